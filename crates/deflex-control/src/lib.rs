@@ -1,0 +1,1 @@
+//! deflex-control
