@@ -1,1 +1,45 @@
-//! deflex-model
+//! # deflex-model
+//!
+//! The elasto-geometrical robot model of Johra et al. (2022), *Robotics* 11, 48, Section 2.2:
+//! serial kinematics written as modified Denavit–Hartenberg parameters or a URDF chain, plus the
+//! Virtual Joint Method (VJM): torsional springs ("elastic degrees of freedom", eDoFs) about the
+//! x, y and/or z axis of each joint frame, with the spring centre allowed to slide along the joint
+//! axis (the paper's δr), and optional base eDoFs (baseplate tilt).
+//!
+//! The crate follows Pinocchio's split: a read-only [`Robot`] (the model) and a [`Data`] scratch
+//! space that the hot path fills without allocating. All quantities are SI (m, rad, N, N·m) and
+//! expressed in the world frame unless a name says otherwise.
+//!
+//! ```
+//! use deflex_model::{Robot, Data, builtin};
+//! let robot = builtin("tx200").unwrap();
+//! let mut data = Data::new();
+//! let q = [0.0, 49.7f64.to_radians(), 89.3f64.to_radians(), 0.0, 41f64.to_radians(), 0.0];
+//! robot.forward_kinematics(&mut data, &q).unwrap();
+//! let w = deflex_model::Wrench::new(0.0, 0.0, 1000.0, 0.0, 0.0, 0.0);
+//! let ds = robot.tcp_deflection(&data, &w);
+//! assert!(ds[2] > 0.0); // pushed up by an upward force
+//! ```
+
+mod compliance;
+mod description;
+mod error;
+mod ik;
+mod kinematics;
+mod robot;
+pub mod spatial;
+mod urdf;
+pub mod wrench;
+
+pub use compliance::EdofColumns;
+pub use description::{BUILTIN_ROBOTS, builtin, load_robot, robot_from_toml_str, robot_to_toml};
+pub use error::{ModelError, QLengthError};
+pub use ik::{IkOptions, IkSolution};
+pub use kinematics::Data;
+pub use robot::{Axis, AxisStiffness, DhParams, Edof, EdofSite, Joint, Robot, UrdfSource};
+pub use spatial::{Displacement, Pose, Wrench};
+
+/// Largest number of motorised joints a [`Robot`] may have (fixed so [`Data`] needs no heap).
+pub const MAX_JOINTS: usize = 8;
+/// Largest number of eDoFs: three per joint plus three at the base.
+pub const MAX_EDOFS: usize = 3 * MAX_JOINTS + 3;
