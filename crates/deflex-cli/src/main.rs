@@ -1,1 +1,78 @@
-fn main() {}
+//! `deflex`: the command-line front end. Thin: it parses arguments and calls the crates.
+
+mod args;
+mod cmd_calib;
+mod cmd_control;
+mod cmd_model;
+mod cmd_sim;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,
+/// force-feedback correction, digital twin). SI units in files; human output in mm, degrees.
+#[derive(Parser)]
+#[command(name = "deflex", version, about, long_about = None)]
+struct Cli {
+    /// Machine-readable JSON on stdout instead of human-readable text.
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Inspect a robot model.
+    Model {
+        #[command(subcommand)]
+        command: cmd_model::ModelCommand,
+    },
+    /// TCP pose for given joint values.
+    Pose(cmd_model::PoseArgs),
+    /// TCP deflection under a wrench (eq. 15).
+    Deflect(cmd_model::DeflectArgs),
+    /// Joint values for a TCP pose.
+    Ik(cmd_model::IkArgs),
+    /// Deflection over a grid of TCP positions, tool pointing down (paper Fig. 10 set-up).
+    Map(cmd_model::MapArgs),
+    /// Identify stiffnesses (and the model structure) from measurements.
+    Calibrate(cmd_calib::CalibrateArgs),
+    /// Prediction errors of a model against measurements, with plots.
+    Validate(cmd_calib::ValidateArgs),
+    /// Propose a measurement campaign for identification.
+    Plan(cmd_calib::PlanArgs),
+    /// The digital twin of the robotised ISF cell (SIMULATED).
+    Sim {
+        #[command(subcommand)]
+        command: cmd_sim::SimCommand,
+    },
+    /// Run the real-time correction controller against a robot and a force sensor.
+    Run(cmd_control::RunArgs),
+    /// Serve the simulated cell over the robot and sensor protocols on loopback.
+    Cell(cmd_control::CellArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Model { command } => cmd_model::model(command, cli.json),
+        Command::Pose(args) => cmd_model::pose(args, cli.json),
+        Command::Deflect(args) => cmd_model::deflect(args, cli.json),
+        Command::Ik(args) => cmd_model::ik(args, cli.json),
+        Command::Map(args) => cmd_model::map(args, cli.json),
+        Command::Calibrate(args) => cmd_calib::calibrate(args, cli.json),
+        Command::Validate(args) => cmd_calib::validate(args, cli.json),
+        Command::Plan(args) => cmd_calib::plan(args, cli.json),
+        Command::Sim { command } => cmd_sim::sim(command, cli.json),
+        Command::Run(args) => cmd_control::run(args, cli.json),
+        Command::Cell(args) => cmd_control::cell(args, cli.json),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}

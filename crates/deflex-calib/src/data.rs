@@ -1,0 +1,394 @@
+//! Measurement and plan files (CSV, SI units, one row per measured point per load case).
+//!
+//! Columns, by exact name (order free): `load_case`, `q1_rad` … `qN_rad`,
+//! `fx_N, fy_N, fz_N, mx_Nm, my_Nm, mz_Nm` (applied wrench, world axes, moment about the load
+//! point), `load_link`, `load_x_m, load_y_m, load_z_m` (load point, world, unloaded pose),
+//! `point`, `point_link`, `x_m, y_m, z_m` (measured point, world, unloaded),
+//! `dx_m, dy_m, dz_m` (displacement, loaded − unloaded, world axes).
+//! Optional: `sigma_m`, `drx_rad, dry_rad, drz_rad`, `purpose` (free text, plans).
+//! A plan is the same file without the displacement columns.
+
+use std::collections::HashMap;
+use std::path::Path;
+use thiserror::Error;
+
+/// One measured (or planned) point under one load case.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasurementRow {
+    /// Load-case label; rows sharing it share configuration and load.
+    pub load_case: String,
+    /// Joint values (rad).
+    pub q_rad: Vec<f64>,
+    /// Applied wrench `[fx, fy, fz, mx, my, mz]` (N, N·m), world axes, moment about the load point.
+    pub wrench: [f64; 6],
+    /// Link carrying the load (0 = base … N = last link).
+    pub load_link: usize,
+    /// Load point, world coordinates in the unloaded pose (m).
+    pub load_point_m: [f64; 3],
+    /// Point label (`TCP`, `M1`, …).
+    pub point: String,
+    /// Link carrying the measured point.
+    pub point_link: usize,
+    /// Measured point, world coordinates in the unloaded pose (m).
+    pub point_m: [f64; 3],
+    /// Displacement loaded − unloaded, world axes (m). `None` in a plan.
+    pub displacement_m: Option<[f64; 3]>,
+    /// Measurement standard deviation for this row (m).
+    pub sigma_m: Option<f64>,
+    /// Measured small rotation of the point's link (rad), when orientation was measured.
+    pub rotation_rad: Option<[f64; 3]>,
+    /// Why this row is in a plan (free text).
+    pub purpose: Option<String>,
+}
+
+/// A bad measurement or plan file. Nothing of a file with an error is used.
+#[derive(Debug, Error)]
+pub enum DataError {
+    /// The file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// A problem with the header (missing or duplicate column).
+    #[error("{path}: header: {message}")]
+    Header {
+        /// File.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A problem with one row.
+    #[error("{path}:{line}: {message}")]
+    Row {
+        /// File.
+        path: String,
+        /// 1-based line number in the file.
+        line: u64,
+        /// What is wrong, naming the column.
+        message: String,
+    },
+    /// The data as a whole cannot be used.
+    #[error("{path}: {message}")]
+    Content {
+        /// File.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+const WRENCH_COLUMNS: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"];
+const LOAD_POINT_COLUMNS: [&str; 3] = ["load_x_m", "load_y_m", "load_z_m"];
+const POINT_COLUMNS: [&str; 3] = ["x_m", "y_m", "z_m"];
+const DISPLACEMENT_COLUMNS: [&str; 3] = ["dx_m", "dy_m", "dz_m"];
+const ROTATION_COLUMNS: [&str; 3] = ["drx_rad", "dry_rad", "drz_rad"];
+
+/// Read a measurement file: every row must carry the displacement columns.
+pub fn read_measurements(path: &Path) -> Result<Vec<MeasurementRow>, DataError> {
+    read_rows(path, true)
+}
+
+/// Read a plan file: displacement columns are not expected (ignored if present).
+pub fn read_plan(path: &Path) -> Result<Vec<MeasurementRow>, DataError> {
+    read_rows(path, false)
+}
+
+/// Parse measurement or plan CSV text. `origin` names the file in errors.
+pub fn parse_rows(
+    text: &str,
+    origin: &str,
+    require_displacement: bool,
+) -> Result<Vec<MeasurementRow>, DataError> {
+    let header_error = |message: String| DataError::Header {
+        path: origin.to_string(),
+        message,
+    };
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .flexible(true)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let headers = reader
+        .headers()
+        .map_err(|e| header_error(e.to_string()))?
+        .clone();
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    for (i, name) in headers.iter().enumerate() {
+        if index.insert(name, i).is_some() {
+            return Err(header_error(format!("column `{name}` appears twice")));
+        }
+    }
+    let mut joint_count = 0;
+    while index.contains_key(format!("q{}_rad", joint_count + 1).as_str()) {
+        joint_count += 1;
+    }
+    if joint_count == 0 {
+        return Err(header_error("no joint columns: expected q1_rad, q2_rad, …".into()));
+    }
+    let mut required: Vec<String> = vec!["load_case".into(), "load_link".into(), "point".into(), "point_link".into()];
+    required.extend(WRENCH_COLUMNS.iter().chain(&LOAD_POINT_COLUMNS).chain(&POINT_COLUMNS).map(|s| s.to_string()));
+    if require_displacement {
+        required.extend(DISPLACEMENT_COLUMNS.iter().map(|s| s.to_string()));
+    }
+    let missing: Vec<&String> = required.iter().filter(|c| !index.contains_key(c.as_str())).collect();
+    if !missing.is_empty() {
+        return Err(header_error(format!(
+            "missing column(s) {}",
+            missing.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ")
+        )));
+    }
+    let has_displacement = DISPLACEMENT_COLUMNS.iter().all(|c| index.contains_key(c));
+    let has_rotation = ROTATION_COLUMNS.iter().all(|c| index.contains_key(c));
+    let width = headers.len();
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| DataError::Row {
+            path: origin.to_string(),
+            line: e.position().map(|p| p.line()).unwrap_or(0),
+            message: e.to_string(),
+        })?;
+        let line = record.position().map(|p| p.line()).unwrap_or(0);
+        let row_error = |message: String| DataError::Row {
+            path: origin.to_string(),
+            line,
+            message,
+        };
+        if record.len() != width {
+            return Err(row_error(format!(
+                "expected {width} fields as in the header, found {}",
+                record.len()
+            )));
+        }
+        let text_of = |name: &str| record.get(index[name]).unwrap_or("");
+        let number = |name: &str| -> Result<f64, DataError> {
+            let text = text_of(name);
+            let value: f64 = text
+                .parse()
+                .map_err(|_| row_error(format!("column `{name}`: expected a number, got \"{text}\"")))?;
+            if value.is_finite() {
+                Ok(value)
+            } else {
+                Err(row_error(format!("column `{name}`: value must be finite, got {text}")))
+            }
+        };
+        let link = |name: &str| -> Result<usize, DataError> {
+            let text = text_of(name);
+            let value: usize = text.parse().map_err(|_| {
+                row_error(format!("column `{name}`: expected a link index 0..={joint_count}, got \"{text}\""))
+            })?;
+            if value > joint_count {
+                return Err(row_error(format!(
+                    "column `{name}`: link {value} does not exist (0 = base … {joint_count} = last link)"
+                )));
+            }
+            Ok(value)
+        };
+        let triple = |names: &[&str; 3]| -> Result<[f64; 3], DataError> {
+            Ok([number(names[0])?, number(names[1])?, number(names[2])?])
+        };
+        let q_rad = (1..=joint_count)
+            .map(|i| number(&format!("q{i}_rad")))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut wrench = [0.0; 6];
+        for (value, name) in wrench.iter_mut().zip(WRENCH_COLUMNS) {
+            *value = number(name)?;
+        }
+        let load_case = text_of("load_case").to_string();
+        if load_case.is_empty() {
+            return Err(row_error("column `load_case`: empty label".into()));
+        }
+        let point = text_of("point").to_string();
+        if point.is_empty() {
+            return Err(row_error("column `point`: empty label".into()));
+        }
+        let optional_number = |name: &str| -> Result<Option<f64>, DataError> {
+            match index.get(name) {
+                Some(_) if !text_of(name).is_empty() => number(name).map(Some),
+                _ => Ok(None),
+            }
+        };
+        let sigma_m = optional_number("sigma_m")?;
+        if let Some(sigma) = sigma_m
+            && sigma <= 0.0
+        {
+            return Err(row_error(format!("column `sigma_m`: must be positive, got {sigma}")));
+        }
+        let displacement_m = if has_displacement && (require_displacement || !text_of("dx_m").is_empty()) {
+            Some(triple(&DISPLACEMENT_COLUMNS)?)
+        } else {
+            None
+        };
+        let rotation_rad = if has_rotation && !text_of("drx_rad").is_empty() {
+            Some(triple(&ROTATION_COLUMNS)?)
+        } else {
+            None
+        };
+        let purpose = index
+            .get("purpose")
+            .map(|_| text_of("purpose").to_string())
+            .filter(|s| !s.is_empty());
+        rows.push(MeasurementRow {
+            load_case,
+            q_rad,
+            wrench,
+            load_link: link("load_link")?,
+            load_point_m: triple(&LOAD_POINT_COLUMNS)?,
+            point,
+            point_link: link("point_link")?,
+            point_m: triple(&POINT_COLUMNS)?,
+            displacement_m,
+            sigma_m,
+            rotation_rad,
+            purpose,
+        });
+    }
+    if rows.is_empty() {
+        return Err(DataError::Content {
+            path: origin.to_string(),
+            message: "no data rows".into(),
+        });
+    }
+    Ok(rows)
+}
+
+fn read_rows(path: &Path, require_displacement: bool) -> Result<Vec<MeasurementRow>, DataError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
+        path: origin.clone(),
+        source,
+    })?;
+    parse_rows(&text, &origin, require_displacement)
+}
+
+/// Format rows as CSV text (full precision). Displacement, sigma, rotation and purpose columns are
+/// written when any row has them.
+pub fn format_rows(rows: &[MeasurementRow]) -> String {
+    let joint_count = rows.first().map(|r| r.q_rad.len()).unwrap_or(0);
+    let with_displacement = rows.iter().any(|r| r.displacement_m.is_some());
+    let with_sigma = rows.iter().any(|r| r.sigma_m.is_some());
+    let with_rotation = rows.iter().any(|r| r.rotation_rad.is_some());
+    let with_purpose = rows.iter().any(|r| r.purpose.is_some());
+    let mut header: Vec<String> = vec!["load_case".into()];
+    header.extend((1..=joint_count).map(|i| format!("q{i}_rad")));
+    header.extend(WRENCH_COLUMNS.iter().map(|s| s.to_string()));
+    header.push("load_link".into());
+    header.extend(LOAD_POINT_COLUMNS.iter().map(|s| s.to_string()));
+    header.extend(["point".to_string(), "point_link".to_string()]);
+    header.extend(POINT_COLUMNS.iter().map(|s| s.to_string()));
+    if with_displacement {
+        header.extend(DISPLACEMENT_COLUMNS.iter().map(|s| s.to_string()));
+    }
+    if with_sigma {
+        header.push("sigma_m".into());
+    }
+    if with_rotation {
+        header.extend(ROTATION_COLUMNS.iter().map(|s| s.to_string()));
+    }
+    if with_purpose {
+        header.push("purpose".into());
+    }
+    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
+    let _ = writer.write_record(&header);
+    let num = |v: f64| format!("{v:e}");
+    for row in rows {
+        let mut record: Vec<String> = vec![row.load_case.clone()];
+        record.extend(row.q_rad.iter().map(|v| format!("{v:?}")));
+        record.extend(row.wrench.iter().map(|v| format!("{v:?}")));
+        record.push(row.load_link.to_string());
+        record.extend(row.load_point_m.iter().map(|v| format!("{v:?}")));
+        record.push(row.point.clone());
+        record.push(row.point_link.to_string());
+        record.extend(row.point_m.iter().map(|v| format!("{v:?}")));
+        if with_displacement {
+            match row.displacement_m {
+                Some(d) => record.extend(d.iter().map(|v| num(*v))),
+                None => record.extend(["".to_string(), "".to_string(), "".to_string()]),
+            }
+        }
+        if with_sigma {
+            record.push(row.sigma_m.map(num).unwrap_or_default());
+        }
+        if with_rotation {
+            match row.rotation_rad {
+                Some(r) => record.extend(r.iter().map(|v| num(*v))),
+                None => record.extend(["".to_string(), "".to_string(), "".to_string()]),
+            }
+        }
+        if with_purpose {
+            record.push(row.purpose.clone().unwrap_or_default());
+        }
+        let _ = writer.write_record(&record);
+    }
+    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// Write rows to a CSV file (see [`format_rows`]).
+pub fn write_rows(path: &Path, rows: &[MeasurementRow]) -> Result<(), DataError> {
+    std::fs::write(path, format_rows(rows)).map_err(|source| DataError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Vec<MeasurementRow> {
+        vec![MeasurementRow {
+            load_case: "L1".into(),
+            q_rad: vec![0.0, 1.5707963267948966, 0.0, 0.0, 0.0, 0.0],
+            wrench: [0.0, 1400.0, 0.0, 0.0, 0.0, 0.0],
+            load_link: 6,
+            load_point_m: [2.194, 0.0, 0.0],
+            point: "M2, elbow".into(),
+            point_link: 3,
+            point_m: [1.2, 0.1, 0.0],
+            displacement_m: Some([1.25e-4, -3.5e-4, 2e-6]),
+            sigma_m: Some(1.5e-5),
+            rotation_rad: None,
+            purpose: Some("J1.z".into()),
+        }]
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let rows = sample();
+        let text = format_rows(&rows);
+        assert_eq!(parse_rows(&text, "t.csv", true).unwrap(), rows);
+    }
+
+    #[test]
+    fn bad_rows_name_line_and_column() {
+        let text = format_rows(&sample());
+        let bad = text.replace("1400.0", "NaN");
+        let err = parse_rows(&bad, "t.csv", true).unwrap_err().to_string();
+        assert!(err.contains("t.csv:2") && err.contains("fy_N"), "{err}");
+        let bad = text.replace("1400.0", "12x");
+        let err = parse_rows(&bad, "t.csv", true).unwrap_err().to_string();
+        assert!(err.contains("expected a number") && err.contains("\"12x\""), "{err}");
+        let short = format!("{}{}", text, "L2,0,0\n");
+        let err = parse_rows(&short, "t.csv", true).unwrap_err().to_string();
+        assert!(err.contains("t.csv:3") && err.contains("fields"), "{err}");
+        let no_dx = text.replacen("dx_m", "dq_m", 1);
+        let err = parse_rows(&no_dx, "t.csv", true).unwrap_err().to_string();
+        assert!(err.contains("missing column") && err.contains("dx_m"), "{err}");
+        let bad_link = text.replace(",6,2.194", ",9,2.194");
+        let err = parse_rows(&bad_link, "t.csv", true).unwrap_err().to_string();
+        assert!(err.contains("load_link") && err.contains("does not exist"), "{err}");
+    }
+
+    #[test]
+    fn plan_needs_no_displacement() {
+        let mut rows = sample();
+        rows[0].displacement_m = None;
+        rows[0].sigma_m = None;
+        let text = format_rows(&rows);
+        assert!(!text.contains("dx_m"));
+        assert_eq!(parse_rows(&text, "p.csv", false).unwrap(), rows);
+        assert!(parse_rows(&text, "p.csv", true).is_err());
+    }
+}
