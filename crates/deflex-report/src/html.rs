@@ -1,0 +1,337 @@
+//! A builder for one self-contained HTML page: headings, paragraphs, tables,
+//! call-out notes and images embedded as base64 data URIs, with inline CSS.
+//! The page loads nothing from the network.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::{ReportError, base64_encode};
+
+/// Escapes `&`, `<`, `>`, `"` and `'` so `text` can be placed in HTML
+/// element content or a quoted attribute value.
+pub fn html_escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Block {
+    Section(String),
+    Paragraph(String),
+    Note(String),
+    Preformatted(String),
+    Table {
+        headers: Vec<String>,
+        rows: Vec<Vec<String>>,
+    },
+    Image {
+        path: PathBuf,
+        caption: String,
+    },
+}
+
+/// Builder of a self-contained HTML report.
+///
+/// Text is HTML-escaped. Images are read when the page is rendered
+/// ([`HtmlReport::render`] / [`HtmlReport::write`]) and embedded as base64
+/// data URIs, so the file can be moved, mailed or opened offline.
+///
+/// ```no_run
+/// use deflex_report::HtmlReport;
+/// let mut r = HtmlReport::new("Calibration report");
+/// r.note("SIMULATED data: no robot was measured.")
+///     .section("Prediction error")
+///     .paragraph("Error over the test grid.")
+///     .table(&["axis", "RMSE [mm]"], &[vec!["x".into(), "0.12".into()]])
+///     .image("heatmap.png", "Fig. 1: error norm over the grid");
+/// r.write(std::path::Path::new("report.html")).unwrap();
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct HtmlReport {
+    title: String,
+    blocks: Vec<Block>,
+}
+
+const CSS: &str = "\
+body{font-family:-apple-system,'Segoe UI',Roboto,'DejaVu Sans',Helvetica,Arial,sans-serif;\
+max-width:1000px;margin:2em auto;padding:0 1.2em;color:#222;line-height:1.5;background:#fff}\
+h1{font-size:1.8em;border-bottom:2px solid #1f77b4;padding-bottom:.25em}\
+h2{font-size:1.35em;margin-top:1.8em;border-bottom:1px solid #ddd;padding-bottom:.15em}\
+table{border-collapse:collapse;margin:1em 0;font-size:.95em}\
+th,td{border:1px solid #ccc;padding:.35em .75em;text-align:left}\
+th{background:#f0f4f8}tr:nth-child(even) td{background:#fafafa}\
+td.num{text-align:right;font-variant-numeric:tabular-nums}\
+figure{margin:1.5em 0;text-align:center}\
+figure img{max-width:100%;height:auto;border:1px solid #e4e4e4}\
+figcaption{font-size:.92em;color:#555;margin-top:.4em}\
+.note{border-left:5px solid #d62728;background:#fdf1f1;padding:.6em 1em;margin:1em 0;font-weight:600}\
+pre{background:#f6f8fa;padding:.8em;overflow-x:auto;font-size:.9em}\
+footer{margin-top:3em;font-size:.8em;color:#888}";
+
+impl HtmlReport {
+    /// A new, empty report whose page title and top heading are `title`.
+    pub fn new(title: impl Into<String>) -> Self {
+        HtmlReport {
+            title: title.into(),
+            blocks: Vec::new(),
+        }
+    }
+
+    /// Starts a section with a second-level heading.
+    pub fn section(&mut self, heading: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Section(heading.into()));
+        self
+    }
+
+    /// Adds a paragraph of text.
+    pub fn paragraph(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Paragraph(text.into()));
+        self
+    }
+
+    /// Adds a highlighted call-out, e.g. `"SIMULATED"` for results not
+    /// measured on a real robot.
+    pub fn note(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Note(text.into()));
+        self
+    }
+
+    /// Adds preformatted (monospace) text, e.g. a configuration dump.
+    pub fn preformatted(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Preformatted(text.into()));
+        self
+    }
+
+    /// Adds a table. Every row must have as many cells as there are headers;
+    /// this is checked when the page is rendered. Cells that parse as numbers
+    /// are right-aligned.
+    pub fn table(&mut self, headers: &[&str], rows: &[Vec<String>]) -> &mut Self {
+        self.blocks.push(Block::Table {
+            headers: headers.iter().map(|h| h.to_string()).collect(),
+            rows: rows.to_vec(),
+        });
+        self
+    }
+
+    /// Adds an image (PNG, SVG, JPEG or GIF, by extension) with a caption.
+    /// The file is read and embedded when the page is rendered.
+    pub fn image(&mut self, path: impl AsRef<Path>, caption: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Image {
+            path: path.as_ref().to_path_buf(),
+            caption: caption.into(),
+        });
+        self
+    }
+
+    /// Renders the page to a string. Errors name the image or table that is
+    /// at fault (for a table, the path is empty).
+    pub fn render(&self) -> Result<String, ReportError> {
+        let mut h = String::new();
+        let title = html_escape(&self.title);
+        h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+        h.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+        let _ = writeln!(h, "<title>{title}</title>");
+        let _ = writeln!(h, "<style>{CSS}</style>\n</head>\n<body>");
+        let _ = writeln!(h, "<h1>{title}</h1>");
+        for block in &self.blocks {
+            match block {
+                Block::Section(t) => {
+                    let _ = writeln!(h, "<h2>{}</h2>", html_escape(t));
+                }
+                Block::Paragraph(t) => {
+                    let _ = writeln!(h, "<p>{}</p>", html_escape(t));
+                }
+                Block::Note(t) => {
+                    let _ = writeln!(h, "<div class=\"note\">{}</div>", html_escape(t));
+                }
+                Block::Preformatted(t) => {
+                    let _ = writeln!(h, "<pre>{}</pre>", html_escape(t));
+                }
+                Block::Table { headers, rows } => render_table(&mut h, headers, rows)?,
+                Block::Image { path, caption } => render_image(&mut h, path, caption)?,
+            }
+        }
+        let _ = writeln!(
+            h,
+            "<footer>Generated by deflex-report {}.</footer>\n</body>\n</html>",
+            env!("CARGO_PKG_VERSION")
+        );
+        Ok(h)
+    }
+
+    /// Renders the page and writes it to `path`.
+    pub fn write(&self, path: &Path) -> Result<(), ReportError> {
+        let html = self.render()?;
+        std::fs::write(path, html).map_err(|source| ReportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+}
+
+fn looks_numeric(cell: &str) -> bool {
+    let t = cell.trim();
+    !t.is_empty()
+        && t.trim_start_matches(['+', '-', '±'])
+            .trim_end_matches('%')
+            .parse::<f64>()
+            .is_ok()
+}
+
+fn render_table(
+    h: &mut String,
+    headers: &[String],
+    rows: &[Vec<String>],
+) -> Result<(), ReportError> {
+    for (i, row) in rows.iter().enumerate() {
+        if !headers.is_empty() && row.len() != headers.len() {
+            return Err(ReportError::InvalidInput {
+                path: PathBuf::new(),
+                reason: format!(
+                    "table row {i} has {} cells but there are {} headers ({})",
+                    row.len(),
+                    headers.len(),
+                    headers.join(", ")
+                ),
+            });
+        }
+    }
+    h.push_str("<table>\n");
+    if !headers.is_empty() {
+        h.push_str("<thead><tr>");
+        for c in headers {
+            let _ = write!(h, "<th>{}</th>", html_escape(c));
+        }
+        h.push_str("</tr></thead>\n");
+    }
+    h.push_str("<tbody>\n");
+    for row in rows {
+        h.push_str("<tr>");
+        for c in row {
+            let class = if looks_numeric(c) {
+                " class=\"num\""
+            } else {
+                ""
+            };
+            let _ = write!(h, "<td{class}>{}</td>", html_escape(c));
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</tbody>\n</table>\n");
+    Ok(())
+}
+
+fn render_image(h: &mut String, path: &Path, caption: &str) -> Result<(), ReportError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    let mime = match ext.as_deref() {
+        Some("png") => "image/png",
+        Some("svg") => "image/svg+xml",
+        Some("jpg" | "jpeg") => "image/jpeg",
+        Some("gif") => "image/gif",
+        _ => {
+            return Err(ReportError::UnsupportedFormat {
+                path: path.to_path_buf(),
+                expected: ".png, .svg, .jpg, .jpeg or .gif",
+            });
+        }
+    };
+    let bytes = std::fs::read(path).map_err(|source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let cap = html_escape(caption);
+    let _ = writeln!(
+        h,
+        "<figure><img src=\"data:{mime};base64,{}\" alt=\"{cap}\"><figcaption>{cap}</figcaption></figure>",
+        base64_encode(&bytes)
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_all_special_characters() {
+        assert_eq!(
+            html_escape(r#"<a href="x">Tom & 'Jerry'</a>"#),
+            "&lt;a href=&quot;x&quot;&gt;Tom &amp; &#39;Jerry&#39;&lt;/a&gt;"
+        );
+        assert_eq!(
+            html_escape("plain ünïcode ±0.1 mm"),
+            "plain ünïcode ±0.1 mm"
+        );
+    }
+
+    #[test]
+    fn report_text_is_escaped_everywhere() {
+        let mut r = HtmlReport::new("T <1>");
+        r.section("S & S")
+            .paragraph("<script>alert(1)</script>")
+            .note("SIMULATED <b>")
+            .preformatted("a<b")
+            .table(&["<h>"], &[vec!["<c>".to_string()]]);
+        let html = r.render().unwrap();
+        assert!(!html.contains("<script>"));
+        assert!(html.contains("<title>T &lt;1&gt;</title>"));
+        assert!(html.contains("<h2>S &amp; S</h2>"));
+        assert!(html.contains("&lt;script&gt;alert(1)&lt;/script&gt;"));
+        assert!(html.contains("<div class=\"note\">SIMULATED &lt;b&gt;</div>"));
+        assert!(html.contains("<th>&lt;h&gt;</th>"));
+        assert!(html.contains("<td>&lt;c&gt;</td>"));
+        assert!(html.contains("<pre>a&lt;b</pre>"));
+    }
+
+    #[test]
+    fn table_cells_and_alignment() {
+        let mut r = HtmlReport::new("t");
+        r.table(
+            &["axis", "RMSE [mm]"],
+            &[
+                vec!["x".into(), "0.125".into()],
+                vec!["norm".into(), "-1e-3".into()],
+            ],
+        );
+        let html = r.render().unwrap();
+        assert!(html.contains("<td>x</td><td class=\"num\">0.125</td>"));
+        assert!(html.contains("<td class=\"num\">-1e-3</td>"));
+    }
+
+    #[test]
+    fn ragged_table_is_an_error() {
+        let mut r = HtmlReport::new("t");
+        r.table(&["a", "b"], &[vec!["1".into()]]);
+        let e = r.render().unwrap_err();
+        assert!(matches!(e, ReportError::InvalidInput { .. }), "{e}");
+        assert!(e.to_string().contains("row 0 has 1 cells"), "{e}");
+    }
+
+    #[test]
+    fn missing_image_error_names_the_file() {
+        let mut r = HtmlReport::new("t");
+        r.image("/nonexistent/deflex/fig.png", "c");
+        let e = r.render().unwrap_err();
+        assert!(matches!(e, ReportError::Io { .. }));
+        assert!(e.to_string().contains("/nonexistent/deflex/fig.png"), "{e}");
+        let mut r = HtmlReport::new("t");
+        r.image("fig.bmp", "c");
+        assert!(matches!(
+            r.render().unwrap_err(),
+            ReportError::UnsupportedFormat { .. }
+        ));
+    }
+}

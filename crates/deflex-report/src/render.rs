@@ -1,0 +1,265 @@
+//! Shared plumbing: output format by extension, backend dispatch, input
+//! checks, axis ranges and text styles.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::ReportError;
+
+/// Output formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Format {
+    Png,
+    Svg,
+}
+
+impl Format {
+    pub(crate) fn from_path(path: &Path) -> Result<Self, ReportError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("png") => Ok(Format::Png),
+            Some("svg") => Ok(Format::Svg),
+            _ => Err(ReportError::UnsupportedFormat {
+                path: path.to_path_buf(),
+                expected: ".png or .svg",
+            }),
+        }
+    }
+}
+
+/// Runs `$body` (an expression of type `Result<(), String>` using `$root`, a
+/// `&DrawingArea<_, Shift>`) on a PNG or SVG backend chosen by the path's
+/// extension, then saves the file. Evaluates to `Result<(), ReportError>`.
+macro_rules! render {
+    ($path:expr, ($w:expr, $h:expr), |$root:ident| $body:expr) => {{
+        let path: &::std::path::Path = $path;
+        let size: (u32, u32) = ($w, $h);
+        let fail = |reason: String| $crate::ReportError::Draw {
+            path: path.to_path_buf(),
+            reason,
+        };
+        $crate::render::check_size(path, size)?;
+        $crate::font::ensure_registered();
+        match $crate::render::Format::from_path(path)? {
+            $crate::render::Format::Png => {
+                let backend = ::plotters::prelude::BitMapBackend::new(path, size);
+                let $root = &::plotters::prelude::IntoDrawingArea::into_drawing_area(backend);
+                $root
+                    .fill(&::plotters::prelude::WHITE)
+                    .map_err(|e| fail(e.to_string()))?;
+                #[allow(clippy::redundant_closure_call)]
+                let drawn: Result<(), String> = (|| -> Result<(), String> { $body })();
+                drawn.map_err(fail)?;
+                $root.present().map_err(|e| fail(e.to_string()))
+            }
+            $crate::render::Format::Svg => {
+                let backend = ::plotters::prelude::SVGBackend::new(path, size);
+                let $root = &::plotters::prelude::IntoDrawingArea::into_drawing_area(backend);
+                $root
+                    .fill(&::plotters::prelude::WHITE)
+                    .map_err(|e| fail(e.to_string()))?;
+                #[allow(clippy::redundant_closure_call)]
+                let drawn: Result<(), String> = (|| -> Result<(), String> { $body })();
+                drawn.map_err(fail)?;
+                $root.present().map_err(|e| fail(e.to_string()))
+            }
+        }
+    }};
+}
+pub(crate) use render;
+
+/// Converts any displayable error into the `String` used inside drawing code.
+pub(crate) fn err<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+/// Rejects degenerate or absurd image sizes.
+pub(crate) fn check_size(path: &Path, (w, h): (u32, u32)) -> Result<(), ReportError> {
+    if !(64..=16_384).contains(&w) || !(64..=16_384).contains(&h) {
+        return Err(ReportError::invalid(
+            path,
+            format!("image size {w}x{h} outside 64..=16384 pixels"),
+        ));
+    }
+    Ok(())
+}
+
+/// Min and max of the finite values, or `None` when there are none.
+pub(crate) fn finite_extent<'a>(values: impl IntoIterator<Item = &'a f64>) -> Option<(f64, f64)> {
+    values
+        .into_iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(None, |acc, v| match acc {
+            None => Some((v, v)),
+            Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
+        })
+}
+
+/// Widens a data extent by `pad` (a fraction of its span) on both sides, and
+/// gives a zero-width extent a sensible non-zero width.
+pub(crate) fn padded((lo, hi): (f64, f64), pad: f64) -> (f64, f64) {
+    let span = hi - lo;
+    if span > 0.0 && span.is_finite() {
+        (lo - pad * span, hi + pad * span)
+    } else {
+        let half = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };
+        (lo - half, hi + half)
+    }
+}
+
+/// Validates a user-given range.
+pub(crate) fn check_range(
+    path: &Path,
+    what: &str,
+    (lo, hi): (f64, f64),
+) -> Result<(), ReportError> {
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(ReportError::invalid(
+            path,
+            format!("{what} range ({lo}, {hi}) must be finite with min < max"),
+        ));
+    }
+    Ok(())
+}
+
+/// The area below a title drawn at the top of `root` (or `root` itself when
+/// the title is empty).
+pub(crate) fn titled_area<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    size: u32,
+) -> Result<DrawingArea<DB, plotters::coord::Shift>, String> {
+    if title.is_empty() {
+        return Ok(root.clone());
+    }
+    root.margin(10, 0, 0, 0)
+        .titled(title, (crate::font::FAMILY, size).into_font().color(&BLACK))
+        .map_err(err)
+}
+
+/// Title text style.
+pub(crate) fn title_style() -> TextStyle<'static> {
+    (crate::font::FAMILY, 24).into_font().color(&BLACK)
+}
+
+/// Axis description (label) text style.
+pub(crate) fn axis_desc_style() -> TextStyle<'static> {
+    (crate::font::FAMILY, 18).into_font().color(&BLACK)
+}
+
+/// Tick label text style.
+pub(crate) fn tick_style() -> TextStyle<'static> {
+    (crate::font::FAMILY, 15).into_font().color(&BLACK)
+}
+
+/// Legend text style.
+pub(crate) fn legend_style() -> TextStyle<'static> {
+    (crate::font::FAMILY, 15).into_font().color(&BLACK)
+}
+
+/// A tick-label formatter for an axis spanning `(lo, hi)`: values that are
+/// zero up to rounding print as `0`, the number of decimals follows the span,
+/// and very large or small magnitudes use scientific notation.
+pub(crate) fn tick_formatter((lo, hi): (f64, f64)) -> impl Fn(&f64) -> String {
+    let span = (hi - lo).abs();
+    let mag = lo.abs().max(hi.abs());
+    let sci = !(1e-3..1e5).contains(&mag);
+    let decimals = if span > 0.0 {
+        ((-span.log10()).ceil() as i32 + 2).clamp(0, 6) as usize
+    } else {
+        3
+    };
+    move |v: &f64| {
+        let v = if v.abs() <= span * 1e-9 { 0.0 } else { *v };
+        if sci && v != 0.0 {
+            fmt_tick(v)
+        } else {
+            let s = format!("{v:.decimals$}");
+            let s = if s.contains('.') {
+                s.trim_end_matches('0').trim_end_matches('.')
+            } else {
+                &s
+            };
+            if s == "-0" {
+                "0".to_string()
+            } else {
+                s.to_string()
+            }
+        }
+    }
+}
+
+/// How many tick labels fit along `pixels` at roughly one per `spacing`.
+pub(crate) fn label_count(pixels: u32, spacing: u32) -> usize {
+    ((pixels / spacing.max(1)) as usize).clamp(5, 12)
+}
+
+/// Compact tick label: few significant digits, scientific for extremes.
+pub(crate) fn fmt_tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".to_string()
+    } else if !(1e-3..1e5).contains(&a) {
+        let s = format!("{v:.2e}");
+        // Tidy "1.50e-4" -> "1.5e-4".
+        match s.split_once('e') {
+            Some((m, e)) => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            None => s,
+        }
+    } else {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" {
+            "0".to_string()
+        } else {
+            s.to_string()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_snap_rounding_noise_to_zero() {
+        let f = tick_formatter((-0.45, 0.45));
+        assert_eq!(f(&-5.55e-17), "0");
+        assert_eq!(f(&0.2), "0.2");
+        assert_eq!(f(&-0.4), "-0.4");
+        let g = tick_formatter((400.0, 700.0));
+        assert_eq!(g(&450.0), "450");
+        let h = tick_formatter((0.0, 2e-5));
+        assert_eq!(h(&1.5e-5), "1.5e-5");
+    }
+
+    #[test]
+    fn padding_and_extents() {
+        assert_eq!(
+            finite_extent(&[f64::NAN, 2.0, -1.0, f64::INFINITY]),
+            Some((-1.0, 2.0))
+        );
+        assert_eq!(finite_extent(&[f64::NAN]), None);
+        assert_eq!(padded((0.0, 10.0), 0.1), (-1.0, 11.0));
+        assert_eq!(padded((0.0, 0.0), 0.1), (-1.0, 1.0));
+        assert_eq!(padded((5.0, 5.0), 0.1), (4.5, 5.5));
+    }
+
+    #[test]
+    fn format_by_extension() {
+        assert_eq!(
+            Format::from_path(Path::new("a/b.PNG")).unwrap(),
+            Format::Png
+        );
+        assert_eq!(Format::from_path(Path::new("b.svg")).unwrap(), Format::Svg);
+        assert!(Format::from_path(Path::new("b")).is_err());
+    }
+}
