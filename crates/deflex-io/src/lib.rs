@@ -1,1 +1,43 @@
-//! deflex-io
+//! # deflex-io
+//!
+//! Wire protocols between the deflex controller, industrial robot
+//! controllers and a force/torque sensor, each with **both sides**
+//! implemented so that a simulated cell can play the robot or the sensor over
+//! loopback UDP with the very same code:
+//!
+//! | module | protocol | units on the wire |
+//! |---|---|---|
+//! | [`rsi`] | KUKA RSI, XML over UDP (port 59152) | mm, degrees |
+//! | [`egm`] | ABB EGM path correction, protobuf over UDP | mm, degrees |
+//! | [`staubli`] | deflex binary protocol for a Stäubli VAL3 `alter` program | m, rad |
+//! | [`netft`] | ATI Net F/T RDT, binary UDP (port 49152) | sensor counts |
+//! | [`simple_udp`] | text lines, for other controllers (e.g. UR) | m, rad |
+//!
+//! Inside the crate and at its API everything is SI: metres, radians,
+//! newtons, newton-metres ([`link`]). Each protocol module offers pure
+//! parse/format functions on byte slices (no I/O) plus UDP endpoints for the
+//! controller side ([`RobotLink`], [`ForceSensorLink`]) and the robot/sensor
+//! side ([`RobotSideLink`], [`netft::NetFtSensorServer`]).
+//!
+//! The controller-side hot path (`receive` / `send_correction`) does not
+//! allocate after construction: buffers are fixed and reused. Network input
+//! never causes a panic; every malformed packet is a [`LinkError`] (see
+//! [`LinkError::is_bad_packet`]) and the endpoint stays usable.
+
+#![warn(missing_docs)]
+
+pub mod egm;
+pub mod error;
+pub mod link;
+pub mod netft;
+pub mod rsi;
+pub mod simple_udp;
+pub mod staubli;
+pub mod udp;
+pub mod xml;
+
+pub use error::{LinkError, Protocol};
+pub use link::{
+    Correction, ForceSensorLink, N_JOINTS, Pose6, ReceivedCorrection, RobotLink, RobotSideLink,
+    RobotState, WrenchSample,
+};

@@ -1,5 +1,5 @@
 //! Hot-path bench: forward kinematics + eDoF screws + TCP deflection (eq. 15) for the TX200 with
-//! its 7 identified eDoFs and with all 18 joint eDoFs plus 2 base eDoFs.
+//! the Table 1 eDoFs (6), with 7 (plus J6.z) and with all 18 joint eDoFs plus 2 base eDoFs.
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use deflex_model::{Axis, Data, EdofSite, Wrench, builtin};

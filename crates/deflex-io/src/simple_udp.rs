@@ -1,0 +1,348 @@
+//! Generic text line protocol over UDP, for controllers without a dedicated
+//! protocol (e.g. a Universal Robots URScript loop, see
+//! `docs/ur/deflex_loop.script`). One datagram carries one line:
+//!
+//! * robot → PC: `q <q1> <q2> <q3> <q4> <q5> <q6>\n` — joint positions in
+//!   **rad**;
+//! * PC → robot: `corr <dx> <dy> <dz> <rx> <ry> <rz>\n` — total correction,
+//!   translation in **m**, rotation vector (axis × angle) in **rad**, base
+//!   axes ([`ReplyStyle::Keyword`]), or the same six values as
+//!   `(dx,dy,dz,rx,ry,rz)\n` ([`ReplyStyle::Tuple`]), the format URScript's
+//!   `socket_read_ascii_float(6)` reads. The rotation vector is UR's own
+//!   pose rotation representation.
+//!
+//! Parsers are tolerant: values may be separated by spaces, tabs or commas
+//! and wrapped in `[...]` or `(...)` (so URScript's printing of a list,
+//! `q [0.1, -1.57, ...]`, is accepted); the trailing newline (or CR LF) is
+//! optional. Numbers are printed with 9 decimals (1 nm, 1 nrad).
+//! `cycle_id` on the PC side is the count of valid lines received.
+
+use crate::error::{LinkError, Protocol};
+use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
+use crate::udp::{SliceWriter, UdpEndpoint, parse_f64, trim};
+use core::fmt::Write;
+use std::net::{SocketAddr, ToSocketAddrs};
+use std::time::Duration;
+
+/// Line buffer size.
+pub const LINE_BUFFER: usize = 512;
+
+const P: Protocol = Protocol::SimpleLine;
+const fn bad(reason: &'static str) -> LinkError {
+    LinkError::malformed(P, reason)
+}
+
+/// Format of the PC's answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ReplyStyle {
+    /// `corr dx dy dz rx ry rz\n`.
+    #[default]
+    Keyword,
+    /// `(dx,dy,dz,rx,ry,rz)\n`.
+    Tuple,
+}
+
+/// Parses six numbers after an optional keyword; `keyword` must be present
+/// when `required`.
+fn parse6(line: &[u8], keyword: &str, required: bool) -> Result<[f64; 6], LinkError> {
+    let mut s = trim(line);
+    if s.len() >= keyword.len() && s[..keyword.len()].eq_ignore_ascii_case(keyword.as_bytes()) {
+        let rest = &s[keyword.len()..];
+        if rest.first().is_some_and(|c| c.is_ascii_alphanumeric()) {
+            return Err(bad("unknown keyword"));
+        }
+        s = trim(rest);
+    } else if required {
+        return Err(bad("line does not start with the expected keyword"));
+    }
+    if let [open, inner @ .., close] = s
+        && matches!((open, close), (b'[', b']') | (b'(', b')'))
+    {
+        s = inner;
+    }
+    let mut out = [0.0; 6];
+    let mut n = 0;
+    for tok in s.split(|c| c.is_ascii_whitespace() || *c == b',') {
+        if tok.is_empty() {
+            continue;
+        }
+        if n == 6 {
+            return Err(bad("more than six values"));
+        }
+        out[n] = parse_f64(tok).ok_or(bad("value is not a finite number"))?;
+        n += 1;
+    }
+    if n != 6 {
+        return Err(bad("fewer than six values"));
+    }
+    Ok(out)
+}
+
+/// Parses a robot → PC line `q q1 … q6` (rad).
+pub fn parse_joints_line(line: &[u8]) -> Result<[f64; 6], LinkError> {
+    parse6(line, "q", true)
+}
+
+/// Parses a PC → robot line, either `corr …` or `(…)`.
+pub fn parse_correction_line(line: &[u8]) -> Result<Correction, LinkError> {
+    let v = parse6(line, "corr", false)?;
+    Ok(Correction {
+        dp_m: [v[0], v[1], v[2]],
+        dphi_rad: [v[3], v[4], v[5]],
+    })
+}
+
+fn write6(
+    out: &mut [u8],
+    head: &str,
+    v: &[f64; 6],
+    sep: &str,
+    tail: &str,
+) -> Result<usize, LinkError> {
+    if !v.iter().all(|x| x.is_finite()) {
+        return Err(LinkError::InvalidValue {
+            protocol: P,
+            reason: "non-finite value",
+        });
+    }
+    let cap = out.len();
+    let mut w = SliceWriter::new(out);
+    let r = (|| {
+        w.write_str(head)?;
+        for (i, x) in v.iter().enumerate() {
+            if i > 0 {
+                w.write_str(sep)?;
+            }
+            write!(w, "{x:.9}")?;
+        }
+        w.write_str(tail)
+    })();
+    r.map_err(|_| LinkError::BufferTooSmall {
+        protocol: P,
+        capacity: cap,
+    })?;
+    Ok(w.len())
+}
+
+/// Formats `q q1 … q6\n`.
+pub fn format_joints_line(q: &[f64; 6], out: &mut [u8]) -> Result<usize, LinkError> {
+    write6(out, "q ", q, " ", "\n")
+}
+
+/// Formats a correction line in the given style.
+pub fn format_correction_line(
+    c: &Correction,
+    style: ReplyStyle,
+    out: &mut [u8],
+) -> Result<usize, LinkError> {
+    let v = [
+        c.dp_m[0],
+        c.dp_m[1],
+        c.dp_m[2],
+        c.dphi_rad[0],
+        c.dphi_rad[1],
+        c.dphi_rad[2],
+    ];
+    match style {
+        ReplyStyle::Keyword => write6(out, "corr ", &v, " ", "\n"),
+        ReplyStyle::Tuple => write6(out, "(", &v, ",", ")\n"),
+    }
+}
+
+/// PC side: receives `q` lines, answers correction lines to their sender.
+#[derive(Debug)]
+pub struct SimpleUdpLink {
+    ep: UdpEndpoint,
+    style: ReplyStyle,
+    rx: [u8; LINE_BUFFER],
+    tx: [u8; LINE_BUFFER],
+    count: u64,
+}
+
+impl SimpleUdpLink {
+    /// Binds to `local`.
+    pub fn bind(local: impl ToSocketAddrs, style: ReplyStyle) -> Result<Self, LinkError> {
+        Ok(SimpleUdpLink {
+            ep: UdpEndpoint::bind(local, P)?,
+            style,
+            rx: [0; LINE_BUFFER],
+            tx: [0; LINE_BUFFER],
+            count: 0,
+        })
+    }
+    /// Local socket address.
+    pub fn local_addr(&self) -> Result<SocketAddr, LinkError> {
+        self.ep.local_addr()
+    }
+}
+
+impl RobotLink for SimpleUdpLink {
+    fn receive(&mut self, timeout: Duration) -> Result<Option<RobotState>, LinkError> {
+        let Some((n, from)) = self.ep.recv(&mut self.rx, timeout)? else {
+            return Ok(None);
+        };
+        let q = parse_joints_line(&self.rx[..n])?;
+        self.ep.set_peer(from);
+        self.count += 1;
+        Ok(Some(RobotState {
+            q_rad: q,
+            cycle_id: self.count,
+            ..Default::default()
+        }))
+    }
+    fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
+        let n = format_correction_line(c, self.style, &mut self.tx)?;
+        self.ep.send(&self.tx[..n])
+    }
+}
+
+/// Robot side (simulated cell).
+#[derive(Debug)]
+pub struct SimpleUdpRobotEndpoint {
+    ep: UdpEndpoint,
+    rx: [u8; LINE_BUFFER],
+    tx: [u8; LINE_BUFFER],
+    count: u64,
+}
+
+impl SimpleUdpRobotEndpoint {
+    /// Binds to `local` and sends to `pc`.
+    pub fn new(local: impl ToSocketAddrs, pc: SocketAddr) -> Result<Self, LinkError> {
+        let mut ep = UdpEndpoint::bind(local, P)?;
+        ep.set_peer(pc);
+        Ok(SimpleUdpRobotEndpoint {
+            ep,
+            rx: [0; LINE_BUFFER],
+            tx: [0; LINE_BUFFER],
+            count: 0,
+        })
+    }
+    /// Local socket address.
+    pub fn local_addr(&self) -> Result<SocketAddr, LinkError> {
+        self.ep.local_addr()
+    }
+}
+
+impl RobotSideLink for SimpleUdpRobotEndpoint {
+    /// Only the joints are sent (the protocol has no cycle id or pose).
+    fn send_state(&mut self, s: &RobotState) -> Result<(), LinkError> {
+        let n = format_joints_line(&s.q_rad, &mut self.tx)?;
+        self.ep.send(&self.tx[..n])
+    }
+    /// `cycle_id` is the count of corrections received.
+    fn receive_correction(
+        &mut self,
+        timeout: Duration,
+    ) -> Result<Option<ReceivedCorrection>, LinkError> {
+        let Some((n, _)) = self.ep.recv(&mut self.rx, timeout)? else {
+            return Ok(None);
+        };
+        let correction = parse_correction_line(&self.rx[..n])?;
+        self.count += 1;
+        Ok(Some(ReceivedCorrection {
+            correction,
+            cycle_id: self.count,
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn known_lines() {
+        let mut b = [0u8; LINE_BUFFER];
+        let n = format_joints_line(&[0.0, -1.5, 2.0, 0.25, 1e-10, -3.0], &mut b).unwrap();
+        assert_eq!(
+            std::str::from_utf8(&b[..n]).unwrap(),
+            "q 0.000000000 -1.500000000 2.000000000 0.250000000 0.000000000 -3.000000000\n"
+        );
+        let c = Correction {
+            dp_m: [0.001, 0.0, -0.5],
+            dphi_rad: [0.0, 0.1, 0.0],
+        };
+        let n = format_correction_line(&c, ReplyStyle::Tuple, &mut b).unwrap();
+        assert_eq!(
+            std::str::from_utf8(&b[..n]).unwrap(),
+            "(0.001000000,0.000000000,-0.500000000,0.000000000,0.100000000,0.000000000)\n"
+        );
+        assert_eq!(parse_correction_line(&b[..n]).unwrap(), c);
+        let n = format_correction_line(&c, ReplyStyle::Keyword, &mut b).unwrap();
+        assert!(b.starts_with(b"corr 0.001000000 "));
+        assert_eq!(parse_correction_line(&b[..n]).unwrap(), c);
+        assert!(format_correction_line(&c, ReplyStyle::Keyword, &mut b[..10]).is_err());
+    }
+
+    #[test]
+    fn tolerant_parsing_and_errors() {
+        let q = parse_joints_line(b"q [0.1, -1.57, 1.2, 0, 3.25, -6]\r\n").unwrap();
+        assert_eq!(q, [0.1, -1.57, 1.2, 0.0, 3.25, -6.0]);
+        assert_eq!(parse_joints_line(b"Q 1 2 3 4 5 6").unwrap()[5], 6.0);
+        for bad in [
+            &b"q 1 2 3 4 5"[..],
+            b"q 1 2 3 4 5 6 7",
+            b"1 2 3 4 5 6",
+            b"qq 1 2 3 4 5 6",
+            b"q 1 2 3 4 5 nan",
+            b"q 1 2 3 4 5 1e999",
+            b"q 1 2 3 4 5 x",
+            b"",
+            &[0xff, 0xfe],
+        ] {
+            assert!(parse_joints_line(bad).unwrap_err().is_bad_packet());
+        }
+        assert!(parse_correction_line(b"corrx 1 2 3 4 5 6").is_err());
+    }
+
+    #[test]
+    fn fuzz_never_panics() {
+        let mut rng = StdRng::seed_from_u64(0x5EED_0005);
+        let alphabet = b"qcor ()[],.-+eE0123456789\n\t";
+        for i in 0..20_000 {
+            let len = rng.gen_range(0..80);
+            let b: Vec<u8> = if i % 2 == 0 {
+                (0..len).map(|_| rng.r#gen()).collect()
+            } else {
+                (0..len)
+                    .map(|_| alphabet[rng.gen_range(0..alphabet.len())])
+                    .collect()
+            };
+            if let Ok(q) = parse_joints_line(&b) {
+                assert!(q.iter().all(|x| x.is_finite()));
+            }
+            let _ = parse_correction_line(&b);
+        }
+    }
+
+    #[test]
+    fn loopback_exchange() {
+        for style in [ReplyStyle::Keyword, ReplyStyle::Tuple] {
+            let mut pc = SimpleUdpLink::bind("127.0.0.1:0", style).unwrap();
+            let mut robot =
+                SimpleUdpRobotEndpoint::new("127.0.0.1:0", pc.local_addr().unwrap()).unwrap();
+            let t = Duration::from_secs(2);
+            assert!(pc.send_correction(&Correction::ZERO).is_err());
+            for k in 1..=5u64 {
+                let s = RobotState {
+                    q_rad: [0.123456789 * k as f64; 6],
+                    ..Default::default()
+                };
+                robot.send_state(&s).unwrap();
+                let got = pc.receive(t).unwrap().unwrap();
+                assert_eq!(got.cycle_id, k);
+                assert!((got.q_rad[0] - s.q_rad[0]).abs() < 1e-9);
+                let c = Correction {
+                    dp_m: [1e-4, 2e-4, 3e-4],
+                    dphi_rad: [1e-5, 0.0, -1e-5],
+                };
+                pc.send_correction(&c).unwrap();
+                let rc = robot.receive_correction(t).unwrap().unwrap();
+                assert_eq!(rc.correction, c);
+                assert_eq!(rc.cycle_id, k);
+            }
+        }
+    }
+}

@@ -1,0 +1,51 @@
+//! The hot path (FK + eDoF screws + deflection + compliance) performs zero heap allocations,
+//! checked with a counting global allocator.
+
+use deflex_model::{Axis, Data, EdofSite, Wrench, builtin};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn hot_path_allocates_nothing() {
+    let mut robot = builtin("tx200").unwrap();
+    for i in 1..=6 {
+        for axis in Axis::ALL {
+            robot.set_stiffness(EdofSite::Joint(i), axis, Some(3.0e6));
+        }
+    }
+    robot.set_stiffness(EdofSite::Base, Axis::X, Some(5.0e7));
+    robot.set_stiffness(EdofSite::Base, Axis::Y, Some(5.0e7));
+    let mut data = Data::new();
+    let q = [0.1, 0.8, 1.5, 0.05, 0.7, -0.1];
+    let wrench = Wrench::new(100.0, -300.0, 1200.0, 1.0, 2.0, 3.0);
+    let mut sink = 0.0;
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    for k in 0..1000 {
+        let mut qk = q;
+        qk[0] += k as f64 * 1e-4;
+        robot.forward_kinematics(&mut data, &qk).unwrap();
+        sink += robot.tcp_deflection(&data, &wrench)[2];
+        sink += robot.compliance_matrix(&data)[(2, 2)];
+        let columns = robot.edof_columns(&data, &data.tcp_position(), 6);
+        sink += columns.columns[0][0];
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert!(sink.is_finite());
+    assert_eq!(after - before, 0, "the hot path allocated {} times", after - before);
+}
