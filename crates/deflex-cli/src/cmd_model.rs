@@ -408,8 +408,47 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
     Ok(())
 }
 
-/// Heatmaps of δz and |δp| over the grid (mm).
-pub fn map_plots(out: &std::path::Path, nodes: &[MapNode], robot_name: &str, wrench: &[f64; 6]) -> Result<Vec<PathBuf>, String> {
-    let _ = (out, nodes, robot_name, wrench);
-    Ok(Vec::new())
+/// Heatmaps of δz and |δp| over the grid (mm), one cell per node.
+pub fn map_plots(
+    out: &std::path::Path,
+    nodes: &[MapNode],
+    robot_name: &str,
+    wrench: &[f64; 6],
+) -> Result<Vec<PathBuf>, String> {
+    let mut xs: Vec<f64> = nodes.iter().map(|n| n.position_m[0] * 1e3).collect();
+    let mut ys: Vec<f64> = nodes.iter().map(|n| n.position_m[1] * 1e3).collect();
+    for v in [&mut xs, &mut ys] {
+        v.sort_by(f64::total_cmp);
+        v.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+    }
+    let index = |values: &[f64], v: f64| values.iter().position(|x| (x - v).abs() < 1e-6);
+    let mut dz = vec![f64::NAN; xs.len() * ys.len()];
+    let mut norm = vec![f64::NAN; xs.len() * ys.len()];
+    for node in nodes {
+        if let (Some(ix), Some(iy)) = (index(&xs, node.position_m[0] * 1e3), index(&ys, node.position_m[1] * 1e3)) {
+            dz[iy * xs.len() + ix] = node.deflection[2] * 1e3;
+            norm[iy * xs.len() + ix] = node.deflection.fixed_rows::<3>(0).norm() * 1e3;
+        }
+    }
+    let load = format!(
+        "F = ({:.0}, {:.0}, {:.0}) N",
+        wrench[0], wrench[1], wrench[2]
+    );
+    let z_mm = nodes.first().map(|n| n.position_m[2] * 1e3).unwrap_or(0.0);
+    let mut written = Vec::new();
+    for (name, values, label) in [
+        ("deflection_dz.png", &dz, "δz [mm]"),
+        ("deflection_norm.png", &norm, "|δp| [mm]"),
+    ] {
+        let path = out.join(name);
+        let spec = deflex_report::PlotSpec::new(
+            format!("{robot_name}: predicted {label} at z = {z_mm:.0} mm, {load}"),
+            "x [mm]",
+            "y [mm]",
+        )
+        .size(1000, 800);
+        deflex_report::heatmap(&path, &spec, &xs, &ys, values, label).map_err(|e| e.to_string())?;
+        written.push(path);
+    }
+    Ok(written)
 }

@@ -28,8 +28,12 @@ fn bench(c: &mut Criterion) {
         0.0,
     ];
     let wrench = Wrench::new(150.0, -300.0, 1200.0, 0.0, 0.0, 0.0);
+    let table1 = builtin("tx200").expect("builtin");
+    let mut seven = table1.clone();
+    seven.set_stiffness(EdofSite::Joint(6), Axis::Z, Some(0.02e6));
     for (label, robot) in [
-        ("tx200_7_edofs", builtin("tx200").expect("builtin")),
+        ("tx200_table1_6_edofs", table1),
+        ("tx200_7_edofs", seven),
         ("tx200_20_edofs", full_model()),
     ] {
         let mut data = Data::new();
