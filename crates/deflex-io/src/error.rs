@@ -17,7 +17,8 @@ pub enum Protocol {
     Staubli,
     /// ATI Net F/T Raw Data Transfer (binary UDP).
     NetFt,
-    /// The generic text line protocol of [`crate::simple_udp`].
+    /// The generic text line protocol of [`crate::simple_udp`] (UDP) and
+    /// [`crate::simple_tcp`] (TCP).
     SimpleLine,
     /// The small XML scanner of [`crate::xml`].
     Xml,
@@ -72,8 +73,9 @@ pub enum LinkError {
         /// Checksum computed over the received bytes.
         computed: u32,
     },
-    /// A received datagram did not fit in the receive buffer.
-    #[error("{protocol} datagram larger than the {capacity}-byte receive buffer")]
+    /// A received datagram (or, on a TCP line stream, a line) did not fit in
+    /// the receive buffer.
+    #[error("{protocol} message larger than the {capacity}-byte receive buffer")]
     Oversize {
         /// Protocol of the endpoint.
         protocol: Protocol,

@@ -3,7 +3,7 @@
 //! Wire protocols between the deflex controller, industrial robot
 //! controllers and a force/torque sensor, each with **both sides**
 //! implemented so that a simulated cell can play the robot or the sensor over
-//! loopback UDP with the very same code:
+//! loopback UDP (or TCP) with the very same code:
 //!
 //! | module | protocol | units on the wire |
 //! |---|---|---|
@@ -11,13 +11,15 @@
 //! | [`egm`] | ABB EGM path correction, protobuf over UDP | mm, degrees |
 //! | [`staubli`] | deflex binary protocol for a Stäubli VAL3 `alter` program | m, rad |
 //! | [`netft`] | ATI Net F/T RDT, binary UDP (port 49152) | sensor counts |
-//! | [`simple_udp`] | text lines, for other controllers (e.g. UR) | m, rad |
+//! | [`simple_udp`] | text lines over UDP, for other controllers | m, rad |
+//! | [`simple_tcp`] | the same text lines over TCP (port 50161), for UR URScript | m, rad |
 //!
 //! Inside the crate and at its API everything is SI: metres, radians,
 //! newtons, newton-metres ([`link`]). Each protocol module offers pure
-//! parse/format functions on byte slices (no I/O) plus UDP endpoints for the
-//! controller side ([`RobotLink`], [`ForceSensorLink`]) and the robot/sensor
-//! side ([`RobotSideLink`], [`netft::NetFtSensorServer`]).
+//! parse/format functions on byte slices (no I/O) plus UDP endpoints (TCP for
+//! [`simple_tcp`], whose robot is a TCP client) for the controller side
+//! ([`RobotLink`], [`ForceSensorLink`]) and the robot/sensor side
+//! ([`RobotSideLink`], [`netft::NetFtSensorServer`]).
 //!
 //! The controller-side hot path (`receive` / `send_correction`) does not
 //! allocate after construction: buffers are fixed and reused. Network input
@@ -31,6 +33,7 @@ pub mod error;
 pub mod link;
 pub mod netft;
 pub mod rsi;
+pub mod simple_tcp;
 pub mod simple_udp;
 pub mod staubli;
 pub mod udp;

@@ -1,6 +1,7 @@
 //! Generic text line protocol over UDP, for controllers without a dedicated
-//! protocol (e.g. a Universal Robots URScript loop, see
-//! `docs/ur/deflex_loop.script`). One datagram carries one line:
+//! protocol. One datagram carries one line. URScript (Universal Robots) only
+//! has TCP client sockets: it uses the same lines over TCP,
+//! [`crate::simple_tcp`] (see `docs/ur/deflex_loop.script`).
 //!
 //! * robot → PC: `q <q1> <q2> <q3> <q4> <q5> <q6>\n` — joint positions in
 //!   **rad**;

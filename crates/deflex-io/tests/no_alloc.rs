@@ -4,6 +4,7 @@
 use deflex_io::egm::{EgmLink, EgmRobotEndpoint};
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
+use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
 use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
 use deflex_io::{Correction, ForceSensorLink, Pose6, RobotLink, RobotSideLink, RobotState};
@@ -104,6 +105,10 @@ fn robot_links_do_not_allocate_on_the_hot_path() {
     let mut pc = SimpleUdpLink::bind("127.0.0.1:0", ReplyStyle::Keyword).unwrap();
     let mut robot = SimpleUdpRobotEndpoint::new("127.0.0.1:0", pc.local_addr().unwrap()).unwrap();
     assert_eq!(run(&mut pc, &mut robot), 0, "simple line");
+
+    let mut pc = SimpleTcpLink::bind("127.0.0.1:0").unwrap();
+    let mut robot = SimpleTcpRobotEndpoint::connect(pc.local_addr().unwrap(), T).unwrap();
+    assert_eq!(run(&mut pc, &mut robot), 0, "simple line over TCP");
 }
 
 #[test]
