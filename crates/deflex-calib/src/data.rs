@@ -86,6 +86,40 @@ const POINT_COLUMNS: [&str; 3] = ["x_m", "y_m", "z_m"];
 const DISPLACEMENT_COLUMNS: [&str; 3] = ["dx_m", "dy_m", "dz_m"];
 const ROTATION_COLUMNS: [&str; 3] = ["drx_rad", "dry_rad", "drz_rad"];
 
+/// Read a measurement (or plan) file for a robot with `joint_count` joints: like
+/// [`read_measurements`] / [`read_plan`], but a file written for a different joint count is
+/// reported as such ("the data has 5 joint columns … but the robot has 6 joints") before any
+/// row-level check.
+pub fn read_for_robot(
+    path: &Path,
+    joint_count: usize,
+    require_displacement: bool,
+) -> Result<Vec<MeasurementRow>, DataError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
+        path: origin.clone(),
+        source,
+    })?;
+    let header = text
+        .lines()
+        .find(|l| !l.trim_start().starts_with('#'))
+        .unwrap_or("");
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let mut found = 0;
+    while names.contains(&format!("q{}_rad", found + 1).as_str()) {
+        found += 1;
+    }
+    if found > 0 && found != joint_count {
+        return Err(DataError::Content {
+            path: origin,
+            message: format!(
+                "the data has {found} joint columns (q1_rad…q{found}_rad) but the robot has {joint_count} joints"
+            ),
+        });
+    }
+    parse_rows(&text, &origin, require_displacement)
+}
+
 /// Read a measurement file: every row must carry the displacement columns.
 pub fn read_measurements(path: &Path) -> Result<Vec<MeasurementRow>, DataError> {
     read_rows(path, true)
@@ -126,18 +160,38 @@ pub fn parse_rows(
         joint_count += 1;
     }
     if joint_count == 0 {
-        return Err(header_error("no joint columns: expected q1_rad, q2_rad, …".into()));
+        return Err(header_error(
+            "no joint columns: expected q1_rad, q2_rad, …".into(),
+        ));
     }
-    let mut required: Vec<String> = vec!["load_case".into(), "load_link".into(), "point".into(), "point_link".into()];
-    required.extend(WRENCH_COLUMNS.iter().chain(&LOAD_POINT_COLUMNS).chain(&POINT_COLUMNS).map(|s| s.to_string()));
+    let mut required: Vec<String> = vec![
+        "load_case".into(),
+        "load_link".into(),
+        "point".into(),
+        "point_link".into(),
+    ];
+    required.extend(
+        WRENCH_COLUMNS
+            .iter()
+            .chain(&LOAD_POINT_COLUMNS)
+            .chain(&POINT_COLUMNS)
+            .map(|s| s.to_string()),
+    );
     if require_displacement {
         required.extend(DISPLACEMENT_COLUMNS.iter().map(|s| s.to_string()));
     }
-    let missing: Vec<&String> = required.iter().filter(|c| !index.contains_key(c.as_str())).collect();
+    let missing: Vec<&String> = required
+        .iter()
+        .filter(|c| !index.contains_key(c.as_str()))
+        .collect();
     if !missing.is_empty() {
         return Err(header_error(format!(
             "missing column(s) {}",
-            missing.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ")
+            missing
+                .iter()
+                .map(|s| format!("`{s}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
         )));
     }
     let has_displacement = DISPLACEMENT_COLUMNS.iter().all(|c| index.contains_key(c));
@@ -165,19 +219,25 @@ pub fn parse_rows(
         let text_of = |name: &str| record.get(index[name]).unwrap_or("");
         let number = |name: &str| -> Result<f64, DataError> {
             let text = text_of(name);
-            let value: f64 = text
-                .parse()
-                .map_err(|_| row_error(format!("column `{name}`: expected a number, got \"{text}\"")))?;
+            let value: f64 = text.parse().map_err(|_| {
+                row_error(format!(
+                    "column `{name}`: expected a number, got \"{text}\""
+                ))
+            })?;
             if value.is_finite() {
                 Ok(value)
             } else {
-                Err(row_error(format!("column `{name}`: value must be finite, got {text}")))
+                Err(row_error(format!(
+                    "column `{name}`: value must be finite, got {text}"
+                )))
             }
         };
         let link = |name: &str| -> Result<usize, DataError> {
             let text = text_of(name);
             let value: usize = text.parse().map_err(|_| {
-                row_error(format!("column `{name}`: expected a link index 0..={joint_count}, got \"{text}\""))
+                row_error(format!(
+                    "column `{name}`: expected a link index 0..={joint_count}, got \"{text}\""
+                ))
             })?;
             if value > joint_count {
                 return Err(row_error(format!(
@@ -214,13 +274,16 @@ pub fn parse_rows(
         if let Some(sigma) = sigma_m
             && sigma <= 0.0
         {
-            return Err(row_error(format!("column `sigma_m`: must be positive, got {sigma}")));
+            return Err(row_error(format!(
+                "column `sigma_m`: must be positive, got {sigma}"
+            )));
         }
-        let displacement_m = if has_displacement && (require_displacement || !text_of("dx_m").is_empty()) {
-            Some(triple(&DISPLACEMENT_COLUMNS)?)
-        } else {
-            None
-        };
+        let displacement_m =
+            if has_displacement && (require_displacement || !text_of("dx_m").is_empty()) {
+                Some(triple(&DISPLACEMENT_COLUMNS)?)
+            } else {
+                None
+            };
         let rotation_rad = if has_rotation && !text_of("drx_rad").is_empty() {
             Some(triple(&ROTATION_COLUMNS)?)
         } else {
@@ -340,7 +403,7 @@ mod tests {
     fn sample() -> Vec<MeasurementRow> {
         vec![MeasurementRow {
             load_case: "L1".into(),
-            q_rad: vec![0.0, 1.5707963267948966, 0.0, 0.0, 0.0, 0.0],
+            q_rad: vec![0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0],
             wrench: [0.0, 1400.0, 0.0, 0.0, 0.0, 0.0],
             load_link: 6,
             load_point_m: [2.194, 0.0, 0.0],
@@ -369,16 +432,27 @@ mod tests {
         assert!(err.contains("t.csv:2") && err.contains("fy_N"), "{err}");
         let bad = text.replace("1400.0", "12x");
         let err = parse_rows(&bad, "t.csv", true).unwrap_err().to_string();
-        assert!(err.contains("expected a number") && err.contains("\"12x\""), "{err}");
+        assert!(
+            err.contains("expected a number") && err.contains("\"12x\""),
+            "{err}"
+        );
         let short = format!("{}{}", text, "L2,0,0\n");
         let err = parse_rows(&short, "t.csv", true).unwrap_err().to_string();
         assert!(err.contains("t.csv:3") && err.contains("fields"), "{err}");
         let no_dx = text.replacen("dx_m", "dq_m", 1);
         let err = parse_rows(&no_dx, "t.csv", true).unwrap_err().to_string();
-        assert!(err.contains("missing column") && err.contains("dx_m"), "{err}");
+        assert!(
+            err.contains("missing column") && err.contains("dx_m"),
+            "{err}"
+        );
         let bad_link = text.replace(",6,2.194", ",9,2.194");
-        let err = parse_rows(&bad_link, "t.csv", true).unwrap_err().to_string();
-        assert!(err.contains("load_link") && err.contains("does not exist"), "{err}");
+        let err = parse_rows(&bad_link, "t.csv", true)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("load_link") && err.contains("does not exist"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -3,5 +3,46 @@
 //! Identification of the VJM stiffness model from laser-tracker measurements (Johra et al. 2022,
 //! Section 3): the measurement and plan file formats, calibration, the automatic model-structure
 //! search, experiment planning and validation.
+//!
+//! * [`design`]: the design matrix of eqs. 13–15, linear in the compliances c = 1/k and
+//!   quadratic in each centre shift δr;
+//! * [`nnls`]: Lawson–Hanson non-negative least squares (c ≥ 0);
+//! * [`fit`]: fixed-structure calibration with standard errors, intervals, correlations;
+//! * [`search`]: the paper's test-model loop (Fig. 6, Tables A1/A2) automated with BIC;
+//! * [`plan`]: axis-by-axis and D-optimal experiment design;
+//! * [`validate`]: prediction errors against measurements, with plots and HTML;
+//! * [`synthetic`]: measurement generation from a known model (tests, benches, demos);
+//! * [`report`]: text tables.
+
+#![warn(missing_docs)]
 
 pub mod data;
+pub mod design;
+pub mod fit;
+pub mod nnls;
+pub mod plan;
+pub mod report;
+pub mod search;
+mod shift;
+pub mod synthetic;
+pub mod validate;
+
+pub use data::{
+    DataError, MeasurementRow, read_for_robot, read_measurements, read_plan, write_rows,
+};
+pub use design::{DEFAULT_SIGMA_M, Design, EdofId, edof_label};
+pub use fit::{
+    Calibration, EdofEstimate, ResidualStats, ShiftEstimate, Status, Structure, calibrate_fixed,
+};
+pub use search::{SearchOptions, SearchResult, SearchStep, search_structure};
+
+/// Why a calibration, plan or validation could not be done. Messages are meant for the user.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibError {
+    /// Bad file.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// Data or request that cannot be used, with the reason.
+    #[error("{0}")]
+    Invalid(String),
+}

@@ -215,7 +215,7 @@ pub(crate) fn parse_chain(
             "fixed" => pending *= joint.origin,
             "revolute" | "continuous" => {
                 let norm = joint.axis.norm();
-                if !(norm > 1e-9) {
+                if norm.is_nan() || norm <= 1e-9 {
                     return Err(invalid(
                         path,
                         &format!("joint \"{}\" <axis xyz>", joint.name),

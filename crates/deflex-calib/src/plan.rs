@@ -1,0 +1,367 @@
+//! Experiment planning: which configurations, loads and points to measure.
+//!
+//! 1. **Axis by axis** (the paper's Fig. 7 and Tables A1/A2, generalised): for every eDoF, among
+//!    many reachable configurations (joint limits respected, angles rounded to 0.1°) and
+//!    world-axis load directions (±x, ±y, ±z at the TCP, like a cable or a deadweight), the load
+//!    case where that eDoF's share of the predicted displacement (eq. 15, all measured points) is
+//!    largest while being clearly visible (≥ 10 σ).
+//! 2. **D-optimal completion**: greedily add, from the same candidates, the load case that
+//!    maximises `log det F` of the Fisher information `F = Σ JᵀJ/σ²` of the relative compliances
+//!    `c_e / c_e,nominal`, up to the requested number of load cases.
+//!
+//! The expected standard error of every stiffness follows from `F⁻¹` (relative SE of k equals
+//! relative SE of c to first order). Each load case measures the TCP and two mid-arm points
+//! ([`standard_points`]), like the paper's M1..M3.
+
+use crate::CalibError;
+use crate::data::MeasurementRow;
+use crate::design::{Design, EdofId, edof_label};
+use crate::synthetic::{case_rows, random_q};
+use deflex_model::{Axis, Data, EdofSite, Robot};
+use nalgebra::{DMatrix, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// Settings of [`plan_experiments`].
+#[derive(Clone, Debug)]
+pub struct PlanOptions {
+    /// Load magnitude (N).
+    pub max_force_n: f64,
+    /// Total number of load cases (axis-by-axis ones included).
+    pub load_cases: usize,
+    /// Random configurations tried (each with 6 load directions).
+    pub configurations: usize,
+    /// Tracker noise (m) for the expected standard errors.
+    pub noise_sigma_m: f64,
+    /// Random seed.
+    pub seed: u64,
+    /// Plan for every eDoF of the model family (x, y, z per joint, base x/y tilt), not only the
+    /// model's: what the structure search needs. Absent eDoFs get the median stiffness.
+    pub full_family: bool,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        PlanOptions {
+            max_force_n: 1500.0,
+            load_cases: 24,
+            configurations: 600,
+            noise_sigma_m: 15e-6,
+            seed: 1,
+            full_family: false,
+        }
+    }
+}
+
+/// Expected precision of one stiffness under a plan.
+#[derive(Clone, Debug)]
+pub struct ExpectedSe {
+    /// The eDoF.
+    pub id: EdofId,
+    /// Label.
+    pub label: String,
+    /// Nominal stiffness used (N·m/rad).
+    pub nominal_k: f64,
+    /// Expected standard error of k (N·m/rad); +∞ when not identifiable.
+    pub se_k: f64,
+    /// `se_k / nominal_k`.
+    pub relative: f64,
+}
+
+/// The axis-by-axis choice for one eDoF.
+#[derive(Clone, Debug)]
+pub struct AxisCase {
+    /// The eDoF.
+    pub id: EdofId,
+    /// Load-case label in the plan.
+    pub load_case: String,
+    /// That eDoF's share of the summed per-eDoF displacement norms.
+    pub share: f64,
+    /// Its contribution, in units of the tracker σ.
+    pub snr: f64,
+}
+
+/// A measurement campaign.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Rows in the plan format (no displacement).
+    pub rows: Vec<MeasurementRow>,
+    /// Axis-by-axis choices.
+    pub axis_cases: Vec<AxisCase>,
+    /// Expected SE of every planned stiffness.
+    pub expected: Vec<ExpectedSe>,
+    /// `log det` of the final information matrix (relative parameters).
+    pub log_det: f64,
+}
+
+/// Measured points of a load case: the TCP (last link) and the middle of the two links at the
+/// middle of the arm (links ⌈N/2⌉ and ⌈N/2⌉ − 1), named `M<link>`. A point too close to its
+/// joint axis is moved 0.1 m along x_k so that it sees the joint's z-eDoF.
+pub fn standard_points(robot: &Robot, data: &Data) -> Vec<(String, usize, Vector3<f64>)> {
+    let n = robot.joint_count();
+    let mut out = vec![("TCP".to_string(), n, data.tcp_position())];
+    let m = n.div_ceil(2);
+    for link in [m, m.saturating_sub(1)] {
+        if link == 0 || link >= n {
+            continue;
+        }
+        let frame = data.link_frame(link);
+        let o = frame.translation.vector;
+        let next = data.link_frame(link + 1).translation.vector;
+        let mut p = 0.5 * (o + next);
+        let z: Vector3<f64> = frame.rotation.matrix().column(2).into_owned();
+        let radial = (p - o) - z * z.dot(&(p - o));
+        if radial.norm() < 0.05 {
+            p += frame.rotation.matrix().column(0) * 0.1;
+        }
+        out.push((format!("M{link}"), link, p));
+    }
+    out
+}
+
+/// Plan a campaign for `robot` (its geometry, eDoFs, stiffnesses and centre shifts are the
+/// nominal model).
+pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, CalibError> {
+    if !(options.max_force_n.is_finite() && options.max_force_n > 0.0) {
+        return Err(CalibError::Invalid(
+            "--max-force-N must be a positive number".into(),
+        ));
+    }
+    if !(options.noise_sigma_m.is_finite() && options.noise_sigma_m > 0.0) {
+        return Err(CalibError::Invalid("tracker noise must be positive".into()));
+    }
+    let (edofs, nominal) = planned_edofs(robot, options.full_family);
+    if edofs.is_empty() {
+        return Err(CalibError::Invalid(format!(
+            "robot \"{}\" has no eDoF to plan for (use the full model family)",
+            robot.name
+        )));
+    }
+    let shifts: Vec<f64> = robot.joints.iter().map(|j| j.center_shift).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    let mut data = Data::new();
+    // Candidates: configurations × 6 world-axis load directions.
+    let mut cand_rows: Vec<Vec<MeasurementRow>> = Vec::new();
+    for _ in 0..options.configurations.max(1) {
+        let q: Vec<f64> = random_q(robot, &mut rng)
+            .into_iter()
+            .map(|v| (v.to_degrees() * 10.0).round().to_radians() / 10.0)
+            .collect();
+        robot
+            .forward_kinematics(&mut data, &q)
+            .map_err(|e| CalibError::Invalid(e.to_string()))?;
+        for dir in 0..6 {
+            let mut f = Vector3::zeros();
+            f[dir / 2] = if dir % 2 == 0 { 1.0 } else { -1.0 } * options.max_force_n;
+            cand_rows.push(case_rows(robot, &data, &q, &f, "", None));
+        }
+    }
+    let flat: Vec<MeasurementRow> = cand_rows
+        .iter()
+        .flatten()
+        .cloned()
+        .map(|mut r| {
+            r.sigma_m = Some(options.noise_sigma_m);
+            r
+        })
+        .collect();
+    let design = Design::build(robot, &flat, &edofs, false)?;
+    let p = edofs.len();
+    // U_c: p × (equations of the case), relative-compliance sensitivities in units of σ.
+    let mut sens: Vec<DMatrix<f64>> = Vec::with_capacity(cand_rows.len());
+    let mut eq0 = 0;
+    for case in &cand_rows {
+        let m = 3 * case.len();
+        let mut u = DMatrix::zeros(p, m);
+        for e in 0..p {
+            let s = design.shift_joint(e).map(|j| shifts[j - 1]).unwrap_or(0.0);
+            for (b, coef) in design.col(e, s) {
+                for k in 0..m {
+                    u[(e, k)] += coef * design.x[(eq0 + k, b)] * nominal[e].recip();
+                }
+            }
+        }
+        eq0 += m;
+        sens.push(u);
+    }
+    let mut chosen: Vec<(usize, String)> = Vec::new();
+    let mut axis_cases = Vec::new();
+    for (e, &id) in edofs.iter().enumerate() {
+        let mut best: Option<(f64, f64, usize)> = None;
+        let mut loudest: Option<(f64, usize)> = None;
+        for (c, u) in sens.iter().enumerate() {
+            let norms: Vec<f64> = (0..p).map(|f| u.row(f).norm()).collect();
+            let total: f64 = norms.iter().sum();
+            if total <= 0.0 {
+                continue;
+            }
+            let share = norms[e] / total;
+            if norms[e] >= 10.0 && best.is_none_or(|(s, ..)| share > s) {
+                best = Some((share, norms[e], c));
+            }
+            if loudest.is_none_or(|(s, _)| norms[e] > s) {
+                loudest = Some((norms[e], c));
+            }
+        }
+        let pick = best.or_else(|| {
+            loudest.filter(|l| l.0 >= 3.0).map(|(snr, c)| {
+                let u = &sens[c];
+                let total: f64 = (0..p).map(|f| u.row(f).norm()).sum();
+                (snr / total, snr, c)
+            })
+        });
+        if let Some((share, snr, c)) = pick {
+            let label = format!("A{:02}", axis_cases.len() + 1);
+            if !chosen.iter().any(|(k, _)| *k == c) {
+                chosen.push((c, format!("axis-by-axis {}", edof_label(id))));
+            }
+            let load_case = chosen
+                .iter()
+                .position(|(k, _)| *k == c)
+                .map(|i| format!("A{:02}", i + 1))
+                .unwrap_or(label);
+            axis_cases.push(AxisCase {
+                id,
+                load_case,
+                share,
+                snr,
+            });
+        }
+    }
+    let axis_count = chosen.len();
+    // Greedy D-optimal completion.
+    let ridge = 1e-9;
+    let mut info = DMatrix::<f64>::identity(p, p) * ridge;
+    for (c, _) in &chosen {
+        info += &sens[*c] * sens[*c].transpose();
+    }
+    while chosen.len() < options.load_cases.max(axis_count) {
+        let mut best: Option<(f64, usize)> = None;
+        for (c, u) in sens.iter().enumerate() {
+            if chosen.iter().any(|(k, _)| *k == c) {
+                continue;
+            }
+            let trial = &info + u * u.transpose();
+            let Some(ch) = trial.cholesky() else { continue };
+            let ld: f64 = ch.l().diagonal().iter().map(|v| 2.0 * v.ln()).sum();
+            if best.is_none_or(|(b, _)| ld > b) {
+                best = Some((ld, c));
+            }
+        }
+        let Some((_, c)) = best else { break };
+        info += &sens[c] * sens[c].transpose();
+        chosen.push((c, "D-optimal".into()));
+    }
+    let log_det = info
+        .clone()
+        .cholesky()
+        .map(|ch| ch.l().diagonal().iter().map(|v| 2.0 * v.ln()).sum())
+        .unwrap_or(f64::NEG_INFINITY);
+    // Expected SE: the model's eDoFs from their joint information; an extra family eDoF (with
+    // `full_family`) from the information of the model's eDoFs plus that one, i.e. its precision
+    // if the structure search adds it.
+    let own: Vec<usize> = (0..p)
+        .filter(|&e| robot.stiffness(edofs[e].0, edofs[e].1).is_some())
+        .collect();
+    let relative_se = |set: &[usize], e: usize| -> f64 {
+        let m = set.len();
+        let sub = DMatrix::from_fn(m, m, |i, j| {
+            info[(set[i], set[j])] - if i == j { ridge } else { 0.0 }
+        });
+        let Some(pos) = set.iter().position(|&k| k == e) else {
+            return f64::INFINITY;
+        };
+        let d: Vec<f64> = (0..m).map(|i| sub[(i, i)].max(0.0).sqrt()).collect();
+        if d[pos] == 0.0 {
+            return f64::INFINITY;
+        }
+        let scaled = DMatrix::from_fn(m, m, |i, j| {
+            if d[i] > 0.0 && d[j] > 0.0 {
+                sub[(i, j)] / (d[i] * d[j])
+            } else if i == j {
+                1.0
+            } else {
+                0.0
+            }
+        });
+        let eig_min = scaled
+            .clone()
+            .symmetric_eigenvalues()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        if eig_min < 1e-10 {
+            return f64::INFINITY;
+        }
+        match scaled.cholesky() {
+            Some(ch) => ch.inverse()[(pos, pos)].max(0.0).sqrt() / d[pos],
+            None => f64::INFINITY,
+        }
+    };
+    let expected = edofs
+        .iter()
+        .enumerate()
+        .map(|(e, &id)| {
+            let mut set = own.clone();
+            if !set.contains(&e) {
+                set.push(e);
+            }
+            let rel = relative_se(&set, e);
+            ExpectedSe {
+                id,
+                label: edof_label(id),
+                nominal_k: nominal[e],
+                se_k: rel * nominal[e],
+                relative: rel,
+            }
+        })
+        .collect();
+    let mut rows = Vec::new();
+    for (i, (c, purpose)) in chosen.iter().enumerate() {
+        let label = if i < axis_count {
+            format!("A{:02}", i + 1)
+        } else {
+            format!("D{:02}", i + 1 - axis_count)
+        };
+        for r in &cand_rows[*c] {
+            let mut r = r.clone();
+            r.load_case = label.clone();
+            r.purpose = Some(purpose.clone());
+            rows.push(r);
+        }
+    }
+    Ok(Plan {
+        rows,
+        axis_cases,
+        expected,
+        log_det,
+    })
+}
+
+/// eDoFs to plan for and their nominal stiffness.
+fn planned_edofs(robot: &Robot, full: bool) -> (Vec<EdofId>, Vec<f64>) {
+    let own: Vec<(EdofId, f64)> = robot
+        .edofs()
+        .map(|e| ((e.site, e.axis), e.stiffness))
+        .collect();
+    if !full {
+        return (
+            own.iter().map(|e| e.0).collect(),
+            own.iter().map(|e| e.1).collect(),
+        );
+    }
+    let mut ks: Vec<f64> = own.iter().map(|e| e.1).collect();
+    ks.sort_by(f64::total_cmp);
+    let median = ks.get(ks.len() / 2).copied().unwrap_or(1e6);
+    let mut ids: Vec<EdofId> = vec![(EdofSite::Base, Axis::X), (EdofSite::Base, Axis::Y)];
+    for i in 1..=robot.joint_count() {
+        for a in Axis::ALL {
+            ids.push((EdofSite::Joint(i), a));
+        }
+    }
+    let nominal = ids
+        .iter()
+        .map(|id| robot.stiffness(id.0, id.1).unwrap_or(median))
+        .collect();
+    (ids, nominal)
+}

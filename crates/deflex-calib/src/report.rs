@@ -1,0 +1,275 @@
+//! Text and CSV tables: the search iteration table (like the paper's Tables A1/A2), the
+//! identified stiffnesses with standard errors and 95 % intervals (like Table 1), the correlation
+//! matrix, residuals, expected standard errors of a plan, validation errors.
+
+use crate::fit::{Calibration, Status};
+use crate::plan::Plan;
+use crate::search::SearchStep;
+use crate::validate::Validation;
+use std::fmt::Write as _;
+
+fn um(x: f64) -> String {
+    format!("{:.1}", x * 1e6)
+}
+
+fn k_fmt(k: f64) -> String {
+    if k.is_infinite() {
+        "∞".into()
+    } else {
+        format!("{:.4e}", k)
+    }
+}
+
+/// Table rows of the search: iteration, change, structure, parameters, RMS, BIC, ΔBIC.
+pub fn iteration_rows(steps: &[SearchStep]) -> Vec<Vec<String>> {
+    steps
+        .iter()
+        .map(|s| {
+            vec![
+                s.iteration.to_string(),
+                s.change.clone(),
+                s.structure.clone(),
+                s.parameters.to_string(),
+                um(s.residuals.rms_all_m),
+                um(s.residuals.rms_m[0]),
+                um(s.residuals.rms_m[1]),
+                um(s.residuals.rms_m[2]),
+                format!("{:.1}", s.bic),
+                if s.iteration == 0 {
+                    "".into()
+                } else {
+                    format!("{:.1}", s.delta_bic)
+                },
+            ]
+        })
+        .collect()
+}
+
+/// Headers of [`iteration_rows`].
+pub const ITERATION_HEADERS: [&str; 10] = [
+    "step",
+    "change",
+    "structure",
+    "params",
+    "RMS [µm]",
+    "RMS x",
+    "RMS y",
+    "RMS z",
+    "BIC",
+    "ΔBIC",
+];
+
+/// Headers of [`stiffness_rows`].
+pub const STIFFNESS_HEADERS: [&str; 6] = [
+    "eDoF",
+    "k [N·m/rad]",
+    "SE [N·m/rad]",
+    "95% low",
+    "95% high",
+    "status",
+];
+
+/// Table rows of the identified stiffnesses and shifts.
+pub fn stiffness_rows(cal: &Calibration) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
+    for e in &cal.edofs {
+        let status = match &e.status {
+            Status::Identified => "identified".to_string(),
+            Status::Weak => "weakly identified".to_string(),
+            Status::NotIdentifiable(r) => r.clone(),
+        };
+        let (lo, hi) = e
+            .interval95
+            .map(|(a, b)| (k_fmt(a), k_fmt(b)))
+            .unwrap_or(("-".into(), "-".into()));
+        rows.push(vec![
+            e.label.clone(),
+            e.stiffness.map(k_fmt).unwrap_or("-".into()),
+            e.stiffness_se.map(k_fmt).unwrap_or("-".into()),
+            lo,
+            hi,
+            status,
+        ]);
+    }
+    for s in &cal.shifts {
+        let se = s.se_m.map(|v| format!("{:.4}", v)).unwrap_or("-".into());
+        let (lo, hi) = s
+            .se_m
+            .map(|v| {
+                (
+                    format!("{:.4}", s.value_m - crate::fit::Z95 * v),
+                    format!("{:.4}", s.value_m + crate::fit::Z95 * v),
+                )
+            })
+            .unwrap_or(("-".into(), "-".into()));
+        rows.push(vec![
+            format!("δr{} [m]", s.joint),
+            format!("{:.4}", s.value_m),
+            se,
+            lo,
+            hi,
+            if s.free {
+                "fitted".into()
+            } else {
+                "fixed".into()
+            },
+        ]);
+    }
+    rows
+}
+
+/// Render a table with aligned columns.
+pub fn render_table(headers: &[&str], rows: &[Vec<String>]) -> String {
+    let ncol = headers.len();
+    let mut width: Vec<usize> = headers.iter().map(|h| h.chars().count()).collect();
+    for r in rows {
+        for (i, c) in r.iter().enumerate().take(ncol) {
+            width[i] = width[i].max(c.chars().count());
+        }
+    }
+    let mut out = String::new();
+    let line = |cells: Vec<&str>, out: &mut String| {
+        let parts: Vec<String> = cells
+            .iter()
+            .enumerate()
+            .map(|(i, c)| format!("{c}{}", " ".repeat(width[i] - c.chars().count())))
+            .collect();
+        let _ = writeln!(out, "{}", parts.join("  ").trim_end());
+    };
+    line(headers.to_vec(), &mut out);
+    let total: usize = width.iter().sum::<usize>() + 2 * (ncol - 1);
+    let _ = writeln!(out, "{}", "-".repeat(total));
+    for r in rows {
+        line(r.iter().map(String::as_str).collect(), &mut out);
+    }
+    out
+}
+
+/// CSV of a table (RFC 4180 quoting).
+pub fn table_csv(headers: &[&str], rows: &[Vec<String>]) -> String {
+    let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
+    let _ = w.write_record(headers);
+    for r in rows {
+        let _ = w.write_record(r);
+    }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// Correlation matrix as text.
+pub fn correlation_table(cal: &Calibration) -> String {
+    let mut headers: Vec<&str> = vec![""];
+    headers.extend(cal.parameter_labels.iter().map(String::as_str));
+    let rows: Vec<Vec<String>> = cal
+        .parameter_labels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut r = vec![l.clone()];
+            r.extend(
+                (0..cal.parameter_labels.len()).map(|j| format!("{:+.2}", cal.correlation[(i, j)])),
+            );
+            r
+        })
+        .collect();
+    render_table(&headers, &rows)
+}
+
+/// Residual summary of a calibration.
+pub fn residual_summary(cal: &Calibration) -> String {
+    let r = &cal.residuals;
+    format!(
+        "rows {}  χ²/dof {:.3}  condition number {:.1}  BIC {:.1}\n\
+         residual RMS x/y/z {:.1} / {:.1} / {:.1} µm (all {:.1} µm, norm {:.1} µm)\n\
+         residual max x/y/z {:.1} / {:.1} / {:.1} µm (norm {:.1} µm)\n",
+        cal.rows,
+        cal.reduced_chi2,
+        cal.condition_number,
+        cal.bic,
+        r.rms_m[0] * 1e6,
+        r.rms_m[1] * 1e6,
+        r.rms_m[2] * 1e6,
+        r.rms_all_m * 1e6,
+        r.rms_norm_m * 1e6,
+        r.max_abs_m[0] * 1e6,
+        r.max_abs_m[1] * 1e6,
+        r.max_abs_m[2] * 1e6,
+        r.max_norm_m * 1e6
+    )
+}
+
+/// Expected standard errors of a plan.
+pub fn expected_se_rows(plan: &Plan) -> Vec<Vec<String>> {
+    plan.expected
+        .iter()
+        .map(|e| {
+            let axis = plan
+                .axis_cases
+                .iter()
+                .find(|a| a.id == e.id)
+                .map(|a| {
+                    format!(
+                        "{} ({:.0} % share, {:.0} σ)",
+                        a.load_case,
+                        100.0 * a.share,
+                        a.snr
+                    )
+                })
+                .unwrap_or("-".into());
+            vec![
+                e.label.clone(),
+                k_fmt(e.nominal_k),
+                k_fmt(e.se_k),
+                if e.relative.is_finite() {
+                    format!("{:.2}", 100.0 * e.relative)
+                } else {
+                    "not identifiable".into()
+                },
+                axis,
+            ]
+        })
+        .collect()
+}
+
+/// Headers of [`expected_se_rows`].
+pub const EXPECTED_SE_HEADERS: [&str; 5] = [
+    "eDoF",
+    "nominal k [N·m/rad]",
+    "expected SE",
+    "SE [%]",
+    "axis-by-axis case",
+];
+
+/// Validation errors as table rows (mm).
+pub fn validation_rows(v: &Validation) -> Vec<Vec<String>> {
+    std::iter::once(&v.model)
+        .chain(v.baseline.as_ref())
+        .map(|m| {
+            let s = &m.stats;
+            let mm = |x: f64| format!("{:.4}", x * 1e3);
+            vec![
+                m.name.clone(),
+                mm(s.rms_m[0]),
+                mm(s.rms_m[1]),
+                mm(s.rms_m[2]),
+                mm(s.rms_norm_m),
+                mm(s.max_abs_m[0]),
+                mm(s.max_abs_m[1]),
+                mm(s.max_abs_m[2]),
+                mm(s.max_norm_m),
+            ]
+        })
+        .collect()
+}
+
+/// Headers of [`validation_rows`].
+pub const VALIDATION_HEADERS: [&str; 9] = [
+    "model",
+    "RMS x [mm]",
+    "RMS y",
+    "RMS z",
+    "RMS norm",
+    "max x",
+    "max y",
+    "max z",
+    "max norm",
+];

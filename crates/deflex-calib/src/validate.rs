@@ -1,0 +1,319 @@
+//! Validation: prediction errors of a model (and optionally a baseline) against measurements
+//! (the paper's Section 3.2), with predicted-vs-measured plots (Figs. 8–10, 12) and error
+//! heatmaps over the measured grid (Figs. 11, 13) as PNG, gathered in one HTML page.
+
+use crate::CalibError;
+use crate::data::MeasurementRow;
+use deflex_model::{Data, Robot, Wrench};
+use deflex_report::{HtmlReport, PlotSpec, Series, line_plot, parity_plot, scatter_heatmap};
+use nalgebra::Vector3;
+use std::path::{Path, PathBuf};
+
+/// Error statistics (measured − predicted), metres.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorStats {
+    /// RMS per axis.
+    pub rms_m: [f64; 3],
+    /// Largest absolute error per axis.
+    pub max_abs_m: [f64; 3],
+    /// Mean (bias) per axis.
+    pub mean_m: [f64; 3],
+    /// RMS of the error norm.
+    pub rms_norm_m: f64,
+    /// Largest error norm.
+    pub max_norm_m: f64,
+}
+
+/// Predictions and errors of one model.
+#[derive(Clone, Debug)]
+pub struct ModelErrors {
+    /// Model name.
+    pub name: String,
+    /// Predicted displacement per row (m).
+    pub predicted: Vec<[f64; 3]>,
+    /// Measured − predicted per row (m).
+    pub errors: Vec<[f64; 3]>,
+    /// Statistics.
+    pub stats: ErrorStats,
+}
+
+/// A validation of a model on measurements.
+#[derive(Clone, Debug)]
+pub struct Validation {
+    /// The model under test.
+    pub model: ModelErrors,
+    /// The baseline, when given.
+    pub baseline: Option<ModelErrors>,
+    /// Measured displacement per row (m).
+    pub measured: Vec<[f64; 3]>,
+    /// Measured point per row (world, m).
+    pub points: Vec<[f64; 3]>,
+    /// Point label per row.
+    pub labels: Vec<String>,
+    /// RMS of the measured displacement per axis (m), for scale.
+    pub measured_rms_m: [f64; 3],
+}
+
+/// VJM prediction (eq. 15, any point and load link) of every row's displacement.
+pub fn predict(robot: &Robot, rows: &[MeasurementRow]) -> Result<Vec<[f64; 3]>, CalibError> {
+    let mut data = Data::new();
+    let mut last: Option<&[f64]> = None;
+    let mut out = Vec::with_capacity(rows.len());
+    for row in rows {
+        if row.q_rad.len() != robot.joint_count() {
+            return Err(CalibError::Invalid(format!(
+                "the data has {} joint columns but robot \"{}\" has {} joints",
+                row.q_rad.len(),
+                robot.name,
+                robot.joint_count()
+            )));
+        }
+        if row.point_link > robot.joint_count() || row.load_link > robot.joint_count() {
+            return Err(CalibError::Invalid(format!(
+                "load case {}: link index out of range for a {}-joint robot",
+                row.load_case,
+                robot.joint_count()
+            )));
+        }
+        if last != Some(row.q_rad.as_slice()) {
+            robot
+                .forward_kinematics(&mut data, &row.q_rad)
+                .map_err(|e| CalibError::Invalid(e.to_string()))?;
+            last = Some(row.q_rad.as_slice());
+        }
+        let d = robot.point_displacement(
+            &data,
+            &Vector3::from(row.point_m),
+            row.point_link,
+            &Vector3::from(row.load_point_m),
+            row.load_link,
+            &Wrench::from_row_slice(&row.wrench),
+        );
+        out.push([d.x, d.y, d.z]);
+    }
+    Ok(out)
+}
+
+/// Compare `model` (and `baseline`) with measured rows.
+pub fn validate(
+    model: &Robot,
+    baseline: Option<&Robot>,
+    rows: &[MeasurementRow],
+) -> Result<Validation, CalibError> {
+    if rows.is_empty() {
+        return Err(CalibError::Invalid("no data rows".into()));
+    }
+    let mut measured = Vec::with_capacity(rows.len());
+    for (i, r) in rows.iter().enumerate() {
+        let d = r.displacement_m.ok_or_else(|| {
+            CalibError::Invalid(format!("row {}: no measured displacement", i + 1))
+        })?;
+        if !d.iter().all(|v| v.is_finite()) {
+            return Err(CalibError::Invalid(format!(
+                "row {}: displacement is NaN or infinite",
+                i + 1
+            )));
+        }
+        measured.push(d);
+    }
+    let errors_of = |robot: &Robot| -> Result<ModelErrors, CalibError> {
+        let predicted = predict(robot, rows)?;
+        let errors: Vec<[f64; 3]> = predicted
+            .iter()
+            .zip(&measured)
+            .map(|(p, m)| [m[0] - p[0], m[1] - p[1], m[2] - p[2]])
+            .collect();
+        Ok(ModelErrors {
+            name: robot.name.clone(),
+            stats: stats(&errors),
+            predicted,
+            errors,
+        })
+    };
+    let model_errors = errors_of(model)?;
+    let baseline = baseline.map(errors_of).transpose()?;
+    let measured_rms_m = stats(&measured).rms_m;
+    Ok(Validation {
+        model: model_errors,
+        baseline,
+        points: rows.iter().map(|r| r.point_m).collect(),
+        labels: rows.iter().map(|r| r.point.clone()).collect(),
+        measured,
+        measured_rms_m,
+    })
+}
+
+/// Statistics of a set of 3D errors.
+pub fn stats(errors: &[[f64; 3]]) -> ErrorStats {
+    let mut s = ErrorStats::default();
+    let n = errors.len().max(1) as f64;
+    let mut sum2 = [0.0; 3];
+    let mut norm2 = 0.0;
+    for e in errors {
+        let mut n2 = 0.0;
+        for ax in 0..3 {
+            sum2[ax] += e[ax] * e[ax];
+            s.mean_m[ax] += e[ax] / n;
+            s.max_abs_m[ax] = s.max_abs_m[ax].max(e[ax].abs());
+            n2 += e[ax] * e[ax];
+        }
+        norm2 += n2;
+        s.max_norm_m = s.max_norm_m.max(n2.sqrt());
+    }
+    for (rms, s2) in s.rms_m.iter_mut().zip(sum2) {
+        *rms = (s2 / n).sqrt();
+    }
+    s.rms_norm_m = (norm2 / n).sqrt();
+    s
+}
+
+fn report_err(e: deflex_report::ReportError) -> CalibError {
+    CalibError::Invalid(format!("report: {e}"))
+}
+
+/// Write PNG plots and `validation.html` into `dir` (created if needed). Returns the files.
+pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CalibError::Invalid(format!("{}: {e}", dir.display())))?;
+    let mut files = Vec::new();
+    let mut html = HtmlReport::new(format!("Validation of {}", v.model.name));
+    html.section("Prediction errors (measured − predicted)");
+    let headers = [
+        "model",
+        "RMS x [mm]",
+        "RMS y [mm]",
+        "RMS z [mm]",
+        "RMS norm [mm]",
+        "max x [mm]",
+        "max y [mm]",
+        "max z [mm]",
+        "max norm [mm]",
+    ];
+    let mut table = Vec::new();
+    for m in std::iter::once(&v.model).chain(v.baseline.as_ref()) {
+        let s = &m.stats;
+        let mm = |x: f64| format!("{:.4}", x * 1e3);
+        table.push(vec![
+            m.name.clone(),
+            mm(s.rms_m[0]),
+            mm(s.rms_m[1]),
+            mm(s.rms_m[2]),
+            mm(s.rms_norm_m),
+            mm(s.max_abs_m[0]),
+            mm(s.max_abs_m[1]),
+            mm(s.max_abs_m[2]),
+            mm(s.max_norm_m),
+        ]);
+    }
+    html.table(&headers, &table);
+    html.paragraph(format!(
+        "{} measured points; RMS of the measured displacement x/y/z: {:.4} / {:.4} / {:.4} mm.",
+        v.measured.len(),
+        v.measured_rms_m[0] * 1e3,
+        v.measured_rms_m[1] * 1e3,
+        v.measured_rms_m[2] * 1e3
+    ));
+
+    // Predicted vs measured (Figs. 8–10, 12).
+    html.section("Predicted vs measured");
+    let axes = ["x", "y", "z"];
+    for (tag, m) in
+        std::iter::once(("model", &v.model)).chain(v.baseline.as_ref().map(|b| ("baseline", b)))
+    {
+        for ax in 0..3 {
+            let path = dir.join(format!("parity_{tag}_{}.png", axes[ax]));
+            let meas: Vec<f64> = v.measured.iter().map(|d| d[ax] * 1e3).collect();
+            let pred: Vec<f64> = m.predicted.iter().map(|d| d[ax] * 1e3).collect();
+            let spec = PlotSpec::new(
+                format!("δp{} — {}", axes[ax], m.name),
+                format!("measured δp{} [mm]", axes[ax]),
+                format!("predicted δp{} [mm]", axes[ax]),
+            )
+            .size(700, 700);
+            parity_plot(&path, &spec, &pred, &meas, &m.name).map_err(report_err)?;
+            html.image(
+                &path,
+                format!("Predicted vs measured δp{} ({tag})", axes[ax]),
+            );
+            files.push(path);
+        }
+    }
+    // δz along the measurement order (Figs. 10, 12).
+    let path = dir.join("dz_along_points.png");
+    let mut series = vec![Series::indexed(
+        "measured",
+        v.measured.iter().map(|d| d[2] * 1e3).collect(),
+        deflex_report::SeriesStyle::LineAndPoints,
+    )];
+    for m in std::iter::once(&v.model).chain(v.baseline.as_ref()) {
+        series.push(Series::indexed(
+            m.name.clone(),
+            m.predicted.iter().map(|d| d[2] * 1e3).collect(),
+            deflex_report::SeriesStyle::Line,
+        ));
+    }
+    let spec = PlotSpec::new("δp_z: measured and predicted", "point #", "δp_z [mm]");
+    line_plot(&path, &spec, &series).map_err(report_err)?;
+    html.image(
+        &path,
+        "Vertical displacement along the measured points (cf. Figs. 10, 12)",
+    );
+    files.push(path);
+
+    // Heatmaps of the error norm over the measured points (Figs. 11, 13), common colour scale.
+    html.section("Error over the measured grid");
+    // The TCP grid when the TCP was measured (as in the paper), else every point.
+    let keep: Vec<bool> = if v.labels.iter().any(|l| l == "TCP") {
+        v.labels.iter().map(|l| l == "TCP").collect()
+    } else {
+        vec![true; v.labels.len()]
+    };
+    let pick = |values: Vec<f64>| -> Vec<f64> {
+        values
+            .into_iter()
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .map(|(x, _)| x)
+            .collect()
+    };
+    let xs: Vec<f64> = pick(v.points.iter().map(|p| p[0] * 1e3).collect());
+    let ys: Vec<f64> = pick(v.points.iter().map(|p| p[1] * 1e3).collect());
+    let norm = |m: &ModelErrors| -> Vec<f64> {
+        pick(
+            m.errors
+                .iter()
+                .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e3)
+                .collect(),
+        )
+    };
+    let mut vmax: f64 = norm(&v.model).iter().copied().fold(0.0, f64::max);
+    if let Some(b) = &v.baseline {
+        vmax = vmax.max(norm(b).iter().copied().fold(0.0, f64::max));
+    }
+    for (tag, m) in
+        std::iter::once(("model", &v.model)).chain(v.baseline.as_ref().map(|b| ("baseline", b)))
+    {
+        let path = dir.join(format!("heatmap_{tag}.png"));
+        let spec = PlotSpec::new(format!("|error| — {}", m.name), "x [mm]", "y [mm]")
+            .size(800, 700)
+            .color_range(0.0, vmax.max(1e-9));
+        scatter_heatmap(
+            &path,
+            &spec,
+            &xs,
+            &ys,
+            &norm(m),
+            "|measured − predicted| [mm]",
+        )
+        .map_err(report_err)?;
+        html.image(
+            &path,
+            format!("Error norm over the measured points ({tag}; cf. Figs. 11, 13)"),
+        );
+        files.push(path);
+    }
+    let page = dir.join("validation.html");
+    html.write(&page).map_err(report_err)?;
+    files.push(page);
+    Ok(files)
+}
