@@ -1,6 +1,7 @@
 //! `deflex`: the command-line front end. Thin: it parses arguments and calls the crates.
 
 mod args;
+mod closed_loop;
 mod cmd_calib;
 mod cmd_control;
 mod cmd_model;
@@ -54,6 +55,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Model { command } => cmd_model::model(command, cli.json),
@@ -74,5 +76,15 @@ fn main() -> ExitCode {
             eprintln!("error: {message}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `deflex ... | head` should end quietly like other Unix tools instead of panicking on a
+/// broken pipe: restore the default SIGPIPE action that the Rust runtime replaces.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal disposition to SIG_DFL at start-up, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

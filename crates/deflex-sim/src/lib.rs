@@ -1,1 +1,61 @@
-//! deflex-sim
+//! # deflex-sim — the digital twin of the robotised ISF cell (SIMULATED)
+//!
+//! A simulated version of the cell of Johra et al. (Robotics 2022, 11, 48, Section 4): a Stäubli
+//! TX200 whose *true* elasticity ([`plant`]) differs from the paper's identified model, its
+//! controller with an Alter/RSI-style correction input ([`controller_emulation`]), an ATI
+//! Omega160 force/torque sensor ([`sensor`]), a laser tracker ([`tracker`]), a 1 mm AA5086 sheet
+//! formed by a 15 mm hemispherical tool with an elastic–plastic contact and the Aerens force
+//! level ([`sheet`]), tool paths (cone, pyramid, G-code: [`toolpath`], [`gcode`]), calibration
+//! campaigns ([`campaign`]) and the forming run ([`forming`]) driven through the steppable
+//! [`cell::Cell`].
+//!
+//! **The plant is never read by a controller or by calibration**: they only get
+//! [`cell::ControllerInput`] (time, measured joints, raw F/T samples) or campaign measurement
+//! files. Every output is labelled SIMULATED. All randomness comes from one
+//! `ChaCha8Rng` seed, so a run is reproducible bit for bit.
+//!
+//! See [`plant`] for the documented plant values (the `PLANT` section) and why.
+//!
+//! ## Measured numbers (default cell, paper cone, seed 1, no correction)
+//!
+//! `cargo run --release -p deflex-sim --example cone_open_loop -- OUT_DIR` (also checked by
+//! `tests/forming.rs::paper_cone_uncorrected_acceptance`): 494 s of forming at 250 Hz
+//! (123 467 cycles) simulate in ≈ 0.4–0.6 s; maximum TCP error 3.70 mm (paper: 3.84 mm), RMS
+//! 2.27 mm, max Fz 1252 N (Aerens level 1260 N), max in-plane force 478 N near the end, part
+//! formed 11.9 mm deep instead of the programmed 15 mm.
+//!
+//! ## Using the cell from a controller
+//!
+//! ```no_run
+//! use deflex_sim::{CellConfig, ControllerInput, CorrectionController, ToolPath, run_forming};
+//! struct Hold;
+//! impl CorrectionController for Hold {
+//!     fn period_s(&self) -> f64 { 0.01 }
+//!     fn step(&mut self, input: &ControllerInput) -> [f64; 6] {
+//!         let _raw = input.wrench_samples; // sensor frame, bias and tool weight included
+//!         [0.0; 6]
+//!     }
+//! }
+//! let run = run_forming(&CellConfig::default(), ToolPath::paper_cone(), 1, Some(&mut Hold)).unwrap();
+//! run.write_outputs(std::path::Path::new("out")).unwrap();
+//! ```
+
+pub mod campaign;
+pub mod cell;
+pub mod config;
+pub mod controller_emulation;
+pub mod error;
+pub mod forming;
+pub mod gcode;
+pub mod plant;
+mod plots;
+pub mod sensor;
+pub mod sheet;
+pub mod toolpath;
+pub mod tracker;
+
+pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};
+pub use config::CellConfig;
+pub use error::SimError;
+pub use forming::{FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress};
+pub use toolpath::{ConeParams, PyramidParams, ToolPath, Waypoint};

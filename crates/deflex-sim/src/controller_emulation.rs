@@ -1,0 +1,407 @@
+//! Robot controller emulation (a Stäubli CS8 with the Alter pack, or a KUKA KRC with RSI).
+//!
+//! * **Interpolation.** The path's waypoints are converted once to joint values by inverse
+//!   kinematics (seeded point to point, so the robot stays on one branch); at the controller
+//!   rate the joints are interpolated linearly between them in time at the programmed feed
+//!   rates. The *desired* pose is the Cartesian polyline through the waypoints (what the CAM
+//!   program means); joint interpolation departs from it by well under a micrometre.
+//! * **External correction** `ξ = [δp; δφ]` (m, rad, robot base axes): taken into account after
+//!   a transport delay (whole cycles), a first-order filter, a bound on its size and one on its
+//!   speed, then added through the Jacobian as a joint offset `δq = J⁻¹ ξ` (small corrections,
+//!   so no IK per cycle): `s_com = s_des + ξ` (eq. 7).
+
+use crate::config::ControllerConfig;
+use crate::error::SimError;
+use crate::toolpath::ToolPath;
+use deflex_model::{Data, IkOptions, Pose, Robot};
+use nalgebra::{Matrix6, Rotation3, Vector3, Vector6};
+use std::collections::VecDeque;
+
+/// The correction pipeline: delay → first-order filter → size bound → speed bound.
+#[derive(Clone, Debug)]
+pub struct CorrectionPipeline {
+    period_s: f64,
+    fifo: VecDeque<[f64; 6]>,
+    delay_cycles: usize,
+    alpha: f64,
+    filtered: [f64; 6],
+    applied: [f64; 6],
+    requested: [f64; 6],
+    max_m: f64,
+    max_rad: f64,
+    step_m: f64,
+    step_rad: f64,
+}
+
+impl CorrectionPipeline {
+    /// A pipeline for the controller settings.
+    pub fn new(config: &ControllerConfig) -> CorrectionPipeline {
+        let period_s = 1.0 / config.rate_hz;
+        let delay_cycles = (config.correction_delay_s / period_s).round() as usize;
+        let alpha = if config.correction_filter_s > 0.0 {
+            1.0 - (-period_s / config.correction_filter_s).exp()
+        } else {
+            1.0
+        };
+        let mut fifo = VecDeque::with_capacity(delay_cycles + 2);
+        fifo.extend(std::iter::repeat_n([0.0; 6], delay_cycles));
+        CorrectionPipeline {
+            period_s,
+            fifo,
+            delay_cycles,
+            alpha,
+            filtered: [0.0; 6],
+            applied: [0.0; 6],
+            requested: [0.0; 6],
+            max_m: config.max_correction_m,
+            max_rad: config.max_correction_rad,
+            step_m: config.max_correction_speed_m_s * period_s,
+            step_rad: config.max_correction_speed_rad_s * period_s,
+        }
+    }
+
+    /// Latest requested correction (held until replaced).
+    pub fn set(&mut self, xi: [f64; 6]) {
+        if xi.iter().all(|v| v.is_finite()) {
+            self.requested = xi;
+        }
+    }
+
+    /// Delay in whole controller cycles.
+    pub fn delay_cycles(&self) -> usize {
+        self.delay_cycles
+    }
+
+    /// Controller period (s).
+    pub fn period_s(&self) -> f64 {
+        self.period_s
+    }
+
+    /// Advance one cycle; returns the correction applied in this cycle.
+    pub fn advance(&mut self) -> [f64; 6] {
+        self.fifo.push_back(self.requested);
+        let delayed = self.fifo.pop_front().unwrap_or([0.0; 6]);
+        for (f, d) in self.filtered.iter_mut().zip(delayed) {
+            *f += self.alpha * (d - *f);
+        }
+        // Size bound on the target, then speed bound on the change.
+        let mut target = self.filtered;
+        clamp_norm(&mut target[0..3], self.max_m);
+        clamp_norm(&mut target[3..6], self.max_rad);
+        let mut change = [0.0; 6];
+        for ((c, t), a) in change.iter_mut().zip(target).zip(self.applied) {
+            *c = t - a;
+        }
+        clamp_norm(&mut change[0..3], self.step_m);
+        clamp_norm(&mut change[3..6], self.step_rad);
+        for (a, c) in self.applied.iter_mut().zip(change) {
+            *a += c;
+        }
+        self.applied
+    }
+
+    /// Correction applied in the last cycle.
+    pub fn applied(&self) -> [f64; 6] {
+        self.applied
+    }
+}
+
+fn clamp_norm(v: &mut [f64], max: f64) {
+    let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if n > max {
+        let s = max / n;
+        v.iter_mut().for_each(|x| *x *= s);
+    }
+}
+
+/// One interpolation cycle of the emulated controller.
+#[derive(Clone, Copy, Debug)]
+pub struct ControllerCycle {
+    /// Simulated time (s).
+    pub time_s: f64,
+    /// Desired TCP position (world, m): the programmed polyline.
+    pub desired_m: Vector3<f64>,
+    /// Horizontal unit direction of the programmed motion (zero when not moving horizontally).
+    pub feed_dir: Vector3<f64>,
+    /// Interpolated joint values without correction (rad).
+    pub q_nominal: [f64; 6],
+    /// Joint values sent to the drives (with the correction) (rad).
+    pub q_command: [f64; 6],
+    /// Correction applied (m, rad).
+    pub correction: [f64; 6],
+    /// Past the end of the path.
+    pub finished: bool,
+}
+
+/// Joint-space interpolation between IK'd waypoints plus the correction input.
+#[derive(Clone, Debug)]
+pub struct ControllerEmulation {
+    robot: Robot,
+    data: Data,
+    times: Vec<f64>,
+    q: Vec<[f64; 6]>,
+    p: Vec<Vector3<f64>>,
+    tool_rotation: Rotation3<f64>,
+    segment: usize,
+    cycle: u64,
+    period_s: f64,
+    pipeline: CorrectionPipeline,
+}
+
+impl ControllerEmulation {
+    /// Plan the path: waypoints (R_p, mm) → world poses with the tool orientation of the seed
+    /// configuration → joint values by IK.
+    pub fn new(
+        robot: &Robot,
+        config: &ControllerConfig,
+        path: &ToolPath,
+        part_frame: &Pose,
+        seed_q: &[f64; 6],
+    ) -> Result<ControllerEmulation, SimError> {
+        path.validate()?;
+        if robot.joint_count() != 6 {
+            return Err(SimError::config(
+                "part.robot",
+                "the twin needs a 6-joint robot",
+            ));
+        }
+        let tool_rotation = robot
+            .tcp_pose(seed_q)
+            .map_err(|e| SimError::config("part.seed_q_deg", e.to_string()))?
+            .rotation;
+        let options = IkOptions {
+            position_tolerance_m: 1e-10,
+            orientation_tolerance_rad: 1e-10,
+            ..IkOptions::default()
+        };
+        let mut seed: Vec<f64> = seed_q.to_vec();
+        let mut times = Vec::with_capacity(path.waypoints.len());
+        let mut qs = Vec::with_capacity(path.waypoints.len());
+        let mut ps: Vec<Vector3<f64>> = Vec::with_capacity(path.waypoints.len());
+        let mut t = 0.0;
+        for (i, w) in path.waypoints.iter().enumerate() {
+            let p = part_frame * nalgebra::Point3::from(Vector3::from(w.p_mm) * 1e-3);
+            if let Some(prev) = ps.last() {
+                let prev: &Vector3<f64> = prev;
+                let length = (p.coords - prev).norm();
+                t += length / (w.feed_mm_s.unwrap_or(config.rapid_feed_mm_s) * 1e-3);
+            }
+            let target = Pose::from_parts(p.coords.into(), tool_rotation);
+            let solution =
+                robot
+                    .inverse_kinematics(&target, &seed, &options)
+                    .map_err(|source| SimError::Unreachable {
+                        what: format!(
+                            "waypoint {i} of \"{}\" at ({:.3}, {:.3}, {:.3}) mm in R_p",
+                            path.name, w.p_mm[0], w.p_mm[1], w.p_mm[2]
+                        ),
+                        source,
+                    })?;
+            seed.copy_from_slice(&solution.q);
+            let mut q = [0.0; 6];
+            q.copy_from_slice(&solution.q);
+            times.push(t);
+            qs.push(q);
+            ps.push(p.coords);
+        }
+        Ok(ControllerEmulation {
+            robot: robot.clone(),
+            data: Data::new(),
+            times,
+            q: qs,
+            p: ps,
+            tool_rotation,
+            segment: 0,
+            cycle: 0,
+            period_s: 1.0 / config.rate_hz,
+            pipeline: CorrectionPipeline::new(config),
+        })
+    }
+
+    /// Controller period (s).
+    pub fn period_s(&self) -> f64 {
+        self.period_s
+    }
+
+    /// Path duration (s).
+    pub fn duration_s(&self) -> f64 {
+        *self.times.last().unwrap_or(&0.0)
+    }
+
+    /// Tool orientation held along the path.
+    pub fn tool_rotation(&self) -> Rotation3<f64> {
+        self.tool_rotation
+    }
+
+    /// Number of waypoints.
+    pub fn waypoint_count(&self) -> usize {
+        self.q.len()
+    }
+
+    /// Request a correction (see [`CorrectionPipeline`]).
+    pub fn set_correction(&mut self, xi: [f64; 6]) {
+        self.pipeline.set(xi);
+    }
+
+    /// Run one controller cycle. Allocation-free.
+    pub fn advance(&mut self) -> ControllerCycle {
+        let time_s = self.cycle as f64 * self.period_s;
+        self.cycle += 1;
+        let last = self.times.len() - 1;
+        while self.segment < last - 1 && self.times[self.segment + 1] <= time_s {
+            self.segment += 1;
+        }
+        let (a, b) = (self.segment, (self.segment + 1).min(last));
+        let span = self.times[b] - self.times[a];
+        let f = if span > 0.0 {
+            ((time_s - self.times[a]) / span).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let mut q_nominal = [0.0; 6];
+        for (i, q) in q_nominal.iter_mut().enumerate() {
+            *q = self.q[a][i] + f * (self.q[b][i] - self.q[a][i]);
+        }
+        let desired_m = self.p[a] + (self.p[b] - self.p[a]) * f;
+        let mut dir = self.p[b] - self.p[a];
+        dir.z = 0.0;
+        let finished = time_s >= self.times[last];
+        let feed_dir = if finished || dir.norm() < 1e-12 {
+            Vector3::zeros()
+        } else {
+            dir.normalize()
+        };
+        let correction = self.pipeline.advance();
+        let mut q_command = q_nominal;
+        if correction.iter().any(|v| *v != 0.0) {
+            let dq = self.joint_offset(&q_nominal, &correction);
+            for (q, d) in q_command.iter_mut().zip(dq.iter()) {
+                *q += d;
+            }
+        }
+        ControllerCycle {
+            time_s,
+            desired_m,
+            feed_dir,
+            q_nominal,
+            q_command,
+            correction,
+            finished,
+        }
+    }
+
+    /// `δq = J⁻¹ ξ` at `q` (6×6 geometric Jacobian at the TCP; damped when near singular).
+    fn joint_offset(&mut self, q: &[f64; 6], xi: &[f64; 6]) -> Vector6<f64> {
+        self.robot
+            .forward_kinematics(&mut self.data, q)
+            .expect("6 joints");
+        let tcp = self.data.tcp_position();
+        let mut j = Matrix6::zeros();
+        for i in 0..6 {
+            let frame = &self.data.joint_frames[i];
+            let z: Vector3<f64> = frame.rotation.matrix().column(2).into_owned();
+            let lin = z.cross(&(tcp - frame.translation.vector));
+            j.fixed_view_mut::<3, 1>(0, i).copy_from(&lin);
+            j.fixed_view_mut::<3, 1>(3, i).copy_from(&z);
+        }
+        let xi = Vector6::from_row_slice(xi);
+        match j.lu().solve(&xi) {
+            Some(dq) if dq.iter().all(|v| v.is_finite()) => dq,
+            _ => {
+                let jt = j.transpose();
+                let damped = j * jt + Matrix6::identity() * 1e-6;
+                jt * damped.lu().solve(&xi).unwrap_or_else(Vector6::zeros)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn step_response(config: &ControllerConfig, cycles: usize) -> Vec<[f64; 6]> {
+        let mut pipe = CorrectionPipeline::new(config);
+        pipe.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        (0..cycles).map(|_| pipe.advance()).collect()
+    }
+
+    #[test]
+    fn delay_then_first_order_response() {
+        let config = ControllerConfig {
+            correction_delay_s: 0.008,
+            correction_filter_s: 0.02,
+            max_correction_speed_m_s: 10.0,
+            ..ControllerConfig::default()
+        };
+        let out = step_response(&config, 200);
+        // 8 ms at 250 Hz = 2 cycles of pure delay.
+        assert_eq!(out[0][0], 0.0);
+        assert_eq!(out[1][0], 0.0);
+        assert!(out[2][0] > 0.0);
+        // First-order: after one time constant (5 cycles after the delay) ≈ 63 %.
+        let a = 1.0 - (-0.004f64 / 0.02).exp();
+        let expected = 0.001 * (1.0 - (1.0 - a).powi(5));
+        assert!(
+            (out[6][0] - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            out[6][0]
+        );
+        assert!((out[6][0] / 0.001 - 0.632).abs() < 0.01);
+        assert!((out[199][0] - 0.001).abs() < 1e-9);
+    }
+
+    #[test]
+    fn size_and_speed_bounds() {
+        let config = ControllerConfig {
+            correction_delay_s: 0.0,
+            correction_filter_s: 0.0,
+            max_correction_m: 0.002,
+            max_correction_speed_m_s: 0.025, // 0.1 mm per 4 ms cycle
+            ..ControllerConfig::default()
+        };
+        let mut pipe = CorrectionPipeline::new(&config);
+        pipe.set([0.003, 0.004, 0.0, 0.0, 0.0, 0.0]); // 5 mm requested
+        let first = pipe.advance();
+        let n = (first[0].powi(2) + first[1].powi(2)).sqrt();
+        assert!((n - 1e-4).abs() < 1e-12, "speed-limited step {n}");
+        let mut last = first;
+        for _ in 0..100 {
+            last = pipe.advance();
+        }
+        let n = (last[0].powi(2) + last[1].powi(2)).sqrt();
+        assert!((n - 0.002).abs() < 1e-12, "size-limited {n}");
+        // Direction kept.
+        assert!((last[1] / last[0] - 4.0 / 3.0).abs() < 1e-9);
+        // NaN requests are ignored.
+        pipe.set([f64::NAN; 6]);
+        assert_eq!(pipe.advance(), last);
+    }
+
+    #[test]
+    fn interpolation_follows_the_path_and_correction_moves_the_tcp() {
+        let robot = deflex_model::builtin("tx200").unwrap();
+        let path = ToolPath::paper_cone().truncated(30.0);
+        let config = ControllerConfig::default();
+        let part = deflex_model::spatial::pose_from_xyz_rpy([1.5, 0.0, -0.183], [0.0; 3]);
+        let seed = [0.0, 49.7, 89.3, 0.0, 41.0, 0.0].map(f64::to_radians);
+        let mut ctrl = ControllerEmulation::new(&robot, &config, &path, &part, &seed).unwrap();
+        assert!((ctrl.duration_s() - path.duration_s(50.0)).abs() < 1e-9);
+        let mut worst: f64 = 0.0;
+        let mut cycle = ctrl.advance();
+        while !cycle.finished {
+            let tcp = robot.tcp_pose(&cycle.q_command).unwrap().translation.vector;
+            worst = worst.max((tcp - cycle.desired_m).norm());
+            cycle = ctrl.advance();
+        }
+        assert!(worst < 1e-6, "joint vs Cartesian interpolation {worst}");
+        // A 2 mm correction along y moves the commanded TCP by 2 mm (after delay and filter).
+        ctrl.set_correction([0.0, 0.002, 0.0, 0.0, 0.0, 0.0]);
+        for _ in 0..100 {
+            cycle = ctrl.advance();
+        }
+        let tcp = robot.tcp_pose(&cycle.q_command).unwrap().translation.vector;
+        let d = tcp - cycle.desired_m;
+        assert!((d.y - 0.002).abs() < 2e-6 && d.x.abs() < 2e-6, "{d}");
+    }
+}

@@ -1,0 +1,67 @@
+//! Errors of the twin. Every message says what was wrong and where.
+
+use thiserror::Error;
+
+/// Something the twin could not do.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// A configuration value is out of its physical range.
+    #[error("cell configuration: {field}: {message}")]
+    Config {
+        /// The offending field (`sensor.rate_hz`, …).
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A tool path could not be built or read.
+    #[error("tool path: {0}")]
+    Path(String),
+    /// A G-code file has a problem on a given line.
+    #[error("{file}:{line}: {message}")]
+    Gcode {
+        /// File name (or `<text>`).
+        file: String,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A pose of the path or of a campaign is out of the robot's reach.
+    #[error("{what}: inverse kinematics failed: {source}")]
+    Unreachable {
+        /// Which pose.
+        what: String,
+        /// Model error.
+        source: deflex_model::ModelError,
+    },
+    /// Robot model problem.
+    #[error(transparent)]
+    Model(#[from] deflex_model::ModelError),
+    /// Measurement/plan file problem.
+    #[error(transparent)]
+    Data(#[from] deflex_calib::data::DataError),
+    /// Writing outputs failed.
+    #[error("{path}: {message}")]
+    Output {
+        /// File or folder.
+        path: String,
+        /// Cause.
+        message: String,
+    },
+}
+
+impl SimError {
+    pub(crate) fn config(field: &str, message: impl Into<String>) -> Self {
+        SimError::Config {
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn output(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
+        SimError::Output {
+            path: path.display().to_string(),
+            message: message.to_string(),
+        }
+    }
+}

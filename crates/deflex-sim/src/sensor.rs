@@ -1,0 +1,209 @@
+//! The 6-axis force/torque sensor between flange and tool (defaults: ATI Omega160 SI-1500-240,
+//! see [`crate::config::SensorConfig`]).
+//!
+//! A reading is the sum of the loads on everything below the sensing plane, expressed in the
+//! sensor frame with the moment about the sensor origin: the contact wrench of the environment on
+//! the tool (the model's w) plus the tool's weight, plus a constant bias and Gaussian noise, each
+//! channel clipped at the calibrated range (the sample is then flagged `saturated`). A controller
+//! must therefore tare the bias and compensate the tool weight, which rotates with the tool, as
+//! on hardware.
+
+use crate::config::SensorConfig;
+use deflex_model::wrench::world_wrench_in_sensor;
+use deflex_model::{Pose, Wrench};
+use nalgebra::{Rotation3, Vector3};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
+
+/// One raw F/T sample as the sensor reports it (sensor frame, N and N·m, bias + tool gravity +
+/// noise included, saturated values clipped).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SensorSample {
+    /// Simulated time of the sample (s).
+    pub time_s: f64,
+    /// `[Fx, Fy, Fz, Tx, Ty, Tz]` in the sensor frame (N, N·m).
+    pub wrench_sensor: [f64; 6],
+    /// At least one channel hit its range and was clipped.
+    pub saturated: bool,
+}
+
+/// The tool's weight as the sensor sees it: force `Rᵀ(0, 0, −m g)` and its moment about the sensor
+/// origin, for a sensor with world orientation `sensor_rotation`.
+pub fn tool_gravity_in_sensor(
+    sensor_rotation: &Rotation3<f64>,
+    mass_kg: f64,
+    com_in_sensor_m: &[f64; 3],
+    gravity_m_s2: f64,
+) -> Wrench {
+    let force = sensor_rotation.inverse() * Vector3::new(0.0, 0.0, -mass_kg * gravity_m_s2);
+    let moment = Vector3::from(*com_in_sensor_m).cross(&force);
+    Wrench::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
+}
+
+/// The simulated sensor: its own sample clock, bias, noise and saturation.
+#[derive(Clone, Debug)]
+pub struct ForceSensor {
+    config: SensorConfig,
+    sensor_in_flange: Pose,
+    period_s: f64,
+    next_sample_s: f64,
+    rng: ChaCha8Rng,
+}
+
+impl ForceSensor {
+    /// A sensor whose first sample is at t = 0.
+    pub fn new(config: &SensorConfig, sensor_in_flange: Pose, rng: ChaCha8Rng) -> ForceSensor {
+        ForceSensor {
+            config: config.clone(),
+            sensor_in_flange,
+            period_s: 1.0 / config.rate_hz,
+            next_sample_s: 0.0,
+            rng,
+        }
+    }
+
+    /// World pose of the sensor frame for a (true) flange pose.
+    pub fn sensor_pose(&self, flange: &Pose) -> Pose {
+        flange * self.sensor_in_flange
+    }
+
+    /// Noise-free, bias-free reading: contact wrench (world axes, moment about world point `at`)
+    /// plus tool weight, in the sensor frame.
+    pub fn ideal_reading(&self, flange: &Pose, contact: &Wrench, at: &Vector3<f64>) -> Wrench {
+        let sensor = self.sensor_pose(flange);
+        world_wrench_in_sensor(contact, at, &sensor)
+            + tool_gravity_in_sensor(
+                &sensor.rotation,
+                self.config.tool_mass_kg,
+                &self.config.tool_com_in_sensor_m,
+                self.config.gravity_m_s2,
+            )
+    }
+
+    /// One raw sample at `time_s`.
+    pub fn sample(
+        &mut self,
+        time_s: f64,
+        flange: &Pose,
+        contact: &Wrench,
+        at: &Vector3<f64>,
+    ) -> SensorSample {
+        let ideal = self.ideal_reading(flange, contact, at);
+        let mut wrench_sensor = [0.0; 6];
+        let mut saturated = false;
+        for (i, out) in wrench_sensor.iter_mut().enumerate() {
+            let noise: f64 = self.rng.sample(StandardNormal);
+            let value = ideal[i] + self.config.bias[i] + self.config.noise_sigma[i] * noise;
+            let range = self.config.range[i];
+            if value.abs() > range {
+                saturated = true;
+            }
+            *out = value.clamp(-range, range);
+        }
+        SensorSample {
+            time_s,
+            wrench_sensor,
+            saturated,
+        }
+    }
+
+    /// Append every sample whose time falls before or at `until_s` (zero-order hold of the given
+    /// state). Allocation-free once `out` has capacity.
+    pub fn samples_until(
+        &mut self,
+        until_s: f64,
+        flange: &Pose,
+        contact: &Wrench,
+        at: &Vector3<f64>,
+        out: &mut Vec<SensorSample>,
+    ) {
+        // Tolerance against accumulated rounding of the two clocks.
+        while self.next_sample_s <= until_s + 1e-9 {
+            let t = self.next_sample_s;
+            let sample = self.sample(t, flange, contact, at);
+            out.push(sample);
+            self.next_sample_s += self.period_s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use deflex_model::spatial::pose_from_xyz_rpy;
+    use rand::SeedableRng;
+
+    fn quiet() -> SensorConfig {
+        SensorConfig {
+            noise_sigma: [0.0; 6],
+            ..SensorConfig::default()
+        }
+    }
+
+    #[test]
+    fn unloaded_reading_is_bias_plus_gravity_and_rotates_with_the_tool() {
+        let config = quiet();
+        let mut sensor = ForceSensor::new(&config, Pose::identity(), ChaCha8Rng::seed_from_u64(1));
+        let at = Vector3::zeros();
+        // Tool pointing down (flange z = −world z): gravity reads +m g along sensor z.
+        let down = pose_from_xyz_rpy([1.5, 0.0, 0.0], [std::f64::consts::PI, 0.0, 0.0]);
+        let s = sensor.sample(0.0, &down, &Wrench::zeros(), &at);
+        let mg = config.tool_mass_kg * config.gravity_m_s2;
+        assert!((s.wrench_sensor[2] - (mg + config.bias[2])).abs() < 1e-9);
+        assert!((s.wrench_sensor[0] - config.bias[0]).abs() < 1e-9);
+        // Tool horizontal along world x: gravity now along sensor x (world −z = sensor x).
+        let side = pose_from_xyz_rpy([1.5, 0.0, 0.0], [0.0, std::f64::consts::FRAC_PI_2, 0.0]);
+        let s = sensor.sample(0.0, &side, &Wrench::zeros(), &at);
+        assert!(
+            (s.wrench_sensor[0] - (mg + config.bias[0])).abs() < 1e-9,
+            "{s:?}"
+        );
+        assert!((s.wrench_sensor[2] - config.bias[2]).abs() < 1e-9);
+        // The COM offset along sensor z gives a moment about sensor y: com × f.
+        let expected_ty = config.tool_com_in_sensor_m[2] * mg + config.bias[4];
+        assert!((s.wrench_sensor[4] - expected_ty).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
+    fn contact_wrench_appears_and_saturates() {
+        let config = quiet();
+        let mut sensor = ForceSensor::new(&config, Pose::identity(), ChaCha8Rng::seed_from_u64(1));
+        let down = pose_from_xyz_rpy([1.5, 0.0, 0.0], [std::f64::consts::PI, 0.0, 0.0]);
+        let at = Vector3::new(1.5, 0.0, 0.0);
+        let up = Wrench::new(0.0, 0.0, 1000.0, 0.0, 0.0, 0.0);
+        let s = sensor.sample(0.0, &down, &up, &at);
+        let mg = config.tool_mass_kg * config.gravity_m_s2;
+        // World +z is sensor −z when pointing down.
+        assert!((s.wrench_sensor[2] - (-1000.0 + mg + config.bias[2])).abs() < 1e-9);
+        assert!(!s.saturated);
+        let huge = Wrench::new(5000.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let s = sensor.sample(0.0, &down, &huge, &at);
+        assert!(s.saturated);
+        assert!(s.wrench_sensor[0].abs() <= config.range[0] + 1e-12);
+    }
+
+    #[test]
+    fn noise_has_the_configured_spread_and_rate_is_kept() {
+        let config = SensorConfig::default();
+        let mut sensor = ForceSensor::new(&config, Pose::identity(), ChaCha8Rng::seed_from_u64(7));
+        let mut out = Vec::new();
+        sensor.samples_until(
+            1.0 - 1e-6,
+            &Pose::identity(),
+            &Wrench::zeros(),
+            &Vector3::zeros(),
+            &mut out,
+        );
+        assert_eq!(out.len(), 1000);
+        let mean: f64 = out.iter().map(|s| s.wrench_sensor[0]).sum::<f64>() / 1000.0;
+        let var: f64 = out
+            .iter()
+            .map(|s| (s.wrench_sensor[0] - mean).powi(2))
+            .sum::<f64>()
+            / 999.0;
+        assert!((mean - config.bias[0]).abs() < 0.05, "{mean}");
+        assert!((var.sqrt() / config.noise_sigma[0] - 1.0).abs() < 0.1);
+    }
+}
