@@ -4,6 +4,7 @@ mod args;
 mod closed_loop;
 mod cmd_calib;
 mod cmd_control;
+mod cmd_demo;
 mod cmd_model;
 mod cmd_sim;
 
@@ -52,6 +53,8 @@ enum Command {
     Run(cmd_control::RunArgs),
     /// Serve the simulated cell over the robot and sensor protocols on loopback.
     Cell(cmd_control::CellArgs),
+    /// The paper's whole study on the built-in SIMULATED cell, with an HTML report.
+    Demo(cmd_demo::DemoArgs),
 }
 
 fn main() -> ExitCode {
@@ -69,6 +72,7 @@ fn main() -> ExitCode {
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cmd_control::cell(args, cli.json),
+        Command::Demo(args) => cmd_demo::demo(args, cli.json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -136,7 +136,7 @@ impl Default for TrackerConfig {
             position_m: [2.8, -1.6, 0.3],
             sigma_const_m: 10e-6,
             sigma_per_m: 5e-6,
-            samples_per_reading: 25,
+            samples_per_reading: 1,
         }
     }
 }

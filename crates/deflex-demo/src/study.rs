@@ -1,0 +1,564 @@
+//! The study pipeline: plan → campaign → identification → validation → forming → report.
+
+use crate::paper;
+use crate::twin_controller::{controller_config_for, run_closed_loop};
+use deflex_calib::plan::{PlanOptions, plan_experiments};
+use deflex_calib::validate::predict;
+use deflex_calib::{
+    MeasurementRow, SearchOptions, SearchResult, Structure, calibrate_fixed, search_structure,
+    write_rows,
+};
+use deflex_model::{Axis, EdofSite, Robot, builtin, robot_to_toml};
+use deflex_sim::campaign::{SpiralParams, run_campaign, spiral, validation_grid};
+use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct DemoOptions {
+    /// Output folder (created).
+    pub out_dir: PathBuf,
+    /// Seed of every random draw (campaign noise, sensor noise, planner).
+    pub seed: u64,
+    /// A shortened study for tests: fewer load cases, a short spiral, the first part of the cone.
+    pub quick: bool,
+}
+
+/// Progress callbacks for a terminal front end.
+pub trait Progress {
+    /// A stage starts (`index` of `total`).
+    fn stage(&mut self, index: usize, total: usize, name: &str);
+    /// Fraction (0..1) of the current stage done.
+    fn fraction(&mut self, fraction: f64);
+    /// The current stage is done; `note` is a one-line result.
+    fn done(&mut self, note: &str);
+}
+
+/// Prediction error of one model on one data set (δz as in the paper's Figs. 10–13, and the
+/// norm), mm.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ModelErrorNumbers {
+    /// Model name.
+    pub model: String,
+    /// Data set (`grid 600 N`, `grid 1100 N`, `spiral 600 N`).
+    pub data: String,
+    /// Points.
+    pub points: usize,
+    /// RMS of the δz error (mm).
+    pub rms_z_mm: f64,
+    /// Largest |δz error| (mm).
+    pub max_z_mm: f64,
+    /// RMS of the 3D error norm (mm).
+    pub rms_norm_mm: f64,
+    /// Largest 3D error norm (mm).
+    pub max_norm_mm: f64,
+    /// RMS of the measured δz, for scale (mm).
+    pub measured_rms_z_mm: f64,
+}
+
+/// One identified stiffness beside the paper's Table 1 and the twin's (simulated) truth.
+#[derive(Clone, Debug, Serialize)]
+pub struct StiffnessRow {
+    /// eDoF label (`J3.x`) or shift (`δr3`).
+    pub name: String,
+    /// Identified value (N·m/rad, or m for a shift).
+    pub identified: Option<f64>,
+    /// Standard error.
+    pub se: Option<f64>,
+    /// 95 % interval.
+    pub interval95: Option<(f64, f64)>,
+    /// Status from the calibration.
+    pub status: String,
+    /// The paper's Table 1 value.
+    pub table1: Option<f64>,
+    /// The twin plant's linear value (SIMULATED ground truth).
+    pub plant: Option<f64>,
+}
+
+/// Numbers of one forming run.
+#[derive(Clone, Debug, Default, Serialize)]
+#[allow(non_snake_case)]
+pub struct FormingNumbers {
+    /// Largest TCP error norm (mm).
+    pub max_error_norm_mm: f64,
+    /// RMS TCP error norm (mm).
+    pub rms_error_norm_mm: f64,
+    /// Largest vertical force (N).
+    pub max_fz_N: f64,
+    /// Largest in-plane force (N).
+    pub max_fxy_N: f64,
+    /// Largest force norm (N).
+    pub max_force_norm_N: f64,
+    /// Deepest formed point (mm).
+    pub final_part_depth_mm: f64,
+    /// Programmed depth (mm).
+    pub target_depth_mm: f64,
+    /// Simulated duration (s).
+    pub duration_s: f64,
+}
+
+impl FormingNumbers {
+    fn from_run(run: &FormingRun) -> Self {
+        let s = &run.summary;
+        FormingNumbers {
+            max_error_norm_mm: s.max_error_norm_mm,
+            rms_error_norm_mm: s.rms_error_norm_mm,
+            max_fz_N: s.max_fz_N,
+            max_fxy_N: s.max_fxy_N,
+            max_force_norm_N: s.max_force_norm_N,
+            final_part_depth_mm: s.final_part_depth_mm,
+            target_depth_mm: s.target_depth_mm,
+            duration_s: s.duration_s,
+        }
+    }
+}
+
+/// Everything the study measured (`summary.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct DemoSummary {
+    /// Always true: the cell is the digital twin.
+    pub simulated: bool,
+    /// Seed.
+    pub seed: u64,
+    /// Shortened study.
+    pub quick: bool,
+    /// Load cases and measured points of the campaign.
+    pub campaign_load_cases: usize,
+    /// Rows of the campaign file.
+    pub campaign_rows: usize,
+    /// Identified structure label.
+    pub identified_structure: String,
+    /// Search iterations accepted.
+    pub search_steps: usize,
+    /// Why the search stopped.
+    pub search_stop_reason: String,
+    /// RMS residual of the identification (µm, all components).
+    pub identification_rms_um: f64,
+    /// χ²/dof of the identification.
+    pub identification_reduced_chi2: f64,
+    /// Identified stiffnesses and shifts beside Table 1 and the plant.
+    pub stiffness: Vec<StiffnessRow>,
+    /// Validation errors (grid and spiral, every model).
+    pub validation: Vec<ModelErrorNumbers>,
+    /// Forming without correction.
+    pub forming_open: FormingNumbers,
+    /// Forming with correction.
+    pub forming_closed: FormingNumbers,
+    /// `100 (1 − closed/open)` of the maximum error norm.
+    pub improvement_percent: f64,
+    /// Status line of the controller at the end of the corrected run.
+    pub controller_status: String,
+    /// Wall time of each stage (s).
+    pub stage_seconds: Vec<(String, f64)>,
+}
+
+impl DemoSummary {
+    /// The validation numbers of one model on one data set.
+    pub fn errors(&self, model: &str, data: &str) -> Option<&ModelErrorNumbers> {
+        self.validation
+            .iter()
+            .find(|v| v.model == model && v.data == data)
+    }
+}
+
+/// Model names used in the report.
+pub(crate) const IDENTIFIED: &str = "identified (deflex)";
+pub(crate) const BASELINE: &str = "one eDoF per joint";
+pub(crate) const TABLE1: &str = "paper Table 1";
+
+const STAGES: usize = 7;
+
+/// Run the whole study; writes every output into `options.out_dir`.
+pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<DemoSummary, String> {
+    let out = &options.out_dir;
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let seed = options.seed;
+    let cell = CellConfig::default();
+    let nominal = cell.nominal_robot().map_err(|e| e.to_string())?;
+    let mut timings = Vec::new();
+
+    // 1. Plan.
+    let clock = Instant::now();
+    progress.stage(1, STAGES, "plan the calibration campaign");
+    let plan_options = PlanOptions {
+        max_force_n: 1400.0,
+        load_cases: if options.quick { 24 } else { 40 },
+        configurations: if options.quick { 300 } else { 600 },
+        seed,
+        full_family: true,
+        ..PlanOptions::default()
+    };
+    let plan = plan_experiments(&nominal, &plan_options).map_err(|e| e.to_string())?;
+    write_rows(&out.join("plan.csv"), &plan.rows).map_err(|e| e.to_string())?;
+    let load_cases = count_cases(&plan.rows);
+    progress.done(&format!(
+        "{load_cases} load cases, {} points to measure",
+        plan.rows.len()
+    ));
+    timings.push(("plan".to_string(), clock.elapsed().as_secs_f64()));
+
+    // 2. Campaign on the twin.
+    let clock = Instant::now();
+    progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
+    let campaign = run_campaign(&cell, &plan.rows, seed).map_err(|e| e.to_string())?;
+    write_rows(&out.join("campaign.csv"), &campaign).map_err(|e| e.to_string())?;
+    progress.done(&format!("{} measured points", campaign.len()));
+    timings.push(("campaign".to_string(), clock.elapsed().as_secs_f64()));
+
+    // 3. Identification: structure search from one z-eDoF per joint, and the one-eDoF baseline
+    // calibrated on the same data.
+    let clock = Instant::now();
+    progress.stage(3, STAGES, "identify the model structure and stiffnesses");
+    let start = builtin("tx200-1edof").ok_or("built-in tx200-1edof missing")?;
+    let search = search_structure(
+        &start,
+        &campaign,
+        &SearchOptions::default(),
+        &mut |iteration, done, total| {
+            let _ = iteration;
+            if total > 0 {
+                progress.fraction(done as f64 / total as f64);
+            }
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let mut identified = search.calibration.to_robot(&start);
+    identified.name = "deflex-identified TX200 (from the SIMULATED twin campaign)".into();
+    let baseline_calibration =
+        calibrate_fixed(&start, &campaign, &Structure::from_robot(&start)).map_err(|e| e.to_string())?;
+    let mut baseline = baseline_calibration.to_robot(&start);
+    baseline.name = "one eDoF per joint, calibrated on the SIMULATED twin campaign".into();
+    write_text(&out.join("identified.toml"), &robot_to_toml(&identified))?;
+    write_text(&out.join("baseline-1edof.toml"), &robot_to_toml(&baseline))?;
+    write_text(
+        &out.join("search_iterations.csv"),
+        &deflex_calib::report::table_csv(
+            &deflex_calib::report::ITERATION_HEADERS,
+            &deflex_calib::report::iteration_rows(&search.steps),
+        ),
+    )?;
+    let plant_robot = cell.plant.linear_robot(&nominal).map_err(|e| e.to_string())?;
+    let stiffness = stiffness_rows(&search, &plant_robot);
+    write_text(&out.join("stiffness.csv"), &stiffness_csv(&stiffness))?;
+    progress.done(&format!(
+        "{} in {} steps, RMS residual {:.1} µm",
+        search.calibration.structure.label(),
+        search.steps.len().saturating_sub(1),
+        search.calibration.residuals.rms_all_m * 1e6
+    ));
+    timings.push(("identification".to_string(), clock.elapsed().as_secs_f64()));
+
+    // 4. Validation on the paper's grid (600 N and 1100 N).
+    let clock = Instant::now();
+    progress.stage(4, STAGES, "validate on the paper's 200-pose grid");
+    let grid_plan = validation_grid(&cell).map_err(|e| e.to_string())?;
+    let grid = run_campaign(&cell, &grid_plan, seed.wrapping_add(1)).map_err(|e| e.to_string())?;
+    write_rows(&out.join("grid.csv"), &grid).map_err(|e| e.to_string())?;
+    let models: [(&str, &Robot); 3] =
+        [(IDENTIFIED, &identified), (BASELINE, &baseline), (TABLE1, &nominal)];
+    let mut grid_predictions = Vec::new();
+    for (name, robot) in models {
+        grid_predictions.push((name, predict(robot, &grid).map_err(|e| e.to_string())?));
+    }
+    write_text(&out.join("grid_predictions.csv"), &predictions_csv(&grid, &grid_predictions))?;
+    let mut validation = Vec::new();
+    for load in [600.0, 1100.0] {
+        let selected: Vec<usize> = (0..grid.len())
+            .filter(|&i| grid[i].load_case.starts_with(&format!("grid{load:.0}N")))
+            .collect();
+        for (name, predicted) in &grid_predictions {
+            validation.push(error_numbers(
+                name,
+                &format!("grid {load:.0} N"),
+                &grid,
+                predicted,
+                &selected,
+            ));
+        }
+    }
+    let grid_files = crate::figures::grid_figures(out, &grid, &grid_predictions)?;
+    progress.done(&format!(
+        "δz RMS at 600/1100 N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
+        validation[0].rms_z_mm, validation[3].rms_z_mm, validation[1].rms_z_mm, validation[4].rms_z_mm
+    ));
+    timings.push(("grid validation".to_string(), clock.elapsed().as_secs_f64()));
+
+    // Spiral (Fig. 14).
+    let clock = Instant::now();
+    progress.stage(5, STAGES, "validate along the Figure 14 spiral");
+    let spiral_params = SpiralParams {
+        length_m: if options.quick { 0.3 } else { SpiralParams::default().length_m },
+        ..SpiralParams::default()
+    };
+    let spiral_rows = spiral(&cell, &spiral_params, seed.wrapping_add(2)).map_err(|e| e.to_string())?;
+    write_rows(&out.join("spiral.csv"), &spiral_rows).map_err(|e| e.to_string())?;
+    let all: Vec<usize> = (0..spiral_rows.len()).collect();
+    let mut spiral_predictions = Vec::new();
+    for (name, robot) in models {
+        let predicted = predict(robot, &spiral_rows).map_err(|e| e.to_string())?;
+        validation.push(error_numbers(name, "spiral 600 N", &spiral_rows, &predicted, &all));
+        spiral_predictions.push((name, predicted));
+    }
+    write_text(
+        &out.join("spiral_predictions.csv"),
+        &predictions_csv(&spiral_rows, &spiral_predictions),
+    )?;
+    let spiral_files = crate::figures::spiral_figures(out, &spiral_rows, &spiral_predictions)?;
+    let spiral_identified = &validation[validation.len() - 3];
+    progress.done(&format!(
+        "{} samples, identified δz RMS {:.3} mm",
+        spiral_rows.len(),
+        spiral_identified.rms_z_mm
+    ));
+    timings.push(("spiral validation".to_string(), clock.elapsed().as_secs_f64()));
+
+    // 5. Forming without and with correction.
+    let path = if options.quick {
+        ToolPath::paper_cone().truncated(1500.0)
+    } else {
+        ToolPath::paper_cone()
+    };
+    let clock = Instant::now();
+    progress.stage(6, STAGES, "form the cone without correction");
+    let open = run_forming_with_progress(&cell, path.clone(), seed, None, &mut |f| progress.fraction(f))
+        .map_err(|e| e.to_string())?;
+    open.write_outputs(&out.join("forming_open")).map_err(|e| e.to_string())?;
+    progress.done(&format!(
+        "max error norm {:.2} mm, max Fz {:.0} N",
+        open.summary.max_error_norm_mm, open.summary.max_fz_N
+    ));
+    timings.push(("forming without correction".to_string(), clock.elapsed().as_secs_f64()));
+
+    let clock = Instant::now();
+    progress.stage(7, STAGES, "form the cone with online correction");
+    let closed = run_closed_loop(
+        &cell,
+        path,
+        seed,
+        identified.clone(),
+        controller_config_for(&cell),
+        false,
+        &mut |f| progress.fraction(f),
+    )?;
+    closed.forming.write_outputs(&out.join("forming_closed")).map_err(|e| e.to_string())?;
+    let improvement = 100.0
+        * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
+    progress.done(&format!(
+        "max error norm {:.2} mm ({improvement:.0} % better), max Fz {:.0} N",
+        closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_fz_N
+    ));
+    timings.push(("forming with correction".to_string(), clock.elapsed().as_secs_f64()));
+    let forming_files = crate::figures::forming_figures(out, &open, &closed.forming)?;
+
+    let summary = DemoSummary {
+        simulated: true,
+        seed,
+        quick: options.quick,
+        campaign_load_cases: load_cases,
+        campaign_rows: campaign.len(),
+        identified_structure: search.calibration.structure.label(),
+        search_steps: search.steps.len().saturating_sub(1),
+        search_stop_reason: search.stop_reason.clone(),
+        identification_rms_um: search.calibration.residuals.rms_all_m * 1e6,
+        identification_reduced_chi2: search.calibration.reduced_chi2,
+        stiffness,
+        validation,
+        forming_open: FormingNumbers::from_run(&open),
+        forming_closed: FormingNumbers::from_run(&closed.forming),
+        improvement_percent: improvement,
+        controller_status: closed.status,
+        stage_seconds: timings,
+    };
+    write_text(
+        &out.join("summary.json"),
+        &serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?,
+    )?;
+    write_text(&out.join("paper_vs_deflex.csv"), &paper_vs_deflex_csv(&summary))?;
+    let page = crate::page::Page {
+        summary: &summary,
+        search: &search,
+        plan: &plan,
+        grid_files,
+        spiral_files,
+        forming_files,
+    };
+    crate::page::write(out, &page)?;
+    Ok(summary)
+}
+
+fn count_cases(rows: &[MeasurementRow]) -> usize {
+    let mut cases: Vec<&str> = rows.iter().map(|r| r.load_case.as_str()).collect();
+    cases.sort_unstable();
+    cases.dedup();
+    cases.len()
+}
+
+pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), String> {
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Errors (measured − predicted) of one model on the selected rows.
+fn error_numbers(
+    model: &str,
+    data: &str,
+    rows: &[MeasurementRow],
+    predicted: &[[f64; 3]],
+    selected: &[usize],
+) -> ModelErrorNumbers {
+    let n = selected.len().max(1) as f64;
+    let (mut sum_z, mut sum_norm, mut sum_meas) = (0.0, 0.0, 0.0);
+    let (mut max_z, mut max_norm) = (0.0f64, 0.0f64);
+    for &i in selected {
+        let measured = rows[i].displacement_m.unwrap_or([0.0; 3]);
+        let e = [
+            measured[0] - predicted[i][0],
+            measured[1] - predicted[i][1],
+            measured[2] - predicted[i][2],
+        ];
+        let norm = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        sum_z += e[2] * e[2];
+        sum_norm += norm * norm;
+        sum_meas += measured[2] * measured[2];
+        max_z = max_z.max(e[2].abs());
+        max_norm = max_norm.max(norm);
+    }
+    ModelErrorNumbers {
+        model: model.to_string(),
+        data: data.to_string(),
+        points: selected.len(),
+        rms_z_mm: (sum_z / n).sqrt() * 1e3,
+        max_z_mm: max_z * 1e3,
+        rms_norm_mm: (sum_norm / n).sqrt() * 1e3,
+        max_norm_mm: max_norm * 1e3,
+        measured_rms_z_mm: (sum_meas / n).sqrt() * 1e3,
+    }
+}
+
+/// Per-row measured and predicted displacements (m) of every model.
+fn predictions_csv(rows: &[MeasurementRow], predictions: &[(&str, Vec<[f64; 3]>)]) -> String {
+    let mut s = String::from(
+        "# SIMULATED measurements from the deflex digital twin; predictions of each model\n",
+    );
+    s.push_str("load_case,fz_N,x_m,y_m,z_m,dx_m,dy_m,dz_m");
+    let slug = |name: &str| -> String {
+        name.chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect::<String>()
+            .replace("__", "_")
+    };
+    for (name, _) in predictions {
+        let tag = slug(name);
+        let _ = write!(s, ",{tag}_dx_m,{tag}_dy_m,{tag}_dz_m");
+    }
+    s.push('\n');
+    for (i, row) in rows.iter().enumerate() {
+        let d = row.displacement_m.unwrap_or([f64::NAN; 3]);
+        let _ = write!(
+            s,
+            "{},{},{:?},{:?},{:?},{:e},{:e},{:e}",
+            row.load_case, row.wrench[2], row.point_m[0], row.point_m[1], row.point_m[2], d[0], d[1], d[2]
+        );
+        for (_, predicted) in predictions {
+            let p = predicted[i];
+            let _ = write!(s, ",{:e},{:e},{:e}", p[0], p[1], p[2]);
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn stiffness_rows(search: &SearchResult, plant: &Robot) -> Vec<StiffnessRow> {
+    let table1 = |label: &str| paper::TABLE1.iter().find(|(l, _)| *l == label).map(|(_, k)| *k);
+    let mut rows: Vec<StiffnessRow> = search
+        .calibration
+        .edofs
+        .iter()
+        .map(|e| {
+            let (site, axis): (EdofSite, Axis) = e.id;
+            let status = match &e.status {
+                deflex_calib::Status::Identified => "identified".to_string(),
+                deflex_calib::Status::Weak => "weakly identified".to_string(),
+                deflex_calib::Status::NotIdentifiable(reason) => format!("not identifiable: {reason}"),
+            };
+            StiffnessRow {
+                name: e.label.clone(),
+                identified: e.stiffness,
+                se: e.stiffness_se,
+                interval95: e.interval95,
+                status,
+                table1: table1(&e.label),
+                plant: plant.stiffness(site, axis),
+            }
+        })
+        .collect();
+    for shift in &search.calibration.shifts {
+        rows.push(StiffnessRow {
+            name: format!("δr{} [m]", shift.joint),
+            identified: Some(shift.value_m),
+            se: shift.se_m,
+            interval95: shift
+                .se_m
+                .map(|se| (shift.value_m - 1.96 * se, shift.value_m + 1.96 * se)),
+            status: if shift.free { "fitted".into() } else { "fixed".into() },
+            table1: (shift.joint == 3).then_some(paper::DELTA_R3_M),
+            plant: plant.joints.get(shift.joint - 1).map(|j| j.center_shift),
+        });
+    }
+    rows
+}
+
+fn stiffness_csv(rows: &[StiffnessRow]) -> String {
+    let mut s = String::from(
+        "# identified from the SIMULATED twin campaign; plant = the twin's hidden linear truth\n\
+         name,identified,se,low95,high95,status,table1,plant\n",
+    );
+    let opt = |v: Option<f64>| v.map(|v| format!("{v:e}")).unwrap_or_default();
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},\"{}\",{},{}",
+            r.name,
+            opt(r.identified),
+            opt(r.se),
+            opt(r.interval95.map(|i| i.0)),
+            opt(r.interval95.map(|i| i.1)),
+            r.status.replace('"', "'"),
+            opt(r.table1),
+            opt(r.plant)
+        );
+    }
+    s
+}
+
+/// Rows of the "paper vs deflex" table: (quantity, paper, deflex on the SIMULATED cell, unit).
+pub fn paper_vs_deflex(summary: &DemoSummary) -> Vec<(String, f64, f64, &'static str)> {
+    let mut rows = Vec::new();
+    for (i, load) in ["600", "1100"].iter().enumerate() {
+        let data = format!("grid {load} N");
+        if let Some(e) = summary.errors(BASELINE, &data) {
+            rows.push((format!("one eDoF per joint, max δz error, {load} N"), paper::ONE_EDOF_MAX_MM[i], e.max_z_mm, "mm"));
+            rows.push((format!("one eDoF per joint, RMS δz error, {load} N"), paper::ONE_EDOF_RMS_MM[i], e.rms_z_mm, "mm"));
+        }
+        if let Some(e) = summary.errors(IDENTIFIED, &data) {
+            rows.push((format!("identified model, max δz error, {load} N"), paper::MODEL_MAX_MM[i], e.max_z_mm, "mm"));
+            rows.push((format!("identified model, RMS δz error, {load} N"), paper::MODEL_RMS_MM[i], e.rms_z_mm, "mm"));
+        }
+    }
+    rows.push(("forming, max error norm without correction".into(), paper::FORMING_OPEN_MAX_MM, summary.forming_open.max_error_norm_mm, "mm"));
+    rows.push(("forming, max error norm with correction".into(), paper::FORMING_CLOSED_MAX_MM, summary.forming_closed.max_error_norm_mm, "mm"));
+    rows.push(("forming, improvement of the max error norm".into(), paper::FORMING_IMPROVEMENT_PERCENT, summary.improvement_percent, "%"));
+    rows.push(("forming, max Fz without correction".into(), paper::FORMING_OPEN_FZ_N, summary.forming_open.max_fz_N, "N"));
+    rows.push(("forming, max in-plane force without correction".into(), paper::FORMING_OPEN_FXY_N, summary.forming_open.max_fxy_N, "N"));
+    rows
+}
+
+fn paper_vs_deflex_csv(summary: &DemoSummary) -> String {
+    let mut s = String::from("# deflex column: measured on the SIMULATED twin cell\nquantity,paper,deflex,unit\n");
+    for (quantity, paper, ours, unit) in paper_vs_deflex(summary) {
+        let _ = writeln!(s, "\"{quantity}\",{paper},{ours:.4},{unit}");
+    }
+    s
+}
