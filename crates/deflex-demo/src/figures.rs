@@ -5,8 +5,8 @@
 use crate::study::{BASELINE, IDENTIFIED};
 use deflex_calib::MeasurementRow;
 use deflex_report::{
-    Cloud3, PanelLayout, Plot3Spec, PlotSpec, Series, cloud_3d, line_plot, panels_plot, parity_plot,
-    scatter_heatmap,
+    Cloud3, PanelLayout, Plot3Spec, PlotSpec, Series, cloud_3d, line_plot, panels_plot,
+    parity_plot, scatter_heatmap,
 };
 use deflex_sim::FormingRun;
 use std::path::{Path, PathBuf};
@@ -34,7 +34,12 @@ pub(crate) fn grid_figures(
         let y: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[1] * 1e3).collect();
         let measured: Vec<f64> = selected
             .iter()
-            .map(|&i| grid[i].displacement_m.map(|d| d[2] * 1e3).unwrap_or(f64::NAN))
+            .map(|&i| {
+                grid[i]
+                    .displacement_m
+                    .map(|d| d[2] * 1e3)
+                    .unwrap_or(f64::NAN)
+            })
             .collect();
         // One colour scale for both models so the heatmaps compare at a glance.
         let errors: Vec<(&str, Vec<f64>)> = predictions
@@ -55,30 +60,49 @@ pub(crate) fn grid_figures(
             .fold(0.0f64, f64::max)
             .max(1e-6);
         for (name, error) in &errors {
-            let tag = if *name == IDENTIFIED { "identified" } else { "one_edof" };
+            let tag = crate::study::column_tag(name);
             let path = out.join(format!("grid_error_{tag}_{load:.0}N.png"));
             let spec = PlotSpec::new(
-                format!("SIMULATED cell — |δz error| of the {name} model, {load:.0} N (cf. Fig. {})", if load < 1000.0 { 11 } else { 13 }),
+                format!(
+                    "SIMULATED cell — |δz error| of the {name} model, {load:.0} N (cf. Fig. {})",
+                    if load < 1000.0 { 11 } else { 13 }
+                ),
                 "x [mm]",
                 "y [mm]",
             )
             .size(900, 700)
             .color_range(0.0, top);
-            draw(scatter_heatmap(&path, &spec, &x, &y, error, "|measured − predicted δz| [mm]"))?;
+            draw(scatter_heatmap(
+                &path,
+                &spec,
+                &x,
+                &y,
+                error,
+                "|measured − predicted δz| [mm]",
+            ))?;
             figures.push((path, format!("|δz error| of the {name} model over the grid, {load:.0} N dead weight (SIMULATED)")));
         }
-        for (name, p) in predictions.iter().filter(|(name, _)| *name == BASELINE || *name == IDENTIFIED) {
-            let tag = if *name == IDENTIFIED { "identified" } else { "one_edof" };
+        for (name, p) in predictions
+            .iter()
+            .filter(|(name, _)| *name == BASELINE || *name == IDENTIFIED)
+        {
+            let tag = crate::study::column_tag(name);
             let predicted: Vec<f64> = selected.iter().map(|&i| p[i][2] * 1e3).collect();
             let path = out.join(format!("grid_parity_{tag}_{load:.0}N.png"));
             let spec = PlotSpec::new(
-                format!("SIMULATED cell — δz predicted vs measured, {name}, {load:.0} N (cf. Fig. {})", if load < 1000.0 { 10 } else { 12 }),
+                format!(
+                    "SIMULATED cell — δz predicted vs measured, {name}, {load:.0} N (cf. Fig. {})",
+                    if load < 1000.0 { 10 } else { 12 }
+                ),
                 "measured δz [mm]",
                 "predicted δz [mm]",
             )
             .size(700, 650);
             draw(parity_plot(&path, &spec, &predicted, &measured, name))?;
-            figures.push((path, format!("Predicted vs measured δz, {name} model, {load:.0} N (SIMULATED)")));
+            figures.push((
+                path,
+                format!("Predicted vs measured δz, {name} model, {load:.0} N (SIMULATED)"),
+            ));
         }
     }
     Ok(figures)
@@ -94,30 +118,57 @@ pub(crate) fn spiral_figures(
     let x: Vec<f64> = rows.iter().map(|r| r.point_m[0] * 1e3).collect();
     let y: Vec<f64> = rows.iter().map(|r| r.point_m[1] * 1e3).collect();
     let path = out.join("spiral_path.png");
-    let spec = PlotSpec::new("SIMULATED cell — spiral trajectory at z = 300 mm (cf. Fig. 14a)", "x [mm]", "y [mm]")
-        .size(700, 700);
+    let spec = PlotSpec::new(
+        "SIMULATED cell — spiral trajectory at z = 300 mm (cf. Fig. 14a)",
+        "x [mm]",
+        "y [mm]",
+    )
+    .size(700, 700);
     draw(line_plot(&path, &spec, &[Series::line("TCP path", x, y)]))?;
-    figures.push((path, "Spiral trajectory, 600 N dead weight (SIMULATED)".to_string()));
+    figures.push((
+        path,
+        "Spiral trajectory, 600 N dead weight (SIMULATED)".to_string(),
+    ));
     let length: Vec<f64> = (0..rows.len()).map(|i| i as f64 / 50.0 * 10.0).collect();
     let mut series = vec![Series::line(
         "measured (SIMULATED tracker)",
         length.clone(),
-        rows.iter().map(|r| r.displacement_m.map(|d| d[2] * 1e3).unwrap_or(f64::NAN)).collect(),
+        rows.iter()
+            .map(|r| r.displacement_m.map(|d| d[2] * 1e3).unwrap_or(f64::NAN))
+            .collect(),
     )];
-    for (name, p) in predictions.iter().filter(|(name, _)| *name == BASELINE || *name == IDENTIFIED) {
-        series.push(Series::line(format!("{name} model"), length.clone(), p.iter().map(|d| d[2] * 1e3).collect()));
+    for (name, p) in predictions
+        .iter()
+        .filter(|(name, _)| *name == BASELINE || *name == IDENTIFIED)
+    {
+        series.push(Series::line(
+            format!("{name} model"),
+            length.clone(),
+            p.iter().map(|d| d[2] * 1e3).collect(),
+        ));
     }
     let path = out.join("spiral_dz.png");
-    let spec = PlotSpec::new("SIMULATED cell — δz along the spiral, 600 N (cf. Fig. 14b)", "path length [mm]", "δz [mm]")
-        .size(1100, 500);
+    let spec = PlotSpec::new(
+        "SIMULATED cell — δz along the spiral, 600 N (cf. Fig. 14b)",
+        "path length [mm]",
+        "δz [mm]",
+    )
+    .size(1100, 500);
     draw(line_plot(&path, &spec, &series))?;
-    figures.push((path, "δz along the spiral: measured and predicted (SIMULATED)".to_string()));
+    figures.push((
+        path,
+        "δz along the spiral: measured and predicted (SIMULATED)".to_string(),
+    ));
     Ok(figures)
 }
 
 /// Forming without vs with correction: deviation clouds (Fig. 17), error per axis and norm along
 /// the path (Fig. A1), forces (Fig. 18) and error vs force norm (Fig. 19).
-pub(crate) fn forming_figures(out: &Path, open: &FormingRun, closed: &FormingRun) -> Result<Vec<Figure>, String> {
+pub(crate) fn forming_figures(
+    out: &Path,
+    open: &FormingRun,
+    closed: &FormingRun,
+) -> Result<Vec<Figure>, String> {
     let mut figures = Vec::new();
     let runs = [("without correction", open), ("with correction", closed)];
     let cloud: Vec<Cloud3> = runs
@@ -139,11 +190,19 @@ pub(crate) fn forming_figures(out: &Path, open: &FormingRun, closed: &FormingRun
     let path = out.join("forming_cloud.png");
     draw(cloud_3d(
         &path,
-        &Plot3Spec::new("SIMULATED cell — TCP deviation during cone forming (cf. Fig. 17)", "x_p [mm]", "y_p [mm]", "z_p [mm]")
-            .size(900, 750),
+        &Plot3Spec::new(
+            "SIMULATED cell — TCP deviation during cone forming (cf. Fig. 17)",
+            "x_p [mm]",
+            "y_p [mm]",
+            "z_p [mm]",
+        )
+        .size(900, 750),
         &cloud,
     ))?;
-    figures.push((path, "Deviation from the desired path, without and with correction (SIMULATED)".to_string()));
+    figures.push((
+        path,
+        "Deviation from the desired path, without and with correction (SIMULATED)".to_string(),
+    ));
 
     let axis_names = ["x_p", "y_p", "z_p", "norm"];
     let panels: Vec<(PlotSpec, Vec<Series>)> = axis_names
@@ -161,12 +220,23 @@ pub(crate) fn forming_figures(out: &Path, open: &FormingRun, closed: &FormingRun
                     Series::line(*label, t, v)
                 })
                 .collect();
-            (PlotSpec::new(format!("deviation {axis}"), "time [s]", "[mm]").size(1100, 300), series)
+            (
+                PlotSpec::new(format!("deviation {axis}"), "time [s]", "[mm]").size(1100, 300),
+                series,
+            )
         })
         .collect();
     let path = out.join("forming_error_along_path.png");
-    draw(panels_plot(&path, "SIMULATED cell — deviation along the path (cf. Fig. A1)", PanelLayout::Column, &panels))?;
-    figures.push((path, "Deviation per axis and in norm along the path (SIMULATED)".to_string()));
+    draw(panels_plot(
+        &path,
+        "SIMULATED cell — deviation along the path (cf. Fig. A1)",
+        PanelLayout::Column,
+        &panels,
+    ))?;
+    figures.push((
+        path,
+        "Deviation per axis and in norm along the path (SIMULATED)".to_string(),
+    ));
 
     let force_names = ["F_x", "F_y", "F_z"];
     let panels: Vec<(PlotSpec, Vec<Series>)> = runs
@@ -176,14 +246,28 @@ pub(crate) fn forming_figures(out: &Path, open: &FormingRun, closed: &FormingRun
             let series = force_names
                 .iter()
                 .enumerate()
-                .map(|(k, name)| Series::line(*name, t.clone(), run.log.column(move |r| r.truth.wrench[k])))
+                .map(|(k, name)| {
+                    Series::line(*name, t.clone(), run.log.column(move |r| r.truth.wrench[k]))
+                })
                 .collect();
-            (PlotSpec::new(format!("contact force, {label}"), "time [s]", "force [N]").size(700, 420), series)
+            (
+                PlotSpec::new(format!("contact force, {label}"), "time [s]", "force [N]")
+                    .size(700, 420),
+                series,
+            )
         })
         .collect();
     let path = out.join("forming_forces.png");
-    draw(panels_plot(&path, "SIMULATED cell — contact force at the TCP, part axes (cf. Fig. 18)", PanelLayout::Row, &panels))?;
-    figures.push((path, "Contact forces without and with correction (SIMULATED)".to_string()));
+    draw(panels_plot(
+        &path,
+        "SIMULATED cell — contact force at the TCP, part axes (cf. Fig. 18)",
+        PanelLayout::Row,
+        &panels,
+    ))?;
+    figures.push((
+        path,
+        "Contact forces without and with correction (SIMULATED)".to_string(),
+    ));
 
     let series: Vec<Series> = runs
         .iter()
@@ -191,16 +275,25 @@ pub(crate) fn forming_figures(out: &Path, open: &FormingRun, closed: &FormingRun
             Series::points(
                 *label,
                 run.log.column(|r| r.truth.wrench.fixed_rows::<3>(0).norm()),
-                run.log.column(|r| (r.truth.true_m - r.truth.desired_m).norm() * 1e3),
+                run.log
+                    .column(|r| (r.truth.true_m - r.truth.desired_m).norm() * 1e3),
             )
         })
         .collect();
     let path = out.join("forming_error_vs_force.png");
     draw(line_plot(
         &path,
-        &PlotSpec::new("SIMULATED cell — deviation norm vs force norm (cf. Fig. 19)", "|F| [N]", "|deviation| [mm]").size(900, 560),
+        &PlotSpec::new(
+            "SIMULATED cell — deviation norm vs force norm (cf. Fig. 19)",
+            "|F| [N]",
+            "|deviation| [mm]",
+        )
+        .size(900, 560),
         &series,
     ))?;
-    figures.push((path, "Deviation norm as a function of the force norm (SIMULATED)".to_string()));
+    figures.push((
+        path,
+        "Deviation norm as a function of the force norm (SIMULATED)".to_string(),
+    ));
     Ok(figures)
 }

@@ -11,9 +11,9 @@
 //! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
 //! the controller sees only joint values and raw F/T samples.
 
-pub mod paper;
 mod figures;
 mod page;
+pub mod paper;
 mod study;
 pub mod twin_controller;
 

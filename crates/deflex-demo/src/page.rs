@@ -40,7 +40,11 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         "Seed {}{}. Reproduce with `deflex demo --seed {}{}`. Data behind every number: the CSV \
          files beside this page.",
         s.seed,
-        if s.quick { ", shortened study (--quick)" } else { "" },
+        if s.quick {
+            ", shortened study (--quick)"
+        } else {
+            ""
+        },
         s.seed,
         if s.quick { " --quick" } else { "" }
     ));
@@ -48,9 +52,24 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
     html.section("Paper vs deflex");
     let rows: Vec<Vec<String>> = paper_vs_deflex(s)
         .into_iter()
-        .map(|(q, paper, ours, unit)| vec![q, format!("{paper}"), format!("{ours:.3}"), unit.to_string()])
+        .map(|(q, paper, ours, unit)| {
+            vec![
+                q,
+                format!("{paper}"),
+                format!("{ours:.3}"),
+                unit.to_string(),
+            ]
+        })
         .collect();
-    html.table(&["quantity", "paper (real TX200)", "deflex (SIMULATED cell)", "unit"], &rows);
+    html.table(
+        &[
+            "quantity",
+            "paper (real TX200)",
+            "deflex (SIMULATED cell)",
+            "unit",
+        ],
+        &rows,
+    );
 
     html.section("1. Calibration campaign plan");
     html.paragraph(format!(
@@ -69,7 +88,10 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         "Start: one z-eDoF per joint (the paper's start). Each step tries every refinement (an x/y \
          eDoF on any joint, a base tilt eDoF, a free centre shift) and keeps the one that lowers \
          BIC most. Stopped: {}. Result: {} (RMS residual {:.1} µm, χ²/dof {:.2}).",
-        s.search_stop_reason, s.identified_structure, s.identification_rms_um, s.identification_reduced_chi2
+        s.search_stop_reason,
+        s.identified_structure,
+        s.identification_rms_um,
+        s.identification_reduced_chi2
     ));
     html.table(
         &deflex_calib::report::ITERATION_HEADERS,
@@ -85,7 +107,9 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
                 fmt_k(r.identified, shift),
                 fmt_k(r.se, shift),
                 r.interval95
-                    .map(|(lo, hi)| format!("[{}, {}]", fmt_k(Some(lo), shift), fmt_k(Some(hi), shift)))
+                    .map(|(lo, hi)| {
+                        format!("[{}, {}]", fmt_k(Some(lo), shift), fmt_k(Some(hi), shift))
+                    })
                     .unwrap_or_else(|| "–".into()),
                 r.status.clone(),
                 fmt_k(r.table1, shift),
@@ -95,7 +119,15 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         .collect();
     html.paragraph("Stiffnesses in 10⁶ N·m/rad (shifts in mm). \"Twin plant\" is the simulated robot's hidden linear truth, shown only to judge the identification; the twin also has a J2/J3 coupling and wrist lost motion that no VJM model represents.");
     html.table(
-        &["eDoF", "identified", "SE", "95 % interval", "status", "paper Table 1", "twin plant (SIMULATED truth)"],
+        &[
+            "eDoF",
+            "identified",
+            "SE",
+            "95 % interval",
+            "status",
+            "paper Table 1",
+            "twin plant (SIMULATED truth)",
+        ],
         &stiffness,
     );
 
@@ -123,7 +155,16 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         })
         .collect();
     html.table(
-        &["data (SIMULATED)", "model", "points", "RMS δz err", "max |δz err|", "RMS |err|", "max |err|", "RMS measured δz"],
+        &[
+            "data (SIMULATED)",
+            "model",
+            "points",
+            "RMS δz err",
+            "max |δz err|",
+            "RMS |err|",
+            "max |err|",
+            "RMS measured δz",
+        ],
         &validation,
     );
     for (path, caption) in page.grid_files.iter().chain(&page.spiral_files) {
@@ -131,7 +172,10 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
     }
 
     html.section("5. Forming the paper's cone (Section 4)");
-    let f = [(&s.forming_open, "without correction"), (&s.forming_closed, "with correction")];
+    let f = [
+        (&s.forming_open, "without correction"),
+        (&s.forming_closed, "with correction"),
+    ];
     let forming: Vec<Vec<String>> = f
         .iter()
         .map(|(n, label)| {
@@ -146,7 +190,14 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         })
         .collect();
     html.table(
-        &["run (SIMULATED)", "max |error| [mm]", "RMS |error| [mm]", "max Fz [N]", "max in-plane F [N]", "part depth / programmed [mm]"],
+        &[
+            "run (SIMULATED)",
+            "max |error| [mm]",
+            "RMS |error| [mm]",
+            "max Fz [N]",
+            "max in-plane F [N]",
+            "part depth / programmed [mm]",
+        ],
         &forming,
     );
     html.paragraph(format!(
@@ -164,5 +215,6 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         .map(|(stage, seconds)| vec![stage.clone(), format!("{seconds:.2}")])
         .collect();
     html.table(&["stage", "wall time [s]"], &timings);
-    html.write(&out.join("index.html")).map_err(|e| e.to_string())
+    html.write(&out.join("index.html"))
+        .map_err(|e| e.to_string())
 }

@@ -227,8 +227,8 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     .map_err(|e| e.to_string())?;
     let mut identified = search.calibration.to_robot(&start);
     identified.name = "deflex-identified TX200 (from the SIMULATED twin campaign)".into();
-    let baseline_calibration =
-        calibrate_fixed(&start, &campaign, &Structure::from_robot(&start)).map_err(|e| e.to_string())?;
+    let baseline_calibration = calibrate_fixed(&start, &campaign, &Structure::from_robot(&start))
+        .map_err(|e| e.to_string())?;
     let mut baseline = baseline_calibration.to_robot(&start);
     baseline.name = "one eDoF per joint, calibrated on the SIMULATED twin campaign".into();
     write_text(&out.join("identified.toml"), &robot_to_toml(&identified))?;
@@ -240,7 +240,10 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
             &deflex_calib::report::iteration_rows(&search.steps),
         ),
     )?;
-    let plant_robot = cell.plant.linear_robot(&nominal).map_err(|e| e.to_string())?;
+    let plant_robot = cell
+        .plant
+        .linear_robot(&nominal)
+        .map_err(|e| e.to_string())?;
     let stiffness = stiffness_rows(&search, &plant_robot);
     write_text(&out.join("stiffness.csv"), &stiffness_csv(&stiffness))?;
     progress.done(&format!(
@@ -257,13 +260,19 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     let grid_plan = validation_grid(&cell).map_err(|e| e.to_string())?;
     let grid = run_campaign(&cell, &grid_plan, seed.wrapping_add(1)).map_err(|e| e.to_string())?;
     write_rows(&out.join("grid.csv"), &grid).map_err(|e| e.to_string())?;
-    let models: [(&str, &Robot); 3] =
-        [(IDENTIFIED, &identified), (BASELINE, &baseline), (TABLE1, &nominal)];
+    let models: [(&str, &Robot); 3] = [
+        (IDENTIFIED, &identified),
+        (BASELINE, &baseline),
+        (TABLE1, &nominal),
+    ];
     let mut grid_predictions = Vec::new();
     for (name, robot) in models {
         grid_predictions.push((name, predict(robot, &grid).map_err(|e| e.to_string())?));
     }
-    write_text(&out.join("grid_predictions.csv"), &predictions_csv(&grid, &grid_predictions))?;
+    write_text(
+        &out.join("grid_predictions.csv"),
+        &predictions_csv(&grid, &grid_predictions),
+    )?;
     let mut validation = Vec::new();
     for load in [600.0, 1100.0] {
         let selected: Vec<usize> = (0..grid.len())
@@ -282,7 +291,10 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     let grid_files = crate::figures::grid_figures(out, &grid, &grid_predictions)?;
     progress.done(&format!(
         "δz RMS at 600/1100 N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
-        validation[0].rms_z_mm, validation[3].rms_z_mm, validation[1].rms_z_mm, validation[4].rms_z_mm
+        validation[0].rms_z_mm,
+        validation[3].rms_z_mm,
+        validation[1].rms_z_mm,
+        validation[4].rms_z_mm
     ));
     timings.push(("grid validation".to_string(), clock.elapsed().as_secs_f64()));
 
@@ -290,16 +302,27 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     let clock = Instant::now();
     progress.stage(5, STAGES, "validate along the Figure 14 spiral");
     let spiral_params = SpiralParams {
-        length_m: if options.quick { 0.3 } else { SpiralParams::default().length_m },
+        length_m: if options.quick {
+            0.3
+        } else {
+            SpiralParams::default().length_m
+        },
         ..SpiralParams::default()
     };
-    let spiral_rows = spiral(&cell, &spiral_params, seed.wrapping_add(2)).map_err(|e| e.to_string())?;
+    let spiral_rows =
+        spiral(&cell, &spiral_params, seed.wrapping_add(2)).map_err(|e| e.to_string())?;
     write_rows(&out.join("spiral.csv"), &spiral_rows).map_err(|e| e.to_string())?;
     let all: Vec<usize> = (0..spiral_rows.len()).collect();
     let mut spiral_predictions = Vec::new();
     for (name, robot) in models {
         let predicted = predict(robot, &spiral_rows).map_err(|e| e.to_string())?;
-        validation.push(error_numbers(name, "spiral 600 N", &spiral_rows, &predicted, &all));
+        validation.push(error_numbers(
+            name,
+            "spiral 600 N",
+            &spiral_rows,
+            &predicted,
+            &all,
+        ));
         spiral_predictions.push((name, predicted));
     }
     write_text(
@@ -313,7 +336,10 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         spiral_rows.len(),
         spiral_identified.rms_z_mm
     ));
-    timings.push(("spiral validation".to_string(), clock.elapsed().as_secs_f64()));
+    timings.push((
+        "spiral validation".to_string(),
+        clock.elapsed().as_secs_f64(),
+    ));
 
     // 5. Forming without and with correction.
     let path = if options.quick {
@@ -323,14 +349,20 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     };
     let clock = Instant::now();
     progress.stage(6, STAGES, "form the cone without correction");
-    let open = run_forming_with_progress(&cell, path.clone(), seed, None, &mut |f| progress.fraction(f))
+    let open = run_forming_with_progress(&cell, path.clone(), seed, None, &mut |f| {
+        progress.fraction(f)
+    })
+    .map_err(|e| e.to_string())?;
+    open.write_outputs(&out.join("forming_open"))
         .map_err(|e| e.to_string())?;
-    open.write_outputs(&out.join("forming_open")).map_err(|e| e.to_string())?;
     progress.done(&format!(
         "max error norm {:.2} mm, max Fz {:.0} N",
         open.summary.max_error_norm_mm, open.summary.max_fz_N
     ));
-    timings.push(("forming without correction".to_string(), clock.elapsed().as_secs_f64()));
+    timings.push((
+        "forming without correction".to_string(),
+        clock.elapsed().as_secs_f64(),
+    ));
 
     let clock = Instant::now();
     progress.stage(7, STAGES, "form the cone with online correction");
@@ -343,14 +375,20 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         false,
         &mut |f| progress.fraction(f),
     )?;
-    closed.forming.write_outputs(&out.join("forming_closed")).map_err(|e| e.to_string())?;
-    let improvement = 100.0
-        * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
+    closed
+        .forming
+        .write_outputs(&out.join("forming_closed"))
+        .map_err(|e| e.to_string())?;
+    let improvement =
+        100.0 * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
     progress.done(&format!(
         "max error norm {:.2} mm ({improvement:.0} % better), max Fz {:.0} N",
         closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_fz_N
     ));
-    timings.push(("forming with correction".to_string(), clock.elapsed().as_secs_f64()));
+    timings.push((
+        "forming with correction".to_string(),
+        clock.elapsed().as_secs_f64(),
+    ));
     let forming_files = crate::figures::forming_figures(out, &open, &closed.forming)?;
 
     let summary = DemoSummary {
@@ -376,7 +414,10 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?,
     )?;
-    write_text(&out.join("paper_vs_deflex.csv"), &paper_vs_deflex_csv(&summary))?;
+    write_text(
+        &out.join("paper_vs_deflex.csv"),
+        &paper_vs_deflex_csv(&summary),
+    )?;
     let page = crate::page::Page {
         summary: &summary,
         search: &search,
@@ -443,14 +484,8 @@ fn predictions_csv(rows: &[MeasurementRow], predictions: &[(&str, Vec<[f64; 3]>)
         "# SIMULATED measurements from the deflex digital twin; predictions of each model\n",
     );
     s.push_str("load_case,fz_N,x_m,y_m,z_m,dx_m,dy_m,dz_m");
-    let slug = |name: &str| -> String {
-        name.chars()
-            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-            .collect::<String>()
-            .replace("__", "_")
-    };
     for (name, _) in predictions {
-        let tag = slug(name);
+        let tag = column_tag(name);
         let _ = write!(s, ",{tag}_dx_m,{tag}_dy_m,{tag}_dz_m");
     }
     s.push('\n');
@@ -459,7 +494,14 @@ fn predictions_csv(rows: &[MeasurementRow], predictions: &[(&str, Vec<[f64; 3]>)
         let _ = write!(
             s,
             "{},{},{:?},{:?},{:?},{:e},{:e},{:e}",
-            row.load_case, row.wrench[2], row.point_m[0], row.point_m[1], row.point_m[2], d[0], d[1], d[2]
+            row.load_case,
+            row.wrench[2],
+            row.point_m[0],
+            row.point_m[1],
+            row.point_m[2],
+            d[0],
+            d[1],
+            d[2]
         );
         for (_, predicted) in predictions {
             let p = predicted[i];
@@ -470,8 +512,22 @@ fn predictions_csv(rows: &[MeasurementRow], predictions: &[(&str, Vec<[f64; 3]>)
     s
 }
 
+/// Short column prefix of a model in the prediction CSVs.
+pub(crate) fn column_tag(model: &str) -> &'static str {
+    match model {
+        IDENTIFIED => "identified",
+        BASELINE => "one_edof",
+        _ => "table1",
+    }
+}
+
 fn stiffness_rows(search: &SearchResult, plant: &Robot) -> Vec<StiffnessRow> {
-    let table1 = |label: &str| paper::TABLE1.iter().find(|(l, _)| *l == label).map(|(_, k)| *k);
+    let table1 = |label: &str| {
+        paper::TABLE1
+            .iter()
+            .find(|(l, _)| *l == label)
+            .map(|(_, k)| *k)
+    };
     let mut rows: Vec<StiffnessRow> = search
         .calibration
         .edofs
@@ -481,7 +537,9 @@ fn stiffness_rows(search: &SearchResult, plant: &Robot) -> Vec<StiffnessRow> {
             let status = match &e.status {
                 deflex_calib::Status::Identified => "identified".to_string(),
                 deflex_calib::Status::Weak => "weakly identified".to_string(),
-                deflex_calib::Status::NotIdentifiable(reason) => format!("not identifiable: {reason}"),
+                deflex_calib::Status::NotIdentifiable(reason) => {
+                    format!("not identifiable: {reason}")
+                }
             };
             StiffnessRow {
                 name: e.label.clone(),
@@ -502,7 +560,11 @@ fn stiffness_rows(search: &SearchResult, plant: &Robot) -> Vec<StiffnessRow> {
             interval95: shift
                 .se_m
                 .map(|se| (shift.value_m - 1.96 * se, shift.value_m + 1.96 * se)),
-            status: if shift.free { "fitted".into() } else { "fixed".into() },
+            status: if shift.free {
+                "fitted".into()
+            } else {
+                "fixed".into()
+            },
             table1: (shift.joint == 3).then_some(paper::DELTA_R3_M),
             plant: plant.joints.get(shift.joint - 1).map(|j| j.center_shift),
         });
@@ -539,24 +601,71 @@ pub fn paper_vs_deflex(summary: &DemoSummary) -> Vec<(String, f64, f64, &'static
     for (i, load) in ["600", "1100"].iter().enumerate() {
         let data = format!("grid {load} N");
         if let Some(e) = summary.errors(BASELINE, &data) {
-            rows.push((format!("one eDoF per joint, max δz error, {load} N"), paper::ONE_EDOF_MAX_MM[i], e.max_z_mm, "mm"));
-            rows.push((format!("one eDoF per joint, RMS δz error, {load} N"), paper::ONE_EDOF_RMS_MM[i], e.rms_z_mm, "mm"));
+            rows.push((
+                format!("one eDoF per joint, max δz error, {load} N"),
+                paper::ONE_EDOF_MAX_MM[i],
+                e.max_z_mm,
+                "mm",
+            ));
+            rows.push((
+                format!("one eDoF per joint, RMS δz error, {load} N"),
+                paper::ONE_EDOF_RMS_MM[i],
+                e.rms_z_mm,
+                "mm",
+            ));
         }
         if let Some(e) = summary.errors(IDENTIFIED, &data) {
-            rows.push((format!("identified model, max δz error, {load} N"), paper::MODEL_MAX_MM[i], e.max_z_mm, "mm"));
-            rows.push((format!("identified model, RMS δz error, {load} N"), paper::MODEL_RMS_MM[i], e.rms_z_mm, "mm"));
+            rows.push((
+                format!("identified model, max δz error, {load} N"),
+                paper::MODEL_MAX_MM[i],
+                e.max_z_mm,
+                "mm",
+            ));
+            rows.push((
+                format!("identified model, RMS δz error, {load} N"),
+                paper::MODEL_RMS_MM[i],
+                e.rms_z_mm,
+                "mm",
+            ));
         }
     }
-    rows.push(("forming, max error norm without correction".into(), paper::FORMING_OPEN_MAX_MM, summary.forming_open.max_error_norm_mm, "mm"));
-    rows.push(("forming, max error norm with correction".into(), paper::FORMING_CLOSED_MAX_MM, summary.forming_closed.max_error_norm_mm, "mm"));
-    rows.push(("forming, improvement of the max error norm".into(), paper::FORMING_IMPROVEMENT_PERCENT, summary.improvement_percent, "%"));
-    rows.push(("forming, max Fz without correction".into(), paper::FORMING_OPEN_FZ_N, summary.forming_open.max_fz_N, "N"));
-    rows.push(("forming, max in-plane force without correction".into(), paper::FORMING_OPEN_FXY_N, summary.forming_open.max_fxy_N, "N"));
+    rows.push((
+        "forming, max error norm without correction".into(),
+        paper::FORMING_OPEN_MAX_MM,
+        summary.forming_open.max_error_norm_mm,
+        "mm",
+    ));
+    rows.push((
+        "forming, max error norm with correction".into(),
+        paper::FORMING_CLOSED_MAX_MM,
+        summary.forming_closed.max_error_norm_mm,
+        "mm",
+    ));
+    rows.push((
+        "forming, improvement of the max error norm".into(),
+        paper::FORMING_IMPROVEMENT_PERCENT,
+        summary.improvement_percent,
+        "%",
+    ));
+    rows.push((
+        "forming, max Fz without correction".into(),
+        paper::FORMING_OPEN_FZ_N,
+        summary.forming_open.max_fz_N,
+        "N",
+    ));
+    rows.push((
+        "forming, max in-plane force without correction".into(),
+        paper::FORMING_OPEN_FXY_N,
+        summary.forming_open.max_fxy_N,
+        "N",
+    ));
     rows
 }
 
 fn paper_vs_deflex_csv(summary: &DemoSummary) -> String {
-    let mut s = String::from("# deflex column: measured on the SIMULATED twin cell\nquantity,paper,deflex,unit\n");
+    let mut s = String::from(
+        "# deflex column: measured on the SIMULATED twin cell\nquantity,paper,deflex,unit\n",
+    );
     for (quantity, paper, ours, unit) in paper_vs_deflex(summary) {
         let _ = writeln!(s, "\"{quantity}\",{paper},{ours:.4},{unit}");
     }

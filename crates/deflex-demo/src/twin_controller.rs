@@ -5,7 +5,6 @@
 //! joint values the robot reports and the raw F/T samples of the period (averaged), plus the
 //! mounting and tool data an integrator takes from drawings and datasheets. Never the plant.
 
-
 use deflex_control::{Controller, ControllerConfig, CycleInput, CycleOutput, Fault, Phase};
 use deflex_model::Robot;
 use deflex_model::spatial::pose_from_xyz_rpy;
