@@ -46,12 +46,21 @@ pub fn parse_length_mm_default(text: &str, what: &str) -> Result<f64, String> {
 }
 
 /// Joint values from `--q-deg` or `--q-rad`, checked against the robot's joint count.
-pub fn joint_values(robot: &Robot, q_deg: Option<&str>, q_rad: Option<&str>) -> Result<Vec<f64>, String> {
+pub fn joint_values(
+    robot: &Robot,
+    q_deg: Option<&str>,
+    q_rad: Option<&str>,
+) -> Result<Vec<f64>, String> {
     let q = match (q_deg, q_rad) {
-        (Some(d), None) => parse_list(d, "--q-deg")?.into_iter().map(f64::to_radians).collect(),
+        (Some(d), None) => parse_list(d, "--q-deg")?
+            .into_iter()
+            .map(f64::to_radians)
+            .collect(),
         (None, Some(r)) => parse_list(r, "--q-rad")?,
         (Some(_), Some(_)) => return Err("give either --q-deg or --q-rad, not both".into()),
-        (None, None) => return Err("joint values needed: --q-deg a,b,c,... or --q-rad a,b,c,...".into()),
+        (None, None) => {
+            return Err("joint values needed: --q-deg a,b,c,... or --q-rad a,b,c,...".into());
+        }
     };
     if q.len() != robot.joint_count() {
         return Err(format!(

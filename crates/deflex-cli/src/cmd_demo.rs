@@ -60,17 +60,30 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
         quick: args.quick,
     };
     let started = std::time::Instant::now();
-    let mut bars = Bars { bar: None, quiet: json };
+    let mut bars = Bars {
+        bar: None,
+        quiet: json,
+    };
     let summary = run_demo(&options, &mut bars)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&summary).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&summary).unwrap_or_default()
+        );
         return Ok(());
     }
     println!();
-    println!("deflex demo — SIMULATED TX200 cell (seed {}){}", summary.seed, if summary.quick { ", quick" } else { "" });
+    println!(
+        "deflex demo — SIMULATED TX200 cell (seed {}){}",
+        summary.seed,
+        if summary.quick { ", quick" } else { "" }
+    );
     println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
     for (quantity, paper, ours, unit) in deflex_demo::paper_vs_deflex_rows(&summary) {
-        println!("{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}", quantity, paper, ours);
+        println!(
+            "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
+            quantity, paper, ours
+        );
     }
     println!("identified structure: {}", summary.identified_structure);
     println!(

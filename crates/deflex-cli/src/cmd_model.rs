@@ -115,8 +115,10 @@ pub fn model(command: ModelCommand, json_output: bool) -> CliResult {
                     .collect();
                 println!(
                     "{}",
-                    serde_json::to_string_pretty(&json!({"name": robot.name, "joints": joints, "edofs": edofs}))
-                        .unwrap_or_default()
+                    serde_json::to_string_pretty(
+                        &json!({"name": robot.name, "joints": joints, "edofs": edofs})
+                    )
+                    .unwrap_or_default()
                 );
             } else {
                 print!("{}", describe(&robot));
@@ -129,17 +131,32 @@ pub fn model(command: ModelCommand, json_output: bool) -> CliResult {
 /// Human-readable joint table and eDoF list.
 pub fn describe(robot: &Robot) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "{}  ({} joints, {} eDoFs)", robot.name, robot.joint_count(), robot.edof_count());
+    let _ = writeln!(
+        out,
+        "{}  ({} joints, {} eDoFs)",
+        robot.name,
+        robot.joint_count(),
+        robot.edof_count()
+    );
     let _ = writeln!(
         out,
         "{:<10} {:>9} {:>8} {:>8} {:>9} {:>17} {:>9}  stiffness x / y / z (10^6 N·m/rad)",
         "joint", "alpha°", "a mm", "d mm", "offset°", "limits°", "shift mm"
     );
-    let k = |v: Option<f64>| v.map(|k| format!("{:.3}", k / 1e6)).unwrap_or_else(|| "-".into());
+    let k = |v: Option<f64>| {
+        v.map(|k| format!("{:.3}", k / 1e6))
+            .unwrap_or_else(|| "-".into())
+    };
     for joint in &robot.joints {
         let (alpha, a, d) = joint
             .dh
-            .map(|dh| (fixed(dh.alpha.to_degrees(), 1), fixed(dh.a * 1e3, 1), fixed(dh.d * 1e3, 1)))
+            .map(|dh| {
+                (
+                    fixed(dh.alpha.to_degrees(), 1),
+                    fixed(dh.a * 1e3, 1),
+                    fixed(dh.d * 1e3, 1),
+                )
+            })
             .unwrap_or(("urdf".into(), "".into(), "".into()));
         let limits = joint
             .limits
@@ -177,7 +194,11 @@ fn rotation_rows(rotation: &nalgebra::Rotation3<f64>) -> Vec<[f64; 3]> {
 
 pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
-    let q = joint_values(&robot, args.joints.q_deg.as_deref(), args.joints.q_rad.as_deref())?;
+    let q = joint_values(
+        &robot,
+        args.joints.q_deg.as_deref(),
+        args.joints.q_rad.as_deref(),
+    )?;
     let pose = robot.tcp_pose(&q).map_err(|e| e.to_string())?;
     let p = pose.translation.vector;
     let rpy = rpy_from_rotation(&pose.rotation);
@@ -187,9 +208,17 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
             "rotation": rotation_rows(&pose.rotation),
             "rpy_rad": rpy,
         });
-        println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
     } else {
-        println!("TCP position (mm): x {:.3}  y {:.3}  z {:.3}", p.x * 1e3, p.y * 1e3, p.z * 1e3);
+        println!(
+            "TCP position (mm): x {:.3}  y {:.3}  z {:.3}",
+            p.x * 1e3,
+            p.y * 1e3,
+            p.z * 1e3
+        );
         println!(
             "TCP orientation (deg, R = Rz·Ry·Rx): roll {:.3}  pitch {:.3}  yaw {:.3}",
             rpy[0].to_degrees(),
@@ -204,16 +233,24 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
 
 pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
-    let q = joint_values(&robot, args.joints.q_deg.as_deref(), args.joints.q_rad.as_deref())?;
+    let q = joint_values(
+        &robot,
+        args.joints.q_deg.as_deref(),
+        args.joints.q_rad.as_deref(),
+    )?;
     let w = parse_fixed::<6>(&args.wrench, "--wrench")?;
     let wrench = Wrench::from_row_slice(&w);
     let mut data = Data::new();
-    robot.forward_kinematics(&mut data, &q).map_err(|e| e.to_string())?;
+    robot
+        .forward_kinematics(&mut data, &q)
+        .map_err(|e| e.to_string())?;
     let compliance = robot.compliance_matrix(&data);
     let ds = robot.tcp_deflection(&data, &wrench);
     let p = data.tcp_position();
     if json_output {
-        let rows: Vec<Vec<f64>> = (0..6).map(|r| (0..6).map(|c| compliance[(r, c)]).collect()).collect();
+        let rows: Vec<Vec<f64>> = (0..6)
+            .map(|r| (0..6).map(|c| compliance[(r, c)]).collect())
+            .collect();
         let value = json!({
             "tcp_m": [p.x, p.y, p.z],
             "wrench": w,
@@ -221,9 +258,17 @@ pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
             "dphi_rad": [ds[3], ds[4], ds[5]],
             "compliance": rows,
         });
-        println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
     } else {
-        println!("TCP (mm): x {:.3}  y {:.3}  z {:.3}", p.x * 1e3, p.y * 1e3, p.z * 1e3);
+        println!(
+            "TCP (mm): x {:.3}  y {:.3}  z {:.3}",
+            p.x * 1e3,
+            p.y * 1e3,
+            p.z * 1e3
+        );
         println!("wrench (N, N·m, world axes at the TCP): {w:?}");
         println!(
             "deflection δp (mm):   x {:+.4}  y {:+.4}  z {:+.4}   |δp| {:.4}",
@@ -245,7 +290,10 @@ pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
 /// The paper's forming configuration, a good seed for work near the ISF cell.
 pub fn default_seed(robot: &Robot) -> Vec<f64> {
     if robot.joint_count() == 6 {
-        [0.0, 49.7, 89.3, 0.0, 41.0, 0.0].iter().map(|d: &f64| d.to_radians()).collect()
+        [0.0, 49.7, 89.3, 0.0, 41.0, 0.0]
+            .iter()
+            .map(|d: &f64| d.to_radians())
+            .collect()
     } else {
         vec![0.0; robot.joint_count()]
     }
@@ -271,9 +319,16 @@ pub fn ik(args: IkArgs, json_output: bool) -> CliResult {
             "position_error_m": solution.position_error_m,
             "orientation_error_rad": solution.orientation_error_rad,
         });
-        println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
     } else {
-        let degrees: Vec<String> = solution.q.iter().map(|v| format!("{:.4}", v.to_degrees())).collect();
+        let degrees: Vec<String> = solution
+            .q
+            .iter()
+            .map(|v| format!("{:.4}", v.to_degrees()))
+            .collect();
         println!("q (deg): {}", degrees.join(", "));
         println!(
             "converged in {} iterations; residual {:.2e} mm, {:.2e} mrad",
@@ -324,10 +379,16 @@ pub fn deflection_grid(
             target.translation.vector = nalgebra::Vector3::new(x, y, z_m);
             match robot.inverse_kinematics(&target, &row_seed, &IkOptions::default()) {
                 Ok(solution) => {
-                    robot.forward_kinematics(&mut data, &solution.q).map_err(|e| e.to_string())?;
+                    robot
+                        .forward_kinematics(&mut data, &solution.q)
+                        .map_err(|e| e.to_string())?;
                     let deflection = robot.tcp_deflection(&data, wrench);
                     row_seed = solution.q.clone();
-                    nodes.push(MapNode { position_m: [x, y, z_m], q_rad: solution.q, deflection });
+                    nodes.push(MapNode {
+                        position_m: [x, y, z_m],
+                        q_rad: solution.q,
+                        deflection,
+                    });
                 }
                 Err(_) => unreachable += 1,
             }
@@ -340,15 +401,18 @@ pub fn deflection_grid(
 pub fn map(args: MapArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
     let plane = args.plane.trim();
-    let z_text = plane
-        .strip_prefix("z=")
-        .ok_or_else(|| format!("--plane: only horizontal planes are supported, write z=100mm (got \"{plane}\")"))?;
+    let z_text = plane.strip_prefix("z=").ok_or_else(|| {
+        format!("--plane: only horizontal planes are supported, write z=100mm (got \"{plane}\")")
+    })?;
     let z_m = parse_length_mm_default(z_text, "--plane")?;
     let center: Vec<&str> = args.center.split(',').collect();
     let [cx, cy] = center.as_slice() else {
         return Err(format!("--center: expected x,y, got \"{}\"", args.center));
     };
-    let center_m = [parse_length_mm_default(cx, "--center")?, parse_length_mm_default(cy, "--center")?];
+    let center_m = [
+        parse_length_mm_default(cx, "--center")?,
+        parse_length_mm_default(cy, "--center")?,
+    ];
     let size_m = parse_length_mm_default(&args.size, "--size")?;
     let step_m = parse_length_mm_default(&args.step, "--step")?;
     let w = parse_fixed::<6>(&args.wrench, "--wrench")?;
@@ -367,16 +431,27 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
     }
     csv.push_str("dx_m,dy_m,dz_m,drx_rad,dry_rad,drz_rad\n");
     for node in &nodes {
-        let _ = write!(csv, "{:?},{:?},{:?},", node.position_m[0], node.position_m[1], node.position_m[2]);
+        let _ = write!(
+            csv,
+            "{:?},{:?},{:?},",
+            node.position_m[0], node.position_m[1], node.position_m[2]
+        );
         for q in &node.q_rad {
             let _ = write!(csv, "{q:?},");
         }
         let d = &node.deflection;
-        let _ = writeln!(csv, "{:e},{:e},{:e},{:e},{:e},{:e}", d[0], d[1], d[2], d[3], d[4], d[5]);
+        let _ = writeln!(
+            csv,
+            "{:e},{:e},{:e},{:e},{:e},{:e}",
+            d[0], d[1], d[2], d[3], d[4], d[5]
+        );
     }
     let csv_path = args.out.join("deflection_map.csv");
     std::fs::write(&csv_path, csv).map_err(|e| format!("{}: {e}", csv_path.display()))?;
-    let norms: Vec<f64> = nodes.iter().map(|n| n.deflection.fixed_rows::<3>(0).norm()).collect();
+    let norms: Vec<f64> = nodes
+        .iter()
+        .map(|n| n.deflection.fixed_rows::<3>(0).norm())
+        .collect();
     let max = norms.iter().cloned().fold(0.0, f64::max);
     let mean = norms.iter().sum::<f64>() / norms.len() as f64;
     let pngs = crate::cmd_model::map_plots(&args.out, &nodes, &robot.name, &w)?;
@@ -390,7 +465,10 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
             "png": pngs,
             "elapsed_s": elapsed.as_secs_f64(),
         });
-        println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
     } else {
         println!(
             "{} grid nodes ({} unreachable) in {:.1} ms; |δp| max {:.4} mm, mean {:.4} mm",
@@ -425,7 +503,10 @@ pub fn map_plots(
     let mut dz = vec![f64::NAN; xs.len() * ys.len()];
     let mut norm = vec![f64::NAN; xs.len() * ys.len()];
     for node in nodes {
-        if let (Some(ix), Some(iy)) = (index(&xs, node.position_m[0] * 1e3), index(&ys, node.position_m[1] * 1e3)) {
+        if let (Some(ix), Some(iy)) = (
+            index(&xs, node.position_m[0] * 1e3),
+            index(&ys, node.position_m[1] * 1e3),
+        ) {
             dz[iy * xs.len() + ix] = node.deflection[2] * 1e3;
             norm[iy * xs.len() + ix] = node.deflection.fixed_rows::<3>(0).norm() * 1e3;
         }

@@ -200,16 +200,18 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
                 return Err("--model is only used with --correction on".into());
             }
         }
-        "on" => {
-            return Err(
-                "--correction on is not wired yet in `deflex sim isf`: this command runs the open-loop \
-                 forming only (the correction controller lives in deflex-control)"
-                    .into(),
-            );
-        }
+        "on" => {}
         other => return Err(format!("--correction: expected on or off, got \"{other}\"")),
     }
     let config = load_config(args.config.as_deref())?;
+    // Closed loop: the deflex correction controller in-process, in simulated time.
+    let mut twin = match args.correction.as_str() {
+        "on" => Some(deflex_demo::twin_controller::twin_controller(
+            &config,
+            args.model.as_deref(),
+        )?),
+        _ => None,
+    };
     let path = tool_path(&args)?;
     let name = path.name.clone();
     let bar = if json {
@@ -223,7 +225,10 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
         )
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let run = run_forming_with_progress(&config, path, args.seed, None, &mut |f| {
+    let controller = twin
+        .as_mut()
+        .map(|t| t as &mut dyn deflex_sim::CorrectionController);
+    let run = run_forming_with_progress(&config, path, args.seed, controller, &mut |f| {
         bar.set_position((f * 1000.0) as u64)
     })
     .map_err(|e| e.to_string())?;
@@ -249,7 +254,15 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
             serde_json::to_string_pretty(&value).unwrap_or_default()
         );
     } else {
-        println!("SIMULATED open-loop forming: {name} (seed {})", args.seed);
+        let mode = if twin.is_some() {
+            "closed-loop"
+        } else {
+            "open-loop"
+        };
+        println!("SIMULATED {mode} forming: {name} (seed {})", args.seed);
+        if let Some(t) = &twin {
+            println!("  {}", t.status_line());
+        }
         println!(
             "  {:.1} s simulated in {:.2} s ({} cycles)",
             s.duration_s, run.wall_time_s, s.cycles

@@ -3,7 +3,10 @@
 use std::process::Command;
 
 fn deflex(args: &[&str]) -> (bool, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex")).args(args).output().expect("run deflex");
+    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
+        .args(args)
+        .output()
+        .expect("run deflex");
     (
         output.status.success(),
         String::from_utf8_lossy(&output.stdout).into_owned(),
@@ -23,33 +26,69 @@ fn json(args: &[&str]) -> serde_json::Value {
 fn pose_json_reaches_the_paper_part_origin() {
     let v = json(&["pose", "--robot", "tx200", "--q-deg", "0,49.7,89.3,0,41,0"]);
     let tcp: Vec<f64> = serde_json::from_value(v["tcp_m"].clone()).unwrap();
-    assert!((tcp[0] - 1.4994).abs() < 5e-4 && tcp[1].abs() < 1e-9 && (tcp[2] + 0.1833).abs() < 5e-4);
+    assert!(
+        (tcp[0] - 1.4994).abs() < 5e-4 && tcp[1].abs() < 1e-9 && (tcp[2] + 0.1833).abs() < 5e-4
+    );
     let rotation: Vec<Vec<f64>> = serde_json::from_value(v["rotation"].clone()).unwrap();
-    assert!((rotation[2][2] + 1.0).abs() < 1e-3, "tool axis down: {rotation:?}");
+    assert!(
+        (rotation[2][2] + 1.0).abs() < 1e-3,
+        "tool axis down: {rotation:?}"
+    );
 }
 
 #[test]
 fn deflect_json_has_compliance_consistent_with_dp() {
-    let v = json(&["deflect", "--robot", "tx200", "--q-deg", "0,90,0,0,0,0", "--wrench", "0,1400,0,0,0,0"]);
+    let v = json(&[
+        "deflect",
+        "--robot",
+        "tx200",
+        "--q-deg",
+        "0,90,0,0,0,0",
+        "--wrench",
+        "0,1400,0,0,0,0",
+    ]);
     let dp: Vec<f64> = serde_json::from_value(v["dp_m"].clone()).unwrap();
     let compliance: Vec<Vec<f64>> = serde_json::from_value(v["compliance"].clone()).unwrap();
     assert_eq!(compliance.len(), 6);
     for (r, value) in dp.iter().enumerate() {
         assert!((compliance[r][1] * 1400.0 - value).abs() < 1e-15);
     }
-    assert!(dp[0] > 1e-4, "enhanced model shows the Figure 7 x-displacement");
+    assert!(
+        dp[0] > 1e-4,
+        "enhanced model shows the Figure 7 x-displacement"
+    );
     let _: Vec<f64> = serde_json::from_value(v["dphi_rad"].clone()).unwrap();
 }
 
 #[test]
 fn ik_round_trips_and_reports_unreachable() {
-    let v = json(&["ik", "--robot", "tx200", "--xyz-mm", "1450,80,-150", "--rpy-deg", "180,0,180"]);
+    let v = json(&[
+        "ik",
+        "--robot",
+        "tx200",
+        "--xyz-mm",
+        "1450,80,-150",
+        "--rpy-deg",
+        "180,0,180",
+    ]);
     let q: Vec<f64> = serde_json::from_value(v["q_rad"].clone()).unwrap();
     let q_text: Vec<String> = q.iter().map(|x| format!("{x}")).collect();
     let pose = json(&["pose", "--robot", "tx200", "--q-rad", &q_text.join(",")]);
     let tcp: Vec<f64> = serde_json::from_value(pose["tcp_m"].clone()).unwrap();
-    assert!((tcp[0] - 1.45).abs() < 1e-8 && (tcp[1] - 0.08).abs() < 1e-8 && (tcp[2] + 0.15).abs() < 1e-8);
-    let (ok, _, stderr) = deflex(&["ik", "--robot", "tx200", "--xyz-mm", "5000,0,0", "--rpy-deg", "0,0,0"]);
+    assert!(
+        (tcp[0] - 1.45).abs() < 1e-8
+            && (tcp[1] - 0.08).abs() < 1e-8
+            && (tcp[2] + 0.15).abs() < 1e-8
+    );
+    let (ok, _, stderr) = deflex(&[
+        "ik",
+        "--robot",
+        "tx200",
+        "--xyz-mm",
+        "5000,0,0",
+        "--rpy-deg",
+        "0,0,0",
+    ]);
     assert!(!ok && stderr.contains("unreachable"), "{stderr}");
 }
 
@@ -57,8 +96,21 @@ fn ik_round_trips_and_reports_unreachable() {
 fn map_writes_csv_and_heatmaps_for_the_paper_grid() {
     let out = std::env::temp_dir().join(format!("deflex-cli-map-{}", std::process::id()));
     let v = json(&[
-        "map", "--robot", "tx200", "--plane", "z=100mm", "--center", "1500,0", "--size", "600mm", "--step", "40mm",
-        "--wrench", "0,0,-1100,0,0,0", "--out", out.to_str().unwrap(),
+        "map",
+        "--robot",
+        "tx200",
+        "--plane",
+        "z=100mm",
+        "--center",
+        "1500,0",
+        "--size",
+        "600mm",
+        "--step",
+        "40mm",
+        "--wrench",
+        "0,0,-1100,0,0,0",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     assert_eq!(v["nodes"], 256);
     assert_eq!(v["unreachable"], 0);
@@ -74,11 +126,39 @@ fn map_writes_csv_and_heatmaps_for_the_paper_grid() {
 #[test]
 fn user_errors_are_clear() {
     let (ok, _, stderr) = deflex(&["pose", "--robot", "tx200", "--q-deg", "0,1"]);
-    assert!(!ok && stderr.contains("6 joints") && stderr.contains("2 joint values"), "{stderr}");
-    let (ok, _, stderr) = deflex(&["pose", "--robot", "no/such/robot.toml", "--q-deg", "0,0,0,0,0,0"]);
+    assert!(
+        !ok && stderr.contains("6 joints") && stderr.contains("2 joint values"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = deflex(&[
+        "pose",
+        "--robot",
+        "no/such/robot.toml",
+        "--q-deg",
+        "0,0,0,0,0,0",
+    ]);
     assert!(!ok && stderr.contains("no/such/robot.toml"), "{stderr}");
-    let (ok, _, stderr) = deflex(&["deflect", "--robot", "tx200", "--q-deg", "0,0,0,0,0,0", "--wrench", "1,2,x,4,5,6"]);
-    assert!(!ok && stderr.contains("--wrench") && stderr.contains("\"x\""), "{stderr}");
-    let (ok, _, stderr) = deflex(&["deflect", "--robot", "tx200", "--q-deg", "0,0,0,0,0,0", "--wrench", "1,2,3"]);
+    let (ok, _, stderr) = deflex(&[
+        "deflect",
+        "--robot",
+        "tx200",
+        "--q-deg",
+        "0,0,0,0,0,0",
+        "--wrench",
+        "1,2,x,4,5,6",
+    ]);
+    assert!(
+        !ok && stderr.contains("--wrench") && stderr.contains("\"x\""),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = deflex(&[
+        "deflect",
+        "--robot",
+        "tx200",
+        "--q-deg",
+        "0,0,0,0,0,0",
+        "--wrench",
+        "1,2,3",
+    ]);
     assert!(!ok && stderr.contains("expected 6 values"), "{stderr}");
 }

@@ -173,29 +173,36 @@ pub fn run_closed_loop(
     })
 }
 
+/// A model identified from the twin's own calibration campaign, the way a user would do it on
+/// hardware (plan for the full eDoF family → laser-tracker campaign on the twin → structure
+/// search from the nominal model). Never reads the plant. Used by tests and embedders; the demo
+/// runs the same steps with its reporting around them.
+pub fn identify_from_twin_campaign(cell: &CellConfig, seed: u64) -> Result<Robot, String> {
+    let nominal = cell.nominal_robot().map_err(|e| e.to_string())?;
+    let options = deflex_calib::plan::PlanOptions {
+        full_family: true,
+        ..Default::default()
+    };
+    let plan =
+        deflex_calib::plan::plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
+    let rows =
+        deflex_sim::campaign::run_campaign(cell, &plan.rows, seed).map_err(|e| e.to_string())?;
+    let result = deflex_calib::search_structure(
+        &nominal,
+        &rows,
+        &deflex_calib::SearchOptions::default(),
+        &mut |_, _, _| {},
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(result.calibration.to_robot(&nominal))
+}
+
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
 
-    /// A model calibrated from the twin's own campaign (plan → laser-tracker campaign on the
-    /// twin → structure search), never read from the plant.
-    pub(crate) fn calibrated_model(cell: &CellConfig) -> Robot {
-        let nominal = cell.nominal_robot().unwrap();
-        let options = deflex_calib::plan::PlanOptions {
-            full_family: true,
-            ..Default::default()
-        };
-        let plan = deflex_calib::plan::plan_experiments(&nominal, &options).unwrap();
-        let rows = deflex_sim::campaign::run_campaign(cell, &plan.rows, 11).unwrap();
-        let options = deflex_calib::SearchOptions::default();
-        let result =
-            deflex_calib::search_structure(&nominal, &rows, &options, &mut |_, _, _| {}).unwrap();
-        eprintln!(
-            "calibrated from {} campaign rows: {}",
-            rows.len(),
-            result.calibration.structure.label()
-        );
-        result.calibration.to_robot(&nominal)
+    fn calibrated_model(cell: &CellConfig) -> Robot {
+        identify_from_twin_campaign(cell, 11).unwrap()
     }
 
     fn norm3(v: &[f64]) -> f64 {

@@ -26,18 +26,33 @@ fn urdf_chain_matches_modified_dh() {
             * Rotation3::from_axis_angle(&Vector3::z_axis(), joint.theta_offset);
         let rpy = rpy_from_rotation(&rotation);
         assert!((rotation_from_rpy(rpy).matrix() - rotation.matrix()).norm() < 1e-12);
-        let parent = if i == 0 { "base".to_string() } else { format!("link{i}") };
+        let parent = if i == 0 {
+            "base".to_string()
+        } else {
+            format!("link{i}")
+        };
         joints_xml += &format!(
             "<joint name=\"j{}\" type=\"revolute\"><parent link=\"{parent}\"/><child link=\"link{}\"/>\
              <origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/><axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/></joint>",
-            i + 1, i + 1, xyz.x, xyz.y, xyz.z, rpy[0], rpy[1], rpy[2]
+            i + 1,
+            i + 1,
+            xyz.x,
+            xyz.y,
+            xyz.z,
+            rpy[0],
+            rpy[1],
+            rpy[2]
         );
         links_xml += &format!("<link name=\"link{}\"/>", i + 1);
     }
     joints_xml += "<joint name=\"flange_fix\" type=\"fixed\"><parent link=\"link6\"/><child link=\"flange\"/><origin xyz=\"0 0 0.05\" rpy=\"0 0 0\"/></joint>";
     links_xml += "<link name=\"flange\"/>";
     let dir = temp_dir("urdf");
-    std::fs::write(dir.join("arm.urdf"), format!("<robot name=\"arm\">{links_xml}{joints_xml}</robot>")).unwrap();
+    std::fs::write(
+        dir.join("arm.urdf"),
+        format!("<robot name=\"arm\">{links_xml}{joints_xml}</robot>"),
+    )
+    .unwrap();
     let mut toml = String::from("name = \"urdf arm\"\nurdf = \"arm.urdf\"\n");
     for i in 1..=6 {
         toml += &format!("[[joint]]\nname = \"j{i}\"\nstiffness = {{ z = 1.0e6 }}\n");
@@ -57,12 +72,19 @@ fn urdf_chain_matches_modified_dh() {
     // A joint count that does not match the URDF is named with both numbers.
     let short: String = toml.lines().take(2 + 3 * 5).collect::<Vec<_>>().join("\n");
     std::fs::write(dir.join("short.toml"), short).unwrap();
-    let err = load_robot(dir.join("short.toml").to_str().unwrap()).unwrap_err().to_string();
-    assert!(err.contains("6 revolute joints") && err.contains("5 [[joint]]"), "{err}");
+    let err = load_robot(dir.join("short.toml").to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("6 revolute joints") && err.contains("5 [[joint]]"),
+        "{err}"
+    );
 }
 
 fn error_of(text: &str) -> String {
-    robot_from_toml_str(text, "robots/bad.toml", None).unwrap_err().to_string()
+    robot_from_toml_str(text, "robots/bad.toml", None)
+        .unwrap_err()
+        .to_string()
 }
 
 const ONE_JOINT: &str = "name = \"r\"\n[[joint]]\na = 0.5\n";
@@ -70,13 +92,21 @@ const ONE_JOINT: &str = "name = \"r\"\n[[joint]]\na = 0.5\n";
 #[test]
 fn validation_errors_name_file_and_field() {
     let e = error_of(&format!("{ONE_JOINT}stiffness = {{ z = -5.0 }}\n"));
-    assert!(e.contains("robots/bad.toml") && e.contains("joint[1] (joint_1).stiffness.z") && e.contains("positive"), "{e}");
+    assert!(
+        e.contains("robots/bad.toml")
+            && e.contains("joint[1] (joint_1).stiffness.z")
+            && e.contains("positive"),
+        "{e}"
+    );
     let e = error_of(&format!("{ONE_JOINT}stiffness = {{ z = 0.0 }}\n"));
     assert!(e.contains("stiffness.z"), "{e}");
     let e = error_of(&format!("{ONE_JOINT}stiffness = {{ z = nan }}\n"));
     assert!(e.contains("stiffness.z"), "{e}");
     let e = error_of(&format!("{ONE_JOINT}stiffness = {{ w = 1.0 }}\n"));
-    assert!(e.contains("unknown field") && e.contains("`w`") && e.contains("line"), "{e}");
+    assert!(
+        e.contains("unknown field") && e.contains("`w`") && e.contains("line"),
+        "{e}"
+    );
     let e = error_of(&format!("{ONE_JOINT}d = \"abc\"\n"));
     assert!(e.contains("robots/bad.toml") && e.contains("line 4"), "{e}");
     let e = error_of("name = \"r\"\n[base]\nstiffness = { x = inf }\n[[joint]]\n");
@@ -85,7 +115,9 @@ fn validation_errors_name_file_and_field() {
     assert!(e.contains("1 to 8 motorised joints"), "{e}");
     let e = error_of(&format!("{ONE_JOINT}limits = [1.0, -1.0]\n"));
     assert!(e.contains("limits"), "{e}");
-    let e = load_robot("/nonexistent/robot.toml").unwrap_err().to_string();
+    let e = load_robot("/nonexistent/robot.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("/nonexistent/robot.toml"), "{e}");
 }
 
@@ -98,6 +130,9 @@ fn builtins_parse_and_differ_as_documented() {
     assert_eq!(one.edof_count(), 5);
     assert!((full.joints[2].center_shift - 0.4).abs() < 1e-15);
     assert_eq!(one.joints[2].center_shift, 0.0);
-    assert_eq!(full.joints[2].stiffness.0, [Some(1.45e6), None, Some(2.04e6)]);
+    assert_eq!(
+        full.joints[2].stiffness.0,
+        [Some(1.45e6), None, Some(2.04e6)]
+    );
     assert!(builtin("nope").is_none());
 }

@@ -101,7 +101,7 @@ fn edof_columns_match_perturbed_chain() {
         if edof.site == EdofSite::Base {
             let mut axis = Vector3::zeros();
             axis[edof.axis.index()] = 1.0;
-            frame = frame * rotation_pose(axis * h);
+            frame *= rotation_pose(axis * h);
         }
         for (i, joint) in robot.joints.iter().enumerate() {
             frame =

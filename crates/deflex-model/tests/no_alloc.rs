@@ -47,5 +47,10 @@ fn hot_path_allocates_nothing() {
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
     assert!(sink.is_finite());
-    assert_eq!(after - before, 0, "the hot path allocated {} times", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "the hot path allocated {} times",
+        after - before
+    );
 }

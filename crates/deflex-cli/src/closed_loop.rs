@@ -1,0 +1,233 @@
+//! `deflex run`'s threaded runtime (robot-link, sensor and control threads) driven against the
+//! digital twin in simulated time: the twin's robot and sensor are served through in-memory
+//! [`RobotLink`]/[`ForceSensorLink`] implementations and the control thread is paced by a driven
+//! [`SimClock`], so the exact runtime code of the hardware path runs as fast as the CPU allows.
+//! The in-process adapter itself lives in [`deflex_demo::twin_controller`].
+
+use deflex_control::SimClock;
+use deflex_control::runtime::{self, RunSummary, RuntimeOptions};
+use deflex_control::{Controller, ControllerConfig};
+use deflex_io::{Correction, ForceSensorLink, LinkError, RobotLink, RobotState, WrenchSample};
+use deflex_model::Robot;
+use deflex_sim::forming::RunningStats;
+use deflex_sim::{Cell, CellConfig, CellStep, ToolPath};
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The twin behind the in-memory links of [`run_runtime_in_sim_time`].
+#[cfg_attr(not(test), allow(dead_code))] // entry point for tests and embedders
+struct TwinShared {
+    cell: Mutex<Cell>,
+    /// Samples waiting for the sensor thread, and whether that thread found the queue empty
+    /// since the last push (then everything pushed before has been published).
+    samples: Mutex<(VecDeque<[f64; 6]>, bool)>,
+}
+
+/// The twin's robot as a [`RobotLink`]: each `receive` advances the driven simulated clock by
+/// one robot cycle (running every control cycle due first, in lockstep), steps the twin, hands
+/// the cycle's F/T samples to [`TwinSensorLink`] and waits until they are published.
+#[cfg_attr(not(test), allow(dead_code))] // entry point for tests and embedders
+struct TwinRobotLink {
+    shared: Arc<TwinShared>,
+    clock: SimClock,
+    step: CellStep,
+    period_s: f64,
+    calls: u64,
+    finished: bool,
+}
+
+impl RobotLink for TwinRobotLink {
+    fn receive(&mut self, timeout: Duration) -> Result<Option<RobotState>, LinkError> {
+        if self.finished {
+            std::thread::sleep(timeout);
+            return Ok(None);
+        }
+        if self.calls == 1 {
+            // The first state and samples are out: start the lockstep with the control loop.
+            self.clock.wait_for_follower(Duration::from_secs(10));
+        }
+        self.calls += 1;
+        self.clock.advance_to(self.step.time_s + self.period_s);
+        {
+            let mut cell = self.shared.cell.lock().map_err(|_| LinkError::NoPeer {
+                protocol: deflex_io::Protocol::Rsi,
+            })?;
+            cell.step_into(&mut self.step);
+        }
+        self.clock.advance_to(self.step.time_s);
+        if let Ok(mut q) = self.shared.samples.lock() {
+            q.0.extend(self.step.sensor_samples.iter().map(|s| s.wrench_sensor));
+            q.1 = false;
+        }
+        let waiting = Instant::now();
+        while waiting.elapsed() < Duration::from_secs(2) {
+            match self.shared.samples.lock() {
+                Ok(q) if q.0.is_empty() && q.1 => break,
+                _ => std::thread::yield_now(),
+            }
+        }
+        if self.step.finished {
+            self.finished = true;
+            self.clock.finish();
+        }
+        Ok(Some(RobotState {
+            q_rad: self.step.q_measured_rad,
+            cycle_id: self.calls,
+            ..RobotState::default()
+        }))
+    }
+
+    fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
+        if let Ok(mut cell) = self.shared.cell.lock() {
+            cell.set_correction([
+                c.dp_m[0],
+                c.dp_m[1],
+                c.dp_m[2],
+                c.dphi_rad[0],
+                c.dphi_rad[1],
+                c.dphi_rad[2],
+            ]);
+        }
+        Ok(())
+    }
+}
+
+/// The twin's F/T sensor as a [`ForceSensorLink`] fed by [`TwinRobotLink`].
+#[cfg_attr(not(test), allow(dead_code))] // entry point for tests and embedders
+struct TwinSensorLink {
+    shared: Arc<TwinShared>,
+}
+
+impl ForceSensorLink for TwinSensorLink {
+    fn start(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
+    fn bias(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
+    fn receive(&mut self, timeout: Duration) -> Result<Option<WrenchSample>, LinkError> {
+        let start = Instant::now();
+        loop {
+            if let Ok(mut q) = self.shared.samples.lock() {
+                if let Some(w) = q.0.pop_front() {
+                    return Ok(Some(WrenchSample {
+                        wrench: w,
+                        ..WrenchSample::default()
+                    }));
+                }
+                q.1 = true;
+            }
+            if start.elapsed() >= timeout {
+                return Ok(None);
+            }
+            std::thread::yield_now();
+        }
+    }
+    fn stop(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
+}
+
+/// The threaded runtime of `deflex run` (robot-link, sensor and control threads, the control
+/// thread paced by a driven [`SimClock`]) against the twin in simulated time, as fast as the
+/// CPU allows. Returns the run summary and the twin's ground-truth statistics.
+#[cfg_attr(not(test), allow(dead_code))] // entry point for tests and embedders
+pub fn run_runtime_in_sim_time(
+    cell: &CellConfig,
+    path: ToolPath,
+    seed: u64,
+    model: Robot,
+    config: ControllerConfig,
+) -> Result<(RunSummary, RunningStats), String> {
+    let twin = Cell::new(cell, path, seed).map_err(|e| e.to_string())?;
+    let period_s = twin.robot_period_s();
+    let shared = Arc::new(TwinShared {
+        cell: Mutex::new(twin),
+        samples: Mutex::new((VecDeque::new(), false)),
+    });
+    let clock = SimClock::driven();
+    let robot = TwinRobotLink {
+        shared: shared.clone(),
+        clock: clock.clone(),
+        step: CellStep::default(),
+        period_s,
+        calls: 0,
+        finished: false,
+    };
+    let sensor = TwinSensorLink {
+        shared: shared.clone(),
+    };
+    let controller = Controller::new(model, config).map_err(|e| e.to_string())?;
+    let options = RuntimeOptions {
+        robot_cycle_s: period_s,
+        realtime: false,
+        lock_memory: false,
+        startup_timeout_s: 10.0,
+        idle_exit_s: Some(0.2),
+    };
+    let runtime = runtime::spawn(
+        controller,
+        Box::new(robot),
+        Box::new(sensor),
+        clock,
+        None,
+        options,
+    );
+    while !runtime.is_finished() {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let summary = runtime.join();
+    let stats = shared
+        .cell
+        .lock()
+        .map_err(|_| "twin poisoned".to_string())?
+        .stats()
+        .clone();
+    Ok((summary, stats))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use deflex_demo::twin_controller::{
+        controller_config_for, identify_from_twin_campaign, run_closed_loop,
+    };
+
+    /// The same threads as `deflex run`, paced by a driven simulated clock against the twin,
+    /// agree with the in-process run and beat wall time.
+    #[test]
+    fn runtime_threads_in_simulated_time_agree_with_in_process() {
+        let cell = CellConfig::default();
+        let model = identify_from_twin_campaign(&cell, 11).unwrap();
+        let path = ToolPath::paper_cone().truncated(400.0);
+        let config = controller_config_for(&cell);
+        let wall = Instant::now();
+        let (summary, stats) =
+            run_runtime_in_sim_time(&cell, path.clone(), 5, model.clone(), config).unwrap();
+        let wall_s = wall.elapsed().as_secs_f64();
+        let inproc = run_closed_loop(&cell, path, 5, model, config, false, &mut |_| {}).unwrap();
+        let (a, b) = (
+            stats.max_error_norm_m * 1e3,
+            inproc.forming.summary.max_error_norm_mm,
+        );
+        eprintln!(
+            "runtime in simulated time: {} cycles in {wall_s:.2} s wall, max error {a:.4} mm \
+             (in-process {b:.4} mm), max F {:.0} N, fault {:?}",
+            summary.cycles, stats.max_force_norm_n, summary.fault
+        );
+        assert!(summary.error.is_none(), "{:?}", summary.error);
+        assert!(summary.cycles > 3000);
+        assert!(
+            wall_s < 40.0 * 0.5,
+            "slower than half of real time: {wall_s} s"
+        );
+        assert!((a - b).abs() <= 0.1 * b + 0.005, "{a} vs {b}");
+        // The only fault is the end of the robot's telegrams.
+        assert!(
+            summary
+                .fault
+                .is_none_or(|f| f.kind == deflex_control::FaultKind::RobotLinkLost)
+        );
+    }
+}

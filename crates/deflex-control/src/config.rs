@@ -1,0 +1,624 @@
+//! `CELL.toml`: everything `deflex run` needs: robot link, sensor link, sensor mounting and
+//! tool, model file, gains of eq. 17, limits, safety, log path. SI units throughout, the unit in
+//! each key's name. Unknown keys are errors (typos must not silently fall back to defaults);
+//! every error names the file and the field. The documented example is
+//! `docs/cell.example.toml`.
+
+use crate::controller::ControllerConfig;
+use crate::limiter::LimiterConfig;
+use crate::pid::PidGains;
+use crate::safety::{SafeAction, SafetyConfig};
+use crate::wrench::{STANDARD_GRAVITY, ToolLoad, WrenchConfig};
+use deflex_model::spatial::pose_from_xyz_rpy;
+use serde::Deserialize;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+/// A configuration problem, naming the file and the field.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Read {
+        /// File.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax or type error (the message names the key and line).
+    #[error("{path}: {message}")]
+    Parse {
+        /// File.
+        path: String,
+        /// Parser message.
+        message: String,
+    },
+    /// A value is invalid.
+    #[error("{path}: field `{field}`: {message}")]
+    Invalid {
+        /// File.
+        path: String,
+        /// Dotted field name.
+        field: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// Robot protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RobotKind {
+    /// KUKA RSI, XML over UDP.
+    KukaRsi,
+    /// ABB EGM path correction.
+    AbbEgm,
+    /// Stäubli VAL3 `alter` program (deflex binary protocol).
+    Staubli,
+    /// Text lines over UDP.
+    SimpleUdp,
+}
+
+/// `[robot]`: the robot link.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSection {
+    /// Protocol.
+    pub kind: RobotKind,
+    /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI).
+    pub bind: SocketAddr,
+    /// Robot's address, where the protocol needs it to be known in advance (informational for
+    /// RSI/EGM/Stäubli, which answer the sender).
+    #[serde(default)]
+    pub peer: Option<SocketAddr>,
+    /// RSI `RKorr` interpretation: `absolute` (default) or `relative`.
+    #[serde(default = "default_mode")]
+    pub correction_mode: String,
+    /// RSI `<Sen Type>`.
+    #[serde(default = "default_sen_type")]
+    pub sen_type: String,
+    /// Robot interpolation cycle (s), the reply deadline: 0.004 for RSI.
+    #[serde(default = "default_cycle")]
+    pub cycle_s: f64,
+    /// Silence after which the robot link counts as lost (s).
+    #[serde(default = "default_timeout")]
+    pub timeout_s: f64,
+}
+
+/// Sensor protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SensorKind {
+    /// ATI Net F/T RDT over UDP.
+    Netft,
+}
+
+/// `[sensor]`: the force/torque sensor link.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSection {
+    /// Protocol.
+    pub kind: SensorKind,
+    /// Sensor address (`<ip>:49152`).
+    pub address: SocketAddr,
+    /// Local address (default: any port on all interfaces).
+    #[serde(default = "default_sensor_bind")]
+    pub bind: SocketAddr,
+    /// Counts per newton.
+    #[serde(default = "default_counts")]
+    pub counts_per_force: f64,
+    /// Counts per newton-metre.
+    #[serde(default = "default_counts")]
+    pub counts_per_torque: f64,
+    /// Silence after which the sensor counts as lost (s).
+    #[serde(default = "default_timeout")]
+    pub timeout_s: f64,
+    /// Range of each channel `[fx, fy, fz, mx, my, mz]` (N, N·m); beyond it a reading is garbage.
+    #[serde(default = "default_range")]
+    pub range: [f64; 6],
+}
+
+/// `[mounting]`: sensor pose on the flange and the tool beyond it.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MountingSection {
+    /// Sensor origin in the flange frame (m).
+    #[serde(default)]
+    pub sensor_xyz_m: [f64; 3],
+    /// Sensor orientation in the flange frame, roll–pitch–yaw (rad).
+    #[serde(default)]
+    pub sensor_rpy_rad: [f64; 3],
+    /// Tool mass beyond the sensor (kg).
+    #[serde(default)]
+    pub tool_mass_kg: f64,
+    /// Tool centre of mass in the sensor frame (m).
+    #[serde(default)]
+    pub tool_com_m: [f64; 3],
+    /// Gravity in world axes (m/s²).
+    #[serde(default = "default_gravity")]
+    pub gravity_m_s2: [f64; 3],
+    /// Known bias (sensor frame, gravity excluded); when absent a tare is taken at start.
+    #[serde(default)]
+    pub bias: Option<[f64; 6]>,
+    /// Tare duration at start, out of contact (s).
+    #[serde(default = "default_tare")]
+    pub tare_s: f64,
+    /// Low-pass cut-off on the wrench (Hz); absent = off.
+    #[serde(default)]
+    pub lowpass_hz: Option<f64>,
+}
+
+/// `[model]`: the calibrated elasto-geometrical model.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSection {
+    /// Model TOML/URDF path (relative to the config file) or a built-in name.
+    pub file: String,
+}
+
+/// `[control]`: the law of eq. 17.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlSection {
+    /// Control rate (Hz).
+    #[serde(default = "default_rate")]
+    pub rate_hz: f64,
+    /// K_c.
+    #[serde(default = "default_kc")]
+    pub kc: f64,
+    /// T_i (s).
+    #[serde(default = "default_ti")]
+    pub ti_s: f64,
+    /// T_d (s).
+    #[serde(default = "default_td")]
+    pub td_s: f64,
+    /// Derivative filter ratio N (T_f = T_d/N).
+    #[serde(default = "default_n")]
+    pub derivative_filter_n: f64,
+    /// Corrected axes, any of `x y z rx ry rz`.
+    #[serde(default = "default_axes")]
+    pub axes: Vec<String>,
+    /// Try SCHED_FIFO for the loop threads.
+    #[serde(default = "default_true")]
+    pub realtime: bool,
+    /// Also lock memory (mlockall).
+    #[serde(default = "default_true")]
+    pub lock_memory: bool,
+}
+
+/// `[limits]`: limiter and safety.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsSection {
+    /// Largest |ξ| per position axis (m).
+    #[serde(default = "default_max_m")]
+    pub max_correction_m: f64,
+    /// Largest |ξ| per rotation axis (rad).
+    #[serde(default = "default_max_rad")]
+    pub max_correction_rad: f64,
+    /// Largest rate per position axis (m/s).
+    #[serde(default = "default_rate_m")]
+    pub max_rate_m_s: f64,
+    /// Largest rate per rotation axis (rad/s).
+    #[serde(default = "default_rate_rad")]
+    pub max_rate_rad_s: f64,
+    /// Ramp-in duration (s).
+    #[serde(default = "default_ramp")]
+    pub ramp_in_s: f64,
+    /// Ramp-out duration (s).
+    #[serde(default = "default_ramp")]
+    pub ramp_out_s: f64,
+    /// Force norm limit at the TCP (N).
+    #[serde(default = "default_max_force")]
+    pub max_force_n: f64,
+    /// Torque norm limit at the TCP (N·m).
+    #[serde(default = "default_max_torque")]
+    pub max_torque_nm: f64,
+    /// Largest joint change per control cycle (rad).
+    #[serde(default = "default_joint_step")]
+    pub max_joint_step_rad: f64,
+    /// `zero` (ramp ξ to 0, default) or `hold`.
+    #[serde(default = "default_safe")]
+    pub safe_action: String,
+}
+
+/// `[log]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LogSection {
+    /// CSV path (relative to the config file).
+    pub path: String,
+    /// Ring buffer capacity (records).
+    #[serde(default = "default_ring")]
+    pub ring_capacity: usize,
+}
+
+/// A whole `CELL.toml`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CellFile {
+    /// Robot link.
+    pub robot: RobotSection,
+    /// Sensor link.
+    pub sensor: SensorSection,
+    /// Mounting and tool.
+    #[serde(default = "default_mounting")]
+    pub mounting: MountingSection,
+    /// Model.
+    pub model: ModelSection,
+    /// Gains.
+    #[serde(default = "default_control")]
+    pub control: ControlSection,
+    /// Limits.
+    #[serde(default = "default_limits")]
+    pub limits: LimitsSection,
+    /// Log; absent = no CSV.
+    #[serde(default)]
+    pub log: Option<LogSection>,
+    /// Directory of the file (for relative paths); set by [`CellFile::load`].
+    #[serde(skip)]
+    pub base_dir: PathBuf,
+    /// Path of the file, for messages.
+    #[serde(skip)]
+    pub origin: String,
+}
+
+fn default_mode() -> String {
+    "absolute".into()
+}
+fn default_sen_type() -> String {
+    "ImFree".into()
+}
+fn default_cycle() -> f64 {
+    0.004
+}
+fn default_timeout() -> f64 {
+    0.05
+}
+fn default_sensor_bind() -> SocketAddr {
+    SocketAddr::from(([0, 0, 0, 0], 0))
+}
+fn default_counts() -> f64 {
+    1_000_000.0
+}
+fn default_range() -> [f64; 6] {
+    SafetyConfig::default().sensor_range
+}
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -STANDARD_GRAVITY]
+}
+fn default_tare() -> f64 {
+    0.2
+}
+fn default_mounting() -> MountingSection {
+    toml::from_str("").expect("mounting defaults")
+}
+fn default_rate() -> f64 {
+    100.0
+}
+fn default_kc() -> f64 {
+    PidGains::default().kc
+}
+fn default_ti() -> f64 {
+    PidGains::default().ti_s
+}
+fn default_td() -> f64 {
+    PidGains::default().td_s
+}
+fn default_n() -> f64 {
+    PidGains::default().derivative_filter_n
+}
+fn default_axes() -> Vec<String> {
+    AXES.iter().map(|s| s.to_string()).collect()
+}
+fn default_true() -> bool {
+    true
+}
+fn default_control() -> ControlSection {
+    toml::from_str("").expect("control defaults")
+}
+fn default_max_m() -> f64 {
+    LimiterConfig::default().max_abs[0]
+}
+fn default_max_rad() -> f64 {
+    LimiterConfig::default().max_abs[3]
+}
+fn default_rate_m() -> f64 {
+    LimiterConfig::default().max_rate[0]
+}
+fn default_rate_rad() -> f64 {
+    LimiterConfig::default().max_rate[3]
+}
+fn default_ramp() -> f64 {
+    0.5
+}
+fn default_max_force() -> f64 {
+    SafetyConfig::default().max_force_n
+}
+fn default_max_torque() -> f64 {
+    SafetyConfig::default().max_torque_nm
+}
+fn default_joint_step() -> f64 {
+    SafetyConfig::default().max_joint_step_rad
+}
+fn default_safe() -> String {
+    "zero".into()
+}
+fn default_limits() -> LimitsSection {
+    toml::from_str("").expect("limits defaults")
+}
+fn default_ring() -> usize {
+    8192
+}
+
+/// Axis names in ξ order.
+pub const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+
+impl CellFile {
+    /// Reads and validates a file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: origin.clone(),
+            source,
+        })?;
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Self::parse(&text, &origin, base)
+    }
+
+    /// Parses and validates text; `origin` names it in errors, `base_dir` resolves relative paths.
+    pub fn parse(text: &str, origin: &str, base_dir: PathBuf) -> Result<Self, ConfigError> {
+        let mut cell: CellFile = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: origin.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        cell.base_dir = base_dir;
+        cell.origin = origin.to_string();
+        cell.validate()?;
+        Ok(cell)
+    }
+
+    fn invalid(&self, field: &str, message: impl Into<String>) -> ConfigError {
+        ConfigError::Invalid {
+            path: self.origin.clone(),
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), ConfigError> {
+        let positive = |field: &str, v: f64| -> Result<(), ConfigError> {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(self.invalid(field, format!("must be a positive number, got {v}")))
+            }
+        };
+        let non_negative = |field: &str, v: f64| -> Result<(), ConfigError> {
+            if v >= 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(self.invalid(field, format!("must be ≥ 0, got {v}")))
+            }
+        };
+        if !matches!(self.robot.correction_mode.as_str(), "absolute" | "relative") {
+            return Err(self.invalid(
+                "robot.correction_mode",
+                format!(
+                    "expected \"absolute\" or \"relative\", got \"{}\"",
+                    self.robot.correction_mode
+                ),
+            ));
+        }
+        positive("robot.cycle_s", self.robot.cycle_s)?;
+        positive("robot.timeout_s", self.robot.timeout_s)?;
+        positive("sensor.counts_per_force", self.sensor.counts_per_force)?;
+        positive("sensor.counts_per_torque", self.sensor.counts_per_torque)?;
+        positive("sensor.timeout_s", self.sensor.timeout_s)?;
+        for (i, v) in self.sensor.range.iter().enumerate() {
+            positive(&format!("sensor.range[{i}]"), *v)?;
+        }
+        let m = &self.mounting;
+        non_negative("mounting.tool_mass_kg", m.tool_mass_kg)?;
+        non_negative("mounting.tare_s", m.tare_s)?;
+        if let Some(f) = m.lowpass_hz {
+            positive("mounting.lowpass_hz", f)?;
+        }
+        let finite3 = |field: &str, v: &[f64]| -> Result<(), ConfigError> {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(self.invalid(field, "must be finite numbers"))
+            }
+        };
+        finite3("mounting.sensor_xyz_m", &m.sensor_xyz_m)?;
+        finite3("mounting.sensor_rpy_rad", &m.sensor_rpy_rad)?;
+        finite3("mounting.tool_com_m", &m.tool_com_m)?;
+        finite3("mounting.gravity_m_s2", &m.gravity_m_s2)?;
+        if let Some(b) = &m.bias {
+            finite3("mounting.bias", b)?;
+        }
+        if self.model.file.trim().is_empty() {
+            return Err(self.invalid("model.file", "must name a model file or a built-in robot"));
+        }
+        let c = &self.control;
+        positive("control.rate_hz", c.rate_hz)?;
+        non_negative("control.kc", c.kc)?;
+        non_negative("control.ti_s", c.ti_s)?;
+        non_negative("control.td_s", c.td_s)?;
+        non_negative("control.derivative_filter_n", c.derivative_filter_n)?;
+        for a in &c.axes {
+            if !AXES.contains(&a.as_str()) {
+                return Err(self.invalid(
+                    "control.axes",
+                    format!("unknown axis \"{a}\", expected some of x, y, z, rx, ry, rz"),
+                ));
+            }
+        }
+        let l = &self.limits;
+        non_negative("limits.max_correction_m", l.max_correction_m)?;
+        non_negative("limits.max_correction_rad", l.max_correction_rad)?;
+        non_negative("limits.max_rate_m_s", l.max_rate_m_s)?;
+        non_negative("limits.max_rate_rad_s", l.max_rate_rad_s)?;
+        non_negative("limits.ramp_in_s", l.ramp_in_s)?;
+        non_negative("limits.ramp_out_s", l.ramp_out_s)?;
+        positive("limits.max_force_n", l.max_force_n)?;
+        positive("limits.max_torque_nm", l.max_torque_nm)?;
+        positive("limits.max_joint_step_rad", l.max_joint_step_rad)?;
+        if !matches!(l.safe_action.as_str(), "zero" | "hold") {
+            return Err(self.invalid(
+                "limits.safe_action",
+                format!("expected \"zero\" or \"hold\", got \"{}\"", l.safe_action),
+            ));
+        }
+        if let Some(log) = &self.log
+            && log.path.trim().is_empty()
+        {
+            return Err(self.invalid("log.path", "must not be empty"));
+        }
+        Ok(())
+    }
+
+    /// The model specification: a path resolved against the file's directory when it exists
+    /// there, otherwise the text as given (built-in names).
+    pub fn model_spec(&self) -> String {
+        let p = self.base_dir.join(&self.model.file);
+        if Path::new(&self.model.file).is_relative() && p.exists() {
+            p.display().to_string()
+        } else {
+            self.model.file.clone()
+        }
+    }
+
+    /// The log path resolved against the file's directory.
+    pub fn log_path(&self) -> Option<PathBuf> {
+        self.log.as_ref().map(|l| self.base_dir.join(&l.path))
+    }
+
+    /// The controller configuration this file describes.
+    pub fn controller_config(&self) -> ControllerConfig {
+        let m = &self.mounting;
+        let c = &self.control;
+        let l = &self.limits;
+        let enabled = std::array::from_fn(|i| c.axes.iter().any(|a| a == AXES[i]));
+        ControllerConfig {
+            period_s: 1.0 / c.rate_hz,
+            gains: PidGains {
+                kc: c.kc,
+                ti_s: c.ti_s,
+                td_s: c.td_s,
+                derivative_filter_n: c.derivative_filter_n,
+                tracking_time_s: None,
+            },
+            limiter: LimiterConfig {
+                max_abs: [
+                    l.max_correction_m,
+                    l.max_correction_m,
+                    l.max_correction_m,
+                    l.max_correction_rad,
+                    l.max_correction_rad,
+                    l.max_correction_rad,
+                ],
+                max_rate: [
+                    l.max_rate_m_s,
+                    l.max_rate_m_s,
+                    l.max_rate_m_s,
+                    l.max_rate_rad_s,
+                    l.max_rate_rad_s,
+                    l.max_rate_rad_s,
+                ],
+                enabled,
+                ramp_in_s: l.ramp_in_s,
+                ramp_out_s: l.ramp_out_s,
+            },
+            wrench: WrenchConfig {
+                sensor_in_flange: pose_from_xyz_rpy(m.sensor_xyz_m, m.sensor_rpy_rad),
+                tool: ToolLoad {
+                    mass_kg: m.tool_mass_kg,
+                    com_in_sensor_m: m.tool_com_m,
+                },
+                gravity_world: m.gravity_m_s2,
+                lowpass_hz: m.lowpass_hz,
+            },
+            safety: SafetyConfig {
+                max_force_n: l.max_force_n,
+                max_torque_nm: l.max_torque_nm,
+                sensor_timeout_s: self.sensor.timeout_s,
+                robot_timeout_s: self.robot.timeout_s,
+                sensor_range: self.sensor.range,
+                max_joint_step_rad: l.max_joint_step_rad,
+                joint_limit_margin_rad: SafetyConfig::default().joint_limit_margin_rad,
+                safe_action: if l.safe_action == "hold" {
+                    SafeAction::Hold
+                } else {
+                    SafeAction::Zero
+                },
+            },
+            tare_s: m.tare_s,
+            bias: m.bias,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[robot]
+kind = "kuka-rsi"
+bind = "127.0.0.1:59152"
+[sensor]
+kind = "netft"
+address = "127.0.0.1:49152"
+[model]
+file = "tx200"
+"#;
+
+    #[test]
+    fn minimal_file_gets_paper_defaults() {
+        let cell = CellFile::parse(MINIMAL, "cell.toml", PathBuf::new()).unwrap();
+        let c = cell.controller_config();
+        assert_eq!(c.period_s, 0.01);
+        assert_eq!(c.gains, PidGains::default());
+        assert_eq!(c.limiter.enabled, [true; 6]);
+        assert_eq!(cell.model_spec(), "tx200");
+    }
+
+    #[test]
+    fn the_documented_example_parses() {
+        let text = include_str!("../../../docs/cell.example.toml");
+        let cell = CellFile::parse(text, "cell.example.toml", PathBuf::new()).unwrap();
+        assert_eq!(cell.robot.kind, RobotKind::KukaRsi);
+    }
+
+    #[test]
+    fn errors_name_file_and_field() {
+        let bad = format!("{MINIMAL}[limits]\nsafe_action = \"explode\"\n");
+        let e = CellFile::parse(&bad, "cell.toml", PathBuf::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("cell.toml") && e.contains("limits.safe_action"),
+            "{e}"
+        );
+        let typo = format!("{MINIMAL}[control]\nkp = 1.0\n");
+        let e = CellFile::parse(&typo, "cell.toml", PathBuf::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cell.toml") && e.contains("kp"), "{e}");
+        let axes = format!("{MINIMAL}[control]\naxes = [\"x\", \"w\"]\n");
+        let e = CellFile::parse(&axes, "cell.toml", PathBuf::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("control.axes") && e.contains("\"w\""), "{e}");
+        let e = CellFile::parse(
+            &MINIMAL.replace("kuka-rsi", "fanuc"),
+            "cell.toml",
+            PathBuf::new(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("cell.toml") && e.contains("fanuc"), "{e}");
+    }
+}

@@ -1,0 +1,228 @@
+//! Logging off the cycle path: the control thread pushes fixed-size [`LogRecord`]s into a
+//! lock-free single-producer ring buffer (rtrb, pre-allocated); a writer thread drains it into a
+//! CSV file with unit-named columns. A full buffer drops the record and counts it; the cycle
+//! never blocks, allocates or touches the file.
+//!
+//! Columns: `time_s`, `q1_rad…qN_rad`, the raw reading `raw_fx_n…raw_mz_nm` (sensor frame), the
+//! compensated reading `ws_fx_n…ws_mz_nm` (sensor frame), the TCP wrench `w_fx_n…w_mz_nm` (eq. 2,
+//! base axes), δŝ `ds_x_m…ds_rz_rad` (eq. 15), ξ `xi_x_m…xi_rz_rad` (eq. 7), ε `eps_x_m…eps_rz_rad`
+//! (eq. 5), `cycle_us`, `flags` (integer) and `status` (the flags and the latched fault by name).
+
+use crate::controller::CycleOutput;
+use crate::safety::Flags;
+use deflex_model::MAX_JOINTS;
+use std::io::Write;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::thread::JoinHandle;
+
+/// One logged control cycle (plain data, `Copy`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LogRecord {
+    /// Joint values (rad), first `joint_count` used.
+    pub q_rad: [f64; MAX_JOINTS],
+    /// Number of joints.
+    pub joint_count: u8,
+    /// Raw reading, sensor frame.
+    pub raw_wrench: [f64; 6],
+    /// Controller output of the cycle.
+    pub out: CycleOutput,
+    /// Duration of the cycle computation (µs).
+    pub cycle_us: f64,
+}
+
+impl LogRecord {
+    /// Builds a record (allocation-free).
+    #[inline]
+    pub fn new(q: &[f64], raw: &[f64; 6], out: &CycleOutput, cycle_us: f64) -> Self {
+        let mut q_rad = [0.0; MAX_JOINTS];
+        let n = q.len().min(MAX_JOINTS);
+        q_rad[..n].copy_from_slice(&q[..n]);
+        LogRecord {
+            q_rad,
+            joint_count: n as u8,
+            raw_wrench: *raw,
+            out: *out,
+            cycle_us,
+        }
+    }
+}
+
+/// Producer end held by the control thread.
+pub struct LogSink {
+    producer: rtrb::Producer<LogRecord>,
+    dropped: Arc<AtomicU64>,
+}
+
+impl LogSink {
+    /// Pushes a record; if the ring is full the record is dropped and counted. Never blocks.
+    #[inline]
+    pub fn push(&mut self, record: LogRecord) {
+        if self.producer.push(record).is_err() {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+    /// Records dropped so far.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+}
+
+/// The writer thread; [`LogWriter::finish`] waits for it after the sink is dropped.
+pub struct LogWriter {
+    handle: JoinHandle<std::io::Result<u64>>,
+    dropped: Arc<AtomicU64>,
+}
+
+/// What the writer did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LogReport {
+    /// Rows written.
+    pub written: u64,
+    /// Records dropped because the ring was full.
+    pub dropped: u64,
+}
+
+const SUFFIXES: [&str; 6] = ["x_m", "y_m", "z_m", "rx_rad", "ry_rad", "rz_rad"];
+const WRENCH: [&str; 6] = ["fx_n", "fy_n", "fz_n", "mx_nm", "my_nm", "mz_nm"];
+
+/// CSV header for `joint_count` joints.
+pub fn csv_header(joint_count: usize) -> String {
+    let mut cols = vec!["time_s".to_string()];
+    cols.extend((1..=joint_count).map(|i| format!("q{i}_rad")));
+    for prefix in ["raw", "ws", "w"] {
+        cols.extend(WRENCH.iter().map(|s| format!("{prefix}_{s}")));
+    }
+    for prefix in ["ds", "xi", "eps"] {
+        cols.extend(SUFFIXES.iter().map(|s| format!("{prefix}_{s}")));
+    }
+    cols.extend(["cycle_us", "flags", "status"].map(String::from));
+    cols.join(",")
+}
+
+/// One CSV row (allocates: writer thread only).
+pub fn csv_row(r: &LogRecord) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::with_capacity(512);
+    let _ = write!(s, "{:.6}", r.out.time_s);
+    for q in &r.q_rad[..usize::from(r.joint_count)] {
+        let _ = write!(s, ",{q:.9}");
+    }
+    for block in [&r.raw_wrench, &r.out.wrench_sensor, &r.out.wrench_tcp] {
+        for v in block {
+            let _ = write!(s, ",{v:.4}");
+        }
+    }
+    for block in [&r.out.delta_s_hat, &r.out.xi, &r.out.epsilon] {
+        for v in block {
+            let _ = write!(s, ",{v:.9}");
+        }
+    }
+    let _ = write!(
+        s,
+        ",{:.2},{},{}",
+        r.cycle_us,
+        r.out.flags.0,
+        Flags(r.out.flags.0).describe()
+    );
+    s
+}
+
+/// Creates the ring (`capacity` records) and starts the writer thread on `out`.
+pub fn spawn_writer(
+    capacity: usize,
+    joint_count: usize,
+    out: Box<dyn Write + Send>,
+) -> (LogSink, LogWriter) {
+    let (producer, mut consumer) = rtrb::RingBuffer::<LogRecord>::new(capacity.max(16));
+    let dropped = Arc::new(AtomicU64::new(0));
+    let handle = std::thread::Builder::new()
+        .name("deflex-log".into())
+        .spawn(move || -> std::io::Result<u64> {
+            let mut w = std::io::BufWriter::new(out);
+            writeln!(w, "{}", csv_header(joint_count))?;
+            let mut written = 0u64;
+            loop {
+                let mut any = false;
+                while let Ok(record) = consumer.pop() {
+                    writeln!(w, "{}", csv_row(&record))?;
+                    written += 1;
+                    any = true;
+                }
+                if consumer.is_abandoned() && consumer.is_empty() {
+                    break;
+                }
+                if !any {
+                    w.flush()?;
+                    std::thread::sleep(std::time::Duration::from_millis(20));
+                }
+            }
+            w.flush()?;
+            Ok(written)
+        })
+        .expect("spawning the log writer thread");
+    (
+        LogSink {
+            producer,
+            dropped: dropped.clone(),
+        },
+        LogWriter { handle, dropped },
+    )
+}
+
+impl LogWriter {
+    /// Waits for the writer (drop the [`LogSink`] first) and reports.
+    pub fn finish(self) -> std::io::Result<LogReport> {
+        let written = self
+            .handle
+            .join()
+            .map_err(|_| std::io::Error::other("log writer thread panicked"))??;
+        Ok(LogReport {
+            written,
+            dropped: self.dropped.load(Ordering::Relaxed),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Mutex;
+
+    #[derive(Clone, Default)]
+    struct Shared(Arc<Mutex<Vec<u8>>>);
+    impl Write for Shared {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn rows_match_header_and_drops_are_counted() {
+        let buf = Shared::default();
+        let (mut sink, writer) = spawn_writer(16, 6, Box::new(buf.clone()));
+        let mut out = CycleOutput::default();
+        out.flags.set(Flags::SENSOR_TIMEOUT | Flags::LATCHED);
+        for k in 0..10_000 {
+            out.time_s = k as f64;
+            sink.push(LogRecord::new(&[0.1; 6], &[1.0; 6], &out, 1.0));
+        }
+        let dropped = sink.dropped();
+        drop(sink);
+        let report = writer.finish().unwrap();
+        assert_eq!(report.written + report.dropped, 10_000);
+        assert_eq!(report.dropped, dropped);
+        let text = String::from_utf8(buf.0.lock().unwrap().clone()).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap();
+        let n = header.split(',').count();
+        assert_eq!(n, 1 + 6 + 18 + 18 + 3);
+        let row = lines.next().unwrap();
+        assert_eq!(row.split(',').count(), n);
+        assert!(row.ends_with("sensor_timeout|latched"));
+    }
+}

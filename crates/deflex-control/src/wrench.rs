@@ -1,0 +1,261 @@
+//! The wrench path of the controller (Section 4.2): raw sensor reading → bias (tare taken out of
+//! contact) → tool-gravity compensation for the current orientation → optional first-order
+//! low-pass → the environment wrench `w` of eq. 2 at the TCP, in world (base) axes, which is what
+//! eq. 15 needs.
+//!
+//! Conventions: the sensor reports, in its own axes and about its own origin, the wrench that
+//! acts on the part of the tool beyond it (the environment's push plus the tool's weight). The
+//! sensor pose is `flange × sensor_in_flange`, with the flange from forward kinematics (eq. 1).
+//! Everything here is allocation-free.
+
+use deflex_model::wrench::sensor_wrench_at_point;
+use deflex_model::{Data, Pose, Wrench};
+use nalgebra::Vector3;
+
+/// Standard gravity (m/s²), pointing along −z of the world frame by default.
+pub const STANDARD_GRAVITY: f64 = 9.806_65;
+
+/// The tool carried by the sensor: its weight is taken out of every reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolLoad {
+    /// Mass beyond the sensor's measuring plane (kg).
+    pub mass_kg: f64,
+    /// Centre of mass in the sensor frame (m).
+    pub com_in_sensor_m: [f64; 3],
+}
+
+/// Static configuration of the wrench path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WrenchConfig {
+    /// Sensor frame in the flange frame (mounting).
+    pub sensor_in_flange: Pose,
+    /// Tool load for gravity compensation.
+    pub tool: ToolLoad,
+    /// Gravity acceleration in world axes (m/s²).
+    pub gravity_world: [f64; 3],
+    /// Cut-off of the first-order low-pass (Hz); `None` disables it.
+    pub lowpass_hz: Option<f64>,
+}
+
+impl Default for WrenchConfig {
+    fn default() -> Self {
+        WrenchConfig {
+            sensor_in_flange: Pose::identity(),
+            tool: ToolLoad {
+                mass_kg: 0.0,
+                com_in_sensor_m: [0.0; 3],
+            },
+            gravity_world: [0.0, 0.0, -STANDARD_GRAVITY],
+            lowpass_hz: None,
+        }
+    }
+}
+
+/// The result of one pass through the wrench path.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct ProcessedWrench {
+    /// Bias- and gravity-compensated, filtered reading in the sensor frame.
+    pub sensor: [f64; 6],
+    /// Environment wrench `w` (eq. 2) at the TCP in world axes, moment about the TCP.
+    pub tcp_world: [f64; 6],
+}
+
+/// Stateful wrench processing: bias, tare accumulation and low-pass state.
+#[derive(Clone, Debug)]
+pub struct WrenchProcessor {
+    config: WrenchConfig,
+    bias: [f64; 6],
+    tare_sum: [f64; 6],
+    tare_count: u32,
+    filtered: [f64; 6],
+    filter_primed: bool,
+    /// Cached (dt, α) of the low-pass: `exp` only when the sample time changes.
+    alpha_cache: (f64, f64),
+}
+
+impl WrenchProcessor {
+    /// A processor with zero bias.
+    pub fn new(config: WrenchConfig) -> Self {
+        WrenchProcessor {
+            config,
+            bias: [0.0; 6],
+            tare_sum: [0.0; 6],
+            tare_count: 0,
+            filtered: [0.0; 6],
+            filter_primed: false,
+            alpha_cache: (f64::NAN, 0.0),
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &WrenchConfig {
+        &self.config
+    }
+
+    /// World pose of the sensor frame: `flange × sensor_in_flange` (forward kinematics, eq. 1).
+    #[inline]
+    pub fn sensor_pose(&self, data: &Data) -> Pose {
+        data.flange * self.config.sensor_in_flange
+    }
+
+    /// What the sensor reads from the tool's weight alone at `sensor_pose`: force `Rᵀ m g`, moment
+    /// `c × f` about the sensor origin (sensor axes).
+    #[inline]
+    pub fn gravity_in_sensor(&self, sensor_pose: &Pose) -> [f64; 6] {
+        let g = Vector3::from(self.config.gravity_world) * self.config.tool.mass_kg;
+        let f = sensor_pose.rotation.matrix().transpose() * g;
+        let m = Vector3::from(self.config.tool.com_in_sensor_m).cross(&f);
+        [f.x, f.y, f.z, m.x, m.y, m.z]
+    }
+
+    /// Current bias (sensor frame, gravity excluded).
+    pub fn bias(&self) -> [f64; 6] {
+        self.bias
+    }
+
+    /// Sets the bias directly (e.g. from a configuration file).
+    pub fn set_bias(&mut self, bias: [f64; 6]) {
+        self.bias = bias;
+    }
+
+    /// Adds one out-of-contact reading to the tare: its gravity part for the current orientation
+    /// is removed first, so the tool may move during the tare.
+    pub fn tare_add(&mut self, raw: &[f64; 6], sensor_pose: &Pose) {
+        let g = self.gravity_in_sensor(sensor_pose);
+        for i in 0..6 {
+            self.tare_sum[i] += raw[i] - g[i];
+        }
+        self.tare_count += 1;
+    }
+
+    /// Number of readings accumulated by [`Self::tare_add`] since the last [`Self::tare_finish`].
+    pub fn tare_count(&self) -> u32 {
+        self.tare_count
+    }
+
+    /// Ends the tare: the bias becomes the mean of the accumulated readings. Returns false (bias
+    /// unchanged) when nothing was accumulated.
+    pub fn tare_finish(&mut self) -> bool {
+        if self.tare_count == 0 {
+            return false;
+        }
+        let n = f64::from(self.tare_count);
+        for i in 0..6 {
+            self.bias[i] = self.tare_sum[i] / n;
+        }
+        self.tare_sum = [0.0; 6];
+        self.tare_count = 0;
+        true
+    }
+
+    /// Bias and gravity compensation of one raw reading (sensor frame).
+    #[inline]
+    pub fn compensate(&self, raw: &[f64; 6], sensor_pose: &Pose) -> [f64; 6] {
+        let g = self.gravity_in_sensor(sensor_pose);
+        let mut out = [0.0; 6];
+        for i in 0..6 {
+            out[i] = raw[i] - self.bias[i] - g[i];
+        }
+        out
+    }
+
+    /// First-order low-pass with cut-off `lowpass_hz`, sampled every `dt_s`; the identity when the
+    /// filter is off. The first sample primes the state.
+    #[inline]
+    pub fn filter(&mut self, wrench: &[f64; 6], dt_s: f64) -> [f64; 6] {
+        let Some(fc) = self.config.lowpass_hz.filter(|f| *f > 0.0) else {
+            return *wrench;
+        };
+        if !self.filter_primed {
+            self.filtered = *wrench;
+            self.filter_primed = true;
+            return *wrench;
+        }
+        let dt = dt_s.max(0.0);
+        if dt != self.alpha_cache.0 {
+            self.alpha_cache = (dt, 1.0 - (-2.0 * std::f64::consts::PI * fc * dt).exp());
+        }
+        let alpha = self.alpha_cache.1;
+        for i in 0..6 {
+            self.filtered[i] += alpha * (wrench[i] - self.filtered[i]);
+        }
+        self.filtered
+    }
+
+    /// Forgets the filter state (the next sample primes it).
+    pub fn reset_filter(&mut self) {
+        self.filter_primed = false;
+    }
+
+    /// The full path for one reading with `data` filled by forward kinematics at the robot's
+    /// reported joint values: compensated, filtered, and moved to the TCP in world axes.
+    #[inline]
+    pub fn process(&mut self, raw: &[f64; 6], data: &Data, dt_s: f64) -> ProcessedWrench {
+        let sensor_pose = self.sensor_pose(data);
+        let compensated = self.compensate(raw, &sensor_pose);
+        let filtered = self.filter(&compensated, dt_s);
+        let w = Wrench::from(filtered);
+        let at_tcp = sensor_wrench_at_point(&w, &sensor_pose, &data.tcp_position());
+        ProcessedWrench {
+            sensor: filtered,
+            tcp_world: at_tcp.into(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use deflex_model::spatial::pose_from_xyz_rpy;
+
+    #[test]
+    fn gravity_compensation_is_exact_over_many_orientations() {
+        let config = WrenchConfig {
+            sensor_in_flange: pose_from_xyz_rpy([0.0, 0.0, 0.05], [0.0, 0.0, 0.3]),
+            tool: ToolLoad {
+                mass_kg: 7.5,
+                com_in_sensor_m: [0.01, -0.02, 0.12],
+            },
+            ..WrenchConfig::default()
+        };
+        let mut p = WrenchProcessor::new(config);
+        let bias = [3.0, -2.0, 5.0, 0.1, -0.2, 0.05];
+        // Tare at one orientation (reading = bias + gravity there).
+        let tare_pose = pose_from_xyz_rpy([1.0, 0.0, 1.0], [0.2, 2.8, -0.4]);
+        let g0 = p.gravity_in_sensor(&tare_pose);
+        let raw0: [f64; 6] = std::array::from_fn(|i| bias[i] + g0[i]);
+        p.tare_add(&raw0, &tare_pose);
+        assert!(p.tare_finish());
+        let mut worst: f64 = 0.0;
+        for k in 0..500 {
+            let t = k as f64;
+            let pose = pose_from_xyz_rpy(
+                [0.0; 3],
+                [(t * 0.37).sin() * 3.0, (t * 0.11).cos() * 1.5, t * 0.73],
+            );
+            let g = p.gravity_in_sensor(&pose);
+            let raw: [f64; 6] = std::array::from_fn(|i| bias[i] + g[i]);
+            let out = p.compensate(&raw, &pose);
+            worst = out.iter().fold(worst, |a, v| a.max(v.abs()));
+        }
+        assert!(worst < 1e-12, "residual {worst}");
+    }
+
+    #[test]
+    fn lowpass_converges_and_is_off_by_default() {
+        let mut off = WrenchProcessor::new(WrenchConfig::default());
+        assert_eq!(off.filter(&[1.0; 6], 0.01), [1.0; 6]);
+        let mut on = WrenchProcessor::new(WrenchConfig {
+            lowpass_hz: Some(10.0),
+            ..WrenchConfig::default()
+        });
+        on.filter(&[0.0; 6], 0.01);
+        let y = on.filter(&[1.0; 6], 0.01);
+        let alpha = 1.0 - (-2.0 * std::f64::consts::PI * 10.0 * 0.01f64).exp();
+        assert!((y[0] - alpha).abs() < 1e-12);
+        for _ in 0..200 {
+            on.filter(&[1.0; 6], 0.01);
+        }
+        assert!((on.filter(&[1.0; 6], 0.01)[5] - 1.0).abs() < 1e-9);
+    }
+}
