@@ -67,6 +67,7 @@ mod tests {
     fn noise_grows_with_distance_as_specified() {
         let config = TrackerConfig {
             position_m: [0.0, 0.0, 0.0],
+            samples_per_reading: 25,
             ..TrackerConfig::default()
         };
         let mut tracker = LaserTracker::new(&config, ChaCha8Rng::seed_from_u64(3));
