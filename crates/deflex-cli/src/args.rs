@@ -78,6 +78,14 @@ pub fn robot(spec: &str) -> Result<Robot, String> {
     load_robot(spec).map_err(|e| e.to_string())
 }
 
+/// Print a JSON value, pretty, to stdout (the `--json` output of every command).
+pub fn print_json(value: &serde_json::Value) {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(value).unwrap_or_default()
+    );
+}
+
 /// Format a float with a fixed number of decimals for tables.
 pub fn fixed(value: f64, decimals: usize) -> String {
     format!("{value:.decimals$}")

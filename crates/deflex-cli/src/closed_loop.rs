@@ -80,14 +80,7 @@ impl RobotLink for TwinRobotLink {
 
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         if let Ok(mut cell) = self.shared.cell.lock() {
-            cell.set_correction([
-                c.dp_m[0],
-                c.dp_m[1],
-                c.dp_m[2],
-                c.dphi_rad[0],
-                c.dphi_rad[1],
-                c.dphi_rad[2],
-            ]);
+            cell.set_correction(c.to_array());
         }
         Ok(())
     }

@@ -139,6 +139,8 @@ fn calibration_json(cal: &Calibration) -> Value {
         "residual_rms_all_m": r.rms_all_m,
         "residual_rms_norm_m": r.rms_norm_m,
         "residual_max_norm_m": r.max_norm_m,
+        "rotation_rows": cal.rotation_rows,
+        "residual_rotation_rms_rad": r.rotation_rms_rad,
         "warnings": cal.warnings,
     })
 }
@@ -288,7 +290,13 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         None => Vec::new(),
     };
     if json_output {
-        let m = |e: &deflex_calib::validate::ModelErrors| json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m, "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m, "max_norm_m": e.stats.max_norm_m});
+        let m = |e: &deflex_calib::validate::ModelErrors| {
+            let rotation = e.rotation.as_ref().map(|r| {
+                let s = &r.stats;
+                json!({"rows": s.rows, "rms_rad": s.rms_rad, "max_abs_rad": s.max_abs_rad, "mean_rad": s.mean_rad, "rms_norm_rad": s.rms_norm_rad, "max_norm_rad": s.max_norm_rad})
+            });
+            json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m, "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m, "max_norm_m": e.stats.max_norm_m, "rotation": rotation})
+        };
         let value = json!({
             "rows": v.measured.len(),
             "model": m(&v.model),
@@ -312,6 +320,9 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         "{}",
         render_table(&VALIDATION_HEADERS, &validation_rows(&v))
     );
+    if let Some(rotation) = deflex_calib::report::validation_rotation_summary(&v) {
+        print!("{rotation}");
+    }
     if let Some(dir) = &args.out {
         println!(
             "wrote {} files to {} (validation.html)",

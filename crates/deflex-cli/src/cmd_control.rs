@@ -1,21 +1,18 @@
 //! `deflex run` — the real-time correction controller (Johra et al. 2022, Section 4.2: eq. 5–7,
 //! 15, 17) against a robot link and a force/torque sensor described by `CELL.toml`
-//! (docs/cell.example.toml) — and `deflex cell --sim`, the digital twin served on loopback over
-//! the same protocols (it plays the KUKA robot sending RSI telegrams every 4 ms and the ATI Net
-//! F/T streaming its readings while the twin forms the cone), so `deflex run` can be tried end
-//! to end with no hardware.
+//! (docs/cell.example.toml). Its counterpart without hardware, `deflex cell --sim`, is in
+//! [`crate::cell_server`].
 
-use crate::args::CliResult;
+use crate::args::{CliResult, print_json};
 use clap::Args;
 use deflex_control::config::{CellFile, RobotKind, SensorKind};
 use deflex_control::log::spawn_writer;
 use deflex_control::runtime::{RunSummary, RuntimeOptions, spawn};
-use deflex_control::stats::{CycleStats, StatsSummary};
+use deflex_control::stats::StatsSummary;
 use deflex_control::{Controller, WallClock};
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
-use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
-use deflex_io::{ForceSensorLink, RobotLink, RobotSideLink, RobotState};
-use deflex_sim::{Cell, CellConfig, ConeParams, ToolPath};
+use deflex_io::netft::{Calibration, NetFtClient};
+use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink};
+use deflex_io::{ForceSensorLink, RobotLink};
 use serde_json::json;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -40,36 +37,7 @@ pub struct RunArgs {
     pub quiet: bool,
 }
 
-#[derive(Args, Clone, Debug)]
-pub struct CellArgs {
-    /// Serve the simulated cell (the digital twin); the only cell there is.
-    #[arg(long)]
-    pub sim: bool,
-    /// The same CELL.toml as `deflex run`: robot.bind is where RSI telegrams go, sensor.address
-    /// is where the simulated Net F/T answers. Both must be loopback addresses.
-    #[arg(long)]
-    pub config: PathBuf,
-    /// Twin settings (`[cell]` TOML of `deflex sim`); default: the paper's cell.
-    #[arg(long)]
-    pub twin: Option<PathBuf>,
-    /// Tool path: `cone` (the paper's cone, as `deflex sim isf`) or `helical`.
-    #[arg(long, default_value = "cone")]
-    pub path: String,
-    /// Only the first part of the path (mm).
-    #[arg(long)]
-    pub length_mm: Option<f64>,
-    /// Time scale: cycles run N times faster than the robot's 4 ms in wall time.
-    #[arg(long, default_value_t = 1.0)]
-    pub speed: f64,
-    /// Random seed of the twin.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// How long to wait for the controller's first answer (s).
-    #[arg(long, default_value_t = 60.0)]
-    pub wait_s: f64,
-}
-
-fn load_cell_file(path: &std::path::Path) -> Result<CellFile, String> {
+pub(crate) fn load_cell_file(path: &std::path::Path) -> Result<CellFile, String> {
     CellFile::load(path).map_err(|e| e.to_string())
 }
 
@@ -100,7 +68,7 @@ fn robot_link(cell: &CellFile) -> Result<Box<dyn RobotLink + Send>, String> {
     })
 }
 
-fn rsi_mode(cell: &CellFile) -> CorrectionMode {
+pub(crate) fn rsi_mode(cell: &CellFile) -> CorrectionMode {
     if cell.robot.correction_mode == "relative" {
         CorrectionMode::Relative
     } else {
@@ -108,7 +76,7 @@ fn rsi_mode(cell: &CellFile) -> CorrectionMode {
     }
 }
 
-fn calibration(cell: &CellFile) -> Calibration {
+pub(crate) fn calibration(cell: &CellFile) -> Calibration {
     Calibration {
         counts_per_force: cell.sensor.counts_per_force,
         counts_per_torque: cell.sensor.counts_per_torque,
@@ -202,7 +170,7 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
     })
 }
 
-fn stats_json(s: &StatsSummary) -> serde_json::Value {
+pub(crate) fn stats_json(s: &StatsSummary) -> serde_json::Value {
     json!({"count": s.count, "p50_us": s.p50_us, "p99_us": s.p99_us, "max_us": s.max_us,
            "mean_us": s.mean_us, "deadline_misses": s.deadline_misses})
 }
@@ -223,10 +191,7 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             "log_rows": o.log_rows, "log_dropped": s.log_dropped, "warnings": s.warnings,
             "error": s.error,
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        print_json(&value);
     } else {
         println!(
             "deflex run: {:.1} s, {} control cycles ({:.1} Hz), final phase {}",
@@ -278,194 +243,12 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
     }
 }
 
-/// What the served twin did.
-pub struct CellOutcome {
-    pub summary: deflex_sim::forming::RunningStats,
-    pub round_trip: StatsSummary,
-    pub cycles: u64,
-    pub late: u64,
-    pub duration_s: f64,
-}
-
-fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
-    let path = match args.path.as_str() {
-        "cone" => ToolPath::paper_cone(),
-        "helical" => ToolPath::cone(&ConeParams {
-            helical: true,
-            ..ConeParams::default()
-        })
-        .map_err(|e| e.to_string())?,
-        other => return Err(format!("--path: expected cone or helical, got \"{other}\"")),
-    };
-    Ok(match args.length_mm {
-        Some(l) => path.truncated(l),
-        None => path,
-    })
-}
-
-pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
-    match &args.twin {
-        Some(p) => CellConfig::load(p).map_err(|e| format!("{}: {e}", p.display())),
-        None => Ok(CellConfig::default()),
-    }
-}
-
-/// Serves the twin until the path is done (or `stop`).
-pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, String> {
-    if !args.sim {
-        return Err("cell: only the simulated cell exists; pass --sim".into());
-    }
-    if !(args.speed > 0.0 && args.speed.is_finite()) {
-        return Err(format!("--speed: must be positive, got {}", args.speed));
-    }
-    let file = load_cell_file(&args.config)?;
-    if file.robot.kind != RobotKind::KukaRsi {
-        return Err(format!(
-            "{}: robot.kind: the simulated cell serves kuka-rsi only",
-            file.origin
-        ));
-    }
-    for (field, addr) in [
-        ("robot.bind", file.robot.bind),
-        ("sensor.address", file.sensor.address),
-    ] {
-        if !addr.ip().is_loopback() {
-            return Err(format!(
-                "{}: {field} = {addr}: the simulated cell only uses loopback addresses",
-                file.origin
-            ));
-        }
-    }
-    let twin = twin_config(args)?;
-    let mut cell = Cell::new(&twin, twin_path(args)?, args.seed).map_err(|e| e.to_string())?;
-    let mut server = NetFtSensorServer::bind(file.sensor.address, calibration(&file))
-        .map_err(|e| format!("sensor.address {}: {e}", file.sensor.address))?;
-    let mut robot = RsiRobotEndpoint::new("127.0.0.1:0", file.robot.bind, rsi_mode(&file))
-        .map_err(|e| format!("RSI robot endpoint: {e}"))?;
-    let period = Duration::from_secs_f64(cell.robot_period_s() / args.speed);
-    let mut round_trip = CycleStats::new(period);
-    let mut step = cell.step();
-    let (mut ipoc, mut cycles, mut late) = (0u64, 0u64, 0u64);
-    let mut serving = false;
-    let start = Instant::now();
-    let mut next = Instant::now();
-    loop {
-        if stop.load(Ordering::SeqCst) {
-            break;
-        }
-        while let Ok(Some(_)) = server.poll_request(Duration::ZERO) {}
-        if serving {
-            cell.step_into(&mut step);
-            for s in &step.sensor_samples {
-                let _ = server.send_sample(&s.wrench_sensor, 0);
-            }
-        } else if let Some(s) = step.sensor_samples.last() {
-            // Waiting for the controller: hold the start pose, keep streaming.
-            let _ = server.send_sample(&s.wrench_sensor, 0);
-        }
-        ipoc += 4;
-        let state = RobotState {
-            q_rad: step.q_measured_rad,
-            cycle_id: ipoc,
-            ..RobotState::default()
-        };
-        let sent = Instant::now();
-        let _ = robot.send_state(&state);
-        next += period;
-        loop {
-            let wait = next.saturating_duration_since(Instant::now());
-            if wait.is_zero() {
-                if serving {
-                    late += 1;
-                    round_trip.record_miss();
-                }
-                break;
-            }
-            match robot.receive_correction(wait) {
-                Ok(Some(r)) if r.cycle_id == ipoc => {
-                    let c = r.correction;
-                    if serving {
-                        round_trip.record(sent.elapsed());
-                    }
-                    serving = true;
-                    cell.set_correction([
-                        c.dp_m[0],
-                        c.dp_m[1],
-                        c.dp_m[2],
-                        c.dphi_rad[0],
-                        c.dphi_rad[1],
-                        c.dphi_rad[2],
-                    ]);
-                    break;
-                }
-                Ok(Some(_)) | Err(_) => continue,
-                Ok(None) => {}
-            }
-        }
-        if serving {
-            cycles += 1;
-            if step.finished {
-                break;
-            }
-        } else if start.elapsed().as_secs_f64() > args.wait_s {
-            return Err(format!(
-                "no answer from a controller on {} within {} s",
-                file.robot.bind, args.wait_s
-            ));
-        }
-        std::thread::sleep(next.saturating_duration_since(Instant::now()));
-    }
-    Ok(CellOutcome {
-        summary: cell.stats().clone(),
-        round_trip: round_trip.summary(),
-        cycles,
-        late,
-        duration_s: step.time_s,
-    })
-}
-
-pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
-    let stop = deflex_control::rt::interrupt_flag();
-    if !json_out {
-        eprintln!(
-            "SIMULATED cell serving KUKA RSI and ATI Net F/T on loopback; waiting for `deflex run`…"
-        );
-    }
-    let o = cell_session(&args, stop)?;
-    let s = &o.summary;
-    if json_out {
-        let value = json!({
-            "simulated": true, "cycles": o.cycles, "late_replies": o.late, "duration_s": o.duration_s,
-            "round_trip": stats_json(&o.round_trip),
-            "max_error_norm_mm": s.max_error_norm_m * 1e3, "rms_error_norm_mm": s.rms_error_norm_m() * 1e3,
-            "max_force_norm_n": s.max_force_norm_n, "max_fz_n": s.max_fz_n,
-            "max_correction_mm": s.max_correction_m * 1e3,
-        });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
-    } else {
-        println!(
-            "deflex cell (SIMULATED): {:.1} s simulated, {} robot cycles, {} replies late or missing",
-            o.duration_s, o.cycles, o.late
-        );
-        println!("  RSI round trip (robot side): {}", o.round_trip);
-        println!(
-            "  max TCP error norm {:.3} mm (rms {:.3} mm), max force {:.0} N, max correction {:.3} mm",
-            s.max_error_norm_m * 1e3,
-            s.rms_error_norm_m() * 1e3,
-            s.max_force_norm_n,
-            s.max_correction_m * 1e3
-        );
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cell_server::{CellArgs, cell_session, twin_path};
     use deflex_demo::twin_controller::{controller_config_for, run_closed_loop};
+    use deflex_sim::CellConfig;
 
     fn free_port() -> u16 {
         std::net::UdpSocket::bind("127.0.0.1:0")
@@ -484,35 +267,6 @@ mod tests {
             let cell = CellFile::parse(&text, "cell.toml", PathBuf::new()).unwrap();
             assert!(robot_link(&cell).is_ok(), "{kind}");
         }
-    }
-
-    /// `deflex cell --sim` refuses anything but loopback.
-    #[test]
-    fn cell_refuses_non_loopback_addresses() {
-        let dir = std::env::temp_dir().join(format!("deflex-nonloop-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let config = dir.join("cell.toml");
-        std::fs::write(
-            &config,
-            "[robot]\nkind = \"kuka-rsi\"\nbind = \"10.0.0.2:59152\"\n\
-             [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n",
-        )
-        .unwrap();
-        let args = CellArgs {
-            sim: true,
-            config,
-            twin: None,
-            path: "cone".into(),
-            length_mm: None,
-            speed: 1.0,
-            seed: 1,
-            wait_s: 1.0,
-        };
-        let e = cell_session(&args, &AtomicBool::new(false))
-            .err()
-            .unwrap_or_default();
-        assert!(e.contains("loopback") && e.contains("robot.bind"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// `deflex cell --sim` and `deflex run` over loopback for a few seconds of the helical cone;

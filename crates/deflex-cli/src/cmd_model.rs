@@ -1,9 +1,11 @@
 //! `deflex model show`, `pose`, `deflect`, `ik`, `map`.
 
-use crate::args::{CliResult, fixed, joint_values, parse_fixed, parse_length_mm_default, robot};
+use crate::args::{
+    CliResult, fixed, joint_values, parse_fixed, parse_length_mm_default, print_json, robot,
+};
 use clap::{Args, Subcommand};
 use deflex_model::spatial::{pose_from_xyz_rpy, rpy_from_rotation};
-use deflex_model::{Data, IkOptions, Robot, Wrench};
+use deflex_model::{Data, IkOptions, Robot, TX200_FORMING_Q_DEG, Wrench};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -26,6 +28,13 @@ pub struct JointArgs {
     /// Joint values in radians, comma-separated.
     #[arg(long, allow_hyphen_values = true)]
     pub q_rad: Option<String>,
+}
+
+impl JointArgs {
+    /// The joint values in radians, checked against `robot`'s joint count.
+    pub fn values(&self, robot: &Robot) -> Result<Vec<f64>, String> {
+        joint_values(robot, self.q_deg.as_deref(), self.q_rad.as_deref())
+    }
 }
 
 #[derive(Args)]
@@ -113,13 +122,7 @@ pub fn model(command: ModelCommand, json_output: bool) -> CliResult {
                     .edofs()
                     .map(|e| json!({"edof": e.label(), "stiffness_Nm_per_rad": e.stiffness}))
                     .collect();
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(
-                        &json!({"name": robot.name, "joints": joints, "edofs": edofs})
-                    )
-                    .unwrap_or_default()
-                );
+                print_json(&json!({"name": robot.name, "joints": joints, "edofs": edofs}));
             } else {
                 print!("{}", describe(&robot));
             }
@@ -194,11 +197,7 @@ fn rotation_rows(rotation: &nalgebra::Rotation3<f64>) -> Vec<[f64; 3]> {
 
 pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
-    let q = joint_values(
-        &robot,
-        args.joints.q_deg.as_deref(),
-        args.joints.q_rad.as_deref(),
-    )?;
+    let q = args.joints.values(&robot)?;
     let pose = robot.tcp_pose(&q).map_err(|e| e.to_string())?;
     let p = pose.translation.vector;
     let rpy = rpy_from_rotation(&pose.rotation);
@@ -208,10 +207,7 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
             "rotation": rotation_rows(&pose.rotation),
             "rpy_rad": rpy,
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        print_json(&value);
     } else {
         println!(
             "TCP position (mm): x {:.3}  y {:.3}  z {:.3}",
@@ -233,11 +229,7 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
 
 pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
-    let q = joint_values(
-        &robot,
-        args.joints.q_deg.as_deref(),
-        args.joints.q_rad.as_deref(),
-    )?;
+    let q = args.joints.values(&robot)?;
     let w = parse_fixed::<6>(&args.wrench, "--wrench")?;
     let wrench = Wrench::from_row_slice(&w);
     let mut data = Data::new();
@@ -258,10 +250,7 @@ pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
             "dphi_rad": [ds[3], ds[4], ds[5]],
             "compliance": rows,
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        print_json(&value);
     } else {
         println!(
             "TCP (mm): x {:.3}  y {:.3}  z {:.3}",
@@ -290,10 +279,7 @@ pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
 /// The paper's forming configuration, a good seed for work near the ISF cell.
 pub fn default_seed(robot: &Robot) -> Vec<f64> {
     if robot.joint_count() == 6 {
-        [0.0, 49.7, 89.3, 0.0, 41.0, 0.0]
-            .iter()
-            .map(|d: &f64| d.to_radians())
-            .collect()
+        TX200_FORMING_Q_DEG.map(f64::to_radians).to_vec()
     } else {
         vec![0.0; robot.joint_count()]
     }
@@ -319,10 +305,7 @@ pub fn ik(args: IkArgs, json_output: bool) -> CliResult {
             "position_error_m": solution.position_error_m,
             "orientation_error_rad": solution.orientation_error_rad,
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        print_json(&value);
     } else {
         let degrees: Vec<String> = solution
             .q
@@ -465,10 +448,7 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
             "png": pngs,
             "elapsed_s": elapsed.as_secs_f64(),
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        print_json(&value);
     } else {
         println!(
             "{} grid nodes ({} unreachable) in {:.1} ms; |δp| max {:.4} mm, mean {:.4} mm",

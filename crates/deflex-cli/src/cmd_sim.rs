@@ -8,7 +8,7 @@
 //! * `deflex sim isf --path cone|cone-contour|pyramid|FILE.gcode --out DIR [--seed N]`: the
 //!   forming run without correction, with its log, summary and plots (Figs. 17–19, A1).
 
-use crate::args::CliResult;
+use crate::args::{CliResult, print_json};
 use clap::{Args, Subcommand};
 use deflex_sim::campaign::{SpiralParams, run_campaign, spiral, validation_grid};
 use deflex_sim::gcode::read_gcode;
@@ -131,19 +131,15 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
         .fold(0.0, f64::max);
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&json!({
-                "simulated": true,
-                "campaign": kind,
-                "seed": args.seed,
-                "rows": rows.len(),
-                "load_cases": cases,
-                "max_displacement_mm": max_disp * 1e3,
-                "out": args.out.display().to_string(),
-            }))
-            .unwrap_or_default()
-        );
+        print_json(&json!({
+            "simulated": true,
+            "campaign": kind,
+            "seed": args.seed,
+            "rows": rows.len(),
+            "load_cases": cases,
+            "max_displacement_mm": max_disp * 1e3,
+            "out": args.out.display().to_string(),
+        }));
     } else {
         println!("SIMULATED campaign: {kind}");
         println!(
@@ -249,10 +245,7 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
                 ),
             );
         }
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        print_json(&value);
     } else {
         let mode = if twin.is_some() {
             "closed-loop"

@@ -1,6 +1,7 @@
 //! `deflex`: the command-line front end. Thin: it parses arguments and calls the crates.
 
 mod args;
+mod cell_server;
 mod closed_loop;
 mod cmd_calib;
 mod cmd_control;
@@ -52,7 +53,7 @@ enum Command {
     /// Run the real-time correction controller against a robot and a force sensor.
     Run(cmd_control::RunArgs),
     /// Serve the simulated cell over the robot and sensor protocols on loopback.
-    Cell(cmd_control::CellArgs),
+    Cell(cell_server::CellArgs),
     /// The paper's whole study on the built-in SIMULATED cell, with an HTML report.
     Demo(cmd_demo::DemoArgs),
 }
@@ -71,7 +72,7 @@ fn main() -> ExitCode {
         Command::Plan(args) => cmd_calib::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
-        Command::Cell(args) => cmd_control::cell(args, cli.json),
+        Command::Cell(args) => cell_server::cell(args, cli.json),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
     };
     match result {

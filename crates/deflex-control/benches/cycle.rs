@@ -4,8 +4,8 @@
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
-use deflex_model::builtin;
 use deflex_model::spatial::pose_from_xyz_rpy;
+use deflex_model::{TX200_FORMING_Q_DEG, builtin};
 
 fn bench_cycle(c: &mut Criterion) {
     let robot = builtin("tx200").expect("built-in tx200");
@@ -23,14 +23,7 @@ fn bench_cycle(c: &mut Criterion) {
         ..ControllerConfig::default()
     };
     let mut ctrl = Controller::new(robot, config).expect("controller");
-    let q0 = [
-        0.0,
-        49.7f64.to_radians(),
-        89.3f64.to_radians(),
-        0.0,
-        41f64.to_radians(),
-        0.0,
-    ];
+    let q0 = TX200_FORMING_Q_DEG.map(f64::to_radians);
     ctrl.start(0.0);
     let mut t = 0.0;
     let mut k = 0u64;

@@ -220,10 +220,7 @@ pub fn spawn<C: Clock + Clone + 'static>(
                         q[Q_TIME] = clock.now();
                         shared.q.write(&q);
                         let (xi, _) = shared.xi.read();
-                        let correction = Correction {
-                            dp_m: [xi[0], xi[1], xi[2]],
-                            dphi_rad: [xi[3], xi[4], xi[5]],
-                        };
+                        let correction = Correction::from_array(xi);
                         match robot_link.send_correction(&correction) {
                             Ok(()) => {
                                 latency.record(received.elapsed());
@@ -441,23 +438,42 @@ fn control_loop<C: Clock>(
     warnings.dedup();
     RunSummary {
         control: stats.summary(),
-        reply_latency: StatsSummary::default(),
         cycles,
-        telegrams: 0,
-        robot_timeouts: 0,
-        robot_bad_packets: 0,
-        robot_errors: 0,
-        samples: 0,
-        sample_gaps: 0,
-        sensor_faults: 0,
-        sensor_errors: 0,
-        phase: ctrl.phase(),
         fault: ctrl.fault(),
         max_force_n: max_force,
         max_xi_m: max_xi,
         log_dropped,
         warnings,
         error: summary_error,
+        ..RunSummary::zeroed(ctrl.phase())
+    }
+}
+
+impl RunSummary {
+    /// A summary in `phase` with every statistic and counter at zero, no fault, no warnings
+    /// and no error. The control thread fills in what it saw; the link counters are added
+    /// from the shared atomics by [`Runtime::join`].
+    fn zeroed(phase: Phase) -> Self {
+        RunSummary {
+            control: StatsSummary::default(),
+            reply_latency: StatsSummary::default(),
+            cycles: 0,
+            telegrams: 0,
+            robot_timeouts: 0,
+            robot_bad_packets: 0,
+            robot_errors: 0,
+            samples: 0,
+            sample_gaps: 0,
+            sensor_faults: 0,
+            sensor_errors: 0,
+            phase,
+            fault: None,
+            max_force_n: 0.0,
+            max_xi_m: 0.0,
+            log_dropped: 0,
+            warnings: Vec::new(),
+            error: None,
+        }
     }
 }
 
@@ -491,24 +507,8 @@ impl Runtime {
     /// Waits for the threads and gathers the summary.
     pub fn join(self) -> RunSummary {
         let mut summary = self.control.join().unwrap_or_else(|_| RunSummary {
-            control: StatsSummary::default(),
-            reply_latency: StatsSummary::default(),
-            cycles: 0,
-            telegrams: 0,
-            robot_timeouts: 0,
-            robot_bad_packets: 0,
-            robot_errors: 0,
-            samples: 0,
-            sample_gaps: 0,
-            sensor_faults: 0,
-            sensor_errors: 0,
-            phase: Phase::Faulted,
-            fault: None,
-            max_force_n: 0.0,
-            max_xi_m: 0.0,
-            log_dropped: 0,
-            warnings: Vec::new(),
             error: Some("control thread panicked".into()),
+            ..RunSummary::zeroed(Phase::Faulted)
         });
         self.shared.done.store(true, Ordering::Release);
         if let Ok((latency, warnings)) = self.robot.join() {

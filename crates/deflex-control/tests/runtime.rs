@@ -63,15 +63,7 @@ fn run(robot_s: f64, sensor_s: f64) -> Outcome {
             let wait = next.saturating_duration_since(Instant::now());
             if let Ok(Some(reply)) = ep.receive_correction(wait.max(Duration::from_micros(100))) {
                 answered += 1;
-                let c = reply.correction;
-                corrections.push([
-                    c.dp_m[0],
-                    c.dp_m[1],
-                    c.dp_m[2],
-                    c.dphi_rad[0],
-                    c.dphi_rad[1],
-                    c.dphi_rad[2],
-                ]);
+                corrections.push(reply.correction.to_array());
             }
             std::thread::sleep(next.saturating_duration_since(Instant::now()));
         }

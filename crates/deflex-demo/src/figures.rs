@@ -60,7 +60,7 @@ pub(crate) fn grid_figures(
             .fold(0.0f64, f64::max)
             .max(1e-6);
         for (name, error) in &errors {
-            let tag = crate::study::column_tag(name);
+            let tag = crate::tables::column_tag(name);
             let path = out.join(format!("grid_error_{tag}_{load:.0}N.png"));
             let spec = PlotSpec::new(
                 format!(
@@ -86,7 +86,7 @@ pub(crate) fn grid_figures(
             .iter()
             .filter(|(name, _)| *name == BASELINE || *name == IDENTIFIED)
         {
-            let tag = crate::study::column_tag(name);
+            let tag = crate::tables::column_tag(name);
             let predicted: Vec<f64> = selected.iter().map(|&i| p[i][2] * 1e3).collect();
             let path = out.join(format!("grid_parity_{tag}_{load:.0}N.png"));
             let spec = PlotSpec::new(

@@ -15,9 +15,10 @@ mod figures;
 mod page;
 pub mod paper;
 mod study;
+mod tables;
 pub mod twin_controller;
 
-pub use study::paper_vs_deflex as paper_vs_deflex_rows;
 pub use study::{
     DemoOptions, DemoSummary, FormingNumbers, ModelErrorNumbers, Progress, StiffnessRow, run_demo,
 };
+pub use tables::paper_vs_deflex as paper_vs_deflex_rows;

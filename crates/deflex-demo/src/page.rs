@@ -2,7 +2,8 @@
 //! labelled, the paper's numbers beside ours.
 
 use crate::figures::Figure;
-use crate::study::{DemoSummary, paper_vs_deflex};
+use crate::study::DemoSummary;
+use crate::tables::paper_vs_deflex;
 use deflex_calib::SearchResult;
 use deflex_calib::plan::Plan;
 use deflex_report::HtmlReport;

@@ -97,6 +97,24 @@ impl Correction {
             .all(|v| v.is_finite())
     }
 
+    /// The six components as one screw `[dx, dy, dz, φx, φy, φz]`: translation in metres
+    /// along base x, y, z, then the rotation vector in radians about base x, y, z.
+    pub fn to_array(&self) -> [f64; 6] {
+        let [x, y, z] = self.dp_m;
+        let [rx, ry, rz] = self.dphi_rad;
+        [x, y, z, rx, ry, rz]
+    }
+
+    /// Inverse of [`Correction::to_array`]: `[dx, dy, dz, φx, φy, φz]` with the translation in
+    /// metres and the rotation vector in radians, both in base axes.
+    pub fn from_array(v: [f64; 6]) -> Self {
+        let [x, y, z, rx, ry, rz] = v;
+        Correction {
+            dp_m: [x, y, z],
+            dphi_rad: [rx, ry, rz],
+        }
+    }
+
     /// Rotation part as KUKA ZYX Euler angles `[a, b, c]` in radians.
     pub fn zyx_rad(&self) -> [f64; 3] {
         matrix_to_zyx(&rotvec_to_matrix(self.dphi_rad))

@@ -86,11 +86,7 @@ pub fn parse_joints_line(line: &[u8]) -> Result<[f64; 6], LinkError> {
 
 /// Parses a PC → robot line, either `corr …` or `(…)`.
 pub fn parse_correction_line(line: &[u8]) -> Result<Correction, LinkError> {
-    let v = parse6(line, "corr", false)?;
-    Ok(Correction {
-        dp_m: [v[0], v[1], v[2]],
-        dphi_rad: [v[3], v[4], v[5]],
-    })
+    parse6(line, "corr", false).map(Correction::from_array)
 }
 
 fn write6(
@@ -136,14 +132,7 @@ pub fn format_correction_line(
     style: ReplyStyle,
     out: &mut [u8],
 ) -> Result<usize, LinkError> {
-    let v = [
-        c.dp_m[0],
-        c.dp_m[1],
-        c.dp_m[2],
-        c.dphi_rad[0],
-        c.dphi_rad[1],
-        c.dphi_rad[2],
-    ];
+    let v = c.to_array();
     match style {
         ReplyStyle::Keyword => write6(out, "corr ", &v, " ", "\n"),
         ReplyStyle::Tuple => write6(out, "(", &v, ",", ")\n"),

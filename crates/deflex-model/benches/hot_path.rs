@@ -2,7 +2,7 @@
 //! the Table 1 eDoFs (6), with 7 (plus J6.z) and with all 18 joint eDoFs plus 2 base eDoFs.
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
-use deflex_model::{Axis, Data, EdofSite, Wrench, builtin};
+use deflex_model::{Axis, Data, EdofSite, TX200_FORMING_Q_DEG, Wrench, builtin};
 
 fn full_model() -> deflex_model::Robot {
     let mut robot = builtin("tx200").expect("builtin");
@@ -19,14 +19,7 @@ fn full_model() -> deflex_model::Robot {
 }
 
 fn bench(c: &mut Criterion) {
-    let q = [
-        0.0,
-        49.7f64.to_radians(),
-        89.3f64.to_radians(),
-        0.0,
-        41f64.to_radians(),
-        0.0,
-    ];
+    let q = TX200_FORMING_Q_DEG.map(f64::to_radians);
     let wrench = Wrench::new(150.0, -300.0, 1200.0, 0.0, 0.0, 0.0);
     let table1 = builtin("tx200").expect("builtin");
     let mut seven = table1.clone();

@@ -31,13 +31,17 @@ pub mod spatial;
 mod urdf;
 pub mod wrench;
 
-pub use compliance::EdofColumns;
+pub use compliance::{EdofColumns, edof_screw};
 pub use description::{BUILTIN_ROBOTS, builtin, load_robot, robot_from_toml_str, robot_to_toml};
 pub use error::{ModelError, QLengthError};
 pub use ik::{IkOptions, IkSolution};
 pub use kinematics::Data;
 pub use robot::{Axis, AxisStiffness, DhParams, Edof, EdofSite, Joint, Robot, UrdfSource};
 pub use spatial::{Displacement, Pose, Wrench};
+
+/// The paper's forming configuration of the TX200, in degrees: the TCP at the part origin
+/// (≈ [1499, 0, −183] mm), tool pointing down. A good IK seed near the ISF cell.
+pub const TX200_FORMING_Q_DEG: [f64; 6] = [0.0, 49.7, 89.3, 0.0, 41.0, 0.0];
 
 /// Largest number of motorised joints a [`Robot`] may have (fixed so [`Data`] needs no heap).
 pub const MAX_JOINTS: usize = 8;

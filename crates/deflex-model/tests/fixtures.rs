@@ -1,7 +1,7 @@
 //! Exact fixtures and independent cross-checks of the model (issue: robot model).
 
 use deflex_model::spatial::pose_from_xyz_rpy;
-use deflex_model::{Axis, Data, EdofSite, IkOptions, Robot, Wrench, builtin};
+use deflex_model::{Axis, Data, EdofSite, IkOptions, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
 use nalgebra::{Matrix6, Vector3, Vector6};
 
 fn deg(v: &[f64]) -> Vec<f64> {
@@ -9,7 +9,7 @@ fn deg(v: &[f64]) -> Vec<f64> {
 }
 
 fn forming_q() -> Vec<f64> {
-    deg(&[0.0, 49.7, 89.3, 0.0, 41.0, 0.0])
+    deg(&TX200_FORMING_Q_DEG)
 }
 
 #[test]

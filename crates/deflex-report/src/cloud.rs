@@ -8,7 +8,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::ReportError;
 use crate::colormap::palette_rgb;
 use crate::render::{
-    check_range, err, finite_extent, legend_style, padded, render, tick_formatter, tick_style,
+    check_range, draw_legend, err, finite_extent, padded, render, tick_formatter, tick_style,
     titled_area,
 };
 
@@ -199,15 +199,7 @@ pub fn cloud_3d(path: &Path, spec: &Plot3Spec, clouds: &[Cloud3]) -> Result<(), 
             }
         }
         if any_label {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.88))
-                .border_style(RGBColor(160, 160, 160))
-                .label_font(legend_style())
-                .margin(10)
-                .draw()
-                .map_err(err)?;
+            draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
     })

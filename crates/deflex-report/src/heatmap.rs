@@ -10,7 +10,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::colormap::viridis_rgb;
 use crate::render::{
-    axis_desc_style, check_range, err, finite_extent, label_count, padded, render, tick_formatter,
+    axis_desc_style, check_range, draw_axes, err, finite_extent, padded, render, tick_formatter,
     tick_style, titled_area,
 };
 use crate::{PlotSpec, ReportError};
@@ -106,23 +106,7 @@ fn main_chart<'a, DB: DrawingBackend>(
         .y_label_area_size(Y_AREA)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?;
-    let (fx, fy) = (tick_formatter((x0, x1)), tick_formatter((y0, y1)));
-    let (pw, ph) = chart.plotting_area().dim_in_pixel();
-    let mut mesh = chart.configure_mesh();
-    mesh.x_desc(spec.x_label.as_str())
-        .y_desc(spec.y_label.as_str())
-        .axis_desc_style(axis_desc_style())
-        .label_style(tick_style())
-        .x_labels(label_count(pw, 75))
-        .y_labels(label_count(ph, 40))
-        .x_label_formatter(&fx)
-        .y_label_formatter(&fy)
-        .bold_line_style(RGBColor(215, 215, 215))
-        .light_line_style(RGBColor(240, 240, 240));
-    if !grid_lines {
-        mesh.disable_mesh();
-    }
-    mesh.draw().map_err(err)?;
+    draw_axes(&mut chart, spec, (x0, x1), (y0, y1), grid_lines)?;
     Ok(chart)
 }
 

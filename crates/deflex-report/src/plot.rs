@@ -8,8 +8,8 @@ use plotters::prelude::*;
 
 use crate::colormap::palette_rgb;
 use crate::render::{
-    axis_desc_style, check_range, err, finite_extent, fmt_tick, label_count, legend_style, padded,
-    render, tick_formatter, tick_style, title_style, titled_area,
+    check_range, draw_axes, draw_legend, err, finite_extent, fmt_tick, padded, render, title_style,
+    titled_area,
 };
 use crate::{PlotSpec, ReportError, Series, SeriesStyle};
 
@@ -184,22 +184,8 @@ fn draw_chart<DB: DrawingBackend>(
         .y_label_area_size(86)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?;
-    let (fx, fy) = (tick_formatter((x0, x1)), tick_formatter((y0, y1)));
     let (pw, ph) = chart.plotting_area().dim_in_pixel();
-    chart
-        .configure_mesh()
-        .x_desc(spec.x_label.as_str())
-        .y_desc(spec.y_label.as_str())
-        .axis_desc_style(axis_desc_style())
-        .label_style(tick_style())
-        .x_labels(label_count(pw, 75))
-        .y_labels(label_count(ph, 40))
-        .x_label_formatter(&fx)
-        .y_label_formatter(&fy)
-        .bold_line_style(RGBColor(215, 215, 215))
-        .light_line_style(RGBColor(240, 240, 240))
-        .draw()
-        .map_err(err)?;
+    draw_axes(&mut chart, spec, (x0, x1), (y0, y1), true)?;
 
     let mut any_label = false;
     for (i, p) in prepared.iter().enumerate() {
@@ -236,15 +222,8 @@ fn draw_chart<DB: DrawingBackend>(
         }
     }
     if any_label {
-        chart
-            .configure_series_labels()
-            .position(legend_corner(prepared, (x0, x1), (y0, y1), (pw, ph)))
-            .background_style(WHITE.mix(0.88))
-            .border_style(RGBColor(160, 160, 160))
-            .label_font(legend_style())
-            .margin(10)
-            .draw()
-            .map_err(err)?;
+        let corner = legend_corner(prepared, (x0, x1), (y0, y1), (pw, ph));
+        draw_legend(&mut chart, corner)?;
     }
     Ok(())
 }

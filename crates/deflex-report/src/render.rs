@@ -3,9 +3,10 @@
 
 use std::path::Path;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use crate::ReportError;
+use crate::{PlotSpec, ReportError};
 
 /// Output formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,6 +36,18 @@ impl Format {
 /// `&DrawingArea<_, Shift>`) on a PNG or SVG backend chosen by the path's
 /// extension, then saves the file. Evaluates to `Result<(), ReportError>`.
 macro_rules! render {
+    // One backend: white background, `$body`, save. Each backend has its own drawing-area
+    // type, so `$body` is expanded once per backend.
+    (@draw $backend:expr, $fail:ident, |$root:ident| $body:expr) => {{
+        let $root = &::plotters::prelude::IntoDrawingArea::into_drawing_area($backend);
+        $root
+            .fill(&::plotters::prelude::WHITE)
+            .map_err(|e| $fail(e.to_string()))?;
+        #[allow(clippy::redundant_closure_call)]
+        let drawn: Result<(), String> = (|| -> Result<(), String> { $body })();
+        drawn.map_err($fail)?;
+        $root.present().map_err(|e| $fail(e.to_string()))
+    }};
     ($path:expr, ($w:expr, $h:expr), |$root:ident| $body:expr) => {{
         let path: &::std::path::Path = $path;
         let size: (u32, u32) = ($w, $h);
@@ -45,28 +58,16 @@ macro_rules! render {
         $crate::render::check_size(path, size)?;
         $crate::font::ensure_registered();
         match $crate::render::Format::from_path(path)? {
-            $crate::render::Format::Png => {
-                let backend = ::plotters::prelude::BitMapBackend::new(path, size);
-                let $root = &::plotters::prelude::IntoDrawingArea::into_drawing_area(backend);
-                $root
-                    .fill(&::plotters::prelude::WHITE)
-                    .map_err(|e| fail(e.to_string()))?;
-                #[allow(clippy::redundant_closure_call)]
-                let drawn: Result<(), String> = (|| -> Result<(), String> { $body })();
-                drawn.map_err(fail)?;
-                $root.present().map_err(|e| fail(e.to_string()))
-            }
-            $crate::render::Format::Svg => {
-                let backend = ::plotters::prelude::SVGBackend::new(path, size);
-                let $root = &::plotters::prelude::IntoDrawingArea::into_drawing_area(backend);
-                $root
-                    .fill(&::plotters::prelude::WHITE)
-                    .map_err(|e| fail(e.to_string()))?;
-                #[allow(clippy::redundant_closure_call)]
-                let drawn: Result<(), String> = (|| -> Result<(), String> { $body })();
-                drawn.map_err(fail)?;
-                $root.present().map_err(|e| fail(e.to_string()))
-            }
+            $crate::render::Format::Png => $crate::render::render!(
+                @draw ::plotters::prelude::BitMapBackend::new(path, size),
+                fail,
+                |$root| $body
+            ),
+            $crate::render::Format::Svg => $crate::render::render!(
+                @draw ::plotters::prelude::SVGBackend::new(path, size),
+                fail,
+                |$root| $body
+            ),
         }
     }};
 }
@@ -139,6 +140,51 @@ pub(crate) fn titled_area<DB: DrawingBackend>(
     }
     root.margin(10, 0, 0, 0)
         .titled(title, (crate::font::FAMILY, size).into_font().color(&BLACK))
+        .map_err(err)
+}
+
+/// Draws the axes of a 2D chart: axis descriptions from `spec`, tick labels formatted for the
+/// ranges `x` and `y` and spaced by the plotting area's size, and light grid lines (left out
+/// when `grid_lines` is false).
+pub(crate) fn draw_axes<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    spec: &PlotSpec,
+    x: (f64, f64),
+    y: (f64, f64),
+    grid_lines: bool,
+) -> Result<(), String> {
+    let (fx, fy) = (tick_formatter(x), tick_formatter(y));
+    let (pw, ph) = chart.plotting_area().dim_in_pixel();
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(spec.x_label.as_str())
+        .y_desc(spec.y_label.as_str())
+        .axis_desc_style(axis_desc_style())
+        .label_style(tick_style())
+        .x_labels(label_count(pw, 75))
+        .y_labels(label_count(ph, 40))
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
+        .bold_line_style(RGBColor(215, 215, 215))
+        .light_line_style(RGBColor(240, 240, 240));
+    if !grid_lines {
+        mesh.disable_mesh();
+    }
+    mesh.draw().map_err(err)
+}
+
+/// Draws the legend of the labelled series of `chart` in a framed, slightly transparent box.
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.88))
+        .border_style(RGBColor(160, 160, 160))
+        .label_font(legend_style())
+        .margin(10)
+        .draw()
         .map_err(err)
 }
 

@@ -162,7 +162,7 @@ impl Default for PartConfig {
         PartConfig {
             robot: "tx200".into(),
             origin_mm: [1500.0, 0.0, -183.0],
-            seed_q_deg: [0.0, 49.7, 89.3, 0.0, 41.0, 0.0],
+            seed_q_deg: deflex_model::TX200_FORMING_Q_DEG,
         }
     }
 }

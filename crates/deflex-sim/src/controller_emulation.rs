@@ -384,7 +384,7 @@ mod tests {
         let path = ToolPath::paper_cone().truncated(30.0);
         let config = ControllerConfig::default();
         let part = deflex_model::spatial::pose_from_xyz_rpy([1.5, 0.0, -0.183], [0.0; 3]);
-        let seed = [0.0, 49.7, 89.3, 0.0, 41.0, 0.0].map(f64::to_radians);
+        let seed = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
         let mut ctrl = ControllerEmulation::new(&robot, &config, &path, &part, &seed).unwrap();
         assert!((ctrl.duration_s() - path.duration_s(50.0)).abs() < 1e-9);
         let mut worst: f64 = 0.0;

@@ -51,6 +51,8 @@
 //! once per controller cycle (or per static load), so it remembers the loading history.
 
 use crate::error::SimError;
+/// The eDoF screw of eq. 13, shared with the identified model (kept here under its old path).
+pub use deflex_model::edof_screw;
 use deflex_model::{Axis, AxisStiffness, Data, Displacement, EdofSite, Pose, Robot, Wrench};
 use nalgebra::{Rotation3, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
@@ -354,18 +356,6 @@ impl Plant {
     }
 }
 
-/// `[v × (p − c); v]`: displacement of point `p` per unit rotation about axis `v` through `c`
-/// (the eDoF screw of eq. 13).
-#[inline]
-pub fn edof_screw(
-    axis: &Vector3<f64>,
-    center: &Vector3<f64>,
-    point: &Vector3<f64>,
-) -> Vector6<f64> {
-    let linear = axis.cross(&(point - center));
-    Vector6::new(linear.x, linear.y, linear.z, axis.x, axis.y, axis.z)
-}
-
 /// Pose moved by a small displacement screw `[δp; δφ]` given at the pose's origin in world axes.
 pub fn apply_displacement(pose: &Pose, d: &Displacement) -> Pose {
     let dp = Vector3::new(d[0], d[1], d[2]);
@@ -380,7 +370,7 @@ mod tests {
     use deflex_model::builtin;
 
     fn paper_q() -> [f64; 6] {
-        [0.0, 49.7, 89.3, 0.0, 41.0, 0.0].map(f64::to_radians)
+        deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians)
     }
 
     #[test]

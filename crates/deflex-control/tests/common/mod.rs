@@ -5,19 +5,12 @@
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::wrench::world_wrench_in_sensor;
-use deflex_model::{Data, Robot, Wrench, builtin};
+use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
 
 pub const BIAS: [f64; 6] = [4.0, -3.0, 7.0, 0.2, -0.1, 0.05];
 
 pub fn q0() -> [f64; 6] {
-    [
-        0.0,
-        49.7f64.to_radians(),
-        89.3f64.to_radians(),
-        0.0,
-        41f64.to_radians(),
-        0.0,
-    ]
+    TX200_FORMING_Q_DEG.map(f64::to_radians)
 }
 
 pub fn config() -> ControllerConfig {
