@@ -65,6 +65,9 @@ fn robot_link(cell: &CellFile) -> Result<Box<dyn RobotLink + Send>, String> {
         RobotKind::SimpleUdp => Box::new(
             deflex_io::simple_udp::SimpleUdpLink::bind(r.bind, Default::default()).map_err(err)?,
         ),
+        RobotKind::SimpleTcp => {
+            Box::new(deflex_io::simple_tcp::SimpleTcpLink::bind(r.bind).map_err(err)?)
+        }
     })
 }
 
@@ -259,7 +262,7 @@ mod tests {
 
     #[test]
     fn every_robot_kind_binds_on_loopback() {
-        for kind in ["kuka-rsi", "abb-egm", "staubli", "simple-udp"] {
+        for kind in ["kuka-rsi", "abb-egm", "staubli", "simple-udp", "simple-tcp"] {
             let text = format!(
                 "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:0\"\n\
                  [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n"

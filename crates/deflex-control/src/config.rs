@@ -58,6 +58,8 @@ pub enum RobotKind {
     Staubli,
     /// Text lines over UDP.
     SimpleUdp,
+    /// The same text lines over TCP (the controller listens; a UR script connects to it).
+    SimpleTcp,
 }
 
 /// `[robot]`: the robot link.
