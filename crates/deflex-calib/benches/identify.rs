@@ -4,7 +4,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use deflex_calib::fit::{Structure, calibrate_fixed};
 use deflex_calib::search::{SearchOptions, search_structure};
-use deflex_calib::synthetic::{SyntheticOptions, measure, random_campaign};
+use deflex_calib::synthetic::{SyntheticOptions, measure, measure_with_rotations, random_campaign};
 use deflex_model::{Axis, EdofSite, builtin};
 use std::hint::black_box;
 
@@ -33,6 +33,13 @@ fn identify(c: &mut Criterion) {
     let free = Structure::from_robot(&truth).with_free_shifts();
     c.bench_function("fixed_fit_10k_rows_free_shift", |b| {
         b.iter(|| calibrate_fixed(&truth, black_box(big), &free).unwrap())
+    });
+    // The same rows with measured link rotations (20 µrad): 6 equations per row.
+    let plan = random_campaign(&truth, 3334, (600.0, 1400.0), 1);
+    let rot = measure_with_rotations(&truth, &plan[..10_000], &SyntheticOptions::default(), 20e-6)
+        .unwrap();
+    c.bench_function("fixed_fit_10k_rows_with_rotations", |b| {
+        b.iter(|| calibrate_fixed(&truth, black_box(&rot), &free).unwrap())
     });
     let mut group = c.benchmark_group("search");
     group.sample_size(10);

@@ -5,8 +5,23 @@
 //! point), `load_link`, `load_x_m, load_y_m, load_z_m` (load point, world, unloaded pose),
 //! `point`, `point_link`, `x_m, y_m, z_m` (measured point, world, unloaded),
 //! `dx_m, dy_m, dz_m` (displacement, loaded − unloaded, world axes).
-//! Optional: `sigma_m`, `drx_rad, dry_rad, drz_rad`, `purpose` (free text, plans).
 //! A plan is the same file without the displacement columns.
+//!
+//! Optional columns:
+//!
+//! | column | unit | meaning |
+//! |---|---|---|
+//! | `sigma_m` | m | standard deviation of each displacement component of this row (default [`DEFAULT_SIGMA_M`], 15 µm) |
+//! | `drx_rad, dry_rad, drz_rad` | rad | measured small rotation of the measured point's link, loaded − unloaded, world axes (e.g. a 6-DoF tracker probe); all three or none per row |
+//! | `sigma_rad` | rad | standard deviation of each rotation component of this row (default [`DEFAULT_SIGMA_RAD`], 20 µrad); only used on rows with a rotation |
+//! | `purpose` | – | free text (plans) |
+//!
+//! Rows with a rotation add three rotation equations to the calibration, weighted by
+//! `1/sigma_rad`; rows without one are used exactly as before. Cells of optional columns may be
+//! left empty.
+//!
+//! [`DEFAULT_SIGMA_M`]: crate::design::DEFAULT_SIGMA_M
+//! [`DEFAULT_SIGMA_RAD`]: crate::design::DEFAULT_SIGMA_RAD
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -35,10 +50,35 @@ pub struct MeasurementRow {
     pub displacement_m: Option<[f64; 3]>,
     /// Measurement standard deviation for this row (m).
     pub sigma_m: Option<f64>,
-    /// Measured small rotation of the point's link (rad), when orientation was measured.
-    pub rotation_rad: Option<[f64; 3]>,
+    /// Measured small rotation of the point's link (rad), when orientation was measured, with
+    /// its standard deviation.
+    pub rotation_rad: Option<MeasuredRotation>,
     /// Why this row is in a plan (free text).
     pub purpose: Option<String>,
+}
+
+/// A measured small rotation (columns `drx_rad, dry_rad, drz_rad` and `sigma_rad`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeasuredRotation {
+    /// Rotation vector loaded − unloaded of the measured point's link, world axes (rad).
+    pub value_rad: [f64; 3],
+    /// Standard deviation of each component (rad); `None` = [`crate::design::DEFAULT_SIGMA_RAD`].
+    pub sigma_rad: Option<f64>,
+}
+
+impl MeasuredRotation {
+    /// A rotation with the default standard deviation.
+    pub fn new(value_rad: [f64; 3]) -> MeasuredRotation {
+        MeasuredRotation {
+            value_rad,
+            sigma_rad: None,
+        }
+    }
+
+    /// The standard deviation used for weighting (rad).
+    pub fn sigma(&self) -> f64 {
+        self.sigma_rad.unwrap_or(crate::design::DEFAULT_SIGMA_RAD)
+    }
 }
 
 /// A bad measurement or plan file. Nothing of a file with an error is used.
@@ -285,7 +325,18 @@ pub fn parse_rows(
                 None
             };
         let rotation_rad = if has_rotation && !text_of("drx_rad").is_empty() {
-            Some(triple(&ROTATION_COLUMNS)?)
+            let sigma_rad = optional_number("sigma_rad")?;
+            if let Some(sigma) = sigma_rad
+                && sigma <= 0.0
+            {
+                return Err(row_error(format!(
+                    "column `sigma_rad`: must be positive, got {sigma}"
+                )));
+            }
+            Some(MeasuredRotation {
+                value_rad: triple(&ROTATION_COLUMNS)?,
+                sigma_rad,
+            })
         } else {
             None
         };
@@ -326,13 +377,16 @@ fn read_rows(path: &Path, require_displacement: bool) -> Result<Vec<MeasurementR
     parse_rows(&text, &origin, require_displacement)
 }
 
-/// Format rows as CSV text (full precision). Displacement, sigma, rotation and purpose columns are
-/// written when any row has them.
+/// Format rows as CSV text (full precision). Displacement, `sigma_m`, rotation, `sigma_rad` and
+/// purpose columns are written when any row has them.
 pub fn format_rows(rows: &[MeasurementRow]) -> String {
     let joint_count = rows.first().map(|r| r.q_rad.len()).unwrap_or(0);
     let with_displacement = rows.iter().any(|r| r.displacement_m.is_some());
     let with_sigma = rows.iter().any(|r| r.sigma_m.is_some());
     let with_rotation = rows.iter().any(|r| r.rotation_rad.is_some());
+    let with_sigma_rad = rows
+        .iter()
+        .any(|r| r.rotation_rad.is_some_and(|m| m.sigma_rad.is_some()));
     let with_purpose = rows.iter().any(|r| r.purpose.is_some());
     let mut header: Vec<String> = vec!["load_case".into()];
     header.extend((1..=joint_count).map(|i| format!("q{i}_rad")));
@@ -349,6 +403,9 @@ pub fn format_rows(rows: &[MeasurementRow]) -> String {
     }
     if with_rotation {
         header.extend(ROTATION_COLUMNS.iter().map(|s| s.to_string()));
+    }
+    if with_sigma_rad {
+        header.push("sigma_rad".into());
     }
     if with_purpose {
         header.push("purpose".into());
@@ -376,9 +433,17 @@ pub fn format_rows(rows: &[MeasurementRow]) -> String {
         }
         if with_rotation {
             match row.rotation_rad {
-                Some(r) => record.extend(r.iter().map(|v| num(*v))),
+                Some(r) => record.extend(r.value_rad.iter().map(|v| num(*v))),
                 None => record.extend(["".to_string(), "".to_string(), "".to_string()]),
             }
+        }
+        if with_sigma_rad {
+            record.push(
+                row.rotation_rad
+                    .and_then(|r| r.sigma_rad)
+                    .map(num)
+                    .unwrap_or_default(),
+            );
         }
         if with_purpose {
             record.push(row.purpose.clone().unwrap_or_default());
@@ -464,5 +529,49 @@ mod tests {
         assert!(!text.contains("dx_m"));
         assert_eq!(parse_rows(&text, "p.csv", false).unwrap(), rows);
         assert!(parse_rows(&text, "p.csv", true).is_err());
+    }
+
+    #[test]
+    fn rotation_and_sigma_rad_round_trip() {
+        let mut rows = sample();
+        rows.push(rows[0].clone());
+        rows.push(rows[0].clone());
+        rows[0].rotation_rad = Some(MeasuredRotation {
+            value_rad: [1.25e-5, -3.0e-6, 7.1e-7],
+            sigma_rad: Some(2.5e-5),
+        });
+        rows[1].rotation_rad = Some(MeasuredRotation::new([-2e-6, 0.0, 4.5e-5]));
+        rows[2].point = "TCP".into();
+        let text = format_rows(&rows);
+        let header = text.lines().next().unwrap();
+        assert!(
+            header.ends_with("drx_rad,dry_rad,drz_rad,sigma_rad,purpose"),
+            "{header}"
+        );
+        let back = parse_rows(&text, "t.csv", true).unwrap();
+        assert_eq!(back, rows);
+        assert_eq!(back[0].rotation_rad.unwrap().sigma(), 2.5e-5);
+        assert_eq!(
+            back[1].rotation_rad.unwrap().sigma(),
+            crate::design::DEFAULT_SIGMA_RAD
+        );
+        // Without any sigma_rad the column is not written.
+        rows[0].rotation_rad = Some(MeasuredRotation::new([1.0e-5, 0.0, 0.0]));
+        let text = format_rows(&rows);
+        assert!(!text.contains("sigma_rad") && text.contains("drz_rad"));
+        assert_eq!(parse_rows(&text, "t.csv", true).unwrap(), rows);
+        // A bad sigma_rad names the column.
+        let mut rows = sample();
+        rows[0].rotation_rad = Some(MeasuredRotation {
+            value_rad: [0.0; 3],
+            sigma_rad: Some(-1.0),
+        });
+        let err = parse_rows(&format_rows(&rows), "t.csv", true)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("sigma_rad") && err.contains("positive"),
+            "{err}"
+        );
     }
 }

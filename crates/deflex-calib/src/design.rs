@@ -16,7 +16,19 @@
 //! col_e(s) = L₀τ₀ − s (u τ₀ + L₀ (u·f)) + s² u (u·f)  =  a₀ + a₁ s + a₂ s²
 //! ```
 //!
-//! so the design stores the three *basis* vectors of every x/y joint eDoF (one for z and base
+//! A row that also measured the rotation of its link (`rotation_rad`) adds three rotation
+//! equations. The angular part of the eDoF screw is `v` alone (no dependence on the moved point,
+//! hence none on the centre through it), but the torque still depends on the centre through the
+//! load point, so the rotation column is linear in the shift:
+//!
+//! ```text
+//! δφ = Σ_e c_e · v · (j_e(A)ᵀ w),   col_e(s) = v τ₀ − s v (u·f)   (a₂ = 0)
+//! ```
+//!
+//! The rotation equations are weighted by `1/σ_rad` and appended after all position
+//! equations (3 per row, in row order), so the same basis/Gram machinery covers both.
+//!
+//! So the design stores the three *basis* vectors of every x/y joint eDoF (one for z and base
 //! eDoFs, where `u = 0`) once, together with their Gram matrix. Every fit of every candidate
 //! structure, with any centre shifts, then costs O(p²) inner products of precomputed numbers,
 //! independent of the number of rows: this is what makes the structure search fast.
@@ -31,6 +43,10 @@ pub type EdofId = (EdofSite, Axis);
 
 /// Default tracker standard deviation when a row has no `sigma_m` (15 µm).
 pub const DEFAULT_SIGMA_M: f64 = 15e-6;
+
+/// Default standard deviation of a measured rotation component when a row has no `sigma_rad`
+/// (20 µrad, a 6-DoF tracker probe).
+pub const DEFAULT_SIGMA_RAD: f64 = 20e-6;
 
 /// Label of an eDoF as in the paper's Table 1: `J3.x`, `base.y`.
 pub fn edof_label(id: EdofId) -> String {
@@ -65,11 +81,12 @@ pub struct Design {
     pub(crate) offset: Vec<usize>,
     /// Number of basis vectors of each candidate (3 for joint x/y, 1 otherwise).
     pub(crate) nbasis: Vec<usize>,
-    /// Weighted basis values, one row per equation (3 per data row: x, y, z).
+    /// Weighted basis values, one row per equation: 3 per data row (δp x, y, z), then 3 per
+    /// row with a measured rotation (δφ x, y, z), from `3 · rows` on.
     pub(crate) x: DMatrix<f64>,
     /// Weighted observations.
     pub(crate) y: DVector<f64>,
-    /// Standard deviation of each equation (m).
+    /// Standard deviation of each equation (m for positions, rad for rotations).
     pub(crate) sigma: Vec<f64>,
     /// Gram matrix `XᵀX` of the basis.
     pub(crate) gram: DMatrix<f64>,
@@ -79,6 +96,8 @@ pub struct Design {
     pub(crate) yty: f64,
     /// Number of data rows.
     pub rows: usize,
+    /// Number of rows with a measured rotation (3 rotation equations each).
+    pub rotation_rows: usize,
     /// Number of joints of the robot.
     pub joint_count: usize,
     /// Observations about the data that do not stop the fit (e.g. unobservable eDoFs).
@@ -118,10 +137,12 @@ impl Design {
             nbasis.push(k);
             nb += k;
         }
-        let neq = 3 * rows.len();
+        let rotation_rows = rows.iter().filter(|r| r.rotation_rad.is_some()).count();
+        let neq = 3 * rows.len() + 3 * rotation_rows;
         let mut x = DMatrix::<f64>::zeros(neq, nb);
         let mut y = DVector::<f64>::zeros(neq);
         let mut sigma = vec![DEFAULT_SIGMA_M; neq];
+        let mut next_rotation = 3 * rows.len();
         let mut data = Data::new();
         let mut last_q: Option<&[f64]> = None;
         for (r, row) in rows.iter().enumerate() {
@@ -144,6 +165,17 @@ impl Design {
                     y[3 * r + ax] = d[ax] * wgt;
                 }
             }
+            // Rotation equations of this row: (first equation, weight).
+            let rotation = row.rotation_rad.map(|m| {
+                let e0 = next_rotation;
+                next_rotation += 3;
+                let sr = m.sigma();
+                for ax in 0..3 {
+                    sigma[e0 + ax] = sr;
+                    y[e0 + ax] = m.value_rad[ax] / sr;
+                }
+                (e0, 1.0 / sr)
+            });
             for (ci, &(site, axis)) in candidates.iter().enumerate() {
                 if site.link_index() > reach {
                     continue;
@@ -159,6 +191,11 @@ impl Design {
                 for ax in 0..3 {
                     x[(3 * r + ax, base)] = a0[ax] * wgt;
                 }
+                if let Some((e0, wr)) = rotation {
+                    for ax in 0..3 {
+                        x[(e0 + ax, base)] = v[ax] * t0 * wr;
+                    }
+                }
                 if nbasis[ci] == 3 {
                     let z: Vector3<f64> = rot.column(2).into_owned();
                     let u = v.cross(&z);
@@ -168,6 +205,12 @@ impl Design {
                     for ax in 0..3 {
                         x[(3 * r + ax, base + 1)] = a1[ax] * wgt;
                         x[(3 * r + ax, base + 2)] = a2[ax] * wgt;
+                    }
+                    // Rotation: a₁ = −v (u·f), a₂ = 0.
+                    if let Some((e0, wr)) = rotation {
+                        for ax in 0..3 {
+                            x[(e0 + ax, base + 1)] = -v[ax] * uf * wr;
+                        }
                     }
                 }
             }
@@ -187,12 +230,13 @@ impl Design {
             xty,
             yty,
             rows: rows.len(),
+            rotation_rows,
             joint_count: n,
             warnings,
         })
     }
 
-    /// Number of equations (3 per row).
+    /// Number of equations (3 per row, plus 3 per row with a measured rotation).
     pub fn equations(&self) -> usize {
         self.y.len()
     }
@@ -292,10 +336,14 @@ fn check_rows(
             && row
                 .displacement_m
                 .is_none_or(|d| d.iter().all(|v| v.is_finite()))
-            && row.sigma_m.is_none_or(|s| s.is_finite() && s > 0.0);
+            && row.sigma_m.is_none_or(|s| s.is_finite() && s > 0.0)
+            && row.rotation_rad.is_none_or(|m| {
+                m.value_rad.iter().all(|v| v.is_finite())
+                    && m.sigma_rad.is_none_or(|s| s.is_finite() && s > 0.0)
+            });
         if !finite {
             return Err(CalibError::Invalid(format!(
-                "{}: a value is NaN or infinite (or sigma_m ≤ 0)",
+                "{}: a value is NaN or infinite (or sigma_m / sigma_rad ≤ 0)",
                 at()
             )));
         }
@@ -352,4 +400,89 @@ fn observability_warnings(
         "{where_}: eDoF(s) {} cannot be observed (they only move links beyond {reach}); measure a point on a later link",
         blind.join(", ")
     )]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::MeasuredRotation;
+    use crate::synthetic::random_campaign;
+    use deflex_model::{Wrench, builtin};
+
+    /// The design's prediction at the robot's own compliances and centre shifts reproduces
+    /// `Robot::point_displacement`: rows 0..3 for positions, rows 3..6 for rotations, for
+    /// points and loads on several links, with moments and a shifted x/y eDoF centre.
+    #[test]
+    fn rotation_rows_match_point_displacement() {
+        let mut robot = builtin("tx200").unwrap();
+        robot.set_stiffness(EdofSite::Base, Axis::Y, Some(6.0e6));
+        robot.set_stiffness(EdofSite::Joint(2), Axis::X, Some(9.0e6));
+        robot.joints[1].center_shift = -0.15;
+        let mut rows = random_campaign(&robot, 8, (600.0, 1400.0), 5);
+        for (i, row) in rows.iter_mut().enumerate() {
+            row.wrench[3] = 40.0 * (i as f64 - 3.0);
+            row.wrench[5] = -25.0;
+            if i % 4 == 1 {
+                row.load_link = 3;
+            }
+            if i % 3 != 2 {
+                row.rotation_rad = Some(MeasuredRotation {
+                    value_rad: [0.0; 3],
+                    sigma_rad: (i % 2 == 0).then_some(5e-6),
+                });
+            }
+        }
+        let candidates: Vec<EdofId> = robot.edofs().map(|e| (e.site, e.axis)).collect();
+        let design = Design::build(&robot, &rows, &candidates, false).unwrap();
+        let nrot = rows.iter().filter(|r| r.rotation_rad.is_some()).count();
+        assert_eq!(design.rotation_rows, nrot);
+        assert_eq!(design.equations(), 3 * rows.len() + 3 * nrot);
+        let mut beta = DVector::zeros(design.gram.nrows());
+        for (ci, e) in robot.edofs().enumerate() {
+            let s = design
+                .shift_joint(ci)
+                .map(|j| robot.joints[j - 1].center_shift)
+                .unwrap_or(0.0);
+            for (b, coef) in design.col(ci, s) {
+                beta[b] += coef / e.stiffness;
+            }
+        }
+        let pred = design.predict(&beta);
+        let mut data = Data::new();
+        let mut e_rot = 3 * rows.len();
+        let mut checked = 0;
+        for (r, row) in rows.iter().enumerate() {
+            robot.forward_kinematics(&mut data, &row.q_rad).unwrap();
+            let d = robot.point_displacement(
+                &data,
+                &Vector3::from(row.point_m),
+                row.point_link,
+                &Vector3::from(row.load_point_m),
+                row.load_link,
+                &Wrench::from_row_slice(&row.wrench),
+            );
+            for ax in 0..3 {
+                let e = 3 * r + ax;
+                let p = pred[e] * design.sigma[e];
+                assert!((p - d[ax]).abs() <= 1e-9 * d.norm().max(1e-12), "{p} {d}");
+            }
+            if row.rotation_rad.is_some() {
+                let angular = d.fixed_rows::<3>(3).into_owned();
+                assert!(angular.norm() > 0.0);
+                for ax in 0..3 {
+                    let e = e_rot + ax;
+                    let p = pred[e] * design.sigma[e];
+                    assert!(
+                        (p - angular[ax]).abs() <= 1e-9 * angular.norm(),
+                        "row {r} axis {ax}: design {p:e}, model {:e}",
+                        angular[ax]
+                    );
+                }
+                e_rot += 3;
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, nrot);
+        assert!(nrot > 0);
+    }
 }

@@ -1,19 +1,21 @@
 //! Fixed-structure calibration: compliances `c = 1/k` by weighted NNLS (eq. 15 is linear in c),
 //! centre shifts by variable projection, with standard errors, 95 % intervals, correlations,
-//! condition number and residual statistics.
+//! condition number and residual statistics (computed in the internal `uncertainty` module).
 //!
-//! Covariance: `s² (JᵀWJ)⁻¹` over the free parameters (compliances not at the c ≥ 0 bound, free
-//! shifts), with `s² = χ²/(n − p)` the reduced chi-square, so that an unrepresentable truth or a
-//! wrong σ inflates the intervals honestly. Stiffness `k = 1/c`: SE by the delta method
-//! (`SE_k = SE_c / c²`), interval by mapping the c-interval (upper bound ∞ when
-//! `c − 1.96 SE_c ≤ 0`: weakly identified).
+//! The least-squares problem holds the three position equations of every row and, for rows with
+//! a measured rotation, its three rotation equations (weighted by `1/σ_rad`); residual
+//! statistics stay position-only in metres, with the rotation RMS reported separately.
 
 use crate::CalibError;
 use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId, edof_label, edof_order};
-use crate::shift::{self, Inner, jacobian, normal_system, scales};
+use crate::shift::{self, normal_system, scales};
+use crate::uncertainty::analyse;
 use deflex_model::{Axis, EdofSite, Robot};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
+
+pub use crate::uncertainty::bic;
+pub(crate) use crate::uncertainty::residual_stats;
 
 /// Relative standard error of a compliance above which it is reported not identifiable.
 pub const MAX_RELATIVE_SE: f64 = 5.0;
@@ -141,7 +143,8 @@ pub struct ShiftEstimate {
     pub se_m: Option<f64>,
 }
 
-/// Residual statistics (measured − predicted), metres.
+/// Residual statistics (measured − predicted): positions in metres, plus the RMS of the
+/// rotation residuals when the data has measured rotations.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ResidualStats {
     /// RMS per axis x, y, z.
@@ -152,8 +155,11 @@ pub struct ResidualStats {
     pub rms_norm_m: f64,
     /// Largest residual norm.
     pub max_norm_m: f64,
-    /// RMS over all components (the "RMS" of the iteration table).
+    /// RMS over all position components (the "RMS" of the iteration table).
     pub rms_all_m: f64,
+    /// RMS over all rotation components (rad) of the rows with a measured rotation; `None`
+    /// when no row has one.
+    pub rotation_rms_rad: Option<f64>,
 }
 
 /// A calibrated model structure with its uncertainty.
@@ -183,6 +189,8 @@ pub struct Calibration {
     pub residuals: ResidualStats,
     /// Number of data rows.
     pub rows: usize,
+    /// Number of rows with a measured rotation (3 extra equations each).
+    pub rotation_rows: usize,
     /// Non-fatal observations (unobservable eDoFs, …).
     pub warnings: Vec<String>,
 }
@@ -350,271 +358,4 @@ fn rank_problem(
             others.join(", ")
         ),
     ))
-}
-
-#[allow(clippy::too_many_arguments)]
-fn analyse(
-    design: &Design,
-    structure: &Structure,
-    active: &[EdofId],
-    idx: &[usize],
-    sol: &Inner,
-    shifts: &[f64],
-    dropped: &[(EdofId, String)],
-    free: &[usize],
-) -> Calibration {
-    let n = design.equations();
-    let include: Vec<bool> = sol.c.iter().map(|&c| c > 0.0).collect();
-    // Free shifts that are identifiable: the joint has an active x/y eDoF.
-    let mut shift_ok: Vec<usize> = free
-        .iter()
-        .copied()
-        .filter(|&j| {
-            idx.iter()
-                .zip(&sol.c)
-                .any(|(&ci, &c)| design.shift_joint(ci) == Some(j) && c > 0.0)
-        })
-        .collect();
-    let mut cov;
-    let mut labels;
-    let mut cond;
-    loop {
-        let (cols, l) = jacobian(design, idx, &sol.c, shifts, &include, &shift_ok);
-        labels = l;
-        let (nm, _) = normal_system(design, &cols);
-        let d = scales(&nm);
-        let m = cols.len();
-        let ns = DMatrix::from_fn(m, m, |i, j| nm[(i, j)] * d[i] * d[j]);
-        let eig = ns.clone().symmetric_eigen();
-        let lmax = eig.eigenvalues.amax();
-        let lmin = eig
-            .eigenvalues
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        cond = if m == 0 {
-            1.0
-        } else {
-            (lmax / lmin.max(1e-300)).sqrt()
-        };
-        if m > 0 && (lmin <= 1e-12 * lmax || d.contains(&0.0)) && !shift_ok.is_empty() {
-            shift_ok.pop();
-            continue;
-        }
-        let inv = ns
-            .clone()
-            .cholesky()
-            .map(|ch| ch.inverse())
-            .unwrap_or_else(|| {
-                ns.pseudo_inverse(1e-14 * lmax)
-                    .unwrap_or(DMatrix::zeros(m, m))
-            });
-        cov = DMatrix::from_fn(m, m, |i, j| inv[(i, j)] * d[i] * d[j]);
-        break;
-    }
-    let p = labels.len();
-    let dof = n.saturating_sub(p).max(1);
-    let s2 = sol.chi2 / dof as f64;
-    cov *= s2;
-    let se = |k: usize| cov[(k, k)].max(0.0).sqrt();
-    let correlation = DMatrix::from_fn(p, p, |i, j| {
-        let den = se(i) * se(j);
-        if den > 0.0 { cov[(i, j)] / den } else { 0.0 }
-    });
-
-    let mut edofs = Vec::new();
-    for &id in &structure.edofs {
-        let label = edof_label(id);
-        let not = |reason: String| EdofEstimate {
-            id,
-            label: label.clone(),
-            status: Status::NotIdentifiable(reason),
-            compliance: 0.0,
-            compliance_se: f64::NAN,
-            stiffness: None,
-            stiffness_se: None,
-            interval95: None,
-        };
-        if let Some((_, reason)) = dropped.iter().find(|(d, _)| *d == id) {
-            edofs.push(not(reason.clone()));
-            continue;
-        }
-        let Some(k) = active.iter().position(|a| *a == id) else {
-            continue;
-        };
-        let c = sol.c[k];
-        if c <= 0.0 {
-            let bound = bound_se(design, idx, shifts, &sol.c, k, s2)
-                .map(|se| format!(" (k > {:.3e} N·m/rad at 95 %)", 1.0 / (Z95 * se)))
-                .unwrap_or_default();
-            edofs.push(not(format!(
-                "not identifiable: the fit hit the c ≥ 0 bound, stiffer than the data can resolve{bound}"
-            )));
-            continue;
-        }
-        let pos = labels.iter().position(|l| *l == Ok(k)).unwrap_or(0);
-        let sc = se(pos);
-        let rel = sc / c;
-        let status = if !(rel.is_finite()) || rel > MAX_RELATIVE_SE {
-            Status::NotIdentifiable(format!(
-                "not identifiable: relative standard error of the compliance {:.0} %",
-                100.0 * rel
-            ))
-        } else if c - Z95 * sc <= 0.0 {
-            Status::Weak
-        } else {
-            Status::Identified
-        };
-        if matches!(status, Status::NotIdentifiable(_)) {
-            let mut e = not(match &status {
-                Status::NotIdentifiable(r) => r.clone(),
-                _ => String::new(),
-            });
-            e.compliance = c;
-            e.compliance_se = sc;
-            edofs.push(e);
-            continue;
-        }
-        let lo_c = c - Z95 * sc;
-        let hi = if lo_c > 0.0 {
-            1.0 / lo_c
-        } else {
-            f64::INFINITY
-        };
-        edofs.push(EdofEstimate {
-            id,
-            label,
-            status,
-            compliance: c,
-            compliance_se: sc,
-            stiffness: Some(1.0 / c),
-            stiffness_se: Some(sc / (c * c)),
-            interval95: Some((1.0 / (c + Z95 * sc), hi)),
-        });
-    }
-
-    let mut shift_estimates = Vec::new();
-    for j in 1..=design.joint_count {
-        let has_xy = structure
-            .edofs
-            .iter()
-            .any(|e| e.0 == EdofSite::Joint(j) && e.1 != Axis::Z);
-        let is_free = structure.free_shift[j - 1];
-        if !has_xy && !is_free && shifts[j - 1] == 0.0 {
-            continue;
-        }
-        let se_m = labels.iter().position(|l| *l == Err(j)).map(se);
-        shift_estimates.push(ShiftEstimate {
-            joint: j,
-            value_m: shifts[j - 1],
-            free: is_free,
-            se_m,
-        });
-    }
-
-    let parameter_labels: Vec<String> = labels
-        .iter()
-        .map(|l| match l {
-            Ok(k) => edof_label(active[*k]),
-            Err(j) => format!("δr{j}"),
-        })
-        .collect();
-
-    // Residuals, directly from the rows.
-    let mut beta = DVector::zeros(design.gram.nrows());
-    for (k, &ci) in idx.iter().enumerate() {
-        for (b, coef) in design.col(ci, shift::shift_of(design, ci, shifts)) {
-            beta[b] += coef * sol.c[k];
-        }
-    }
-    let pred = design.predict(&beta);
-    let residuals = residual_stats(design, &pred);
-
-    let mut out_structure = structure.clone();
-    out_structure.shifts_m = shifts.to_vec();
-    out_structure.edofs = edofs
-        .iter()
-        .filter(|e| e.stiffness.is_some())
-        .map(|e| e.id)
-        .collect();
-    let bic = bic(sol.chi2, n, p);
-    let mut warnings = Vec::new();
-    for &j in free {
-        if !shift_ok.contains(&j) {
-            warnings.push(format!(
-                "centre shift δr{j} is not identifiable (no active x/y eDoF on joint {j} or collinear); kept at {:.4} m",
-                shifts[j - 1]
-            ));
-        }
-    }
-    Calibration {
-        structure: out_structure,
-        edofs,
-        shifts: shift_estimates,
-        parameter_labels,
-        correlation,
-        condition_number: cond,
-        chi2: sol.chi2,
-        dof,
-        reduced_chi2: s2,
-        bic,
-        residuals,
-        rows: design.rows,
-        warnings,
-    }
-}
-
-/// Standard error of a compliance sitting at the bound, from the information matrix with it
-/// included (gives the one-sided lower bound on the stiffness).
-fn bound_se(
-    design: &Design,
-    idx: &[usize],
-    shifts: &[f64],
-    c: &[f64],
-    k: usize,
-    s2: f64,
-) -> Option<f64> {
-    let keep: Vec<usize> = (0..idx.len()).filter(|&i| c[i] > 0.0 || i == k).collect();
-    let sub: Vec<usize> = keep.iter().map(|&i| idx[i]).collect();
-    let cols = shift::columns(design, &sub, shifts);
-    let (g, _) = normal_system(design, &cols);
-    let d = scales(&g);
-    let m = sub.len();
-    let gs = DMatrix::from_fn(m, m, |i, j| g[(i, j)] * d[i] * d[j]);
-    let inv = gs.cholesky()?.inverse();
-    let pos = keep.iter().position(|&i| i == k)?;
-    let v = inv[(pos, pos)] * d[pos] * d[pos] * s2;
-    (v > 0.0 && v.is_finite()).then(|| v.sqrt())
-}
-
-/// BIC with unknown noise scale: `n ln(χ²/n) + p ln n`.
-pub fn bic(chi2: f64, n: usize, p: usize) -> f64 {
-    let n_f = n.max(1) as f64;
-    n_f * (chi2.max(1e-300) / n_f).ln() + p as f64 * n_f.ln()
-}
-
-/// Residual statistics in metres from a weighted prediction.
-pub(crate) fn residual_stats(design: &Design, pred: &DVector<f64>) -> ResidualStats {
-    let mut stats = ResidualStats::default();
-    let mut sum = [0.0; 3];
-    let mut sum_norm = 0.0;
-    for r in 0..design.rows {
-        let mut norm2 = 0.0;
-        for (ax, (acc, max)) in sum.iter_mut().zip(stats.max_abs_m.iter_mut()).enumerate() {
-            let e = 3 * r + ax;
-            let res = (design.y[e] - pred[e]) * design.sigma[e];
-            *acc += res * res;
-            norm2 += res * res;
-            *max = max.max(res.abs());
-        }
-        sum_norm += norm2;
-        stats.max_norm_m = stats.max_norm_m.max(norm2.sqrt());
-    }
-    let rows = design.rows.max(1) as f64;
-    for (rms, s) in stats.rms_m.iter_mut().zip(sum) {
-        *rms = (s / rows).sqrt();
-    }
-    stats.rms_norm_m = (sum_norm / rows).sqrt();
-    stats.rms_all_m = (sum_norm / (3.0 * rows)).sqrt();
-    stats
 }

@@ -7,7 +7,8 @@
 //! * [`design`]: the design matrix of eqs. 13–15, linear in the compliances c = 1/k and
 //!   quadratic in each centre shift δr;
 //! * [`nnls`]: Lawson–Hanson non-negative least squares (c ≥ 0);
-//! * [`fit`]: fixed-structure calibration with standard errors, intervals, correlations;
+//! * [`fit`]: fixed-structure calibration (positions and, when measured, link rotations) with
+//!   standard errors, intervals, correlations (`uncertainty`, internal);
 //! * [`search`]: the paper's test-model loop (Fig. 6, Tables A1/A2) automated with BIC;
 //! * [`plan`]: axis-by-axis and D-optimal experiment design;
 //! * [`validate`]: prediction errors against measurements, with plots and HTML;
@@ -25,12 +26,14 @@ pub mod report;
 pub mod search;
 mod shift;
 pub mod synthetic;
+mod uncertainty;
 pub mod validate;
 
 pub use data::{
-    DataError, MeasurementRow, read_for_robot, read_measurements, read_plan, write_rows,
+    DataError, MeasuredRotation, MeasurementRow, read_for_robot, read_measurements, read_plan,
+    write_rows,
 };
-pub use design::{DEFAULT_SIGMA_M, Design, EdofId, edof_label};
+pub use design::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, Design, EdofId, edof_label};
 pub use fit::{
     Calibration, EdofEstimate, ResidualStats, ShiftEstimate, Status, Structure, calibrate_fixed,
 };

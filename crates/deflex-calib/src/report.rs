@@ -108,7 +108,12 @@ pub fn stiffness_rows(cal: &Calibration) -> Vec<Vec<String>> {
             se,
             lo,
             hi,
-            if s.free {
+            if s.free && s.value_m.abs() >= crate::shift::MAX_SHIFT_M * (1.0 - 1e-9) {
+                format!(
+                    "at the ±{} m search bound: not identified",
+                    crate::shift::MAX_SHIFT_M
+                )
+            } else if s.free {
                 "fitted".into()
             } else {
                 "fixed".into()
@@ -177,7 +182,7 @@ pub fn correlation_table(cal: &Calibration) -> String {
 /// Residual summary of a calibration.
 pub fn residual_summary(cal: &Calibration) -> String {
     let r = &cal.residuals;
-    format!(
+    let mut out = format!(
         "rows {}  χ²/dof {:.3}  condition number {:.1}  BIC {:.1}\n\
          residual RMS x/y/z {:.1} / {:.1} / {:.1} µm (all {:.1} µm, norm {:.1} µm)\n\
          residual max x/y/z {:.1} / {:.1} / {:.1} µm (norm {:.1} µm)\n",
@@ -194,7 +199,16 @@ pub fn residual_summary(cal: &Calibration) -> String {
         r.max_abs_m[1] * 1e6,
         r.max_abs_m[2] * 1e6,
         r.max_norm_m * 1e6
-    )
+    );
+    if let Some(rot) = r.rotation_rms_rad {
+        let _ = writeln!(
+            out,
+            "rotation residual RMS {:.1} µrad ({} rows with a measured rotation)",
+            rot * 1e6,
+            cal.rotation_rows
+        );
+    }
+    out
 }
 
 /// Expected standard errors of a plan.
@@ -273,3 +287,62 @@ pub const VALIDATION_HEADERS: [&str; 9] = [
     "max z",
     "max norm",
 ];
+
+/// Rotation validation errors as table rows (µrad), one per model; empty when no row has a
+/// measured rotation.
+pub fn validation_rotation_rows(v: &Validation) -> Vec<Vec<String>> {
+    std::iter::once(&v.model)
+        .chain(v.baseline.as_ref())
+        .filter_map(|m| {
+            let s = &m.rotation.as_ref()?.stats;
+            let ur = |x: f64| format!("{:.1}", x * 1e6);
+            Some(vec![
+                m.name.clone(),
+                s.rows.to_string(),
+                ur(s.rms_rad[0]),
+                ur(s.rms_rad[1]),
+                ur(s.rms_rad[2]),
+                ur(s.rms_norm_rad),
+                ur(s.max_abs_rad[0]),
+                ur(s.max_abs_rad[1]),
+                ur(s.max_abs_rad[2]),
+                ur(s.max_norm_rad),
+            ])
+        })
+        .collect()
+}
+
+/// Headers of [`validation_rotation_rows`].
+pub const VALIDATION_ROTATION_HEADERS: [&str; 10] = [
+    "model",
+    "rows",
+    "rot RMS x [µrad]",
+    "RMS y",
+    "RMS z",
+    "RMS norm",
+    "max x",
+    "max y",
+    "max z",
+    "max norm",
+];
+
+/// One line per model with the rotation prediction errors, `None` when no row has a measured
+/// rotation.
+pub fn validation_rotation_summary(v: &Validation) -> Option<String> {
+    let mut out = String::new();
+    for m in std::iter::once(&v.model).chain(v.baseline.as_ref()) {
+        let s = &m.rotation.as_ref()?.stats;
+        let _ = writeln!(
+            out,
+            "rotation errors {} ({} rows): RMS x/y/z {:.1} / {:.1} / {:.1} µrad (norm {:.1} µrad), max norm {:.1} µrad",
+            m.name,
+            s.rows,
+            s.rms_rad[0] * 1e6,
+            s.rms_rad[1] * 1e6,
+            s.rms_rad[2] * 1e6,
+            s.rms_norm_rad * 1e6,
+            s.max_norm_rad * 1e6
+        );
+    }
+    Some(out)
+}

@@ -1,10 +1,12 @@
 //! Synthetic measurements from a known model: the displacement of each planned point under its
 //! load case by the VJM transfer (eq. 15 generalised to any point/load link), optionally plus a
-//! coupling term the diagonal-K_θ family cannot represent, plus Gaussian tracker noise.
+//! coupling term the diagonal-K_θ family cannot represent, plus Gaussian tracker noise;
+//! optionally also the small rotation of the measured point's link (a 6-DoF probe), with its
+//! own noise.
 //! Used by the recovery tests, the benches and demos.
 
 use crate::CalibError;
-use crate::data::MeasurementRow;
+use crate::data::{MeasuredRotation, MeasurementRow};
 use crate::design::EdofId;
 use crate::plan::standard_points;
 use deflex_model::{Data, Robot, Wrench};
@@ -34,7 +36,7 @@ pub struct SyntheticOptions {
     pub seed: u64,
     /// Coupling terms added to the truth.
     pub coupling: Vec<Coupling>,
-    /// Write `sigma_m` into the rows.
+    /// Write `sigma_m` (and `sigma_rad` in [`measure_with_rotations`]) into the rows.
     pub record_sigma: bool,
 }
 
@@ -55,11 +57,38 @@ pub fn measure(
     plan: &[MeasurementRow],
     options: &SyntheticOptions,
 ) -> Result<Vec<MeasurementRow>, CalibError> {
+    measure_rows(truth, plan, options, None)
+}
+
+/// [`measure`], and also the small rotation of each measured point's link (`rotation_rad`, as
+/// a 6-DoF probe sees it) plus Gaussian noise of `rotation_noise_sigma_rad` per axis (rad),
+/// with `sigma_rad` recorded when [`SyntheticOptions::record_sigma`]. The rotation noise has
+/// its own random stream: the displacements are exactly those of [`measure`].
+pub fn measure_with_rotations(
+    truth: &Robot,
+    plan: &[MeasurementRow],
+    options: &SyntheticOptions,
+    rotation_noise_sigma_rad: f64,
+) -> Result<Vec<MeasurementRow>, CalibError> {
+    measure_rows(truth, plan, options, Some(rotation_noise_sigma_rad))
+}
+
+fn measure_rows(
+    truth: &Robot,
+    plan: &[MeasurementRow],
+    options: &SyntheticOptions,
+    rotation_noise_sigma_rad: Option<f64>,
+) -> Result<Vec<MeasurementRow>, CalibError> {
     // Salted so that the noise stream never equals a campaign generated with the same seed
     // (which would correlate the noise with the design and bias the fit).
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed ^ 0x9E37_79B9_7F4A_7C15);
     let noise = Normal::new(0.0, options.noise_sigma_m.max(0.0))
         .map_err(|e| CalibError::Invalid(format!("noise: {e}")))?;
+    let mut rotation_rng = ChaCha8Rng::seed_from_u64(options.seed ^ 0x6A09_E667_F3BC_C908);
+    let rotation_noise = rotation_noise_sigma_rad
+        .map(|s| Normal::new(0.0, s.max(0.0)))
+        .transpose()
+        .map_err(|e| CalibError::Invalid(format!("rotation noise: {e}")))?;
     let mut data = Data::new();
     let mut out = Vec::with_capacity(plan.len());
     let mut last_q: Option<Vec<f64>> = None;
@@ -73,10 +102,7 @@ pub fn measure(
         let p = Vector3::from(row.point_m);
         let a = Vector3::from(row.load_point_m);
         let w = Wrench::from_row_slice(&row.wrench);
-        let mut d = truth
-            .point_displacement(&data, &p, row.point_link, &a, row.load_link, &w)
-            .fixed_rows::<3>(0)
-            .into_owned();
+        let mut d = truth.point_displacement(&data, &p, row.point_link, &a, row.load_link, &w);
         let reach = row.point_link.min(row.load_link);
         for c in &options.coupling {
             if c.a.0.link_index() > reach || c.b.0.link_index() > reach {
@@ -90,7 +116,7 @@ pub fn measure(
             let (ja_p, jb_p) = (screw(c.a, &p), screw(c.b, &p));
             let (ja_a, jb_a) = (screw(c.a, &a), screw(c.b, &a));
             let delta = (ja_p * jb_a.dot(&w) + jb_p * ja_a.dot(&w)) * c.compliance;
-            d += delta.fixed_rows::<3>(0);
+            d += delta;
         }
         let mut r = row.clone();
         r.displacement_m = Some([
@@ -100,6 +126,19 @@ pub fn measure(
         ]);
         if options.record_sigma {
             r.sigma_m = Some(options.noise_sigma_m);
+        }
+        if let Some(noise) = rotation_noise {
+            r.rotation_rad = Some(MeasuredRotation {
+                value_rad: [
+                    d[3] + noise.sample(&mut rotation_rng),
+                    d[4] + noise.sample(&mut rotation_rng),
+                    d[5] + noise.sample(&mut rotation_rng),
+                ],
+                sigma_rad: options
+                    .record_sigma
+                    .then_some(rotation_noise_sigma_rad)
+                    .flatten(),
+            });
         }
         out.push(r);
     }

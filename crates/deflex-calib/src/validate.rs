@@ -1,6 +1,8 @@
 //! Validation: prediction errors of a model (and optionally a baseline) against measurements
 //! (the paper's Section 3.2), with predicted-vs-measured plots (Figs. 8–10, 12) and error
-//! heatmaps over the measured grid (Figs. 11, 13) as PNG, gathered in one HTML page.
+//! heatmaps over the measured grid (Figs. 11, 13) as PNG, gathered in one HTML page. When rows
+//! carry a measured link rotation, its prediction errors are reported too (statistics only; the
+//! plots stay position-only).
 
 use crate::CalibError;
 use crate::data::MeasurementRow;
@@ -24,6 +26,37 @@ pub struct ErrorStats {
     pub max_norm_m: f64,
 }
 
+/// Rotation error statistics (measured − predicted), radians, over the rows with a measured
+/// rotation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RotationStats {
+    /// Number of rows with a measured rotation.
+    pub rows: usize,
+    /// RMS per axis.
+    pub rms_rad: [f64; 3],
+    /// Largest absolute error per axis.
+    pub max_abs_rad: [f64; 3],
+    /// Mean (bias) per axis.
+    pub mean_rad: [f64; 3],
+    /// RMS of the error norm.
+    pub rms_norm_rad: f64,
+    /// Largest error norm.
+    pub max_norm_rad: f64,
+}
+
+/// Rotation predictions and errors of one model, for the rows with a measured rotation.
+#[derive(Clone, Debug)]
+pub struct RotationErrors {
+    /// Index of each row used (rows with a measured rotation).
+    pub rows: Vec<usize>,
+    /// Predicted rotation per used row (rad).
+    pub predicted_rad: Vec<[f64; 3]>,
+    /// Measured − predicted per used row (rad).
+    pub errors_rad: Vec<[f64; 3]>,
+    /// Statistics.
+    pub stats: RotationStats,
+}
+
 /// Predictions and errors of one model.
 #[derive(Clone, Debug)]
 pub struct ModelErrors {
@@ -35,6 +68,8 @@ pub struct ModelErrors {
     pub errors: Vec<[f64; 3]>,
     /// Statistics.
     pub stats: ErrorStats,
+    /// Rotation errors, when some rows have a measured rotation.
+    pub rotation: Option<RotationErrors>,
 }
 
 /// A validation of a model on measurements.
@@ -56,6 +91,14 @@ pub struct Validation {
 
 /// VJM prediction (eq. 15, any point and load link) of every row's displacement.
 pub fn predict(robot: &Robot, rows: &[MeasurementRow]) -> Result<Vec<[f64; 3]>, CalibError> {
+    Ok(predict_full(robot, rows)?
+        .into_iter()
+        .map(|d| [d[0], d[1], d[2]])
+        .collect())
+}
+
+/// VJM prediction of every row's displacement and link rotation `[δp; δφ]` (m, rad).
+pub fn predict_full(robot: &Robot, rows: &[MeasurementRow]) -> Result<Vec<[f64; 6]>, CalibError> {
     let mut data = Data::new();
     let mut last: Option<&[f64]> = None;
     let mut out = Vec::with_capacity(rows.len());
@@ -89,7 +132,7 @@ pub fn predict(robot: &Robot, rows: &[MeasurementRow]) -> Result<Vec<[f64; 3]>, 
             row.load_link,
             &Wrench::from_row_slice(&row.wrench),
         );
-        out.push([d.x, d.y, d.z]);
+        out.push([d[0], d[1], d[2], d[3], d[4], d[5]]);
     }
     Ok(out)
 }
@@ -116,8 +159,54 @@ pub fn validate(
         }
         measured.push(d);
     }
+    let rotation_rows: Vec<usize> = (0..rows.len())
+        .filter(|&i| rows[i].rotation_rad.is_some())
+        .collect();
+    for &i in &rotation_rows {
+        if !rows[i]
+            .rotation_rad
+            .is_some_and(|m| m.value_rad.iter().all(|v| v.is_finite()))
+        {
+            return Err(CalibError::Invalid(format!(
+                "row {}: rotation is NaN or infinite",
+                i + 1
+            )));
+        }
+    }
     let errors_of = |robot: &Robot| -> Result<ModelErrors, CalibError> {
-        let predicted = predict(robot, rows)?;
+        let full = predict_full(robot, rows)?;
+        let rotation = (!rotation_rows.is_empty()).then(|| {
+            let predicted_rad: Vec<[f64; 3]> = rotation_rows
+                .iter()
+                .map(|&i| [full[i][3], full[i][4], full[i][5]])
+                .collect();
+            let errors_rad: Vec<[f64; 3]> = rotation_rows
+                .iter()
+                .zip(&predicted_rad)
+                .map(|(&i, p)| {
+                    let m = rows[i]
+                        .rotation_rad
+                        .map(|m| m.value_rad)
+                        .unwrap_or_default();
+                    [m[0] - p[0], m[1] - p[1], m[2] - p[2]]
+                })
+                .collect();
+            let s = stats(&errors_rad);
+            RotationErrors {
+                rows: rotation_rows.clone(),
+                predicted_rad,
+                stats: RotationStats {
+                    rows: errors_rad.len(),
+                    rms_rad: s.rms_m,
+                    max_abs_rad: s.max_abs_m,
+                    mean_rad: s.mean_m,
+                    rms_norm_rad: s.rms_norm_m,
+                    max_norm_rad: s.max_norm_m,
+                },
+                errors_rad,
+            }
+        });
+        let predicted: Vec<[f64; 3]> = full.iter().map(|d| [d[0], d[1], d[2]]).collect();
         let errors: Vec<[f64; 3]> = predicted
             .iter()
             .zip(&measured)
@@ -128,6 +217,7 @@ pub fn validate(
             stats: stats(&errors),
             predicted,
             errors,
+            rotation,
         })
     };
     let model_errors = errors_of(model)?;
@@ -143,7 +233,7 @@ pub fn validate(
     })
 }
 
-/// Statistics of a set of 3D errors.
+/// Statistics of a set of 3D errors (any unit; the fields are named for metres).
 pub fn stats(errors: &[[f64; 3]]) -> ErrorStats {
     let mut s = ErrorStats::default();
     let n = errors.len().max(1) as f64;
@@ -206,6 +296,13 @@ pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibErr
         ]);
     }
     html.table(&headers, &table);
+    if v.model.rotation.is_some() {
+        html.section("Rotation errors (measured − predicted)");
+        html.table(
+            &crate::report::VALIDATION_ROTATION_HEADERS,
+            &crate::report::validation_rotation_rows(v),
+        );
+    }
     html.paragraph(format!(
         "{} measured points; RMS of the measured displacement x/y/z: {:.4} / {:.4} / {:.4} mm.",
         v.measured.len(),
