@@ -85,6 +85,8 @@ pub struct Validation {
     pub points: Vec<[f64; 3]>,
     /// Point label per row.
     pub labels: Vec<String>,
+    /// Applied force magnitude per row (N): heatmaps are drawn per load level.
+    pub load_n: Vec<f64>,
     /// RMS of the measured displacement per axis (m), for scale.
     pub measured_rms_m: [f64; 3],
 }
@@ -228,6 +230,10 @@ pub fn validate(
         baseline,
         points: rows.iter().map(|r| r.point_m).collect(),
         labels: rows.iter().map(|r| r.point.clone()).collect(),
+        load_n: rows
+            .iter()
+            .map(|r| (r.wrench[0].powi(2) + r.wrench[1].powi(2) + r.wrench[2].powi(2)).sqrt())
+            .collect(),
         measured,
         measured_rms_m,
     })
@@ -327,7 +333,7 @@ pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibErr
                 format!("predicted δp{} [mm]", axes[ax]),
             )
             .size(700, 700);
-            parity_plot(&path, &spec, &pred, &meas, &m.name).map_err(report_err)?;
+            parity_plot(&path, &spec, &pred, &meas, tag).map_err(report_err)?;
             html.image(
                 &path,
                 format!("Predicted vs measured δp{} ({tag})", axes[ax]),
@@ -357,57 +363,69 @@ pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibErr
     );
     files.push(path);
 
-    // Heatmaps of the error norm over the measured points (Figs. 11, 13), common colour scale.
+    // Heatmaps of the error norm over the measured points (Figs. 11, 13): one per model and per
+    // load level (the paper's 600 N and 1100 N grids share their points), each with its own
+    // colour scale so that a good model's pattern stays visible beside a poor one.
     html.section("Error over the measured grid");
     // The TCP grid when the TCP was measured (as in the paper), else every point.
-    let keep: Vec<bool> = if v.labels.iter().any(|l| l == "TCP") {
-        v.labels.iter().map(|l| l == "TCP").collect()
-    } else {
-        vec![true; v.labels.len()]
-    };
-    let pick = |values: Vec<f64>| -> Vec<f64> {
-        values
-            .into_iter()
-            .zip(&keep)
-            .filter(|(_, k)| **k)
-            .map(|(x, _)| x)
-            .collect()
-    };
-    let xs: Vec<f64> = pick(v.points.iter().map(|p| p[0] * 1e3).collect());
-    let ys: Vec<f64> = pick(v.points.iter().map(|p| p[1] * 1e3).collect());
-    let norm = |m: &ModelErrors| -> Vec<f64> {
-        pick(
-            m.errors
-                .iter()
-                .map(|e| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e3)
-                .collect(),
-        )
-    };
-    let mut vmax: f64 = norm(&v.model).iter().copied().fold(0.0, f64::max);
-    if let Some(b) = &v.baseline {
-        vmax = vmax.max(norm(b).iter().copied().fold(0.0, f64::max));
+    let tcp_only = v.labels.iter().any(|l| l == "TCP");
+    let mut levels: Vec<f64> = Vec::new();
+    for &f in &v.load_n {
+        let level = (f / 10.0).round() * 10.0;
+        if !levels.iter().any(|l| (l - level).abs() < 1e-9) {
+            levels.push(level);
+        }
     }
-    for (tag, m) in
-        std::iter::once(("model", &v.model)).chain(v.baseline.as_ref().map(|b| ("baseline", b)))
-    {
-        let path = dir.join(format!("heatmap_{tag}.png"));
-        let spec = PlotSpec::new(format!("|error| — {}", m.name), "x [mm]", "y [mm]")
-            .size(800, 700)
-            .color_range(0.0, vmax.max(1e-9));
-        scatter_heatmap(
-            &path,
-            &spec,
-            &xs,
-            &ys,
-            &norm(m),
-            "|measured − predicted| [mm]",
-        )
-        .map_err(report_err)?;
-        html.image(
-            &path,
-            format!("Error norm over the measured points ({tag}; cf. Figs. 11, 13)"),
-        );
-        files.push(path);
+    levels.sort_by(f64::total_cmp);
+    let many_levels = levels.len() > 4;
+    for level in if many_levels { vec![f64::NAN] } else { levels } {
+        let keep: Vec<usize> = (0..v.labels.len())
+            .filter(|&i| !tcp_only || v.labels[i] == "TCP")
+            .filter(|&i| {
+                level.is_nan() || ((v.load_n[i] / 10.0).round() * 10.0 - level).abs() < 1e-9
+            })
+            .collect();
+        if keep.is_empty() {
+            continue;
+        }
+        let xs: Vec<f64> = keep.iter().map(|&i| v.points[i][0] * 1e3).collect();
+        let ys: Vec<f64> = keep.iter().map(|&i| v.points[i][1] * 1e3).collect();
+        let load = if level.is_nan() {
+            "all loads".to_string()
+        } else {
+            format!("{level:.0} N")
+        };
+        let file_tag = if level.is_nan() {
+            "all".to_string()
+        } else {
+            format!("{level:.0}N")
+        };
+        for (tag, m) in
+            std::iter::once(("model", &v.model)).chain(v.baseline.as_ref().map(|b| ("baseline", b)))
+        {
+            let norm: Vec<f64> = keep
+                .iter()
+                .map(|&i| {
+                    let e = m.errors[i];
+                    (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e3
+                })
+                .collect();
+            let top = norm.iter().copied().fold(0.0, f64::max).max(1e-9);
+            let path = dir.join(format!("heatmap_{tag}_{file_tag}.png"));
+            let spec = PlotSpec::new(format!("|error| of the {tag}, {load}"), "x [mm]", "y [mm]")
+                .size(800, 700)
+                .color_range(0.0, top);
+            scatter_heatmap(&path, &spec, &xs, &ys, &norm, "|measured − predicted| [mm]")
+                .map_err(report_err)?;
+            html.image(
+                &path,
+                format!(
+                    "Error norm over the measured points, {load}: {} (cf. Figs. 11, 13)",
+                    m.name
+                ),
+            );
+            files.push(path);
+        }
     }
     let page = dir.join("validation.html");
     html.write(&page).map_err(report_err)?;

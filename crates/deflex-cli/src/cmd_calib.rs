@@ -195,11 +195,19 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
             (result.calibration, result.steps, Some(result.stop_reason))
         };
     let elapsed = t0.elapsed();
-    let model = cal.to_robot(&start);
-    let mut model = model;
-    if !model.name.contains("calibrated") {
-        model.name = format!("{} (calibrated)", model.name);
-    }
+    let mut model = cal.to_robot(&start);
+    // The geometry is the start model's; the elasticity is new: say so in the name.
+    let geometry = model
+        .name
+        .split(" — calibrated")
+        .next()
+        .unwrap_or("")
+        .to_string();
+    model.name = format!(
+        "{geometry} — calibrated from {} ({})",
+        args.data.display(),
+        cal.structure.label()
+    );
     write_file(&args.out, &robot_to_toml(&model))?;
     let it_rows = iteration_rows(&steps);
     let st_rows = stiffness_rows(&cal);

@@ -8,8 +8,8 @@ use plotters::prelude::*;
 
 use crate::colormap::palette_rgb;
 use crate::render::{
-    check_range, draw_axes, draw_legend, err, finite_extent, fmt_tick, padded, render, title_style,
-    titled_area,
+    check_range, draw_axes, draw_legend, err, finite_extent, fitted_font_size, fmt_tick, padded,
+    render, titled_area,
 };
 use crate::{PlotSpec, ReportError, Series, SeriesStyle};
 
@@ -178,7 +178,12 @@ fn draw_chart<DB: DrawingBackend>(
     colors: &[RGBColor],
 ) -> Result<(), String> {
     let mut chart = ChartBuilder::on(area)
-        .caption(&spec.title, title_style())
+        .caption(
+            &spec.title,
+            (crate::font::FAMILY, fitted_font_size(area, &spec.title, 24))
+                .into_font()
+                .color(&BLACK),
+        )
         .margin(14)
         .x_label_area_size(58)
         .y_label_area_size(86)

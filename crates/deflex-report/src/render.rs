@@ -138,9 +138,29 @@ pub(crate) fn titled_area<DB: DrawingBackend>(
     if title.is_empty() {
         return Ok(root.clone());
     }
+    let size = fitted_font_size(root, title, size);
     root.margin(10, 0, 0, 0)
         .titled(title, (crate::font::FAMILY, size).into_font().color(&BLACK))
         .map_err(err)
+}
+
+/// The largest font size ≤ `preferred` (and ≥ 10) at which `text` fits the width of `area`
+/// with a 10 px margin on each side, so long titles shrink instead of being clipped.
+pub(crate) fn fitted_font_size<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    text: &str,
+    preferred: u32,
+) -> u32 {
+    let (width, _) = area.dim_in_pixel();
+    let mut size = preferred;
+    while size > 10 {
+        let style: TextStyle = (crate::font::FAMILY, size).into_font().into();
+        match area.estimate_text_size(text, &style) {
+            Ok((text_width, _)) if text_width + 20 > width => size -= 1,
+            _ => break,
+        }
+    }
+    size
 }
 
 /// Draws the axes of a 2D chart: axis descriptions from `spec`, tick labels formatted for the
@@ -186,11 +206,6 @@ pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .margin(10)
         .draw()
         .map_err(err)
-}
-
-/// Title text style.
-pub(crate) fn title_style() -> TextStyle<'static> {
-    (crate::font::FAMILY, 24).into_font().color(&BLACK)
 }
 
 /// Axis description (label) text style.
