@@ -38,7 +38,7 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
          Johra et al., Robotics 2022, 11, 48.",
     );
     html.paragraph(format!(
-        "Seed {}{}. Reproduce with `deflex demo --seed {}{}`. Data behind every number: the CSV \
+        "Seed {}{}. Reproduce with: deflex demo --seed {}{}. Data behind every number: the CSV \
          files beside this page.",
         s.seed,
         if s.quick {
