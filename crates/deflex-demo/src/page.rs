@@ -118,7 +118,14 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
             ]
         })
         .collect();
-    html.paragraph("Stiffnesses in 10⁶ N·m/rad (shifts in mm). \"Twin plant\" is the simulated robot's hidden linear truth, shown only to judge the identification; the twin also has a J2/J3 coupling and wrist lost motion that no VJM model represents.");
+    html.paragraph(
+        "Stiffnesses in 10⁶ N·m/rad (shifts in mm). \"Twin plant\" is the simulated robot's \
+         hidden linear truth, shown only to judge the identification. The 95 % intervals account \
+         for measurement noise, not for model-form error: the twin also has a J2/J3 coupling and \
+         wrist lost motion that no VJM model represents, and a base tilt that TCP-side data \
+         cannot separate from J1.x/y, so some identified values lie outside their interval \
+         around the plant value while the model still predicts well (validation below).",
+    );
     html.table(
         &[
             "eDoF",
