@@ -10,8 +10,9 @@
 //!    `c_e / c_e,nominal`, up to the requested number of load cases.
 //!
 //! The expected standard error of every stiffness follows from `F⁻¹` (relative SE of k equals
-//! relative SE of c to first order). Each load case measures the TCP and two mid-arm points
-//! ([`standard_points`]), like the paper's M1..M3.
+//! relative SE of c to first order). Each load case measures the TCP, two mid-arm points
+//! ([`standard_points`]) and a reflector on the base casting (`M0`, [`PlanOptions::base_point`]),
+//! like the paper's M1..M3.
 
 use crate::CalibError;
 use crate::data::MeasurementRow;
@@ -38,6 +39,10 @@ pub struct PlanOptions {
     /// Plan for every eDoF of the model family (x, y, z per joint, base x/y tilt), not only the
     /// model's: what the structure search needs. Absent eDoFs get the median stiffness.
     pub full_family: bool,
+    /// Also measure a reflector `M0` on the base casting in every load case: only base eDoFs
+    /// move it, which separates a baseplate tilt from the x/y eDoFs of joint 1 (the paper's M1
+    /// saw the tilt, Section 3.1).
+    pub base_point: bool,
 }
 
 impl Default for PlanOptions {
@@ -49,6 +54,7 @@ impl Default for PlanOptions {
             noise_sigma_m: 15e-6,
             seed: 1,
             full_family: false,
+            base_point: true,
         }
     }
 }
@@ -119,6 +125,24 @@ pub fn standard_points(robot: &Robot, data: &Data) -> Vec<(String, usize, Vector
     out
 }
 
+/// Where the base reflector `M0` sits in R0: 0.3 m forward of and 0.3 m below the origin of R0,
+/// on the base casting under the shoulder.
+pub const BASE_POINT_IN_R0_M: [f64; 3] = [0.3, 0.0, -0.3];
+
+/// The `M0` row of a load case (same configuration and load as `template`).
+fn base_point_row(template: &MeasurementRow, data: &Data) -> MeasurementRow {
+    let [x, y, z] = BASE_POINT_IN_R0_M;
+    let p = data
+        .link_frame(0)
+        .transform_point(&nalgebra::Point3::new(x, y, z));
+    MeasurementRow {
+        point: "M0".to_string(),
+        point_link: 0,
+        point_m: [p.x, p.y, p.z],
+        ..template.clone()
+    }
+}
+
 /// Plan a campaign for `robot` (its geometry, eDoFs, stiffnesses and centre shifts are the
 /// nominal model).
 pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, CalibError> {
@@ -153,7 +177,11 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
         for dir in 0..6 {
             let mut f = Vector3::zeros();
             f[dir / 2] = if dir % 2 == 0 { 1.0 } else { -1.0 } * options.max_force_n;
-            cand_rows.push(case_rows(robot, &data, &q, &f, "", None));
+            let mut rows = case_rows(robot, &data, &q, &f, "", None);
+            if options.base_point {
+                rows.push(base_point_row(&rows[0], &data));
+            }
+            cand_rows.push(rows);
         }
     }
     let flat: Vec<MeasurementRow> = cand_rows

@@ -82,6 +82,9 @@ pub struct PlanArgs {
     /// only the model's.
     #[arg(long)]
     pub full_family: bool,
+    /// Do not measure the base reflector M0 (which separates a baseplate tilt from joint 1).
+    #[arg(long)]
+    pub no_base_point: bool,
     /// Tracker noise (µm) for the expected standard errors.
     #[arg(long, default_value_t = 15.0)]
     pub noise_um: f64,
@@ -353,6 +356,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         noise_sigma_m: args.noise_um * 1e-6,
         seed: args.seed,
         full_family: args.full_family,
+        base_point: !args.no_base_point,
     };
     let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
     write_rows(&args.out, &plan.rows).map_err(|e| e.to_string())?;

@@ -87,6 +87,8 @@ pub fn campaign(
             configurations: 300,
             full_family: true,
             seed,
+            // The recovery fixtures measure the TCP and the mid-arm points only.
+            base_point: false,
             ..PlanOptions::default()
         },
     )
