@@ -405,6 +405,50 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         "{}",
         render_table(&EXPECTED_SE_HEADERS, &expected_se_rows(&plan))
     );
+    if args.load_cases < cases {
+        println!(
+            "note: {cases} load cases instead of the {} asked for: every eDoF gets its own axis-by-axis case",
+            args.load_cases
+        );
+    }
+    println!(
+        "\nLoad cases for the technician (joint values in degrees; force at the TCP, world axes):"
+    );
+    print!(
+        "{}",
+        render_table(
+            &["case", "q [deg]", "force [N]", "measure", "why"],
+            &technician_rows(&plan.rows)
+        )
+    );
     println!("wrote {}", args.out.display());
     Ok(())
+}
+
+/// One line per load case: configuration in degrees, force vector, points to measure, purpose.
+fn technician_rows(rows: &[deflex_calib::MeasurementRow]) -> Vec<Vec<String>> {
+    let mut out: Vec<Vec<String>> = Vec::new();
+    for row in rows {
+        match out.last_mut() {
+            Some(last) if last[0] == row.load_case => {
+                last[3] = format!("{}, {}", last[3], row.point);
+            }
+            _ => {
+                let q: Vec<String> = row
+                    .q_rad
+                    .iter()
+                    .map(|q| format!("{:.1}", q.to_degrees()))
+                    .collect();
+                let f = row.wrench;
+                out.push(vec![
+                    row.load_case.clone(),
+                    q.join(", "),
+                    format!("({:.0}, {:.0}, {:.0})", f[0], f[1], f[2]),
+                    row.point.clone(),
+                    row.purpose.clone().unwrap_or_default(),
+                ]);
+            }
+        }
+    }
+    out
 }
