@@ -74,8 +74,8 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
 
     html.section("1. Calibration campaign plan");
     html.paragraph(format!(
-        "{} load cases ({} measured points: the TCP plus points on links 2 and 3, like the paper's \
-         M1–M3), chosen axis by axis and then D-optimally from random reachable poses and load \
+        "{} load cases ({} measured points: the TCP, points on links 2 and 3 and a reflector on the \
+         base casting, like the paper's M1–M3), chosen axis by axis and then D-optimally from random reachable poses and load \
          directions, loads up to 1400 N. Expected standard error of each stiffness at 15 µm tracker noise:",
         s.campaign_load_cases, s.campaign_rows
     ));
