@@ -259,19 +259,32 @@ pub fn validation_rows(v: &Validation) -> Vec<Vec<String>> {
         .chain(v.baseline.as_ref())
         .map(|m| {
             let s = &m.stats;
-            let mm = |x: f64| format!("{:.4}", x * 1e3);
-            vec![
-                m.name.clone(),
-                mm(s.rms_m[0]),
-                mm(s.rms_m[1]),
-                mm(s.rms_m[2]),
-                mm(s.rms_norm_m),
-                mm(s.max_abs_m[0]),
-                mm(s.max_abs_m[1]),
-                mm(s.max_abs_m[2]),
-                mm(s.max_norm_m),
-            ]
+            let mut row = vec![m.name.clone()];
+            row.extend(stat_cells(
+                s.rms_m,
+                s.rms_norm_m,
+                s.max_abs_m,
+                s.max_norm_m,
+                |x| format!("{:.4}", x * 1e3),
+            ));
+            row
         })
+        .collect()
+}
+
+/// RMS x, y, z, RMS norm, max x, y, z, max norm, each formatted by `fmt`.
+fn stat_cells(
+    rms: [f64; 3],
+    rms_norm: f64,
+    max_abs: [f64; 3],
+    max_norm: f64,
+    fmt: impl Fn(f64) -> String,
+) -> Vec<String> {
+    rms.iter()
+        .chain(std::iter::once(&rms_norm))
+        .chain(max_abs.iter())
+        .chain(std::iter::once(&max_norm))
+        .map(|&x| fmt(x))
         .collect()
 }
 
@@ -295,19 +308,15 @@ pub fn validation_rotation_rows(v: &Validation) -> Vec<Vec<String>> {
         .chain(v.baseline.as_ref())
         .filter_map(|m| {
             let s = &m.rotation.as_ref()?.stats;
-            let ur = |x: f64| format!("{:.1}", x * 1e6);
-            Some(vec![
-                m.name.clone(),
-                s.rows.to_string(),
-                ur(s.rms_rad[0]),
-                ur(s.rms_rad[1]),
-                ur(s.rms_rad[2]),
-                ur(s.rms_norm_rad),
-                ur(s.max_abs_rad[0]),
-                ur(s.max_abs_rad[1]),
-                ur(s.max_abs_rad[2]),
-                ur(s.max_norm_rad),
-            ])
+            let mut row = vec![m.name.clone(), s.rows.to_string()];
+            row.extend(stat_cells(
+                s.rms_rad,
+                s.rms_norm_rad,
+                s.max_abs_rad,
+                s.max_norm_rad,
+                |x| format!("{:.1}", x * 1e6),
+            ));
+            Some(row)
         })
         .collect()
 }

@@ -274,34 +274,10 @@ pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibErr
     let mut files = Vec::new();
     let mut html = HtmlReport::new(format!("Validation of {}", v.model.name));
     html.section("Prediction errors (measured − predicted)");
-    let headers = [
-        "model",
-        "RMS x [mm]",
-        "RMS y [mm]",
-        "RMS z [mm]",
-        "RMS norm [mm]",
-        "max x [mm]",
-        "max y [mm]",
-        "max z [mm]",
-        "max norm [mm]",
-    ];
-    let mut table = Vec::new();
-    for m in std::iter::once(&v.model).chain(v.baseline.as_ref()) {
-        let s = &m.stats;
-        let mm = |x: f64| format!("{:.4}", x * 1e3);
-        table.push(vec![
-            m.name.clone(),
-            mm(s.rms_m[0]),
-            mm(s.rms_m[1]),
-            mm(s.rms_m[2]),
-            mm(s.rms_norm_m),
-            mm(s.max_abs_m[0]),
-            mm(s.max_abs_m[1]),
-            mm(s.max_abs_m[2]),
-            mm(s.max_norm_m),
-        ]);
-    }
-    html.table(&headers, &table);
+    html.table(
+        &crate::report::VALIDATION_HEADERS,
+        &crate::report::validation_rows(v),
+    );
     if v.model.rotation.is_some() {
         html.section("Rotation errors (measured − predicted)");
         html.table(
