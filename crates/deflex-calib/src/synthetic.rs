@@ -110,8 +110,7 @@ fn measure_rows(
             }
             let screw = |id: EdofId, x: &Vector3<f64>| -> Vector6<f64> {
                 let (v, o) = data.edof_axis_center(truth, id.0, id.1);
-                let l = v.cross(&(x - o));
-                Vector6::new(l.x, l.y, l.z, v.x, v.y, v.z)
+                deflex_model::edof_screw(&v, &o, x)
             };
             let (ja_p, jb_p) = (screw(c.a, &p), screw(c.b, &p));
             let (ja_a, jb_a) = (screw(c.a, &a), screw(c.b, &a));

@@ -149,7 +149,7 @@ impl Robot {
             }
             let frame = &data.joint_frames[i];
             let rotation = frame.rotation.matrix();
-            let center = frame.translation.vector + rotation.column(2) * joint.center_shift;
+            let center = crate::kinematics::edof_center(frame, joint.center_shift);
             for axis in Axis::ALL {
                 if let Some(stiffness) = joint.stiffness.get(axis) {
                     let edof = Edof {

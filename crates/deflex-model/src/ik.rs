@@ -63,9 +63,9 @@ impl Robot {
     ) -> Result<IkSolution, ModelError> {
         let n = self.joint_count();
         let mut data = Data::new();
-        self.forward_kinematics(&mut data, seed)?;
         let mut q: Vec<f64> = seed.to_vec();
         self.clamp_to_limits(&mut q);
+        // Also checks that the seed has one value per joint.
         self.forward_kinematics(&mut data, &q)?;
         let weight = options.orientation_weight_m;
         let pose_error = |data: &Data| -> Vector6<f64> {

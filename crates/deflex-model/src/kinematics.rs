@@ -1,5 +1,6 @@
 //! Forward kinematics (eq. 1) and the geometric Jacobian of the motorised joints.
 
+use crate::compliance::edof_screw;
 use crate::error::QLengthError;
 use crate::robot::Robot;
 use crate::spatial::{Pose, rot_z};
@@ -79,11 +80,9 @@ impl Data {
             }
             EdofSite::Joint(i) => {
                 let frame = &self.joint_frames[i - 1];
-                let rotation = frame.rotation.matrix();
-                let z = rotation.column(2);
                 (
-                    rotation.column(axis.index()).into_owned(),
-                    frame.translation.vector + z * robot.joints[i - 1].center_shift,
+                    frame.rotation.matrix().column(axis.index()).into_owned(),
+                    edof_center(frame, robot.joints[i - 1].center_shift),
                 )
             }
         }
@@ -121,25 +120,38 @@ impl Robot {
         Ok(data.tcp)
     }
 
-    /// Geometric Jacobian (6×N) of the motorised joints at a world point attached to the last
-    /// link (the TCP when `point` is `data.tcp_position()`): column i is `[z_i × (p − O_i); z_i]`,
-    /// mapping joint rates to `[linear velocity; angular velocity]` in world axes.
-    pub fn geometric_jacobian(&self, data: &Data, point: &Vector3<f64>) -> DMatrix<f64> {
-        let n = self.joints.len();
-        let mut jacobian = DMatrix::zeros(6, n);
-        for i in 0..n {
-            let column = joint_screw(&data.joint_frames[i], point);
-            jacobian.column_mut(i).copy_from(&column);
+    /// Columns of the geometric Jacobian of the motorised joints at a world point attached to
+    /// the last link: column i is `[z_i × (p − O_i); z_i]`, mapping joint rates to
+    /// `[linear velocity; angular velocity]` in world axes. The first `joint_count` entries are
+    /// filled; fixed-size and allocation-free for per-cycle use.
+    pub fn geometric_jacobian_columns(
+        &self,
+        data: &Data,
+        point: &Vector3<f64>,
+    ) -> [Vector6<f64>; MAX_JOINTS] {
+        let mut columns = [Vector6::zeros(); MAX_JOINTS];
+        for (column, frame) in columns
+            .iter_mut()
+            .zip(&data.joint_frames[..self.joints.len()])
+        {
+            let z = frame.rotation.matrix().column(2).into_owned();
+            *column = edof_screw(&z, &frame.translation.vector, point);
         }
-        jacobian
+        columns
+    }
+
+    /// Geometric Jacobian (6×N) of the motorised joints at a world point attached to the last
+    /// link (the TCP when `point` is `data.tcp_position()`), as a matrix (allocates; see
+    /// [`Robot::geometric_jacobian_columns`] for the per-cycle form).
+    pub fn geometric_jacobian(&self, data: &Data, point: &Vector3<f64>) -> DMatrix<f64> {
+        let columns = self.geometric_jacobian_columns(data, point);
+        DMatrix::from_fn(6, self.joints.len(), |r, c| columns[c][r])
     }
 }
 
-/// `[z × (p − O); z]` for a joint frame.
+/// Centre O_i of the eDoFs of a joint: the frame origin shifted `center_shift` (the paper's δr)
+/// along z_i.
 #[inline]
-fn joint_screw(frame: &Pose, point: &Vector3<f64>) -> Vector6<f64> {
-    let z = frame.rotation.matrix().column(2).into_owned();
-    let lever = point - frame.translation.vector;
-    let linear = z.cross(&lever);
-    Vector6::new(linear.x, linear.y, linear.z, z.x, z.y, z.z)
+pub(crate) fn edof_center(frame: &Pose, center_shift: f64) -> Vector3<f64> {
+    frame.translation.vector + frame.rotation.matrix().column(2) * center_shift
 }

@@ -295,15 +295,10 @@ impl ControllerEmulation {
         self.robot
             .forward_kinematics(&mut self.data, q)
             .expect("6 joints");
-        let tcp = self.data.tcp_position();
-        let mut j = Matrix6::zeros();
-        for i in 0..6 {
-            let frame = &self.data.joint_frames[i];
-            let z: Vector3<f64> = frame.rotation.matrix().column(2).into_owned();
-            let lin = z.cross(&(tcp - frame.translation.vector));
-            j.fixed_view_mut::<3, 1>(0, i).copy_from(&lin);
-            j.fixed_view_mut::<3, 1>(3, i).copy_from(&z);
-        }
+        let columns = self
+            .robot
+            .geometric_jacobian_columns(&self.data, &self.data.tcp_position());
+        let j = Matrix6::from_fn(|r, c| columns[c][r]);
         let xi = Vector6::from_row_slice(xi);
         match j.lu().solve(&xi) {
             Some(dq) if dq.iter().all(|v| v.is_finite()) => dq,
