@@ -377,6 +377,14 @@ fn read_rows(path: &Path, require_displacement: bool) -> Result<Vec<MeasurementR
     parse_rows(&text, &origin, require_displacement)
 }
 
+/// Number of distinct load cases among `rows`.
+pub fn load_case_count(rows: &[MeasurementRow]) -> usize {
+    rows.iter()
+        .map(|r| r.load_case.as_str())
+        .collect::<std::collections::BTreeSet<_>>()
+        .len()
+}
+
 /// Format rows as CSV text (full precision). Displacement, `sigma_m`, rotation, `sigma_rad` and
 /// purpose columns are written when any row has them.
 pub fn format_rows(rows: &[MeasurementRow]) -> String {

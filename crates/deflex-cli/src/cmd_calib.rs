@@ -360,12 +360,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
     };
     let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
     write_rows(&args.out, &plan.rows).map_err(|e| e.to_string())?;
-    let cases = plan
-        .rows
-        .iter()
-        .map(|r| r.load_case.as_str())
-        .collect::<std::collections::BTreeSet<_>>()
-        .len();
+    let cases = deflex_calib::data::load_case_count(&plan.rows);
     if json_output {
         let expected: Vec<Value> = plan
             .expected
@@ -388,10 +383,9 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         "Plan for {}: {} load cases ({} axis-by-axis + D-optimal), {} points to measure, |F| = {:.0} N at the TCP",
         nominal.name,
         cases,
-        plan.rows
+        plan.axis_cases
             .iter()
-            .filter(|r| r.load_case.starts_with('A'))
-            .map(|r| r.load_case.as_str())
+            .map(|a| a.load_case.as_str())
             .collect::<std::collections::BTreeSet<_>>()
             .len(),
         plan.rows.len(),

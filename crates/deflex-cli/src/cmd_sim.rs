@@ -120,11 +120,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
     );
     text.push_str(&deflex_calib::data::format_rows(&rows));
     std::fs::write(&args.out, text).map_err(|e| format!("{}: {e}", args.out.display()))?;
-    let cases = {
-        let mut names: Vec<&str> = rows.iter().map(|r| r.load_case.as_str()).collect();
-        names.dedup();
-        names.len()
-    };
+    let cases = deflex_calib::data::load_case_count(&rows);
     let max_disp = rows
         .iter()
         .filter_map(|r| r.displacement_m)

@@ -27,9 +27,7 @@ pub(crate) fn grid_figures(
 ) -> Result<Vec<Figure>, String> {
     let mut figures = Vec::new();
     for load in [600.0, 1100.0] {
-        let selected: Vec<usize> = (0..grid.len())
-            .filter(|&i| grid[i].load_case.starts_with(&format!("grid{load:.0}N")))
-            .collect();
+        let selected = crate::tables::grid_rows(grid, load);
         let x: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[0] * 1e3).collect();
         let y: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[1] * 1e3).collect();
         let measured: Vec<f64> = selected

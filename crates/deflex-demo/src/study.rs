@@ -1,8 +1,8 @@
 //! The study pipeline: plan → campaign → identification → validation → forming → report.
 
 use crate::tables::{
-    count_cases, error_numbers, paper_vs_deflex_csv, predictions_csv, stiffness_csv,
-    stiffness_rows, write_text,
+    error_numbers, grid_rows, paper_vs_deflex_csv, predictions_csv, stiffness_csv, stiffness_rows,
+    write_text,
 };
 use crate::twin_controller::{controller_config_for, run_closed_loop};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
@@ -192,7 +192,7 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     };
     let plan = plan_experiments(&nominal, &plan_options).map_err(|e| e.to_string())?;
     write_rows(&out.join("plan.csv"), &plan.rows).map_err(|e| e.to_string())?;
-    let load_cases = count_cases(&plan.rows);
+    let load_cases = deflex_calib::data::load_case_count(&plan.rows);
     progress.done(&format!(
         "{load_cases} load cases, {} points to measure",
         plan.rows.len()
@@ -274,9 +274,7 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     )?;
     let mut validation = Vec::new();
     for load in [600.0, 1100.0] {
-        let selected: Vec<usize> = (0..grid.len())
-            .filter(|&i| grid[i].load_case.starts_with(&format!("grid{load:.0}N")))
-            .collect();
+        let selected = grid_rows(&grid, load);
         for (name, predicted) in &grid_predictions {
             validation.push(error_numbers(
                 name,

@@ -8,11 +8,13 @@ use deflex_model::{Axis, EdofSite, Robot};
 use std::fmt::Write as _;
 use std::path::Path;
 
-pub(crate) fn count_cases(rows: &[MeasurementRow]) -> usize {
-    let mut cases: Vec<&str> = rows.iter().map(|r| r.load_case.as_str()).collect();
-    cases.sort_unstable();
-    cases.dedup();
-    cases.len()
+/// Indices of the validation-grid rows loaded by the `load_n` dead weight (the twin labels them
+/// `grid<load>N-…`).
+pub(crate) fn grid_rows(grid: &[MeasurementRow], load_n: f64) -> Vec<usize> {
+    let prefix = format!("grid{load_n:.0}N");
+    (0..grid.len())
+        .filter(|&i| grid[i].load_case.starts_with(&prefix))
+        .collect()
 }
 
 pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), String> {
