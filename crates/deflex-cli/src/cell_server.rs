@@ -1,15 +1,21 @@
 //! `deflex cell --sim`: the digital twin served on loopback over the protocols of a real cell.
-//! It plays the KUKA robot sending RSI telegrams every 4 ms and the ATI Net F/T streaming its
-//! readings while the twin forms the cone, so `deflex run` can be tried end to end with no
-//! hardware. It reads the same `CELL.toml` as `deflex run`.
+//! It plays the robot of `robot.kind` (a KUKA sending RSI telegrams, an ABB streaming EGM, the
+//! Stäubli VAL3 program, a UR script on the simple UDP/TCP line links) at the twin's robot cycle
+//! and the ATI Net F/T streaming its readings while the twin forms the cone, so `deflex run` can
+//! be tried end to end with no hardware. It reads the same `CELL.toml` as `deflex run`.
 
 use crate::args::{CliResult, print_json};
 use crate::cmd_control::{calibration, load_cell_file, rsi_mode, stats_json};
 use clap::Args;
+use deflex_control::config::CellFile;
 use deflex_control::config::RobotKind;
 use deflex_control::stats::{CycleStats, StatsSummary};
+use deflex_io::egm::EgmRobotEndpoint;
 use deflex_io::netft::NetFtSensorServer;
 use deflex_io::rsi::RsiRobotEndpoint;
+use deflex_io::simple_tcp::SimpleTcpRobotEndpoint;
+use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
+use deflex_io::staubli::StaubliRobotEndpoint;
 use deflex_io::{RobotSideLink, RobotState};
 use deflex_sim::{Cell, CellConfig, ConeParams, ToolPath};
 use serde_json::json;
@@ -22,7 +28,8 @@ pub struct CellArgs {
     /// Serve the simulated cell (the digital twin); the only cell there is.
     #[arg(long)]
     pub sim: bool,
-    /// The same CELL.toml as `deflex run`: robot.bind is where RSI telegrams go, sensor.address
+    /// The same CELL.toml as `deflex run`: robot.bind is where the robot's telegrams go (any
+    /// robot.kind), sensor.address
     /// is where the simulated Net F/T answers. Both must be loopback addresses.
     #[arg(long)]
     pub config: PathBuf,
@@ -44,6 +51,11 @@ pub struct CellArgs {
     /// How long to wait for the controller's first answer (s).
     #[arg(long, default_value_t = 60.0)]
     pub wait_s: f64,
+    /// Dwell at the start pose, out of contact, once the controller answers and the sensor
+    /// streams, before the path starts (s of robot time): the controller tares its sensor there,
+    /// as a robot program that waits for the correction to be ready.
+    #[arg(long, default_value_t = 0.5)]
+    pub dwell_s: f64,
 }
 
 /// What the served twin did.
@@ -78,6 +90,60 @@ pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
     }
 }
 
+/// The robot side of `robot.kind`, played by the twin, and whether its replies echo the state's
+/// cycle id (RSI's IPOC, the Stäubli acknowledgement), so a late reply is never taken for the
+/// current one. The other protocols carry no echo: the first reply after a state is its answer.
+fn robot_endpoint(
+    file: &CellFile,
+    wait: Duration,
+    stop: &AtomicBool,
+) -> Result<(Box<dyn RobotSideLink>, bool), String> {
+    let pc = file.robot.bind;
+    let local = "127.0.0.1:0";
+    let err = |e: deflex_io::LinkError| {
+        format!("simulated {:?} robot towards {pc}: {e}", file.robot.kind)
+    };
+    Ok(match file.robot.kind {
+        RobotKind::KukaRsi => (
+            Box::new(RsiRobotEndpoint::new(local, pc, rsi_mode(file)).map_err(err)?),
+            true,
+        ),
+        RobotKind::AbbEgm => (
+            Box::new(EgmRobotEndpoint::new(local, pc).map_err(err)?),
+            false,
+        ),
+        RobotKind::Staubli => (
+            Box::new(
+                // The VAL3 program's watchdog: the robot's own timeout.
+                StaubliRobotEndpoint::new(
+                    local,
+                    pc,
+                    Duration::from_secs_f64(file.robot.timeout_s.clamp(1e-3, 10.0)),
+                )
+                .map_err(err)?,
+            ),
+            true,
+        ),
+        RobotKind::SimpleUdp => (
+            Box::new(SimpleUdpRobotEndpoint::new(local, pc).map_err(err)?),
+            false,
+        ),
+        RobotKind::SimpleTcp => {
+            // The robot's script connects to the PC: retry until `deflex run` listens.
+            let start = Instant::now();
+            loop {
+                match SimpleTcpRobotEndpoint::connect(pc, Duration::from_millis(200)) {
+                    Ok(ep) => break (Box::new(ep), false),
+                    Err(e) if start.elapsed() > wait || stop.load(Ordering::SeqCst) => {
+                        return Err(err(e));
+                    }
+                    Err(_) => std::thread::sleep(Duration::from_millis(50)),
+                }
+            }
+        }
+    })
+}
+
 /// Serves the twin until the path is done (or `stop`).
 pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, String> {
     if !args.sim {
@@ -86,13 +152,13 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
     if !(args.speed > 0.0 && args.speed.is_finite()) {
         return Err(format!("--speed: must be positive, got {}", args.speed));
     }
-    let file = load_cell_file(&args.config)?;
-    if file.robot.kind != RobotKind::KukaRsi {
+    if !(args.dwell_s >= 0.0 && args.dwell_s <= 3600.0) {
         return Err(format!(
-            "{}: robot.kind: the simulated cell serves kuka-rsi only",
-            file.origin
+            "--dwell-s: expected 0 to 3600 s, got {}",
+            args.dwell_s
         ));
     }
+    let file = load_cell_file(&args.config)?;
     for (field, addr) in [
         ("robot.bind", file.robot.bind),
         ("sensor.address", file.sensor.address),
@@ -108,13 +174,16 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
     let mut cell = Cell::new(&twin, twin_path(args)?, args.seed).map_err(|e| e.to_string())?;
     let mut server = NetFtSensorServer::bind(file.sensor.address, calibration(&file))
         .map_err(|e| format!("sensor.address {}: {e}", file.sensor.address))?;
-    let mut robot = RsiRobotEndpoint::new("127.0.0.1:0", file.robot.bind, rsi_mode(&file))
-        .map_err(|e| format!("RSI robot endpoint: {e}"))?;
+    let wait = Duration::from_secs_f64(args.wait_s.clamp(0.0, 3600.0));
+    let (mut robot, echoes_cycle) = robot_endpoint(&file, wait, stop)?;
     let period = Duration::from_secs_f64(cell.robot_period_s() / args.speed);
     let mut round_trip = CycleStats::new(period);
     let mut step = cell.step();
     let (mut ipoc, mut cycles, mut late) = (0u64, 0u64, 0u64);
     let mut serving = false;
+    // Robot cycles still to hold the start pose once the controller answers and the sensor
+    // streams.
+    let mut dwell_cycles = (args.dwell_s / cell.robot_period_s()).ceil() as u64;
     let start = Instant::now();
     let mut next = Instant::now();
     loop {
@@ -128,7 +197,7 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
                 let _ = server.send_sample(&s.wrench_sensor, 0);
             }
         } else if let Some(s) = step.sensor_samples.last() {
-            // Waiting for the controller: hold the start pose, keep streaming.
+            // Waiting for the controller, then dwelling: hold the start pose, keep streaming.
             let _ = server.send_sample(&s.wrench_sensor, 0);
         }
         ipoc += 4;
@@ -150,12 +219,18 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
                 break;
             }
             match robot.receive_correction(wait) {
-                Ok(Some(r)) if r.cycle_id == ipoc => {
+                Ok(Some(r)) if r.cycle_id == ipoc || !echoes_cycle => {
                     let c = r.correction;
                     if serving {
                         round_trip.record(sent.elapsed());
                     }
-                    serving = true;
+                    if !serving && server.streaming() {
+                        if dwell_cycles == 0 {
+                            serving = true;
+                        } else {
+                            dwell_cycles -= 1;
+                        }
+                    }
                     cell.set_correction(c.to_array());
                     break;
                 }
@@ -189,7 +264,8 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
     let stop = deflex_control::rt::interrupt_flag();
     if !json_out {
         eprintln!(
-            "SIMULATED cell serving KUKA RSI and ATI Net F/T on loopback; waiting for `deflex run`…"
+            "SIMULATED cell serving the robot link of the config and an ATI Net F/T on loopback; \
+             waiting for `deflex run`…"
         );
     }
     let o = cell_session(&args, stop)?;
@@ -208,7 +284,7 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
             "deflex cell (SIMULATED): {:.1} s simulated, {} robot cycles, {} replies late or missing",
             o.duration_s, o.cycles, o.late
         );
-        println!("  RSI round trip (robot side): {}", o.round_trip);
+        println!("  robot-side round trip: {}", o.round_trip);
         println!(
             "  max TCP error norm {:.3} mm (rms {:.3} mm), max force {:.0} N, max correction {:.3} mm",
             s.max_error_norm_m * 1e3,
@@ -245,6 +321,7 @@ mod tests {
             speed: 1.0,
             seed: 1,
             wait_s: 1.0,
+            dwell_s: 0.5,
         };
         let e = cell_session(&args, &AtomicBool::new(false))
             .err()
