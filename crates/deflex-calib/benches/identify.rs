@@ -54,6 +54,20 @@ fn identify(c: &mut Criterion) {
             .unwrap()
         })
     });
+    group.bench_function("full_search_2k_rows_cross_validated", |b| {
+        b.iter(|| {
+            search_structure(
+                &truth,
+                black_box(small),
+                &SearchOptions {
+                    criterion: deflex_calib::Criterion::cross_validated(),
+                    ..SearchOptions::default()
+                },
+                &mut |_, _, _| {},
+            )
+            .unwrap()
+        })
+    });
     group.finish();
 }
 

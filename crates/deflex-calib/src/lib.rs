@@ -9,7 +9,8 @@
 //! * [`nnls`]: Lawson–Hanson non-negative least squares (c ≥ 0);
 //! * [`fit`]: fixed-structure calibration (positions and, when measured, link rotations) with
 //!   standard errors, intervals, correlations (`uncertainty`, internal);
-//! * [`search`]: the paper's test-model loop (Fig. 6, Tables A1/A2) automated with BIC;
+//! * [`search`]: the paper's test-model loop (Fig. 6, Tables A1/A2) automated with BIC or
+//!   cross-validated error ([`crossval`], k folds by load case);
 //! * [`plan`]: axis-by-axis and D-optimal experiment design;
 //! * [`validate`]: prediction errors against measurements, with plots and HTML;
 //! * [`synthetic`]: measurement generation from a known model (tests, benches, demos);
@@ -17,6 +18,7 @@
 
 #![warn(missing_docs)]
 
+pub mod crossval;
 pub mod data;
 pub mod design;
 pub mod fit;
@@ -37,7 +39,7 @@ pub use design::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, Design, EdofId, edof_label}
 pub use fit::{
     Calibration, EdofEstimate, ResidualStats, ShiftEstimate, Status, Structure, calibrate_fixed,
 };
-pub use search::{SearchOptions, SearchResult, SearchStep, search_structure};
+pub use search::{Criterion, SearchOptions, SearchResult, SearchStep, search_structure};
 
 /// Why a calibration, plan or validation could not be done. Messages are meant for the user.
 #[derive(Debug, thiserror::Error)]

@@ -20,7 +20,8 @@ fn k_fmt(k: f64) -> String {
     }
 }
 
-/// Table rows of the search: iteration, change, structure, parameters, RMS, BIC, ΔBIC.
+/// Table rows of the search: iteration, change, structure, parameters, RMS (all, x, y, z), BIC,
+/// ΔBIC and the cross-validated RMS (held-out load cases; "—" when not computed).
 pub fn iteration_rows(steps: &[SearchStep]) -> Vec<Vec<String>> {
     steps
         .iter()
@@ -40,13 +41,14 @@ pub fn iteration_rows(steps: &[SearchStep]) -> Vec<Vec<String>> {
                 } else {
                     format!("{:.1}", s.delta_bic)
                 },
+                s.cv_rms_m.map_or_else(|| "—".into(), um),
             ]
         })
         .collect()
 }
 
 /// Headers of [`iteration_rows`].
-pub const ITERATION_HEADERS: [&str; 10] = [
+pub const ITERATION_HEADERS: [&str; 11] = [
     "step",
     "change",
     "structure",
@@ -57,6 +59,7 @@ pub const ITERATION_HEADERS: [&str; 10] = [
     "RMS z",
     "BIC",
     "ΔBIC",
+    "CV RMS [µm]",
 ];
 
 /// Headers of [`stiffness_rows`].

@@ -4,12 +4,20 @@
 //! eDoF on any joint (alone, or together with a free centre shift of that joint, the paper's
 //! "k_θ3,x with δr3" step), a base tilt eDoF, freeing a centre shift, or removing an eDoF — fit
 //! each (NNLS + variable projection on the precomputed Gram matrix, so a candidate costs
-//! O(p³) regardless of the number of rows), and keep the one that lowers the BIC
-//! `n ln(χ²/n) + p ln n` most. An addition must lower it by at least
-//! [`SearchOptions::min_bic_gain`] ("significantly"); a removal by any amount. Stop when the
-//! target RMS is met or nothing qualifies.
+//! O(p³) regardless of the number of rows), and keep the one that lowers the criterion most:
+//!
+//! * [`Criterion::Bic`] (default): `n ln(χ²/n) + p ln n`; an addition must lower it by at least
+//!   [`SearchOptions::min_bic_gain`] ("significantly");
+//! * [`Criterion::CrossValidated`]: the held-out χ² of k-fold cross-validation by load case
+//!   ([`crate::crossval`]); an addition must lower it by a given fraction.
+//!
+//! A removal is kept when it lowers the criterion by any amount. Stop when the target RMS is met
+//! or nothing qualifies. Whatever the criterion, every row of the iteration table carries the
+//! cross-validated RMS (when the data has at least two load cases), the out-of-sample number an
+//! engineer should trust over the in-sample RMS.
 
 use crate::CalibError;
+use crate::crossval::{CrossValidation, CvScore, DEFAULT_FOLDS};
 use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId, all_edofs, edof_label};
 use crate::fit::{Calibration, ResidualStats, Structure, bic, fit_in_design, residual_stats};
@@ -17,9 +25,39 @@ use crate::shift::{self, Inner, normal_system, scales};
 use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::{DMatrix, DVector};
 
+/// How [`search_structure`] ranks structures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Criterion {
+    /// Bayesian information criterion; an addition must lower it by
+    /// [`SearchOptions::min_bic_gain`].
+    Bic,
+    /// Held-out χ² of `folds`-fold cross-validation by load case; an addition must lower it by
+    /// the fraction `min_relative_gain` (e.g. 0.02).
+    CrossValidated {
+        /// Number of folds (at most the number of load cases is used).
+        folds: usize,
+        /// Smallest relative decrease for an addition to count.
+        min_relative_gain: f64,
+    },
+}
+
+impl Criterion {
+    /// Cross-validation with [`DEFAULT_FOLDS`] folds and a 2 % minimum gain.
+    pub fn cross_validated() -> Self {
+        Criterion::CrossValidated {
+            folds: DEFAULT_FOLDS,
+            min_relative_gain: 0.02,
+        }
+    }
+}
+
 /// Settings of [`search_structure`].
 #[derive(Clone, Debug)]
 pub struct SearchOptions {
+    /// How structures are ranked.
+    pub criterion: Criterion,
+    /// Folds of the cross-validated RMS column when the criterion is BIC (0: no column).
+    pub report_folds: usize,
     /// Stop as soon as the RMS residual (all components) is at most this (m).
     pub target_rms_m: Option<f64>,
     /// Smallest BIC decrease for an addition to count as significant.
@@ -37,6 +75,8 @@ pub struct SearchOptions {
 impl Default for SearchOptions {
     fn default() -> Self {
         SearchOptions {
+            criterion: Criterion::Bic,
+            report_folds: DEFAULT_FOLDS,
             target_rms_m: None,
             min_bic_gain: 10.0,
             max_steps: 40,
@@ -64,6 +104,9 @@ pub struct SearchStep {
     pub bic: f64,
     /// BIC change (negative = better).
     pub delta_bic: f64,
+    /// Cross-validated RMS over every held-out position component (m), when the data has at
+    /// least two load cases.
+    pub cv_rms_m: Option<f64>,
     /// Candidates evaluated at this step.
     pub candidates_tried: usize,
 }
@@ -138,7 +181,28 @@ pub fn search_structure(
     if !dropped.is_empty() {
         dropped_note = format!(" ({} not identifiable, dropped)", dropped.join(", "));
     }
+    let cv = match options.criterion {
+        Criterion::CrossValidated { folds, .. } => {
+            Some(CrossValidation::new(robot, rows, &candidates, folds)?)
+        }
+        Criterion::Bic if options.report_folds >= 2 => {
+            CrossValidation::new(robot, rows, &candidates, options.report_folds).ok()
+        }
+        Criterion::Bic => None,
+    };
+    let cv_score = |st: &Structure| cv.as_ref().and_then(|cv| cv.score(st));
     let mut current_bic = bic(start_cal.chi2, n, current.parameter_count());
+    let start_cv = cv_score(&current);
+    // The criterion's value of the current structure (BIC, or held-out χ²).
+    let criterion_of = |b: f64, score: Option<CvScore>| match options.criterion {
+        Criterion::Bic => Some(b),
+        Criterion::CrossValidated { .. } => score.map(|s| s.chi2),
+    };
+    let Some(mut current_value) = criterion_of(current_bic, start_cv) else {
+        return Err(CalibError::Invalid(
+            "cross-validation cannot score the start structure".into(),
+        ));
+    };
     let mut steps = vec![SearchStep {
         iteration: 0,
         change: format!(
@@ -154,6 +218,7 @@ pub fn search_structure(
         residuals: start_cal.residuals,
         bic: current_bic,
         delta_bic: 0.0,
+        cv_rms_m: start_cv.map(|s| s.rms_all_m),
         candidates_tried: 1,
     }];
     let mut stop_reason = String::from("maximum number of steps reached");
@@ -164,7 +229,7 @@ pub fn search_structure(
         for iteration in 1..=options.max_steps {
             let changes = candidate_changes(&current, &candidates, options);
             let total = changes.len();
-            let mut best: Option<(f64, Change, Structure, Inner)> = None;
+            let mut best: Option<(f64, f64, Option<CvScore>, Change, Structure, Inner)> = None;
             for (done, change) in changes.into_iter().enumerate() {
                 let outcome = evaluate(&design, &current, &change, scale);
                 progress(iteration, done + 1, total);
@@ -172,23 +237,44 @@ pub fn search_structure(
                     continue;
                 };
                 let b = bic(sol.chi2, n, structure.parameter_count());
-                let needed = if change.is_addition() {
-                    current_bic - options.min_bic_gain
-                } else {
-                    current_bic - 1e-9
+                let score = match options.criterion {
+                    Criterion::Bic => None,
+                    Criterion::CrossValidated { .. } => cv_score(&structure),
                 };
-                if b < needed && best.as_ref().is_none_or(|(bb, ..)| b < *bb) {
-                    best = Some((b, change, structure, sol));
+                let Some(value) = criterion_of(b, score) else {
+                    continue;
+                };
+                let needed = match (options.criterion, change.is_addition()) {
+                    (Criterion::Bic, true) => current_value - options.min_bic_gain,
+                    (
+                        Criterion::CrossValidated {
+                            min_relative_gain, ..
+                        },
+                        true,
+                    ) => current_value * (1.0 - min_relative_gain),
+                    (_, false) => current_value - 1e-9 * current_value.abs().max(1.0),
+                };
+                if value < needed && best.as_ref().is_none_or(|(v, ..)| value < *v) {
+                    best = Some((value, b, score, change, structure, sol));
                 }
             }
-            let Some((b, change, structure, sol)) = best else {
-                stop_reason = format!(
-                    "no candidate lowers the BIC by {} or more",
-                    options.min_bic_gain
-                );
+            let Some((value, b, score, change, structure, sol)) = best else {
+                stop_reason = match options.criterion {
+                    Criterion::Bic => format!(
+                        "no candidate lowers the BIC by {} or more",
+                        options.min_bic_gain
+                    ),
+                    Criterion::CrossValidated {
+                        min_relative_gain, ..
+                    } => format!(
+                        "no candidate lowers the cross-validated χ² by {:.0} % or more",
+                        100.0 * min_relative_gain
+                    ),
+                };
                 break;
             };
             let residuals = quick_residuals(&design, &structure, &sol);
+            let score = score.or_else(|| cv_score(&structure));
             steps.push(SearchStep {
                 iteration,
                 change: change.describe(),
@@ -197,10 +283,12 @@ pub fn search_structure(
                 residuals,
                 bic: b,
                 delta_bic: b - current_bic,
+                cv_rms_m: score.map(|s| s.rms_all_m),
                 candidates_tried: total,
             });
             current = structure;
             current_bic = b;
+            current_value = value;
             if target_met(&residuals) {
                 stop_reason = "target RMS met".into();
                 break;

@@ -8,14 +8,14 @@ mod common;
 use common::{campaign, kr_like, tx200_truth};
 use deflex_calib::design::edof_label;
 use deflex_calib::fit::{Status, Structure, calibrate_fixed};
-use deflex_calib::search::{SearchOptions, search_structure};
+use deflex_calib::search::{Criterion, SearchOptions, search_structure};
 use deflex_calib::synthetic::{Coupling, SyntheticOptions, measure, random_campaign};
 use deflex_calib::validate::validate;
 use deflex_model::{Axis, EdofSite, Robot};
 
 const SIGMA: f64 = 15e-6;
 
-fn check_recovery(truth: &Robot, seed: u64) {
+fn check_recovery(truth: &Robot, seed: u64, criterion: Criterion) {
     let plan = campaign(truth, 30, 40, seed);
     let rows = measure(
         truth,
@@ -27,8 +27,11 @@ fn check_recovery(truth: &Robot, seed: u64) {
         },
     )
     .unwrap();
-    let result =
-        search_structure(truth, &rows, &SearchOptions::default(), &mut |_, _, _| {}).unwrap();
+    let options = SearchOptions {
+        criterion,
+        ..SearchOptions::default()
+    };
+    let result = search_structure(truth, &rows, &options, &mut |_, _, _| {}).unwrap();
     let table = deflex_calib::report::render_table(
         &deflex_calib::report::ITERATION_HEADERS,
         &deflex_calib::report::iteration_rows(&result.steps),
@@ -83,6 +86,12 @@ fn check_recovery(truth: &Robot, seed: u64) {
         }
     }
     assert!(cal.reduced_chi2 < 1.3, "χ²/dof {}", cal.reduced_chi2);
+    // Held-out load cases are predicted at the noise level by the final structure, and far
+    // worse by the one-eDoF start.
+    let cv_final = result.steps.last().unwrap().cv_rms_m.unwrap();
+    let cv_start = result.steps[0].cv_rms_m.unwrap();
+    assert!(cv_final <= 1.5 * SIGMA, "cross-validated RMS {cv_final:e}");
+    assert!(cv_start > 2.0 * cv_final, "{cv_start:e} vs {cv_final:e}");
 
     // Separate validation set.
     let model = cal.to_robot(truth);
@@ -112,12 +121,19 @@ fn check_recovery(truth: &Robot, seed: u64) {
 
 #[test]
 fn tx200_search_recovers_structure_and_stiffness() {
-    check_recovery(&tx200_truth(), 11);
+    check_recovery(&tx200_truth(), 11, Criterion::Bic);
 }
 
 #[test]
 fn kr_like_search_recovers_structure_and_stiffness() {
-    check_recovery(&kr_like(), 23);
+    check_recovery(&kr_like(), 23, Criterion::Bic);
+}
+
+/// The cross-validated criterion finds the same true structures.
+#[test]
+fn cross_validated_search_recovers_structure_and_stiffness() {
+    check_recovery(&tx200_truth(), 11, Criterion::cross_validated());
+    check_recovery(&kr_like(), 23, Criterion::cross_validated());
 }
 
 #[test]

@@ -10,7 +10,7 @@ use deflex_calib::report::{
     correlation_table, expected_se_rows, iteration_rows, render_table, residual_summary,
     stiffness_rows, table_csv, validation_rows,
 };
-use deflex_calib::search::{SearchOptions, SearchStep, search_structure};
+use deflex_calib::search::{Criterion, SearchOptions, SearchStep, search_structure};
 use deflex_calib::validate::{validate as run_validation, write_report};
 use deflex_calib::{read_for_robot, write_rows};
 use deflex_model::robot_to_toml;
@@ -27,7 +27,7 @@ pub struct CalibrateArgs {
     /// Measurement CSV (see `deflex plan` for the columns).
     #[arg(long)]
     pub data: PathBuf,
-    /// auto: BIC structure search from one z-eDoF per joint; fixed: the start model's eDoFs and
+    /// auto: structure search from one z-eDoF per joint (see --criterion); fixed: the start model's eDoFs and
     /// centre shifts as given.
     #[arg(long, default_value = "auto", value_parser = ["auto", "fixed"])]
     pub structure: String,
@@ -43,6 +43,17 @@ pub struct CalibrateArgs {
     /// Smallest BIC decrease for the search to accept a refinement.
     #[arg(long, default_value_t = 10.0)]
     pub min_bic_gain: f64,
+    /// How the search ranks structures: bic, or cv (held-out χ² of k-fold cross-validation by
+    /// load case). The iteration table shows the cross-validated RMS either way.
+    #[arg(long, default_value = "bic", value_parser = ["bic", "cv"])]
+    pub criterion: String,
+    /// Folds of the cross-validation (by load case; at most one per load case).
+    #[arg(long, default_value_t = 5)]
+    pub folds: usize,
+    /// With --criterion cv: smallest relative decrease of the held-out χ² for the search to
+    /// accept a refinement (%).
+    #[arg(long, default_value_t = 2.0)]
+    pub min_cv_gain_percent: f64,
     /// Output robot TOML (a drop-in for every other command).
     #[arg(long)]
     pub out: PathBuf,
@@ -170,7 +181,26 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
             let cal = calibrate_fixed(&start, &rows, &st).map_err(|e| e.to_string())?;
             (cal, Vec::new(), None)
         } else {
+            if args.folds < 2 {
+                return Err(format!("--folds: expected 2 or more, got {}", args.folds));
+            }
+            if !(0.0..100.0).contains(&args.min_cv_gain_percent) {
+                return Err(format!(
+                    "--min-cv-gain-percent: expected 0 to 100, got {}",
+                    args.min_cv_gain_percent
+                ));
+            }
+            let criterion = if args.criterion == "cv" {
+                Criterion::CrossValidated {
+                    folds: args.folds,
+                    min_relative_gain: args.min_cv_gain_percent / 100.0,
+                }
+            } else {
+                Criterion::Bic
+            };
             let options = SearchOptions {
+                criterion,
+                report_folds: args.folds,
                 target_rms_m: args.target_rms_mm.map(|v| v * 1e-3),
                 min_bic_gain: args.min_bic_gain,
                 allow_base: !args.no_base,
@@ -253,7 +283,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
     if json_output {
         let steps_json: Vec<Value> = steps
             .iter()
-            .map(|s| json!({"step": s.iteration, "change": s.change, "structure": s.structure, "parameters": s.parameters, "rms_m": s.residuals.rms_all_m, "rms_axis_m": s.residuals.rms_m, "bic": s.bic, "delta_bic": s.delta_bic}))
+            .map(|s| json!({"step": s.iteration, "change": s.change, "structure": s.structure, "parameters": s.parameters, "rms_m": s.residuals.rms_all_m, "rms_axis_m": s.residuals.rms_m, "bic": s.bic, "delta_bic": s.delta_bic, "cv_rms_m": s.cv_rms_m}))
             .collect();
         let mut v = calibration_json(&cal);
         v["iterations"] = json!(steps_json);
