@@ -36,7 +36,13 @@ pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
     }
     let path = Path::new(spec);
     let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
-        path: spec.to_string(),
+        path: if source.kind() == std::io::ErrorKind::NotFound {
+            // Say what else the argument could have been.
+            let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
+            format!("{spec} (not a built-in robot: {})", names.join(", "))
+        } else {
+            spec.to_string()
+        },
         source,
     })?;
     robot_from_toml_str(&text, spec, path.parent())

@@ -15,11 +15,12 @@ use crate::toolpath::{ToolPath, Waypoint};
 pub fn read_gcode(path: &std::path::Path) -> Result<ToolPath, SimError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| SimError::Path(format!("{}: {e}", path.display())))?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.display().to_string());
-    parse_gcode(&text, &name)
+    // Errors name the whole path; the tool path is named after the file.
+    let mut toolpath = parse_gcode(&text, &path.display().to_string())?;
+    if let Some(name) = path.file_name() {
+        toolpath.name = name.to_string_lossy().into_owned();
+    }
+    Ok(toolpath)
 }
 
 /// Parse G-code text; `file` names the source in errors and becomes the path name.
