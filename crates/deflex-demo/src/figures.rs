@@ -237,7 +237,7 @@ pub(crate) fn forming_figures(
     ));
 
     let force_names = ["F_x", "F_y", "F_z"];
-    let panels: Vec<(PlotSpec, Vec<Series>)> = runs
+    let mut panels: Vec<(PlotSpec, Vec<Series>)> = runs
         .iter()
         .map(|(label, run)| {
             let t = run.log.column(|r| r.time_s);
@@ -255,6 +255,19 @@ pub(crate) fn forming_figures(
             )
         })
         .collect();
+    // Both runs' F_z on one axis: the correction pushes deeper, so the force builds up sooner.
+    panels.push((
+        PlotSpec::new("F_z without and with correction", "time [s]", "force [N]").size(700, 420),
+        runs.iter()
+            .map(|(label, run)| {
+                Series::line(
+                    format!("F_z, {label}"),
+                    run.log.column(|r| r.time_s),
+                    run.log.column(|r| r.truth.wrench[2]),
+                )
+            })
+            .collect(),
+    ));
     let path = out.join("forming_forces.png");
     draw(panels_plot(
         &path,
