@@ -10,7 +10,8 @@
 //!    `c_e / c_e,nominal`, up to the requested number of load cases.
 //!
 //! The expected standard error of every stiffness follows from `F⁻¹` (relative SE of k equals
-//! relative SE of c to first order). Each load case measures the TCP, two mid-arm points
+//! relative SE of c to first order); that of every centre shift the calibration fits from the
+//! calibration's own covariance `(JᵀWJ)⁻¹` at the nominal model ([`expected_shift_se`]). Each load case measures the TCP, two mid-arm points
 //! ([`standard_points`]) and a reflector on the base casting (`M0`, [`PlanOptions::base_point`]),
 //! like the paper's M1..M3.
 
@@ -18,6 +19,7 @@ use crate::CalibError;
 use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId, edof_label};
 use crate::synthetic::{case_rows, random_q};
+use crate::uncertainty::unscaled_covariance;
 use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::{DMatrix, Vector3};
 use rand::SeedableRng;
@@ -74,6 +76,18 @@ pub struct ExpectedSe {
     pub relative: f64,
 }
 
+/// Expected precision of a centre shift the calibration will fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExpectedShiftSe {
+    /// Joint (1-based).
+    pub joint: usize,
+    /// Nominal shift (m).
+    pub nominal_m: f64,
+    /// Expected standard error (m), fitted jointly with the compliances; +∞ when the campaign
+    /// cannot see it.
+    pub se_m: f64,
+}
+
 /// The axis-by-axis choice for one eDoF.
 #[derive(Clone, Debug)]
 pub struct AxisCase {
@@ -96,6 +110,8 @@ pub struct Plan {
     pub axis_cases: Vec<AxisCase>,
     /// Expected SE of every planned stiffness.
     pub expected: Vec<ExpectedSe>,
+    /// Expected SE of the centre shift of every joint with an x/y eDoF in the model.
+    pub expected_shifts: Vec<ExpectedShiftSe>,
     /// `log det` of the final information matrix (relative parameters).
     pub log_det: f64,
 }
@@ -358,12 +374,72 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
             rows.push(r);
         }
     }
+    let expected_shifts = expected_shift_se(robot, &rows, options.noise_sigma_m)?;
     Ok(Plan {
         rows,
         axis_cases,
         expected,
+        expected_shifts,
         log_det,
     })
+}
+
+/// Expected standard error of every centre shift the calibration fits (joints with an x or y
+/// eDoF in `robot`) if the campaign `rows` is measured with tracker noise `noise_sigma_m`:
+/// the square root of the diagonal of `(JᵀWJ)⁻¹` at the nominal model, over the model's
+/// compliances and those shifts together — the covariance the calibration reports (eq. 13–15
+/// through [`crate::design`]), before any measurement.
+pub fn expected_shift_se(
+    robot: &Robot,
+    rows: &[MeasurementRow],
+    noise_sigma_m: f64,
+) -> Result<Vec<ExpectedShiftSe>, CalibError> {
+    let edofs: Vec<(EdofId, f64)> = robot
+        .edofs()
+        .map(|e| ((e.site, e.axis), e.stiffness))
+        .collect();
+    let joints: Vec<usize> = (1..=robot.joint_count())
+        .filter(|&j| {
+            edofs
+                .iter()
+                .any(|((site, axis), _)| *site == EdofSite::Joint(j) && *axis != Axis::Z)
+        })
+        .collect();
+    if joints.is_empty() || rows.is_empty() {
+        return Ok(Vec::new());
+    }
+    let rows: Vec<MeasurementRow> = rows
+        .iter()
+        .map(|r| MeasurementRow {
+            sigma_m: Some(noise_sigma_m),
+            ..r.clone()
+        })
+        .collect();
+    let ids: Vec<EdofId> = edofs.iter().map(|e| e.0).collect();
+    let design = Design::build(robot, &rows, &ids, false)?;
+    let idx: Vec<usize> = (0..ids.len()).collect();
+    let compliances: Vec<f64> = edofs.iter().map(|e| 1.0 / e.1).collect();
+    let shifts: Vec<f64> = robot.joints.iter().map(|j| j.center_shift).collect();
+    let covariance = unscaled_covariance(
+        &design,
+        &idx,
+        &compliances,
+        &shifts,
+        &vec![true; idx.len()],
+        joints.clone(),
+    );
+    Ok(joints
+        .into_iter()
+        .map(|j| ExpectedShiftSe {
+            joint: j,
+            nominal_m: shifts[j - 1],
+            se_m: covariance
+                .labels
+                .iter()
+                .position(|l| *l == Err(j))
+                .map_or(f64::INFINITY, |p| covariance.cov[(p, p)].max(0.0).sqrt()),
+        })
+        .collect())
 }
 
 /// eDoFs to plan for and their nominal stiffness.

@@ -256,6 +256,27 @@ pub const EXPECTED_SE_HEADERS: [&str; 5] = [
     "axis-by-axis case",
 ];
 
+/// Expected centre-shift precision of a plan as table rows (mm).
+pub fn expected_shift_rows(plan: &Plan) -> Vec<Vec<String>> {
+    plan.expected_shifts
+        .iter()
+        .map(|e| {
+            vec![
+                format!("δr{}", e.joint),
+                format!("{:.1}", e.nominal_m * 1e3),
+                if e.se_m.is_finite() {
+                    format!("{:.2}", e.se_m * 1e3)
+                } else {
+                    "not identifiable".into()
+                },
+            ]
+        })
+        .collect()
+}
+
+/// Headers of [`expected_shift_rows`].
+pub const EXPECTED_SHIFT_HEADERS: [&str; 3] = ["centre shift", "nominal [mm]", "expected SE [mm]"];
+
 /// Validation errors as table rows (mm).
 pub fn validation_rows(v: &Validation) -> Vec<Vec<String>> {
     std::iter::once(&v.model)

@@ -16,6 +16,68 @@ use crate::shift::{self, Inner, jacobian, normal_system, scales};
 use deflex_model::{Axis, EdofSite};
 use nalgebra::{DMatrix, DVector};
 
+/// `(JᵀWJ)⁻¹` of a structure's free parameters: the covariance for a unit noise scale.
+pub(crate) struct ParameterCovariance {
+    /// Covariance (compliances in (rad/(N·m))², shifts in m²) for `s² = 1`.
+    pub cov: DMatrix<f64>,
+    /// Per parameter: `Ok(k)` compliance of structure eDoF k, `Err(j)` shift of joint j.
+    pub labels: Vec<Result<usize, usize>>,
+    /// Condition number of the column-scaled normal matrix.
+    pub condition_number: f64,
+    /// The shift joints kept (collinear ones dropped, last first).
+    pub shift_joints: Vec<usize>,
+}
+
+/// Covariance `(JᵀWJ)⁻¹` (weights 1/σ² of the design) of the compliances `include`d and the
+/// centre shifts of `shift_joints` at `(c, shifts)`, computed on the column-scaled normal
+/// matrix. A shift that makes the matrix singular is dropped (the last one first).
+pub(crate) fn unscaled_covariance(
+    design: &Design,
+    idx: &[usize],
+    c: &[f64],
+    shifts: &[f64],
+    include: &[bool],
+    mut shift_joints: Vec<usize>,
+) -> ParameterCovariance {
+    loop {
+        let (cols, labels) = jacobian(design, idx, c, shifts, include, &shift_joints);
+        let (nm, _) = normal_system(design, &cols);
+        let d = scales(&nm);
+        let m = cols.len();
+        let ns = DMatrix::from_fn(m, m, |i, j| nm[(i, j)] * d[i] * d[j]);
+        let eig = ns.clone().symmetric_eigen();
+        let lmax = eig.eigenvalues.amax();
+        let lmin = eig
+            .eigenvalues
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let condition_number = if m == 0 {
+            1.0
+        } else {
+            (lmax / lmin.max(1e-300)).sqrt()
+        };
+        if m > 0 && (lmin <= 1e-12 * lmax || d.contains(&0.0)) && !shift_joints.is_empty() {
+            shift_joints.pop();
+            continue;
+        }
+        let inv = ns
+            .clone()
+            .cholesky()
+            .map(|ch| ch.inverse())
+            .unwrap_or_else(|| {
+                ns.pseudo_inverse(1e-14 * lmax)
+                    .unwrap_or(DMatrix::zeros(m, m))
+            });
+        return ParameterCovariance {
+            cov: DMatrix::from_fn(m, m, |i, j| inv[(i, j)] * d[i] * d[j]),
+            labels,
+            condition_number,
+            shift_joints,
+        };
+    }
+}
+
 /// Standard errors, status and statistics of a fitted structure.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn analyse(
@@ -31,7 +93,7 @@ pub(crate) fn analyse(
     let n = design.equations();
     let include: Vec<bool> = sol.c.iter().map(|&c| c > 0.0).collect();
     // Free shifts that are identifiable: the joint has an active x/y eDoF.
-    let mut shift_ok: Vec<usize> = free
+    let shift_ok: Vec<usize> = free
         .iter()
         .copied()
         .filter(|&j| {
@@ -40,43 +102,12 @@ pub(crate) fn analyse(
                 .any(|(&ci, &c)| design.shift_joint(ci) == Some(j) && c > 0.0)
         })
         .collect();
-    let mut cov;
-    let mut labels;
-    let mut cond;
-    loop {
-        let (cols, l) = jacobian(design, idx, &sol.c, shifts, &include, &shift_ok);
-        labels = l;
-        let (nm, _) = normal_system(design, &cols);
-        let d = scales(&nm);
-        let m = cols.len();
-        let ns = DMatrix::from_fn(m, m, |i, j| nm[(i, j)] * d[i] * d[j]);
-        let eig = ns.clone().symmetric_eigen();
-        let lmax = eig.eigenvalues.amax();
-        let lmin = eig
-            .eigenvalues
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        cond = if m == 0 {
-            1.0
-        } else {
-            (lmax / lmin.max(1e-300)).sqrt()
-        };
-        if m > 0 && (lmin <= 1e-12 * lmax || d.contains(&0.0)) && !shift_ok.is_empty() {
-            shift_ok.pop();
-            continue;
-        }
-        let inv = ns
-            .clone()
-            .cholesky()
-            .map(|ch| ch.inverse())
-            .unwrap_or_else(|| {
-                ns.pseudo_inverse(1e-14 * lmax)
-                    .unwrap_or(DMatrix::zeros(m, m))
-            });
-        cov = DMatrix::from_fn(m, m, |i, j| inv[(i, j)] * d[i] * d[j]);
-        break;
-    }
+    let ParameterCovariance {
+        mut cov,
+        labels,
+        condition_number: cond,
+        shift_joints: shift_ok,
+    } = unscaled_covariance(design, idx, &sol.c, shifts, &include, shift_ok);
     let p = labels.len();
     let dof = n.saturating_sub(p).max(1);
     let s2 = sol.chi2 / dof as f64;

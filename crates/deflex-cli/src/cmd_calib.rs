@@ -6,9 +6,9 @@ use clap::Args;
 use deflex_calib::fit::{Calibration, Status, Structure, calibrate_fixed};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::report::{
-    EXPECTED_SE_HEADERS, ITERATION_HEADERS, STIFFNESS_HEADERS, VALIDATION_HEADERS,
-    correlation_table, expected_se_rows, iteration_rows, render_table, residual_summary,
-    stiffness_rows, table_csv, validation_rows,
+    EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, ITERATION_HEADERS, STIFFNESS_HEADERS,
+    VALIDATION_HEADERS, correlation_table, expected_se_rows, expected_shift_rows, iteration_rows,
+    render_table, residual_summary, stiffness_rows, table_csv, validation_rows,
 };
 use deflex_calib::search::{Criterion, SearchOptions, SearchStep, search_structure};
 use deflex_calib::validate::{validate as run_validation, write_report};
@@ -397,6 +397,11 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
             .iter()
             .map(|e| json!({"edof": e.label, "nominal_k": e.nominal_k, "expected_se_k": if e.se_k.is_finite() { json!(e.se_k) } else { Value::Null }, "relative": if e.relative.is_finite() { json!(e.relative) } else { Value::Null }}))
             .collect();
+        let shifts: Vec<Value> = plan
+            .expected_shifts
+            .iter()
+            .map(|e| json!({"joint": e.joint, "nominal_m": e.nominal_m, "expected_se_m": if e.se_m.is_finite() { json!(e.se_m) } else { Value::Null }}))
+            .collect();
         let axis: Vec<Value> = plan
             .axis_cases
             .iter()
@@ -404,7 +409,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
             .collect();
         println!(
             "{}",
-            serde_json::to_string_pretty(&json!({"load_cases": cases, "rows": plan.rows.len(), "output": args.out.display().to_string(), "expected": expected, "axis_by_axis": axis, "log_det": plan.log_det}))
+            serde_json::to_string_pretty(&json!({"load_cases": cases, "rows": plan.rows.len(), "output": args.out.display().to_string(), "expected": expected, "expected_shifts": shifts, "axis_by_axis": axis, "log_det": plan.log_det}))
                 .unwrap_or_default()
         );
         return Ok(());
@@ -429,6 +434,12 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         "{}",
         render_table(&EXPECTED_SE_HEADERS, &expected_se_rows(&plan))
     );
+    if !plan.expected_shifts.is_empty() {
+        print!(
+            "{}",
+            render_table(&EXPECTED_SHIFT_HEADERS, &expected_shift_rows(&plan))
+        );
+    }
     if args.load_cases < cases {
         println!(
             "note: {cases} load cases instead of the {} asked for: every eDoF gets its own axis-by-axis case",

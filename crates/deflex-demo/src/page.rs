@@ -83,6 +83,12 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         &deflex_calib::report::EXPECTED_SE_HEADERS,
         &deflex_calib::report::expected_se_rows(page.plan),
     );
+    if !page.plan.expected_shifts.is_empty() {
+        html.table(
+            &deflex_calib::report::EXPECTED_SHIFT_HEADERS,
+            &deflex_calib::report::expected_shift_rows(page.plan),
+        );
+    }
 
     html.section("2–3. Identification (structure search, Section 3)");
     html.paragraph(format!(
