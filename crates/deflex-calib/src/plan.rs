@@ -45,6 +45,10 @@ pub struct PlanOptions {
     /// move it, which separates a baseplate tilt from the x/y eDoFs of joint 1 (the paper's M1
     /// saw the tilt, Section 3.1).
     pub base_point: bool,
+    /// Keep every joint origin and the TCP at or above this world height (m): the floor, the
+    /// table or the fixture under the robot. World = the robot file's frame (R0 at the
+    /// shoulder for the built-in TX200, so its floor is negative). `None`: joint limits only.
+    pub floor_z_m: Option<f64>,
 }
 
 impl Default for PlanOptions {
@@ -57,6 +61,7 @@ impl Default for PlanOptions {
             seed: 1,
             full_family: false,
             base_point: true,
+            floor_z_m: None,
         }
     }
 }
@@ -182,7 +187,15 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
     let mut data = Data::new();
     // Candidates: configurations × 6 world-axis load directions.
     let mut cand_rows: Vec<Vec<MeasurementRow>> = Vec::new();
-    for _ in 0..options.configurations.max(1) {
+    if options.floor_z_m.is_some_and(|z| !z.is_finite()) {
+        return Err(CalibError::Invalid(
+            "the floor height must be a number".into(),
+        ));
+    }
+    let wanted = options.configurations.max(1);
+    let (mut accepted, mut drawn) = (0, 0);
+    while accepted < wanted && drawn < 20 * wanted {
+        drawn += 1;
         let q: Vec<f64> = random_q(robot, &mut rng)
             .into_iter()
             .map(|v| (v.to_degrees() * 10.0).round().to_radians() / 10.0)
@@ -190,6 +203,12 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
         robot
             .forward_kinematics(&mut data, &q)
             .map_err(|e| CalibError::Invalid(e.to_string()))?;
+        if let Some(floor) = options.floor_z_m
+            && lowest_point_z(robot, &data) < floor
+        {
+            continue;
+        }
+        accepted += 1;
         for dir in 0..6 {
             let mut f = Vector3::zeros();
             f[dir / 2] = if dir % 2 == 0 { 1.0 } else { -1.0 } * options.max_force_n;
@@ -199,6 +218,12 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
             }
             cand_rows.push(rows);
         }
+    }
+    if cand_rows.is_empty() {
+        return Err(CalibError::Invalid(format!(
+            "no configuration out of {drawn} drawn keeps the arm above the floor at z = {:.3} m",
+            options.floor_z_m.unwrap_or(f64::NAN)
+        )));
     }
     let flat: Vec<MeasurementRow> = cand_rows
         .iter()
@@ -440,6 +465,13 @@ pub fn expected_shift_se(
                 .map_or(f64::INFINITY, |p| covariance.cov[(p, p)].max(0.0).sqrt()),
         })
         .collect())
+}
+
+/// Lowest world height of the joint origins and the TCP (after forward kinematics).
+pub fn lowest_point_z(robot: &Robot, data: &Data) -> f64 {
+    (1..=robot.joint_count())
+        .map(|i| data.link_frame(i).translation.vector.z)
+        .fold(data.tcp_position().z, f64::min)
 }
 
 /// eDoFs to plan for and their nominal stiffness.

@@ -102,6 +102,10 @@ pub struct PlanArgs {
     /// Random configurations tried (each with 6 load directions).
     #[arg(long, default_value_t = 600)]
     pub configurations: usize,
+    /// Keep every joint origin and the TCP at or above this world height (m): the floor, table
+    /// or fixture under the robot (the world is the robot file's frame).
+    #[arg(long)]
+    pub floor_z_m: Option<f64>,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -387,6 +391,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         seed: args.seed,
         full_family: args.full_family,
         base_point: !args.no_base_point,
+        floor_z_m: args.floor_z_m,
     };
     let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
     write_rows(&args.out, &plan.rows).map_err(|e| e.to_string())?;
