@@ -92,6 +92,19 @@ pub struct RunOutcome {
     pub wall_s: f64,
     pub log_path: Option<PathBuf>,
     pub log_rows: u64,
+    /// The robot link's protocol, for the summary.
+    pub robot_kind: RobotKind,
+}
+
+/// The protocol's name for people.
+fn protocol_name(kind: RobotKind) -> &'static str {
+    match kind {
+        RobotKind::KukaRsi => "KUKA RSI",
+        RobotKind::AbbEgm => "ABB EGM",
+        RobotKind::Staubli => "Stäubli",
+        RobotKind::SimpleUdp => "simple UDP",
+        RobotKind::SimpleTcp => "simple TCP",
+    }
 }
 
 /// The `deflex run` session: links, threads, live status, summary. `stop` ends it early.
@@ -170,6 +183,7 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         wall_s: started.elapsed().as_secs_f64(),
         log_path,
         log_rows,
+        robot_kind: cell.robot.kind,
     })
 }
 
@@ -205,7 +219,8 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
         );
         println!("  control cycle:     {}", s.control);
         println!(
-            "  RSI reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs (late: {}); {} telegrams answered, {} receive timeouts, {} bad packets, {} errors",
+            "  {} reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs (late: {}); {} telegrams answered, {} receive timeouts, {} bad packets, {} errors",
+            protocol_name(o.robot_kind),
             s.reply_latency.p50_us,
             s.reply_latency.p99_us,
             s.reply_latency.max_us,
@@ -225,6 +240,12 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             s.max_xi_m * 1e3
         );
         match &s.fault {
+            Some(f) if f.kind == deflex_control::FaultKind::RobotLinkLost && s.telegrams > 0 => {
+                println!(
+                    "  fault: {f} — the robot stopped sending (the end of its program, or a lost \
+                     link); the correction was ramped to its safe value"
+                )
+            }
             Some(f) => println!("  fault: {f} — the correction was ramped to its safe value"),
             None => println!("  fault: none"),
         }
@@ -402,6 +423,12 @@ mod tests {
             l.cell.cycles
         );
         assert!(l.run.log_rows > 50, "{kind}: {} log rows", l.run.log_rows);
+        // The controller's largest tared force matches the twin's true contact force.
+        let (seen, truth) = (s.max_force_n, l.cell.summary.max_force_norm_n);
+        assert!(
+            (seen - truth).abs() <= 0.15 * truth + 3.0,
+            "{kind}: controller max force {seen:.1} N vs twin {truth:.1} N"
+        );
         assert!(l.log_header.starts_with("time_s,q1_rad"), "{kind}");
         let loop_mm = l.cell.summary.max_error_norm_m * 1e3;
         assert!(

@@ -144,7 +144,7 @@ pub struct RunSummary {
     pub phase: Phase,
     /// The latched fault, if any.
     pub fault: Option<Fault>,
-    /// Largest force norm seen at the TCP (N).
+    /// Largest force norm seen at the TCP once tared (N).
     pub max_force_n: f64,
     /// Largest |ξ_p| (m).
     pub max_xi_m: f64,
@@ -388,7 +388,10 @@ fn control_loop<C: Clock>(
             cycles += 1;
             let f = &out.wrench_tcp;
             let force = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
-            max_force = max_force.max(force);
+            if out.flags.0 & Flags::TARING == 0 && ctrl.phase() != Phase::Idle {
+                // Before and during the tare the reading still carries the sensor's bias.
+                max_force = max_force.max(force);
+            }
             let xi_p = (out.xi[0].powi(2) + out.xi[1].powi(2) + out.xi[2].powi(2)).sqrt();
             max_xi = max_xi.max(xi_p);
             if let Some(sink) = log.as_mut() {
