@@ -136,7 +136,7 @@ mod tests {
     use crate::design::all_edofs;
     use crate::fit::calibrate_fixed;
     use crate::synthetic::{SyntheticOptions, measure, random_campaign};
-    use deflex_model::Data;
+    use crate::validate::predict_full;
 
     /// The fold score equals an independent computation: calibrate on the training rows with
     /// the public fixed-structure calibration, write the robot, and predict every held-out row
@@ -153,7 +153,6 @@ mod tests {
 
         let (assignment, k) = fold_assignment(&rows, 4);
         let (mut sum_sq, mut n) = (0.0, 0usize);
-        let mut data = Data::new();
         for f in 0..k {
             let pick = |want: bool| -> Vec<MeasurementRow> {
                 rows.iter()
@@ -163,17 +162,9 @@ mod tests {
                     .collect()
             };
             let cal = calibrate_fixed(&truth, &pick(false), &structure).unwrap();
-            let model = cal.to_robot(&truth);
-            for r in pick(true) {
-                model.forward_kinematics(&mut data, &r.q_rad).unwrap();
-                let d = model.point_displacement(
-                    &data,
-                    &r.point_m.into(),
-                    r.point_link,
-                    &r.load_point_m.into(),
-                    r.load_link,
-                    &r.wrench.into(),
-                );
+            let held_out = pick(true);
+            let predicted = predict_full(&cal.to_robot(&truth), &held_out).unwrap();
+            for (r, d) in held_out.iter().zip(&predicted) {
                 let measured = r.displacement_m.unwrap();
                 for ax in 0..3 {
                     sum_sq += (measured[ax] - d[ax]).powi(2);

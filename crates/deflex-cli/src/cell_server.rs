@@ -7,8 +7,7 @@
 use crate::args::{CliResult, print_json};
 use crate::cmd_control::{calibration, load_cell_file, rsi_mode, stats_json};
 use clap::Args;
-use deflex_control::config::CellFile;
-use deflex_control::config::RobotKind;
+use deflex_control::config::{CellFile, RobotKind};
 use deflex_control::stats::{CycleStats, StatsSummary};
 use deflex_io::egm::EgmRobotEndpoint;
 use deflex_io::netft::NetFtSensorServer;
@@ -29,8 +28,8 @@ pub struct CellArgs {
     #[arg(long)]
     pub sim: bool,
     /// The same CELL.toml as `deflex run`: robot.bind is where the robot's telegrams go (any
-    /// robot.kind), sensor.address
-    /// is where the simulated Net F/T answers. Both must be loopback addresses.
+    /// robot.kind), sensor.address is where the simulated Net F/T answers. Both must be
+    /// loopback addresses.
     #[arg(long)]
     pub config: PathBuf,
     /// Twin settings (`[cell]` TOML of `deflex sim`); default: the paper's cell.
@@ -101,7 +100,10 @@ fn robot_endpoint(
     let pc = file.robot.bind;
     let local = "127.0.0.1:0";
     let err = |e: deflex_io::LinkError| {
-        format!("simulated {:?} robot towards {pc}: {e}", file.robot.kind)
+        format!(
+            "simulated {} robot towards {pc}: {e}",
+            file.robot.kind.name()
+        )
     };
     Ok(match file.robot.kind {
         RobotKind::KukaRsi => (

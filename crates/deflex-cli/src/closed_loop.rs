@@ -37,10 +37,10 @@ struct TwinRobotLink {
     step: CellStep,
     period_s: f64,
     calls: u64,
-    finished: bool,
-    /// Simulated time at which the path ended (s).
-    end_s: f64,
-    /// The last F/T sample, repeated while the robot is silent after the end.
+    /// Simulated time at which the path ended (s); `None` while it runs.
+    ended_at_s: Option<f64>,
+    /// The latest F/T sample (a robot cycle may carry none when the sensor is slower), repeated
+    /// while the robot is silent after the end.
     last_sample: [f64; 6],
 }
 
@@ -67,12 +67,12 @@ impl TwinRobotLink {
         }
     }
 
-    /// One robot period after the end of the path, in lockstep: the robot is silent (no
-    /// telegram), the sensor keeps reporting the resting wrench. After [`AFTER_END_S`] the
-    /// clock is released to run free.
-    fn silent_cycle(&mut self, timeout: Duration) -> Option<RobotState> {
+    /// One robot period after the end of the path (at `ended_at_s`), in lockstep: the robot is
+    /// silent (no telegram), the sensor keeps reporting its latest wrench. After
+    /// [`AFTER_END_S`] the clock is released to run free.
+    fn silent_cycle(&mut self, ended_at_s: f64, timeout: Duration) -> Option<RobotState> {
         let now = self.clock.now();
-        if now - self.end_s > AFTER_END_S {
+        if now - ended_at_s > AFTER_END_S {
             self.clock.finish();
             std::thread::sleep(timeout);
             return None;
@@ -86,8 +86,8 @@ impl TwinRobotLink {
 
 impl RobotLink for TwinRobotLink {
     fn receive(&mut self, timeout: Duration) -> Result<Option<RobotState>, LinkError> {
-        if self.finished {
-            return Ok(self.silent_cycle(timeout));
+        if let Some(ended_at_s) = self.ended_at_s {
+            return Ok(self.silent_cycle(ended_at_s, timeout));
         }
         if self.calls == 1 {
             // The first state and samples are out: start the lockstep with the control loop.
@@ -107,8 +107,7 @@ impl RobotLink for TwinRobotLink {
         }
         self.publish_samples(self.step.sensor_samples.iter().map(|s| s.wrench_sensor));
         if self.step.finished {
-            self.finished = true;
-            self.end_s = self.step.time_s;
+            self.ended_at_s = Some(self.step.time_s);
         }
         Ok(Some(RobotState {
             q_rad: self.step.q_measured_rad,
@@ -187,8 +186,7 @@ pub fn run_runtime_in_sim_time(
         step: CellStep::default(),
         period_s,
         calls: 0,
-        finished: false,
-        end_s: 0.0,
+        ended_at_s: None,
         last_sample: [0.0; 6],
     };
     let sensor = TwinSensorLink {

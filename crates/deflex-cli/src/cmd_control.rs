@@ -96,17 +96,6 @@ pub struct RunOutcome {
     pub robot_kind: RobotKind,
 }
 
-/// The protocol's name for people.
-fn protocol_name(kind: RobotKind) -> &'static str {
-    match kind {
-        RobotKind::KukaRsi => "KUKA RSI",
-        RobotKind::AbbEgm => "ABB EGM",
-        RobotKind::Staubli => "Stäubli",
-        RobotKind::SimpleUdp => "simple UDP",
-        RobotKind::SimpleTcp => "simple TCP",
-    }
-}
-
 /// The `deflex run` session: links, threads, live status, summary. `stop` ends it early.
 pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunOutcome, String> {
     let cell = load_cell_file(&args.config)?;
@@ -220,7 +209,7 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
         println!("  control cycle:     {}", s.control);
         println!(
             "  {} reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs (late: {}); {} telegrams answered, {} receive timeouts, {} bad packets, {} errors",
-            protocol_name(o.robot_kind),
+            o.robot_kind.name(),
             s.reply_latency.p50_us,
             s.reply_latency.p99_us,
             s.reply_latency.max_us,
@@ -300,6 +289,8 @@ mod tests {
         cell: crate::cell_server::CellOutcome,
         log_header: String,
         in_process_mm: f64,
+        /// The tool path the twin formed.
+        path: deflex_sim::ToolPath,
     }
 
     /// `deflex cell --sim` and `deflex run` over loopback with robot link `kind`, for the first
@@ -369,7 +360,7 @@ mod tests {
         let path = twin_path(&cell_args).unwrap();
         let closed = run_closed_loop(
             &twin,
-            path,
+            path.clone(),
             seed,
             model,
             controller_config_for(&twin),
@@ -402,6 +393,7 @@ mod tests {
             cell,
             log_header,
             in_process_mm: closed.forming.summary.max_error_norm_mm,
+            path,
         }
     }
 
@@ -446,13 +438,8 @@ mod tests {
         let l = loopback("kuka-rsi", 60.0, 3);
         check_loopback("kuka-rsi", &l, 500);
         // The correction really acted: the same path without it ends further off.
-        let path = deflex_sim::ToolPath::cone(&deflex_sim::ConeParams {
-            helical: true,
-            ..Default::default()
-        })
-        .unwrap()
-        .truncated(60.0);
-        let open = deflex_sim::run_forming(&CellConfig::default(), path, 3, None).unwrap();
+        let open =
+            deflex_sim::run_forming(&CellConfig::default(), l.path.clone(), 3, None).unwrap();
         eprintln!("open loop: {:.4} mm", open.summary.max_error_norm_mm);
         assert!(l.cell.summary.max_error_norm_m * 1e3 < open.summary.max_error_norm_mm);
     }

@@ -62,6 +62,19 @@ pub enum RobotKind {
     SimpleTcp,
 }
 
+impl RobotKind {
+    /// The protocol's name for people ("KUKA RSI", "ABB EGM", …).
+    pub fn name(self) -> &'static str {
+        match self {
+            RobotKind::KukaRsi => "KUKA RSI",
+            RobotKind::AbbEgm => "ABB EGM",
+            RobotKind::Staubli => "Stäubli",
+            RobotKind::SimpleUdp => "simple UDP",
+            RobotKind::SimpleTcp => "simple TCP",
+        }
+    }
+}
+
 /// `[robot]`: the robot link.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

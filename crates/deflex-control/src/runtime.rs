@@ -388,7 +388,7 @@ fn control_loop<C: Clock>(
             cycles += 1;
             let f = &out.wrench_tcp;
             let force = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
-            if out.flags.0 & Flags::TARING == 0 && ctrl.phase() != Phase::Idle {
+            if !out.flags.has(Flags::TARING) {
                 // Before and during the tare the reading still carries the sensor's bias.
                 max_force = max_force.max(force);
             }
