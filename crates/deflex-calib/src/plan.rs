@@ -11,9 +11,9 @@
 //!
 //! The expected standard error of every stiffness follows from `F⁻¹` (relative SE of k equals
 //! relative SE of c to first order); that of every centre shift the calibration fits from the
-//! calibration's own covariance `(JᵀWJ)⁻¹` at the nominal model ([`expected_shift_se`]). Each load case measures the TCP, two mid-arm points
-//! ([`standard_points`]) and a reflector on the base casting (`M0`, [`PlanOptions::base_point`]),
-//! like the paper's M1..M3.
+//! calibration's own covariance `(JᵀWJ)⁻¹` at the nominal model ([`expected_shift_se`]). Each
+//! load case measures the TCP, two mid-arm points ([`standard_points`]) and a reflector on the
+//! base casting (`M0`, [`PlanOptions::base_point`]), like the paper's M1..M3.
 
 use crate::CalibError;
 use crate::data::MeasurementRow;
@@ -175,6 +175,11 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
     if !(options.noise_sigma_m.is_finite() && options.noise_sigma_m > 0.0) {
         return Err(CalibError::Invalid("tracker noise must be positive".into()));
     }
+    if options.floor_z_m.is_some_and(|z| !z.is_finite()) {
+        return Err(CalibError::Invalid(
+            "the floor height must be a number".into(),
+        ));
+    }
     let (edofs, nominal) = planned_edofs(robot, options.full_family);
     if edofs.is_empty() {
         return Err(CalibError::Invalid(format!(
@@ -187,11 +192,6 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
     let mut data = Data::new();
     // Candidates: configurations × 6 world-axis load directions.
     let mut cand_rows: Vec<Vec<MeasurementRow>> = Vec::new();
-    if options.floor_z_m.is_some_and(|z| !z.is_finite()) {
-        return Err(CalibError::Invalid(
-            "the floor height must be a number".into(),
-        ));
-    }
     let wanted = options.configurations.max(1);
     let (mut accepted, mut drawn) = (0, 0);
     while accepted < wanted && drawn < 20 * wanted {
@@ -419,15 +419,11 @@ pub fn expected_shift_se(
     rows: &[MeasurementRow],
     noise_sigma_m: f64,
 ) -> Result<Vec<ExpectedShiftSe>, CalibError> {
-    let edofs: Vec<(EdofId, f64)> = robot
-        .edofs()
-        .map(|e| ((e.site, e.axis), e.stiffness))
-        .collect();
+    let (ids, stiffness) = planned_edofs(robot, false);
     let joints: Vec<usize> = (1..=robot.joint_count())
         .filter(|&j| {
-            edofs
-                .iter()
-                .any(|((site, axis), _)| *site == EdofSite::Joint(j) && *axis != Axis::Z)
+            ids.iter()
+                .any(|&(site, axis)| site == EdofSite::Joint(j) && axis != Axis::Z)
         })
         .collect();
     if joints.is_empty() || rows.is_empty() {
@@ -440,10 +436,9 @@ pub fn expected_shift_se(
             ..r.clone()
         })
         .collect();
-    let ids: Vec<EdofId> = edofs.iter().map(|e| e.0).collect();
     let design = Design::build(robot, &rows, &ids, false)?;
     let idx: Vec<usize> = (0..ids.len()).collect();
-    let compliances: Vec<f64> = edofs.iter().map(|e| 1.0 / e.1).collect();
+    let compliances: Vec<f64> = stiffness.iter().map(|k| 1.0 / k).collect();
     let shifts: Vec<f64> = robot.joints.iter().map(|j| j.center_shift).collect();
     let covariance = unscaled_covariance(
         &design,
