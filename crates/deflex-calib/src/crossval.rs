@@ -16,7 +16,6 @@ use crate::fit::Structure;
 use crate::shift;
 use crate::uncertainty::residual_stats;
 use deflex_model::Robot;
-use nalgebra::DVector;
 
 /// Default number of folds.
 pub const DEFAULT_FOLDS: usize = 5;
@@ -111,12 +110,7 @@ impl CrossValidation {
                 .collect();
             let mut shifts = structure.shifts_m.clone();
             let sol = shift::optimize(train, &idx, &mut shifts, &free);
-            let mut beta = DVector::zeros(train.gram.nrows());
-            for (k, &ci) in idx.iter().enumerate() {
-                for (b, coef) in train.col(ci, shift::shift_of(train, ci, &shifts)) {
-                    beta[b] += coef * sol.c[k];
-                }
-            }
+            let beta = shift::basis_coefficients(train, &idx, &sol.c, &shifts);
             let predicted = test.predict(&beta);
             let stats = residual_stats(test, &predicted);
             sum_sq += stats.rms_all_m.powi(2) * (3 * test.rows) as f64;

@@ -23,7 +23,7 @@ use crate::design::{Design, EdofId, all_edofs, edof_label};
 use crate::fit::{Calibration, ResidualStats, Structure, bic, fit_in_design, residual_stats};
 use crate::shift::{self, Inner, normal_system, scales};
 use deflex_model::{Axis, Data, EdofSite, Robot};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// How [`search_structure`] ranks structures.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -413,15 +413,13 @@ fn evaluate(
 }
 
 fn quick_residuals(design: &Design, st: &Structure, sol: &Inner) -> ResidualStats {
-    let mut beta = DVector::zeros(design.gram.nrows());
-    for (k, id) in st.edofs.iter().enumerate() {
-        let Some(ci) = design.index_of(*id) else {
-            continue;
-        };
-        for (b, coef) in design.col(ci, shift::shift_of(design, ci, &st.shifts_m)) {
-            beta[b] += coef * sol.c[k];
-        }
-    }
+    let (idx, c): (Vec<usize>, Vec<f64>) = st
+        .edofs
+        .iter()
+        .zip(&sol.c)
+        .filter_map(|(id, &c)| design.index_of(*id).map(|ci| (ci, c)))
+        .unzip();
+    let beta = shift::basis_coefficients(design, &idx, &c, &st.shifts_m);
     residual_stats(design, &design.predict(&beta))
 }
 

@@ -35,6 +35,23 @@ pub(crate) fn columns(design: &Design, idx: &[usize], shifts: &[f64]) -> Vec<Com
         .collect()
 }
 
+/// Basis coefficients β of the weighted prediction `X β` (eq. 13–15) for compliances `c` of the
+/// candidates `idx` at the given shifts.
+pub(crate) fn basis_coefficients(
+    design: &Design,
+    idx: &[usize],
+    c: &[f64],
+    shifts: &[f64],
+) -> DVector<f64> {
+    let mut beta = DVector::zeros(design.gram.nrows());
+    for (&ci, &ck) in idx.iter().zip(c) {
+        for (b, coef) in design.col(ci, shift_of(design, ci, shifts)) {
+            beta[b] += coef * ck;
+        }
+    }
+    beta
+}
+
 /// Gram matrix and right-hand side of a set of basis combinations.
 pub(crate) fn normal_system(design: &Design, cols: &[Combo]) -> (DMatrix<f64>, DVector<f64>) {
     let p = cols.len();

@@ -217,12 +217,7 @@ pub(crate) fn analyse(
         .collect();
 
     // Residuals, directly from the rows.
-    let mut beta = DVector::zeros(design.gram.nrows());
-    for (k, &ci) in idx.iter().enumerate() {
-        for (b, coef) in design.col(ci, shift::shift_of(design, ci, shifts)) {
-            beta[b] += coef * sol.c[k];
-        }
-    }
+    let beta = shift::basis_coefficients(design, idx, &sol.c, shifts);
     let pred = design.predict(&beta);
     let residuals = residual_stats(design, &pred);
 
