@@ -105,9 +105,7 @@ impl CrossValidation {
                 .iter()
                 .map(|id| train.index_of(*id))
                 .collect::<Option<_>>()?;
-            let free: Vec<usize> = (1..=train.joint_count)
-                .filter(|&j| structure.free_shift.get(j - 1).copied().unwrap_or(false))
-                .collect();
+            let free = structure.free_shift_joints();
             let mut shifts = structure.shifts_m.clone();
             let sol = shift::optimize(train, &idx, &mut shifts, &free);
             let beta = shift::basis_coefficients(train, &idx, &sol.c, &shifts);

@@ -64,6 +64,13 @@ impl Structure {
         self
     }
 
+    /// Joints (1-based) whose centre shift is fitted.
+    pub fn free_shift_joints(&self) -> Vec<usize> {
+        (1..=self.free_shift.len())
+            .filter(|&j| self.free_shift[j - 1])
+            .collect()
+    }
+
     /// Keep the eDoFs sorted in robot order.
     pub fn normalize(&mut self) {
         self.edofs.sort_by_key(edof_order);
@@ -282,9 +289,7 @@ pub fn fit_in_design(design: &Design, structure: &Structure) -> Result<Calibrati
             }
             continue;
         }
-        let free: Vec<usize> = (1..=design.joint_count)
-            .filter(|&j| structure.free_shift[j - 1])
-            .collect();
+        let free = structure.free_shift_joints();
         let sol = shift::optimize(design, &idx, &mut shifts, &free);
         let cal = analyse(
             design, structure, &active, &idx, &sol, &shifts, &dropped, &free,

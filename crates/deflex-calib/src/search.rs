@@ -397,9 +397,7 @@ fn evaluate(
     if lmin < 1e-10 {
         return None;
     }
-    let free: Vec<usize> = (1..=design.joint_count)
-        .filter(|&j| st.free_shift[j - 1])
-        .collect();
+    let free = st.free_shift_joints();
     let mut shifts = st.shifts_m.clone();
     let sol = match new_shift {
         Some(j) => shift::optimize_multistart(design, &idx, &mut shifts, &free, j, scale),
