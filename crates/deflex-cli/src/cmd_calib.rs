@@ -27,8 +27,8 @@ pub struct CalibrateArgs {
     /// Measurement CSV (see `deflex plan` for the columns).
     #[arg(long)]
     pub data: PathBuf,
-    /// auto: structure search from one z-eDoF per joint (see --criterion); fixed: the start model's eDoFs and
-    /// centre shifts as given.
+    /// auto: structure search from one z-eDoF per joint (see --criterion); fixed: the start
+    /// model's eDoFs and centre shifts as given.
     #[arg(long, default_value = "auto", value_parser = ["auto", "fixed"])]
     pub structure: String,
     /// Stop the search once the RMS residual (all components) is at most this (mm).
@@ -114,6 +114,11 @@ pub struct PlanArgs {
     pub out: PathBuf,
 }
 
+/// A number, or JSON null when it is infinite or NaN (not identifiable).
+fn finite_or_null(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
 fn calibration_json(cal: &Calibration) -> Value {
     let edofs: Vec<Value> = cal
         .edofs
@@ -132,7 +137,7 @@ fn calibration_json(cal: &Calibration) -> Value {
                 "stiffness_se": e.stiffness_se,
                 "interval95": e.interval95.map(|(a, b)| json!([a, if b.is_finite() { json!(b) } else { json!("inf") }])),
                 "compliance": e.compliance,
-                "compliance_se": if e.compliance_se.is_finite() { json!(e.compliance_se) } else { Value::Null },
+                "compliance_se": finite_or_null(e.compliance_se),
             })
         })
         .collect();
@@ -400,12 +405,12 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         let expected: Vec<Value> = plan
             .expected
             .iter()
-            .map(|e| json!({"edof": e.label, "nominal_k": e.nominal_k, "expected_se_k": if e.se_k.is_finite() { json!(e.se_k) } else { Value::Null }, "relative": if e.relative.is_finite() { json!(e.relative) } else { Value::Null }}))
+            .map(|e| json!({"edof": e.label, "nominal_k": e.nominal_k, "expected_se_k": finite_or_null(e.se_k), "relative": finite_or_null(e.relative)}))
             .collect();
         let shifts: Vec<Value> = plan
             .expected_shifts
             .iter()
-            .map(|e| json!({"joint": e.joint, "nominal_m": e.nominal_m, "expected_se_m": if e.se_m.is_finite() { json!(e.se_m) } else { Value::Null }}))
+            .map(|e| json!({"joint": e.joint, "nominal_m": e.nominal_m, "expected_se_m": finite_or_null(e.se_m)}))
             .collect();
         let axis: Vec<Value> = plan
             .axis_cases
