@@ -133,6 +133,24 @@ pub(crate) fn jacobian(
     (cols, labels)
 }
 
+/// The joints of `free` whose shift the data can move: they carry an x/y eDoF with a positive
+/// compliance in `c` (a shift acts only through those, z × z = 0).
+pub(crate) fn active_shift_joints(
+    design: &Design,
+    idx: &[usize],
+    c: &[f64],
+    free: &[usize],
+) -> Vec<usize> {
+    free.iter()
+        .copied()
+        .filter(|&j| {
+            idx.iter()
+                .zip(c)
+                .any(|(&ci, &cv)| design.shift_joint(ci) == Some(j) && cv > 0.0)
+        })
+        .collect()
+}
+
 /// Minimise over the free shifts (joints listed in `free`, 1-based) starting from `shifts`,
 /// which are updated in place. Returns the final inner solution.
 pub(crate) fn optimize(
@@ -148,15 +166,7 @@ pub(crate) fn optimize(
     let mut lambda = 1e-3;
     for _ in 0..200 {
         let include: Vec<bool> = best.c.iter().map(|&v| v > 0.0).collect();
-        let sj: Vec<usize> = free
-            .iter()
-            .copied()
-            .filter(|&j| {
-                idx.iter()
-                    .zip(&best.c)
-                    .any(|(&ci, &cv)| design.shift_joint(ci) == Some(j) && cv > 0.0)
-            })
-            .collect();
+        let sj = active_shift_joints(design, idx, &best.c, free);
         if sj.is_empty() {
             break;
         }

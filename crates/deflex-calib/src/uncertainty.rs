@@ -93,15 +93,7 @@ pub(crate) fn analyse(
     let n = design.equations();
     let include: Vec<bool> = sol.c.iter().map(|&c| c > 0.0).collect();
     // Free shifts that are identifiable: the joint has an active x/y eDoF.
-    let shift_ok: Vec<usize> = free
-        .iter()
-        .copied()
-        .filter(|&j| {
-            idx.iter()
-                .zip(&sol.c)
-                .any(|(&ci, &c)| design.shift_joint(ci) == Some(j) && c > 0.0)
-        })
-        .collect();
+    let shift_ok = shift::active_shift_joints(design, idx, &sol.c, free);
     let ParameterCovariance {
         mut cov,
         labels,
