@@ -132,7 +132,7 @@ mod tests {
 
     /// The fold score equals an independent computation: calibrate on the training rows with
     /// the public fixed-structure calibration, write the robot, and predict every held-out row
-    /// with the model crate's point displacement.
+    /// with `validate::predict_full` (the model crate's point displacement).
     #[test]
     fn score_matches_an_independent_refit_and_prediction() {
         let truth = deflex_model::builtin("tx200").unwrap();
