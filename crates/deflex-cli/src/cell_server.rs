@@ -204,9 +204,8 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
         }
         ipoc += 4;
         let state = RobotState {
-            q_rad: step.q_measured_rad,
             cycle_id: ipoc,
-            ..RobotState::default()
+            ..RobotState::with_joints(&step.q_measured_rad)
         };
         let sent = Instant::now();
         let _ = robot.send_state(&state);

@@ -110,9 +110,8 @@ impl RobotLink for TwinRobotLink {
             self.ended_at_s = Some(self.step.time_s);
         }
         Ok(Some(RobotState {
-            q_rad: self.step.q_measured_rad,
             cycle_id: self.calls,
-            ..RobotState::default()
+            ..RobotState::with_joints(&self.step.q_measured_rad)
         }))
     }
 
@@ -121,6 +120,10 @@ impl RobotLink for TwinRobotLink {
             cell.set_correction(c.to_array());
         }
         Ok(())
+    }
+
+    fn protocol(&self) -> deflex_io::Protocol {
+        deflex_io::Protocol::SimpleLine
     }
 }
 

@@ -52,6 +52,7 @@ fn robot_link(cell: &CellFile) -> Result<Box<dyn RobotLink + Send>, String> {
                     sen_type: r.sen_type.clone(),
                     estr: None,
                     mode: rsi_mode(cell),
+                    ..RsiConfig::default()
                 },
             )
             .map_err(err)?,
@@ -59,7 +60,12 @@ fn robot_link(cell: &CellFile) -> Result<Box<dyn RobotLink + Send>, String> {
         RobotKind::AbbEgm => {
             // EGM's measurement age: one control period.
             let age_ms = (1000.0 / cell.control.rate_hz).round() as u32;
-            Box::new(deflex_io::egm::EgmLink::bind(r.bind, age_ms).map_err(err)?)
+            let cfg = deflex_io::egm::EgmConfig {
+                frame: deflex_io::egm::EgmFrame::Base,
+                age_ms,
+                ..Default::default()
+            };
+            Box::new(deflex_io::egm::EgmLink::bind(r.bind, cfg).map_err(err)?)
         }
         RobotKind::Staubli => Box::new(deflex_io::staubli::StaubliLink::bind(r.bind).map_err(err)?),
         RobotKind::SimpleUdp => Box::new(

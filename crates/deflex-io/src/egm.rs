@@ -7,10 +7,28 @@
 //! sensor. In path-correction mode (RAPID `EGMActMove` + `EGMMoveL`), the
 //! sensor answers `EgmSensorPathCorr` messages: header (`mtype` =
 //! PATH_CORRECTION) and `pathCorr { pos {x, y, z} in mm, age in ms }`. EGM
-//! path correction is **position only** and expressed in the path frame
-//! chosen in RAPID (`EGMActMove ... \SensorFrame`): the rotation part of a
-//! [`Correction`] is ignored, and the caller must give `dp_m` in that frame.
-//! The correction is absolute (offset from the programmed path).
+//! path correction is **position only** (the rotation part of a
+//! [`Correction`] is ignored) and absolute (offset from the programmed path).
+//!
+//! **Frame.** egm.proto documents `pathCorr.pos` as "relative the sensor tool
+//! coordinate system": the sensor frame given to `EGMActMove` (`SensorFrame`,
+//! a pose relative to the tool). [`EgmLink`] takes the correction in robot
+//! base axes and rotates it into the frame chosen by [`EgmFrame`]:
+//! [`EgmFrame::Tool`] (default) uses the TCP orientation the runtime passes
+//! with [`RobotLink::set_tcp_rotation`] (the model's forward kinematics at
+//! the reported joints) times the sensor frame's orientation in the tool;
+//! [`EgmFrame::WorkObject`] a fixed work-object orientation (for set-ups
+//! whose sensor frame keeps the work object's axes, e.g. a tool whose
+//! orientation never changes); [`EgmFrame::Base`] sends base axes unchanged.
+//! The RAPID set-up is in `docs/abb/`.
+//!
+//! **Joints.** `feedBack.joints` carries the robot's own axes (up to six:
+//! 4-, 5- and 6-axis arms send as many). ABB's seven-axis arms (IRB 14000)
+//! send six there and the arm angle, physically the third axis, as the first
+//! external joint; [`EgmConfig::seven_axis`] maps them back to chain order.
+//!
+//! **Peer.** [`EgmLink`] answers only the robot it is locked to (configured
+//! address, or the first valid sender; see [`crate::udp::PeerLock`]).
 //!
 //! The message structs of [`msg`] are written by hand with
 //! `#[derive(prost::Message)]` and the field numbers of ABB's `egm.proto`
@@ -22,7 +40,8 @@
 
 use crate::error::{LinkError, Protocol};
 use crate::link::{Correction, Pose6, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
-use crate::udp::UdpEndpoint;
+use crate::link::{MAX_JOINTS, rotation_transpose_apply};
+use crate::udp::{PeerLock, UdpEndpoint};
 use prost::Message;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::{Duration, Instant};
@@ -55,6 +74,11 @@ pub struct RobotFrame {
     pub q_rad: [f64; 6],
     /// Number of feedback joints present (0 if none).
     pub n_joints: usize,
+    /// Feedback external joints (rotating axes in rad; linear axes come in
+    /// mm and are reported ×π/180, as they are not used as robot joints).
+    pub external_rad: [f64; 6],
+    /// Number of external joints present.
+    pub n_external: usize,
     /// Feedback TCP pose.
     pub tcp_pose: Option<Pose6>,
 }
@@ -266,6 +290,10 @@ pub fn decode_robot(buf: &[u8]) -> Result<RobotFrame, LinkError> {
                             Reader::expect(fw, 2)?;
                             joints(fb.bytes()?, &mut out.q_rad, &mut out.n_joints)?;
                         }
+                        3 => {
+                            Reader::expect(fw, 2)?;
+                            joints(fb.bytes()?, &mut out.external_rad, &mut out.n_external)?;
+                        }
                         2 => {
                             Reader::expect(fw, 2)?;
                             out.tcp_pose = pose(fb.bytes()?)?;
@@ -344,8 +372,15 @@ pub fn decode_path_corr(buf: &[u8]) -> Result<PathCorrFrame, LinkError> {
 }
 
 /// Fills a reusable `EgmRobot` from a state (joints in deg, position in mm,
-/// quaternion); reuses the joints vector's capacity.
-pub fn fill_robot_msg(m: &mut msg::EgmRobot, s: &RobotState, seqno: u32, tm_ms: u32) {
+/// quaternion); reuses the joints vectors' capacity. With `seven_axis` the
+/// third of seven joints goes to the first external joint (ABB's layout).
+pub fn fill_robot_msg(
+    m: &mut msg::EgmRobot,
+    s: &RobotState,
+    seqno: u32,
+    tm_ms: u32,
+    seven_axis: bool,
+) {
     m.header = Some(msg::EgmHeader {
         seqno: Some(seqno),
         tm: Some(tm_ms),
@@ -354,7 +389,20 @@ pub fn fill_robot_msg(m: &mut msg::EgmRobot, s: &RobotState, seqno: u32, tm_ms: 
     let fb = m.feed_back.get_or_insert_with(Default::default);
     let j = fb.joints.get_or_insert_with(Default::default);
     j.joints.clear();
-    j.joints.extend(s.q_rad.iter().map(|q| q.to_degrees()));
+    let q = s.joints();
+    if seven_axis && q.len() == 7 {
+        j.joints.extend(
+            [q[0], q[1], q[3], q[4], q[5], q[6]]
+                .iter()
+                .map(|v| v.to_degrees()),
+        );
+        let e = fb.external_joints.get_or_insert_with(Default::default);
+        e.joints.clear();
+        e.joints.push(q[2].to_degrees());
+    } else {
+        j.joints.extend(q.iter().map(|v| v.to_degrees()));
+        fb.external_joints = None;
+    }
     fb.cartesian = s.tcp_pose.map(|p| {
         let q = p.quaternion();
         msg::EgmPose {
@@ -374,8 +422,92 @@ pub fn fill_robot_msg(m: &mut msg::EgmRobot, s: &RobotState, seqno: u32, tm_ms: 
     });
 }
 
+/// The frame `pathCorr.pos` is expressed in (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum EgmFrame {
+    /// The sensor frame of `EGMActMove`, attached to the tool (egm.proto's
+    /// "sensor tool coordinate system").
+    #[default]
+    Tool,
+    /// A fixed work-object orientation.
+    WorkObject,
+    /// Robot base axes, unchanged.
+    Base,
+}
+
+/// Settings of [`EgmLink`] (and of the simulated robot's endpoint).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EgmConfig {
+    /// Frame of the correction.
+    pub frame: EgmFrame,
+    /// Orientation of `EGMActMove`'s sensor frame relative to the tool
+    /// (row-major rotation), for [`EgmFrame::Tool`].
+    pub sensor_in_tool: [[f64; 3]; 3],
+    /// Orientation of the work object in the robot base frame, for
+    /// [`EgmFrame::WorkObject`].
+    pub work_object_in_base: [[f64; 3]; 3],
+    /// Age (ms) reported in `pathCorr.age`.
+    pub age_ms: u32,
+    /// The robot is one of ABB's seven-axis arms: axis 3 arrives as the first
+    /// external joint.
+    pub seven_axis: bool,
+}
+
+const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+impl Default for EgmConfig {
+    fn default() -> Self {
+        EgmConfig {
+            frame: EgmFrame::Tool,
+            sensor_in_tool: IDENTITY,
+            work_object_in_base: IDENTITY,
+            age_ms: 10,
+            seven_axis: false,
+        }
+    }
+}
+
+fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+impl EgmConfig {
+    /// Orientation, in robot base axes, of the frame `pathCorr.pos` is
+    /// expressed in, given the TCP orientation in base axes.
+    pub fn correction_frame(&self, tcp_in_base: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+        match self.frame {
+            EgmFrame::Tool => mat_mul(tcp_in_base, &self.sensor_in_tool),
+            EgmFrame::WorkObject => self.work_object_in_base,
+            EgmFrame::Base => IDENTITY,
+        }
+    }
+
+    /// Joint values in chain order from a decoded feedback (at most
+    /// [`MAX_JOINTS`]); an error when the message does not carry what the
+    /// configuration needs.
+    pub fn chain_joints(&self, f: &RobotFrame) -> Result<([f64; MAX_JOINTS], usize), LinkError> {
+        let mut q = [0.0; MAX_JOINTS];
+        if self.seven_axis {
+            if f.n_joints != 6 || f.n_external < 1 {
+                return Err(bad(
+                    "seven-axis robot: feedback needs 6 joints and the arm angle as first external joint",
+                ));
+            }
+            let j = &f.q_rad;
+            q[..7].copy_from_slice(&[j[0], j[1], f.external_rad[0], j[2], j[3], j[4], j[5]]);
+            Ok((q, 7))
+        } else {
+            if f.n_joints == 0 {
+                return Err(bad("EgmRobot feedback carries no joints"));
+            }
+            q[..f.n_joints].copy_from_slice(&f.q_rad[..f.n_joints]);
+            Ok((q, f.n_joints))
+        }
+    }
+}
+
 /// Sensor side of EGM (the deflex controller): receives `EgmRobot`, sends
-/// `EgmSensorPathCorr` to the address the robot messages come from.
+/// `EgmSensorPathCorr` to the robot the link is locked to.
 #[derive(Debug)]
 pub struct EgmLink {
     ep: UdpEndpoint,
@@ -383,24 +515,35 @@ pub struct EgmLink {
     tx: Box<[u8; BUFFER]>,
     seqno: u32,
     epoch: Instant,
-    /// Age (ms) reported in `pathCorr.age`.
-    pub age_ms: u32,
+    cfg: EgmConfig,
+    tcp_in_base: [[f64; 3]; 3],
     last: Option<RobotFrame>,
+    peers: PeerLock,
 }
 
 impl EgmLink {
     /// Binds to `local` (the UDP port configured in the robot's EGM
     /// transmission settings).
-    pub fn bind(local: impl ToSocketAddrs, age_ms: u32) -> Result<Self, LinkError> {
+    pub fn bind(local: impl ToSocketAddrs, cfg: EgmConfig) -> Result<Self, LinkError> {
         Ok(EgmLink {
             ep: UdpEndpoint::bind(local, P)?,
             rx: Box::new([0; BUFFER]),
             tx: Box::new([0; BUFFER]),
             seqno: 0,
             epoch: Instant::now(),
-            age_ms,
+            cfg,
+            tcp_in_base: IDENTITY,
             last: None,
+            peers: PeerLock::first_sender(),
         })
+    }
+    /// Accepts messages only from `peer` (port 0: any port of that IP).
+    pub fn expect_peer(&mut self, peer: SocketAddr) {
+        self.peers.set_configured(Some(peer));
+    }
+    /// The sender lock.
+    pub fn peers(&self) -> &PeerLock {
+        &self.peers
     }
     /// Local socket address.
     pub fn local_addr(&self) -> Result<SocketAddr, LinkError> {
@@ -410,6 +553,10 @@ impl EgmLink {
     pub fn last_frame(&self) -> Option<&RobotFrame> {
         self.last.as_ref()
     }
+    /// Settings.
+    pub fn config(&self) -> &EgmConfig {
+        &self.cfg
+    }
 }
 
 impl RobotLink for EgmLink {
@@ -417,30 +564,45 @@ impl RobotLink for EgmLink {
         let Some((n, from)) = self.ep.recv(&mut self.rx[..], timeout)? else {
             return Ok(None);
         };
+        self.peers.check(P, from)?;
         let f = decode_robot(&self.rx[..n])?;
-        if f.n_joints != 6 {
-            return Err(bad("EgmRobot feedback does not carry 6 joints"));
-        }
+        let (q, count) = self.cfg.chain_joints(&f)?;
+        self.peers.lock(from);
         self.ep.set_peer(from);
         self.last = Some(f);
         Ok(Some(RobotState {
-            q_rad: f.q_rad,
+            q_rad: q,
+            joint_count: count,
             tcp_pose: f.tcp_pose,
             cycle_id: u64::from(f.seqno.unwrap_or(0)),
             robot_time_s: f.tm_ms.map(|t| f64::from(t) * 1e-3),
             status: 0,
+            late_answers: None,
         }))
     }
 
-    /// Sends `correction.dp_m` (path frame); the rotation part is ignored.
+    /// Sends `correction.dp_m` rotated from base axes into the configured
+    /// frame; the rotation part is ignored.
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         if self.ep.peer().is_none() {
             return Err(LinkError::NoPeer { protocol: P });
         }
+        let frame = self.cfg.correction_frame(&self.tcp_in_base);
+        let dp = rotation_transpose_apply(&frame, c.dp_m);
         self.seqno = self.seqno.wrapping_add(1);
         let tm = self.epoch.elapsed().as_millis() as u32;
-        let n = encode_path_corr(self.seqno, tm, c.dp_m, self.age_ms, &mut self.tx[..])?;
+        let n = encode_path_corr(self.seqno, tm, dp, self.cfg.age_ms, &mut self.tx[..])?;
         self.ep.send(&self.tx[..n])
+    }
+
+    fn set_tcp_rotation(&mut self, rotation: &[[f64; 3]; 3]) {
+        if rotation.iter().flatten().all(|v| v.is_finite()) {
+            self.tcp_in_base = *rotation;
+        }
+    }
+
+    fn protocol(&self) -> Protocol {
+        P
     }
 }
 
@@ -451,6 +613,8 @@ pub struct EgmRobotEndpoint {
     msg: msg::EgmRobot,
     rx: Box<[u8; BUFFER]>,
     tx: Box<[u8; BUFFER]>,
+    seven_axis: bool,
+    frame: [[f64; 3]; 3],
 }
 
 impl EgmRobotEndpoint {
@@ -459,13 +623,26 @@ impl EgmRobotEndpoint {
         let mut ep = UdpEndpoint::bind(local, P)?;
         ep.set_peer(sensor);
         let mut msg = msg::EgmRobot::default();
-        fill_robot_msg(&mut msg, &RobotState::default(), 0, 0);
+        fill_robot_msg(&mut msg, &RobotState::default(), 0, 0, false);
         Ok(EgmRobotEndpoint {
             ep,
             msg,
             rx: Box::new([0; BUFFER]),
             tx: Box::new([0; BUFFER]),
+            seven_axis: false,
+            frame: IDENTITY,
         })
+    }
+    /// Sends the third of seven joints as the first external joint (ABB's
+    /// seven-axis arms).
+    pub fn set_seven_axis(&mut self, seven_axis: bool) {
+        self.seven_axis = seven_axis;
+    }
+    /// Orientation in base axes of the frame the corrections arrive in
+    /// ([`EgmConfig::correction_frame`]); received corrections are rotated
+    /// back to base axes with it.
+    pub fn set_correction_frame(&mut self, frame: &[[f64; 3]; 3]) {
+        self.frame = *frame;
     }
     /// Local socket address.
     pub fn local_addr(&self) -> Result<SocketAddr, LinkError> {
@@ -477,7 +654,7 @@ impl RobotSideLink for EgmRobotEndpoint {
     /// `cycle_id` becomes `seqno` (truncated to 32 bits), `robot_time_s` `tm`.
     fn send_state(&mut self, s: &RobotState) -> Result<(), LinkError> {
         let tm = (s.robot_time_s.unwrap_or(0.0) * 1e3) as u32;
-        fill_robot_msg(&mut self.msg, s, s.cycle_id as u32, tm);
+        fill_robot_msg(&mut self.msg, s, s.cycle_id as u32, tm, self.seven_axis);
         let cap = self.tx.len();
         let mut w = &mut self.tx[..];
         self.msg
@@ -490,6 +667,7 @@ impl RobotSideLink for EgmRobotEndpoint {
         self.ep.send(&self.tx[..n])
     }
 
+    /// The correction in base axes (rotated back from the configured frame).
     fn receive_correction(
         &mut self,
         timeout: Duration,
@@ -498,12 +676,15 @@ impl RobotSideLink for EgmRobotEndpoint {
             return Ok(None);
         };
         let f = decode_path_corr(&self.rx[..n])?;
+        let r = &self.frame;
+        let dp_m = std::array::from_fn(|i| (0..3).map(|k| r[i][k] * f.dp_m[k]).sum());
         Ok(Some(ReceivedCorrection {
             correction: Correction {
-                dp_m: f.dp_m,
+                dp_m,
                 dphi_rad: [0.0; 3],
             },
             cycle_id: u64::from(f.seqno.unwrap_or(0)),
+            joint_correction_rad: None,
         }))
     }
 }

@@ -97,6 +97,16 @@ pub enum LinkError {
         /// Protocol of the endpoint.
         protocol: Protocol,
     },
+    /// A packet (or, on TCP, a connection) came from a host that is not the
+    /// peer this link is locked to (the configured robot or sensor address,
+    /// or the first valid sender of the session). It is dropped unanswered.
+    #[error("{protocol}: dropped a packet from {from}, which is not the locked peer")]
+    ForeignSender {
+        /// Protocol of the endpoint.
+        protocol: Protocol,
+        /// Where the packet came from.
+        from: std::net::SocketAddr,
+    },
     /// A value was rejected before sending (e.g. non-finite number, or a
     /// configuration string with forbidden characters).
     #[error("{protocol}: invalid value: {reason}")]
@@ -124,5 +134,11 @@ impl LinkError {
                 | LinkError::Checksum { .. }
                 | LinkError::Oversize { .. }
         )
+    }
+
+    /// True for a packet or connection from a host other than the locked
+    /// peer ([`LinkError::ForeignSender`]): dropped, the link is still usable.
+    pub fn is_foreign(&self) -> bool {
+        matches!(self, LinkError::ForeignSender { .. })
     }
 }

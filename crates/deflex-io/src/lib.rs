@@ -41,6 +41,6 @@ pub mod xml;
 
 pub use error::{LinkError, Protocol};
 pub use link::{
-    Correction, ForceSensorLink, N_JOINTS, Pose6, ReceivedCorrection, RobotLink, RobotSideLink,
+    Correction, ForceSensorLink, MAX_JOINTS, Pose6, ReceivedCorrection, RobotLink, RobotSideLink,
     RobotState, WrenchSample,
 };

@@ -16,8 +16,8 @@
 use crate::error::LinkError;
 use std::time::Duration;
 
-/// Number of joint values carried by [`RobotState`].
-pub const N_JOINTS: usize = 6;
+/// Largest number of joint values a [`RobotState`] carries (the model's `MAX_JOINTS`).
+pub const MAX_JOINTS: usize = 8;
 
 /// A Cartesian pose: position and KUKA-style ZYX Euler angles.
 ///
@@ -55,8 +55,12 @@ impl Pose6 {
 /// What the robot controller reports every cycle.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RobotState {
-    /// Measured joint positions in radians (axis 1 first).
-    pub q_rad: [f64; N_JOINTS],
+    /// Measured joint positions in radians (axis 1 first); the first
+    /// [`RobotState::joint_count`] are valid, the rest are zero.
+    pub q_rad: [f64; MAX_JOINTS],
+    /// Number of joint values the telegram carried (KUKA RSI and Stäubli: 6;
+    /// ABB EGM: what the robot sends; the simple line links: 1 to 8).
+    pub joint_count: usize,
     /// Measured TCP pose in the robot base frame, when the protocol carries it.
     pub tcp_pose: Option<Pose6>,
     /// Cycle identifier: KUKA IPOC, EGM or deflex sequence number, or the
@@ -65,9 +69,35 @@ pub struct RobotState {
     /// Robot controller clock in seconds when the protocol carries one
     /// (EGM `tm`, deflex timestamp). Receive time is the caller's business.
     pub robot_time_s: Option<f64>,
-    /// Protocol-specific status word: KUKA RSI `Delay D` (late telegrams),
-    /// deflex status bits (see [`crate::staubli`]), 0 otherwise.
+    /// Protocol-specific status word: deflex status bits (see
+    /// [`crate::staubli`]), 0 otherwise.
     pub status: u32,
+    /// The robot's own count of answers that came too late or not at all,
+    /// where the protocol carries one (KUKA RSI `Delay D`, cumulative).
+    pub late_answers: Option<u32>,
+}
+
+impl RobotState {
+    /// A state carrying the joint values `q` (at most [`MAX_JOINTS`]; extra
+    /// values are dropped), everything else default.
+    pub fn with_joints(q: &[f64]) -> Self {
+        let mut s = RobotState::default();
+        s.set_joints(q);
+        s
+    }
+
+    /// Sets the joint values (at most [`MAX_JOINTS`]).
+    pub fn set_joints(&mut self, q: &[f64]) {
+        let n = q.len().min(MAX_JOINTS);
+        self.q_rad = [0.0; MAX_JOINTS];
+        self.q_rad[..n].copy_from_slice(&q[..n]);
+        self.joint_count = n;
+    }
+
+    /// The valid joint values.
+    pub fn joints(&self) -> &[f64] {
+        &self.q_rad[..self.joint_count.min(MAX_JOINTS)]
+    }
 }
 
 /// A Cartesian correction of the tool path, expressed in the robot base axes.
@@ -137,6 +167,9 @@ pub struct ReceivedCorrection {
     /// Cycle identifier echoed by the controller (IPOC, acknowledged
     /// sequence number...), 0 when the protocol has none.
     pub cycle_id: u64,
+    /// A joint-space correction (rad, axis 1 first) when the controller
+    /// answered in joint space (KUKA RSI `AK`); `correction` is then zero.
+    pub joint_correction_rad: Option<[f64; 6]>,
 }
 
 /// One force/torque sample from the sensor, in SI units.
@@ -168,6 +201,30 @@ pub trait RobotLink {
     fn receive(&mut self, timeout: Duration) -> Result<Option<RobotState>, LinkError>;
     /// Sends the total correction for the current cycle.
     fn send_correction(&mut self, correction: &Correction) -> Result<(), LinkError>;
+    /// Whether this link answers with joint corrections
+    /// ([`RobotLink::send_joint_correction`]) instead of Cartesian ones.
+    fn answers_in_joint_space(&self) -> bool {
+        false
+    }
+    /// Sends a joint-space correction (rad, axis 1 first) for the current
+    /// cycle. Only links that [answer in joint space](RobotLink::answers_in_joint_space)
+    /// implement it.
+    fn send_joint_correction(&mut self, dq_rad: &[f64]) -> Result<(), LinkError> {
+        let _ = dq_rad;
+        Err(LinkError::InvalidValue {
+            protocol: self.protocol(),
+            reason: "this link does not send joint corrections",
+        })
+    }
+    /// Tells the link the orientation of the TCP in the robot base frame
+    /// (row-major rotation matrix) for the cycle being answered, from the
+    /// model's forward kinematics at the reported joints. Links whose
+    /// correction frame follows the tool (ABB EGM) use it; others ignore it.
+    fn set_tcp_rotation(&mut self, rotation: &[[f64; 3]; 3]) {
+        let _ = rotation;
+    }
+    /// The protocol, for messages.
+    fn protocol(&self) -> crate::Protocol;
 }
 
 /// Robot side of a robot link (used by the simulated cell).
@@ -194,6 +251,13 @@ pub trait ForceSensorLink {
 }
 
 // ---------------------------------------------------------------- rotations
+
+/// `Rᵀ v` for a row-major rotation `R`: a base-axes vector expressed in the
+/// axes of the frame whose orientation (in base axes) is `R`.
+#[inline]
+pub fn rotation_transpose_apply(r: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|j| (0..3).map(|i| r[i][j] * v[i]).sum())
+}
 
 /// `Rz(a) · Ry(b) · Rx(c)` for `zyx = [a, b, c]`, row-major.
 pub fn zyx_to_matrix(zyx: [f64; 3]) -> [[f64; 3]; 3] {

@@ -420,7 +420,7 @@ impl ForceSensorLink for NetFtClient {
             return Ok(None);
         };
         if from != self.sensor {
-            return Err(bad("datagram from an address other than the sensor"));
+            return Err(LinkError::ForeignSender { protocol: P, from });
         }
         let mut last = None;
         let mut gap = 0u32;

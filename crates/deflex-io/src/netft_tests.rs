@@ -208,5 +208,5 @@ fn loopback_stream_bias_gap_and_fault() {
             client.local_addr().unwrap(),
         )
         .unwrap();
-    assert!(client.receive(t).unwrap_err().is_bad_packet());
+    assert!(client.receive(t).unwrap_err().is_foreign());
 }

@@ -22,19 +22,40 @@
 //!
 //! (`Type` must match the RSI configuration; `EStr` is an optional message
 //! shown on the pendant). `RKorr` is in mm and degrees, printed with four
-//! decimals. In [`CorrectionMode::Absolute`] it is the total correction of
+//! decimals (a value that rounds to zero is printed `0.0000`, never
+//! `-0.0000`). In [`CorrectionMode::Absolute`] it is the total correction of
 //! the path; in [`CorrectionMode::Relative`] it is the increment since the
-//! previous answer, which the robot accumulates (a lost answer then loses its
-//! increment, so absolute mode is preferred). Element and attribute names are
-//! case-insensitive. Internally everything is SI ([`Correction`] rotation
+//! previous answer, which the robot accumulates. Element and attribute names
+//! are case-insensitive. Internally everything is SI ([`Correction`] rotation
 //! vectors are converted exactly to and from A B C).
+//!
+//! **Joint-space answers.** RSI configurations built around an axis
+//! correction object (`AXISCORR`, as the ROS-Industrial `kuka_rsi_hw_interface`
+//! set-ups use) read `<AK A1=".." … A6=".."/>` (degrees) instead of `RKorr`;
+//! [`RsiAnswer::Joint`] answers that way (tag `AK`, or `AKorr`), with a joint
+//! correction the caller computes from the Cartesian one
+//! ([`RobotLink::send_joint_correction`]).
+//!
+//! **Relative mode without drift.** `Delay D` is the robot's cumulative count
+//! of answers that did not arrive in time (KUKA's `DEF_Delay`); RSI does not
+//! apply an answer that misses its cycle. When `D` grows between two
+//! telegrams, the answer to the previous telegram was not applied, so
+//! [`RsiLink`] takes its increment back out of what it believes the robot has
+//! accumulated and the next increment re-sends it: a lost or late answer
+//! delays the correction by one cycle instead of offsetting it for the rest
+//! of the session. A counter that goes backwards means a new RSI session
+//! (the robot's accumulated correction restarts at zero).
+//!
+//! **Peer.** [`RsiLink`] answers only the robot it is locked to: the
+//! configured address ([`RsiLink::expect_peer`]) or the first valid sender
+//! of the session ([`crate::udp::PeerLock`]).
 //!
 //! Parsing uses the allocation-free scanner of [`crate::xml`]; formatting
 //! writes into caller-provided byte slices.
 
 use crate::error::{LinkError, Protocol};
 use crate::link::{Correction, Pose6, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
-use crate::udp::{SliceWriter, UdpEndpoint, parse_f64, parse_u64};
+use crate::udp::{PeerLock, SliceWriter, UdpEndpoint, parse_f64, parse_u64};
 use crate::xml::{Attributes, XmlEvent, XmlScanner, name_eq};
 use core::fmt::Write;
 use std::net::{SocketAddr, ToSocketAddrs};
@@ -81,10 +102,44 @@ pub struct RobTelegram {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SenTelegram {
     /// `RKorr` as `[x, y, z]` in metres then `[a, b, c]` ZYX Euler angles in
-    /// radians (total or increment depending on the [`CorrectionMode`]).
-    pub rkorr: [f64; 6],
+    /// radians (total or increment depending on the [`CorrectionMode`]), when
+    /// the answer is Cartesian.
+    pub rkorr: Option<[f64; 6]>,
+    /// `AK` / `AKorr` axis corrections A1…A6 in radians, when the answer is
+    /// in joint space.
+    pub joints_rad: Option<[f64; 6]>,
     /// Echoed cycle stamp.
     pub ipoc: u64,
+}
+
+/// The element a joint-space answer uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum JointTag {
+    /// `<AK A1=".." … A6=".."/>` (the ROS-Industrial RSI set-ups).
+    #[default]
+    Ak,
+    /// `<AKorr A1=".." … A6=".."/>`.
+    AKorr,
+}
+
+impl JointTag {
+    /// The element name.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointTag::Ak => "AK",
+            JointTag::AKorr => "AKorr",
+        }
+    }
+}
+
+/// What the answers carry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RsiAnswer {
+    /// Cartesian `RKorr` (mm, degrees).
+    #[default]
+    Cartesian,
+    /// Joint corrections A1…A6 (degrees) in the given element.
+    Joint(JointTag),
 }
 
 const POSE_ATTRS: [&str; 6] = ["X", "Y", "Z", "A", "B", "C"];
@@ -195,9 +250,10 @@ pub fn parse_rob(buf: &[u8]) -> Result<RobTelegram, LinkError> {
     Ok(t)
 }
 
-/// Parses a sensor → robot `<Sen>` answer.
+/// Parses a sensor → robot `<Sen>` answer (`RKorr`, or `AK` / `AKorr`).
 pub fn parse_sen(buf: &[u8]) -> Result<SenTelegram, LinkError> {
     let mut rkorr = None;
+    let mut joints = None;
     let ipoc = walk(buf, "Sen", |name, attrs| {
         if name_eq(name, "RKorr") {
             let v = read6(attrs, &POSE_ATTRS, "RKorr lacks one of X Y Z A B C")?;
@@ -209,13 +265,27 @@ pub fn parse_sen(buf: &[u8]) -> Result<SenTelegram, LinkError> {
                 v[4].to_radians(),
                 v[5].to_radians(),
             ]);
+        } else if name_eq(name, "AK") || name_eq(name, "AKorr") {
+            let v = read6(attrs, &AXIS_ATTRS, "AK lacks one of A1..A6")?;
+            joints = Some(v.map(f64::to_radians));
         }
         Ok(())
     })?;
+    if rkorr.is_none() && joints.is_none() {
+        return Err(bad("answer has neither RKorr nor AK"));
+    }
     Ok(SenTelegram {
-        rkorr: rkorr.ok_or(bad("answer has no RKorr"))?,
+        rkorr,
+        joints_rad: joints,
         ipoc,
     })
+}
+
+/// The value printed with four decimals, without a negative zero: anything
+/// that rounds to zero prints `0.0000`.
+#[inline]
+fn four_decimals(x: f64) -> f64 {
+    if x.abs() < 5e-5 { 0.0 } else { x }
 }
 
 fn check_finite(v: &[f64]) -> Result<(), LinkError> {
@@ -229,10 +299,15 @@ fn check_finite(v: &[f64]) -> Result<(), LinkError> {
     }
 }
 
-fn write_pose(w: &mut SliceWriter<'_>, tag: &str, v: [f64; 6]) -> core::fmt::Result {
+fn write_six(
+    w: &mut SliceWriter<'_>,
+    tag: &str,
+    names: &[&str; 6],
+    v: [f64; 6],
+) -> core::fmt::Result {
     write!(w, "<{tag}")?;
-    for (n, x) in POSE_ATTRS.iter().zip(v) {
-        write!(w, " {n}=\"{x:.4}\"")?;
+    for (n, x) in names.iter().zip(v) {
+        write!(w, " {n}=\"{:.4}\"", four_decimals(x))?;
     }
     w.push_bytes(b"/>")
 }
@@ -262,17 +337,13 @@ pub fn format_rob(t: &RobTelegram, out: &mut [u8]) -> Result<usize, LinkError> {
     let r = (|| {
         w.push_bytes(b"<Rob Type=\"KUKA\">")?;
         if let Some(v) = ist {
-            write_pose(&mut w, "RIst", v)?;
+            write_six(&mut w, "RIst", &POSE_ATTRS, v)?;
         }
         if let Some(v) = sol {
-            write_pose(&mut w, "RSol", v)?;
+            write_six(&mut w, "RSol", &POSE_ATTRS, v)?;
         }
         if let Some(q) = q {
-            w.push_bytes(b"<AIPos")?;
-            for (n, x) in AXIS_ATTRS.iter().zip(q) {
-                write!(w, " {n}=\"{x:.4}\"")?;
-            }
-            w.push_bytes(b"/>")?;
+            write_six(&mut w, "AIPos", &AXIS_ATTRS, q)?;
         }
         write!(w, "<Delay D=\"{}\"/><IPOC>{}</IPOC></Rob>", t.delay, t.ipoc)
     })();
@@ -308,6 +379,51 @@ pub fn format_sen(
     estr: Option<&str>,
     out: &mut [u8],
 ) -> Result<usize, LinkError> {
+    let v = [
+        rkorr[0] * 1e3,
+        rkorr[1] * 1e3,
+        rkorr[2] * 1e3,
+        rkorr[3].to_degrees(),
+        rkorr[4].to_degrees(),
+        rkorr[5].to_degrees(),
+    ];
+    format_sen_body("RKorr", &POSE_ATTRS, rkorr, v, ipoc, sen_type, estr, out)
+}
+
+/// Formats a joint-space `<Sen>` answer (`<AK A1=".." … A6=".."/>` or
+/// `AKorr`, degrees) into `out`, returning its length. `dq_rad` is in rad.
+pub fn format_sen_joints(
+    tag: JointTag,
+    dq_rad: &[f64; 6],
+    ipoc: u64,
+    sen_type: &str,
+    estr: Option<&str>,
+    out: &mut [u8],
+) -> Result<usize, LinkError> {
+    let v = dq_rad.map(f64::to_degrees);
+    format_sen_body(
+        tag.name(),
+        &AXIS_ATTRS,
+        dq_rad,
+        v,
+        ipoc,
+        sen_type,
+        estr,
+        out,
+    )
+}
+
+#[allow(clippy::too_many_arguments)] // one private formatter behind the two public ones
+fn format_sen_body(
+    tag: &str,
+    names: &[&str; 6],
+    si: &[f64; 6],
+    printed: [f64; 6],
+    ipoc: u64,
+    sen_type: &str,
+    estr: Option<&str>,
+    out: &mut [u8],
+) -> Result<usize, LinkError> {
     if !valid_sen_type(sen_type) {
         return Err(LinkError::InvalidValue {
             protocol: P,
@@ -320,23 +436,16 @@ pub fn format_sen(
             reason: "EStr must be printable ASCII without < > &",
         });
     }
-    check_finite(rkorr)?;
+    check_finite(si)?;
+    check_finite(&printed)?;
     let cap = out.len();
     let mut w = SliceWriter::new(out);
-    let v = [
-        rkorr[0] * 1e3,
-        rkorr[1] * 1e3,
-        rkorr[2] * 1e3,
-        rkorr[3].to_degrees(),
-        rkorr[4].to_degrees(),
-        rkorr[5].to_degrees(),
-    ];
     let r = (|| {
         write!(w, "<Sen Type=\"{sen_type}\">")?;
         if let Some(e) = estr {
             write!(w, "<EStr>{e}</EStr>")?;
         }
-        write_pose(&mut w, "RKorr", v)?;
+        write_six(&mut w, tag, names, printed)?;
         write!(w, "<IPOC>{ipoc}</IPOC></Sen>")
     })();
     r.map_err(|_| LinkError::BufferTooSmall {
@@ -365,8 +474,10 @@ pub struct RsiConfig {
     pub sen_type: String,
     /// Optional `EStr` message.
     pub estr: Option<String>,
-    /// Absolute or relative `RKorr`.
+    /// Absolute or relative corrections.
     pub mode: CorrectionMode,
+    /// Cartesian `RKorr` or joint `AK` answers.
+    pub answer: RsiAnswer,
 }
 
 impl Default for RsiConfig {
@@ -375,14 +486,62 @@ impl Default for RsiConfig {
             sen_type: "ImFree".into(),
             estr: None,
             mode: CorrectionMode::Absolute,
+            answer: RsiAnswer::Cartesian,
         }
+    }
+}
+
+/// What [`RsiLink`] believes the robot has accumulated in relative mode.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct RelativeBook {
+    /// Sum of the printed increments the robot applied (RKorr or AK units in
+    /// SI), as far as `Delay` tells.
+    applied: [f64; 6],
+    /// The increment sent in answer to the latest telegram, until the next
+    /// telegram's `Delay` confirms or refutes it.
+    unconfirmed: Option<[f64; 6]>,
+    /// `Delay D` of the latest telegram.
+    last_delay: Option<u32>,
+    /// Answers taken back because `Delay` grew.
+    rolled_back: u64,
+}
+
+impl RelativeBook {
+    /// Books the `Delay D` of a new telegram.
+    fn on_telegram(&mut self, delay: u32) {
+        match self.last_delay {
+            Some(prev) if delay > prev => {
+                if let Some(inc) = self.unconfirmed {
+                    for (a, i) in self.applied.iter_mut().zip(inc) {
+                        *a -= i;
+                    }
+                    self.rolled_back += 1;
+                }
+            }
+            Some(prev) if delay < prev => {
+                // A new RSI session: the robot's accumulation restarts at zero.
+                self.applied = [0.0; 6];
+            }
+            _ => {}
+        }
+        self.unconfirmed = None;
+        self.last_delay = Some(delay);
+    }
+
+    /// Books an increment that was sent.
+    fn on_sent(&mut self, increment: [f64; 6]) {
+        for (a, i) in self.applied.iter_mut().zip(increment) {
+            *a += i;
+        }
+        self.unconfirmed = Some(increment);
     }
 }
 
 /// Sensor-PC side of RSI: receives `<Rob>` telegrams and answers `<Sen>`.
 ///
-/// [`RobotLink::send_correction`] answers the most recently received
-/// telegram (echoing its IPOC) to the address it came from.
+/// [`RobotLink::send_correction`] (or, with [`RsiAnswer::Joint`],
+/// [`RobotLink::send_joint_correction`]) answers the most recently received
+/// telegram (echoing its IPOC) to the robot the link is locked to.
 #[derive(Debug)]
 pub struct RsiLink {
     ep: UdpEndpoint,
@@ -390,7 +549,8 @@ pub struct RsiLink {
     rx: Box<[u8; RX_BUFFER]>,
     tx: Box<[u8; TX_BUFFER]>,
     last: Option<RobTelegram>,
-    last_sent: [f64; 6],
+    peers: PeerLock,
+    relative: RelativeBook,
 }
 
 impl RsiLink {
@@ -408,8 +568,20 @@ impl RsiLink {
             rx: Box::new([0; RX_BUFFER]),
             tx: Box::new([0; TX_BUFFER]),
             last: None,
-            last_sent: [0.0; 6],
+            peers: PeerLock::first_sender(),
+            relative: RelativeBook::default(),
         })
+    }
+
+    /// Accepts telegrams only from `peer` (port 0: any port of that IP)
+    /// instead of locking to the first sender.
+    pub fn expect_peer(&mut self, peer: SocketAddr) {
+        self.peers.set_configured(Some(peer));
+    }
+
+    /// The sender lock (locked address, refused packets).
+    pub fn peers(&self) -> &PeerLock {
+        &self.peers
     }
 
     /// Local socket address.
@@ -421,6 +593,57 @@ impl RsiLink {
     pub fn last_telegram(&self) -> Option<&RobTelegram> {
         self.last.as_ref()
     }
+
+    /// Relative mode: answers whose increment was taken back because the
+    /// robot's `Delay` counter showed they were not applied.
+    pub fn rolled_back(&self) -> u64 {
+        self.relative.rolled_back
+    }
+
+    fn current_ipoc(&self) -> Result<u64, LinkError> {
+        Ok(self
+            .last
+            .as_ref()
+            .ok_or(LinkError::NoPeer { protocol: P })?
+            .ipoc)
+    }
+
+    /// Formats and sends one answer: `total` is the total correction in the
+    /// answer's units (RKorr SI or joint rad); relative mode sends the
+    /// increment over what the robot has applied.
+    fn answer(&mut self, total: [f64; 6], joint: Option<JointTag>) -> Result<(), LinkError> {
+        let ipoc = self.current_ipoc()?;
+        check_finite(&total).map_err(|_| LinkError::InvalidValue {
+            protocol: P,
+            reason: "non-finite correction",
+        })?;
+        let relative = self.cfg.mode == CorrectionMode::Relative;
+        let mut sent = total;
+        if relative {
+            for (s, a) in sent.iter_mut().zip(self.relative.applied) {
+                *s -= a;
+            }
+        }
+        let estr = self.cfg.estr.as_deref();
+        let n = match joint {
+            None => format_sen(&sent, ipoc, &self.cfg.sen_type, estr, &mut self.tx[..])?,
+            Some(tag) => {
+                format_sen_joints(tag, &sent, ipoc, &self.cfg.sen_type, estr, &mut self.tx[..])?
+            }
+        };
+        self.ep.send(&self.tx[..n])?;
+        if relative {
+            // The robot accumulates what was printed: book the rounded value
+            // so that rounding does not drift either.
+            let printed = parse_sen(&self.tx[..n])?;
+            let inc = printed
+                .rkorr
+                .or(printed.joints_rad)
+                .ok_or(bad("formatted answer has no body"))?;
+            self.relative.on_sent(inc);
+        }
+        Ok(())
+    }
 }
 
 impl RobotLink for RsiLink {
@@ -428,55 +651,57 @@ impl RobotLink for RsiLink {
         let Some((n, from)) = self.ep.recv(&mut self.rx[..], timeout)? else {
             return Ok(None);
         };
+        self.peers.check(P, from)?;
         let t = parse_rob(&self.rx[..n])?;
         let q = t.q_rad.ok_or(bad("telegram has no AIPos"))?;
+        self.peers.lock(from);
         self.ep.set_peer(from);
+        self.relative.on_telegram(t.delay);
         self.last = Some(t);
-        Ok(Some(RobotState {
-            q_rad: q,
-            tcp_pose: t.actual_pose,
-            cycle_id: t.ipoc,
-            robot_time_s: None,
-            status: t.delay,
-        }))
+        let mut state = RobotState::with_joints(&q);
+        state.tcp_pose = t.actual_pose;
+        state.cycle_id = t.ipoc;
+        state.late_answers = Some(t.delay);
+        Ok(Some(state))
     }
 
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
-        let ipoc = self
-            .last
-            .as_ref()
-            .ok_or(LinkError::NoPeer { protocol: P })?
-            .ipoc;
+        if let RsiAnswer::Joint(_) = self.cfg.answer {
+            return Err(LinkError::InvalidValue {
+                protocol: P,
+                reason: "this RSI link answers joint corrections (AK)",
+            });
+        }
         if !c.is_finite() {
             return Err(LinkError::InvalidValue {
                 protocol: P,
                 reason: "non-finite correction",
             });
         }
-        let total = correction_to_rkorr(c);
-        let mut sent = total;
-        if self.cfg.mode == CorrectionMode::Relative {
-            for (s, l) in sent.iter_mut().zip(self.last_sent) {
-                *s -= l;
-            }
-        }
-        let n = format_sen(
-            &sent,
-            ipoc,
-            &self.cfg.sen_type,
-            self.cfg.estr.as_deref(),
-            &mut self.tx[..],
-        )?;
-        self.ep.send(&self.tx[..n])?;
-        // Relative mode: the robot accumulates what was printed, so track the
-        // rounded value to avoid drift from rounding.
-        if self.cfg.mode == CorrectionMode::Relative {
-            let printed = parse_sen(&self.tx[..n])?.rkorr;
-            for (l, p) in self.last_sent.iter_mut().zip(printed) {
-                *l += p;
-            }
-        }
-        Ok(())
+        self.answer(correction_to_rkorr(c), None)
+    }
+
+    fn answers_in_joint_space(&self) -> bool {
+        matches!(self.cfg.answer, RsiAnswer::Joint(_))
+    }
+
+    /// Sends `<AK A1..A6>` (degrees on the wire) from `dq_rad` (the first six
+    /// values; missing ones are zero).
+    fn send_joint_correction(&mut self, dq_rad: &[f64]) -> Result<(), LinkError> {
+        let RsiAnswer::Joint(tag) = self.cfg.answer else {
+            return Err(LinkError::InvalidValue {
+                protocol: P,
+                reason: "this RSI link answers Cartesian corrections (RKorr)",
+            });
+        };
+        let mut dq = [0.0; 6];
+        let n = dq_rad.len().min(6);
+        dq[..n].copy_from_slice(&dq_rad[..n]);
+        self.answer(dq, Some(tag))
+    }
+
+    fn protocol(&self) -> Protocol {
+        P
     }
 }
 
@@ -521,12 +746,17 @@ impl RsiRobotEndpoint {
 }
 
 impl RobotSideLink for RsiRobotEndpoint {
+    /// Sends `AIPos` (the first six joint values), `RIst` when known and
+    /// `Delay D` = [`RobotState::late_answers`] (0 when absent).
     fn send_state(&mut self, s: &RobotState) -> Result<(), LinkError> {
+        let mut q = [0.0; 6];
+        let n = s.joint_count.min(6);
+        q[..n].copy_from_slice(&s.q_rad[..n]);
         let t = RobTelegram {
             actual_pose: s.tcp_pose,
             setpoint_pose: None,
-            q_rad: Some(s.q_rad),
-            delay: s.status,
+            q_rad: Some(q),
+            delay: s.late_answers.unwrap_or(0),
             ipoc: s.cycle_id,
         };
         let n = format_rob(&t, &mut self.tx[..])?;
@@ -541,18 +771,27 @@ impl RobotSideLink for RsiRobotEndpoint {
             return Ok(None);
         };
         let t = parse_sen(&self.rx[..n])?;
+        let body = t.rkorr.or(t.joints_rad).unwrap_or_default();
         let total = match self.mode {
-            CorrectionMode::Absolute => t.rkorr,
+            CorrectionMode::Absolute => body,
             CorrectionMode::Relative => {
-                for (a, d) in self.accumulated.iter_mut().zip(t.rkorr) {
+                for (a, d) in self.accumulated.iter_mut().zip(body) {
                     *a += d;
                 }
                 self.accumulated
             }
         };
-        Ok(Some(ReceivedCorrection {
-            correction: rkorr_to_correction(&total),
-            cycle_id: t.ipoc,
+        Ok(Some(match t.rkorr {
+            Some(_) => ReceivedCorrection {
+                correction: rkorr_to_correction(&total),
+                cycle_id: t.ipoc,
+                joint_correction_rad: None,
+            },
+            None => ReceivedCorrection {
+                correction: Correction::ZERO,
+                cycle_id: t.ipoc,
+                joint_correction_rad: Some(total),
+            },
         }))
     }
 }

@@ -138,8 +138,9 @@ fn sen_known_bytes_and_round_trip() {
     );
     let back = parse_sen(&buf[..n]).unwrap();
     assert_eq!(back.ipoc, 42);
+    let rkorr = back.rkorr.unwrap();
     for i in 0..6 {
-        assert!(close(back.rkorr[i], rk[i], 1e-12));
+        assert!(close(rkorr[i], rk[i], 1e-12));
     }
     assert!(format_sen(&rk, 1, "Im Free", None, &mut buf).is_err());
     assert!(format_sen(&rk, 1, "ImFree", Some("<x>"), &mut buf).is_err());
@@ -225,16 +226,12 @@ fn loopback_exchange_absolute_and_relative() {
         ));
         let mut last = Correction::ZERO;
         for k in 0..20u64 {
-            let state = RobotState {
-                q_rad: [0.1 * k as f64, -1.0, 1.2, 0.0, 0.5, -0.3],
-                tcp_pose: Some(Pose6 {
-                    position_m: [1.0, 0.0, 0.8],
-                    zyx_rad: [0.0, 0.1, 3.0],
-                }),
-                cycle_id: 1000 + k,
-                robot_time_s: None,
-                status: 0,
-            };
+            let mut state = RobotState::with_joints(&[0.1 * k as f64, -1.0, 1.2, 0.0, 0.5, -0.3]);
+            state.tcp_pose = Some(Pose6 {
+                position_m: [1.0, 0.0, 0.8],
+                zyx_rad: [0.0, 0.1, 3.0],
+            });
+            state.cycle_id = 1000 + k;
             robot.send_state(&state).unwrap();
             let got = pc.receive(timeout).unwrap().unwrap();
             assert_eq!(got.cycle_id, 1000 + k);
@@ -277,10 +274,180 @@ fn malformed_datagram_is_an_error_and_link_survives() {
     sock.send_to(SAMPLE, pc.local_addr().unwrap()).unwrap();
     let s = pc.receive(Duration::from_secs(2)).unwrap().unwrap();
     assert_eq!(s.cycle_id, 4208138482);
-    assert_eq!(s.status, 3);
+    assert_eq!(s.late_answers, Some(3));
     pc.send_correction(&Correction::ZERO).unwrap();
     let mut b = [0u8; 512];
     sock.set_read_timeout(Some(Duration::from_secs(2))).unwrap();
     let n = sock.recv(&mut b).unwrap();
     assert_eq!(parse_sen(&b[..n]).unwrap().ipoc, 4208138482);
+}
+
+/// The `X="…"` attribute of element `tag` in `text`, parsed by hand (no
+/// deflex parser involved).
+fn attr(text: &str, tag: &str, name: &str) -> f64 {
+    let start = text.find(&format!("<{tag} ")).expect("tag present");
+    let rest = &text[start..];
+    let at = rest
+        .find(&format!(" {name}=\""))
+        .expect("attribute present")
+        + name.len()
+        + 3;
+    let end = rest[at..].find('"').unwrap();
+    rest[at..at + end].parse().unwrap()
+}
+
+#[test]
+fn no_negative_zero_is_ever_printed() {
+    let mut buf = [0u8; TX_BUFFER];
+    let tiny = [-1e-9, -4.9e-8, 1e-9, -0.0, -4.99e-7f64.to_radians(), 0.0];
+    let n = format_sen(&tiny, 1, "ImFree", None, &mut buf).unwrap();
+    let text = std::str::from_utf8(&buf[..n]).unwrap();
+    assert!(!text.contains("-0.0000"), "{text}");
+    assert_eq!(
+        text,
+        r#"<Sen Type="ImFree"><RKorr X="0.0000" Y="0.0000" Z="0.0000" A="0.0000" B="0.0000" C="0.0000"/><IPOC>1</IPOC></Sen>"#
+    );
+    // The smallest value that prints non-zero keeps its sign.
+    let n = format_sen(
+        &[-6e-8, 0.0, 0.0, 0.0, 0.0, 0.0],
+        1,
+        "ImFree",
+        None,
+        &mut buf,
+    )
+    .unwrap();
+    assert!(
+        std::str::from_utf8(&buf[..n])
+            .unwrap()
+            .contains(r#"X="-0.0001""#)
+    );
+    let n = format_sen_joints(JointTag::Ak, &[-1e-12; 6], 1, "ImFree", None, &mut buf).unwrap();
+    assert!(!std::str::from_utf8(&buf[..n]).unwrap().contains("-0.0000"));
+    let t = RobTelegram {
+        q_rad: Some([-1e-10; 6]),
+        ipoc: 3,
+        ..Default::default()
+    };
+    let n = format_rob(&t, &mut buf).unwrap();
+    assert!(!std::str::from_utf8(&buf[..n]).unwrap().contains("-0.0000"));
+}
+
+#[test]
+fn joint_answers_known_bytes() {
+    let mut buf = [0u8; TX_BUFFER];
+    let dq = [1.0, -0.5, 0.0, 2.25, 0.0, -10.0].map(f64::to_radians);
+    let n = format_sen_joints(JointTag::Ak, &dq, 7, "ImFree", None, &mut buf).unwrap();
+    assert_eq!(
+        std::str::from_utf8(&buf[..n]).unwrap(),
+        r#"<Sen Type="ImFree"><AK A1="1.0000" A2="-0.5000" A3="0.0000" A4="2.2500" A5="0.0000" A6="-10.0000"/><IPOC>7</IPOC></Sen>"#
+    );
+    let back = parse_sen(&buf[..n]).unwrap();
+    assert!(back.rkorr.is_none());
+    let j = back.joints_rad.unwrap();
+    for i in 0..6 {
+        assert!(close(j[i], dq[i], 1e-12));
+    }
+    let n = format_sen_joints(JointTag::AKorr, &dq, 7, "ImFree", None, &mut buf).unwrap();
+    assert!(
+        std::str::from_utf8(&buf[..n])
+            .unwrap()
+            .contains("<AKorr A1=")
+    );
+    assert!(parse_sen(&buf[..n]).unwrap().joints_rad.is_some());
+    assert!(parse_sen(b"<Sen Type=\"ImFree\"><IPOC>1</IPOC></Sen>").is_err());
+}
+
+/// A KUKA emulator in relative mode that discards some answers (as RSI does
+/// with a late answer) and counts them in `Delay`: the robot's accumulated
+/// correction still ends on the controller's total. The robot side here is
+/// written with the socket and a hand parser, not with deflex's endpoint.
+#[test]
+fn relative_mode_does_not_drift_when_answers_are_lost() {
+    let cfg = RsiConfig {
+        mode: CorrectionMode::Relative,
+        ..RsiConfig::default()
+    };
+    let mut pc = RsiLink::bind("127.0.0.1:0", cfg).unwrap();
+    let robot = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    robot
+        .set_read_timeout(Some(Duration::from_secs(2)))
+        .unwrap();
+    let to = pc.local_addr().unwrap();
+    let dropped_at = [17u64, 18, 50, 51, 52, 120];
+    let (mut delay, mut applied_mm, mut lost_mm) = (0u32, 0.0f64, 0.0f64);
+    let mut total_mm = 0.0;
+    let mut rb = [0u8; 1024];
+    for k in 1..=200u64 {
+        let telegram = format!(
+            "<Rob Type=\"KUKA\"><AIPos A1=\"0\" A2=\"-90\" A3=\"90\" A4=\"0\" A5=\"0\" A6=\"0\"/>\
+             <Delay D=\"{delay}\"/><IPOC>{k}</IPOC></Rob>"
+        );
+        robot.send_to(telegram.as_bytes(), to).unwrap();
+        let s = pc.receive(Duration::from_secs(2)).unwrap().unwrap();
+        assert_eq!(s.late_answers, Some(delay));
+        // A wavy total correction, in metres.
+        let total = 1e-3 * (0.02 * k as f64).sin() + 1e-5 * k as f64;
+        total_mm = total * 1e3;
+        pc.send_correction(&Correction {
+            dp_m: [total, 0.0, 0.0],
+            dphi_rad: [0.0; 3],
+        })
+        .unwrap();
+        let n = robot.recv(&mut rb).unwrap();
+        let answer = std::str::from_utf8(&rb[..n]).unwrap();
+        let x = attr(answer, "RKorr", "X");
+        if dropped_at.contains(&k) {
+            delay += 1;
+            lost_mm += x;
+        } else {
+            applied_mm += x;
+        }
+    }
+    assert!(
+        lost_mm.abs() > 0.01,
+        "the dropped answers must matter: {lost_mm} mm"
+    );
+    // Equal up to the printing of the last total (four decimals of a mm).
+    assert!(
+        (applied_mm - total_mm).abs() <= 0.5e-4 + 1e-9,
+        "robot accumulated {applied_mm} mm, controller total {total_mm} mm"
+    );
+    assert_eq!(pc.rolled_back(), dropped_at.len() as u64);
+}
+
+/// Only the robot's datagrams are answered: a stranger is refused, counted
+/// and never becomes the peer.
+#[test]
+fn stray_sender_is_refused_and_not_answered() {
+    let mut pc = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
+    let to = pc.local_addr().unwrap();
+    let robot = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let stranger = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    for s in [&robot, &stranger] {
+        s.set_read_timeout(Some(Duration::from_millis(200)))
+            .unwrap();
+    }
+    robot.send_to(SAMPLE, to).unwrap();
+    assert!(pc.receive(Duration::from_secs(2)).unwrap().is_some());
+    stranger.send_to(SAMPLE, to).unwrap();
+    let e = pc.receive(Duration::from_secs(2)).unwrap_err();
+    assert!(e.is_foreign(), "{e}");
+    // The answer still goes to the robot, echoing the robot's IPOC.
+    pc.send_correction(&Correction::ZERO).unwrap();
+    let mut b = [0u8; 512];
+    let n = robot.recv(&mut b).unwrap();
+    assert_eq!(parse_sen(&b[..n]).unwrap().ipoc, 4208138482);
+    assert!(stranger.recv(&mut b).is_err(), "the stranger got an answer");
+    assert_eq!(pc.peers().foreign(), 1);
+    assert_eq!(
+        pc.peers().last_foreign(),
+        Some(stranger.local_addr().unwrap())
+    );
+    // With a configured robot address, even the first sender must match.
+    let mut pc = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
+    pc.expect_peer(robot.local_addr().unwrap());
+    stranger.send_to(SAMPLE, pc.local_addr().unwrap()).unwrap();
+    assert!(pc.receive(Duration::from_secs(2)).unwrap_err().is_foreign());
+    robot.send_to(SAMPLE, pc.local_addr().unwrap()).unwrap();
+    assert!(pc.receive(Duration::from_secs(2)).unwrap().is_some());
 }

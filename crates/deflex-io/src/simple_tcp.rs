@@ -38,6 +38,13 @@
 //! over: when a receive times out, a pending new connection replaces the
 //! current one. [`SimpleTcpLink::connections`] counts accepted connections.
 //!
+//! One client: the link serves only the robot's host: the configured address
+//! ([`SimpleTcpLink::expect_peer`], IP only, as a client's source port is
+//! ephemeral) or, otherwise, the host of the first connection that sent a
+//! valid line, until the link is dropped. A connection from any other host
+//! is closed at once and reported as [`LinkError::ForeignSender`]
+//! ([`SimpleTcpLink::refused`] counts them); it never takes over.
+//!
 //! After construction the hot path does not allocate: lines are assembled
 //! in a fixed buffer that is reused, replies are formatted into another.
 //! The accepted socket has `TCP_NODELAY` set (one small line per cycle must
@@ -51,6 +58,7 @@ use crate::simple_udp::{
 };
 use crate::udp::trim;
 use std::io::{ErrorKind, Read, Write};
+use std::net::IpAddr;
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
@@ -289,6 +297,9 @@ pub struct SimpleTcpLink {
     write_timeout: Duration,
     count: u64,
     connections: u64,
+    expected_ip: Option<IpAddr>,
+    locked_ip: Option<IpAddr>,
+    refused: u64,
 }
 
 impl SimpleTcpLink {
@@ -307,7 +318,25 @@ impl SimpleTcpLink {
             write_timeout: DEFAULT_WRITE_TIMEOUT,
             count: 0,
             connections: 0,
+            expected_ip: None,
+            locked_ip: None,
+            refused: 0,
         })
+    }
+
+    /// Serves only connections from `peer`'s IP (its port is ignored).
+    pub fn expect_peer(&mut self, peer: SocketAddr) {
+        self.expected_ip = Some(peer.ip().to_canonical());
+    }
+
+    /// Connections from other hosts closed so far.
+    pub fn refused(&self) -> u64 {
+        self.refused
+    }
+
+    /// The host the link serves: configured, or locked to the first robot.
+    pub fn robot_host(&self) -> Option<IpAddr> {
+        self.expected_ip.or(self.locked_ip)
     }
 
     /// Listens on all interfaces, port [`DEFAULT_PORT`].
@@ -354,10 +383,22 @@ impl SimpleTcpLink {
         self.rx.clear();
     }
 
-    /// Accepts one pending connection without waiting; true if one was.
+    /// Accepts one pending connection without waiting; true if one was. A
+    /// connection from a host other than the robot's is closed and reported.
     fn try_accept(&mut self) -> Result<bool, LinkError> {
         match self.listener.accept() {
             Ok((stream, peer)) => {
+                if self
+                    .robot_host()
+                    .is_some_and(|host| host != peer.ip().to_canonical())
+                {
+                    drop(stream);
+                    self.refused += 1;
+                    return Err(LinkError::ForeignSender {
+                        protocol: P,
+                        from: peer,
+                    });
+                }
                 let conn = Conn::new(stream, self.write_timeout)?;
                 self.disconnect();
                 self.conn = Some(conn);
@@ -411,10 +452,14 @@ impl RobotLink for SimpleTcpLink {
             };
             match fill_line(conn, &mut self.rx, wait, deadline)? {
                 Fill::Line(r) => {
-                    let q = parse_joints_line(&self.rx.buf[r])?;
+                    let (q, joint_count) = parse_joints_line(&self.rx.buf[r])?;
                     self.count += 1;
+                    if self.locked_ip.is_none() {
+                        self.locked_ip = self.peer.map(|p| p.ip().to_canonical());
+                    }
                     return Ok(Some(RobotState {
                         q_rad: q,
+                        joint_count,
                         cycle_id: self.count,
                         ..Default::default()
                     }));
@@ -449,6 +494,10 @@ impl RobotLink for SimpleTcpLink {
             return Err(e);
         }
         Ok(())
+    }
+
+    fn protocol(&self) -> Protocol {
+        P
     }
 }
 
@@ -495,7 +544,7 @@ fn closed_error() -> LinkError {
 impl RobotSideLink for SimpleTcpRobotEndpoint {
     /// Only the joints are sent (the protocol has no cycle id or pose).
     fn send_state(&mut self, s: &RobotState) -> Result<(), LinkError> {
-        let n = format_joints_line(&s.q_rad, &mut self.tx)?;
+        let n = format_joints_line(s.joints(), &mut self.tx)?;
         self.conn.write_line(&self.tx[..n])
     }
 
@@ -517,6 +566,7 @@ impl RobotSideLink for SimpleTcpRobotEndpoint {
                 Ok(Some(ReceivedCorrection {
                     correction,
                     cycle_id: self.count,
+                    joint_correction_rad: None,
                 }))
             }
             Fill::Timeout => Ok(None),

@@ -23,15 +23,14 @@ fn robot(pc: &SimpleTcpLink) -> SimpleTcpRobotEndpoint {
 }
 
 fn state(q: [f64; 6]) -> RobotState {
-    RobotState {
-        q_rad: q,
-        ..Default::default()
-    }
+    RobotState::with_joints(&q)
 }
 
-/// Receives with a timeout and expects a state.
+/// Receives with a timeout and expects a six-joint state.
 fn recv_q(pc: &mut SimpleTcpLink) -> [f64; 6] {
-    pc.receive(T).unwrap().expect("timeout").q_rad
+    let s = pc.receive(T).unwrap().expect("timeout");
+    assert_eq!(s.joint_count, 6);
+    std::array::from_fn(|i| s.q_rad[i])
 }
 
 #[test]
@@ -146,7 +145,7 @@ fn partial_lines_split_across_writes() {
     assert!(pc.receive(Duration::ZERO).unwrap().is_none());
 
     // A malformed line is an error, the next line is fine.
-    raw.write_all(b"q 1 2 3\nq 4 4 4 4 4 4\n").unwrap();
+    raw.write_all(b"q 1 2 x\nq 4 4 4 4 4 4\n").unwrap();
     let e = pc.receive(T).unwrap_err();
     assert!(matches!(e, LinkError::Malformed { .. }), "{e}");
     assert_eq!(recv_q(&mut pc), [4.0; 6]);
@@ -174,7 +173,8 @@ fn robot_side_reassembles_partial_lines() {
     let mut buf = [0u8; 128];
     raw.set_read_timeout(Some(T)).unwrap();
     let n = raw.read(&mut buf).unwrap();
-    assert_eq!(parse_joints_line(&buf[..n]).unwrap(), [0.25; 6]);
+    let (q, count) = parse_joints_line(&buf[..n]).unwrap();
+    assert_eq!(&q[..count], &[0.25; 6]);
     // The PC going away is an error on the robot side, every time.
     drop(raw);
     for _ in 0..2 {
@@ -256,7 +256,7 @@ fn reconnect_after_the_robot_drops() {
     let mut r2 = robot(&pc);
     r2.send_state(&state([2.0; 6])).unwrap();
     let s = pc.receive(T).unwrap().unwrap();
-    assert_eq!(s.q_rad, [2.0; 6]);
+    assert_eq!(s.joints(), &[2.0; 6]);
     assert_eq!(s.cycle_id, 2);
     assert_eq!(pc.connections(), 3);
     assert_ne!(pc.peer_addr(), Some(first_peer));
@@ -292,7 +292,7 @@ fn a_new_connection_takes_over_a_silent_one() {
             break;
         }
     }
-    assert_eq!(got.unwrap().q_rad, [2.0; 6]);
+    assert_eq!(got.unwrap().joints(), &[2.0; 6]);
     assert_eq!(pc.connections(), 2);
     assert_eq!(pc.peer_addr(), Some(r2.local_addr().unwrap()));
     pc.send_correction(&Correction::ZERO).unwrap();
@@ -313,11 +313,14 @@ fn zero_and_huge_timeouts() {
             }
             std::thread::yield_now();
         };
-        assert_eq!(s.q_rad, [k as f64; 6]);
+        assert_eq!(s.joints(), &[k as f64; 6]);
         pc.send_correction(&Correction::ZERO).unwrap();
         assert!(robot.receive_correction(T).unwrap().is_some());
         robot.send_state(&state([0.5; 6])).unwrap();
-        assert_eq!(pc.receive(Duration::MAX).unwrap().unwrap().q_rad, [0.5; 6]);
+        assert_eq!(
+            pc.receive(Duration::MAX).unwrap().unwrap().joints(),
+            &[0.5; 6]
+        );
         pc.send_correction(&Correction::ZERO).unwrap();
         assert!(robot.receive_correction(Duration::MAX).unwrap().is_some());
     }
@@ -416,7 +419,7 @@ fn random_bytes_fuzz_never_panics() {
             Err(e) => assert!(e.is_bad_packet()),
         }
     };
-    assert_eq!(last.q_rad, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    assert_eq!(last.joints(), &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
     assert_eq!(pc.connections(), 1);
     pc.send_correction(&Correction::ZERO).unwrap();
 }

@@ -3,8 +3,9 @@
 //! has TCP client sockets: it uses the same lines over TCP,
 //! [`crate::simple_tcp`] (see `docs/ur/deflex_loop.script`).
 //!
-//! * robot → PC: `q <q1> <q2> <q3> <q4> <q5> <q6>\n` — joint positions in
-//!   **rad**;
+//! * robot → PC: `q <q1> … <qN>\n` — joint positions in **rad**, one to
+//!   eight of them (a six-axis arm sends six; `run` checks the count against
+//!   the model);
 //! * PC → robot: `corr <dx> <dy> <dz> <rx> <ry> <rz>\n` — total correction,
 //!   translation in **m**, rotation vector (axis × angle) in **rad**, base
 //!   axes ([`ReplyStyle::Keyword`]), or the same six values as
@@ -17,10 +18,15 @@
 //! `q [0.1, -1.57, ...]`, is accepted); the trailing newline (or CR LF) is
 //! optional. Numbers are printed with 9 decimals (1 nm, 1 nrad).
 //! `cycle_id` on the PC side is the count of valid lines received.
+//!
+//! [`SimpleUdpLink`] answers only the robot it is locked to: the configured
+//! address or the first valid sender (see [`crate::udp::PeerLock`]).
 
 use crate::error::{LinkError, Protocol};
-use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
-use crate::udp::{SliceWriter, UdpEndpoint, parse_f64, trim};
+use crate::link::{
+    Correction, MAX_JOINTS, ReceivedCorrection, RobotLink, RobotSideLink, RobotState,
+};
+use crate::udp::{PeerLock, SliceWriter, UdpEndpoint, parse_f64, trim};
 use core::fmt::Write;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
@@ -43,9 +49,14 @@ pub enum ReplyStyle {
     Tuple,
 }
 
-/// Parses six numbers after an optional keyword; `keyword` must be present
-/// when `required`.
-fn parse6(line: &[u8], keyword: &str, required: bool) -> Result<[f64; 6], LinkError> {
+/// Parses `min..=N` numbers after an optional keyword; `keyword` must be
+/// present when `required`. Returns the values and their count.
+fn parse_values<const N: usize>(
+    line: &[u8],
+    keyword: &str,
+    required: bool,
+    min: usize,
+) -> Result<([f64; N], usize), LinkError> {
     let mut s = trim(line);
     if s.len() >= keyword.len() && s[..keyword.len()].eq_ignore_ascii_case(keyword.as_bytes()) {
         let rest = &s[keyword.len()..];
@@ -61,38 +72,41 @@ fn parse6(line: &[u8], keyword: &str, required: bool) -> Result<[f64; 6], LinkEr
     {
         s = inner;
     }
-    let mut out = [0.0; 6];
+    let mut out = [0.0; N];
     let mut n = 0;
     for tok in s.split(|c| c.is_ascii_whitespace() || *c == b',') {
         if tok.is_empty() {
             continue;
         }
-        if n == 6 {
-            return Err(bad("more than six values"));
+        if n == N {
+            return Err(bad("too many values"));
         }
         out[n] = parse_f64(tok).ok_or(bad("value is not a finite number"))?;
         n += 1;
     }
-    if n != 6 {
-        return Err(bad("fewer than six values"));
+    if n < min {
+        return Err(bad("too few values"));
     }
-    Ok(out)
+    Ok((out, n))
 }
 
-/// Parses a robot → PC line `q q1 … q6` (rad).
-pub fn parse_joints_line(line: &[u8]) -> Result<[f64; 6], LinkError> {
-    parse6(line, "q", true)
+/// Parses a robot → PC line `q q1 … qN` (rad, 1 ≤ N ≤ 8); returns the values
+/// and N.
+pub fn parse_joints_line(line: &[u8]) -> Result<([f64; MAX_JOINTS], usize), LinkError> {
+    parse_values::<MAX_JOINTS>(line, "q", true, 1)
 }
 
-/// Parses a PC → robot line, either `corr …` or `(…)`.
+/// Parses a PC → robot line, either `corr …` or `(…)`, exactly six values.
 pub fn parse_correction_line(line: &[u8]) -> Result<Correction, LinkError> {
-    parse6(line, "corr", false).map(Correction::from_array)
+    let (v, n) = parse_values::<6>(line, "corr", false, 6)?;
+    debug_assert_eq!(n, 6);
+    Ok(Correction::from_array(v))
 }
 
-fn write6(
+fn write_values(
     out: &mut [u8],
     head: &str,
-    v: &[f64; 6],
+    v: &[f64],
     sep: &str,
     tail: &str,
 ) -> Result<usize, LinkError> {
@@ -121,9 +135,15 @@ fn write6(
     Ok(w.len())
 }
 
-/// Formats `q q1 … q6\n`.
-pub fn format_joints_line(q: &[f64; 6], out: &mut [u8]) -> Result<usize, LinkError> {
-    write6(out, "q ", q, " ", "\n")
+/// Formats `q q1 … qN\n` (1 ≤ N ≤ 8).
+pub fn format_joints_line(q: &[f64], out: &mut [u8]) -> Result<usize, LinkError> {
+    if q.is_empty() || q.len() > MAX_JOINTS {
+        return Err(LinkError::InvalidValue {
+            protocol: P,
+            reason: "a joints line carries 1 to 8 values",
+        });
+    }
+    write_values(out, "q ", q, " ", "\n")
 }
 
 /// Formats a correction line in the given style.
@@ -134,8 +154,8 @@ pub fn format_correction_line(
 ) -> Result<usize, LinkError> {
     let v = c.to_array();
     match style {
-        ReplyStyle::Keyword => write6(out, "corr ", &v, " ", "\n"),
-        ReplyStyle::Tuple => write6(out, "(", &v, ",", ")\n"),
+        ReplyStyle::Keyword => write_values(out, "corr ", &v, " ", "\n"),
+        ReplyStyle::Tuple => write_values(out, "(", &v, ",", ")\n"),
     }
 }
 
@@ -147,6 +167,7 @@ pub struct SimpleUdpLink {
     rx: [u8; LINE_BUFFER],
     tx: [u8; LINE_BUFFER],
     count: u64,
+    peers: PeerLock,
 }
 
 impl SimpleUdpLink {
@@ -158,7 +179,16 @@ impl SimpleUdpLink {
             rx: [0; LINE_BUFFER],
             tx: [0; LINE_BUFFER],
             count: 0,
+            peers: PeerLock::first_sender(),
         })
+    }
+    /// Accepts lines only from `peer` (port 0: any port of that IP).
+    pub fn expect_peer(&mut self, peer: SocketAddr) {
+        self.peers.set_configured(Some(peer));
+    }
+    /// The sender lock.
+    pub fn peers(&self) -> &PeerLock {
+        &self.peers
     }
     /// Local socket address.
     pub fn local_addr(&self) -> Result<SocketAddr, LinkError> {
@@ -171,11 +201,14 @@ impl RobotLink for SimpleUdpLink {
         let Some((n, from)) = self.ep.recv(&mut self.rx, timeout)? else {
             return Ok(None);
         };
-        let q = parse_joints_line(&self.rx[..n])?;
+        self.peers.check(P, from)?;
+        let (q, count) = parse_joints_line(&self.rx[..n])?;
+        self.peers.lock(from);
         self.ep.set_peer(from);
         self.count += 1;
         Ok(Some(RobotState {
             q_rad: q,
+            joint_count: count,
             cycle_id: self.count,
             ..Default::default()
         }))
@@ -183,6 +216,9 @@ impl RobotLink for SimpleUdpLink {
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         let n = format_correction_line(c, self.style, &mut self.tx)?;
         self.ep.send(&self.tx[..n])
+    }
+    fn protocol(&self) -> Protocol {
+        P
     }
 }
 
@@ -216,7 +252,7 @@ impl SimpleUdpRobotEndpoint {
 impl RobotSideLink for SimpleUdpRobotEndpoint {
     /// Only the joints are sent (the protocol has no cycle id or pose).
     fn send_state(&mut self, s: &RobotState) -> Result<(), LinkError> {
-        let n = format_joints_line(&s.q_rad, &mut self.tx)?;
+        let n = format_joints_line(s.joints(), &mut self.tx)?;
         self.ep.send(&self.tx[..n])
     }
     /// `cycle_id` is the count of corrections received.
@@ -232,6 +268,7 @@ impl RobotSideLink for SimpleUdpRobotEndpoint {
         Ok(Some(ReceivedCorrection {
             correction,
             cycle_id: self.count,
+            joint_correction_rad: None,
         }))
     }
 }
@@ -246,6 +283,8 @@ mod tests {
     fn known_lines() {
         let mut b = [0u8; LINE_BUFFER];
         let n = format_joints_line(&[0.0, -1.5, 2.0, 0.25, 1e-10, -3.0], &mut b).unwrap();
+        assert!(format_joints_line(&[], &mut b).is_err());
+        assert!(format_joints_line(&[0.0; 9], &mut b).is_err());
         assert_eq!(
             std::str::from_utf8(&b[..n]).unwrap(),
             "q 0.000000000 -1.500000000 2.000000000 0.250000000 0.000000000 -3.000000000\n"
@@ -268,12 +307,16 @@ mod tests {
 
     #[test]
     fn tolerant_parsing_and_errors() {
-        let q = parse_joints_line(b"q [0.1, -1.57, 1.2, 0, 3.25, -6]\r\n").unwrap();
-        assert_eq!(q, [0.1, -1.57, 1.2, 0.0, 3.25, -6.0]);
-        assert_eq!(parse_joints_line(b"Q 1 2 3 4 5 6").unwrap()[5], 6.0);
+        let (q, n) = parse_joints_line(b"q [0.1, -1.57, 1.2, 0, 3.25, -6]\r\n").unwrap();
+        assert_eq!(&q[..n], &[0.1, -1.57, 1.2, 0.0, 3.25, -6.0]);
+        assert_eq!(parse_joints_line(b"Q 1 2 3 4 5 6").unwrap().0[5], 6.0);
+        // Any joint count from 1 to 8: a 4-axis palletiser, a 7-axis arm.
+        assert_eq!(parse_joints_line(b"q 1 2 3 4").unwrap().1, 4);
+        assert_eq!(parse_joints_line(b"q 1 2 3 4 5 6 7").unwrap().1, 7);
+        assert_eq!(parse_joints_line(b"q 1 2 3 4 5 6 7 8").unwrap().1, 8);
         for bad in [
-            &b"q 1 2 3 4 5"[..],
-            b"q 1 2 3 4 5 6 7",
+            &b"q"[..],
+            b"q 1 2 3 4 5 6 7 8 9",
             b"1 2 3 4 5 6",
             b"qq 1 2 3 4 5 6",
             b"q 1 2 3 4 5 nan",
@@ -285,6 +328,8 @@ mod tests {
             assert!(parse_joints_line(bad).unwrap_err().is_bad_packet());
         }
         assert!(parse_correction_line(b"corrx 1 2 3 4 5 6").is_err());
+        assert!(parse_correction_line(b"corr 1 2 3 4 5").is_err());
+        assert!(parse_correction_line(b"corr 1 2 3 4 5 6 7").is_err());
     }
 
     #[test]
@@ -300,8 +345,8 @@ mod tests {
                     .map(|_| alphabet[rng.gen_range(0..alphabet.len())])
                     .collect()
             };
-            if let Ok(q) = parse_joints_line(&b) {
-                assert!(q.iter().all(|x| x.is_finite()));
+            if let Ok((q, n)) = parse_joints_line(&b) {
+                assert!((1..=MAX_JOINTS).contains(&n) && q.iter().all(|x| x.is_finite()));
             }
             let _ = parse_correction_line(&b);
         }
@@ -316,13 +361,11 @@ mod tests {
             let t = Duration::from_secs(2);
             assert!(pc.send_correction(&Correction::ZERO).is_err());
             for k in 1..=5u64 {
-                let s = RobotState {
-                    q_rad: [0.123456789 * k as f64; 6],
-                    ..Default::default()
-                };
+                let s = RobotState::with_joints(&[0.123456789 * k as f64; 6]);
                 robot.send_state(&s).unwrap();
                 let got = pc.receive(t).unwrap().unwrap();
                 assert_eq!(got.cycle_id, k);
+                assert_eq!(got.joint_count, 6);
                 assert!((got.q_rad[0] - s.q_rad[0]).abs() < 1e-9);
                 let c = Correction {
                     dp_m: [1e-4, 2e-4, 3e-4],

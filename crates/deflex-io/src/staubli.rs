@@ -30,7 +30,7 @@ use crate::link::{
     Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState, matrix_to_rotvec,
     rotvec_to_matrix,
 };
-use crate::udp::UdpEndpoint;
+use crate::udp::{PeerLock, UdpEndpoint};
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
@@ -297,6 +297,7 @@ pub struct StaubliLink {
     seq: u32,
     last_state_seq: u32,
     epoch: Instant,
+    peers: PeerLock,
 }
 
 impl StaubliLink {
@@ -309,7 +310,16 @@ impl StaubliLink {
             seq: 0,
             last_state_seq: 0,
             epoch: Instant::now(),
+            peers: PeerLock::first_sender(),
         })
+    }
+    /// Accepts states only from `peer` (port 0: any port of that IP).
+    pub fn expect_peer(&mut self, peer: SocketAddr) {
+        self.peers.set_configured(Some(peer));
+    }
+    /// The sender lock.
+    pub fn peers(&self) -> &PeerLock {
+        &self.peers
     }
     /// Local socket address.
     pub fn local_addr(&self) -> Result<SocketAddr, LinkError> {
@@ -344,19 +354,22 @@ impl RobotLink for StaubliLink {
         let Some((n, from)) = self.ep.recv(&mut self.rx, timeout)? else {
             return Ok(None);
         };
+        self.peers.check(P, from)?;
         let m = decode_state(&self.rx[..n])?;
+        self.peers.lock(from);
         self.ep.set_peer(from);
         self.last_state_seq = m.header.seq;
-        Ok(Some(RobotState {
-            q_rad: m.q_rad,
-            tcp_pose: None,
-            cycle_id: u64::from(m.header.seq),
-            robot_time_s: Some(m.header.timestamp_s),
-            status: m.status,
-        }))
+        let mut state = RobotState::with_joints(&m.q_rad);
+        state.cycle_id = u64::from(m.header.seq);
+        state.robot_time_s = Some(m.header.timestamp_s);
+        state.status = m.status;
+        Ok(Some(state))
     }
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         self.send(c, FLAG_ACTIVE)
+    }
+    fn protocol(&self) -> Protocol {
+        P
     }
 }
 
@@ -406,8 +419,12 @@ impl StaubliRobotEndpoint {
 }
 
 impl RobotSideLink for StaubliRobotEndpoint {
-    /// `cycle_id` → sequence (32 bits), `status` → status word.
+    /// `cycle_id` → sequence (32 bits), `status` → status word; the first six
+    /// joint values (the protocol carries six).
     fn send_state(&mut self, s: &RobotState) -> Result<(), LinkError> {
+        let mut q_rad = [0.0; 6];
+        let n = s.joint_count.min(6);
+        q_rad[..n].copy_from_slice(&s.q_rad[..n]);
         let m = StateMsg {
             header: Header {
                 flags: 0,
@@ -415,7 +432,7 @@ impl RobotSideLink for StaubliRobotEndpoint {
                 ack: self.last_corr_seq,
                 timestamp_s: s.robot_time_s.unwrap_or(0.0),
             },
-            q_rad: s.q_rad,
+            q_rad,
             status: s.status,
         };
         let n = encode_state(&m, &mut self.tx)?;
@@ -440,6 +457,7 @@ impl RobotSideLink for StaubliRobotEndpoint {
         Ok(Some(ReceivedCorrection {
             correction,
             cycle_id: u64::from(m.header.ack),
+            joint_correction_rad: None,
         }))
     }
 }

@@ -144,11 +144,10 @@ fn loopback_exchange_and_watchdog() {
     assert!(pc.send_correction(&Correction::ZERO).is_err());
     for k in 1..=10u64 {
         let s = RobotState {
-            q_rad: [0.01 * k as f64; 6],
             cycle_id: k,
             robot_time_s: Some(0.004 * k as f64),
             status: STATUS_ALTER_ACTIVE,
-            ..Default::default()
+            ..RobotState::with_joints(&[0.01 * k as f64; 6])
         };
         robot.send_state(&s).unwrap();
         let got = pc.receive(t).unwrap().unwrap();

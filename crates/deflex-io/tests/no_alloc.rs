@@ -1,7 +1,7 @@
 //! Checks that the controller-side hot path (`receive` / `send_correction`,
 //! and the force sensor's `receive`) does not allocate after construction.
 
-use deflex_io::egm::{EgmLink, EgmRobotEndpoint};
+use deflex_io::egm::{EgmConfig, EgmLink, EgmRobotEndpoint};
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
@@ -42,16 +42,14 @@ fn allocs() -> u64 {
 const T: Duration = Duration::from_secs(2);
 
 fn state(k: u64) -> RobotState {
-    RobotState {
-        q_rad: [0.1, -1.2, 1.3, 0.0, 0.7, k as f64 * 1e-3],
-        tcp_pose: Some(Pose6 {
-            position_m: [1.0, 0.2, 0.5],
-            zyx_rad: [0.1, 0.2, 3.0],
-        }),
-        cycle_id: k,
-        robot_time_s: Some(k as f64 * 0.004),
-        status: 0,
-    }
+    let mut s = RobotState::with_joints(&[0.1, -1.2, 1.3, 0.0, 0.7, k as f64 * 1e-3]);
+    s.tcp_pose = Some(Pose6 {
+        position_m: [1.0, 0.2, 0.5],
+        zyx_rad: [0.1, 0.2, 3.0],
+    });
+    s.cycle_id = k;
+    s.robot_time_s = Some(k as f64 * 0.004);
+    s
 }
 
 /// Runs 50 cycles; counts allocations of the PC side only (after a warm-up).
@@ -94,7 +92,7 @@ fn robot_links_do_not_allocate_on_the_hot_path() {
     .unwrap();
     assert_eq!(run(&mut pc, &mut robot), 0, "RSI");
 
-    let mut pc = EgmLink::bind("127.0.0.1:0", 4).unwrap();
+    let mut pc = EgmLink::bind("127.0.0.1:0", EgmConfig::default()).unwrap();
     let mut robot = EgmRobotEndpoint::new("127.0.0.1:0", pc.local_addr().unwrap()).unwrap();
     assert_eq!(run(&mut pc, &mut robot), 0, "EGM");
 
