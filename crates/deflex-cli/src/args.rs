@@ -5,6 +5,18 @@ use deflex_model::{Robot, load_robot};
 /// Result type of every command: errors are user-facing messages.
 pub type CliResult = Result<(), String>;
 
+/// A numeric flag within `[lo, hi]` (NaN and infinities refused), or an error naming the flag,
+/// the bounds and the value.
+pub fn check_flag(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<(), String> {
+    if value >= lo && value <= hi {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: expected a number from {lo} to {hi} {unit}, got {value}"
+        ))
+    }
+}
+
 /// Parse a comma-separated list of finite numbers; `what` names the option in errors.
 pub fn parse_list(text: &str, what: &str) -> Result<Vec<f64>, String> {
     text.split(',')

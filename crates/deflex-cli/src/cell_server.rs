@@ -4,19 +4,21 @@
 //! and the ATI Net F/T streaming its readings while the twin forms the cone, so `deflex run` can
 //! be tried end to end with no hardware. It reads the same `CELL.toml` as `deflex run`.
 
-use crate::args::{CliResult, print_json};
-use crate::cmd_control::{calibration, load_cell_file, rsi_mode, stats_json};
+use crate::args::{CliResult, check_flag, print_json};
+use crate::cmd_control::{load_cell_file, stats_json};
 use clap::Args;
 use deflex_control::config::{CellFile, RobotKind};
 use deflex_control::stats::{CycleStats, StatsSummary};
-use deflex_io::egm::EgmRobotEndpoint;
+use deflex_io::egm::{EgmConfig, EgmRobotEndpoint};
 use deflex_io::netft::NetFtSensorServer;
 use deflex_io::rsi::RsiRobotEndpoint;
 use deflex_io::simple_tcp::SimpleTcpRobotEndpoint;
 use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
 use deflex_io::staubli::StaubliRobotEndpoint;
-use deflex_io::{RobotSideLink, RobotState};
+use deflex_io::{LinkError, ReceivedCorrection, RobotSideLink, RobotState};
+use deflex_model::{Data, Robot};
 use deflex_sim::{Cell, CellConfig, ConeParams, ToolPath};
+use nalgebra::Vector3;
 use serde_json::json;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -38,23 +40,47 @@ pub struct CellArgs {
     /// Tool path: `cone` (the paper's cone, as `deflex sim isf`) or `helical`.
     #[arg(long, default_value = "cone")]
     pub path: String,
-    /// Only the first part of the path (mm).
+    /// Only the first part of the path (0 < mm ≤ 10⁶).
     #[arg(long)]
     pub length_mm: Option<f64>,
-    /// Time scale: cycles run N times faster than the robot's 4 ms in wall time.
+    /// Time scale: cycles run N times faster than the robot's 4 ms in wall time (0 < N ≤ 100).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
     /// Random seed of the twin.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// How long to wait for the controller's first answer (s).
+    /// How long to wait for the controller's first answer (0–3600 s).
     #[arg(long, default_value_t = 60.0)]
     pub wait_s: f64,
     /// Dwell at the start pose, out of contact, once the controller answers and the sensor
-    /// streams, before the path starts (s of robot time): the controller tares its sensor there,
-    /// as a robot program that waits for the correction to be ready.
+    /// streams, before the path starts (0–3600 s of robot time): the controller tares its
+    /// sensor there, as a robot program that waits for the correction to be ready.
     #[arg(long, default_value_t = 0.5)]
     pub dwell_s: f64,
+    /// No progress lines on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl CellArgs {
+    /// Every numeric flag within its documented bounds.
+    pub fn check(&self) -> Result<(), String> {
+        check_flag("--speed", self.speed, 1e-3, 100.0, "")?;
+        if let Some(l) = self.length_mm {
+            check_flag("--length-mm", l, 1e-3, 1e6, "mm")?;
+        }
+        check_flag("--wait-s", self.wait_s, 0.0, 3600.0, "s")?;
+        check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")
+    }
+}
+
+/// How the served session ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellEnd {
+    /// The simulated robot program reached the end of its path.
+    ProgramFinished,
+    /// Stopped by a signal before the end.
+    Stopped,
 }
 
 /// What the served twin did.
@@ -62,8 +88,12 @@ pub struct CellOutcome {
     pub summary: deflex_sim::forming::RunningStats,
     pub round_trip: StatsSummary,
     pub cycles: u64,
+    /// Robot cycles whose answer did not arrive within the cycle, judged when the next cycle
+    /// starts — KUKA's own definition of a late answer (`Delay`), which the simulated KUKA
+    /// sends in its telegrams, so `deflex run` reports the same number.
     pub late: u64,
     pub duration_s: f64,
+    pub end: CellEnd,
 }
 
 pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
@@ -89,53 +119,111 @@ pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
     }
 }
 
-/// The robot side of `robot.kind`, played by the twin, and whether its replies echo the state's
-/// cycle id (RSI's IPOC, the Stäubli acknowledgement), so a late reply is never taken for the
-/// current one. The other protocols carry no echo: the first reply after a state is its answer.
-fn robot_endpoint(
+/// The robot controller's own kinematics, for what a real controller does itself: turn joint
+/// corrections (RSI `AK`) into a Cartesian one and know its tool orientation (EGM's sensor
+/// frame). The simulated controller uses the CELL.toml model (its nominal geometry).
+struct ControllerKinematics {
+    robot: Robot,
+    data: Data,
+}
+
+impl ControllerKinematics {
+    fn at(&mut self, q: &[f64]) -> bool {
+        self.robot.forward_kinematics(&mut self.data, q).is_ok()
+    }
+
+    /// TCP orientation in base axes.
+    fn tcp_rotation(&self) -> [[f64; 3]; 3] {
+        let r = self.robot.base.rotation.inverse() * self.data.tcp.rotation;
+        let m = r.matrix();
+        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+    }
+
+    /// J(q) Δq in base axes: the TCP motion of a joint correction.
+    fn joint_to_cartesian(&self, dq: &[f64]) -> [f64; 6] {
+        let tcp = self.data.tcp_position();
+        let columns = self.robot.geometric_jacobian_columns(&self.data, &tcp);
+        let mut v = nalgebra::Vector6::zeros();
+        for (c, d) in columns.iter().zip(dq).take(self.robot.joint_count()) {
+            v += c * *d;
+        }
+        let r_t = self.robot.base.rotation.inverse();
+        let lin = r_t * Vector3::new(v[0], v[1], v[2]);
+        let ang = r_t * Vector3::new(v[3], v[4], v[5]);
+        [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z]
+    }
+}
+
+/// The robot side of `robot.kind`, played by the twin.
+enum RobotSide {
+    Rsi(RsiRobotEndpoint),
+    Egm(EgmRobotEndpoint, EgmConfig),
+    Other(Box<dyn RobotSideLink>),
+}
+
+impl RobotSide {
+    fn link(&mut self) -> &mut dyn RobotSideLink {
+        match self {
+            RobotSide::Rsi(l) => l,
+            RobotSide::Egm(l, _) => l,
+            RobotSide::Other(l) => l.as_mut(),
+        }
+    }
+
+    /// Whether replies echo the state's cycle id (RSI's IPOC, the Stäubli acknowledgement), so a
+    /// late reply is never taken for the current one. The other protocols carry no echo: the
+    /// first reply after a state is its answer.
+    fn echoes_cycle(&self, kind: RobotKind) -> bool {
+        matches!(kind, RobotKind::KukaRsi | RobotKind::Staubli)
+    }
+
+    fn receive(&mut self, wait: Duration) -> Result<Option<ReceivedCorrection>, LinkError> {
+        self.link().receive_correction(wait)
+    }
+}
+
+fn robot_side(
     file: &CellFile,
+    joints: usize,
     wait: Duration,
     stop: &AtomicBool,
-) -> Result<(Box<dyn RobotSideLink>, bool), String> {
+) -> Result<RobotSide, String> {
     let pc = file.robot.bind;
     let local = "127.0.0.1:0";
-    let err = |e: deflex_io::LinkError| {
+    let err = |e: LinkError| {
         format!(
             "simulated {} robot towards {pc}: {e}",
             file.robot.kind.name()
         )
     };
     Ok(match file.robot.kind {
-        RobotKind::KukaRsi => (
-            Box::new(RsiRobotEndpoint::new(local, pc, rsi_mode(file)).map_err(err)?),
-            true,
-        ),
-        RobotKind::AbbEgm => (
-            Box::new(EgmRobotEndpoint::new(local, pc).map_err(err)?),
-            false,
-        ),
-        RobotKind::Staubli => (
-            Box::new(
-                // The VAL3 program's watchdog: the robot's own timeout.
-                StaubliRobotEndpoint::new(
-                    local,
-                    pc,
-                    Duration::from_secs_f64(file.robot.timeout_s.clamp(1e-3, 10.0)),
-                )
-                .map_err(err)?,
-            ),
-            true,
-        ),
-        RobotKind::SimpleUdp => (
-            Box::new(SimpleUdpRobotEndpoint::new(local, pc).map_err(err)?),
-            false,
-        ),
+        RobotKind::KukaRsi => {
+            RobotSide::Rsi(RsiRobotEndpoint::new(local, pc, file.rsi_mode()).map_err(err)?)
+        }
+        RobotKind::AbbEgm => {
+            let cfg = file.egm_config(joints);
+            let mut ep = EgmRobotEndpoint::new(local, pc).map_err(err)?;
+            ep.set_seven_axis(cfg.seven_axis);
+            RobotSide::Egm(ep, cfg)
+        }
+        RobotKind::Staubli => RobotSide::Other(Box::new(
+            // The VAL3 program's watchdog: the robot's own timeout.
+            StaubliRobotEndpoint::new(
+                local,
+                pc,
+                Duration::from_secs_f64(file.robot.timeout_s.clamp(1e-3, 10.0)),
+            )
+            .map_err(err)?,
+        )),
+        RobotKind::SimpleUdp => {
+            RobotSide::Other(Box::new(SimpleUdpRobotEndpoint::new(local, pc).map_err(err)?))
+        }
         RobotKind::SimpleTcp => {
             // The robot's script connects to the PC: retry until `deflex run` listens.
             let start = Instant::now();
             loop {
                 match SimpleTcpRobotEndpoint::connect(pc, Duration::from_millis(200)) {
-                    Ok(ep) => break (Box::new(ep), false),
+                    Ok(ep) => break RobotSide::Other(Box::new(ep)),
                     Err(e) if start.elapsed() > wait || stop.load(Ordering::SeqCst) => {
                         return Err(err(e));
                     }
@@ -146,20 +234,17 @@ fn robot_endpoint(
     })
 }
 
-/// Serves the twin until the path is done (or `stop`).
-pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, String> {
+/// Serves the twin until the path is done (or `stop`). With `progress`, prints a status line
+/// on stderr every two seconds.
+pub fn cell_session(
+    args: &CellArgs,
+    stop: &AtomicBool,
+    progress: bool,
+) -> Result<CellOutcome, String> {
     if !args.sim {
         return Err("cell: only the simulated cell exists; pass --sim".into());
     }
-    if !(args.speed > 0.0 && args.speed.is_finite()) {
-        return Err(format!("--speed: must be positive, got {}", args.speed));
-    }
-    if !(args.dwell_s >= 0.0 && args.dwell_s <= 3600.0) {
-        return Err(format!(
-            "--dwell-s: expected 0 to 3600 s, got {}",
-            args.dwell_s
-        ));
-    }
+    args.check()?;
     let file = load_cell_file(&args.config)?;
     for (field, addr) in [
         ("robot.bind", file.robot.bind),
@@ -172,24 +257,35 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
             ));
         }
     }
+    let model = deflex_model::load_robot(&file.model_spec())
+        .map_err(|e| format!("{}: model.file: {e}", file.origin))?;
     let twin = twin_config(args)?;
     let mut cell = Cell::new(&twin, twin_path(args)?, args.seed).map_err(|e| e.to_string())?;
-    let mut server = NetFtSensorServer::bind(file.sensor.address, calibration(&file))
+    let mut server = NetFtSensorServer::bind(file.sensor.address, file.calibration())
         .map_err(|e| format!("sensor.address {}: {e}", file.sensor.address))?;
-    let wait = Duration::from_secs_f64(args.wait_s.clamp(0.0, 3600.0));
-    let (mut robot, echoes_cycle) = robot_endpoint(&file, wait, stop)?;
+    let wait = Duration::from_secs_f64(args.wait_s);
+    let mut kinematics = ControllerKinematics {
+        data: Data::new(),
+        robot: model,
+    };
+    let mut robot = robot_side(&file, kinematics.robot.joint_count(), wait, stop)?;
+    let echoes_cycle = robot.echoes_cycle(file.robot.kind);
     let period = Duration::from_secs_f64(cell.robot_period_s() / args.speed);
     let mut round_trip = CycleStats::new(period);
     let mut step = cell.step();
     let (mut ipoc, mut cycles, mut late) = (0u64, 0u64, 0u64);
     let mut serving = false;
+    let mut end = CellEnd::ProgramFinished;
     // Robot cycles still to hold the start pose once the controller answers and the sensor
     // streams.
     let mut dwell_cycles = (args.dwell_s / cell.robot_period_s()).ceil() as u64;
+    let path_s = cell.path_duration_s();
     let start = Instant::now();
+    let mut last_progress = Instant::now();
     let mut next = Instant::now();
     loop {
         if stop.load(Ordering::SeqCst) {
+            end = CellEnd::Stopped;
             break;
         }
         while let Ok(Some(_)) = server.poll_request(Duration::ZERO) {}
@@ -203,25 +299,34 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
             let _ = server.send_sample(&s.wrench_sensor, 0);
         }
         ipoc += 4;
+        let kinematics_ok = kinematics.at(&step.q_measured_rad);
+        if let RobotSide::Egm(ep, cfg) = &mut robot
+            && kinematics_ok
+        {
+            ep.set_correction_frame(&cfg.correction_frame(&kinematics.tcp_rotation()));
+        }
         let state = RobotState {
             cycle_id: ipoc,
+            // A KUKA reports its count of late answers in every telegram.
+            late_answers: Some(late.min(u64::from(u32::MAX)) as u32),
             ..RobotState::with_joints(&step.q_measured_rad)
         };
         let sent = Instant::now();
-        let _ = robot.send_state(&state);
+        let _ = robot.link().send_state(&state);
         next += period;
+        let mut answered = false;
         loop {
             let wait = next.saturating_duration_since(Instant::now());
             if wait.is_zero() {
-                if serving {
-                    late += 1;
-                    round_trip.record_miss();
-                }
                 break;
             }
-            match robot.receive_correction(wait) {
+            match robot.receive(wait) {
                 Ok(Some(r)) if r.cycle_id == ipoc || !echoes_cycle => {
-                    let c = r.correction;
+                    let correction = match r.joint_correction_rad {
+                        Some(dq) if kinematics_ok => kinematics.joint_to_cartesian(&dq),
+                        Some(_) => [0.0; 6],
+                        None => r.correction.to_array(),
+                    };
                     if serving {
                         round_trip.record(sent.elapsed());
                     }
@@ -232,11 +337,20 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
                             dwell_cycles -= 1;
                         }
                     }
-                    cell.set_correction(c.to_array());
+                    cell.set_correction(correction);
+                    answered = true;
                     break;
                 }
                 Ok(Some(_)) | Err(_) => continue,
                 Ok(None) => {}
+            }
+        }
+        if serving && !answered {
+            round_trip.record_miss();
+            // The next cycle starts without this cycle's answer: late, as the robot counts it
+            // (and reports it in its next telegram; the program's last telegram has no next).
+            if !step.finished {
+                late += 1;
             }
         }
         if serving {
@@ -250,6 +364,29 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
                 file.robot.bind, args.wait_s
             ));
         }
+        if progress && last_progress.elapsed() >= Duration::from_secs(2) {
+            last_progress = Instant::now();
+            let (force, corr) = cell.truth().map_or((0.0, 0.0), |t| {
+                let f = &t.wrench;
+                let c = &t.correction;
+                (
+                    (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt(),
+                    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt(),
+                )
+            });
+            eprintln!(
+                "cell (SIMULATED): {} | t {:6.1} of {:.0} s | {} robot cycles, {} late | F {:6.0} N | \
+                 correction {:.3} mm | max error so far {:.3} mm",
+                if serving { "forming" } else { "waiting for the controller" },
+                step.time_s,
+                path_s,
+                cycles,
+                late,
+                force,
+                corr * 1e3,
+                cell.stats().max_error_norm_m * 1e3
+            );
+        }
         std::thread::sleep(next.saturating_duration_since(Instant::now()));
     }
     Ok(CellOutcome {
@@ -258,22 +395,28 @@ pub fn cell_session(args: &CellArgs, stop: &AtomicBool) -> Result<CellOutcome, S
         cycles,
         late,
         duration_s: step.time_s,
+        end,
     })
 }
 
 pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
     let stop = deflex_control::rt::interrupt_flag();
-    if !json_out {
+    if !json_out && !args.quiet {
         eprintln!(
             "SIMULATED cell serving the robot link of the config and an ATI Net F/T on loopback; \
              waiting for `deflex run`…"
         );
     }
-    let o = cell_session(&args, stop)?;
+    let o = cell_session(&args, stop, !args.quiet)?;
     let s = &o.summary;
+    let phase = match o.end {
+        CellEnd::ProgramFinished => "ended (robot program finished)",
+        CellEnd::Stopped => "stopped (signal)",
+    };
     if json_out {
         let value = json!({
-            "simulated": true, "cycles": o.cycles, "late_replies": o.late, "duration_s": o.duration_s,
+            "simulated": true, "phase": match o.end { CellEnd::ProgramFinished => "ended", CellEnd::Stopped => "stopped" },
+            "phase_text": phase, "cycles": o.cycles, "late_replies": o.late, "duration_s": o.duration_s,
             "round_trip": stats_json(&o.round_trip),
             "max_error_norm_mm": s.max_error_norm_m * 1e3, "rms_error_norm_mm": s.rms_error_norm_m() * 1e3,
             "max_force_norm_n": s.max_force_norm_n, "max_fz_n": s.max_fz_n,
@@ -282,8 +425,13 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
         print_json(&value);
     } else {
         println!(
-            "deflex cell (SIMULATED): {:.1} s simulated, {} robot cycles, {} replies late or missing",
-            o.duration_s, o.cycles, o.late
+            "deflex cell (SIMULATED): {:.1} s simulated, {} robot cycles, phase: {phase}",
+            o.duration_s, o.cycles
+        );
+        println!(
+            "  late answers: {} (the robot's count: no answer before its next cycle; `deflex run` \
+             over KUKA RSI reports the same number from the telegrams' Delay)",
+            o.late
         );
         println!("  robot-side round trip: {}", o.round_trip);
         println!(
@@ -323,8 +471,9 @@ mod tests {
             seed: 1,
             wait_s: 1.0,
             dwell_s: 0.5,
+            quiet: true,
         };
-        let e = cell_session(&args, &AtomicBool::new(false))
+        let e = cell_session(&args, &AtomicBool::new(false), false)
             .err()
             .unwrap_or_default();
         assert!(e.contains("loopback") && e.contains("robot.bind"), "{e}");

@@ -210,7 +210,8 @@ pub fn run_runtime_in_sim_time(
         clock,
         None,
         options,
-    );
+    )
+    .map_err(|e| format!("starting the runtime threads: {e}"))?;
     while !runtime.is_finished() {
         std::thread::sleep(Duration::from_millis(5));
     }

@@ -3,16 +3,13 @@
 //! (docs/cell.example.toml). Its counterpart without hardware, `deflex cell --sim`, is in
 //! [`crate::cell_server`].
 
-use crate::args::{CliResult, print_json};
+use crate::args::{CliResult, check_flag, print_json};
 use clap::Args;
-use deflex_control::config::{CellFile, RobotKind, SensorKind};
+use deflex_control::config::{CellFile, RobotKind};
 use deflex_control::log::spawn_writer;
 use deflex_control::runtime::{RunSummary, RuntimeOptions, spawn};
 use deflex_control::stats::StatsSummary;
-use deflex_control::{Controller, WallClock};
-use deflex_io::netft::{Calibration, NetFtClient};
-use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink};
-use deflex_io::{ForceSensorLink, RobotLink};
+use deflex_control::{Controller, Fault, WallClock};
 use serde_json::json;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -23,13 +20,13 @@ pub struct RunArgs {
     /// Cell configuration (robot link, sensor link, mounting, model, gains, limits, log).
     #[arg(long)]
     pub config: PathBuf,
-    /// Stop (ramping the correction out) after this many seconds.
+    /// Stop (ramping the correction out) after this many seconds (0 < s ≤ 10⁷).
     #[arg(long)]
     pub duration_s: Option<f64>,
-    /// Exit once the robot has been silent this long after the session started (s).
+    /// Exit once the robot has been silent this long after the session started (0.01–3600 s).
     #[arg(long, default_value_t = 2.0)]
     pub idle_exit_s: f64,
-    /// Give up when no robot telegram and sensor sample arrive within this time (s).
+    /// Give up when no robot telegram and sensor sample arrive within this time (0.1–3600 s).
     #[arg(long, default_value_t = 60.0)]
     pub startup_timeout_s: f64,
     /// No live status lines.
@@ -37,59 +34,19 @@ pub struct RunArgs {
     pub quiet: bool,
 }
 
+impl RunArgs {
+    /// Every numeric flag within its documented bounds.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(d) = self.duration_s {
+            check_flag("--duration-s", d, 1e-3, 1e7, "s")?;
+        }
+        check_flag("--idle-exit-s", self.idle_exit_s, 0.01, 3600.0, "s")?;
+        check_flag("--startup-timeout-s", self.startup_timeout_s, 0.1, 3600.0, "s")
+    }
+}
+
 pub(crate) fn load_cell_file(path: &std::path::Path) -> Result<CellFile, String> {
     CellFile::load(path).map_err(|e| e.to_string())
-}
-
-fn robot_link(cell: &CellFile) -> Result<Box<dyn RobotLink + Send>, String> {
-    let r = &cell.robot;
-    let err = |e: deflex_io::LinkError| format!("robot link on {}: {e}", r.bind);
-    Ok(match r.kind {
-        RobotKind::KukaRsi => Box::new(
-            RsiLink::bind(
-                r.bind,
-                RsiConfig {
-                    sen_type: r.sen_type.clone(),
-                    estr: None,
-                    mode: rsi_mode(cell),
-                    ..RsiConfig::default()
-                },
-            )
-            .map_err(err)?,
-        ),
-        RobotKind::AbbEgm => {
-            // EGM's measurement age: one control period.
-            let age_ms = (1000.0 / cell.control.rate_hz).round() as u32;
-            let cfg = deflex_io::egm::EgmConfig {
-                frame: deflex_io::egm::EgmFrame::Base,
-                age_ms,
-                ..Default::default()
-            };
-            Box::new(deflex_io::egm::EgmLink::bind(r.bind, cfg).map_err(err)?)
-        }
-        RobotKind::Staubli => Box::new(deflex_io::staubli::StaubliLink::bind(r.bind).map_err(err)?),
-        RobotKind::SimpleUdp => Box::new(
-            deflex_io::simple_udp::SimpleUdpLink::bind(r.bind, Default::default()).map_err(err)?,
-        ),
-        RobotKind::SimpleTcp => {
-            Box::new(deflex_io::simple_tcp::SimpleTcpLink::bind(r.bind).map_err(err)?)
-        }
-    })
-}
-
-pub(crate) fn rsi_mode(cell: &CellFile) -> CorrectionMode {
-    if cell.robot.correction_mode == "relative" {
-        CorrectionMode::Relative
-    } else {
-        CorrectionMode::Absolute
-    }
-}
-
-pub(crate) fn calibration(cell: &CellFile) -> Calibration {
-    Calibration {
-        counts_per_force: cell.sensor.counts_per_force,
-        counts_per_torque: cell.sensor.counts_per_torque,
-    }
 }
 
 /// Everything `deflex run` did.
@@ -98,30 +55,36 @@ pub struct RunOutcome {
     pub wall_s: f64,
     pub log_path: Option<PathBuf>,
     pub log_rows: u64,
+    /// The log was committed to its path (a failed run leaves what was there).
+    pub log_committed: bool,
     /// The robot link's protocol, for the summary.
     pub robot_kind: RobotKind,
+    /// Largest step allowed between two answers (m): max rate × robot cycle.
+    pub step_limit_m: f64,
 }
 
 /// The `deflex run` session: links, threads, live status, summary. `stop` ends it early.
 pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunOutcome, String> {
+    args.check()?;
     let cell = load_cell_file(&args.config)?;
     let model = deflex_model::load_robot(&cell.model_spec())
         .map_err(|e| format!("{}: model.file: {e}", cell.origin))?;
     let controller = Controller::new(model, cell.controller_config()).map_err(|e| e.to_string())?;
     let joints = controller.robot().joint_count();
-    let robot = robot_link(&cell)?;
-    let sensor: Box<dyn ForceSensorLink + Send> = match cell.sensor.kind {
-        SensorKind::Netft => Box::new(
-            NetFtClient::new(cell.sensor.bind, cell.sensor.address, calibration(&cell))
-                .map_err(|e| format!("sensor link to {}: {e}", cell.sensor.address))?,
-        ),
-    };
+    let robot = cell
+        .open_robot_link(joints)
+        .map_err(|e| format!("robot link on {}: {e}", cell.robot.bind))?;
+    let sensor = cell
+        .open_sensor_link()
+        .map_err(|e| format!("sensor link to {}: {e}", cell.sensor.address))?;
     let log_path = cell.log_path();
     let (sink, writer) = match (&log_path, &cell.log) {
         (Some(path), Some(section)) => {
-            let file = std::fs::File::create(path)
+            // Written aside and renamed at the end: a failed run keeps an existing log.
+            let file = deflex_files::AtomicFile::create(path)
                 .map_err(|e| format!("log.path {}: {e}", path.display()))?;
-            let (s, w) = spawn_writer(section.ring_capacity, joints, Box::new(file));
+            let (s, w) = spawn_writer(section.ring_capacity, joints, Box::new(file))
+                .map_err(|e| format!("log writer: {e}"))?;
             (Some(s), Some(w))
         }
         _ => (None, None),
@@ -133,12 +96,14 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         startup_timeout_s: args.startup_timeout_s,
         idle_exit_s: Some(args.idle_exit_s),
     };
+    let step_limit_m = cell.limits.max_rate_m_s * cell.robot.cycle_s;
     let started = Instant::now();
-    let runtime = spawn(controller, robot, sensor, WallClock::new(), sink, options);
+    let runtime = spawn(controller, robot, sensor, WallClock::new(), sink, options)
+        .map_err(|e| format!("starting the runtime threads: {e}"))?;
     let mut last_cycles = 0u64;
     let mut last_print = Instant::now();
     while !runtime.is_finished() {
-        std::thread::sleep(Duration::from_millis(50));
+        std::thread::sleep(Duration::from_millis(20));
         let elapsed = started.elapsed().as_secs_f64();
         if stop.load(Ordering::SeqCst) || args.duration_s.is_some_and(|d| elapsed >= d) {
             runtime.request_stop();
@@ -150,7 +115,7 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
             last_print = Instant::now();
             let faults = s.flags.describe();
             eprintln!(
-                "t {:7.1} s | {:8} | {:5.1} Hz | F {:7.1} N | ξ [{:+.3} {:+.3} {:+.3}] mm | telegrams {} | samples {} | {}",
+                "t {:7.1} s | {:8} | {:5.1} Hz | F {:7.1} N | ξ [{:+.3} {:+.3} {:+.3}] mm | telegrams {}{} | samples {} | {}",
                 s.time_s,
                 s.phase.name(),
                 rate,
@@ -159,6 +124,9 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
                 s.xi_m[1] * 1e3,
                 s.xi_m[2] * 1e3,
                 s.telegrams,
+                s.robot_late
+                    .map(|l| format!(" (robot counts {l} late)"))
+                    .unwrap_or_default(),
                 s.samples,
                 if faults.is_empty() {
                     "ok".to_string()
@@ -169,16 +137,22 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         }
     }
     let summary = runtime.join();
-    let log_rows = match writer {
-        Some(w) => w.finish().map_err(|e| format!("log writer: {e}"))?.written,
-        None => 0,
+    let commit = summary.error.is_none();
+    let (log_rows, log_committed) = match writer {
+        Some(w) => {
+            let report = w.finish(commit).map_err(|e| format!("log writer: {e}"))?;
+            (report.written, report.committed)
+        }
+        None => (0, false),
     };
     Ok(RunOutcome {
         summary,
         wall_s: started.elapsed().as_secs_f64(),
         log_path,
         log_rows,
+        log_committed,
         robot_kind: cell.robot.kind,
+        step_limit_m,
     })
 }
 
@@ -187,78 +161,126 @@ pub(crate) fn stats_json(s: &StatsSummary) -> serde_json::Value {
            "mean_us": s.mean_us, "deadline_misses": s.deadline_misses})
 }
 
+pub(crate) fn fault_json(f: &Fault) -> serde_json::Value {
+    json!({"kind": f.kind.name(), "channel": f.channel.to_string(), "time_s": f.time_s,
+           "value": f.value, "limit": f.limit, "unit": f.kind.unit(), "text": f.to_string()})
+}
+
 pub fn run(args: RunArgs, json_out: bool) -> CliResult {
     let stop = deflex_control::rt::interrupt_flag();
     let o = run_session(&args, !args.quiet && !json_out, stop)?;
     let s = &o.summary;
     if json_out {
         let value = json!({
-            "wall_s": o.wall_s, "cycles": s.cycles, "phase": s.phase.name(),
+            "wall_s": o.wall_s, "cycles": s.cycles, "phase": s.end.name(),
+            "phase_text": s.phase_text(), "controller_phase": s.phase.name(),
+            "robot_protocol": o.robot_kind.name(), "robot_joints": s.robot_joints,
             "control_cycle": stats_json(&s.control), "reply_latency": stats_json(&s.reply_latency),
-            "telegrams": s.telegrams, "robot_timeouts": s.robot_timeouts,
+            "telegrams": s.telegrams,
+            "late_replies": s.reply_latency.deadline_misses,
+            "robot_reported_late": s.robot_late,
+            "robot_timeouts": s.robot_timeouts,
             "robot_bad_packets": s.robot_bad_packets, "robot_errors": s.robot_errors,
+            "robot_foreign": s.robot_foreign,
+            "last_foreign": s.last_foreign.map(|a| a.to_string()),
+            "max_step_sent_m": s.max_step_sent[..3].iter().fold(0.0f64, |m, v| m.max(*v)),
+            "max_step_sent_rad": s.max_step_sent[3..].iter().fold(0.0f64, |m, v| m.max(*v)),
+            "step_limit_m": o.step_limit_m,
             "samples": s.samples, "sample_gaps": s.sample_gaps, "sensor_faults": s.sensor_faults,
-            "fault": s.fault.map(|f| json!({"kind": f.kind.name(), "time_s": f.time_s, "value": f.value, "limit": f.limit})),
+            "sensor_errors": s.sensor_errors, "sensor_foreign": s.sensor_foreign,
+            "fault": s.fault.as_ref().map(fault_json),
+            "runaway_events": s.runaway_events,
+            "first_runaway": s.first_runaway.as_ref().map(fault_json),
             "max_force_n": s.max_force_n, "max_correction_mm": s.max_xi_m * 1e3,
-            "log_rows": o.log_rows, "log_dropped": s.log_dropped, "warnings": s.warnings,
+            "log_rows": o.log_rows, "log_committed": o.log_committed,
+            "log_dropped": s.log_dropped, "warnings": s.warnings,
             "error": s.error,
         });
         print_json(&value);
     } else {
-        println!(
-            "deflex run: {:.1} s, {} control cycles ({:.1} Hz), final phase {}",
-            o.wall_s,
-            s.cycles,
-            s.cycles as f64 / o.wall_s.max(1e-9),
-            s.phase.name()
-        );
-        println!("  control cycle:     {}", s.control);
-        println!(
-            "  {} reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs (late: {}); {} telegrams answered, {} receive timeouts, {} bad packets, {} errors",
-            o.robot_kind.name(),
-            s.reply_latency.p50_us,
-            s.reply_latency.p99_us,
-            s.reply_latency.max_us,
-            s.reply_latency.deadline_misses,
-            s.telegrams,
-            s.robot_timeouts,
-            s.robot_bad_packets,
-            s.robot_errors
-        );
-        println!(
-            "  sensor: {} samples, {} lost, {} flagged",
-            s.samples, s.sample_gaps, s.sensor_faults
-        );
-        println!(
-            "  max force {:.1} N, max |ξp| {:.3} mm",
-            s.max_force_n,
-            s.max_xi_m * 1e3
-        );
-        match &s.fault {
-            Some(f) if f.kind == deflex_control::FaultKind::RobotLinkLost && s.telegrams > 0 => {
-                println!(
-                    "  fault: {f} — the robot stopped sending (the end of its program, or a lost \
-                     link); the correction was ramped to its safe value"
-                )
-            }
-            Some(f) => println!("  fault: {f} — the correction was ramped to its safe value"),
-            None => println!("  fault: none"),
+        print_summary(&o);
+    }
+    match &s.error {
+        Some(e) => Err(e.clone()),
+        None => Ok(()),
+    }
+}
+
+fn print_summary(o: &RunOutcome) {
+    let s = &o.summary;
+    println!(
+        "deflex run: {:.1} s, {} control cycles ({:.1} Hz), phase: {}",
+        o.wall_s,
+        s.cycles,
+        s.cycles as f64 / o.wall_s.max(1e-9),
+        s.phase_text()
+    );
+    println!("  control cycle:     {}", s.control);
+    println!(
+        "  {} ({} joints) reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; {} telegrams          answered, {} answered later than one robot cycle{}",
+        o.robot_kind.name(),
+        s.robot_joints,
+        s.reply_latency.p50_us,
+        s.reply_latency.p99_us,
+        s.reply_latency.max_us,
+        s.telegrams,
+        s.reply_latency.deadline_misses,
+        match s.robot_late {
+            Some(l) => format!("; the robot counted {l} late answers (RSI Delay)"),
+            None => String::new(),
         }
-        if let Some(p) = &o.log_path {
+    );
+    println!(
+        "  robot link: {} receive timeouts, {} malformed packets, {} errors, {} from other hosts          refused{}",
+        s.robot_timeouts,
+        s.robot_bad_packets,
+        s.robot_errors,
+        s.robot_foreign,
+        s.last_foreign
+            .map(|a| format!(" (last {a})"))
+            .unwrap_or_default()
+    );
+    println!(
+        "  largest correction step sent: {:.4} mm (limit {:.4} mm per robot cycle)",
+        s.max_step_sent[..3].iter().fold(0.0f64, |m, v| m.max(*v)) * 1e3,
+        o.step_limit_m * 1e3
+    );
+    println!(
+        "  sensor: {} samples, {} lost, {} flagged by the status word, {} malformed or failed, {}          from other hosts refused",
+        s.samples, s.sample_gaps, s.sensor_faults, s.sensor_errors, s.sensor_foreign
+    );
+    println!(
+        "  max force {:.1} N, max |ξp| {:.3} mm",
+        s.max_force_n,
+        s.max_xi_m * 1e3
+    );
+    if let Some(f) = &s.first_runaway {
+        println!(
+            "  warning: the runaway guard acted {} time(s); first: {f}",
+            s.runaway_events
+        );
+    }
+    match &s.fault {
+        Some(f) => println!("  fault: {f} — the correction was ramped to its safe value"),
+        None => println!("  fault: none"),
+    }
+    if let Some(p) = &o.log_path {
+        if o.log_committed {
             println!(
                 "  log: {} ({} rows, {} dropped)",
                 p.display(),
                 o.log_rows,
                 s.log_dropped
             );
-        }
-        for w in &s.warnings {
-            println!("  warning: {w}");
+        } else {
+            println!(
+                "  log: not written, the run failed ({} keeps what it held)",
+                p.display()
+            );
         }
     }
-    match &s.error {
-        Some(e) => Err(e.clone()),
-        None => Ok(()),
+    for w in &s.warnings {
+        println!("  warning: {w}");
     }
 }
 
@@ -284,7 +306,7 @@ mod tests {
                  [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n"
             );
             let cell = CellFile::parse(&text, "cell.toml", PathBuf::new()).unwrap();
-            assert!(robot_link(&cell).is_ok(), "{kind}");
+            assert!(cell.open_robot_link(6).is_ok(), "{kind}");
         }
     }
 
@@ -345,6 +367,7 @@ mod tests {
             seed,
             wait_s: 20.0,
             dwell_s: 0.5,
+            quiet: true,
         };
         let run_args = RunArgs {
             config: config.clone(),
@@ -356,7 +379,7 @@ mod tests {
         let stop = std::sync::Arc::new(AtomicBool::new(false));
         let cell_thread = {
             let (a, stop) = (cell_args.clone(), stop.clone());
-            std::thread::spawn(move || cell_session(&a, &stop))
+            std::thread::spawn(move || cell_session(&a, &stop, false))
         };
         let run = run_session(&run_args, false, &stop).unwrap();
         let cell = cell_thread.join().unwrap().unwrap();
@@ -428,6 +451,19 @@ mod tests {
             "{kind}: controller max force {seen:.1} N vs twin {truth:.1} N"
         );
         assert!(l.log_header.starts_with("time_s,q1_rad"), "{kind}");
+        // The end of the robot's program is an end, not a fault.
+        assert_eq!(
+            s.phase_text(),
+            "ended (robot program finished)",
+            "{kind}: {:?}",
+            s.fault
+        );
+        assert_eq!(s.robot_joints, 6, "{kind}");
+        // Every answer within the rate limit per robot cycle.
+        let limit = deflex_control::LimiterConfig::default().max_rate[0] * 0.004;
+        for i in 0..3 {
+            assert!(s.max_step_sent[i] <= limit + 1e-12, "{kind}: {:?}", s.max_step_sent);
+        }
         let loop_mm = l.cell.summary.max_error_norm_m * 1e3;
         assert!(
             (loop_mm - l.in_process_mm).abs() <= 0.1 * l.in_process_mm + 0.003,
@@ -443,6 +479,9 @@ mod tests {
         let _serial = crate::realtime_test_lock();
         let l = loopback("kuka-rsi", 60.0, 3);
         check_loopback("kuka-rsi", &l, 500);
+        // `cell` and `run` count late answers the same way: the simulated KUKA sends its count
+        // in every telegram's Delay, and `run` reports the session's Delay.
+        assert_eq!(l.run.summary.robot_late, Some(l.cell.late));
         // The correction really acted: the same path without it ends further off.
         let open =
             deflex_sim::run_forming(&CellConfig::default(), l.path.clone(), 3, None).unwrap();

@@ -5,7 +5,10 @@
 //! `docs/cell.example.toml`.
 
 mod controller_config;
+mod links;
 mod validate;
+
+pub use validate::{BOUNDS, bounds_of};
 
 use crate::limiter::LimiterConfig;
 use crate::pid::PidGains;
@@ -83,16 +86,36 @@ pub struct RobotSection {
     pub kind: RobotKind,
     /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI).
     pub bind: SocketAddr,
-    /// Robot's address, where the protocol needs it to be known in advance (informational for
-    /// RSI/EGM/Stäubli, which answer the sender).
+    /// The robot controller's address: the link answers only it (port 0: any port of that
+    /// IP; the simple TCP link compares the IP only). Absent: the link locks to the first host
+    /// that sends a valid telegram, for the whole session.
     #[serde(default)]
     pub peer: Option<SocketAddr>,
-    /// RSI `RKorr` interpretation: `absolute` (default) or `relative`.
+    /// RSI correction interpretation: `absolute` (default) or `relative`.
     #[serde(default = "default_mode")]
     pub correction_mode: String,
     /// RSI `<Sen Type>`.
     #[serde(default = "default_sen_type")]
     pub sen_type: String,
+    /// RSI answers: `cartesian` (`RKorr`, default) or `joint` (`AK`, joint corrections from the
+    /// Cartesian one through the model's Jacobian).
+    #[serde(default = "default_rsi_answer")]
+    pub rsi_answer: String,
+    /// Element of joint answers: `AK` (default, the ROS-Industrial set-ups) or `AKorr`.
+    #[serde(default = "default_rsi_joint_tag")]
+    pub rsi_joint_tag: String,
+    /// ABB EGM: frame of `pathCorr`: `tool` (default: the sensor frame of `EGMActMove`,
+    /// attached to the tool), `work-object` or `base`.
+    #[serde(default = "default_egm_frame")]
+    pub egm_frame: String,
+    /// ABB EGM: orientation of `EGMActMove`'s sensor frame in the tool frame (roll, pitch, yaw,
+    /// rad), for `egm_frame = "tool"`.
+    #[serde(default)]
+    pub egm_sensor_rpy_rad: [f64; 3],
+    /// ABB EGM: orientation of the work object in the robot base frame (roll, pitch, yaw, rad),
+    /// for `egm_frame = "work-object"`.
+    #[serde(default)]
+    pub egm_work_object_rpy_rad: [f64; 3],
     /// Robot interpolation cycle (s), the reply deadline: 0.004 for RSI.
     #[serde(default = "default_cycle")]
     pub cycle_s: f64,
@@ -236,6 +259,27 @@ pub struct LimitsSection {
     /// `zero` (ramp ξ to 0, default) or `hold`.
     #[serde(default = "default_safe")]
     pub safe_action: String,
+    /// Watch for contact runaway (stiff contact making the correction positive feedback).
+    #[serde(default = "default_true")]
+    pub runaway_guard: bool,
+    /// Estimated loop gain through the contact above which the guard acts.
+    #[serde(default = "default_runaway_gain")]
+    pub runaway_gain_limit: f64,
+    /// Estimated loop gain below which the guard releases its hold.
+    #[serde(default = "default_runaway_release")]
+    pub runaway_release_gain: f64,
+    /// Forgetting time of the guard's estimate (s).
+    #[serde(default = "default_runaway_window")]
+    pub runaway_window_s: f64,
+    /// Motion along the corrected direction needed to trust the estimate (m).
+    #[serde(default = "default_runaway_travel")]
+    pub runaway_min_travel_m: f64,
+    /// Consecutive control cycles above the limit before the guard acts.
+    #[serde(default = "default_runaway_confirm")]
+    pub runaway_confirm_cycles: u32,
+    /// `hold` (stop the correction growing along its direction, warn; default) or `fault`.
+    #[serde(default = "default_runaway_action")]
+    pub runaway_action: String,
 }
 
 /// `[log]`.
@@ -281,6 +325,33 @@ pub struct CellFile {
 
 fn default_mode() -> String {
     "absolute".into()
+}
+fn default_rsi_answer() -> String {
+    "cartesian".into()
+}
+fn default_rsi_joint_tag() -> String {
+    "AK".into()
+}
+fn default_egm_frame() -> String {
+    "tool".into()
+}
+fn default_runaway_gain() -> f64 {
+    crate::runaway::RunawayConfig::default().gain_limit
+}
+fn default_runaway_release() -> f64 {
+    crate::runaway::RunawayConfig::default().release_gain
+}
+fn default_runaway_window() -> f64 {
+    crate::runaway::RunawayConfig::default().window_s
+}
+fn default_runaway_travel() -> f64 {
+    crate::runaway::RunawayConfig::default().min_travel_m
+}
+fn default_runaway_confirm() -> u32 {
+    crate::runaway::RunawayConfig::default().confirm_cycles
+}
+fn default_runaway_action() -> String {
+    "hold".into()
 }
 fn default_sen_type() -> String {
     "ImFree".into()

@@ -13,10 +13,14 @@
 
 use crate::limiter::{Limiter, LimiterConfig, RampState};
 use crate::pid::{Pid, PidGains, PidSolution};
-use crate::safety::{Fault, FaultKind, Flags, SafeAction, Safety, SafetyConfig};
+use crate::runaway::{RunawayConfig, RunawayGuard};
+use crate::safety::{FAULT_KINDS, Fault, FaultKind, Flags, SafeAction, Safety, SafetyConfig};
 use crate::wrench::{WrenchConfig, WrenchProcessor};
-use deflex_model::{Data, MAX_JOINTS, Robot, Wrench};
-use nalgebra::Vector3;
+use deflex_model::{Data, MAX_JOINTS, Robot};
+
+mod checks;
+
+pub use checks::JOINT_MAP_DAMPING;
 
 /// Everything the controller needs besides the model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,6 +39,8 @@ pub struct ControllerConfig {
     pub tare_s: f64,
     /// A known sensor bias (sensor frame, gravity excluded): no tare is taken.
     pub bias: Option<[f64; 6]>,
+    /// The contact-runaway guard ([`crate::runaway`]).
+    pub runaway: RunawayConfig,
 }
 
 impl Default for ControllerConfig {
@@ -47,6 +53,7 @@ impl Default for ControllerConfig {
             safety: SafetyConfig::default(),
             tare_s: 0.2,
             bias: None,
+            runaway: RunawayConfig::default(),
         }
     }
 }
@@ -97,8 +104,8 @@ pub struct CycleInput<'a> {
     pub wrench_age_s: f64,
     /// False when no new sample arrived since the previous cycle.
     pub wrench_fresh: bool,
-    /// The sensor flags a fault in its status word.
-    pub sensor_fault: bool,
+    /// The sensor's status word (0: healthy; anything else is a `sensor_status` fault).
+    pub sensor_status: u32,
 }
 
 /// What one cycle produced (all in base axes, SI).
@@ -116,6 +123,9 @@ pub struct CycleOutput {
     pub wrench_sensor: [f64; 6],
     /// Environment wrench w (eq. 2) at the TCP, base axes.
     pub wrench_tcp: [f64; 6],
+    /// Loop gain through the contact estimated by the runaway guard along the corrected
+    /// direction ([`crate::runaway`]); NaN when it cannot be estimated.
+    pub loop_gain: f64,
     /// Status bits.
     pub flags: Flags,
 }
@@ -137,6 +147,9 @@ pub struct Controller {
     q_prev: [f64; MAX_JOINTS],
     q_prev_valid: bool,
     last: CycleOutput,
+    guard: RunawayGuard,
+    runaway_events: u64,
+    first_runaway: Option<Fault>,
 }
 
 /// Error building a controller.
@@ -198,6 +211,9 @@ impl Controller {
             q_prev: [0.0; MAX_JOINTS],
             q_prev_valid: false,
             last: CycleOutput::default(),
+            guard: RunawayGuard::new(config.runaway),
+            runaway_events: 0,
+            first_runaway: None,
         })
     }
 
@@ -218,8 +234,17 @@ impl Controller {
         self.safety.latched()
     }
     /// Fault detection counts per kind (order of [`FaultKind::ALL`]).
-    pub fn fault_counts(&self) -> [u64; 5] {
+    pub fn fault_counts(&self) -> [u64; FAULT_KINDS] {
         self.safety.counts()
+    }
+    /// Times the runaway guard acted (held the growth or latched the fault).
+    pub fn runaway_events(&self) -> u64 {
+        self.runaway_events
+    }
+    /// The first runaway the guard acted on, as a fault record (also when it only held the
+    /// growth, which is not latched).
+    pub fn first_runaway(&self) -> Option<Fault> {
+        self.first_runaway
     }
     /// The last cycle's output.
     pub fn last_output(&self) -> &CycleOutput {
@@ -237,6 +262,7 @@ impl Controller {
         }
         self.pid.reset();
         self.wrench.reset_filter();
+        self.guard.reset();
         self.phase_t0 = now_s;
         if self.config.bias.is_some() || self.config.tare_s <= 0.0 {
             self.limiter.start(now_s);
@@ -246,7 +272,9 @@ impl Controller {
         }
     }
 
-    /// Ramps the correction out; the phase becomes `Stopped` once ξ = 0.
+    /// Ramps the correction out; the phase becomes `Stopped` once ξ = 0. A correction held by a
+    /// fault (safe action "hold") is ramped out too (the phase stays `Faulted`): a stop always
+    /// leaves the robot on its programmed path.
     pub fn stop(&mut self, now_s: f64) {
         match self.phase {
             Phase::Running => {
@@ -254,7 +282,8 @@ impl Controller {
                 self.phase = Phase::Stopping;
             }
             Phase::Taring | Phase::Idle => self.phase = Phase::Stopped,
-            _ => {}
+            Phase::Faulted => self.limiter.ramp_out(now_s),
+            Phase::Stopping | Phase::Stopped => {}
         }
     }
 
@@ -290,17 +319,12 @@ impl Controller {
         }
     }
 
-    /// Latches a fault detected outside the cycle (e.g. by the runtime). Returns true if new.
-    pub fn trip(&mut self, kind: FaultKind, now_s: f64, value: f64, limit: f64) -> bool {
-        let fault = Fault {
-            kind,
-            time_s: now_s,
-            value,
-            limit,
-        };
+    /// Latches a fault (detected in the cycle, or outside it by the runtime). Returns true if
+    /// new.
+    pub fn trip(&mut self, fault: Fault) -> bool {
         let new = self.safety.trip(fault);
         if new {
-            self.enter_fault(now_s);
+            self.enter_fault(fault.time_s);
         }
         new
     }
@@ -328,7 +352,7 @@ impl Controller {
             wrench_sensor: raw_wrench_sensor,
             wrench_age_s: 0.0,
             wrench_fresh: true,
-            sensor_fault: false,
+            sensor_status: 0,
         })
     }
 
@@ -347,12 +371,23 @@ impl Controller {
         self.last_time = Some(now);
         let mut flags = Flags::default();
         let detected = self.check_inputs(input, now);
-        let data_ok =
-            detected.is_none_or(|k| !matches!(k, FaultKind::NonFinite | FaultKind::OutOfRange));
+        // Inputs that cannot be trusted at all: the law does not see them.
+        let data_ok = detected.is_none_or(|k| {
+            !matches!(
+                k,
+                FaultKind::NonFinite
+                    | FaultKind::SensorOverRange
+                    | FaultKind::JointOutOfLimits
+                    | FaultKind::JointJump
+                    | FaultKind::JointCountMismatch
+            )
+        });
         let mut out = CycleOutput {
             time_s: now,
+            loop_gain: f64::NAN,
             ..self.last
         };
+        let mut kinematics_ok = false;
         if let Some(kind) = detected {
             flags.set(kind.flag());
         }
@@ -362,6 +397,7 @@ impl Controller {
         if data_ok {
             let q = &input.q_rad[..self.robot.joint_count()];
             if self.robot.forward_kinematics(&mut self.data, q).is_ok() {
+                kinematics_ok = true;
                 if self.phase == Phase::Taring {
                     let pose = self.wrench.sensor_pose(&self.data);
                     self.wrench.tare_add(input.wrench_sensor, &pose);
@@ -388,6 +424,9 @@ impl Controller {
         }
         // The law (eq. 17 solved with eq. 5–7), only on trusted data while it drives ξ.
         let follow = self.limiter.follows_law() && self.phase == Phase::Running && data_ok;
+        if follow && kinematics_ok {
+            self.watch_runaway(&mut out, now, h, &mut flags);
+        }
         let mut law = [PidSolution::default(); 6];
         let mut xi_law = self.limiter.output();
         if follow {
@@ -400,6 +439,12 @@ impl Controller {
                     xi_law[i] = 0.0;
                 }
             }
+            if self.guard.limit(&mut xi_law) {
+                flags.set(Flags::RUNAWAY_HOLD);
+            }
+        }
+        if self.guard.hold().is_some() {
+            flags.set(Flags::RUNAWAY_HOLD);
         }
         let limited = self.limiter.apply(&xi_law, now, h);
         if follow {
@@ -436,112 +481,5 @@ impl Controller {
         out.flags = flags;
         self.last = out;
         out
-    }
-
-    /// Input checks; trips and returns the first fault kind detected this cycle.
-    fn check_inputs(&mut self, input: &CycleInput, now: f64) -> Option<FaultKind> {
-        let cfg = self.config.safety;
-        let n = self.robot.joint_count();
-        let mut found: Option<(FaultKind, f64, f64)> = None;
-        let q_finite = input.q_rad.iter().all(|v| v.is_finite());
-        let w_finite = input.wrench_sensor.iter().all(|v| v.is_finite());
-        if !input.now_s.is_finite() || !q_finite || !w_finite {
-            found = Some((FaultKind::NonFinite, f64::NAN, 0.0));
-        } else if input.q_rad.len() < n {
-            found = Some((FaultKind::OutOfRange, input.q_rad.len() as f64, n as f64));
-        } else if let Some(i) =
-            (0..6).find(|&i| input.wrench_sensor[i].abs() >= cfg.sensor_range[i])
-        {
-            found = Some((
-                FaultKind::OutOfRange,
-                input.wrench_sensor[i],
-                cfg.sensor_range[i],
-            ));
-        } else {
-            for i in 0..n {
-                let qi = input.q_rad[i];
-                if let Some([lo, hi]) = self.robot.joints[i].limits {
-                    let m = cfg.joint_limit_margin_rad;
-                    if qi < lo - m || qi > hi + m {
-                        found = Some((FaultKind::OutOfRange, qi, if qi < lo { lo } else { hi }));
-                        break;
-                    }
-                }
-                if self.q_prev_valid && (qi - self.q_prev[i]).abs() > cfg.max_joint_step_rad {
-                    found = Some((
-                        FaultKind::OutOfRange,
-                        qi - self.q_prev[i],
-                        cfg.max_joint_step_rad,
-                    ));
-                    break;
-                }
-            }
-        }
-        if found.is_none() && (input.q_age_s.is_nan() || input.q_age_s > cfg.robot_timeout_s) {
-            found = Some((FaultKind::RobotLinkLost, input.q_age_s, cfg.robot_timeout_s));
-        }
-        if found.is_none()
-            && (input.sensor_fault
-                || input.wrench_age_s.is_nan()
-                || input.wrench_age_s > cfg.sensor_timeout_s)
-        {
-            found = Some((
-                FaultKind::SensorTimeout,
-                input.wrench_age_s,
-                cfg.sensor_timeout_s,
-            ));
-        }
-        let (kind, value, limit) = found?;
-        self.trip(kind, now, value, limit);
-        Some(kind)
-    }
-
-    /// Wrench path and deflection estimate (eq. 2, 15) into `out`, in base axes.
-    #[inline]
-    fn estimate(&mut self, raw: &[f64; 6], h: f64, out: &mut CycleOutput) {
-        let processed = self.wrench.process(raw, &self.data, h);
-        let w = Wrench::from(processed.tcp_world);
-        let ds = self.robot.tcp_deflection(&self.data, &w);
-        let r_t = self.robot.base.rotation.matrix().transpose();
-        let to_base = |v: &[f64], at: usize| -> [f64; 3] {
-            let b = r_t * Vector3::new(v[at], v[at + 1], v[at + 2]);
-            [b.x, b.y, b.z]
-        };
-        let (f, m) = (
-            to_base(&processed.tcp_world, 0),
-            to_base(&processed.tcp_world, 3),
-        );
-        let (dp, dphi) = (to_base(ds.as_slice(), 0), to_base(ds.as_slice(), 3));
-        out.wrench_sensor = processed.sensor;
-        out.wrench_tcp = [f[0], f[1], f[2], m[0], m[1], m[2]];
-        out.delta_s_hat = [dp[0], dp[1], dp[2], dphi[0], dphi[1], dphi[2]];
-    }
-
-    /// Checks the estimate; returns false when it is not finite.
-    fn check_estimate(&mut self, out: &CycleOutput, now: f64, flags: &mut Flags) -> bool {
-        let cfg = self.config.safety;
-        let w = &out.wrench_tcp;
-        let force = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-        let torque = (w[3] * w[3] + w[4] * w[4] + w[5] * w[5]).sqrt();
-        let finite = out.delta_s_hat.iter().all(|v| v.is_finite())
-            && force.is_finite()
-            && torque.is_finite();
-        if self.phase == Phase::Taring {
-            return finite;
-        }
-        let fault = if !finite {
-            Some((FaultKind::NonFinite, f64::NAN, 0.0))
-        } else if force > cfg.max_force_n {
-            Some((FaultKind::ForceOverLimit, force, cfg.max_force_n))
-        } else if torque > cfg.max_torque_nm {
-            Some((FaultKind::ForceOverLimit, torque, cfg.max_torque_nm))
-        } else {
-            None
-        };
-        if let Some((kind, value, limit)) = fault {
-            flags.set(kind.flag());
-            self.trip(kind, now, value, limit);
-        }
-        finite
     }
 }

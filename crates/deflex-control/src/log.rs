@@ -6,7 +6,12 @@
 //! Columns: `time_s`, `q1_rad…qN_rad`, the raw reading `raw_fx_n…raw_mz_nm` (sensor frame), the
 //! compensated reading `ws_fx_n…ws_mz_nm` (sensor frame), the TCP wrench `w_fx_n…w_mz_nm` (eq. 2,
 //! base axes), δŝ `ds_x_m…ds_rz_rad` (eq. 15), ξ `xi_x_m…xi_rz_rad` (eq. 7), ε `eps_x_m…eps_rz_rad`
-//! (eq. 5), `cycle_us`, `flags` (integer) and `status` (the flags and the latched fault by name).
+//! (eq. 5), `loop_gain` (the runaway guard's estimate, empty when unknown), `cycle_us`, `flags`
+//! (integer) and `status` (the flags and the latched fault by name).
+//!
+//! The writer streams into a [`LogTarget`]; for `deflex run` that is a
+//! [`deflex_files::AtomicFile`], so the log appears at its path only when
+//! [`LogWriter::finish`] commits it: a run that fails keeps the log a previous run left there.
 
 use crate::controller::CycleOutput;
 use crate::safety::Flags;
@@ -68,9 +73,42 @@ impl LogSink {
     }
 }
 
+/// Where the writer thread streams the CSV: written as it goes, made visible (or kept) only by
+/// [`LogTarget::commit`].
+pub trait LogTarget: Write + Send {
+    /// Flushes and makes the file appear at its destination.
+    fn commit(self: Box<Self>) -> std::io::Result<()>;
+}
+
+impl LogTarget for deflex_files::AtomicFile {
+    fn commit(self: Box<Self>) -> std::io::Result<()> {
+        deflex_files::AtomicFile::commit(*self)
+    }
+}
+
+/// Any writer as a [`LogTarget`] whose commit is a flush (tests, stdout).
+pub struct Plain<W: Write + Send>(pub W);
+
+impl<W: Write + Send> Write for Plain<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
+impl<W: Write + Send> LogTarget for Plain<W> {
+    fn commit(mut self: Box<Self>) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
+type WriterResult = (Box<dyn LogTarget>, std::io::Result<u64>);
+
 /// The writer thread; [`LogWriter::finish`] waits for it after the sink is dropped.
 pub struct LogWriter {
-    handle: JoinHandle<std::io::Result<u64>>,
+    handle: JoinHandle<WriterResult>,
     dropped: Arc<AtomicU64>,
 }
 
@@ -81,6 +119,8 @@ pub struct LogReport {
     pub written: u64,
     /// Records dropped because the ring was full.
     pub dropped: u64,
+    /// The file was committed (it is at its destination).
+    pub committed: bool,
 }
 
 const SUFFIXES: [&str; 6] = ["x_m", "y_m", "z_m", "rx_rad", "ry_rad", "rz_rad"];
@@ -96,7 +136,7 @@ pub fn csv_header(joint_count: usize) -> String {
     for prefix in ["ds", "xi", "eps"] {
         cols.extend(SUFFIXES.iter().map(|s| format!("{prefix}_{s}")));
     }
-    cols.extend(["cycle_us", "flags", "status"].map(String::from));
+    cols.extend(["loop_gain", "cycle_us", "flags", "status"].map(String::from));
     cols.join(",")
 }
 
@@ -118,6 +158,11 @@ pub fn csv_row(r: &LogRecord) -> String {
             let _ = write!(s, ",{v:.9}");
         }
     }
+    if r.out.loop_gain.is_finite() {
+        let _ = write!(s, ",{:.4}", r.out.loop_gain);
+    } else {
+        s.push(',');
+    }
     let _ = write!(
         s,
         ",{:.2},{},{}",
@@ -128,58 +173,68 @@ pub fn csv_row(r: &LogRecord) -> String {
     s
 }
 
-/// Creates the ring (`capacity` records) and starts the writer thread on `out`.
+/// Creates the ring (`capacity` records, at least 16) and starts the writer thread on `out`.
 pub fn spawn_writer(
     capacity: usize,
     joint_count: usize,
-    out: Box<dyn Write + Send>,
-) -> (LogSink, LogWriter) {
+    out: Box<dyn LogTarget>,
+) -> Result<(LogSink, LogWriter), std::io::Error> {
     let (producer, mut consumer) = rtrb::RingBuffer::<LogRecord>::new(capacity.max(16));
     let dropped = Arc::new(AtomicU64::new(0));
     let handle = std::thread::Builder::new()
         .name("deflex-log".into())
-        .spawn(move || -> std::io::Result<u64> {
-            let mut w = std::io::BufWriter::new(out);
-            writeln!(w, "{}", csv_header(joint_count))?;
-            let mut written = 0u64;
-            loop {
-                let mut any = false;
-                while let Ok(record) = consumer.pop() {
-                    writeln!(w, "{}", csv_row(&record))?;
-                    written += 1;
-                    any = true;
+        .spawn(move || -> WriterResult {
+            let mut out = out;
+            let result = (|| -> std::io::Result<u64> {
+                let mut w = std::io::BufWriter::new(&mut out);
+                writeln!(w, "{}", csv_header(joint_count))?;
+                let mut written = 0u64;
+                loop {
+                    let mut any = false;
+                    while let Ok(record) = consumer.pop() {
+                        writeln!(w, "{}", csv_row(&record))?;
+                        written += 1;
+                        any = true;
+                    }
+                    if consumer.is_abandoned() && consumer.is_empty() {
+                        break;
+                    }
+                    if !any {
+                        w.flush()?;
+                        std::thread::sleep(std::time::Duration::from_millis(20));
+                    }
                 }
-                if consumer.is_abandoned() && consumer.is_empty() {
-                    break;
-                }
-                if !any {
-                    w.flush()?;
-                    std::thread::sleep(std::time::Duration::from_millis(20));
-                }
-            }
-            w.flush()?;
-            Ok(written)
-        })
-        .expect("spawning the log writer thread");
-    (
+                w.flush()?;
+                Ok(written)
+            })();
+            (out, result)
+        })?;
+    Ok((
         LogSink {
             producer,
             dropped: dropped.clone(),
         },
         LogWriter { handle, dropped },
-    )
+    ))
 }
 
 impl LogWriter {
-    /// Waits for the writer (drop the [`LogSink`] first) and reports.
-    pub fn finish(self) -> std::io::Result<LogReport> {
-        let written = self
+    /// Waits for the writer (drop the [`LogSink`] first) and, when `commit`, makes the file
+    /// appear at its destination; otherwise the partial file is discarded (an
+    /// [`deflex_files::AtomicFile`] leaves whatever was at the destination untouched).
+    pub fn finish(self, commit: bool) -> std::io::Result<LogReport> {
+        let (target, result) = self
             .handle
             .join()
-            .map_err(|_| std::io::Error::other("log writer thread panicked"))??;
+            .map_err(|_| std::io::Error::other("log writer thread panicked"))?;
+        let written = result?;
+        if commit {
+            target.commit()?;
+        }
         Ok(LogReport {
             written,
             dropped: self.dropped.load(Ordering::Relaxed),
+            committed: commit,
         })
     }
 }
@@ -204,7 +259,7 @@ mod tests {
     #[test]
     fn rows_match_header_and_drops_are_counted() {
         let buf = Shared::default();
-        let (mut sink, writer) = spawn_writer(16, 6, Box::new(buf.clone()));
+        let (mut sink, writer) = spawn_writer(16, 6, Box::new(Plain(buf.clone()))).unwrap();
         let mut out = CycleOutput::default();
         out.flags.set(Flags::SENSOR_TIMEOUT | Flags::LATCHED);
         for k in 0..10_000 {
@@ -213,16 +268,47 @@ mod tests {
         }
         let dropped = sink.dropped();
         drop(sink);
-        let report = writer.finish().unwrap();
+        let report = writer.finish(true).unwrap();
         assert_eq!(report.written + report.dropped, 10_000);
         assert_eq!(report.dropped, dropped);
         let text = String::from_utf8(buf.0.lock().unwrap().clone()).unwrap();
         let mut lines = text.lines();
         let header = lines.next().unwrap();
         let n = header.split(',').count();
-        assert_eq!(n, 1 + 6 + 18 + 18 + 3);
+        assert_eq!(n, 1 + 6 + 18 + 18 + 4);
         let row = lines.next().unwrap();
         assert_eq!(row.split(',').count(), n);
         assert!(row.ends_with("sensor_timeout|latched"));
+    }
+}
+
+#[cfg(test)]
+mod atomic_tests {
+    use super::*;
+
+    /// A run that fails (no commit) leaves the previous log as it was; a finished run replaces
+    /// it whole.
+    #[test]
+    fn uncommitted_log_keeps_the_previous_file() {
+        let dir = std::env::temp_dir().join(format!("deflex-log-atomic-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("run.csv");
+        std::fs::write(&path, "previous session\n").unwrap();
+        let write = |commit: bool| {
+            let file = deflex_files::AtomicFile::create(&path).unwrap();
+            let (mut sink, writer) = spawn_writer(64, 6, Box::new(file)).unwrap();
+            sink.push(LogRecord::new(&[0.0; 6], &[0.0; 6], &CycleOutput::default(), 1.0));
+            drop(sink);
+            writer.finish(commit).unwrap()
+        };
+        let report = write(false);
+        assert_eq!((report.written, report.committed), (1, false));
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "previous session\n");
+        // No temporary file is left behind.
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        write(true);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("time_s,q1_rad") && text.lines().count() == 2, "{text}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

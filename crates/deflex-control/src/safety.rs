@@ -14,52 +14,93 @@
 //! right reaction to a force over the limit. [`SafeAction::Hold`] (freeze ξ) is offered for
 //! processes where retracting by the deflection would mark the part; it never grows either.
 
-/// Why the correction was stopped.
+/// Why the correction was stopped (or, for [`FaultKind::ContactRunaway`] with the guard's
+/// default action, why its growth was held).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum FaultKind {
-    /// Force (or torque) norm at the TCP above its limit.
+    /// Force norm at the TCP above its limit (N).
     ForceOverLimit,
-    /// No force sample for longer than the sensor timeout (or the sensor flags a fault).
+    /// Torque norm at the TCP above its limit (N·m).
+    TorqueOverLimit,
+    /// No force sample for longer than the sensor timeout (s).
     SensorTimeout,
-    /// No robot state for longer than the robot timeout.
+    /// The sensor flags a fault in its status word (the value is the word).
+    SensorStatus,
+    /// No robot state for longer than the robot timeout (s).
     RobotLinkLost,
-    /// A non-finite input (joint value, wrench, time) or result.
+    /// A non-finite input (joint value, wrench channel, time) or result.
     NonFinite,
-    /// A value outside its plausible range: joint outside its limits or jumping, wrench beyond
-    /// the sensor's range.
-    OutOfRange,
+    /// A raw reading channel at or beyond the sensor's range (N or N·m).
+    SensorOverRange,
+    /// A joint outside the model's limits plus the margin (rad).
+    JointOutOfLimits,
+    /// A joint changed more than plausible between two control cycles (rad).
+    JointJump,
+    /// The robot reports a different number of joints than the model has.
+    JointCountMismatch,
+    /// The correction pushes into a contact stiff enough that the force rises in step with it
+    /// (estimated loop gain, see [`crate::runaway`]).
+    ContactRunaway,
 }
+
+/// Number of fault kinds.
+pub const FAULT_KINDS: usize = 11;
 
 impl FaultKind {
     /// All kinds, in flag-bit order.
-    pub const ALL: [FaultKind; 5] = [
+    pub const ALL: [FaultKind; FAULT_KINDS] = [
         FaultKind::ForceOverLimit,
+        FaultKind::TorqueOverLimit,
         FaultKind::SensorTimeout,
+        FaultKind::SensorStatus,
         FaultKind::RobotLinkLost,
         FaultKind::NonFinite,
-        FaultKind::OutOfRange,
+        FaultKind::SensorOverRange,
+        FaultKind::JointOutOfLimits,
+        FaultKind::JointJump,
+        FaultKind::JointCountMismatch,
+        FaultKind::ContactRunaway,
     ];
 
-    /// Stable snake-case name used in logs and status.
+    /// Stable snake-case name used in logs and status: the check that tripped.
     pub fn name(self) -> &'static str {
         match self {
             FaultKind::ForceOverLimit => "force_over_limit",
+            FaultKind::TorqueOverLimit => "torque_over_limit",
             FaultKind::SensorTimeout => "sensor_timeout",
+            FaultKind::SensorStatus => "sensor_status",
             FaultKind::RobotLinkLost => "robot_link_lost",
             FaultKind::NonFinite => "non_finite",
-            FaultKind::OutOfRange => "out_of_range",
+            FaultKind::SensorOverRange => "sensor_over_range",
+            FaultKind::JointOutOfLimits => "joint_out_of_limits",
+            FaultKind::JointJump => "joint_jump",
+            FaultKind::JointCountMismatch => "joint_count_mismatch",
+            FaultKind::ContactRunaway => "contact_runaway",
+        }
+    }
+
+    /// Unit of the fault's value and limit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            FaultKind::ForceOverLimit | FaultKind::SensorOverRange => "N",
+            FaultKind::TorqueOverLimit => "N·m",
+            FaultKind::SensorTimeout | FaultKind::RobotLinkLost => "s",
+            FaultKind::JointOutOfLimits | FaultKind::JointJump => "rad",
+            FaultKind::SensorStatus
+            | FaultKind::NonFinite
+            | FaultKind::JointCountMismatch
+            | FaultKind::ContactRunaway => "",
         }
     }
 
     /// The status flag of this kind.
     pub fn flag(self) -> u32 {
-        match self {
-            FaultKind::ForceOverLimit => Flags::FORCE_OVER_LIMIT,
-            FaultKind::SensorTimeout => Flags::SENSOR_TIMEOUT,
-            FaultKind::RobotLinkLost => Flags::ROBOT_LINK_LOST,
-            FaultKind::NonFinite => Flags::NON_FINITE,
-            FaultKind::OutOfRange => Flags::OUT_OF_RANGE,
-        }
+        let index = FaultKind::ALL.iter().position(|k| *k == self).unwrap_or(0);
+        1 << index
+    }
+
+    fn index(self) -> usize {
+        FaultKind::ALL.iter().position(|k| *k == self).unwrap_or(0)
     }
 }
 
@@ -69,8 +110,41 @@ impl std::fmt::Display for FaultKind {
     }
 }
 
-/// A latched fault: what, when, and the offending value (N, s, rad… depending on the kind;
-/// NaN for non-finite inputs).
+/// Which quantity a fault is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Channel {
+    /// A scalar (force norm, a timeout, …).
+    #[default]
+    Whole,
+    /// Correction / deflection axis `0..6` (`x y z rx ry rz`, base axes).
+    Axis(u8),
+    /// Joint index `0..` (shown 1-based).
+    Joint(u8),
+    /// Sensor channel `0..6` (`fx fy fz mx my mz`, sensor frame).
+    Sensor(u8),
+    /// Controller time.
+    Time,
+}
+
+const AXIS_NAMES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+const SENSOR_NAMES: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
+
+impl std::fmt::Display for Channel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Channel::Whole => Ok(()),
+            Channel::Axis(i) => write!(f, "axis {}", AXIS_NAMES.get(i as usize).unwrap_or(&"?")),
+            Channel::Joint(i) => write!(f, "joint {}", u32::from(i) + 1),
+            Channel::Sensor(i) => {
+                write!(f, "sensor {}", SENSOR_NAMES.get(i as usize).unwrap_or(&"?"))
+            }
+            Channel::Time => f.write_str("time"),
+        }
+    }
+}
+
+/// A latched fault: which check, on which axis, joint or channel, the offending value and the
+/// limit it was compared with (in [`FaultKind::unit`]; NaN for non-finite inputs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fault {
     /// What happened.
@@ -81,47 +155,118 @@ pub struct Fault {
     pub value: f64,
     /// The limit it was compared with.
     pub limit: f64,
+    /// The axis, joint or channel concerned.
+    pub channel: Channel,
 }
 
-impl std::fmt::Display for Fault {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} at t = {:.3} s (value {:.4}, limit {:.4})",
-            self.kind, self.time_s, self.value, self.limit
-        )
+impl Fault {
+    /// A fault on the whole quantity (no axis or joint).
+    pub fn new(kind: FaultKind, time_s: f64, value: f64, limit: f64) -> Self {
+        Fault {
+            kind,
+            time_s,
+            value,
+            limit,
+            channel: Channel::Whole,
+        }
+    }
+
+    /// The same fault on `channel`.
+    pub fn on(mut self, channel: Channel) -> Self {
+        self.channel = channel;
+        self
     }
 }
 
-/// Status bits of a control cycle (logged as an integer, decoded by [`Flags::describe`]).
+impl std::fmt::Display for Fault {
+    /// `joint_out_of_limits: joint 3 value 3.2000 rad limit 3.1416 rad at t = 1.230 s`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let unit = self.kind.unit();
+        let sep = if unit.is_empty() { "" } else { " " };
+        write!(f, "{}:", self.kind)?;
+        if self.channel != Channel::Whole {
+            write!(f, " {}", self.channel)?;
+        }
+        match self.kind {
+            FaultKind::SensorStatus => write!(
+                f,
+                " status word {:#010x} (non-zero means fault)",
+                self.value as u32
+            )?,
+            FaultKind::NonFinite => f.write_str(" value not finite")?,
+            FaultKind::JointCountMismatch => write!(
+                f,
+                " the robot reports {} joints, the model has {}",
+                self.value, self.limit
+            )?,
+            FaultKind::ContactRunaway => write!(
+                f,
+                " estimated loop gain {:.3} limit {:.3} (force rising with the correction)",
+                self.value, self.limit
+            )?,
+            _ => write!(
+                f,
+                " value {:.4}{sep}{unit} limit {:.4}{sep}{unit}",
+                self.value, self.limit
+            )?,
+        }
+        if matches!(self.kind, FaultKind::JointOutOfLimits | FaultKind::JointJump) {
+            write!(
+                f,
+                " ({:.2}° vs {:.2}°)",
+                self.value.to_degrees(),
+                self.limit.to_degrees()
+            )?;
+        }
+        write!(f, " at t = {:.3} s", self.time_s)
+    }
+}
+
+/// Status bits of a control cycle (logged as an integer, decoded by [`Flags::describe`]). Bits
+/// 0–15 are the fault kinds in [`FaultKind::ALL`] order (the kind detected this cycle, and the
+/// latched one); bits 16 and up are states.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
 pub struct Flags(pub u32);
 
 impl Flags {
     /// Fault: force over limit.
     pub const FORCE_OVER_LIMIT: u32 = 1 << 0;
+    /// Fault: torque over limit.
+    pub const TORQUE_OVER_LIMIT: u32 = 1 << 1;
     /// Fault: sensor silent.
-    pub const SENSOR_TIMEOUT: u32 = 1 << 1;
+    pub const SENSOR_TIMEOUT: u32 = 1 << 2;
+    /// Fault: sensor status word.
+    pub const SENSOR_STATUS: u32 = 1 << 3;
     /// Fault: robot link lost.
-    pub const ROBOT_LINK_LOST: u32 = 1 << 2;
+    pub const ROBOT_LINK_LOST: u32 = 1 << 4;
     /// Fault: non-finite value.
-    pub const NON_FINITE: u32 = 1 << 3;
-    /// Fault: out-of-range value.
-    pub const OUT_OF_RANGE: u32 = 1 << 4;
+    pub const NON_FINITE: u32 = 1 << 5;
+    /// Fault: reading beyond the sensor's range.
+    pub const SENSOR_OVER_RANGE: u32 = 1 << 6;
+    /// Fault: joint outside its limits.
+    pub const JOINT_OUT_OF_LIMITS: u32 = 1 << 7;
+    /// Fault: implausible joint jump.
+    pub const JOINT_JUMP: u32 = 1 << 8;
+    /// Fault: joint count differs from the model's.
+    pub const JOINT_COUNT_MISMATCH: u32 = 1 << 9;
+    /// Contact runaway detected (a fault, or the guard's hold; see [`Flags::RUNAWAY_HOLD`]).
+    pub const CONTACT_RUNAWAY: u32 = 1 << 10;
     /// A fault is latched (the correction is going to / at its safe value).
-    pub const LATCHED: u32 = 1 << 8;
+    pub const LATCHED: u32 = 1 << 16;
     /// ξ hit a size bound.
-    pub const SATURATED_SIZE: u32 = 1 << 9;
+    pub const SATURATED_SIZE: u32 = 1 << 17;
     /// ξ hit a rate bound.
-    pub const SATURATED_RATE: u32 = 1 << 10;
+    pub const SATURATED_RATE: u32 = 1 << 18;
     /// A ramp (in or out) is in progress.
-    pub const RAMPING: u32 = 1 << 11;
+    pub const RAMPING: u32 = 1 << 19;
     /// The law drives the correction.
-    pub const ACTIVE: u32 = 1 << 12;
+    pub const ACTIVE: u32 = 1 << 20;
     /// Taring the sensor (out of contact).
-    pub const TARING: u32 = 1 << 13;
+    pub const TARING: u32 = 1 << 21;
     /// This cycle reused a previous wrench sample (no new sample arrived).
-    pub const STALE_WRENCH: u32 = 1 << 14;
+    pub const STALE_WRENCH: u32 = 1 << 22;
+    /// The runaway guard holds the correction's growth along the corrected direction.
+    pub const RUNAWAY_HOLD: u32 = 1 << 23;
 
     /// True if `bit` is set.
     pub fn has(self, bit: u32) -> bool {
@@ -135,12 +280,7 @@ impl Flags {
 
     /// `|`-separated names of the set bits (allocates: for writer threads and humans only).
     pub fn describe(self) -> String {
-        const NAMES: [(u32, &str); 12] = [
-            (Flags::FORCE_OVER_LIMIT, "force_over_limit"),
-            (Flags::SENSOR_TIMEOUT, "sensor_timeout"),
-            (Flags::ROBOT_LINK_LOST, "robot_link_lost"),
-            (Flags::NON_FINITE, "non_finite"),
-            (Flags::OUT_OF_RANGE, "out_of_range"),
+        const STATES: [(u32, &str); 8] = [
             (Flags::LATCHED, "latched"),
             (Flags::SATURATED_SIZE, "saturated_size"),
             (Flags::SATURATED_RATE, "saturated_rate"),
@@ -148,11 +288,14 @@ impl Flags {
             (Flags::ACTIVE, "active"),
             (Flags::TARING, "taring"),
             (Flags::STALE_WRENCH, "stale_wrench"),
+            (Flags::RUNAWAY_HOLD, "runaway_hold"),
         ];
-        let names: Vec<&str> = NAMES
+        let names: Vec<&str> = FaultKind::ALL
             .iter()
+            .map(|k| (k.flag(), k.name()))
+            .chain(STATES)
             .filter(|(bit, _)| self.has(*bit))
-            .map(|(_, n)| *n)
+            .map(|(_, n)| n)
             .collect();
         names.join("|")
     }
@@ -212,7 +355,7 @@ pub struct Safety {
     /// Limits.
     pub config: SafetyConfig,
     latched: Option<Fault>,
-    counts: [u64; 5],
+    counts: [u64; FAULT_KINDS],
 }
 
 impl Safety {
@@ -221,7 +364,7 @@ impl Safety {
         Safety {
             config,
             latched: None,
-            counts: [0; 5],
+            counts: [0; FAULT_KINDS],
         }
     }
 
@@ -232,11 +375,7 @@ impl Safety {
 
     /// Records a detected fault; latches it if none is latched. Returns true when newly latched.
     pub fn trip(&mut self, fault: Fault) -> bool {
-        let index = FaultKind::ALL
-            .iter()
-            .position(|k| *k == fault.kind)
-            .unwrap_or(0);
-        self.counts[index] += 1;
+        self.counts[fault.kind.index()] += 1;
         if self.latched.is_none() {
             self.latched = Some(fault);
             true
@@ -246,12 +385,52 @@ impl Safety {
     }
 
     /// Number of cycles on which each kind was detected (order of [`FaultKind::ALL`]).
-    pub fn counts(&self) -> [u64; 5] {
+    pub fn counts(&self) -> [u64; FAULT_KINDS] {
         self.counts
     }
 
     /// Clears the latch (operator acknowledgement). Counters are kept.
     pub fn reset(&mut self) {
         self.latched = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fault_texts_name_check_channel_value_and_limit() {
+        let f = Fault::new(FaultKind::JointOutOfLimits, 1.23, 3.2, std::f64::consts::PI)
+            .on(Channel::Joint(2));
+        assert_eq!(
+            f.to_string(),
+            "joint_out_of_limits: joint 3 value 3.2000 rad limit 3.1416 rad (183.35° vs 180.00°) at t = 1.230 s"
+        );
+        let f = Fault::new(FaultKind::SensorOverRange, 0.5, -2600.0, 2500.0).on(Channel::Sensor(2));
+        assert_eq!(
+            f.to_string(),
+            "sensor_over_range: sensor fz value -2600.0000 N limit 2500.0000 N at t = 0.500 s"
+        );
+        let f = Fault::new(FaultKind::SensorStatus, 2.0, f64::from(0x8000_0001u32), 0.0);
+        assert!(f.to_string().starts_with("sensor_status: status word 0x80000001"), "{f}");
+        let f = Fault::new(FaultKind::ForceOverLimit, 2.0, 2600.0, 2500.0);
+        assert_eq!(
+            f.to_string(),
+            "force_over_limit: value 2600.0000 N limit 2500.0000 N at t = 2.000 s"
+        );
+    }
+
+    #[test]
+    fn every_kind_has_its_own_bit_below_the_state_bits() {
+        let mut all = 0u32;
+        for k in FaultKind::ALL {
+            assert_eq!(all & k.flag(), 0, "{k}");
+            all |= k.flag();
+            assert!(k.flag() < Flags::LATCHED);
+            assert_eq!(Flags(k.flag()).describe(), k.name());
+        }
+        assert_eq!(Flags::CONTACT_RUNAWAY, FaultKind::ContactRunaway.flag());
+        assert_eq!(Flags::ROBOT_LINK_LOST, FaultKind::RobotLinkLost.flag());
     }
 }

@@ -104,7 +104,7 @@ fn sensor_silent() {
             wrench_sensor: &raw,
             wrench_age_s: t - t0,
             wrench_fresh: false,
-            sensor_fault: false,
+            sensor_status: 0,
         })
     });
 }
@@ -113,7 +113,8 @@ fn sensor_silent() {
 fn sensor_status_fault() {
     let (ctrl, t0, raw) = loaded(SafeAction::Zero);
     let q = common::q0();
-    assert_safe_reaction(ctrl, t0, FaultKind::SensorTimeout, |c, t| {
+    let mut ctrl2 = ctrl.clone();
+    assert_safe_reaction(ctrl, t0, FaultKind::SensorStatus, |c, t| {
         c.cycle_input(&CycleInput {
             now_s: t,
             q_rad: &q,
@@ -121,9 +122,22 @@ fn sensor_status_fault() {
             wrench_sensor: &raw,
             wrench_age_s: 0.0,
             wrench_fresh: true,
-            sensor_fault: true,
+            sensor_status: 0x8000_0040,
         })
     });
+    // Its own kind, with the status word, not a timeout with a meaningless value.
+    ctrl2.cycle_input(&CycleInput {
+        now_s: t0 + 0.01,
+        q_rad: &q,
+        q_age_s: 0.0,
+        wrench_sensor: &raw,
+        wrench_age_s: 0.0,
+        wrench_fresh: true,
+        sensor_status: 0x8000_0040,
+    });
+    let f = ctrl2.fault().unwrap();
+    assert_eq!((f.kind, f.value as u32), (FaultKind::SensorStatus, 0x8000_0040));
+    assert!(f.to_string().contains("0x80000040"), "{f}");
 }
 
 #[test]
@@ -138,7 +152,7 @@ fn robot_link_lost() {
             wrench_sensor: &raw,
             wrench_age_s: 0.0,
             wrench_fresh: true,
-            sensor_fault: false,
+            sensor_status: 0,
         })
     });
 }
@@ -163,22 +177,50 @@ fn garbage_values_are_out_of_range() {
     let (ctrl, t, _) = loaded(SafeAction::Zero);
     let q = common::q0();
     let garbage = [3.0e7, -1.0e9, 12.0, 0.0, 0.0, 0.0];
-    assert_safe_reaction(ctrl, t, FaultKind::OutOfRange, |c, t| {
+    let mut named = ctrl.clone();
+    assert_safe_reaction(ctrl, t, FaultKind::SensorOverRange, |c, t| {
         c.cycle(t, &q, &garbage)
     });
+    named.cycle(t + 0.01, &q, &garbage);
+    let text = named.fault().unwrap().to_string();
+    assert!(
+        text.starts_with("sensor_over_range: sensor fx value 30000000.0000 N limit 2500.0000 N"),
+        "{text}"
+    );
     // Joint values jumping (a corrupted telegram).
     let (ctrl, t, raw) = loaded(SafeAction::Zero);
     let mut jump = common::q0();
     jump[1] += 0.5;
-    assert_safe_reaction(ctrl, t, FaultKind::OutOfRange, |c, t| {
+    let mut named = ctrl.clone();
+    assert_safe_reaction(ctrl, t, FaultKind::JointJump, |c, t| {
         c.cycle(t, &jump, &raw)
     });
+    named.cycle(t + 0.01, &jump, &raw);
+    let text = named.fault().unwrap().to_string();
+    assert!(
+        text.starts_with("joint_jump: joint 2 value 0.5000 rad limit 0.0500 rad"),
+        "{text}"
+    );
     // Too few joint values.
     let (ctrl, t, raw) = loaded(SafeAction::Zero);
     let short = [0.0; 3];
-    assert_safe_reaction(ctrl, t, FaultKind::OutOfRange, |c, t| {
+    assert_safe_reaction(ctrl, t, FaultKind::JointCountMismatch, |c, t| {
         c.cycle(t, &short, &raw)
     });
+    // A joint beyond the model's limits names the joint and the limit.
+    let (mut ctrl, t, raw) = loaded(SafeAction::Zero);
+    let [lo, _] = ctrl.robot().joints[0].limits.expect("TX200 limits");
+    // Move in small steps so the joint-jump check does not trip first.
+    let mut q = common::q0();
+    let mut tt = t;
+    while q[0] > lo - 0.03 {
+        q[0] = (q[0] - 0.04).max(lo - 0.03);
+        tt += 0.01;
+        ctrl.cycle(tt, &q, &raw);
+    }
+    let f = ctrl.fault().unwrap();
+    assert_eq!(f.kind, FaultKind::JointOutOfLimits, "{f}");
+    assert!(f.to_string().starts_with("joint_out_of_limits: joint 1 value"), "{f}");
 }
 
 #[test]
@@ -245,7 +287,7 @@ fn random_garbage_never_panics_and_stays_bounded() {
                 wrench_sensor: &w,
                 wrench_age_s: if rng.gen_bool(0.1) { f64::NAN } else { 0.0 },
                 wrench_fresh: rng.gen_bool(0.8),
-                sensor_fault: rng.gen_bool(0.02),
+                sensor_status: if rng.gen_bool(0.02) { 1 } else { 0 },
             });
             for i in 0..6 {
                 assert!(out.xi[i].is_finite() && out.xi[i].abs() <= max_abs[i] + 1e-15);

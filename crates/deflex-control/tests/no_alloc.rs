@@ -1,9 +1,12 @@
 //! A counting global allocator proves that a control cycle (wrench path, eq. 15, eq. 17,
-//! limiter, safety), the seqlock slots and the log push allocate nothing.
+//! limiter, safety, runaway guard), the seqlock slots, the log push and the robot-link thread's
+//! per-answer work (send shaper, joint-correction map, TCP orientation) allocate nothing. It
+//! counts only its own thread's allocations.
 
 mod common;
 
-use deflex_control::log::{LogRecord, spawn_writer};
+use deflex_control::log::{LogRecord, Plain, spawn_writer};
+use deflex_control::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use deflex_control::slot::SeqSlot;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -49,7 +52,8 @@ fn control_cycle_allocates_nothing() {
     let raw_free = common::raw_reading(&config, &q, [0.0; 6]);
     let raw_load = common::raw_reading(&config, &q, [300.0, -200.0, 900.0, 1.0, 2.0, -1.0]);
     let xi_slot = SeqSlot::<6>::new();
-    let (mut sink, writer) = spawn_writer(1 << 14, 6, Box::new(std::io::sink()));
+    let (mut sink, writer) = spawn_writer(1 << 14, 6, Box::new(Plain(std::io::sink()))).unwrap();
+    let mut shaper = SendShaper::new(SendShaperConfig::new([0.02; 6], [0.008; 6], 0.004, 0.5));
     ctrl.start(0.0);
     // Warm-up outside the measurement (first use of lazily initialised statics, if any).
     ctrl.cycle(0.01, &q, &raw_free);
@@ -61,7 +65,12 @@ fn control_cycle_allocates_nothing() {
         let raw = if k < 30 { &raw_free } else { &raw_load };
         let out = ctrl.cycle(t, &q, raw);
         xi_slot.write(&out.xi);
-        let _ = xi_slot.read();
+        let (xi, _) = xi_slot.read();
+        // What the robot-link thread does per answer: shape, map to joints, orient.
+        let sent = shaper.next(&xi, LinkDirective::Follow);
+        let map = ctrl.joint_correction_map();
+        let dq0: f64 = (0..6).map(|j| map[0][j] * sent[j]).sum();
+        std::hint::black_box((dq0, ctrl.tcp_rotation_in_base()));
         sink.push(LogRecord::new(&q, raw, &out, 1.0));
     }
     // Faults and the ramp to the safe value must not allocate either.
@@ -81,7 +90,7 @@ fn control_cycle_allocates_nothing() {
         after - before
     );
     drop(sink);
-    writer.finish().unwrap();
+    writer.finish(true).unwrap();
     // The counter itself works.
     COUNTING.with(|c| c.set(true));
     let v: Vec<u8> = Vec::with_capacity(std::hint::black_box(64));

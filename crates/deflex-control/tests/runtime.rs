@@ -7,6 +7,8 @@ mod common;
 
 use deflex_control::runtime::{RuntimeOptions, spawn};
 use deflex_control::{FaultKind, WallClock};
+#[allow(unused_imports)]
+use deflex_io::RobotLink as _;
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::{RobotSideLink, RobotState};
@@ -53,9 +55,8 @@ fn run(robot_s: f64, sensor_s: f64) -> Outcome {
         let mut next = Instant::now();
         while start.elapsed().as_secs_f64() < robot_s {
             let state = RobotState {
-                q_rad: q,
                 cycle_id: sent + 1,
-                ..RobotState::default()
+                ..RobotState::with_joints(&q)
             };
             ep.send_state(&state).unwrap();
             sent += 1;
@@ -82,7 +83,8 @@ fn run(robot_s: f64, sensor_s: f64) -> Outcome {
         WallClock::new(),
         None,
         options,
-    );
+    )
+    .unwrap();
     let (corrections, sent, answered) = robot.join().unwrap();
     sensor.join().unwrap();
     let deadline = Instant::now() + Duration::from_secs(10);
@@ -138,16 +140,17 @@ fn sensor_goes_silent() {
     eprintln!("control cycle: {}", s.control);
 }
 
+/// The robot stops sending for good: the end of its program, reported as an end (not a
+/// `robot_link_lost` fault), and the correction it last heard was bounded.
 #[test]
-fn robot_link_lost() {
+fn robot_program_end_is_an_end_not_a_fault() {
     let o = run(1.5, 3.0);
     let s = &o.summary;
     assert_eq!(s.error, None);
-    assert_eq!(
-        s.fault.map(|f| f.kind),
-        Some(FaultKind::RobotLinkLost),
-        "{s:?}"
-    );
+    assert_eq!(s.end, deflex_control::runtime::SessionEnd::RobotFinished, "{s:?}");
+    assert_eq!(s.fault, None, "{s:?}");
+    assert_eq!(s.phase_text(), "ended (robot program finished)");
+    assert_eq!(s.robot_joints, 6);
     check_bounded(&o.corrections);
     assert!(s.cycles > 50);
 }

@@ -90,7 +90,7 @@ impl CorrectionController for TwinController {
             wrench_sensor: &self.last_raw,
             wrench_age_s: input.time_s - self.last_sample_s,
             wrench_fresh: fresh,
-            sensor_fault: false,
+            sensor_status: 0,
         });
         let f = &out.wrench_tcp;
         self.max_force_n = self

@@ -5,6 +5,7 @@ use super::{AXES, CellFile};
 use crate::controller::ControllerConfig;
 use crate::limiter::LimiterConfig;
 use crate::pid::PidGains;
+use crate::runaway::{RunawayAction, RunawayConfig};
 use crate::safety::{SafeAction, SafetyConfig};
 use crate::wrench::{ToolLoad, WrenchConfig};
 use deflex_model::spatial::pose_from_xyz_rpy;
@@ -71,6 +72,20 @@ impl CellFile {
             },
             tare_s: m.tare_s,
             bias: m.bias,
+            runaway: RunawayConfig {
+                enabled: l.runaway_guard,
+                gain_limit: l.runaway_gain_limit,
+                release_gain: l.runaway_release_gain,
+                window_s: l.runaway_window_s,
+                min_travel_m: l.runaway_min_travel_m,
+                confirm_cycles: l.runaway_confirm_cycles,
+                action: if l.runaway_action == "fault" {
+                    RunawayAction::Fault
+                } else {
+                    RunawayAction::Hold
+                },
+                ..RunawayConfig::default()
+            },
         }
     }
 }

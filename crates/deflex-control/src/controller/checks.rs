@@ -1,0 +1,248 @@
+//! The controller's per-cycle checks and estimates: input supervision (each fault names its
+//! check, joint or channel, value and limit), the wrench path and deflection estimate (eq. 2,
+//! 15), the force/torque limits, the runaway guard's update, and the frames the robot links need
+//! (TCP orientation, the joint-space map of a correction). All allocation-free.
+
+use super::{Controller, CycleInput, CycleOutput, Phase};
+use crate::runaway::RunawayAction;
+use crate::safety::{Channel, Fault, FaultKind, Flags};
+use deflex_model::{MAX_JOINTS, Wrench};
+use nalgebra::{Matrix6, Vector3, Vector6};
+
+/// Damping λ of the least-squares map from a Cartesian correction to joint corrections
+/// ([`Controller::joint_correction_map`]): Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ ξ. With J in metres per radian
+/// (position rows) and 1 (rotation rows), λ = 10⁻³ leaves a well-conditioned arm untouched
+/// (its smallest singular value is ≥ 0.1) and bounds Δq near a singularity to |ξ|/(2λ).
+pub const JOINT_MAP_DAMPING: f64 = 1e-3;
+
+impl Controller {
+    /// Input checks; trips and returns the first fault kind detected this cycle.
+    pub(super) fn check_inputs(&mut self, input: &CycleInput, now: f64) -> Option<FaultKind> {
+        let cfg = self.config.safety;
+        let n = self.robot.joint_count();
+        let fault = |kind, value, limit, channel| Fault::new(kind, now, value, limit).on(channel);
+        let mut found: Option<Fault> = None;
+        if !input.now_s.is_finite() {
+            found = Some(fault(FaultKind::NonFinite, f64::NAN, 0.0, Channel::Time));
+        } else if let Some(i) = input.q_rad.iter().position(|v| !v.is_finite()) {
+            found = Some(fault(FaultKind::NonFinite, f64::NAN, 0.0, Channel::Joint(i as u8)));
+        } else if let Some(i) = input.wrench_sensor.iter().position(|v| !v.is_finite()) {
+            found = Some(fault(FaultKind::NonFinite, f64::NAN, 0.0, Channel::Sensor(i as u8)));
+        } else if input.q_rad.len() != n {
+            found = Some(fault(
+                FaultKind::JointCountMismatch,
+                input.q_rad.len() as f64,
+                n as f64,
+                Channel::Whole,
+            ));
+        } else if let Some(i) =
+            (0..6).find(|&i| input.wrench_sensor[i].abs() >= cfg.sensor_range[i])
+        {
+            found = Some(fault(
+                FaultKind::SensorOverRange,
+                input.wrench_sensor[i],
+                cfg.sensor_range[i].copysign(input.wrench_sensor[i]),
+                Channel::Sensor(i as u8),
+            ));
+        } else {
+            for i in 0..n {
+                let qi = input.q_rad[i];
+                if let Some([lo, hi]) = self.robot.joints[i].limits {
+                    let m = cfg.joint_limit_margin_rad;
+                    if qi < lo - m || qi > hi + m {
+                        let limit = if qi < lo { lo - m } else { hi + m };
+                        found = Some(fault(
+                            FaultKind::JointOutOfLimits,
+                            qi,
+                            limit,
+                            Channel::Joint(i as u8),
+                        ));
+                        break;
+                    }
+                }
+                if self.q_prev_valid && (qi - self.q_prev[i]).abs() > cfg.max_joint_step_rad {
+                    found = Some(fault(
+                        FaultKind::JointJump,
+                        qi - self.q_prev[i],
+                        cfg.max_joint_step_rad.copysign(qi - self.q_prev[i]),
+                        Channel::Joint(i as u8),
+                    ));
+                    break;
+                }
+            }
+        }
+        if found.is_none() && (input.q_age_s.is_nan() || input.q_age_s > cfg.robot_timeout_s) {
+            found = Some(fault(
+                FaultKind::RobotLinkLost,
+                input.q_age_s,
+                cfg.robot_timeout_s,
+                Channel::Whole,
+            ));
+        }
+        if found.is_none() && input.sensor_status != 0 {
+            found = Some(fault(
+                FaultKind::SensorStatus,
+                f64::from(input.sensor_status),
+                0.0,
+                Channel::Whole,
+            ));
+        }
+        if found.is_none()
+            && (input.wrench_age_s.is_nan() || input.wrench_age_s > cfg.sensor_timeout_s)
+        {
+            found = Some(fault(
+                FaultKind::SensorTimeout,
+                input.wrench_age_s,
+                cfg.sensor_timeout_s,
+                Channel::Whole,
+            ));
+        }
+        let fault = found?;
+        self.trip(fault);
+        Some(fault.kind)
+    }
+
+    /// Wrench path and deflection estimate (eq. 2, 15) into `out`, in base axes.
+    #[inline]
+    pub(super) fn estimate(&mut self, raw: &[f64; 6], h: f64, out: &mut CycleOutput) {
+        let processed = self.wrench.process(raw, &self.data, h);
+        let w = Wrench::from(processed.tcp_world);
+        let ds = self.robot.tcp_deflection(&self.data, &w);
+        let r_t = self.robot.base.rotation.matrix().transpose();
+        let to_base = |v: &[f64], at: usize| -> [f64; 3] {
+            let b = r_t * Vector3::new(v[at], v[at + 1], v[at + 2]);
+            [b.x, b.y, b.z]
+        };
+        let (f, m) = (
+            to_base(&processed.tcp_world, 0),
+            to_base(&processed.tcp_world, 3),
+        );
+        let (dp, dphi) = (to_base(ds.as_slice(), 0), to_base(ds.as_slice(), 3));
+        out.wrench_sensor = processed.sensor;
+        out.wrench_tcp = [f[0], f[1], f[2], m[0], m[1], m[2]];
+        out.delta_s_hat = [dp[0], dp[1], dp[2], dphi[0], dphi[1], dphi[2]];
+    }
+
+    /// Checks the estimate; returns false when it is not finite.
+    pub(super) fn check_estimate(
+        &mut self,
+        out: &CycleOutput,
+        now: f64,
+        flags: &mut Flags,
+    ) -> bool {
+        let cfg = self.config.safety;
+        let w = &out.wrench_tcp;
+        let force = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        let torque = (w[3] * w[3] + w[4] * w[4] + w[5] * w[5]).sqrt();
+        let finite = out.delta_s_hat.iter().all(|v| v.is_finite())
+            && force.is_finite()
+            && torque.is_finite();
+        if self.phase == Phase::Taring {
+            return finite;
+        }
+        let fault = if !finite {
+            Some(Fault::new(FaultKind::NonFinite, now, f64::NAN, 0.0))
+        } else if force > cfg.max_force_n {
+            Some(Fault::new(FaultKind::ForceOverLimit, now, force, cfg.max_force_n))
+        } else if torque > cfg.max_torque_nm {
+            Some(Fault::new(FaultKind::TorqueOverLimit, now, torque, cfg.max_torque_nm))
+        } else {
+            None
+        };
+        if let Some(fault) = fault {
+            flags.set(fault.kind.flag());
+            self.trip(fault);
+        }
+        finite
+    }
+
+    /// The TCP position in base axes (m), from the last forward kinematics.
+    fn tcp_in_base(&self) -> [f64; 3] {
+        let base = &self.robot.base;
+        let p = base.rotation.inverse() * (self.data.tcp_position() - base.translation.vector);
+        [p.x, p.y, p.z]
+    }
+
+    /// Updates the runaway guard with this cycle's position, force and applied correction, and
+    /// acts on a detection (hold: record and flag; fault: latch `contact_runaway`).
+    pub(super) fn watch_runaway(
+        &mut self,
+        out: &mut CycleOutput,
+        now: f64,
+        h: f64,
+        flags: &mut Flags,
+    ) {
+        if !self.guard.config().enabled {
+            return;
+        }
+        let applied = self.limiter.output();
+        let xi_p = [applied[0], applied[1], applied[2]];
+        let u = self.guard.direction(&xi_p);
+        // The model's compliance along u: deflection along u under a unit force along u.
+        let compliance_u = u.map_or(f64::NAN, |u| {
+            let r = self.robot.base.rotation;
+            let uw = r * Vector3::new(u[0], u[1], u[2]);
+            let ds = self
+                .robot
+                .tcp_deflection(&self.data, &Wrench::from([uw.x, uw.y, uw.z, 0.0, 0.0, 0.0]));
+            ds[0] * uw.x + ds[1] * uw.y + ds[2] * uw.z
+        });
+        let x = self.tcp_in_base();
+        let force = [out.wrench_tcp[0], out.wrench_tcp[1], out.wrench_tcp[2]];
+        let update = self.guard.update(&x, &force, &xi_p, u, compliance_u, h);
+        out.loop_gain = update.gain;
+        if update.tripped {
+            self.runaway_events += 1;
+            flags.set(Flags::CONTACT_RUNAWAY);
+            let limit = self.guard.config().gain_limit;
+            let fault = Fault::new(FaultKind::ContactRunaway, now, update.gain, limit);
+            if self.first_runaway.is_none() {
+                self.first_runaway = Some(fault);
+            }
+            if self.guard.config().action == RunawayAction::Fault {
+                self.trip(fault);
+            }
+        }
+    }
+
+    /// Orientation of the TCP in the robot base frame (row-major), from the last forward
+    /// kinematics: what a link whose correction frame follows the tool needs (ABB EGM).
+    pub fn tcp_rotation_in_base(&self) -> [[f64; 3]; 3] {
+        let r = self.robot.base.rotation.inverse() * self.data.tcp.rotation;
+        let m = r.matrix();
+        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+    }
+
+    /// The least-squares map `P` (row i: joint i) from a correction ξ (base axes, [δp; δφ]) to
+    /// joint corrections Δq = P ξ at the last reported joints: Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ ξ with J
+    /// the geometric Jacobian at the TCP in base axes and λ = [`JOINT_MAP_DAMPING`], so that
+    /// J Δq ≈ ξ (the robot moves its TCP by the correction). Rows past the joint count are
+    /// zero; a failed solve gives an all-zero map.
+    pub fn joint_correction_map(&self) -> [[f64; 6]; MAX_JOINTS] {
+        let mut map = [[0.0; 6]; MAX_JOINTS];
+        let n = self.robot.joint_count();
+        let tcp = self.data.tcp_position();
+        let columns = self.robot.geometric_jacobian_columns(&self.data, &tcp);
+        let r_t = self.robot.base.rotation.inverse();
+        let mut base_columns = [Vector6::zeros(); MAX_JOINTS];
+        for (b, c) in base_columns.iter_mut().zip(&columns).take(n) {
+            let lin = r_t * Vector3::new(c[0], c[1], c[2]);
+            let ang = r_t * Vector3::new(c[3], c[4], c[5]);
+            *b = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
+        }
+        let mut jjt = Matrix6::identity() * (JOINT_MAP_DAMPING * JOINT_MAP_DAMPING);
+        for c in &base_columns[..n] {
+            jjt += c * c.transpose();
+        }
+        let Some(inverse) = jjt.cholesky().map(|ch| ch.inverse()) else {
+            return map;
+        };
+        for (row, c) in map.iter_mut().zip(&base_columns).take(n) {
+            let r = inverse * c; // (J Jᵀ + λ²I)⁻¹ is symmetric: row i of P is (inverse · j_i)ᵀ.
+            if r.iter().all(|v| v.is_finite()) {
+                row.copy_from_slice(r.as_slice());
+            }
+        }
+        map
+    }
+}
