@@ -215,9 +215,9 @@ fn robot_side(
             )
             .map_err(err)?,
         )),
-        RobotKind::SimpleUdp => {
-            RobotSide::Other(Box::new(SimpleUdpRobotEndpoint::new(local, pc).map_err(err)?))
-        }
+        RobotKind::SimpleUdp => RobotSide::Other(Box::new(
+            SimpleUdpRobotEndpoint::new(local, pc).map_err(err)?,
+        )),
         RobotKind::SimpleTcp => {
             // The robot's script connects to the PC: retry until `deflex run` listens.
             let start = Instant::now();
@@ -377,7 +377,11 @@ pub fn cell_session(
             eprintln!(
                 "cell (SIMULATED): {} | t {:6.1} of {:.0} s | {} robot cycles, {} late | F {:6.0} N | \
                  correction {:.3} mm | max error so far {:.3} mm",
-                if serving { "forming" } else { "waiting for the controller" },
+                if serving {
+                    "forming"
+                } else {
+                    "waiting for the controller"
+                },
                 step.time_s,
                 path_s,
                 cycles,

@@ -263,6 +263,9 @@ mod tests {
         assert!((a - b).abs() <= 0.1 * b + 0.005, "{a} vs {b}");
         // The end of the robot's telegrams is the end of its program, not a fault.
         assert_eq!(summary.fault, None);
-        assert_eq!(summary.end, deflex_control::runtime::SessionEnd::RobotFinished);
+        assert_eq!(
+            summary.end,
+            deflex_control::runtime::SessionEnd::RobotFinished
+        );
     }
 }

@@ -41,7 +41,13 @@ impl RunArgs {
             check_flag("--duration-s", d, 1e-3, 1e7, "s")?;
         }
         check_flag("--idle-exit-s", self.idle_exit_s, 0.01, 3600.0, "s")?;
-        check_flag("--startup-timeout-s", self.startup_timeout_s, 0.1, 3600.0, "s")
+        check_flag(
+            "--startup-timeout-s",
+            self.startup_timeout_s,
+            0.1,
+            3600.0,
+            "s",
+        )
     }
 }
 
@@ -462,7 +468,11 @@ mod tests {
         // Every answer within the rate limit per robot cycle.
         let limit = deflex_control::LimiterConfig::default().max_rate[0] * 0.004;
         for i in 0..3 {
-            assert!(s.max_step_sent[i] <= limit + 1e-12, "{kind}: {:?}", s.max_step_sent);
+            assert!(
+                s.max_step_sent[i] <= limit + 1e-12,
+                "{kind}: {:?}",
+                s.max_step_sent
+            );
         }
         let loop_mm = l.cell.summary.max_error_norm_m * 1e3;
         assert!(

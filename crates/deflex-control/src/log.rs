@@ -297,18 +297,29 @@ mod atomic_tests {
         let write = |commit: bool| {
             let file = deflex_files::AtomicFile::create(&path).unwrap();
             let (mut sink, writer) = spawn_writer(64, 6, Box::new(file)).unwrap();
-            sink.push(LogRecord::new(&[0.0; 6], &[0.0; 6], &CycleOutput::default(), 1.0));
+            sink.push(LogRecord::new(
+                &[0.0; 6],
+                &[0.0; 6],
+                &CycleOutput::default(),
+                1.0,
+            ));
             drop(sink);
             writer.finish(commit).unwrap()
         };
         let report = write(false);
         assert_eq!((report.written, report.committed), (1, false));
-        assert_eq!(std::fs::read_to_string(&path).unwrap(), "previous session\n");
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "previous session\n"
+        );
         // No temporary file is left behind.
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         write(true);
         let text = std::fs::read_to_string(&path).unwrap();
-        assert!(text.starts_with("time_s,q1_rad") && text.lines().count() == 2, "{text}");
+        assert!(
+            text.starts_with("time_s,q1_rad") && text.lines().count() == 2,
+            "{text}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

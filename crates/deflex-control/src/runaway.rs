@@ -290,8 +290,7 @@ impl RunawayGuard {
         if self.travel >= self.config.min_travel_m && self.sxx > 0.0 {
             let slope = self.sxp / self.sxx;
             out.gain = compliance_u * slope;
-            let residual =
-                (self.spp - slope * self.sxp).max(0.0) / (self.weight - 1.0).max(1.0);
+            let residual = (self.spp - slope * self.sxp).max(0.0) / (self.weight - 1.0).max(1.0);
             gain_low = out.gain - 2.0 * compliance_u.abs() * (residual / self.sxx).sqrt();
         }
         let reaction = -dot(force, &u);
@@ -418,7 +417,11 @@ fn characteristic_polynomial(g: f64, gains: &PidGains, h: f64, delay: usize) -> 
     let zma = [alpha - 1.0, 1.0];
     let dq = mul(&zm1, &zma);
     let nq = add(
-        &add(&zma.map(|c| ai * c), &dq.iter().map(|c| a * c).collect::<Vec<_>>(), 1.0),
+        &add(
+            &zma.map(|c| ai * c),
+            &dq.iter().map(|c| a * c).collect::<Vec<_>>(),
+            1.0,
+        ),
         &zm1.map(|c| kd * alpha * c),
         -1.0,
     );
@@ -538,7 +541,10 @@ mod tests {
             };
             for delay in [1usize, 5] {
                 let g_star = critical_gain(&hot, 0.01, delay);
-                assert!((g_star - 1.0).abs() < 1e-3, "{kc} {ti_s} {td_s} d {delay}: {g_star}");
+                assert!(
+                    (g_star - 1.0).abs() < 1e-3,
+                    "{kc} {ti_s} {td_s} d {delay}: {g_star}"
+                );
             }
         }
     }

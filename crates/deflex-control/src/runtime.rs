@@ -342,9 +342,11 @@ fn robot_loop<C: Clock>(
                     link.send_joint_correction(&dq[..n.max(1)])
                 } else {
                     let (r, _) = shared.tcp_rotation.read();
-                    link.set_tcp_rotation(&[[r[0], r[1], r[2]], [r[3], r[4], r[5]], [
-                        r[6], r[7], r[8],
-                    ]]);
+                    link.set_tcp_rotation(&[
+                        [r[0], r[1], r[2]],
+                        [r[3], r[4], r[5]],
+                        [r[6], r[7], r[8]],
+                    ]);
                     link.send_correction(&Correction::from_array(sent))
                 };
                 match result {

@@ -210,7 +210,10 @@ impl std::fmt::Display for Fault {
                 self.value, self.limit
             )?,
         }
-        if matches!(self.kind, FaultKind::JointOutOfLimits | FaultKind::JointJump) {
+        if matches!(
+            self.kind,
+            FaultKind::JointOutOfLimits | FaultKind::JointJump
+        ) {
             write!(
                 f,
                 " ({:.2}° vs {:.2}°)",
@@ -413,7 +416,11 @@ mod tests {
             "sensor_over_range: sensor fz value -2600.0000 N limit 2500.0000 N at t = 0.500 s"
         );
         let f = Fault::new(FaultKind::SensorStatus, 2.0, f64::from(0x8000_0001u32), 0.0);
-        assert!(f.to_string().starts_with("sensor_status: status word 0x80000001"), "{f}");
+        assert!(
+            f.to_string()
+                .starts_with("sensor_status: status word 0x80000001"),
+            "{f}"
+        );
         let f = Fault::new(FaultKind::ForceOverLimit, 2.0, 2600.0, 2500.0);
         assert_eq!(
             f.to_string(),

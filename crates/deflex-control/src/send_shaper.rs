@@ -67,7 +67,13 @@ impl SendShaperConfig {
         };
         let answers = (ramp_out_s / cycle).ceil();
         SendShaperConfig {
-            max_step: max_rate.map(|r| if r.is_finite() && r >= 0.0 { r * cycle } else { 0.0 }),
+            max_step: max_rate.map(|r| {
+                if r.is_finite() && r >= 0.0 {
+                    r * cycle
+                } else {
+                    0.0
+                }
+            }),
             max_abs: max_abs.map(|a| if a.is_finite() && a >= 0.0 { a } else { 0.0 }),
             ramp_out_answers: if answers.is_finite() && answers >= 1.0 {
                 answers.min(f64::from(u32::MAX)) as u32
@@ -155,7 +161,11 @@ mod tests {
         let mut prev = [0.0; 6];
         for k in 0..2000 {
             let t = [targets[k % targets.len()]; 6];
-            let d = [LinkDirective::Follow, LinkDirective::RampOut, LinkDirective::Hold][k / 300 % 3];
+            let d = [
+                LinkDirective::Follow,
+                LinkDirective::RampOut,
+                LinkDirective::Hold,
+            ][k / 300 % 3];
             let out = s.next(&t, d);
             for i in 0..6 {
                 assert!((out[i] - prev[i]).abs() <= 0.02 * 0.004 + 1e-18);

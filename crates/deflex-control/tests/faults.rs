@@ -136,7 +136,10 @@ fn sensor_status_fault() {
         sensor_status: 0x8000_0040,
     });
     let f = ctrl2.fault().unwrap();
-    assert_eq!((f.kind, f.value as u32), (FaultKind::SensorStatus, 0x8000_0040));
+    assert_eq!(
+        (f.kind, f.value as u32),
+        (FaultKind::SensorStatus, 0x8000_0040)
+    );
     assert!(f.to_string().contains("0x80000040"), "{f}");
 }
 
@@ -220,7 +223,11 @@ fn garbage_values_are_out_of_range() {
     }
     let f = ctrl.fault().unwrap();
     assert_eq!(f.kind, FaultKind::JointOutOfLimits, "{f}");
-    assert!(f.to_string().starts_with("joint_out_of_limits: joint 1 value"), "{f}");
+    assert!(
+        f.to_string()
+            .starts_with("joint_out_of_limits: joint 1 value"),
+        "{f}"
+    );
 }
 
 #[test]

@@ -21,8 +21,7 @@ const DELAY_CYCLES: usize = 2;
 fn model_compliance_z(robot: &Robot, q: &[f64]) -> f64 {
     let mut data = Data::new();
     robot.forward_kinematics(&mut data, q).unwrap();
-    robot
-        .tcp_deflection(&data, &Wrench::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]))[2]
+    robot.tcp_deflection(&data, &Wrench::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]))[2]
 }
 
 /// Joint values that move the TCP by `xi` (world axes, [δp; δφ]) from `q0`: Jacobian
@@ -124,7 +123,10 @@ fn stiff_contact_runs_away_without_the_guard_and_is_held_with_it() {
     let f0 = 800.0;
     let max_abs = common::config().limiter.max_abs[2];
     let c_r = model_compliance_z(&common::robot(), &common::q0());
-    eprintln!("model compliance along z at the forming pose: {:.3} µm/N", c_r * 1e6);
+    eprintln!(
+        "model compliance along z at the forming pose: {:.3} µm/N",
+        c_r * 1e6
+    );
     for k_c in [1e5, 1e6, 1e7, 1e8] {
         for rho in [1.0, 1.3] {
             let g = deflex_control::runaway::static_loop_gain(c_r, c_r / rho, k_c);
@@ -146,7 +148,10 @@ fn stiff_contact_runs_away_without_the_guard_and_is_held_with_it() {
                     "k_c {k_c} ρ {rho}: no runaway without the guard ({} N)",
                     free.max_force
                 );
-                assert!(guarded.runaway_events >= 1 && guarded.held, "k_c {k_c} ρ {rho}");
+                assert!(
+                    guarded.runaway_events >= 1 && guarded.held,
+                    "k_c {k_c} ρ {rho}"
+                );
             }
             // The stated bound: the force stays below 2.5 F0 with the guard.
             assert!(
@@ -166,7 +171,11 @@ fn fault_action_latches_contact_runaway_and_ramps_out() {
     let o = press(1e8, 1.3, 800.0, c, 10.0);
     let f = o.fault.expect("a fault");
     assert_eq!(f.kind, FaultKind::ContactRunaway);
-    assert!(f.to_string().starts_with("contact_runaway: estimated loop gain"), "{f}");
+    assert!(
+        f.to_string()
+            .starts_with("contact_runaway: estimated loop gain"),
+        "{f}"
+    );
     assert!(o.max_force <= 2.5 * 800.0, "{}", o.max_force);
 }
 
@@ -227,6 +236,9 @@ fn forming_like_contact_does_not_trip_the_guard() {
     assert!(fault.is_none(), "{fault:?}");
     assert!(with[2] < -0.5e-3, "the correction was active: {with:?}");
     for i in 0..6 {
-        assert!((with[i] - without[i]).abs() < 1e-12, "{with:?} vs {without:?}");
+        assert!(
+            (with[i] - without[i]).abs() < 1e-12,
+            "{with:?} vs {without:?}"
+        );
     }
 }

@@ -147,7 +147,11 @@ fn robot_program_end_is_an_end_not_a_fault() {
     let o = run(1.5, 3.0);
     let s = &o.summary;
     assert_eq!(s.error, None);
-    assert_eq!(s.end, deflex_control::runtime::SessionEnd::RobotFinished, "{s:?}");
+    assert_eq!(
+        s.end,
+        deflex_control::runtime::SessionEnd::RobotFinished,
+        "{s:?}"
+    );
     assert_eq!(s.fault, None, "{s:?}");
     assert_eq!(s.phase_text(), "ended (robot program finished)");
     assert_eq!(s.robot_joints, 6);

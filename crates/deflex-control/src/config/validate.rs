@@ -37,7 +37,12 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("limits.ramp_out_s", 0.0, 10.0, "s"),
     ("limits.max_force_n", 1e-3, 1e6, "N"),
     ("limits.max_torque_nm", 1e-3, 1e6, "N·m"),
-    ("limits.max_joint_step_rad", 1e-6, std::f64::consts::PI, "rad"),
+    (
+        "limits.max_joint_step_rad",
+        1e-6,
+        std::f64::consts::PI,
+        "rad",
+    ),
     ("limits.runaway_gain_limit", 0.01, 10.0, ""),
     ("limits.runaway_release_gain", 0.0, 10.0, ""),
     ("limits.runaway_window_s", 0.01, 10.0, "s"),
@@ -206,7 +211,11 @@ impl CellFile {
             "limits.runaway_confirm_cycles",
             f64::from(l.runaway_confirm_cycles),
         )?;
-        self.one_of("limits.runaway_action", &l.runaway_action, &["hold", "fault"])?;
+        self.one_of(
+            "limits.runaway_action",
+            &l.runaway_action,
+            &["hold", "fault"],
+        )?;
         if let Some(log) = &self.log {
             if log.path.trim().is_empty() {
                 return Err(self.invalid("log.path", "must not be empty"));

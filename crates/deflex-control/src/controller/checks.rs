@@ -25,9 +25,19 @@ impl Controller {
         if !input.now_s.is_finite() {
             found = Some(fault(FaultKind::NonFinite, f64::NAN, 0.0, Channel::Time));
         } else if let Some(i) = input.q_rad.iter().position(|v| !v.is_finite()) {
-            found = Some(fault(FaultKind::NonFinite, f64::NAN, 0.0, Channel::Joint(i as u8)));
+            found = Some(fault(
+                FaultKind::NonFinite,
+                f64::NAN,
+                0.0,
+                Channel::Joint(i as u8),
+            ));
         } else if let Some(i) = input.wrench_sensor.iter().position(|v| !v.is_finite()) {
-            found = Some(fault(FaultKind::NonFinite, f64::NAN, 0.0, Channel::Sensor(i as u8)));
+            found = Some(fault(
+                FaultKind::NonFinite,
+                f64::NAN,
+                0.0,
+                Channel::Sensor(i as u8),
+            ));
         } else if input.q_rad.len() != n {
             found = Some(fault(
                 FaultKind::JointCountMismatch,
@@ -143,9 +153,19 @@ impl Controller {
         let fault = if !finite {
             Some(Fault::new(FaultKind::NonFinite, now, f64::NAN, 0.0))
         } else if force > cfg.max_force_n {
-            Some(Fault::new(FaultKind::ForceOverLimit, now, force, cfg.max_force_n))
+            Some(Fault::new(
+                FaultKind::ForceOverLimit,
+                now,
+                force,
+                cfg.max_force_n,
+            ))
         } else if torque > cfg.max_torque_nm {
-            Some(Fault::new(FaultKind::TorqueOverLimit, now, torque, cfg.max_torque_nm))
+            Some(Fault::new(
+                FaultKind::TorqueOverLimit,
+                now,
+                torque,
+                cfg.max_torque_nm,
+            ))
         } else {
             None
         };
