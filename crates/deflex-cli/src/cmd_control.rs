@@ -103,6 +103,15 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         idle_exit_s: Some(args.idle_exit_s),
     };
     let step_limit_m = cell.limits.max_rate_m_s * cell.robot.cycle_s;
+    if live {
+        eprintln!(
+            "deflex run: waiting for the robot ({}) on {} and the sensor at {} (Ctrl-C or \
+             SIGTERM stops, ramping the correction out)",
+            cell.robot.kind.name(),
+            cell.robot.bind,
+            cell.sensor.address
+        );
+    }
     let started = Instant::now();
     let runtime = spawn(controller, robot, sensor, WallClock::new(), sink, options)
         .map_err(|e| format!("starting the runtime threads: {e}"))?;

@@ -543,4 +543,103 @@ file = "tx200"
         .to_string();
         assert!(e.contains("cell.toml") && e.contains("fanuc"), "{e}");
     }
+
+    /// Every numeric field has a bound; absurd values are refused with the field named.
+    #[test]
+    fn every_number_is_bounded_and_named() {
+        let cases = [
+            ("[control]\nrate_hz = 1e-300\n", "control.rate_hz"),
+            ("[control]\nrate_hz = 0.001\n", "control.rate_hz"),
+            ("[control]\nrate_hz = 1e300\n", "control.rate_hz"),
+            ("[control]\nrate_hz = nan\n", "control.rate_hz"),
+            ("[control]\nkc = inf\n", "control.kc"),
+            (
+                "[log]\npath = \"x.csv\"\nring_capacity = 2000000000000000000\n",
+                "log.ring_capacity",
+            ),
+            (
+                "[log]\npath = \"x.csv\"\nring_capacity = 2e18\n",
+                "ring_capacity",
+            ),
+            ("[limits]\nramp_out_s = 1e9\n", "limits.ramp_out_s"),
+            (
+                "[limits]\nmax_correction_m = 5.0\n",
+                "limits.max_correction_m",
+            ),
+            ("[limits]\nmax_force_n = 0.0\n", "limits.max_force_n"),
+            (
+                "[limits]\nrunaway_gain_limit = 0.2\nrunaway_release_gain = 0.3\n",
+                "limits.runaway_release_gain",
+            ),
+            (
+                "[limits]\nrunaway_action = \"panic\"\n",
+                "limits.runaway_action",
+            ),
+            ("[mounting]\ntare_s = 1e12\n", "mounting.tare_s"),
+            (
+                "[mounting]\nsensor_xyz_m = [0.0, 0.0, 1e300]\n",
+                "mounting.sensor_xyz_m[2]",
+            ),
+            ("[mounting]\nlowpass_hz = 1e-9\n", "mounting.lowpass_hz"),
+            (
+                "[mounting]\nbias = [0.0, 0.0, nan, 0.0, 0.0, 0.0]\n",
+                "mounting.bias[2]",
+            ),
+        ];
+        for (extra, field) in cases {
+            let text = format!("{MINIMAL}{extra}");
+            let e = CellFile::parse(&text, "cell.toml", PathBuf::new())
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {extra}"))
+                .to_string();
+            assert!(
+                e.contains("cell.toml") && e.contains(field),
+                "{extra} → {e}"
+            );
+        }
+        for (robot_extra, field) in [
+            ("cycle_s = 1e300\n", "robot.cycle_s"),
+            ("cycle_s = 0.0\n", "robot.cycle_s"),
+            ("timeout_s = nan\n", "robot.timeout_s"),
+            ("cycle_s = 0.012\ntimeout_s = 0.004\n", "robot.timeout_s"),
+            ("egm_frame = \"flange\"\n", "robot.egm_frame"),
+            ("rsi_answer = \"both\"\n", "robot.rsi_answer"),
+            ("rsi_joint_tag = \"AX\"\n", "robot.rsi_joint_tag"),
+            ("sen_type = \"Im Free\"\n", "robot.sen_type"),
+        ] {
+            let text = MINIMAL.replace(
+                "bind = \"127.0.0.1:59152\"\n",
+                &format!("bind = \"127.0.0.1:59152\"\n{robot_extra}"),
+            );
+            let e = CellFile::parse(&text, "cell.toml", PathBuf::new())
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {robot_extra}"))
+                .to_string();
+            assert!(e.contains(field), "{robot_extra} → {e}");
+        }
+        // The documented example stays inside every bound it states.
+        for (field, lo, hi, _) in BOUNDS {
+            assert!(lo < hi, "{field}");
+        }
+    }
+
+    #[test]
+    fn link_settings_follow_the_file() {
+        let text = MINIMAL.replace(
+            "bind = \"127.0.0.1:59152\"\n",
+            "bind = \"127.0.0.1:0\"\nrsi_answer = \"joint\"\nrsi_joint_tag = \"AKorr\"\n\
+             egm_frame = \"work-object\"\negm_work_object_rpy_rad = [0.0, 0.0, 1.5707963267948966]\n",
+        );
+        let cell = CellFile::parse(&text, "cell.toml", PathBuf::new()).unwrap();
+        assert_eq!(
+            cell.rsi_config().answer,
+            deflex_io::rsi::RsiAnswer::Joint(deflex_io::rsi::JointTag::AKorr)
+        );
+        let egm = cell.egm_config(7);
+        assert!(egm.seven_axis);
+        assert_eq!(egm.frame, deflex_io::egm::EgmFrame::WorkObject);
+        // Yaw 90°: the work object's x is the base's y.
+        assert!((egm.work_object_in_base[1][0] - 1.0).abs() < 1e-12);
+        assert!(cell.open_robot_link(6).unwrap().answers_in_joint_space());
+    }
 }

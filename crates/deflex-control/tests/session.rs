@@ -41,9 +41,12 @@ impl Clock for FailingClock {
 /// A Net F/T streaming `raw` until the returned flag is set.
 fn sensor(raw: [f64; 6]) -> (NetFtClient, Arc<AtomicBool>, std::thread::JoinHandle<()>) {
     let mut server = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
-    let client =
-        NetFtClient::new("127.0.0.1:0", server.local_addr().unwrap(), Calibration::default())
-            .unwrap();
+    let client = NetFtClient::new(
+        "127.0.0.1:0",
+        server.local_addr().unwrap(),
+        Calibration::default(),
+    )
+    .unwrap();
     let done = Arc::new(AtomicBool::new(false));
     let handle = {
         let done = done.clone();
@@ -152,7 +155,10 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
         summary.error
     );
     let e = summary.error.clone().unwrap();
-    assert!(e.contains("control thread panicked") && e.contains("injected"), "{e}");
+    assert!(
+        e.contains("control thread panicked") && e.contains("injected"),
+        "{e}"
+    );
     assert_eq!(summary.end, SessionEnd::Failed);
     // The drain is bounded (the design bound, not a timing assertion on this machine: the
     // robot-link thread stops after at most DRAIN_S plus one receive timeout).
@@ -202,7 +208,11 @@ fn model_that_does_not_fit_the_robot_is_refused() {
         assert!(e.contains(expect), "{e}");
         assert_eq!(summary.cycles, 0);
         // Nothing but zero was ever sent.
-        assert!(answers.iter().all(|a| a.contains(r#"X="0.0000" Y="0.0000" Z="0.0000""#)));
+        assert!(
+            answers
+                .iter()
+                .all(|a| a.contains(r#"X="0.0000" Y="0.0000" Z="0.0000""#))
+        );
     }
 }
 
@@ -261,7 +271,10 @@ fn egm_tool_down_correction_has_the_right_sign_on_the_wire() {
     let mut data = Data::new();
     robot.forward_kinematics(&mut data, &q).unwrap();
     let tool_z = data.tcp.rotation * nalgebra::Vector3::z();
-    assert!(tool_z.z < -0.99, "the forming pose holds the tool down: {tool_z}");
+    assert!(
+        tool_z.z < -0.99,
+        "the forming pose holds the tool down: {tool_z}"
+    );
     let raw = common::raw_reading(&config, &q, [0.0, 0.0, 900.0, 0.0, 0.0, 0.0]);
     let (client, done, sensor) = sensor(raw);
     let link = EgmLink::bind("127.0.0.1:0", EgmConfig::default()).unwrap();
@@ -286,7 +299,8 @@ fn egm_tool_down_correction_has_the_right_sign_on_the_wire() {
     while start.elapsed() < Duration::from_secs(20) {
         seq += 1;
         deflex_io::egm::fill_robot_msg(&mut m, &RobotState::with_joints(&q), seq, 4 * seq, false);
-        sock.send_to(&prost::Message::encode_to_vec(&m), to).unwrap();
+        sock.send_to(&prost::Message::encode_to_vec(&m), to)
+            .unwrap();
         if let Ok(n) = sock.recv(&mut buf) {
             last = egm_pos(&buf[..n]);
         }

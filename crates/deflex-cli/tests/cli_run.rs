@@ -1,0 +1,280 @@
+//! `deflex run` and `deflex cell` as a user runs them: every numeric flag checked, absurd
+//! CELL.toml values refused with the field named, a failed run keeps an existing log, and
+//! SIGTERM ends the process cleanly (before the start, and in a session, ramping the correction
+//! out first).
+
+use deflex_io::netft::{Calibration, NetFtSensorServer};
+use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
+use deflex_io::{RobotSideLink, RobotState};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+fn deflex() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_deflex"))
+}
+
+fn free_udp_port() -> u16 {
+    std::net::UdpSocket::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .map(|a| a.port())
+        .unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("deflex-cli-run-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A cell file on free loopback ports with `extra` appended.
+fn cell_file(dir: &Path, kind: &str, extra: &str) -> (PathBuf, u16, u16) {
+    let (robot, sensor) = (free_udp_port(), free_udp_port());
+    let text = format!(
+        "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot}\"\ntimeout_s = 0.2\n\
+         [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:{sensor}\"\nbind = \"127.0.0.1:0\"\n\
+         timeout_s = 0.2\n[model]\nfile = \"tx200\"\n[control]\nrealtime = false\n\
+         lock_memory = false\n{extra}"
+    );
+    let path = dir.join("cell.toml");
+    std::fs::write(&path, text).unwrap();
+    (path, robot, sensor)
+}
+
+#[test]
+fn numeric_flags_are_checked() {
+    let dir = scratch("flags");
+    let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
+    let cell = cell.to_str().unwrap();
+    for (args, flag) in [
+        (
+            vec!["run", "--config", cell, "--startup-timeout-s", "nan"],
+            "--startup-timeout-s",
+        ),
+        (
+            vec!["run", "--config", cell, "--duration-s", "nan"],
+            "--duration-s",
+        ),
+        (
+            vec!["run", "--config", cell, "--idle-exit-s", "1e300"],
+            "--idle-exit-s",
+        ),
+        (
+            vec!["run", "--config", cell, "--duration-s=-1"],
+            "--duration-s",
+        ),
+        (
+            vec!["cell", "--sim", "--config", cell, "--wait-s", "nan"],
+            "--wait-s",
+        ),
+        (
+            vec!["cell", "--sim", "--config", cell, "--speed", "inf"],
+            "--speed",
+        ),
+        (
+            vec!["cell", "--sim", "--config", cell, "--dwell-s", "1e9"],
+            "--dwell-s",
+        ),
+        (
+            vec!["cell", "--sim", "--config", cell, "--length-mm", "nan"],
+            "--length-mm",
+        ),
+    ] {
+        let start = Instant::now();
+        let out = deflex().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains(flag) && err.contains("expected a number"),
+            "{args:?}: {err}"
+        );
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "{args:?} took long"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn absurd_cell_values_are_refused_with_the_field() {
+    let dir = scratch("fields");
+    for (extra, field) in [
+        ("rate_hz = 1e-300\n", "control.rate_hz"),
+        ("rate_hz = 0.001\n", "control.rate_hz"),
+        ("rate_hz = 1e300\n", "control.rate_hz"),
+    ] {
+        let (cell, ..) = cell_file(&dir, "kuka-rsi", extra);
+        let out = deflex()
+            .args(["run", "--config", cell.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(field),
+            "{extra}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A run that fails (nobody answers within the start-up time) leaves the previous log alone.
+#[test]
+fn failed_run_keeps_the_existing_log() {
+    let dir = scratch("log");
+    let (cell, ..) = cell_file(&dir, "simple-udp", "[log]\npath = \"run.csv\"\n");
+    std::fs::write(dir.join("run.csv"), "a previous session\n").unwrap();
+    let out = deflex()
+        .args([
+            "run",
+            "--config",
+            cell.to_str().unwrap(),
+            "--startup-timeout-s",
+            "0.3",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no data within"));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("run.csv")).unwrap(),
+        "a previous session\n"
+    );
+    let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert_eq!(names.len(), 2, "a temporary file was left behind");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn sigterm(pid: u32) {
+    // SAFETY: sending a signal to a child process we spawned.
+    unsafe {
+        libc::kill(pid as libc::pid_t, libc::SIGTERM);
+    }
+}
+
+#[test]
+fn sigterm_before_the_start_ends_cleanly() {
+    let dir = scratch("term0");
+    let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
+    let mut child = deflex()
+        .args(["run", "--config", cell.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Signal once it says it is waiting (the handler is installed by then).
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while std::io::BufRead::read_line(&mut err, &mut line).unwrap() > 0 {
+        if line.contains("waiting for the robot") {
+            break;
+        }
+        line.clear();
+    }
+    assert!(line.contains("waiting for the robot"), "{line}");
+    sigterm(child.id());
+    let out = child.wait_with_output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("stopped before start"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// In a session (a simple-UDP robot and a Net F/T on loopback, in this process), SIGTERM ramps
+/// the correction out before the process ends: the robot's last answers come down to zero.
+#[test]
+fn sigterm_in_a_session_ramps_the_correction_out() {
+    let dir = scratch("term1");
+    let (cell, robot_port, sensor_port) = cell_file(
+        &dir,
+        "simple-udp",
+        "[limits]\nramp_out_s = 0.3\n[log]\npath = \"run.csv\"\n",
+    );
+    let run = Arc::new(AtomicBool::new(true));
+    let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
+    let sensor = {
+        let run = run.clone();
+        std::thread::spawn(move || {
+            let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
+                .unwrap();
+            let start = Instant::now();
+            while run.load(Ordering::Acquire) {
+                let _ = s.poll_request(Duration::from_micros(500));
+                // Out of contact for the tare, then 800 N pushing up on the tool: −z of the
+                // sensor at this tool-down pose (sensor at the flange).
+                let fz = if start.elapsed() < Duration::from_secs(1) {
+                    0.0
+                } else {
+                    -800.0
+                };
+                let _ = s.send_sample(&[0.0, 0.0, fz, 0.0, 0.0, 0.0], 0);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    };
+    let active = Arc::new(AtomicBool::new(false));
+    let robot = {
+        let (run, active) = (run.clone(), active.clone());
+        std::thread::spawn(move || {
+            let mut ep =
+                SimpleUdpRobotEndpoint::new("127.0.0.1:0", ([127, 0, 0, 1], robot_port).into())
+                    .unwrap();
+            let mut answers = Vec::new();
+            while run.load(Ordering::Acquire) {
+                let _ = ep.send_state(&RobotState::with_joints(&q));
+                if let Ok(Some(c)) = ep.receive_correction(Duration::from_millis(20)) {
+                    answers.push(c.correction.to_array());
+                    if c.correction.dp_m[2].abs() > 1e-4 {
+                        active.store(true, Ordering::Release);
+                    }
+                }
+                std::thread::sleep(Duration::from_millis(4));
+            }
+            answers
+        })
+    };
+    let child = deflex()
+        .args(["run", "--config", cell.to_str().unwrap(), "--quiet"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Signal once the correction is active (the session is running, the handler installed).
+    let start = Instant::now();
+    while !active.load(Ordering::Acquire) && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    sigterm(child.id());
+    let out = child.wait_with_output().unwrap();
+    run.store(false, Ordering::Release);
+    let answers = robot.join().unwrap();
+    sensor.join().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("phase: stopped (correction ramped out)"),
+        "{text}"
+    );
+    let peak = answers.iter().map(|c| c[2].abs()).fold(0.0, f64::max);
+    assert!(peak > 1e-4, "the correction was active: {peak}");
+    let last = answers.last().unwrap();
+    assert!(
+        last.iter().all(|v| v.abs() < 1e-9),
+        "not ramped out: {last:?}"
+    );
+    // The log of the stopped session was written.
+    assert!(
+        std::fs::read_to_string(dir.join("run.csv"))
+            .unwrap()
+            .lines()
+            .count()
+            > 10
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
