@@ -157,7 +157,7 @@ impl ControllerKinematics {
 /// The robot side of `robot.kind`, played by the twin.
 enum RobotSide {
     Rsi(RsiRobotEndpoint),
-    Egm(EgmRobotEndpoint, EgmConfig),
+    Egm(Box<EgmRobotEndpoint>, EgmConfig),
     Other(Box<dyn RobotSideLink>),
 }
 
@@ -165,7 +165,7 @@ impl RobotSide {
     fn link(&mut self) -> &mut dyn RobotSideLink {
         match self {
             RobotSide::Rsi(l) => l,
-            RobotSide::Egm(l, _) => l,
+            RobotSide::Egm(l, _) => l.as_mut(),
             RobotSide::Other(l) => l.as_mut(),
         }
     }
@@ -204,7 +204,7 @@ fn robot_side(
             let cfg = file.egm_config(joints);
             let mut ep = EgmRobotEndpoint::new(local, pc).map_err(err)?;
             ep.set_seven_axis(cfg.seven_axis);
-            RobotSide::Egm(ep, cfg)
+            RobotSide::Egm(Box::new(ep), cfg)
         }
         RobotKind::Staubli => RobotSide::Other(Box::new(
             // The VAL3 program's watchdog: the robot's own timeout.

@@ -5,6 +5,7 @@
 //! `docs/cell.example.toml`.
 
 mod controller_config;
+pub mod fuzz;
 mod links;
 mod validate;
 

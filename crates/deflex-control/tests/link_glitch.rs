@@ -8,6 +8,7 @@
 //! Nothing here depends on timing luck: the step bound holds for any scheduling (it is enforced
 //! per answer); the robot warms up until it has received a sizeable correction, and the checks
 //! on the ramp after the pause apply only when the controller did latch `robot_link_lost`.
+#![allow(clippy::needless_range_loop)] // per-axis loops over several arrays
 
 mod common;
 

@@ -6,6 +6,7 @@
 //! below 2.5× the force the program alone gives. A forming-like contact (the force set by the
 //! material's flow, hardening 4 N/mm, the tool circling in the plane, sensor noise) never trips
 //! the guard and gives the same correction as without it.
+#![allow(clippy::needless_range_loop)] // per-axis loops over several arrays
 
 mod common;
 

@@ -252,12 +252,11 @@ fn egm_pos(b: &[u8]) -> [f64; 3] {
         }
     }
     let pos = sub(sub(b, 2), 1);
-    let mut out = [0.0; 3];
-    for k in 0..3 {
+    // Three (key, fixed64) pairs: fields 1, 2, 3 in order.
+    std::array::from_fn(|k| {
         let at = k * 9 + 1;
-        out[k] = f64::from_le_bytes(pos[at..at + 8].try_into().unwrap());
-    }
-    out
+        f64::from_le_bytes(pos[at..at + 8].try_into().unwrap())
+    })
 }
 
 /// The TX200 at the forming pose holds the tool pointing down. A 900 N upward contact force

@@ -78,8 +78,8 @@ const ACCEPT_POLL: Duration = Duration::from_millis(1);
 
 /// Assembles newline-terminated lines from a byte stream in a fixed buffer.
 #[derive(Debug)]
-struct LineBuf {
-    buf: [u8; LINE_BUFFER],
+pub(crate) struct LineBuf {
+    pub(crate) buf: [u8; LINE_BUFFER],
     /// Start of the unconsumed bytes.
     start: usize,
     /// End of the received bytes.
@@ -89,7 +89,7 @@ struct LineBuf {
 }
 
 impl LineBuf {
-    const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         LineBuf {
             buf: [0; LINE_BUFFER],
             start: 0,
@@ -106,7 +106,7 @@ impl LineBuf {
 
     /// Range of the next complete line (newline excluded) and consumes it.
     /// The bytes stay valid until the next [`LineBuf::space`].
-    fn take_line(&mut self) -> Option<core::ops::Range<usize>> {
+    pub(crate) fn take_line(&mut self) -> Option<core::ops::Range<usize>> {
         loop {
             let pending = &self.buf[self.start..self.end];
             let Some(pos) = pending.iter().position(|&b| b == b'\n') else {
@@ -131,7 +131,7 @@ impl LineBuf {
     /// Free space to read into, after moving unconsumed bytes to the front.
     /// Must be called only when [`LineBuf::take_line`] returned `None`; a
     /// full buffer then holds a line without newline that is too long.
-    fn space(&mut self) -> Result<&mut [u8], LinkError> {
+    pub(crate) fn space(&mut self) -> Result<&mut [u8], LinkError> {
         if self.start > 0 {
             self.buf.copy_within(self.start..self.end, 0);
             self.end -= self.start;
@@ -148,7 +148,7 @@ impl LineBuf {
         Ok(&mut self.buf[self.end..])
     }
 
-    fn commit(&mut self, n: usize) {
+    pub(crate) fn commit(&mut self, n: usize) {
         self.end = (self.end + n).min(LINE_BUFFER);
     }
 }
