@@ -643,4 +643,31 @@ file = "tx200"
         assert!((egm.work_object_in_base[1][0] - 1.0).abs() < 1e-12);
         assert!(cell.open_robot_link(6).unwrap().answers_in_joint_space());
     }
+
+    /// docs/cell.example.toml documents every key of every section (read from this file's
+    /// struct definitions, so a new key without documentation fails here).
+    #[test]
+    fn the_example_documents_every_key() {
+        let source = include_str!("config.rs");
+        let example = include_str!("../../../docs/cell.example.toml");
+        let mut in_section = false;
+        let mut checked = 0;
+        for line in source.lines() {
+            if line.starts_with("pub struct ") && line.contains("Section") {
+                in_section = true;
+            } else if line.starts_with('}') {
+                in_section = false;
+            } else if in_section
+                && let Some(rest) = line.trim().strip_prefix("pub ")
+                && let Some((name, _)) = rest.split_once(':')
+            {
+                let documented = example
+                    .lines()
+                    .any(|l| l.trim_start_matches("# ").starts_with(&format!("{name} =")));
+                assert!(documented, "docs/cell.example.toml does not document `{name}`");
+                checked += 1;
+            }
+        }
+        assert!(checked > 40, "{checked}");
+    }
 }
