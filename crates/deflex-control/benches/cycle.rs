@@ -1,6 +1,7 @@
 //! One control cycle: wrench processing (bias, gravity, low-pass, move to the TCP) + deflection
-//! estimate δŝ = J K_θ⁻¹ Jᵀ w (eq. 15) + the PID of eq. 17 with limiter and safety.
-//! Target: ≤ 1 µs median.
+//! estimate δŝ = J K_θ⁻¹ Jᵀ w (eq. 15) + the PID of eq. 17 with limiter, safety and the
+//! contact-runaway guard. Target: ≤ 1 µs median. Also the per-cycle extras of the runtime: the
+//! joint-correction map (RSI `AK` answers) and the per-answer send shaper.
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
@@ -39,5 +40,25 @@ fn bench_cycle(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench_cycle);
+fn bench_link_extras(c: &mut Criterion) {
+    use deflex_control::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
+    let robot = builtin("tx200").expect("built-in tx200");
+    let mut ctrl = Controller::new(robot, ControllerConfig::default()).expect("controller");
+    let q0 = TX200_FORMING_Q_DEG.map(f64::to_radians);
+    ctrl.cycle(0.01, &q0, &[0.0; 6]);
+    c.bench_function("joint_correction_map", |b| {
+        b.iter(|| black_box(ctrl.joint_correction_map()))
+    });
+    let mut shaper = SendShaper::new(SendShaperConfig::new([0.02; 6], [0.008; 6], 0.004, 0.5));
+    let mut k = 0u64;
+    c.bench_function("send_shaper_next", |b| {
+        b.iter(|| {
+            k += 1;
+            let t = [(k % 7) as f64 * 1e-3; 6];
+            black_box(shaper.next(black_box(&t), LinkDirective::Follow))
+        })
+    });
+}
+
+criterion_group!(benches, bench_cycle, bench_link_extras);
 criterion_main!(benches);

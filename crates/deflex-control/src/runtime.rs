@@ -232,6 +232,7 @@ pub fn spawn<C: Clock + Clone + 'static>(
     options: RuntimeOptions,
 ) -> std::io::Result<Runtime> {
     let shared = Arc::new(Shared::new());
+    let joint_answers = robot_link.answers_in_joint_space();
     let limits = controller.config().limiter;
     let shaper = SendShaperConfig::new(
         limits.max_rate,
@@ -260,7 +261,7 @@ pub fn spawn<C: Clock + Clone + 'static>(
                 control: true,
                 release: Some(&release),
             };
-            control_loop(controller, &shared, &clock, log, options)
+            control_loop(controller, &shared, &clock, log, options, joint_answers)
         })?
     };
     Ok(Runtime {
@@ -489,6 +490,7 @@ fn control_loop<C: Clock>(
     clock: &C,
     mut log: Option<LogSink>,
     options: RuntimeOptions,
+    joint_answers: bool,
 ) -> RunSummary {
     let mut warnings = if options.realtime {
         try_realtime(70, options.lock_memory).warnings()
@@ -586,12 +588,14 @@ fn control_loop<C: Clock>(
             shared.tcp_rotation.write(&[
                 r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
             ]);
-            let map = ctrl.joint_correction_map();
-            let mut flat = [0.0; MAP_LEN];
-            for (i, row) in map.iter().enumerate() {
-                flat[i * 6..i * 6 + 6].copy_from_slice(row);
+            if joint_answers {
+                let map = ctrl.joint_correction_map();
+                let mut flat = [0.0; MAP_LEN];
+                for (i, row) in map.iter().enumerate() {
+                    flat[i * 6..i * 6 + 6].copy_from_slice(row);
+                }
+                shared.joint_map.write(&flat);
             }
-            shared.joint_map.write(&flat);
             let elapsed = started.elapsed();
             stats.record(elapsed);
             cycles += 1;
