@@ -125,7 +125,7 @@ impl Robot {
 
     /// Calls `f(edof, axis, center)` for every eDoF with its world axis and centre.
     #[inline]
-    fn for_each_edof_screw(
+    pub(crate) fn for_each_edof_screw(
         &self,
         data: &Data,
         mut f: impl FnMut(&Edof, &Vector3<f64>, &Vector3<f64>),

@@ -15,7 +15,7 @@ pub struct Data {
     pub base_frame: Pose,
     /// World pose of each joint frame R_i (i = 1..N at index i-1), joint rotation included.
     pub joint_frames: [Pose; MAX_JOINTS],
-    /// World pose of the flange frame R_m (= R_N).
+    /// World pose of the flange frame R_m (= R_N · [`Robot::flange`]).
     pub flange: Pose,
     /// World pose of the TCP frame R_t.
     pub tcp: Pose,
@@ -108,8 +108,8 @@ impl Robot {
             data.q[i] = qi;
         }
         data.joint_count = n;
-        data.flange = frame;
-        data.tcp = frame * self.tool;
+        data.flange = frame * self.flange;
+        data.tcp = data.flange * self.tool;
         Ok(())
     }
 
