@@ -526,3 +526,62 @@ fn hostile_urdfs_get_errors_not_hangs() {
     assert_eq!(robot.joint_count(), 1);
     let _ = PI;
 }
+
+#[test]
+fn ik_search_reaches_poses_from_a_singular_seed_on_every_builtin() {
+    use deflex_model::IkOptions;
+    for (name, _) in deflex_model::BUILTIN_ROBOTS {
+        let robot = builtin(name).unwrap();
+        let mut reached = 0;
+        for q in q_samples(12) {
+            // A reachable target: FK of a configuration inside the limits.
+            let mut q = q.to_vec();
+            robot.clamp_to_limits(&mut q);
+            let target = robot.tcp_pose(&q).unwrap();
+            // The all-zero seed is singular (stretched arm, straight wrist) on every one of them.
+            let solution = robot
+                .inverse_kinematics_search(&target, Some(&[0.0; 6]), &IkOptions::default())
+                .unwrap_or_else(|e| panic!("{name} {q:?}: {e}"));
+            let got = robot.tcp_pose(&solution.q).unwrap();
+            assert!(
+                (pose_matrix(&got) - pose_matrix(&target)).norm() < 1e-7,
+                "{name}"
+            );
+            reached += 1;
+        }
+        assert_eq!(reached, 12);
+    }
+}
+
+#[test]
+fn ik_search_tells_out_of_reach_from_not_converged() {
+    use deflex_model::{IkOptions, ModelError, spatial::pose_from_xyz_rpy};
+    let robot = builtin("tx200").unwrap();
+    let far = pose_from_xyz_rpy([5.0, 0.0, 0.0], [0.0, PI, 0.0]);
+    match robot.inverse_kinematics_search(&far, None, &IkOptions::default()) {
+        Err(ModelError::OutOfReach {
+            distance_m,
+            reach_m,
+        }) => {
+            assert!((distance_m - 5.0).abs() < 1e-12);
+            // 0.25 + 0.95 + 0.8 + 0.194 m of links beyond joint 1.
+            assert!((reach_m - 2.194).abs() < 1e-9, "{reach_m}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Within the arm's length but joint 2 locked far from what the pose needs.
+    let mut locked = robot.clone();
+    locked.joints[1].limits = Some([1.5, 1.51]);
+    let target = robot.tcp_pose(&[0.0, 0.87, 1.56, 0.0, 0.7, 0.0]).unwrap();
+    let err = locked
+        .inverse_kinematics_search(&target, None, &IkOptions::default())
+        .unwrap_err();
+    assert!(
+        matches!(err, ModelError::NotConverged { seeds: 36, .. }),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string().contains("not reached from 36 seeds"),
+        "{err}"
+    );
+}
