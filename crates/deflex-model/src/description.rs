@@ -198,6 +198,29 @@ pub fn robot_from_toml_str(
     origin: &str,
     base_dir: Option<&Path>,
 ) -> Result<Robot, ModelError> {
+    parse_robot(text, origin, base_dir, &|resolved, shown| {
+        read_bounded(resolved, shown)
+    })
+}
+
+/// Parse a robot TOML whose `urdf = "…"` names a URDF given here as text (not read from disk):
+/// for robot descriptions shipped inside a program, and for fuzzing the URDF reader.
+pub fn robot_from_toml_and_urdf_str(
+    text: &str,
+    urdf_xml: &str,
+    origin: &str,
+) -> Result<Robot, ModelError> {
+    parse_robot(text, origin, None, &|_, _| Ok(urdf_xml.to_string()))
+}
+
+type ReadUrdf<'a> = &'a dyn Fn(&Path, &str) -> Result<String, ModelError>;
+
+fn parse_robot(
+    text: &str,
+    origin: &str,
+    base_dir: Option<&Path>,
+    read_urdf: ReadUrdf,
+) -> Result<Robot, ModelError> {
     let file: RobotFile = toml::from_str(text).map_err(|e| ModelError::Parse {
         path: origin.to_string(),
         message: e.to_string().trim_end().replace('\n', "\n  "),
@@ -333,7 +356,7 @@ pub fn robot_from_toml_str(
                 _ => Path::new(urdf_path).to_path_buf(),
             };
             let resolved_str = resolved.display().to_string();
-            let xml = read_bounded(&resolved, &resolved_str)?;
+            let xml = read_urdf(&resolved, &resolved_str)?;
             let chain = crate::urdf::parse_chain(
                 &xml,
                 &resolved_str,

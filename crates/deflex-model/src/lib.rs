@@ -36,7 +36,7 @@ pub mod wrench;
 pub use compliance::{EdofColumns, edof_screw};
 pub use description::{
     BUILTIN_ROBOTS, MAX_ROBOT_FILE_BYTES, builtin, geometry_fingerprint, load_robot,
-    robot_from_toml_str, robot_to_toml, robot_to_toml_for,
+    robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml, robot_to_toml_for,
 };
 pub use error::{ModelError, QLengthError};
 pub use ik::{IkOptions, IkSolution};
