@@ -321,14 +321,24 @@ fn rotation_rows(rotation: &nalgebra::Rotation3<f64>) -> Vec<[f64; 3]> {
 pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
     let q = args.joints.values(&robot)?;
-    let pose = robot.tcp_pose(&q).map_err(|e| e.to_string())?;
+    let mut data = Data::new();
+    robot
+        .forward_kinematics(&mut data, &q)
+        .map_err(|e| e.to_string())?;
+    let pose = data.tcp;
     let p = pose.translation.vector;
     let rpy = rpy_from_rotation(&pose.rotation);
+    // The arm's own weight (and payload) sags the TCP when the model knows its masses.
+    let has_masses = robot.joints.iter().any(|j| j.inertia.is_some()) || robot.payload.is_some();
+    let sag = has_masses.then(|| robot.gravity_displacement(&data, &p, robot.joint_count()));
     if json_output {
         let value = json!({
             "tcp_m": [p.x, p.y, p.z],
             "rotation": rotation_rows(&pose.rotation),
             "rpy_rad": rpy,
+            "gravity_sag_m": sag.map(|d| [d[0], d[1], d[2]]),
+            "gravity_sag_rad": sag.map(|d| [d[3], d[4], d[5]]),
+            "tcp_with_gravity_m": sag.map(|d| [p.x + d[0], p.y + d[1], p.z + d[2]]),
         });
         print_json(&value);
     } else {
@@ -346,6 +356,17 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
         );
         let z = pose.rotation.matrix().column(2);
         println!("tool axis z_t: [{:.4}, {:.4}, {:.4}]", z[0], z[1], z[2]);
+        if let Some(d) = sag {
+            println!(
+                "sag under the arm's own weight (mm): x {:+.4}  y {:+.4}  z {:+.4}  → TCP x {:.3}  y {:.3}  z {:.3}",
+                d[0] * 1e3,
+                d[1] * 1e3,
+                d[2] * 1e3,
+                (p.x + d[0]) * 1e3,
+                (p.y + d[1]) * 1e3,
+                (p.z + d[2]) * 1e3
+            );
+        }
     }
     Ok(())
 }

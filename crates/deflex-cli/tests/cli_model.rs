@@ -234,3 +234,17 @@ fn map_refuses_a_grid_too_fine_to_hold() {
     );
     assert!(!out.exists(), "nothing written");
 }
+
+#[test]
+fn pose_reports_the_sag_under_the_arms_own_weight_when_masses_are_known() {
+    // UR10 stretched horizontally (q2 = 0): the gravity sag is downward and of the order of
+    // m·g·L²/k over the links; the TX200 file has no masses and reports none.
+    let v = json(&["pose", "--robot", "ur10", "--q-deg", "0,0,0,0,90,0"]);
+    let sag: Vec<f64> = serde_json::from_value(v["gravity_sag_m"].clone()).unwrap();
+    assert!(sag[2] < -1e-4 && sag[2] > -1e-2, "{sag:?}");
+    let with: Vec<f64> = serde_json::from_value(v["tcp_with_gravity_m"].clone()).unwrap();
+    let tcp: Vec<f64> = serde_json::from_value(v["tcp_m"].clone()).unwrap();
+    assert!((with[2] - tcp[2] - sag[2]).abs() < 1e-15);
+    let v = json(&["pose", "--robot", "tx200", "--q-deg", "0,0,0,0,0,0"]);
+    assert!(v["gravity_sag_m"].is_null());
+}
