@@ -131,7 +131,7 @@ impl Robot {
         mut f: impl FnMut(&Edof, &Vector3<f64>, &Vector3<f64>),
     ) {
         let base_rotation = data.base_frame.rotation.matrix();
-        let base_origin = data.base_frame.translation.vector;
+        let base_origin = crate::kinematics::base_pivot_world(&data.base_frame, self);
         for axis in Axis::ALL {
             if let Some(stiffness) = self.base_stiffness.get(axis) {
                 let edof = Edof {

@@ -107,6 +107,7 @@ struct BaseSection {
     xyz: Option<[f64; 3]>,
     rpy: Option<[f64; 3]>,
     stiffness: Option<StiffnessSection>,
+    pivot: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -272,6 +273,7 @@ fn parse_robot(
         name: file.name.clone(),
         base,
         base_stiffness,
+        base_pivot: Vector3::from(base_section.and_then(|b| b.pivot).unwrap_or([0.0; 3])),
         joints: Vec::new(),
         flange: flange_offset,
         flange_offset,
@@ -592,6 +594,7 @@ fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> Str
     if base_xyz.norm() > 0.0
         || base_rpy.iter().any(|v| *v != 0.0)
         || robot.base_stiffness.count() > 0
+        || robot.base_pivot != Vector3::zeros()
     {
         let _ = writeln!(out, "\n[base]");
         let _ = writeln!(
@@ -602,6 +605,10 @@ fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> Str
         let _ = writeln!(out, "rpy = {}", toml_array(&base_rpy));
         if robot.base_stiffness.count() > 0 {
             let _ = writeln!(out, "stiffness = {}", toml_stiffness(&robot.base_stiffness));
+        }
+        if robot.base_pivot != Vector3::zeros() {
+            let p = robot.base_pivot;
+            let _ = writeln!(out, "pivot = {}", toml_array(&[p.x, p.y, p.z]));
         }
     }
     for joint in &robot.joints {

@@ -62,7 +62,7 @@ impl Data {
 
     /// World axis and centre of an eDoF (the spring's rotation axis v_{i,j} and centre O_i of
     /// eq. 13). For a joint the centre is the frame origin shifted `center_shift` along z_i; for
-    /// the base it is R0's origin.
+    /// the base it is the base pivot ([`Robot::base_pivot`], R0's origin by default).
     #[inline]
     pub fn edof_axis_center(
         &self,
@@ -75,7 +75,7 @@ impl Data {
                 let frame = &self.base_frame;
                 (
                     frame.rotation.matrix().column(axis.index()).into_owned(),
-                    frame.translation.vector,
+                    base_pivot_world(frame, robot),
                 )
             }
             EdofSite::Joint(i) => {
@@ -87,6 +87,12 @@ impl Data {
             }
         }
     }
+}
+
+/// World position of the base eDoFs' centre.
+#[inline]
+pub(crate) fn base_pivot_world(base_frame: &Pose, robot: &Robot) -> Vector3<f64> {
+    base_frame.translation.vector + base_frame.rotation * robot.base_pivot
 }
 
 impl Robot {

@@ -230,8 +230,12 @@ pub struct Robot {
     pub name: String,
     /// World → R0 placement.
     pub base: Pose,
-    /// Base eDoFs about R0's axes at its origin (baseplate tilt).
+    /// Base eDoFs about R0's axes through [`Robot::base_pivot`] (baseplate tilt).
     pub base_stiffness: AxisStiffness,
+    /// Centre of the base eDoFs in R0 (m): where the baseplate tilts. R0's origin by default; a
+    /// baseplate bolted to the floor tilts about a point near the floor, which for a robot whose
+    /// R0 sits at shoulder height is well below R0 (the TX200's baseplate is 0.642 m below).
+    pub base_pivot: Vector3<f64>,
     /// Motorised joints, base to flange.
     pub joints: Vec<Joint>,
     /// Last joint frame R_N → flange frame R_m (identity for modified DH; `TransX(a_N)·RotX(α_N)·
@@ -336,6 +340,13 @@ impl Robot {
         }
         check_stiffness(&self.base_stiffness, "base.stiffness", &invalid)?;
         check_pose(&self.base, "base", &invalid)?;
+        check_vector(
+            &self.base_pivot,
+            "base.pivot",
+            bounds::MAX_LENGTH_M,
+            "m",
+            &invalid,
+        )?;
         check_pose(&self.flange, "flange", &invalid)?;
         check_pose(&self.flange_offset, "flange", &invalid)?;
         check_pose(&self.tool, "tool", &invalid)?;

@@ -585,3 +585,31 @@ fn ik_search_tells_out_of_reach_from_not_converged() {
         "{err}"
     );
 }
+
+#[test]
+fn the_base_tilts_about_its_pivot() {
+    // A base eDoF about x0 through a pivot 0.642 m below R0 (the TX200's baseplate), loaded by a
+    // horizontal force at the TCP: τ = (x × (A − c))·F, δ(P) = x × (P − c)·τ/k, by hand.
+    let k = 8.0e6;
+    let toml = format!(
+        "name = \"r\"\n[base]\nstiffness = {{ x = {k:e} }}\npivot = [0.0, 0.0, -0.642]\n[[joint]]\nd = 0.0\n[tool]\nxyz = [1.2, 0.0, 0.3]\n"
+    );
+    let robot = robot_from_toml_str(&toml, "r", None).unwrap();
+    let again = robot_from_toml_str(&robot_to_toml(&robot), "again", None).unwrap();
+    assert_eq!(again.base_pivot, robot.base_pivot);
+    let mut data = Data::new();
+    robot.forward_kinematics(&mut data, &[0.0]).unwrap();
+    let tcp = data.tcp_position();
+    let force = Vector3::new(0.0, 1000.0, 0.0);
+    let d = robot.tcp_deflection(&data, &Wrench::new(0.0, 1000.0, 0.0, 0.0, 0.0, 0.0));
+    let c = Vector3::new(0.0, 0.0, -0.642);
+    let axis = Vector3::x();
+    let torque = axis.cross(&(tcp - c)).dot(&force);
+    let expected = axis.cross(&(tcp - c)) * (torque / k);
+    assert!(
+        (d.fixed_rows::<3>(0) - expected).norm() < 1e-15,
+        "{d} vs {expected}"
+    );
+    // 0.942 m lever instead of 0.3 m: about 10× the deflection a tilt about R0 would give.
+    assert!(expected.y > 1e-4);
+}
