@@ -5,7 +5,6 @@
 //! `docs/cell.example.toml`.
 
 mod controller_config;
-pub mod fuzz;
 mod links;
 mod validate;
 
@@ -664,7 +663,10 @@ file = "tx200"
                 let documented = example
                     .lines()
                     .any(|l| l.trim_start_matches("# ").starts_with(&format!("{name} =")));
-                assert!(documented, "docs/cell.example.toml does not document `{name}`");
+                assert!(
+                    documented,
+                    "docs/cell.example.toml does not document `{name}`"
+                );
                 checked += 1;
             }
         }

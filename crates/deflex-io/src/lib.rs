@@ -30,7 +30,6 @@
 
 pub mod egm;
 pub mod error;
-pub mod fuzz;
 pub mod link;
 pub mod netft;
 pub mod rsi;

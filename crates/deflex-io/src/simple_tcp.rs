@@ -76,10 +76,19 @@ const ACCEPT_POLL: Duration = Duration::from_millis(1);
 
 // ------------------------------------------------------------ line buffer
 
-/// Assembles newline-terminated lines from a byte stream in a fixed buffer.
+impl Default for LineBuf {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Assembles newline-terminated lines from a byte stream in a fixed buffer (the framing of
+/// both ends of the TCP link; public so that it can be fuzzed on its own). Feed it with
+/// [`LineBuf::space`] + [`LineBuf::commit`], take lines with [`LineBuf::take_line`] and read them
+/// with [`LineBuf::line`].
 #[derive(Debug)]
-pub(crate) struct LineBuf {
-    pub(crate) buf: [u8; LINE_BUFFER],
+pub struct LineBuf {
+    buf: [u8; LINE_BUFFER],
     /// Start of the unconsumed bytes.
     start: usize,
     /// End of the received bytes.
@@ -89,13 +98,20 @@ pub(crate) struct LineBuf {
 }
 
 impl LineBuf {
-    pub(crate) const fn new() -> Self {
+    /// Empty.
+    pub const fn new() -> Self {
         LineBuf {
             buf: [0; LINE_BUFFER],
             start: 0,
             end: 0,
             discarding: false,
         }
+    }
+
+    /// The bytes of a line returned by [`LineBuf::take_line`] (valid until the next
+    /// [`LineBuf::space`]).
+    pub fn line(&self, range: core::ops::Range<usize>) -> &[u8] {
+        self.buf.get(range).unwrap_or(&[])
     }
 
     fn clear(&mut self) {
@@ -106,7 +122,7 @@ impl LineBuf {
 
     /// Range of the next complete line (newline excluded) and consumes it.
     /// The bytes stay valid until the next [`LineBuf::space`].
-    pub(crate) fn take_line(&mut self) -> Option<core::ops::Range<usize>> {
+    pub fn take_line(&mut self) -> Option<core::ops::Range<usize>> {
         loop {
             let pending = &self.buf[self.start..self.end];
             let Some(pos) = pending.iter().position(|&b| b == b'\n') else {
@@ -131,7 +147,7 @@ impl LineBuf {
     /// Free space to read into, after moving unconsumed bytes to the front.
     /// Must be called only when [`LineBuf::take_line`] returned `None`; a
     /// full buffer then holds a line without newline that is too long.
-    pub(crate) fn space(&mut self) -> Result<&mut [u8], LinkError> {
+    pub fn space(&mut self) -> Result<&mut [u8], LinkError> {
         if self.start > 0 {
             self.buf.copy_within(self.start..self.end, 0);
             self.end -= self.start;
@@ -148,7 +164,8 @@ impl LineBuf {
         Ok(&mut self.buf[self.end..])
     }
 
-    pub(crate) fn commit(&mut self, n: usize) {
+    /// Marks `n` bytes of the last [`LineBuf::space`] as received.
+    pub fn commit(&mut self, n: usize) {
         self.end = (self.end + n).min(LINE_BUFFER);
     }
 }

@@ -1,0 +1,295 @@
+//! Fuzz targets, one per wire parser (KUKA RSI, ABB EGM, Stäubli, simple UDP lines, the simple
+//! TCP stream framing + lines, ATI Net F/T), on the shared `deflex-fuzz` mutation fuzzer: random
+//! bytes and mutations of valid messages must never make a parser panic, and whatever a parser
+//! accepts must keep its promises (finite values, counts in range, a message that formats
+//! again). A quick count here; the full count:
+//!
+//! ```sh
+//! DEFLEX_FUZZ_COUNT=1000000 cargo test --release -p deflex-io --test fuzz -- --nocapture
+//! ```
+
+use deflex_fuzz::{count_from_env, fuzz};
+use deflex_io::egm::{EgmConfig, decode_path_corr, decode_robot, fill_robot_msg};
+use deflex_io::rsi::{JointTag, format_rob, format_sen, format_sen_joints, parse_rob, parse_sen};
+use deflex_io::simple_tcp::LineBuf;
+use deflex_io::simple_udp::{format_joints_line, parse_correction_line, parse_joints_line};
+use deflex_io::{LinkError, MAX_JOINTS, Pose6, RobotState};
+
+const QUICK: usize = 30_000;
+
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// A parser's error must describe the packet, not a socket.
+fn packet_error(e: &LinkError) {
+    assert!(
+        e.is_bad_packet(),
+        "a parser returned a non-packet error: {e}"
+    );
+}
+
+fn run(name: &str, corpus: &[Vec<u8>], max_len: usize, target: impl FnMut(&[u8])) {
+    let corpus: Vec<&[u8]> = corpus.iter().map(Vec::as_slice).collect();
+    let report = fuzz(&corpus, count_from_env(QUICK), max_len, target);
+    report.assert_no_panic(name);
+    println!("{name}: {} inputs, no panic", report.inputs);
+}
+
+#[test]
+fn rsi_parsers() {
+    let mut rob = [0u8; 1024];
+    let t = deflex_io::rsi::RobTelegram {
+        actual_pose: Some(Pose6 {
+            position_m: [1.2, -0.03, 0.8],
+            zyx_rad: [1.5, -0.2, 3.1],
+        }),
+        setpoint_pose: None,
+        q_rad: Some([0.1, -1.5, 1.6, 0.0, 0.7, -3.0]),
+        delay: 3,
+        ipoc: 4_208_138_482,
+    };
+    let n = format_rob(&t, &mut rob).unwrap();
+    let mut sen = [0u8; 1024];
+    let m = format_sen(&[0.001; 6], 77, "ImFree", Some("deflex"), &mut sen).unwrap();
+    let mut ak = [0u8; 1024];
+    let k = format_sen_joints(JointTag::Ak, &[0.01; 6], 78, "ImFree", None, &mut ak).unwrap();
+    let corpus = [rob[..n].to_vec(), sen[..m].to_vec(), ak[..k].to_vec()];
+    run("KUKA RSI", &corpus, 2048, |b| {
+        match parse_rob(b) {
+            Ok(t) => {
+                assert!(t.q_rad.is_none_or(|q| finite(&q)));
+                for p in [t.actual_pose, t.setpoint_pose].into_iter().flatten() {
+                    assert!(finite(&p.position_m) && finite(&p.zyx_rad));
+                }
+                // Values that parse format again (huge ones may not fit the buffer: an error).
+                let mut out = [0u8; 4096];
+                if let Err(e) = format_rob(&t, &mut out) {
+                    assert!(matches!(e, LinkError::BufferTooSmall { .. }), "{e}");
+                }
+            }
+            Err(e) => packet_error(&e),
+        }
+        match parse_sen(b) {
+            Ok(s) => {
+                assert!(s.rkorr.is_some() || s.joints_rad.is_some());
+                assert!(s.rkorr.is_none_or(|v| finite(&v)));
+                assert!(s.joints_rad.is_none_or(|v| finite(&v)));
+            }
+            Err(e) => packet_error(&e),
+        }
+    });
+}
+
+#[test]
+fn egm_decoders() {
+    use prost::Message;
+    let mut m = deflex_io::egm::msg::EgmRobot::default();
+    let mut s = RobotState::with_joints(&[0.1, -0.5, 1.0, 0.0, 0.4, 3.0]);
+    s.tcp_pose = Some(Pose6 {
+        position_m: [1.0, 0.5, 0.3],
+        zyx_rad: [0.3, -0.2, 2.9],
+    });
+    fill_robot_msg(&mut m, &s, 7, 1234, false);
+    let robot = m.encode_to_vec();
+    fill_robot_msg(
+        &mut m,
+        &RobotState::with_joints(&[0.1, -0.5, 0.7, 1.0, 0.0, 0.4, 3.0]),
+        8,
+        1238,
+        true,
+    );
+    let seven = m.encode_to_vec();
+    let mut pc = [0u8; 256];
+    let n = deflex_io::egm::encode_path_corr(3, 4, [0.001, -0.002, 0.003], 10, &mut pc).unwrap();
+    run("ABB EGM", &[robot, seven, pc[..n].to_vec()], 1024, |b| {
+        match decode_robot(b) {
+            Ok(f) => {
+                assert!(f.n_joints <= 6 && f.n_external <= 6);
+                assert!(finite(&f.q_rad[..f.n_joints]));
+                assert!(f.tcp_pose.is_none_or(|p| finite(&p.position_m)));
+                // The allocation-free walker agrees with prost on the joints.
+                if let Ok(p) = deflex_io::egm::msg::EgmRobot::decode(b)
+                    && let Some(j) = p.feed_back.and_then(|fb| fb.joints)
+                    && j.joints.len() == f.n_joints
+                {
+                    for (a, q) in j.joints.iter().zip(&f.q_rad) {
+                        assert!((a.to_radians() - q).abs() <= 1e-12 * q.abs().max(1.0));
+                    }
+                }
+                for seven_axis in [false, true] {
+                    let cfg = EgmConfig {
+                        seven_axis,
+                        ..EgmConfig::default()
+                    };
+                    if let Ok((q, n)) = cfg.chain_joints(&f) {
+                        assert!((1..=MAX_JOINTS).contains(&n) && finite(&q));
+                    }
+                }
+            }
+            Err(e) => packet_error(&e),
+        }
+        match decode_path_corr(b) {
+            Ok(p) => assert!(finite(&p.dp_m)),
+            Err(e) => packet_error(&e),
+        }
+    });
+}
+
+#[test]
+fn staubli_decoders() {
+    use deflex_io::staubli::*;
+    let mut a = [0u8; STATE_LEN];
+    encode_state(
+        &StateMsg {
+            header: Header {
+                flags: 0,
+                seq: 9,
+                ack: 8,
+                timestamp_s: 1.5,
+            },
+            q_rad: [0.1, -1.0, 1.2, 0.0, 0.5, 3.0],
+            status: STATUS_ALTER_ACTIVE,
+        },
+        &mut a,
+    )
+    .unwrap();
+    let mut c = [0u8; CORRECTION_LEN];
+    encode_correction(
+        &CorrectionMsg {
+            header: Header {
+                flags: FLAG_ACTIVE,
+                seq: 10,
+                ack: 9,
+                timestamp_s: 1.504,
+            },
+            values: [1e-3, -2e-3, 5e-4, 1e-3, 0.0, -1e-3],
+        },
+        &mut c,
+    )
+    .unwrap();
+    run("Staubli", &[a.to_vec(), c.to_vec()], 256, |b| {
+        match decode_state(b) {
+            Ok(m) => assert!(finite(&m.q_rad) && m.header.timestamp_s.is_finite()),
+            Err(e) => packet_error(&e),
+        }
+        match decode_correction(b) {
+            Ok(m) => assert!(finite(&m.values)),
+            Err(e) => packet_error(&e),
+        }
+    });
+}
+
+fn line_corpus() -> Vec<Vec<u8>> {
+    vec![
+        b"q 0.1 -1.57 1.2 0 3.25 -6\n".to_vec(),
+        b"q [0.1, -1.57, 1.2, 0.0, 3.25, -6.0, 0.5]\r\n".to_vec(),
+        b"corr 0.001 0 -0.0005 0 0.0001 0\n".to_vec(),
+        b"(0.001000000,0.000000000,-0.500000000,0.000000000,0.100000000,0.000000000)\n".to_vec(),
+    ]
+}
+
+fn check_joints_line(line: &[u8]) {
+    match parse_joints_line(line) {
+        Ok((q, n)) => {
+            assert!((1..=MAX_JOINTS).contains(&n) && finite(&q));
+            // Plausible joint values format again (huge ones need more digits than a line
+            // holds: an error, not a panic).
+            let mut out = [0u8; 512];
+            let formatted = format_joints_line(&q[..n], &mut out);
+            assert!(formatted.is_ok() || q[..n].iter().any(|v| v.abs() >= 1e6));
+        }
+        Err(e) => packet_error(&e),
+    }
+}
+
+#[test]
+fn simple_udp_lines() {
+    run("simple UDP", &line_corpus(), 1024, |b| {
+        check_joints_line(b);
+        match parse_correction_line(b) {
+            Ok(c) => assert!(c.is_finite()),
+            Err(e) => packet_error(&e),
+        }
+    });
+}
+
+/// The TCP stream: the input cut into chunks whose sizes come from the input's own bytes (as
+/// TCP reads may cut it anywhere), assembled into lines, each line parsed.
+#[test]
+fn simple_tcp_stream() {
+    let mut stream = Vec::new();
+    for l in line_corpus() {
+        stream.extend_from_slice(&l);
+    }
+    let mut corpus = line_corpus();
+    corpus.push(stream);
+    run("simple TCP", &corpus, 4096, |b| {
+        let mut lines = LineBuf::new();
+        let mut fed = 0;
+        while fed < b.len() {
+            while let Some(r) = lines.take_line() {
+                let line = lines.line(r.clone());
+                assert_eq!(line.len(), r.len());
+                assert!(!line.contains(&b'\n'));
+                check_joints_line(line);
+            }
+            match lines.space() {
+                Ok(space) => {
+                    let chunk = 1 + usize::from(b[fed]) % 64;
+                    let k = chunk.min(space.len()).min(b.len() - fed);
+                    space[..k].copy_from_slice(&b[fed..fed + k]);
+                    lines.commit(k);
+                    fed += k;
+                }
+                Err(e) => packet_error(&e),
+            }
+        }
+    });
+}
+
+#[test]
+fn netft_decoders() {
+    use deflex_io::netft::*;
+    let rec = encode_record(&RdtRecord {
+        rdt_sequence: 5,
+        ft_sequence: 900,
+        status: 0,
+        counts: [1_000_000, -2_000_000, 3, 4, -5, 6],
+    });
+    let mut two = rec.to_vec();
+    two.extend_from_slice(&rec);
+    let req = encode_request(&RdtRequest {
+        command: RdtCommand::StartRealtime,
+        sample_count: 0,
+    });
+    let xml = b"<netft><cfgcpf>1000000</cfgcpf><cfgcpt>1000</cfgcpt><scfgfu>N</scfgfu>\
+<scfgtu>N-m</scfgtu></netft>"
+        .to_vec();
+    run(
+        "ATI Net F/T",
+        &[rec.to_vec(), two, req.to_vec(), xml],
+        1500,
+        |b| {
+            match decode_records(b) {
+                Ok(records) => {
+                    let cal = Calibration::default();
+                    for r in records {
+                        assert!(finite(&cal.to_wrench(&r.counts)));
+                    }
+                }
+                Err(e) => packet_error(&e),
+            }
+            if let Err(e) = decode_record(b) {
+                packet_error(&e);
+            }
+            let _ = decode_request(b);
+            if let Ok(text) = std::str::from_utf8(b)
+                && let Ok(c) = Calibration::from_netftapi2_xml(text)
+            {
+                assert!(c.counts_per_force > 0.0 && c.counts_per_force.is_finite());
+                assert!(c.counts_per_torque > 0.0 && c.counts_per_torque.is_finite());
+            }
+        },
+    );
+}
