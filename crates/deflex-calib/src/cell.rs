@@ -519,19 +519,36 @@ impl Obstacles {
 /// Joint values wrapped into the limits: each value replaced by its equivalent modulo 2π with
 /// the smallest magnitude that lies within the joint's limits (unchanged when none does).
 pub fn wrap_into_limits(robot: &Robot, q: &mut [f64]) {
-    use std::f64::consts::TAU;
     for (value, joint) in q.iter_mut().zip(&robot.joints) {
-        let [lo, hi] = joint.limits.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
-        let mut best = *value;
-        let turns = (*value / TAU).round() as i64;
-        for k in (turns - 2)..=(turns + 2) {
-            let candidate = *value - k as f64 * TAU;
-            if candidate >= lo && candidate <= hi && candidate.abs() < best.abs() - 1e-12 {
-                best = candidate;
-            }
-        }
-        *value = best;
+        let limits = joint.limits.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+        *value = wrapped(*value, limits);
     }
+}
+
+/// `value` modulo 2π with the smallest magnitude within `[lo, hi]`, or `value` when no
+/// equivalent lies within.
+pub fn wrapped(value: f64, [lo, hi]: [f64; 2]) -> f64 {
+    use std::f64::consts::TAU;
+    if !value.is_finite() {
+        return value;
+    }
+    let turns = (value / TAU).round();
+    let mut best: Option<f64> = None;
+    for k in -3..=3 {
+        let candidate = value - (turns + f64::from(k)) * TAU;
+        let candidate = if (candidate - value).abs() < 1e-12 {
+            value
+        } else {
+            candidate
+        };
+        if candidate >= lo
+            && candidate <= hi
+            && best.is_none_or(|b| candidate.abs() < b.abs() - 1e-12)
+        {
+            best = Some(candidate);
+        }
+    }
+    best.unwrap_or(value)
 }
 
 /// The joints without limits, an error naming the first, when the planner needs limits.

@@ -351,6 +351,9 @@ fn rank_problem(
         ));
     }
     let p = idx.len();
+    if p == 0 {
+        return None;
+    }
     let gs = DMatrix::from_fn(p, p, |i, j| g[(i, j)] * d[i] * d[j]);
     if !crate::all_finite(&gs) {
         return Some((

@@ -389,7 +389,7 @@ fn evaluate(
     }
     let p = idx.len();
     let gs = DMatrix::from_fn(p, p, |i, j| g[(i, j)] * d[i] * d[j]);
-    if !crate::all_finite(&gs) {
+    if p == 0 || !crate::all_finite(&gs) {
         return None;
     }
     let lmin = gs
