@@ -505,3 +505,47 @@ fn calibrate_writes_a_report_with_plots_and_flags_a_high_chi2() {
     assert!(run.stdout.contains("well above 1"), "{}", run.stdout);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The simulated campaign names the robot the twin played; a UR10e plan measured on the twin
+/// keeps the UR10e's coordinates, so the TX200's model refuses the file.
+#[test]
+fn simulated_campaigns_carry_their_robot() {
+    let dir = folder("sim");
+    let plan = dir.join("plan_ur.csv");
+    let run = deflex(&[
+        "plan",
+        "--robot",
+        "ur10e",
+        "--out",
+        s(&plan),
+        "--load-cases",
+        "8",
+        "--configurations",
+        "200",
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let meas = dir.join("meas_ur.csv");
+    let run = deflex(&["sim", "campaign", "--plan", s(&plan), "--out", s(&meas)]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let text = std::fs::read_to_string(&meas).unwrap();
+    let mut lines = text.lines();
+    assert!(lines.next().unwrap().starts_with("# SIMULATED"));
+    assert!(lines.next().unwrap().starts_with("# robot: "));
+    assert!(lines.next().unwrap().starts_with("# geometry: "));
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&meas),
+        "--out",
+        s(&dir.join("m.toml")),
+    ]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(
+        run.stderr.contains("mm from the TCP its joint values give"),
+        "{}",
+        run.stderr
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
