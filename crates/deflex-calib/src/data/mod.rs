@@ -36,37 +36,24 @@
 //! [`DEFAULT_SIGMA_M`]: crate::design::DEFAULT_SIGMA_M
 //! [`DEFAULT_SIGMA_RAD`]: crate::design::DEFAULT_SIGMA_RAD
 
+mod bounds;
+mod header;
+
+use bounds::{
+    DISPLACEMENT_COLUMNS, LOAD_POINT_COLUMNS, POINT_COLUMNS, ROTATION_COLUMNS, WRENCH_COLUMNS,
+    column_bound,
+};
+pub use bounds::{
+    MAX_COORDINATE_M, MAX_DISPLACEMENT_M, MAX_FILE_BYTES, MAX_FORCE_N, MAX_JOINT_RAD,
+    MAX_LABEL_CHARS, MAX_MOMENT_NM, MAX_ROTATION_RAD, MAX_ROWS, MAX_SIGMA_M, MAX_SIGMA_RAD,
+    MIN_SIGMA_M, MIN_SIGMA_RAD, check_row_values,
+};
+pub use header::FileHeader;
+
 use deflex_model::Robot;
 use std::collections::HashMap;
 use std::path::Path;
 use thiserror::Error;
-
-/// Largest |joint value| in a file (rad), as for robot files' joint limits.
-pub const MAX_JOINT_RAD: f64 = 100.0;
-/// Largest |force component| in a file (N): 1 MN, far above any robot's rating.
-pub const MAX_FORCE_N: f64 = 1e6;
-/// Largest |moment component| in a file (N·m).
-pub const MAX_MOMENT_NM: f64 = 1e6;
-/// Largest |coordinate| in a file (m), as for robot files' lengths.
-pub const MAX_COORDINATE_M: f64 = 100.0;
-/// Largest |displacement component| (m): an elastic deflection is millimetres, not a metre.
-pub const MAX_DISPLACEMENT_M: f64 = 1.0;
-/// Largest |rotation component| (rad): a small rotation.
-pub const MAX_ROTATION_RAD: f64 = 1.0;
-/// Largest `sigma_m` (m).
-pub const MAX_SIGMA_M: f64 = 1.0;
-/// Smallest `sigma_m` (m): 1 nm (a weight of 1/σ must stay finite).
-pub const MIN_SIGMA_M: f64 = 1e-9;
-/// Largest `sigma_rad` (rad).
-pub const MAX_SIGMA_RAD: f64 = 1.0;
-/// Smallest `sigma_rad` (rad).
-pub const MIN_SIGMA_RAD: f64 = 1e-9;
-/// Longest label (`load_case`, `point`) or `purpose` text, in characters.
-pub const MAX_LABEL_CHARS: usize = 200;
-/// Largest file read (bytes): 128 MiB, about 200 000 rows.
-pub const MAX_FILE_BYTES: u64 = 128 << 20;
-/// Most data rows in a file (the calibration's design matrix grows with them).
-pub const MAX_ROWS: usize = 100_000;
 
 /// One measured (or planned) point under one load case.
 #[derive(Clone, Debug, PartialEq)]
@@ -121,85 +108,6 @@ impl MeasuredRotation {
         self.sigma_rad.unwrap_or(crate::design::DEFAULT_SIGMA_RAD)
     }
 }
-
-/// What a file's header comments say about the robot it was made for.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct FileHeader {
-    /// `# robot: <name>`.
-    pub robot: Option<String>,
-    /// `# geometry: <fingerprint>` (`Robot::geometry_fingerprint`).
-    pub geometry: Option<String>,
-    /// Other comment lines before the column names (without the leading `#`), in order.
-    pub notes: Vec<String>,
-}
-
-impl FileHeader {
-    /// The header naming `robot` and its geometry fingerprint.
-    pub fn for_robot(robot: &Robot) -> FileHeader {
-        FileHeader {
-            robot: Some(one_line(&robot.name)),
-            geometry: Some(robot.geometry_fingerprint()),
-            notes: Vec::new(),
-        }
-    }
-
-    /// Add a free comment line (written after the robot lines).
-    pub fn with_note(mut self, note: impl Into<String>) -> FileHeader {
-        self.notes.push(one_line(&note.into()));
-        self
-    }
-
-    /// The comment lines, each ending in a newline (empty when there is nothing to say).
-    pub fn render(&self) -> String {
-        let mut out = String::new();
-        for note in &self.notes {
-            out.push_str(&format!("# {note}\n"));
-        }
-        if let Some(robot) = &self.robot {
-            out.push_str(&format!("# robot: {}\n", one_line(robot)));
-        }
-        if let Some(geometry) = &self.geometry {
-            out.push_str(&format!("# geometry: {}\n", one_line(geometry)));
-        }
-        out
-    }
-
-    /// Read the comment lines before the first non-comment line of `text`.
-    pub fn parse(text: &str) -> FileHeader {
-        let mut header = FileHeader::default();
-        for line in text.lines() {
-            let line = line.trim();
-            if line.is_empty() {
-                continue;
-            }
-            let Some(comment) = line.strip_prefix('#') else {
-                break;
-            };
-            let comment = comment.trim();
-            let value = |key: &str| {
-                comment
-                    .strip_prefix(key)
-                    .map(|v| v.trim().chars().take(MAX_LABEL_CHARS).collect::<String>())
-            };
-            if let Some(v) = value("robot:") {
-                header.robot = Some(v);
-            } else if let Some(v) = value("geometry:") {
-                header.geometry = Some(v);
-            } else if header.notes.len() < 100 {
-                header
-                    .notes
-                    .push(comment.chars().take(MAX_LABEL_CHARS).collect());
-            }
-        }
-        header
-    }
-}
-
-/// A header value on one line (a robot name with a newline would end the comment).
-fn one_line(text: &str) -> String {
-    text.replace(['\n', '\r'], " ")
-}
-
 /// A measurement or plan file as read: its header, its rows and the line of each row.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeasurementFile {
@@ -249,12 +157,6 @@ pub enum DataError {
         message: String,
     },
 }
-
-const WRENCH_COLUMNS: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"];
-const LOAD_POINT_COLUMNS: [&str; 3] = ["load_x_m", "load_y_m", "load_z_m"];
-const POINT_COLUMNS: [&str; 3] = ["x_m", "y_m", "z_m"];
-const DISPLACEMENT_COLUMNS: [&str; 3] = ["dx_m", "dy_m", "dz_m"];
-const ROTATION_COLUMNS: [&str; 3] = ["drx_rad", "dry_rad", "drz_rad"];
 
 /// Read a measurement (or plan) file for a robot with `joint_count` joints: like
 /// [`read_measurements`] / [`read_plan`], but a file written for a different joint count is
@@ -568,72 +470,6 @@ pub fn parse_file(
         rows,
         lines,
     })
-}
-
-/// The bound on a numeric column's magnitude and its unit (see the module documentation).
-fn column_bound(name: &str) -> (f64, &'static str) {
-    match name {
-        "fx_N" | "fy_N" | "fz_N" => (MAX_FORCE_N, "N"),
-        "mx_Nm" | "my_Nm" | "mz_Nm" => (MAX_MOMENT_NM, "N·m"),
-        "dx_m" | "dy_m" | "dz_m" => (MAX_DISPLACEMENT_M, "m"),
-        "drx_rad" | "dry_rad" | "drz_rad" => (MAX_ROTATION_RAD, "rad"),
-        "sigma_m" => (MAX_SIGMA_M, "m"),
-        "sigma_rad" => (MAX_SIGMA_RAD, "rad"),
-        n if n.starts_with('q') && n.ends_with("_rad") => (MAX_JOINT_RAD, "rad"),
-        _ => (MAX_COORDINATE_M, "m"),
-    }
-}
-
-/// Check a row built in code (not read from a file) against the same bounds as a file row:
-/// `Err` names the value that is NaN, infinite or beyond its bound.
-pub fn check_row_values(row: &MeasurementRow) -> Result<(), String> {
-    let check = |name: &str, value: f64| -> Result<(), String> {
-        let (limit, unit) = column_bound(name);
-        if value.is_finite() && value.abs() <= limit {
-            Ok(())
-        } else {
-            Err(format!(
-                "`{name}` = {value:e} {unit} is NaN, infinite or beyond ±{limit:e} {unit}"
-            ))
-        }
-    };
-    for (i, q) in row.q_rad.iter().enumerate() {
-        check(&format!("q{}_rad", i + 1), *q)?;
-    }
-    for (name, value) in WRENCH_COLUMNS.iter().zip(row.wrench) {
-        check(name, value)?;
-    }
-    for (name, value) in LOAD_POINT_COLUMNS.iter().zip(row.load_point_m) {
-        check(name, value)?;
-    }
-    for (name, value) in POINT_COLUMNS.iter().zip(row.point_m) {
-        check(name, value)?;
-    }
-    if let Some(d) = row.displacement_m {
-        for (name, value) in DISPLACEMENT_COLUMNS.iter().zip(d) {
-            check(name, value)?;
-        }
-    }
-    if let Some(sigma) = row.sigma_m
-        && !(MIN_SIGMA_M..=MAX_SIGMA_M).contains(&sigma)
-    {
-        return Err(format!(
-            "`sigma_m` = {sigma:e} m must be positive, from {MIN_SIGMA_M:e} to {MAX_SIGMA_M} m"
-        ));
-    }
-    if let Some(rotation) = row.rotation_rad {
-        for (name, value) in ROTATION_COLUMNS.iter().zip(rotation.value_rad) {
-            check(name, value)?;
-        }
-        if let Some(sigma) = rotation.sigma_rad
-            && !(MIN_SIGMA_RAD..=MAX_SIGMA_RAD).contains(&sigma)
-        {
-            return Err(format!(
-                "`sigma_rad` = {sigma:e} rad must be positive, from {MIN_SIGMA_RAD:e} to {MAX_SIGMA_RAD} rad"
-            ));
-        }
-    }
-    Ok(())
 }
 
 fn read_rows(path: &Path, require_displacement: bool) -> Result<Vec<MeasurementRow>, DataError> {
