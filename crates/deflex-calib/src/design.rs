@@ -218,6 +218,15 @@ impl Design {
         let gram = x.tr_mul(&x);
         let xty = x.tr_mul(&y);
         let yty = y.norm_squared();
+        // Bounded inputs keep these finite; a guard so that no decomposition ever sees NaN.
+        if !(yty.is_finite()
+            && gram.iter().all(|v| v.is_finite())
+            && xty.iter().all(|v| v.is_finite()))
+        {
+            return Err(CalibError::Invalid(
+                "the data's magnitudes overflow the least-squares problem (check the loads, coordinates and sigma_m)".into(),
+            ));
+        }
         let warnings = observability_warnings(rows, candidates, n);
         Ok(Design {
             candidates: candidates.to_vec(),
@@ -329,23 +338,8 @@ fn check_rows(
                 at()
             )));
         }
-        let finite = row.q_rad.iter().all(|v| v.is_finite())
-            && row.wrench.iter().all(|v| v.is_finite())
-            && row.load_point_m.iter().all(|v| v.is_finite())
-            && row.point_m.iter().all(|v| v.is_finite())
-            && row
-                .displacement_m
-                .is_none_or(|d| d.iter().all(|v| v.is_finite()))
-            && row.sigma_m.is_none_or(|s| s.is_finite() && s > 0.0)
-            && row.rotation_rad.is_none_or(|m| {
-                m.value_rad.iter().all(|v| v.is_finite())
-                    && m.sigma_rad.is_none_or(|s| s.is_finite() && s > 0.0)
-            });
-        if !finite {
-            return Err(CalibError::Invalid(format!(
-                "{}: a value is NaN or infinite (or sigma_m / sigma_rad ≤ 0)",
-                at()
-            )));
+        if let Err(message) = crate::data::check_row_values(row) {
+            return Err(CalibError::Invalid(format!("{}: {message}", at())));
         }
         if require_displacement && row.displacement_m.is_none() {
             return Err(CalibError::Invalid(format!(
@@ -357,6 +351,16 @@ fn check_rows(
     if rows.iter().all(|r| r.wrench.iter().all(|v| *v == 0.0)) {
         return Err(CalibError::Invalid(
             "every load is zero: nothing to identify".into(),
+        ));
+    }
+    if require_displacement
+        && rows.iter().all(|r| {
+            r.displacement_m
+                .is_some_and(|d| d.iter().all(|v| *v == 0.0))
+        })
+    {
+        return Err(CalibError::Invalid(
+            "every measured displacement is exactly zero: nothing to identify (were the loaded readings recorded?)".into(),
         ));
     }
     Ok(())

@@ -21,6 +21,12 @@ pub(crate) use crate::uncertainty::residual_stats;
 pub const MAX_RELATIVE_SE: f64 = 5.0;
 /// Two-sided 95 % normal quantile.
 pub const Z95: f64 = 1.959964;
+/// χ²/dof above which a calibration says that its model does not represent the data to the
+/// measurement noise. With a right model and right σ, χ²/dof has mean 1 and standard deviation
+/// √(2/dof): 0.2 at 50 degrees of freedom, 0.06 at 500, so 2 is ≥ 5 standard deviations away
+/// for any campaign worth fitting; a value above it means model-form error (effects the eDoF
+/// family cannot represent) or a σ that is too small.
+pub const CHI2_WELL_ABOVE_ONE: f64 = 2.0;
 
 /// A model structure: which eDoFs, which centre shifts, and which shifts are fitted.
 #[derive(Clone, Debug, PartialEq)]
@@ -224,6 +230,17 @@ impl Calibration {
         robot
     }
 
+    /// When χ²/dof is well above 1 ([`CHI2_WELL_ABOVE_ONE`]): a note that the intervals cover
+    /// the noise, not the model-form error.
+    pub fn model_form_note(&self) -> Option<String> {
+        (self.reduced_chi2 > CHI2_WELL_ABOVE_ONE).then(|| {
+            format!(
+                "χ²/dof = {:.2} is well above 1 (more than {CHI2_WELL_ABOVE_ONE}): the residuals are larger than the measurement noise (sigma_m) explains, so the data holds effects this model does not represent (model-form error), or sigma_m is too small. The standard errors and 95 % intervals are scaled by χ²/dof but cover noise only, not model-form error: true stiffnesses may lie outside them.",
+                self.reduced_chi2
+            )
+        })
+    }
+
     /// The estimate of one eDoF.
     pub fn edof(&self, id: EdofId) -> Option<&EdofEstimate> {
         self.edofs.iter().find(|e| e.id == id)
@@ -334,7 +351,17 @@ fn rank_problem(
         ));
     }
     let p = idx.len();
+    if p == 0 {
+        return None;
+    }
     let gs = DMatrix::from_fn(p, p, |i, j| g[(i, j)] * d[i] * d[j]);
+    if !crate::all_finite(&gs) {
+        return Some((
+            0,
+            "not identifiable: the normal equations are not finite (data magnitudes overflow)"
+                .into(),
+        ));
+    }
     let eig = gs.symmetric_eigen();
     let (imin, &lmin) = eig
         .eigenvalues

@@ -84,6 +84,10 @@ fn solve_sub(g: &DMatrix<f64>, b: &DVector<f64>, idx: &[usize]) -> DVector<f64> 
     let k = idx.len();
     let gs = DMatrix::from_fn(k, k, |r, c| g[(idx[r], idx[c])]);
     let bs = DVector::from_fn(k, |r, _| b[idx[r]]);
+    if !(crate::all_finite(&gs) && bs.iter().all(|v| v.is_finite())) {
+        // No decomposition on non-finite input (an SVD on NaN may not terminate).
+        return DVector::zeros(k);
+    }
     if let Some(ch) = gs.clone().cholesky() {
         return ch.solve(&bs);
     }

@@ -54,9 +54,9 @@ pub const ITERATION_HEADERS: [&str; 11] = [
     "structure",
     "params",
     "RMS [µm]",
-    "RMS x",
-    "RMS y",
-    "RMS z",
+    "RMS x [µm]",
+    "RMS y [µm]",
+    "RMS z [µm]",
     "BIC",
     "ΔBIC",
     "CV RMS [µm]",
@@ -72,7 +72,8 @@ pub const STIFFNESS_HEADERS: [&str; 6] = [
     "status",
 ];
 
-/// Table rows of the identified stiffnesses and shifts.
+/// Table rows of the identified stiffnesses (the centre shifts are in [`shift_rows`]: one unit
+/// per column).
 pub fn stiffness_rows(cal: &Calibration) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     for e in &cal.edofs {
@@ -94,20 +95,37 @@ pub fn stiffness_rows(cal: &Calibration) -> Vec<Vec<String>> {
             status,
         ]);
     }
+    rows
+}
+
+/// Headers of [`shift_rows`].
+pub const SHIFT_HEADERS: [&str; 6] = [
+    "centre shift",
+    "δr [mm]",
+    "SE [mm]",
+    "95% low [mm]",
+    "95% high [mm]",
+    "status",
+];
+
+/// Table rows of the centre shifts δr, in millimetres.
+pub fn shift_rows(cal: &Calibration) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
     for s in &cal.shifts {
-        let se = s.se_m.map(|v| format!("{:.4}", v)).unwrap_or("-".into());
+        let mm = |v: f64| format!("{:.1}", v * 1e3);
+        let se = s.se_m.map(mm).unwrap_or("-".into());
         let (lo, hi) = s
             .se_m
             .map(|v| {
                 (
-                    format!("{:.4}", s.value_m - crate::fit::Z95 * v),
-                    format!("{:.4}", s.value_m + crate::fit::Z95 * v),
+                    mm(s.value_m - crate::fit::Z95 * v),
+                    mm(s.value_m + crate::fit::Z95 * v),
                 )
             })
             .unwrap_or(("-".into(), "-".into()));
         rows.push(vec![
-            format!("δr{} [m]", s.joint),
-            format!("{:.4}", s.value_m),
+            format!("δr{}", s.joint),
+            mm(s.value_m),
             se,
             lo,
             hi,
@@ -211,6 +229,9 @@ pub fn residual_summary(cal: &Calibration) -> String {
             cal.rotation_rows
         );
     }
+    if let Some(note) = cal.model_form_note() {
+        let _ = writeln!(out, "note: {note}");
+    }
     out
 }
 
@@ -222,7 +243,7 @@ pub fn expected_se_rows(plan: &Plan) -> Vec<Vec<String>> {
             let axis = plan
                 .axis_cases
                 .iter()
-                .find(|a| a.id == e.id)
+                .find(|a| a.id == e.id && e.identifiable())
                 .map(|a| {
                     format!(
                         "{} ({:.0} % share, {:.0} σ)",
@@ -231,7 +252,13 @@ pub fn expected_se_rows(plan: &Plan) -> Vec<Vec<String>> {
                         a.snr
                     )
                 })
-                .unwrap_or("-".into());
+                .unwrap_or_else(|| {
+                    if e.identifiable() {
+                        "none (seen jointly by the other cases)".into()
+                    } else {
+                        "-".into()
+                    }
+                });
             vec![
                 e.label.clone(),
                 k_fmt(e.nominal_k),
@@ -246,6 +273,52 @@ pub fn expected_se_rows(plan: &Plan) -> Vec<Vec<String>> {
         })
         .collect()
 }
+
+/// The technician's sheet: one line per load case with the joint values in degrees (wrapped
+/// into the limits by the planner), where and how the load acts, the force vector (world
+/// axes), the points to measure and why the case is there (the eDoFs whose axis-by-axis case
+/// it is, the same as in [`expected_se_rows`]).
+pub fn technician_rows(plan: &Plan) -> Vec<Vec<String>> {
+    let mut out: Vec<Vec<String>> = Vec::new();
+    for row in &plan.rows {
+        match out.last_mut() {
+            Some(last) if last[0] == row.load_case => {
+                last[4] = format!("{}, {}", last[4], row.point);
+            }
+            _ => {
+                let q: Vec<String> = row
+                    .q_rad
+                    .iter()
+                    .map(|q| format!("{:.1}", q.to_degrees()))
+                    .collect();
+                let f = row.wrench;
+                let purpose = row.purpose.clone().unwrap_or_default();
+                let (why, how) = match purpose.split_once("; ") {
+                    Some((why, how)) => (why.to_string(), how.to_string()),
+                    None => (purpose, String::new()),
+                };
+                let at = if how.ends_with("at the bracket") {
+                    "BR"
+                } else {
+                    "TCP"
+                };
+                out.push(vec![
+                    row.load_case.clone(),
+                    q.join(", "),
+                    format!("{} at {at}", how.trim_end_matches(" at the bracket")),
+                    format!("({:.0}, {:.0}, {:.0})", f[0], f[1], f[2]),
+                    row.point.clone(),
+                    why,
+                ]);
+            }
+        }
+    }
+    out
+}
+
+/// Headers of [`technician_rows`].
+pub const TECHNICIAN_HEADERS: [&str; 6] =
+    ["case", "q [deg]", "load", "force [N]", "measure", "why"];
 
 /// Headers of [`expected_se_rows`].
 pub const EXPECTED_SE_HEADERS: [&str; 5] = [

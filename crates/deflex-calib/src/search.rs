@@ -389,6 +389,9 @@ fn evaluate(
     }
     let p = idx.len();
     let gs = DMatrix::from_fn(p, p, |i, j| g[(i, j)] * d[i] * d[j]);
+    if p == 0 || !crate::all_finite(&gs) {
+        return None;
+    }
     let lmin = gs
         .symmetric_eigenvalues()
         .iter()

@@ -45,6 +45,16 @@ pub(crate) fn unscaled_covariance(
         let d = scales(&nm);
         let m = cols.len();
         let ns = DMatrix::from_fn(m, m, |i, j| nm[(i, j)] * d[i] * d[j]);
+        if m == 0 || !crate::all_finite(&ns) {
+            // Nothing free (every compliance at its bound), or a matrix no decomposition may
+            // see: every parameter's variance is unknown (infinite).
+            return ParameterCovariance {
+                cov: DMatrix::from_fn(m, m, |i, j| if i == j { f64::INFINITY } else { 0.0 }),
+                labels,
+                condition_number: if m == 0 { 1.0 } else { f64::INFINITY },
+                shift_joints,
+            };
+        }
         let eig = ns.clone().symmetric_eigen();
         let lmax = eig.eigenvalues.amax();
         let lmin = eig

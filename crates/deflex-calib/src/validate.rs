@@ -267,10 +267,23 @@ fn report_err(e: deflex_report::ReportError) -> CalibError {
     CalibError::Invalid(format!("report: {e}"))
 }
 
-/// Write PNG plots and `validation.html` into `dir` (created if needed). Returns the files.
+/// Write PNG plots and `validation.html` into the folder `dir`, whole or not at all: the folder
+/// is built aside and swapped in when complete (`deflex_files::AtomicDir`; an existing folder is
+/// replaced, and kept as it was when anything fails). Returns the files (final paths).
 pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibError> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| CalibError::Invalid(format!("{}: {e}", dir.display())))?;
+    let io = |e: std::io::Error| CalibError::Invalid(format!("{}: {e}", dir.display()));
+    let folder = deflex_files::AtomicDir::create(dir).map_err(io)?;
+    let files = write_report_into(v, folder.path())?;
+    folder.commit().map_err(io)?;
+    Ok(files
+        .iter()
+        .filter_map(|f| f.file_name())
+        .map(|name| dir.join(name))
+        .collect())
+}
+
+/// [`write_report`]'s files, written into an existing folder.
+fn write_report_into(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibError> {
     let mut files = Vec::new();
     let mut html = HtmlReport::new(format!("Validation of {}", v.model.name));
     html.section("Prediction errors (measured − predicted)");
@@ -304,7 +317,7 @@ pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibErr
             let meas: Vec<f64> = v.measured.iter().map(|d| d[ax] * 1e3).collect();
             let pred: Vec<f64> = m.predicted.iter().map(|d| d[ax] * 1e3).collect();
             let spec = PlotSpec::new(
-                format!("δp{} — {}", axes[ax], m.name),
+                format!("δp{}: predicted vs measured ({tag})", axes[ax]),
                 format!("measured δp{} [mm]", axes[ax]),
                 format!("predicted δp{} [mm]", axes[ax]),
             )
@@ -312,7 +325,7 @@ pub fn write_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, CalibErr
             parity_plot(&path, &spec, &pred, &meas, tag).map_err(report_err)?;
             html.image(
                 &path,
-                format!("Predicted vs measured δp{} ({tag})", axes[ax]),
+                format!("Predicted vs measured δp{} ({tag}: {})", axes[ax], m.name),
             );
             files.push(path);
         }

@@ -107,3 +107,85 @@ fn all_points_on_one_link() {
         "{err}"
     );
 }
+
+/// Issue 12: degenerate data gets an error, never a panic.
+#[test]
+fn all_displacements_zero_is_an_error() {
+    let mut r = rows();
+    for row in &mut r {
+        row.displacement_m = Some([0.0; 3]);
+    }
+    let err = fixed_error(&r);
+    assert!(
+        err.contains("every measured displacement is exactly zero"),
+        "{err}"
+    );
+    let robot = builtin("tx200-1edof").unwrap();
+    let err = search_structure(&robot, &r, &SearchOptions::default(), &mut |_, _, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("exactly zero"), "{err}");
+}
+
+/// Issue 12: `fx_N = 1e308` (finite, absurd) is refused with the column named, in a file and
+/// in rows built in code.
+#[test]
+fn absurd_magnitudes_are_refused_with_the_column_named() {
+    let mut r = rows();
+    r[2].wrench[0] = 1e308;
+    let err = fixed_error(&r);
+    assert!(err.contains("row 3") && err.contains("fx_N"), "{err}");
+    let text = deflex_calib::data::format_rows(&r);
+    let err = parse_rows(&text, "d.csv", true).unwrap_err().to_string();
+    assert!(
+        err.contains("d.csv:4") && err.contains("fx_N") && err.contains("1e308"),
+        "{err}"
+    );
+    let mut r = rows();
+    r[0].sigma_m = Some(5e-324);
+    let err = fixed_error(&r);
+    assert!(err.contains("sigma_m"), "{err}");
+    let mut r = rows();
+    r[1].displacement_m = Some([2.0, 0.0, 0.0]);
+    let err = fixed_error(&r);
+    assert!(err.contains("dx_m"), "{err}");
+}
+
+/// Displacements against every spring (all compliances at the c ≥ 0 bound, nothing free):
+/// once a `symmetric_eigen` of a 0 × 0 matrix; now every eDoF is reported not identifiable.
+#[test]
+fn data_that_pins_every_compliance_at_zero_does_not_panic() {
+    let mut r = rows();
+    for row in &mut r {
+        let d = row.displacement_m.unwrap();
+        row.displacement_m = Some([-d[0], -d[1], -d[2]]);
+    }
+    let robot = builtin("tx200-1edof").unwrap();
+    let cal = calibrate_fixed(&robot, &r, &Structure::from_robot(&robot)).unwrap();
+    assert!(
+        cal.edofs
+            .iter()
+            .all(|e| matches!(e.status, Status::NotIdentifiable(_))),
+        "{:?}",
+        cal.edofs.iter().map(|e| &e.status).collect::<Vec<_>>()
+    );
+    let _ = search_structure(&robot, &r, &SearchOptions::default(), &mut |_, _, _| {});
+}
+
+/// Issue 12: `plan --max-force-N 1e308` once spun in an SVD on NaN; now refused at once.
+#[test]
+fn an_absurd_plan_force_is_refused() {
+    let robot = builtin("tx200").unwrap();
+    for force in [1e308, f64::INFINITY, f64::NAN, -5.0, 0.0] {
+        let err = deflex_calib::plan::plan_experiments(
+            &robot,
+            &deflex_calib::plan::PlanOptions {
+                max_force_n: force,
+                ..Default::default()
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("--max-force-N"), "{err}");
+    }
+}

@@ -2,7 +2,7 @@
 //! x/y eDoFs of joint 1: both rotate the TCP about axes through the same point, but only the tilt
 //! moves the base casting.
 
-use deflex_calib::plan::{PlanOptions, plan_experiments};
+use deflex_calib::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_calib::search::{SearchOptions, search_structure};
 use deflex_calib::synthetic::{SyntheticOptions, measure};
 use deflex_model::{Axis, EdofSite, Robot, builtin};
@@ -14,7 +14,11 @@ fn identify(truth: &Robot, base_point: bool) -> Robot {
             max_force_n: 1400.0,
             load_cases: 40,
             full_family: true,
-            base_point,
+            base_point: if base_point {
+                BasePoint::Default
+            } else {
+                BasePoint::Off
+            },
             ..PlanOptions::default()
         },
     )

@@ -1,6 +1,6 @@
 //! `deflex plan --floor-z-m`: every planned configuration keeps the arm above the floor.
 
-use deflex_calib::plan::{PlanOptions, lowest_point_z, plan_experiments};
+use deflex_calib::plan::{Floor, PlanOptions, lowest_point_z, plan_experiments};
 use deflex_model::Data;
 
 fn lowest_of_plan(options: &PlanOptions) -> f64 {
@@ -27,7 +27,8 @@ fn planned_configurations_stay_above_the_floor() {
     assert!(free < floor, "lowest point without a floor: {free} m");
     let guarded = lowest_of_plan(&PlanOptions {
         full_family: true,
-        floor_z_m: Some(floor),
+        floor: Floor::At(floor),
+        clearance_m: 0.0,
         ..PlanOptions::default()
     });
     eprintln!("lowest point: {free:.3} m without a floor, {guarded:.3} m with z ≥ {floor} m");
@@ -40,12 +41,12 @@ fn an_unreachable_floor_is_a_clear_error() {
     let e = plan_experiments(
         &robot,
         &PlanOptions {
-            floor_z_m: Some(3.0),
+            floor: Floor::At(3.0),
             configurations: 50,
             ..PlanOptions::default()
         },
     )
     .unwrap_err()
     .to_string();
-    assert!(e.contains("floor") && e.contains("3.000"), "{e}");
+    assert!(e.contains("floor") && e.contains("3.000 m"), "{e}");
 }

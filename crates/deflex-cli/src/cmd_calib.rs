@@ -1,26 +1,30 @@
-//! `deflex calibrate`, `validate`, `plan`: identification of the elasto-geometrical model
-//! (Johra et al. 2022, Section 3) from laser-tracker measurements.
+//! `deflex calibrate`, `validate` (and `plan`, in `cmd_plan`): identification of the
+//! elasto-geometrical model (Johra et al. 2022, Section 3) from laser-tracker measurements.
 
 use crate::args::{CliResult, robot};
+pub use crate::cmd_plan::{PlanArgs, plan};
 use clap::Args;
+use deflex_calib::calib_report::{CalibrationReport, write_calibration_report};
+use deflex_calib::consistency::{
+    GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
+};
 use deflex_calib::fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_calib::plan::{PlanOptions, plan_experiments};
+use deflex_calib::read_file;
 use deflex_calib::report::{
-    EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, ITERATION_HEADERS, STIFFNESS_HEADERS,
-    VALIDATION_HEADERS, correlation_table, expected_se_rows, expected_shift_rows, iteration_rows,
-    render_table, residual_summary, stiffness_rows, table_csv, validation_rows,
+    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, VALIDATION_HEADERS, correlation_table,
+    iteration_rows, render_table, residual_summary, shift_rows, stiffness_rows, validation_rows,
 };
 use deflex_calib::search::{Criterion, SearchOptions, SearchStep, search_structure};
 use deflex_calib::validate::{validate as run_validation, write_report};
-use deflex_calib::{read_for_robot, write_rows};
-use deflex_model::robot_to_toml;
-use deflex_report::HtmlReport;
+use deflex_files::{AtomicDir, AtomicFile};
+use deflex_model::{Robot, robot_to_toml_for};
 use serde_json::{Value, json};
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct CalibrateArgs {
-    /// Start model: built-in name (tx200, tx200-1edof) or TOML file. Gives the geometry; with
+    /// Start model: built-in name (tx200, tx200-1edof, …) or TOML file. Gives the geometry; with
     /// --structure fixed also the eDoFs and centre shifts.
     #[arg(long)]
     pub robot: String,
@@ -31,7 +35,7 @@ pub struct CalibrateArgs {
     /// model's eDoFs and centre shifts as given.
     #[arg(long, default_value = "auto", value_parser = ["auto", "fixed"])]
     pub structure: String,
-    /// Stop the search once the RMS residual (all components) is at most this (mm).
+    /// Stop the search once the RMS residual (all components) is at most this (mm, 0 to 1000).
     #[arg(long)]
     pub target_rms_mm: Option<f64>,
     /// With --structure fixed: also fit the centre shift of every joint with an x or y eDoF.
@@ -40,24 +44,32 @@ pub struct CalibrateArgs {
     /// Do not consider base tilt eDoFs in the search.
     #[arg(long)]
     pub no_base: bool,
-    /// Smallest BIC decrease for the search to accept a refinement.
+    /// Smallest BIC decrease for the search to accept a refinement (0 to 1e6).
     #[arg(long, default_value_t = 10.0)]
     pub min_bic_gain: f64,
     /// How the search ranks structures: bic, or cv (held-out χ² of k-fold cross-validation by
     /// load case). The iteration table shows the cross-validated RMS either way.
     #[arg(long, default_value = "bic", value_parser = ["bic", "cv"])]
     pub criterion: String,
-    /// Folds of the cross-validation (by load case; at most one per load case).
+    /// Folds of the cross-validation (by load case; 2 to 100, at most one per load case).
     #[arg(long, default_value_t = 5)]
     pub folds: usize,
     /// With --criterion cv: smallest relative decrease of the held-out χ² for the search to
-    /// accept a refinement (%).
+    /// accept a refinement (%, 0 to 100).
     #[arg(long, default_value_t = 2.0)]
     pub min_cv_gain_percent: f64,
+    /// Largest distance between a row's point coordinates and the robot's forward kinematics of
+    /// its joint values (mm, 0.001 to 1000): more refuses the file.
+    #[arg(long, default_value_t = 1.0)]
+    pub fk_tolerance_mm: f64,
+    /// Use the file even when its coordinates disagree with the robot's forward kinematics
+    /// (the disagreement is printed as a warning).
+    #[arg(long)]
+    pub ignore_fk_check: bool,
     /// Output robot TOML (a drop-in for every other command).
     #[arg(long)]
     pub out: PathBuf,
-    /// Folder for an HTML report and CSV tables.
+    /// Folder for an HTML report with plots and CSV tables (replaced whole).
     #[arg(long)]
     pub report: Option<PathBuf>,
 }
@@ -73,49 +85,19 @@ pub struct ValidateArgs {
     /// Baseline model shown side by side (e.g. tx200-1edof).
     #[arg(long)]
     pub baseline: Option<String>,
-    /// Folder for PNG plots and validation.html.
+    /// Largest distance between a row's point coordinates and the model's forward kinematics
+    /// of its joint values (mm, 0.001 to 1000): more refuses the file.
+    #[arg(long, default_value_t = 1.0)]
+    pub fk_tolerance_mm: f64,
+    /// Use the file even when its coordinates disagree with the model's forward kinematics.
+    #[arg(long)]
+    pub ignore_fk_check: bool,
+    /// Folder for PNG plots and validation.html (replaced whole, or left as it was on error).
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
-
-#[derive(Args)]
-pub struct PlanArgs {
-    /// Nominal model: built-in name or TOML file.
-    #[arg(long)]
-    pub robot: String,
-    /// Load magnitude (N), applied at the TCP along ±x, ±y or ±z of the world.
-    #[arg(long = "max-force-N", default_value_t = 1500.0)]
-    pub max_force_n: f64,
-    /// Number of load cases (axis-by-axis ones included).
-    #[arg(long, default_value_t = 24)]
-    pub load_cases: usize,
-    /// Plan for every eDoF of the model family (what `calibrate --structure auto` needs), not
-    /// only the model's.
-    #[arg(long)]
-    pub full_family: bool,
-    /// Do not measure the base reflector M0 (which separates a baseplate tilt from joint 1).
-    #[arg(long)]
-    pub no_base_point: bool,
-    /// Tracker noise (µm) for the expected standard errors.
-    #[arg(long, default_value_t = 15.0)]
-    pub noise_um: f64,
-    /// Random configurations tried (each with 6 load directions).
-    #[arg(long, default_value_t = 600)]
-    pub configurations: usize,
-    /// Keep every joint origin and the TCP at or above this world height (m): the floor, table
-    /// or fixture under the robot (the world is the robot file's frame).
-    #[arg(long)]
-    pub floor_z_m: Option<f64>,
-    /// Random seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Output plan CSV.
-    #[arg(long)]
-    pub out: PathBuf,
-}
-
 /// A number, or JSON null when it is infinite or NaN (not identifiable).
-fn finite_or_null(x: f64) -> Value {
+pub(crate) fn finite_or_null(x: f64) -> Value {
     if x.is_finite() { json!(x) } else { Value::Null }
 }
 
@@ -164,22 +146,103 @@ fn calibration_json(cal: &Calibration) -> Value {
         "residual_max_norm_m": r.max_norm_m,
         "rotation_rows": cal.rotation_rows,
         "residual_rotation_rms_rad": r.rotation_rms_rad,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_calib::fit::CHI2_WELL_ABOVE_ONE,
+        "model_form_note": cal.model_form_note(),
         "warnings": cal.warnings,
     })
 }
 
-fn write_file(path: &Path, text: &str) -> Result<(), String> {
-    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+/// Read a measurement file for `robot` and check its coordinates against the robot's forward
+/// kinematics; the warnings to print, or the refusal.
+fn read_checked(
+    robot: &Robot,
+    data: &Path,
+    tolerance_mm: f64,
+    ignore: bool,
+) -> Result<
+    (
+        Vec<deflex_calib::MeasurementRow>,
+        GeometryCheck,
+        Vec<String>,
+    ),
+    String,
+> {
+    if !(tolerance_mm.is_finite()
+        && (MIN_FK_TOLERANCE_M * 1e3..=MAX_FK_TOLERANCE_M * 1e3).contains(&tolerance_mm))
+    {
+        return Err(format!(
+            "--fk-tolerance-mm: expected {} to {} mm, got {tolerance_mm}",
+            MIN_FK_TOLERANCE_M * 1e3,
+            MAX_FK_TOLERANCE_M * 1e3
+        ));
+    }
+    let file = read_file(data, Some(robot.joint_count()), true).map_err(|e| e.to_string())?;
+    let check = check_geometry(
+        robot,
+        &file.rows,
+        Some(&file.lines),
+        Some(&file.header),
+        tolerance_mm * 1e-3,
+    )
+    .map_err(|e| format!("{}: {e}", data.display()))?;
+    let warnings = enforce(
+        &check,
+        &data.display().to_string(),
+        ignore,
+        "Is this the robot the file was measured on? Widen the tolerance with --fk-tolerance-mm, or use the file anyway with --ignore-fk-check.",
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((file.rows, check, warnings))
+}
+
+fn geometry_json(check: &GeometryCheck) -> Value {
+    json!({
+        "robot": check.robot,
+        "geometry": check.geometry,
+        "tolerance_m": check.tolerance_m,
+        "rows": check.rows,
+        "checked_points": check.checked_points,
+        "checked_loads": check.checked_loads,
+        "disagreeing_rows": check.disagreeing_rows(),
+        "max_distance_m": check.max_distance_m,
+        "first_disagreements": check.disagreements.iter().take(deflex_calib::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
+        "unchecked": check.unchecked,
+        "header_mismatch": check.header_mismatch,
+    })
+}
+
+/// A number flag within a range, named in the error.
+pub(crate) fn check_range(flag: &str, value: f64, lo: f64, hi: f64) -> Result<(), String> {
+    if value.is_finite() && value >= lo && value <= hi {
+        Ok(())
+    } else {
+        Err(format!(
+            "{flag}: expected a number from {lo} to {hi}, got {value}"
+        ))
+    }
 }
 
 pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
-    let start = robot(&args.robot)?;
-    let rows = read_for_robot(&args.data, start.joint_count(), true).map_err(|e| e.to_string())?;
-    if let Some(t) = args.target_rms_mm
-        && !(t.is_finite() && t >= 0.0)
-    {
-        return Err("--target-rms-mm must be a non-negative number".into());
+    if let Some(t) = args.target_rms_mm {
+        check_range("--target-rms-mm", t, 0.0, 1000.0)?;
     }
+    check_range("--min-bic-gain", args.min_bic_gain, 0.0, 1e6)?;
+    check_range(
+        "--min-cv-gain-percent",
+        args.min_cv_gain_percent,
+        0.0,
+        99.999,
+    )?;
+    if !(2..=100).contains(&args.folds) {
+        return Err(format!("--folds: expected 2 to 100, got {}", args.folds));
+    }
+    let start = robot(&args.robot)?;
+    let (rows, check, mut warnings) = read_checked(
+        &start,
+        &args.data,
+        args.fk_tolerance_mm,
+        args.ignore_fk_check,
+    )?;
     let t0 = std::time::Instant::now();
     let (cal, steps, stop): (Calibration, Vec<SearchStep>, Option<String>) =
         if args.structure == "fixed" {
@@ -190,15 +253,6 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
             let cal = calibrate_fixed(&start, &rows, &st).map_err(|e| e.to_string())?;
             (cal, Vec::new(), None)
         } else {
-            if args.folds < 2 {
-                return Err(format!("--folds: expected 2 or more, got {}", args.folds));
-            }
-            if !(0.0..100.0).contains(&args.min_cv_gain_percent) {
-                return Err(format!(
-                    "--min-cv-gain-percent: expected 0 to 100, got {}",
-                    args.min_cv_gain_percent
-                ));
-            }
             let criterion = if args.criterion == "cv" {
                 Criterion::CrossValidated {
                     folds: args.folds,
@@ -237,6 +291,12 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
             (result.calibration, result.steps, Some(result.stop_reason))
         };
     let elapsed = t0.elapsed();
+    if !cal.edofs.iter().any(|e| e.stiffness.is_some()) {
+        return Err(format!(
+            "{}: no eDoF could be identified from this data (every compliance is at its bound or not observable); nothing written",
+            args.data.display()
+        ));
+    }
     let mut model = cal.to_robot(&start);
     // The geometry is the start model's; the elasticity is new: say so in the name.
     let geometry = model
@@ -250,45 +310,36 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
         args.data.display(),
         cal.structure.label()
     );
-    write_file(&args.out, &robot_to_toml(&model))?;
+    // Everything is built aside and appears only when complete: the report folder first,
+    // then the model.
+    fn io(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
+        move |e| format!("{}: {e}", path.display())
+    }
+    let mut model_file = AtomicFile::create(&args.out).map_err(io(&args.out))?;
+    model_file
+        .write_all(robot_to_toml_for(&model, &args.out).as_bytes())
+        .map_err(io(&args.out))?;
+    if let Some(dir) = &args.report {
+        let folder = AtomicDir::create(dir).map_err(io(dir))?;
+        let report = CalibrationReport {
+            start_name: &start.name,
+            data_name: &args.data.display().to_string(),
+            output_name: &args.out.display().to_string(),
+            calibration: &cal,
+            model: &model,
+            steps: &steps,
+            stop_reason: stop.as_deref(),
+            rows: &rows,
+            warnings: &warnings,
+        };
+        write_calibration_report(folder.path(), &report).map_err(|e| e.to_string())?;
+        folder.commit().map_err(io(dir))?;
+    }
+    model_file.commit().map_err(io(&args.out))?;
+    warnings.extend(cal.warnings.iter().cloned());
     let it_rows = iteration_rows(&steps);
     let st_rows = stiffness_rows(&cal);
-    if let Some(dir) = &args.report {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        write_file(
-            &dir.join("iterations.csv"),
-            &table_csv(&ITERATION_HEADERS, &it_rows),
-        )?;
-        write_file(
-            &dir.join("stiffness.csv"),
-            &table_csv(&STIFFNESS_HEADERS, &st_rows),
-        )?;
-        let mut html = HtmlReport::new(format!("Calibration of {}", start.name));
-        html.paragraph(format!(
-            "Data: {} ({} rows). Structure: {}. Output model: {}.",
-            args.data.display(),
-            cal.rows,
-            cal.structure.label(),
-            args.out.display()
-        ));
-        if !steps.is_empty() {
-            html.section("Structure search (test-model loop, cf. Tables A1/A2)");
-            html.table(&ITERATION_HEADERS, &it_rows);
-            if let Some(s) = &stop {
-                html.paragraph(format!("Stopped: {s}."));
-            }
-        }
-        html.section("Identified stiffnesses (cf. Table 1)");
-        html.table(&STIFFNESS_HEADERS, &st_rows);
-        html.preformatted(residual_summary(&cal));
-        html.section("Parameter correlation");
-        html.preformatted(correlation_table(&cal));
-        for w in &cal.warnings {
-            html.note(w.clone());
-        }
-        html.write(&dir.join("calibration.html"))
-            .map_err(|e| e.to_string())?;
-    }
+    let sh_rows = shift_rows(&cal);
     if json_output {
         let steps_json: Vec<Value> = steps
             .iter()
@@ -299,6 +350,8 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
         v["stop_reason"] = json!(stop);
         v["output"] = json!(args.out.display().to_string());
         v["elapsed_s"] = json!(elapsed.as_secs_f64());
+        v["geometry_check"] = geometry_json(&check);
+        v["warnings"] = json!(warnings);
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
         return Ok(());
     }
@@ -316,11 +369,21 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
     }
     println!("Identified model: {}", cal.structure.label());
     print!("{}", render_table(&STIFFNESS_HEADERS, &st_rows));
+    if !sh_rows.is_empty() {
+        print!("{}", render_table(&SHIFT_HEADERS, &sh_rows));
+    }
     println!();
     print!("{}", residual_summary(&cal));
     println!("\nParameter correlation:");
     print!("{}", correlation_table(&cal));
-    for w in &cal.warnings {
+    println!(
+        "\nfile check: {} points and {} load points agree with the forward kinematics within {:.3} mm (largest {:.3} mm)",
+        check.checked_points,
+        check.checked_loads,
+        check.tolerance_m * 1e3,
+        check.max_distance_m * 1e3
+    );
+    for w in &warnings {
         println!("warning: {w}");
     }
     println!("\nwrote {}", args.out.display());
@@ -333,7 +396,12 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
 pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
     let model = robot(&args.robot)?;
     let baseline = args.baseline.as_deref().map(robot).transpose()?;
-    let rows = read_for_robot(&args.data, model.joint_count(), true).map_err(|e| e.to_string())?;
+    let (rows, check, warnings) = read_checked(
+        &model,
+        &args.data,
+        args.fk_tolerance_mm,
+        args.ignore_fk_check,
+    )?;
     let v = run_validation(&model, baseline.as_ref(), &rows).map_err(|e| e.to_string())?;
     let files = match &args.out {
         Some(dir) => write_report(&v, dir).map_err(|e| e.to_string())?,
@@ -352,6 +420,8 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
             "model": m(&v.model),
             "baseline": v.baseline.as_ref().map(m),
             "files": files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
+            "geometry_check": geometry_json(&check),
+            "warnings": warnings,
         });
         println!(
             "{}",
@@ -373,6 +443,9 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
     if let Some(rotation) = deflex_calib::report::validation_rotation_summary(&v) {
         print!("{rotation}");
     }
+    for w in &warnings {
+        println!("warning: {w}");
+    }
     if let Some(dir) = &args.out {
         println!(
             "wrote {} files to {} (validation.html)",
@@ -381,119 +454,4 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         );
     }
     Ok(())
-}
-
-pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
-    let nominal = robot(&args.robot)?;
-    if args.load_cases == 0 {
-        return Err("--load-cases must be at least 1".into());
-    }
-    let options = PlanOptions {
-        max_force_n: args.max_force_n,
-        load_cases: args.load_cases,
-        configurations: args.configurations.max(1),
-        noise_sigma_m: args.noise_um * 1e-6,
-        seed: args.seed,
-        full_family: args.full_family,
-        base_point: !args.no_base_point,
-        floor_z_m: args.floor_z_m,
-    };
-    let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
-    write_rows(&args.out, &plan.rows).map_err(|e| e.to_string())?;
-    let cases = deflex_calib::data::load_case_count(&plan.rows);
-    if json_output {
-        let expected: Vec<Value> = plan
-            .expected
-            .iter()
-            .map(|e| json!({"edof": e.label, "nominal_k": e.nominal_k, "expected_se_k": finite_or_null(e.se_k), "relative": finite_or_null(e.relative)}))
-            .collect();
-        let shifts: Vec<Value> = plan
-            .expected_shifts
-            .iter()
-            .map(|e| json!({"joint": e.joint, "nominal_m": e.nominal_m, "expected_se_m": finite_or_null(e.se_m)}))
-            .collect();
-        let axis: Vec<Value> = plan
-            .axis_cases
-            .iter()
-            .map(|a| json!({"edof": deflex_calib::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
-            .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&json!({"load_cases": cases, "rows": plan.rows.len(), "output": args.out.display().to_string(), "expected": expected, "expected_shifts": shifts, "axis_by_axis": axis, "log_det": plan.log_det}))
-                .unwrap_or_default()
-        );
-        return Ok(());
-    }
-    println!(
-        "Plan for {}: {} load cases ({} axis-by-axis + D-optimal), {} points to measure, |F| = {:.0} N at the TCP",
-        nominal.name,
-        cases,
-        plan.axis_cases
-            .iter()
-            .map(|a| a.load_case.as_str())
-            .collect::<std::collections::BTreeSet<_>>()
-            .len(),
-        plan.rows.len(),
-        args.max_force_n
-    );
-    println!(
-        "Expected standard errors with {:.1} µm tracker noise:",
-        args.noise_um
-    );
-    print!(
-        "{}",
-        render_table(&EXPECTED_SE_HEADERS, &expected_se_rows(&plan))
-    );
-    if !plan.expected_shifts.is_empty() {
-        print!(
-            "{}",
-            render_table(&EXPECTED_SHIFT_HEADERS, &expected_shift_rows(&plan))
-        );
-    }
-    if args.load_cases < cases {
-        println!(
-            "note: {cases} load cases instead of the {} asked for: every eDoF gets its own axis-by-axis case",
-            args.load_cases
-        );
-    }
-    println!(
-        "\nLoad cases for the technician (joint values in degrees; force at the TCP, world axes):"
-    );
-    print!(
-        "{}",
-        render_table(
-            &["case", "q [deg]", "force [N]", "measure", "why"],
-            &technician_rows(&plan.rows)
-        )
-    );
-    println!("wrote {}", args.out.display());
-    Ok(())
-}
-
-/// One line per load case: configuration in degrees, force vector, points to measure, purpose.
-fn technician_rows(rows: &[deflex_calib::MeasurementRow]) -> Vec<Vec<String>> {
-    let mut out: Vec<Vec<String>> = Vec::new();
-    for row in rows {
-        match out.last_mut() {
-            Some(last) if last[0] == row.load_case => {
-                last[3] = format!("{}, {}", last[3], row.point);
-            }
-            _ => {
-                let q: Vec<String> = row
-                    .q_rad
-                    .iter()
-                    .map(|q| format!("{:.1}", q.to_degrees()))
-                    .collect();
-                let f = row.wrench;
-                out.push(vec![
-                    row.load_case.clone(),
-                    q.join(", "),
-                    format!("({:.0}, {:.0}, {:.0})", f[0], f[1], f[2]),
-                    row.point.clone(),
-                    row.purpose.clone().unwrap_or_default(),
-                ]);
-            }
-        }
-    }
-    out
 }

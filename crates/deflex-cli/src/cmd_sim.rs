@@ -114,12 +114,13 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         }
         _ => return Err("give one of --plan PLAN.csv, --grid paper or --spiral".into()),
     };
-    let mut text = format!(
-        "# SIMULATED deflex digital-twin campaign ({kind}), seed {}: not a measurement\n",
+    // The header names the robot the twin played (`# robot:`, `# geometry:`).
+    let played = config.nominal_robot().map_err(|e| e.to_string())?;
+    let note = format!(
+        "SIMULATED deflex digital-twin campaign ({kind}), seed {}: not a measurement",
         args.seed
     );
-    text.push_str(&deflex_calib::data::format_rows(&rows));
-    std::fs::write(&args.out, text).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_calib::write_rows_for(&args.out, &played, &rows, &[&note]).map_err(|e| e.to_string())?;
     let cases = deflex_calib::data::load_case_count(&rows);
     let max_disp = rows
         .iter()

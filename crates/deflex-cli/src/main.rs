@@ -7,6 +7,7 @@ mod cmd_calib;
 mod cmd_control;
 mod cmd_demo;
 mod cmd_model;
+mod cmd_plan;
 mod cmd_sim;
 
 use clap::{Parser, Subcommand};

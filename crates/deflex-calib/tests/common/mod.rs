@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use deflex_calib::data::MeasurementRow;
-use deflex_calib::plan::{PlanOptions, plan_experiments};
+use deflex_calib::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_calib::synthetic::random_campaign;
 use deflex_model::{Robot, robot_from_toml_str};
 use rand::{Rng, SeedableRng};
@@ -88,7 +88,7 @@ pub fn campaign(
             full_family: true,
             seed,
             // The recovery fixtures measure the TCP and the mid-arm points only.
-            base_point: false,
+            base_point: BasePoint::Off,
             ..PlanOptions::default()
         },
     )

@@ -20,9 +20,37 @@
 //! `1/sigma_rad`; rows without one are used exactly as before. Cells of optional columns may be
 //! left empty.
 //!
+//! **Header comments.** Lines starting with `#` are comments. Those before the column names may
+//! say which robot the file was made for ([`FileHeader`]): `# robot: <name>` and
+//! `# geometry: <16 hex digits>` (`Robot::geometry_fingerprint`). Plans and simulated
+//! measurements carry them; `calibrate` and `validate` compare them with the robot they are
+//! given (see [`crate::consistency`]).
+//!
+//! **Bounds.** Every number must be finite and within a physical bound, checked with the line
+//! and column named: joint values ±[`MAX_JOINT_RAD`], forces ±[`MAX_FORCE_N`], moments
+//! ±[`MAX_MOMENT_NM`], coordinates ±[`MAX_COORDINATE_M`], displacements ±[`MAX_DISPLACEMENT_M`],
+//! rotations ±[`MAX_ROTATION_RAD`], `sigma_m` in [[`MIN_SIGMA_M`], [`MAX_SIGMA_M`]], `sigma_rad`
+//! in [[`MIN_SIGMA_RAD`], [`MAX_SIGMA_RAD`]]; labels at most [`MAX_LABEL_CHARS`] characters; a file at most
+//! [`MAX_FILE_BYTES`] bytes and [`MAX_ROWS`] rows.
+//!
 //! [`DEFAULT_SIGMA_M`]: crate::design::DEFAULT_SIGMA_M
 //! [`DEFAULT_SIGMA_RAD`]: crate::design::DEFAULT_SIGMA_RAD
 
+mod bounds;
+mod header;
+
+use bounds::{
+    DISPLACEMENT_COLUMNS, LOAD_POINT_COLUMNS, POINT_COLUMNS, ROTATION_COLUMNS, WRENCH_COLUMNS,
+    column_bound,
+};
+pub use bounds::{
+    MAX_COORDINATE_M, MAX_DISPLACEMENT_M, MAX_FILE_BYTES, MAX_FORCE_N, MAX_JOINT_RAD,
+    MAX_LABEL_CHARS, MAX_MOMENT_NM, MAX_ROTATION_RAD, MAX_ROWS, MAX_SIGMA_M, MAX_SIGMA_RAD,
+    MIN_SIGMA_M, MIN_SIGMA_RAD, check_row_values,
+};
+pub use header::FileHeader;
+
+use deflex_model::Robot;
 use std::collections::HashMap;
 use std::path::Path;
 use thiserror::Error;
@@ -80,6 +108,16 @@ impl MeasuredRotation {
         self.sigma_rad.unwrap_or(crate::design::DEFAULT_SIGMA_RAD)
     }
 }
+/// A measurement or plan file as read: its header, its rows and the line of each row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasurementFile {
+    /// The header comments.
+    pub header: FileHeader,
+    /// The rows.
+    pub rows: Vec<MeasurementRow>,
+    /// 1-based line number of each row in the file.
+    pub lines: Vec<u64>,
+}
 
 /// A bad measurement or plan file. Nothing of a file with an error is used.
 #[derive(Debug, Error)]
@@ -120,12 +158,6 @@ pub enum DataError {
     },
 }
 
-const WRENCH_COLUMNS: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"];
-const LOAD_POINT_COLUMNS: [&str; 3] = ["load_x_m", "load_y_m", "load_z_m"];
-const POINT_COLUMNS: [&str; 3] = ["x_m", "y_m", "z_m"];
-const DISPLACEMENT_COLUMNS: [&str; 3] = ["dx_m", "dy_m", "dz_m"];
-const ROTATION_COLUMNS: [&str; 3] = ["drx_rad", "dry_rad", "drz_rad"];
-
 /// Read a measurement (or plan) file for a robot with `joint_count` joints: like
 /// [`read_measurements`] / [`read_plan`], but a file written for a different joint count is
 /// reported as such ("the data has 5 joint columns … but the robot has 6 joints") before any
@@ -135,11 +167,44 @@ pub fn read_for_robot(
     joint_count: usize,
     require_displacement: bool,
 ) -> Result<Vec<MeasurementRow>, DataError> {
+    Ok(read_file(path, Some(joint_count), require_displacement)?.rows)
+}
+
+/// Read a measurement (or plan) file with its header comments and row line numbers. With
+/// `joint_count`, a file written for another joint count is reported as such before any
+/// row-level check. Files over [`MAX_FILE_BYTES`] are not read.
+pub fn read_file(
+    path: &Path,
+    joint_count: Option<usize>,
+    require_displacement: bool,
+) -> Result<MeasurementFile, DataError> {
+    let text = read_text(path)?;
     let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
+    if let Some(joint_count) = joint_count {
+        check_joint_columns(&text, &origin, joint_count)?;
+    }
+    parse_file(&text, &origin, require_displacement)
+}
+
+fn read_text(path: &Path) -> Result<String, DataError> {
+    let origin = path.display().to_string();
+    let io = |source| DataError::Io {
         path: origin.clone(),
         source,
-    })?;
+    };
+    let size = std::fs::metadata(path).map_err(io)?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(DataError::Content {
+            path: origin,
+            message: format!(
+                "{size} bytes is more than the {MAX_FILE_BYTES} bytes a measurement file may have"
+            ),
+        });
+    }
+    std::fs::read_to_string(path).map_err(io)
+}
+
+fn check_joint_columns(text: &str, origin: &str, joint_count: usize) -> Result<(), DataError> {
     let header = text
         .lines()
         .find(|l| !l.trim_start().starts_with('#'))
@@ -151,13 +216,13 @@ pub fn read_for_robot(
     }
     if found > 0 && found != joint_count {
         return Err(DataError::Content {
-            path: origin,
+            path: origin.to_string(),
             message: format!(
                 "the data has {found} joint columns (q1_rad…q{found}_rad) but the robot has {joint_count} joints"
             ),
         });
     }
-    parse_rows(&text, &origin, require_displacement)
+    Ok(())
 }
 
 /// Read a measurement file: every row must carry the displacement columns.
@@ -176,6 +241,16 @@ pub fn parse_rows(
     origin: &str,
     require_displacement: bool,
 ) -> Result<Vec<MeasurementRow>, DataError> {
+    Ok(parse_file(text, origin, require_displacement)?.rows)
+}
+
+/// Parse measurement or plan CSV text with its header comments and the line of every row.
+/// `origin` names the file in errors.
+pub fn parse_file(
+    text: &str,
+    origin: &str,
+    require_displacement: bool,
+) -> Result<MeasurementFile, DataError> {
     let header_error = |message: String| DataError::Header {
         path: origin.to_string(),
         message,
@@ -238,6 +313,7 @@ pub fn parse_rows(
     let has_rotation = ROTATION_COLUMNS.iter().all(|c| index.contains_key(c));
     let width = headers.len();
     let mut rows = Vec::new();
+    let mut lines = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| DataError::Row {
             path: origin.to_string(),
@@ -256,21 +332,33 @@ pub fn parse_rows(
                 record.len()
             )));
         }
+        if rows.len() >= MAX_ROWS {
+            return Err(row_error(format!(
+                "more than {MAX_ROWS} data rows: split the campaign"
+            )));
+        }
         let text_of = |name: &str| record.get(index[name]).unwrap_or("");
         let number = |name: &str| -> Result<f64, DataError> {
             let text = text_of(name);
             let value: f64 = text.parse().map_err(|_| {
                 row_error(format!(
-                    "column `{name}`: expected a number, got \"{text}\""
+                    "column `{name}`: expected a number, got \"{}\"",
+                    text.chars().take(40).collect::<String>()
                 ))
             })?;
-            if value.is_finite() {
-                Ok(value)
-            } else {
-                Err(row_error(format!(
-                    "column `{name}`: value must be finite, got {text}"
-                )))
+            if !value.is_finite() {
+                return Err(row_error(format!(
+                    "column `{name}`: value must be finite, got {}",
+                    text.chars().take(40).collect::<String>()
+                )));
             }
+            let (limit, unit) = column_bound(name);
+            if value.abs() > limit {
+                return Err(row_error(format!(
+                    "column `{name}`: {value:e} {unit} is beyond the ±{limit:e} {unit} a file may hold"
+                )));
+            }
+            Ok(value)
         };
         let link = |name: &str| -> Result<usize, DataError> {
             let text = text_of(name);
@@ -296,14 +384,20 @@ pub fn parse_rows(
         for (value, name) in wrench.iter_mut().zip(WRENCH_COLUMNS) {
             *value = number(name)?;
         }
-        let load_case = text_of("load_case").to_string();
-        if load_case.is_empty() {
-            return Err(row_error("column `load_case`: empty label".into()));
-        }
-        let point = text_of("point").to_string();
-        if point.is_empty() {
-            return Err(row_error("column `point`: empty label".into()));
-        }
+        let label = |name: &str| -> Result<String, DataError> {
+            let text = text_of(name);
+            if text.is_empty() {
+                return Err(row_error(format!("column `{name}`: empty label")));
+            }
+            if text.chars().count() > MAX_LABEL_CHARS {
+                return Err(row_error(format!(
+                    "column `{name}`: a label of more than {MAX_LABEL_CHARS} characters"
+                )));
+            }
+            Ok(text.to_string())
+        };
+        let load_case = label("load_case")?;
+        let point = label("point")?;
         let optional_number = |name: &str| -> Result<Option<f64>, DataError> {
             match index.get(name) {
                 Some(_) if !text_of(name).is_empty() => number(name).map(Some),
@@ -312,10 +406,10 @@ pub fn parse_rows(
         };
         let sigma_m = optional_number("sigma_m")?;
         if let Some(sigma) = sigma_m
-            && sigma <= 0.0
+            && !(MIN_SIGMA_M..=MAX_SIGMA_M).contains(&sigma)
         {
             return Err(row_error(format!(
-                "column `sigma_m`: must be positive, got {sigma}"
+                "column `sigma_m`: must be positive, from {MIN_SIGMA_M:e} to {MAX_SIGMA_M} m, got {sigma}"
             )));
         }
         let displacement_m =
@@ -327,10 +421,10 @@ pub fn parse_rows(
         let rotation_rad = if has_rotation && !text_of("drx_rad").is_empty() {
             let sigma_rad = optional_number("sigma_rad")?;
             if let Some(sigma) = sigma_rad
-                && sigma <= 0.0
+                && !(MIN_SIGMA_RAD..=MAX_SIGMA_RAD).contains(&sigma)
             {
                 return Err(row_error(format!(
-                    "column `sigma_rad`: must be positive, got {sigma}"
+                    "column `sigma_rad`: must be positive, from {MIN_SIGMA_RAD:e} to {MAX_SIGMA_RAD} rad, got {sigma}"
                 )));
             }
             Some(MeasuredRotation {
@@ -342,7 +436,12 @@ pub fn parse_rows(
         };
         let purpose = index
             .get("purpose")
-            .map(|_| text_of("purpose").to_string())
+            .map(|_| {
+                text_of("purpose")
+                    .chars()
+                    .take(MAX_LABEL_CHARS)
+                    .collect::<String>()
+            })
             .filter(|s| !s.is_empty());
         rows.push(MeasurementRow {
             load_case,
@@ -358,6 +457,7 @@ pub fn parse_rows(
             rotation_rad,
             purpose,
         });
+        lines.push(line);
     }
     if rows.is_empty() {
         return Err(DataError::Content {
@@ -365,16 +465,15 @@ pub fn parse_rows(
             message: "no data rows".into(),
         });
     }
-    Ok(rows)
+    Ok(MeasurementFile {
+        header: FileHeader::parse(text),
+        rows,
+        lines,
+    })
 }
 
 fn read_rows(path: &Path, require_displacement: bool) -> Result<Vec<MeasurementRow>, DataError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
-        path: origin.clone(),
-        source,
-    })?;
-    parse_rows(&text, &origin, require_displacement)
+    Ok(read_file(path, None, require_displacement)?.rows)
 }
 
 /// Number of distinct load cases among `rows`.
@@ -461,9 +560,37 @@ pub fn format_rows(rows: &[MeasurementRow]) -> String {
     String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
-/// Write rows to a CSV file (see [`format_rows`]).
+/// Write rows to a CSV file (see [`format_rows`]), whole or not at all.
 pub fn write_rows(path: &Path, rows: &[MeasurementRow]) -> Result<(), DataError> {
-    std::fs::write(path, format_rows(rows)).map_err(|source| DataError::Io {
+    write_text(path, &format_rows(rows))
+}
+
+/// [`format_rows`] after a header naming the robot the rows were made for (`# robot: …`,
+/// `# geometry: …`, see [`FileHeader`]), preceded by `notes` as comment lines (e.g.
+/// `SIMULATED …`).
+pub fn format_rows_for(robot: &Robot, rows: &[MeasurementRow], notes: &[&str]) -> String {
+    let mut header = FileHeader::default();
+    for note in notes {
+        header = header.with_note(*note);
+    }
+    let robot_lines = FileHeader::for_robot(robot);
+    header.robot = robot_lines.robot;
+    header.geometry = robot_lines.geometry;
+    format!("{}{}", header.render(), format_rows(rows))
+}
+
+/// Write rows for `robot` ([`format_rows_for`]) to a CSV file, whole or not at all.
+pub fn write_rows_for(
+    path: &Path,
+    robot: &Robot,
+    rows: &[MeasurementRow],
+    notes: &[&str],
+) -> Result<(), DataError> {
+    write_text(path, &format_rows_for(robot, rows, notes))
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), DataError> {
+    deflex_files::write_atomic(path, text).map_err(|source| DataError::Io {
         path: path.display().to_string(),
         source,
     })

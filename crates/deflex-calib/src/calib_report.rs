@@ -1,0 +1,284 @@
+//! The calibration report (`deflex calibrate --report DIR`): the search's iteration table, the
+//! identified stiffnesses and centre shifts (one unit per column: N·m/rad for stiffnesses, mm
+//! for δr), the residual summary with the χ²/dof note, and plots: residuals per load case,
+//! predicted versus measured displacement per axis (mm), and the parameter correlation as a
+//! heatmap; the tables as CSV beside the page (`residuals.csv` in SI units).
+//!
+//! The caller gives the folder; `deflex calibrate` builds it aside (`deflex_files::AtomicDir`)
+//! so a failure leaves no half-written report.
+
+use crate::CalibError;
+use crate::data::MeasurementRow;
+use crate::fit::Calibration;
+use crate::report::{
+    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
+    residual_summary, shift_rows, stiffness_rows, table_csv,
+};
+use crate::search::SearchStep;
+use deflex_model::Robot;
+use deflex_report::{HtmlReport, PlotSpec, Series, SeriesStyle, heatmap, line_plot, parity_plot};
+use std::path::{Path, PathBuf};
+
+/// Longest plot title (characters): short enough to be drawn at the full title size on the
+/// report's 600–900 px images, never shrunk.
+pub const MAX_TITLE_CHARS: usize = 40;
+
+/// What the report shows.
+pub struct CalibrationReport<'a> {
+    /// Start model's name.
+    pub start_name: &'a str,
+    /// Measurement file, as named to the user.
+    pub data_name: &'a str,
+    /// Where the calibrated model was written.
+    pub output_name: &'a str,
+    /// The calibration.
+    pub calibration: &'a Calibration,
+    /// The calibrated robot (predictions of the plots).
+    pub model: &'a Robot,
+    /// The search's steps (empty for a fixed structure).
+    pub steps: &'a [SearchStep],
+    /// Why the search stopped.
+    pub stop_reason: Option<&'a str>,
+    /// The measurement rows.
+    pub rows: &'a [MeasurementRow],
+    /// Warnings to show (file checks, calibration warnings).
+    pub warnings: &'a [String],
+}
+
+fn report_err(e: deflex_report::ReportError) -> CalibError {
+    CalibError::Invalid(format!("report: {e}"))
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), CalibError> {
+    deflex_files::write_atomic(path, text)
+        .map_err(|e| CalibError::Invalid(format!("{}: {e}", path.display())))
+}
+
+fn spec(title: &str, x: &str, y: &str) -> PlotSpec {
+    debug_assert!(title.chars().count() <= MAX_TITLE_CHARS, "{title}");
+    PlotSpec::new(title, x, y)
+}
+
+/// Residuals (measured − predicted by the calibrated model) per row, in metres.
+pub fn residuals(model: &Robot, rows: &[MeasurementRow]) -> Result<Vec<[f64; 3]>, CalibError> {
+    let predicted = crate::validate::predict(model, rows)?;
+    Ok(rows
+        .iter()
+        .zip(&predicted)
+        .map(|(r, p)| {
+            let m = r.displacement_m.unwrap_or([f64::NAN; 3]);
+            [m[0] - p[0], m[1] - p[1], m[2] - p[2]]
+        })
+        .collect())
+}
+
+/// Write the report's files into `dir` (which must exist). Returns the files written.
+pub fn write_calibration_report(
+    dir: &Path,
+    report: &CalibrationReport,
+) -> Result<Vec<PathBuf>, CalibError> {
+    let cal = report.calibration;
+    let mut files = Vec::new();
+    let it_rows = iteration_rows(report.steps);
+    let st_rows = stiffness_rows(cal);
+    let sh_rows = shift_rows(cal);
+    for (name, text) in [
+        ("iterations.csv", table_csv(&ITERATION_HEADERS, &it_rows)),
+        ("stiffness.csv", table_csv(&STIFFNESS_HEADERS, &st_rows)),
+        ("shifts.csv", table_csv(&SHIFT_HEADERS, &sh_rows)),
+    ] {
+        let path = dir.join(name);
+        write_text(&path, &text)?;
+        files.push(path);
+    }
+    let predicted = crate::validate::predict(report.model, report.rows)?;
+    let residual = residuals(report.model, report.rows)?;
+    let mut csv = String::from(
+        "load_case,point,point_link,dx_m,dy_m,dz_m,pred_dx_m,pred_dy_m,pred_dz_m,res_dx_m,res_dy_m,res_dz_m\n",
+    );
+    for ((r, p), e) in report.rows.iter().zip(&predicted).zip(&residual) {
+        let m = r.displacement_m.unwrap_or([f64::NAN; 3]);
+        csv.push_str(&format!(
+            "{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+            quote(&r.load_case),
+            quote(&r.point),
+            r.point_link,
+            m[0],
+            m[1],
+            m[2],
+            p[0],
+            p[1],
+            p[2],
+            e[0],
+            e[1],
+            e[2]
+        ));
+    }
+    let path = dir.join("residuals.csv");
+    write_text(&path, &csv)?;
+    files.push(path);
+
+    let mut html = HtmlReport::new(format!("Calibration of {}", report.start_name));
+    html.paragraph(format!(
+        "Data: {} ({} rows). Structure: {}. Output model: {}. Tables beside this page: iterations.csv, stiffness.csv, shifts.csv, residuals.csv (SI units).",
+        report.data_name,
+        cal.rows,
+        cal.structure.label(),
+        report.output_name
+    ));
+    if let Some(note) = cal.model_form_note() {
+        html.note(note);
+    }
+    for w in report.warnings {
+        html.note(w.clone());
+    }
+    if !report.steps.is_empty() {
+        html.section("Structure search (test-model loop, cf. Tables A1/A2)");
+        html.table(&ITERATION_HEADERS, &it_rows);
+        if let Some(s) = report.stop_reason {
+            html.paragraph(format!("Stopped: {s}."));
+        }
+    }
+    html.section("Identified stiffnesses (cf. Table 1)");
+    html.table(&STIFFNESS_HEADERS, &st_rows);
+    if !sh_rows.is_empty() {
+        html.section("Centre shifts");
+        html.table(&SHIFT_HEADERS, &sh_rows);
+    }
+    html.section("Residuals");
+    html.preformatted(residual_summary(cal));
+
+    // Residual norm per load case, one series per measured point.
+    let mut cases: Vec<&str> = Vec::new();
+    for r in report.rows {
+        if !cases.contains(&r.load_case.as_str()) {
+            cases.push(&r.load_case);
+        }
+    }
+    let mut labels: Vec<&str> = Vec::new();
+    for r in report.rows {
+        if !labels.contains(&r.point.as_str()) && labels.len() < 12 {
+            labels.push(&r.point);
+        }
+    }
+    let series: Vec<Series> = labels
+        .iter()
+        .map(|label| {
+            let (x, y): (Vec<f64>, Vec<f64>) = report
+                .rows
+                .iter()
+                .zip(&residual)
+                .filter(|(r, _)| r.point == *label)
+                .map(|(r, e)| {
+                    let case = cases.iter().position(|c| *c == r.load_case).unwrap_or(0);
+                    (
+                        (case + 1) as f64,
+                        (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e3,
+                    )
+                })
+                .unzip();
+            Series::new(label.to_string(), x, y, SeriesStyle::Points)
+        })
+        .collect();
+    let path = dir.join("residuals_per_load_case.png");
+    line_plot(
+        &path,
+        &spec(
+            "Residual per load case",
+            "load case # (order of residuals.csv)",
+            "|measured − predicted| [mm]",
+        )
+        .size(900, 500),
+        &series,
+    )
+    .map_err(report_err)?;
+    html.image(
+        &path,
+        "Norm of the residual (measured − predicted displacement) of every measured point, per load case",
+    );
+    files.push(path);
+
+    html.section("Predicted vs measured");
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        let path = dir.join(format!("parity_{name}.png"));
+        let measured: Vec<f64> = report
+            .rows
+            .iter()
+            .map(|r| r.displacement_m.map_or(f64::NAN, |d| d[axis] * 1e3))
+            .collect();
+        let pred: Vec<f64> = predicted.iter().map(|p| p[axis] * 1e3).collect();
+        parity_plot(
+            &path,
+            &spec(
+                &format!("δp{name}: predicted vs measured"),
+                &format!("measured δp{name} [mm]"),
+                &format!("predicted δp{name} [mm]"),
+            )
+            .size(600, 600),
+            &pred,
+            &measured,
+            "calibrated model",
+        )
+        .map_err(report_err)?;
+        html.image(
+            &path,
+            format!("Displacement along world {name}: calibrated model against the tracker"),
+        );
+        files.push(path);
+    }
+
+    html.section("Parameter correlation");
+    let p = cal.parameter_labels.len();
+    if p >= 2 {
+        let centers: Vec<f64> = (1..=p).map(|i| i as f64).collect();
+        let mut values = Vec::with_capacity(p * p);
+        for j in 0..p {
+            for i in 0..p {
+                values.push(cal.correlation[(j, i)]);
+            }
+        }
+        let path = dir.join("correlation.png");
+        heatmap(
+            &path,
+            &spec(
+                "Parameter correlation",
+                "parameter # (list below)",
+                "parameter #",
+            )
+            .size(760, 680)
+            .color_range(-1.0, 1.0),
+            &centers,
+            &centers,
+            &values,
+            "correlation [-]",
+        )
+        .map_err(report_err)?;
+        html.image(&path, "Correlation of the fitted parameters (−1 … +1)");
+        files.push(path);
+        html.paragraph(
+            cal.parameter_labels
+                .iter()
+                .enumerate()
+                .map(|(i, l)| format!("{} = {l}", i + 1))
+                .collect::<Vec<_>>()
+                .join(", "),
+        );
+    }
+    html.preformatted(correlation_table(cal));
+    for w in &cal.warnings {
+        html.note(w.clone());
+    }
+    let page = dir.join("calibration.html");
+    html.write(&page).map_err(report_err)?;
+    files.push(page);
+    Ok(files)
+}
+
+/// A CSV field, quoted when needed.
+fn quote(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}

@@ -1,0 +1,367 @@
+//! `deflex plan`: the measurement campaign for a real cell (floor, table, cable or dead-weight
+//! loads, bracket, measured points), with expected standard errors and the technician's sheet.
+
+use crate::args::{CliResult, robot};
+use crate::cmd_calib::{check_range, finite_or_null};
+use clap::Args;
+use deflex_calib::cell::{
+    MAX_PLAN_FORCE_N, MAX_USER_POINTS, default_force_n, parse_directions, parse_point_flag,
+    read_points,
+};
+use deflex_calib::plan::{
+    BasePoint, Floor, LoadKind, PlanOptions, PointSet, Table, TableOption, plan_experiments,
+};
+use deflex_calib::report::{
+    EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
+    expected_shift_rows, render_table, technician_rows,
+};
+use deflex_calib::write_rows_for;
+use deflex_model::Robot;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct PlanArgs {
+    /// Nominal model: built-in name or TOML file (joint limits required).
+    #[arg(long)]
+    pub robot: String,
+    /// Cable tension (N, up to 1e5). Default: from the robot (the force whose median TCP
+    /// deflection is 2.5 mm with its stiffnesses, at most half the arm's weight when its masses
+    /// are known): 1400 N for the TX200, 140 N for a UR10e.
+    #[arg(long = "max-force-N")]
+    pub max_force_n: Option<f64>,
+    /// How loads are applied: cable (tension along --cable-directions) or dead-weight (masses
+    /// along gravity, --masses-kg).
+    #[arg(long, default_value = "cable", value_parser = ["cable", "dead-weight"])]
+    pub load: String,
+    /// Directions a cable may lead from the attachment (world axes): x,-x,y,-y,z,-z (default
+    /// all; +z needs an overhead anchor).
+    #[arg(long)]
+    pub cable_directions: Option<String>,
+    /// Dead weights (kg, comma-separated, at most 4). Default: one weight of the default force.
+    #[arg(long)]
+    pub masses_kg: Option<String>,
+    /// Off-axis bracket: load point offset from the TCP in the TCP frame (m, `x,y,z`, e.g.
+    /// 0.2,0,0). Loads then also act there, its moment turns the wrist, and the bracket point
+    /// is measured (`BR`).
+    #[arg(long)]
+    pub bracket_m: Option<String>,
+    /// Number of load cases (1 to 1000; axis-by-axis ones included).
+    #[arg(long, default_value_t = 24)]
+    pub load_cases: usize,
+    /// Plan for every eDoF of the model family (what `calibrate --structure auto` needs), not
+    /// only the model's.
+    #[arg(long)]
+    pub full_family: bool,
+    /// Points measured on the arm besides the TCP: `standard` (two mid-arm points), `none`, or
+    /// a CSV file with columns name,link,x_m,y_m,z_m (position in the link's frame).
+    #[arg(long, default_value = "standard")]
+    pub points: String,
+    /// An extra measured point `NAME,LINK,X,Y,Z` (m, link frame; repeatable).
+    #[arg(long)]
+    pub point: Vec<String>,
+    /// Base reflector M0 position in R0 (m, `x,y,z`). Default: (0.3, 0, −0.3), raised to
+    /// 0.15 m above the floor when the floor is higher.
+    #[arg(long)]
+    pub base_point_m: Option<String>,
+    /// Do not measure the base reflector M0 (which separates a baseplate tilt from joint 1).
+    #[arg(long)]
+    pub no_base_point: bool,
+    /// Floor height (world z, m). Default: from the robot (its base pivot, the TX200's
+    /// 0.642 m shoulder height, or R0 when R0 is below the shoulder).
+    #[arg(long)]
+    pub floor_z_m: Option<f64>,
+    /// No floor check.
+    #[arg(long)]
+    pub no_floor: bool,
+    /// Work table `x_min,x_max,y_min,y_max,top_z` (world, m). Default: in front of the robot,
+    /// x 0.5–0.85 × reach, y ±0.3 × reach, top 0.2 × reach above the floor.
+    #[arg(long)]
+    pub table: Option<String>,
+    /// No table check.
+    #[arg(long)]
+    pub no_table: bool,
+    /// Clearance kept above the floor and the table (m, 0 to 1).
+    #[arg(long, default_value_t = 0.05)]
+    pub clearance_m: f64,
+    /// Free height a dead weight or a cable leading down needs below its attachment (m, 0 to 5).
+    #[arg(long, default_value_t = 0.3)]
+    pub hanging_drop_m: f64,
+    /// Tracker noise (µm, 0.001 to 10000) for the expected standard errors.
+    #[arg(long, default_value_t = 15.0)]
+    pub noise_um: f64,
+    /// Random configurations tried (1 to 2000; each with every load direction or weight).
+    #[arg(long, default_value_t = 600)]
+    pub configurations: usize,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output plan CSV (with `# robot:` and `# geometry:` header lines).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Comma-separated numbers of a flag, exactly `N` of them.
+fn fixed<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], String> {
+    crate::args::parse_fixed::<N>(text, flag)
+}
+
+/// The plan options from the flags (every number checked, the flag named).
+fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, String> {
+    let n = nominal.joint_count();
+    let max_force_n = match args.max_force_n {
+        Some(f) => {
+            check_range("--max-force-N", f, 1e-3, MAX_PLAN_FORCE_N)?;
+            f
+        }
+        None => default_force_n(nominal).map_err(|e| e.to_string())?,
+    };
+    check_range("--noise-um", args.noise_um, 1e-3, 1e4)?;
+    check_range("--clearance-m", args.clearance_m, 0.0, 1.0)?;
+    check_range("--hanging-drop-m", args.hanging_drop_m, 0.0, 5.0)?;
+    if let Some(z) = args.floor_z_m {
+        check_range("--floor-z-m", z, -100.0, 100.0)?;
+    }
+    let load = if args.load == "dead-weight" {
+        if args.cable_directions.is_some() {
+            return Err("--cable-directions: only with --load cable".into());
+        }
+        let g = nominal.gravity.norm();
+        let masses_kg = match &args.masses_kg {
+            Some(text) => crate::args::parse_list(text, "--masses-kg")?,
+            None if g > 0.0 => vec![(max_force_n / g).round().max(1.0)],
+            None => {
+                return Err(format!(
+                    "--load dead-weight: robot \"{}\" has no gravity",
+                    nominal.name
+                ));
+            }
+        };
+        LoadKind::DeadWeight { masses_kg }
+    } else {
+        if args.masses_kg.is_some() {
+            return Err("--masses-kg: only with --load dead-weight".into());
+        }
+        match &args.cable_directions {
+            Some(text) => LoadKind::Cable {
+                directions: parse_directions(text)
+                    .map_err(|e| format!("--cable-directions: {e}"))?,
+            },
+            None => LoadKind::cable_all_axes(),
+        }
+    };
+    let mut points = match args.points.as_str() {
+        "standard" => PointSet::Standard,
+        "none" => PointSet::Custom(Vec::new()),
+        file => {
+            PointSet::Custom(read_points(Path::new(file), n).map_err(|e| format!("--points: {e}"))?)
+        }
+    };
+    if !args.point.is_empty() {
+        let mut list = match points {
+            PointSet::Standard => Vec::new(),
+            PointSet::Custom(list) => list,
+        };
+        if args.points == "standard" {
+            return Err(
+                "--point: give --points none (or a file) with it; the standard mid-arm points are not combined with others".into(),
+            );
+        }
+        for text in args.point.iter().take(MAX_USER_POINTS + 1) {
+            list.push(parse_point_flag(text, n).map_err(|e| format!("--point {text}: {e}"))?);
+        }
+        if list.len() > MAX_USER_POINTS {
+            return Err(format!("--point: at most {MAX_USER_POINTS} points"));
+        }
+        points = PointSet::Custom(list);
+    }
+    let base_point = match (&args.base_point_m, args.no_base_point) {
+        (Some(_), true) => return Err("give --base-point-m or --no-base-point, not both".into()),
+        (Some(text), false) => BasePoint::At(fixed::<3>("--base-point-m", text)?),
+        (None, true) => BasePoint::Off,
+        (None, false) => BasePoint::Default,
+    };
+    let floor = match (args.floor_z_m, args.no_floor) {
+        (Some(_), true) => return Err("give --floor-z-m or --no-floor, not both".into()),
+        (Some(z), false) => Floor::At(z),
+        (None, true) => Floor::Off,
+        (None, false) => Floor::Default,
+    };
+    let table = match (&args.table, args.no_table) {
+        (Some(_), true) => return Err("give --table or --no-table, not both".into()),
+        (Some(text), false) => {
+            let [x0, x1, y0, y1, top] = fixed::<5>("--table", text)?;
+            TableOption::At(Table {
+                x_m: [x0, x1],
+                y_m: [y0, y1],
+                top_z_m: top,
+            })
+        }
+        (None, true) => TableOption::Off,
+        (None, false) => TableOption::Default,
+    };
+    let bracket_m = args
+        .bracket_m
+        .as_deref()
+        .map(|text| fixed::<3>("--bracket-m", text))
+        .transpose()?;
+    Ok(PlanOptions {
+        max_force_n,
+        load_cases: args.load_cases,
+        configurations: args.configurations,
+        noise_sigma_m: args.noise_um * 1e-6,
+        seed: args.seed,
+        full_family: args.full_family,
+        base_point,
+        points,
+        floor,
+        table,
+        clearance_m: args.clearance_m,
+        hanging_drop_m: args.hanging_drop_m,
+        load,
+        bracket_m,
+    })
+}
+
+pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
+    let nominal = robot(&args.robot)?;
+    let options = plan_options(&args, &nominal)?;
+    let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
+    write_rows_for(&args.out, &nominal, &plan.rows, &[]).map_err(|e| e.to_string())?;
+    let cases = deflex_calib::data::load_case_count(&plan.rows);
+    let setup = &plan.setup;
+    let load_text = match &setup.load {
+        LoadKind::Cable { directions } => format!(
+            "cable, {:.0} N along {}",
+            setup.force_n,
+            directions
+                .iter()
+                .map(|d| direction_name(*d))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        LoadKind::DeadWeight { masses_kg } => format!(
+            "dead weights {} kg",
+            masses_kg
+                .iter()
+                .map(|m| format!("{m}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    if json_output {
+        let expected: Vec<Value> = plan
+            .expected
+            .iter()
+            .map(|e| json!({"edof": e.label, "nominal_k": e.nominal_k, "expected_se_k": finite_or_null(e.se_k), "relative": finite_or_null(e.relative), "identifiable": e.identifiable()}))
+            .collect();
+        let shifts: Vec<Value> = plan
+            .expected_shifts
+            .iter()
+            .map(|e| json!({"joint": e.joint, "nominal_m": e.nominal_m, "expected_se_m": finite_or_null(e.se_m)}))
+            .collect();
+        let axis: Vec<Value> = plan
+            .axis_cases
+            .iter()
+            .map(|a| json!({"edof": deflex_calib::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
+            .collect();
+        let setup_json = json!({
+            "force_N": setup.force_n,
+            "load": load_text,
+            "bracket_m": setup.bracket_m,
+            "floor_z_m": setup.floor_z_m,
+            "table": setup.table.map(|t| json!({"x_m": t.x_m, "y_m": t.y_m, "top_z_m": t.top_z_m})),
+            "base_point_r0_m": setup.base_point_r0_m,
+            "configurations_drawn": setup.configurations_drawn,
+            "configurations_kept": setup.configurations_kept,
+        });
+        let sheet: Vec<Value> = technician_rows(&plan)
+            .into_iter()
+            .map(|r| json!({"case": r[0], "q_deg": r[1], "load": r[2], "force_N": r[3], "measure": r[4], "why": r[5]}))
+            .collect();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({"robot": nominal.name, "geometry": nominal.geometry_fingerprint(), "load_cases": cases, "rows": plan.rows.len(), "output": args.out.display().to_string(), "setup": setup_json, "expected": expected, "expected_shifts": shifts, "axis_by_axis": axis, "technician_sheet": sheet, "log_det": plan.log_det}))
+                .unwrap_or_default()
+        );
+        return Ok(());
+    }
+    println!(
+        "Plan for {}: {} load cases ({} axis-by-axis + D-optimal), {} points to measure; {load_text}{}",
+        nominal.name,
+        cases,
+        plan.axis_cases
+            .iter()
+            .map(|a| a.load_case.as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len(),
+        plan.rows.len(),
+        setup
+            .bracket_m
+            .map(|b| format!(
+                ", at the TCP and at the bracket ({:.3}, {:.3}, {:.3}) m in the TCP frame",
+                b[0], b[1], b[2]
+            ))
+            .unwrap_or_else(|| " at the TCP".into())
+    );
+    println!(
+        "Cell: floor {}; table {}; base reflector M0 {}; {} of {} configurations drawn were clear",
+        setup
+            .floor_z_m
+            .map_or("not checked".to_string(), |z| format!("at z = {z:.3} m")),
+        setup.table.map_or("not checked".to_string(), |t| format!(
+            "top z = {:.3} m over x {:.3}…{:.3} m, y {:.3}…{:.3} m",
+            t.top_z_m, t.x_m[0], t.x_m[1], t.y_m[0], t.y_m[1]
+        )),
+        setup
+            .base_point_r0_m
+            .map_or("not measured".to_string(), |p| format!(
+                "at ({:.3}, {:.3}, {:.3}) m in R0",
+                p[0], p[1], p[2]
+            )),
+        setup.configurations_kept,
+        setup.configurations_drawn
+    );
+    println!(
+        "Expected standard errors with {:.1} µm tracker noise:",
+        args.noise_um
+    );
+    print!(
+        "{}",
+        render_table(&EXPECTED_SE_HEADERS, &expected_se_rows(&plan))
+    );
+    if !plan.expected_shifts.is_empty() {
+        print!(
+            "{}",
+            render_table(&EXPECTED_SHIFT_HEADERS, &expected_shift_rows(&plan))
+        );
+    }
+    if args.load_cases < cases {
+        println!(
+            "note: {cases} load cases instead of the {} asked for: every eDoF gets its own axis-by-axis case",
+            args.load_cases
+        );
+    }
+    println!(
+        "\nLoad cases for the technician (joint values in degrees within the joint limits; force in world axes):"
+    );
+    print!(
+        "{}",
+        render_table(&TECHNICIAN_HEADERS, &technician_rows(&plan))
+    );
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+/// `+x`, `-z`, … for a world axis direction, else the vector.
+fn direction_name(d: [f64; 3]) -> String {
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        if d[axis] == 1.0 {
+            return format!("+{name}");
+        }
+        if d[axis] == -1.0 {
+            return format!("-{name}");
+        }
+    }
+    format!("({:.2}, {:.2}, {:.2})", d[0], d[1], d[2])
+}

@@ -1,0 +1,551 @@
+//! End-to-end tests of `deflex plan`, `calibrate` and `validate` through the real binary:
+//! files that know their robot, the planner's cell, and every bad input of issue 12.
+
+use deflex_calib::plan::{PlanOptions, plan_experiments};
+use deflex_calib::synthetic::{SyntheticOptions, measure};
+use deflex_calib::{MeasurementRow, write_rows_for};
+use deflex_model::{Robot, builtin};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+fn deflex(args: &[&str]) -> Run {
+    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
+        .args(args)
+        .output()
+        .expect("run deflex");
+    Run {
+        code: output.status.code(),
+        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+    }
+}
+
+/// A fresh folder for one test.
+fn folder(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("deflex-cli-calib-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A SIMULATED campaign of `robot` (planned for it, measured on it), written with its header.
+fn campaign(robot: &Robot, force: f64, path: &Path) -> Vec<MeasurementRow> {
+    let plan = plan_experiments(
+        robot,
+        &PlanOptions {
+            max_force_n: force,
+            load_cases: 16,
+            full_family: false,
+            ..PlanOptions::for_a_real_cell()
+        },
+    )
+    .unwrap();
+    let rows = measure(robot, &plan.rows, &SyntheticOptions::default()).unwrap();
+    write_rows_for(path, robot, &rows, &["SIMULATED test campaign"]).unwrap();
+    rows
+}
+
+/// The issue's acceptance: a UR10e measurement file given with the TX200's model is refused,
+/// by `calibrate` and by `validate`, naming rows and distances; nothing is written.
+#[test]
+fn a_ur10e_measurement_given_with_the_tx200_is_refused() {
+    let dir = folder("ur-vs-tx");
+    let data = dir.join("meas_ur.csv");
+    campaign(&builtin("ur10e").unwrap(), 150.0, &data);
+    let model = dir.join("m.toml");
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--out",
+        s(&model),
+    ]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    for wanted in [
+        "meas_ur.csv: ",
+        "rows disagree with the forward kinematics of robot \"Staubli TX200",
+        "line 5 (load case A01, point TCP): ",
+        " mm from the TCP its joint values give",
+        "header names robot \"Universal Robots UR10e",
+        "--ignore-fk-check",
+    ] {
+        assert!(
+            run.stderr.contains(wanted),
+            "missing {wanted:?} in:\n{}",
+            run.stderr
+        );
+    }
+    assert!(!model.exists());
+    let val = dir.join("val");
+    let run = deflex(&[
+        "validate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--out",
+        s(&val),
+    ]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(run.stderr.contains("mm from the TCP"), "{}", run.stderr);
+    assert!(!val.exists());
+    // Overridden, it goes on with a warning.
+    let run = deflex(&[
+        "validate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--ignore-fk-check",
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert!(run.stdout.contains("warning: ") && run.stdout.contains("going on as asked"));
+    // Its own robot takes it, and says how well the coordinates agree.
+    let run = deflex(&[
+        "--json",
+        "calibrate",
+        "--robot",
+        "ur10e",
+        "--data",
+        s(&data),
+        "--out",
+        s(&model),
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(v["geometry_check"]["disagreeing_rows"], 0);
+    assert!(v["geometry_check"]["max_distance_m"].as_f64().unwrap() < 1e-9);
+    assert!(model.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 12: degenerate data (every displacement zero; one force of 1e308 N) gets a clear
+/// error, not a panic (exit 101).
+#[test]
+fn degenerate_calibration_data_is_a_clear_error() {
+    let dir = folder("degenerate");
+    let data = dir.join("meas.csv");
+    let robot = builtin("tx200").unwrap();
+    let mut rows = campaign(&robot, 1400.0, &data);
+    for r in &mut rows {
+        r.displacement_m = Some([0.0; 3]);
+    }
+    let zero = dir.join("zero.csv");
+    write_rows_for(&zero, &robot, &rows, &[]).unwrap();
+    let model = dir.join("m.toml");
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&zero),
+        "--out",
+        s(&model),
+    ]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(
+        run.stderr
+            .contains("every measured displacement is exactly zero"),
+        "{}",
+        run.stderr
+    );
+
+    let text = std::fs::read_to_string(&data).unwrap();
+    let header = text.lines().find(|l| l.starts_with("load_case")).unwrap();
+    let column = header.split(',').position(|c| c == "fx_N").unwrap();
+    let first = text.lines().find(|l| l.starts_with("A01")).unwrap();
+    let mut fields: Vec<&str> = first.split(',').collect();
+    fields[column] = "1e308";
+    let big = dir.join("big.csv");
+    std::fs::write(&big, text.replacen(first, &fields.join(","), 1)).unwrap();
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&big),
+        "--out",
+        s(&model),
+    ]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(
+        run.stderr.contains("big.csv:5") && run.stderr.contains("fx_N"),
+        "{}",
+        run.stderr
+    );
+    assert!(!model.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 12: every numeric flag of plan, calibrate and validate is checked, the flag named;
+/// `--max-force-N 1e308` (once an endless SVD on NaN) is refused at once.
+#[test]
+fn every_numeric_flag_is_checked() {
+    let dir = folder("flags");
+    let data = dir.join("meas.csv");
+    campaign(&builtin("tx200").unwrap(), 1400.0, &data);
+    let out = dir.join("x");
+    let plan = |extra: &[&str]| {
+        let mut args = vec!["plan", "--robot", "tx200", "--out", s(&out)];
+        args.extend_from_slice(extra);
+        deflex(&args)
+    };
+    let cases: &[(&[&str], &str)] = &[
+        (&["--max-force-N", "1e308"], "--max-force-N"),
+        (&["--max-force-N", "nan"], "--max-force-N"),
+        (&["--max-force-N=-1"], "--max-force-N"),
+        (&["--noise-um", "nan"], "--noise-um"),
+        (&["--noise-um", "0"], "--noise-um"),
+        (&["--load-cases", "0"], "--load-cases"),
+        (&["--load-cases", "1000000"], "--load-cases"),
+        (&["--configurations", "0"], "--configurations"),
+        (&["--configurations", "100000000"], "--configurations"),
+        (&["--clearance-m", "nan"], "--clearance-m"),
+        (&["--hanging-drop-m", "inf"], "--hanging-drop-m"),
+        (&["--floor-z-m", "nan"], "--floor-z-m"),
+        (&["--table", "1,0,0,1,0"], "--table"),
+        (&["--table", "0,1,0,1,nan"], "--table"),
+        (&["--bracket-m", "nan,0,0"], "--bracket-m"),
+        (&["--bracket-m", "9,0,0"], "--bracket-m"),
+        (&["--base-point-m", "0,0,1e300"], "--base-point-m"),
+        (
+            &["--load", "dead-weight", "--masses-kg", "nan"],
+            "--masses-kg",
+        ),
+        (
+            &["--load", "dead-weight", "--masses-kg", "1e9"],
+            "--masses-kg",
+        ),
+        (&["--cable-directions", "x,up"], "--cable-directions"),
+        (&["--point", "R1,1,0,0,0"], "--point"),
+        (&["--points", "none", "--point", "R1,1,nan,0,0"], "--point"),
+    ];
+    for (extra, flag) in cases {
+        let run = plan(extra);
+        assert_eq!(run.code, Some(1), "{extra:?}: {}", run.stderr);
+        assert!(run.stderr.contains(flag), "{extra:?}: {}", run.stderr);
+    }
+    assert!(!out.exists());
+    let calibrate = |extra: &[&str]| {
+        let mut args = vec![
+            "calibrate",
+            "--robot",
+            "tx200",
+            "--data",
+            s(&data),
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        deflex(&args)
+    };
+    let cases: &[(&[&str], &str)] = &[
+        (&["--min-bic-gain", "nan"], "--min-bic-gain"),
+        (&["--min-bic-gain=-1"], "--min-bic-gain"),
+        (&["--target-rms-mm", "nan"], "--target-rms-mm"),
+        (&["--min-cv-gain-percent", "nan"], "--min-cv-gain-percent"),
+        (&["--folds", "1"], "--folds"),
+        (&["--folds", "100000"], "--folds"),
+        (&["--fk-tolerance-mm", "nan"], "--fk-tolerance-mm"),
+        (&["--fk-tolerance-mm", "0"], "--fk-tolerance-mm"),
+    ];
+    for (extra, flag) in cases {
+        let run = calibrate(extra);
+        assert_eq!(run.code, Some(1), "{extra:?}: {}", run.stderr);
+        assert!(run.stderr.contains(flag), "{extra:?}: {}", run.stderr);
+    }
+    let run = deflex(&[
+        "validate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--fk-tolerance-mm",
+        "inf",
+    ]);
+    assert_eq!(run.code, Some(1));
+    assert!(run.stderr.contains("--fk-tolerance-mm"), "{}", run.stderr);
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 12: a failed validate leaves an existing output folder as it was (and creates none).
+#[test]
+fn a_failed_validate_leaves_the_folder_as_it_was() {
+    let dir = folder("validate-atomic");
+    let data = dir.join("meas.csv");
+    campaign(&builtin("ur10e").unwrap(), 150.0, &data);
+    let val = dir.join("val");
+    std::fs::create_dir_all(&val).unwrap();
+    std::fs::write(val.join("old.txt"), "from an earlier run").unwrap();
+    // Fails: the TX200 is not the robot of this file.
+    let run = deflex(&[
+        "validate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--out",
+        s(&val),
+    ]);
+    assert_eq!(run.code, Some(1));
+    let names: Vec<String> = std::fs::read_dir(&val)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["old.txt".to_string()]);
+    // Succeeds: the folder is replaced whole.
+    let run = deflex(&[
+        "validate",
+        "--robot",
+        "ur10e",
+        "--data",
+        s(&data),
+        "--out",
+        s(&val),
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert!(val.join("validation.html").exists() && !val.join("old.txt").exists());
+    // No temporary sibling is left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp-"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A six-joint URDF arm (UR-like placements) with revolute limits.
+const URDF: &str = r#"<?xml version="1.0"?>
+<robot name="test_arm">
+  <link name="base_link"/><link name="l1"/><link name="l2"/><link name="l3"/><link name="l4"/><link name="l5"/><link name="l6"/>
+  <joint name="j1" type="revolute"><origin xyz="0 0 0.18" rpy="0 0 0"/><parent link="base_link"/><child link="l1"/><axis xyz="0 0 1"/><limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><origin xyz="0 0 0" rpy="1.5708 0 0"/><parent link="l1"/><child link="l2"/><axis xyz="0 0 1"/><limit lower="-3.1" upper="0.0" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="revolute"><origin xyz="-0.61 0 0" rpy="0 0 0"/><parent link="l2"/><child link="l3"/><axis xyz="0 0 1"/><limit lower="-2.8" upper="2.8" effort="1" velocity="1"/></joint>
+  <joint name="j4" type="revolute"><origin xyz="-0.57 0 0.17" rpy="0 0 0"/><parent link="l3"/><child link="l4"/><axis xyz="0 0 1"/><limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+  <joint name="j5" type="revolute"><origin xyz="0 -0.12 0" rpy="1.5708 0 0"/><parent link="l4"/><child link="l5"/><axis xyz="0 0 1"/><limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+  <joint name="j6" type="revolute"><origin xyz="0 0.12 0" rpy="-1.5708 0 0"/><parent link="l5"/><child link="l6"/><axis xyz="0 0 1"/><limit lower="-3.1" upper="3.1" effort="1" velocity="1"/></joint>
+</robot>
+"#;
+
+/// Issue 12: `calibrate --out sub/m.toml` for a URDF-based robot writes a model that still
+/// finds its URDF.
+#[test]
+fn a_calibrated_urdf_robot_written_elsewhere_finds_its_urdf() {
+    let dir = folder("urdf");
+    std::fs::write(dir.join("arm.urdf"), URDF).unwrap();
+    let mut toml = String::from("name = \"URDF test arm\"\nurdf = \"arm.urdf\"\n");
+    for (i, k) in [1.6e5, 1.3e5, 8.0e4, 2.0e4, 2.0e4, 1.5e4]
+        .iter()
+        .enumerate()
+    {
+        toml.push_str(&format!(
+            "[[joint]]\nname = \"j{}\"\nstiffness = {{ z = {k:e} }}\n",
+            i + 1
+        ));
+    }
+    let robot_file = dir.join("arm.toml");
+    std::fs::write(&robot_file, toml).unwrap();
+    let robot = deflex_model::load_robot(s(&robot_file)).unwrap();
+    let data = dir.join("meas.csv");
+    campaign(&robot, 150.0, &data);
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let model = dir.join("sub").join("m.toml");
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        s(&robot_file),
+        "--data",
+        s(&data),
+        "--out",
+        s(&model),
+        "--structure",
+        "fixed",
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let written = std::fs::read_to_string(&model).unwrap();
+    assert!(written.contains("urdf = \"../arm.urdf\""), "{written}");
+    let run = deflex(&["model", "show", "--robot", s(&model)]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `deflex plan` plans a real cell for every built-in robot: header lines, floor, joint values
+/// within ±180° where the limits allow, a technician's sheet; a bracket loads the wrist.
+#[test]
+fn plan_for_every_builtin_robot() {
+    let dir = folder("plans");
+    for (name, _) in deflex_model::BUILTIN_ROBOTS {
+        let out = dir.join(format!("{name}.csv"));
+        let run = deflex(&[
+            "--json",
+            "plan",
+            "--robot",
+            name,
+            "--out",
+            s(&out),
+            "--configurations",
+            "200",
+            "--load-cases",
+            "10",
+        ]);
+        assert_eq!(run.code, Some(0), "{name}: {}", run.stderr);
+        let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+        assert!(v["setup"]["floor_z_m"].is_number(), "{name}");
+        assert!(v["setup"]["table"].is_object(), "{name}");
+        assert!(!v["technician_sheet"].as_array().unwrap().is_empty());
+        let text = std::fs::read_to_string(&out).unwrap();
+        let robot = builtin(name).unwrap();
+        assert!(
+            text.starts_with(&format!(
+                "# robot: {}\n# geometry: {}\n",
+                robot.name,
+                robot.geometry_fingerprint()
+            )),
+            "{name}"
+        );
+    }
+    // Text output, with a bracket and dead weights.
+    let out = dir.join("bracket.csv");
+    let run = deflex(&[
+        "plan",
+        "--robot",
+        "tx200",
+        "--full-family",
+        "--bracket-m",
+        "0.2,0,0.1",
+        "--load",
+        "dead-weight",
+        "--masses-kg",
+        "80,140",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert!(
+        run.stdout.contains("dead weight 140 kg at BR")
+            || run.stdout.contains("dead weight 80 kg at BR"),
+        "{}",
+        run.stdout
+    );
+    assert!(
+        run.stdout.contains("floor at z = -0.642 m"),
+        "{}",
+        run.stdout
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The calibration report holds the plots; JSON says when χ²/dof is well above 1.
+#[test]
+fn calibrate_writes_a_report_with_plots_and_flags_a_high_chi2() {
+    let dir = folder("report");
+    let data = dir.join("meas.csv");
+    let robot = builtin("tx200").unwrap();
+    let mut rows = campaign(&robot, 1400.0, &data);
+    // Claim 3 µm where the noise is 15 µm: χ²/dof ≈ 25.
+    for r in &mut rows {
+        r.sigma_m = Some(3e-6);
+    }
+    write_rows_for(&data, &robot, &rows, &[]).unwrap();
+    let model = dir.join("m.toml");
+    let report = dir.join("report");
+    let run = deflex(&[
+        "--json",
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--out",
+        s(&model),
+        "--report",
+        s(&report),
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(v["chi2_well_above_one"], true, "{}", v["reduced_chi2"]);
+    assert!(
+        v["model_form_note"]
+            .as_str()
+            .unwrap()
+            .contains("well above 1")
+    );
+    for name in [
+        "calibration.html",
+        "residuals_per_load_case.png",
+        "parity_z.png",
+        "correlation.png",
+        "shifts.csv",
+    ] {
+        assert!(report.join(name).exists(), "{name}");
+    }
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&data),
+        "--out",
+        s(&model),
+    ]);
+    assert!(run.stdout.contains("well above 1"), "{}", run.stdout);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The simulated campaign names the robot the twin played; a UR10e plan measured on the twin
+/// keeps the UR10e's coordinates, so the TX200's model refuses the file.
+#[test]
+fn simulated_campaigns_carry_their_robot() {
+    let dir = folder("sim");
+    let plan = dir.join("plan_ur.csv");
+    let run = deflex(&[
+        "plan",
+        "--robot",
+        "ur10e",
+        "--out",
+        s(&plan),
+        "--load-cases",
+        "8",
+        "--configurations",
+        "200",
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let meas = dir.join("meas_ur.csv");
+    let run = deflex(&["sim", "campaign", "--plan", s(&plan), "--out", s(&meas)]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let text = std::fs::read_to_string(&meas).unwrap();
+    let mut lines = text.lines();
+    assert!(lines.next().unwrap().starts_with("# SIMULATED"));
+    assert!(lines.next().unwrap().starts_with("# robot: "));
+    assert!(lines.next().unwrap().starts_with("# geometry: "));
+    let run = deflex(&[
+        "calibrate",
+        "--robot",
+        "tx200",
+        "--data",
+        s(&meas),
+        "--out",
+        s(&dir.join("m.toml")),
+    ]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(
+        run.stderr.contains("mm from the TCP its joint values give"),
+        "{}",
+        run.stderr
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
