@@ -20,18 +20,58 @@ fn unique_suffix() -> String {
     format!("{}-{n}", std::process::id())
 }
 
-/// The temporary sibling `.<name>.tmp-<pid>-<n>` of `path` (same folder, so rename is atomic).
-fn temporary_sibling(path: &Path) -> io::Result<PathBuf> {
-    let name = path.file_name().ok_or_else(|| {
+/// The temporary sibling of `path` in the same folder (so rename is atomic):
+/// `.<name>.tmp-<pid>-<n>`, or `.<stem>.tmp-<pid>-<n>.<ext>` with `keep_extension` (for writers
+/// that choose the format from the extension).
+fn temporary_sibling(path: &Path, keep_extension: bool) -> io::Result<PathBuf> {
+    let base = if keep_extension {
+        path.file_stem()
+    } else {
+        path.file_name()
+    };
+    let base = base.ok_or_else(|| {
         io::Error::new(
             io::ErrorKind::InvalidInput,
             format!("{}: not a file name", path.display()),
         )
     })?;
-    let mut temp_name = std::ffi::OsString::from(".");
-    temp_name.push(name);
-    temp_name.push(format!(".tmp-{}", unique_suffix()));
-    Ok(path.with_file_name(temp_name))
+    let mut name = std::ffi::OsString::from(".");
+    name.push(base);
+    name.push(format!(".tmp-{}", unique_suffix()));
+    if let (true, Some(extension)) = (keep_extension, path.extension()) {
+        name.push(".");
+        name.push(extension);
+    }
+    Ok(path.with_file_name(name))
+}
+
+/// Let `write` produce the file `path` through a temporary sibling with the same extension (for
+/// writers that take a path, such as image encoders), renamed over `path` when `write`
+/// succeeds and removed when it fails. `io_error` turns a rename failure into the caller's
+/// error type.
+pub fn write_through<T, E>(
+    path: impl AsRef<Path>,
+    write: impl FnOnce(&Path) -> Result<T, E>,
+    io_error: impl FnOnce(io::Error) -> E,
+) -> Result<T, E> {
+    let path = path.as_ref();
+    let temporary = match temporary_sibling(path, true) {
+        Ok(t) => t,
+        Err(e) => return Err(io_error(e)),
+    };
+    match write(&temporary) {
+        Ok(value) => match fs::rename(&temporary, path) {
+            Ok(()) => Ok(value),
+            Err(e) => {
+                let _ = fs::remove_file(&temporary);
+                Err(io_error(e))
+            }
+        },
+        Err(e) => {
+            let _ = fs::remove_file(&temporary);
+            Err(e)
+        }
+    }
 }
 
 /// Write `contents` to `path` whole or not at all (temporary sibling, flush, rename). The parent
@@ -55,7 +95,7 @@ impl AtomicFile {
     /// Start writing `path` (through a temporary sibling). The parent folder must exist.
     pub fn create(path: impl AsRef<Path>) -> io::Result<AtomicFile> {
         let destination = path.as_ref().to_path_buf();
-        let temporary = temporary_sibling(&destination)?;
+        let temporary = temporary_sibling(&destination, false)?;
         let file = File::create(&temporary)?;
         Ok(AtomicFile {
             destination,
@@ -127,7 +167,7 @@ impl AtomicDir {
                 format!("{}: exists and is not a folder", destination.display()),
             ));
         }
-        let temporary = temporary_sibling(&destination)?;
+        let temporary = temporary_sibling(&destination, false)?;
         fs::create_dir(&temporary)?;
         Ok(AtomicDir {
             destination,
@@ -151,7 +191,7 @@ impl AtomicDir {
     /// are not kept.
     pub fn commit(mut self) -> io::Result<()> {
         let old = if self.destination.exists() {
-            let aside = temporary_sibling(&self.destination)?;
+            let aside = temporary_sibling(&self.destination, false)?;
             fs::rename(&self.destination, &aside)?;
             Some(aside)
         } else {
@@ -235,6 +275,29 @@ mod tests {
         building.commit().unwrap();
         assert_eq!(entries(&out), vec!["b.csv"]);
         assert_eq!(entries(&dir), vec!["report"]);
+        fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn write_through_keeps_the_extension_and_cleans_up_on_failure() {
+        let dir = scratch("through");
+        let path = dir.join("plot.png");
+        fs::write(&path, "old").unwrap();
+        let failed: Result<(), String> = write_through(
+            &path,
+            |tmp| {
+                assert_eq!(tmp.extension().unwrap(), "png");
+                fs::write(tmp, "half").unwrap();
+                Err("drawing failed".into())
+            },
+            |e| e.to_string(),
+        );
+        assert!(failed.is_err());
+        assert_eq!(fs::read_to_string(&path).unwrap(), "old");
+        assert_eq!(entries(&dir), vec!["plot.png"]);
+        write_through(&path, |tmp| fs::write(tmp, "new"), |e| e).unwrap();
+        assert_eq!(fs::read_to_string(&path).unwrap(), "new");
+        assert_eq!(entries(&dir), vec!["plot.png"]);
         fs::remove_dir_all(dir).unwrap();
     }
 
