@@ -157,7 +157,8 @@ pub(crate) fn num(value: f64, decimals: usize) -> String {
 }
 
 /// Comment text safe for every controller: printable ASCII only (a few common symbols are
-/// spelled out, anything else becomes `?`), without the characters in `forbidden`, at most
+/// spelled out, anything else becomes `?`), without the characters in `forbidden` (brackets
+/// become `[ ]`, `&` `+`, `-` `_`), at most
 /// [`MAX_COMMENT_LEN`] characters.
 pub(crate) fn comment_text(text: &str, forbidden: &[char]) -> String {
     let mut out = String::with_capacity(text.len());
@@ -178,11 +179,16 @@ pub(crate) fn comment_text(text: &str, forbidden: &[char]) -> String {
             '≥' => ">=",
             '±' => "+/-",
             'δ' => "d",
+            'Δ' => "D",
             'Ø' => "D",
             c if (' '..='~').contains(&c) && !forbidden.contains(&c) => {
                 out.push(c);
                 continue;
             }
+            '(' | '<' => "[",
+            ')' | '>' => "]",
+            '&' => "+",
+            '-' => "_",
             _ => "?",
         };
         out.push_str(replacement);

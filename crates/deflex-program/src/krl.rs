@@ -29,6 +29,13 @@
 //! * The first motion is a slow `PTP` to the first point (axis speed `BAS(#VEL_PTP, …)`), given
 //!   as a frame without Status/Turn: the controller keeps the current configuration, so start
 //!   the program near the path (as with any CAM program).
+//! * Angles stay in KUKA's display ranges (A, C ∈ (−180°, 180°], B ∈ [−90°, 90°]), so a tool
+//!   pointing down (A ≈ C ≈ ±180°) may print A = 180 at one point and −179.99999 at the next:
+//!   the same rotation. KUKA's `LIN` interpolates the orientation as a rotation, not the three
+//!   angles one by one (the angles are coupled, a point noted by integrators, e.g.
+//!   <https://industrialmonitordirect.com/blogs/knowledgebase/resolving-kuka-lin-rel-unwanted-axis-tilt-during-rotation>);
+//!   at B = ±90° exactly KUKA itself sets A = 0, as [`crate::orientation::kuka_abc_deg`] does
+//!   without a previous point.
 //! * Positions are written inline in the `.src`, as CAM post-processors do for long paths, rather
 //!   than as one `E6POS` declaration per point in the `.dat`; the `.dat` holds the settings.
 
