@@ -115,13 +115,11 @@ impl FormingProcess {
             (f - c.force_n, p, c)
         };
         let (mut a, mut ga) = (0.0, -free.force_n);
-        let mut b = free.force_n;
-        let (mut gb, mut pb, mut cb) = eval(b);
-        if gb <= 0.0 {
-            return (unit * b, pb, cb);
-        }
+        // Warm start from the previous point's force (the force changes little between
+        // neighbouring points): often the answer, otherwise a bound.
+        let mut upper = None;
         let guess = self.last_force;
-        if guess > a && guess < b {
+        if guess > 0.0 && guess < free.force_n {
             let (g, p, c) = eval(guess);
             if g.abs() < FORCE_TOLERANCE_N {
                 return (unit * guess, p, c);
@@ -129,9 +127,19 @@ impl FormingProcess {
             if g < 0.0 {
                 (a, ga) = (guess, g);
             } else {
-                (b, gb, pb, cb) = (guess, g, p, c);
+                upper = Some((guess, g, p, c));
             }
         }
+        let (mut b, mut gb, mut pb, mut cb) = match upper {
+            Some(bound) => bound,
+            None => {
+                let (g, p, c) = eval(free.force_n);
+                if g <= 0.0 {
+                    return (unit * free.force_n, p, c);
+                }
+                (free.force_n, g, p, c)
+            }
+        };
         let mut side = 0i8;
         for _ in 0..60 {
             let x = (a * gb - b * ga) / (gb - ga);
