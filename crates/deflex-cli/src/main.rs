@@ -4,6 +4,7 @@ mod args;
 mod cell_server;
 mod closed_loop;
 mod cmd_calib;
+mod cmd_compensate;
 mod cmd_control;
 mod cmd_demo;
 mod cmd_model;
@@ -60,6 +61,8 @@ enum Command {
         #[command(subcommand)]
         command: cmd_sim::SimCommand,
     },
+    /// Compensate a tool path offline and write robot programs (no real-time option needed).
+    Compensate(cmd_compensate::CompensateArgs),
     /// Run the real-time correction controller against a robot and a force sensor.
     Run(cmd_control::RunArgs),
     /// Serve the simulated cell over the robot and sensor protocols on loopback.
@@ -81,6 +84,7 @@ fn main() -> ExitCode {
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
         Command::Plan(args) => cmd_calib::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
+        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cell_server::cell(args, cli.json),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),

@@ -49,6 +49,7 @@ pub mod forming;
 pub mod gcode;
 pub mod plant;
 mod plots;
+pub mod process_model;
 pub mod sensor;
 pub mod sheet;
 pub mod toolpath;
@@ -58,4 +59,5 @@ pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSamp
 pub use config::CellConfig;
 pub use error::SimError;
 pub use forming::{FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress};
+pub use process_model::{FormingProcess, tcp_path, tool_path_by_name};
 pub use toolpath::{ConeParams, PyramidParams, ToolPath, Waypoint};

@@ -1,0 +1,249 @@
+//! What every exporter shares: checking the input against the settings' bounds, speeds, number
+//! formatting, comment text and the line-length check of the result.
+
+use crate::error::ProgramError;
+use crate::settings::ProgramSettings;
+use crate::{ProgramInput, ProgramPoint};
+use nalgebra::Vector3;
+
+/// Longest line any exporter writes (characters). A KRL `LIN` with six values is about 100, a
+/// RAPID `MoveL` with an inline robtarget about 170.
+pub const MAX_LINE_LEN: usize = 250;
+
+/// Largest |coordinate| accepted (m): no robot cell is 100 m across.
+pub const MAX_COORDINATE_M: f64 = 100.0;
+
+/// Longest comment line (characters, after the comment marker).
+pub const MAX_COMMENT_LEN: usize = 160;
+
+/// Largest number of header comment lines.
+pub const MAX_COMMENT_LINES: usize = 40;
+
+/// A checked point: position in mm, rotation, speed in mm/s (capped), rapid flag.
+#[derive(Clone, Debug)]
+pub(crate) struct Checked {
+    pub position_mm: Vector3<f64>,
+    pub rotation: nalgebra::Rotation3<f64>,
+    pub speed_mm_s: f64,
+    pub rapid: bool,
+}
+
+/// Check the point count and every value; cap the speeds.
+pub(crate) fn check_points(
+    format: &'static str,
+    input: &ProgramInput,
+    settings: &ProgramSettings,
+) -> Result<Vec<Checked>, ProgramError> {
+    let max = settings.program.max_points;
+    if input.points.is_empty() || input.points.len() > max {
+        return Err(ProgramError::PointCount {
+            format,
+            points: input.points.len(),
+            max,
+        });
+    }
+    for (which, pose) in [
+        ("frame", &input.frame_in_robot),
+        ("tool", &input.tool_in_flange),
+    ] {
+        check_pose(pose).map_err(|(field, value, limit)| ProgramError::BadFrame {
+            format,
+            which,
+            field,
+            value,
+            limit,
+        })?;
+    }
+    input
+        .points
+        .iter()
+        .enumerate()
+        .map(|(index, point)| check_point(format, index, point, settings))
+        .collect()
+}
+
+/// A pose's bad value as `(field, value, bound)`.
+type PoseFault = (&'static str, f64, f64);
+
+fn check_pose(pose: &crate::Pose) -> Result<(), PoseFault> {
+    let t = pose.translation.vector;
+    for (field, value) in [("x_m", t.x), ("y_m", t.y), ("z_m", t.z)] {
+        if !(value.is_finite() && value.abs() <= MAX_COORDINATE_M) {
+            return Err((field, value, MAX_COORDINATE_M));
+        }
+    }
+    let m = pose.rotation.matrix();
+    let deviation = (m.transpose() * m - nalgebra::Matrix3::identity()).amax();
+    if !(deviation < 1e-6 && (m.determinant() - 1.0).abs() < 1e-6) {
+        return Err(("rotation (orthonormality error)", deviation, 1e-6));
+    }
+    Ok(())
+}
+
+fn check_point(
+    format: &'static str,
+    index: usize,
+    point: &ProgramPoint,
+    settings: &ProgramSettings,
+) -> Result<Checked, ProgramError> {
+    check_pose(&point.pose).map_err(|(field, value, limit)| ProgramError::BadValue {
+        format,
+        index,
+        field,
+        value,
+        limit,
+    })?;
+    let speed_mm_s = match point.speed_m_s {
+        Some(v) if v.is_finite() && v > 0.0 && v <= 10.0 => {
+            (v * 1e3).min(settings.program.max_speed_mm_s)
+        }
+        Some(v) => {
+            return Err(ProgramError::BadValue {
+                format,
+                index,
+                field: "speed_m_s",
+                value: v,
+                limit: 10.0,
+            });
+        }
+        None => settings.program.rapid_speed_mm_s,
+    };
+    Ok(Checked {
+        position_mm: point.pose.translation.vector * 1e3,
+        rotation: point.pose.rotation,
+        speed_mm_s,
+        rapid: point.speed_m_s.is_none(),
+    })
+}
+
+/// Distinct speeds (mm/s, rounded to 0.01) in order of first use, and each point's index into
+/// them. At most `max` distinct speeds.
+pub(crate) fn speed_table(
+    format: &'static str,
+    points: &[Checked],
+    max: usize,
+) -> Result<(Vec<f64>, Vec<usize>), ProgramError> {
+    let mut speeds: Vec<f64> = Vec::new();
+    let mut index = Vec::with_capacity(points.len());
+    for p in points {
+        let v = (p.speed_mm_s * 100.0).round() / 100.0;
+        let k = match speeds.iter().position(|s| *s == v) {
+            Some(k) => k,
+            None => {
+                speeds.push(v);
+                if speeds.len() > max {
+                    return Err(ProgramError::TooManySpeeds {
+                        format,
+                        count: speeds.len(),
+                        max,
+                    });
+                }
+                speeds.len() - 1
+            }
+        };
+        index.push(k);
+    }
+    Ok((speeds, index))
+}
+
+/// `value` with `decimals` decimals, never `-0.000`.
+pub(crate) fn num(value: f64, decimals: usize) -> String {
+    let s = format!("{value:.decimals$}");
+    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+/// Comment text safe for every controller: printable ASCII only (a few common symbols are
+/// spelled out, anything else becomes `?`), without the characters in `forbidden` (brackets
+/// become `[ ]`, `&` `+`, `-` `_`), at most
+/// [`MAX_COMMENT_LEN`] characters.
+pub(crate) fn comment_text(text: &str, forbidden: &[char]) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        let replacement: &str = match c {
+            'ä' | 'à' | 'â' => "a",
+            'é' | 'è' | 'ê' | 'ë' => "e",
+            'ö' | 'ô' => "o",
+            'ü' | 'ù' | 'û' => "u",
+            'Ä' => "A",
+            'Ö' => "O",
+            'Ü' => "U",
+            'µ' | 'μ' => "u",
+            '°' => " deg",
+            '×' | '·' => "x",
+            '—' | '–' | '−' => "-",
+            '≤' => "<=",
+            '≥' => ">=",
+            '±' => "+/-",
+            'δ' => "d",
+            'Δ' => "D",
+            'Ø' => "D",
+            c if (' '..='~').contains(&c) && !forbidden.contains(&c) => {
+                out.push(c);
+                continue;
+            }
+            '(' | '<' => "[",
+            ')' | '>' => "]",
+            '&' => "+",
+            '-' => "_",
+            _ => "?",
+        };
+        out.push_str(replacement);
+    }
+    out.chars().take(MAX_COMMENT_LEN).collect()
+}
+
+/// The header comment lines: the caller's description (bounded) plus the standard notice.
+pub(crate) fn header_lines(input: &ProgramInput) -> Vec<String> {
+    let mut lines: Vec<String> = input
+        .description
+        .iter()
+        .take(MAX_COMMENT_LINES)
+        .cloned()
+        .collect();
+    lines.push(
+        "Generated by deflex. Not yet run on a real controller: check it in the vendor's".into(),
+    );
+    lines.push("simulator, then on the robot at reduced speed, before production.".into());
+    lines
+}
+
+/// Check every line of a produced file against [`MAX_LINE_LEN`].
+pub(crate) fn check_lines(format: &'static str, text: &str) -> Result<(), ProgramError> {
+    for (i, line) in text.lines().enumerate() {
+        let length = line.chars().count();
+        if length > MAX_LINE_LEN {
+            return Err(ProgramError::LineTooLong {
+                format,
+                line: i + 1,
+                length,
+                max: MAX_LINE_LEN,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Blend (approximation) radius at each point (mm): `blend_mm`, at most 45 % of the shorter of
+/// the two segments meeting there (two neighbouring blends must not overlap), 0 at the last
+/// point (the program ends exactly there).
+pub(crate) fn blend_radii(points: &[Checked], blend_mm: f64) -> Vec<f64> {
+    let n = points.len();
+    (0..n)
+        .map(|i| {
+            if i + 1 >= n || blend_mm <= 0.0 {
+                return 0.0;
+            }
+            let next = (points[i + 1].position_mm - points[i].position_mm).norm();
+            let prev = if i > 0 {
+                (points[i].position_mm - points[i - 1].position_mm).norm()
+            } else {
+                next
+            };
+            blend_mm.min(0.45 * prev.min(next))
+        })
+        .collect()
+}

@@ -1,0 +1,386 @@
+//! The twin's forming model as a process model for offline compensation
+//! (`deflex_compensate::ProcessModel`), SIMULATED. A thin adapter over the public API of
+//! [`crate::sheet::Sheet`]: the compensation gives it, point by point along the path, the
+//! commanded TCP and the robot *model's* compliance there; it finds the quasi-static equilibrium
+//! between that compliance and the sheet (the force at the tool's predicted position, the
+//! predicted position under that force: the same bracketed root find on the vertical force as
+//! the twin's cell, with the model instead of the plant), lets the sheet flow there, and returns
+//! the contact wrench. A tool commanded deeper pushes harder, which is why the compensation
+//! iterates.
+//!
+//! The path's waypoints can be far apart (5° on the cone, 1.3 mm); the sheet is stored on 1°
+//! rays, so between two points the adapter walks the commanded segment in steps of at most
+//! [`FormingProcess::max_step_m`] and forms the sheet at each step, returning the wrench at the
+//! point itself.
+//!
+//! With the default [`crate::sheet::SheetConfig`] the process model *is* the twin's forming law:
+//! an optimistic assumption that a real process model (FE, Aerens' formula, a previous run) does
+//! not meet. Pass another `SheetConfig` to study a mismatched model.
+//!
+//! Also here: [`tcp_path`] (a [`ToolPath`] in the part frame → a `TcpPath` in the world, tool
+//! orientation fixed) and [`tool_path_by_name`] (the built-in paths or a G-code file).
+
+use crate::config::CellConfig;
+use crate::error::SimError;
+use crate::sheet::{ContactState, Sheet, SheetConfig};
+use crate::toolpath::{ConeParams, PyramidParams, ToolPath};
+use deflex_compensate::{ProcessError, ProcessModel, ProcessPoint, TcpPath};
+use deflex_model::{Pose, Wrench};
+use nalgebra::{Matrix6, Rotation3, Vector3};
+
+/// The equilibrium's force tolerance (N): 0.05 N moves the predicted tool by about 0.1 nm on
+/// the TX200 (compliance ≈ 2.5 µm/N), far below the compensation's tolerance.
+pub const FORCE_TOLERANCE_N: f64 = 0.05;
+
+/// Most sub-steps between two path points (a longer segment is walked in longer steps).
+pub const MAX_SUBSTEPS: usize = 100_000;
+
+/// The forming process of the twin as a process model (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct FormingProcess {
+    flat: Sheet,
+    sheet: Sheet,
+    part: Pose,
+    feed_ratio: f64,
+    /// Longest step between sheet updates along a segment (m).
+    pub max_step_m: f64,
+    previous: Option<Vector3<f64>>,
+    last_force: f64,
+}
+
+impl FormingProcess {
+    /// A flat sheet for `path` (its step-down and wall angle set the Aerens level, as in the
+    /// twin), the part frame in the world, sheet updates every `max_step_m` at most.
+    pub fn new(
+        sheet: &SheetConfig,
+        path: &ToolPath,
+        part_frame: &Pose,
+        max_step_m: f64,
+    ) -> Result<FormingProcess, SimError> {
+        if !(max_step_m.is_finite() && (1e-6..=0.01).contains(&max_step_m)) {
+            return Err(SimError::config(
+                "process.max_step_m",
+                format!("expected 1e-6 ..= 0.01 m, got {max_step_m}"),
+            ));
+        }
+        let flat = Sheet::new(
+            sheet,
+            path.step_down_mm.unwrap_or(sheet.default_step_down_mm),
+            path.wall_angle_deg.unwrap_or(sheet.default_wall_angle_deg),
+        )?;
+        Ok(FormingProcess {
+            sheet: flat.clone(),
+            flat,
+            part: *part_frame,
+            feed_ratio: sheet.feed_ratio,
+            max_step_m,
+            previous: None,
+            last_force: 0.0,
+        })
+    }
+
+    /// The twin's own sheet and part placement (`config.sheet`, `config.part`), steps of 0.1 mm.
+    pub fn from_cell(config: &CellConfig, path: &ToolPath) -> Result<FormingProcess, SimError> {
+        FormingProcess::new(&config.sheet, path, &config.part_frame(), 1e-4)
+    }
+
+    /// Steady-state (Aerens) force level of this sheet (N).
+    pub fn steady_force_n(&self) -> f64 {
+        self.flat.steady_force_n()
+    }
+
+    /// Quasi-static equilibrium at commanded position `p_cmd` (part frame) with compliance
+    /// `compliance` (part axes): the vertical force `F = min(k δ(p(F)), F_flow(p(F)))`,
+    /// `p(F) = p_cmd + (C · w(F))_p`, by a bracketed regula falsi (Illinois) on the increasing
+    /// `g(F) = F − force(p(F))`, to [`FORCE_TOLERANCE_N`]. Returns the wrench (part axes), the tool's position and the
+    /// contact state there.
+    fn equilibrium(
+        &self,
+        p_cmd: &Vector3<f64>,
+        compliance: &Matrix6<f64>,
+        feed_dir: &Vector3<f64>,
+    ) -> (Wrench, Vector3<f64>, ContactState) {
+        let free = self.sheet.contact(p_cmd);
+        if free.force_n <= 0.0 {
+            return (Wrench::zeros(), *p_cmd, free);
+        }
+        let force = self.sheet.force_vector(p_cmd, 1.0, feed_dir, free.depth_m);
+        let friction = -feed_dir * self.feed_ratio;
+        let moment = Vector3::new(0.0, 0.0, -self.sheet.tool_radius_m()).cross(&friction);
+        let unit = Wrench::new(force.x, force.y, force.z, moment.x, moment.y, moment.z);
+        let unit_shift = (compliance * unit).fixed_rows::<3>(0).into_owned();
+        let eval = |f: f64| -> (f64, Vector3<f64>, ContactState) {
+            let p = p_cmd + unit_shift * f;
+            let c = self.sheet.contact(&p);
+            (f - c.force_n, p, c)
+        };
+        let (mut a, mut ga) = (0.0, -free.force_n);
+        // Warm start from the previous point's force (the force changes little between
+        // neighbouring points): often the answer, otherwise a bound.
+        let mut upper = None;
+        let guess = self.last_force;
+        if guess > 0.0 && guess < free.force_n {
+            let (g, p, c) = eval(guess);
+            if g.abs() < FORCE_TOLERANCE_N {
+                return (unit * guess, p, c);
+            }
+            if g < 0.0 {
+                (a, ga) = (guess, g);
+            } else {
+                upper = Some((guess, g, p, c));
+            }
+        }
+        let (mut b, mut gb, mut pb, mut cb) = match upper {
+            Some(bound) => bound,
+            None => {
+                let (g, p, c) = eval(free.force_n);
+                if g <= 0.0 {
+                    return (unit * free.force_n, p, c);
+                }
+                (free.force_n, g, p, c)
+            }
+        };
+        let mut side = 0i8;
+        for _ in 0..60 {
+            let x = (a * gb - b * ga) / (gb - ga);
+            let (g, p, c) = eval(x);
+            if g.abs() < FORCE_TOLERANCE_N || (b - a) < 1e-6 {
+                return (unit * x, p, c);
+            }
+            if g < 0.0 {
+                (a, ga) = (x, g);
+                if side == -1 {
+                    gb *= 0.5;
+                }
+                side = -1;
+            } else {
+                (b, gb, pb, cb) = (x, g, p, c);
+                if side == 1 {
+                    ga *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        (unit * b, pb, cb)
+    }
+}
+
+impl ProcessModel for FormingProcess {
+    fn name(&self) -> String {
+        format!(
+            "twin forming model (SIMULATED): Aerens level {:.0} N",
+            self.flat.steady_force_n()
+        )
+    }
+
+    fn simulated(&self) -> bool {
+        true
+    }
+
+    fn begin_pass(&mut self) {
+        self.sheet.clone_from(&self.flat);
+        self.previous = None;
+        self.last_force = 0.0;
+    }
+
+    fn wrench(&mut self, point: &ProcessPoint) -> Result<Wrench, ProcessError> {
+        let r = self.part.rotation;
+        let to_part = r.inverse();
+        let p_cmd = to_part * (point.commanded.translation.vector - self.part.translation.vector);
+        if !p_cmd.iter().all(|v| v.is_finite()) {
+            return Err(ProcessError {
+                model: self.name(),
+                index: point.index,
+                message: "commanded position is not finite".into(),
+            });
+        }
+        // The compliance in part axes: blockdiag(Rᵀ, Rᵀ) · C · blockdiag(R, R).
+        let mut rotate = Matrix6::zeros();
+        rotate.fixed_view_mut::<3, 3>(0, 0).copy_from(r.matrix());
+        rotate.fixed_view_mut::<3, 3>(3, 3).copy_from(r.matrix());
+        let compliance = rotate.transpose() * point.compliance * rotate;
+        let mut feed_dir = to_part * point.travel_direction;
+        feed_dir.z = 0.0;
+        let norm = feed_dir.norm();
+        let feed_dir = if norm > 1e-9 {
+            feed_dir / norm
+        } else {
+            Vector3::zeros()
+        };
+        let start = self.previous.unwrap_or(p_cmd);
+        let length = (p_cmd - start).norm();
+        let steps = ((length / self.max_step_m).ceil() as usize).clamp(1, MAX_SUBSTEPS);
+        let mut wrench = Wrench::zeros();
+        for k in 1..=steps {
+            let p = start + (p_cmd - start) * (k as f64 / steps as f64);
+            let (w, p_true, contact) = self.equilibrium(&p, &compliance, &feed_dir);
+            self.sheet.form(&p_true, &contact);
+            self.last_force = w[2];
+            wrench = w;
+        }
+        self.previous = Some(p_cmd);
+        let f = r * Vector3::new(wrench[0], wrench[1], wrench[2]);
+        let m = r * Vector3::new(wrench[3], wrench[4], wrench[5]);
+        Ok(Wrench::new(f.x, f.y, f.z, m.x, m.y, m.z))
+    }
+}
+
+/// A tool path (part frame, mm) as TCP poses in the world: each waypoint placed with the part
+/// frame, the tool held at `tool_rotation` (the twin holds the orientation of its seed
+/// configuration); feeds in m/s, rapids at `rapid_feed_mm_s`.
+pub fn tcp_path(
+    path: &ToolPath,
+    part_frame: &Pose,
+    tool_rotation: &Rotation3<f64>,
+    rapid_feed_mm_s: f64,
+) -> Result<TcpPath, SimError> {
+    path.validate()?;
+    let poses = path.waypoints.iter().map(|w| {
+        let p = part_frame * nalgebra::Point3::from(Vector3::from(w.p_mm) * 1e-3);
+        (
+            Pose::from_parts(p.coords.into(), *tool_rotation),
+            w.feed_mm_s.map(|f| f * 1e-3),
+        )
+    });
+    TcpPath::new(&path.name, poses, rapid_feed_mm_s * 1e-3)
+        .map_err(|e| SimError::Path(e.to_string()))
+}
+
+/// A built-in path by name (`cone`: the paper's helical cone, `cone-contour`, `pyramid`) or a
+/// G-code file.
+pub fn tool_path_by_name(spec: &str) -> Result<ToolPath, SimError> {
+    match spec {
+        "cone" => Ok(ToolPath::paper_cone()),
+        "cone-contour" => ToolPath::cone(&ConeParams {
+            helical: false,
+            ..ConeParams::default()
+        }),
+        "pyramid" => ToolPath::pyramid(&PyramidParams::default()),
+        file => crate::gcode::read_gcode(std::path::Path::new(file)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use deflex_compensate::{CompensationOptions, WrenchSource, compensate};
+
+    fn seed() -> Vec<f64> {
+        CellConfig::default().seed_q_rad().to_vec()
+    }
+
+    fn setup(length_mm: f64) -> (deflex_model::Robot, ToolPath, TcpPath, CellConfig) {
+        let config = CellConfig::default();
+        let robot = config.nominal_robot().unwrap();
+        let path = ToolPath::paper_cone().truncated(length_mm);
+        let rotation = robot.tcp_pose(&seed()).unwrap().rotation;
+        let tcp = tcp_path(
+            &path,
+            &config.part_frame(),
+            &rotation,
+            config.controller.rapid_feed_mm_s,
+        )
+        .unwrap();
+        (robot, path, tcp, config)
+    }
+
+    #[test]
+    fn the_compensation_converges_on_the_cone_and_pushes_harder() {
+        let (robot, path, tcp, config) = setup(700.0);
+        let mut process = FormingProcess::from_cell(&config, &path).unwrap();
+        let result = compensate(
+            &robot,
+            &tcp,
+            &seed(),
+            WrenchSource::Process(&mut process),
+            &CompensationOptions::default(),
+            &mut |_| {},
+        )
+        .unwrap();
+        assert!(result.simulated);
+        assert!(result.converged, "{:?}", result.iterations);
+        assert_eq!(result.failure_count(), 0);
+        let first = &result.iterations[0];
+        // Uncompensated, the model predicts a path error of the order of the deflection.
+        assert!(first.max_predicted_error_m > 0.3e-3, "{first:?}");
+        assert!(
+            result.final_max_error_m < 2e-6,
+            "{}",
+            result.final_max_error_m
+        );
+        // The compensated tool reaches the programmed depth: the force rises towards the
+        // flow level, above the uncompensated one (a deeper tool pushes harder).
+        assert!(result.final_max_force_n > first.max_force_n, "{result:?}");
+        assert!(result.final_max_force_n <= process.steady_force_n() * 1.5);
+        // The compensation points into the sheet (down) where the tool is pushed up.
+        let deepest = result
+            .points
+            .iter()
+            .map(|p| p.compensation[2])
+            .fold(0.0, f64::min);
+        assert!(deepest < -0.3e-3, "{deepest}");
+    }
+
+    #[test]
+    fn the_equilibrium_holds_at_the_returned_force() {
+        // Uncompensated command (x = 0): the returned force equals the sheet's contact force at
+        // the tool's predicted position p_cmd + (C w)_p, within the root find's tolerance.
+        let (robot, path, tcp, config) = setup(300.0);
+        let mut process = FormingProcess::from_cell(&config, &path).unwrap();
+        let mut data = deflex_model::Data::new();
+        let q = robot
+            .inverse_kinematics(&tcp.points()[0].pose, &seed(), &Default::default())
+            .unwrap()
+            .q;
+        robot.forward_kinematics(&mut data, &q).unwrap();
+        let compliance = robot.compliance_matrix(&data);
+        process.begin_pass();
+        let mut checked = 0;
+        for (i, point) in tcp.points().iter().enumerate() {
+            let w = process
+                .wrench(&ProcessPoint {
+                    index: i,
+                    arc_length_m: point.arc_length_m,
+                    desired: &point.pose,
+                    commanded: &point.pose,
+                    compliance: &compliance,
+                    travel_direction: tcp.travel_direction(i),
+                    rapid: point.feed_m_s.is_none(),
+                })
+                .unwrap();
+            if w[2] > 100.0 {
+                let p = point.pose.translation.vector - config.part_frame().translation.vector
+                    + (compliance * w).fixed_rows::<3>(0);
+                // After forming, the surface sits at the tool minus the springback: the elastic
+                // force there is the returned force.
+                let c = process.sheet.contact(&p);
+                assert!(
+                    (c.force_n - w[2]).abs() < 0.5,
+                    "point {i}: {} vs {}",
+                    c.force_n,
+                    w[2]
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 50, "{checked}");
+    }
+
+    #[test]
+    fn paths_are_placed_in_the_world_and_named_paths_resolve() {
+        let config = CellConfig::default();
+        let rotation = Rotation3::identity();
+        let path = ToolPath::paper_cone();
+        let tcp = tcp_path(&path, &config.part_frame(), &rotation, 50.0).unwrap();
+        assert_eq!(tcp.len(), path.waypoints.len());
+        let first = tcp.points()[0].pose.translation.vector;
+        assert!((first - Vector3::new(1.52, 0.0, -0.183)).norm() < 1e-12);
+        assert!((tcp.length_m() - path.length_mm() * 1e-3).abs() < 1e-9);
+        assert!((tcp.duration_s() - path.duration_s(50.0)).abs() < 1e-6);
+        for name in ["cone", "cone-contour", "pyramid"] {
+            assert!(tool_path_by_name(name).is_ok(), "{name}");
+        }
+        assert!(tool_path_by_name("/nonexistent.gcode").is_err());
+        assert!(FormingProcess::new(&config.sheet, &path, &config.part_frame(), 0.0).is_err());
+    }
+}
