@@ -677,10 +677,16 @@ mod tests {
         assert_eq!(
             deflex_compensate::log::RUN_LOG_SKIP_FLAGS,
             Flags::FORCE_OVER_LIMIT
+                | Flags::TORQUE_OVER_LIMIT
                 | Flags::SENSOR_TIMEOUT
+                | Flags::SENSOR_STATUS
                 | Flags::ROBOT_LINK_LOST
                 | Flags::NON_FINITE
-                | Flags::OUT_OF_RANGE
+                | Flags::SENSOR_OVER_RANGE
+                | Flags::JOINT_OUT_OF_LIMITS
+                | Flags::JOINT_JUMP
+                | Flags::JOINT_COUNT_MISMATCH
+                | Flags::CONTACT_RUNAWAY
                 | Flags::LATCHED
                 | Flags::TARING
                 | Flags::STALE_WRENCH

@@ -41,9 +41,10 @@ use std::path::Path;
 pub const MAX_LOG_BYTES: u64 = 1 << 30;
 /// Largest number of rows read.
 pub const MAX_LOG_ROWS: usize = 20_000_000;
-/// `deflex run` flag bits whose rows are skipped: the five fault bits, latched, taring and
-/// stale wrench (`deflex_control::safety::Flags`).
-pub const RUN_LOG_SKIP_FLAGS: u32 = 0x1F | (1 << 8) | (1 << 13) | (1 << 14);
+/// `deflex run` flag bits whose rows are skipped: the eleven fault bits, latched, taring and
+/// stale wrench (`deflex_control::safety::Flags`; a test in deflex-cli checks the bits against
+/// it, since this crate does not depend on the controller).
+pub const RUN_LOG_SKIP_FLAGS: u32 = 0x7FF | (1 << 16) | (1 << 21) | (1 << 22);
 
 /// Which program wrote the log.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
