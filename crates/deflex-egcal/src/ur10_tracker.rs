@@ -370,10 +370,10 @@ mod tests {
         assert!((rows[0].position_m[1] + 1.3685474).abs() < 1e-12);
         // std: RMS of (0.03, 0, 0) mm.
         assert!((rows[0].sigma_m.unwrap() - 0.03e-3 / 3f64.sqrt()).abs() < 1e-15);
-        // Intrinsic X-Y-Z 90°, 0, 90°: R = Rx(90°)·Rz(90°), by hand: columns (0,1,0), (0,0,1), (1,0,0).
+        // Intrinsic X-Y-Z 90°, 0, 90°: R = Rx(90°)·Rz(90°), by hand rows (0,-1,0), (0,0,-1), (1,0,0).
         let v = rows[0].orientation.unwrap().rotation_vector_rad;
         let r = Rotation3::from_scaled_axis(Vector3::from(v));
-        let expected = nalgebra::Matrix3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+        let expected = nalgebra::Matrix3::new(0.0, -1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 0.0);
         assert!((r.matrix() - expected).abs().max() < 1e-12, "{r}");
         assert_eq!(rows[0].time_s, Some(1_594_744_744.0));
         assert_eq!(rows[1].time_s, None);
