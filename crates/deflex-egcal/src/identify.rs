@@ -18,9 +18,9 @@ use crate::params::{EgModel, Param, ParamGroup};
 use nalgebra::{DMatrix, DVector};
 
 /// Relative length below which a scaled column counts as a combination of the kept ones.
-pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+pub const DEFAULT_TOLERANCE: f64 = 1e-3;
 /// Kept parameters whose independent part is below this are flagged as weakly identifiable.
-pub const WEAK_THRESHOLD: f64 = 1e-3;
+pub const WEAK_THRESHOLD: f64 = 1e-2;
 
 /// A parameter left at its starting value, and why.
 #[derive(Clone, Debug)]

@@ -20,8 +20,12 @@
 
 pub mod campaign;
 pub mod data;
+pub mod fit;
 pub mod identify;
 pub mod model;
 pub mod params;
+pub mod plots;
+pub mod register;
+pub mod report;
 pub mod solve;
 pub mod ur10_tracker;
