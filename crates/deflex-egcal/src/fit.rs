@@ -254,6 +254,8 @@ pub struct FitResult {
     pub reduction: Reduction,
     /// Estimates of the final step's identifiable parameters.
     pub estimates: Vec<Estimate>,
+    /// Covariance of the estimates (same order), scaled by the residual.
+    pub covariance: DMatrix<f64>,
     /// χ²/dof of the final fit with the stated σ (absolute and loaded readings together).
     pub chi2_per_dof: f64,
     /// Plain warning when χ²/dof ≫ 1.
@@ -665,6 +667,7 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         start: start.clone(),
         reduction,
         estimates,
+        covariance,
         chi2_per_dof,
         warning,
         outliers,
