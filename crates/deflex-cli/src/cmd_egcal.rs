@@ -124,7 +124,8 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
         ),
     ];
     let text = format_absolute(&kept, &comments);
-    deflex_files::write_atomic(&args.out, text).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_files::write_atomic(&args.out, text)
+        .map_err(|e| format!("{}: {e}", args.out.display()))?;
     if json_output {
         print_json(&serde_json::json!({
             "file": summary.file.display().to_string(),
@@ -146,7 +147,10 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
             args.target
         );
         if let Some(s) = summary.median_tracker_std_m {
-            println!("tracker standard deviation per reading: median {:.1} µm", s * 1e6);
+            println!(
+                "tracker standard deviation per reading: median {:.1} µm",
+                s * 1e6
+            );
         }
         if let Some([lo, hi]) = summary.temperature_range_c {
             println!("temperature {lo:.2} … {hi:.2} °C");
@@ -186,7 +190,9 @@ fn parse_loss(text: &str) -> Result<Loss, String> {
                 k.parse::<f64>()
                     .ok()
                     .filter(|k| k.is_finite() && (0.1..=100.0).contains(k))
-                    .ok_or_else(|| format!("--loss: threshold \"{k}\" must be a number in 0.1…100"))?,
+                    .ok_or_else(|| {
+                        format!("--loss: threshold \"{k}\" must be a number in 0.1…100")
+                    })?,
             ),
         ),
         None => (text, None),
@@ -195,7 +201,9 @@ fn parse_loss(text: &str) -> Result<Loss, String> {
         "huber" => Ok(Loss::Huber(k.unwrap_or(3.0))),
         "cauchy" => Ok(Loss::Cauchy(k.unwrap_or(2.4))),
         "none" | "squared" => Ok(Loss::Squared),
-        other => Err(format!("--loss: expected huber, cauchy or none, got \"{other}\"")),
+        other => Err(format!(
+            "--loss: expected huber, cauchy or none, got \"{other}\""
+        )),
     }
 }
 
@@ -220,7 +228,8 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let mut all = absolute;
     // Test readings are tagged by a configuration label of their own, so they form their own
     // configurations, which the options below hold out.
-    let test_setups: std::collections::BTreeSet<String> = test.iter().map(|r| r.setup.clone()).collect();
+    let test_setups: std::collections::BTreeSet<String> =
+        test.iter().map(|r| r.setup.clone()).collect();
     all.extend(test);
     let mut model = EgModel::from_robot(&start_robot);
     let campaign = Campaign::new(&mut model, all, loaded).map_err(|e| e.to_string())?;
@@ -245,7 +254,8 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let elapsed = started.elapsed().as_secs_f64();
     let robot_out = result.model.to_robot();
     let toml = deflex_model::robot_to_toml_for(&robot_out, &args.out);
-    deflex_files::write_atomic(&args.out, toml).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_files::write_atomic(&args.out, toml)
+        .map_err(|e| format!("{}: {e}", args.out.display()))?;
     let files = match &args.report {
         Some(dir) => report::write_report(&result, &campaign, dir).map_err(|e| e.to_string())?,
         None => Vec::new(),
@@ -254,11 +264,19 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
         let mut value = report::json(&result, &campaign);
         value["elapsed_s"] = serde_json::json!(elapsed);
         value["out"] = serde_json::json!(args.out.display().to_string());
-        value["report_files"] = serde_json::json!(files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>());
+        value["report_files"] = serde_json::json!(
+            files
+                .iter()
+                .map(|f| f.display().to_string())
+                .collect::<Vec<_>>()
+        );
         print_json(&value);
     } else {
         print!("{}", report::text(&result, &campaign));
-        println!("fit time {elapsed:.2} s; calibrated robot written to {}", args.out.display());
+        println!(
+            "fit time {elapsed:.2} s; calibrated robot written to {}",
+            args.out.display()
+        );
         if let Some(dir) = &args.report {
             println!("report: {}", dir.join("index.html").display());
         }
@@ -269,7 +287,8 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
 pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
     let rows = read_absolute(&args.data, robot.joint_count()).map_err(|e| e.to_string())?;
-    let prediction = report::predict_rows(&robot, rows, args.fit_setup).map_err(|e| e.to_string())?;
+    let prediction =
+        report::predict_rows(&robot, rows, args.fit_setup).map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, &prediction.csv)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     if json_output {

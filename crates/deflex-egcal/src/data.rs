@@ -163,7 +163,10 @@ const PAYLOAD_COM: [&str; 3] = ["payload_com_x_m", "payload_com_y_m", "payload_c
 const WRENCH: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"];
 
 /// Read an absolute measurement file for a robot with `joint_count` joints.
-pub fn read_absolute(path: &Path, joint_count: usize) -> Result<Vec<AbsoluteRow>, AbsoluteDataError> {
+pub fn read_absolute(
+    path: &Path,
+    joint_count: usize,
+) -> Result<Vec<AbsoluteRow>, AbsoluteDataError> {
     let origin = path.display().to_string();
     let io = |source| AbsoluteDataError::Io {
         path: origin.clone(),
@@ -225,7 +228,10 @@ pub fn parse_absolute(
         .map(|c| format!("`{c}`"))
         .collect();
     if !missing.is_empty() {
-        return Err(header_error(format!("missing column(s) {}", missing.join(", "))));
+        return Err(header_error(format!(
+            "missing column(s) {}",
+            missing.join(", ")
+        )));
     }
     let all_or_none = |group: &[&str]| -> Result<bool, AbsoluteDataError> {
         let present = group.iter().filter(|c| index.contains_key(**c)).count();
@@ -265,7 +271,10 @@ pub fn parse_absolute(
         if record.len() != width {
             return Err(error(
                 "-",
-                format!("expected {width} fields as in the header, found {}", record.len()),
+                format!(
+                    "expected {width} fields as in the header, found {}",
+                    record.len()
+                ),
             ));
         }
         let text_of = |name: &str| index.get(name).and_then(|&i| record.get(i)).unwrap_or("");
@@ -282,13 +291,14 @@ pub fn parse_absolute(
             }
             Ok(value)
         };
-        let optional = |name: &str, limit: f64, unit: &str| -> Result<Option<f64>, AbsoluteDataError> {
-            if index.contains_key(name) && !text_of(name).is_empty() {
-                number(name, limit, unit).map(Some)
-            } else {
-                Ok(None)
-            }
-        };
+        let optional =
+            |name: &str, limit: f64, unit: &str| -> Result<Option<f64>, AbsoluteDataError> {
+                if index.contains_key(name) && !text_of(name).is_empty() {
+                    number(name, limit, unit).map(Some)
+                } else {
+                    Ok(None)
+                }
+            };
         let label = |name: &str| -> Result<String, AbsoluteDataError> {
             let text = text_of(name);
             if text.is_empty() {
@@ -338,7 +348,10 @@ pub fn parse_absolute(
         };
         let payload = match optional("payload_kg", limits::MAX_PAYLOAD_KG, "kg")? {
             Some(mass) if mass < 0.0 => {
-                return Err(error("payload_kg", format!("must not be negative, got {mass}")));
+                return Err(error(
+                    "payload_kg",
+                    format!("must not be negative, got {mass}"),
+                ));
             }
             Some(mass_kg) => {
                 let mut com_m = [0.0; 3];
@@ -602,14 +615,21 @@ mod tests {
             );
         }
         let err = parse_absolute(&text, "t.csv", 7).unwrap_err().to_string();
-        assert!(err.contains("6 joint columns") && err.contains("7 joints"), "{err}");
+        assert!(
+            err.contains("6 joint columns") && err.contains("7 joints"),
+            "{err}"
+        );
         let err = parse_absolute(&text.replacen("ry_rad", "ryy", 1), "t.csv", 6)
             .unwrap_err()
             .to_string();
         assert!(err.contains("go together"), "{err}");
-        let err = parse_absolute(&text.replacen(",B,", ",,", 1).replacen("\nB,", "\n,", 1), "t.csv", 6)
-            .unwrap_err()
-            .to_string();
+        let err = parse_absolute(
+            &text.replacen(",B,", ",,", 1).replacen("\nB,", "\n,", 1),
+            "t.csv",
+            6,
+        )
+        .unwrap_err()
+        .to_string();
         assert!(err.contains("t.csv:3") && err.contains("setup"), "{err}");
     }
 

@@ -118,10 +118,14 @@ pub enum FitError {
     #[error("no readings left to fit on (all held out, or none given)")]
     NoFitData,
     /// A geometric step on a robot without a DH table.
-    #[error("geometric calibration needs a robot described by a DH table (standard or modified); `{0}` comes from a URDF")]
+    #[error(
+        "geometric calibration needs a robot described by a DH table (standard or modified); `{0}` comes from a URDF"
+    )]
     NotDh(String),
     /// An `elastic_edofs` label names no eDoF of the robot.
-    #[error("eDoF `{label}` is not in the robot (its eDoFs: {known}); add its stiffness to the robot file first")]
+    #[error(
+        "eDoF `{label}` is not in the robot (its eDoFs: {known}); add its stiffness to the robot file first"
+    )]
     UnknownEdof {
         /// Label given.
         label: String,
@@ -343,7 +347,11 @@ fn norms(model: &EgModel, campaign: &Campaign, rows: &[usize]) -> Vec<f64> {
 }
 
 /// Run the identification (module documentation).
-pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result<FitResult, FitError> {
+pub fn fit(
+    start: &EgModel,
+    campaign: &Campaign,
+    options: &FitOptions,
+) -> Result<FitResult, FitError> {
     if options.folds == 1 || options.folds > MAX_FOLDS {
         return Err(FitError::Option {
             field: "folds",
@@ -353,7 +361,10 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
     if options.bootstrap > MAX_BOOTSTRAP {
         return Err(FitError::Option {
             field: "bootstrap",
-            message: format!("at most {MAX_BOOTSTRAP} replicates, got {}", options.bootstrap),
+            message: format!(
+                "at most {MAX_BOOTSTRAP} replicates, got {}",
+                options.bootstrap
+            ),
         });
     }
     if !(0.0..=0.9).contains(&options.test_fraction) {
@@ -362,7 +373,8 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
             message: format!("expected 0…0.9, got {}", options.test_fraction),
         });
     }
-    if options.steps.iter().any(|s| *s != Step::Registration) && start.robot.dh_convention.is_none() {
+    if options.steps.iter().any(|s| *s != Step::Registration) && start.robot.dh_convention.is_none()
+    {
         return Err(FitError::NotDh(start.robot.name.clone()));
     }
     let edof_labels: Vec<String> = start.robot.edofs().map(|e| e.label()).collect();
@@ -435,7 +447,9 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         their_configs.sort_unstable();
         their_configs.dedup();
         for i in (0..n_abs).filter(|&i| campaign.setup_of[i] == s) {
-            let rank = their_configs.binary_search(&campaign.config_of[i]).unwrap_or(0);
+            let rank = their_configs
+                .binary_search(&campaign.config_of[i])
+                .unwrap_or(0);
             if rank % 2 == 0 {
                 registration_mult[i] = 1.0;
             } else {
@@ -482,7 +496,14 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
     if !options.steps.first().is_some_and(|s| s.elastic()) {
         model.compliance.iter_mut().for_each(|c| *c = 0.0);
     }
-    register::initialise(&mut model, campaign, &unknown_setups, &unknown_targets, &fit_mult, 4);
+    register::initialise(
+        &mut model,
+        campaign,
+        &unknown_setups,
+        &unknown_targets,
+        &fit_mult,
+        4,
+    );
     let registered_start = model.clone();
 
     let mut steps = Vec::new();
@@ -497,14 +518,28 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         }
         let candidates = candidates(&model, &options.steps, index, &elastic, &fit_setups);
         let reduced = identify::reduce(&model, campaign, &candidates, &fit_mult, options.tolerance);
-        let solved = solve::solve(&mut model, campaign, &reduced.kept, &fit_mult, &solve_options);
+        let solved = solve::solve(
+            &mut model,
+            campaign,
+            &reduced.kept,
+            &fit_mult,
+            &solve_options,
+        );
         let fit_stats = ErrorStats::of(&norms(&model, campaign, &fit_abs_rows));
         let loaded_rms = (!fit_loaded_rows.is_empty()).then(|| {
             let n = norms(&model, campaign, &fit_loaded_rows);
             (n.iter().map(|e| e * e).sum::<f64>() / n.len() as f64).sqrt()
         });
         let cv_rms = (options.folds >= 2).then(|| {
-            cross_validate(&model, campaign, &reduced.kept, &fit_mult, &fold_of, options.folds, &solve_options)
+            cross_validate(
+                &model,
+                campaign,
+                &reduced.kept,
+                &fit_mult,
+                &fold_of,
+                options.folds,
+                &solve_options,
+            )
         });
         let mut test = Vec::new();
         if !test_rows.is_empty() {
@@ -522,7 +557,13 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         for &s in &registration_only {
             let mut scored = model.clone();
             let mult: Vec<f64> = (0..total)
-                .map(|i| if i < n_abs && campaign.setup_of[i] == s { registration_mult[i] } else { 0.0 })
+                .map(|i| {
+                    if i < n_abs && campaign.setup_of[i] == s {
+                        registration_mult[i]
+                    } else {
+                        0.0
+                    }
+                })
                 .collect();
             register::initialise(&mut scored, campaign, &[s], &[], &mult, 1);
             let params: Vec<Param> = (0..3)
@@ -537,7 +578,7 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
                 .collect();
             test.push(TestGroup {
                 name: format!(
-                    "{}: registration fitted on half its configurations, scored on the other half",
+                    "{}: own registration on half, scored on the rest",
                     model.setups[s].name
                 ),
                 stats: ErrorStats::of(&norms(&scored, campaign, &rows)),
@@ -576,7 +617,10 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         .zip(&outcome.weights)
         .filter_map(|(r, w)| r.map(|r| w * r.norm_squared()))
         .sum();
-    let chi2: f64 = residuals.iter().filter_map(|r| r.map(|r| r.norm_squared())).sum();
+    let chi2: f64 = residuals
+        .iter()
+        .filter_map(|r| r.map(|r| r.norm_squared()))
+        .sum();
     let chi2_per_dof = chi2 / dof;
     let variance_scale = weighted_chi2 / dof;
     let covariance = a
@@ -585,7 +629,15 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         .map(|c| c.inverse() * variance_scale)
         .unwrap_or_else(|| DMatrix::from_element(kept.len(), kept.len(), f64::NAN));
     let bootstrap = (options.bootstrap > 0).then(|| {
-        bootstrap_se(&model, campaign, kept, &fit_mult, &outcome.weights, options.bootstrap, &mut rng)
+        bootstrap_se(
+            &model,
+            campaign,
+            kept,
+            &fit_mult,
+            &outcome.weights,
+            options.bootstrap,
+            &mut rng,
+        )
     });
     let estimates: Vec<Estimate> = kept
         .iter()
@@ -635,7 +687,10 @@ pub fn fit(start: &EgModel, campaign: &Campaign, options: &FitOptions) -> Result
         }
         if *w < 0.5 {
             let (line, label) = if i < n_abs {
-                (campaign.absolute[i].line, campaign.absolute[i].setup.clone())
+                (
+                    campaign.absolute[i].line,
+                    campaign.absolute[i].setup.clone(),
+                )
             } else {
                 (0, campaign.loaded[i - n_abs].load_case.clone())
             };
@@ -699,7 +754,13 @@ fn cross_validate(
     let mut count = 0usize;
     for fold in 0..folds {
         let train: Vec<f64> = (0..campaign.len())
-            .map(|i| if fold_of[campaign.config(i)] == fold { 0.0 } else { fit_mult[i] })
+            .map(|i| {
+                if fold_of[campaign.config(i)] == fold {
+                    0.0
+                } else {
+                    fit_mult[i]
+                }
+            })
             .collect();
         let held: Vec<usize> = (0..campaign.absolute.len())
             .filter(|&i| fit_mult[i] > 0.0 && fold_of[campaign.config(i)] == fold)
@@ -764,6 +825,10 @@ fn bootstrap_se(
     let n = replicates as f64;
     sums.iter()
         .zip(&squares)
-        .map(|(s, q)| ((q / n - (s / n).powi(2)) * n / (n - 1.0).max(1.0)).max(0.0).sqrt())
+        .map(|(s, q)| {
+            ((q / n - (s / n).powi(2)) * n / (n - 1.0).max(1.0))
+                .max(0.0)
+                .sqrt()
+        })
         .collect()
 }

@@ -183,13 +183,11 @@ fn reason(model: &EgModel, param: Param, others: &[Param], no_effect: bool) -> S
     let only = |g: ParamGroup| !groups.is_empty() && groups.iter().all(|x| *x == g);
     let last_joint = model.robot.joint_count().saturating_sub(1);
     let after_last_axis = matches!(param, Param::Dh(j, _) if j == last_joint)
-        && others
-            .iter()
-            .all(|p| match p {
-                Param::Target(..) => true,
-                Param::Dh(j, _) => *j == last_joint,
-                _ => false,
-            });
+        && others.iter().all(|p| match p {
+            Param::Target(..) => true,
+            Param::Dh(j, _) => *j == last_joint,
+            _ => false,
+        });
     match group {
         ParamGroup::Geometry if only(ParamGroup::Setup) => {
             "moves every reading like a rigid motion of the whole arm: indistinguishable from where the tracker stands (set-up registration)".into()

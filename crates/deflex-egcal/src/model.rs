@@ -237,9 +237,7 @@ impl EgModel {
                     let (axis, center) = ev.axis_center[e];
                     let dtau = match param {
                         Param::Mass(_) => axis.cross(&(frame.translation.vector - center)).dot(&g),
-                        Param::FirstMoment(_, k) => {
-                            (frame.rotation.inverse() * g.cross(&axis))[k]
-                        }
+                        Param::FirstMoment(_, k) => (frame.rotation.inverse() * g.cross(&axis))[k],
                         _ => 0.0,
                     };
                     column += ev.screw_linear[e] * (self.compliance[e] * dtau);
@@ -270,11 +268,7 @@ impl EgModel {
         };
         let (j, field, factor) = match param {
             Param::Dh(j, field) => (j, field, 1.0),
-            Param::Harmonic {
-                joint,
-                order,
-                sine,
-            } => {
+            Param::Harmonic { joint, order, sine } => {
                 let x = f64::from(order) * ev.q_raw[joint];
                 (joint, DhField::Theta, if sine { x.sin() } else { x.cos() })
             }
@@ -315,8 +309,8 @@ impl EgModel {
                     DhField::Alpha => rotation(axis(&previous.rotation, 0), prev_origin, j),
                     DhField::Beta => rotation(axis(&after_alpha, 1), prev_origin, j),
                     DhField::A => {
-                        let after_beta = after_alpha
-                            * Rotation3::from_axis_angle(&Vector3::y_axis(), dh.beta);
+                        let after_beta =
+                            after_alpha * Rotation3::from_axis_angle(&Vector3::y_axis(), dh.beta);
                         translation(axis(&after_beta, 0), j)
                     }
                     DhField::D => translation(z, j),
@@ -346,12 +340,16 @@ impl EgModel {
         let mut d_moment = [Vector3::zeros(); MAX_JOINTS];
         for b in 0..n {
             if b >= twist.first_frame {
-                d_moment[b] = twist.axis.cross(&(ev.body_moment[b] - twist.point * ev.body_mass[b]))
+                d_moment[b] = twist
+                    .axis
+                    .cross(&(ev.body_moment[b] - twist.point * ev.body_mass[b]))
                     + twist.linear * ev.body_mass[b];
             }
         }
         let (payload_mass, payload_moment) = ev.payload;
-        d_moment[n - 1] += twist.axis.cross(&(payload_moment - twist.point * payload_mass))
+        d_moment[n - 1] += twist
+            .axis
+            .cross(&(payload_moment - twist.point * payload_mass))
             + twist.linear * payload_mass;
         let mut mass = ev.body_mass;
         let mut moment = ev.body_moment;

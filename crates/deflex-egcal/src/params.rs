@@ -220,11 +220,7 @@ impl EgModel {
             Param::Compliance(e) => format!("c[{}]", edof_label(e)),
             Param::Mass(b) => format!("body{}.m", b + 1),
             Param::FirstMoment(b, k) => format!("body{}.m{}", b + 1, XYZ[k]),
-            Param::Harmonic {
-                joint,
-                order,
-                sine,
-            } => format!(
+            Param::Harmonic { joint, order, sine } => format!(
                 "J{}.{}{}",
                 joint + 1,
                 if sine { "sin" } else { "cos" },
@@ -281,11 +277,7 @@ impl EgModel {
             Param::Compliance(e) => self.compliance[e],
             Param::Mass(b) => self.lumped[b][0],
             Param::FirstMoment(b, k) => self.lumped[b][1 + k],
-            Param::Harmonic {
-                joint,
-                order,
-                sine,
-            } => self
+            Param::Harmonic { joint, order, sine } => self
                 .harmonics
                 .iter()
                 .find(|h| h.joint == joint && h.order == order && h.sine == sine)
@@ -323,11 +315,7 @@ impl EgModel {
                 Param::Compliance(e) => self.compliance[e] += d,
                 Param::Mass(b) => self.lumped[b][0] += d,
                 Param::FirstMoment(b, k) => self.lumped[b][1 + k] += d,
-                Param::Harmonic {
-                    joint,
-                    order,
-                    sine,
-                } => {
+                Param::Harmonic { joint, order, sine } => {
                     match self
                         .harmonics
                         .iter_mut()
@@ -422,6 +410,15 @@ impl EgModel {
                     mass_kg: lumped[0],
                     com: Vector3::new(lumped[1], lumped[2], lumped[3]) / lumped[0],
                 });
+            }
+        }
+        // The file writes centres of mass in the convention's link frame: for standard DH that
+        // is L_i of the *calibrated* row (the model keeps them in R_i).
+        if robot.dh_convention == Some(deflex_model::DhConvention::Standard) {
+            for joint in &mut robot.joints {
+                if let Some(dh) = &joint.dh {
+                    joint.link_frame = deflex_model::dh::standard_dh_link(dh);
+                }
             }
         }
         robot.setups = self.setups.clone();

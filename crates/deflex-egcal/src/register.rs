@@ -73,7 +73,9 @@ pub fn initialise(
                 let a = (setup.rotation * ev.data.flange.rotation).into_inner();
                 let flange_origin = ev.data.flange.translation.vector;
                 let b = Vector3::from(row.position_m)
-                    - setup.transform_point(&(flange_origin + ev.sag_world).into()).coords;
+                    - setup
+                        .transform_point(&(flange_origin + ev.sag_world).into())
+                        .coords;
                 normal += a.transpose() * a;
                 rhs += a.transpose() * b;
             }

@@ -177,13 +177,19 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         result.model.targets.len(),
         result.loss.name()
     );
-    let _ = writeln!(out, "Errors are norms of the 3-D position error.\n\nIteration table:");
+    let _ = writeln!(
+        out,
+        "Errors are norms of the 3-D position error.\n\nIteration table:"
+    );
     let (headers, rows) = iteration_rows(result);
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
     out.push_str(&table(&headers, &rows));
     let held = heldout_rows(result);
     if !held.is_empty() {
-        let _ = writeln!(out, "\nHeld-out error distribution (readings the fit did not see):");
+        let _ = writeln!(
+            out,
+            "\nHeld-out error distribution (readings the fit did not see):"
+        );
         out.push_str(&table(&HELDOUT_HEADERS, &held));
     }
     let _ = writeln!(
@@ -224,7 +230,11 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         .map(|(p, i)| format!("{} ({i:.1e})", result.model.param_name(*p)))
         .collect();
     if !weak.is_empty() {
-        let _ = writeln!(out, "\nWeakly identifiable (independent part < 1e-2): {}", weak.join(", "));
+        let _ = writeln!(
+            out,
+            "\nWeakly identifiable (independent part < 1e-2): {}",
+            weak.join(", ")
+        );
     }
     if !result.correlations.is_empty() {
         let _ = writeln!(out, "\nStrong correlations (|ρ| ≥ 0.95):");
@@ -247,11 +257,19 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         let _ = writeln!(
             out,
             "  reading {} (line {}, {}): residual {:.3} mm, weight {:.3}",
-            o.index, o.line, o.label, o.residual * 1e3, o.weight
+            o.index,
+            o.line,
+            o.label,
+            o.residual * 1e3,
+            o.weight
         );
     }
     if result.outliers.len() > 20 {
-        let _ = writeln!(out, "  … {} more in outliers.csv", result.outliers.len() - 20);
+        let _ = writeln!(
+            out,
+            "  … {} more in outliers.csv",
+            result.outliers.len() - 20
+        );
     }
     if !result.model.harmonics.is_empty() {
         let _ = writeln!(
@@ -264,9 +282,7 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
 
 /// The JSON report (SI).
 pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
-    let stats = |s: &ErrorStats| {
-        json!({"count": s.count, "rms_m": s.rms, "mean_m": s.mean, "p95_m": s.p95, "max_m": s.max})
-    };
+    let stats = |s: &ErrorStats| json!({"count": s.count, "rms_m": s.rms, "mean_m": s.mean, "p95_m": s.p95, "max_m": s.max});
     json!({
         "absolute_readings": campaign.absolute.len(),
         "loaded_readings": campaign.loaded.len(),
@@ -339,7 +355,12 @@ pub fn write_report(
     let (headers, rows) = iteration_rows(result);
     put("iterations.csv", &csv_text(&headers, &rows))?;
     let estimate_headers: Vec<String> = vec![
-        "parameter", "unit", "nominal", "estimate", "standard_error", "bootstrap_se",
+        "parameter",
+        "unit",
+        "nominal",
+        "estimate",
+        "standard_error",
+        "bootstrap_se",
     ]
     .into_iter()
     .map(String::from)
@@ -358,7 +379,10 @@ pub fn write_report(
             ]
         })
         .collect();
-    put("estimates.csv", &csv_text(&estimate_headers, &estimate_csv_rows))?;
+    put(
+        "estimates.csv",
+        &csv_text(&estimate_headers, &estimate_csv_rows),
+    )?;
     let mut residual_rows = Vec::new();
     for r in &result.residuals {
         let (label, line, q) = if campaign.is_absolute(r.index) {
@@ -382,13 +406,22 @@ pub fn write_report(
     }
     let n = result.model.robot.joint_count();
     let mut residual_headers: Vec<String> = [
-        "reading", "line", "setup_or_case", "role", "ex_m", "ey_m", "ez_m",
+        "reading",
+        "line",
+        "setup_or_case",
+        "role",
+        "ex_m",
+        "ey_m",
+        "ez_m",
     ]
     .into_iter()
     .map(String::from)
     .collect();
     residual_headers.extend((1..=n).map(|i| format!("q{i}_rad")));
-    put("residuals.csv", &csv_text(&residual_headers, &residual_rows))?;
+    put(
+        "residuals.csv",
+        &csv_text(&residual_headers, &residual_rows),
+    )?;
     let outlier_rows: Vec<Vec<String>> = result
         .outliers
         .iter()
@@ -418,9 +451,11 @@ pub fn write_report(
     html.section("Iteration table").table(&h, &rows);
     let held = heldout_rows(result);
     if !held.is_empty() {
-        html.section("Held-out error distribution").table(&HELDOUT_HEADERS, &held);
+        html.section("Held-out error distribution")
+            .table(&HELDOUT_HEADERS, &held);
     }
-    html.section("Identified parameters").table(&ESTIMATE_HEADERS, &estimate_rows(result));
+    html.section("Identified parameters")
+        .table(&ESTIMATE_HEADERS, &estimate_rows(result));
     html.section("Residual plots");
     for (file, caption) in &images {
         html.image(root.join(file), caption.clone());
@@ -455,7 +490,9 @@ pub struct Prediction {
 #[derive(Debug, thiserror::Error)]
 pub enum PredictError {
     /// A row names a set-up or target the robot file does not have.
-    #[error("line {line}: {what} `{name}` is not in the robot file (it knows: {known}); calibrate with it, or use --fit-setup for a set-up")]
+    #[error(
+        "line {line}: {what} `{name}` is not in the robot file (it knows: {known}); calibrate with it, or use --fit-setup for a set-up"
+    )]
     Unknown {
         /// Line.
         line: u64,
@@ -486,7 +523,12 @@ pub fn predict_rows(
                 line: row.line,
                 what: "target",
                 name: row.target.clone(),
-                known: model.targets.iter().map(|t| t.name.clone()).collect::<Vec<_>>().join(", "),
+                known: model
+                    .targets
+                    .iter()
+                    .map(|t| t.name.clone())
+                    .collect::<Vec<_>>()
+                    .join(", "),
             });
         }
         if !fit_setup && model.setup_index(&row.setup).is_none() {
@@ -494,13 +536,24 @@ pub fn predict_rows(
                 line: row.line,
                 what: "set-up",
                 name: row.setup.clone(),
-                known: model.setups.iter().map(|t| t.name.clone()).collect::<Vec<_>>().join(", "),
+                known: model
+                    .setups
+                    .iter()
+                    .map(|t| t.name.clone())
+                    .collect::<Vec<_>>()
+                    .join(", "),
             });
         }
     }
     let campaign = Campaign::new(&mut model, rows, Vec::new())?;
     if fit_setup {
-        let setups: Vec<usize> = campaign.setup_of.iter().copied().collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+        let setups: Vec<usize> = campaign
+            .setup_of
+            .iter()
+            .copied()
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
         let all = vec![1.0; campaign.len()];
         let fresh: Vec<usize> = setups
             .iter()
@@ -527,14 +580,27 @@ pub fn predict_rows(
     let mut header: Vec<String> = vec!["line".into(), "setup".into(), "target".into()];
     header.extend((1..=n).map(|i| format!("q{i}_rad")));
     header.extend(
-        ["predicted_x_m", "predicted_y_m", "predicted_z_m", "x_m", "y_m", "z_m", "error_m"]
-            .map(String::from),
+        [
+            "predicted_x_m",
+            "predicted_y_m",
+            "predicted_z_m",
+            "x_m",
+            "y_m",
+            "z_m",
+            "error_m",
+        ]
+        .map(String::from),
     );
     let _ = writer.write_record(&header);
     let mut norms = Vec::new();
     for (i, row) in campaign.absolute.iter().enumerate() {
         let loads = campaign.loads(&model, i);
-        let p = model.predict_tracker(&row.q_rad, campaign.setup_of[i], campaign.target_of[i], &loads);
+        let p = model.predict_tracker(
+            &row.q_rad,
+            campaign.setup_of[i],
+            campaign.target_of[i],
+            &loads,
+        );
         let error = (nalgebra::Vector3::from(row.position_m) - p).norm();
         norms.push(error);
         let mut record = vec![row.line.to_string(), row.setup.clone(), row.target.clone()];
@@ -549,7 +615,11 @@ pub fn predict_rows(
     let text = format!(
         "{} rows predicted{}; error norm (measured − predicted): RMS {} mm, mean {} mm, p95 {} mm, max {} mm\n",
         stats.count,
-        if fit_setup { " (set-up registration fitted on these rows)" } else { "" },
+        if fit_setup {
+            " (set-up registration fitted on these rows)"
+        } else {
+            ""
+        },
         mm(stats.rms),
         mm(stats.mean),
         mm(stats.p95),

@@ -258,8 +258,13 @@ pub fn solve(
                 let mut trial = model.clone();
                 trial.apply(params, step.as_slice());
                 let trial_residuals = standardised_residuals(&trial, campaign, multiplicity);
-                let evaluated =
-                    robust_cost(campaign, &trial_residuals, multiplicity, scale, options.loss);
+                let evaluated = robust_cost(
+                    campaign,
+                    &trial_residuals,
+                    multiplicity,
+                    scale,
+                    options.loss,
+                );
                 if evaluated.cost.is_finite() && evaluated.cost <= current.cost {
                     let decrease = current.cost - evaluated.cost;
                     small_step = decrease <= options.relative_tolerance * current.cost.max(1e-300);

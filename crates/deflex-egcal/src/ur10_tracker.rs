@@ -216,7 +216,12 @@ pub fn parse_series(
         require("measurement_z")?,
     ];
     let rotation = ["measurement_rx", "measurement_ry", "measurement_rz"].map(column);
-    let std = ["measurement_std_x", "measurement_std_y", "measurement_std_z"].map(column);
+    let std = [
+        "measurement_std_x",
+        "measurement_std_y",
+        "measurement_std_z",
+    ]
+    .map(column);
     let has_std = std.iter().all(Option::is_some);
     let has_rotation = rotation.iter().all(Option::is_some);
     let temperature = column("measurement_temperature");
@@ -365,7 +370,10 @@ mod tests {
         );
         let (rows, summary) = parse_series(&text, "s.csv", &options()).unwrap();
         assert_eq!(rows.len(), 2);
-        assert_eq!(rows[0].q_rad, vec![-1.5708, -1.5708, 0.0, -1.5708, 0.0, 0.0]);
+        assert_eq!(
+            rows[0].q_rad,
+            vec![-1.5708, -1.5708, 0.0, -1.5708, 0.0, 0.0]
+        );
         assert!((rows[0].position_m[0] - 2.3619831).abs() < 1e-12);
         assert!((rows[0].position_m[1] + 1.3685474).abs() < 1e-12);
         // std: RMS of (0.03, 0, 0) mm.
@@ -384,14 +392,21 @@ mod tests {
     #[test]
     fn bad_rows_are_named() {
         let text = format!("{HEADER}\n1;0;0;0;0;0;0;0;21;1;0;2x;0;3;0;0;0;0");
-        let err = parse_series(&text, "s.csv", &options()).unwrap_err().to_string();
-        assert!(err.contains("s.csv:2") && err.contains("measurement_y"), "{err}");
+        let err = parse_series(&text, "s.csv", &options())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("s.csv:2") && err.contains("measurement_y"),
+            "{err}"
+        );
         let err = parse_series("Timestamp;x\n1;2", "s.csv", &options())
             .unwrap_err()
             .to_string();
         assert!(err.contains("shoulder_pan_joint"), "{err}");
         let text = format!("{HEADER}\n1;0;0");
-        let err = parse_series(&text, "s.csv", &options()).unwrap_err().to_string();
+        let err = parse_series(&text, "s.csv", &options())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("fields"), "{err}");
     }
 }

@@ -29,9 +29,19 @@ fn model(name: &str, compliance_factor: f64) -> EgModel {
         *c *= compliance_factor;
     }
     let mut params = m.geometric_params();
-    params.push(Param::Harmonic { joint: 1, order: 1, sine: false });
-    params.push(Param::Harmonic { joint: 2, order: 2, sine: true });
-    let deltas: Vec<f64> = (0..params.len()).map(|k| 1e-3 * ((k as f64) * 0.77).sin()).collect();
+    params.push(Param::Harmonic {
+        joint: 1,
+        order: 1,
+        sine: false,
+    });
+    params.push(Param::Harmonic {
+        joint: 2,
+        order: 2,
+        sine: true,
+    });
+    let deltas: Vec<f64> = (0..params.len())
+        .map(|k| 1e-3 * ((k as f64) * 0.77).sin())
+        .collect();
     m.apply(&params, &deltas);
     m
 }
@@ -49,7 +59,11 @@ fn all_params(m: &EgModel) -> Vec<Param> {
     for j in 0..m.robot.joint_count() {
         for order in 1..=2 {
             for sine in [false, true] {
-                params.push(Param::Harmonic { joint: j, order, sine });
+                params.push(Param::Harmonic {
+                    joint: j,
+                    order,
+                    sine,
+                });
             }
         }
     }
@@ -74,14 +88,17 @@ fn check(name: &str, compliance_factor: f64, relative_tolerance: f64) {
             let analytic = m.tracker_column(&ev, 0, p);
             let h = match EgModel::unit(p) {
                 deflex_egcal::params::Unit::Compliance => 1e-6,
-                deflex_egcal::params::Unit::Kilogram | deflex_egcal::params::Unit::KilogramMetre => 1e-3,
+                deflex_egcal::params::Unit::Kilogram
+                | deflex_egcal::params::Unit::KilogramMetre => 1e-3,
                 _ => 1e-6,
             };
             let mut plus = m.clone();
             plus.apply(&[p], &[h]);
             let mut minus = m.clone();
             minus.apply(&[p], &[-h]);
-            let numeric = (plus.predict_tracker(&q, 0, 0, &loads) - minus.predict_tracker(&q, 0, 0, &loads)) / (2.0 * h);
+            let numeric = (plus.predict_tracker(&q, 0, 0, &loads)
+                - minus.predict_tracker(&q, 0, 0, &loads))
+                / (2.0 * h);
             let tolerance = relative_tolerance * numeric.norm().max(analytic.norm()) + 1e-9;
             assert!(
                 (analytic - numeric).norm() <= tolerance,
@@ -110,7 +127,10 @@ fn sag_matches_the_model_crate() {
     m.harmonics.clear();
     // The model crate's gravity uses the robot's stiffness and inertias: make them match.
     let robot = m.to_robot();
-    let m = EgModel { robot: robot.clone(), ..m };
+    let m = EgModel {
+        robot: robot.clone(),
+        ..m
+    };
     let q = [0.3, -1.2, 1.1, -0.4, 1.3, 0.7];
     let ev = m.evaluate(&q, 0, &Loads::default());
     let mut data = deflex_model::Data::new();
@@ -119,5 +139,8 @@ fn sag_matches_the_model_crate() {
     let expected = robot.gravity_displacement(&data, &p, robot.joint_count());
     let sag = ev.sag_world;
     assert!(sag.norm() > 1e-4, "{sag:?}");
-    assert!((sag - Vector3::new(expected[0], expected[1], expected[2])).norm() < 1e-12 * 1e3 * sag.norm());
+    assert!(
+        (sag - Vector3::new(expected[0], expected[1], expected[2])).norm()
+            < 1e-12 * 1e3 * sag.norm()
+    );
 }

@@ -33,18 +33,26 @@ struct Truth {
 
 fn rot_x(a: f64) -> Matrix4<f64> {
     let (s, c) = a.sin_cos();
-    Matrix4::new(1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0)
+    Matrix4::new(
+        1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
 }
 fn rot_y(a: f64) -> Matrix4<f64> {
     let (s, c) = a.sin_cos();
-    Matrix4::new(c, 0.0, s, 0.0, 0.0, 1.0, 0.0, 0.0, -s, 0.0, c, 0.0, 0.0, 0.0, 0.0, 1.0)
+    Matrix4::new(
+        c, 0.0, s, 0.0, 0.0, 1.0, 0.0, 0.0, -s, 0.0, c, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
 }
 fn rot_z(a: f64) -> Matrix4<f64> {
     let (s, c) = a.sin_cos();
-    Matrix4::new(c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    Matrix4::new(
+        c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    )
 }
 fn trans(x: f64, y: f64, z: f64) -> Matrix4<f64> {
-    Matrix4::new(1.0, 0.0, 0.0, x, 0.0, 1.0, 0.0, y, 0.0, 0.0, 1.0, z, 0.0, 0.0, 0.0, 1.0)
+    Matrix4::new(
+        1.0, 0.0, 0.0, x, 0.0, 1.0, 0.0, y, 0.0, 0.0, 1.0, z, 0.0, 0.0, 0.0, 1.0,
+    )
 }
 fn point(m: &Matrix4<f64>, p: [f64; 3]) -> Vector3<f64> {
     (m * Vector4::new(p[0], p[1], p[2], 1.0)).xyz()
@@ -76,7 +84,11 @@ impl Truth {
     }
 
     /// Torque on each joint's z-eDoF under gravity and a force `force` at `at`.
-    fn torques(&self, frames: &[Matrix4<f64>], force: Option<(Vector3<f64>, Vector3<f64>)>) -> [f64; 6] {
+    fn torques(
+        &self,
+        frames: &[Matrix4<f64>],
+        force: Option<(Vector3<f64>, Vector3<f64>)>,
+    ) -> [f64; 6] {
         let mut tau = [0.0; 6];
         for (j, t) in tau.iter_mut().enumerate() {
             // Joint j+1 turns about z of F_j through its origin.
@@ -93,15 +105,25 @@ impl Truth {
     }
 
     /// Displacement of world point `p` (on the last link) by eDoF rotations `c τ`.
-    fn deflection(&self, frames: &[Matrix4<f64>], tau: &[f64; 6], p: &Vector3<f64>) -> Vector3<f64> {
+    fn deflection(
+        &self,
+        frames: &[Matrix4<f64>],
+        tau: &[f64; 6],
+        p: &Vector3<f64>,
+    ) -> Vector3<f64> {
         (0..6)
-            .map(|j| z_axis(&frames[j]).cross(&(p - origin(&frames[j]))) * (self.compliance[j] * tau[j]))
+            .map(|j| {
+                z_axis(&frames[j]).cross(&(p - origin(&frames[j]))) * (self.compliance[j] * tau[j])
+            })
             .sum()
     }
 
     fn setup(&self, s: usize) -> (nalgebra::Rotation3<f64>, Vector3<f64>) {
         let (xyz, rpy) = self.setups[s];
-        (nalgebra::Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]), Vector3::from(xyz))
+        (
+            nalgebra::Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+            Vector3::from(xyz),
+        )
     }
 }
 
@@ -117,25 +139,27 @@ fn truth() -> Truth {
         let inertia = joint.inertia.unwrap();
         mass[j] = inertia.mass_kg;
         // The model keeps com in R_i; the file (and this truth) in F_i = R_i L_i.
-        let c = joint.link_frame.inverse_transform_point(&inertia.com.into());
+        let c = joint
+            .link_frame
+            .inverse_transform_point(&inertia.com.into());
         com[j] = [c.x, c.y, c.z];
     }
     // Planted kinematic errors (rad, m).
     let planted: [(usize, usize, f64); 14] = [
-        (0, 2, 0.4e-3), // J1.a
+        (0, 2, 0.4e-3),  // J1.a
         (0, 3, -0.3e-3), // J1.alpha
-        (1, 0, 0.8e-3), // J2.theta
+        (1, 0, 0.8e-3),  // J2.theta
         (1, 2, -0.9e-3), // J2.a
-        (1, 3, 0.5e-3), // J2.alpha
-        (1, 4, 0.3e-3), // J2.beta
+        (1, 3, 0.5e-3),  // J2.alpha
+        (1, 4, 0.3e-3),  // J2.beta
         (2, 0, -0.6e-3), // J3.theta
-        (2, 2, 0.7e-3), // J3.a
+        (2, 2, 0.7e-3),  // J3.a
         (2, 4, -0.4e-3), // J3.beta
-        (3, 0, 0.5e-3), // J4.theta
-        (3, 3, 0.6e-3), // J4.alpha
+        (3, 0, 0.5e-3),  // J4.theta
+        (3, 3, 0.6e-3),  // J4.alpha
         (4, 0, -0.7e-3), // J5.theta
-        (4, 1, 0.5e-3), // J5.d
-        (1, 1, 0.6e-3), // J2.d
+        (4, 1, 0.5e-3),  // J5.d
+        (1, 1, 0.6e-3),  // J2.d
     ];
     for (j, k, v) in planted {
         dh[j][k] += v;
@@ -144,11 +168,21 @@ fn truth() -> Truth {
     mass[1] += 1.5;
     Truth {
         dh,
-        compliance: [1.0 / 1.6e5, 1.0 / 1.0e5, 1.0 / 6.0e4, 1.0 / 2.0e4, 1.0 / 2.0e4, 1.0 / 1.5e4],
+        compliance: [
+            1.0 / 1.6e5,
+            1.0 / 1.0e5,
+            1.0 / 6.0e4,
+            1.0 / 2.0e4,
+            1.0 / 2.0e4,
+            1.0 / 1.5e4,
+        ],
         mass,
         com,
         target: [0.4e-3, -0.3e-3, 0.0931],
-        setups: [([2.9, 0.1, -1.2], [0.01, -0.02, 1.9]), ([-0.5, -3.2, 0.3], [-0.015, 0.01, -0.8])],
+        setups: [
+            ([2.9, 0.1, -1.2], [0.01, -0.02, 1.9]),
+            ([-0.5, -3.2, 0.3], [-0.015, 0.01, -0.8]),
+        ],
     }
 }
 
@@ -215,7 +249,8 @@ fn simulate(truth: &Truth, seed: u64) -> Simulated {
         let with = truth.torques(&frames, Some((force, p)));
         let without = truth.torques(&frames, None);
         let tau: [f64; 6] = std::array::from_fn(|j| with[j] - without[j]);
-        let d = truth.deflection(&frames, &tau, &p) + Vector3::from_fn(|_, _| loaded_noise.sample(&mut rng));
+        let d = truth.deflection(&frames, &tau, &p)
+            + Vector3::from_fn(|_, _| loaded_noise.sample(&mut rng));
         loaded.push(MeasurementRow {
             load_case: format!("L{case}"),
             q_rad: q.to_vec(),
@@ -238,7 +273,12 @@ fn run(sim: &Simulated) -> (FitResult, EgModel) {
     let mut model = EgModel::from_robot(&deflex_model::builtin("ur10").unwrap());
     let campaign = Campaign::new(&mut model, sim.absolute.clone(), sim.loaded.clone()).unwrap();
     let options = FitOptions {
-        steps: vec![Step::Registration, Step::Geometry, Step::Compliance, Step::Masses],
+        steps: vec![
+            Step::Registration,
+            Step::Geometry,
+            Step::Compliance,
+            Step::Masses,
+        ],
         loss: Loss::HUBER_DEFAULT,
         folds: 0,
         elastic_edofs: vec!["J2.z".into(), "J3.z".into()],
@@ -293,21 +333,36 @@ fn recover(seed: u64) -> (f64, usize, usize) {
     let mut subset = Vec::new();
     let mut errors = Vec::new();
     for (k, e) in result.estimates.iter().enumerate() {
-        let Some(truth_value) = true_value(&truth, e.param) else { continue };
+        let Some(truth_value) = true_value(&truth, e.param) else {
+            continue;
+        };
         subset.push(k);
         errors.push(e.value - truth_value);
         let z = (e.value - truth_value) / e.standard_error;
-        report.push_str(&format!("{} est {:.6e} true {:.6e} SE {:.2e} z {:+.2}\n", e.name, e.value, truth_value, e.standard_error, z));
+        report.push_str(&format!(
+            "{} est {:.6e} true {:.6e} SE {:.2e} z {:+.2}\n",
+            e.name, e.value, truth_value, e.standard_error, z
+        ));
         if z.abs() <= 1.96 {
             within_95 += 1;
         }
-        assert!(z.abs() < 3.5, "seed {seed}: {} is {z:.1} SE from the truth\n{report}", e.name);
+        assert!(
+            z.abs() < 3.5,
+            "seed {seed}: {} is {z:.1} SE from the truth\n{report}",
+            e.name
+        );
     }
     // Every planted kinematic error, both stiffnesses and the planted body's first moment are
     // identified (its mass alone is not: a mass at the frame origin on J2's axis loads nothing).
     let names: Vec<&str> = result.estimates.iter().map(|e| e.name.as_str()).collect();
-    for planted in ["J1.a", "J2.theta", "J2.beta", "J3.beta", "J4.alpha", "J5.d", "c[J2.z]", "c[J3.z]", "body2.mx"] {
-        assert!(names.contains(&planted), "{planted} not identified: {names:?}");
+    for planted in [
+        "J1.a", "J2.theta", "J2.beta", "J3.beta", "J4.alpha", "J5.d", "c[J2.z]", "c[J3.z]",
+        "body2.mx",
+    ] {
+        assert!(
+            names.contains(&planted),
+            "{planted} not identified: {names:?}"
+        );
     }
     let p = subset.len();
     assert!(p >= 25, "{p}\n{report}");
@@ -317,8 +372,14 @@ fn recover(seed: u64) -> (f64, usize, usize) {
     // Wilson–Hilferty 99.9 % quantile of χ²_p.
     let pf = p as f64;
     let quantile = pf * (1.0 - 2.0 / (9.0 * pf) + 3.0902 * (2.0 / (9.0 * pf)).sqrt()).powi(3);
-    assert!(d2 < quantile, "seed {seed}: Mahalanobis² {d2:.1} ≥ χ²_{p} 99.9 % quantile {quantile:.1}\n{report}");
-    println!("seed {seed}: {within_95}/{p} within their 95 % interval, Mahalanobis² {d2:.1} (99.9 % quantile {quantile:.1}), χ²/dof {:.2}", result.chi2_per_dof);
+    assert!(
+        d2 < quantile,
+        "seed {seed}: Mahalanobis² {d2:.1} ≥ χ²_{p} 99.9 % quantile {quantile:.1}\n{report}"
+    );
+    println!(
+        "seed {seed}: {within_95}/{p} within their 95 % interval, Mahalanobis² {d2:.1} (99.9 % quantile {quantile:.1}), χ²/dof {:.2}",
+        result.chi2_per_dof
+    );
     (d2, p, within_95)
 }
 
@@ -327,11 +388,17 @@ fn combined_campaign_recovers_planted_parameters_simulated() {
     // Four independent campaigns: each passes `recover`, and together the intervals are honest:
     // the mean Mahalanobis² per parameter is near 1 (it is χ²_p/p, mean 1, sd √(2/p) per run).
     let runs: Vec<(f64, usize, usize)> = (1..=4).map(recover).collect();
-    let per_parameter = runs.iter().map(|(d2, p, _)| d2 / *p as f64).sum::<f64>() / runs.len() as f64;
+    let per_parameter =
+        runs.iter().map(|(d2, p, _)| d2 / *p as f64).sum::<f64>() / runs.len() as f64;
     let within: usize = runs.iter().map(|r| r.2).sum();
     let total: usize = runs.iter().map(|r| r.1).sum();
-    assert!((0.6..1.5).contains(&per_parameter), "mean Mahalanobis² per parameter {per_parameter:.2}");
-    println!("SIMULATED recovery over 4 campaigns: {within}/{total} within their 95 % interval; mean Mahalanobis²/p {per_parameter:.2}");
+    assert!(
+        (0.6..1.5).contains(&per_parameter),
+        "mean Mahalanobis² per parameter {per_parameter:.2}"
+    );
+    println!(
+        "SIMULATED recovery over 4 campaigns: {within}/{total} within their 95 % interval; mean Mahalanobis²/p {per_parameter:.2}"
+    );
 }
 
 #[test]
@@ -356,7 +423,8 @@ fn one_millimetre_glitch_is_named_and_moves_nothing_simulated() {
         // registration; compare the fitted rotations themselves (robot-world axes).
         let change = match a.param {
             Param::SetupRotation(s, k) => deflex_model::spatial::rotation_log(
-                &(clean_fit.model.setups[s].pose.rotation.inverse() * glitch_fit.model.setups[s].pose.rotation),
+                &(clean_fit.model.setups[s].pose.rotation.inverse()
+                    * glitch_fit.model.setups[s].pose.rotation),
             )[k],
             _ => b.value - a.value,
         };
@@ -364,5 +432,8 @@ fn one_millimetre_glitch_is_named_and_moves_nothing_simulated() {
         worst = worst.max(shift);
         assert!(shift < 1.0, "{} moved by {shift:.2} SE", a.name);
     }
-    println!("SIMULATED glitch: reading {victim} named (weight {:.3}); largest parameter shift {worst:.3} SE", glitch_fit.outliers[0].weight);
+    println!(
+        "SIMULATED glitch: reading {victim} named (weight {:.3}); largest parameter shift {worst:.3} SE",
+        glitch_fit.outliers[0].weight
+    );
 }
