@@ -216,6 +216,8 @@ fn read_all(paths: &[PathBuf], joints: usize) -> Result<Vec<AbsoluteRow>, String
 }
 
 pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CliResult {
+    let steps = parse_steps(&args.steps)?;
+    let loss = parse_loss(&args.loss)?;
     let start_robot = robot(&args.robot)?;
     let n = start_robot.joint_count();
     let absolute = read_all(&args.data, n)?;
@@ -226,16 +228,13 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     }
     let fit_count = absolute.len();
     let mut all = absolute;
-    // Test readings are tagged by a configuration label of their own, so they form their own
-    // configurations, which the options below hold out.
-    let test_setups: std::collections::BTreeSet<String> =
-        test.iter().map(|r| r.setup.clone()).collect();
+    // Test readings go after the fitted ones and are held out by index.
     all.extend(test);
     let mut model = EgModel::from_robot(&start_robot);
     let campaign = Campaign::new(&mut model, all, loaded).map_err(|e| e.to_string())?;
     let options = FitOptions {
-        steps: parse_steps(&args.steps)?,
-        loss: parse_loss(&args.loss)?,
+        steps,
+        loss,
         folds: args.folds,
         bootstrap: args.bootstrap,
         test_fraction: args.test_fraction,
@@ -248,7 +247,6 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
         held_out_readings: (fit_count..campaign.absolute.len()).collect(),
         ..FitOptions::default()
     };
-    let _ = test_setups;
     let started = std::time::Instant::now();
     let result = fit(&model, &campaign, &options).map_err(|e| e.to_string())?;
     let elapsed = started.elapsed().as_secs_f64();

@@ -228,15 +228,7 @@ impl Campaign {
         } else {
             let row = &self.loaded[i - self.absolute.len()];
             let mut compliance_columns = [Vector3::zeros(); MAX_EDOFS];
-            let predicted = model.loaded_displacement(
-                &row.q_rad,
-                &Vector3::from(row.point_m),
-                row.point_link,
-                &Vector3::from(row.load_point_m),
-                row.load_link,
-                &row.wrench,
-                &mut compliance_columns,
-            );
+            let predicted = model.loaded_displacement(row, &mut compliance_columns);
             if let Some(columns) = columns {
                 columns.clear();
                 columns.extend(params.iter().map(|&p| match p {

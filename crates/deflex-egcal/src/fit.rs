@@ -418,13 +418,15 @@ pub fn fit(
     let setup_count = start.setups.len();
     // A set-up is a fit set-up if any of its readings falls outside the test configurations
     // and it was not declared a test set-up by the caller (see `fit_with_test_setups`).
-    let mut fit_mult = vec![0.0; total];
-    for i in 0..total {
-        let c = campaign.config(i);
-        if !is_test_config[c] {
-            fit_mult[i] = 1.0;
-        }
-    }
+    let mut fit_mult: Vec<f64> = (0..total)
+        .map(|i| {
+            if is_test_config[campaign.config(i)] {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
     for &i in &options.held_out_readings {
         if i < total {
             fit_mult[i] = 0.0;
@@ -450,7 +452,7 @@ pub fn fit(
             let rank = their_configs
                 .binary_search(&campaign.config_of[i])
                 .unwrap_or(0);
-            if rank % 2 == 0 {
+            if rank.is_multiple_of(2) {
                 registration_mult[i] = 1.0;
             } else {
                 scored_registration_rows.push(i);

@@ -338,13 +338,16 @@ impl EgModel {
         let g = self.robot.gravity;
         // Rates of the bodies' first moments (payload on the last body).
         let mut d_moment = [Vector3::zeros(); MAX_JOINTS];
-        for b in 0..n {
-            if b >= twist.first_frame {
-                d_moment[b] = twist
-                    .axis
-                    .cross(&(ev.body_moment[b] - twist.point * ev.body_mass[b]))
-                    + twist.linear * ev.body_mass[b];
-            }
+        for (b, rate) in d_moment
+            .iter_mut()
+            .enumerate()
+            .take(n)
+            .skip(twist.first_frame)
+        {
+            *rate = twist
+                .axis
+                .cross(&(ev.body_moment[b] - twist.point * ev.body_mass[b]))
+                + twist.linear * ev.body_mass[b];
         }
         let (payload_mass, payload_moment) = ev.payload;
         d_moment[n - 1] += twist
@@ -362,7 +365,7 @@ impl EgModel {
             }
             let (a, center) = ev.axis_center[e];
             let site = ev.site[e];
-            let moved = site >= 1 && site - 1 >= twist.first_frame;
+            let moved = site > twist.first_frame;
             let (da, dcenter) = if moved {
                 (twist.axis.cross(&a), twist.point_rate(&center))
             } else {
@@ -402,18 +405,17 @@ impl EgModel {
         }
     }
 
-    /// Predicted displacement (loaded − unloaded) of a loaded reading, world axes, and the
-    /// column of each compliance in `columns` (others zero).
+    /// Predicted displacement (loaded − unloaded) of a loaded reading (the stiffness
+    /// campaign's row: point, load point, links and wrench, world axes), and the column of each
+    /// compliance in `columns` (others zero).
     pub fn loaded_displacement(
         &self,
-        q: &[f64],
-        point: &Vector3<f64>,
-        point_link: usize,
-        load_point: &Vector3<f64>,
-        load_link: usize,
-        wrench: &[f64; 6],
+        row: &deflex_calib::MeasurementRow,
         columns: &mut [Vector3<f64>; MAX_EDOFS],
     ) -> Vector3<f64> {
+        let (q, point, point_link) = (&row.q_rad, Vector3::from(row.point_m), row.point_link);
+        let (load_point, load_link, wrench) =
+            (Vector3::from(row.load_point_m), row.load_link, &row.wrench);
         let n = self.robot.joint_count();
         let mut q_effective = [0.0; MAX_JOINTS];
         self.effective_q(q, &mut q_effective);

@@ -364,6 +364,8 @@ mod tests {
     }
 
     #[test]
+    // 1.5708 is the file's own rounded value, not π/2.
+    #[allow(clippy::approx_constant)]
     fn decimal_commas_units_and_rotation() {
         let text = format!(
             "{HEADER}\r\n20200714163904;0,365;-1,5708;-1,5708;0,0;-1,5708;0,0;0,0;23,68;2361,9831;0,03;-1368,5474;0,0;119,39713;0,0;90;0;90\r\n2,02011E+13;0;0;0;0;0;0;0;21,5;1;0;2;0;3;0;0;0;0"
