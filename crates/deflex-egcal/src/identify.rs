@@ -134,10 +134,18 @@ pub fn reduce(
             let combination: Vec<(Param, f64)> =
                 combination.into_iter().map(|(p, c, _)| (p, c)).collect();
             let others: Vec<Param> = combination.iter().map(|(p, _)| *p).collect();
+            let mut why = reason(model, param, &others, false);
+            if length > 1e-4 {
+                // Not an identity of the rigid model (those leave at most the sag's 10⁻⁵
+                // trace): these readings do not separate it.
+                why = format!(
+                    "nearly so in these configurations (independent part {length:.1e} < {tolerance:.0e}; other configurations could separate it): {why}"
+                );
+            }
             dropped.push(NotIdentifiable {
                 param,
                 independence: length,
-                reason: reason(model, param, &others, false),
+                reason: why,
                 combination,
             });
         }

@@ -206,7 +206,14 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
                 .combination
                 .iter()
                 .take(4)
-                .map(|(p, c)| format!("{c:+.3}·{}", result.model.param_name(*p)))
+                .map(|(p, c)| {
+                    let name = result.model.param_name(*p);
+                    if c.abs() >= 1e-2 {
+                        format!("{c:+.3}·{name}")
+                    } else {
+                        format!("{c:+.2e}·{name}")
+                    }
+                })
                 .collect();
             let equivalent = if combination.is_empty() {
                 String::new()
