@@ -7,9 +7,9 @@ use deflex_egcal::campaign::Campaign;
 use deflex_egcal::data::{AbsoluteRow, format_absolute, read_absolute};
 use deflex_egcal::fit::{FitOptions, Step, fit};
 use deflex_egcal::params::EgModel;
-use deflex_egcal::report;
 use deflex_egcal::solve::Loss;
 use deflex_egcal::ur10_tracker::{ImportOptions, import_series};
+use deflex_egcal::{predict, report};
 use std::path::PathBuf;
 
 #[derive(Subcommand)]
@@ -286,7 +286,7 @@ pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
     let rows = read_absolute(&args.data, robot.joint_count()).map_err(|e| e.to_string())?;
     let prediction =
-        report::predict_rows(&robot, rows, args.fit_setup).map_err(|e| e.to_string())?;
+        predict::predict_rows(&robot, rows, args.fit_setup).map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, &prediction.csv)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     if json_output {

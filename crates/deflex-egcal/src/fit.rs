@@ -15,14 +15,15 @@
 //! + lumped masses and + joint-angle harmonics.
 
 use crate::campaign::Campaign;
-use crate::identify::{self, Reduction};
-use crate::params::{EgModel, Param, Unit};
+use crate::identify;
+use crate::params::{EgModel, Param};
 use crate::register;
+use crate::resample::{bootstrap_se, cross_validate};
 use crate::solve::{self, Loss, SolveOptions};
 use deflex_model::spatial::rotation_log;
 use nalgebra::{DMatrix, Vector3};
+use rand::SeedableRng;
 use rand::seq::SliceRandom;
-use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// One step of the model sequence.
@@ -134,151 +135,9 @@ pub enum FitError {
     },
 }
 
-/// Error distribution of a set of readings (norm of the 3-D error, m).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ErrorStats {
-    /// Readings.
-    pub count: usize,
-    /// Root mean square.
-    pub rms: f64,
-    /// Mean.
-    pub mean: f64,
-    /// 95th percentile.
-    pub p95: f64,
-    /// Maximum.
-    pub max: f64,
-}
-
-impl ErrorStats {
-    /// Statistics of error norms.
-    pub fn of(norms: &[f64]) -> ErrorStats {
-        if norms.is_empty() {
-            return ErrorStats::default();
-        }
-        let n = norms.len() as f64;
-        let mut sorted = norms.to_vec();
-        sorted.sort_by(f64::total_cmp);
-        let rank = ((0.95 * n).ceil() as usize).clamp(1, sorted.len()) - 1;
-        ErrorStats {
-            count: norms.len(),
-            rms: (norms.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
-            mean: norms.iter().sum::<f64>() / n,
-            p95: sorted[rank],
-            max: sorted[sorted.len() - 1],
-        }
-    }
-}
-
-/// A held-out group scored at each step.
-#[derive(Clone, Debug, PartialEq)]
-pub struct TestGroup {
-    /// Description (e.g. `A: held-out configurations`).
-    pub name: String,
-    /// Error distribution.
-    pub stats: ErrorStats,
-}
-
-/// One row of the iteration table.
-#[derive(Clone, Debug)]
-pub struct StepReport {
-    /// Step.
-    pub step: Step,
-    /// Candidate parameters.
-    pub candidates: usize,
-    /// Identifiable (fitted) parameters.
-    pub identifiable: usize,
-    /// Absolute readings in the fit: error distribution.
-    pub fit: ErrorStats,
-    /// Loaded readings in the fit: RMS of the displacement error (m), if any.
-    pub loaded_rms: Option<f64>,
-    /// Cross-validated RMS over absolute readings (m), if folds > 0.
-    pub cv_rms: Option<f64>,
-    /// Test groups.
-    pub test: Vec<TestGroup>,
-    /// LM iterations.
-    pub iterations: usize,
-}
-
-/// One parameter's estimate.
-#[derive(Clone, Debug)]
-pub struct Estimate {
-    /// Parameter.
-    pub param: Param,
-    /// Name.
-    pub name: String,
-    /// Unit.
-    pub unit: Unit,
-    /// Starting (nominal) value; for set-up rotations 0 (the estimate is the rotation from the
-    /// registration-only fit).
-    pub start: f64,
-    /// Estimate.
-    pub value: f64,
-    /// Standard error scaled by the residual (√(χ²/dof) × formal).
-    pub standard_error: f64,
-    /// Bootstrap standard error, if run.
-    pub bootstrap_se: Option<f64>,
-}
-
-/// A down-weighted reading.
-#[derive(Clone, Debug)]
-pub struct Outlier {
-    /// Reading index in the campaign.
-    pub index: usize,
-    /// File line (absolute readings), if known.
-    pub line: u64,
-    /// Set-up or load case.
-    pub label: String,
-    /// Residual norm (m).
-    pub residual: f64,
-    /// Robust weight (1 = full).
-    pub weight: f64,
-}
-
-/// Residual of one reading with the final model.
-#[derive(Clone, Debug)]
-pub struct RowResidual {
-    /// Reading index.
-    pub index: usize,
-    /// Measured − predicted (m; tracker frame for absolute readings).
-    pub residual: Vector3<f64>,
-    /// Role: `fit`, `test`, `registration`.
-    pub role: &'static str,
-}
-
-/// Everything a fit produces.
-#[derive(Clone, Debug)]
-pub struct FitResult {
-    /// The iteration table.
-    pub steps: Vec<StepReport>,
-    /// The final model.
-    pub model: EgModel,
-    /// The starting model (nominal robot).
-    pub start: EgModel,
-    /// Reduction of the final step.
-    pub reduction: Reduction,
-    /// Estimates of the final step's identifiable parameters.
-    pub estimates: Vec<Estimate>,
-    /// Covariance of the estimates (same order), scaled by the residual.
-    pub covariance: DMatrix<f64>,
-    /// χ²/dof of the final fit with the stated σ (absolute and loaded readings together).
-    pub chi2_per_dof: f64,
-    /// Plain warning when χ²/dof ≫ 1.
-    pub warning: Option<String>,
-    /// Readings whose robust weight fell below 0.5, largest residual first.
-    pub outliers: Vec<Outlier>,
-    /// Number of readings down-weighted at all (weight < 1).
-    pub downweighted: usize,
-    /// Final residuals of every reading.
-    pub residuals: Vec<RowResidual>,
-    /// Role multiplicity used: 1 = fit, 0 = held out.
-    pub fit_rows: Vec<bool>,
-    /// Largest correlations |ρ| ≥ 0.95 between identified parameters.
-    pub correlations: Vec<(String, String, f64)>,
-    /// Robust loss used.
-    pub loss: Loss,
-    /// Set-ups fitted on registration only (test set-ups).
-    pub registration_only_setups: Vec<String>,
-}
+pub use crate::outcome::{
+    ErrorStats, Estimate, FitResult, Outlier, RowResidual, StepReport, TestGroup,
+};
 
 /// Candidates of a step, in priority order.
 fn candidates(
@@ -739,98 +598,4 @@ pub fn fit(
             .collect(),
         model,
     })
-}
-
-/// k-fold cross-validation by configuration: refit (warm start, same identifiable set) on the
-/// other folds and score each fold's absolute readings. RMS of the held-out error norms (m).
-fn cross_validate(
-    model: &EgModel,
-    campaign: &Campaign,
-    kept: &[Param],
-    fit_mult: &[f64],
-    fold_of: &[usize],
-    folds: usize,
-    options: &SolveOptions,
-) -> f64 {
-    let mut squares = 0.0;
-    let mut count = 0usize;
-    for fold in 0..folds {
-        let train: Vec<f64> = (0..campaign.len())
-            .map(|i| {
-                if fold_of[campaign.config(i)] == fold {
-                    0.0
-                } else {
-                    fit_mult[i]
-                }
-            })
-            .collect();
-        let held: Vec<usize> = (0..campaign.absolute.len())
-            .filter(|&i| fit_mult[i] > 0.0 && fold_of[campaign.config(i)] == fold)
-            .collect();
-        if held.is_empty() {
-            continue;
-        }
-        let mut trained = model.clone();
-        solve::solve(&mut trained, campaign, kept, &train, options);
-        for e in norms(&trained, campaign, &held) {
-            squares += e * e;
-            count += 1;
-        }
-    }
-    (squares / count.max(1) as f64).sqrt()
-}
-
-/// Bootstrap by configuration: resample configurations with replacement, refit with the final
-/// robust weights fixed (warm start), and return each parameter's standard deviation.
-fn bootstrap_se(
-    model: &EgModel,
-    campaign: &Campaign,
-    kept: &[Param],
-    fit_mult: &[f64],
-    weights: &[f64],
-    replicates: usize,
-    rng: &mut ChaCha8Rng,
-) -> Vec<f64> {
-    let configs = campaign.total_configs();
-    let fitted: Vec<usize> = {
-        let mut c: Vec<usize> = (0..campaign.len())
-            .filter(|&i| fit_mult[i] > 0.0)
-            .map(|i| campaign.config(i))
-            .collect();
-        c.sort_unstable();
-        c.dedup();
-        c
-    };
-    let options = SolveOptions {
-        loss: Loss::Squared,
-        max_iterations: 20,
-        ..SolveOptions::default()
-    };
-    let mut sums = vec![0.0; kept.len()];
-    let mut squares = vec![0.0; kept.len()];
-    for _ in 0..replicates {
-        let mut draws = vec![0.0; configs];
-        for _ in 0..fitted.len() {
-            draws[fitted[rng.gen_range(0..fitted.len())]] += 1.0;
-        }
-        let mult: Vec<f64> = (0..campaign.len())
-            .map(|i| fit_mult[i] * draws[campaign.config(i)] * weights[i])
-            .collect();
-        let mut replica = model.clone();
-        solve::solve(&mut replica, campaign, kept, &mult, &options);
-        for (k, &param) in kept.iter().enumerate() {
-            let v = relative_value(&replica, model, param);
-            sums[k] += v;
-            squares[k] += v * v;
-        }
-    }
-    let n = replicates as f64;
-    sums.iter()
-        .zip(&squares)
-        .map(|(s, q)| {
-            ((q / n - (s / n).powi(2)) * n / (n - 1.0).max(1.0))
-                .max(0.0)
-                .sqrt()
-        })
-        .collect()
 }

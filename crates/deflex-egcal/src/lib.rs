@@ -13,8 +13,10 @@
 //! * [`model`]: prediction and analytic Jacobians;
 //! * [`identify`]: reduction to the identifiable parameter set;
 //! * [`solve`]: Levenberg–Marquardt with robust (Huber/Cauchy) reweighting;
-//! * [`fit`]: registration, model steps, uncertainty, bootstrap, cross-validation;
-//! * [`report`]: text, JSON and HTML outputs.
+//! * [`fit`]: registration, model steps, uncertainty; [`outcome`]: what a fit produces;
+//! * [`resample`]: cross-validation and bootstrap by configuration;
+//! * [`report`], [`plots`]: text, JSON and HTML outputs;
+//! * [`predict`]: per-row predictions of a calibrated robot file.
 
 #![warn(missing_docs)]
 
@@ -23,9 +25,12 @@ pub mod data;
 pub mod fit;
 pub mod identify;
 pub mod model;
+pub mod outcome;
 pub mod params;
 pub mod plots;
+pub mod predict;
 pub mod register;
 pub mod report;
+pub mod resample;
 pub mod solve;
 pub mod ur10_tracker;

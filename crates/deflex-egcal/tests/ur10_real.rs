@@ -144,7 +144,7 @@ fn calibrated_robot_file_predicts_like_the_fit() {
     }
     // Written with full precision: agreement to well below a micrometre.
     assert!(worst < 1e-8, "{worst}");
-    let prediction = deflex_egcal::report::predict_rows(&robot, rows, false).unwrap();
+    let prediction = deflex_egcal::predict::predict_rows(&robot, rows, false).unwrap();
     let fit_rms = result.steps.last().unwrap().fit.rms;
     let predicted_rms = prediction.json["rms_m"].as_f64().unwrap();
     assert!(
