@@ -7,6 +7,7 @@ mod cmd_calib;
 mod cmd_compensate;
 mod cmd_control;
 mod cmd_demo;
+mod cmd_egcal;
 mod cmd_model;
 mod cmd_plan;
 mod cmd_sim;
@@ -52,6 +53,16 @@ enum Command {
     Map(cmd_model::MapArgs),
     /// Identify stiffnesses (and the model structure) from measurements.
     Calibrate(cmd_calib::CalibrateArgs),
+    /// Elasto-geometric calibration from absolute tracker readings: geometry, set-ups,
+    /// targets, gravity sag and stiffness together.
+    CalibrateGeometry(cmd_egcal::CalibrateGeometryArgs),
+    /// Predict absolute readings (each row's target in its set-up's tracker frame).
+    Predict(cmd_egcal::PredictArgs),
+    /// Convert a public data set into deflex's absolute measurement format.
+    Import {
+        #[command(subcommand)]
+        command: cmd_egcal::ImportCommand,
+    },
     /// Prediction errors of a model against measurements, with plots.
     Validate(cmd_calib::ValidateArgs),
     /// Propose a measurement campaign for identification.
@@ -81,6 +92,9 @@ fn main() -> ExitCode {
         Command::Ik(args) => cmd_model::ik(args, cli.json),
         Command::Map(args) => cmd_model::map(args, cli.json),
         Command::Calibrate(args) => cmd_calib::calibrate(args, cli.json),
+        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json),
+        Command::Predict(args) => cmd_egcal::predict(args, cli.json),
+        Command::Import { command } => cmd_egcal::import(command, cli.json),
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
         Command::Plan(args) => cmd_calib::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),

@@ -1,0 +1,199 @@
+//! End-to-end: `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict` and
+//! `deflex pose` on the vendored real UR10 subset, through the real binary.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn deflex(args: &[&str]) -> (bool, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
+        .args(args)
+        .output()
+        .expect("run deflex");
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["--json"];
+    all.extend_from_slice(args);
+    let (ok, stdout, stderr) = deflex(&all);
+    assert!(ok, "deflex {args:?} failed: {stderr}");
+    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
+}
+
+fn data(series: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../deflex-egcal/tests/data/ur10-tracker")
+        .join(series)
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("deflex-cli-egcal-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn import_calibrate_predict_pose() {
+    let dir = scratch("flow");
+    let a = dir.join("A.csv");
+    let b = dir.join("B.csv");
+    let s = |p: &Path| p.display().to_string();
+    let v = json(&[
+        "import",
+        "ur10-tracker",
+        "--series",
+        &s(&data("Series_A")),
+        "--setup",
+        "A",
+        "--out",
+        &s(&a),
+    ]);
+    assert_eq!(v["rows_written"], 298);
+    json(&[
+        "import",
+        "ur10-tracker",
+        "--series",
+        &s(&data("Series_B")),
+        "--setup",
+        "B",
+        "--out",
+        &s(&b),
+    ]);
+    let model = dir.join("ur10-calibrated.toml");
+    let report = dir.join("report");
+    let v = json(&[
+        "calibrate-geometry",
+        "--robot",
+        "ur10",
+        "--data",
+        &s(&a),
+        "--test-data",
+        &s(&b),
+        "--elastic",
+        "J2.z,J3.z",
+        "--folds",
+        "3",
+        "--out",
+        &s(&model),
+        "--report",
+        &s(&report),
+    ]);
+    let steps = v["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 3);
+    let held = |k: usize| steps[k]["held_out"][0]["stats"]["rms_m"].as_f64().unwrap();
+    assert!(
+        held(2) < 0.7 * held(0),
+        "B held out: {} → {}",
+        held(0),
+        held(2)
+    );
+    for file in [
+        "index.html",
+        "report.json",
+        "residuals.csv",
+        "residuals_vs_joints.png",
+        "error_distribution.png",
+    ] {
+        assert!(report.join(file).exists(), "{file}");
+    }
+    // The calibrated file knows set-up A and B (B registered on half of its configurations):
+    // `predict` scores A's readings with it.
+    let p = json(&[
+        "predict",
+        "--robot",
+        &s(&model),
+        "--data",
+        &s(&a),
+        "--out",
+        &s(&dir.join("pred.csv")),
+    ]);
+    let rms = p["rms_m"].as_f64().unwrap();
+    let fit_rms = steps[2]["fit"]["rms_m"].as_f64().unwrap();
+    assert!((rms - fit_rms).abs() < 1e-9, "{rms} vs {fit_rms}");
+    let csv = std::fs::read_to_string(dir.join("pred.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().contains("predicted_x_m"));
+    assert_eq!(csv.lines().count(), 299);
+    // `pose` of the calibrated file reports the calibrated flange plus the fitted sag.
+    let pose = json(&["pose", "--robot", &s(&model), "--q-deg", "0,-90,0,-90,0,0"]);
+    assert!(pose["gravity_sag_m"].is_array());
+    // A set-up the model does not know is refused with its name, unless --fit-setup.
+    let renamed = dir.join("C.csv");
+    std::fs::write(
+        &renamed,
+        std::fs::read_to_string(&a).unwrap().replace("\nA,", "\nC,"),
+    )
+    .unwrap();
+    let (ok, _, stderr) = deflex(&[
+        "predict",
+        "--robot",
+        &s(&model),
+        "--data",
+        &s(&renamed),
+        "--out",
+        &s(&dir.join("c.csv")),
+    ]);
+    assert!(
+        !ok && stderr.contains("`C`") && stderr.contains("--fit-setup"),
+        "{stderr}"
+    );
+    let p = json(&[
+        "predict",
+        "--robot",
+        &s(&model),
+        "--data",
+        &s(&renamed),
+        "--fit-setup",
+        "--out",
+        &s(&dir.join("c.csv")),
+    ]);
+    assert!(p["rms_m"].as_f64().unwrap() < 0.6e-3);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_inputs_are_named() {
+    let (ok, _, stderr) = deflex(&[
+        "calibrate-geometry",
+        "--robot",
+        "ur10",
+        "--data",
+        "/nonexistent.csv",
+        "--out",
+        "/tmp/x.toml",
+    ]);
+    assert!(!ok && stderr.contains("/nonexistent.csv"), "{stderr}");
+    let dir = scratch("bad");
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "setup,target,q1_rad,q2_rad,q3_rad,q4_rad,q5_rad,q6_rad,x_m,y_m,z_m\nA,t,0,0,0,0,0,0,1,2,nan\n").unwrap();
+    let (ok, _, stderr) = deflex(&[
+        "calibrate-geometry",
+        "--robot",
+        "ur10",
+        "--data",
+        &bad.display().to_string(),
+        "--out",
+        "/tmp/x.toml",
+    ]);
+    assert!(
+        !ok && stderr.contains("bad.csv:2") && stderr.contains("z_m"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = deflex(&[
+        "calibrate-geometry",
+        "--robot",
+        "ur10",
+        "--data",
+        &bad.display().to_string(),
+        "--steps",
+        "registration,wobble",
+        "--out",
+        "/tmp/x.toml",
+    ]);
+    assert!(!ok && stderr.contains("wobble"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

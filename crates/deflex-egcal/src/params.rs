@@ -1,0 +1,428 @@
+//! The error parameters of the elasto-geometric model and the state they act on.
+//!
+//! Every parameter is a small correction applied to an [`EgModel`] by [`EgModel::apply`]:
+//! additive for DH rows, θ offsets, target offsets, compliances, lumped masses and harmonics;
+//! on SO(3) for set-up rotations (`R ← R·exp(δφ)`, the increment in robot-world axes). The LM
+//! loop linearises around the current model, so every increment is small and every parameter
+//! has a clear physical reading.
+
+use deflex_model::{DhConvention, NamedPoint, NamedPose, Robot};
+use nalgebra::{Rotation3, Vector3};
+
+/// Which DH field a geometric parameter corrects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum DhField {
+    /// Joint offset θ (rad): the joint's `theta_offset`.
+    Theta,
+    /// Offset d along the joint axis (m).
+    D,
+    /// Length a (m).
+    A,
+    /// Twist α (rad).
+    Alpha,
+    /// Hayati tilt β about y (rad), for rows whose consecutive axes are parallel.
+    Beta,
+}
+
+impl DhField {
+    fn name(self) -> &'static str {
+        match self {
+            DhField::Theta => "theta",
+            DhField::D => "d",
+            DhField::A => "a",
+            DhField::Alpha => "alpha",
+            DhField::Beta => "beta",
+        }
+    }
+}
+
+/// One identifiable quantity (before reduction).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Param {
+    /// Set-up `s`: rotation about robot-world axis `k` (0 = x, 1 = y, 2 = z) through the world
+    /// origin (rad).
+    SetupRotation(usize, usize),
+    /// Set-up `s`: translation along robot-world axis `k` (m).
+    SetupTranslation(usize, usize),
+    /// Target `t`: coordinate `k` of its position in the flange frame (m).
+    Target(usize, usize),
+    /// DH field of joint `j` (0-based).
+    Dh(usize, DhField),
+    /// Compliance 1/k of eDoF `e` (index in [`Robot::edofs`] order), rad/(N·m).
+    Compliance(usize),
+    /// Mass of body `b` (0-based joint index), kg.
+    Mass(usize),
+    /// First moment m·c of body `b` about axis `k` of its joint frame R_b (kg·m).
+    FirstMoment(usize, usize),
+    /// Joint-angle-dependent offset of joint `j`: `Δθ_j = a·cos(n q_j)` (`sine` false) or
+    /// `b·sin(n q_j)`, order `n` (rad): gear or encoder eccentricity.
+    Harmonic {
+        /// Joint (0-based).
+        joint: usize,
+        /// Order n ≥ 1.
+        order: u8,
+        /// Sine (true) or cosine (false) term.
+        sine: bool,
+    },
+}
+
+/// Coarse groups, for tables and the identifiability reasons.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamGroup {
+    /// Tracker set-up registration.
+    Setup,
+    /// Target offset on the flange.
+    Target,
+    /// Kinematic (DH) error.
+    Geometry,
+    /// Compliance (gravity / load).
+    Compliance,
+    /// Lumped masses.
+    Mass,
+    /// Joint-angle harmonics.
+    Harmonic,
+}
+
+/// Physical unit of a parameter, for display.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// Metre (shown in mm).
+    Metre,
+    /// Radian (shown in mrad).
+    Radian,
+    /// rad/(N·m) (shown as µrad/(N·m)).
+    Compliance,
+    /// kg.
+    Kilogram,
+    /// kg·m.
+    KilogramMetre,
+}
+
+impl Unit {
+    /// Display factor and label: value × factor in label units.
+    pub fn display(self) -> (f64, &'static str) {
+        match self {
+            Unit::Metre => (1e3, "mm"),
+            Unit::Radian => (1e3, "mrad"),
+            Unit::Compliance => (1e6, "µrad/(N·m)"),
+            Unit::Kilogram => (1.0, "kg"),
+            Unit::KilogramMetre => (1.0, "kg·m"),
+        }
+    }
+
+    /// SI label.
+    pub fn si(self) -> &'static str {
+        match self {
+            Unit::Metre => "m",
+            Unit::Radian => "rad",
+            Unit::Compliance => "rad/(N·m)",
+            Unit::Kilogram => "kg",
+            Unit::KilogramMetre => "kg·m",
+        }
+    }
+}
+
+const XYZ: [&str; 3] = ["x", "y", "z"];
+
+/// One joint-angle harmonic term with its coefficient.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HarmonicTerm {
+    /// Joint (0-based).
+    pub joint: usize,
+    /// Order n ≥ 1.
+    pub order: u8,
+    /// Sine (true) or cosine (false).
+    pub sine: bool,
+    /// Coefficient (rad).
+    pub value: f64,
+}
+
+/// The model being identified: a robot (DH rows, θ offsets, eDoFs) plus what absolute
+/// measurements need besides it.
+#[derive(Clone, Debug)]
+pub struct EgModel {
+    /// The robot; its DH rows and θ offsets carry the kinematic corrections.
+    pub robot: Robot,
+    /// Set-up registrations (`p_tracker = pose · p_world`).
+    pub setups: Vec<NamedPose>,
+    /// Targets in the flange frame.
+    pub targets: Vec<NamedPoint>,
+    /// Compliance of each eDoF of the robot ([`Robot::edofs`] order), rad/(N·m); 0 = rigid.
+    pub compliance: Vec<f64>,
+    /// Lumped gravity parameters of each body: mass (kg) and first moment m·c in R_b (kg·m).
+    pub lumped: Vec<[f64; 4]>,
+    /// Joint-angle harmonics.
+    pub harmonics: Vec<HarmonicTerm>,
+}
+
+impl EgModel {
+    /// A model from a robot: compliances from its stiffnesses, lumped parameters from its
+    /// masses, its set-ups and targets.
+    pub fn from_robot(robot: &Robot) -> EgModel {
+        let compliance = robot.edofs().map(|e| 1.0 / e.stiffness).collect();
+        let lumped = robot
+            .joints
+            .iter()
+            .map(|j| match j.inertia {
+                Some(i) => [
+                    i.mass_kg,
+                    i.mass_kg * i.com.x,
+                    i.mass_kg * i.com.y,
+                    i.mass_kg * i.com.z,
+                ],
+                None => [0.0; 4],
+            })
+            .collect();
+        EgModel {
+            robot: robot.clone(),
+            setups: robot.setups.clone(),
+            targets: robot.targets.clone(),
+            compliance,
+            lumped,
+            harmonics: Vec::new(),
+        }
+    }
+
+    /// Joint values with the harmonic offsets added (FK adds `θ_offset` to these).
+    pub fn effective_q(&self, q: &[f64], out: &mut [f64]) {
+        out[..q.len()].copy_from_slice(q);
+        for h in &self.harmonics {
+            let x = f64::from(h.order) * q[h.joint];
+            out[h.joint] += h.value * if h.sine { x.sin() } else { x.cos() };
+        }
+    }
+
+    /// Index of a set-up by name.
+    pub fn setup_index(&self, name: &str) -> Option<usize> {
+        self.setups.iter().position(|s| s.name == name)
+    }
+
+    /// Index of a target by name.
+    pub fn target_index(&self, name: &str) -> Option<usize> {
+        self.targets.iter().position(|t| t.name == name)
+    }
+
+    /// Human-readable name of a parameter (ASCII, stable: used in JSON and CSV).
+    pub fn param_name(&self, param: Param) -> String {
+        let edof_label = |e: usize| {
+            self.robot
+                .edofs()
+                .nth(e)
+                .map_or_else(|| format!("edof{e}"), |edof| edof.label())
+        };
+        match param {
+            Param::SetupRotation(s, k) => format!("setup[{}].r{}", self.setups[s].name, XYZ[k]),
+            Param::SetupTranslation(s, k) => {
+                format!("setup[{}].t{}", self.setups[s].name, XYZ[k])
+            }
+            Param::Target(t, k) => format!("target[{}].{}", self.targets[t].name, XYZ[k]),
+            Param::Dh(j, f) => format!("J{}.{}", j + 1, f.name()),
+            Param::Compliance(e) => format!("c[{}]", edof_label(e)),
+            Param::Mass(b) => format!("body{}.m", b + 1),
+            Param::FirstMoment(b, k) => format!("body{}.m{}", b + 1, XYZ[k]),
+            Param::Harmonic { joint, order, sine } => format!(
+                "J{}.{}{}",
+                joint + 1,
+                if sine { "sin" } else { "cos" },
+                order
+            ),
+        }
+    }
+
+    /// Group of a parameter.
+    pub fn group(param: Param) -> ParamGroup {
+        match param {
+            Param::SetupRotation(..) | Param::SetupTranslation(..) => ParamGroup::Setup,
+            Param::Target(..) => ParamGroup::Target,
+            Param::Dh(..) => ParamGroup::Geometry,
+            Param::Compliance(_) => ParamGroup::Compliance,
+            Param::Mass(_) | Param::FirstMoment(..) => ParamGroup::Mass,
+            Param::Harmonic { .. } => ParamGroup::Harmonic,
+        }
+    }
+
+    /// Unit of a parameter.
+    pub fn unit(param: Param) -> Unit {
+        match param {
+            Param::SetupRotation(..)
+            | Param::Dh(_, DhField::Theta | DhField::Alpha | DhField::Beta)
+            | Param::Harmonic { .. } => Unit::Radian,
+            Param::SetupTranslation(..) | Param::Target(..) | Param::Dh(_, _) => Unit::Metre,
+            Param::Compliance(_) => Unit::Compliance,
+            Param::Mass(_) => Unit::Kilogram,
+            Param::FirstMoment(..) => Unit::KilogramMetre,
+        }
+    }
+
+    /// Current value of a parameter (for set-up rotations: 0, they are increments).
+    pub fn value(&self, param: Param) -> f64 {
+        match param {
+            Param::SetupRotation(..) => 0.0,
+            Param::SetupTranslation(s, k) => {
+                let pose = &self.setups[s].pose;
+                (pose.rotation.inverse() * pose.translation.vector)[k]
+            }
+            Param::Target(t, k) => self.targets[t].position[k],
+            Param::Dh(j, f) => {
+                let joint = &self.robot.joints[j];
+                let dh = joint.dh.unwrap_or_default();
+                match f {
+                    DhField::Theta => joint.theta_offset,
+                    DhField::D => dh.d,
+                    DhField::A => dh.a,
+                    DhField::Alpha => dh.alpha,
+                    DhField::Beta => dh.beta,
+                }
+            }
+            Param::Compliance(e) => self.compliance[e],
+            Param::Mass(b) => self.lumped[b][0],
+            Param::FirstMoment(b, k) => self.lumped[b][1 + k],
+            Param::Harmonic { joint, order, sine } => self
+                .harmonics
+                .iter()
+                .find(|h| h.joint == joint && h.order == order && h.sine == sine)
+                .map_or(0.0, |h| h.value),
+        }
+    }
+
+    /// Apply the increments `delta[i]` to `params[i]` (see the module documentation) and
+    /// rebuild the robot's placements.
+    pub fn apply(&mut self, params: &[Param], delta: &[f64]) {
+        let mut rotations = vec![Vector3::zeros(); self.setups.len()];
+        let mut translations = vec![Vector3::zeros(); self.setups.len()];
+        let mut geometry = false;
+        for (&param, &d) in params.iter().zip(delta) {
+            match param {
+                Param::SetupRotation(s, k) => rotations[s][k] += d,
+                Param::SetupTranslation(s, k) => translations[s][k] += d,
+                Param::Target(t, k) => self.targets[t].position[k] += d,
+                Param::Dh(j, f) => {
+                    geometry = true;
+                    let joint = &mut self.robot.joints[j];
+                    if f == DhField::Theta {
+                        joint.theta_offset += d;
+                    } else {
+                        let dh = joint.dh.get_or_insert_with(Default::default);
+                        match f {
+                            DhField::D => dh.d += d,
+                            DhField::A => dh.a += d,
+                            DhField::Alpha => dh.alpha += d,
+                            DhField::Beta => dh.beta += d,
+                            DhField::Theta => {}
+                        }
+                    }
+                }
+                Param::Compliance(e) => self.compliance[e] += d,
+                Param::Mass(b) => self.lumped[b][0] += d,
+                Param::FirstMoment(b, k) => self.lumped[b][1 + k] += d,
+                Param::Harmonic { joint, order, sine } => {
+                    match self
+                        .harmonics
+                        .iter_mut()
+                        .find(|h| h.joint == joint && h.order == order && h.sine == sine)
+                    {
+                        Some(h) => h.value += d,
+                        None => self.harmonics.push(HarmonicTerm {
+                            joint,
+                            order,
+                            sine,
+                            value: d,
+                        }),
+                    }
+                }
+            }
+        }
+        for (s, setup) in self.setups.iter_mut().enumerate() {
+            let (phi, t) = (rotations[s], translations[s]);
+            if phi != Vector3::zeros() || t != Vector3::zeros() {
+                // p_t = R (exp(φ) p + δt) + t_s  →  R' = R exp(φ), t' = t_s + R δt.
+                let r = setup.pose.rotation;
+                setup.pose.translation.vector += r * t;
+                setup.pose.rotation = r * Rotation3::from_scaled_axis(phi);
+            }
+        }
+        if geometry {
+            self.robot.rebuild_dh_geometry();
+        }
+    }
+
+    /// The candidate geometric parameters of a DH robot: θ, d, a, α of every joint, and β of
+    /// the rows whose consecutive axes are parallel (|sin α| < 0.01; Hayati). Empty for a
+    /// robot without a DH table.
+    pub fn geometric_params(&self) -> Vec<Param> {
+        let Some(convention) = self.robot.dh_convention else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (j, joint) in self.robot.joints.iter().enumerate() {
+            out.push(Param::Dh(j, DhField::Theta));
+            out.push(Param::Dh(j, DhField::D));
+            out.push(Param::Dh(j, DhField::A));
+            out.push(Param::Dh(j, DhField::Alpha));
+            let parallel_row = match convention {
+                // Standard DH: row j's α is the twist between axes j and j+1.
+                DhConvention::Standard => j + 1 < self.robot.joints.len(),
+                // Modified DH: row j's α is the twist between axes j−1 and j.
+                DhConvention::Modified => j > 0,
+            } && joint.dh.is_some_and(|dh| dh.alpha.sin().abs() < 0.01);
+            if parallel_row {
+                out.push(Param::Dh(j, DhField::Beta));
+            }
+        }
+        out
+    }
+
+    /// Registration parameters of every set-up and target.
+    pub fn registration_params(&self) -> Vec<Param> {
+        let mut out = Vec::new();
+        for s in 0..self.setups.len() {
+            for k in 0..3 {
+                out.push(Param::SetupRotation(s, k));
+            }
+            for k in 0..3 {
+                out.push(Param::SetupTranslation(s, k));
+            }
+        }
+        for t in 0..self.targets.len() {
+            for k in 0..3 {
+                out.push(Param::Target(t, k));
+            }
+        }
+        out
+    }
+
+    /// Write the identified quantities back into a robot: DH rows and θ offsets (already
+    /// there), stiffness = 1/compliance (an eDoF with compliance ≤ 0 becomes rigid), masses and
+    /// centres of mass from the lumped parameters, set-ups and targets. Harmonic terms have no
+    /// place in a robot file; the caller reports them.
+    pub fn to_robot(&self) -> Robot {
+        let mut robot = self.robot.clone();
+        let edofs: Vec<_> = robot.edofs().collect();
+        for (edof, &c) in edofs.iter().zip(&self.compliance) {
+            let k = 1.0 / c;
+            let stiffness = (c > 0.0 && k <= deflex_model::bounds::MAX_STIFFNESS)
+                .then_some(k.max(deflex_model::bounds::MIN_STIFFNESS));
+            robot.set_stiffness(edof.site, edof.axis, stiffness);
+        }
+        for (joint, lumped) in robot.joints.iter_mut().zip(&self.lumped) {
+            if lumped[0] > 0.0 {
+                joint.inertia = Some(deflex_model::LinkInertia {
+                    mass_kg: lumped[0],
+                    com: Vector3::new(lumped[1], lumped[2], lumped[3]) / lumped[0],
+                });
+            }
+        }
+        // The file writes centres of mass in the convention's link frame: for standard DH that
+        // is L_i of the *calibrated* row (the model keeps them in R_i).
+        if robot.dh_convention == Some(deflex_model::DhConvention::Standard) {
+            for joint in &mut robot.joints {
+                if let Some(dh) = &joint.dh {
+                    joint.link_frame = deflex_model::dh::standard_dh_link(dh);
+                }
+            }
+        }
+        robot.setups = self.setups.clone();
+        robot.targets = self.targets.clone();
+        robot
+    }
+}
