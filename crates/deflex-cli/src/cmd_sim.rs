@@ -100,7 +100,9 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
             if grid != "paper" {
                 return Err(format!("--grid: only `paper` is known, got \"{grid}\""));
             }
-            let plan = validation_grid(&config).map_err(|e| e.to_string())?;
+            let params =
+                deflex_sim::campaign::GridParams::for_cell(&config).map_err(|e| e.to_string())?;
+            let plan = validation_grid(&config, &params).map_err(|e| e.to_string())?;
             let rows = run_campaign(&config, &plan, args.seed).map_err(|e| e.to_string())?;
             (
                 "validation grid (paper, 600 N and 1100 N)".to_string(),

@@ -9,7 +9,7 @@ use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::validate::predict;
 use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure, write_rows};
 use deflex_model::{Robot, builtin, robot_to_toml};
-use deflex_sim::campaign::{SpiralParams, run_campaign, spiral, validation_grid};
+use deflex_sim::campaign::{GridParams, SpiralParams, run_campaign, spiral, validation_grid};
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -211,7 +211,8 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     // calibrated on the same data.
     let clock = Instant::now();
     progress.stage(3, STAGES, "identify the model structure and stiffnesses");
-    let start = builtin("tx200-1edof").ok_or("built-in tx200-1edof missing")?;
+    let mut start = builtin("tx200-1edof").ok_or("built-in tx200-1edof missing")?;
+    start.tool = cell.tool();
     let search = search_structure(
         &start,
         &campaign,
@@ -256,7 +257,8 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     // 4. Validation on the paper's grid (600 N and 1100 N).
     let clock = Instant::now();
     progress.stage(4, STAGES, "validate on the paper's 200-pose grid");
-    let grid_plan = validation_grid(&cell).map_err(|e| e.to_string())?;
+    let grid_params = GridParams::for_cell(&cell).map_err(|e| e.to_string())?;
+    let grid_plan = validation_grid(&cell, &grid_params).map_err(|e| e.to_string())?;
     let grid = run_campaign(&cell, &grid_plan, seed.wrapping_add(1)).map_err(|e| e.to_string())?;
     write_rows(&out.join("grid.csv"), &grid).map_err(|e| e.to_string())?;
     let models: [(&str, &Robot); 3] = [

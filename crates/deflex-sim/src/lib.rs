@@ -42,20 +42,23 @@
 
 pub mod campaign;
 pub mod cell;
+pub mod chain;
 pub mod config;
 pub mod controller_emulation;
 pub mod error;
+pub mod fixture;
 pub mod forming;
 pub mod gcode;
 pub mod plant;
 mod plots;
+pub mod profile;
 pub mod sensor;
 pub mod sheet;
 pub mod toolpath;
 pub mod tracker;
 
 pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};
-pub use config::CellConfig;
+pub use config::{CellConfig, ErrorSources, ProcessKind};
 pub use error::SimError;
 pub use forming::{FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress};
-pub use toolpath::{ConeParams, PyramidParams, ToolPath, Waypoint};
+pub use toolpath::{ConeParams, PlungeParams, PyramidParams, ToolPath, Waypoint};
