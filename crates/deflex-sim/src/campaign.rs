@@ -96,7 +96,10 @@ pub fn run_campaign(
             }
             let finite = r.q_rad.iter().all(|v| v.is_finite() && v.abs() <= 100.0)
                 && r.wrench.iter().all(|v| v.is_finite() && v.abs() <= 1e6)
-                && r.point_m.iter().chain(&r.load_point_m).all(|v| v.is_finite() && v.abs() <= 100.0);
+                && r.point_m
+                    .iter()
+                    .chain(&r.load_point_m)
+                    .all(|v| v.is_finite() && v.abs() <= 100.0);
             if !finite {
                 return Err(SimError::Path(format!(
                     "load case {case}: joint values, wrench and points must be finite (|q| ≤ 100 rad, \
@@ -300,7 +303,13 @@ fn cell_force_level(config: &CellConfig) -> f64 {
         s.default_step_down_mm,
         s.default_wall_angle_deg,
     );
-    crate::sheet::aerens_fz(s.rm_mpa, s.thickness_mm, s.tool_diameter_mm, dh, s.default_wall_angle_deg)
+    crate::sheet::aerens_fz(
+        s.rm_mpa,
+        s.thickness_mm,
+        s.tool_diameter_mm,
+        dh,
+        s.default_wall_angle_deg,
+    )
 }
 
 fn round_load(n: f64) -> f64 {

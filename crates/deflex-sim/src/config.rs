@@ -444,8 +444,20 @@ impl CellConfig {
     pub fn validate(&self) -> Result<(), SimError> {
         let c = &self.controller;
         bounded("controller.rate_hz", c.rate_hz, 10.0, 10_000.0, "Hz")?;
-        bounded("controller.correction_delay_s", c.correction_delay_s, 0.0, 1.0, "s")?;
-        bounded("controller.correction_filter_s", c.correction_filter_s, 0.0, 1.0, "s")?;
+        bounded(
+            "controller.correction_delay_s",
+            c.correction_delay_s,
+            0.0,
+            1.0,
+            "s",
+        )?;
+        bounded(
+            "controller.correction_filter_s",
+            c.correction_filter_s,
+            0.0,
+            1.0,
+            "s",
+        )?;
         if c.servo_bandwidth_hz != 0.0 {
             bounded(
                 "controller.servo_bandwidth_hz",
@@ -457,7 +469,12 @@ impl CellConfig {
         }
         bounded("controller.lookahead_s", c.lookahead_s, 0.0, 1.0, "s")?;
         bounded_open("controller.max_correction_m", c.max_correction_m, 0.1, "m")?;
-        bounded_open("controller.max_correction_rad", c.max_correction_rad, 0.5, "rad")?;
+        bounded_open(
+            "controller.max_correction_rad",
+            c.max_correction_rad,
+            0.5,
+            "rad",
+        )?;
         bounded_open(
             "controller.max_correction_speed_m_s",
             c.max_correction_speed_m_s,
@@ -470,15 +487,42 @@ impl CellConfig {
             10.0,
             "rad/s",
         )?;
-        bounded("controller.rapid_feed_mm_s", c.rapid_feed_mm_s, 0.1, 2000.0, "mm/s")?;
+        bounded(
+            "controller.rapid_feed_mm_s",
+            c.rapid_feed_mm_s,
+            0.1,
+            2000.0,
+            "mm/s",
+        )?;
         let s = &self.sensor;
         bounded("sensor.rate_hz", s.rate_hz, 100.0, 7000.0, "Hz")?;
-        all_bounded("sensor.sensor_in_flange_xyz_m", &s.sensor_in_flange_xyz_m, 2.0, "m")?;
-        all_bounded("sensor.sensor_in_flange_rpy", &s.sensor_in_flange_rpy, 7.0, "rad")?;
+        all_bounded(
+            "sensor.sensor_in_flange_xyz_m",
+            &s.sensor_in_flange_xyz_m,
+            2.0,
+            "m",
+        )?;
+        all_bounded(
+            "sensor.sensor_in_flange_rpy",
+            &s.sensor_in_flange_rpy,
+            7.0,
+            "rad",
+        )?;
         bounded("sensor.tool_mass_kg", s.tool_mass_kg, 0.0, 1000.0, "kg")?;
-        all_bounded("sensor.tool_com_in_sensor_m", &s.tool_com_in_sensor_m, 2.0, "m")?;
+        all_bounded(
+            "sensor.tool_com_in_sensor_m",
+            &s.tool_com_in_sensor_m,
+            2.0,
+            "m",
+        )?;
         for (i, v) in s.noise_sigma.iter().enumerate() {
-            bounded(&format!("sensor.noise_sigma[{i}]"), *v, 0.0, 1000.0, "N or N·m")?;
+            bounded(
+                &format!("sensor.noise_sigma[{i}]"),
+                *v,
+                0.0,
+                1000.0,
+                "N or N·m",
+            )?;
         }
         all_bounded("sensor.bias", &s.bias, 1e4, "N or N·m")?;
         for (i, v) in s.range.iter().enumerate() {
@@ -486,10 +530,31 @@ impl CellConfig {
         }
         bounded("sensor.gravity_m_s2", s.gravity_m_s2, 0.0, 30.0, "m/s²")?;
         all_bounded("sensor.gain_error", &s.gain_error, 0.5, "(relative)")?;
-        all_bounded("sensor.bias_drift_per_s", &s.bias_drift_per_s, 10.0, "N/s or N·m/s")?;
-        all_bounded("sensor.mounting_error_xyz_m", &s.mounting_error_xyz_m, 0.05, "m")?;
-        all_bounded("sensor.mounting_error_rpy", &s.mounting_error_rpy, 0.1, "rad")?;
-        bounded("sensor.tool_mass_error_kg", s.tool_mass_error_kg, -10.0, 10.0, "kg")?;
+        all_bounded(
+            "sensor.bias_drift_per_s",
+            &s.bias_drift_per_s,
+            10.0,
+            "N/s or N·m/s",
+        )?;
+        all_bounded(
+            "sensor.mounting_error_xyz_m",
+            &s.mounting_error_xyz_m,
+            0.05,
+            "m",
+        )?;
+        all_bounded(
+            "sensor.mounting_error_rpy",
+            &s.mounting_error_rpy,
+            0.1,
+            "rad",
+        )?;
+        bounded(
+            "sensor.tool_mass_error_kg",
+            s.tool_mass_error_kg,
+            -10.0,
+            10.0,
+            "kg",
+        )?;
         all_bounded("sensor.tool_com_error_m", &s.tool_com_error_m, 0.1, "m")?;
         if s.tool_mass_kg + s.tool_mass_error_kg < 0.0 {
             return Err(SimError::config(
@@ -513,8 +578,18 @@ impl CellConfig {
                 format!("must be within 1..1000, got {}", t.samples_per_reading),
             ));
         }
-        all_bounded("tracker.registration_error_xyz_m", &t.registration_error_xyz_m, 0.01, "m")?;
-        all_bounded("tracker.registration_error_rpy", &t.registration_error_rpy, 0.01, "rad")?;
+        all_bounded(
+            "tracker.registration_error_xyz_m",
+            &t.registration_error_xyz_m,
+            0.01,
+            "m",
+        )?;
+        all_bounded(
+            "tracker.registration_error_rpy",
+            &t.registration_error_rpy,
+            0.01,
+            "rad",
+        )?;
         let p = &self.part;
         if p.robot.trim().is_empty() {
             return Err(SimError::config("part.robot", "must name a robot"));
@@ -643,7 +718,13 @@ fn merge(base: &mut toml::Table, overlay: toml::Table) {
 }
 
 /// `value` finite and within `[lo, hi]`, else an error naming `field` and the range.
-pub(crate) fn bounded(field: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<(), SimError> {
+pub(crate) fn bounded(
+    field: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+) -> Result<(), SimError> {
     if value.is_finite() && value >= lo && value <= hi {
         Ok(())
     } else {
@@ -667,7 +748,12 @@ pub(crate) fn bounded_open(field: &str, value: f64, hi: f64, unit: &str) -> Resu
 }
 
 /// Every entry finite with `|v| ≤ limit`; the message names the entry.
-pub(crate) fn all_bounded(field: &str, values: &[f64], limit: f64, unit: &str) -> Result<(), SimError> {
+pub(crate) fn all_bounded(
+    field: &str,
+    values: &[f64],
+    limit: f64,
+    unit: &str,
+) -> Result<(), SimError> {
     for (i, v) in values.iter().enumerate() {
         bounded(&format!("{field}[{i}]"), *v, -limit, limit, unit)?;
     }
@@ -706,24 +792,60 @@ mod tests {
             ("[cell.tracker]\nrate_hz = 100.0\n", "tracker.rate_hz"),
             // Issue 12: absurd magnitudes and NaN, each named.
             ("[cell.controller]\nrate_hz = 1e300\n", "controller.rate_hz"),
-            ("[cell.controller]\nrate_hz = 1e-300\n", "controller.rate_hz"),
-            ("[cell.tracker]\nsamples_per_reading = 1000000000000\n", "samples_per_reading"),
-            ("[cell.tracker]\nsamples_per_reading = 1e12\n", "samples_per_reading"),
-            ("[cell.sensor]\nbias = [nan, 0.0, 0.0, 0.0, 0.0, 0.0]\n", "sensor.bias[0]"),
+            (
+                "[cell.controller]\nrate_hz = 1e-300\n",
+                "controller.rate_hz",
+            ),
+            (
+                "[cell.tracker]\nsamples_per_reading = 1000000000000\n",
+                "samples_per_reading",
+            ),
+            (
+                "[cell.tracker]\nsamples_per_reading = 1e12\n",
+                "samples_per_reading",
+            ),
+            (
+                "[cell.sensor]\nbias = [nan, 0.0, 0.0, 0.0, 0.0, 0.0]\n",
+                "sensor.bias[0]",
+            ),
             (
                 "[cell.sensor]\nsensor_in_flange_xyz_m = [0.0, nan, 0.0]\n",
                 "sensor.sensor_in_flange_xyz_m[1]",
             ),
-            ("[cell.tracker]\nposition_m = [nan, 0.0, 0.0]\n", "tracker.position_m[0]"),
-            ("[cell.tracker]\nposition_m = [1e300, 0.0, 0.0]\n", "tracker.position_m[0]"),
-            ("[cell.plant]\nbase_stiffness = [5e-324, 0.0, 0.0]\n", "plant.base_stiffness[0]"),
-            ("[cell.plant]\ncenter_shift_m = [0.0, 0.0, 1e308, 0.0, 0.0, 0.0]\n", "plant.center_shift_m[2]"),
+            (
+                "[cell.tracker]\nposition_m = [nan, 0.0, 0.0]\n",
+                "tracker.position_m[0]",
+            ),
+            (
+                "[cell.tracker]\nposition_m = [1e300, 0.0, 0.0]\n",
+                "tracker.position_m[0]",
+            ),
+            (
+                "[cell.plant]\nbase_stiffness = [5e-324, 0.0, 0.0]\n",
+                "plant.base_stiffness[0]",
+            ),
+            (
+                "[cell.plant]\ncenter_shift_m = [0.0, 0.0, 1e308, 0.0, 0.0, 0.0]\n",
+                "plant.center_shift_m[2]",
+            ),
             ("[cell.log]\nrate_hz = 1e9\n", "log.rate_hz"),
-            ("[cell.controller]\nlookahead_s = inf\n", "controller.lookahead_s"),
-            ("[cell.process]\nfixture_stiffness_n_m = 1e20\n", "process.fixture_stiffness_n_m"),
+            (
+                "[cell.controller]\nlookahead_s = inf\n",
+                "controller.lookahead_s",
+            ),
+            (
+                "[cell.process]\nfixture_stiffness_n_m = 1e20\n",
+                "process.fixture_stiffness_n_m",
+            ),
             ("[cell.sheet]\nsectors = 100000000\n", "sheet.sectors"),
-            ("[cell.sheet]\nradial_step_mm = 1e-9\n", "sheet.radial_step_mm"),
-            ("[cell.part]\norigin_mm = [nan, 0.0, 0.0]\n", "part.origin_mm[0]"),
+            (
+                "[cell.sheet]\nradial_step_mm = 1e-9\n",
+                "sheet.radial_step_mm",
+            ),
+            (
+                "[cell.part]\norigin_mm = [nan, 0.0, 0.0]\n",
+                "part.origin_mm[0]",
+            ),
             ("other = 1\n", "other"),
         ];
         for (text, field) in cases {

@@ -427,6 +427,39 @@ mod tests {
     }
 
     #[test]
+    fn look_ahead_and_servo_slow_a_step_down() {
+        // UR-like: 500 Hz, 4 ms delay, 0.1 s look-ahead, 15 Hz servo.
+        let config = ControllerConfig {
+            rate_hz: 500.0,
+            correction_delay_s: 0.004,
+            correction_filter_s: 0.0,
+            servo_bandwidth_hz: 15.0,
+            lookahead_s: 0.1,
+            max_correction_speed_m_s: 10.0,
+            ..ControllerConfig::default()
+        };
+        let mut ideal = CorrectionPipeline::new(&config, false);
+        let mut real = CorrectionPipeline::new(&config, true);
+        ideal.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        real.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let a: Vec<f64> = (0..400).map(|_| ideal.advance()[0]).collect();
+        let b: Vec<f64> = (0..400).map(|_| real.advance()[0]).collect();
+        // Without servo and look-ahead: the step after 2 cycles of delay.
+        assert_eq!(a[1], 0.0);
+        assert!((a[2] - 0.001).abs() < 1e-15);
+        // With them: the moving average ramps over 50 cycles, the servo lags and settles at 1.
+        assert!(
+            b[2] < 0.1 * 0.001 && b[26] < 0.6 * 0.001 && b[26] > 0.3 * 0.001,
+            "{}",
+            b[26]
+        );
+        assert!((b[399] - 0.001).abs() < 1e-9);
+        // Second order with damping 0.7: a small overshoot (≤ 5 %).
+        let peak = b.iter().cloned().fold(0.0, f64::max);
+        assert!(peak < 1.05 * 0.001, "{peak}");
+    }
+
+    #[test]
     fn size_and_speed_bounds() {
         let config = ControllerConfig {
             correction_delay_s: 0.0,

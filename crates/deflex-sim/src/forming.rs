@@ -40,7 +40,12 @@ pub struct FormingLog {
 }
 
 impl FormingLog {
-    pub(crate) fn with_capacity(path_name: &str, robot: &str, seed: u64, rows: usize) -> FormingLog {
+    pub(crate) fn with_capacity(
+        path_name: &str,
+        robot: &str,
+        seed: u64,
+        rows: usize,
+    ) -> FormingLog {
         FormingLog {
             path_name: path_name.to_string(),
             robot: robot.to_string(),

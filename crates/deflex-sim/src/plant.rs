@@ -179,7 +179,13 @@ impl PlantConfig {
             ));
         }
         for (i, b) in self.wrist_lost_motion_rad.iter().enumerate() {
-            bounded(&format!("plant.wrist_lost_motion_rad[{i}]"), *b, 0.0, 0.01, "rad")?;
+            bounded(
+                &format!("plant.wrist_lost_motion_rad[{i}]"),
+                *b,
+                0.0,
+                0.01,
+                "rad",
+            )?;
         }
         bounded(
             "plant.wrist_takeup_torque_nm",
@@ -196,11 +202,23 @@ impl PlantConfig {
             "N·m",
         )?;
         for (i, v) in self.joint_offset_error_rad.iter().enumerate() {
-            bounded(&format!("plant.joint_offset_error_rad[{i}]"), *v, -0.01, 0.01, "rad")?;
+            bounded(
+                &format!("plant.joint_offset_error_rad[{i}]"),
+                *v,
+                -0.01,
+                0.01,
+                "rad",
+            )?;
         }
         for (i, joint) in self.link_error_m.iter().enumerate() {
             for (a, v) in joint.iter().enumerate() {
-                bounded(&format!("plant.link_error_m[{i}][{a}]"), *v, -0.01, 0.01, "m")?;
+                bounded(
+                    &format!("plant.link_error_m[{i}][{a}]"),
+                    *v,
+                    -0.01,
+                    0.01,
+                    "m",
+                )?;
             }
         }
         for (a, v) in self.tool_error_m.iter().enumerate() {
@@ -328,9 +346,9 @@ impl Springs {
 
 /// Largest number of fixed-point iterations of one equilibrium.
 const MAX_ITERATIONS: usize = 200;
-/// Convergence: largest change of a spring rotation (rad); 1e-13 rad moves a point 2 m away by
-/// 0.2 pm.
-const THETA_TOLERANCE: f64 = 1e-13;
+/// Convergence: largest change of a spring rotation (rad); 1e-12 rad moves a point 2 m away by
+/// 2 pm.
+const THETA_TOLERANCE: f64 = 1e-12;
 
 /// The true robot: spring chain with large rotations, floor-pivot base tilt, J2/J3 coupling,
 /// wrist lost motion with hysteresis, geometry errors.
@@ -343,12 +361,16 @@ pub struct Plant {
     springs: Springs,
     large_rotation: bool,
     q: [f64; JOINTS],
+    /// The joints' exponentials at `q`.
+    joint_motions: [Pose; JOINTS],
     rigid: ChainState,
     /// Twists of the springs at the undeformed TCP (first-order response).
     tcp_twists: [Displacement; MAX_SPRINGS],
     bent: ChainState,
     theta: [f64; MAX_SPRINGS],
     tau: [f64; MAX_SPRINGS],
+    /// First-order spring rotations of the last load (the predictor of the next solve).
+    theta_first: [f64; MAX_SPRINGS],
     last_iterations: usize,
 }
 
@@ -419,11 +441,13 @@ impl Plant {
             springs,
             large_rotation: config.large_rotation,
             q: [0.0; JOINTS],
+            joint_motions: [Pose::identity(); JOINTS],
             rigid: ChainState::default(),
             tcp_twists: [Displacement::zeros(); MAX_SPRINGS],
             bent: ChainState::default(),
             theta: [0.0; MAX_SPRINGS],
             tau: [0.0; MAX_SPRINGS],
+            theta_first: [0.0; MAX_SPRINGS],
             last_iterations: 0,
         };
         plant.set_configuration(&[0.0; JOINTS]);
@@ -433,8 +457,12 @@ impl Plant {
     /// Set the motor-side joint values (rad): the undeformed chain. Allocation-free.
     pub fn set_configuration(&mut self, q: &[f64; JOINTS]) {
         self.q = *q;
-        self.chain
-            .evaluate(q, &[0.0; MAX_SPRINGS][..self.springs.count], &mut self.rigid);
+        self.joint_motions = self.chain.joint_motions(q);
+        self.chain.evaluate_with(
+            &self.joint_motions,
+            &[0.0; MAX_SPRINGS][..self.springs.count],
+            &mut self.rigid,
+        );
         self.bent.clone_from(&self.rigid);
         let p = self.rigid.tcp.translation.vector;
         for s in 0..self.springs.count {
@@ -539,11 +567,28 @@ impl Plant {
             self.last_iterations = 1;
             return;
         }
+        // Predictor: the last solution plus the first-order change of the load (what remains for
+        // the iterations is the change of the geometric part, a few per cent of it).
+        let p_rigid = self.rigid.links[link] * nalgebra::Point3::from(*local);
+        for s in 0..n {
+            tau[s] = if self.chain.spring_link(s) <= link {
+                self.rigid.springs[s].torque(&p_rigid.coords, &force, &moment)
+            } else {
+                0.0
+            };
+        }
+        let mut first = [0.0; MAX_SPRINGS];
+        self.springs.rotations(&tau, &mut first);
         let mut theta = self.theta;
+        for s in 0..n {
+            theta[s] += first[s] - self.theta_first[s];
+        }
+        self.theta_first = first;
         let mut iterations = 0;
         loop {
             iterations += 1;
-            self.chain.evaluate(&self.q, &theta[..n], &mut self.bent);
+            self.chain
+                .evaluate_with(&self.joint_motions, &theta[..n], &mut self.bent);
             let p = self.bent.links[link] * nalgebra::Point3::from(*local);
             for s in 0..n {
                 tau[s] = if self.chain.spring_link(s) <= link {
@@ -623,7 +668,8 @@ impl Plant {
         let load_link = load_link.min(JOINTS);
         let frame = self.rigid.links[point_link];
         let on_link = (frame.inverse() * nalgebra::Point3::from(*point)).coords;
-        let load = (self.rigid.links[load_link].inverse() * nalgebra::Point3::from(*load_point)).coords;
+        let load =
+            (self.rigid.links[load_link].inverse() * nalgebra::Point3::from(*load_point)).coords;
         let moved = self.loaded_point(point_link, &on_link, load_link, &load, wrench);
         let rotation = deflex_model::spatial::rotation_log(
             &(self.bent.links[point_link].rotation * frame.rotation.inverse()),

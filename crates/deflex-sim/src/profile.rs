@@ -49,7 +49,11 @@ pub enum Maker {
 impl Maker {
     /// From the robot spec (built-in name or file) and the robot's name.
     pub fn of(spec: &str, name: &str) -> Maker {
-        let text = format!("{} {}", spec.to_ascii_lowercase(), name.to_ascii_lowercase());
+        let text = format!(
+            "{} {}",
+            spec.to_ascii_lowercase(),
+            name.to_ascii_lowercase()
+        );
         if text.contains("tx200") {
             Maker::StaubliTx200
         } else if text.contains("ur3")
@@ -99,7 +103,9 @@ impl CellConfig {
 pub fn derived_plant(robot: &Robot, strain_wave_wrist: bool) -> PlantConfig {
     let soft = 0.85;
     let mut plant = PlantConfig {
-        center_shift_m: std::array::from_fn(|i| robot.joints.get(i).map_or(0.0, |j| j.center_shift)),
+        center_shift_m: std::array::from_fn(|i| {
+            robot.joints.get(i).map_or(0.0, |j| j.center_shift)
+        }),
         base_pivot_m: [0.0; 3],
         ..PlantConfig::default()
     };
@@ -117,7 +123,8 @@ pub fn derived_plant(robot: &Robot, strain_wave_wrist: bool) -> PlantConfig {
                 k[a] = soft * value;
             }
         }
-        plant.joint_stiffness[i] = k.map(|v| v.clamp(crate::plant::MIN_STIFFNESS, crate::plant::MAX_STIFFNESS));
+        plant.joint_stiffness[i] =
+            k.map(|v| v.clamp(crate::plant::MIN_STIFFNESS, crate::plant::MAX_STIFFNESS));
     }
     let j1 = plant.joint_stiffness[0][2];
     plant.base_stiffness = [3.0 * j1, 3.0 * j1, 0.0];
@@ -150,10 +157,14 @@ fn ik_down(robot: &Robot, p: &Vector3<f64>, seeds: &[[f64; 6]]) -> Option<[f64; 
     for seed in seeds {
         let seed_rad: Vec<f64> = seed.iter().map(|d| d.to_radians()).collect();
         if let Ok(solution) = robot.inverse_kinematics(&target, &seed_rad, &options) {
-            let within = robot.joints.iter().zip(&solution.q).all(|(j, q)| match j.limits {
-                Some([lo, hi]) => *q >= lo && *q <= hi,
-                None => true,
-            });
+            let within = robot
+                .joints
+                .iter()
+                .zip(&solution.q)
+                .all(|(j, q)| match j.limits {
+                    Some([lo, hi]) => *q >= lo && *q <= hi,
+                    None => true,
+                });
             if within {
                 return Some(std::array::from_fn(|i| solution.q[i].to_degrees()));
             }
@@ -166,7 +177,13 @@ fn ik_down(robot: &Robot, p: &Vector3<f64>, seeds: &[[f64; 6]]) -> Option<[f64; 
 fn seeds() -> Vec<[f64; 6]> {
     let mut out = Vec::new();
     for q1 in [0.0, 180.0, 90.0, -90.0] {
-        for (q2, q3) in [(-90.0, 90.0), (45.0, 90.0), (-45.0, 45.0), (60.0, 60.0), (-60.0, -60.0)] {
+        for (q2, q3) in [
+            (-90.0, 90.0),
+            (45.0, 90.0),
+            (-45.0, 45.0),
+            (60.0, 60.0),
+            (-60.0, -60.0),
+        ] {
             for q5 in [-90.0, 90.0, 45.0, -45.0] {
                 out.push([q1, q2, q3, -90.0, q5, 0.0]);
                 out.push([q1, q2, q3, 0.0, q5, 0.0]);

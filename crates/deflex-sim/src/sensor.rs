@@ -252,8 +252,12 @@ mod tests {
         // Every error off: the ideal sensor of the nominal mounting.
         cell.errors = crate::config::ErrorSources::all(false);
         let mut ideal = ForceSensor::for_cell(&cell, ChaCha8Rng::seed_from_u64(1));
-        let plain = ForceSensor::new(&cell.sensor, cell.sensor_in_flange(), ChaCha8Rng::seed_from_u64(1))
-            .ideal_reading(&down, &push, &at);
+        let plain = ForceSensor::new(
+            &cell.sensor,
+            cell.sensor_in_flange(),
+            ChaCha8Rng::seed_from_u64(1),
+        )
+        .ideal_reading(&down, &push, &at);
         let got = ideal.sample(50.0, &down, &push, &at);
         for i in 0..6 {
             assert!((got.wrench_sensor[i] - plain[i] - cell.sensor.bias[i]).abs() < 1e-9);

@@ -105,7 +105,13 @@ impl SheetConfig {
         use crate::config::bounded;
         bounded("sheet.thickness_mm", self.thickness_mm, 0.01, 20.0, "mm")?;
         bounded("sheet.rm_mpa", self.rm_mpa, 1.0, 3000.0, "MPa")?;
-        bounded("sheet.tool_diameter_mm", self.tool_diameter_mm, 1.0, 200.0, "mm")?;
+        bounded(
+            "sheet.tool_diameter_mm",
+            self.tool_diameter_mm,
+            1.0,
+            200.0,
+            "mm",
+        )?;
         bounded(
             "sheet.contact_stiffness_n_mm",
             self.contact_stiffness_n_mm,
@@ -113,7 +119,13 @@ impl SheetConfig {
             1e6,
             "N/mm",
         )?;
-        bounded("sheet.buildup_depth_mm", self.buildup_depth_mm, 1e-3, 1e3, "mm")?;
+        bounded(
+            "sheet.buildup_depth_mm",
+            self.buildup_depth_mm,
+            1e-3,
+            1e3,
+            "mm",
+        )?;
         bounded(
             "sheet.inplane_buildup_depth_mm",
             self.inplane_buildup_depth_mm,
@@ -123,15 +135,48 @@ impl SheetConfig {
         )?;
         bounded("sheet.radial_ratio", self.radial_ratio, 0.0, 10.0, "")?;
         bounded("sheet.feed_ratio", self.feed_ratio, 0.0, 10.0, "")?;
-        bounded("sheet.default_step_down_mm", self.default_step_down_mm, 1e-3, 50.0, "mm")?;
-        bounded("sheet.radial_step_mm", self.radial_step_mm, 0.01, 10.0, "mm")?;
-        bounded("sheet.blank_radius_mm", self.blank_radius_mm, 1.0, 2000.0, "mm")?;
-        bounded("sheet.depth_growth_per_mm", self.depth_growth_per_mm, 0.0, 0.5, "1/mm")?;
-        bounded("sheet.reference_depth_mm", self.reference_depth_mm, 0.0, 500.0, "mm")?;
+        bounded(
+            "sheet.default_step_down_mm",
+            self.default_step_down_mm,
+            1e-3,
+            50.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.radial_step_mm",
+            self.radial_step_mm,
+            0.01,
+            10.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.blank_radius_mm",
+            self.blank_radius_mm,
+            1.0,
+            2000.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.depth_growth_per_mm",
+            self.depth_growth_per_mm,
+            0.0,
+            0.5,
+            "1/mm",
+        )?;
+        bounded(
+            "sheet.reference_depth_mm",
+            self.reference_depth_mm,
+            0.0,
+            500.0,
+            "mm",
+        )?;
         if !(self.default_wall_angle_deg > 0.0 && self.default_wall_angle_deg < 90.0) {
             return Err(SimError::config(
                 "sheet.default_wall_angle_deg",
-                format!("must be within (0, 90), got {}", self.default_wall_angle_deg),
+                format!(
+                    "must be within (0, 90), got {}",
+                    self.default_wall_angle_deg
+                ),
             ));
         }
         if !(8..=3600).contains(&self.sectors) {
@@ -299,10 +344,7 @@ impl Sheet {
     /// Smoothed actual step-down (mm) and wall angle (deg) of the tool's passes.
     pub fn actual_step_and_angle(&self) -> (f64, f64) {
         let p = &self.passes;
-        (
-            p.step_m * 1e3,
-            p.step_m.atan2(p.radial_m).to_degrees(),
-        )
+        (p.step_m * 1e3, p.step_m.atan2(p.radial_m).to_degrees())
     }
 
     /// Record where the tool actually is (R_p, m) in a contact cycle: compare with its last pass
@@ -539,12 +581,18 @@ mod tests {
         };
         let exact = run(0.0);
         let (step, angle) = exact.actual_step_and_angle();
-        assert!((step - 0.24).abs() < 0.005 && (angle - 45.0).abs() < 0.5, "{step} {angle}");
+        assert!(
+            (step - 0.24).abs() < 0.005 && (angle - 45.0).abs() < 0.5,
+            "{step} {angle}"
+        );
         assert!((exact.level_force_n() / exact.steady_force_n() - 1.0).abs() < 0.01);
         let shallow = run(0.25);
         let (step, angle) = shallow.actual_step_and_angle();
         let expected = (0.75f64).atan().to_degrees();
-        assert!((step - 0.18).abs() < 0.005 && (angle - expected).abs() < 0.5, "{step} {angle}");
+        assert!(
+            (step - 0.18).abs() < 0.005 && (angle - expected).abs() < 0.5,
+            "{step} {angle}"
+        );
         assert!(shallow.level_force_n() < 0.95 * exact.level_force_n());
     }
 

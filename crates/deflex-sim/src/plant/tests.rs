@@ -80,7 +80,14 @@ fn a_single_spring_lever_matches_its_closed_form_at_large_load() {
     robot.tool = deflex_model::spatial::pose_from_xyz_rpy([0.0, 0.0, 0.2], [0.0; 3]);
     let k = 1.0e5;
     let config = PlantConfig {
-        joint_stiffness: [[0.0; 3], [0.0, 0.0, k], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]],
+        joint_stiffness: [
+            [0.0; 3],
+            [0.0, 0.0, k],
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+        ],
         center_shift_m: [0.0; 6],
         base_stiffness: [0.0; 3],
         j2_j3_coupling: 0.0,
@@ -129,7 +136,9 @@ fn the_equilibrium_is_a_stationary_point_of_the_potential_energy() {
     let energy = |t: &[f64]| -> f64 {
         let mut state = ChainState::default();
         plant.chain.evaluate(&plant.q, t, &mut state);
-        let springs: f64 = (0..n).map(|s| 0.5 * plant.springs.stiffness[s] * t[s] * t[s]).sum();
+        let springs: f64 = (0..n)
+            .map(|s| 0.5 * plant.springs.stiffness[s] * t[s] * t[s])
+            .sum();
         springs - force.dot(&state.tcp.translation.vector)
     };
     for s in 0..n {
