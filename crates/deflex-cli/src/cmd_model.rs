@@ -14,7 +14,7 @@ use std::path::PathBuf;
 pub enum ModelCommand {
     /// The joint table, eDoFs and stiffnesses.
     Show {
-        /// Robot: built-in name (tx200, tx200-1edof) or TOML file.
+        /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
         #[arg(long)]
         robot: String,
     },
@@ -39,7 +39,7 @@ impl JointArgs {
 
 #[derive(Args)]
 pub struct PoseArgs {
-    /// Robot: built-in name (tx200, tx200-1edof) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
     #[arg(long)]
     pub robot: String,
     #[command(flatten)]
@@ -48,7 +48,7 @@ pub struct PoseArgs {
 
 #[derive(Args)]
 pub struct DeflectArgs {
-    /// Robot: built-in name (tx200, tx200-1edof) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
     #[arg(long)]
     pub robot: String,
     #[command(flatten)]
@@ -60,7 +60,7 @@ pub struct DeflectArgs {
 
 #[derive(Args)]
 pub struct IkArgs {
-    /// Robot: built-in name (tx200, tx200-1edof) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
     #[arg(long)]
     pub robot: String,
     /// TCP position in world, mm.
@@ -76,7 +76,7 @@ pub struct IkArgs {
 
 #[derive(Args)]
 pub struct MapArgs {
-    /// Robot: built-in name (tx200, tx200-1edof) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
     #[arg(long)]
     pub robot: String,
     /// Grid plane, e.g. z=100mm (bare numbers are mm).
@@ -104,31 +104,82 @@ pub fn model(command: ModelCommand, json_output: bool) -> CliResult {
         ModelCommand::Show { robot: spec } => {
             let robot = robot(&spec)?;
             if json_output {
-                let joints: Vec<_> = robot
-                    .joints
-                    .iter()
-                    .map(|j| {
-                        json!({
-                            "name": j.name,
-                            "dh": j.dh.map(|d| json!({"alpha_rad": d.alpha, "a_m": d.a, "d_m": d.d})),
-                            "theta_offset_rad": j.theta_offset,
-                            "limits_rad": j.limits,
-                            "center_shift_m": j.center_shift,
-                            "stiffness_Nm_per_rad": {"x": j.stiffness.0[0], "y": j.stiffness.0[1], "z": j.stiffness.0[2]},
-                        })
-                    })
-                    .collect();
-                let edofs: Vec<_> = robot
-                    .edofs()
-                    .map(|e| json!({"edof": e.label(), "stiffness_Nm_per_rad": e.stiffness}))
-                    .collect();
-                print_json(&json!({"name": robot.name, "joints": joints, "edofs": edofs}));
+                print_json(&describe_json(&robot));
             } else {
                 print!("{}", describe(&robot));
             }
             Ok(())
         }
     }
+}
+
+/// A pose as `{xyz_m, rpy_rad}`.
+fn pose_json(pose: &deflex_model::Pose) -> serde_json::Value {
+    let t = pose.translation.vector;
+    json!({"xyz_m": [t.x, t.y, t.z], "rpy_rad": rpy_from_rotation(&pose.rotation)})
+}
+
+/// Where the geometry came from, in words.
+fn geometry_source(robot: &Robot) -> String {
+    match (&robot.urdf, robot.dh_convention) {
+        (Some(urdf), _) => format!(
+            "URDF {} ({} → {})",
+            urdf.resolved.display(),
+            urdf.base_link,
+            urdf.tip_link
+        ),
+        (None, Some(convention)) => format!("{} DH", convention.name()),
+        (None, None) => "placements".into(),
+    }
+}
+
+/// The model as JSON (SI): geometry of every joint (DH row or placement), masses, eDoFs.
+pub fn describe_json(robot: &Robot) -> serde_json::Value {
+    let joints: Vec<_> = robot
+        .joints
+        .iter()
+        .map(|j| {
+            json!({
+                "name": j.name,
+                "dh": j.dh.map(|d| json!({"alpha_rad": d.alpha, "a_m": d.a, "d_m": d.d, "beta_rad": d.beta})),
+                "placement": pose_json(&j.placement),
+                "theta_offset_rad": j.theta_offset,
+                "limits_rad": j.limits,
+                "center_shift_m": j.center_shift,
+                "stiffness_Nm_per_rad": {"x": j.stiffness.0[0], "y": j.stiffness.0[1], "z": j.stiffness.0[2]},
+                "mass_kg": j.inertia.map(|i| i.mass_kg),
+                "com_joint_frame_m": j.inertia.map(|i| [i.com.x, i.com.y, i.com.z]),
+            })
+        })
+        .collect();
+    let edofs: Vec<_> = robot
+        .edofs()
+        .map(|e| json!({"edof": e.label(), "stiffness_Nm_per_rad": e.stiffness}))
+        .collect();
+    json!({
+        "name": robot.name,
+        "geometry": geometry_source(robot),
+        "geometry_fingerprint": robot.geometry_fingerprint(),
+        "base": pose_json(&robot.base),
+        "flange": pose_json(&robot.flange),
+        "tool": pose_json(&robot.tool),
+        "gravity_m_s2": [robot.gravity.x, robot.gravity.y, robot.gravity.z],
+        "payload": robot.payload.map(|p| json!({"mass_kg": p.mass_kg, "com_flange_m": [p.com.x, p.com.y, p.com.z]})),
+        "joints": joints,
+        "edofs": edofs,
+        "setups": robot.setups.iter().map(|s| json!({"name": s.name, "pose": pose_json(&s.pose)})).collect::<Vec<_>>(),
+        "targets": robot.targets.iter().map(|t| json!({"name": t.name, "xyz_flange_m": [t.position.x, t.position.y, t.position.z]})).collect::<Vec<_>>(),
+    })
+}
+
+/// `x y z mm, r p y °` of a pose.
+fn pose_text(pose: &deflex_model::Pose) -> String {
+    let t = pose.translation.vector * 1e3;
+    let r = rpy_from_rotation(&pose.rotation).map(f64::to_degrees);
+    format!(
+        "xyz {:.1} {:.1} {:.1} mm, rpy {:.2} {:.2} {:.2}°",
+        t.x, t.y, t.z, r[0], r[1], r[2]
+    )
 }
 
 /// Human-readable joint table and eDoF list.
@@ -143,42 +194,98 @@ pub fn describe(robot: &Robot) -> String {
     );
     let _ = writeln!(
         out,
-        "{:<10} {:>9} {:>8} {:>8} {:>9} {:>17} {:>9}  stiffness x / y / z (10^6 N·m/rad)",
-        "joint", "alpha°", "a mm", "d mm", "offset°", "limits°", "shift mm"
+        "geometry: {}  (fingerprint {})",
+        geometry_source(robot),
+        robot.geometry_fingerprint()
     );
+    let width = robot
+        .joints
+        .iter()
+        .map(|j| j.name.chars().count())
+        .max()
+        .unwrap_or(5)
+        .max(5);
     let k = |v: Option<f64>| {
         v.map(|k| format!("{:.3}", k / 1e6))
             .unwrap_or_else(|| "-".into())
     };
-    for joint in &robot.joints {
-        let (alpha, a, d) = joint
-            .dh
-            .map(|dh| {
-                (
-                    fixed(dh.alpha.to_degrees(), 1),
-                    fixed(dh.a * 1e3, 1),
-                    fixed(dh.d * 1e3, 1),
-                )
-            })
-            .unwrap_or(("urdf".into(), "".into(), "".into()));
-        let limits = joint
+    let mass = |joint: &deflex_model::Joint| {
+        joint
+            .inertia
+            .map(|i| format!("{:.2}", i.mass_kg))
+            .unwrap_or_else(|| "-".into())
+    };
+    let limits = |joint: &deflex_model::Joint| {
+        joint
             .limits
             .map(|[lo, hi]| format!("[{:.0}, {:.0}]", lo.to_degrees(), hi.to_degrees()))
-            .unwrap_or_else(|| "none".into());
-        let s = joint.stiffness.0;
+            .unwrap_or_else(|| "none".into())
+    };
+    if robot.dh_convention.is_some() {
         let _ = writeln!(
             out,
-            "{:<10} {:>9} {:>8} {:>8} {:>9} {:>17} {:>9}  {} / {} / {}",
-            joint.name,
-            alpha,
-            a,
-            d,
-            fixed(joint.theta_offset.to_degrees(), 1),
-            limits,
-            fixed(joint.center_shift * 1e3, 1),
-            k(s[0]),
-            k(s[1]),
-            k(s[2])
+            "{:<width$} {:>9} {:>9} {:>9} {:>7} {:>9} {:>17} {:>9} {:>7}  stiffness x / y / z (10^6 N·m/rad)",
+            "joint", "alpha°", "a mm", "d mm", "beta°", "offset°", "limits°", "shift mm", "mass kg"
+        );
+        for joint in &robot.joints {
+            let dh = joint.dh.unwrap_or_default();
+            let s = joint.stiffness.0;
+            let _ = writeln!(
+                out,
+                "{:<width$} {:>9} {:>9} {:>9} {:>7} {:>9} {:>17} {:>9} {:>7}  {} / {} / {}",
+                joint.name,
+                fixed(dh.alpha.to_degrees(), 1),
+                fixed(dh.a * 1e3, 1),
+                fixed(dh.d * 1e3, 1),
+                fixed(dh.beta.to_degrees(), 3),
+                fixed(joint.theta_offset.to_degrees(), 1),
+                limits(joint),
+                fixed(joint.center_shift * 1e3, 1),
+                mass(joint),
+                k(s[0]),
+                k(s[1]),
+                k(s[2])
+            );
+        }
+    } else {
+        let _ = writeln!(
+            out,
+            "{:<width$} {:>44} {:>17} {:>9} {:>7}  stiffness x / y / z (10^6 N·m/rad)",
+            "joint", "placement in the previous joint frame", "limits°", "shift mm", "mass kg"
+        );
+        for joint in &robot.joints {
+            let s = joint.stiffness.0;
+            let _ = writeln!(
+                out,
+                "{:<width$} {:>44} {:>17} {:>9} {:>7}  {} / {} / {}",
+                joint.name,
+                pose_text(&joint.placement),
+                limits(joint),
+                fixed(joint.center_shift * 1e3, 1),
+                mass(joint),
+                k(s[0]),
+                k(s[1]),
+                k(s[2])
+            );
+        }
+    }
+    if robot.flange != deflex_model::Pose::identity() {
+        let _ = writeln!(
+            out,
+            "flange (last joint frame → flange): {}",
+            pose_text(&robot.flange)
+        );
+    }
+    let _ = writeln!(out, "tool (flange → TCP): {}", pose_text(&robot.tool));
+    if robot.base != deflex_model::Pose::identity() {
+        let _ = writeln!(out, "base (world → R0): {}", pose_text(&robot.base));
+    }
+    if let Some(payload) = &robot.payload {
+        let c = payload.com * 1e3;
+        let _ = writeln!(
+            out,
+            "payload: {:.2} kg at {:.1} {:.1} {:.1} mm (flange frame)",
+            payload.mass_kg, c.x, c.y, c.z
         );
     }
     if robot.base_stiffness.count() > 0 {
@@ -187,6 +294,22 @@ pub fn describe(robot: &Robot) -> String {
     }
     let edofs: Vec<String> = robot.edofs().map(|e| e.label()).collect();
     let _ = writeln!(out, "eDoFs: {}", edofs.join(", "));
+    for setup in &robot.setups {
+        let _ = writeln!(
+            out,
+            "tracker set-up {}: {}",
+            setup.name,
+            pose_text(&setup.pose)
+        );
+    }
+    for target in &robot.targets {
+        let p = target.position * 1e3;
+        let _ = writeln!(
+            out,
+            "target {}: {:.2} {:.2} {:.2} mm (flange frame)",
+            target.name, p.x, p.y, p.z
+        );
+    }
     out
 }
 
@@ -198,14 +321,24 @@ fn rotation_rows(rotation: &nalgebra::Rotation3<f64>) -> Vec<[f64; 3]> {
 pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
     let robot = robot(&args.robot)?;
     let q = args.joints.values(&robot)?;
-    let pose = robot.tcp_pose(&q).map_err(|e| e.to_string())?;
+    let mut data = Data::new();
+    robot
+        .forward_kinematics(&mut data, &q)
+        .map_err(|e| e.to_string())?;
+    let pose = data.tcp;
     let p = pose.translation.vector;
     let rpy = rpy_from_rotation(&pose.rotation);
+    // The arm's own weight (and payload) sags the TCP when the model knows its masses.
+    let has_masses = robot.joints.iter().any(|j| j.inertia.is_some()) || robot.payload.is_some();
+    let sag = has_masses.then(|| robot.gravity_displacement(&data, &p, robot.joint_count()));
     if json_output {
         let value = json!({
             "tcp_m": [p.x, p.y, p.z],
             "rotation": rotation_rows(&pose.rotation),
             "rpy_rad": rpy,
+            "gravity_sag_m": sag.map(|d| [d[0], d[1], d[2]]),
+            "gravity_sag_rad": sag.map(|d| [d[3], d[4], d[5]]),
+            "tcp_with_gravity_m": sag.map(|d| [p.x + d[0], p.y + d[1], p.z + d[2]]),
         });
         print_json(&value);
     } else {
@@ -223,6 +356,17 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
         );
         let z = pose.rotation.matrix().column(2);
         println!("tool axis z_t: [{:.4}, {:.4}, {:.4}]", z[0], z[1], z[2]);
+        if let Some(d) = sag {
+            println!(
+                "sag under the arm's own weight (mm): x {:+.4}  y {:+.4}  z {:+.4}  → TCP x {:.3}  y {:.3}  z {:.3}",
+                d[0] * 1e3,
+                d[1] * 1e3,
+                d[2] * 1e3,
+                (p.x + d[0]) * 1e3,
+                (p.y + d[1]) * 1e3,
+                (p.z + d[2]) * 1e3
+            );
+        }
     }
     Ok(())
 }
@@ -295,7 +439,7 @@ pub fn ik(args: IkArgs, json_output: bool) -> CliResult {
     };
     let target = pose_from_xyz_rpy(xyz.map(|v| v * 1e-3), rpy.map(f64::to_radians));
     let solution = robot
-        .inverse_kinematics(&target, &seed, &IkOptions::default())
+        .inverse_kinematics_search(&target, Some(&seed), &IkOptions::default())
         .map_err(|e| format!("{e} (target {xyz:?} mm, rpy {rpy:?}°)"))?;
     if json_output {
         let value = json!({
@@ -323,6 +467,11 @@ pub fn ik(args: IkArgs, json_output: bool) -> CliResult {
     Ok(())
 }
 
+/// Largest `deflex map` grid side (m).
+pub const MAX_MAP_SIZE_M: f64 = 20.0;
+/// Most `deflex map` nodes per grid side (the grid holds the square of it).
+pub const MAX_MAP_NODES_PER_SIDE: usize = 1001;
+
 /// One grid node of `deflex map`.
 pub struct MapNode {
     pub position_m: [f64; 3],
@@ -344,7 +493,24 @@ pub fn deflection_grid(
     if !(step_m > 0.0 && size_m >= 0.0) {
         return Err("--step must be positive and --size non-negative".into());
     }
-    let count = (size_m / step_m + 1e-9).floor() as usize + 1;
+    if size_m > MAX_MAP_SIZE_M {
+        return Err(format!(
+            "--size {:.1} mm: at most {:.0} mm",
+            size_m * 1e3,
+            MAX_MAP_SIZE_M * 1e3
+        ));
+    }
+    let per_side = size_m / step_m + 1e-9;
+    if per_side >= MAX_MAP_NODES_PER_SIDE as f64 {
+        return Err(format!(
+            "--step {:.4} mm over --size {:.1} mm gives {:.0} nodes per side; at most {} (raise --step)",
+            step_m * 1e3,
+            size_m * 1e3,
+            per_side.floor() + 1.0,
+            MAX_MAP_NODES_PER_SIDE
+        ));
+    }
+    let count = per_side.floor() as usize + 1;
     let seed = default_seed(robot);
     let reference = robot.tcp_pose(&seed).map_err(|e| e.to_string())?;
     let mut data = Data::new();
@@ -430,7 +596,8 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
         );
     }
     let csv_path = args.out.join("deflection_map.csv");
-    std::fs::write(&csv_path, csv).map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    deflex_files::write_atomic(&csv_path, csv)
+        .map_err(|e| format!("{}: {e}", csv_path.display()))?;
     let norms: Vec<f64> = nodes
         .iter()
         .map(|n| n.deflection.fixed_rows::<3>(0).norm())

@@ -89,7 +89,20 @@ fn ik_round_trips_and_reports_unreachable() {
         "--rpy-deg",
         "0,0,0",
     ]);
-    assert!(!ok && stderr.contains("unreachable"), "{stderr}");
+    assert!(!ok && stderr.contains("out of reach"), "{stderr}");
+    // A reachable pose from a singular seed (stretched arm, straight wrist).
+    let v = json(&[
+        "ik",
+        "--robot",
+        "tx200",
+        "--xyz-mm",
+        "1450,80,-150",
+        "--rpy-deg",
+        "180,0,180",
+        "--seed-deg",
+        "0,0,0,0,0,0",
+    ]);
+    assert!(v["q_rad"].is_array(), "{v}");
 }
 
 #[test]
@@ -161,4 +174,77 @@ fn user_errors_are_clear() {
         "1,2,3",
     ]);
     assert!(!ok && stderr.contains("expected 6 values"), "{stderr}");
+}
+
+#[test]
+fn model_show_prints_standard_dh_masses_and_urdf_geometry() {
+    let (ok, stdout, stderr) = deflex(&["model", "show", "--robot", "ur10"]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("standard DH") && stdout.contains("shoulder_pan_joint"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("12.70"), "link masses shown: {stdout}");
+    let v = json(&["model", "show", "--robot", "kr210-r2700"]);
+    assert_eq!(v["geometry"], "modified DH");
+    assert_eq!(v["geometry_fingerprint"].as_str().unwrap().len(), 16);
+    // A URDF robot shows its placements.
+    let dir = std::env::temp_dir().join(format!("deflex-cli-urdf-show-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("arm.urdf"),
+        r#"<robot name="a"><link name="b"/><link name="l1"/><link name="l2"/>
+        <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="0" velocity="1"/></joint>
+        <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.25 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="0" velocity="1"/></joint></robot>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("arm.toml"),
+        "name = \"two-joint arm\"\nurdf = \"arm.urdf\"\n[[joint]]\nname = \"j1\"\n[[joint]]\nname = \"j2\"\n",
+    )
+    .unwrap();
+    let (ok, stdout, stderr) = deflex(&[
+        "model",
+        "show",
+        "--robot",
+        dir.join("arm.toml").to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("URDF") && stdout.contains("xyz 250.0 0.0 0.0 mm"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn map_refuses_a_grid_too_fine_to_hold() {
+    let out = std::env::temp_dir().join(format!("deflex-cli-map-fine-{}", std::process::id()));
+    let (ok, _, stderr) = deflex(&[
+        "map",
+        "--robot",
+        "tx200",
+        "--step",
+        "1e-9mm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && stderr.contains("--step") && stderr.contains("nodes per side"),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "nothing written");
+}
+
+#[test]
+fn pose_reports_the_sag_under_the_arms_own_weight_when_masses_are_known() {
+    // UR10 stretched horizontally (q2 = 0): the gravity sag is downward and of the order of
+    // m·g·L²/k over the links; the TX200 file has no masses and reports none.
+    let v = json(&["pose", "--robot", "ur10", "--q-deg", "0,0,0,0,90,0"]);
+    let sag: Vec<f64> = serde_json::from_value(v["gravity_sag_m"].clone()).unwrap();
+    assert!(sag[2] < -1e-4 && sag[2] > -1e-2, "{sag:?}");
+    let with: Vec<f64> = serde_json::from_value(v["tcp_with_gravity_m"].clone()).unwrap();
+    let tcp: Vec<f64> = serde_json::from_value(v["tcp_m"].clone()).unwrap();
+    assert!((with[2] - tcp[2] - sag[2]).abs() < 1e-15);
+    let v = json(&["pose", "--robot", "tx200", "--q-deg", "0,0,0,0,0,0"]);
+    assert!(v["gravity_sag_m"].is_null());
 }

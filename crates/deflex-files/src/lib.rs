@@ -34,6 +34,54 @@ fn temporary_sibling(path: &Path) -> io::Result<PathBuf> {
     Ok(path.with_file_name(temp_name))
 }
 
+/// The temporary sibling `.<stem>.tmp-<pid>-<n>.<ext>` of `path`: same folder, same extension
+/// (for writers that choose the format from the extension).
+fn temporary_sibling_keeping_extension(path: &Path) -> io::Result<PathBuf> {
+    let stem = path.file_stem().ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("{}: not a file name", path.display()),
+        )
+    })?;
+    let mut name = std::ffi::OsString::from(".");
+    name.push(stem);
+    name.push(format!(".tmp-{}", unique_suffix()));
+    if let Some(extension) = path.extension() {
+        name.push(".");
+        name.push(extension);
+    }
+    Ok(path.with_file_name(name))
+}
+
+/// Let `write` produce the file `path` through a temporary sibling with the same extension (for
+/// writers that take a path, such as image encoders), renamed over `path` when `write`
+/// succeeds and removed when it fails. `io_error` turns a rename failure into the caller's
+/// error type.
+pub fn write_through<T, E>(
+    path: impl AsRef<Path>,
+    write: impl FnOnce(&Path) -> Result<T, E>,
+    io_error: impl FnOnce(io::Error) -> E,
+) -> Result<T, E> {
+    let path = path.as_ref();
+    let temporary = match temporary_sibling_keeping_extension(path) {
+        Ok(t) => t,
+        Err(e) => return Err(io_error(e)),
+    };
+    match write(&temporary) {
+        Ok(value) => match fs::rename(&temporary, path) {
+            Ok(()) => Ok(value),
+            Err(e) => {
+                let _ = fs::remove_file(&temporary);
+                Err(io_error(e))
+            }
+        },
+        Err(e) => {
+            let _ = fs::remove_file(&temporary);
+            Err(e)
+        }
+    }
+}
+
 /// Write `contents` to `path` whole or not at all (temporary sibling, flush, rename). The parent
 /// folder must exist.
 pub fn write_atomic(path: impl AsRef<Path>, contents: impl AsRef<[u8]>) -> io::Result<()> {
@@ -235,6 +283,29 @@ mod tests {
         building.commit().unwrap();
         assert_eq!(entries(&out), vec!["b.csv"]);
         assert_eq!(entries(&dir), vec!["report"]);
+        fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn write_through_keeps_the_extension_and_cleans_up_on_failure() {
+        let dir = scratch("through");
+        let path = dir.join("plot.png");
+        fs::write(&path, "old").unwrap();
+        let failed: Result<(), String> = write_through(
+            &path,
+            |tmp| {
+                assert_eq!(tmp.extension().unwrap(), "png");
+                fs::write(tmp, "half").unwrap();
+                Err("drawing failed".into())
+            },
+            |e| e.to_string(),
+        );
+        assert!(failed.is_err());
+        assert_eq!(fs::read_to_string(&path).unwrap(), "old");
+        assert_eq!(entries(&dir), vec!["plot.png"]);
+        write_through(&path, |tmp| fs::write(tmp, "new"), |e| e).unwrap();
+        assert_eq!(fs::read_to_string(&path).unwrap(), "new");
+        assert_eq!(entries(&dir), vec!["plot.png"]);
         fs::remove_dir_all(dir).unwrap();
     }
 

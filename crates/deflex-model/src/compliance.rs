@@ -125,13 +125,13 @@ impl Robot {
 
     /// Calls `f(edof, axis, center)` for every eDoF with its world axis and centre.
     #[inline]
-    fn for_each_edof_screw(
+    pub(crate) fn for_each_edof_screw(
         &self,
         data: &Data,
         mut f: impl FnMut(&Edof, &Vector3<f64>, &Vector3<f64>),
     ) {
         let base_rotation = data.base_frame.rotation.matrix();
-        let base_origin = data.base_frame.translation.vector;
+        let base_origin = crate::kinematics::base_pivot_world(&data.base_frame, self);
         for axis in Axis::ALL {
             if let Some(stiffness) = self.base_stiffness.get(axis) {
                 let edof = Edof {

@@ -1,12 +1,17 @@
 //! Robot description files: the TOML schema (documented in the README), built-in robots, and
 //! writing a robot back to TOML (the calibration output).
 
+use crate::dh::{dh_placements, standard_dh_link};
 use crate::error::ModelError;
-use crate::robot::{Axis, AxisStiffness, DhParams, Joint, Robot, UrdfSource};
-use crate::spatial::{mdh_placement, pose_from_xyz_rpy, rpy_from_rotation};
+use crate::robot::{
+    Axis, AxisStiffness, DhConvention, DhParams, Joint, LinkInertia, NamedPoint, NamedPose, Robot,
+    STANDARD_GRAVITY, UrdfSource, check_dh_row,
+};
+use crate::spatial::{Pose, pose_from_xyz_rpy, rpy_from_rotation};
+use nalgebra::Vector3;
 use serde::Deserialize;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Built-in robots, selectable by name wherever a robot file is accepted: `(name, TOML text)`.
 pub const BUILTIN_ROBOTS: &[(&str, &str)] = &[
@@ -15,9 +20,16 @@ pub const BUILTIN_ROBOTS: &[(&str, &str)] = &[
         "tx200-1edof",
         include_str!("../../../robots/tx200-1edof.toml"),
     ),
+    ("ur10", include_str!("../../../robots/ur10.toml")),
+    ("ur10e", include_str!("../../../robots/ur10e.toml")),
+    (
+        "kr210-r2700",
+        include_str!("../../../robots/kr210-r2700.toml"),
+    ),
+    ("irb4600", include_str!("../../../robots/irb4600.toml")),
 ];
 
-/// A built-in robot by name (`tx200`, `tx200-1edof`).
+/// A built-in robot by name (see [`BUILTIN_ROBOTS`]).
 pub fn builtin(name: &str) -> Option<Robot> {
     BUILTIN_ROBOTS
         .iter()
@@ -28,6 +40,28 @@ pub fn builtin(name: &str) -> Option<Robot> {
         })
 }
 
+/// Largest robot file (TOML or URDF) read (bytes): far above any real description.
+pub const MAX_ROBOT_FILE_BYTES: u64 = 64 << 20;
+
+/// Read a text file of at most [`MAX_ROBOT_FILE_BYTES`].
+pub(crate) fn read_bounded(path: &Path, shown: &str) -> Result<String, ModelError> {
+    let io_error = |source| ModelError::Io {
+        path: shown.to_string(),
+        source,
+    };
+    let size = std::fs::metadata(path).map_err(io_error)?.len();
+    if size > MAX_ROBOT_FILE_BYTES {
+        return Err(ModelError::Invalid {
+            path: shown.to_string(),
+            field: "file".into(),
+            message: format!(
+                "{size} bytes is more than the {MAX_ROBOT_FILE_BYTES} bytes a robot description may have"
+            ),
+        });
+    }
+    std::fs::read_to_string(path).map_err(io_error)
+}
+
 /// Load a robot from a built-in name or a TOML file path. A URDF named in the TOML is resolved
 /// relative to the TOML file's folder.
 pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
@@ -35,16 +69,14 @@ pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
         return Ok(robot);
     }
     let path = Path::new(spec);
-    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
-        path: if source.kind() == std::io::ErrorKind::NotFound {
-            // Say what else the argument could have been.
-            let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
-            format!("{spec} (not a built-in robot: {})", names.join(", "))
-        } else {
-            spec.to_string()
-        },
-        source,
-    })?;
+    if !path.exists() {
+        let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
+        return Err(ModelError::Io {
+            path: format!("{spec} (not a built-in robot: {})", names.join(", ")),
+            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        });
+    }
+    let text = read_bounded(path, spec)?;
     robot_from_toml_str(&text, spec, path.parent())
 }
 
@@ -52,13 +84,21 @@ pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
 #[serde(deny_unknown_fields)]
 struct RobotFile {
     name: String,
+    dh: Option<DhConvention>,
     urdf: Option<String>,
     base_link: Option<String>,
     tip_link: Option<String>,
+    gravity: Option<[f64; 3]>,
     base: Option<BaseSection>,
     #[serde(default, rename = "joint")]
     joints: Vec<JointSection>,
+    flange: Option<PoseSection>,
     tool: Option<PoseSection>,
+    payload: Option<InertiaSection>,
+    #[serde(default, rename = "setup")]
+    setups: Vec<NamedPoseSection>,
+    #[serde(default, rename = "target")]
+    targets: Vec<TargetSection>,
 }
 
 #[derive(Deserialize)]
@@ -67,6 +107,7 @@ struct BaseSection {
     xyz: Option<[f64; 3]>,
     rpy: Option<[f64; 3]>,
     stiffness: Option<StiffnessSection>,
+    pivot: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -78,15 +119,40 @@ struct PoseSection {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct NamedPoseSection {
+    name: String,
+    xyz: Option<[f64; 3]>,
+    rpy: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TargetSection {
+    name: String,
+    xyz: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InertiaSection {
+    mass: f64,
+    com: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct JointSection {
     name: Option<String>,
     alpha: Option<f64>,
     a: Option<f64>,
     d: Option<f64>,
+    beta: Option<f64>,
     theta_offset: Option<f64>,
     limits: Option<[f64; 2]>,
     center_shift: Option<f64>,
     stiffness: Option<StiffnessSection>,
+    mass: Option<f64>,
+    com: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize, Default)]
@@ -103,12 +169,58 @@ impl StiffnessSection {
     }
 }
 
+/// Bounds checked before any trigonometry: a pose from a file.
+fn checked_pose(
+    xyz: Option<[f64; 3]>,
+    rpy: Option<[f64; 3]>,
+    field: &str,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<Pose, ModelError> {
+    let xyz = xyz.unwrap_or([0.0; 3]);
+    let rpy = rpy.unwrap_or([0.0; 3]);
+    for (name, values, limit, unit) in [
+        ("xyz", xyz, crate::robot::bounds::MAX_LENGTH_M, "m"),
+        ("rpy", rpy, crate::robot::bounds::MAX_ANGLE_RAD, "rad"),
+    ] {
+        if let Some(bad) = values.iter().find(|v| !(v.is_finite() && v.abs() <= limit)) {
+            return Err(invalid(
+                format!("{field}.{name}"),
+                format!("expected finite values within ±{limit} {unit}, got {bad}"),
+            ));
+        }
+    }
+    Ok(pose_from_xyz_rpy(xyz, rpy))
+}
+
 /// Parse a robot TOML. `origin` names the file in error messages; `base_dir` resolves a relative
 /// `urdf` path.
 pub fn robot_from_toml_str(
     text: &str,
     origin: &str,
     base_dir: Option<&Path>,
+) -> Result<Robot, ModelError> {
+    parse_robot(text, origin, base_dir, &|resolved, shown| {
+        read_bounded(resolved, shown)
+    })
+}
+
+/// Parse a robot TOML whose `urdf = "…"` names a URDF given here as text (not read from disk):
+/// for robot descriptions shipped inside a program, and for fuzzing the URDF reader.
+pub fn robot_from_toml_and_urdf_str(
+    text: &str,
+    urdf_xml: &str,
+    origin: &str,
+) -> Result<Robot, ModelError> {
+    parse_robot(text, origin, None, &|_, _| Ok(urdf_xml.to_string()))
+}
+
+type ReadUrdf<'a> = &'a dyn Fn(&Path, &str) -> Result<String, ModelError>;
+
+fn parse_robot(
+    text: &str,
+    origin: &str,
+    base_dir: Option<&Path>,
+    read_urdf: ReadUrdf,
 ) -> Result<Robot, ModelError> {
     let file: RobotFile = toml::from_str(text).map_err(|e| ModelError::Parse {
         path: origin.to_string(),
@@ -120,21 +232,64 @@ pub fn robot_from_toml_str(
         message,
     };
     let base_section = file.base.as_ref();
-    let base = pose_from_xyz_rpy(
-        base_section.and_then(|b| b.xyz).unwrap_or([0.0; 3]),
-        base_section.and_then(|b| b.rpy).unwrap_or([0.0; 3]),
-    );
+    let base = checked_pose(
+        base_section.and_then(|b| b.xyz),
+        base_section.and_then(|b| b.rpy),
+        "base",
+        &invalid,
+    )?;
     let base_stiffness = base_section
         .and_then(|b| b.stiffness.as_ref())
         .map(StiffnessSection::to_axes)
         .unwrap_or_default();
-    let tool = file
-        .tool
-        .as_ref()
-        .map(|t| pose_from_xyz_rpy(t.xyz.unwrap_or([0.0; 3]), t.rpy.unwrap_or([0.0; 3])))
-        .unwrap_or_else(crate::Pose::identity);
+    let flange_offset = match &file.flange {
+        Some(f) => checked_pose(f.xyz, f.rpy, "flange", &invalid)?,
+        None => Pose::identity(),
+    };
+    let tool = match &file.tool {
+        Some(t) => checked_pose(t.xyz, t.rpy, "tool", &invalid)?,
+        None => Pose::identity(),
+    };
+    let setups = file
+        .setups
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            Ok(NamedPose {
+                name: s.name.clone(),
+                pose: checked_pose(s.xyz, s.rpy, &format!("setup[{}]", i + 1), &invalid)?,
+            })
+        })
+        .collect::<Result<Vec<_>, ModelError>>()?;
+    let targets = file
+        .targets
+        .iter()
+        .map(|t| NamedPoint {
+            name: t.name.clone(),
+            position: Vector3::from(t.xyz),
+        })
+        .collect();
+    let mut robot = Robot {
+        name: file.name.clone(),
+        base,
+        base_stiffness,
+        base_pivot: Vector3::from(base_section.and_then(|b| b.pivot).unwrap_or([0.0; 3])),
+        joints: Vec::new(),
+        flange: flange_offset,
+        flange_offset,
+        tool,
+        urdf: None,
+        dh_convention: None,
+        gravity: file.gravity.map(Vector3::from).unwrap_or(STANDARD_GRAVITY),
+        payload: file.payload.as_ref().map(|p| LinkInertia {
+            mass_kg: p.mass,
+            com: Vector3::from(p.com.unwrap_or([0.0; 3])),
+        }),
+        setups,
+        targets,
+    };
 
-    let (joints, urdf) = match &file.urdf {
+    match &file.urdf {
         None => {
             if file.base_link.is_some() || file.tip_link.is_some() {
                 return Err(invalid(
@@ -142,17 +297,39 @@ pub fn robot_from_toml_str(
                     "base_link/tip_link are only meaningful with `urdf = \"...\"`".into(),
                 ));
             }
-            let mut joints = Vec::with_capacity(file.joints.len());
-            for (i, section) in file.joints.iter().enumerate() {
-                let alpha = section.alpha.unwrap_or(0.0);
-                let a = section.a.unwrap_or(0.0);
-                let d = section.d.unwrap_or(0.0);
-                joints.push(Joint {
+            let convention = file.dh.unwrap_or_default();
+            let rows: Vec<DhParams> = file
+                .joints
+                .iter()
+                .map(|s| DhParams {
+                    alpha: s.alpha.unwrap_or(0.0),
+                    a: s.a.unwrap_or(0.0),
+                    d: s.d.unwrap_or(0.0),
+                    beta: s.beta.unwrap_or(0.0),
+                })
+                .collect();
+            // Bounds before trigonometry: a twist of 1e308 rad has no meaningful sine.
+            for (i, (row, section)) in rows.iter().zip(&file.joints).enumerate() {
+                let name = section
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("joint_{}", i + 1));
+                check_dh_row(row, &format!("joint[{}] ({name})", i + 1), &invalid)?;
+            }
+            let (placements, flange) = dh_placements(convention, &rows);
+            for (i, ((section, row), placement)) in
+                file.joints.iter().zip(&rows).zip(placements).enumerate()
+            {
+                let link_frame = match convention {
+                    DhConvention::Modified => Pose::identity(),
+                    DhConvention::Standard => standard_dh_link(row),
+                };
+                robot.joints.push(Joint {
                     name: section
                         .name
                         .clone()
                         .unwrap_or_else(|| format!("joint_{}", i + 1)),
-                    placement: mdh_placement(alpha, a, d),
+                    placement,
                     theta_offset: section.theta_offset.unwrap_or(0.0),
                     limits: section.limits,
                     center_shift: section.center_shift.unwrap_or(0.0),
@@ -161,21 +338,27 @@ pub fn robot_from_toml_str(
                         .as_ref()
                         .map(StiffnessSection::to_axes)
                         .unwrap_or_default(),
-                    dh: Some(DhParams { alpha, a, d }),
+                    dh: Some(*row),
+                    inertia: inertia_in_joint_frame(section, &link_frame, None),
+                    link_frame,
                 });
             }
-            (joints, None)
+            robot.flange = flange * flange_offset;
+            robot.dh_convention = Some(convention);
         }
         Some(urdf_path) => {
+            if file.dh.is_some() {
+                return Err(invalid(
+                    "dh".into(),
+                    "the geometry comes from the URDF; remove `dh`".into(),
+                ));
+            }
             let resolved = match base_dir {
                 Some(dir) if Path::new(urdf_path).is_relative() => dir.join(urdf_path),
                 _ => Path::new(urdf_path).to_path_buf(),
             };
             let resolved_str = resolved.display().to_string();
-            let xml = std::fs::read_to_string(&resolved).map_err(|source| ModelError::Io {
-                path: resolved_str.clone(),
-                source,
-            })?;
+            let xml = read_urdf(&resolved, &resolved_str)?;
             let chain = crate::urdf::parse_chain(
                 &xml,
                 &resolved_str,
@@ -227,11 +410,12 @@ pub fn robot_from_toml_str(
                 if section.alpha.is_some()
                     || section.a.is_some()
                     || section.d.is_some()
+                    || section.beta.is_some()
                     || section.theta_offset.is_some()
                 {
                     return Err(invalid(
                         field,
-                        "alpha/a/d/theta_offset come from the URDF; remove them from the TOML"
+                        "alpha/a/d/beta/theta_offset come from the URDF; remove them from the TOML"
                             .into(),
                     ));
                 }
@@ -244,63 +428,173 @@ pub fn robot_from_toml_str(
                     .as_ref()
                     .map(StiffnessSection::to_axes)
                     .unwrap_or_default();
+                joint.inertia = inertia_in_joint_frame(section, &joint.link_frame, joint.inertia);
             }
-            let source = UrdfSource {
+            robot.joints = joints;
+            // The URDF's fixed joints after the last revolute joint lead to the flange (tip link).
+            robot.flange = chain.tip_offset * flange_offset;
+            robot.urdf = Some(UrdfSource {
                 path: urdf_path.clone(),
+                resolved,
                 base_link: chain.base_link,
                 tip_link: chain.tip_link,
-            };
-            // The URDF's fixed joints after the last revolute joint belong to the flange side.
-            let tool = chain.tip_offset * tool;
-            return finish(
-                Robot {
-                    name: file.name,
-                    base,
-                    base_stiffness,
-                    joints,
-                    tool,
-                    urdf: Some(source),
-                },
-                origin,
-            );
+            });
         }
-    };
-    finish(
-        Robot {
-            name: file.name,
-            base,
-            base_stiffness,
-            joints,
-            tool,
-            urdf,
-        },
-        origin,
-    )
-}
-
-fn finish(robot: Robot, origin: &str) -> Result<Robot, ModelError> {
+    }
     robot.validate(origin)?;
     Ok(robot)
 }
 
+/// The TOML's `mass`/`com` of a joint (com in the description's link frame) in the joint frame,
+/// overriding `fallback` (the URDF's inertials). A `com` without a mass is ignored by nothing:
+/// it needs a mass.
+fn inertia_in_joint_frame(
+    section: &JointSection,
+    link_frame: &Pose,
+    fallback: Option<LinkInertia>,
+) -> Option<LinkInertia> {
+    match (section.mass, section.com) {
+        (Some(mass), com) => Some(LinkInertia {
+            mass_kg: mass,
+            com: link_frame
+                .transform_point(&Vector3::from(com.unwrap_or([0.0; 3])).into())
+                .coords,
+        }),
+        (None, Some(com)) => Some(LinkInertia {
+            // Validation refuses NaN: a centre of mass without a mass is an error.
+            mass_kg: f64::NAN,
+            com: Vector3::from(com),
+        }),
+        (None, None) => fallback,
+    }
+}
+
+/// A 64-bit FNV-1a hash of the robot's geometry (base, joint placements and offsets, flange,
+/// tool), each number rounded to 0.1 µm / 0.1 µrad first, as 16 hex digits. Plans and
+/// measurement files carry it so a file can be matched to the robot it was made for. Stiffness,
+/// limits and masses do not enter it.
+pub fn geometry_fingerprint(robot: &Robot) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut feed = |value: f64| {
+        let rounded = (value * 1e7).round() as i64;
+        for byte in rounded.to_le_bytes() {
+            hash ^= u64::from(byte);
+            hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    let feed_pose = |pose: &Pose, feed: &mut dyn FnMut(f64)| {
+        for v in pose.translation.vector.iter() {
+            feed(*v);
+        }
+        for v in pose.rotation.matrix().iter() {
+            feed(*v);
+        }
+    };
+    feed(robot.joints.len() as f64);
+    feed_pose(&robot.base, &mut feed);
+    for joint in &robot.joints {
+        feed_pose(&joint.placement, &mut feed);
+        feed(joint.theta_offset);
+    }
+    feed_pose(&robot.flange, &mut feed);
+    feed_pose(&robot.tool, &mut feed);
+    format!("{hash:016x}")
+}
+
+impl Robot {
+    /// See [`geometry_fingerprint`].
+    pub fn geometry_fingerprint(&self) -> String {
+        geometry_fingerprint(self)
+    }
+}
+
 /// Write a robot as TOML in the same schema (the calibration result is a drop-in robot file).
+/// A URDF path is written as the robot file had it; use [`robot_to_toml_for`] when the TOML goes
+/// to another folder.
 pub fn robot_to_toml(robot: &Robot) -> String {
+    robot_to_toml_with_urdf_path(robot, robot.urdf.as_ref().map(|u| u.path.clone()))
+}
+
+/// [`robot_to_toml`] for a file that will be written at `destination`: a URDF path is rewritten
+/// relative to `destination`'s folder (absolute when no relative path exists), so the written
+/// robot still finds its URDF.
+pub fn robot_to_toml_for(robot: &Robot, destination: &Path) -> String {
+    let urdf_path = robot.urdf.as_ref().map(|urdf| {
+        let target = absolute(&urdf.resolved);
+        let folder = destination
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        relative_path(&absolute(folder), &target)
+            .unwrap_or(target)
+            .display()
+            .to_string()
+    });
+    robot_to_toml_with_urdf_path(robot, urdf_path)
+}
+
+/// An absolute, symlink-free path when the file exists; otherwise the path joined to the
+/// current folder.
+fn absolute(path: &Path) -> PathBuf {
+    path.canonicalize().unwrap_or_else(|_| {
+        std::env::current_dir()
+            .map(|cwd| cwd.join(path))
+            .unwrap_or_else(|_| path.to_path_buf())
+    })
+}
+
+/// `target` relative to folder `from` (both absolute), e.g. `../robots/arm.urdf`.
+fn relative_path(from: &Path, target: &Path) -> Option<PathBuf> {
+    use std::path::Component;
+    let from: Vec<Component> = from.components().collect();
+    let to: Vec<Component> = target.components().collect();
+    if from.first() != to.first() {
+        return None;
+    }
+    let common = from.iter().zip(&to).take_while(|(a, b)| a == b).count();
+    let mut out = PathBuf::new();
+    for _ in common..from.len() {
+        out.push("..");
+    }
+    for component in &to[common..] {
+        out.push(component.as_os_str());
+    }
+    Some(out)
+}
+
+fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "# deflex robot description (SI units: m, rad, N·m/rad)"
+        "# deflex robot description (SI units: m, rad, N·m/rad, kg)"
+    );
+    let _ = writeln!(
+        out,
+        "# geometry fingerprint {}",
+        geometry_fingerprint(robot)
     );
     let _ = writeln!(out, "name = {}", toml_string(&robot.name));
-    if let Some(urdf) = &robot.urdf {
-        let _ = writeln!(out, "urdf = {}", toml_string(&urdf.path));
+    if let (Some(urdf), Some(path)) = (&robot.urdf, urdf_path) {
+        let _ = writeln!(out, "urdf = {}", toml_string(&path));
         let _ = writeln!(out, "base_link = {}", toml_string(&urdf.base_link));
         let _ = writeln!(out, "tip_link = {}", toml_string(&urdf.tip_link));
+    }
+    if let Some(convention) = robot.dh_convention {
+        let _ = writeln!(out, "dh = {}", toml_string(convention.name()));
+    }
+    if robot.gravity != STANDARD_GRAVITY {
+        let _ = writeln!(
+            out,
+            "gravity = {}",
+            toml_array(&[robot.gravity.x, robot.gravity.y, robot.gravity.z])
+        );
     }
     let base_xyz = robot.base.translation.vector;
     let base_rpy = rpy_from_rotation(&robot.base.rotation);
     if base_xyz.norm() > 0.0
         || base_rpy.iter().any(|v| *v != 0.0)
         || robot.base_stiffness.count() > 0
+        || robot.base_pivot != Vector3::zeros()
     {
         let _ = writeln!(out, "\n[base]");
         let _ = writeln!(
@@ -312,19 +606,22 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         if robot.base_stiffness.count() > 0 {
             let _ = writeln!(out, "stiffness = {}", toml_stiffness(&robot.base_stiffness));
         }
+        if robot.base_pivot != Vector3::zeros() {
+            let p = robot.base_pivot;
+            let _ = writeln!(out, "pivot = {}", toml_array(&[p.x, p.y, p.z]));
+        }
     }
     for joint in &robot.joints {
         let _ = writeln!(out, "\n[[joint]]");
         let _ = writeln!(out, "name = {}", toml_string(&joint.name));
         if robot.urdf.is_none() {
-            let dh = joint.dh.unwrap_or(DhParams {
-                alpha: 0.0,
-                a: 0.0,
-                d: 0.0,
-            });
+            let dh = joint.dh.unwrap_or_default();
             let _ = writeln!(out, "alpha = {:?}", dh.alpha);
             let _ = writeln!(out, "a = {:?}", dh.a);
             let _ = writeln!(out, "d = {:?}", dh.d);
+            if dh.beta != 0.0 {
+                let _ = writeln!(out, "beta = {:?}", dh.beta);
+            }
             let _ = writeln!(out, "theta_offset = {:?}", joint.theta_offset);
         }
         if let Some(limits) = joint.limits {
@@ -336,6 +633,24 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         if joint.stiffness.count() > 0 {
             let _ = writeln!(out, "stiffness = {}", toml_stiffness(&joint.stiffness));
         }
+        if let Some(inertia) = &joint.inertia {
+            let com = joint
+                .link_frame
+                .inverse_transform_point(&inertia.com.into())
+                .coords;
+            let _ = writeln!(out, "mass = {:?}", inertia.mass_kg);
+            let _ = writeln!(out, "com = {}", toml_array(&[com.x, com.y, com.z]));
+        }
+    }
+    if robot.flange_offset != Pose::identity() {
+        let xyz = robot.flange_offset.translation.vector;
+        let _ = writeln!(out, "\n[flange]");
+        let _ = writeln!(out, "xyz = {}", toml_array(&[xyz.x, xyz.y, xyz.z]));
+        let _ = writeln!(
+            out,
+            "rpy = {}",
+            toml_array(&rpy_from_rotation(&robot.flange_offset.rotation))
+        );
     }
     let tool_xyz = robot.tool.translation.vector;
     let _ = writeln!(out, "\n[tool]");
@@ -349,6 +664,32 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         "rpy = {}",
         toml_array(&rpy_from_rotation(&robot.tool.rotation))
     );
+    if let Some(payload) = &robot.payload {
+        let _ = writeln!(out, "\n[payload]");
+        let _ = writeln!(out, "mass = {:?}", payload.mass_kg);
+        let _ = writeln!(
+            out,
+            "com = {}",
+            toml_array(&[payload.com.x, payload.com.y, payload.com.z])
+        );
+    }
+    for setup in &robot.setups {
+        let xyz = setup.pose.translation.vector;
+        let _ = writeln!(out, "\n[[setup]]");
+        let _ = writeln!(out, "name = {}", toml_string(&setup.name));
+        let _ = writeln!(out, "xyz = {}", toml_array(&[xyz.x, xyz.y, xyz.z]));
+        let _ = writeln!(
+            out,
+            "rpy = {}",
+            toml_array(&rpy_from_rotation(&setup.pose.rotation))
+        );
+    }
+    for target in &robot.targets {
+        let p = target.position;
+        let _ = writeln!(out, "\n[[target]]");
+        let _ = writeln!(out, "name = {}", toml_string(&target.name));
+        let _ = writeln!(out, "xyz = {}", toml_array(&[p.x, p.y, p.z]));
+    }
     out
 }
 

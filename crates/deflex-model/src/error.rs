@@ -34,9 +34,10 @@ pub enum ModelError {
     /// The number of joint values does not match the robot.
     #[error(transparent)]
     QLength(#[from] QLengthError),
-    /// Inverse kinematics did not converge to the requested pose.
+    /// Inverse kinematics did not converge to the requested pose from the given seed (the pose
+    /// may still be reachable from another seed: see [`crate::Robot::inverse_kinematics_search`]).
     #[error(
-        "pose unreachable: after {iterations} iterations the remaining error is {position_error_m:.3e} m and {orientation_error_rad:.3e} rad"
+        "pose unreachable from this seed: after {iterations} iterations the remaining error is {position_error_m:.3e} m and {orientation_error_rad:.3e} rad"
     )]
     Unreachable {
         /// Iterations used.
@@ -44,6 +45,34 @@ pub enum ModelError {
         /// Remaining position error norm (m).
         position_error_m: f64,
         /// Remaining orientation error norm (rad).
+        orientation_error_rad: f64,
+    },
+    /// The target position lies farther from the first joint than the arm can reach.
+    #[error(
+        "pose out of reach: the target is {distance_m:.4} m from joint 1, the arm reaches at most {reach_m:.4} m"
+    )]
+    OutOfReach {
+        /// Distance of the target from joint 1's frame origin (m).
+        distance_m: f64,
+        /// Sum of the link lengths beyond joint 1, tool included (m): an upper bound on the reach.
+        reach_m: f64,
+    },
+    /// Inverse kinematics converged from none of the seeds tried, though the target lies within
+    /// the arm's length: the orientation or the joint limits may forbid it, or it lies at the
+    /// edge of the workspace.
+    #[error(
+        "pose not reached from {seeds} seeds (within the arm's length, {distance_m:.4} m of {reach_m:.4} m): best remaining error {position_error_m:.3e} m and {orientation_error_rad:.3e} rad; the orientation or the joint limits may forbid it"
+    )]
+    NotConverged {
+        /// Seeds tried.
+        seeds: usize,
+        /// Distance of the target from joint 1 (m).
+        distance_m: f64,
+        /// Upper bound on the reach (m).
+        reach_m: f64,
+        /// Best remaining position error (m).
+        position_error_m: f64,
+        /// Orientation error of that best attempt (rad).
         orientation_error_rad: f64,
     },
 }

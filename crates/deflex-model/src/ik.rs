@@ -1,5 +1,6 @@
 //! Inverse kinematics by damped least squares with joint limits, seeded from a reference
-//! configuration so that successive poses of a path stay on one branch.
+//! configuration so that successive poses of a path stay on one branch; and a multi-seed search
+//! for a single pose that tells "out of reach" from "not converged".
 
 use crate::error::ModelError;
 use crate::kinematics::Data;
@@ -151,6 +152,79 @@ impl Robot {
         })
     }
 
+    /// Upper bound on the distance from joint 1's frame origin that the TCP can reach: the sum of
+    /// the link lengths beyond joint 1, flange and tool included (m).
+    pub fn reach_bound(&self) -> f64 {
+        self.joints
+            .iter()
+            .skip(1)
+            .map(|j| j.placement.translation.vector.norm())
+            .sum::<f64>()
+            + self.flange.translation.vector.norm()
+            + self.tool.translation.vector.norm()
+    }
+
+    /// Inverse kinematics from several seeds: `preferred` first (when given), then a fixed,
+    /// deterministic spread over the first three joints (wrist bent away from its singularity),
+    /// clamped into the limits. Returns the first converged solution. Fails with
+    /// [`ModelError::OutOfReach`] when the target position is beyond the sum of the link
+    /// lengths, and with [`ModelError::NotConverged`] (best attempt's error) when no seed
+    /// converged though the target is within the arm's length.
+    pub fn inverse_kinematics_search(
+        &self,
+        target: &Pose,
+        preferred: Option<&[f64]>,
+        options: &IkOptions,
+    ) -> Result<IkSolution, ModelError> {
+        let n = self.joint_count();
+        if let Some(seed) = preferred
+            && seed.len() != n
+        {
+            return Err(crate::QLengthError {
+                expected: n,
+                got: seed.len(),
+            }
+            .into());
+        }
+        let mut data = Data::new();
+        self.forward_kinematics(&mut data, &vec![0.0; n])?;
+        let shoulder = data.joint_frames[0].translation.vector;
+        let distance_m = (target.translation.vector - shoulder).norm();
+        let reach_m = self.reach_bound();
+        if distance_m > reach_m + options.position_tolerance_m.max(1e-9) {
+            return Err(ModelError::OutOfReach {
+                distance_m,
+                reach_m,
+            });
+        }
+        let mut seeds: Vec<Vec<f64>> = preferred.map(|s| vec![s.to_vec()]).unwrap_or_default();
+        seeds.extend(spread_seeds(self));
+        let mut best: Option<(f64, f64)> = None;
+        for seed in &seeds {
+            match self.inverse_kinematics(target, seed, options) {
+                Ok(solution) => return Ok(solution),
+                Err(ModelError::Unreachable {
+                    position_error_m,
+                    orientation_error_rad,
+                    ..
+                }) => {
+                    if best.is_none_or(|(p, _)| position_error_m < p) {
+                        best = Some((position_error_m, orientation_error_rad));
+                    }
+                }
+                Err(other) => return Err(other),
+            }
+        }
+        let (position_error_m, orientation_error_rad) = best.unwrap_or((f64::NAN, f64::NAN));
+        Err(ModelError::NotConverged {
+            seeds: seeds.len(),
+            distance_m,
+            reach_m,
+            position_error_m,
+            orientation_error_rad,
+        })
+    }
+
     /// Clamp joint values into their limits (joints without limits are left alone).
     pub fn clamp_to_limits(&self, q: &mut [f64]) {
         for (value, joint) in q.iter_mut().zip(&self.joints) {
@@ -159,4 +233,43 @@ impl Robot {
             }
         }
     }
+}
+
+/// The multi-seed search's fixed spread: joint 1 at four headings, joints 2 and 3 at three
+/// values each around the middle of their ranges, the wrist bent by 0.6 rad on its middle joint
+/// (a straight wrist is singular), every value clamped into the limits: 36 seeds for an arm of
+/// three or more joints.
+fn spread_seeds(robot: &Robot) -> Vec<Vec<f64>> {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let n = robot.joint_count();
+    let middle = |i: usize| {
+        robot
+            .joints
+            .get(i)
+            .and_then(|j| j.limits)
+            .map_or(0.0, |[lo, hi]| 0.5 * (lo + hi))
+    };
+    let headings = [0.0, FRAC_PI_2, -FRAC_PI_2, PI];
+    let offsets = [-0.8, 0.0, 0.8];
+    let mut seeds = Vec::new();
+    for heading in headings {
+        for a in offsets {
+            for b in offsets {
+                let mut q: Vec<f64> = (0..n).map(middle).collect();
+                q[0] = middle(0) + heading;
+                if n > 1 {
+                    q[1] += a;
+                }
+                if n > 2 {
+                    q[2] += 1.5 * b;
+                }
+                if n > 4 {
+                    q[4] += 0.6;
+                }
+                robot.clamp_to_limits(&mut q);
+                seeds.push(q);
+            }
+        }
+    }
+    seeds
 }

@@ -15,7 +15,7 @@ pub struct Data {
     pub base_frame: Pose,
     /// World pose of each joint frame R_i (i = 1..N at index i-1), joint rotation included.
     pub joint_frames: [Pose; MAX_JOINTS],
-    /// World pose of the flange frame R_m (= R_N).
+    /// World pose of the flange frame R_m (= R_N · [`Robot::flange`]).
     pub flange: Pose,
     /// World pose of the TCP frame R_t.
     pub tcp: Pose,
@@ -62,7 +62,7 @@ impl Data {
 
     /// World axis and centre of an eDoF (the spring's rotation axis v_{i,j} and centre O_i of
     /// eq. 13). For a joint the centre is the frame origin shifted `center_shift` along z_i; for
-    /// the base it is R0's origin.
+    /// the base it is the base pivot ([`Robot::base_pivot`], R0's origin by default).
     #[inline]
     pub fn edof_axis_center(
         &self,
@@ -75,7 +75,7 @@ impl Data {
                 let frame = &self.base_frame;
                 (
                     frame.rotation.matrix().column(axis.index()).into_owned(),
-                    frame.translation.vector,
+                    base_pivot_world(frame, robot),
                 )
             }
             EdofSite::Joint(i) => {
@@ -87,6 +87,12 @@ impl Data {
             }
         }
     }
+}
+
+/// World position of the base eDoFs' centre.
+#[inline]
+pub(crate) fn base_pivot_world(base_frame: &Pose, robot: &Robot) -> Vector3<f64> {
+    base_frame.translation.vector + base_frame.rotation * robot.base_pivot
 }
 
 impl Robot {
@@ -108,8 +114,8 @@ impl Robot {
             data.q[i] = qi;
         }
         data.joint_count = n;
-        data.flange = frame;
-        data.tcp = frame * self.tool;
+        data.flange = frame * self.flange;
+        data.tcp = data.flange * self.tool;
         Ok(())
     }
 

@@ -23,7 +23,9 @@
 
 mod compliance;
 mod description;
+pub mod dh;
 mod error;
+mod gravity;
 mod ik;
 mod kinematics;
 mod robot;
@@ -32,11 +34,17 @@ mod urdf;
 pub mod wrench;
 
 pub use compliance::{EdofColumns, edof_screw};
-pub use description::{BUILTIN_ROBOTS, builtin, load_robot, robot_from_toml_str, robot_to_toml};
+pub use description::{
+    BUILTIN_ROBOTS, MAX_ROBOT_FILE_BYTES, builtin, geometry_fingerprint, load_robot,
+    robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml, robot_to_toml_for,
+};
 pub use error::{ModelError, QLengthError};
 pub use ik::{IkOptions, IkSolution};
 pub use kinematics::Data;
-pub use robot::{Axis, AxisStiffness, DhParams, Edof, EdofSite, Joint, Robot, UrdfSource};
+pub use robot::{
+    Axis, AxisStiffness, DhConvention, DhParams, Edof, EdofSite, Joint, LinkInertia, NamedPoint,
+    NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, bounds,
+};
 pub use spatial::{Displacement, Pose, Wrench};
 
 /// The paper's forming configuration of the TX200, in degrees: the TCP at the part origin

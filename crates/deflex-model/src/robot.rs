@@ -3,6 +3,7 @@
 use crate::MAX_JOINTS;
 use crate::error::ModelError;
 use crate::spatial::Pose;
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// An axis of a joint frame R_i (or of the base frame R0) about which a torsional spring acts.
@@ -66,16 +67,71 @@ impl AxisStiffness {
     }
 }
 
-/// Modified Denavit–Hartenberg (Craig) parameters of a joint, kept for display and for writing
-/// the robot back to TOML.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Which Denavit–Hartenberg convention a robot file uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DhConvention {
+    /// Modified DH (Craig): `T(i-1,i) = RotX(α_i)·RotY(β_i)·TransX(a_i)·TransZ(d_i)·RotZ(q_i+θ_i)`.
+    #[default]
+    Modified,
+    /// Standard DH (as UR and most datasheets publish it):
+    /// `T(i-1,i) = RotZ(q_i+θ_i)·TransZ(d_i)·TransX(a_i)·RotX(α_i)·RotY(β_i)`.
+    Standard,
+}
+
+impl DhConvention {
+    /// The word used in robot files (`modified`, `standard`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DhConvention::Modified => "modified",
+            DhConvention::Standard => "standard",
+        }
+    }
+}
+
+/// Denavit–Hartenberg parameters of one joint's row, in the robot's [`DhConvention`], with
+/// Hayati's β (a rotation about y) for consecutive axes that are (nearly) parallel, where the
+/// classic parameters jump under a small tilt. β is 0 in every nominal table; calibration may
+/// identify it. Kept for display, for writing the robot back to TOML and for geometric
+/// calibration, which changes these and rebuilds the placements ([`Robot::rebuild_dh_geometry`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DhParams {
-    /// Twist about x_{i-1} (rad).
+    /// Twist α (rad).
     pub alpha: f64,
-    /// Length along x_{i-1} (m).
+    /// Length a (m).
     pub a: f64,
-    /// Offset along z_i (m).
+    /// Offset d along the joint axis (m).
     pub d: f64,
+    /// Hayati tilt β about y (rad).
+    pub beta: f64,
+}
+
+/// Mass and centre of mass of the body a joint moves (its link plus everything rigidly attached
+/// up to the next joint), for gravity-induced deflection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkInertia {
+    /// Mass (kg).
+    pub mass_kg: f64,
+    /// Centre of mass in the joint frame R_i (m).
+    pub com: Vector3<f64>,
+}
+
+/// A named rigid placement (a tracker set-up: the robot's world frame in the tracker frame).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedPose {
+    /// Label (the measurement file's `setup` column).
+    pub name: String,
+    /// `p_tracker = pose · p_world`.
+    pub pose: Pose,
+}
+
+/// A named point on the flange (a tracker target, a probe tip), in the flange frame (m).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedPoint {
+    /// Label (the measurement file's `target` column).
+    pub name: String,
+    /// Position in the flange frame (m).
+    pub position: Vector3<f64>,
 }
 
 /// One motorised revolute joint: a fixed placement in the previous joint frame followed by a
@@ -95,15 +151,24 @@ pub struct Joint {
     pub center_shift: f64,
     /// Torsional stiffness about x_i, y_i, z_i (N·m/rad).
     pub stiffness: AxisStiffness,
-    /// DH parameters when the joint was written in modified DH.
+    /// DH row when the geometry was written as a DH table (see [`Robot::dh_convention`]).
     pub dh: Option<DhParams>,
+    /// Mass and centre of mass of the body this joint moves, if known.
+    pub inertia: Option<LinkInertia>,
+    /// R_i → the frame in which the robot file writes this link's centre of mass: identity for
+    /// modified DH, `L_i` for standard DH (the DH frame at the end of the link), the child
+    /// link's frame for a URDF.
+    pub link_frame: Pose,
 }
 
 /// Where a robot's geometry came from when it was read from a URDF.
 #[derive(Clone, Debug, PartialEq)]
 pub struct UrdfSource {
-    /// Absolute or TOML-relative path of the URDF file.
+    /// The URDF path as the robot file wrote it (absolute, or relative to the robot file).
     pub path: String,
+    /// The path the URDF was read from (the robot file's folder joined with `path`); used to
+    /// rewrite `path` when the robot is written to another folder.
+    pub resolved: std::path::PathBuf,
     /// Root link of the chain.
     pub base_link: String,
     /// Last link of the chain (the flange).
@@ -165,15 +230,39 @@ pub struct Robot {
     pub name: String,
     /// World → R0 placement.
     pub base: Pose,
-    /// Base eDoFs about R0's axes at its origin (baseplate tilt).
+    /// Base eDoFs about R0's axes through [`Robot::base_pivot`] (baseplate tilt).
     pub base_stiffness: AxisStiffness,
+    /// Centre of the base eDoFs in R0 (m): where the baseplate tilts. R0's origin by default; a
+    /// baseplate bolted to the floor tilts about a point near the floor, which for a robot whose
+    /// R0 sits at shoulder height is well below R0 (the TX200's baseplate is 0.642 m below).
+    pub base_pivot: Vector3<f64>,
     /// Motorised joints, base to flange.
     pub joints: Vec<Joint>,
+    /// Last joint frame R_N → flange frame R_m (identity for modified DH; `TransX(a_N)·RotX(α_N)·
+    /// RotY(β_N)` for standard DH; the fixed joints after the last revolute one in a URDF).
+    pub flange: Pose,
+    /// The robot file's `[flange]`: an extra fixed placement after the DH table's last frame,
+    /// for arms whose flange frame is not the last DH frame (KUKA's A6 axis points into the
+    /// wrist while `$FLANGE` z points out). Included in `flange`; kept to rebuild it.
+    pub flange_offset: Pose,
     /// Flange frame R_m → TCP frame R_t.
     pub tool: Pose,
     /// Set when the geometry was read from a URDF.
     pub urdf: Option<UrdfSource>,
+    /// Set when the geometry was written as a DH table (every joint then has `dh`).
+    pub dh_convention: Option<DhConvention>,
+    /// Gravity in world axes (m/s²), for gravity-induced deflection. Default `[0, 0, −9.81]`.
+    pub gravity: Vector3<f64>,
+    /// Payload carried at the flange, if any: mass and centre of mass in the flange frame.
+    pub payload: Option<LinkInertia>,
+    /// Tracker set-ups known to the model (calibrated registrations), by name.
+    pub setups: Vec<NamedPose>,
+    /// Targets on the flange known to the model (calibrated probe/reflector offsets), by name.
+    pub targets: Vec<NamedPoint>,
 }
+
+/// Standard gravity (m/s²) pointing down the world z axis.
+pub const STANDARD_GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -9.80665);
 
 impl Robot {
     /// Number of motorised joints.
@@ -232,7 +321,8 @@ impl Robot {
     }
 
     /// Check the invariants every other function relies on: 1..=[`MAX_JOINTS`] joints, finite
-    /// geometry, positive finite stiffnesses, ordered limits. `origin` names the file in errors.
+    /// geometry within [`bounds`], stiffnesses, masses and limits within their bounds. `origin`
+    /// names the file in errors.
     pub fn validate(&self, origin: &str) -> Result<(), ModelError> {
         let invalid = |field: String, message: String| ModelError::Invalid {
             path: origin.to_string(),
@@ -250,34 +340,194 @@ impl Robot {
         }
         check_stiffness(&self.base_stiffness, "base.stiffness", &invalid)?;
         check_pose(&self.base, "base", &invalid)?;
+        check_vector(
+            &self.base_pivot,
+            "base.pivot",
+            bounds::MAX_LENGTH_M,
+            "m",
+            &invalid,
+        )?;
+        check_pose(&self.flange, "flange", &invalid)?;
+        check_pose(&self.flange_offset, "flange", &invalid)?;
         check_pose(&self.tool, "tool", &invalid)?;
+        check_vector(
+            &self.gravity,
+            "gravity",
+            bounds::MAX_GRAVITY_M_S2,
+            "m/s²",
+            &invalid,
+        )?;
+        if let Some(payload) = &self.payload {
+            check_inertia(payload, "payload", &invalid)?;
+        }
         for (i, joint) in self.joints.iter().enumerate() {
             let field = |name: &str| format!("joint[{}] ({}).{name}", i + 1, joint.name);
             check_stiffness(&joint.stiffness, &field("stiffness"), &invalid)?;
             check_pose(&joint.placement, &field("placement"), &invalid)?;
-            if !joint.theta_offset.is_finite() {
+            check_scalar(
+                joint.theta_offset,
+                &field("theta_offset"),
+                bounds::MAX_ANGLE_RAD,
+                "rad",
+                &invalid,
+            )?;
+            check_scalar(
+                joint.center_shift,
+                &field("center_shift"),
+                bounds::MAX_LENGTH_M,
+                "m",
+                &invalid,
+            )?;
+            if let Some([lo, hi]) = joint.limits {
+                let within = |v: f64| v.is_finite() && v.abs() <= bounds::MAX_JOINT_LIMIT_RAD;
+                if !(within(lo) && within(hi) && lo < hi) {
+                    return Err(invalid(
+                        field("limits"),
+                        format!(
+                            "expected [min, max] in rad with min < max, each within ±{}, got [{lo}, {hi}]",
+                            bounds::MAX_JOINT_LIMIT_RAD
+                        ),
+                    ));
+                }
+            }
+            if let Some(dh) = &joint.dh {
+                check_dh_row(dh, &format!("joint[{}] ({})", i + 1, joint.name), &invalid)?;
+            }
+            if let Some(inertia) = &joint.inertia {
+                check_inertia(inertia, &field(""), &invalid)?;
+            }
+        }
+        let mut names = std::collections::BTreeSet::new();
+        for (i, setup) in self.setups.iter().enumerate() {
+            check_pose(
+                &setup.pose,
+                &format!("setup[{}] ({})", i + 1, setup.name),
+                &invalid,
+            )?;
+            if !names.insert(("setup", setup.name.as_str())) {
                 return Err(invalid(
-                    field("theta_offset"),
-                    "must be a finite angle in rad".into(),
+                    format!("setup[{}].name", i + 1),
+                    format!("set-up `{}` is listed twice", setup.name),
                 ));
             }
-            if !joint.center_shift.is_finite() {
+        }
+        for (i, target) in self.targets.iter().enumerate() {
+            let field = format!("target[{}] ({}).xyz", i + 1, target.name);
+            check_vector(
+                &target.position,
+                &field,
+                bounds::MAX_LENGTH_M,
+                "m",
+                &invalid,
+            )?;
+            if !names.insert(("target", target.name.as_str())) {
                 return Err(invalid(
-                    field("center_shift"),
-                    "must be a finite length in m".into(),
-                ));
-            }
-            if let Some([lo, hi]) = joint.limits
-                && !(lo.is_finite() && hi.is_finite() && lo < hi)
-            {
-                return Err(invalid(
-                    field("limits"),
-                    format!("expected [min, max] in rad with min < max, got [{lo}, {hi}]"),
+                    format!("target[{}].name", i + 1),
+                    format!("target `{}` is listed twice", target.name),
                 ));
             }
         }
         Ok(())
     }
+}
+
+/// Bounds on robot-file values. A value outside is refused at load with the field named: it
+/// would make every result meaningless (a stiffness of 5e-324 N·m/rad is an infinite compliance,
+/// a twist of 1e308 rad has no meaningful sine).
+pub mod bounds {
+    /// Largest length (m): link lengths, offsets, centre shifts, tool and base translations.
+    pub const MAX_LENGTH_M: f64 = 100.0;
+    /// Largest fixed angle (rad): twists, offsets, roll–pitch–yaw (two turns).
+    pub const MAX_ANGLE_RAD: f64 = 4.0 * std::f64::consts::PI;
+    /// Largest joint limit magnitude (rad), generous for multi-turn joints.
+    pub const MAX_JOINT_LIMIT_RAD: f64 = 100.0;
+    /// Smallest torsional stiffness (N·m/rad).
+    pub const MIN_STIFFNESS: f64 = 1e-2;
+    /// Largest torsional stiffness (N·m/rad); beyond it, leave the axis out (rigid).
+    pub const MAX_STIFFNESS: f64 = 1e13;
+    /// Largest link or payload mass (kg).
+    pub const MAX_MASS_KG: f64 = 1e5;
+    /// Largest gravity magnitude (m/s²).
+    pub const MAX_GRAVITY_M_S2: f64 = 100.0;
+}
+
+/// A DH row within [`bounds`]; `joint_field` is e.g. `joint[3] (joint_3)`.
+pub(crate) fn check_dh_row(
+    row: &DhParams,
+    joint_field: &str,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    let field = |name: &str| format!("{joint_field}.{name}");
+    check_scalar(
+        row.alpha,
+        &field("alpha"),
+        bounds::MAX_ANGLE_RAD,
+        "rad",
+        invalid,
+    )?;
+    check_scalar(
+        row.beta,
+        &field("beta"),
+        bounds::MAX_ANGLE_RAD,
+        "rad",
+        invalid,
+    )?;
+    check_scalar(row.a, &field("a"), bounds::MAX_LENGTH_M, "m", invalid)?;
+    check_scalar(row.d, &field("d"), bounds::MAX_LENGTH_M, "m", invalid)
+}
+
+fn check_scalar(
+    value: f64,
+    field: &str,
+    limit: f64,
+    unit: &str,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    if value.is_finite() && value.abs() <= limit {
+        Ok(())
+    } else {
+        Err(invalid(
+            field.to_string(),
+            format!("expected a finite value within ±{limit} {unit}, got {value}"),
+        ))
+    }
+}
+
+fn check_vector(
+    value: &Vector3<f64>,
+    field: &str,
+    limit: f64,
+    unit: &str,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    for (c, v) in ["x", "y", "z"].iter().zip(value.iter()) {
+        check_scalar(*v, &format!("{field}.{c}"), limit, unit, invalid)?;
+    }
+    Ok(())
+}
+
+fn check_inertia(
+    inertia: &LinkInertia,
+    field: &str,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    let mass = inertia.mass_kg;
+    if !(mass.is_finite() && (0.0..=bounds::MAX_MASS_KG).contains(&mass)) {
+        return Err(invalid(
+            format!("{field}mass"),
+            format!(
+                "expected a mass in kg within [0, {}], got {mass}",
+                bounds::MAX_MASS_KG
+            ),
+        ));
+    }
+    check_vector(
+        &inertia.com,
+        &format!("{field}com"),
+        bounds::MAX_LENGTH_M,
+        "m",
+        invalid,
+    )
 }
 
 fn check_stiffness(
@@ -287,12 +537,14 @@ fn check_stiffness(
 ) -> Result<(), ModelError> {
     for axis in Axis::ALL {
         if let Some(k) = stiffness.get(axis)
-            && !(k.is_finite() && k > 0.0)
+            && !(k.is_finite() && (bounds::MIN_STIFFNESS..=bounds::MAX_STIFFNESS).contains(&k))
         {
             return Err(invalid(
                 format!("{field}.{}", axis.letter()),
                 format!(
-                    "stiffness must be a positive finite number in N·m/rad (omit the axis for a rigid one), got {k}"
+                    "stiffness must be a positive finite number in N·m/rad within [{:e}, {:e}] (omit the axis for a rigid one), got {k}",
+                    bounds::MIN_STIFFNESS,
+                    bounds::MAX_STIFFNESS
                 ),
             ));
         }
@@ -305,14 +557,21 @@ fn check_pose(
     field: &str,
     invalid: &dyn Fn(String, String) -> ModelError,
 ) -> Result<(), ModelError> {
-    let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+    let finite = pose
+        .translation
+        .vector
+        .iter()
+        .all(|v| v.is_finite() && v.abs() <= bounds::MAX_LENGTH_M)
         && pose.rotation.matrix().iter().all(|v| v.is_finite());
     if finite {
         Ok(())
     } else {
         Err(invalid(
             field.to_string(),
-            "must contain only finite numbers".into(),
+            format!(
+                "must contain only finite numbers, translations within ±{} m",
+                bounds::MAX_LENGTH_M
+            ),
         ))
     }
 }

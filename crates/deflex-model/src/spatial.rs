@@ -41,15 +41,6 @@ pub fn rot_z(angle: f64) -> Pose {
     )
 }
 
-/// The modified Denavit–Hartenberg (Craig) fixed part of a joint placement,
-/// `RotX(alpha) · TransX(a) · TransZ(d)`; the joint rotation `RotZ(q + theta_offset)` commutes with
-/// `TransZ(d)` and is applied after it.
-pub fn mdh_placement(alpha: f64, a: f64, d: f64) -> Pose {
-    let rot_x = Rotation3::from_axis_angle(&Vector3::x_axis(), alpha);
-    Pose::from_parts(Translation3::identity(), rot_x)
-        * Pose::from_parts(Translation3::new(a, 0.0, d), Rotation3::identity())
-}
-
 /// The rotation vector (axis × angle, rad) that takes orientation `from` to `to`, in the parent
 /// frame: `to = exp(ω) · from`.
 pub fn orientation_error(from: &Rotation3<f64>, to: &Rotation3<f64>) -> Vector3<f64> {

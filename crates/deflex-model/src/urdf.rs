@@ -2,12 +2,25 @@
 //! a fixed placement followed by a rotation about local z; a URDF joint with origin `T` and axis
 //! `a` becomes placement `T · R_a` (R_a takes z onto a) and the next placement starts with
 //! `R_a⁻¹`, so that frames follow the URDF's link frames exactly.
+//!
+//! Link inertials (`<inertial><mass>`, `<origin xyz>`) of the chain's links are summed per moving
+//! body: a revolute joint's child link plus every link fixed to it, up to the next revolute
+//! joint. Links off the chain and links fixed to the base are ignored.
+//!
+//! Hostile input is bounded: the document's nesting depth is checked before the XML parser (which
+//! recurses) sees it, the node count is capped, link cycles are reported instead of walked
+//! forever, and the chain is found with hash maps in linear time.
 
 use crate::error::ModelError;
-use crate::robot::{AxisStiffness, Joint};
+use crate::robot::{AxisStiffness, Joint, LinkInertia};
 use crate::spatial::{Pose, pose_from_xyz_rpy};
 use nalgebra::{Rotation3, Translation3, Unit, Vector3};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+
+/// Deepest element nesting accepted (a URDF is 3–4 levels deep).
+pub const MAX_URDF_DEPTH: usize = 64;
+/// Most XML nodes accepted.
+pub const MAX_URDF_NODES: u32 = 4_000_000;
 
 /// The serial chain read from a URDF.
 pub(crate) struct UrdfChain {
@@ -32,7 +45,7 @@ fn parse_triplet(text: Option<&str>, path: &str, field: &str) -> Result<[f64; 3]
     let Some(text) = text else {
         return Ok([0.0; 3]);
     };
-    let values: Vec<&str> = text.split_whitespace().collect();
+    let values: Vec<&str> = text.split_whitespace().take(4).collect();
     let parse = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
     match values.as_slice() {
         [a, b, c] => match (parse(a), parse(b), parse(c)) {
@@ -40,14 +53,22 @@ fn parse_triplet(text: Option<&str>, path: &str, field: &str) -> Result<[f64; 3]
             _ => Err(invalid(
                 path,
                 field,
-                format!("expected three finite numbers, got \"{text}\""),
+                format!("expected three finite numbers, got \"{}\"", shorten(text)),
             )),
         },
         _ => Err(invalid(
             path,
             field,
-            format!("expected three numbers, got \"{text}\""),
+            format!("expected three numbers, got \"{}\"", shorten(text)),
         )),
+    }
+}
+
+fn shorten(text: &str) -> String {
+    if text.chars().count() > 60 {
+        format!("{}…", text.chars().take(60).collect::<String>())
+    } else {
+        text.to_string()
     }
 }
 
@@ -59,6 +80,67 @@ fn invalid(path: &str, field: &str, message: String) -> ModelError {
     }
 }
 
+/// Deepest element nesting of an XML text, by a linear scan that skips comments, CDATA,
+/// processing instructions, declarations and quoted attribute values. Returns as soon as
+/// `limit` is exceeded.
+fn nesting_depth(xml: &str, limit: usize) -> usize {
+    let bytes = xml.as_bytes();
+    let (mut i, mut depth, mut deepest) = (0usize, 0usize, 0usize);
+    let skip_to = |from: usize, end: &[u8]| -> usize {
+        bytes[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(bytes.len(), |p| from + p + end.len())
+    };
+    while i < bytes.len() {
+        if bytes[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &bytes[i..];
+        if rest.starts_with(b"<!--") {
+            i = skip_to(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = skip_to(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = skip_to(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            i = skip_to(i + 2, b">");
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = skip_to(i + 2, b">");
+        } else {
+            // A start tag: find its end outside quotes; `/>` closes it at once.
+            let mut j = i + 1;
+            let mut quote = None;
+            let mut self_closing = false;
+            while j < bytes.len() {
+                let c = bytes[j];
+                match quote {
+                    Some(q) if c == q => quote = None,
+                    Some(_) => {}
+                    None if c == b'"' || c == b'\'' => quote = Some(c),
+                    None if c == b'>' => {
+                        self_closing = bytes[j - 1] == b'/';
+                        break;
+                    }
+                    None => {}
+                }
+                j += 1;
+            }
+            if !self_closing {
+                depth += 1;
+                deepest = deepest.max(depth);
+                if deepest > limit {
+                    return deepest;
+                }
+            }
+            i = j + 1;
+        }
+    }
+    deepest
+}
+
 /// Read the chain from `base_link` (default: the root link) to `tip_link` (default: the single
 /// leaf reached by following the only child at every link).
 pub(crate) fn parse_chain(
@@ -67,10 +149,24 @@ pub(crate) fn parse_chain(
     base_link: Option<&str>,
     tip_link: Option<&str>,
 ) -> Result<UrdfChain, ModelError> {
-    let document = roxmltree::Document::parse(xml).map_err(|e| ModelError::Parse {
-        path: path.to_string(),
-        message: format!("not valid XML: {e}"),
-    })?;
+    let depth = nesting_depth(xml, MAX_URDF_DEPTH);
+    if depth > MAX_URDF_DEPTH {
+        return Err(ModelError::Parse {
+            path: path.to_string(),
+            message: format!(
+                "elements are nested more than {MAX_URDF_DEPTH} levels deep; a URDF needs 4"
+            ),
+        });
+    }
+    let options = roxmltree::ParsingOptions {
+        allow_dtd: false,
+        nodes_limit: MAX_URDF_NODES,
+    };
+    let document =
+        roxmltree::Document::parse_with_options(xml, options).map_err(|e| ModelError::Parse {
+            path: path.to_string(),
+            message: format!("not valid XML: {e}"),
+        })?;
     let robot = document.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(invalid(
@@ -78,6 +174,51 @@ pub(crate) fn parse_chain(
             "<robot>",
             format!("the root element is <{}>", robot.tag_name().name()),
         ));
+    }
+    let mut inertials: HashMap<String, LinkInertia> = HashMap::new();
+    for link in robot.children().filter(|n| n.has_tag_name("link")) {
+        let name = link.attribute("name").unwrap_or("?");
+        let Some(inertial) = link.children().find(|c| c.has_tag_name("inertial")) else {
+            continue;
+        };
+        let field = format!("link \"{name}\" <inertial>");
+        let mass = match inertial
+            .children()
+            .find(|c| c.has_tag_name("mass"))
+            .and_then(|m| m.attribute("value"))
+        {
+            Some(text) => text
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|m| m.is_finite() && *m >= 0.0)
+                .ok_or_else(|| {
+                    invalid(
+                        path,
+                        &format!("{field} <mass value>"),
+                        format!(
+                            "expected a non-negative mass in kg, got \"{}\"",
+                            shorten(text)
+                        ),
+                    )
+                })?,
+            None => continue,
+        };
+        let com = parse_triplet(
+            inertial
+                .children()
+                .find(|c| c.has_tag_name("origin"))
+                .and_then(|o| o.attribute("xyz")),
+            path,
+            &format!("{field} <origin xyz>"),
+        )?;
+        inertials.insert(
+            name.to_string(),
+            LinkInertia {
+                mass_kg: mass,
+                com: Vector3::from(com),
+            },
+        );
     }
     let mut joints = Vec::new();
     for node in robot.children().filter(|n| n.has_tag_name("joint")) {
@@ -106,6 +247,24 @@ pub(crate) fn parse_chain(
             path,
             &field("<origin rpy>"),
         )?;
+        if let Some(bad) = xyz
+            .iter()
+            .find(|v| v.abs() > crate::robot::bounds::MAX_LENGTH_M)
+            .or_else(|| {
+                rpy.iter()
+                    .find(|v| v.abs() > crate::robot::bounds::MAX_ANGLE_RAD)
+            })
+        {
+            return Err(invalid(
+                path,
+                &field("<origin>"),
+                format!(
+                    "{bad} is out of range (lengths within ±{} m, angles within ±{} rad)",
+                    crate::robot::bounds::MAX_LENGTH_M,
+                    crate::robot::bounds::MAX_ANGLE_RAD
+                ),
+            ));
+        }
         let axis_node = node.children().find(|c| c.has_tag_name("axis"));
         let axis = match axis_node.and_then(|a| a.attribute("xyz")) {
             Some(text) => Vector3::from(parse_triplet(Some(text), path, &field("<axis xyz>"))?),
@@ -142,11 +301,21 @@ pub(crate) fn parse_chain(
             limits,
         });
     }
-    let by_child: HashMap<&str, usize> = joints
-        .iter()
-        .enumerate()
-        .map(|(i, j)| (j.child.as_str(), i))
-        .collect();
+    let mut by_child: HashMap<&str, usize> = HashMap::with_capacity(joints.len());
+    let mut by_parent: HashMap<&str, Vec<usize>> = HashMap::with_capacity(joints.len());
+    for (i, joint) in joints.iter().enumerate() {
+        if by_child.insert(joint.child.as_str(), i).is_some() {
+            return Err(invalid(
+                path,
+                &format!("joint \"{}\" <child>", joint.name),
+                format!(
+                    "link \"{}\" is the child of two joints; a URDF is a tree",
+                    joint.child
+                ),
+            ));
+        }
+        by_parent.entry(joint.parent.as_str()).or_default().push(i);
+    }
     let root = match base_link {
         Some(b) => b.to_string(),
         None => {
@@ -156,32 +325,49 @@ pub(crate) fn parse_chain(
                 .filter(|p| !by_child.contains_key(p))
                 .collect::<std::collections::BTreeSet<_>>()
                 .into_iter()
+                .take(5)
                 .collect();
             match roots.as_slice() {
                 [one] => one.to_string(),
+                [] => {
+                    return Err(invalid(
+                        path,
+                        "base_link",
+                        "every link has a parent: the joints form a cycle".into(),
+                    ));
+                }
                 _ => {
                     return Err(invalid(
                         path,
                         "base_link",
                         format!(
-                            "cannot tell the root link (candidates: {roots:?}); set base_link in the TOML"
+                            "cannot tell the root link (candidates include: {roots:?}); set base_link in the TOML"
                         ),
                     ));
                 }
             }
         }
     };
+    let cycle = |link: &str| {
+        invalid(
+            path,
+            "joint",
+            format!("the joints form a cycle through link \"{link}\"; a URDF is a tree"),
+        )
+    };
     let tip = match tip_link {
         Some(t) => t.to_string(),
         None => {
-            let mut link = root.clone();
+            let mut link = root.as_str();
+            let mut visited = HashSet::new();
             loop {
-                let children: Vec<&UrdfJoint> =
-                    joints.iter().filter(|j| j.parent == link).collect();
-                match children.as_slice() {
-                    [] => break link,
-                    [one] => link = one.child.clone(),
-                    _ => {
+                if !visited.insert(link) {
+                    return Err(cycle(link));
+                }
+                match by_parent.get(link).map(Vec::as_slice) {
+                    None | Some([]) => break link.to_string(),
+                    Some([one]) => link = joints[*one].child.as_str(),
+                    Some(_) => {
                         return Err(invalid(
                             path,
                             "tip_link",
@@ -192,28 +378,45 @@ pub(crate) fn parse_chain(
             }
         }
     };
-    // Walk from the tip up to the root.
+    // Walk from the tip up to the root; a chain visits each joint at most once.
     let mut chain = Vec::new();
-    let mut link = tip.clone();
+    let mut link = tip.as_str();
     while link != root {
-        let Some(&index) = by_child.get(link.as_str()) else {
+        let Some(&index) = by_child.get(link) else {
             return Err(invalid(
                 path,
                 "tip_link",
                 format!("link \"{tip}\" is not below \"{root}\""),
             ));
         };
+        if chain.len() > joints.len() {
+            return Err(cycle(link));
+        }
         chain.push(index);
-        link = joints[index].parent.clone();
+        link = joints[index].parent.as_str();
     }
     chain.reverse();
     let mut pending = Pose::identity();
-    let mut out = Vec::new();
+    let mut out: Vec<Joint> = Vec::new();
+    // Mass-weighted sum of the current body's centres of mass (joint frame) and its mass.
+    let mut body = (Vector3::zeros(), 0.0);
+    let flush_body = |out: &mut Vec<Joint>, body: &mut (Vector3<f64>, f64)| {
+        if let Some(last) = out.last_mut()
+            && body.1 > 0.0
+        {
+            last.inertia = Some(LinkInertia {
+                mass_kg: body.1,
+                com: body.0 / body.1,
+            });
+        }
+        *body = (Vector3::zeros(), 0.0);
+    };
     for index in chain {
         let joint = &joints[index];
         match joint.kind.as_str() {
             "fixed" => pending *= joint.origin,
             "revolute" | "continuous" => {
+                flush_body(&mut out, &mut body);
                 let norm = joint.axis.norm();
                 if norm.is_nan() || norm <= 1e-9 {
                     return Err(invalid(
@@ -236,6 +439,8 @@ pub(crate) fn parse_chain(
                     center_shift: 0.0,
                     stiffness: AxisStiffness::RIGID,
                     dh: None,
+                    inertia: None,
+                    link_frame: align_pose.inverse(),
                 });
                 pending = align_pose.inverse();
             }
@@ -244,12 +449,22 @@ pub(crate) fn parse_chain(
                     path,
                     &format!("joint \"{}\" type", joint.name),
                     format!(
-                        "only revolute, continuous and fixed joints are supported, got \"{other}\""
+                        "only revolute, continuous and fixed joints are supported, got \"{}\"",
+                        shorten(other)
                     ),
                 ));
             }
         }
+        // The joint's child link is now `pending` in the last revolute joint's frame.
+        if !out.is_empty()
+            && let Some(inertia) = inertials.get(&joint.child)
+        {
+            let com = pending.transform_point(&inertia.com.into()).coords;
+            body.0 += com * inertia.mass_kg;
+            body.1 += inertia.mass_kg;
+        }
     }
+    flush_body(&mut out, &mut body);
     if out.is_empty() {
         return Err(invalid(
             path,
@@ -263,4 +478,17 @@ pub(crate) fn parse_chain(
         tip_link: tip,
         tip_offset: pending,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nesting_depth;
+
+    #[test]
+    fn nesting_depth_skips_comments_quotes_and_self_closing_tags() {
+        assert_eq!(nesting_depth("<a><b/><c x='>'><!-- <d> --></c></a>", 10), 2);
+        assert_eq!(nesting_depth("<?xml version='1.0'?><robot></robot>", 10), 1);
+        let deep = "<a>".repeat(1000);
+        assert!(nesting_depth(&deep, 64) > 64);
+    }
 }

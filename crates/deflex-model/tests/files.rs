@@ -123,7 +123,32 @@ fn validation_errors_name_file_and_field() {
 
 #[test]
 fn builtins_parse_and_differ_as_documented() {
-    assert_eq!(BUILTIN_ROBOTS.len(), 2);
+    let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
+    assert_eq!(
+        names,
+        [
+            "tx200",
+            "tx200-1edof",
+            "ur10",
+            "ur10e",
+            "kr210-r2700",
+            "irb4600"
+        ]
+    );
+    for (name, text) in BUILTIN_ROBOTS {
+        let robot = builtin(name).unwrap();
+        assert_eq!(robot.joint_count(), 6, "{name}");
+        if !name.starts_with("tx200") {
+            assert!(
+                text.contains("PLACEHOLDER") && robot.name.contains("placeholder stiffness"),
+                "{name}: the stiffness of a built-in robot from a datasheet is labelled a placeholder"
+            );
+            assert!(
+                text.contains("github.com") || text.contains("universal-robots.com"),
+                "{name} cites its source"
+            );
+        }
+    }
     let full = builtin("tx200").unwrap();
     let one = builtin("tx200-1edof").unwrap();
     assert_eq!(full.edof_count(), 6);

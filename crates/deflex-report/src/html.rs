@@ -169,10 +169,10 @@ impl HtmlReport {
         Ok(h)
     }
 
-    /// Renders the page and writes it to `path`.
+    /// Renders the page and writes it to `path` (whole or not at all).
     pub fn write(&self, path: &Path) -> Result<(), ReportError> {
         let html = self.render()?;
-        std::fs::write(path, html).map_err(|source| ReportError::Io {
+        deflex_files::write_atomic(path, html).map_err(|source| ReportError::Io {
             path: path.to_path_buf(),
             source,
         })

@@ -57,18 +57,27 @@ macro_rules! render {
         };
         $crate::render::check_size(path, size)?;
         $crate::font::ensure_registered();
-        match $crate::render::Format::from_path(path)? {
-            $crate::render::Format::Png => $crate::render::render!(
-                @draw ::plotters::prelude::BitMapBackend::new(path, size),
-                fail,
-                |$root| $body
-            ),
-            $crate::render::Format::Svg => $crate::render::render!(
-                @draw ::plotters::prelude::SVGBackend::new(path, size),
-                fail,
-                |$root| $body
-            ),
-        }
+        let format = $crate::render::Format::from_path(path)?;
+        // Drawn into a temporary sibling and renamed: a failure never leaves half an image.
+        ::deflex_files::write_through(
+            path,
+            |temporary| match format {
+                $crate::render::Format::Png => $crate::render::render!(
+                    @draw ::plotters::prelude::BitMapBackend::new(temporary, size),
+                    fail,
+                    |$root| $body
+                ),
+                $crate::render::Format::Svg => $crate::render::render!(
+                    @draw ::plotters::prelude::SVGBackend::new(temporary, size),
+                    fail,
+                    |$root| $body
+                ),
+            },
+            |source| $crate::ReportError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+        )
     }};
 }
 pub(crate) use render;
