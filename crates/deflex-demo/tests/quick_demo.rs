@@ -22,6 +22,7 @@ fn run(tag: &str, seed: u64) -> (DemoSummary, PathBuf) {
         out_dir: dir.clone(),
         seed,
         quick: true,
+        ..DemoOptions::default()
     };
     (
         run_demo(&options, &mut Silent).expect("quick demo runs"),

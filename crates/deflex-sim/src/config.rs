@@ -226,6 +226,10 @@ pub struct PartConfig {
     pub tool_xyz_m: [f64; 3],
     /// The tool's orientation (roll, pitch, yaw, rad).
     pub tool_rpy: [f64; 3],
+    /// Where the baseplate tilts, in R0 (m, |·| ≤ 5), as the model is told it (the robot's
+    /// datasheet: the TX200's baseplate is 0.642 m below its shoulder-height R0); absent: the
+    /// robot file's `[base] pivot`.
+    pub base_pivot_m: Option<[f64; 3]>,
 }
 
 impl Default for PartConfig {
@@ -236,6 +240,7 @@ impl Default for PartConfig {
             seed_q_deg: deflex_model::TX200_FORMING_Q_DEG,
             tool_xyz_m: [0.0, 0.0, 0.200],
             tool_rpy: [0.0; 3],
+            base_pivot_m: Some([0.0, 0.0, -0.642]),
         }
     }
 }
@@ -598,6 +603,9 @@ impl CellConfig {
         all_bounded("part.seed_q_deg", &p.seed_q_deg, 720.0, "deg")?;
         all_bounded("part.tool_xyz_m", &p.tool_xyz_m, 2.0, "m")?;
         all_bounded("part.tool_rpy", &p.tool_rpy, 7.0, "rad")?;
+        if let Some(pivot) = &p.base_pivot_m {
+            all_bounded("part.base_pivot_m", pivot, 5.0, "m")?;
+        }
         bounded(
             "process.fixture_stiffness_n_m",
             self.process.fixture_stiffness_n_m,
@@ -685,18 +693,22 @@ impl CellConfig {
         pose_from_xyz_rpy(self.part.tool_xyz_m, self.part.tool_rpy)
     }
 
-    /// The nominal robot model with the cell's tool: what the robot controller believes and
-    /// what a calibration starts from (its stiffnesses are the description's).
+    /// The nominal robot model with the cell's tool and base pivot: what the robot controller
+    /// believes and what a calibration starts from (its stiffnesses are the description's).
     pub fn nominal_robot(&self) -> Result<deflex_model::Robot, SimError> {
         let mut robot = deflex_model::load_robot(&self.part.robot)?;
         robot.tool = self.tool();
+        if let Some(pivot) = self.part.base_pivot_m {
+            robot.base_pivot = nalgebra::Vector3::from(pivot);
+        }
         crate::plant::check_six_joints(&robot)?;
         Ok(robot)
     }
 
-    /// The flange placement after the last joint frame of the nominal robot.
-    pub fn flange(&self, _robot: &deflex_model::Robot) -> Pose {
-        Pose::identity()
+    /// The flange placement after the last joint frame of the nominal robot (the description's
+    /// `flange`, read as data by the plant).
+    pub fn flange(&self, robot: &deflex_model::Robot) -> Pose {
+        robot.flange
     }
 
     /// The IK seed (rad).

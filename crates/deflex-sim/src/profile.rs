@@ -16,8 +16,8 @@
 //! spring of the file also 15 % softer; every other x/y axis gets a secondary spring 8× the
 //! joint's plant z-stiffness (the TX200 twin's are 7–15×); a joint the file leaves rigid gets
 //! 1.5× the stiffness of the joint before it (J6 from J5, as on the TX200 twin); base tilt about
-//! x0/y0 at 3× the J1 plant stiffness, about a pivot at R0's origin (robots described from their
-//! mounting face); the J2/J3 coupling ρ = 0.1; wrist lost motion ±0.15 mrad (±0.05 mrad for
+//! x0/y0 at 3× the J1 plant stiffness, about the robot file's `[base] pivot` (R0's origin by
+//! default: robots described from their mounting face); the J2/J3 coupling ρ = 0.1; wrist lost motion ±0.15 mrad (±0.05 mrad for
 //! UR's strain-wave gears), taken up over a torque of 1.3·10⁻³ × the J5 plant stiffness with a
 //! hysteresis of a quarter of it; the same residual geometry errors as the TX200 twin.
 //!
@@ -106,7 +106,7 @@ pub fn derived_plant(robot: &Robot, strain_wave_wrist: bool) -> PlantConfig {
         center_shift_m: std::array::from_fn(|i| {
             robot.joints.get(i).map_or(0.0, |j| j.center_shift)
         }),
-        base_pivot_m: [0.0; 3],
+        base_pivot_m: robot.base_pivot.into(),
         ..PlantConfig::default()
     };
     let mut previous_z: f64 = 1e5;
@@ -299,6 +299,7 @@ pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
         ..CellConfig::default()
     };
     cell.part.tool_xyz_m = [0.0, 0.0, 0.150];
+    cell.part.base_pivot_m = None;
     let mut with_tool = robot.clone();
     with_tool.tool = cell.tool();
     let (origin, seed) = place_part(&with_tool)?;
@@ -323,6 +324,7 @@ pub fn generic_cell(robot: &Robot, maker: Maker) -> Result<CellConfig, SimError>
         plant: derived_plant(robot, false),
         ..CellConfig::default()
     };
+    cell.part.base_pivot_m = None;
     cell.controller.correction_delay_s = 0.012;
     cell.controller.correction_filter_s = 0.0;
     if maker == Maker::Abb {
