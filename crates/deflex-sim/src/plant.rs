@@ -532,6 +532,28 @@ impl Plant {
         displacement(&self.rigid.tcp, &self.bent.tcp)
     }
 
+    /// The TCP displacement under a wrench at the TCP estimated as the first-order response plus
+    /// `large_rotation` (the large-rotation part of a recent exact equilibrium, scaled by the
+    /// caller); sets the deformed TCP and flange poses and the torques to commit as
+    /// [`Plant::solve_tcp`] does. Allocation-free.
+    pub fn estimate_tcp(&mut self, wrench: &Wrench, large_rotation: &Displacement) -> Displacement {
+        let n = self.springs.count;
+        let mut tau = [0.0; MAX_SPRINGS];
+        for (t, twist) in tau.iter_mut().zip(&self.tcp_twists[..n]) {
+            *t = twist.dot(wrench);
+        }
+        let mut theta = [0.0; MAX_SPRINGS];
+        self.springs.rotations(&tau, &mut theta);
+        let mut d = *large_rotation;
+        for (twist, angle) in self.tcp_twists[..n].iter().zip(&theta) {
+            d += twist * *angle;
+        }
+        self.tau = tau;
+        self.bent.tcp = apply_displacement(&self.rigid.tcp, &d);
+        self.bent.flange = self.bent.tcp * self.chain.tool().inverse();
+        d
+    }
+
     /// The equilibrium for a load on link `link` at the material point `local` (link frame, m).
     fn solve(&mut self, link: usize, local: &Vector3<f64>, wrench: &Wrench) {
         let force = Vector3::new(wrench[0], wrench[1], wrench[2]);

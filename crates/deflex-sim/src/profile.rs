@@ -208,13 +208,27 @@ fn reach_m(robot: &Robot) -> f64 {
 /// tool pointing down, such that the part's corners (±30 mm, 20 mm deep) are reachable too.
 /// Returns the origin (mm, R0) and the seed configuration (deg).
 pub fn place_part(robot: &Robot) -> Result<([f64; 3], [f64; 6]), SimError> {
+    place_part_among(
+        robot,
+        &[0.55, 0.5, 0.6, 0.45, 0.65, 0.4],
+        &[-0.25, -0.15, -0.35, 0.0, -0.5],
+    )
+}
+
+/// [`place_part`] trying the given fractions of the reach (horizontal distance from the base)
+/// and heights below the shoulder (fractions of the reach), in order.
+pub fn place_part_among(
+    robot: &Robot,
+    fractions: &[f64],
+    heights: &[f64],
+) -> Result<([f64; 3], [f64; 6]), SimError> {
     let reach = reach_m(robot);
     let shoulder = robot.base
         * robot.joints[0].placement
         * nalgebra::Point3::from(robot.joints[1].placement.translation.vector);
     let seeds = seeds();
-    for fraction in [0.55, 0.5, 0.6, 0.45, 0.65, 0.4] {
-        for height in [-0.25, -0.15, -0.35, 0.0, -0.5] {
+    for &fraction in fractions {
+        for &height in heights {
             for azimuth in [0.0f64, 180.0, 90.0, -90.0] {
                 let (s, c) = azimuth.to_radians().sin_cos();
                 let origin = Vector3::new(
@@ -261,8 +275,9 @@ pub fn place_part(robot: &Robot) -> Result<([f64; 3], [f64; 6]), SimError> {
 /// * **process**: a 0.5 mm AA3003-H14 sheet (Rm ≈ 150 MPa), 10 mm ball: the Aerens level of
 ///   the paper's cone is ≈ 170 N, in the 100–300 N a 12.5 kg-payload arm can push without
 ///   stalling; the same cone as the paper.
-/// * **part**: placed by [`place_part`] (for the UR10e: about 0.6 m in front of the base, a
-///   little below the mounting face).
+/// * **part**: 0.45 of the reach in front of the base, 0.1 of it below the shoulder (for the
+///   UR10e: 0.72 m in front, 20 mm above the mounting face: a sheet clamped in a frame on the
+///   robot's table), tool pointing down ([`place_part_among`]).
 pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
     let mut cell = CellConfig {
         controller: ControllerConfig {
@@ -302,7 +317,7 @@ pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
     cell.part.base_pivot_m = None;
     let mut with_tool = robot.clone();
     with_tool.tool = cell.tool();
-    let (origin, seed) = place_part(&with_tool)?;
+    let (origin, seed) = place_part_among(&with_tool, &[0.45, 0.5, 0.4], &[-0.1, 0.0, -0.2])?;
     cell.part = PartConfig {
         origin_mm: origin,
         seed_q_deg: seed,
