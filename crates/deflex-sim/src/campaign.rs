@@ -156,6 +156,27 @@ pub fn run_campaign(
     Ok(out)
 }
 
+/// A campaign file's text: the `# SIMULATED` header naming the robot the twin played (its name,
+/// the spec it was given as and the geometry fingerprint of its description) and what was
+/// measured, then the rows in the measurement format.
+pub fn campaign_text(
+    config: &CellConfig,
+    rows: &[MeasurementRow],
+    what: &str,
+    seed: u64,
+) -> Result<String, SimError> {
+    let robot = config.nominal_robot()?;
+    let mut text = format!(
+        "# SIMULATED deflex digital-twin campaign ({what}), seed {seed}: not a measurement\n\
+         # robot: {} ({}); geometry fingerprint {}\n",
+        robot.name,
+        config.part.robot,
+        robot.geometry_fingerprint()
+    );
+    text.push_str(&deflex_calib::data::format_rows(rows));
+    Ok(text)
+}
+
 fn instruments(config: &CellConfig, seed: u64) -> (LaserTracker, ChaCha8Rng) {
     let mut tracker_rng = ChaCha8Rng::seed_from_u64(seed);
     tracker_rng.set_stream(3);

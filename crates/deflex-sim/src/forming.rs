@@ -362,25 +362,35 @@ impl FormingRun {
         serde_json::to_string_pretty(&value).unwrap_or_default()
     }
 
-    /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots into `dir` (created if
-    /// needed). Returns the files written.
+    /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots into the folder `dir`,
+    /// whole or not at all: the folder is built aside and swapped in at the end (an existing
+    /// `dir` is replaced only then). Returns the files written.
     pub fn write_outputs(&self, dir: &Path) -> Result<Vec<std::path::PathBuf>, SimError> {
-        std::fs::create_dir_all(dir).map_err(|e| SimError::output(dir, e))?;
-        let mut files = Vec::new();
+        let building = deflex_files::AtomicDir::create(dir).map_err(|e| SimError::output(dir, e))?;
+        let temporary = building.path().to_path_buf();
+        let mut names = Vec::new();
         let mut write = |name: &str, text: String| -> Result<(), SimError> {
-            let path = dir.join(name);
-            std::fs::write(&path, text).map_err(|e| SimError::output(&path, e))?;
-            files.push(path);
+            let path = temporary.join(name);
+            deflex_files::write_atomic(&path, text).map_err(|e| SimError::output(&path, e))?;
+            names.push(name.to_string());
             Ok(())
         };
         write("log.csv", self.log.to_csv())?;
         write("summary.json", self.summary_json())?;
-        let mut profile = String::from("# SIMULATED formed profile along θ = 0\nr_mm,depth_mm\n");
+        let mut profile = format!(
+            "# SIMULATED formed profile along θ = 0; robot: {}\nr_mm,depth_mm\n",
+            self.summary.robot
+        );
         for (r, d) in &self.profile_mm {
             let _ = writeln!(profile, "{r:.3},{d:.5}");
         }
         write("profile.csv", profile)?;
-        files.extend(crate::plots::forming_plots(self, dir)?);
-        Ok(files)
+        for plot in crate::plots::forming_plots(self, &temporary)? {
+            if let Some(name) = plot.file_name() {
+                names.push(name.to_string_lossy().into_owned());
+            }
+        }
+        building.commit().map_err(|e| SimError::output(dir, e))?;
+        Ok(names.into_iter().map(|n| dir.join(n)).collect())
     }
 }
