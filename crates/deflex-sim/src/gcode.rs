@@ -306,7 +306,7 @@ mod tests {
             ),
             ("G0 X1\nG1 X2 F0\n", 2, "feeds from"),
             ("G0 X1\nG1 X2 F-5\n", 2, "feeds from"),
-            ("G0 X1e300\n", 1, "beyond"),
+            ("G0 X20000\n", 1, "beyond"),
             ("G0 X1\nG91\nG0 X9999\nG0 X9999\n", 4, "beyond"),
             ("G20 G1 X1 F100000\n", 1, "feeds from"),
         ];
