@@ -85,7 +85,10 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
             ]
         })
         .collect();
-    html.table(&["error source / effect", "level", "in this run"], &conditions);
+    html.table(
+        &["error source / effect", "level", "in this run"],
+        &conditions,
+    );
 
     if s.paper_comparison {
         html.section("Paper vs deflex");
@@ -315,7 +318,10 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
              compliance scale of the controller's model (1.3: the model is 30 % too soft).",
             sens.runs
         ));
-        html.table(&crate::sensitivity::SensitivityResult::HEADERS, &sens.table_rows());
+        html.table(
+            &crate::sensitivity::SensitivityResult::HEADERS,
+            &sens.table_rows(),
+        );
         for (path, caption) in &page.sensitivity_files {
             html.image(path, caption.clone());
         }

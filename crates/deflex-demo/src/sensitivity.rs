@@ -80,14 +80,22 @@ impl SensitivityPlan {
         };
         check("--delays-ms (s)", &self.delays_s, 0.0, 1.0)?;
         check("--model-scales", &self.model_scales, 0.1, 10.0)?;
-        for (name, values) in [("--delays-ms", &self.delays_s), ("--model-scales", &self.model_scales)] {
+        for (name, values) in [
+            ("--delays-ms", &self.delays_s),
+            ("--model-scales", &self.model_scales),
+        ] {
             if values.windows(2).any(|w| w[1] <= w[0]) {
                 return Err(format!("{name}: give increasing values"));
             }
         }
         check("--gain-errors", &self.gain_errors, -0.5, 0.5)?;
         check("--drift-factors", &self.drift_factors, 0.0, 1000.0)?;
-        check("--contact-stiffness-n-m", &self.contact_stiffness_n_m, 1e4, 1e9)?;
+        check(
+            "--contact-stiffness-n-m",
+            &self.contact_stiffness_n_m,
+            1e4,
+            1e9,
+        )?;
         if !(1..=64).contains(&self.threads) {
             return Err(format!("--threads: 1..64, got {}", self.threads));
         }
@@ -198,7 +206,13 @@ struct Outcome {
     fault: Option<String>,
 }
 
-fn run_job(job: &Job, path: &ToolPath, model: &Robot, seed: u64, closed: bool) -> Result<Outcome, String> {
+fn run_job(
+    job: &Job,
+    path: &ToolPath,
+    model: &Robot,
+    seed: u64,
+    closed: bool,
+) -> Result<Outcome, String> {
     if closed {
         let run = run_closed_loop(
             &job.cell,
@@ -275,7 +289,8 @@ pub fn run_sensitivity(
             factor: "bias drift".into(),
             condition: format!(
                 "×{d} ({:.1} N of Fz over the run)",
-                d * base.sensor.bias_drift_per_s[2] * path.duration_s(base.controller.rapid_feed_mm_s)
+                d * base.sensor.bias_drift_per_s[2]
+                    * path.duration_s(base.controller.rapid_feed_mm_s)
             ),
             cell: with(&|c| {
                 c.errors.bias_drift = true;
@@ -341,7 +356,9 @@ pub fn run_sensitivity(
             });
         }
     });
-    let results = results.into_inner().map_err(|_| "a sensitivity run panicked".to_string())?;
+    let results = results
+        .into_inner()
+        .map_err(|_| "a sensitivity run panicked".to_string())?;
     let mut outcomes = Vec::with_capacity(results.len());
     for r in results {
         outcomes.push(r.ok_or("a sensitivity run did not finish")??);
@@ -367,7 +384,10 @@ pub fn run_sensitivity(
     }
     let cells = plan.delays_s.len() * plan.model_scales.len();
     Ok(SensitivityResult {
-        heatmap_improvement_percent: rows[..cells].iter().map(|r| r.improvement_percent).collect(),
+        heatmap_improvement_percent: rows[..cells]
+            .iter()
+            .map(|r| r.improvement_percent)
+            .collect(),
         heatmap_delays_s: plan.delays_s.clone(),
         heatmap_scales: plan.model_scales.clone(),
         rows,

@@ -1,5 +1,6 @@
 //! The study pipeline: plan → campaign → identification → validation → forming → report.
 
+use crate::sensitivity::{SensitivityPlan, run_sensitivity};
 use crate::tables::{
     error_numbers, grid_rows, paper_vs_deflex_csv, predictions_csv, stiffness_csv, stiffness_rows,
     write_text,
@@ -8,10 +9,9 @@ use crate::twin_controller::{controller_config_for, run_closed_loop};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::validate::predict;
 use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure, write_rows};
-use crate::sensitivity::{SensitivityPlan, run_sensitivity};
 use deflex_model::{Robot, robot_to_toml};
-use deflex_sim::profile::Maker;
 use deflex_sim::campaign::{GridParams, SpiralParams, run_campaign, spiral, validation_grid};
+use deflex_sim::profile::Maker;
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -259,7 +259,11 @@ pub fn conditions(cell: &CellConfig) -> Vec<(String, String, bool)> {
             format!(
                 "up to {:.2} mrad and {:.2} mm (tool {:.2} mm)",
                 max_abs(&p.joint_offset_error_rad) * 1e3,
-                p.link_error_m.iter().map(|l| max_abs(l)).fold(0.0, f64::max) * 1e3,
+                p.link_error_m
+                    .iter()
+                    .map(|l| max_abs(l))
+                    .fold(0.0, f64::max)
+                    * 1e3,
                 norm(&p.tool_error_m) * 1e3
             ),
             e.geometry,
@@ -328,10 +332,7 @@ pub fn conditions(cell: &CellConfig) -> Vec<(String, String, bool)> {
         (
             "process: forming force at the actual step-down and wall angle, growing with depth"
                 .to_string(),
-            format!(
-                "Aerens level, κ = {}/mm",
-                cell.sheet.depth_growth_per_mm
-            ),
+            format!("Aerens level, κ = {}/mm", cell.sheet.depth_growth_per_mm),
             cell.sheet.actual_geometry,
         ),
     ];
@@ -658,7 +659,10 @@ fn study(
             .iter()
             .map(|r| r.improvement_percent)
             .fold(f64::INFINITY, f64::min);
-        progress.done(&format!("{} runs, worst improvement {worst:.0} %", result.runs));
+        progress.done(&format!(
+            "{} runs, worst improvement {worst:.0} %",
+            result.runs
+        ));
         Some(result)
     } else {
         progress.done("skipped");

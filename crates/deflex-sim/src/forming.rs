@@ -366,7 +366,8 @@ impl FormingRun {
     /// whole or not at all: the folder is built aside and swapped in at the end (an existing
     /// `dir` is replaced only then). Returns the files written.
     pub fn write_outputs(&self, dir: &Path) -> Result<Vec<std::path::PathBuf>, SimError> {
-        let building = deflex_files::AtomicDir::create(dir).map_err(|e| SimError::output(dir, e))?;
+        let building =
+            deflex_files::AtomicDir::create(dir).map_err(|e| SimError::output(dir, e))?;
         let temporary = building.path().to_path_buf();
         let mut names = Vec::new();
         let mut write = |name: &str, text: String| -> Result<(), SimError> {

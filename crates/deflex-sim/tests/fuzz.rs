@@ -62,7 +62,10 @@ fn parsed_programs_plan_or_are_refused() {
             Ok(cell) => assert!(cell.path_duration_s() <= deflex_sim::config::MAX_RUN_S),
             Err(e) => {
                 let e = e.to_string();
-                assert!(e.contains("at most") || e.contains("inverse kinematics"), "{e}");
+                assert!(
+                    e.contains("at most") || e.contains("inverse kinematics"),
+                    "{e}"
+                );
             }
         }
     }
