@@ -305,6 +305,31 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
             .map(|f| format!("; the controller stopped on {f}"))
             .unwrap_or_default()
     ));
+    let sweep: Vec<Vec<String>> = s
+        .stiff_contact_sweep
+        .iter()
+        .map(|n| {
+            vec![
+                format!("{:.0e}", n.stiffness_n_m),
+                format!("{:.0}", n.open_max_force_N),
+                format!("{:.0}", n.rigid_robot_force_N),
+                format!("{:.0}", n.closed_max_force_N),
+                format!("{:.2}", n.closed_max_correction_mm),
+                n.fault.clone().unwrap_or_else(|| "–".into()),
+            ]
+        })
+        .collect();
+    html.table(
+        &[
+            "fixture stiffness [N/m]",
+            "max |F| without correction [N]",
+            "rigid-robot force k·δ [N]",
+            "max |F| with correction [N]",
+            "max correction [mm]",
+            "controller fault",
+        ],
+        &sweep,
+    );
     for (path, caption) in &page.contact_files {
         html.image(path, caption.clone());
     }

@@ -179,8 +179,10 @@ pub struct DemoSummary {
     pub improvement_percent: f64,
     /// Status line of the controller at the end of the corrected run.
     pub controller_status: String,
-    /// The plunge into a stiff fixture without and with correction.
+    /// The plunge into a stiff fixture (10⁷ N/m) without and with correction.
     pub stiff_contact: crate::contact::StiffContactNumbers,
+    /// The same plunge across fixture stiffnesses 10⁵–10⁸ N/m.
+    pub stiff_contact_sweep: Vec<crate::contact::StiffContactNumbers>,
     /// The sensitivity study, when run.
     pub sensitivity: Option<crate::sensitivity::SensitivityResult>,
     /// Wall time of each stage (s).
@@ -609,6 +611,11 @@ fn study(
          (SIMULATED)"
             .to_string(),
     ));
+    let mut stiff_contact_sweep = Vec::new();
+    for k in [1e5, 1e6, 1e7, 1e8] {
+        let (numbers, _, _) = crate::contact::stiff_contact(&cell, &identified, k, seed, &|_| {})?;
+        stiff_contact_sweep.push(numbers);
+    }
     progress.done(&format!(
         "max |F| {:.0} N open, {:.0} N corrected{}",
         stiff_contact.open_max_force_N,
@@ -692,6 +699,7 @@ fn study(
         improvement_percent: improvement,
         controller_status: closed.status,
         stiff_contact,
+        stiff_contact_sweep,
         sensitivity,
         stage_seconds: timings,
     };
