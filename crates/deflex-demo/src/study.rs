@@ -10,7 +10,9 @@ use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::validate::predict;
 use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure, write_rows};
 use deflex_model::{Robot, robot_to_toml};
-use deflex_sim::campaign::{GridParams, SpiralParams, run_campaign, spiral, validation_grid};
+use deflex_sim::campaign::{
+    GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
+};
 use deflex_sim::profile::Maker;
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
 use serde::Serialize;
@@ -369,17 +371,7 @@ fn study(
     // 1. Plan.
     let clock = Instant::now();
     progress.stage(1, STAGES, "plan the calibration campaign");
-    let level = deflex_sim::sheet::aerens_fz(
-        cell.sheet.rm_mpa,
-        cell.sheet.thickness_mm,
-        cell.sheet.tool_diameter_mm,
-        deflex_sim::sheet::scallop_height_mm(
-            cell.sheet.tool_diameter_mm / 2.0,
-            cell.sheet.default_step_down_mm,
-            cell.sheet.default_wall_angle_deg,
-        ),
-        cell.sheet.default_wall_angle_deg,
-    );
+    let level = cell.forming_force_level_n();
     let plan_options = PlanOptions {
         // The paper loads its TX200 to 1.4 kN; other cells to 1.1 × their forming force.
         max_force_n: if paper_comparison {
@@ -406,7 +398,13 @@ fn study(
     let clock = Instant::now();
     progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
     let campaign = run_campaign(&cell, &plan.rows, seed).map_err(|e| e.to_string())?;
-    write_rows(&out.join("campaign.csv"), &campaign).map_err(|e| e.to_string())?;
+    let campaign_file = |rows: &[deflex_calib::MeasurementRow], what: &str, seed: u64| {
+        campaign_text(&cell, rows, what, seed).map_err(|e| e.to_string())
+    };
+    write_text(
+        &out.join("campaign.csv"),
+        &campaign_file(&campaign, "calibration campaign", seed)?,
+    )?;
     progress.done(&format!("{} measured points", campaign.len()));
     timings.push(("campaign".to_string(), clock.elapsed().as_secs_f64()));
 
@@ -464,7 +462,10 @@ fn study(
     let grid_params = GridParams::for_cell(&cell).map_err(|e| e.to_string())?;
     let grid_plan = validation_grid(&cell, &grid_params).map_err(|e| e.to_string())?;
     let grid = run_campaign(&cell, &grid_plan, seed.wrapping_add(1)).map_err(|e| e.to_string())?;
-    write_rows(&out.join("grid.csv"), &grid).map_err(|e| e.to_string())?;
+    write_text(
+        &out.join("grid.csv"),
+        &campaign_file(&grid, "validation grid", seed.wrapping_add(1))?,
+    )?;
     let models: [(&str, &Robot); 3] = [
         (IDENTIFIED, &identified),
         (BASELINE, &baseline),
@@ -514,7 +515,10 @@ fn study(
     }
     let spiral_rows =
         spiral(&cell, &spiral_params, seed.wrapping_add(2)).map_err(|e| e.to_string())?;
-    write_rows(&out.join("spiral.csv"), &spiral_rows).map_err(|e| e.to_string())?;
+    write_text(
+        &out.join("spiral.csv"),
+        &campaign_file(&spiral_rows, "spiral", seed.wrapping_add(2))?,
+    )?;
     let all: Vec<usize> = (0..spiral_rows.len()).collect();
     let mut spiral_predictions = Vec::new();
     let spiral_label = format!("spiral {:.0} N", spiral_params.load_n);

@@ -12,9 +12,17 @@ use deflex_sim::{CellConfig, ControllerInput, CorrectionController, FormingRun, 
 use std::path::Path;
 
 /// The controller configuration for the twin's cell: the paper's gains and the default limits,
-/// with the sensor mounting, tool, gravity and sensor range of the cell (datasheet values).
+/// with the sensor mounting, tool, gravity and sensor range of the cell as an integrator knows
+/// them: the **nominal** mounting and tool of the drawings and datasheets, not the twin's true
+/// ones (which differ by the documented mounting and tool-load errors). The force limit is twice
+/// the cell's forming force level, capped at the controller's default 2500 N (the TX200 cell
+/// keeps 2500 N; the UR10e cell gets about 340 N, well inside what its arm and sensor carry).
 pub fn controller_config_for(cell: &CellConfig) -> ControllerConfig {
     let mut config = ControllerConfig::default();
+    config.safety.max_force_n = config
+        .safety
+        .max_force_n
+        .min((2.0 * cell.forming_force_level_n() / 10.0).round() * 10.0);
     let s = &cell.sensor;
     config.wrench.sensor_in_flange =
         pose_from_xyz_rpy(s.sensor_in_flange_xyz_m, s.sensor_in_flange_rpy);

@@ -252,7 +252,7 @@ impl GridParams {
         }
         let o = config.part.origin_mm.map(|v| v * 1e-3);
         let scale = cell_scale(&robot);
-        let level = cell_force_level(config);
+        let level = config.forming_force_level_n();
         Ok(GridParams {
             center_xy_m: [o[0], o[1]],
             size_xy_m: [0.6 * scale, 0.6 * scale],
@@ -314,23 +314,6 @@ fn cell_scale(robot: &Robot) -> f64 {
         .sum::<f64>()
         + robot.tool.translation.vector.norm();
     (reach / 2.394).clamp(0.1, 3.0)
-}
-
-/// The cell's forming force level (N): the Aerens level of the paper's cone on its sheet.
-fn cell_force_level(config: &CellConfig) -> f64 {
-    let s = &config.sheet;
-    let dh = crate::sheet::scallop_height_mm(
-        s.tool_diameter_mm / 2.0,
-        s.default_step_down_mm,
-        s.default_wall_angle_deg,
-    );
-    crate::sheet::aerens_fz(
-        s.rm_mpa,
-        s.thickness_mm,
-        s.tool_diameter_mm,
-        dh,
-        s.default_wall_angle_deg,
-    )
 }
 
 fn round_load(n: f64) -> f64 {
@@ -447,7 +430,7 @@ impl SpiralParams {
             pitch_m: 0.05 * scale,
             length_m: 2.7 * scale,
             speed_m_s: 0.010,
-            load_n: round_load(0.48 * cell_force_level(config)),
+            load_n: round_load(0.48 * config.forming_force_level_n()),
         })
     }
 

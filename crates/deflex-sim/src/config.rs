@@ -711,6 +711,24 @@ impl CellConfig {
         robot.flange
     }
 
+    /// The cell's forming force level (N): the Aerens level of the paper's cone (its default
+    /// step-down and wall angle) on the cell's sheet. 1260 N for the TX200 cell.
+    pub fn forming_force_level_n(&self) -> f64 {
+        let s = &self.sheet;
+        let dh = crate::sheet::scallop_height_mm(
+            s.tool_diameter_mm / 2.0,
+            s.default_step_down_mm,
+            s.default_wall_angle_deg,
+        );
+        crate::sheet::aerens_fz(
+            s.rm_mpa,
+            s.thickness_mm,
+            s.tool_diameter_mm,
+            dh,
+            s.default_wall_angle_deg,
+        )
+    }
+
     /// The IK seed (rad).
     pub fn seed_q_rad(&self) -> [f64; 6] {
         self.part.seed_q_deg.map(f64::to_radians)
