@@ -94,8 +94,8 @@ const EXACT_EVERY: u32 = 5;
 /// What the tool meets: a sheet to form or a stiff fixture.
 #[derive(Clone, Debug)]
 pub enum Workpiece {
-    /// Incremental sheet forming.
-    Sheet(Sheet),
+    /// Incremental sheet forming (boxed: the sheet's state is the large variant).
+    Sheet(Box<Sheet>),
     /// A stiff fixture (pressing, plunging).
     Fixture(Fixture),
 }
@@ -232,13 +232,13 @@ impl Cell {
             + (plant.tcp_pose().translation.vector - teach.translation.vector);
         let tool_radius_m = config.sheet.tool_diameter_mm * 0.5e-3;
         let work = match config.process.kind {
-            ProcessKind::Sheet => Workpiece::Sheet(Sheet::new(
+            ProcessKind::Sheet => Workpiece::Sheet(Box::new(Sheet::new(
                 &config.sheet,
                 path.step_down_mm
                     .unwrap_or(config.sheet.default_step_down_mm),
                 path.wall_angle_deg
                     .unwrap_or(config.sheet.default_wall_angle_deg),
-            )?),
+            )?)),
             ProcessKind::Fixture => Workpiece::Fixture(Fixture::new(
                 config.process.fixture_stiffness_n_m,
                 tool_radius_m,

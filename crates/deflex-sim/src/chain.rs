@@ -234,9 +234,8 @@ impl Chain {
             elements[count] = (element, screw, link);
             count += 1;
         };
-        for link in 0..=JOINTS {
+        for (link, frame) in home_links.iter().enumerate() {
             if link > 0 {
-                let frame = &home_links[link];
                 push(
                     Element::Joint(link - 1),
                     Screw {

@@ -563,24 +563,25 @@ impl Plant {
         let mut tau = [0.0; MAX_SPRINGS];
         let mut next = [0.0; MAX_SPRINGS];
         if !self.large_rotation {
-            let p = self.rigid.links[link] * nalgebra::Point3::from(*local);
-            for s in 0..n {
-                if self.chain.spring_link(s) <= link {
-                    tau[s] = self.rigid.springs[s].torque(&p.coords, &force, &moment);
-                }
-            }
+            self.torques(&self.rigid, link, local, &force, &moment, &mut tau);
             self.springs.rotations(&tau, &mut next);
             // First order: every point of link k moves by Σ twist θ over the springs before it.
             let mut bent = self.rigid.clone();
-            for k in 0..=JOINTS {
+            for (k, (frame, bent_frame)) in self
+                .rigid
+                .links
+                .iter()
+                .zip(bent.links.iter_mut())
+                .enumerate()
+            {
                 let mut d = Displacement::zeros();
-                let origin = self.rigid.links[k].translation.vector;
-                for s in 0..n {
+                let origin = frame.translation.vector;
+                for (s, angle) in next[..n].iter().enumerate() {
                     if self.chain.spring_link(s) <= k {
-                        d += self.rigid.springs[s].twist_at(&origin) * next[s];
+                        d += self.rigid.springs[s].twist_at(&origin) * *angle;
                     }
                 }
-                bent.links[k] = apply_displacement(&self.rigid.links[k], &d);
+                *bent_frame = apply_displacement(frame, &d);
             }
             bent.flange = bent.links[JOINTS] * self.chain.flange();
             bent.tcp = bent.flange * self.chain.tool();
@@ -592,19 +593,12 @@ impl Plant {
         }
         // Predictor: the last solution plus the first-order change of the load (what remains for
         // the iterations is the change of the geometric part, a few per cent of it).
-        let p_rigid = self.rigid.links[link] * nalgebra::Point3::from(*local);
-        for s in 0..n {
-            tau[s] = if self.chain.spring_link(s) <= link {
-                self.rigid.springs[s].torque(&p_rigid.coords, &force, &moment)
-            } else {
-                0.0
-            };
-        }
+        self.torques(&self.rigid, link, local, &force, &moment, &mut tau);
         let mut first = [0.0; MAX_SPRINGS];
         self.springs.rotations(&tau, &mut first);
         let mut theta = self.theta;
-        for s in 0..n {
-            theta[s] += first[s] - self.theta_first[s];
+        for ((t, f), old) in theta.iter_mut().zip(&first).zip(&self.theta_first) {
+            *t += f - old;
         }
         self.theta_first = first;
         let mut iterations = 0;
@@ -612,14 +606,7 @@ impl Plant {
             iterations += 1;
             self.chain
                 .evaluate_with(&self.joint_motions, &theta[..n], &mut self.bent);
-            let p = self.bent.links[link] * nalgebra::Point3::from(*local);
-            for s in 0..n {
-                tau[s] = if self.chain.spring_link(s) <= link {
-                    self.bent.springs[s].torque(&p.coords, &force, &moment)
-                } else {
-                    0.0
-                };
-            }
+            self.torques(&self.bent, link, local, &force, &moment, &mut tau);
             self.springs.rotations(&tau, &mut next);
             let mut change: f64 = 0.0;
             for s in 0..n {
@@ -633,6 +620,32 @@ impl Plant {
         self.theta = theta;
         self.tau = tau;
         self.last_iterations = iterations;
+    }
+
+    /// Torques on the springs of `state` of a force at the material point `local` of link `link`
+    /// plus a pure moment (springs beyond the link carry none).
+    fn torques(
+        &self,
+        state: &ChainState,
+        link: usize,
+        local: &Vector3<f64>,
+        force: &Vector3<f64>,
+        moment: &Vector3<f64>,
+        tau: &mut [f64; MAX_SPRINGS],
+    ) {
+        let p = (state.links[link] * nalgebra::Point3::from(*local)).coords;
+        for (s, (t, screw)) in tau
+            .iter_mut()
+            .zip(&state.springs)
+            .take(self.springs.count)
+            .enumerate()
+        {
+            *t = if self.chain.spring_link(s) <= link {
+                screw.torque(&p, force, moment)
+            } else {
+                0.0
+            };
+        }
     }
 
     /// Record the torques of the last equilibrium in the hysteresis state (once per cycle).
