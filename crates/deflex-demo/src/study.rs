@@ -616,7 +616,12 @@ fn study(
             .to_string(),
     ));
     let mut stiff_contact_sweep = Vec::new();
-    for k in [1e5, 1e6, 1e7, 1e8] {
+    let sweep: &[f64] = if options.quick {
+        &[]
+    } else {
+        &[1e5, 1e6, 1e7, 1e8]
+    };
+    for &k in sweep {
         let (numbers, _, _) = crate::contact::stiff_contact(&cell, &identified, k, seed, &|_| {})?;
         stiff_contact_sweep.push(numbers);
     }
@@ -644,7 +649,7 @@ fn study(
                 drift_factors: vec![],
                 contact_stiffness_n_m: vec![],
                 threads: 2,
-                length_mm: Some(600.0),
+                length_mm: Some(300.0),
             }
         } else {
             SensitivityPlan::demo()
