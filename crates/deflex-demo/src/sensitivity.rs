@@ -134,6 +134,8 @@ pub struct SensitivityRow {
 /// The study's result.
 #[derive(Clone, Debug, Serialize)]
 pub struct SensitivityResult {
+    /// The robot the twin played.
+    pub robot: String,
     /// Every condition, the heatmap cells first.
     pub rows: Vec<SensitivityRow>,
     /// Heatmap axes: delays (s) and model scales, and the improvement (%) per cell, row-major
@@ -384,6 +386,10 @@ pub fn run_sensitivity(
     }
     let cells = plan.delays_s.len() * plan.model_scales.len();
     Ok(SensitivityResult {
+        robot: cell
+            .nominal_robot()
+            .map(|r| r.name)
+            .unwrap_or_else(|_| cell.part.robot.clone()),
         heatmap_improvement_percent: rows[..cells]
             .iter()
             .map(|r| r.improvement_percent)
@@ -398,9 +404,10 @@ pub fn run_sensitivity(
 impl SensitivityResult {
     /// `sensitivity.csv` (SIMULATED).
     pub fn csv(&self) -> String {
-        let mut s = String::from(
-            "# SIMULATED closed-loop sensitivity on the deflex digital twin (sensitivity cone)\n\
+        let mut s = format!(
+            "# SIMULATED closed-loop sensitivity on the deflex digital twin (sensitivity cone); robot: {}\n\
              factor,condition,open_max_mm,closed_max_mm,closed_rms_mm,improvement_percent,closed_max_force_N,fault\n",
+            self.robot
         );
         for r in &self.rows {
             let _ = writeln!(
@@ -454,7 +461,10 @@ impl SensitivityResult {
             return Ok(());
         }
         let spec = deflex_report::PlotSpec::new(
-            "SIMULATED — improvement of the max path error [%]: correction delay × model compliance scale",
+            format!(
+                "SIMULATED {} — improvement of the max path error [%]: delay × model compliance scale",
+                self.robot
+            ),
             "correction delay [ms]",
             "model compliance scale (1.3 = 30 % too soft)",
         )

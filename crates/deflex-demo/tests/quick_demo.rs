@@ -143,6 +143,14 @@ fn quick_demo_numbers_match_its_own_csvs_and_are_deterministic() {
             numbers.max_error_norm_mm
         );
     }
+    // The honest headline: every error source of the twin was on.
+    assert!(summary.conditions.len() >= 10);
+    assert!(
+        summary.conditions.iter().all(|(_, _, on)| *on),
+        "{:?}",
+        summary.conditions
+    );
+    assert!(summary.stiff_contact.closed_max_force_N > summary.stiff_contact.open_max_force_N);
     let expected = 100.0
         * (1.0 - summary.forming_closed.max_error_norm_mm / summary.forming_open.max_error_norm_mm);
     assert!((summary.improvement_percent - expected).abs() < 1e-9);
