@@ -15,6 +15,7 @@
 //! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
 //! the controller sees only joint values and raw F/T samples.
 
+mod conditions;
 pub mod contact;
 mod figures;
 mod page;
@@ -24,8 +25,8 @@ mod study;
 mod tables;
 pub mod twin_controller;
 
+pub use conditions::{conditions, one_edof_start};
 pub use study::{
-    DemoOptions, DemoSummary, FormingNumbers, ModelErrorNumbers, Progress, StiffnessRow,
-    conditions, one_edof_start, run_demo,
+    DemoOptions, DemoSummary, FormingNumbers, ModelErrorNumbers, Progress, StiffnessRow, run_demo,
 };
 pub use tables::paper_vs_deflex as paper_vs_deflex_rows;
