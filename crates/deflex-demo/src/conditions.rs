@@ -29,7 +29,7 @@ pub fn conditions(cell: &CellConfig) -> Vec<(String, String, bool)> {
     let t = &cell.tracker;
     let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let mut out = vec![
+    let out = vec![
         (
             "plant: finite-rotation spring chain (geometric stiffness)".to_string(),
             "torques in the deformed configuration".to_string(),
@@ -137,6 +137,5 @@ pub fn conditions(cell: &CellConfig) -> Vec<(String, String, bool)> {
             cell.sheet.actual_geometry,
         ),
     ];
-    out.retain(|(name, _, _)| !name.is_empty());
     out
 }
