@@ -221,53 +221,50 @@ pub fn describe(robot: &Robot) -> String {
             .map(|[lo, hi]| format!("[{:.0}, {:.0}]", lo.to_degrees(), hi.to_degrees()))
             .unwrap_or_else(|| "none".into())
     };
-    if robot.dh_convention.is_some() {
-        let _ = writeln!(
-            out,
-            "{:<width$} {:>9} {:>9} {:>9} {:>7} {:>9} {:>17} {:>9} {:>7}  stiffness x / y / z (10^6 N·m/rad)",
-            "joint", "alpha°", "a mm", "d mm", "beta°", "offset°", "limits°", "shift mm", "mass kg"
-        );
-        for joint in &robot.joints {
+    // The geometry columns: a DH row, or the placement for a URDF robot.
+    let dh_table = robot.dh_convention.is_some();
+    let geometry_header = if dh_table {
+        format!(
+            "{:>9} {:>9} {:>9} {:>7} {:>9}",
+            "alpha°", "a mm", "d mm", "beta°", "offset°"
+        )
+    } else {
+        format!("{:>44}", "placement in the previous joint frame")
+    };
+    let geometry = |joint: &deflex_model::Joint| {
+        if dh_table {
             let dh = joint.dh.unwrap_or_default();
-            let s = joint.stiffness.0;
-            let _ = writeln!(
-                out,
-                "{:<width$} {:>9} {:>9} {:>9} {:>7} {:>9} {:>17} {:>9} {:>7}  {} / {} / {}",
-                joint.name,
+            format!(
+                "{:>9} {:>9} {:>9} {:>7} {:>9}",
                 fixed(dh.alpha.to_degrees(), 1),
                 fixed(dh.a * 1e3, 1),
                 fixed(dh.d * 1e3, 1),
                 fixed(dh.beta.to_degrees(), 3),
-                fixed(joint.theta_offset.to_degrees(), 1),
-                limits(joint),
-                fixed(joint.center_shift * 1e3, 1),
-                mass(joint),
-                k(s[0]),
-                k(s[1]),
-                k(s[2])
-            );
+                fixed(joint.theta_offset.to_degrees(), 1)
+            )
+        } else {
+            format!("{:>44}", pose_text(&joint.placement))
         }
-    } else {
+    };
+    let _ = writeln!(
+        out,
+        "{:<width$} {geometry_header} {:>17} {:>9} {:>7}  stiffness x / y / z (10^6 N·m/rad)",
+        "joint", "limits°", "shift mm", "mass kg"
+    );
+    for joint in &robot.joints {
+        let s = joint.stiffness.0;
         let _ = writeln!(
             out,
-            "{:<width$} {:>44} {:>17} {:>9} {:>7}  stiffness x / y / z (10^6 N·m/rad)",
-            "joint", "placement in the previous joint frame", "limits°", "shift mm", "mass kg"
+            "{:<width$} {} {:>17} {:>9} {:>7}  {} / {} / {}",
+            joint.name,
+            geometry(joint),
+            limits(joint),
+            fixed(joint.center_shift * 1e3, 1),
+            mass(joint),
+            k(s[0]),
+            k(s[1]),
+            k(s[2])
         );
-        for joint in &robot.joints {
-            let s = joint.stiffness.0;
-            let _ = writeln!(
-                out,
-                "{:<width$} {:>44} {:>17} {:>9} {:>7}  {} / {} / {}",
-                joint.name,
-                pose_text(&joint.placement),
-                limits(joint),
-                fixed(joint.center_shift * 1e3, 1),
-                mass(joint),
-                k(s[0]),
-                k(s[1]),
-                k(s[2])
-            );
-        }
     }
     if robot.flange != deflex_model::Pose::identity() {
         let _ = writeln!(

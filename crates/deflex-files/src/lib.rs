@@ -20,33 +20,25 @@ fn unique_suffix() -> String {
     format!("{}-{n}", std::process::id())
 }
 
-/// The temporary sibling `.<name>.tmp-<pid>-<n>` of `path` (same folder, so rename is atomic).
-fn temporary_sibling(path: &Path) -> io::Result<PathBuf> {
-    let name = path.file_name().ok_or_else(|| {
-        io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("{}: not a file name", path.display()),
-        )
-    })?;
-    let mut temp_name = std::ffi::OsString::from(".");
-    temp_name.push(name);
-    temp_name.push(format!(".tmp-{}", unique_suffix()));
-    Ok(path.with_file_name(temp_name))
-}
-
-/// The temporary sibling `.<stem>.tmp-<pid>-<n>.<ext>` of `path`: same folder, same extension
-/// (for writers that choose the format from the extension).
-fn temporary_sibling_keeping_extension(path: &Path) -> io::Result<PathBuf> {
-    let stem = path.file_stem().ok_or_else(|| {
+/// The temporary sibling of `path` in the same folder (so rename is atomic):
+/// `.<name>.tmp-<pid>-<n>`, or `.<stem>.tmp-<pid>-<n>.<ext>` with `keep_extension` (for writers
+/// that choose the format from the extension).
+fn temporary_sibling(path: &Path, keep_extension: bool) -> io::Result<PathBuf> {
+    let base = if keep_extension {
+        path.file_stem()
+    } else {
+        path.file_name()
+    };
+    let base = base.ok_or_else(|| {
         io::Error::new(
             io::ErrorKind::InvalidInput,
             format!("{}: not a file name", path.display()),
         )
     })?;
     let mut name = std::ffi::OsString::from(".");
-    name.push(stem);
+    name.push(base);
     name.push(format!(".tmp-{}", unique_suffix()));
-    if let Some(extension) = path.extension() {
+    if let (true, Some(extension)) = (keep_extension, path.extension()) {
         name.push(".");
         name.push(extension);
     }
@@ -63,7 +55,7 @@ pub fn write_through<T, E>(
     io_error: impl FnOnce(io::Error) -> E,
 ) -> Result<T, E> {
     let path = path.as_ref();
-    let temporary = match temporary_sibling_keeping_extension(path) {
+    let temporary = match temporary_sibling(path, true) {
         Ok(t) => t,
         Err(e) => return Err(io_error(e)),
     };
@@ -103,7 +95,7 @@ impl AtomicFile {
     /// Start writing `path` (through a temporary sibling). The parent folder must exist.
     pub fn create(path: impl AsRef<Path>) -> io::Result<AtomicFile> {
         let destination = path.as_ref().to_path_buf();
-        let temporary = temporary_sibling(&destination)?;
+        let temporary = temporary_sibling(&destination, false)?;
         let file = File::create(&temporary)?;
         Ok(AtomicFile {
             destination,
@@ -175,7 +167,7 @@ impl AtomicDir {
                 format!("{}: exists and is not a folder", destination.display()),
             ));
         }
-        let temporary = temporary_sibling(&destination)?;
+        let temporary = temporary_sibling(&destination, false)?;
         fs::create_dir(&temporary)?;
         Ok(AtomicDir {
             destination,
@@ -199,7 +191,7 @@ impl AtomicDir {
     /// are not kept.
     pub fn commit(mut self) -> io::Result<()> {
         let old = if self.destination.exists() {
-            let aside = temporary_sibling(&self.destination)?;
+            let aside = temporary_sibling(&self.destination, false)?;
             fs::rename(&self.destination, &aside)?;
             Some(aside)
         } else {
