@@ -1,5 +1,5 @@
-//! `deflex demo`: the paper's whole study on the built-in SIMULATED cell, with progress bars and
-//! a summary table; the work is done by `deflex-demo`.
+//! `deflex demo`: the paper's whole study on the SIMULATED cell of the TX200 or another robot
+//! (`--robot`), with progress bars and a summary table; the work is done by `deflex-demo`.
 
 use crate::args::CliResult;
 use clap::Args;
@@ -18,6 +18,13 @@ pub struct DemoArgs {
     /// Shortened study (fewer load cases, short spiral, first part of the cone): for tests.
     #[arg(long)]
     pub quick: bool,
+    /// The robot the twin plays: a built-in name (`tx200`, `ur10e`, …) or a robot file. The
+    /// paper's comparisons are shown for the TX200 only.
+    #[arg(long, default_value = "tx200")]
+    pub robot: String,
+    /// Leave out the sensitivity section (about half the run time).
+    #[arg(long)]
+    pub no_sensitivity: bool,
 }
 
 struct Bars {
@@ -58,6 +65,8 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
         out_dir: args.out.clone(),
         seed: args.seed,
         quick: args.quick,
+        robot: args.robot.clone(),
+        sensitivity: !args.no_sensitivity,
     };
     let started = std::time::Instant::now();
     let mut bars = Bars {
@@ -74,16 +83,63 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
     }
     println!();
     println!(
-        "deflex demo — SIMULATED TX200 cell (seed {}){}",
+        "deflex demo — SIMULATED cell of the {} (seed {}){}",
+        summary.robot,
         summary.seed,
         if summary.quick { ", quick" } else { "" }
     );
-    println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
-    for (quantity, paper, ours, unit) in deflex_demo::paper_vs_deflex_rows(&summary) {
-        println!(
-            "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
-            quantity, paper, ours
-        );
+    if summary.paper_comparison {
+        println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
+        for (quantity, paper, ours, unit) in deflex_demo::paper_vs_deflex_rows(&summary) {
+            println!(
+                "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
+                quantity, paper, ours
+            );
+        }
+    } else {
+        for v in &summary.validation {
+            if v.model.starts_with("identified") {
+                println!(
+                    "identified model, {}: RMS / max δz error {:.3} / {:.3} mm",
+                    v.data, v.rms_z_mm, v.max_z_mm
+                );
+            }
+        }
+    }
+    let (o, c) = (&summary.forming_open, &summary.forming_closed);
+    println!(
+        "cone, every error source on: max |error| {:.3} → {:.3} mm ({:.1} % better), RMS {:.3} → {:.3} mm, \
+         max |F| {:.0} → {:.0} N",
+        o.max_error_norm_mm,
+        c.max_error_norm_mm,
+        summary.improvement_percent,
+        o.rms_error_norm_mm,
+        c.rms_error_norm_mm,
+        o.max_force_norm_N,
+        c.max_force_norm_N
+    );
+    let sc = &summary.stiff_contact;
+    println!(
+        "plunge into a {:.0e} N/m fixture: max |F| {:.0} N without, {:.0} N with correction{}",
+        sc.stiffness_n_m,
+        sc.open_max_force_N,
+        sc.closed_max_force_N,
+        sc.fault
+            .as_ref()
+            .map(|f| format!(" ({f})"))
+            .unwrap_or_default()
+    );
+    if let Some(s) = &summary.sensitivity {
+        let worst = s
+            .rows
+            .iter()
+            .min_by(|a, b| a.improvement_percent.total_cmp(&b.improvement_percent));
+        if let Some(w) = worst {
+            println!(
+                "sensitivity: {} runs, worst improvement {:.1} % ({}: {})",
+                s.runs, w.improvement_percent, w.factor, w.condition
+            );
+        }
     }
     println!("identified structure: {}", summary.identified_structure);
     println!(

@@ -1,27 +1,57 @@
-//! `deflex sim ...`: the digital twin of the robotised ISF cell (SIMULATED).
+//! `deflex sim ...`: the digital twin of a robotised cell (SIMULATED), playing any 6-joint robot
+//! (`--robot`, default the paper's TX200).
 //!
 //! * `deflex sim campaign --plan PLAN.csv --out MEAS.csv [--seed N]`: measure a calibration plan
 //!   on the twin's true robot with the simulated laser tracker and load cell;
-//! * `deflex sim campaign --grid paper --out GRID.csv`: the paper's validation grid (200 poses,
-//!   600 N and 1100 N, Figs. 10–13);
-//! * `deflex sim campaign --spiral --out SPIRAL.csv`: the spiral of Fig. 14;
-//! * `deflex sim isf --path cone|cone-contour|pyramid|FILE.gcode --out DIR [--seed N]`: the
-//!   forming run without correction, with its log, summary and plots (Figs. 17–19, A1).
+//! * `deflex sim campaign --grid [paper|cell] --out GRID.csv [--grid-center-m x,y …]`: a
+//!   validation grid of dead-weight loads (the paper's for the TX200, Figs. 10–13);
+//! * `deflex sim campaign --spiral --out SPIRAL.csv [--spiral-center-m x,y,z …]`: the spiral of
+//!   Fig. 14;
+//! * `deflex sim isf --path cone|cone-contour|pyramid|plunge|FILE.gcode --out DIR [--seed N]`:
+//!   forming (or a plunge into a stiff fixture), open or closed loop, with its log, summary and
+//!   plots (Figs. 17–19, A1);
+//! * `deflex sim sensitivity --out DIR`: the closed loop across delay, model scale, sensor gain,
+//!   bias drift and contact stiffness (table, heatmap).
+//!
+//! Every output names the robot the twin played. Every numeric option is checked (finite, within
+//! its documented range); the error names the option.
 
-use crate::args::{CliResult, print_json};
+use crate::args::{CliResult, parse_list, print_json};
 use clap::{Args, Subcommand};
-use deflex_sim::campaign::{SpiralParams, run_campaign, spiral, validation_grid};
+use deflex_sim::campaign::{
+    GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
+};
 use deflex_sim::gcode::read_gcode;
-use deflex_sim::{CellConfig, ConeParams, PyramidParams, ToolPath, run_forming_with_progress};
+use deflex_sim::{
+    CellConfig, ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath,
+    run_forming_with_progress,
+};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
+mod sensitivity;
+use sensitivity::{SensitivityArgs, sensitivity};
+
 #[derive(Subcommand)]
 pub enum SimCommand {
-    /// Measure a calibration plan, the paper's validation grid or its spiral on the twin.
+    /// Measure a calibration plan, a validation grid or a spiral on the twin.
     Campaign(CampaignArgs),
-    /// Form a part on the twin (open loop) and write its log, summary and plots.
+    /// Form a part (or plunge into a fixture) on the twin and write its log, summary and plots.
     Isf(IsfArgs),
+    /// The closed loop across delay, model scale, sensor gain, bias drift and contact stiffness.
+    Sensitivity(SensitivityArgs),
+}
+
+/// The robot and the twin settings, shared by every `sim` command.
+#[derive(Args, Clone)]
+pub struct TwinArgs {
+    /// The robot the twin plays: a built-in name (`tx200`, `ur10e`, …) or a robot file. Wins
+    /// over the twin file's `[cell.part] robot`. Default: the twin file's, else `tx200`.
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Twin settings (`[cell]` TOML) over the robot's cell; default: the robot's cell.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -29,43 +59,82 @@ pub struct CampaignArgs {
     /// Plan file (the measurement format without displacement columns), e.g. from `deflex plan`.
     #[arg(long, conflicts_with_all = ["grid", "spiral"])]
     pub plan: Option<PathBuf>,
-    /// The paper's validation grid: `paper` (200 poses, 600 N and 1100 N dead weights).
-    #[arg(long, conflicts_with = "spiral")]
+    /// A validation grid: `cell` (default: the robot cell's grid, the paper's for the TX200) or
+    /// `paper` (200 poses, 600 N and 1100 N, at the TX200's work area). The `--grid-*` options
+    /// change it.
+    #[arg(long, num_args = 0..=1, default_missing_value = "cell", conflicts_with = "spiral")]
     pub grid: Option<String>,
-    /// The paper's spiral (Fig. 14): 600 N dead weight, tracked at 50 Hz.
+    /// Grid centre x,y (m, world).
+    #[arg(long)]
+    pub grid_center_m: Option<String>,
+    /// Grid size along x,y (m, 0 < s ≤ 5), or one value for a square.
+    #[arg(long)]
+    pub grid_size_m: Option<String>,
+    /// Grid height z (m, |z| ≤ 5).
+    #[arg(long)]
+    pub grid_height_m: Option<f64>,
+    /// Grid step (m): round(size/step) + 1 positions per side, 2 to 200.
+    #[arg(long)]
+    pub grid_step_m: Option<f64>,
+    /// Dead weights of the grid (N, comma-separated, 1 to 10 values within (0, 10⁵]).
+    #[arg(long)]
+    pub grid_loads_n: Option<String>,
+    /// The spiral of Fig. 14 (the robot cell's; the paper's for the TX200). The `--spiral-*`
+    /// options change it.
     #[arg(long)]
     pub spiral: bool,
-    /// Output measurement file (CSV).
+    /// Spiral centre x,y,z (m, world).
+    #[arg(long)]
+    pub spiral_center_m: Option<String>,
+    /// Spiral initial radius (m, within (0, 5]).
+    #[arg(long)]
+    pub spiral_radius_m: Option<f64>,
+    /// Radius lost per turn (m, within (0, 1]).
+    #[arg(long)]
+    pub spiral_pitch_m: Option<f64>,
+    /// Spiral length (m, within (0, 100]).
+    #[arg(long)]
+    pub spiral_length_m: Option<f64>,
+    /// Spiral speed (m/s, 0.001–1).
+    #[arg(long)]
+    pub spiral_speed_m_s: Option<f64>,
+    /// Spiral dead weight (N, within (0, 10⁵]).
+    #[arg(long)]
+    pub spiral_load_n: Option<f64>,
+    /// Output measurement file (CSV), written whole or not at all.
     #[arg(long)]
     pub out: PathBuf,
     /// Random seed (tracker and load-cell noise).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Twin settings (`[cell]` TOML); default: the paper's cell.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub twin: TwinArgs,
 }
 
 #[derive(Args)]
 pub struct IsfArgs {
-    /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid`, or a G-code file.
+    /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid`, `plunge` (1 mm
+    /// into a stiff fixture, then 20 mm along x), or a G-code file.
     #[arg(long, default_value = "cone")]
     pub path: String,
-    /// Output folder (log.csv, summary.json, plots).
+    /// Output folder (log.csv, summary.json, plots), swapped in whole at the end.
     #[arg(long)]
     pub out: PathBuf,
     /// Random seed (sensor and tracker noise).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Twin settings (`[cell]` TOML); default: the paper's cell.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Only the first part of the path (mm of travel).
+    #[command(flatten)]
+    pub twin: TwinArgs,
+    /// Only the first part of the path (mm of travel, within (0, 10⁶]).
     #[arg(long)]
     pub length_mm: Option<f64>,
-    /// Feed rate for the built-in paths (mm/s).
+    /// Feed rate for the built-in paths (mm/s, 0.1–1000).
     #[arg(long)]
     pub feed_mm_s: Option<f64>,
+    /// Contact stiffness of the fixture for `--path plunge` (N/m, 10⁴–10⁹; default the twin's
+    /// `[cell.process] fixture_stiffness_n_m`, 10⁷).
+    #[arg(long)]
+    pub fixture_stiffness_n_m: Option<f64>,
     /// Online correction: `off` (default) or `on` (needs --model).
     #[arg(long, default_value = "off")]
     pub correction: String,
@@ -78,67 +147,222 @@ pub fn sim(command: SimCommand, json: bool) -> CliResult {
     match command {
         SimCommand::Campaign(args) => campaign(args, json),
         SimCommand::Isf(args) => isf(args, json),
+        SimCommand::Sensitivity(args) => sensitivity(args, json),
     }
 }
 
-fn load_config(path: Option<&Path>) -> Result<CellConfig, String> {
-    match path {
-        Some(p) => CellConfig::load(p).map_err(|e| e.to_string()),
-        None => Ok(CellConfig::default()),
+/// A numeric option: finite and within `[lo, hi]`, else an error naming it.
+fn bounded(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
+    if value.is_finite() && value >= lo && value <= hi {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{name}: expected a number from {lo} to {hi} {unit}, got {value}"
+        ))
     }
+}
+
+/// The cell: the robot's (`--robot`, else the file's, else the TX200's), with the twin file's
+/// settings over it.
+pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, String> {
+    match (&twin.config, &twin.robot) {
+        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
+        (None, Some(robot)) => CellConfig::for_robot(robot).map_err(|e| e.to_string()),
+        (None, None) => Ok(CellConfig::default()),
+    }
+}
+
+/// `robot` (spec) for outputs.
+pub(super) fn robot_name(config: &CellConfig) -> String {
+    config
+        .nominal_robot()
+        .map(|r| r.name)
+        .unwrap_or_else(|_| config.part.robot.clone())
+}
+
+fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, String> {
+    let mut params = match args.grid.as_deref() {
+        Some("paper") => GridParams::paper(),
+        Some("cell") | None => GridParams::for_cell(config).map_err(|e| e.to_string())?,
+        Some(other) => {
+            return Err(format!(
+                "--grid: expected `cell` (default) or `paper`, got \"{other}\""
+            ));
+        }
+    };
+    if let Some(text) = &args.grid_center_m {
+        let v = crate::args::parse_fixed::<2>(text, "--grid-center-m")?;
+        for x in v {
+            bounded("--grid-center-m", x, -100.0, 100.0, "m")?;
+        }
+        params.center_xy_m = v;
+    }
+    if let Some(text) = &args.grid_size_m {
+        let v = parse_list(text, "--grid-size-m")?;
+        let size = match v.as_slice() {
+            [s] => [*s, *s],
+            [a, b] => [*a, *b],
+            _ => return Err("--grid-size-m: give one or two values (m)".into()),
+        };
+        for s in size {
+            if !(s > 0.0 && s <= 5.0) {
+                return Err(format!("--grid-size-m: within (0, 5] m, got {s}"));
+            }
+        }
+        params.size_xy_m = size;
+    }
+    if let Some(z) = args.grid_height_m {
+        params.height_m = bounded("--grid-height-m", z, -5.0, 5.0, "m")?;
+    }
+    if let Some(step) = args.grid_step_m {
+        let step = bounded("--grid-step-m", step, 1e-4, 5.0, "m")?;
+        for (i, size) in params.size_xy_m.into_iter().enumerate() {
+            params.points_xy[i] = GridParams::points_for_step(size, step)
+                .map_err(|e| format!("--grid-step-m: {e}"))?;
+        }
+    }
+    if let Some(text) = &args.grid_loads_n {
+        params.loads_n = parse_list(text, "--grid-loads-n")?;
+    }
+    params.validate().map_err(|e| e.to_string())?;
+    Ok(params)
+}
+
+fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParams, String> {
+    let mut p = SpiralParams::for_cell(config).map_err(|e| e.to_string())?;
+    if let Some(text) = &args.spiral_center_m {
+        p.center_m = crate::args::parse_fixed::<3>(text, "--spiral-center-m")?;
+    }
+    let set = |target: &mut f64, value: Option<f64>, name: &str, lo: f64, hi: f64, unit: &str| {
+        if let Some(v) = value {
+            *target = bounded(name, v, lo, hi, unit)?;
+        }
+        Ok::<(), String>(())
+    };
+    set(
+        &mut p.initial_radius_m,
+        args.spiral_radius_m,
+        "--spiral-radius-m",
+        1e-4,
+        5.0,
+        "m",
+    )?;
+    set(
+        &mut p.pitch_m,
+        args.spiral_pitch_m,
+        "--spiral-pitch-m",
+        1e-5,
+        1.0,
+        "m",
+    )?;
+    set(
+        &mut p.length_m,
+        args.spiral_length_m,
+        "--spiral-length-m",
+        1e-4,
+        100.0,
+        "m",
+    )?;
+    set(
+        &mut p.speed_m_s,
+        args.spiral_speed_m_s,
+        "--spiral-speed-m-s",
+        0.001,
+        1.0,
+        "m/s",
+    )?;
+    set(
+        &mut p.load_n,
+        args.spiral_load_n,
+        "--spiral-load-n",
+        1e-3,
+        1e5,
+        "N",
+    )?;
+    p.validate().map_err(|e| e.to_string())?;
+    Ok(p)
 }
 
 fn campaign(args: CampaignArgs, json: bool) -> CliResult {
-    let config = load_config(args.config.as_deref())?;
+    let config = load_config(&args.twin)?;
+    let grid_options = args.grid_center_m.is_some()
+        || args.grid_size_m.is_some()
+        || args.grid_height_m.is_some()
+        || args.grid_step_m.is_some()
+        || args.grid_loads_n.is_some();
+    let spiral_options = args.spiral_center_m.is_some()
+        || args.spiral_radius_m.is_some()
+        || args.spiral_pitch_m.is_some()
+        || args.spiral_length_m.is_some()
+        || args.spiral_speed_m_s.is_some()
+        || args.spiral_load_n.is_some();
+    if grid_options && args.grid.is_none() {
+        return Err("the --grid-* options need --grid".into());
+    }
+    if spiral_options && !args.spiral {
+        return Err("the --spiral-* options need --spiral".into());
+    }
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
             let plan_rows = deflex_calib::read_plan(plan).map_err(|e| e.to_string())?;
             let rows = run_campaign(&config, &plan_rows, args.seed).map_err(|e| e.to_string())?;
             (format!("plan {}", plan.display()), rows)
         }
-        (None, Some(grid), false) => {
-            if grid != "paper" {
-                return Err(format!("--grid: only `paper` is known, got \"{grid}\""));
-            }
-            let plan = validation_grid(&config).map_err(|e| e.to_string())?;
+        (None, Some(_), false) => {
+            let params = grid_params(&args, &config)?;
+            let plan = validation_grid(&config, &params).map_err(|e| e.to_string())?;
             let rows = run_campaign(&config, &plan, args.seed).map_err(|e| e.to_string())?;
+            let loads: Vec<String> = params.loads_n.iter().map(|l| format!("{l:.0} N")).collect();
             (
-                "validation grid (paper, 600 N and 1100 N)".to_string(),
+                format!(
+                    "validation grid {} × {} over {:.3} × {:.3} m at z = {:.3} m, {}",
+                    params.points_xy[0],
+                    params.points_xy[1],
+                    params.size_xy_m[0],
+                    params.size_xy_m[1],
+                    params.height_m,
+                    loads.join(" and ")
+                ),
                 rows,
             )
         }
         (None, None, true) => {
-            let rows =
-                spiral(&config, &SpiralParams::default(), args.seed).map_err(|e| e.to_string())?;
-            ("spiral (paper Fig. 14, 600 N)".to_string(), rows)
+            let params = spiral_params(&args, &config)?;
+            let rows = spiral(&config, &params, args.seed).map_err(|e| e.to_string())?;
+            (
+                format!(
+                    "spiral (Fig. 14) {:.3} m long at z = {:.3} m, {:.0} N",
+                    params.length_m, params.center_m[2], params.load_n
+                ),
+                rows,
+            )
         }
-        _ => return Err("give one of --plan PLAN.csv, --grid paper or --spiral".into()),
+        _ => return Err("give one of --plan PLAN.csv, --grid [cell|paper] or --spiral".into()),
     };
-    // The header names the robot the twin played (`# robot:`, `# geometry:`).
-    let played = config.nominal_robot().map_err(|e| e.to_string())?;
-    let note = format!(
-        "SIMULATED deflex digital-twin campaign ({kind}), seed {}: not a measurement",
-        args.seed
-    );
-    deflex_calib::write_rows_for(&args.out, &played, &rows, &[&note]).map_err(|e| e.to_string())?;
+    let text = campaign_text(&config, &rows, &kind, args.seed).map_err(|e| e.to_string())?;
+    deflex_files::write_atomic(&args.out, text)
+        .map_err(|e| format!("{}: {e}", args.out.display()))?;
     let cases = deflex_calib::data::load_case_count(&rows);
     let max_disp = rows
         .iter()
         .filter_map(|r| r.displacement_m)
         .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
         .fold(0.0, f64::max);
+    let robot = robot_name(&config);
     if json {
         print_json(&json!({
             "simulated": true,
+            "robot": robot,
+            "robot_spec": config.part.robot,
             "campaign": kind,
             "seed": args.seed,
             "rows": rows.len(),
             "load_cases": cases,
-            "max_displacement_mm": max_disp * 1e3,
+            "max_displacement_m": max_disp,
             "out": args.out.display().to_string(),
         }));
     } else {
-        println!("SIMULATED campaign: {kind}");
+        println!("SIMULATED campaign on the twin of the {robot}: {kind}");
         println!(
             "  {} rows in {} load cases, largest displacement {:.3} mm → {}",
             rows.len(),
@@ -151,26 +375,37 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
 }
 
 fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
+    let feed = match args.feed_mm_s {
+        Some(f) => Some(bounded("--feed-mm-s", f, 0.1, 1000.0, "mm/s")?),
+        None => None,
+    };
     let path = match args.path.as_str() {
         "cone" | "cone-contour" => {
             let mut p = ConeParams {
                 helical: args.path == "cone",
                 ..ConeParams::default()
             };
-            if let Some(f) = args.feed_mm_s {
+            if let Some(f) = feed {
                 p.feed_mm_s = f;
             }
             ToolPath::cone(&p).map_err(|e| e.to_string())?
         }
         "pyramid" => {
             let mut p = PyramidParams::default();
-            if let Some(f) = args.feed_mm_s {
+            if let Some(f) = feed {
                 p.feed_mm_s = f;
             }
             ToolPath::pyramid(&p).map_err(|e| e.to_string())?
         }
+        "plunge" => {
+            let mut p = PlungeParams::default();
+            if let Some(f) = feed {
+                p.traverse_feed_mm_s = f;
+            }
+            ToolPath::plunge(&p).map_err(|e| e.to_string())?
+        }
         file => {
-            if args.feed_mm_s.is_some() {
+            if feed.is_some() {
                 return Err(
                     "--feed-mm-s applies to the built-in paths; a G-code file sets its own F"
                         .into(),
@@ -180,8 +415,7 @@ fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
         }
     };
     Ok(match args.length_mm {
-        Some(l) if l > 0.0 => path.truncated(l),
-        Some(l) => return Err(format!("--length-mm must be positive, got {l}")),
+        Some(l) => path.truncated(bounded("--length-mm", l, 1e-3, 1e6, "mm")?),
         None => path,
     })
 }
@@ -196,7 +430,18 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
         "on" => {}
         other => return Err(format!("--correction: expected on or off, got \"{other}\"")),
     }
-    let config = load_config(args.config.as_deref())?;
+    let mut config = load_config(&args.twin)?;
+    if args.path == "plunge" {
+        config.process.kind = ProcessKind::Fixture;
+    }
+    if let Some(k) = args.fixture_stiffness_n_m {
+        if args.path != "plunge" {
+            return Err("--fixture-stiffness-n-m applies to --path plunge".into());
+        }
+        config.process.fixture_stiffness_n_m =
+            bounded("--fixture-stiffness-n-m", k, 1e4, 1e9, "N/m")?;
+    }
+    let path = tool_path(&args)?;
     // Closed loop: the deflex correction controller in-process, in simulated time.
     let mut twin = match args.correction.as_str() {
         "on" => Some(deflex_demo::twin_controller::twin_controller(
@@ -205,7 +450,6 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
         )?),
         _ => None,
     };
-    let path = tool_path(&args)?;
     let name = path.name.clone();
     let bar = if json {
         indicatif::ProgressBar::hidden()
@@ -232,6 +476,7 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
         let mut value: serde_json::Value =
             serde_json::from_str(&run.summary_json()).unwrap_or_default();
         if let Some(map) = value.as_object_mut() {
+            map.insert("robot_spec".into(), json!(config.part.robot));
             map.insert(
                 "files".into(),
                 json!(
@@ -249,7 +494,10 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
         } else {
             "open-loop"
         };
-        println!("SIMULATED {mode} forming: {name} (seed {})", args.seed);
+        println!(
+            "SIMULATED {mode} run on the twin of the {}: {name} (seed {})",
+            s.robot, args.seed
+        );
         if let Some(t) = &twin {
             println!("  {}", t.status_line());
         }
@@ -265,14 +513,21 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
             s.max_error_abs_mm[1],
             s.max_error_abs_mm[2]
         );
-        println!(
-            "  force: max |F| {:.0} N, max Fz {:.0} N, max in-plane {:.0} N (Aerens level {:.0} N)",
-            s.max_force_norm_N, s.max_fz_N, s.max_fxy_N, s.aerens_steady_fz_N
-        );
-        println!(
-            "  part depth {:.2} mm of {:.2} mm programmed",
-            s.final_part_depth_mm, s.target_depth_mm
-        );
+        if config.process.kind == ProcessKind::Fixture {
+            println!(
+                "  force: max |F| {:.0} N against a {:.0e} N/m fixture, deepest penetration {:.3} mm",
+                s.max_force_norm_N, config.process.fixture_stiffness_n_m, s.final_part_depth_mm
+            );
+        } else {
+            println!(
+                "  force: max |F| {:.0} N, max Fz {:.0} N, max in-plane {:.0} N (Aerens level {:.0} N)",
+                s.max_force_norm_N, s.max_fz_N, s.max_fxy_N, s.aerens_steady_fz_N
+            );
+            println!(
+                "  part depth {:.2} mm of {:.2} mm programmed",
+                s.final_part_depth_mm, s.target_depth_mm
+            );
+        }
         println!("  wrote {} files to {}", files.len(), args.out.display());
     }
     Ok(())

@@ -19,14 +19,16 @@ fn draw(result: Result<(), deflex_report::ReportError>) -> Result<(), String> {
 }
 
 /// Heatmaps of the δz prediction error over the grid for the baseline and the identified model
-/// at 600 N and 1100 N (Figs. 11, 13), and predicted-vs-measured δz (Figs. 10, 12).
+/// for each dead weight (the paper's 600 N and 1100 N: Figs. 11, 13), and predicted-vs-measured
+/// δz (Figs. 10, 12).
 pub(crate) fn grid_figures(
     out: &Path,
     grid: &[MeasurementRow],
+    loads_n: &[f64],
     predictions: &[(&str, Vec<[f64; 3]>)],
 ) -> Result<Vec<Figure>, String> {
     let mut figures = Vec::new();
-    for load in [600.0, 1100.0] {
+    for (index, &load) in loads_n.iter().enumerate() {
         let selected = crate::tables::grid_rows(grid, load);
         let x: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[0] * 1e3).collect();
         let y: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[1] * 1e3).collect();
@@ -63,7 +65,7 @@ pub(crate) fn grid_figures(
             let spec = PlotSpec::new(
                 format!(
                     "SIMULATED cell — |δz error| of the {name} model, {load:.0} N (cf. Fig. {})",
-                    if load < 1000.0 { 11 } else { 13 }
+                    if index == 0 { 11 } else { 13 }
                 ),
                 "x [mm]",
                 "y [mm]",
@@ -90,7 +92,7 @@ pub(crate) fn grid_figures(
             let spec = PlotSpec::new(
                 format!(
                     "SIMULATED cell — δz predicted vs measured, {name}, {load:.0} N (cf. Fig. {})",
-                    if load < 1000.0 { 10 } else { 12 }
+                    if index == 0 { 10 } else { 12 }
                 ),
                 "measured δz [mm]",
                 "predicted δz [mm]",
@@ -110,6 +112,7 @@ pub(crate) fn grid_figures(
 pub(crate) fn spiral_figures(
     out: &Path,
     rows: &[MeasurementRow],
+    params: &deflex_sim::campaign::SpiralParams,
     predictions: &[(&str, Vec<[f64; 3]>)],
 ) -> Result<Vec<Figure>, String> {
     let mut figures = Vec::new();
@@ -117,7 +120,10 @@ pub(crate) fn spiral_figures(
     let y: Vec<f64> = rows.iter().map(|r| r.point_m[1] * 1e3).collect();
     let path = out.join("spiral_path.png");
     let spec = PlotSpec::new(
-        "SIMULATED cell — spiral trajectory at z = 300 mm (cf. Fig. 14a)",
+        format!(
+            "SIMULATED cell — spiral trajectory at z = {:.0} mm (cf. Fig. 14a)",
+            params.center_m[2] * 1e3
+        ),
         "x [mm]",
         "y [mm]",
     )
@@ -125,9 +131,13 @@ pub(crate) fn spiral_figures(
     draw(line_plot(&path, &spec, &[Series::line("TCP path", x, y)]))?;
     figures.push((
         path,
-        "Spiral trajectory, 600 N dead weight (SIMULATED)".to_string(),
+        format!(
+            "Spiral trajectory, {:.0} N dead weight (SIMULATED)",
+            params.load_n
+        ),
     ));
-    let length: Vec<f64> = (0..rows.len()).map(|i| i as f64 / 50.0 * 10.0).collect();
+    let per_sample_mm = params.speed_m_s * 1e3 / 50.0;
+    let length: Vec<f64> = (0..rows.len()).map(|i| i as f64 * per_sample_mm).collect();
     let mut series = vec![Series::line(
         "measured (SIMULATED tracker)",
         length.clone(),
@@ -147,7 +157,10 @@ pub(crate) fn spiral_figures(
     }
     let path = out.join("spiral_dz.png");
     let spec = PlotSpec::new(
-        "SIMULATED cell — δz along the spiral, 600 N (cf. Fig. 14b)",
+        format!(
+            "SIMULATED cell — δz along the spiral, {:.0} N (cf. Fig. 14b)",
+            params.load_n
+        ),
         "path length [mm]",
         "δz [mm]",
     )

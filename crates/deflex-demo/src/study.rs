@@ -1,5 +1,7 @@
 //! The study pipeline: plan → campaign → identification → validation → forming → report.
 
+use crate::conditions::{conditions, one_edof_start};
+use crate::sensitivity::{SensitivityPlan, run_sensitivity};
 use crate::tables::{
     error_numbers, grid_rows, paper_vs_deflex_csv, predictions_csv, stiffness_csv, stiffness_rows,
     write_text,
@@ -8,8 +10,11 @@ use crate::twin_controller::{controller_config_for, run_closed_loop};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::validate::predict;
 use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure, write_rows};
-use deflex_model::{Robot, builtin, robot_to_toml};
-use deflex_sim::campaign::{SpiralParams, run_campaign, spiral, validation_grid};
+use deflex_model::{Robot, robot_to_toml};
+use deflex_sim::campaign::{
+    GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
+};
+use deflex_sim::profile::Maker;
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -18,12 +23,30 @@ use std::time::Instant;
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct DemoOptions {
-    /// Output folder (created).
+    /// Output folder (built aside and swapped in whole at the end).
     pub out_dir: PathBuf,
     /// Seed of every random draw (campaign noise, sensor noise, planner).
     pub seed: u64,
-    /// A shortened study for tests: fewer load cases, a short spiral, the first part of the cone.
+    /// A shortened study for tests: fewer load cases, a short spiral, the first part of the cone,
+    /// a 2 × 2 sensitivity on a short path.
     pub quick: bool,
+    /// The robot the twin plays (built-in name or robot file): its cell comes from
+    /// `deflex_sim::profile`. The paper's comparisons are shown for the TX200 only.
+    pub robot: String,
+    /// Run the sensitivity section.
+    pub sensitivity: bool,
+}
+
+impl Default for DemoOptions {
+    fn default() -> Self {
+        DemoOptions {
+            out_dir: PathBuf::from("deflex-report"),
+            seed: 1,
+            quick: false,
+            robot: "tx200".into(),
+            sensitivity: true,
+        }
+    }
 }
 
 /// Progress callbacks for a terminal front end.
@@ -120,6 +143,15 @@ impl FormingNumbers {
 pub struct DemoSummary {
     /// Always true: the cell is the digital twin.
     pub simulated: bool,
+    /// The robot the twin played (its description's name) and the spec it was given as.
+    pub robot: String,
+    /// The robot spec (`tx200`, `ur10e`, a file).
+    pub robot_spec: String,
+    /// The paper's comparisons apply (the TX200 cell).
+    pub paper_comparison: bool,
+    /// The error sources and effects of the twin, with their levels and whether they were on:
+    /// `(source, level, on)`.
+    pub conditions: Vec<(String, String, bool)>,
     /// Seed.
     pub seed: u64,
     /// Shortened study.
@@ -150,6 +182,12 @@ pub struct DemoSummary {
     pub improvement_percent: f64,
     /// Status line of the controller at the end of the corrected run.
     pub controller_status: String,
+    /// The plunge into a stiff fixture (10⁷ N/m) without and with correction.
+    pub stiff_contact: crate::contact::StiffContactNumbers,
+    /// The same plunge across fixture stiffnesses 10⁵–10⁸ N/m.
+    pub stiff_contact_sweep: Vec<crate::contact::StiffContactNumbers>,
+    /// The sensitivity study, when run.
+    pub sensitivity: Option<crate::sensitivity::SensitivityResult>,
     /// Wall time of each stage (s).
     pub stage_seconds: Vec<(String, f64)>,
 }
@@ -168,22 +206,43 @@ pub(crate) const IDENTIFIED: &str = "identified (deflex)";
 pub(crate) const BASELINE: &str = "one eDoF per joint";
 pub(crate) const TABLE1: &str = "paper Table 1";
 
-const STAGES: usize = 7;
+const STAGES: usize = 9;
 
-/// Run the whole study; writes every output into `options.out_dir`.
+/// Run the whole study; writes every output into `options.out_dir`, which appears whole at the
+/// end (or not at all when the study fails).
 pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<DemoSummary, String> {
-    let out = &options.out_dir;
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let building = deflex_files::AtomicDir::create(&options.out_dir)
+        .map_err(|e| format!("{}: {e}", options.out_dir.display()))?;
+    let out = building.path().to_path_buf();
+    let summary = study(options, &out, progress)?;
+    building
+        .commit()
+        .map_err(|e| format!("{}: {e}", options.out_dir.display()))?;
+    Ok(summary)
+}
+
+fn study(
+    options: &DemoOptions,
+    out: &std::path::Path,
+    progress: &mut dyn Progress,
+) -> Result<DemoSummary, String> {
     let seed = options.seed;
-    let cell = CellConfig::default();
+    let cell = CellConfig::for_robot(&options.robot).map_err(|e| e.to_string())?;
     let nominal = cell.nominal_robot().map_err(|e| e.to_string())?;
+    let paper_comparison = Maker::of(&options.robot, &nominal.name) == Maker::StaubliTx200;
     let mut timings = Vec::new();
 
     // 1. Plan.
     let clock = Instant::now();
     progress.stage(1, STAGES, "plan the calibration campaign");
+    let level = cell.forming_force_level_n();
     let plan_options = PlanOptions {
-        max_force_n: 1400.0,
+        // The paper loads its TX200 to 1.4 kN; other cells to 1.1 × their forming force.
+        max_force_n: if paper_comparison {
+            1400.0
+        } else {
+            (1.1 * level / 10.0).round() * 10.0
+        },
         load_cases: if options.quick { 24 } else { 40 },
         configurations: if options.quick { 300 } else { 600 },
         seed,
@@ -203,7 +262,13 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     let clock = Instant::now();
     progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
     let campaign = run_campaign(&cell, &plan.rows, seed).map_err(|e| e.to_string())?;
-    write_rows(&out.join("campaign.csv"), &campaign).map_err(|e| e.to_string())?;
+    let campaign_file = |rows: &[deflex_calib::MeasurementRow], what: &str, seed: u64| {
+        campaign_text(&cell, rows, what, seed).map_err(|e| e.to_string())
+    };
+    write_text(
+        &out.join("campaign.csv"),
+        &campaign_file(&campaign, "calibration campaign", seed)?,
+    )?;
     progress.done(&format!("{} measured points", campaign.len()));
     timings.push(("campaign".to_string(), clock.elapsed().as_secs_f64()));
 
@@ -211,13 +276,12 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     // calibrated on the same data.
     let clock = Instant::now();
     progress.stage(3, STAGES, "identify the model structure and stiffnesses");
-    let start = builtin("tx200-1edof").ok_or("built-in tx200-1edof missing")?;
+    let start = one_edof_start(&nominal);
     let search = search_structure(
         &start,
         &campaign,
         &SearchOptions::default(),
-        &mut |iteration, done, total| {
-            let _ = iteration;
+        &mut |_iteration, done, total| {
             if total > 0 {
                 progress.fraction(done as f64 / total as f64);
             }
@@ -225,7 +289,10 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     )
     .map_err(|e| e.to_string())?;
     let mut identified = search.calibration.to_robot(&start);
-    identified.name = "deflex-identified TX200 (from the SIMULATED twin campaign)".into();
+    identified.name = format!(
+        "deflex-identified {} (from the SIMULATED twin campaign)",
+        nominal.name
+    );
     let baseline_calibration = calibrate_fixed(&start, &campaign, &Structure::from_robot(&start))
         .map_err(|e| e.to_string())?;
     let mut baseline = baseline_calibration.to_robot(&start);
@@ -253,12 +320,16 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     ));
     timings.push(("identification".to_string(), clock.elapsed().as_secs_f64()));
 
-    // 4. Validation on the paper's grid (600 N and 1100 N).
+    // 4. Validation on the grid.
     let clock = Instant::now();
-    progress.stage(4, STAGES, "validate on the paper's 200-pose grid");
-    let grid_plan = validation_grid(&cell).map_err(|e| e.to_string())?;
+    progress.stage(4, STAGES, "validate on the grid of dead-weight loads");
+    let grid_params = GridParams::for_cell(&cell).map_err(|e| e.to_string())?;
+    let grid_plan = validation_grid(&cell, &grid_params).map_err(|e| e.to_string())?;
     let grid = run_campaign(&cell, &grid_plan, seed.wrapping_add(1)).map_err(|e| e.to_string())?;
-    write_rows(&out.join("grid.csv"), &grid).map_err(|e| e.to_string())?;
+    write_text(
+        &out.join("grid.csv"),
+        &campaign_file(&grid, "validation grid", seed.wrapping_add(1))?,
+    )?;
     let models: [(&str, &Robot); 3] = [
         (IDENTIFIED, &identified),
         (BASELINE, &baseline),
@@ -273,7 +344,7 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         &predictions_csv(&grid, &grid_predictions),
     )?;
     let mut validation = Vec::new();
-    for load in [600.0, 1100.0] {
+    for &load in &grid_params.loads_n {
         let selected = grid_rows(&grid, load);
         for (name, predicted) in &grid_predictions {
             validation.push(error_numbers(
@@ -285,37 +356,41 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
             ));
         }
     }
-    let grid_files = crate::figures::grid_figures(out, &grid, &grid_predictions)?;
+    let grid_files =
+        crate::figures::grid_figures(out, &grid, &grid_params.loads_n, &grid_predictions)?;
+    let last = validation.len().saturating_sub(3);
     progress.done(&format!(
-        "δz RMS at 600/1100 N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
+        "δz RMS at {:.0}/{:.0} N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
+        grid_params.loads_n[0],
+        grid_params.loads_n[grid_params.loads_n.len() - 1],
         validation[0].rms_z_mm,
-        validation[3].rms_z_mm,
+        validation[last].rms_z_mm,
         validation[1].rms_z_mm,
-        validation[4].rms_z_mm
+        validation[last + 1].rms_z_mm
     ));
     timings.push(("grid validation".to_string(), clock.elapsed().as_secs_f64()));
 
-    // Spiral (Fig. 14).
+    // 5. Spiral (Fig. 14).
     let clock = Instant::now();
-    progress.stage(5, STAGES, "validate along the Figure 14 spiral");
-    let spiral_params = SpiralParams {
-        length_m: if options.quick {
-            0.3
-        } else {
-            SpiralParams::default().length_m
-        },
-        ..SpiralParams::default()
-    };
+    progress.stage(5, STAGES, "validate along the spiral");
+    let mut spiral_params = SpiralParams::for_cell(&cell).map_err(|e| e.to_string())?;
+    if options.quick {
+        spiral_params.length_m *= 0.3 / 2.7;
+    }
     let spiral_rows =
         spiral(&cell, &spiral_params, seed.wrapping_add(2)).map_err(|e| e.to_string())?;
-    write_rows(&out.join("spiral.csv"), &spiral_rows).map_err(|e| e.to_string())?;
+    write_text(
+        &out.join("spiral.csv"),
+        &campaign_file(&spiral_rows, "spiral", seed.wrapping_add(2))?,
+    )?;
     let all: Vec<usize> = (0..spiral_rows.len()).collect();
     let mut spiral_predictions = Vec::new();
+    let spiral_label = format!("spiral {:.0} N", spiral_params.load_n);
     for (name, robot) in models {
         let predicted = predict(robot, &spiral_rows).map_err(|e| e.to_string())?;
         validation.push(error_numbers(
             name,
-            "spiral 600 N",
+            &spiral_label,
             &spiral_rows,
             &predicted,
             &all,
@@ -326,7 +401,8 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         &out.join("spiral_predictions.csv"),
         &predictions_csv(&spiral_rows, &spiral_predictions),
     )?;
-    let spiral_files = crate::figures::spiral_figures(out, &spiral_rows, &spiral_predictions)?;
+    let spiral_files =
+        crate::figures::spiral_figures(out, &spiral_rows, &spiral_params, &spiral_predictions)?;
     let spiral_identified = &validation[validation.len() - 3];
     progress.done(&format!(
         "{} samples, identified δz RMS {:.3} mm",
@@ -338,7 +414,7 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         clock.elapsed().as_secs_f64(),
     ));
 
-    // 5. Forming without and with correction.
+    // 6–7. Forming without and with correction.
     let path = if options.quick {
         ToolPath::paper_cone().truncated(1500.0)
     } else {
@@ -353,8 +429,8 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     open.write_outputs(&out.join("forming_open"))
         .map_err(|e| e.to_string())?;
     progress.done(&format!(
-        "max error norm {:.2} mm, max Fz {:.0} N",
-        open.summary.max_error_norm_mm, open.summary.max_fz_N
+        "max error norm {:.2} mm, max |F| {:.0} N",
+        open.summary.max_error_norm_mm, open.summary.max_force_norm_N
     ));
     timings.push((
         "forming without correction".to_string(),
@@ -379,17 +455,107 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
     let improvement =
         100.0 * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
     progress.done(&format!(
-        "max error norm {:.2} mm ({improvement:.0} % better), max Fz {:.0} N",
-        closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_fz_N
+        "max error norm {:.2} mm ({improvement:.0} % better), max |F| {:.0} N",
+        closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_force_norm_N
     ));
     timings.push((
         "forming with correction".to_string(),
         clock.elapsed().as_secs_f64(),
     ));
     let forming_files = crate::figures::forming_figures(out, &open, &closed.forming)?;
+    let mut contact_files = Vec::new();
+    let mut sensitivity_files = Vec::new();
+
+    // 8. Stiff contact.
+    let clock = Instant::now();
+    progress.stage(8, STAGES, "plunge into a stiff fixture (1e7 N/m)");
+    let (stiff_contact, plunge_open, plunge_closed) =
+        crate::contact::stiff_contact(&cell, &identified, 1e7, seed, &|_| {})?;
+    let figure = out.join("stiff_contact_force.png");
+    crate::contact::contact_figure(&figure, &plunge_open, &plunge_closed.forming, 1e7)?;
+    contact_files.push((
+        figure,
+        "Plunge into a 10⁷ N/m fixture: the contact force without and with correction \
+         (SIMULATED)"
+            .to_string(),
+    ));
+    let mut stiff_contact_sweep = Vec::new();
+    let sweep: &[f64] = if options.quick {
+        &[]
+    } else {
+        &[1e5, 1e6, 1e7, 1e8]
+    };
+    for &k in sweep {
+        let (numbers, _, _) = crate::contact::stiff_contact(&cell, &identified, k, seed, &|_| {})?;
+        stiff_contact_sweep.push(numbers);
+    }
+    progress.done(&format!(
+        "max |F| {:.0} N open, {:.0} N corrected{}",
+        stiff_contact.open_max_force_N,
+        stiff_contact.closed_max_force_N,
+        stiff_contact
+            .fault
+            .as_ref()
+            .map(|f| format!(" ({f})"))
+            .unwrap_or_default()
+    ));
+    timings.push(("stiff contact".to_string(), clock.elapsed().as_secs_f64()));
+
+    // 9. Sensitivity.
+    let clock = Instant::now();
+    progress.stage(9, STAGES, "sensitivity of the closed loop");
+    let sensitivity = if options.sensitivity {
+        let plan = if options.quick {
+            SensitivityPlan {
+                delays_s: vec![0.008, 0.060],
+                model_scales: vec![1.0, 1.3],
+                gain_errors: vec![],
+                drift_factors: vec![],
+                contact_stiffness_n_m: vec![],
+                threads: 2,
+                length_mm: Some(300.0),
+            }
+        } else {
+            SensitivityPlan::demo()
+        };
+        let fraction = std::sync::Mutex::new(0.0f64);
+        let result = run_sensitivity(&cell, &identified, &plan, seed, &|f| {
+            if let Ok(mut v) = fraction.lock() {
+                *v = f;
+            }
+        })?;
+        progress.fraction(1.0);
+        write_text(&out.join("sensitivity.csv"), &result.csv())?;
+        let figure = out.join("sensitivity_heatmap.png");
+        result.heatmap(&figure)?;
+        sensitivity_files.push((
+            figure,
+            "Improvement of the max path error across the correction delay and the model's \
+             compliance scale (SIMULATED, sensitivity cone)"
+                .to_string(),
+        ));
+        let worst = result
+            .rows
+            .iter()
+            .map(|r| r.improvement_percent)
+            .fold(f64::INFINITY, f64::min);
+        progress.done(&format!(
+            "{} runs, worst improvement {worst:.0} %",
+            result.runs
+        ));
+        Some(result)
+    } else {
+        progress.done("skipped");
+        None
+    };
+    timings.push(("sensitivity".to_string(), clock.elapsed().as_secs_f64()));
 
     let summary = DemoSummary {
         simulated: true,
+        robot: nominal.name.clone(),
+        robot_spec: options.robot.clone(),
+        paper_comparison,
+        conditions: conditions(&cell),
         seed,
         quick: options.quick,
         campaign_load_cases: load_cases,
@@ -405,6 +571,9 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         forming_closed: FormingNumbers::from_run(&closed.forming),
         improvement_percent: improvement,
         controller_status: closed.status,
+        stiff_contact,
+        stiff_contact_sweep,
+        sensitivity,
         stage_seconds: timings,
     };
     write_text(
@@ -419,9 +588,13 @@ pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<De
         summary: &summary,
         search: &search,
         plan: &plan,
+        grid: &grid_params,
+        spiral: &spiral_params,
         grid_files,
         spiral_files,
         forming_files,
+        contact_files,
+        sensitivity_files,
     };
     crate::page::write(out, &page)?;
     Ok(summary)

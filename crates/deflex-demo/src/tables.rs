@@ -17,8 +17,9 @@ pub(crate) fn grid_rows(grid: &[MeasurementRow], load_n: f64) -> Vec<usize> {
         .collect()
 }
 
+/// Write a text file whole or not at all.
 pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), String> {
-    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+    deflex_files::write_atomic(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Errors (measured − predicted) of one model on the selected rows.

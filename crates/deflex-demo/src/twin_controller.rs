@@ -12,9 +12,17 @@ use deflex_sim::{CellConfig, ControllerInput, CorrectionController, FormingRun, 
 use std::path::Path;
 
 /// The controller configuration for the twin's cell: the paper's gains and the default limits,
-/// with the sensor mounting, tool, gravity and sensor range of the cell (datasheet values).
+/// with the sensor mounting, tool, gravity and sensor range of the cell as an integrator knows
+/// them: the **nominal** mounting and tool of the drawings and datasheets, not the twin's true
+/// ones (which differ by the documented mounting and tool-load errors). The force limit is twice
+/// the cell's forming force level, capped at the controller's default 2500 N (the TX200 cell
+/// keeps 2500 N; the UR10e cell gets about 340 N, well inside what its arm and sensor carry).
 pub fn controller_config_for(cell: &CellConfig) -> ControllerConfig {
     let mut config = ControllerConfig::default();
+    config.safety.max_force_n = config
+        .safety
+        .max_force_n
+        .min((2.0 * cell.forming_force_level_n() / 10.0).round() * 10.0);
     let s = &cell.sensor;
     config.wrench.sensor_in_flange =
         pose_from_xyz_rpy(s.sensor_in_flange_xyz_m, s.sensor_in_flange_rpy);
@@ -234,10 +242,11 @@ mod tests {
         Comparison { open, closed }
     }
 
-    /// The acceptance run: the paper's cone on the twin, closed loop with a model calibrated from
-    /// the twin's campaign: the maximum error norm improves by ≥ 70 % (the paper's figure;
-    /// measured ≈ 90 %), without fault, overshoot or instability, and the process force rises
-    /// with the correction as in Fig. 18.
+    /// The acceptance run: the paper's cone on the twin with every error source on, closed loop
+    /// with a model calibrated from the twin's campaign: the maximum error norm improves by ≥ 70 %
+    /// (the paper's figure; measured 83 %), without fault, overshoot or instability, and the
+    /// process force rises with the correction as in Figs. 18–19 (force norm 1320 → 1472 N
+    /// measured, the paper's ≈ 1300 → 1500 N).
     #[test]
     fn paper_cone_closed_loop_with_calibrated_model() {
         let cell = CellConfig::default();
@@ -284,11 +293,22 @@ mod tests {
         // No instability: the loop error stays a small fraction of the deflection.
         assert!(max_eps <= 0.1 * max_ds, "ε {max_eps} vs δŝ {max_ds}");
         assert!(trace.iter().all(|t| t.xi.iter().all(|v| v.is_finite())));
-        // Forces rise with the correction (Fig. 18).
+        // Forces rise with the correction (Fig. 18): the corrected tool reaches the programmed
+        // depth and wall angle, where the process pushes back harder.
         assert!(
             fz_closed >= fz_open,
             "mean Fz closed {fz_closed} < open {fz_open}"
         );
+        let rise = k.max_force_norm_N / o.max_force_norm_N;
+        assert!(
+            (1.08..1.30).contains(&rise),
+            "max |F| open {} N, closed {} N",
+            o.max_force_norm_N,
+            k.max_force_norm_N
+        );
+        // The uncorrected cone reproduces the paper's levels: 3.84 mm ± 25 %, Fz 1.2–1.3 kN.
+        assert!((2.88..=4.80).contains(&o.max_error_norm_mm));
+        assert!((1150.0..=1350.0).contains(&o.max_fz_N));
     }
 
     /// With the paper's Table 1 model (stiffer than the twin's robot) the loop still helps.

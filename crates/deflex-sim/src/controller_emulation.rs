@@ -6,9 +6,12 @@
 //!   rates. The *desired* pose is the Cartesian polyline through the waypoints (what the CAM
 //!   program means); joint interpolation departs from it by well under a micrometre.
 //! * **External correction** `ξ = [δp; δφ]` (m, rad, robot base axes): taken into account after
-//!   a transport delay (whole cycles), a first-order filter, a bound on its size and one on its
-//!   speed, then added through the Jacobian as a joint offset `δq = J⁻¹ ξ` (small corrections,
-//!   so no IK per cycle): `s_com = s_des + ξ` (eq. 7).
+//!   a transport delay (whole cycles), the look-ahead of streaming interfaces (a moving average,
+//!   UR `servoj`, ABB EGM), the interpolator's first-order filter, a bound on its size and one on
+//!   its speed, and the joint servos' response to it (second order, damping 0.7, at the servo
+//!   bandwidth; the programmed path itself is feed-forwarded and tracked exactly), then added
+//!   through the Jacobian as a joint offset `δq = J⁻¹ ξ` (small corrections, so no IK per
+//!   cycle): `s_com = s_des + ξ` (eq. 7).
 
 use crate::config::ControllerConfig;
 use crate::error::SimError;
@@ -17,14 +20,59 @@ use deflex_model::{Data, IkOptions, Pose, Robot};
 use nalgebra::{Matrix6, Rotation3, Vector3, Vector6};
 use std::collections::VecDeque;
 
-/// The correction pipeline: delay → first-order filter → size bound → speed bound.
+/// Damping ratio of the servo response to a correction.
+const SERVO_DAMPING: f64 = 0.7;
+
+/// A second-order low-pass (bilinear transform of ω²/(s² + 2ζωs + ω²), unit DC gain) per
+/// channel, direct form II transposed.
+#[derive(Clone, Debug)]
+struct Biquad {
+    b: [f64; 3],
+    a: [f64; 2],
+    state: [[f64; 2]; 6],
+}
+
+impl Biquad {
+    fn low_pass(cutoff_hz: f64, rate_hz: f64) -> Biquad {
+        let w0 = 2.0 * std::f64::consts::PI * cutoff_hz / rate_hz;
+        let (sin, cos) = w0.sin_cos();
+        let q = 1.0 / (2.0 * SERVO_DAMPING);
+        let alpha = sin / (2.0 * q);
+        let a0 = 1.0 + alpha;
+        let b0 = (1.0 - cos) / 2.0 / a0;
+        Biquad {
+            b: [b0, 2.0 * b0, b0],
+            a: [-2.0 * cos / a0, (1.0 - alpha) / a0],
+            state: [[0.0; 2]; 6],
+        }
+    }
+
+    fn step(&mut self, input: &[f64; 6]) -> [f64; 6] {
+        let mut out = [0.0; 6];
+        for ((o, x), s) in out.iter_mut().zip(input).zip(self.state.iter_mut()) {
+            let y = self.b[0] * x + s[0];
+            s[0] = self.b[1] * x - self.a[0] * y + s[1];
+            s[1] = self.b[2] * x - self.a[1] * y;
+            *o = y;
+        }
+        out
+    }
+}
+
+/// The correction pipeline: delay → look-ahead → first-order filter → size bound → speed bound
+/// → servo response.
 #[derive(Clone, Debug)]
 pub struct CorrectionPipeline {
     period_s: f64,
     fifo: VecDeque<[f64; 6]>,
     delay_cycles: usize,
+    window: VecDeque<[f64; 6]>,
+    window_sum: [f64; 6],
+    window_len: usize,
     alpha: f64,
     filtered: [f64; 6],
+    limited: [f64; 6],
+    servo: Option<Biquad>,
     applied: [f64; 6],
     requested: [f64; 6],
     max_m: f64,
@@ -34,8 +82,10 @@ pub struct CorrectionPipeline {
 }
 
 impl CorrectionPipeline {
-    /// A pipeline for the controller settings.
-    pub fn new(config: &ControllerConfig) -> CorrectionPipeline {
+    /// A pipeline for the controller settings; `servo` switches the servo response and the
+    /// look-ahead on (`[cell.errors] servo`). The settings must have been validated (their
+    /// bounds keep the buffers small: at most 10⁴ cycles each).
+    pub fn new(config: &ControllerConfig, servo: bool) -> CorrectionPipeline {
         let period_s = 1.0 / config.rate_hz;
         let delay_cycles = (config.correction_delay_s / period_s).round() as usize;
         let alpha = if config.correction_filter_s > 0.0 {
@@ -43,14 +93,27 @@ impl CorrectionPipeline {
         } else {
             1.0
         };
+        let window_len = if servo {
+            ((config.lookahead_s / period_s).round() as usize).max(1)
+        } else {
+            1
+        };
         let mut fifo = VecDeque::with_capacity(delay_cycles + 2);
         fifo.extend(std::iter::repeat_n([0.0; 6], delay_cycles));
+        let mut window = VecDeque::with_capacity(window_len + 1);
+        window.extend(std::iter::repeat_n([0.0; 6], window_len));
         CorrectionPipeline {
             period_s,
             fifo,
             delay_cycles,
+            window,
+            window_sum: [0.0; 6],
+            window_len,
             alpha,
             filtered: [0.0; 6],
+            limited: [0.0; 6],
+            servo: (servo && config.servo_bandwidth_hz > 0.0)
+                .then(|| Biquad::low_pass(config.servo_bandwidth_hz, config.rate_hz)),
             applied: [0.0; 6],
             requested: [0.0; 6],
             max_m: config.max_correction_m,
@@ -77,11 +140,23 @@ impl CorrectionPipeline {
         self.period_s
     }
 
-    /// Advance one cycle; returns the correction applied in this cycle.
+    /// Advance one cycle; returns the correction applied in this cycle. Allocation-free.
     pub fn advance(&mut self) -> [f64; 6] {
         self.fifo.push_back(self.requested);
         let delayed = self.fifo.pop_front().unwrap_or([0.0; 6]);
-        for (f, d) in self.filtered.iter_mut().zip(delayed) {
+        // Look-ahead: moving average over the window (a running sum; the window is full).
+        let oldest = self.window.pop_front().unwrap_or([0.0; 6]);
+        self.window.push_back(delayed);
+        let n = self.window_len as f64;
+        let mut smoothed = [0.0; 6];
+        for i in 0..6 {
+            self.window_sum[i] += delayed[i] - oldest[i];
+            smoothed[i] = self.window_sum[i] / n;
+        }
+        if self.window_len == 1 {
+            smoothed = delayed;
+        }
+        for (f, d) in self.filtered.iter_mut().zip(smoothed) {
             *f += self.alpha * (d - *f);
         }
         // Size bound on the target, then speed bound on the change.
@@ -89,14 +164,18 @@ impl CorrectionPipeline {
         clamp_norm(&mut target[0..3], self.max_m);
         clamp_norm(&mut target[3..6], self.max_rad);
         let mut change = [0.0; 6];
-        for ((c, t), a) in change.iter_mut().zip(target).zip(self.applied) {
+        for ((c, t), a) in change.iter_mut().zip(target).zip(self.limited) {
             *c = t - a;
         }
         clamp_norm(&mut change[0..3], self.step_m);
         clamp_norm(&mut change[3..6], self.step_rad);
-        for (a, c) in self.applied.iter_mut().zip(change) {
+        for (a, c) in self.limited.iter_mut().zip(change) {
             *a += c;
         }
+        self.applied = match self.servo.as_mut() {
+            Some(servo) => servo.step(&self.limited),
+            None => self.limited,
+        };
         self.applied
     }
 
@@ -154,6 +233,7 @@ impl ControllerEmulation {
     pub fn new(
         robot: &Robot,
         config: &ControllerConfig,
+        servo: bool,
         path: &ToolPath,
         part_frame: &Pose,
         seed_q: &[f64; 6],
@@ -214,7 +294,7 @@ impl ControllerEmulation {
             segment: 0,
             cycle: 0,
             period_s: 1.0 / config.rate_hz,
-            pipeline: CorrectionPipeline::new(config),
+            pipeline: CorrectionPipeline::new(config, servo),
         })
     }
 
@@ -316,7 +396,7 @@ mod tests {
     use super::*;
 
     fn step_response(config: &ControllerConfig, cycles: usize) -> Vec<[f64; 6]> {
-        let mut pipe = CorrectionPipeline::new(config);
+        let mut pipe = CorrectionPipeline::new(config, false);
         pipe.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
         (0..cycles).map(|_| pipe.advance()).collect()
     }
@@ -347,6 +427,39 @@ mod tests {
     }
 
     #[test]
+    fn look_ahead_and_servo_slow_a_step_down() {
+        // UR-like: 500 Hz, 4 ms delay, 0.1 s look-ahead, 15 Hz servo.
+        let config = ControllerConfig {
+            rate_hz: 500.0,
+            correction_delay_s: 0.004,
+            correction_filter_s: 0.0,
+            servo_bandwidth_hz: 15.0,
+            lookahead_s: 0.1,
+            max_correction_speed_m_s: 10.0,
+            ..ControllerConfig::default()
+        };
+        let mut ideal = CorrectionPipeline::new(&config, false);
+        let mut real = CorrectionPipeline::new(&config, true);
+        ideal.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        real.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let a: Vec<f64> = (0..400).map(|_| ideal.advance()[0]).collect();
+        let b: Vec<f64> = (0..400).map(|_| real.advance()[0]).collect();
+        // Without servo and look-ahead: the step after 2 cycles of delay.
+        assert_eq!(a[1], 0.0);
+        assert!((a[2] - 0.001).abs() < 1e-15);
+        // With them: the moving average ramps over 50 cycles, the servo lags and settles at 1.
+        assert!(
+            b[2] < 0.1 * 0.001 && b[26] < 0.6 * 0.001 && b[26] > 0.3 * 0.001,
+            "{}",
+            b[26]
+        );
+        assert!((b[399] - 0.001).abs() < 1e-9);
+        // Second order with damping 0.7: a small overshoot (≤ 5 %).
+        let peak = b.iter().cloned().fold(0.0, f64::max);
+        assert!(peak < 1.05 * 0.001, "{peak}");
+    }
+
+    #[test]
     fn size_and_speed_bounds() {
         let config = ControllerConfig {
             correction_delay_s: 0.0,
@@ -355,7 +468,7 @@ mod tests {
             max_correction_speed_m_s: 0.025, // 0.1 mm per 4 ms cycle
             ..ControllerConfig::default()
         };
-        let mut pipe = CorrectionPipeline::new(&config);
+        let mut pipe = CorrectionPipeline::new(&config, false);
         pipe.set([0.003, 0.004, 0.0, 0.0, 0.0, 0.0]); // 5 mm requested
         let first = pipe.advance();
         let n = (first[0].powi(2) + first[1].powi(2)).sqrt();
@@ -380,7 +493,8 @@ mod tests {
         let config = ControllerConfig::default();
         let part = deflex_model::spatial::pose_from_xyz_rpy([1.5, 0.0, -0.183], [0.0; 3]);
         let seed = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
-        let mut ctrl = ControllerEmulation::new(&robot, &config, &path, &part, &seed).unwrap();
+        let mut ctrl =
+            ControllerEmulation::new(&robot, &config, true, &path, &part, &seed).unwrap();
         assert!((ctrl.duration_s() - path.duration_s(50.0)).abs() < 1e-9);
         let mut worst: f64 = 0.0;
         let mut cycle = ctrl.advance();

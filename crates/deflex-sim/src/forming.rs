@@ -31,6 +31,8 @@ pub struct LogRow {
 pub struct FormingLog {
     /// Path name.
     pub path_name: String,
+    /// The robot the twin played.
+    pub robot: String,
     /// Seed of the run.
     pub seed: u64,
     /// Rows, in time order.
@@ -38,9 +40,15 @@ pub struct FormingLog {
 }
 
 impl FormingLog {
-    pub(crate) fn with_capacity(path_name: &str, seed: u64, rows: usize) -> FormingLog {
+    pub(crate) fn with_capacity(
+        path_name: &str,
+        robot: &str,
+        seed: u64,
+        rows: usize,
+    ) -> FormingLog {
         FormingLog {
             path_name: path_name.to_string(),
+            robot: robot.to_string(),
             seed,
             rows: Vec::with_capacity(rows),
         }
@@ -55,8 +63,8 @@ impl FormingLog {
         let mut s = String::with_capacity(self.rows.len() * 400 + 512);
         let _ = writeln!(
             s,
-            "# SIMULATED deflex digital twin forming log (not a measurement). path: {}; seed: {}",
-            self.path_name, self.seed
+            "# SIMULATED deflex digital twin forming log (not a measurement). robot: {}; path: {}; seed: {}",
+            self.robot, self.path_name, self.seed
         );
         let _ = writeln!(
             s,
@@ -167,6 +175,8 @@ impl RunningStats {
 pub struct FormingSummary {
     /// Always true: this is the digital twin.
     pub simulated: bool,
+    /// The robot the twin played.
+    pub robot: String,
     /// Path name.
     pub path: String,
     /// Seed.
@@ -191,11 +201,21 @@ pub struct FormingSummary {
     pub max_fxy_N: f64,
     /// Largest correction applied (mm).
     pub max_correction_mm: f64,
-    /// Aerens steady-state level for this path (N).
+    /// Aerens steady-state level for this path at the programmed step-down and wall angle (N;
+    /// 0 against a fixture).
     pub aerens_steady_fz_N: f64,
+    /// Aerens level at the actual step-down and wall angle at the end of the run (N; 0 against a
+    /// fixture).
+    pub aerens_actual_fz_N: f64,
+    /// Smoothed actual step-down (mm) and wall angle (deg) at the end of the run (0 against a
+    /// fixture).
+    pub actual_step_down_mm: f64,
+    /// See `actual_step_down_mm`.
+    pub actual_wall_angle_deg: f64,
     /// Programmed depth (mm).
     pub target_depth_mm: f64,
-    /// Deepest point of the formed part (mm below the undeformed sheet).
+    /// Deepest point of the formed part (mm below the undeformed sheet); against a fixture, the
+    /// deepest penetration.
     pub final_part_depth_mm: f64,
     /// F/T samples clipped at the sensor range.
     pub saturated_samples: u64,
@@ -287,9 +307,23 @@ pub fn run_forming_with_progress(
     }
     progress(1.0);
     let stats = cell.stats().clone();
-    let sheet = cell.sheet();
+    let (aerens, actual, (step_mm, angle), depth, profile_mm) = match cell.workpiece() {
+        crate::cell::Workpiece::Sheet(sheet) => (
+            sheet.steady_force_n(),
+            sheet.level_force_n(),
+            sheet.actual_step_and_angle(),
+            sheet.max_depth_m(),
+            sheet
+                .profile(0.0)
+                .into_iter()
+                .map(|(r, d)| (r * 1e3, d * 1e3))
+                .collect(),
+        ),
+        crate::cell::Workpiece::Fixture(f) => (0.0, 0.0, (0.0, 0.0), f.deepest_m(), Vec::new()),
+    };
     let summary = FormingSummary {
         simulated: true,
+        robot: cell.robot_name().to_string(),
         path: cell.log().path_name.clone(),
         seed,
         correction: controller.is_some(),
@@ -302,16 +336,14 @@ pub fn run_forming_with_progress(
         max_fz_N: stats.max_fz_n,
         max_fxy_N: stats.max_fxy_n,
         max_correction_mm: stats.max_correction_m * 1e3,
-        aerens_steady_fz_N: sheet.steady_force_n(),
+        aerens_steady_fz_N: aerens,
+        aerens_actual_fz_N: actual,
+        actual_step_down_mm: step_mm,
+        actual_wall_angle_deg: angle,
         target_depth_mm,
-        final_part_depth_mm: sheet.max_depth_m() * 1e3,
+        final_part_depth_mm: depth * 1e3,
         saturated_samples: saturated,
     };
-    let profile_mm = sheet
-        .profile(0.0)
-        .into_iter()
-        .map(|(r, d)| (r * 1e3, d * 1e3))
-        .collect();
     Ok(FormingRun {
         log: cell.log().clone(),
         summary,
@@ -330,25 +362,36 @@ impl FormingRun {
         serde_json::to_string_pretty(&value).unwrap_or_default()
     }
 
-    /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots into `dir` (created if
-    /// needed). Returns the files written.
+    /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots into the folder `dir`,
+    /// whole or not at all: the folder is built aside and swapped in at the end (an existing
+    /// `dir` is replaced only then). Returns the files written.
     pub fn write_outputs(&self, dir: &Path) -> Result<Vec<std::path::PathBuf>, SimError> {
-        std::fs::create_dir_all(dir).map_err(|e| SimError::output(dir, e))?;
-        let mut files = Vec::new();
+        let building =
+            deflex_files::AtomicDir::create(dir).map_err(|e| SimError::output(dir, e))?;
+        let temporary = building.path().to_path_buf();
+        let mut names = Vec::new();
         let mut write = |name: &str, text: String| -> Result<(), SimError> {
-            let path = dir.join(name);
-            std::fs::write(&path, text).map_err(|e| SimError::output(&path, e))?;
-            files.push(path);
+            let path = temporary.join(name);
+            deflex_files::write_atomic(&path, text).map_err(|e| SimError::output(&path, e))?;
+            names.push(name.to_string());
             Ok(())
         };
         write("log.csv", self.log.to_csv())?;
         write("summary.json", self.summary_json())?;
-        let mut profile = String::from("# SIMULATED formed profile along θ = 0\nr_mm,depth_mm\n");
+        let mut profile = format!(
+            "# SIMULATED formed profile along θ = 0; robot: {}\nr_mm,depth_mm\n",
+            self.summary.robot
+        );
         for (r, d) in &self.profile_mm {
             let _ = writeln!(profile, "{r:.3},{d:.5}");
         }
         write("profile.csv", profile)?;
-        files.extend(crate::plots::forming_plots(self, dir)?);
-        Ok(files)
+        for plot in crate::plots::forming_plots(self, &temporary)? {
+            if let Some(name) = plot.file_name() {
+                names.push(name.to_string_lossy().into_owned());
+            }
+        }
+        building.commit().map_err(|e| SimError::output(dir, e))?;
+        Ok(names.into_iter().map(|n| dir.join(n)).collect())
     }
 }

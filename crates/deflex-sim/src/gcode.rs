@@ -7,12 +7,37 @@
 //!
 //! Coordinates are the TCP (the centre of the ball tip) in the part frame R_p, z up, in the unit
 //! in force; the program starts at R_p's origin.
+//!
+//! Bounds (each an error naming the line): a file of at most [`MAX_GCODE_BYTES`], at most
+//! [`MAX_WAYPOINTS`] moves, coordinates within ±[`MAX_COORDINATE_MM`] of R_p's origin, feeds
+//! from [`MIN_FEED_MM_MIN`] to [`MAX_FEED_MM_MIN`] mm/min (in the unit in force). A run of the
+//! program is further bounded in time by the cell (`deflex_sim::config::MAX_RUN_S`).
 
 use crate::error::SimError;
 use crate::toolpath::{ToolPath, Waypoint};
 
+/// Largest G-code file read (bytes).
+pub const MAX_GCODE_BYTES: u64 = 64 << 20;
+/// Most moves in a program.
+pub const MAX_WAYPOINTS: usize = 1_000_000;
+/// Largest |coordinate| of a move (mm, after units).
+pub const MAX_COORDINATE_MM: f64 = 10_000.0;
+/// Slowest feed (mm/min): 0.01 mm/s.
+pub const MIN_FEED_MM_MIN: f64 = 0.6;
+/// Fastest feed (mm/min): 1 m/s.
+pub const MAX_FEED_MM_MIN: f64 = 60_000.0;
+
 /// Read a G-code file into a [`ToolPath`].
 pub fn read_gcode(path: &std::path::Path) -> Result<ToolPath, SimError> {
+    let size = std::fs::metadata(path)
+        .map_err(|e| SimError::Path(format!("{}: {e}", path.display())))?
+        .len();
+    if size > MAX_GCODE_BYTES {
+        return Err(SimError::Path(format!(
+            "{}: {size} bytes; G-code files of at most {MAX_GCODE_BYTES} bytes are read",
+            path.display()
+        )));
+    }
     let text = std::fs::read_to_string(path)
         .map_err(|e| SimError::Path(format!("{}: {e}", path.display())))?;
     // Errors name the whole path; the tool path is named after the file.
@@ -94,9 +119,6 @@ pub fn parse_gcode(text: &str, file: &str) -> Result<ToolPath, SimError> {
                     }
                 }
                 'F' => {
-                    if *value <= 0.0 {
-                        return Err(err(format!("feed F{text} must be positive")));
-                    }
                     line_feed = Some(*value);
                 }
                 other => {
@@ -113,7 +135,14 @@ pub fn parse_gcode(text: &str, file: &str) -> Result<ToolPath, SimError> {
             absolute = m;
         }
         if let Some(f) = line_feed {
-            feed_mm_s = Some(f * scale / 60.0);
+            let per_min = f * scale;
+            if !(MIN_FEED_MM_MIN..=MAX_FEED_MM_MIN).contains(&per_min) {
+                return Err(err(format!(
+                    "feed F{f} is {per_min} mm/min; feeds from {MIN_FEED_MM_MIN} to \
+                     {MAX_FEED_MM_MIN} mm/min are accepted"
+                )));
+            }
+            feed_mm_s = Some(per_min / 60.0);
         }
         if let Some(m) = line_motion {
             motion = Some(m);
@@ -142,8 +171,18 @@ pub fn parse_gcode(text: &str, file: &str) -> Result<ToolPath, SimError> {
                         .ok_or_else(|| err("G1 move without a feed rate: set F first".into()))?,
                 )
             };
+            if let Some(axis) = (0..3).find(|&a| next[a].abs() > MAX_COORDINATE_MM) {
+                return Err(err(format!(
+                    "{} = {} mm is beyond ±{MAX_COORDINATE_MM} mm of the part origin",
+                    ['X', 'Y', 'Z'][axis],
+                    next[axis]
+                )));
+            }
             let moved = (0..3).any(|a| (next[a] - position[a]).abs() > 1e-12);
             if moved {
+                if waypoints.len() >= MAX_WAYPOINTS {
+                    return Err(err(format!("more than {MAX_WAYPOINTS} moves")));
+                }
                 waypoints.push(Waypoint {
                     p_mm: next,
                     feed_mm_s: feed,
@@ -258,6 +297,18 @@ mod tests {
             ("G0 X1 X2\n", 1, "twice"),
             ("M3\n", 1, "M-code"),
             ("(nothing)\n", 1, "no move"),
+            // Issue 12: a feed that would take forever, and absurd magnitudes.
+            ("G1 X1 F1e-42\n", 1, "unsupported word E"),
+            (
+                "G1 X1 F0.000000000000000000000000000000000000000001\n",
+                1,
+                "feeds from",
+            ),
+            ("G0 X1\nG1 X2 F0\n", 2, "feeds from"),
+            ("G0 X1\nG1 X2 F-5\n", 2, "feeds from"),
+            ("G0 X20000\n", 1, "beyond"),
+            ("G0 X1\nG91\nG0 X9999\nG0 X9999\n", 4, "beyond"),
+            ("G20 G1 X1 F100000\n", 1, "feeds from"),
         ];
         for (text, line, needle) in cases {
             let e = parse_gcode(text, "p.nc").unwrap_err().to_string();

@@ -1,13 +1,17 @@
 //! # deflex-sim — the digital twin of the robotised ISF cell (SIMULATED)
 //!
-//! A simulated version of the cell of Johra et al. (Robotics 2022, 11, 48, Section 4): a Stäubli
-//! TX200 whose *true* elasticity ([`plant`]) differs from the paper's identified model, its
-//! controller with an Alter/RSI-style correction input ([`controller_emulation`]), an ATI
-//! Omega160 force/torque sensor ([`sensor`]), a laser tracker ([`tracker`]), a 1 mm AA5086 sheet
-//! formed by a 15 mm hemispherical tool with an elastic–plastic contact and the Aerens force
-//! level ([`sheet`]), tool paths (cone, pyramid, G-code: [`toolpath`], [`gcode`]), calibration
-//! campaigns ([`campaign`]) and the forming run ([`forming`]) driven through the steppable
-//! [`cell::Cell`].
+//! A simulated version of the cell of Johra et al. (Robotics 2022, 11, 48, Section 4), or of the
+//! same cell around another 6-joint robot ([`profile`]): a robot whose *true* kinematics and
+//! elasticity ([`plant`], on its own product-of-exponentials spring chain, [`chain`]) differ from
+//! any model, its controller with an Alter/RSI/`servoj`-style correction input and servo dynamics
+//! ([`controller_emulation`]), an ATI force/torque sensor with gain error, drift and a mounting
+//! the controller is not told ([`sensor`]), a laser tracker with a registration error
+//! ([`tracker`]), a sheet formed by a hemispherical tool with an elastic–plastic contact whose
+//! Aerens force level follows the tool's actual step-down and wall angle ([`sheet`]) or a stiff
+//! fixture ([`fixture`]), tool paths (cone, pyramid, plunge, G-code: [`toolpath`], [`gcode`]),
+//! calibration campaigns ([`campaign`]) and the forming run ([`forming`]) driven through the
+//! steppable [`cell::Cell`]. Every error source is documented where it is configured
+//! ([`config`]) and switchable.
 //!
 //! **The plant is never read by a controller or by calibration**: they only get
 //! [`cell::ControllerInput`] (time, measured joints, raw F/T samples) or campaign measurement
@@ -20,9 +24,9 @@
 //!
 //! `cargo run --release -p deflex-sim --example cone_open_loop -- OUT_DIR` (also checked by
 //! `tests/forming.rs::paper_cone_uncorrected_acceptance`): 494 s of forming at 250 Hz
-//! (123 467 cycles) simulate in ≈ 0.4–0.6 s; maximum TCP error 3.70 mm (paper: 3.84 mm), RMS
-//! 2.27 mm, max Fz 1252 N (Aerens level 1260 N), max in-plane force 478 N near the end, part
-//! formed 11.9 mm deep instead of the programmed 15 mm.
+//! (123 467 cycles) simulate in ≈ 0.6 s; maximum TCP error 3.90 mm (paper: 3.84 mm), RMS
+//! 2.00 mm, max Fz 1233 N (Aerens level 1260 N at the programmed step-down and wall angle), max
+//! in-plane force 471 N near the end, part formed 12.1 mm deep instead of the programmed 15 mm.
 //!
 //! ## Using the cell from a controller
 //!
@@ -42,22 +46,25 @@
 
 pub mod campaign;
 pub mod cell;
+pub mod chain;
 pub mod config;
 pub mod controller_emulation;
 pub mod error;
+pub mod fixture;
 pub mod forming;
 pub mod gcode;
 pub mod plant;
 mod plots;
 pub mod process_model;
+pub mod profile;
 pub mod sensor;
 pub mod sheet;
 pub mod toolpath;
 pub mod tracker;
 
 pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};
-pub use config::CellConfig;
+pub use config::{CellConfig, ErrorSources, ProcessKind};
 pub use error::SimError;
 pub use forming::{FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress};
 pub use process_model::{FormingProcess, tcp_path, tool_path_by_name};
-pub use toolpath::{ConeParams, PyramidParams, ToolPath, Waypoint};
+pub use toolpath::{ConeParams, PlungeParams, PyramidParams, ToolPath, Waypoint};

@@ -20,11 +20,16 @@ pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, SimEr
     if log.rows.len() < 2 {
         return Ok(files);
     }
-    let mode = if run.summary.correction {
-        "with correction"
-    } else {
-        "without correction"
-    };
+    let mode = format!(
+        "{}, {}",
+        run.summary.robot,
+        if run.summary.correction {
+            "with correction"
+        } else {
+            "without correction"
+        }
+    );
+    let mode = mode.as_str();
     let t = log.column(|r| r.time_s);
     let err = |i: usize| log.column(move |r| (r.truth.true_m[i] - r.truth.desired_m[i]) * 1e3);
     let norm = log.column(|r| (r.truth.true_m - r.truth.desired_m).norm() * 1e3);

@@ -3,12 +3,14 @@
 //!
 //! A reading is the sum of the loads on everything below the sensing plane, expressed in the
 //! sensor frame with the moment about the sensor origin: the contact wrench of the environment on
-//! the tool (the model's w) plus the tool's weight, plus a constant bias and Gaussian noise, each
-//! channel clipped at the calibrated range (the sample is then flagged `saturated`). A controller
-//! must therefore tare the bias and compensate the tool weight, which rotates with the tool, as
-//! on hardware.
+//! the tool (the model's w) plus the tool's weight, scaled by the calibration's gain error, plus
+//! a bias that drifts as the sensor warms and Gaussian noise, each channel clipped at the
+//! calibrated range (the sample is then flagged `saturated`). The sensor sits at its *true*
+//! mounting and carries the *true* tool (see [`crate::config::SensorConfig`]), which differ from
+//! the nominal ones a controller is told. A controller must therefore tare the bias and
+//! compensate the tool weight, which rotates with the tool, as on hardware.
 
-use crate::config::SensorConfig;
+use crate::config::{CellConfig, SensorConfig};
 use deflex_model::wrench::world_wrench_in_sensor;
 use deflex_model::{Pose, Wrench};
 use nalgebra::{Rotation3, Vector3};
@@ -42,23 +44,67 @@ pub fn tool_gravity_in_sensor(
     Wrench::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
 }
 
-/// The simulated sensor: its own sample clock, bias, noise and saturation.
+/// The simulated sensor: its own sample clock, true mounting and tool, gain error, drifting
+/// bias, noise and saturation.
 #[derive(Clone, Debug)]
 pub struct ForceSensor {
     config: SensorConfig,
     sensor_in_flange: Pose,
+    tool_mass_kg: f64,
+    tool_com_m: [f64; 3],
+    gain: [f64; 6],
+    drift_per_s: [f64; 6],
+    noise_sigma: [f64; 6],
     period_s: f64,
     next_sample_s: f64,
     rng: ChaCha8Rng,
 }
 
 impl ForceSensor {
-    /// A sensor whose first sample is at t = 0.
+    /// An ideal-mounting sensor (nominal pose given, nominal tool, no gain error, no drift) whose
+    /// first sample is at t = 0.
     pub fn new(config: &SensorConfig, sensor_in_flange: Pose, rng: ChaCha8Rng) -> ForceSensor {
         ForceSensor {
             config: config.clone(),
             sensor_in_flange,
+            tool_mass_kg: config.tool_mass_kg,
+            tool_com_m: config.tool_com_in_sensor_m,
+            gain: [1.0; 6],
+            drift_per_s: [0.0; 6],
+            noise_sigma: config.noise_sigma,
             period_s: 1.0 / config.rate_hz,
+            next_sample_s: 0.0,
+            rng,
+        }
+    }
+
+    /// The sensor of a cell: true mounting and tool load, gain error, bias drift and noise as
+    /// `[cell.errors]` switches them.
+    pub fn for_cell(cell: &CellConfig, rng: ChaCha8Rng) -> ForceSensor {
+        let s = &cell.sensor;
+        let e = &cell.errors;
+        let (mass, com) = cell.true_tool_load();
+        ForceSensor {
+            config: s.clone(),
+            sensor_in_flange: cell.true_sensor_in_flange(),
+            tool_mass_kg: mass,
+            tool_com_m: com,
+            gain: if e.sensor_gain {
+                s.gain_error.map(|g| 1.0 + g)
+            } else {
+                [1.0; 6]
+            },
+            drift_per_s: if e.bias_drift {
+                s.bias_drift_per_s
+            } else {
+                [0.0; 6]
+            },
+            noise_sigma: if e.sensor_noise {
+                s.noise_sigma
+            } else {
+                [0.0; 6]
+            },
+            period_s: 1.0 / s.rate_hz,
             next_sample_s: 0.0,
             rng,
         }
@@ -76,8 +122,8 @@ impl ForceSensor {
         world_wrench_in_sensor(contact, at, &sensor)
             + tool_gravity_in_sensor(
                 &sensor.rotation,
-                self.config.tool_mass_kg,
-                &self.config.tool_com_in_sensor_m,
+                self.tool_mass_kg,
+                &self.tool_com_m,
                 self.config.gravity_m_s2,
             )
     }
@@ -95,7 +141,8 @@ impl ForceSensor {
         let mut saturated = false;
         for (i, out) in wrench_sensor.iter_mut().enumerate() {
             let noise: f64 = self.rng.sample(StandardNormal);
-            let value = ideal[i] + self.config.bias[i] + self.config.noise_sigma[i] * noise;
+            let bias = self.config.bias[i] + self.drift_per_s[i] * time_s;
+            let value = self.gain[i] * ideal[i] + bias + self.noise_sigma[i] * noise;
             let range = self.config.range[i];
             if value.abs() > range {
                 saturated = true;
@@ -182,6 +229,39 @@ mod tests {
         let s = sensor.sample(0.0, &down, &huge, &at);
         assert!(s.saturated);
         assert!(s.wrench_sensor[0].abs() <= config.range[0] + 1e-12);
+    }
+
+    #[test]
+    fn gain_error_drift_and_true_mounting_reach_the_reading() {
+        let mut cell = CellConfig::default();
+        cell.sensor.noise_sigma = [0.0; 6];
+        let mut sensor = ForceSensor::for_cell(&cell, ChaCha8Rng::seed_from_u64(1));
+        let down = pose_from_xyz_rpy([1.5, 0.0, 0.0], [std::f64::consts::PI, 0.0, 0.0]);
+        let at = Vector3::new(1.5, 0.0, -0.2);
+        let push = Wrench::new(0.0, 0.0, 1000.0, 0.0, 0.0, 0.0);
+        let unloaded = sensor.sample(0.0, &down, &Wrench::zeros(), &at);
+        let loaded = sensor.sample(0.0, &down, &push, &at);
+        // The contact part of Fz reads (1 + gain) × 1000 N (up to the 0.1° tilt of the mounting).
+        let fz = unloaded.wrench_sensor[2] - loaded.wrench_sensor[2];
+        let expected = 1000.0 * (1.0 + cell.sensor.gain_error[2]);
+        assert!((fz - expected).abs() < 0.01, "{fz} vs {expected}");
+        // The bias drifts linearly in time.
+        let later = sensor.sample(100.0, &down, &Wrench::zeros(), &at);
+        let drift = later.wrench_sensor[2] - unloaded.wrench_sensor[2];
+        assert!((drift - 100.0 * cell.sensor.bias_drift_per_s[2]).abs() < 1e-9);
+        // Every error off: the ideal sensor of the nominal mounting.
+        cell.errors = crate::config::ErrorSources::all(false);
+        let mut ideal = ForceSensor::for_cell(&cell, ChaCha8Rng::seed_from_u64(1));
+        let plain = ForceSensor::new(
+            &cell.sensor,
+            cell.sensor_in_flange(),
+            ChaCha8Rng::seed_from_u64(1),
+        )
+        .ideal_reading(&down, &push, &at);
+        let got = ideal.sample(50.0, &down, &push, &at);
+        for i in 0..6 {
+            assert!((got.wrench_sensor[i] - plain[i] - cell.sensor.bias[i]).abs() < 1e-9);
+        }
     }
 
     #[test]

@@ -16,10 +16,19 @@
 //!
 //! **Force level** (Aerens et al. 2010, steady state):
 //! `Fz = 0.0716 · Rm · t^1.57 · d^0.41 · Δh^0.09 · α · cos α` (Rm in MPa, t and d in mm, Δh the
-//! scallop height in mm from the step-down and the wall angle, α in degrees), reached over the
-//! first millimetres of depth: `F_flow = Fz · (1 − exp(−depth/λ))`. In-plane forces: `ρ_r Fz`
-//! towards the part axis (building up with depth like the wall) and `ρ_f Fz` against the feed
-//! (friction with the mineral-oil lubricant).
+//! scallop height in mm from the step-down and the wall angle, α in degrees). The step-down and
+//! the wall angle are the ones the tool **actually** forms, not the programmed ones: the sheet
+//! remembers, per angular sector, the depth and radius of the tool's last pass, and the
+//! difference with the current pass gives the actual step-down Δz and radial step Δr (smoothed
+//! over about a turn), hence α = atan(Δz/Δr). A robot that deflects more and more
+//! as the force grows forms a shallower wall with smaller steps, at a lower force; a corrected
+//! robot forms the programmed wall, at the programmed force. The level is reached over the first
+//! millimetres of depth and keeps growing with the tool's actual depth, as the paper's forces do
+//! towards the end of the cone ("the closer the tool is to the center of the frustum cone, the
+//! higher the forming forces", Section 4.3, Fig. 18):
+//! `F_flow = Fz(Δz, α) · (1 − exp(−depth/λ)) · (1 + κ (depth − d_ref))`.
+//! In-plane forces: `ρ_r Fz` towards the part axis (building up with depth like the wall) and
+//! `ρ_f Fz` against the feed (friction with the mineral-oil lubricant).
 
 use crate::error::SimError;
 use nalgebra::Vector3;
@@ -57,6 +66,14 @@ pub struct SheetConfig {
     pub radial_step_mm: f64,
     /// Free radius inside the blank holder (mm).
     pub blank_radius_mm: f64,
+    /// Growth of the flow level with the tool's depth, κ (1/mm, 0–0.5): the paper's forces keep
+    /// rising towards the end of the cone (Fig. 18).
+    pub depth_growth_per_mm: f64,
+    /// Depth at which the growth factor is 1, d_ref (mm).
+    pub reference_depth_mm: f64,
+    /// Take the Aerens level at the actual step-down and wall angle of the tool's passes
+    /// (`false`: at the programmed ones).
+    pub actual_geometry: bool,
 }
 
 impl Default for SheetConfig {
@@ -75,6 +92,9 @@ impl Default for SheetConfig {
             sectors: 360,
             radial_step_mm: 0.2,
             blank_radius_mm: 60.0,
+            depth_growth_per_mm: 0.03,
+            reference_depth_mm: 12.0,
+            actual_geometry: true,
         }
     }
 }
@@ -82,34 +102,103 @@ impl Default for SheetConfig {
 impl SheetConfig {
     /// Check ranges.
     pub fn validate(&self) -> Result<(), SimError> {
-        use crate::config::{non_negative, positive};
-        positive("sheet.thickness_mm", self.thickness_mm)?;
-        positive("sheet.rm_mpa", self.rm_mpa)?;
-        positive("sheet.tool_diameter_mm", self.tool_diameter_mm)?;
-        positive("sheet.contact_stiffness_n_mm", self.contact_stiffness_n_mm)?;
-        positive("sheet.buildup_depth_mm", self.buildup_depth_mm)?;
-        positive(
+        use crate::config::bounded;
+        bounded("sheet.thickness_mm", self.thickness_mm, 0.01, 20.0, "mm")?;
+        bounded("sheet.rm_mpa", self.rm_mpa, 1.0, 3000.0, "MPa")?;
+        bounded(
+            "sheet.tool_diameter_mm",
+            self.tool_diameter_mm,
+            1.0,
+            200.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.contact_stiffness_n_mm",
+            self.contact_stiffness_n_mm,
+            1e-2,
+            1e6,
+            "N/mm",
+        )?;
+        bounded(
+            "sheet.buildup_depth_mm",
+            self.buildup_depth_mm,
+            1e-3,
+            1e3,
+            "mm",
+        )?;
+        bounded(
             "sheet.inplane_buildup_depth_mm",
             self.inplane_buildup_depth_mm,
+            1e-3,
+            1e3,
+            "mm",
         )?;
-        non_negative("sheet.radial_ratio", self.radial_ratio)?;
-        non_negative("sheet.feed_ratio", self.feed_ratio)?;
-        positive("sheet.default_step_down_mm", self.default_step_down_mm)?;
-        positive("sheet.radial_step_mm", self.radial_step_mm)?;
-        positive("sheet.blank_radius_mm", self.blank_radius_mm)?;
+        bounded("sheet.radial_ratio", self.radial_ratio, 0.0, 10.0, "")?;
+        bounded("sheet.feed_ratio", self.feed_ratio, 0.0, 10.0, "")?;
+        bounded(
+            "sheet.default_step_down_mm",
+            self.default_step_down_mm,
+            1e-3,
+            50.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.radial_step_mm",
+            self.radial_step_mm,
+            0.01,
+            10.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.blank_radius_mm",
+            self.blank_radius_mm,
+            1.0,
+            2000.0,
+            "mm",
+        )?;
+        bounded(
+            "sheet.depth_growth_per_mm",
+            self.depth_growth_per_mm,
+            0.0,
+            0.5,
+            "1/mm",
+        )?;
+        bounded(
+            "sheet.reference_depth_mm",
+            self.reference_depth_mm,
+            0.0,
+            500.0,
+            "mm",
+        )?;
         if !(self.default_wall_angle_deg > 0.0 && self.default_wall_angle_deg < 90.0) {
             return Err(SimError::config(
                 "sheet.default_wall_angle_deg",
-                "must be within (0, 90)",
+                format!(
+                    "must be within (0, 90), got {}",
+                    self.default_wall_angle_deg
+                ),
             ));
         }
-        if self.sectors < 8 {
-            return Err(SimError::config("sheet.sectors", "at least 8"));
+        if !(8..=3600).contains(&self.sectors) {
+            return Err(SimError::config(
+                "sheet.sectors",
+                format!("must be within 8..3600, got {}", self.sectors),
+            ));
         }
         if self.blank_radius_mm <= self.tool_diameter_mm {
             return Err(SimError::config(
                 "sheet.blank_radius_mm",
                 "must exceed the tool diameter",
+            ));
+        }
+        let cells = self.sectors as f64 * (self.blank_radius_mm / self.radial_step_mm + 1.0);
+        if cells > 4e6 {
+            return Err(SimError::config(
+                "sheet.radial_step_mm",
+                format!(
+                    "the surface state would hold {cells:.0} cells (sectors × blank_radius_mm / \
+                     radial_step_mm); at most 4 million"
+                ),
             ));
         }
         Ok(())
@@ -147,10 +236,34 @@ pub struct Sheet {
     radius: f64,
     top: f64,
     k: f64,
+    /// Aerens level at the programmed step-down and wall angle (N).
     steady_fz: f64,
+    /// Aerens level at the actual step-down and wall angle of the passes so far (N).
+    level_fz: f64,
+    design_step_mm: f64,
+    design_angle_deg: f64,
     /// `sectors × bins` surface heights (m), row-major by sector.
     surface: Vec<f64>,
+    passes: PassMemory,
 }
+
+/// The tool's last pass over each angular sector, and the smoothed actual step-down and radial
+/// step between passes.
+#[derive(Clone, Debug)]
+struct PassMemory {
+    depth_m: Vec<f64>,
+    radius_m: Vec<f64>,
+    visit: Vec<u64>,
+    visits: u64,
+    current: usize,
+    step_m: f64,
+    radial_m: f64,
+    updates: u64,
+}
+
+/// Weight of one sector's new pass in the smoothed steps (about one turn of memory, so that
+/// an in-plane deflection that depends on the direction of the force averages out).
+const PASS_SMOOTHING_SECTORS: f64 = 360.0;
 
 /// What the contact does for a given tool position.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -186,22 +299,107 @@ impl Sheet {
         let radius = config.blank_radius_mm * 1e-3;
         let bins = (radius / dr).ceil() as usize + 1;
         let top = -tool_radius_mm * 1e-3;
+        if !(step_down_mm.is_finite() && step_down_mm > 0.0) {
+            return Err(SimError::Path(format!(
+                "step-down must be positive, got {step_down_mm} mm"
+            )));
+        }
+        let n = config.sectors;
         Ok(Sheet {
             config: config.clone(),
-            sectors: config.sectors,
+            sectors: n,
             bins,
             dr,
             radius: tool_radius_mm * 1e-3,
             top,
             k: config.contact_stiffness_n_mm * 1e3,
             steady_fz,
-            surface: vec![top; config.sectors * bins],
+            level_fz: steady_fz,
+            design_step_mm: step_down_mm,
+            design_angle_deg: wall_angle_deg,
+            surface: vec![top; n * bins],
+            passes: PassMemory {
+                depth_m: vec![0.0; n],
+                radius_m: vec![0.0; n],
+                visit: vec![0; n],
+                visits: 0,
+                current: usize::MAX,
+                step_m: step_down_mm * 1e-3,
+                radial_m: step_down_mm * 1e-3 / wall_angle_deg.to_radians().tan(),
+                updates: 0,
+            },
         })
     }
 
-    /// Steady-state Aerens level (N).
+    /// Steady-state Aerens level at the programmed step-down and wall angle (N).
     pub fn steady_force_n(&self) -> f64 {
         self.steady_fz
+    }
+
+    /// Aerens level at the actual step-down and wall angle of the passes so far (N).
+    pub fn level_force_n(&self) -> f64 {
+        self.level_fz
+    }
+
+    /// Smoothed actual step-down (mm) and wall angle (deg) of the tool's passes.
+    pub fn actual_step_and_angle(&self) -> (f64, f64) {
+        let p = &self.passes;
+        (p.step_m * 1e3, p.step_m.atan2(p.radial_m).to_degrees())
+    }
+
+    /// Record where the tool actually is (R_p, m) in a contact cycle: compare with its last pass
+    /// over this sector and update the actual step-down, wall angle and Aerens level.
+    pub fn observe_pass(&mut self, p: &Vector3<f64>, depth_m: f64) {
+        let s = ((p.y.atan2(p.x).rem_euclid(2.0 * PI) / (2.0 * PI) * self.sectors as f64).round()
+            as usize)
+            % self.sectors;
+        let r = p.x.hypot(p.y);
+        let half_turn = (self.sectors / 2) as u64;
+        let passes = &mut self.passes;
+        if s != passes.current {
+            passes.visits += 1;
+            passes.current = s;
+            if passes.visit[s] > 0 && passes.visits - passes.visit[s] >= half_turn {
+                let step = depth_m - passes.depth_m[s];
+                let radial = passes.radius_m[s] - r;
+                if step.is_finite() && radial.is_finite() {
+                    let w = 1.0 / PASS_SMOOTHING_SECTORS;
+                    passes.step_m += w * (step - passes.step_m);
+                    passes.radial_m += w * (radial - passes.radial_m);
+                    passes.updates += 1;
+                }
+            }
+        }
+        passes.depth_m[s] = depth_m;
+        passes.radius_m[s] = r;
+        passes.visit[s] = passes.visits;
+        if self.config.actual_geometry && passes.updates > 0 {
+            let design_step = self.design_step_mm;
+            let step_mm = (passes.step_m * 1e3).clamp(0.25 * design_step, 2.0 * design_step);
+            let angle = (passes.step_m.max(1e-9))
+                .atan2(passes.radial_m.max(1e-9))
+                .to_degrees()
+                .clamp(10.0, 80.0);
+            let tool_radius_mm = self.config.tool_diameter_mm / 2.0;
+            let dh = scallop_height_mm(tool_radius_mm, step_mm, angle);
+            self.level_fz = aerens_fz(
+                self.config.rm_mpa,
+                self.config.thickness_mm,
+                self.config.tool_diameter_mm,
+                dh,
+                angle,
+            );
+        }
+    }
+
+    /// Programmed wall angle (deg).
+    pub fn design_wall_angle_deg(&self) -> f64 {
+        self.design_angle_deg
+    }
+
+    /// Force against the feed as a fraction of Fz.
+    pub fn feed_ratio(&self) -> f64 {
+        self.config.feed_ratio
     }
 
     /// Tool radius (m).
@@ -214,10 +412,15 @@ impl Sheet {
         self.top
     }
 
-    /// Flow level (N) at a depth (m).
+    /// Flow level (N) at a depth (m): the current Aerens level, built up over the first
+    /// millimetres and growing with depth.
     pub fn flow_force(&self, depth_m: f64) -> f64 {
         let lambda = self.config.buildup_depth_mm * 1e-3;
-        self.steady_fz * (1.0 - (-depth_m.max(0.0) / lambda).exp())
+        let depth = depth_m.max(0.0);
+        let growth = (1.0
+            + self.config.depth_growth_per_mm * (depth * 1e3 - self.config.reference_depth_mm))
+            .max(0.1);
+        self.level_fz * (1.0 - (-depth / lambda).exp()) * growth
     }
 
     fn sector_of(&self, theta: f64) -> (usize, usize, f64) {
@@ -335,61 +538,4 @@ impl Sheet {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn aerens_numbers() {
-        // The paper's cone: Rm 300 MPa, t = 1 mm, d = 15 mm, Δz = 0.24 mm, α = 45°.
-        let dh = scallop_height_mm(7.5, 0.24, 45.0);
-        let s: f64 = 0.24 / 45f64.to_radians().sin();
-        assert!((dh - (7.5 - (56.25 - s * s / 4.0).sqrt())).abs() < 1e-15);
-        assert!((dh - 1.92e-3).abs() < 2e-5, "{dh}");
-        let fz = aerens_fz(300.0, 1.0, 15.0, dh, 45.0);
-        // 0.0716·300·15^0.41·Δh^0.09·45·cos45 by hand: 21.48 · 3.035 · 0.5695 · 31.82 ≈ 1181 N.
-        assert!((fz - 1181.0).abs() < 10.0, "{fz}");
-        assert!((1100.0..1300.0).contains(&fz));
-        // Force grows with thickness and strength, weakly with step-down.
-        assert!(aerens_fz(300.0, 1.2, 15.0, dh, 45.0) > 1.3 * fz);
-        let deeper_steps = aerens_fz(300.0, 1.0, 15.0, scallop_height_mm(7.5, 0.5, 45.0), 45.0);
-        assert!(deeper_steps > fz && deeper_steps < 1.2 * fz);
-    }
-
-    #[test]
-    fn pushing_deeper_raises_the_force() {
-        let sheet = Sheet::new(&SheetConfig::default(), 0.24, 45.0).unwrap();
-        let mut last = 0.0;
-        for k in 1..40 {
-            let z = -0.0002 * k as f64;
-            let mut s = sheet.clone();
-            let p = Vector3::new(0.015, 0.0, z);
-            let c = s.contact(&p);
-            s.form(&p, &c);
-            assert!(
-                c.force_n >= last,
-                "force fell at z = {z}: {} < {last}",
-                c.force_n
-            );
-            last = c.force_n;
-        }
-        assert!(last > 0.9 * sheet.steady_force_n());
-    }
-
-    #[test]
-    fn a_plastic_pass_leaves_the_part_at_the_tool_depth_minus_springback() {
-        let mut sheet = Sheet::new(&SheetConfig::default(), 0.24, 45.0).unwrap();
-        let p = Vector3::new(0.015, 0.0, -0.005);
-        let c = sheet.contact(&p);
-        assert!(sheet.form(&p, &c));
-        let after = sheet.contact(&p);
-        assert!((after.penetration_m - c.force_n / 2.0e6).abs() < 1e-9);
-        let depth = sheet.max_depth_m();
-        assert!(
-            (depth - (0.005 - c.force_n / 2.0e6)).abs() < 1e-6,
-            "{depth}"
-        );
-        // Lifting the tool unloads it elastically.
-        let lifted = sheet.contact(&Vector3::new(0.015, 0.0, -0.0049));
-        assert!(lifted.force_n < c.force_n);
-    }
-}
+mod tests;

@@ -97,6 +97,36 @@ impl Default for PyramidParams {
     }
 }
 
+/// A plunge into a stiff fixture followed by a traverse under load (pressing, a friction-stir
+/// plunge and weld): the second scenario of the twin ([`crate::fixture`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlungeParams {
+    /// Start height of the TCP above the surface contact (mm).
+    pub approach_mm: f64,
+    /// Programmed interference below the surface contact (mm).
+    pub depth_mm: f64,
+    /// Feed of the approach and the plunge (mm/s).
+    pub plunge_feed_mm_s: f64,
+    /// Length of the traverse at depth, along x of R_p (mm).
+    pub traverse_mm: f64,
+    /// Feed of the traverse (mm/s).
+    pub traverse_feed_mm_s: f64,
+}
+
+impl Default for PlungeParams {
+    /// 5 mm approach, 1 mm interference at 0.5 mm/s, 20 mm traverse at 2 mm/s (about 19 s).
+    fn default() -> Self {
+        PlungeParams {
+            approach_mm: 5.0,
+            depth_mm: 1.0,
+            plunge_feed_mm_s: 0.5,
+            traverse_mm: 20.0,
+            traverse_feed_mm_s: 2.0,
+        }
+    }
+}
+
 fn check(field: &str, value: f64) -> Result<(), SimError> {
     if value.is_finite() && value > 0.0 {
         Ok(())
@@ -247,6 +277,38 @@ impl ToolPath {
             waypoints,
             step_down_mm: Some(p.step_down_mm),
             wall_angle_deg: Some(p.wall_angle_deg),
+        })
+    }
+
+    /// A plunge and traverse ([`PlungeParams`]): from `approach_mm` above the contact down to
+    /// `depth_mm` below it, along x for `traverse_mm`, back up.
+    pub fn plunge(p: &PlungeParams) -> Result<ToolPath, SimError> {
+        check("approach_mm", p.approach_mm)?;
+        check("depth_mm", p.depth_mm)?;
+        check("plunge_feed_mm_s", p.plunge_feed_mm_s)?;
+        check("traverse_mm", p.traverse_mm)?;
+        check("traverse_feed_mm_s", p.traverse_feed_mm_s)?;
+        let at = |x: f64, z: f64, feed: Option<f64>| Waypoint {
+            p_mm: [x, 0.0, z],
+            feed_mm_s: feed,
+        };
+        let plunge = Some(p.plunge_feed_mm_s);
+        let x0 = -p.traverse_mm / 2.0;
+        let x1 = p.traverse_mm / 2.0;
+        Ok(ToolPath {
+            name: format!(
+                "plunge {} mm into the fixture, {} mm traverse",
+                p.depth_mm, p.traverse_mm
+            ),
+            waypoints: vec![
+                at(x0, p.approach_mm, None),
+                at(x0, 0.0, plunge),
+                at(x0, -p.depth_mm, plunge),
+                at(x1, -p.depth_mm, Some(p.traverse_feed_mm_s)),
+                at(x1, p.approach_mm, plunge),
+            ],
+            step_down_mm: Some(p.depth_mm),
+            wall_angle_deg: Some(45.0),
         })
     }
 

@@ -163,7 +163,9 @@ fn sensor_reports_bias_and_tool_weight_before_contact() {
             n += 1.0;
         }
     }
-    let mg = config.sensor.tool_mass_kg * config.sensor.gravity_m_s2;
+    // The true tool (nominal mass plus its error) hangs below the sensor.
+    let (mass, _) = config.true_tool_load();
+    let mg = mass * config.sensor.gravity_m_s2;
     // Tool pointing down, sensor z along the tool: the weight pulls along +z of the sensor.
     let fz = sum[2] / n;
     assert!((fz - (mg + config.sensor.bias[2])).abs() < 1.0, "{fz}");
@@ -237,4 +239,55 @@ fn paper_cone_uncorrected_acceptance() {
         "part {}",
         s.final_part_depth_mm
     );
+}
+
+/// The part frame is taught with the robot, so the calibrated robot's residual geometry errors
+/// (≈ 0.1–0.3 mm at the TCP) leave only their variation over the part in the path error.
+#[test]
+fn a_taught_part_frame_absorbs_the_geometry_error_but_not_its_variation() {
+    let path = ToolPath::paper_cone().truncated(400.0);
+    let mut ideal = CellConfig::default();
+    ideal.errors.geometry = false;
+    let with = run_forming(&CellConfig::default(), path.clone(), 1, None).unwrap();
+    let without = run_forming(&ideal, path, 1, None).unwrap();
+    let difference = (with.summary.max_error_norm_mm - without.summary.max_error_norm_mm).abs();
+    assert!(difference < 0.05, "{difference} mm");
+    // The first logged point, before contact: the taught frame leaves microns at most.
+    let first = &with.log.rows[0].truth;
+    assert!((first.true_m - first.desired_m).norm() < 5e-6);
+}
+
+/// The second scenario: a plunge into a stiff fixture. Without correction the contact and the
+/// robot share the programmed interference as springs in series: F = δ / (1/k + C), with C the
+/// robot's vertical compliance at the plunge pose (measured here with a small load on a cell
+/// whose contact is soft enough for the force not to matter).
+#[test]
+fn a_plunge_into_a_stiff_fixture_shares_the_interference_with_the_robot() {
+    use deflex_sim::{PlungeParams, ProcessKind};
+    let path = ToolPath::plunge(&PlungeParams::default()).unwrap();
+    let mut forces = Vec::new();
+    for k in [1e5, 1e6, 1e7] {
+        let mut config = CellConfig::default();
+        config.process.kind = ProcessKind::Fixture;
+        config.process.fixture_stiffness_n_m = k;
+        let run = run_forming(&config, path.clone(), 1, None).unwrap();
+        let s = &run.summary;
+        assert!(
+            s.max_fxy_N < 1e-9,
+            "a press has no in-plane force: {}",
+            s.max_fxy_N
+        );
+        assert!(s.max_fz_N < k * 1e-3, "k {k}: {} N", s.max_fz_N);
+        forces.push((k, s.max_fz_N, s.final_part_depth_mm));
+    }
+    // Robot compliance from the two softest fixtures: 1/F = (1/k + C)/δ.
+    let delta = 1e-3;
+    let c_a = delta / forces[0].1 - 1.0 / forces[0].0;
+    let c_b = delta / forces[1].1 - 1.0 / forces[1].0;
+    assert!(c_a > 0.5e-6 && c_a < 5e-6, "C = {c_a} m/N");
+    assert!((c_b / c_a - 1.0).abs() < 0.15, "{c_a} vs {c_b}");
+    // The stiffest fixture takes almost none of the interference: F ≈ δ/C.
+    let (_, f_stiff, pen) = forces[2];
+    assert!((f_stiff * c_b / delta - 1.0).abs() < 0.2, "{f_stiff} N");
+    assert!(pen < 0.2, "penetration {pen} mm");
 }

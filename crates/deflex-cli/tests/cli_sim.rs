@@ -1,0 +1,481 @@
+//! End-to-end tests of `deflex sim` and `deflex demo` through the real binary: the twin plays
+//! the robot it is given and says so in every output, and bad input (issue 12) gets a clear error
+//! naming the option or field, with nothing written or overwritten.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn deflex(args: &[&str]) -> (bool, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
+        .args(args)
+        .output()
+        .expect("run deflex");
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("deflex-cli-sim-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `args` fail with an error that mentions `needle`, and the output `out` keeps its old content.
+fn refused(args: &[&str], needle: &str, out: &Path) {
+    let (ok, stdout, stderr) = deflex(args);
+    assert!(!ok, "deflex {args:?} should fail; stdout: {stdout}");
+    assert!(
+        stderr.contains(needle),
+        "deflex {args:?}: the error should name {needle:?}: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    if out.is_file() {
+        assert_eq!(
+            std::fs::read_to_string(out).unwrap(),
+            "old",
+            "{} overwritten",
+            out.display()
+        );
+    } else if out.is_dir() {
+        assert_eq!(
+            std::fs::read_to_string(out.join("keep.txt")).unwrap(),
+            "old",
+            "{} replaced",
+            out.display()
+        );
+    }
+}
+
+#[test]
+fn every_numeric_option_of_sim_is_checked() {
+    let dir = scratch("flags");
+    let out = dir.join("run");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "old").unwrap();
+    let o = out.to_str().unwrap();
+    let csv = dir.join("meas.csv");
+    std::fs::write(&csv, "old").unwrap();
+    let c = csv.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str, &Path)> = vec![
+        // Issue 12: a 180 TB allocation before.
+        (
+            vec!["sim", "isf", "--feed-mm-s", "1e-9", "--out", o],
+            "--feed-mm-s",
+            &out,
+        ),
+        (
+            vec!["sim", "isf", "--feed-mm-s", "nan", "--out", o],
+            "--feed-mm-s",
+            &out,
+        ),
+        (
+            vec!["sim", "isf", "--feed-mm-s", "1e300", "--out", o],
+            "--feed-mm-s",
+            &out,
+        ),
+        (
+            vec!["sim", "isf", "--length-mm", "nan", "--out", o],
+            "--length-mm",
+            &out,
+        ),
+        (
+            vec!["sim", "isf", "--length-mm=-5", "--out", o],
+            "--length-mm",
+            &out,
+        ),
+        (
+            vec!["sim", "isf", "--length-mm", "inf", "--out", o],
+            "--length-mm",
+            &out,
+        ),
+        (
+            vec![
+                "sim",
+                "isf",
+                "--path",
+                "plunge",
+                "--fixture-stiffness-n-m",
+                "1e20",
+                "--out",
+                o,
+            ],
+            "--fixture-stiffness-n-m",
+            &out,
+        ),
+        (
+            vec![
+                "sim",
+                "isf",
+                "--path",
+                "plunge",
+                "--fixture-stiffness-n-m",
+                "nan",
+                "--out",
+                o,
+            ],
+            "--fixture-stiffness-n-m",
+            &out,
+        ),
+        (
+            vec!["sim", "isf", "--robot", "no-such-robot", "--out", o],
+            "no-such-robot",
+            &out,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-step-m",
+                "1e-9",
+                "--out",
+                c,
+            ],
+            "--grid-step-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-step-m",
+                "nan",
+                "--out",
+                c,
+            ],
+            "--grid-step-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-loads-n",
+                "nan",
+                "--out",
+                c,
+            ],
+            "--grid-loads-n",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-loads-n",
+                "1e9",
+                "--out",
+                c,
+            ],
+            "grid loads",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-size-m",
+                "0",
+                "--out",
+                c,
+            ],
+            "--grid-size-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-height-m",
+                "inf",
+                "--out",
+                c,
+            ],
+            "--grid-height-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--grid",
+                "--grid-center-m",
+                "1,nan",
+                "--out",
+                c,
+            ],
+            "--grid-center-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--spiral",
+                "--spiral-length-m",
+                "1e9",
+                "--out",
+                c,
+            ],
+            "--spiral-length-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--spiral",
+                "--spiral-speed-m-s",
+                "0",
+                "--out",
+                c,
+            ],
+            "--spiral-speed-m-s",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--spiral",
+                "--spiral-radius-m",
+                "nan",
+                "--out",
+                c,
+            ],
+            "--spiral-radius-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--spiral",
+                "--spiral-load-n=-1",
+                "--out",
+                c,
+            ],
+            "--spiral-load-n",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--spiral",
+                "--spiral-pitch-m",
+                "1e9",
+                "--out",
+                c,
+            ],
+            "--spiral-pitch-m",
+            &csv,
+        ),
+        (
+            vec![
+                "sim",
+                "campaign",
+                "--spiral",
+                "--spiral-center-m",
+                "1,2",
+                "--out",
+                c,
+            ],
+            "--spiral-center-m",
+            &csv,
+        ),
+        (
+            vec!["sim", "campaign", "--grid-step-m", "0.1", "--out", c],
+            "need --grid",
+            &csv,
+        ),
+        (
+            vec!["sim", "sensitivity", "--delays-ms", "nan", "--out", o],
+            "--delays-ms",
+            &out,
+        ),
+        (
+            vec!["sim", "sensitivity", "--delays-ms", "8,1e9", "--out", o],
+            "--delays-ms",
+            &out,
+        ),
+        (
+            vec!["sim", "sensitivity", "--model-scales", "0", "--out", o],
+            "--model-scales",
+            &out,
+        ),
+        (
+            vec![
+                "sim",
+                "sensitivity",
+                "--gain-errors-percent",
+                "500",
+                "--out",
+                o,
+            ],
+            "--gain-errors",
+            &out,
+        ),
+        (
+            vec!["sim", "sensitivity", "--drift-factors=-1", "--out", o],
+            "--drift-factors",
+            &out,
+        ),
+        (
+            vec![
+                "sim",
+                "sensitivity",
+                "--contact-stiffness-n-m",
+                "1",
+                "--out",
+                o,
+            ],
+            "--contact-stiffness-n-m",
+            &out,
+        ),
+        (
+            vec!["sim", "sensitivity", "--threads", "0", "--out", o],
+            "--threads",
+            &out,
+        ),
+        (
+            vec!["sim", "sensitivity", "--length-mm", "nan", "--out", o],
+            "--length-mm",
+            &out,
+        ),
+        (
+            vec!["demo", "--robot", "no-such-robot", "--out", o],
+            "no-such-robot",
+            &out,
+        ),
+    ];
+    for (args, needle, target) in cases {
+        refused(&args, needle, target);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_twin_files_and_gcode_name_the_field_or_line() {
+    let dir = scratch("files");
+    let out = dir.join("run");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "old").unwrap();
+    let o = out.to_str().unwrap();
+    let cases = [
+        ("[cell.controller]\nrate_hz = 1e300\n", "controller.rate_hz"),
+        (
+            "[cell.tracker]\nsamples_per_reading = 1000000000000\n",
+            "samples_per_reading",
+        ),
+        (
+            "[cell.sensor]\nbias = [nan, 0.0, 0.0, 0.0, 0.0, 0.0]\n",
+            "sensor.bias[0]",
+        ),
+        (
+            "[cell.sensor]\nsensor_in_flange_xyz_m = [0.0, 0.0, nan]\n",
+            "sensor.sensor_in_flange_xyz_m[2]",
+        ),
+        (
+            "[cell.tracker]\nposition_m = [2.8, nan, 0.3]\n",
+            "tracker.position_m[1]",
+        ),
+        ("[cell.log]\nrate_hz = 1e12\n", "log.rate_hz"),
+    ];
+    for (i, (text, field)) in cases.iter().enumerate() {
+        let twin = dir.join(format!("twin{i}.toml"));
+        std::fs::write(&twin, text).unwrap();
+        let t = twin.to_str().unwrap();
+        refused(&["sim", "isf", "--config", t, "--out", o], field, &out);
+        refused(
+            &["sim", "campaign", "--spiral", "--config", t, "--out", o],
+            field,
+            &out,
+        );
+    }
+    // Issue 12: a feed of 1e-42 (out of memory after 39 s before), in the decimal form G-code has.
+    let gcode = dir.join("slow.nc");
+    std::fs::write(
+        &gcode,
+        "G21 G90\nG0 X20 Y0 Z1\nG1 Z0 F0.000000000000000000000000000000000000000001\nG1 X0 Y20\n",
+    )
+    .unwrap();
+    let g = gcode.to_str().unwrap();
+    refused(&["sim", "isf", "--path", g, "--out", o], "slow.nc:3", &out);
+    std::fs::write(&gcode, "G21 G90\nG0 X20 Y0 Z1\nG1 Z0 F1e-42\n").unwrap();
+    refused(&["sim", "isf", "--path", g, "--out", o], "slow.nc:3", &out);
+    // A legal but very slow feed: the run (22 000 s) would take longer than the twin's 4 h.
+    std::fs::write(&gcode, "G21 G90\nG0 X20 Y0 Z1\nG1 Z0 F0.6\nG1 X-200 F0.6\n").unwrap();
+    refused(&["sim", "isf", "--path", g, "--out", o], "at most", &out);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_twin_plays_the_robot_it_is_given_and_names_it() {
+    let dir = scratch("robot");
+    let csv = dir.join("grid.csv");
+    let (ok, stdout, stderr) = deflex(&[
+        "sim",
+        "campaign",
+        "--robot",
+        "ur10e",
+        "--grid",
+        "--grid-step-m",
+        "0.1",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("UR10e"), "{stdout}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().take(2).collect();
+    assert!(header[0].starts_with("# SIMULATED"), "{header:?}");
+    assert!(
+        header[1].contains("UR10e") && header[1].contains("fingerprint"),
+        "{header:?}"
+    );
+    // The UR cell's grid: loads sized to its forming force (≈ 0.5 and 0.9 × 170 N), not 600 N.
+    assert!(!text.contains("grid600N"), "the TX200's loads on a UR10e");
+    let out = dir.join("run");
+    let (ok, stdout, stderr) = deflex(&[
+        "--json",
+        "sim",
+        "isf",
+        "--robot",
+        "ur10e",
+        "--length-mm",
+        "40",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["simulated"], true);
+    assert!(v["robot"].as_str().unwrap().contains("UR10e"), "{v}");
+    assert_eq!(v["robot_spec"], "ur10e");
+    let log = std::fs::read_to_string(out.join("log.csv")).unwrap();
+    assert!(log.lines().next().unwrap().contains("UR10e"));
+    // The plunge into a fixture, open loop.
+    let (ok, stdout, stderr) = deflex(&[
+        "sim",
+        "isf",
+        "--path",
+        "plunge",
+        "--fixture-stiffness-n-m",
+        "1e6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("fixture"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

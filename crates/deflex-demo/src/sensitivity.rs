@@ -1,0 +1,483 @@
+//! Sensitivity of the closed loop to what a real cell gets wrong (issue 11, item 5): the
+//! correction's delay, the model's compliance scale, the F/T gain error, the drift of its bias
+//! and the contact stiffness, each varied around the cell's own values with everything else on.
+//!
+//! The runs use the **sensitivity cone**: the paper's cone (Ø40 mm, 45°, 15 mm deep) with a 1 mm
+//! step-down instead of 0.24 mm (≈ 120 s instead of 494 s) and the sheet's strength scaled so
+//! that its Aerens force level equals the paper cone's (the level grows as Δh^0.09 with the
+//! scallop height of the larger step). Each condition is one open-loop and one closed-loop run;
+//! the improvement is that of the maximum path error norm. Runs are independent and seeded, so
+//! they are spread over threads without changing a number.
+
+use crate::twin_controller::{controller_config_for, run_closed_loop};
+use deflex_model::{Axis, EdofSite, Robot};
+use deflex_sim::sheet::{aerens_fz, scallop_height_mm};
+use deflex_sim::{CellConfig, ConeParams, ToolPath};
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// What to vary. Empty lists leave a factor out.
+#[derive(Clone, Debug, Serialize)]
+pub struct SensitivityPlan {
+    /// Correction delays of the robot controller (s), 0–1.
+    pub delays_s: Vec<f64>,
+    /// Compliance scale of the controller's model (1.3 = a model 30 % too soft), 0.1–10.
+    pub model_scales: Vec<f64>,
+    /// F/T gain errors applied to every channel (relative, ±0.5).
+    pub gain_errors: Vec<f64>,
+    /// Bias drift as a multiple of the cell's documented drift, 0–1000.
+    pub drift_factors: Vec<f64>,
+    /// Contact stiffness of the sheet under the tool (N/m), 10⁴–10⁹.
+    pub contact_stiffness_n_m: Vec<f64>,
+    /// Threads (1–64).
+    pub threads: usize,
+    /// Only the first part of the sensitivity cone (mm of travel), for tests.
+    pub length_mm: Option<f64>,
+}
+
+impl SensitivityPlan {
+    /// The full study of `deflex sim sensitivity`: delay 8/20/40/60 ms × model scale
+    /// 0.7/0.85/1/1.15/1.3 as a heatmap, gain −5/0/+5 %, drift 0/1/10×, contact stiffness
+    /// 10⁵/10⁶/10⁷/10⁸ N/m.
+    pub fn full() -> SensitivityPlan {
+        SensitivityPlan {
+            delays_s: vec![0.008, 0.020, 0.040, 0.060],
+            model_scales: vec![0.7, 0.85, 1.0, 1.15, 1.3],
+            gain_errors: vec![-0.05, 0.0, 0.05],
+            drift_factors: vec![0.0, 1.0, 10.0],
+            contact_stiffness_n_m: vec![1e5, 1e6, 1e7, 1e8],
+            threads: 2,
+            length_mm: None,
+        }
+    }
+
+    /// The demo's section: delay 8/30/60 ms × scale 0.7/1/1.3, gain ±5 %, drift 0/10×,
+    /// contact 10⁵/10⁶/10⁸ N/m.
+    pub fn demo() -> SensitivityPlan {
+        SensitivityPlan {
+            delays_s: vec![0.008, 0.030, 0.060],
+            model_scales: vec![0.7, 1.0, 1.3],
+            gain_errors: vec![-0.05, 0.05],
+            drift_factors: vec![0.0, 10.0],
+            contact_stiffness_n_m: vec![1e5, 1e6, 1e8],
+            threads: 2,
+            length_mm: None,
+        }
+    }
+
+    /// Check every value; messages name the option.
+    pub fn validate(&self) -> Result<(), String> {
+        let check = |name: &str, values: &[f64], lo: f64, hi: f64| -> Result<(), String> {
+            if values.len() > 20 {
+                return Err(format!("{name}: at most 20 values, got {}", values.len()));
+            }
+            for v in values {
+                if !(v.is_finite() && *v >= lo && *v <= hi) {
+                    return Err(format!("{name}: {v} is outside {lo}..{hi}"));
+                }
+            }
+            Ok(())
+        };
+        check("--delays-ms (s)", &self.delays_s, 0.0, 1.0)?;
+        check("--model-scales", &self.model_scales, 0.1, 10.0)?;
+        for (name, values) in [
+            ("--delays-ms", &self.delays_s),
+            ("--model-scales", &self.model_scales),
+        ] {
+            if values.windows(2).any(|w| w[1] <= w[0]) {
+                return Err(format!("{name}: give increasing values"));
+            }
+        }
+        check("--gain-errors", &self.gain_errors, -0.5, 0.5)?;
+        check("--drift-factors", &self.drift_factors, 0.0, 1000.0)?;
+        check(
+            "--contact-stiffness-n-m",
+            &self.contact_stiffness_n_m,
+            1e4,
+            1e9,
+        )?;
+        if !(1..=64).contains(&self.threads) {
+            return Err(format!("--threads: 1..64, got {}", self.threads));
+        }
+        if let Some(l) = self.length_mm
+            && !(l.is_finite() && l > 0.0 && l <= 1e5)
+        {
+            return Err(format!("--length-mm: within (0, 100000], got {l}"));
+        }
+        Ok(())
+    }
+}
+
+/// One condition of the study.
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct SensitivityRow {
+    /// Factor varied (`delay`, `model scale`, `gain error`, `bias drift`, `contact stiffness`,
+    /// or `delay × model scale` for the heatmap cells).
+    pub factor: String,
+    /// Condition, human readable (`40 ms, ×1.30`).
+    pub condition: String,
+    /// Max path error norm without correction (mm).
+    pub open_max_mm: f64,
+    /// Max path error norm with correction (mm).
+    pub closed_max_mm: f64,
+    /// RMS path error norm with correction (mm).
+    pub closed_rms_mm: f64,
+    /// `100 (1 − closed/open)` of the max error norm (%).
+    pub improvement_percent: f64,
+    /// Largest contact force norm with correction (N).
+    pub closed_max_force_N: f64,
+    /// Latched controller fault, if any.
+    pub fault: Option<String>,
+}
+
+/// The study's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct SensitivityResult {
+    /// The robot the twin played.
+    pub robot: String,
+    /// Every condition, the heatmap cells first.
+    pub rows: Vec<SensitivityRow>,
+    /// Heatmap axes: delays (s) and model scales, and the improvement (%) per cell, row-major
+    /// with the scale outer.
+    pub heatmap_delays_s: Vec<f64>,
+    /// See `heatmap_delays_s`.
+    pub heatmap_scales: Vec<f64>,
+    /// See `heatmap_delays_s`.
+    pub heatmap_improvement_percent: Vec<f64>,
+    /// Runs made.
+    pub runs: usize,
+}
+
+/// The sensitivity cone for a cell and the cell with its sheet strength scaled so that the
+/// Aerens level of the 1 mm step-down equals that of the paper's 0.24 mm.
+pub fn sensitivity_cone(cell: &CellConfig) -> Result<(ToolPath, CellConfig), String> {
+    let paper = ConeParams::default();
+    let fast = ConeParams {
+        step_down_mm: 1.0,
+        ..ConeParams::default()
+    };
+    let s = &cell.sheet;
+    let r = s.tool_diameter_mm / 2.0;
+    let level = |step: f64| {
+        aerens_fz(
+            s.rm_mpa,
+            s.thickness_mm,
+            s.tool_diameter_mm,
+            scallop_height_mm(r, step, paper.wall_angle_deg),
+            paper.wall_angle_deg,
+        )
+    };
+    let mut scaled = cell.clone();
+    scaled.sheet.rm_mpa *= level(paper.step_down_mm) / level(fast.step_down_mm);
+    let mut path = ToolPath::cone(&fast).map_err(|e| e.to_string())?;
+    path.name = format!("sensitivity cone ({})", path.name);
+    Ok((path, scaled))
+}
+
+/// The model with every compliance multiplied by `scale` (stiffnesses divided by it).
+pub fn scaled_model(model: &Robot, scale: f64) -> Robot {
+    let mut out = model.clone();
+    for axis in Axis::ALL {
+        if let Some(k) = out.base_stiffness.get(axis) {
+            out.base_stiffness.set(axis, Some(k / scale));
+        }
+    }
+    for i in 1..=out.joint_count() {
+        for axis in Axis::ALL {
+            if let Some(k) = out.stiffness(EdofSite::Joint(i), axis) {
+                out.set_stiffness(EdofSite::Joint(i), axis, Some(k / scale));
+            }
+        }
+    }
+    out
+}
+
+/// One run to make: a cell, a model scale, whether closed loop.
+struct Job {
+    factor: String,
+    condition: String,
+    cell: CellConfig,
+    scale: f64,
+}
+
+struct Outcome {
+    max_mm: f64,
+    rms_mm: f64,
+    force_n: f64,
+    fault: Option<String>,
+}
+
+fn run_job(
+    job: &Job,
+    path: &ToolPath,
+    model: &Robot,
+    seed: u64,
+    closed: bool,
+) -> Result<Outcome, String> {
+    if closed {
+        let run = run_closed_loop(
+            &job.cell,
+            path.clone(),
+            seed,
+            scaled_model(model, job.scale),
+            controller_config_for(&job.cell),
+            false,
+            &mut |_| {},
+        )?;
+        let s = &run.forming.summary;
+        Ok(Outcome {
+            max_mm: s.max_error_norm_mm,
+            rms_mm: s.rms_error_norm_mm,
+            force_n: s.max_force_norm_N,
+            fault: run.fault.map(|f| f.to_string()),
+        })
+    } else {
+        let run = deflex_sim::run_forming(&job.cell, path.clone(), seed, None)
+            .map_err(|e| e.to_string())?;
+        let s = &run.summary;
+        Ok(Outcome {
+            max_mm: s.max_error_norm_mm,
+            rms_mm: s.rms_error_norm_mm,
+            force_n: s.max_force_norm_N,
+            fault: None,
+        })
+    }
+}
+
+/// Run the study for `cell` with the controller's (identified) `model`; `progress` receives the
+/// fraction of runs done.
+pub fn run_sensitivity(
+    cell: &CellConfig,
+    model: &Robot,
+    plan: &SensitivityPlan,
+    seed: u64,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<SensitivityResult, String> {
+    plan.validate()?;
+    let (mut path, base) = sensitivity_cone(cell)?;
+    if let Some(l) = plan.length_mm {
+        path = path.truncated(l);
+    }
+    let mut jobs: Vec<Job> = Vec::new();
+    let with = |f: &dyn Fn(&mut CellConfig)| {
+        let mut c = base.clone();
+        f(&mut c);
+        c
+    };
+    for &scale in &plan.model_scales {
+        for &delay in &plan.delays_s {
+            jobs.push(Job {
+                factor: "delay × model scale".into(),
+                condition: format!("{:.0} ms, ×{scale:.2}", delay * 1e3),
+                cell: with(&|c| c.controller.correction_delay_s = delay),
+                scale,
+            });
+        }
+    }
+    for &g in &plan.gain_errors {
+        jobs.push(Job {
+            factor: "gain error".into(),
+            condition: format!("{:+.1} %", g * 100.0),
+            cell: with(&|c| {
+                c.errors.sensor_gain = true;
+                c.sensor.gain_error = [g; 6];
+            }),
+            scale: 1.0,
+        });
+    }
+    for &d in &plan.drift_factors {
+        jobs.push(Job {
+            factor: "bias drift".into(),
+            condition: format!(
+                "×{d} ({:.1} N of Fz over the run)",
+                d * base.sensor.bias_drift_per_s[2]
+                    * path.duration_s(base.controller.rapid_feed_mm_s)
+            ),
+            cell: with(&|c| {
+                c.errors.bias_drift = true;
+                c.sensor.bias_drift_per_s = c.sensor.bias_drift_per_s.map(|v| v * d);
+            }),
+            scale: 1.0,
+        });
+    }
+    for &k in &plan.contact_stiffness_n_m {
+        jobs.push(Job {
+            factor: "contact stiffness".into(),
+            condition: format!("{k:.0e} N/m"),
+            cell: with(&|c| c.sheet.contact_stiffness_n_mm = k * 1e-3),
+            scale: 1.0,
+        });
+    }
+    // Open loop depends on the cell's plant and process only: one run per distinct process.
+    let open_key = |c: &CellConfig| c.sheet.contact_stiffness_n_mm.to_bits();
+    let mut open_cells: Vec<(u64, CellConfig)> = Vec::new();
+    for job in &jobs {
+        if !open_cells.iter().any(|(k, _)| *k == open_key(&job.cell)) {
+            let mut c = job.cell.clone();
+            c.controller = base.controller.clone();
+            c.sensor = base.sensor.clone();
+            c.errors = base.errors.clone();
+            open_cells.push((open_key(&job.cell), c));
+        }
+    }
+    let total = jobs.len() + open_cells.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let work: Vec<(usize, bool)> = (0..open_cells.len())
+        .map(|i| (i, false))
+        .chain((0..jobs.len()).map(|i| (i, true)))
+        .collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results: std::sync::Mutex<Vec<Option<Result<Outcome, String>>>> =
+        std::sync::Mutex::new((0..work.len()).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..plan.threads.min(work.len()).max(1) {
+            scope.spawn(|| {
+                loop {
+                    let w = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(&(i, closed)) = work.get(w) else {
+                        break;
+                    };
+                    let outcome = if closed {
+                        run_job(&jobs[i], &path, model, seed, true)
+                    } else {
+                        let job = Job {
+                            factor: String::new(),
+                            condition: String::new(),
+                            cell: open_cells[i].1.clone(),
+                            scale: 1.0,
+                        };
+                        run_job(&job, &path, model, seed, false)
+                    };
+                    if let Ok(mut r) = results.lock() {
+                        r[w] = Some(outcome);
+                    }
+                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    progress(n as f64 / total as f64);
+                }
+            });
+        }
+    });
+    let results = results
+        .into_inner()
+        .map_err(|_| "a sensitivity run panicked".to_string())?;
+    let mut outcomes = Vec::with_capacity(results.len());
+    for r in results {
+        outcomes.push(r.ok_or("a sensitivity run did not finish")??);
+    }
+    let (open, closed) = outcomes.split_at(open_cells.len());
+    let mut rows = Vec::with_capacity(jobs.len());
+    for (job, c) in jobs.iter().zip(closed) {
+        let o = open_cells
+            .iter()
+            .position(|(k, _)| *k == open_key(&job.cell))
+            .map(|i| &open[i])
+            .ok_or("missing open-loop run")?;
+        rows.push(SensitivityRow {
+            factor: job.factor.clone(),
+            condition: job.condition.clone(),
+            open_max_mm: o.max_mm,
+            closed_max_mm: c.max_mm,
+            closed_rms_mm: c.rms_mm,
+            improvement_percent: 100.0 * (1.0 - c.max_mm / o.max_mm),
+            closed_max_force_N: c.force_n,
+            fault: c.fault.clone(),
+        });
+    }
+    let cells = plan.delays_s.len() * plan.model_scales.len();
+    Ok(SensitivityResult {
+        robot: cell
+            .nominal_robot()
+            .map(|r| r.name)
+            .unwrap_or_else(|_| cell.part.robot.clone()),
+        heatmap_improvement_percent: rows[..cells]
+            .iter()
+            .map(|r| r.improvement_percent)
+            .collect(),
+        heatmap_delays_s: plan.delays_s.clone(),
+        heatmap_scales: plan.model_scales.clone(),
+        rows,
+        runs: total,
+    })
+}
+
+impl SensitivityResult {
+    /// `sensitivity.csv` (SIMULATED).
+    pub fn csv(&self) -> String {
+        let mut s = format!(
+            "# SIMULATED closed-loop sensitivity on the deflex digital twin (sensitivity cone); robot: {}\n\
+             factor,condition,open_max_mm,closed_max_mm,closed_rms_mm,improvement_percent,closed_max_force_N,fault\n",
+            self.robot
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "\"{}\",\"{}\",{:.4},{:.4},{:.4},{:.2},{:.1},\"{}\"",
+                r.factor,
+                r.condition,
+                r.open_max_mm,
+                r.closed_max_mm,
+                r.closed_rms_mm,
+                r.improvement_percent,
+                r.closed_max_force_N,
+                r.fault.clone().unwrap_or_default()
+            );
+        }
+        s
+    }
+
+    /// Rows for a table: factor, condition, open, closed max, improvement, force, fault.
+    pub fn table_rows(&self) -> Vec<Vec<String>> {
+        self.rows
+            .iter()
+            .map(|r| {
+                vec![
+                    r.factor.clone(),
+                    r.condition.clone(),
+                    format!("{:.3}", r.open_max_mm),
+                    format!("{:.3}", r.closed_max_mm),
+                    format!("{:.1}", r.improvement_percent),
+                    format!("{:.0}", r.closed_max_force_N),
+                    r.fault.clone().unwrap_or_else(|| "–".into()),
+                ]
+            })
+            .collect()
+    }
+
+    /// Headers of [`SensitivityResult::table_rows`].
+    pub const HEADERS: [&'static str; 7] = [
+        "factor",
+        "condition",
+        "open max |e| [mm]",
+        "closed max |e| [mm]",
+        "improvement [%]",
+        "closed max |F| [N]",
+        "fault",
+    ];
+
+    /// The delay × model-scale heatmap of the improvement (PNG).
+    pub fn heatmap(&self, path: &std::path::Path) -> Result<(), String> {
+        if self.heatmap_delays_s.len() < 2 || self.heatmap_scales.len() < 2 {
+            return Ok(());
+        }
+        let spec = deflex_report::PlotSpec::new(
+            format!(
+                "SIMULATED {} — improvement of the max path error [%]: delay × model compliance scale",
+                self.robot
+            ),
+            "correction delay [ms]",
+            "model compliance scale (1.3 = 30 % too soft)",
+        )
+        .size(900, 650);
+        let x: Vec<f64> = self.heatmap_delays_s.iter().map(|d| d * 1e3).collect();
+        deflex_report::heatmap(
+            path,
+            &spec,
+            &x,
+            &self.heatmap_scales,
+            &self.heatmap_improvement_percent,
+            "improvement [%]",
+        )
+        .map_err(|e| e.to_string())
+    }
+}
