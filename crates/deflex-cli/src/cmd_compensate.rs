@@ -540,7 +540,7 @@ mod tests {
             part_xyz_mm: None,
             seed_deg: None,
             twin: None,
-            length_mm: Some(150.0),
+            length_mm: Some(400.0),
             position_only: false,
             include_gravity: false,
             tolerance_um: 1.0,

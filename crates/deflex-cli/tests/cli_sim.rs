@@ -437,10 +437,16 @@ fn the_twin_plays_the_robot_it_is_given_and_names_it() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains("UR10e"), "{stdout}");
     let text = std::fs::read_to_string(&csv).unwrap();
-    let header: Vec<&str> = text.lines().take(2).collect();
+    let header: Vec<&str> = text.lines().take(3).collect();
     assert!(header[0].starts_with("# SIMULATED"), "{header:?}");
     assert!(
-        header[1].contains("UR10e") && header[1].contains("fingerprint"),
+        header[1].starts_with("# robot: ") && header[1].contains("UR10e"),
+        "{header:?}"
+    );
+    // The fingerprint of the robot the twin played, its cell's tool included.
+    let fingerprint = header[2].strip_prefix("# geometry: ").unwrap();
+    assert!(
+        fingerprint.len() == 16 && fingerprint.chars().all(|c| c.is_ascii_hexdigit()),
         "{header:?}"
     );
     // The UR cell's grid: loads sized to its forming force (≈ 0.5 and 0.9 × 170 N), not 600 N.

@@ -115,7 +115,7 @@ fn a_deflex_run_log_uses_forward_kinematics_and_skips_flagged_rows() {
                 "{:.3},{},1.0,0.0,0.0,99999.0,0.0,0.0,0.0,12.5,{},taring",
                 0.01 * i as f64 + 0.001,
                 qs.join(","),
-                1u32 << 13
+                1u32 << 21
             );
         }
     }

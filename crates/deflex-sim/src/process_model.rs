@@ -325,7 +325,7 @@ mod tests {
     fn the_equilibrium_holds_at_the_returned_force() {
         // Uncompensated command (x = 0): the returned force equals the sheet's contact force at
         // the tool's predicted position p_cmd + (C w)_p, within the root find's tolerance.
-        let (robot, path, tcp, config) = setup(300.0);
+        let (robot, path, tcp, config) = setup(600.0);
         let mut process = FormingProcess::from_cell(&config, &path).unwrap();
         let mut data = deflex_model::Data::new();
         let q = robot
