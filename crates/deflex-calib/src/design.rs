@@ -107,7 +107,8 @@ pub struct Design {
 impl Design {
     /// Build the design for `candidates` from measurement rows (`require_displacement`) or plan
     /// rows (observations taken as zero, for information/Fisher computations). Only the robot's
-    /// geometry is used; its stiffnesses and centre shifts are ignored (shifts are parameters).
+    /// geometry (and base pivot) is used; its stiffnesses and centre shifts are ignored (shifts
+    /// are parameters).
     /// FK is computed once per distinct joint configuration.
     pub fn build(
         robot: &Robot,
@@ -183,7 +184,12 @@ impl Design {
                 let frame = data.link_frame(site.link_index());
                 let rot = frame.rotation.matrix();
                 let v: Vector3<f64> = rot.column(axis.index()).into_owned();
-                let o = frame.translation.vector;
+                // A joint's centre shift is a parameter (the basis below); the base tilts about
+                // the robot's pivot.
+                let o = match site {
+                    EdofSite::Base => data.edof_axis_center(robot, site, axis).1,
+                    EdofSite::Joint(_) => frame.translation.vector,
+                };
                 let l0 = v.cross(&(p - o));
                 let t0 = v.cross(&(a - o)).dot(&f) + v.dot(&m);
                 let a0 = l0 * t0;

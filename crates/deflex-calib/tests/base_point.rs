@@ -72,3 +72,45 @@ fn base_point_separates_tilt_from_joint_one() {
         );
     }
 }
+
+/// The design tilts the base about the robot's pivot: nearly noise-free data of a robot whose baseplate
+/// tilts about the floor (0.642 m below R0, written by the model's `point_displacement`) give
+/// back its base stiffness exactly when the start model knows the pivot, and a biased one when
+/// it assumes R0.
+#[test]
+fn the_base_tilts_about_the_robots_pivot_in_the_fit() {
+    use deflex_calib::fit::{Structure, calibrate_fixed};
+    let mut truth = builtin("tx200").unwrap();
+    truth.base_pivot = nalgebra::Vector3::new(0.0, 0.0, -0.642);
+    truth.set_stiffness(EdofSite::Base, Axis::X, Some(8.0e6));
+    truth.set_stiffness(EdofSite::Base, Axis::Y, Some(4.5e6));
+    let plan = plan_experiments(
+        &truth,
+        &PlanOptions {
+            max_force_n: 1400.0,
+            load_cases: 24,
+            ..PlanOptions::default()
+        },
+    )
+    .unwrap();
+    // Noise far below anything the tilt's bias could hide (1 nm).
+    let noise_free = SyntheticOptions {
+        noise_sigma_m: 1e-9,
+        ..SyntheticOptions::default()
+    };
+    let rows = measure(&truth, &plan.rows, &noise_free).unwrap();
+    let structure = Structure::from_robot(&truth);
+    let relative_error = |start: &Robot| {
+        let calibration = calibrate_fixed(start, &rows, &structure).unwrap();
+        let fitted = calibration.to_robot(start);
+        let k = fitted.stiffness(EdofSite::Base, Axis::Y).unwrap();
+        k / 4.5e6 - 1.0
+    };
+    let knows = relative_error(&truth);
+    let mut at_r0 = truth.clone();
+    at_r0.base_pivot = nalgebra::Vector3::zeros();
+    let assumes_r0 = relative_error(&at_r0);
+    eprintln!("base.y: pivot known {knows:+.2e}, pivot at R0 {assumes_r0:+.2e}");
+    assert!(knows.abs() < 1e-6, "{knows}");
+    assert!(assumes_r0.abs() > 1e-3, "{assumes_r0}");
+}

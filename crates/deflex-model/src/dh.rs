@@ -73,7 +73,8 @@ pub fn dh_placements(convention: DhConvention, rows: &[DhParams]) -> (Vec<Pose>,
 
 impl Robot {
     /// Rebuild the joint placements and the flange from the joints' DH rows (after a geometric
-    /// calibration changed them). Does nothing for a robot whose geometry is not a DH table.
+    /// calibration changed them), and the link frames in which centres of mass are written.
+    /// Does nothing for a robot whose geometry is not a DH table.
     pub fn rebuild_dh_geometry(&mut self) {
         let Some(convention) = self.dh_convention else {
             return;
@@ -84,8 +85,13 @@ impl Robot {
             .map(|j| j.dh.unwrap_or_default())
             .collect();
         let (placements, flange) = dh_placements(convention, &rows);
-        for (joint, placement) in self.joints.iter_mut().zip(placements) {
+        for ((joint, placement), row) in self.joints.iter_mut().zip(placements).zip(&rows) {
             joint.placement = placement;
+            // Centres of mass stay put in R_i; the frame the file writes them in follows the row.
+            joint.link_frame = match convention {
+                DhConvention::Modified => Pose::identity(),
+                DhConvention::Standard => standard_dh_link(row),
+            };
         }
         self.flange = flange * self.flange_offset;
     }

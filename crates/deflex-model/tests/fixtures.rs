@@ -99,9 +99,11 @@ fn edof_columns_match_perturbed_chain() {
         // Rebuild the TCP with a small rotation h about the eDoF axis through its centre.
         let mut frame = robot.base;
         if edof.site == EdofSite::Base {
+            // About the base pivot (0.642 m below R0 on the TX200).
+            let pivot = translation_pose(robot.base_pivot);
             let mut axis = Vector3::zeros();
             axis[edof.axis.index()] = 1.0;
-            frame *= rotation_pose(axis * h);
+            frame = frame * pivot * rotation_pose(axis * h) * pivot.inverse();
         }
         for (i, joint) in robot.joints.iter().enumerate() {
             frame =
@@ -113,7 +115,7 @@ fn edof_columns_match_perturbed_chain() {
                 frame = frame * shift * rotation_pose(axis * h) * shift.inverse();
             }
         }
-        let tcp = frame * robot.tool;
+        let tcp = frame * robot.flange * robot.tool;
         let dp = (tcp.translation.vector - data.tcp.translation.vector) / h;
         let dr =
             deflex_model::spatial::rotation_log(&(tcp.rotation * data.tcp.rotation.inverse())) / h;

@@ -613,3 +613,18 @@ fn the_base_tilts_about_its_pivot() {
     // 0.942 m lever instead of 0.3 m: about 10× the deflection a tilt about R0 would give.
     assert!(expected.y > 1e-4);
 }
+
+#[test]
+fn rebuilding_the_dh_geometry_keeps_centres_of_mass_where_they_are() {
+    // Change a standard-DH row (as calibration does), rebuild, write and read back: the centre
+    // of mass in R_i (what gravity uses) must survive the round trip.
+    let mut robot = builtin("ur10").unwrap();
+    robot.joints[1].dh.as_mut().unwrap().a += 0.003;
+    robot.joints[1].dh.as_mut().unwrap().alpha += 0.002;
+    robot.rebuild_dh_geometry();
+    let again = robot_from_toml_str(&robot_to_toml(&robot), "again", None).unwrap();
+    for (a, b) in robot.joints.iter().zip(&again.joints) {
+        let (a, b) = (a.inertia.unwrap(), b.inertia.unwrap());
+        assert!((a.com - b.com).norm() < 1e-12, "{} vs {}", a.com, b.com);
+    }
+}
