@@ -140,7 +140,7 @@ pre{background:#f6f8fa;padding:.8em;overflow-x:auto;font-size:.9em}\
 footer{margin-top:3em;font-size:.8em;color:#888}\
 h3{font-size:1.12em;margin-top:1.4em}\
 nav.contents{background:#f6f8fa;border:1px solid #e1e4e8;padding:.6em 1.2em;margin:1em 0}\
-nav.contents ol{margin:.3em 0;padding-left:1.6em}nav.contents a,ul.files a{color:#1f5f99}\
+nav.contents ul{list-style:none;margin:.2em 0;padding-left:1.2em}nav.contents a,ul.files a{color:#1f5f99}\
 ul.files code{font-size:.95em}";
 
 impl HtmlReport {
@@ -276,7 +276,7 @@ impl HtmlReport {
 }
 
 fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
-    h.push_str("<nav class=\"contents\"><strong>Contents</strong>\n<ol>\n");
+    h.push_str("<nav class=\"contents\"><strong>Contents</strong>\n<ul>\n");
     let mut ids = ids.iter();
     let mut open_sub = false;
     let mut any_section = false;
@@ -285,7 +285,7 @@ fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
             Block::Section(t) => {
                 let id = ids.next().map(String::as_str).unwrap_or_default();
                 if open_sub {
-                    h.push_str("</ol>");
+                    h.push_str("</ul>");
                     open_sub = false;
                 }
                 if any_section {
@@ -297,7 +297,7 @@ fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
             Block::Subsection(t) => {
                 let id = ids.next().map(String::as_str).unwrap_or_default();
                 if !open_sub {
-                    h.push_str("<ol>");
+                    h.push_str("<ul>");
                     open_sub = true;
                 }
                 let _ = write!(h, "<li><a href=\"#{id}\">{}</a></li>", html_escape(t));
@@ -306,12 +306,12 @@ fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
         }
     }
     if open_sub {
-        h.push_str("</ol>");
+        h.push_str("</ul>");
     }
     if any_section {
         h.push_str("</li>\n");
     }
-    h.push_str("</ol></nav>\n");
+    h.push_str("</ul></nav>\n");
 }
 
 fn render_files(h: &mut String, links: &[FileLink]) -> Result<(), ReportError> {
