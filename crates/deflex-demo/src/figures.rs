@@ -347,7 +347,9 @@ pub(crate) fn controller_figures(out: &Path, trace: &[CycleOutput]) -> Result<Ve
         return Ok(figures);
     }
     let t: Vec<f64> = trace.iter().map(|c| c.time_s).collect();
-    let (t0, t1) = (t[0], t[t.len() - 1]);
+    // 1 % of margin on the left, so that what happens in the first cycles (taring, the ramp
+    // in) is not hidden under the axis.
+    let (t0, t1) = (t[0] - 0.01 * (t[t.len() - 1] - t[0]), t[t.len() - 1]);
     let component =
         |k: usize, scale: f64| -> Vec<f64> { trace.iter().map(|c| c.xi[k] * scale).collect() };
     let mut panels = vec![(
