@@ -2,7 +2,9 @@
 //! identified stiffnesses and centre shifts (one unit per column: N·m/rad for stiffnesses, mm
 //! for δr), the residual summary with the χ²/dof note, and plots: residuals per load case,
 //! predicted versus measured displacement per axis (mm), and the parameter correlation as a
-//! heatmap; the tables as CSV beside the page (`residuals.csv` in SI units).
+//! heatmap; the tables as CSV beside the page (`residuals.csv` in SI units), listed with links
+//! under a contents list. Data a file's header calls SIMULATED (a `deflex sim campaign`) is
+//! labelled so on the page, in every plot title and in `residuals.csv`.
 //!
 //! The caller gives the folder; `deflex calibrate` builds it aside (`deflex_files::AtomicDir`)
 //! so a failure leaves no half-written report.
@@ -16,11 +18,14 @@ use crate::report::{
 };
 use crate::search::SearchStep;
 use deflex_model::Robot;
-use deflex_report::{HtmlReport, PlotSpec, Series, SeriesStyle, heatmap, line_plot, parity_plot};
+use deflex_report::{
+    FileLink, HtmlReport, PlotSpec, Series, SeriesStyle, heatmap, line_plot, parity_plot,
+};
 use std::path::{Path, PathBuf};
 
-/// Longest plot title (characters): short enough to be drawn at the full title size on the
-/// report's 600–900 px images, never shrunk.
+/// Longest plot title (characters), with the `SIMULATED — ` prefix of simulated data: short
+/// enough to be drawn on one line at the full title size on the report's 600–900 px images
+/// (deflex-report would wrap a longer one, never shrink it below its minimum).
 pub const MAX_TITLE_CHARS: usize = 40;
 
 /// What the report shows.
@@ -43,6 +48,19 @@ pub struct CalibrationReport<'a> {
     pub rows: &'a [MeasurementRow],
     /// Warnings to show (file checks, calibration warnings).
     pub warnings: &'a [String],
+    /// The measurement file's header comments ([`crate::data::FileHeader::notes`]); a note
+    /// containing `SIMULATED` marks the whole report as simulated.
+    pub data_notes: &'a [String],
+}
+
+impl CalibrationReport<'_> {
+    /// The header note that says the data is simulated, if any.
+    pub fn simulated_note(&self) -> Option<&str> {
+        self.data_notes
+            .iter()
+            .find(|n| n.contains("SIMULATED"))
+            .map(String::as_str)
+    }
 }
 
 fn report_err(e: deflex_report::ReportError) -> CalibError {
@@ -54,10 +72,36 @@ fn write_text(path: &Path, text: &str) -> Result<(), CalibError> {
         .map_err(|e| CalibError::Invalid(format!("{}: {e}", path.display())))
 }
 
-fn spec(title: &str, x: &str, y: &str) -> PlotSpec {
+/// A plot's spec, its title prefixed with `SIMULATED — ` for simulated data.
+fn spec(simulated: bool, title: &str, x: &str, y: &str) -> PlotSpec {
+    let title = if simulated {
+        format!("SIMULATED — {title}")
+    } else {
+        title.to_string()
+    };
     debug_assert!(title.chars().count() <= MAX_TITLE_CHARS, "{title}");
     PlotSpec::new(title, x, y)
 }
+
+/// What each file of the report holds.
+const FILES: [(&str, &str); 4] = [
+    (
+        "iterations.csv",
+        "the structure search step by step (the table above)",
+    ),
+    (
+        "stiffness.csv",
+        "identified stiffnesses with standard errors and 95 % intervals (N·m/rad)",
+    ),
+    (
+        "shifts.csv",
+        "identified centre shifts δr with standard errors and 95 % intervals (mm)",
+    ),
+    (
+        "residuals.csv",
+        "per measured row: measured, predicted and residual displacement, world axes (m)",
+    ),
+];
 
 /// Residuals (measured − predicted by the calibrated model) per row, in metres.
 pub fn residuals(model: &Robot, rows: &[MeasurementRow]) -> Result<Vec<[f64; 3]>, CalibError> {
@@ -78,6 +122,8 @@ pub fn write_calibration_report(
     report: &CalibrationReport,
 ) -> Result<Vec<PathBuf>, CalibError> {
     let cal = report.calibration;
+    let simulated = report.simulated_note();
+    let sim = simulated.is_some();
     let mut files = Vec::new();
     let it_rows = iteration_rows(report.steps);
     let st_rows = stiffness_rows(cal);
@@ -93,7 +139,11 @@ pub fn write_calibration_report(
     }
     let predicted = crate::validate::predict(report.model, report.rows)?;
     let residual = residuals(report.model, report.rows)?;
-    let mut csv = String::from(
+    let mut csv = String::new();
+    if let Some(note) = simulated {
+        csv.push_str(&format!("# data: {note}\n"));
+    }
+    csv.push_str(
         "load_case,point,point_link,dx_m,dy_m,dz_m,pred_dx_m,pred_dy_m,pred_dz_m,res_dx_m,res_dy_m,res_dz_m\n",
     );
     for ((r, p), e) in report.rows.iter().zip(&predicted).zip(&residual) {
@@ -118,14 +168,26 @@ pub fn write_calibration_report(
     write_text(&path, &csv)?;
     files.push(path);
 
-    let mut html = HtmlReport::new(format!("Calibration of {}", report.start_name));
+    let mut html = HtmlReport::new(format!(
+        "Calibration of {}{}",
+        report.start_name,
+        if sim { " (SIMULATED data)" } else { "" }
+    ));
+    if let Some(note) = simulated {
+        html.note(format!(
+            "SIMULATED: the measurement file says \"{note}\". Every displacement, residual and \
+             plot on this page comes from the digital twin, not from a robot."
+        ));
+    }
     html.paragraph(format!(
-        "Data: {} ({} rows). Structure: {}. Output model: {}. Tables beside this page: iterations.csv, stiffness.csv, shifts.csv, residuals.csv (SI units).",
+        "Data: {} ({} rows). Structure: {}. Output model: {}. The tables are also beside this \
+         page as CSV (listed under \"Files\").",
         report.data_name,
         cal.rows,
         cal.structure.label(),
         report.output_name
     ));
+    html.contents();
     if let Some(note) = cal.model_form_note() {
         html.note(note);
     }
@@ -184,6 +246,7 @@ pub fn write_calibration_report(
     line_plot(
         &path,
         &spec(
+            sim,
             "Residual per load case",
             "load case # (order of residuals.csv)",
             "|measured − predicted| [mm]",
@@ -192,9 +255,20 @@ pub fn write_calibration_report(
         &series,
     )
     .map_err(report_err)?;
+    let caption = |text: String| {
+        if sim {
+            format!("{text} (SIMULATED)")
+        } else {
+            text
+        }
+    };
     html.image(
         &path,
-        "Norm of the residual (measured − predicted displacement) of every measured point, per load case",
+        caption(
+            "Norm of the residual (measured − predicted displacement) of every measured point, \
+             per load case"
+                .into(),
+        ),
     );
     files.push(path);
 
@@ -210,6 +284,7 @@ pub fn write_calibration_report(
         parity_plot(
             &path,
             &spec(
+                sim,
                 &format!("δp{name}: predicted vs measured"),
                 &format!("measured δp{name} [mm]"),
                 &format!("predicted δp{name} [mm]"),
@@ -222,7 +297,9 @@ pub fn write_calibration_report(
         .map_err(report_err)?;
         html.image(
             &path,
-            format!("Displacement along world {name}: calibrated model against the tracker"),
+            caption(format!(
+                "Displacement along world {name}: calibrated model against the tracker"
+            )),
         );
         files.push(path);
     }
@@ -241,6 +318,7 @@ pub fn write_calibration_report(
         heatmap(
             &path,
             &spec(
+                sim,
                 "Parameter correlation",
                 "parameter # (list below)",
                 "parameter #",
@@ -253,7 +331,10 @@ pub fn write_calibration_report(
             "correlation [-]",
         )
         .map_err(report_err)?;
-        html.image(&path, "Correlation of the fitted parameters (−1 … +1)");
+        html.image(
+            &path,
+            caption("Correlation of the fitted parameters (−1 … +1)".into()),
+        );
         files.push(path);
         html.paragraph(
             cal.parameter_labels
@@ -268,6 +349,17 @@ pub fn write_calibration_report(
     for w in &cal.warnings {
         html.note(w.clone());
     }
+    html.section("Files");
+    html.paragraph(format!(
+        "Beside this page{}:",
+        if sim { " (SIMULATED data)" } else { "" }
+    ));
+    html.files(
+        &FILES
+            .iter()
+            .map(|(name, what)| FileLink::new(*name, *what))
+            .collect::<Vec<_>>(),
+    );
     let page = dir.join("calibration.html");
     html.write(&page).map_err(report_err)?;
     files.push(page);

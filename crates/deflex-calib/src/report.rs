@@ -67,8 +67,8 @@ pub const STIFFNESS_HEADERS: [&str; 6] = [
     "eDoF",
     "k [N·m/rad]",
     "SE [N·m/rad]",
-    "95% low",
-    "95% high",
+    "95% low [N·m/rad]",
+    "95% high [N·m/rad]",
     "status",
 ];
 
@@ -324,8 +324,8 @@ pub const TECHNICIAN_HEADERS: [&str; 6] =
 pub const EXPECTED_SE_HEADERS: [&str; 5] = [
     "eDoF",
     "nominal k [N·m/rad]",
-    "expected SE",
-    "SE [%]",
+    "expected SE [N·m/rad]",
+    "expected SE [%]",
     "axis-by-axis case",
 ];
 
@@ -389,13 +389,13 @@ fn stat_cells(
 pub const VALIDATION_HEADERS: [&str; 9] = [
     "model",
     "RMS x [mm]",
-    "RMS y",
-    "RMS z",
-    "RMS norm",
-    "max x",
-    "max y",
-    "max z",
-    "max norm",
+    "RMS y [mm]",
+    "RMS z [mm]",
+    "RMS norm [mm]",
+    "max x [mm]",
+    "max y [mm]",
+    "max z [mm]",
+    "max norm [mm]",
 ];
 
 /// Rotation validation errors as table rows (µrad), one per model; empty when no row has a
@@ -423,13 +423,13 @@ pub const VALIDATION_ROTATION_HEADERS: [&str; 10] = [
     "model",
     "rows",
     "rot RMS x [µrad]",
-    "RMS y",
-    "RMS z",
-    "RMS norm",
-    "max x",
-    "max y",
-    "max z",
-    "max norm",
+    "RMS y [µrad]",
+    "RMS z [µrad]",
+    "RMS norm [µrad]",
+    "max x [µrad]",
+    "max y [µrad]",
+    "max z [µrad]",
+    "max norm [µrad]",
 ];
 
 /// One line per model with the rotation prediction errors, `None` when no row has a measured

@@ -90,6 +90,7 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
         stop_reason: None,
         rows: &rows,
         warnings: &["a file warning".to_string()],
+        data_notes: &[],
     };
     let files = write_calibration_report(&dir, &report).unwrap();
     for name in [
@@ -116,5 +117,41 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
     let csv = std::fs::read_to_string(dir.join("residuals.csv")).unwrap();
     assert!(csv.starts_with("load_case,point,point_link,dx_m"));
     assert_eq!(csv.lines().count(), rows.len() + 1);
+    // A contents list and a link to every CSV written beside the page; real data is not
+    // called simulated.
+    assert!(html.contains("<nav class=\"contents\">"));
+    for csv in files
+        .iter()
+        .filter(|f| f.extension().is_some_and(|e| e == "csv"))
+    {
+        let name = csv.file_name().unwrap().to_string_lossy();
+        assert!(
+            html.contains(&format!("<a href=\"{name}\">")),
+            "{name} not linked"
+        );
+    }
+    assert!(!html.contains("SIMULATED"));
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // The same data said to be simulated by its file header: labelled on the page, in the
+    // plot captions and in residuals.csv.
+    let dir = std::env::temp_dir().join(format!("deflex-calib-report-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let notes = [
+        "SIMULATED deflex digital-twin campaign (calibration campaign) of `tx200`, seed 1: not a \
+         measurement"
+            .to_string(),
+    ];
+    let simulated = CalibrationReport {
+        data_notes: &notes,
+        ..report
+    };
+    assert!(simulated.simulated_note().is_some());
+    write_calibration_report(&dir, &simulated).unwrap();
+    let html = std::fs::read_to_string(dir.join("calibration.html")).unwrap();
+    assert!(html.contains("(SIMULATED data)") && html.contains("not a measurement"));
+    assert_eq!(html.matches("(SIMULATED)</figcaption>").count(), 5);
+    let csv = std::fs::read_to_string(dir.join("residuals.csv")).unwrap();
+    assert!(csv.starts_with("# data: SIMULATED"));
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -152,21 +152,24 @@ fn calibration_json(cal: &Calibration) -> Value {
     })
 }
 
+/// A measurement file read and checked against the robot's forward kinematics.
+struct CheckedFile {
+    rows: Vec<deflex_calib::MeasurementRow>,
+    check: GeometryCheck,
+    /// Warnings to print.
+    warnings: Vec<String>,
+    /// The file's header comments (a `SIMULATED` note marks simulated data).
+    notes: Vec<String>,
+}
+
 /// Read a measurement file for `robot` and check its coordinates against the robot's forward
-/// kinematics; the warnings to print, or the refusal.
+/// kinematics (or refuse it).
 fn read_checked(
     robot: &Robot,
     data: &Path,
     tolerance_mm: f64,
     ignore: bool,
-) -> Result<
-    (
-        Vec<deflex_calib::MeasurementRow>,
-        GeometryCheck,
-        Vec<String>,
-    ),
-    String,
-> {
+) -> Result<CheckedFile, String> {
     if !(tolerance_mm.is_finite()
         && (MIN_FK_TOLERANCE_M * 1e3..=MAX_FK_TOLERANCE_M * 1e3).contains(&tolerance_mm))
     {
@@ -192,7 +195,12 @@ fn read_checked(
         "Is this the robot the file was measured on? Widen the tolerance with --fk-tolerance-mm, or use the file anyway with --ignore-fk-check.",
     )
     .map_err(|e| e.to_string())?;
-    Ok((file.rows, check, warnings))
+    Ok(CheckedFile {
+        rows: file.rows,
+        check,
+        warnings,
+        notes: file.header.notes,
+    })
 }
 
 fn geometry_json(check: &GeometryCheck) -> Value {
@@ -237,7 +245,12 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
         return Err(format!("--folds: expected 2 to 100, got {}", args.folds));
     }
     let start = robot(&args.robot)?;
-    let (rows, check, mut warnings) = read_checked(
+    let CheckedFile {
+        rows,
+        check,
+        mut warnings,
+        notes: data_notes,
+    } = read_checked(
         &start,
         &args.data,
         args.fk_tolerance_mm,
@@ -331,6 +344,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
             stop_reason: stop.as_deref(),
             rows: &rows,
             warnings: &warnings,
+            data_notes: &data_notes,
         };
         write_calibration_report(folder.path(), &report).map_err(|e| e.to_string())?;
         folder.commit().map_err(io(dir))?;
@@ -396,7 +410,12 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
 pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
     let model = robot(&args.robot)?;
     let baseline = args.baseline.as_deref().map(robot).transpose()?;
-    let (rows, check, warnings) = read_checked(
+    let CheckedFile {
+        rows,
+        check,
+        warnings,
+        ..
+    } = read_checked(
         &model,
         &args.data,
         args.fk_tolerance_mm,

@@ -1,18 +1,31 @@
 //! The study's figures, after the paper's: validation heatmaps and parity plots (Figs. 10–13),
-//! the spiral (Fig. 14) and the forming comparisons (Figs. 17, A1, 18, 19). Every title says
+//! the spiral (Fig. 14), the forming comparisons (Figs. 17, A1, 18, 19), the programmed versus
+//! formed profile and the controller's correction and state over time. Every title says
 //! SIMULATED.
 
 use crate::study::{BASELINE, IDENTIFIED};
 use deflex_calib::MeasurementRow;
+use deflex_control::{CycleOutput, FaultKind, Flags};
 use deflex_report::{
-    Cloud3, PanelLayout, Plot3Spec, PlotSpec, Series, cloud_3d, line_plot, panels_plot,
-    parity_plot, scatter_heatmap,
+    Cloud3, Lane, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotSpec, Series, cloud_3d,
+    line_plot, panels_plot, parity_plot, scatter_heatmap, timeline_plot,
 };
 use deflex_sim::FormingRun;
+use deflex_sim::plots::{force_panels, profile_panels};
 use std::path::{Path, PathBuf};
 
 /// A figure file and its caption.
 pub(crate) type Figure = (PathBuf, String);
+
+/// Width (px) of the full-width figures: shown at about their own size on the page.
+pub(crate) const FULL_WIDTH_PX: u32 = deflex_sim::plots::FULL_WIDTH_PX;
+
+/// Colour and stroke of the x, y, z components of a vector quantity, the same on every figure.
+const AXES: [(&str, usize, LineStyle); 3] = [
+    ("x", 0, LineStyle::Solid),
+    ("y", 1, LineStyle::Dashed),
+    ("z", 2, LineStyle::Dotted),
+];
 
 fn draw(result: Result<(), deflex_report::ReportError>) -> Result<(), String> {
     result.map_err(|e| e.to_string())
@@ -232,7 +245,8 @@ pub(crate) fn forming_figures(
                 })
                 .collect();
             (
-                PlotSpec::new(format!("deviation {axis}"), "time [s]", "[mm]").size(1100, 300),
+                PlotSpec::new(format!("deviation {axis}"), "time [s]", "deviation [mm]")
+                    .size(FULL_WIDTH_PX, 300),
                 series,
             )
         })
@@ -249,48 +263,19 @@ pub(crate) fn forming_figures(
         "Deviation per axis and in norm along the path (SIMULATED)".to_string(),
     ));
 
-    let force_names = ["F_x", "F_y", "F_z"];
-    let mut panels: Vec<(PlotSpec, Vec<Series>)> = runs
-        .iter()
-        .map(|(label, run)| {
-            let t = run.log.column(|r| r.time_s);
-            let series = force_names
-                .iter()
-                .enumerate()
-                .map(|(k, name)| {
-                    Series::line(*name, t.clone(), run.log.column(move |r| r.truth.wrench[k]))
-                })
-                .collect();
-            (
-                PlotSpec::new(format!("contact force, {label}"), "time [s]", "force [N]")
-                    .size(700, 420),
-                series,
-            )
-        })
-        .collect();
-    // Both runs' F_z on one axis: the correction pushes deeper, so the force builds up sooner.
-    panels.push((
-        PlotSpec::new("F_z without and with correction", "time [s]", "force [N]").size(700, 420),
-        runs.iter()
-            .map(|(label, run)| {
-                Series::line(
-                    format!("F_z, {label}"),
-                    run.log.column(|r| r.time_s),
-                    run.log.column(|r| r.truth.wrench[2]),
-                )
-            })
-            .collect(),
-    ));
     let path = out.join("forming_forces.png");
     draw(panels_plot(
         &path,
-        "SIMULATED cell — contact force at the TCP, part axes (cf. Fig. 18)",
-        PanelLayout::Row,
-        &panels,
+        "SIMULATED cell — contact force on the tool at the TCP, part axes (cf. Fig. 18)",
+        PanelLayout::Column,
+        &force_panels(&runs),
     ))?;
     figures.push((
         path,
-        "Contact forces without and with correction (SIMULATED)".to_string(),
+        "Contact forces without and with correction (SIMULATED), every panel on the same force \
+         scale: each run whole, then the last seconds of each run, where F_x (solid) and F_y \
+         (dashed), a quarter turn apart, follow the tool around the cone; last, F_z of both runs"
+            .to_string(),
     ));
 
     let series: Vec<Series> = runs
@@ -318,6 +303,150 @@ pub(crate) fn forming_figures(
     figures.push((
         path,
         "Deviation norm as a function of the force norm (SIMULATED)".to_string(),
+    ));
+
+    let panels = profile_panels(&runs);
+    if !panels.is_empty() {
+        let path = out.join("forming_profile.png");
+        draw(panels_plot(
+            &path,
+            "SIMULATED cell — the part's cross-section: programmed and formed",
+            PanelLayout::Column,
+            &panels,
+        ))?;
+        figures.push((
+            path,
+            "Programmed versus formed profile along θ = 0 (SIMULATED): the programmed profile is \
+             what a rigid robot on the desired path would form (the tool sphere swept along it), \
+             the formed ones are the twin's sheet after each run; below, their difference"
+                .to_string(),
+        ));
+    }
+    Ok(figures)
+}
+
+/// The states of the controller's flags shown over time, in lane order: the flag bit(s) and
+/// the lane's name.
+const STATE_LANES: [(u32, &str); 8] = [
+    (Flags::ACTIVE, "active"),
+    (Flags::RAMPING, "ramping"),
+    (Flags::TARING, "taring"),
+    (Flags::SATURATED_SIZE, "saturated (size)"),
+    (Flags::SATURATED_RATE, "saturated (rate)"),
+    (Flags::STALE_WRENCH, "stale wrench"),
+    (Flags::RUNAWAY_HOLD, "runaway hold"),
+    (Flags::LATCHED, "fault latched"),
+];
+
+/// The correction ξ the controller sent (position in mm, rotation in mrad when any rotation
+/// axis is used) and its state flags over time, for the corrected run, from its per-cycle log
+/// (`trace`, the rows of `controller_log.csv`).
+pub(crate) fn controller_figures(out: &Path, trace: &[CycleOutput]) -> Result<Vec<Figure>, String> {
+    let mut figures = Vec::new();
+    if trace.len() < 2 {
+        return Ok(figures);
+    }
+    let t: Vec<f64> = trace.iter().map(|c| c.time_s).collect();
+    // 1 % of margin on the left, so that what happens in the first cycles (taring, the ramp
+    // in) is not hidden under the axis.
+    let (t0, t1) = (t[0] - 0.01 * (t[t.len() - 1] - t[0]), t[t.len() - 1]);
+    let component =
+        |k: usize, scale: f64| -> Vec<f64> { trace.iter().map(|c| c.xi[k] * scale).collect() };
+    let mut panels = vec![(
+        PlotSpec::new(
+            "correction ξ, position (robot base axes)",
+            "time [s]",
+            "ξ [mm]",
+        )
+        .size(FULL_WIDTH_PX, 340)
+        .x_range(t0, t1),
+        AXES.iter()
+            .map(|&(name, k, line)| {
+                Series::line(format!("ξ_{name}"), t.clone(), component(k, 1e3))
+                    .with_line(line)
+                    .with_color(PALETTE[k])
+            })
+            .collect::<Vec<_>>(),
+    )];
+    let rotations = trace.iter().any(|c| c.xi[3..].iter().any(|v| *v != 0.0));
+    if rotations {
+        panels.push((
+            PlotSpec::new(
+                "correction ξ, rotation (robot base axes)",
+                "time [s]",
+                "ξ [mrad]",
+            )
+            .size(FULL_WIDTH_PX, 300)
+            .x_range(t0, t1),
+            AXES.iter()
+                .map(|&(name, k, line)| {
+                    Series::line(format!("ξ_r{name}"), t.clone(), component(3 + k, 1e3))
+                        .with_line(line)
+                        .with_color(PALETTE[k])
+                })
+                .collect(),
+        ));
+    }
+    let path = out.join("controller_correction.png");
+    draw(panels_plot(
+        &path,
+        "SIMULATED cell — the correction ξ the controller sent, corrected run",
+        PanelLayout::Column,
+        &panels,
+    ))?;
+    figures.push((
+        path,
+        if rotations {
+            "Correction ξ over the corrected run (SIMULATED): position in mm, rotation in mrad"
+        } else {
+            "Correction ξ over the corrected run (SIMULATED), in mm; the rotation axes are not \
+             corrected (ξ_rx = ξ_ry = ξ_rz = 0 throughout)"
+        }
+        .to_string(),
+    ));
+
+    let fault_bits: u32 = FaultKind::ALL
+        .iter()
+        .map(|k| k.flag())
+        .fold(0, |a, b| a | b);
+    let cycles = trace.len() as f64;
+    let mut lanes: Vec<Lane> = Vec::new();
+    let mut lane = |name: &str, on: Vec<bool>| {
+        let count = on.iter().filter(|v| **v).count();
+        let share = 100.0 * count as f64 / cycles;
+        let label = match count {
+            0 => format!("{name} (never)"),
+            n if n == trace.len() => format!("{name} (always)"),
+            n if share < 0.1 => format!("{name} ({n} cycles)"),
+            n if share >= 99.95 => format!("{name} (all but {} cycles)", trace.len() - n),
+            _ => format!("{name} ({share:.1} % of cycles)"),
+        };
+        lanes.push(Lane::from_samples(label, &t, &on));
+    };
+    for (bit, name) in STATE_LANES {
+        lane(name, trace.iter().map(|c| c.flags.has(bit)).collect());
+    }
+    lane(
+        "fault detected",
+        trace.iter().map(|c| c.flags.0 & fault_bits != 0).collect(),
+    );
+    let path = out.join("controller_state.png");
+    draw(timeline_plot(
+        &path,
+        &PlotSpec::new(
+            "SIMULATED cell — controller state per cycle, corrected run",
+            "time [s]",
+            "",
+        )
+        .size(FULL_WIDTH_PX, 420)
+        .x_range(t0, t1),
+        &lanes,
+    ))?;
+    figures.push((
+        path,
+        "Controller state over the corrected run (SIMULATED), from the flags of every control \
+         cycle in forming_closed/controller_log.csv; each lane gives the share of cycles it held"
+            .to_string(),
     ));
     Ok(figures)
 }

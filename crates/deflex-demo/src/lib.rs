@@ -17,6 +17,7 @@
 
 mod conditions;
 pub mod contact;
+pub mod fig7;
 mod figures;
 mod page;
 pub mod paper;

@@ -117,6 +117,9 @@ pub struct SensitivityRow {
     pub factor: String,
     /// Condition, human readable (`40 ms, ×1.30`).
     pub condition: String,
+    /// The same condition as table columns, one unit per column: `(header with unit, value)`,
+    /// e.g. `("delay [ms]", "40")`, `("model compliance scale [×]", "1.30")`.
+    pub condition_columns: Vec<(String, String)>,
     /// Max path error norm without correction (mm).
     pub open_max_mm: f64,
     /// Max path error norm with correction (mm).
@@ -197,6 +200,7 @@ pub fn scaled_model(model: &Robot, scale: f64) -> Robot {
 struct Job {
     factor: String,
     condition: String,
+    columns: Vec<(String, String)>,
     cell: CellConfig,
     scale: f64,
 }
@@ -270,6 +274,10 @@ pub fn run_sensitivity(
             jobs.push(Job {
                 factor: "delay × model scale".into(),
                 condition: format!("{:.0} ms, ×{scale:.2}", delay * 1e3),
+                columns: vec![
+                    ("delay [ms]".into(), format!("{:.0}", delay * 1e3)),
+                    ("model compliance scale [×]".into(), format!("{scale:.2}")),
+                ],
                 cell: with(&|c| c.controller.correction_delay_s = delay),
                 scale,
             });
@@ -279,6 +287,7 @@ pub fn run_sensitivity(
         jobs.push(Job {
             factor: "gain error".into(),
             condition: format!("{:+.1} %", g * 100.0),
+            columns: vec![("F/T gain error [%]".into(), format!("{:+.1}", g * 100.0))],
             cell: with(&|c| {
                 c.errors.sensor_gain = true;
                 c.sensor.gain_error = [g; 6];
@@ -287,13 +296,15 @@ pub fn run_sensitivity(
         });
     }
     for &d in &plan.drift_factors {
+        let drift_n =
+            d * base.sensor.bias_drift_per_s[2] * path.duration_s(base.controller.rapid_feed_mm_s);
         jobs.push(Job {
             factor: "bias drift".into(),
-            condition: format!(
-                "×{d} ({:.1} N of Fz over the run)",
-                d * base.sensor.bias_drift_per_s[2]
-                    * path.duration_s(base.controller.rapid_feed_mm_s)
-            ),
+            condition: format!("×{d} ({drift_n:.1} N of Fz over the run)"),
+            columns: vec![
+                ("bias drift [× the cell's]".into(), format!("{d}")),
+                ("Fz drift over the run [N]".into(), format!("{drift_n:.1}")),
+            ],
             cell: with(&|c| {
                 c.errors.bias_drift = true;
                 c.sensor.bias_drift_per_s = c.sensor.bias_drift_per_s.map(|v| v * d);
@@ -305,6 +316,7 @@ pub fn run_sensitivity(
         jobs.push(Job {
             factor: "contact stiffness".into(),
             condition: format!("{k:.0e} N/m"),
+            columns: vec![("contact stiffness [N/m]".into(), format!("{k:.0e}"))],
             cell: with(&|c| c.sheet.contact_stiffness_n_mm = k * 1e-3),
             scale: 1.0,
         });
@@ -344,6 +356,7 @@ pub fn run_sensitivity(
                         let job = Job {
                             factor: String::new(),
                             condition: String::new(),
+                            columns: Vec::new(),
                             cell: open_cells[i].1.clone(),
                             scale: 1.0,
                         };
@@ -376,6 +389,7 @@ pub fn run_sensitivity(
         rows.push(SensitivityRow {
             factor: job.factor.clone(),
             condition: job.condition.clone(),
+            condition_columns: job.columns.clone(),
             open_max_mm: o.max_mm,
             closed_max_mm: c.max_mm,
             closed_rms_mm: c.rms_mm,

@@ -174,6 +174,9 @@ pub struct DemoSummary {
     pub stiffness: Vec<StiffnessRow>,
     /// Validation errors (grid and spiral, every model).
     pub validation: Vec<ModelErrorNumbers>,
+    /// The paper's Figs. 8–9 test (Fig. 7 configuration, lateral 1400 N): per point the
+    /// SIMULATED measurement and each model's prediction. Empty for robots other than the TX200.
+    pub fig7: Vec<crate::fig7::Fig7Point>,
     /// Forming without correction.
     pub forming_open: FormingNumbers,
     /// Forming with correction.
@@ -320,6 +323,36 @@ fn study(
     ));
     timings.push(("identification".to_string(), clock.elapsed().as_secs_f64()));
 
+    // The paper's Figs. 8–9: M1–M3 at the Fig. 7 configuration (TX200 only).
+    let clock = Instant::now();
+    let mut fig7_files = Vec::new();
+    let fig7 = if paper_comparison {
+        let models: [(&str, &Robot); 3] = [
+            (IDENTIFIED, &identified),
+            (BASELINE, &baseline),
+            (TABLE1, &nominal),
+        ];
+        let (rows, points) =
+            crate::fig7::fig7_study(&cell, &nominal, &models, seed.wrapping_add(3))?;
+        write_text(
+            &out.join("fig7_points.csv"),
+            &crate::fig7::fig7_csv(&rows, &points),
+        )?;
+        let figure = out.join("fig7_displacements.png");
+        crate::fig7::fig7_figure(&figure, &points)?;
+        fig7_files.push((
+            figure,
+            "Elastic displacements δp_x (top, cf. Fig. 8) and δp_y (bottom, cf. Fig. 9) of M1, M2, \
+             M3 and the TCP at q = (0, 90°, 0, 0, 0, 0) under f_y = 1400 N at the TCP: the \
+             twin's tracker (SIMULATED) against each model"
+                .to_string(),
+        ));
+        timings.push(("Fig. 7 test".to_string(), clock.elapsed().as_secs_f64()));
+        points
+    } else {
+        Vec::new()
+    };
+
     // 4. Validation on the grid.
     let clock = Instant::now();
     progress.stage(4, STAGES, "validate on the grid of dead-weight loads");
@@ -445,13 +478,17 @@ fn study(
         seed,
         identified.clone(),
         controller_config_for(&cell),
-        false,
+        true,
         &mut |f| progress.fraction(f),
     )?;
     closed
         .forming
         .write_outputs(&out.join("forming_closed"))
         .map_err(|e| e.to_string())?;
+    write_text(
+        &out.join("forming_closed").join("controller_log.csv"),
+        &crate::tables::controller_log_csv(&closed.trace, &nominal.name),
+    )?;
     let improvement =
         100.0 * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
     progress.done(&format!(
@@ -463,6 +500,7 @@ fn study(
         clock.elapsed().as_secs_f64(),
     ));
     let forming_files = crate::figures::forming_figures(out, &open, &closed.forming)?;
+    let controller_files = crate::figures::controller_figures(out, &closed.trace)?;
     let mut contact_files = Vec::new();
     let mut sensitivity_files = Vec::new();
 
@@ -567,6 +605,7 @@ fn study(
         identification_reduced_chi2: search.calibration.reduced_chi2,
         stiffness,
         validation,
+        fig7,
         forming_open: FormingNumbers::from_run(&open),
         forming_closed: FormingNumbers::from_run(&closed.forming),
         improvement_percent: improvement,
@@ -590,9 +629,11 @@ fn study(
         plan: &plan,
         grid: &grid_params,
         spiral: &spiral_params,
+        fig7_files,
         grid_files,
         spiral_files,
         forming_files,
+        controller_files,
         contact_files,
         sensitivity_files,
     };

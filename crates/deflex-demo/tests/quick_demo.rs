@@ -170,6 +170,34 @@ fn quick_demo_numbers_match_its_own_csvs_and_are_deterministic() {
     assert!(html.contains("SIMULATED"));
     assert!(!html.contains("http://") && !html.contains("https://"));
     assert!(html.contains("data:image/png;base64,"));
+    // A contents list at the top, and a link to every CSV file beside the page.
+    let contents = html
+        .find("<nav class=\"contents\">")
+        .expect("contents list");
+    assert!(
+        contents < html.find("<h2").unwrap(),
+        "contents before the first section"
+    );
+    let csvs = csv_files(&dir, "");
+    assert!(csvs.len() >= 15, "{csvs:?}");
+    for file in &csvs {
+        assert!(
+            html.contains(&format!("<a href=\"{file}\">")),
+            "{file} is not linked from the page"
+        );
+    }
+    // One unit per column: every numeric header of the page's tables names its unit.
+    for header in html.split("<th>").skip(1) {
+        let header = &header[..header.find("</th>").unwrap()];
+        assert!(
+            !header.contains("] [") && header.matches('[').count() <= 1,
+            "header {header:?} mixes units"
+        );
+    }
+
+    check_fig7(&dir, &summary);
+    check_controller_log(&dir);
+    check_profiles(&dir);
 
     // Deterministic under the seed: a second run gives the same numbers.
     let (again, dir_b) = run("b", 7);
@@ -181,4 +209,133 @@ fn quick_demo_numbers_match_its_own_csvs_and_are_deterministic() {
     assert_eq!(strip(&summary), strip(&again));
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&dir_b);
+}
+
+/// CSV files under `dir` (relative paths), two folders deep.
+fn csv_files(dir: &Path, prefix: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if entry.path().is_dir() {
+            out.extend(csv_files(&entry.path(), &format!("{prefix}{name}/")));
+        } else if name.ends_with(".csv") {
+            out.push(format!("{prefix}{name}"));
+        }
+    }
+    out
+}
+
+fn numbers(row: &[String], columns: &[usize]) -> Vec<f64> {
+    columns
+        .iter()
+        .map(|&c| row[c].parse::<f64>().unwrap())
+        .collect()
+}
+
+/// Figs. 8–9: the CSV carries the summary's numbers; the identified model predicts the twin's
+/// M2, M3 and TCP x-displacement (the joint-3 x-eDoF) that the one-eDoF model misses.
+fn check_fig7(dir: &Path, summary: &DemoSummary) {
+    assert_eq!(summary.fig7.len(), 4);
+    let (header, rows) = csv(&dir.join("fig7_points.csv"));
+    let cols: Vec<usize> = ["dx_m", "dy_m", "identified_dx_m", "one_edof_dx_m"]
+        .iter()
+        .map(|c| column(&header, c))
+        .collect();
+    assert_eq!(rows.len(), 4);
+    for (row, point) in rows.iter().zip(&summary.fig7) {
+        assert_eq!(row[0], point.point);
+        let v = numbers(row, &cols);
+        assert!((v[0] * 1e3 - point.measured_mm[0]).abs() < 1e-9);
+        assert!((v[1] * 1e3 - point.measured_mm[1]).abs() < 1e-9);
+        if point.point != "M1" {
+            let (measured, identified, one_edof) = (v[0], v[2], v[3]);
+            assert!(measured > 0.2e-3, "{}: δx {measured}", point.point);
+            assert!(
+                (identified - measured).abs() < 0.25 * measured,
+                "{}: identified {identified} vs measured {measured}",
+                point.point
+            );
+            assert!(one_edof.abs() < 0.1 * measured, "{}", point.point);
+        }
+    }
+}
+
+/// The controller log: one row per 10 ms cycle, ε = −ξ − δŝ on every row (eq. 5–7), and the
+/// state column agrees with the integer flags.
+fn check_controller_log(dir: &Path) {
+    let (header, rows) = csv(&dir.join("forming_closed").join("controller_log.csv"));
+    assert!(rows.len() > 1000, "{} rows", rows.len());
+    let t = column(&header, "time_s");
+    let mut previous = f64::NEG_INFINITY;
+    for row in &rows {
+        let time: f64 = row[t].parse().unwrap();
+        assert!(time > previous);
+        previous = time;
+        for axis in ["x_m", "y_m", "z_m", "rx_rad", "ry_rad", "rz_rad"] {
+            let v = numbers(
+                row,
+                &[
+                    column(&header, &format!("xi_{axis}")),
+                    column(&header, &format!("ds_{axis}")),
+                    column(&header, &format!("eps_{axis}")),
+                ],
+            );
+            let scale = v.iter().fold(1e-9f64, |m, x| m.max(x.abs()));
+            assert!(
+                (v[2] + v[0] + v[1]).abs() <= 2e-5 * scale,
+                "t {time}: ε {} ≠ −ξ − δŝ ({}, {})",
+                v[2],
+                v[0],
+                v[1]
+            );
+        }
+        let flags: u32 = row[column(&header, "flags")].parse().unwrap();
+        let status = &row[column(&header, "status")];
+        assert_eq!(
+            flags & (1 << 20) != 0,
+            status.contains("active"),
+            "{status}"
+        );
+    }
+    let period = (previous - rows[0][t].parse::<f64>().unwrap()) / (rows.len() - 1) as f64;
+    assert!((period - 0.01).abs() < 1e-6, "period {period}");
+}
+
+/// Programmed and formed profiles: the programmed one reaches the deepest programmed tool
+/// position near the ray θ = 0 (within one step-down of the log's deepest desired point), and
+/// the corrected part is closer to it than the uncorrected one.
+fn check_profiles(dir: &Path) {
+    let mut rms = Vec::new();
+    for run in ["forming_open", "forming_closed"] {
+        let (header, rows) = csv(&dir.join(run).join("profile.csv"));
+        let (d, p) = (
+            column(&header, "depth_mm"),
+            column(&header, "programmed_depth_mm"),
+        );
+        let programmed_max = rows
+            .iter()
+            .map(|r| r[p].parse::<f64>().unwrap())
+            .fold(0.0, f64::max);
+        let (lh, log) = csv(&dir.join(run).join("log.csv"));
+        let z = column(&lh, "des_z_mm");
+        let deepest = log
+            .iter()
+            .map(|r| -r[z].parse::<f64>().unwrap())
+            .fold(0.0, f64::max);
+        assert!(
+            programmed_max <= deepest + 1e-3 && programmed_max >= deepest - 0.25,
+            "{run}: programmed {programmed_max} mm, deepest desired {deepest} mm"
+        );
+        let sq: f64 = rows
+            .iter()
+            .map(|r| (r[d].parse::<f64>().unwrap() - r[p].parse::<f64>().unwrap()).powi(2))
+            .sum();
+        rms.push((sq / rows.len() as f64).sqrt());
+    }
+    assert!(
+        rms[1] < 0.8 * rms[0],
+        "profile RMS open {} closed {}",
+        rms[0],
+        rms[1]
+    );
 }

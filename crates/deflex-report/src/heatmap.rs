@@ -226,7 +226,7 @@ pub fn heatmap(
                     }
                     let t = normalized(v, crange);
                     let color = if t > 0.6 { BLACK } else { WHITE };
-                    let style = (crate::font::FAMILY, 13)
+                    let style = (crate::font::FAMILY, 15)
                         .into_font()
                         .color(&color)
                         .pos(Pos::new(HPos::Center, VPos::Center));

@@ -27,6 +27,9 @@ pub fn html_escape(text: &str) -> String {
 #[derive(Debug, Clone, PartialEq)]
 enum Block {
     Section(String),
+    Subsection(String),
+    Contents,
+    Files(Vec<FileLink>),
     Paragraph(String),
     Note(String),
     Preformatted(String),
@@ -38,6 +41,64 @@ enum Block {
         path: PathBuf,
         caption: String,
     },
+}
+
+/// A link to a file beside the page, with what it holds (see [`HtmlReport::files`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FileLink {
+    /// Path relative to the page (`plan.csv`, `forming_open/log.csv`): letters, digits, `.`,
+    /// `_`, `-` and `/` only, no `..`, not absolute. Checked when the page is rendered.
+    pub href: String,
+    /// One line on what the file holds.
+    pub description: String,
+}
+
+impl FileLink {
+    /// A link to `href` described by `description`.
+    pub fn new(href: impl Into<String>, description: impl Into<String>) -> Self {
+        FileLink {
+            href: href.into(),
+            description: description.into(),
+        }
+    }
+}
+
+/// Whether `href` is a plain relative path inside the page's folder.
+fn relative_inside(href: &str) -> bool {
+    !href.is_empty()
+        && !href.starts_with('/')
+        && href
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-' | '/'))
+        && href.split('/').all(|part| !part.is_empty() && part != "..")
+}
+
+/// Anchor ids of the (sub)sections, in order: a slug of the heading, made unique.
+fn section_ids(blocks: &[Block]) -> Vec<String> {
+    let mut ids: Vec<String> = Vec::new();
+    for block in blocks {
+        let (Block::Section(t) | Block::Subsection(t)) = block else {
+            continue;
+        };
+        let mut slug = String::new();
+        for c in t.chars() {
+            if c.is_ascii_alphanumeric() {
+                slug.push(c.to_ascii_lowercase());
+            } else if !slug.ends_with('-') && !slug.is_empty() {
+                slug.push('-');
+            }
+        }
+        let slug = slug.trim_end_matches('-');
+        let base = if slug.is_empty() { "section" } else { slug };
+        let mut id = base.to_string();
+        let mut k = 2;
+        while ids.contains(&id) {
+            id = format!("{base}-{k}");
+            k += 1;
+        }
+        ids.push(id);
+    }
+    ids
 }
 
 /// Builder of a self-contained HTML report.
@@ -64,7 +125,7 @@ pub struct HtmlReport {
 
 const CSS: &str = "\
 body{font-family:-apple-system,'Segoe UI',Roboto,'DejaVu Sans',Helvetica,Arial,sans-serif;\
-max-width:1000px;margin:2em auto;padding:0 1.2em;color:#222;line-height:1.5;background:#fff}\
+max-width:1120px;margin:2em auto;padding:0 1.2em;color:#222;line-height:1.5;background:#fff}\
 h1{font-size:1.8em;border-bottom:2px solid #1f77b4;padding-bottom:.25em}\
 h2{font-size:1.35em;margin-top:1.8em;border-bottom:1px solid #ddd;padding-bottom:.15em}\
 table{border-collapse:collapse;margin:1em 0;font-size:.95em}\
@@ -76,7 +137,11 @@ figure img{max-width:100%;height:auto;border:1px solid #e4e4e4}\
 figcaption{font-size:.92em;color:#555;margin-top:.4em}\
 .note{border-left:5px solid #d62728;background:#fdf1f1;padding:.6em 1em;margin:1em 0;font-weight:600}\
 pre{background:#f6f8fa;padding:.8em;overflow-x:auto;font-size:.9em}\
-footer{margin-top:3em;font-size:.8em;color:#888}";
+footer{margin-top:3em;font-size:.8em;color:#888}\
+h3{font-size:1.12em;margin-top:1.4em}\
+nav.contents{background:#f6f8fa;border:1px solid #e1e4e8;padding:.6em 1.2em;margin:1em 0}\
+nav.contents ul{list-style:none;margin:.2em 0;padding-left:1.2em}nav.contents a,ul.files a{color:#1f5f99}\
+ul.files code{font-size:.95em}";
 
 impl HtmlReport {
     /// A new, empty report whose page title and top heading are `title`.
@@ -90,6 +155,28 @@ impl HtmlReport {
     /// Starts a section with a second-level heading.
     pub fn section(&mut self, heading: impl Into<String>) -> &mut Self {
         self.blocks.push(Block::Section(heading.into()));
+        self
+    }
+
+    /// Starts a subsection with a third-level heading (listed under its section by
+    /// [`HtmlReport::contents`]).
+    pub fn subsection(&mut self, heading: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Subsection(heading.into()));
+        self
+    }
+
+    /// Places the table of contents here: a linked list of every section (and its
+    /// subsections) of the page, including those added later.
+    pub fn contents(&mut self) -> &mut Self {
+        self.blocks.push(Block::Contents);
+        self
+    }
+
+    /// Adds a list of links to files beside the page, each with its one-line description.
+    /// Every `href` must be a plain relative path inside the page's folder ([`FileLink`]);
+    /// this is checked when the page is rendered.
+    pub fn files(&mut self, links: &[FileLink]) -> &mut Self {
+        self.blocks.push(Block::Files(links.to_vec()));
         self
     }
 
@@ -143,11 +230,20 @@ impl HtmlReport {
         let _ = writeln!(h, "<title>{title}</title>");
         let _ = writeln!(h, "<style>{CSS}</style>\n</head>\n<body>");
         let _ = writeln!(h, "<h1>{title}</h1>");
+        let ids = section_ids(&self.blocks);
+        let mut next_id = ids.iter();
         for block in &self.blocks {
             match block {
                 Block::Section(t) => {
-                    let _ = writeln!(h, "<h2>{}</h2>", html_escape(t));
+                    let id = next_id.next().map(String::as_str).unwrap_or_default();
+                    let _ = writeln!(h, "<h2 id=\"{id}\">{}</h2>", html_escape(t));
                 }
+                Block::Subsection(t) => {
+                    let id = next_id.next().map(String::as_str).unwrap_or_default();
+                    let _ = writeln!(h, "<h3 id=\"{id}\">{}</h3>", html_escape(t));
+                }
+                Block::Contents => render_contents(&mut h, &self.blocks, &ids),
+                Block::Files(links) => render_files(&mut h, links)?,
                 Block::Paragraph(t) => {
                     let _ = writeln!(h, "<p>{}</p>", html_escape(t));
                 }
@@ -177,6 +273,67 @@ impl HtmlReport {
             source,
         })
     }
+}
+
+fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
+    h.push_str("<nav class=\"contents\"><strong>Contents</strong>\n<ul>\n");
+    let mut ids = ids.iter();
+    let mut open_sub = false;
+    let mut any_section = false;
+    for block in blocks {
+        match block {
+            Block::Section(t) => {
+                let id = ids.next().map(String::as_str).unwrap_or_default();
+                if open_sub {
+                    h.push_str("</ul>");
+                    open_sub = false;
+                }
+                if any_section {
+                    h.push_str("</li>\n");
+                }
+                let _ = write!(h, "<li><a href=\"#{id}\">{}</a>", html_escape(t));
+                any_section = true;
+            }
+            Block::Subsection(t) => {
+                let id = ids.next().map(String::as_str).unwrap_or_default();
+                if !open_sub {
+                    h.push_str("<ul>");
+                    open_sub = true;
+                }
+                let _ = write!(h, "<li><a href=\"#{id}\">{}</a></li>", html_escape(t));
+            }
+            _ => {}
+        }
+    }
+    if open_sub {
+        h.push_str("</ul>");
+    }
+    if any_section {
+        h.push_str("</li>\n");
+    }
+    h.push_str("</ul></nav>\n");
+}
+
+fn render_files(h: &mut String, links: &[FileLink]) -> Result<(), ReportError> {
+    h.push_str("<ul class=\"files\">\n");
+    for link in links {
+        if !relative_inside(&link.href) {
+            return Err(ReportError::InvalidInput {
+                path: PathBuf::from(&link.href),
+                reason: "a file link must be a relative path inside the page's folder \
+                         (letters, digits, '.', '_', '-', '/'; no '..')"
+                    .into(),
+            });
+        }
+        let href = html_escape(&link.href);
+        let _ = writeln!(
+            h,
+            "<li><a href=\"{href}\"><code>{href}</code></a>: {}</li>",
+            html_escape(&link.description)
+        );
+    }
+    h.push_str("</ul>\n");
+    Ok(())
 }
 
 fn looks_numeric(cell: &str) -> bool {
@@ -288,7 +445,7 @@ mod tests {
         let html = r.render().unwrap();
         assert!(!html.contains("<script>"));
         assert!(html.contains("<title>T &lt;1&gt;</title>"));
-        assert!(html.contains("<h2>S &amp; S</h2>"));
+        assert!(html.contains("<h2 id=\"s-s\">S &amp; S</h2>"));
         assert!(html.contains("&lt;script&gt;alert(1)&lt;/script&gt;"));
         assert!(html.contains("<div class=\"note\">SIMULATED &lt;b&gt;</div>"));
         assert!(html.contains("<th>&lt;h&gt;</th>"));

@@ -15,11 +15,15 @@
 //! | [`heatmap`] | prediction error over a regular grid (Fig. 11, 13) |
 //! | [`scatter_heatmap`] | the same over scattered measurement points |
 //! | [`cloud_3d`] | 3D deviation cloud (Fig. 17) |
+//! | [`timeline_plot`] | on/off states over time (a controller's flags) |
 //! | [`HtmlReport`] | one self-contained page embedding all of them |
 //!
 //! The output format is chosen by the file extension: `.png` or `.svg`.
 //! Text is drawn with an embedded DejaVu Sans font, so rendering needs no
-//! system fonts. Everything is deterministic: colours come from a fixed
+//! system fonts. Titles are never drawn below [`MIN_TITLE_PX`]: a long one is
+//! wrapped onto up to [`MAX_TITLE_LINES`] lines ([`title_layout`]), then
+//! shortened with an ellipsis. Series can be dashed or dotted ([`LineStyle`])
+//! as well as coloured, so that curves stay apart without colour. Everything is deterministic: colours come from a fixed
 //! palette ([`palette_color`]) and heatmaps use the viridis colour map
 //! ([`viridis`]).
 //!
@@ -45,6 +49,7 @@ mod heatmap;
 mod html;
 mod plot;
 mod render;
+mod timeline;
 
 use std::path::{Path, PathBuf};
 
@@ -52,8 +57,10 @@ pub use base64::base64_encode;
 pub use cloud::{Cloud3, Plot3Spec, cloud_3d};
 pub use colormap::{PALETTE, palette_color, viridis};
 pub use heatmap::{heatmap, scatter_heatmap};
-pub use html::{HtmlReport, html_escape};
+pub use html::{FileLink, HtmlReport, html_escape};
 pub use plot::{PanelLayout, line_plot, panels_plot, parity_plot};
+pub use render::{MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, text_width_px, title_layout};
+pub use timeline::{Lane, timeline_plot};
 
 /// Errors from drawing plots or writing reports. Every variant names the
 /// file concerned.
@@ -126,6 +133,31 @@ pub enum SeriesStyle {
     LineAndPoints,
 }
 
+/// How the line of a [`Series`] is stroked (markers are unaffected). Give series that share a
+/// chart different dash patterns as well as colours, so they stay apart in print, for readers
+/// who do not see the colours, and where they overlap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LineStyle {
+    /// A continuous 2 px line.
+    #[default]
+    Solid,
+    /// 10 px dashes, 6 px gaps.
+    Dashed,
+    /// 3 px dots, 4 px gaps.
+    Dotted,
+}
+
+impl LineStyle {
+    /// `(dash, gap)` lengths in pixels, `None` for a solid line.
+    pub fn pattern_px(self) -> Option<(u32, u32)> {
+        match self {
+            LineStyle::Solid => None,
+            LineStyle::Dashed => Some((10, 6)),
+            LineStyle::Dotted => Some((3, 4)),
+        }
+    }
+}
+
 /// One named data series of a 2D plot. `x` and `y` must have equal lengths.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
@@ -137,6 +169,10 @@ pub struct Series {
     pub y: Vec<f64>,
     /// How the series is drawn.
     pub style: SeriesStyle,
+    /// How its line is stroked.
+    pub line: LineStyle,
+    /// Its colour as `(r, g, b)`; `None`: the [`PALETTE`] colour of its position in the chart.
+    pub color: Option<(u8, u8, u8)>,
 }
 
 impl Series {
@@ -147,7 +183,21 @@ impl Series {
             x,
             y,
             style,
+            line: LineStyle::Solid,
+            color: None,
         }
+    }
+
+    /// The same series stroked with `line`.
+    pub fn with_line(mut self, line: LineStyle) -> Self {
+        self.line = line;
+        self
+    }
+
+    /// The same series drawn in `color` (`(r, g, b)`) instead of its palette colour.
+    pub fn with_color(mut self, color: (u8, u8, u8)) -> Self {
+        self.color = Some(color);
+        self
     }
 
     /// A series drawn as a line.

@@ -4,14 +4,14 @@
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
 use crate::colormap::palette_rgb;
 use crate::render::{
-    check_range, draw_axes, draw_legend, err, finite_extent, fitted_font_size, fmt_tick, padded,
-    render, titled_area,
+    check_range, draw_axes, draw_legend, err, finite_extent, fmt_tick, padded, render, titled_area,
 };
-use crate::{PlotSpec, ReportError, Series, SeriesStyle};
+use crate::{LineStyle, PlotSpec, ReportError, Series, SeriesStyle};
 
 /// How the panels of [`panels_plot`] are arranged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -167,7 +167,23 @@ fn legend_corner(
     boxes[best].0.clone()
 }
 
-/// Draws one chart with its series and legend onto `area`.
+/// A polyline in `color`, solid or with the dash pattern of `line`, as a dynamic element.
+fn stroke<DB: DrawingBackend, C: Clone + 'static>(
+    points: Vec<C>,
+    line: LineStyle,
+    style: ShapeStyle,
+) -> DynElement<'static, DB, C>
+where
+    PathElement<C>: IntoDynElement<'static, DB, C>,
+    DashedPathElement<std::vec::IntoIter<C>, u32>: IntoDynElement<'static, DB, C>,
+{
+    match line.pattern_px() {
+        None => PathElement::new(points, style).into_dyn(),
+        Some((dash, gap)) => DashedPathElement::new(points, dash, gap, style).into_dyn(),
+    }
+}
+
+/// Draws one chart with its title, series and legend onto `area`.
 fn draw_chart<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     spec: &PlotSpec,
@@ -177,13 +193,8 @@ fn draw_chart<DB: DrawingBackend>(
     marker_size: u32,
     colors: &[RGBColor],
 ) -> Result<(), String> {
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            &spec.title,
-            (crate::font::FAMILY, fitted_font_size(area, &spec.title, 24))
-                .into_font()
-                .color(&BLACK),
-        )
+    let body = titled_area(area, &spec.title, 24)?;
+    let mut chart = ChartBuilder::on(&body)
         .margin(14)
         .x_label_area_size(58)
         .y_label_area_size(86)
@@ -194,15 +205,19 @@ fn draw_chart<DB: DrawingBackend>(
 
     let mut any_label = false;
     for (i, p) in prepared.iter().enumerate() {
-        let color = colors.get(i).copied().unwrap_or_else(|| palette_rgb(i));
+        let color = match p.series.color {
+            Some((r, g, b)) => RGBColor(r, g, b),
+            None => colors.get(i).copied().unwrap_or_else(|| palette_rgb(i)),
+        };
         let style = p.series.style;
+        let line = p.series.line;
         let with_line = matches!(style, SeriesStyle::Line | SeriesStyle::LineAndPoints);
         let with_points = matches!(style, SeriesStyle::Points | SeriesStyle::LineAndPoints);
         let mut first = true;
         for run in &p.runs {
             let mut elements: Vec<DynElement<'static, DB, (f64, f64)>> = Vec::new();
             if with_line && run.len() > 1 {
-                elements.push(PathElement::new(run.clone(), color.stroke_width(2)).into_dyn());
+                elements.push(stroke(run.clone(), line, color.stroke_width(2)));
             }
             if with_points || run.len() == 1 {
                 for &pt in run {
@@ -215,8 +230,8 @@ fn draw_chart<DB: DrawingBackend>(
                 anno.label(p.series.label.as_str()).legend(
                     move |(x, y)| -> DynElement<'static, DB, (i32, i32)> {
                         if with_line {
-                            PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-                                .into_dyn()
+                            // 30 px: room for two dashes or several dots of the pattern.
+                            stroke(vec![(x - 4, y), (x + 26, y)], line, color.stroke_width(3))
                         } else {
                             Circle::new((x + 11, y), 4, color.filled()).into_dyn()
                         }

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::{PlotSpec, ReportError};
 
@@ -137,39 +138,166 @@ pub(crate) fn check_range(
     Ok(())
 }
 
-/// The area below a title drawn at the top of `root` (or `root` itself when
-/// the title is empty).
+/// Smallest font size (px) a plot title is ever drawn at. A title too long for its image at this
+/// size is wrapped onto more lines (at most [`MAX_TITLE_LINES`]) and only then shortened with an
+/// ellipsis; it is never drawn smaller. 18 px is the axis labels' size: a title shrunk further
+/// would read as a footnote, and the report pages scale wide images down.
+pub const MIN_TITLE_PX: u32 = 18;
+
+/// Most lines a plot title is wrapped onto.
+pub const MAX_TITLE_LINES: usize = 3;
+
+/// Free space (px) kept on each side of a title line.
+const TITLE_SIDE_MARGIN: u32 = 10;
+/// Space (px) above the first title line.
+const TITLE_TOP_MARGIN: u32 = 10;
+/// Space (px) between the last title line and what follows.
+const TITLE_BOTTOM_MARGIN: u32 = 6;
+
+/// How a plot title is drawn: its font size and its lines (see [`title_layout`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TitleLayout {
+    /// Font size (px), never below [`MIN_TITLE_PX`].
+    pub size_px: u32,
+    /// The lines, top to bottom (empty for an empty title).
+    pub lines: Vec<String>,
+}
+
+impl TitleLayout {
+    /// Line pitch (px).
+    pub fn line_height_px(&self) -> u32 {
+        (self.size_px as f64 * 1.25).round() as u32
+    }
+
+    /// Height (px) the title takes above the chart, margins included (0 when empty).
+    pub fn height_px(&self) -> u32 {
+        if self.lines.is_empty() {
+            0
+        } else {
+            TITLE_TOP_MARGIN + self.lines.len() as u32 * self.line_height_px() + TITLE_BOTTOM_MARGIN
+        }
+    }
+}
+
+/// Width (px) of `text` in the embedded font at `size_px`.
+pub fn text_width_px(text: &str, size_px: u32) -> u32 {
+    crate::font::ensure_registered();
+    let font: FontDesc = (crate::font::FAMILY, size_px as f64).into_font();
+    match font.box_size(text) {
+        Ok((w, _)) => w,
+        // The embedded font always lays out; if it ever did not, a generous estimate keeps the
+        // title inside the image.
+        Err(_) => (text.chars().count() as u32).saturating_mul(size_px),
+    }
+}
+
+/// Greedy word wrap of `text` into lines of at most `width` px at `size` px; a word wider than
+/// `width` on its own is split between characters only when `split_words` is set (otherwise it
+/// overflows its line, which the caller treats as "does not fit").
+fn wrap(text: &str, size: u32, width: u32, split_words: bool) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        let candidate = if line.is_empty() {
+            word.to_string()
+        } else {
+            format!("{line} {word}")
+        };
+        if text_width_px(&candidate, size) <= width {
+            line = candidate;
+            continue;
+        }
+        if !line.is_empty() {
+            lines.push(std::mem::take(&mut line));
+        }
+        if text_width_px(word, size) <= width || !split_words {
+            line = word.to_string();
+            continue;
+        }
+        for c in word.chars() {
+            let mut longer = line.clone();
+            longer.push(c);
+            if !line.is_empty() && text_width_px(&longer, size) > width {
+                lines.push(std::mem::take(&mut line));
+                longer = c.to_string();
+            }
+            line = longer;
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// Lays out a title for an image (or panel) `width_px` wide: the largest size from
+/// `preferred_px` down to [`MIN_TITLE_PX`] at which it fits on one line; else on two lines, then
+/// three; else at [`MIN_TITLE_PX`] with over-long words split and the last line ended by "…".
+/// Every line fits `width_px` less a 10 px margin on each side, except when the width cannot hold
+/// a single character at the minimum size.
+pub fn title_layout(text: &str, width_px: u32, preferred_px: u32) -> TitleLayout {
+    let preferred = preferred_px.max(MIN_TITLE_PX);
+    if text.trim().is_empty() {
+        return TitleLayout {
+            size_px: preferred,
+            lines: Vec::new(),
+        };
+    }
+    let available = width_px.saturating_sub(2 * TITLE_SIDE_MARGIN).max(1);
+    for max_lines in 1..=MAX_TITLE_LINES {
+        for size in (MIN_TITLE_PX..=preferred).rev() {
+            let lines = wrap(text, size, available, false);
+            if lines.len() <= max_lines && lines.iter().all(|l| text_width_px(l, size) <= available)
+            {
+                return TitleLayout {
+                    size_px: size,
+                    lines,
+                };
+            }
+        }
+    }
+    let mut lines = wrap(text, MIN_TITLE_PX, available, true);
+    if lines.len() > MAX_TITLE_LINES {
+        lines.truncate(MAX_TITLE_LINES);
+        let last = &mut lines[MAX_TITLE_LINES - 1];
+        loop {
+            let shortened = format!("{}…", last.trim_end());
+            if text_width_px(&shortened, MIN_TITLE_PX) <= available || last.is_empty() {
+                *last = shortened;
+                break;
+            }
+            last.pop();
+        }
+    }
+    TitleLayout {
+        size_px: MIN_TITLE_PX,
+        lines,
+    }
+}
+
+/// Draws `title` at the top of `root` (laid out by [`title_layout`] for `root`'s width) and
+/// returns the area below it (`root` itself when the title is empty).
 pub(crate) fn titled_area<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
-    size: u32,
+    preferred: u32,
 ) -> Result<DrawingArea<DB, plotters::coord::Shift>, String> {
-    if title.is_empty() {
+    let (width, height) = root.dim_in_pixel();
+    let layout = title_layout(title, width, preferred);
+    if layout.lines.is_empty() {
         return Ok(root.clone());
     }
-    let size = fitted_font_size(root, title, size);
-    root.margin(10, 0, 0, 0)
-        .titled(title, (crate::font::FAMILY, size).into_font().color(&BLACK))
-        .map_err(err)
-}
-
-/// The largest font size ≤ `preferred` (and ≥ 10) at which `text` fits the width of `area`
-/// with a 10 px margin on each side, so long titles shrink instead of being clipped.
-pub(crate) fn fitted_font_size<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    text: &str,
-    preferred: u32,
-) -> u32 {
-    let (width, _) = area.dim_in_pixel();
-    let mut size = preferred;
-    while size > 10 {
-        let style: TextStyle = (crate::font::FAMILY, size).into_font().into();
-        match area.estimate_text_size(text, &style) {
-            Ok((text_width, _)) if text_width + 20 > width => size -= 1,
-            _ => break,
-        }
+    let style = (crate::font::FAMILY, layout.size_px)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Center, VPos::Top));
+    for (i, line) in layout.lines.iter().enumerate() {
+        let y = TITLE_TOP_MARGIN + i as u32 * layout.line_height_px();
+        root.draw_text(line, &style, ((width / 2) as i32, y as i32))
+            .map_err(err)?;
     }
-    size
+    let split = layout.height_px().min(height.saturating_sub(1));
+    Ok(root.split_vertically(split).1)
 }
 
 /// Draws the axes of a 2D chart: axis descriptions from `spec`, tick labels formatted for the

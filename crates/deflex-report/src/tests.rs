@@ -328,3 +328,189 @@ fn rendering_is_deterministic() {
     line_plot(&b, &spec, &sine_series()).unwrap();
     assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
 }
+
+/// Titles of every length, on images from narrow panels to wide figures: never below the
+/// minimum size, every line inside the image, at most `MAX_TITLE_LINES` lines, and nothing
+/// dropped unless the title had to be shortened.
+#[test]
+fn titles_are_never_drawn_below_the_minimum_size() {
+    let words = "SIMULATED Staubli TX200 (Johra 2022, Table 1) — improvement of the max path error \
+                 [%]: delay × model compliance scale, with every error source of the cell on";
+    let mut titles: Vec<String> = (1..=words.len())
+        .step_by(7)
+        .map(|n| words.chars().take(n).collect())
+        .collect();
+    titles.push("x".repeat(150));
+    titles.push(format!(
+        "{} {}",
+        "long_unbroken_file_name_".repeat(4),
+        words
+    ));
+    for title in &titles {
+        for width in [240u32, 300, 450, 600, 700, 900, 1100, 2000] {
+            for preferred in [12u32, 24, 28] {
+                let layout = title_layout(title, width, preferred);
+                assert!(
+                    layout.size_px >= MIN_TITLE_PX,
+                    "{title:?} at {width} px: size {}",
+                    layout.size_px
+                );
+                assert!(layout.size_px <= preferred.max(MIN_TITLE_PX));
+                assert!(!layout.lines.is_empty() && layout.lines.len() <= MAX_TITLE_LINES);
+                for line in &layout.lines {
+                    let w = text_width_px(line, layout.size_px);
+                    assert!(
+                        w + 20 <= width,
+                        "{title:?}: line {line:?} is {w} px on a {width} px image"
+                    );
+                }
+                let joined: String = layout.lines.concat();
+                let letters = |s: &str| s.chars().filter(|c| !c.is_whitespace()).count();
+                if !joined.ends_with('…') {
+                    assert_eq!(letters(&joined), letters(title), "{title:?} lost text");
+                }
+            }
+        }
+    }
+    // A title that fits keeps the preferred size on one line; one that does not is wrapped
+    // before it is shrunk below the minimum.
+    let short = title_layout("Residual per load case", 900, 24);
+    assert_eq!((short.size_px, short.lines.len()), (24, 1));
+    let long = title_layout(words, 900, 24);
+    assert!(long.lines.len() >= 2, "{long:?}");
+}
+
+/// The title of a narrow plot takes two lines at a legible size: dark pixels in two bands
+/// above the chart, where a shrunk one-line title would leave one thin band.
+#[test]
+fn a_long_title_is_wrapped_in_the_image() {
+    let dir = temp_dir("wrap");
+    let path = dir.join("w.png");
+    let title = "SIMULATED cell — a title far too long to fit on one line of a narrow plot";
+    let layout = title_layout(title, 500, 24);
+    assert_eq!(layout.lines.len(), 2, "{layout:?}");
+    line_plot(
+        &path,
+        &PlotSpec::new(title, "x", "y").size(500, 400),
+        &sine_series(),
+    )
+    .unwrap();
+    let px = png_pixels(&path);
+    let dark_rows: Vec<usize> = (0..layout.height_px() as usize)
+        .filter(|&y| (0..500).any(|x| px[y * 500 + x].0 < 100))
+        .collect();
+    let bands = dark_rows.windows(2).filter(|w| w[1] > w[0] + 1).count() + 1;
+    assert!(bands >= 2, "title rows {dark_rows:?}");
+    assert!(
+        dark_rows.len() >= 2 * MIN_TITLE_PX as usize * 6 / 10,
+        "two lines of ≥ {MIN_TITLE_PX} px: {} dark rows",
+        dark_rows.len()
+    );
+}
+
+/// A dashed series leaves gaps along its line that a solid one does not: the colours are
+/// counted along the horizontal line each draws.
+#[test]
+fn dashed_and_dotted_series_are_drawn_with_gaps() {
+    let dir = temp_dir("dash");
+    let x = vec![0.0, 10.0];
+    let series = [
+        Series::line("solid", x.clone(), vec![1.0, 1.0]),
+        Series::line("dashed", x.clone(), vec![2.0, 2.0]).with_line(LineStyle::Dashed),
+        Series::line("dotted", x.clone(), vec![3.0, 3.0])
+            .with_line(LineStyle::Dotted)
+            .with_color((200, 0, 200)),
+    ];
+    let path = dir.join("d.png");
+    let spec = PlotSpec::new("Dashes", "x", "y")
+        .size(600, 400)
+        .y_range(0.0, 4.0);
+    line_plot(&path, &spec, &series).unwrap();
+    let px = png_pixels(&path);
+    // Runs of a colour along the row where it is densest.
+    let runs = |c: (u8, u8, u8)| -> usize {
+        (0..400)
+            .map(|y| {
+                let row = &px[y * 600..(y + 1) * 600];
+                row.windows(2).filter(|w| w[0] != c && w[1] == c).count()
+            })
+            .max()
+            .unwrap_or(0)
+    };
+    let (solid, dashed, dotted) = (
+        runs(palette_color(0)),
+        runs(palette_color(1)),
+        runs((200, 0, 200)),
+    );
+    assert!(solid <= 3, "solid line is continuous: {solid} runs");
+    assert!(dashed >= 20, "dashed line: {dashed} runs");
+    assert!(dotted > dashed, "dotted {dotted} vs dashed {dashed}");
+}
+
+#[test]
+fn timeline_draws_lanes_and_checks_intervals() {
+    let dir = temp_dir("timeline");
+    let path = dir.join("t.png");
+    let t: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
+    let on: Vec<bool> = t.iter().map(|v| (2.0..6.0).contains(v)).collect();
+    let lanes = [
+        Lane::from_samples("active", &t, &on),
+        Lane::new("fault (never)", vec![]),
+        Lane::new("one cycle", vec![(5.0, 5.0)]).with_color((200, 0, 200)),
+    ];
+    let spec = PlotSpec::new("Controller state", "time [s]", "").size(800, 300);
+    timeline_plot(&path, &spec, &lanes).unwrap();
+    assert_eq!(png_dims(&path), (800, 300));
+    let px = png_pixels(&path);
+    assert!(count(&px, palette_color(0)) > 1000, "active bar drawn");
+    assert!(
+        count(&px, (200, 0, 200)) > 10,
+        "a zero-length interval stays visible"
+    );
+    let svg = dir.join("t.svg");
+    timeline_plot(&svg, &spec, &lanes).unwrap();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("fault (never)") && text.contains("time [s]"));
+    assert!(timeline_plot(&path, &spec, &[]).is_err());
+    let bad = [Lane::new("b", vec![(2.0, 1.0)])];
+    assert!(timeline_plot(&path, &spec, &bad).is_err());
+    let empty = [Lane::new("e", vec![])];
+    assert!(timeline_plot(&path, &spec, &empty).is_err());
+    assert!(timeline_plot(&path, &spec.clone().x_range(0.0, 1.0), &empty).is_ok());
+}
+
+#[test]
+fn html_contents_and_file_links() {
+    let mut r = HtmlReport::new("t");
+    r.contents()
+        .section("1. Plan & campaign")
+        .subsection("Points")
+        .section("Data files")
+        .files(&[
+            FileLink::new("plan.csv", "the plan <rows>"),
+            FileLink::new("forming_open/log.csv", "the log"),
+        ])
+        .section("Data files");
+    let html = r.render().unwrap();
+    assert!(html.contains("<h2 id=\"1-plan-campaign\">1. Plan &amp; campaign</h2>"));
+    assert!(html.contains("<h3 id=\"points\">Points</h3>"));
+    assert!(html.contains("<h2 id=\"data-files-2\">"), "unique ids");
+    assert!(html.contains("<a href=\"#1-plan-campaign\">1. Plan &amp; campaign</a>"));
+    assert!(html.contains("<a href=\"#points\">"));
+    assert!(html.contains("<a href=\"#data-files-2\">"));
+    assert!(html.contains("<a href=\"plan.csv\"><code>plan.csv</code></a>: the plan &lt;rows&gt;"));
+    assert!(html.contains("<a href=\"forming_open/log.csv\">"));
+    for bad in [
+        "/etc/passwd",
+        "../x.csv",
+        "a/../../x.csv",
+        "http://x/y.csv",
+        "javascript:alert(1)",
+        "a b.csv",
+        "",
+    ] {
+        let mut r = HtmlReport::new("t");
+        r.files(&[FileLink::new(bad, "d")]);
+        assert!(r.render().is_err(), "{bad:?} accepted");
+    }
+}

@@ -230,6 +230,10 @@ pub struct FormingRun {
     pub summary: FormingSummary,
     /// Formed profile along the ray at θ = 0: (r mm, depth mm).
     pub profile_mm: Vec<(f64, f64)>,
+    /// Programmed profile along the same ray, on the same radii: what a rigid robot following
+    /// the desired path exactly would have formed ([`crate::sheet::Sheet::programmed_profile`]);
+    /// empty against a fixture.
+    pub programmed_profile_mm: Vec<(f64, f64)>,
     /// Wall-clock time of the simulation (s), not part of the deterministic output.
     pub wall_time_s: f64,
 }
@@ -307,20 +311,30 @@ pub fn run_forming_with_progress(
     }
     progress(1.0);
     let stats = cell.stats().clone();
-    let (aerens, actual, (step_mm, angle), depth, profile_mm) = match cell.workpiece() {
-        crate::cell::Workpiece::Sheet(sheet) => (
-            sheet.steady_force_n(),
-            sheet.level_force_n(),
-            sheet.actual_step_and_angle(),
-            sheet.max_depth_m(),
-            sheet
-                .profile(0.0)
-                .into_iter()
-                .map(|(r, d)| (r * 1e3, d * 1e3))
-                .collect(),
-        ),
-        crate::cell::Workpiece::Fixture(f) => (0.0, 0.0, (0.0, 0.0), f.deepest_m(), Vec::new()),
+    let to_mm = |profile: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+        profile
+            .into_iter()
+            .map(|(r, d)| (r * 1e3, d * 1e3))
+            .collect()
     };
+    let (aerens, actual, (step_mm, angle), depth, profile_mm, programmed_profile_mm) =
+        match cell.workpiece() {
+            crate::cell::Workpiece::Sheet(sheet) => {
+                let desired: Vec<Vector3<f64>> =
+                    cell.log().rows.iter().map(|r| r.truth.desired_m).collect();
+                (
+                    sheet.steady_force_n(),
+                    sheet.level_force_n(),
+                    sheet.actual_step_and_angle(),
+                    sheet.max_depth_m(),
+                    to_mm(sheet.profile(0.0)),
+                    to_mm(sheet.programmed_profile(&desired)),
+                )
+            }
+            crate::cell::Workpiece::Fixture(f) => {
+                (0.0, 0.0, (0.0, 0.0), f.deepest_m(), Vec::new(), Vec::new())
+            }
+        };
     let summary = FormingSummary {
         simulated: true,
         robot: cell.robot_name().to_string(),
@@ -348,6 +362,7 @@ pub fn run_forming_with_progress(
         log: cell.log().clone(),
         summary,
         profile_mm,
+        programmed_profile_mm,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
 }
@@ -379,11 +394,20 @@ impl FormingRun {
         write("log.csv", self.log.to_csv())?;
         write("summary.json", self.summary_json())?;
         let mut profile = format!(
-            "# SIMULATED formed profile along θ = 0; robot: {}\nr_mm,depth_mm\n",
+            "# SIMULATED formed profile along θ = 0 (depth below the undeformed sheet) beside the \
+             programmed one (a rigid robot on the desired path, no springback); robot: {}\n\
+             r_mm,depth_mm,programmed_depth_mm\n",
             self.summary.robot
         );
-        for (r, d) in &self.profile_mm {
-            let _ = writeln!(profile, "{r:.3},{d:.5}");
+        for (k, (r, d)) in self.profile_mm.iter().enumerate() {
+            match self.programmed_profile_mm.get(k) {
+                Some((_, p)) => {
+                    let _ = writeln!(profile, "{r:.3},{d:.5},{p:.5}");
+                }
+                None => {
+                    let _ = writeln!(profile, "{r:.3},{d:.5},");
+                }
+            }
         }
         write("profile.csv", profile)?;
         for plot in crate::plots::forming_plots(self, &temporary)? {

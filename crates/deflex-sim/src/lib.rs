@@ -54,7 +54,7 @@ pub mod fixture;
 pub mod forming;
 pub mod gcode;
 pub mod plant;
-mod plots;
+pub mod plots;
 pub mod process_model;
 pub mod profile;
 pub mod sensor;

@@ -535,6 +535,71 @@ impl Sheet {
             .map(|(i, z)| (i as f64 * self.dr, self.top - z))
             .collect()
     }
+
+    /// The **programmed** profile along the ray θ = 0 (`(r, depth below the undeformed sheet)`,
+    /// metres, on the same radii as [`Sheet::profile`]): the surface a rigid robot following the
+    /// tool-centre positions `tool_centres_m` (R_p) exactly would leave, without springback.
+    /// Computed from geometry alone, not from the formed surface: the lower envelope of the
+    /// tool sphere (radius [`Sheet::tool_radius_m`]) cut by the vertical half-plane of the ray,
+    /// `depth(r) = max_p [d_p − R + √(R² − (r − x_p)² − y_p²)]` with `d_p = −z_p` the tool
+    /// lowest point's depth (`−z_p` on the paths of [`crate::toolpath`], whose undeformed top is at z = −R), and, as [`Sheet::form`] does, the floor
+    /// inside the tool's path lowered to the tool's lowest point (`depth = d_p` for `r < |p|`)
+    /// when the tool is within one sector of the ray. Consecutive positions further apart than
+    /// half a radial step are interpolated, so a logged path (50 Hz) gives the same envelope as
+    /// the cycle-rate path.
+    pub fn programmed_profile(&self, tool_centres_m: &[Vector3<f64>]) -> Vec<(f64, f64)> {
+        let rr = self.radius * self.radius;
+        let half_sector = 2.0 * PI / self.sectors as f64;
+        let mut depth = vec![0.0f64; self.bins];
+        let mut press = |p: &Vector3<f64>| {
+            // Depth of the tool's lowest point below the undeformed top.
+            let d = self.top - (p.z - self.radius);
+            if p.y.abs() < self.radius && p.x > -self.radius {
+                let reach = (rr - p.y * p.y).sqrt();
+                let lo = ((p.x - reach) / self.dr).floor().max(0.0) as usize;
+                let hi = (((p.x + reach) / self.dr).ceil().max(0.0) as usize).min(self.bins - 1);
+                for (i, depth) in depth.iter_mut().enumerate().take(hi + 1).skip(lo) {
+                    let u = i as f64 * self.dr - p.x;
+                    let h = rr - u * u - p.y * p.y;
+                    if h > 0.0 {
+                        *depth = depth.max(d - self.radius + h.sqrt());
+                    }
+                }
+            }
+            let r_t = p.x.hypot(p.y);
+            if p.x > 0.0 && p.y.atan2(p.x).abs() < half_sector {
+                let inside = ((r_t / self.dr).ceil() as usize).min(self.bins);
+                for depth in depth.iter_mut().take(inside) {
+                    *depth = depth.max(d);
+                }
+            }
+        };
+        let step = 0.5 * self.dr;
+        for (k, p) in tool_centres_m.iter().enumerate() {
+            if !p.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            if let Some(prev) = k.checked_sub(1).map(|j| tool_centres_m[j])
+                && prev.iter().all(|v| v.is_finite())
+            {
+                let gap = (p - prev).norm();
+                // Only the part of the path near the ray needs the fine steps.
+                let near = prev.y.abs().min(p.y.abs()) < self.radius + gap;
+                if near && gap > step {
+                    let n = ((gap / step).ceil() as usize).min(100_000);
+                    for j in 1..n {
+                        press(&(prev + (p - prev) * (j as f64 / n as f64)));
+                    }
+                }
+            }
+            press(p);
+        }
+        depth
+            .into_iter()
+            .enumerate()
+            .map(|(i, d)| (i as f64 * self.dr, d.max(0.0)))
+            .collect()
+    }
 }
 
 #[cfg(test)]

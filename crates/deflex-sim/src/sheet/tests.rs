@@ -94,3 +94,94 @@ fn a_plastic_pass_leaves_the_part_at_the_tool_depth_minus_springback() {
     let lifted = sheet.contact(&Vector3::new(0.015, 0.0, -0.0049));
     assert!(lifted.force_n < c.force_n);
 }
+
+/// The programmed profile of the paper's cone against the envelope worked out by hand: spheres
+/// of radius R whose centres run down a 45° line leave a parallel line R/cos α below the centre
+/// line, i.e. depth(r) = (r₀ − r)·tan α − R + R/cos α where the tangent point (R sin α further
+/// in) lies on the wall; below the wall's foot the last turn's sphere rounds the corner; the floor
+/// inside the last turn sits at the programmed depth; the sheet beyond r₀ + R is untouched.
+#[test]
+fn the_programmed_profile_of_a_cone_is_the_swept_sphere_envelope() {
+    let config = SheetConfig::default();
+    let sheet = Sheet::new(&config, 0.24, 45.0).unwrap();
+    let r_tool = config.tool_diameter_mm / 2.0 * 1e-3;
+    let path = crate::toolpath::ToolPath::paper_cone();
+    // The path's waypoints (mm) as tool centres (m); 5° apart, interpolated by the method.
+    let centres: Vec<Vector3<f64>> = path
+        .waypoints
+        .iter()
+        .map(|w| Vector3::new(w.p_mm[0], w.p_mm[1], w.p_mm[2]) * 1e-3)
+        .collect();
+    let profile = sheet.programmed_profile(&centres);
+    assert_eq!(profile.len(), sheet.profile(0.0).len());
+    let (r0, depth, tan) = (0.020, 0.015, 1.0f64);
+    let cos = 45f64.to_radians().cos();
+    let r_bottom = r0 - depth / tan;
+    let mut checked = 0;
+    for &(r, d) in &profile {
+        let sin = cos; // 45°
+        let expected = if r < r_bottom - 1e-4 {
+            Some(depth)
+        } else if r > r_bottom + 1e-4 && r < r_bottom + r_tool * sin - 1e-4 {
+            // Outside the last turn, below the wall's foot: the last turn's sphere.
+            let u = r - r_bottom;
+            Some(depth - r_tool + (r_tool * r_tool - u * u).sqrt())
+        } else if r > r_bottom + r_tool * sin + 1e-4 && r < r0 + r_tool * sin - 1e-4 {
+            // Tangent points on the wall: the parallel line.
+            Some(((r0 - r) * tan - r_tool + r_tool / cos).max(0.0))
+        } else if r > r0 + r_tool + 1e-4 {
+            Some(0.0)
+        } else {
+            None
+        };
+        if let Some(e) = expected {
+            // The helix steps 0.24 mm per turn: the scallops between passes are ~2 µm deep
+            // (scallop_height_mm), the 5° chords a few µm.
+            assert!(
+                (d - e).abs() < 2e-5,
+                "r {:.2} mm: {:.4} mm, expected {:.4} mm",
+                r * 1e3,
+                d * 1e3,
+                e * 1e3
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 200, "{checked}");
+}
+
+/// One circle of tool centres at a depth: the floor inside it at that depth only near the ray
+/// (as `form` lowers it), the sphere's cross-section around its radius.
+#[test]
+fn the_programmed_profile_of_one_circle() {
+    let config = SheetConfig::default();
+    let sheet = Sheet::new(&config, 0.24, 45.0).unwrap();
+    let r_tool = config.tool_diameter_mm / 2.0 * 1e-3;
+    let (rho, d) = (0.015, 0.002);
+    let top = sheet.top_m();
+    let circle: Vec<Vector3<f64>> = (0..=720)
+        .map(|k| {
+            let t = k as f64 * PI / 360.0;
+            Vector3::new(rho * t.cos(), rho * t.sin(), top + r_tool - d)
+        })
+        .collect();
+    let profile = sheet.programmed_profile(&circle);
+    for &(r, depth) in &profile {
+        let u = r - rho;
+        let expected = if r < rho {
+            d
+        } else if u < r_tool {
+            (d - r_tool + (r_tool * r_tool - u * u).sqrt()).max(0.0)
+        } else {
+            0.0
+        };
+        assert!(
+            (depth - expected).abs() < 2e-6,
+            "r {r}: {depth} vs {expected}"
+        );
+    }
+    // Non-finite positions are skipped, not spread.
+    let mut with_nan = circle.clone();
+    with_nan[100] = Vector3::new(f64::NAN, 0.0, 0.0);
+    assert_eq!(sheet.programmed_profile(&with_nan), profile);
+}
