@@ -40,6 +40,18 @@ pub enum SimCommand {
     Isf(IsfArgs),
     /// The closed loop across delay, model scale, sensor gain, bias drift and contact stiffness.
     Sensitivity(SensitivityArgs),
+    /// Write the robot file of the simulated cell: the robot with the cell's tool and base pivot,
+    /// the description a user would write for that cell (start of a calibration on the twin).
+    Robot(RobotArgs),
+}
+
+#[derive(Args)]
+pub struct RobotArgs {
+    #[command(flatten)]
+    pub twin: TwinArgs,
+    /// The robot file to write (TOML).
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// The robot and the twin settings, shared by every `sim` command.
@@ -148,7 +160,43 @@ pub fn sim(command: SimCommand, json: bool) -> CliResult {
         SimCommand::Campaign(args) => campaign(args, json),
         SimCommand::Isf(args) => isf(args, json),
         SimCommand::Sensitivity(args) => sensitivity(args, json),
+        SimCommand::Robot(args) => cell_robot(args, json),
     }
+}
+
+/// `deflex sim robot`: the nominal robot of the simulated cell as a robot file.
+fn cell_robot(args: RobotArgs, json: bool) -> CliResult {
+    let config = load_config(&args.twin)?;
+    let robot = config.nominal_robot().map_err(|e| e.to_string())?;
+    let text = format!(
+        "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
+         # cell's tool and base pivot, as a user would describe that cell.\n{}",
+        config.part.robot,
+        deflex_model::robot_to_toml_for(&robot, &args.out)
+    );
+    deflex_files::write_atomic(&args.out, text)
+        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    if json {
+        crate::args::print_json(&serde_json::json!({
+            "simulated": true,
+            "robot": robot.name,
+            "geometry_fingerprint": robot.geometry_fingerprint(),
+            "tool_xyz_m": robot.tool.translation.vector.as_slice(),
+            "out": args.out,
+        }));
+    } else {
+        let t = robot.tool.translation.vector * 1e3;
+        println!(
+            "SIMULATED cell robot {} (tool {:.1} {:.1} {:.1} mm, geometry {}) → {}",
+            robot.name,
+            t.x,
+            t.y,
+            t.z,
+            robot.geometry_fingerprint(),
+            args.out.display()
+        );
+    }
+    Ok(())
 }
 
 /// A numeric option: finite and within `[lo, hi]`, else an error naming it.
@@ -302,10 +350,14 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
     if spiral_options && !args.spiral {
         return Err("the --spiral-* options need --spiral".into());
     }
+    let mut plan_header = None;
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
-            let plan_rows = deflex_calib::read_plan(plan).map_err(|e| e.to_string())?;
-            let rows = run_campaign(&config, &plan_rows, args.seed).map_err(|e| e.to_string())?;
+            let plan_file =
+                deflex_calib::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
+            let rows =
+                run_campaign(&config, &plan_file.rows, args.seed).map_err(|e| e.to_string())?;
+            plan_header = Some(plan_file.header);
             (format!("plan {}", plan.display()), rows)
         }
         (None, Some(_), false) => {
@@ -339,7 +391,8 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         }
         _ => return Err("give one of --plan PLAN.csv, --grid [cell|paper] or --spiral".into()),
     };
-    let text = campaign_text(&config, &rows, &kind, args.seed).map_err(|e| e.to_string())?;
+    let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())
+        .map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, text)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     let cases = deflex_calib::data::load_case_count(&rows);

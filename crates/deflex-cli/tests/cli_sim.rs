@@ -485,3 +485,43 @@ fn the_twin_plays_the_robot_it_is_given_and_names_it() {
     assert!(stdout.contains("fixture"), "{stdout}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A campaign measured from a plan names the robot the plan was made for (its coordinates are
+/// the plan's), so `calibrate --robot` with that robot sees no fingerprint mismatch.
+#[test]
+fn a_campaign_from_a_plan_carries_the_plans_robot_lines() {
+    let dir = scratch("plan-header");
+    let plan = dir.join("plan.csv");
+    let meas = dir.join("meas.csv");
+    let (ok, _, stderr) = deflex(&[
+        "plan",
+        "--robot",
+        "ur10e",
+        "--load-cases",
+        "6",
+        "--out",
+        plan.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let (ok, _, stderr) = deflex(&[
+        "sim",
+        "campaign",
+        "--robot",
+        "ur10e",
+        "--plan",
+        plan.to_str().unwrap(),
+        "--out",
+        meas.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let text = std::fs::read_to_string(&meas).unwrap();
+    let fingerprint = deflex_model::builtin("ur10e")
+        .unwrap()
+        .geometry_fingerprint();
+    assert!(
+        text.contains(&format!("# geometry: {fingerprint}\n")),
+        "{}",
+        &text[..400]
+    );
+    assert!(text.starts_with("# SIMULATED"));
+}

@@ -266,7 +266,7 @@ fn study(
     progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
     let campaign = run_campaign(&cell, &plan.rows, seed).map_err(|e| e.to_string())?;
     let campaign_file = |rows: &[deflex_calib::MeasurementRow], what: &str, seed: u64| {
-        campaign_text(&cell, rows, what, seed).map_err(|e| e.to_string())
+        campaign_text(&cell, rows, what, seed, None).map_err(|e| e.to_string())
     };
     write_text(
         &out.join("campaign.csv"),

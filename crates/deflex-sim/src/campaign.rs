@@ -156,22 +156,31 @@ pub fn run_campaign(
     Ok(out)
 }
 
-/// A campaign file's text: the `# SIMULATED` header naming the robot the twin played (its name,
-/// the spec it was given as and the geometry fingerprint of its description) and what was
-/// measured, then the rows in the measurement format.
+/// A campaign file's text: the `# SIMULATED` header naming what was measured and the robot the
+/// twin played, then the rows in the measurement format. The robot lines (`# robot:`,
+/// `# geometry:`, which deflex-calib reads and checks) are those of `plan_header` when the
+/// campaign measured a plan that names its robot (the point coordinates are the plan's), else
+/// those of the twin's nominal robot (its cell's tool included).
 pub fn campaign_text(
     config: &CellConfig,
     rows: &[MeasurementRow],
     what: &str,
     seed: u64,
+    plan_header: Option<&deflex_calib::data::FileHeader>,
 ) -> Result<String, SimError> {
-    let robot = config.nominal_robot()?;
     let note = format!(
         "SIMULATED deflex digital-twin campaign ({what}) of `{}`, seed {seed}: not a measurement",
         config.part.robot
     );
-    // The header (`# robot:`, `# geometry:`) is the one deflex-calib reads and checks.
-    Ok(deflex_calib::data::format_rows_for(&robot, rows, &[&note]))
+    let robot_lines = match plan_header {
+        Some(header) if header.robot.is_some() && header.geometry.is_some() => header.clone(),
+        _ => deflex_calib::data::FileHeader::for_robot(&config.nominal_robot()?),
+    };
+    Ok(deflex_calib::data::format_rows_with_header(
+        &robot_lines,
+        rows,
+        &[&note],
+    ))
 }
 
 fn instruments(config: &CellConfig, seed: u64) -> (LaserTracker, ChaCha8Rng) {

@@ -569,13 +569,22 @@ pub fn write_rows(path: &Path, rows: &[MeasurementRow]) -> Result<(), DataError>
 /// `# geometry: …`, see [`FileHeader`]), preceded by `notes` as comment lines (e.g.
 /// `SIMULATED …`).
 pub fn format_rows_for(robot: &Robot, rows: &[MeasurementRow], notes: &[&str]) -> String {
+    format_rows_with_header(&FileHeader::for_robot(robot), rows, notes)
+}
+
+/// [`format_rows`] after `notes` and the robot lines of `robot_lines` (e.g. the header of the
+/// plan the rows measured, so the file names the robot its coordinates were made for).
+pub fn format_rows_with_header(
+    robot_lines: &FileHeader,
+    rows: &[MeasurementRow],
+    notes: &[&str],
+) -> String {
     let mut header = FileHeader::default();
     for note in notes {
         header = header.with_note(*note);
     }
-    let robot_lines = FileHeader::for_robot(robot);
-    header.robot = robot_lines.robot;
-    header.geometry = robot_lines.geometry;
+    header.robot = robot_lines.robot.clone();
+    header.geometry = robot_lines.geometry.clone();
     format!("{}{}", header.render(), format_rows(rows))
 }
 
