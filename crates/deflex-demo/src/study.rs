@@ -9,7 +9,7 @@ use crate::tables::{
 use crate::twin_controller::{controller_config_for, run_closed_loop};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::validate::predict;
-use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure, write_rows};
+use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure};
 use deflex_model::{Robot, robot_to_toml};
 use deflex_sim::campaign::{
     GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
@@ -250,10 +250,12 @@ fn study(
         configurations: if options.quick { 300 } else { 600 },
         seed,
         full_family: true,
-        ..PlanOptions::default()
+        // The cell's floor and work table, as `deflex plan` checks them.
+        ..PlanOptions::for_a_real_cell()
     };
     let plan = plan_experiments(&nominal, &plan_options).map_err(|e| e.to_string())?;
-    write_rows(&out.join("plan.csv"), &plan.rows).map_err(|e| e.to_string())?;
+    deflex_calib::data::write_rows_for(&out.join("plan.csv"), &nominal, &plan.rows, &[])
+        .map_err(|e| e.to_string())?;
     let load_cases = deflex_calib::data::load_case_count(&plan.rows);
     progress.done(&format!(
         "{load_cases} load cases, {} points to measure",

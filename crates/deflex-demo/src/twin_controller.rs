@@ -189,7 +189,7 @@ pub fn identify_from_twin_campaign(cell: &CellConfig, seed: u64) -> Result<Robot
     let nominal = cell.nominal_robot().map_err(|e| e.to_string())?;
     let options = deflex_calib::plan::PlanOptions {
         full_family: true,
-        ..Default::default()
+        ..deflex_calib::plan::PlanOptions::for_a_real_cell()
     };
     let plan =
         deflex_calib::plan::plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
