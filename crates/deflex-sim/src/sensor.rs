@@ -11,13 +11,28 @@
 //! compensate the tool weight, which rotates with the tool, as on hardware.
 
 use crate::config::{CellConfig, SensorConfig};
-use deflex_model::wrench::world_wrench_in_sensor;
 use deflex_model::{Pose, Wrench};
 use nalgebra::{Rotation3, Vector3};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
+
+/// What a sensor at `sensor` (world pose) reads for a contact wrench given in world axes with
+/// its moment about world point `at`: the force in sensor axes, `f_s = Rᵀ f`, and the moment
+/// about the sensor origin S, `m_S = m_at + (at − S) × f`, in sensor axes. Written here, not taken
+/// from deflex-model, so that the controller's wrench processing (which undoes it with the model's
+/// transforms) is checked against a separate implementation.
+fn contact_in_sensor(contact: &Wrench, at: &Vector3<f64>, sensor: &Pose) -> Wrench {
+    let force = Vector3::new(contact[0], contact[1], contact[2]);
+    let moment_at = Vector3::new(contact[3], contact[4], contact[5]);
+    let origin = sensor.translation.vector;
+    let moment_at_sensor = moment_at + (at - origin).cross(&force);
+    let r_t = sensor.rotation.inverse();
+    let f = r_t * force;
+    let m = r_t * moment_at_sensor;
+    Wrench::new(f.x, f.y, f.z, m.x, m.y, m.z)
+}
 
 /// One raw F/T sample as the sensor reports it (sensor frame, N and N·m, bias + tool gravity +
 /// noise included, saturated values clipped).
@@ -119,7 +134,7 @@ impl ForceSensor {
     /// plus tool weight, in the sensor frame.
     pub fn ideal_reading(&self, flange: &Pose, contact: &Wrench, at: &Vector3<f64>) -> Wrench {
         let sensor = self.sensor_pose(flange);
-        world_wrench_in_sensor(contact, at, &sensor)
+        contact_in_sensor(contact, at, &sensor)
             + tool_gravity_in_sensor(
                 &sensor.rotation,
                 self.tool_mass_kg,
@@ -180,6 +195,20 @@ impl ForceSensor {
 mod tests {
     use super::*;
     use deflex_model::spatial::pose_from_xyz_rpy;
+
+    #[test]
+    fn a_contact_force_below_the_sensor_reads_as_a_lever_moment_by_hand() {
+        // Sensor 0.2 m above the tool tip, axes turned by 90° about z (x_s = y_world). A force
+        // of 100 N along world x at the tip: f_s = (0, −100, 0); about the sensor origin the
+        // moment is (tip − S) × f = (0, 0, −0.2) × (100, 0, 0) = (0, −20, 0) N·m in world axes,
+        // i.e. (−20, 0, 0) N·m in sensor axes.
+        let sensor = pose_from_xyz_rpy([1.0, 0.5, 0.3], [0.0, 0.0, std::f64::consts::FRAC_PI_2]);
+        let tip = Vector3::new(1.0, 0.5, 0.1);
+        let reading =
+            contact_in_sensor(&Wrench::new(100.0, 0.0, 0.0, 0.0, 0.0, 0.0), &tip, &sensor);
+        let expected = Wrench::new(0.0, -100.0, 0.0, -20.0, 0.0, 0.0);
+        assert!((reading - expected).norm() < 1e-12, "{reading}");
+    }
     use rand::SeedableRng;
 
     fn quiet() -> SensorConfig {
