@@ -8,12 +8,36 @@ pub type CliResult = Result<(), String>;
 /// A numeric flag within `[lo, hi]` (NaN and infinities refused), or an error naming the flag,
 /// the bounds and the value.
 pub fn check_flag(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<(), String> {
+    bounded(name, value, lo, hi, unit).map(|_| ())
+}
+
+/// [`check_flag`] returning the value.
+pub fn bounded(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
     if value >= lo && value <= hi {
-        Ok(())
+        Ok(value)
     } else {
+        let unit = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {unit}")
+        };
         Err(format!(
-            "{name}: expected a number from {lo} to {hi} {unit}, got {value}"
+            "{name}: expected a number from {} to {}{unit}, got {}",
+            compact(lo),
+            compact(hi),
+            compact(value)
         ))
+    }
+}
+
+/// A number for a message: plain when readable, in exponent form when very large or small
+/// (`1e308`, not three hundred digits).
+pub fn compact(value: f64) -> String {
+    let magnitude = value.abs();
+    if value.is_finite() && value != 0.0 && !(1e-3..1e6).contains(&magnitude) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
     }
 }
 

@@ -221,13 +221,7 @@ fn geometry_json(check: &GeometryCheck) -> Value {
 
 /// A number flag within a range, named in the error.
 pub(crate) fn check_range(flag: &str, value: f64, lo: f64, hi: f64) -> Result<(), String> {
-    if value.is_finite() && value >= lo && value <= hi {
-        Ok(())
-    } else {
-        Err(format!(
-            "{flag}: expected a number from {lo} to {hi}, got {value}"
-        ))
-    }
+    crate::args::check_flag(flag, value, lo, hi, "")
 }
 
 pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {

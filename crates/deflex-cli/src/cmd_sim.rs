@@ -16,7 +16,7 @@
 //! Every output names the robot the twin played. Every numeric option is checked (finite, within
 //! its documented range); the error names the option.
 
-use crate::args::{CliResult, parse_list, print_json};
+use crate::args::{CliResult, bounded, parse_list, print_json};
 use clap::{Args, Subcommand};
 use deflex_sim::campaign::{
     GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
@@ -197,17 +197,6 @@ fn cell_robot(args: RobotArgs, json: bool) -> CliResult {
         );
     }
     Ok(())
-}
-
-/// A numeric option: finite and within `[lo, hi]`, else an error naming it.
-fn bounded(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
-    if value.is_finite() && value >= lo && value <= hi {
-        Ok(value)
-    } else {
-        Err(format!(
-            "{name}: expected a number from {lo} to {hi} {unit}, got {value}"
-        ))
-    }
 }
 
 /// The cell: the robot's (`--robot`, else the file's, else the TX200's), with the twin file's
