@@ -7,8 +7,8 @@
 //! a pose the solver cannot reach ([`IkFailure::NotConverged`]).
 
 use deflex_model::spatial::orientation_error;
-use deflex_model::{Data, MAX_JOINTS, Pose, Robot};
-use nalgebra::{Matrix6, Vector6};
+use deflex_model::{Data, MAX_JOINTS, Pose, Robot, damped_least_squares_step};
+use nalgebra::Vector6;
 
 /// Settings of [`track`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -151,23 +151,15 @@ pub fn track(
             dr.z * weight,
         );
         let mut columns = robot.geometric_jacobian_columns(data, &data.tcp_position());
-        let mut jjt = Matrix6::identity() * (options.damping * options.damping);
         for column in columns.iter_mut().take(n) {
             for r in 3..6 {
                 column[r] *= weight;
             }
-            jjt += *column * column.transpose();
         }
-        let Some(cholesky) = jjt.cholesky() else {
+        let Some(step) = damped_least_squares_step(&columns[..n], &error, options.damping) else {
             break;
         };
-        let y = cholesky.solve(&error);
-        let mut largest: f64 = 0.0;
-        let mut step = [0.0; MAX_JOINTS];
-        for (s, column) in step.iter_mut().zip(&columns).take(n) {
-            *s = column.dot(&y);
-            largest = largest.max(s.abs());
-        }
+        let largest = step[..n].iter().fold(0.0_f64, |m, s| m.max(s.abs()));
         let scale = if largest > options.max_step_rad {
             options.max_step_rad / largest
         } else {

@@ -2,11 +2,40 @@
 //! configuration so that successive poses of a path stay on one branch; and a multi-seed search
 //! for a single pose that tells "out of reach" from "not converged".
 
+use crate::MAX_JOINTS;
 use crate::error::ModelError;
 use crate::kinematics::Data;
 use crate::robot::Robot;
 use crate::spatial::{Pose, orientation_error};
-use nalgebra::{DMatrix, DVector, Vector6};
+use nalgebra::{Cholesky, Matrix6, U6, Vector6};
+
+/// `J Jᵀ + λ² I` of the Jacobian `columns` (6-vectors, one per joint), Cholesky-factored:
+/// the 6×6 system behind every damped-least-squares solve (IK, path tracking, joint
+/// corrections). `None` when it is not positive definite (λ = 0 at a singularity, NaN).
+/// Allocation-free.
+pub fn damped_gram(columns: &[Vector6<f64>], damping: f64) -> Option<Cholesky<f64, U6>> {
+    let mut gram = Matrix6::identity() * (damping * damping);
+    for column in columns {
+        gram += column * column.transpose();
+    }
+    gram.cholesky()
+}
+
+/// Damped-least-squares step `Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e` for the Jacobian `columns` (at most
+/// [`MAX_JOINTS`]) and the task error `e`: the joint change that best moves the task by `e`,
+/// regularised near singularities. Entries past `columns.len()` are 0. Allocation-free.
+pub fn damped_least_squares_step(
+    columns: &[Vector6<f64>],
+    error: &Vector6<f64>,
+    damping: f64,
+) -> Option<[f64; MAX_JOINTS]> {
+    let y = damped_gram(columns, damping)?.solve(error);
+    let mut step = [0.0; MAX_JOINTS];
+    for (s, column) in step.iter_mut().zip(columns) {
+        *s = column.dot(&y);
+    }
+    Some(step)
+}
 
 /// Settings of [`Robot::inverse_kinematics`].
 #[derive(Clone, Copy, Debug)]
@@ -97,23 +126,24 @@ impl Robot {
                     orientation_error_rad: orientation_error,
                 });
             }
-            let mut jacobian = self.geometric_jacobian(&data, &data.tcp_position());
-            for mut row in jacobian.rows_mut(3, 3).row_iter_mut() {
-                row *= weight;
+            let mut columns = self.geometric_jacobian_columns(&data, &data.tcp_position());
+            for column in columns.iter_mut().take(n) {
+                for r in 3..6 {
+                    column[r] *= weight;
+                }
             }
-            let jjt = &jacobian * jacobian.transpose();
-            let e = DVector::from_column_slice(error.as_slice());
             let mut improved = false;
             for _ in 0..12 {
-                let damped = &jjt + DMatrix::identity(6, 6) * (lambda * lambda);
-                let Some(solved) = damped.cholesky().map(|c| c.solve(&e)) else {
+                let Some(mut step) = damped_least_squares_step(&columns[..n], &error, lambda)
+                else {
                     lambda *= 10.0;
                     continue;
                 };
-                let mut step = jacobian.transpose() * solved;
-                let largest = step.amax();
+                let largest = step[..n].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
                 if largest > options.max_step_rad {
-                    step *= options.max_step_rad / largest;
+                    for s in &mut step[..n] {
+                        *s *= options.max_step_rad / largest;
+                    }
                 }
                 for i in 0..n {
                     trial[i] = q[i] + step[i];

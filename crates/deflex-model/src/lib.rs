@@ -39,7 +39,7 @@ pub use description::{
     robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml, robot_to_toml_for,
 };
 pub use error::{ModelError, QLengthError};
-pub use ik::{IkOptions, IkSolution};
+pub use ik::{IkOptions, IkSolution, damped_gram, damped_least_squares_step};
 pub use kinematics::Data;
 pub use robot::{
     Axis, AxisStiffness, DhConvention, DhParams, Edof, EdofSite, Joint, LinkInertia, NamedPoint,

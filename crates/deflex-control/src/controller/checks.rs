@@ -7,7 +7,7 @@ use super::{Controller, CycleInput, CycleOutput, Phase};
 use crate::runaway::RunawayAction;
 use crate::safety::{Channel, Fault, FaultKind, Flags};
 use deflex_model::{MAX_JOINTS, Wrench};
-use nalgebra::{Matrix6, Vector3, Vector6};
+use nalgebra::{Vector3, Vector6};
 
 /// Damping λ of the least-squares map from a Cartesian correction to joint corrections
 /// ([`Controller::joint_correction_map`]): Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ ξ. With J in metres per radian
@@ -250,11 +250,9 @@ impl Controller {
             let ang = r_t * Vector3::new(c[3], c[4], c[5]);
             *b = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
         }
-        let mut jjt = Matrix6::identity() * (JOINT_MAP_DAMPING * JOINT_MAP_DAMPING);
-        for c in &base_columns[..n] {
-            jjt += c * c.transpose();
-        }
-        let Some(inverse) = jjt.cholesky().map(|ch| ch.inverse()) else {
+        let Some(inverse) =
+            deflex_model::damped_gram(&base_columns[..n], JOINT_MAP_DAMPING).map(|ch| ch.inverse())
+        else {
             return map;
         };
         for (row, c) in map.iter_mut().zip(&base_columns).take(n) {
