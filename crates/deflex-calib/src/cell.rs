@@ -41,7 +41,7 @@
 use crate::CalibError;
 use deflex_model::{Data, Robot};
 use nalgebra::{Point3, Vector3};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 
@@ -410,16 +410,7 @@ pub fn default_force_n(robot: &Robot) -> Result<f64, CalibError> {
     let mut data = Data::new();
     let mut compliances = Vec::new();
     for _ in 0..200 {
-        let q: Vec<f64> = robot
-            .joints
-            .iter()
-            .map(|j| {
-                let [lo, hi] = j
-                    .limits
-                    .unwrap_or([-std::f64::consts::PI, std::f64::consts::PI]);
-                if hi > lo { rng.gen_range(lo..hi) } else { lo }
-            })
-            .collect();
+        let q: Vec<f64> = crate::synthetic::random_q(robot, &mut rng);
         robot
             .forward_kinematics(&mut data, &q)
             .map_err(|e| CalibError::Invalid(e.to_string()))?;

@@ -181,7 +181,7 @@ pub fn random_campaign(
     rows
 }
 
-/// Random joint values within the limits.
+/// Random joint values within the limits (uniform; ±π for a joint without limits).
 pub fn random_q(robot: &Robot, rng: &mut impl Rng) -> Vec<f64> {
     robot
         .joints
@@ -190,7 +190,7 @@ pub fn random_q(robot: &Robot, rng: &mut impl Rng) -> Vec<f64> {
             let [lo, hi] = j
                 .limits
                 .unwrap_or([-std::f64::consts::PI, std::f64::consts::PI]);
-            rng.gen_range(lo..hi)
+            if hi > lo { rng.gen_range(lo..hi) } else { lo }
         })
         .collect()
 }

@@ -12,7 +12,7 @@ use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId};
 use deflex_model::{Data, Robot};
 use nalgebra::{DMatrix, Point3, Vector3};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Round joint values to 0.1° without leaving the limits.
@@ -106,16 +106,7 @@ pub(super) fn candidates(
     let (mut kept, mut drawn) = (0, 0);
     while kept < o.configurations && drawn < 20 * o.configurations {
         drawn += 1;
-        let mut q: Vec<f64> = robot
-            .joints
-            .iter()
-            .map(|j| {
-                let [lo, hi] = j
-                    .limits
-                    .unwrap_or([-std::f64::consts::PI, std::f64::consts::PI]);
-                if hi > lo { rng.gen_range(lo..hi) } else { lo }
-            })
-            .collect();
+        let mut q: Vec<f64> = crate::synthetic::random_q(robot, &mut rng);
         round_within_limits(robot, &mut q);
         // The rows carry the joint values wrapped into the limits (what the technician types);
         // the information is computed at the values drawn, the same pose.
