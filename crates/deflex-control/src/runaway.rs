@@ -111,8 +111,9 @@
 //!   contact is gone or the correction reversed),
 //!
 //! and then it is released **at a rate**: the cap along u rises by `release_rate_m_s` while the
-//! detector keeps watching (a renewed runaway trips again, from the cap reached), and the hold
-//! ends once the cap exceeds the law's value by `min_correction_m`. **Bound:** with `withdraw`,
+//! detector keeps watching (a runaway seen again withdraws again from the cap reached, as part of
+//! the same episode: one `contact_runaway` report per hold), and the hold ends once the cap
+//! exceeds the law's value by `min_correction_m`. **Bound:** with `withdraw`,
 //! once the ramp is done the force along u is what the program alone gives, `P₀`; before, it is at
 //! most `P₀ + k_eff ξ_trip`, with ξ_trip the correction along u at the trip (what grew during
 //! detection: `confirm_cycles` plus the estimator's settling, times the correction's growth per
@@ -241,7 +242,8 @@ pub struct RunawayHold {
 pub struct GuardUpdate {
     /// Estimated loop gain ĝ, NaN when unknown (no direction or too little motion).
     pub gain: f64,
-    /// A runaway was detected this cycle (the hold began or was renewed, or a fault is due).
+    /// A runaway was detected this cycle (a hold began, or a fault is due). A runaway seen again
+    /// while a hold is being released renews the hold without a new report.
     pub tripped: bool,
     /// A hold is active after this update.
     pub holding: bool,
@@ -460,8 +462,8 @@ impl RunawayGuard {
                     HoldPhase::Releasing => {
                         hold.cap += config.release_rate_m_s * h;
                         if self.detect(&estimate) {
-                            // A renewed runaway: withdraw (or hold) again from where it is.
-                            out.tripped = true;
+                            // The runaway is still there: withdraw (or hold) again from where it
+                            // is. The same episode: no new report.
                             hold.cap_at_trip = hold.cap.min(along).max(0.0);
                             hold.cap = hold.cap_at_trip;
                             hold.since_trip_s = 0.0;
