@@ -477,7 +477,9 @@ fn study(
     contact_files.push((
         figure,
         "Plunge into a 10⁷ N/m fixture: the contact force over time without correction, with \
-         correction and no runaway guard, and with the runaway guard (SIMULATED)"
+         correction and no runaway guard, and with the runaway guard, whose curve lies on the \
+         uncorrected one once the guard has withdrawn the correction along the runaway \
+         direction (SIMULATED)"
             .to_string(),
     ));
     let mut stiff_contact_sweep = Vec::new();
