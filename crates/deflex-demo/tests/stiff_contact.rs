@@ -81,7 +81,10 @@ fn stiff_contact_runs_away_without_the_guard_and_is_held_with_it() {
             g.max_force_N,
             g.force_ratio_to_uncorrected
         );
-        assert_eq!(g.runaway_warnings, 1, "{k:e}: one report per episode: {g:?}");
+        assert_eq!(
+            g.runaway_warnings, 1,
+            "{k:e}: one report per episode: {g:?}"
+        );
         let warning = g.first_runaway.as_deref().unwrap_or_default();
         assert!(warning.starts_with("contact_runaway"), "{warning}");
         assert!(g.fault.is_none(), "{k:e}: {:?}", g.fault);
