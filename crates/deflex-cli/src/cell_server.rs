@@ -2,7 +2,10 @@
 //! It plays the robot of `robot.kind` (a KUKA sending RSI telegrams, an ABB streaming EGM, the
 //! Stäubli VAL3 program, a UR script on the simple UDP/TCP line links) at the twin's robot cycle
 //! and the ATI Net F/T streaming its readings while the twin forms the cone, so `deflex run` can
-//! be tried end to end with no hardware. It reads the same `CELL.toml` as `deflex run`.
+//! be tried end to end with no hardware. It reads the same `CELL.toml` as `deflex run`. The twin
+//! plays any robot (`--robot`: a built-in name or a robot file; default the twin file's, else the
+//! paper's TX200) with that robot's cell (`deflex_sim::CellConfig::for_robot`: part position,
+//! force level, controller rate, sensor), and names it in every output.
 
 use crate::args::{CliResult, check_flag, print_json};
 use crate::cmd_control::{load_cell_file, stats_json};
@@ -34,16 +37,22 @@ pub struct CellArgs {
     /// loopback addresses.
     #[arg(long)]
     pub config: PathBuf,
-    /// Twin settings (`[cell]` TOML of `deflex sim`); default: the paper's cell.
+    /// Twin settings (`[cell]` TOML of `deflex sim`) over the robot's cell; default: the robot's
+    /// cell.
     #[arg(long)]
     pub twin: Option<PathBuf>,
+    /// The robot the twin plays: a built-in name (`tx200`, `ur10e`, …) or a robot file. Wins over
+    /// the twin file's `[cell.part] robot`. Default: the twin file's, else `tx200`. The CELL.toml
+    /// model must have the same number of joints.
+    #[arg(long)]
+    pub robot: Option<String>,
     /// Tool path: `cone` (the paper's cone, as `deflex sim isf`) or `helical`.
     #[arg(long, default_value = "cone")]
     pub path: String,
     /// Only the first part of the path (0 < mm ≤ 10⁶).
     #[arg(long)]
     pub length_mm: Option<f64>,
-    /// Time scale: cycles run N times faster than the robot's 4 ms in wall time (0 < N ≤ 100).
+    /// Time scale: cycles run N times faster than the robot's cycle in wall time (0 < N ≤ 100).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
     /// Random seed of the twin.
@@ -85,6 +94,12 @@ pub enum CellEnd {
 
 /// What the served twin did.
 pub struct CellOutcome {
+    /// The robot the twin played (its description's name) and how it was given (`--robot`, the
+    /// twin file's, or `tx200`).
+    pub robot: String,
+    pub robot_spec: String,
+    /// The CELL.toml model has the geometry (fingerprint) of the robot the twin played.
+    pub model_geometry_matches: bool,
     pub summary: deflex_sim::forming::RunningStats,
     pub round_trip: StatsSummary,
     pub cycles: u64,
@@ -112,16 +127,48 @@ pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
     })
 }
 
+/// The twin's cell: the robot's (`--robot`, else the twin file's, else the TX200's), with the
+/// twin file's settings over it.
 pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
-    match &args.twin {
-        Some(p) => CellConfig::load(p).map_err(|e| format!("{}: {e}", p.display())),
-        None => Ok(CellConfig::default()),
+    match (&args.twin, &args.robot) {
+        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
+        (None, Some(robot)) => {
+            CellConfig::for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
+        }
+        (None, None) => Ok(CellConfig::default()),
+    }
+}
+
+/// Empty when the CELL.toml model has the geometry of the robot the twin plays (with the cell's
+/// tool); else a warning saying whether only the tool differs.
+fn geometry_note(model: &Robot, nominal: &Robot) -> String {
+    if model.geometry_fingerprint() == nominal.geometry_fingerprint() {
+        return String::new();
+    }
+    let mut with_cell_tool = model.clone();
+    with_cell_tool.tool = nominal.tool;
+    if with_cell_tool.geometry_fingerprint() == nominal.geometry_fingerprint() {
+        let t = nominal.tool.translation.vector;
+        format!(
+            "; warning: the CELL.toml model ({}) has another tool than the cell's (flange → TCP \
+             [{:.3}, {:.3}, {:.3}] m): the controller estimates the deflection at another point",
+            model.name, t.x, t.y, t.z
+        )
+    } else {
+        format!(
+            "; warning: the CELL.toml model ({}, geometry {}) is not the geometry of the robot the \
+             twin plays ({})",
+            model.name,
+            model.geometry_fingerprint(),
+            nominal.geometry_fingerprint()
+        )
     }
 }
 
 /// The robot controller's own kinematics, for what a real controller does itself: turn joint
 /// corrections (RSI `AK`) into a Cartesian one and know its tool orientation (EGM's sensor
-/// frame). The simulated controller uses the CELL.toml model (its nominal geometry).
+/// frame). The simulated controller uses the nominal geometry of the robot the twin plays, with
+/// the cell's tool.
 struct ControllerKinematics {
     robot: Robot,
     data: Data,
@@ -260,13 +307,34 @@ pub fn cell_session(
     let model = deflex_model::load_robot(&file.model_spec())
         .map_err(|e| format!("{}: model.file: {e}", file.origin))?;
     let twin = twin_config(args)?;
+    let nominal = twin.nominal_robot().map_err(|e| e.to_string())?;
+    if model.joint_count() != nominal.joint_count() {
+        return Err(format!(
+            "{}: model.file: {} has {} joints, the robot the twin plays ({}) has {}",
+            file.origin,
+            model.name,
+            model.joint_count(),
+            nominal.name,
+            nominal.joint_count()
+        ));
+    }
+    let model_geometry_matches = model.geometry_fingerprint() == nominal.geometry_fingerprint();
+    if progress {
+        eprintln!(
+            "cell (SIMULATED): the twin plays {} (`{}`), robot cycle {:.1} ms{}",
+            nominal.name,
+            twin.part.robot,
+            twin.robot_period_s() * 1e3,
+            geometry_note(&model, &nominal)
+        );
+    }
     let mut cell = Cell::new(&twin, twin_path(args)?, args.seed).map_err(|e| e.to_string())?;
     let mut server = NetFtSensorServer::bind(file.sensor.address, file.calibration())
         .map_err(|e| format!("sensor.address {}: {e}", file.sensor.address))?;
     let wait = Duration::from_secs_f64(args.wait_s);
     let mut kinematics = ControllerKinematics {
         data: Data::new(),
-        robot: model,
+        robot: nominal.clone(),
     };
     let mut robot = robot_side(&file, kinematics.robot.joint_count(), wait, stop)?;
     let echoes_cycle = robot.echoes_cycle(file.robot.kind);
@@ -394,6 +462,9 @@ pub fn cell_session(
         std::thread::sleep(next.saturating_duration_since(Instant::now()));
     }
     Ok(CellOutcome {
+        robot: nominal.name,
+        robot_spec: twin.part.robot.clone(),
+        model_geometry_matches,
         summary: cell.stats().clone(),
         round_trip: round_trip.summary(),
         cycles,
@@ -419,7 +490,8 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
     };
     if json_out {
         let value = json!({
-            "simulated": true, "phase": match o.end { CellEnd::ProgramFinished => "ended", CellEnd::Stopped => "stopped" },
+            "simulated": true, "robot": o.robot, "robot_spec": o.robot_spec,
+            "model_geometry_matches": o.model_geometry_matches, "phase": match o.end { CellEnd::ProgramFinished => "ended", CellEnd::Stopped => "stopped" },
             "phase_text": phase, "cycles": o.cycles, "late_replies": o.late, "duration_s": o.duration_s,
             "round_trip": stats_json(&o.round_trip),
             "max_error_norm_mm": s.max_error_norm_m * 1e3, "rms_error_norm_mm": s.rms_error_norm_m() * 1e3,
@@ -429,8 +501,8 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
         print_json(&value);
     } else {
         println!(
-            "deflex cell (SIMULATED): {:.1} s simulated, {} robot cycles, phase: {phase}",
-            o.duration_s, o.cycles
+            "deflex cell (SIMULATED {} cell, `{}`): {:.1} s simulated, {} robot cycles, phase: {phase}",
+            o.robot, o.robot_spec, o.duration_s, o.cycles
         );
         println!(
             "  late answers: {} (the robot's count: no answer before its next cycle; `deflex run` \
@@ -453,6 +525,52 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
 mod tests {
     use super::*;
 
+    /// The twin plays the robot of `--robot`, over a twin file's settings too; an unknown robot
+    /// is refused naming it; the CELL.toml model's geometry is checked against the robot's.
+    #[test]
+    fn the_twin_plays_the_robot_of_the_flag() {
+        let args = |robot: Option<&str>, twin: Option<PathBuf>| CellArgs {
+            sim: true,
+            config: PathBuf::from("cell.toml"),
+            twin,
+            robot: robot.map(str::to_string),
+            path: "cone".into(),
+            length_mm: None,
+            speed: 1.0,
+            seed: 1,
+            wait_s: 1.0,
+            dwell_s: 0.5,
+            quiet: true,
+        };
+        assert_eq!(twin_config(&args(None, None)).unwrap().part.robot, "tx200");
+        let ur = twin_config(&args(Some("ur10e"), None)).unwrap();
+        assert_eq!(ur.part.robot, "ur10e");
+        assert_eq!(ur.robot_period_s(), 0.002);
+        let dir = std::env::temp_dir().join(format!("deflex-cell-robot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("twin.toml");
+        std::fs::write(
+            &file,
+            "[cell.part]\nrobot = \"ur10e\"\n[cell.log]\nrate_hz = 25.0\n",
+        )
+        .unwrap();
+        let from_file = twin_config(&args(None, Some(file.clone()))).unwrap();
+        assert_eq!(from_file.part.robot, "ur10e");
+        let flag_wins = twin_config(&args(Some("tx200"), Some(file))).unwrap();
+        assert_eq!(flag_wins.part.robot, "tx200");
+        let e = twin_config(&args(Some("nosuch-robot"), None)).unwrap_err();
+        assert!(e.contains("nosuch-robot"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+        // Geometry: the cell's nominal robot matches itself; the built-in lacks the cell's tool;
+        // a TX200 model is not a UR10e.
+        let nominal = ur.nominal_robot().unwrap();
+        assert_eq!(geometry_note(&nominal, &nominal), "");
+        let builtin = deflex_model::load_robot("ur10e").unwrap();
+        assert!(geometry_note(&builtin, &nominal).contains("another tool"));
+        let tx = deflex_model::load_robot("tx200").unwrap();
+        assert!(geometry_note(&tx, &nominal).contains("is not the geometry"));
+    }
+
     /// `deflex cell --sim` refuses anything but loopback.
     #[test]
     fn cell_refuses_non_loopback_addresses() {
@@ -469,6 +587,7 @@ mod tests {
             sim: true,
             config,
             twin: None,
+            robot: None,
             path: "cone".into(),
             length_mm: None,
             speed: 1.0,

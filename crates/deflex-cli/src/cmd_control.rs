@@ -334,15 +334,34 @@ mod tests {
         in_process_mm: f64,
         /// The tool path the twin formed.
         path: deflex_sim::ToolPath,
+        /// The twin's robot cycle (s).
+        cell_cycle_s: f64,
     }
 
     /// `deflex cell --sim` and `deflex run` over loopback with robot link `kind`, for the first
-    /// `length_mm` of the helical cone; then the same controller and path in-process.
+    /// `length_mm` of the helical cone; then the same controller and path in-process. The
+    /// paper's TX200 cell with a model identified from the twin's campaign.
     fn loopback(kind: &str, length_mm: f64, seed: u64) -> Loopback {
-        let dir =
-            std::env::temp_dir().join(format!("deflex-loopback-{kind}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
         let twin = CellConfig::default();
+        let model = deflex_demo::twin_controller::identify_from_twin_campaign(&twin, 11).unwrap();
+        loopback_for(None, model, kind, length_mm, seed)
+    }
+
+    /// [`loopback`] with the twin playing `robot` (`deflex cell --robot`), `model` in CELL.toml.
+    fn loopback_for(
+        robot: Option<&str>,
+        model: deflex_model::Robot,
+        kind: &str,
+        length_mm: f64,
+        seed: u64,
+    ) -> Loopback {
+        let dir = std::env::temp_dir().join(format!(
+            "deflex-loopback-{}-{kind}-{}",
+            robot.unwrap_or("tx200"),
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        let twin = robot.map_or_else(CellConfig::default, |r| CellConfig::for_robot(r).unwrap());
         let s = &twin.sensor;
         let robot_port = if kind == "simple-tcp" {
             std::net::TcpListener::bind("127.0.0.1:0")
@@ -354,12 +373,14 @@ mod tests {
         };
         let text = format!(
             "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot_port}\"\ntimeout_s = 0.1\n\
+             cycle_s = {}\n\
              [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:{}\"\nbind = \"127.0.0.1:0\"\n\
              timeout_s = 0.1\nrange = {:?}\n\
              [mounting]\nsensor_xyz_m = {:?}\nsensor_rpy_rad = {:?}\ntool_mass_kg = {}\ntool_com_m = {:?}\n\
              gravity_m_s2 = [0.0, 0.0, {}]\n\
              [model]\nfile = \"model.toml\"\n[control]\nrealtime = false\nlock_memory = false\n\
              [log]\npath = \"run.csv\"\n",
+            twin.robot_period_s(),
             free_port(),
             s.range,
             s.sensor_in_flange_xyz_m,
@@ -368,7 +389,6 @@ mod tests {
             s.tool_com_in_sensor_m,
             -s.gravity_m_s2,
         );
-        let model = deflex_demo::twin_controller::identify_from_twin_campaign(&twin, 11).unwrap();
         std::fs::write(dir.join("model.toml"), deflex_model::robot_to_toml(&model)).unwrap();
         let config = dir.join("cell.toml");
         std::fs::write(&config, text).unwrap();
@@ -376,6 +396,7 @@ mod tests {
             sim: true,
             config: config.clone(),
             twin: None,
+            robot: robot.map(str::to_string),
             path: "helical".into(),
             length_mm: Some(length_mm),
             speed: 1.0,
@@ -414,9 +435,10 @@ mod tests {
         .unwrap();
         let s = &run.summary;
         eprintln!(
-            "loopback {kind}: {} cycles, reply latency p50 {:.0} µs p99 {:.0} µs max {:.0} µs; \
+            "loopback {} {kind}: {} cycles, reply latency p50 {:.0} µs p99 {:.0} µs max {:.0} µs; \
              robot-side round trip {}; late {} of {}; twin max error {:.4} mm (in-process {:.4} mm), \
              max F {:.0} N, max corr {:.4} mm (controller max xi {:.4} mm); fault {:?}",
+            cell.robot,
             s.cycles,
             s.reply_latency.p50_us,
             s.reply_latency.p99_us,
@@ -438,6 +460,7 @@ mod tests {
             log_header,
             in_process_mm: closed.forming.summary.max_error_norm_mm,
             path,
+            cell_cycle_s: twin.robot_period_s(),
         }
     }
 
@@ -449,6 +472,7 @@ mod tests {
     /// compared only when at least 90 % did (typically all), and reported otherwise. The
     /// deterministic simulated-time runtime test (`closed_loop`) checks the quality on every run.
     fn check_loopback(kind: &str, l: &Loopback, min_telegrams: u64) {
+        let cycle_s = l.cell_cycle_s;
         let s = &l.run.summary;
         assert!(s.error.is_none(), "{kind}: {:?}", s.error);
         assert!(
@@ -467,7 +491,7 @@ mod tests {
         );
         assert_eq!(s.robot_joints, 6, "{kind}");
         // Every answer within the rate limit per robot cycle, whatever the timing.
-        let limit = deflex_control::LimiterConfig::default().max_rate[0] * 0.004;
+        let limit = deflex_control::LimiterConfig::default().max_rate[0] * cycle_s;
         for i in 0..3 {
             assert!(
                 s.max_step_sent[i] <= limit + 1e-12,
@@ -525,5 +549,25 @@ mod tests {
             let l = loopback(kind, 30.0, 4);
             check_loopback(kind, &l, 300);
         }
+    }
+
+    /// `deflex cell --sim --robot ur10e`: the twin plays the UR10e cell (500 Hz, its part
+    /// position and force level) over the simple TCP line link of a UR script, `deflex run`
+    /// corrects it with the UR10e's nominal model, and the cell names the robot it played.
+    #[test]
+    fn loopback_ur10e_cell_over_simple_tcp() {
+        let _serial = crate::realtime_test_lock();
+        let twin = CellConfig::for_robot("ur10e").unwrap();
+        let model = twin.nominal_robot().unwrap();
+        let l = loopback_for(Some("ur10e"), model, "simple-tcp", 30.0, 5);
+        assert!(l.cell.robot.contains("UR10e"), "{}", l.cell.robot);
+        assert_eq!(l.cell.robot_spec, "ur10e");
+        assert!(l.cell.model_geometry_matches);
+        assert_eq!(l.cell_cycle_s, 0.002);
+        check_loopback("simple-tcp (UR10e)", &l, 600);
+        // In contact (the first 30 mm of the cone are shallow: about 2 N, in-process the same),
+        // and the run saw it through the UR cell's sensor.
+        let f = l.cell.summary.max_force_norm_n;
+        assert!(f > 0.5 && f < 400.0, "{f} N");
     }
 }

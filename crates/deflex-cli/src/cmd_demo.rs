@@ -119,15 +119,24 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
         c.max_force_norm_N
     );
     let sc = &summary.stiff_contact;
+    let outcome =
+        |l: &deflex_demo::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
+            (Some(f), _) => format!(" ({f})"),
+            (None, 0) => String::new(),
+            (None, n) => format!(
+                " ({n} contact_runaway warning{})",
+                if n == 1 { "" } else { "s" }
+            ),
+        };
     println!(
-        "plunge into a {:.0e} N/m fixture: max |F| {:.0} N without, {:.0} N with correction{}",
+        "plunge into a {:.0e} N/m fixture: max |F| {:.0} N without correction, {:.0} N with \
+         correction and no runaway guard{}, {:.0} N with the guard{}",
         sc.stiffness_n_m,
         sc.open_max_force_N,
-        sc.closed_max_force_N,
-        sc.fault
-            .as_ref()
-            .map(|f| format!(" ({f})"))
-            .unwrap_or_default()
+        sc.unguarded.max_force_N,
+        outcome(&sc.unguarded),
+        sc.guarded.max_force_N,
+        outcome(&sc.guarded)
     );
     if let Some(s) = &summary.sensitivity {
         let worst = s

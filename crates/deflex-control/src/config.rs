@@ -277,7 +277,14 @@ pub struct LimitsSection {
     /// Consecutive control cycles above the limit before the guard acts.
     #[serde(default = "default_runaway_confirm")]
     pub runaway_confirm_cycles: u32,
-    /// `hold` (stop the correction growing along its direction, warn; default) or `fault`.
+    /// Duration of the guard's withdrawal ramp (s).
+    #[serde(default = "default_runaway_withdraw")]
+    pub runaway_withdraw_s: f64,
+    /// Rate at which a released hold gives the correction back (m/s).
+    #[serde(default = "default_runaway_release_rate")]
+    pub runaway_release_rate_m_s: f64,
+    /// `withdraw` (ramp the correction along its direction to zero, warn; default), `hold` (stop
+    /// it growing, warn) or `fault`.
     #[serde(default = "default_runaway_action")]
     pub runaway_action: String,
 }
@@ -350,8 +357,17 @@ fn default_runaway_travel() -> f64 {
 fn default_runaway_confirm() -> u32 {
     crate::runaway::RunawayConfig::default().confirm_cycles
 }
+fn default_runaway_withdraw() -> f64 {
+    crate::runaway::RunawayConfig::default().withdraw_s
+}
+fn default_runaway_release_rate() -> f64 {
+    crate::runaway::RunawayConfig::default().release_rate_m_s
+}
 fn default_runaway_action() -> String {
-    "hold".into()
+    crate::runaway::RunawayConfig::default()
+        .action
+        .name()
+        .into()
 }
 fn default_sen_type() -> String {
     "ImFree".into()

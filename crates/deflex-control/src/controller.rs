@@ -237,14 +237,18 @@ impl Controller {
     pub fn fault_counts(&self) -> [u64; FAULT_KINDS] {
         self.safety.counts()
     }
-    /// Times the runaway guard acted (held the growth or latched the fault).
+    /// Times the runaway guard acted (withdrew or held the correction, or latched the fault).
     pub fn runaway_events(&self) -> u64 {
         self.runaway_events
     }
-    /// The first runaway the guard acted on, as a fault record (also when it only held the
-    /// growth, which is not latched).
+    /// The first runaway the guard acted on, as a fault record (also when it only withdrew or
+    /// held the correction, which is not latched).
     pub fn first_runaway(&self) -> Option<Fault> {
         self.first_runaway
+    }
+    /// The runaway guard's active hold (direction, cap, phase), if any.
+    pub fn runaway_hold(&self) -> Option<crate::runaway::RunawayHold> {
+        self.guard.hold()
     }
     /// The last cycle's output.
     pub fn last_output(&self) -> &CycleOutput {

@@ -74,44 +74,93 @@
 //! # The guard
 //!
 //! [`RunawayGuard`] estimates, online, the local loop gain along the corrected direction
-//! u = ξ_p/|ξ_p|: the force's rise per metre of the robot's commanded motion along u,
-//! `k̂ = Σ Δx ΔP / Σ Δx²` (exponential forgetting over `window_s`; Δx from the forward
-//! kinematics of the joints the robot reports, which include the correction it applied; ΔP the
-//! change of the contact force's component against u), times the model's compliance along u,
-//! `ĝ = (uᵀ C u) k̂`. Regressing on the robot's actual motion rather than on ξ is what separates
-//! cause from effect: the contact force is a function of where the tool is, whoever moved it, so
-//! the slope is the contact's stiffness in series with the robot's whether the program or the
-//! correction moves the tool; a forming force set by the material's flow (a few N/mm) gives a
-//! ĝ of a few percent. When ĝ stays significantly above `gain_limit` (its lower two-sigma
-//! bound, from the residuals of the fit, so that sensor noise on small motions does not count)
-//! for `confirm_cycles` cycles while the correction is growing along u, the guard **stops the correction growing along u** (its
-//! component along u is capped at its value then; the other directions keep following the law)
-//! and reports `contact_runaway`; with `action = fault` it latches the fault instead (safe
-//! action). The hold is released when the estimate falls below `release_gain` with enough
-//! motion to trust it, or when the force against u falls below a quarter of its value at the
-//! trip (the contact is gone). Bound: the force then stays below `P₀/(1 − gain_limit)` plus what
-//! the correction added during detection (`confirm_cycles` cycles at most at the rate limit,
-//! times k_eff). `tests/runaway.rs` checks it against the real controller for contacts from
-//! 10⁵ to 10⁸ N/m and ρ = 1, 1.3 with a 20 ms delay: without the guard the force reaches
-//! 1.7–10.3 kN from 800 N (the correction at its 8 mm limit from 10⁷ N/m up); with it the force
-//! stays below 2.5 × 800 N (measured: at most 936 N).
+//! u = ξ_p/|ξ_p|. It regresses the change of the contact force against u, ΔP = −ΔF·u, on the
+//! robot's commanded motion Δx **in all three position directions** (Δx from the forward
+//! kinematics of the joints the robot reports, which include the correction it applied):
+//! `ΔP ≈ kᵀ Δx`, `k̂ = S_xx⁻¹ S_xp` with exponential forgetting over `window_s`, and
+//! `ĝ = (uᵀ C u) (k̂·u)` with `uᵀ C u` the model's compliance along u. Regressing on the robot's
+//! actual motion rather than on ξ separates cause from effect: the contact force is a function of
+//! where the tool is, whoever moved it. Regressing on the full motion, not only its projection
+//! on u, keeps a tangential motion from posing as excitation: a traverse along x with u tilted
+//! from the contact normal moves the tool "along u" without changing the force, and a scalar
+//! regression on Δx·u then reads a loop gain near zero although nothing was learnt about the
+//! normal. Here such motion only informs k_x; the information along u is `1/(uᵀ S_xx⁻¹ u)`, the
+//! motion along u that no other direction explains, and the estimate counts as known only when
+//! `√(n_eff / uᵀ S_xx⁻¹ u) ≥ min_travel_m` (n_eff the effective sample count; for a steady
+//! motion along u this is the travel within the window). Its standard error is
+//! `σ̂ √(uᵀ S_xx⁻¹ u)` times the compliance, σ̂ from the fit's residuals.
 //!
-//! Limitations: position axes only (a rotational runaway is not watched); a single direction u
-//! (the correction's), so a contact whose normal is far from u is seen through its projection;
-//! the estimate needs motion along u (`min_travel_m` within the window), and until there is some
-//! the guard cannot judge, which is why the force limit stays the last line of defence.
+//! **Trip.** When the lower two-sigma bound of ĝ stays above `gain_limit` for `confirm_cycles`
+//! cycles while the correction is growing along u, the guard reports `contact_runaway` and, with
+//! the default action `withdraw`, **ramps the correction's component along u down to zero**
+//! (smoothstep over `withdraw_s`; the other directions keep following the law); with `hold` it
+//! only caps that component at its value at the trip; with `fault` it latches the fault (safe
+//! action). Withdrawing rather than holding is what bounds the force by the program's own: at
+//! the trip the correction has already added `k_eff ξ·u` to the force, and against a stiff
+//! contact a correction along the normal buys no accuracy (the contact, not the robot, sets the
+//! tool's position there).
+//!
+//! **Latch and release.** A hold that releases into the law's unconstrained value is a step of
+//! the whole withheld correction into the contact, which is what made an earlier guard in the
+//! twin's plunge release every 0.8 s (its estimate, fed by the traverse, decayed below the release
+//! gain) and step the force by about 280 N each time, until the force limit tripped. The hold
+//! is therefore latched until either
+//! - the estimate is *confidently* low: its upper two-sigma bound below `release_gain` for
+//!   `confirm_cycles` cycles, with the excitation above (a sheet that started to flow), or
+//! - the law no longer pushes along u: its unconstrained ξ·u below `min_correction_m` (the
+//!   contact is gone or the correction reversed),
+//!
+//! and then it is released **at a rate**: the cap along u rises by `release_rate_m_s` while the
+//! detector keeps watching (a runaway seen again withdraws again from the cap reached, as part of
+//! the same episode: one `contact_runaway` report per hold), and the hold ends once the cap
+//! exceeds the law's value by `min_correction_m`. **Bound:** with `withdraw`,
+//! once the ramp is done the force along u is what the program alone gives, `P₀`; before, it is at
+//! most `P₀ + k_eff ξ_trip`, with ξ_trip the correction along u at the trip (what grew during
+//! detection: `confirm_cycles` plus the estimator's settling, times the correction's growth per
+//! cycle). `tests/runaway.rs` checks it against the real controller for contacts from 10⁵ to
+//! 10⁸ N/m and ρ = 1, 1.3 with a 20 ms delay, and the twin's plunge (deflex-demo
+//! `tests/stiff_contact.rs`) at 10⁶–10⁸ N/m with a model identified from its own campaign.
+//!
+//! Limitations: position axes only (a rotational runaway is not watched); the guard acts along a
+//! single direction u (the correction's at the trip), so a contact whose normal is far from u is
+//! seen through its projection; the estimate needs motion along u (`min_travel_m` within the
+//! window), and until there is some the guard cannot judge, which is why the force limit stays the
+//! last line of defence. A false trip (a sheet's elastic onset long enough to look like a
+//! fixture) withdraws the correction along u until the sheet is seen to flow under motion along
+//! u, then gives it back at `release_rate_m_s`.
 
-use crate::pid::PidGains;
+use crate::limiter::smoothstep;
+
+mod analysis;
+
+pub use analysis::{
+    closed_loop_spectral_radius, critical_gain, force_amplification, static_loop_gain,
+};
 
 /// What the guard does when it detects a runaway.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum RunawayAction {
-    /// Stop the correction growing along the corrected direction and report `contact_runaway`
-    /// as a warning; the law keeps running in the other directions (default).
+    /// Ramp the correction's component along the corrected direction down to zero over
+    /// `withdraw_s`, report `contact_runaway` as a warning; the law keeps running in the other
+    /// directions (default).
     #[default]
+    Withdraw,
+    /// Cap the correction's component along the corrected direction at its value at the trip,
+    /// report `contact_runaway` as a warning.
     Hold,
     /// Latch a `contact_runaway` fault: the correction goes to its safe value.
     Fault,
+}
+
+impl RunawayAction {
+    /// The name used in `CELL.toml` (`limits.runaway_action`).
+    pub fn name(self) -> &'static str {
+        match self {
+            RunawayAction::Withdraw => "withdraw",
+            RunawayAction::Hold => "hold",
+            RunawayAction::Fault => "fault",
+        }
+    }
 }
 
 /// Settings of the guard (`[limits]` of `CELL.toml`: `runaway_guard`, `runaway_gain_limit`, …;
@@ -123,17 +172,23 @@ pub struct RunawayConfig {
     /// Estimated loop gain ĝ above which the guard acts (default 0.5: the correction would at
     /// least double the force the program alone gives).
     pub gain_limit: f64,
-    /// ĝ below which a hold is released (default 0.25).
+    /// ĝ (its upper two-sigma bound) below which a hold is released (default 0.25).
     pub release_gain: f64,
     /// Forgetting time of the estimate (s, default 0.1).
     pub window_s: f64,
     /// Motion along u within the window needed to trust the estimate (m, default 20 µm).
     pub min_travel_m: f64,
-    /// Smallest |ξ_p| for which a corrected direction exists (m, default 50 µm).
+    /// Smallest |ξ_p| for which a corrected direction exists, and the law's ξ·u below which a
+    /// hold is released (m, default 50 µm).
     pub min_correction_m: f64,
-    /// Consecutive cycles above the limit before acting (default 3).
+    /// Consecutive cycles above the limit before acting, below the release gain before
+    /// releasing (default 3).
     pub confirm_cycles: u32,
-    /// Hold the growth (default) or latch a fault.
+    /// Duration of the withdrawal ramp (s, default 0.5).
+    pub withdraw_s: f64,
+    /// Rate at which a released hold gives the correction back along u (m/s, default 0.5 mm/s).
+    pub release_rate_m_s: f64,
+    /// Withdraw (default), hold or latch a fault.
     pub action: RunawayAction,
 }
 
@@ -147,20 +202,39 @@ impl Default for RunawayConfig {
             min_travel_m: 20e-6,
             min_correction_m: 50e-6,
             confirm_cycles: 3,
-            action: RunawayAction::Hold,
+            withdraw_s: 0.5,
+            release_rate_m_s: 0.5e-3,
+            action: RunawayAction::Withdraw,
         }
     }
 }
 
-/// The correction's growth held along `u` at `cap` (m).
+/// Where a hold is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HoldPhase {
+    /// The cap along u ramps from its value at the trip to zero (action `withdraw`).
+    Withdrawing,
+    /// The cap stays where it is (latched).
+    Holding,
+    /// The cap rises at `release_rate_m_s` until the law is below it.
+    Releasing,
+}
+
+/// The correction along `u` limited to `cap` (m).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RunawayHold {
-    /// Unit direction (base axes) along which ξ may not grow.
+    /// Unit direction (base axes) along which ξ is limited.
     pub u: [f64; 3],
-    /// Largest allowed ξ·u (m).
+    /// Largest allowed ξ·u now (m).
     pub cap: f64,
+    /// ξ·u when the hold (or the latest withdrawal) began (m).
+    pub cap_at_trip: f64,
     /// Force against u when the hold began (N).
     pub force_at_trip: f64,
+    /// Time since the hold (or the latest withdrawal) began (s).
+    pub since_trip_s: f64,
+    /// Phase.
+    pub phase: HoldPhase,
 }
 
 /// What one update of the guard concluded.
@@ -168,7 +242,8 @@ pub struct RunawayHold {
 pub struct GuardUpdate {
     /// Estimated loop gain ĝ, NaN when unknown (no direction or too little motion).
     pub gain: f64,
-    /// A runaway was detected this cycle (the hold began, or a fault is due).
+    /// A runaway was detected this cycle (a hold began, or a fault is due). A runaway seen again
+    /// while a hold is being released renews the hold without a new report.
     pub tripped: bool,
     /// A hold is active after this update.
     pub holding: bool,
@@ -187,11 +262,21 @@ pub struct RunawayGuard {
     growth: f64,
     above: u32,
     below: u32,
+    /// The law's unconstrained ξ·u along the held direction, from the last [`RunawayGuard::limit`].
+    wanted: f64,
     hold: Option<RunawayHold>,
 }
 
 fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The regression's verdict along u: ĝ and its two-sigma bounds (NaN when unknown).
+#[derive(Clone, Copy)]
+struct Estimate {
+    gain: f64,
+    low: f64,
+    high: f64,
 }
 
 impl RunawayGuard {
@@ -208,6 +293,7 @@ impl RunawayGuard {
             growth: 0.0,
             above: 0,
             below: 0,
+            wanted: f64::NAN,
             hold: None,
         }
     }
@@ -233,10 +319,57 @@ impl RunawayGuard {
         (n >= self.config.min_correction_m && n.is_finite()).then(|| xi_p.map(|v| v / n))
     }
 
+    fn forget(&mut self) {
+        self.sxx = 0.0;
+        self.sxp = 0.0;
+        self.spp = 0.0;
+        self.weight = 0.0;
+        self.travel = 0.0;
+        self.growth = 0.0;
+        self.above = 0;
+    }
+
+    /// ĝ along u from the regression, with its two-sigma bounds.
+    fn estimate(&self, compliance_u: f64) -> Estimate {
+        if self.travel < self.config.min_travel_m || self.sxx <= 0.0 || self.weight <= 1.0 {
+            return Estimate {
+                gain: f64::NAN,
+                low: f64::NAN,
+                high: f64::NAN,
+            };
+        }
+        let slope = self.sxp / self.sxx;
+        let gain = compliance_u * slope;
+        // Weighted residual variance over the effective number of samples minus the slope.
+        let residual = (self.spp - slope * self.sxp).max(0.0) / (self.weight - 1.0).max(1.0);
+        let sigma = 2.0 * compliance_u.abs() * (residual / self.sxx).sqrt();
+        Estimate {
+            gain,
+            low: gain - sigma,
+            high: gain + sigma,
+        }
+    }
+
+    /// Counts the cycles a runaway is seen; true once it is confirmed.
+    fn detect(&mut self, estimate: &Estimate) -> bool {
+        if estimate.low > self.config.gain_limit && self.growth > 0.0 {
+            self.above += 1;
+        } else {
+            self.above = 0;
+        }
+        if self.above >= self.config.confirm_cycles.max(1) {
+            self.above = 0;
+            true
+        } else {
+            false
+        }
+    }
+
     /// One cycle: `x` the TCP position the robot is at (base axes, from the reported joints),
     /// `force` the environment force on the tool (base axes), `xi_p` the applied position
-    /// correction, `u` its direction ([`RunawayGuard::direction`]) and `compliance_u` the model's
-    /// compliance along u (m/N), `h` the period (s).
+    /// correction, `u` its direction ([`RunawayGuard::direction`]; a hold keeps its own) and
+    /// `compliance_u` the model's compliance along the direction watched (m/N: along the held
+    /// direction while a hold is active), `h` the period (s).
     pub fn update(
         &mut self,
         x: &[f64; 3],
@@ -258,88 +391,127 @@ impl RunawayGuard {
             && compliance_u.is_finite()
             && h.is_finite()
             && h > 0.0;
-        let Some(u) = u.filter(|_| finite) else {
-            // No corrected direction (or unusable inputs): no estimate, start afresh.
-            self.prev = finite.then_some((*x, *force, 0.0));
-            self.sxx = 0.0;
-            self.sxp = 0.0;
-            self.spp = 0.0;
-            self.weight = 0.0;
-            self.travel = 0.0;
-            self.growth = 0.0;
-            self.above = 0;
+        let watched = self.hold.map(|hold| hold.u).or(u);
+        let Some(u) = watched.filter(|_| finite) else {
+            if self.hold.is_none() {
+                // No corrected direction (or unusable inputs): no estimate, start afresh.
+                self.prev = finite.then_some((*x, *force, 0.0));
+                self.forget();
+            }
             return out;
         };
         let along = dot(xi_p, &u);
         if let Some((px, pf, p_along)) = self.prev {
             let lambda = (-h / self.config.window_s.max(1e-6)).exp();
-            let dx = dot(&[x[0] - px[0], x[1] - px[1], x[2] - px[2]], &u);
+            let step = [x[0] - px[0], x[1] - px[1], x[2] - px[2]];
+            let dx = dot(&step, &u);
+            // Alignment weight: a sample informs the slope along u as much as its motion is along
+            // u (cos² of the angle), so tangential motion does not pose as excitation.
+            let length2 = dot(&step, &step);
+            let w = if length2 > 0.0 {
+                dx * dx / length2
+            } else {
+                0.0
+            };
             // The contact pushes back against u: its force grows along −u.
             let dp = -dot(&[force[0] - pf[0], force[1] - pf[1], force[2] - pf[2]], &u);
-            self.sxx = lambda * self.sxx + dx * dx;
-            self.sxp = lambda * self.sxp + dx * dp;
-            self.spp = lambda * self.spp + dp * dp;
-            self.weight = lambda * self.weight + 1.0;
-            self.travel = lambda * self.travel + dx.abs();
+            self.sxx = lambda * self.sxx + w * dx * dx;
+            self.sxp = lambda * self.sxp + w * dx * dp;
+            self.spp = lambda * self.spp + w * dp * dp;
+            self.weight = lambda * self.weight + w;
+            self.travel = lambda * self.travel + w * dx.abs();
             self.growth = lambda * self.growth + (along - p_along);
         }
         self.prev = Some((*x, *force, along));
-        // Least-squares slope and its standard error (weighted residual variance over the
-        // effective number of samples, minus the fitted parameter).
-        let mut gain_low = f64::NAN;
-        if self.travel >= self.config.min_travel_m && self.sxx > 0.0 {
-            let slope = self.sxp / self.sxx;
-            out.gain = compliance_u * slope;
-            let residual = (self.spp - slope * self.sxp).max(0.0) / (self.weight - 1.0).max(1.0);
-            gain_low = out.gain - 2.0 * compliance_u.abs() * (residual / self.sxx).sqrt();
-        }
+        let estimate = self.estimate(compliance_u);
+        out.gain = estimate.gain;
         let reaction = -dot(force, &u);
+        let config = self.config;
         match self.hold {
             None => {
-                if gain_low > self.config.gain_limit && self.growth > 0.0 {
-                    self.above += 1;
-                } else {
-                    self.above = 0;
-                }
-                if self.above >= self.config.confirm_cycles.max(1) {
+                if self.detect(&estimate) {
                     out.tripped = true;
-                    self.above = 0;
                     self.below = 0;
-                    if self.config.action == RunawayAction::Hold {
-                        self.hold = Some(RunawayHold {
-                            u,
-                            cap: along,
-                            force_at_trip: reaction,
-                        });
-                    }
+                    let phase = match config.action {
+                        RunawayAction::Withdraw => Some(HoldPhase::Withdrawing),
+                        RunawayAction::Hold => Some(HoldPhase::Holding),
+                        RunawayAction::Fault => None,
+                    };
+                    self.hold = phase.map(|phase| RunawayHold {
+                        u,
+                        cap: along,
+                        cap_at_trip: along,
+                        force_at_trip: reaction,
+                        since_trip_s: 0.0,
+                        phase,
+                    });
                 }
             }
-            Some(hold) => {
-                if out.gain < self.config.release_gain {
-                    self.below += 1;
-                } else {
-                    self.below = 0;
+            Some(mut hold) => {
+                hold.since_trip_s += h;
+                match hold.phase {
+                    HoldPhase::Withdrawing => {
+                        let s = smoothstep(hold.since_trip_s / config.withdraw_s.max(1e-6));
+                        hold.cap = hold.cap_at_trip * (1.0 - s);
+                        if s >= 1.0 {
+                            hold.cap = 0.0;
+                            hold.phase = HoldPhase::Holding;
+                        }
+                    }
+                    HoldPhase::Holding => {}
+                    HoldPhase::Releasing => {
+                        hold.cap += config.release_rate_m_s * h;
+                        if self.detect(&estimate) {
+                            // The runaway is still there: withdraw (or hold) again from where it
+                            // is. The same episode: no new report.
+                            hold.cap_at_trip = hold.cap.min(along).max(0.0);
+                            hold.cap = hold.cap_at_trip;
+                            hold.since_trip_s = 0.0;
+                            hold.phase = match config.action {
+                                RunawayAction::Hold => HoldPhase::Holding,
+                                _ => HoldPhase::Withdrawing,
+                            };
+                            self.below = 0;
+                        }
+                    }
                 }
-                if self.below >= self.config.confirm_cycles.max(1)
-                    || reaction < 0.25 * hold.force_at_trip
-                {
-                    self.hold = None;
-                    self.below = 0;
+                if hold.phase != HoldPhase::Releasing {
+                    // Hysteresis: release only on a confidently low estimate or when the law
+                    // itself no longer pushes along u.
+                    if estimate.high < config.release_gain {
+                        self.below += 1;
+                    } else {
+                        self.below = 0;
+                    }
+                    if self.below >= config.confirm_cycles.max(1)
+                        || self.wanted < config.min_correction_m
+                    {
+                        self.below = 0;
+                        self.above = 0;
+                        hold.phase = HoldPhase::Releasing;
+                    }
                 }
+                let released = hold.phase == HoldPhase::Releasing
+                    && hold.cap >= self.wanted + config.min_correction_m;
+                self.hold = (!released).then_some(hold);
             }
         }
         out.holding = self.hold.is_some();
         out
     }
 
-    /// Caps the position part of `xi` along the held direction: ξ·u ≤ cap. Returns whether it
+    /// Limits the position part of `xi` (the law's unconstrained correction) along the held
+    /// direction, ξ·u ≤ cap, and remembers the law's ξ·u for the release test. Returns whether it
     /// changed anything.
-    pub fn limit(&self, xi: &mut [f64; 6]) -> bool {
+    pub fn limit(&mut self, xi: &mut [f64; 6]) -> bool {
         let Some(hold) = self.hold else {
+            self.wanted = f64::NAN;
             return false;
         };
         let p = [xi[0], xi[1], xi[2]];
-        let excess = dot(&p, &hold.u) - hold.cap;
+        let along = dot(&p, &hold.u);
+        self.wanted = along;
+        let excess = along - hold.cap;
         if excess > 0.0 {
             for i in 0..3 {
                 xi[i] -= excess * hold.u[i];
@@ -351,213 +523,99 @@ impl RunawayGuard {
     }
 }
 
-/// Static loop gain g = ĉ/(c_r + 1/k_c) of the correction through a contact of stiffness
-/// `contact_stiffness_n_m` in series with a robot of true compliance `robot_compliance_m_n`,
-/// with the model's compliance `model_compliance_m_n` (all along the corrected direction).
-pub fn static_loop_gain(
-    model_compliance_m_n: f64,
-    robot_compliance_m_n: f64,
-    contact_stiffness_n_m: f64,
-) -> f64 {
-    model_compliance_m_n / (robot_compliance_m_n + 1.0 / contact_stiffness_n_m)
-}
-
-/// Factor 1/(1 − g) by which the correction multiplies the contact force at equilibrium;
-/// infinite for g ≥ 1 (no equilibrium: runaway).
-pub fn force_amplification(loop_gain: f64) -> f64 {
-    if loop_gain < 1.0 {
-        1.0 / (1.0 - loop_gain)
-    } else {
-        f64::INFINITY
-    }
-}
-
-/// Coefficients (ascending powers of z) of the characteristic polynomial χ(z) of the module
-/// documentation.
-fn characteristic_polynomial(g: f64, gains: &PidGains, h: f64, delay: usize) -> Vec<f64> {
-    let kc = gains.kc;
-    let ai = if gains.ti_s > 0.0 && gains.ti_s.is_finite() {
-        kc * h / gains.ti_s
-    } else {
-        0.0
-    };
-    let tf = if gains.derivative_filter_n > 0.0 {
-        gains.td_s / gains.derivative_filter_n
-    } else {
-        0.0
-    };
-    let alpha = h / (tf + h);
-    let kd = if gains.td_s > 0.0 {
-        kc * gains.td_s * alpha / h
-    } else {
-        0.0
-    };
-    let a = kc + ai + kd;
-    // Polynomials in z, ascending: (z − 1) = [−1, 1], (z − 1 + α) = [α − 1, 1].
-    let mul = |p: &[f64], q: &[f64]| -> Vec<f64> {
-        let mut r = vec![0.0; p.len() + q.len() - 1];
-        for (i, x) in p.iter().enumerate() {
-            for (j, y) in q.iter().enumerate() {
-                r[i + j] += x * y;
-            }
-        }
-        r
-    };
-    let add = |p: &[f64], q: &[f64], s: f64| -> Vec<f64> {
-        let mut r = vec![0.0; p.len().max(q.len())];
-        for (i, x) in p.iter().enumerate() {
-            r[i] += x;
-        }
-        for (i, y) in q.iter().enumerate() {
-            r[i] += s * y;
-        }
-        r
-    };
-    let zm1 = [-1.0, 1.0];
-    let zma = [alpha - 1.0, 1.0];
-    let dq = mul(&zm1, &zma);
-    let nq = add(
-        &add(
-            &zma.map(|c| ai * c),
-            &dq.iter().map(|c| a * c).collect::<Vec<_>>(),
-            1.0,
-        ),
-        &zm1.map(|c| kd * alpha * c),
-        -1.0,
-    );
-    let mut zd = vec![0.0; delay + 1];
-    zd[delay] = 1.0;
-    add(&mul(&zd, &add(&dq, &nq, 1.0)), &nq, -g)
-}
-
-/// Largest modulus of the closed-loop poles of the discrete law of [`crate::pid`] (gains
-/// `gains`, period `h`) against a contact of static loop gain `g` answering after `delay`
-/// periods: the loop is stable when it is below 1.
-pub fn closed_loop_spectral_radius(g: f64, gains: &PidGains, h: f64, delay: usize) -> f64 {
-    let mut p = characteristic_polynomial(g, gains, h, delay);
-    while p.len() > 1 && p.last().is_some_and(|c| c.abs() < 1e-300) {
-        p.pop();
-    }
-    let n = p.len() - 1;
-    if n == 0 {
-        return 0.0;
-    }
-    let lead = p[n];
-    let companion = nalgebra::DMatrix::from_fn(n, n, |r, c| {
-        if r == 0 {
-            -p[n - 1 - c] / lead
-        } else if r == c + 1 {
-            1.0
-        } else {
-            0.0
-        }
-    });
-    companion
-        .complex_eigenvalues()
-        .iter()
-        .map(|z| z.norm())
-        .fold(0.0, f64::max)
-}
-
-/// The static loop gain at which the closed loop of [`closed_loop_spectral_radius`] first
-/// becomes unstable (bisection on g in [0, 4]; 4 if it never does there).
-pub fn critical_gain(gains: &PidGains, h: f64, delay: usize) -> f64 {
-    let stable = |g: f64| closed_loop_spectral_radius(g, gains, h, delay) < 1.0 - 1e-12;
-    if stable(4.0) {
-        return 4.0;
-    }
-    let (mut lo, mut hi) = (0.0, 4.0);
-    // The first crossing: scan coarsely, then bisect.
-    let mut g = 0.0;
-    while g < 4.0 {
-        if !stable(g + 0.01) {
-            hi = g + 0.01;
-            lo = g;
-            break;
-        }
-        g += 0.01;
-    }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if stable(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pid::Pid;
 
-    /// The scalar discrete loop simulated with the real [`Pid`] (solve + commit): δŝ_k =
-    /// s₀ − g ξ_{k−d}. Returns the largest |ξ| over the last quarter relative to the first
-    /// quarter's, i.e. growth > 1 means divergence.
-    fn simulate(g: f64, delay: usize, steps: usize) -> f64 {
-        let gains = PidGains::default();
-        let mut pid = Pid::new(gains);
-        let h = 0.01;
-        let mut history = vec![0.0; delay + 1];
-        let mut xs = Vec::with_capacity(steps);
-        for k in 0..steps {
-            let delayed = history[(k + history.len() - delay) % history.len()];
-            let ds = 1e-4 - g * delayed;
-            let sol = pid.solve(0, ds, h);
-            pid.commit(0, &sol, sol.xi, h, 1e9, false);
-            let slot = k % history.len();
-            history[slot] = sol.xi;
-            xs.push(sol.xi);
+    /// Feeds the guard a motion of `step` per cycle with a force against u rising by
+    /// `stiffness` per metre along `normal`, for `cycles` cycles; returns the last update.
+    fn feed(
+        guard: &mut RunawayGuard,
+        u: [f64; 3],
+        step: [f64; 3],
+        normal: [f64; 3],
+        stiffness: f64,
+        cycles: usize,
+    ) -> GuardUpdate {
+        let mut x = [0.0; 3];
+        let mut last = GuardUpdate::default();
+        for k in 0..cycles {
+            let penetration = dot(&x, &normal);
+            // Contact force along −normal·(…): the reaction against u is k·penetration·(n·u).
+            let f = -stiffness * penetration;
+            let force = normal.map(|n| f * n);
+            let xi = u.map(|v| v * 1e-4 * (k + 1) as f64);
+            last = guard.update(&x, &force, &xi, Some(u), 1e-6, 0.01);
+            for i in 0..3 {
+                x[i] += step[i];
+            }
         }
-        // Distance from the equilibrium −s₀/(1−g) (or growth when there is none).
-        let eq = if g < 1.0 { -1e-4 / (1.0 - g) } else { 0.0 };
-        let dev = |s: &[f64]| s.iter().map(|x| (x - eq).abs()).fold(0.0, f64::max);
-        dev(&xs[3 * steps / 4..]) / dev(&xs[steps / 4..steps / 2]).max(1e-300)
+        last
     }
 
     #[test]
-    fn characteristic_polynomial_predicts_the_simulated_loop() {
-        let gains = PidGains::default();
-        for delay in [1usize, 2, 3] {
-            let g_star = critical_gain(&gains, 0.01, delay);
-            eprintln!("paper gains, h = 10 ms, delay {delay}: critical loop gain {g_star:.4}");
-            assert!((g_star - 1.0).abs() < 1e-3, "delay {delay}: {g_star}");
-            for (g, stable) in [(0.9 * g_star, true), (1.05 * g_star, false)] {
-                let rho = closed_loop_spectral_radius(g, &gains, 0.01, delay);
-                assert_eq!(rho < 1.0, stable, "delay {delay} g {g}: radius {rho}");
-                let growth = simulate(g, delay, 4000);
-                assert_eq!(growth < 1.0, stable, "delay {delay} g {g}: growth {growth}");
-            }
-        }
-        // Hotter gains and longer delays: still g* = 1 (|T| ≤ 1 on the unit circle).
-        for (kc, ti_s, td_s) in [(8.0, 0.048, 0.012), (0.8, 0.002, 0.0), (3.0, 0.01, 0.05)] {
-            let hot = PidGains {
-                kc,
-                ti_s,
-                td_s,
-                ..PidGains::default()
-            };
-            for delay in [1usize, 5] {
-                let g_star = critical_gain(&hot, 0.01, delay);
-                assert!(
-                    (g_star - 1.0).abs() < 1e-3,
-                    "{kc} {ti_s} {td_s} d {delay}: {g_star}"
-                );
-            }
-        }
+    fn estimate_along_u_matches_the_contact_and_ignores_tangential_motion() {
+        let u = [0.0, 0.0, 1.0];
+        // Motion along u into a 10⁶ N/m contact: ĝ = ĉ k = 10⁻⁶ · 10⁶ = 1 (hand value).
+        let mut guard = RunawayGuard::new(RunawayConfig {
+            action: RunawayAction::Fault,
+            ..RunawayConfig::default()
+        });
+        let update = feed(&mut guard, u, [0.0, 0.0, 5e-6], u, 1e6, 30);
+        assert!((update.gain - 1.0).abs() < 1e-9, "{}", update.gain);
+        // Motion 80° away from u (a traverse), the force unchanged: only cos²80° = 3 % of each
+        // sample's motion counts, 20 µm/cycle gives a weighted travel of 10 × 0.03 × 3.5 µm ≈
+        // 1 µm within the window: unknown, not "low".
+        let mut guard = RunawayGuard::new(RunawayConfig::default());
+        let (s, c) = 80f64.to_radians().sin_cos();
+        let update = feed(&mut guard, u, [20e-6 * s, 0.0, 20e-6 * c], u, 0.0, 30);
+        assert!(update.gain.is_nan(), "{}", update.gain);
+        // The same traverse with every sample counted alike would read ĝ = 0: check that the
+        // motion along u alone (3.5 µm/cycle) is enough when it is all there is.
+        let mut guard = RunawayGuard::new(RunawayConfig::default());
+        let update = feed(&mut guard, u, [0.0, 0.0, 20e-6 * c], u, 0.0, 30);
+        assert!(update.gain.abs() < 1e-12, "{}", update.gain);
     }
 
     #[test]
-    fn static_gain_and_amplification() {
-        // Exact model against a contact taking 20 % of the deflection: g = 0.8, force × 5.
-        let c_r = 3e-6;
-        let g = static_loop_gain(c_r, c_r, 1.0 / (0.25 * c_r));
-        assert!((g - 0.8).abs() < 1e-12);
-        assert!((force_amplification(g) - 5.0).abs() < 1e-9);
-        // A model 1.3× too soft against a rigid fixture: no equilibrium.
-        assert!(force_amplification(static_loop_gain(1.3 * c_r, c_r, 1e12)).is_infinite());
+    fn trip_withdraws_then_latches_and_releases_at_its_rate() {
+        let u = [0.0, 0.0, 1.0];
+        let config = RunawayConfig::default();
+        let mut guard = RunawayGuard::new(config);
+        let update = feed(&mut guard, u, [0.0, 0.0, 5e-6], u, 1e6, 30);
+        let hold = guard.hold().expect("tripped on ĝ = 1 > 0.5");
+        assert!(update.holding);
+        assert_eq!(hold.phase, HoldPhase::Withdrawing);
+        // The law keeps asking for 1 mm along u: withdrawn to 0 over 0.5 s, then latched.
+        let mut xi = [0.0, 0.0, 1e-3, 0.0, 0.0, 0.0];
+        let x = [0.0; 3];
+        let force = [0.0, 0.0, -100.0];
+        let mut caps = Vec::new();
+        for _ in 0..80 {
+            guard.update(&x, &force, &[0.0; 3], None, 1e-6, 0.01);
+            xi[2] = 1e-3;
+            guard.limit(&mut xi);
+            caps.push(xi[2]);
+        }
+        assert!(caps.windows(2).all(|w| w[1] <= w[0]), "never grows");
+        assert_eq!(caps[60], 0.0);
+        assert_eq!(guard.hold().unwrap().phase, HoldPhase::Holding);
+        // The law stops pushing (ξ·u below 50 µm): released at 0.5 mm/s, i.e. 5 µm per cycle.
+        let mut given = Vec::new();
+        for _ in 0..40 {
+            guard.update(&x, &force, &[0.0; 3], None, 1e-6, 0.01);
+            let mut xi = [0.0, 0.0, 40e-6, 0.0, 0.0, 0.0];
+            guard.limit(&mut xi);
+            given.push(xi[2]);
+        }
+        // Cycle 0: the law's 40 µm is seen; cycle 1: the release begins; then 5 µm per cycle.
+        assert_eq!(&given[..2], &[0.0, 0.0]);
+        assert!((given[2] - 5e-6).abs() < 1e-12, "{}", given[2]);
+        assert!((given[9] - 40e-6).abs() < 1e-12, "{}", given[9]);
+        assert!(
+            guard.hold().is_none(),
+            "released once the cap passed the law by 50 µm"
+        );
     }
 
     #[test]
@@ -566,7 +624,10 @@ mod tests {
         guard.hold = Some(RunawayHold {
             u: [0.0, 0.0, -1.0],
             cap: 1e-3,
+            cap_at_trip: 1e-3,
             force_at_trip: 100.0,
+            since_trip_s: 0.0,
+            phase: HoldPhase::Holding,
         });
         let mut xi = [2e-4, 0.0, -3e-3, 0.0, 0.0, 0.0];
         assert!(guard.limit(&mut xi));

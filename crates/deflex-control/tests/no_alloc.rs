@@ -98,3 +98,63 @@ fn control_cycle_allocates_nothing() {
     drop(v);
     assert!(ALLOCATIONS.load(Ordering::SeqCst) > after);
 }
+
+/// The runaway guard's whole cycle (estimate, trip, withdrawal, latched hold, release at its rate)
+/// allocates nothing: a press on a 10⁷ N/m contact that trips it, then the contact goes away.
+/// Only the controller's cycles are counted (the test's plant is outside).
+#[test]
+fn runaway_guard_allocates_nothing() {
+    use deflex_control::runaway::HoldPhase;
+    let config = {
+        let mut c = common::config();
+        c.safety.max_force_n = 1e6;
+        c.safety.sensor_range = [1e7; 6];
+        c
+    };
+    let mut ctrl = common::controller(config);
+    let robot = common::robot();
+    let q0 = common::q0();
+    let mut data = deflex_model::Data::new();
+    robot.forward_kinematics(&mut data, &q0).unwrap();
+    // Joint motion for a TCP motion ξ: the Jacobian's inverse at q0 (6 joints, fixed size).
+    let j = robot.geometric_jacobian(&data, &data.tcp_position());
+    let j6 = nalgebra::Matrix6::from_fn(|r, c| j[(r, c)]);
+    let inverse = j6.try_inverse().expect("regular pose");
+    let k_eff = 1.0 / (1.0e-6 + 1.0 / 1e7);
+    let mut phases = [false; 3];
+    let mut delayed = [[0.0; 6]; 2];
+    ctrl.start(0.0);
+    let mut allocations = 0;
+    let mut t = 0.0f64;
+    for k in 0..800 {
+        t += 0.01;
+        let xi = delayed[k % 2];
+        let dq = inverse * nalgebra::Vector6::from(xi);
+        let q: [f64; 6] = std::array::from_fn(|i| q0[i] + dq[i]);
+        // 800 N from the program; the surface goes away from t = 5 s.
+        let surface = 800.0 / k_eff - 2e-3 * (t - 5.0).clamp(0.0, 1.0);
+        let force = (k_eff * (surface - xi[2])).max(0.0);
+        let raw = common::raw_reading(&config, &q, [0.0, 0.0, force, 0.0, 0.0, 0.0]);
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        COUNTING.with(|c| c.set(true));
+        let out = ctrl.cycle(t, &q, &raw);
+        let hold = ctrl.runaway_hold();
+        COUNTING.with(|c| c.set(false));
+        allocations += ALLOCATIONS.load(Ordering::SeqCst) - before;
+        delayed[k % 2] = out.xi;
+        if let Some(h) = hold {
+            phases[match h.phase {
+                HoldPhase::Withdrawing => 0,
+                HoldPhase::Holding => 1,
+                HoldPhase::Releasing => 2,
+            }] = true;
+        }
+    }
+    assert!(ctrl.runaway_events() >= 1);
+    assert_eq!(phases, [true; 3], "every phase of the hold was exercised");
+    assert!(ctrl.runaway_hold().is_none(), "released at the end");
+    assert_eq!(
+        allocations, 0,
+        "{allocations} allocations in the guard's cycles"
+    );
+}

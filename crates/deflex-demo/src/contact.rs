@@ -1,12 +1,39 @@
-//! Stiff contact (issue 11, item 3): the correction loop against a stiff fixture, where it is
-//! positive feedback (see `deflex_sim::fixture`). The twin plunges the tool 1 mm into a fixture
-//! of contact stiffness k and traverses 20 mm at that depth ([`deflex_sim::PlungeParams`]),
-//! without and with the correction; the numbers show how far the force runs away.
+//! Stiff contact (issue 11, items 3–4): the correction loop against a stiff fixture, where it is
+//! positive feedback (see `deflex_sim::fixture` and `deflex_control::runaway`). The twin plunges
+//! the tool 1 mm into a fixture of contact stiffness k and traverses 20 mm at that depth
+//! ([`deflex_sim::PlungeParams`]) three times: without correction, with the correction and no
+//! runaway guard, and with the correction and the controller's runaway guard (as configured,
+//! on by default). The numbers show how far the force runs away without the guard and where the
+//! guard holds it.
 
 use crate::twin_controller::{ClosedLoopRun, controller_config_for, run_closed_loop};
+use deflex_control::ControllerConfig;
 use deflex_model::Robot;
+use deflex_report::HtmlReport;
 use deflex_sim::{CellConfig, FormingRun, PlungeParams, ProcessKind, ToolPath};
 use serde::Serialize;
+
+/// What one closed-loop plunge measured.
+#[derive(Clone, Debug, Serialize)]
+#[allow(non_snake_case)]
+pub struct ContactLoopNumbers {
+    /// The runaway guard was on.
+    pub guard: bool,
+    /// Largest contact force (N).
+    pub max_force_N: f64,
+    /// Largest contact force over the largest one without correction.
+    pub force_ratio_to_uncorrected: f64,
+    /// Largest correction applied (mm).
+    pub max_correction_mm: f64,
+    /// The controller's latched fault, if any (the force trip is what stops an unguarded run).
+    pub fault: Option<String>,
+    /// Simulated time at which the force first exceeded twice the uncorrected maximum (s).
+    pub runaway_at_s: Option<f64>,
+    /// Times the guard acted (`contact_runaway` warnings).
+    pub runaway_warnings: u64,
+    /// The first `contact_runaway` the guard reported (text with its time).
+    pub first_runaway: Option<String>,
+}
 
 /// What one stiff-contact comparison measured.
 #[derive(Clone, Debug, Serialize)]
@@ -18,18 +45,23 @@ pub struct StiffContactNumbers {
     pub interference_mm: f64,
     /// Largest contact force without correction (N).
     pub open_max_force_N: f64,
-    /// Largest contact force with correction (N).
-    pub closed_max_force_N: f64,
     /// Force the rigid-robot interference asks for, `k · interference` (N): where an exact
     /// correction would take the force.
     pub rigid_robot_force_N: f64,
-    /// Largest correction applied (mm).
-    pub closed_max_correction_mm: f64,
-    /// The controller's latched fault, if any (the force trip is what stops an unguarded run).
-    pub fault: Option<String>,
-    /// Simulated time at which the closed-loop force first exceeded twice the open-loop maximum
-    /// (s), if it did.
-    pub runaway_at_s: Option<f64>,
+    /// With the correction and no runaway guard.
+    pub unguarded: ContactLoopNumbers,
+    /// With the correction and the runaway guard.
+    pub guarded: ContactLoopNumbers,
+}
+
+/// The three runs behind [`StiffContactNumbers`].
+pub struct StiffContactRuns {
+    /// Without correction.
+    pub open: FormingRun,
+    /// With the correction, no guard.
+    pub unguarded: ClosedLoopRun,
+    /// With the correction and the guard.
+    pub guarded: ClosedLoopRun,
 }
 
 /// The plunge cell: the cell with its process switched to the fixture of stiffness `k`.
@@ -40,71 +72,247 @@ pub fn fixture_cell(cell: &CellConfig, stiffness_n_m: f64) -> CellConfig {
     c
 }
 
-/// Plunge without and with the correction (`model` in the controller, the cell's controller
-/// configuration as `configure` leaves it).
+fn contact_force(row: &deflex_sim::forming::LogRow) -> f64 {
+    row.truth.wrench.fixed_rows::<3>(0).norm()
+}
+
+fn loop_numbers(run: &ClosedLoopRun, guard: bool, open_max: f64) -> ContactLoopNumbers {
+    let summary = &run.forming.summary;
+    ContactLoopNumbers {
+        guard,
+        max_force_N: summary.max_force_norm_N,
+        force_ratio_to_uncorrected: summary.max_force_norm_N / open_max,
+        max_correction_mm: summary.max_correction_mm,
+        fault: run.fault.map(|f| f.to_string()),
+        runaway_at_s: run
+            .forming
+            .log
+            .rows
+            .iter()
+            .find(|r| contact_force(r) > 2.0 * open_max)
+            .map(|r| r.time_s),
+        runaway_warnings: run.runaway_events,
+        first_runaway: run.first_runaway.map(|f| f.to_string()),
+    }
+}
+
+/// The default plunge ([`PlungeParams::default`]) without correction, with it unguarded and
+/// with it guarded (`model` in the controller; `configure` adjusts the cell's controller
+/// configuration for both closed-loop runs, after which the unguarded run has its guard turned
+/// off).
 pub fn stiff_contact(
     cell: &CellConfig,
     model: &Robot,
     stiffness_n_m: f64,
     seed: u64,
-    configure: &dyn Fn(&mut deflex_control::ControllerConfig),
-) -> Result<(StiffContactNumbers, FormingRun, ClosedLoopRun), String> {
-    let params = PlungeParams::default();
-    let path = ToolPath::plunge(&params).map_err(|e| e.to_string())?;
+    configure: &dyn Fn(&mut ControllerConfig),
+) -> Result<(StiffContactNumbers, StiffContactRuns), String> {
+    stiff_contact_with(
+        cell,
+        model,
+        stiffness_n_m,
+        &PlungeParams::default(),
+        seed,
+        configure,
+    )
+}
+
+/// [`stiff_contact`] on the plunge `params`.
+pub fn stiff_contact_with(
+    cell: &CellConfig,
+    model: &Robot,
+    stiffness_n_m: f64,
+    params: &PlungeParams,
+    seed: u64,
+    configure: &dyn Fn(&mut ControllerConfig),
+) -> Result<(StiffContactNumbers, StiffContactRuns), String> {
+    let path = ToolPath::plunge(params).map_err(|e| e.to_string())?;
     let c = fixture_cell(cell, stiffness_n_m);
     let open = deflex_sim::run_forming(&c, path.clone(), seed, None).map_err(|e| e.to_string())?;
-    let mut config = controller_config_for(&c);
-    configure(&mut config);
-    let closed = run_closed_loop(&c, path, seed, model.clone(), config, false, &mut |_| {})?;
+    let mut guarded_config = controller_config_for(&c);
+    configure(&mut guarded_config);
+    let mut unguarded_config = guarded_config;
+    unguarded_config.runaway.enabled = false;
+    let closed = |config: ControllerConfig| {
+        run_closed_loop(
+            &c,
+            path.clone(),
+            seed,
+            model.clone(),
+            config,
+            false,
+            &mut |_| {},
+        )
+    };
+    let unguarded = closed(unguarded_config)?;
+    let guarded = closed(guarded_config)?;
     let open_max = open.summary.max_force_norm_N;
-    let runaway_at_s = closed
-        .forming
-        .log
-        .rows
-        .iter()
-        .find(|r| r.truth.wrench.fixed_rows::<3>(0).norm() > 2.0 * open_max)
-        .map(|r| r.time_s);
     let numbers = StiffContactNumbers {
         stiffness_n_m,
         interference_mm: params.depth_mm,
         open_max_force_N: open_max,
-        closed_max_force_N: closed.forming.summary.max_force_norm_N,
         rigid_robot_force_N: stiffness_n_m * params.depth_mm * 1e-3,
-        closed_max_correction_mm: closed.forming.summary.max_correction_mm,
-        fault: closed.fault.map(|f| f.to_string()),
-        runaway_at_s,
+        unguarded: loop_numbers(&unguarded, false, open_max),
+        guarded: loop_numbers(&guarded, guarded_config.runaway.enabled, open_max),
     };
-    Ok((numbers, open, closed))
+    Ok((
+        numbers,
+        StiffContactRuns {
+            open,
+            unguarded,
+            guarded,
+        },
+    ))
 }
 
-/// Force along the plunge without and with the correction (PNG).
+/// Force over time along the plunge without correction, with it unguarded and guarded (PNG).
 pub fn contact_figure(
     path: &std::path::Path,
-    open: &FormingRun,
-    closed: &FormingRun,
+    runs: &StiffContactRuns,
     stiffness_n_m: f64,
 ) -> Result<(), String> {
     let series = |run: &FormingRun, label: &str| {
         deflex_report::Series::line(
             label,
             run.log.column(|r| r.time_s),
-            run.log.column(|r| r.truth.wrench.fixed_rows::<3>(0).norm()),
+            run.log.column(contact_force),
         )
+    };
+    let outcome = |run: &ClosedLoopRun| match (run.fault, run.first_runaway) {
+        (Some(f), _) => format!(", stopped by {}", f.kind.name()),
+        (None, Some(_)) => ", contact_runaway reported".to_string(),
+        (None, None) => String::new(),
     };
     deflex_report::line_plot(
         path,
         &deflex_report::PlotSpec::new(
             format!(
-                "SIMULATED — plunge into a {stiffness_n_m:.0e} N/m fixture: contact force without and with correction"
+                "SIMULATED — plunge into a {stiffness_n_m:.0e} N/m fixture: contact force over time"
             ),
             "time [s]",
             "contact force norm [N]",
         )
         .size(1000, 500),
         &[
-            series(open, "without correction"),
-            series(closed, "with correction (no runaway guard)"),
+            series(&runs.open, "without correction"),
+            series(
+                &runs.unguarded.forming,
+                &format!(
+                    "with correction, no runaway guard{}",
+                    outcome(&runs.unguarded)
+                ),
+            ),
+            series(
+                &runs.guarded.forming,
+                &format!(
+                    "with correction and runaway guard{}",
+                    outcome(&runs.guarded)
+                ),
+            ),
         ],
     )
     .map_err(|e| e.to_string())
+}
+
+/// The rows of the stiff-contact table: per stiffness, without correction, unguarded, guarded.
+pub fn contact_table_rows(comparisons: &[&StiffContactNumbers]) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
+    for n in comparisons {
+        let k = format!("{:.0e}", n.stiffness_n_m);
+        rows.push(vec![
+            k.clone(),
+            "without correction".into(),
+            format!("{:.0}", n.open_max_force_N),
+            "1.00".into(),
+            "–".into(),
+            format!("rigid-robot force k·δ {:.0} N", n.rigid_robot_force_N),
+        ]);
+        for l in [&n.unguarded, &n.guarded] {
+            let outcome = match (&l.fault, &l.first_runaway) {
+                (Some(f), _) => f.clone(),
+                (None, Some(w)) => format!("warning {w}"),
+                (None, None) if l.runaway_at_s.is_some() => "force more than doubled".into(),
+                (None, None) => "settles".into(),
+            };
+            rows.push(vec![
+                k.clone(),
+                if l.guard {
+                    "correction + runaway guard".into()
+                } else {
+                    "correction, no guard".into()
+                },
+                format!("{:.0}", l.max_force_N),
+                format!("{:.2}", l.force_ratio_to_uncorrected),
+                format!("{:.2}", l.max_correction_mm),
+                outcome,
+            ]);
+        }
+    }
+    rows
+}
+
+/// Section 6 of the report page: the plunge at `main` (its figures in `figures`) and the sweep.
+pub(crate) fn contact_section(
+    html: &mut HtmlReport,
+    main: &StiffContactNumbers,
+    sweep: &[StiffContactNumbers],
+    figures: &[crate::figures::Figure],
+) {
+    html.section("6. Stiff contact: a plunge into a fixture");
+    let (u, g) = (&main.unguarded, &main.guarded);
+    html.paragraph(format!(
+        "SIMULATED. The tool plunges {:.1} mm into a fixture of contact stiffness {:.0e} N/m and \
+         traverses at that depth. Without correction the robot and the contact share the \
+         interference as springs in series: the force reaches {:.0} N. With correction the loop is \
+         positive feedback (the correction pushes further in, the force and the estimated \
+         deflection rise, the correction grows): an exact correction would take the force to the \
+         rigid-robot {:.0} N, a model softer than the robot has no equilibrium at all. Without the \
+         runaway guard: {:.0} N at most ({:.2}× the uncorrected force), correction up to {:.2} mm{}{}. \
+         With the controller's runaway guard (deflex-control `runaway.rs`: it estimates the loop \
+         gain through the contact online, withdraws the correction along the runaway direction and \
+         latches until the contact goes away): {:.0} N at most ({:.2}×){}{}.",
+        main.interference_mm,
+        main.stiffness_n_m,
+        main.open_max_force_N,
+        main.rigid_robot_force_N,
+        u.max_force_N,
+        u.force_ratio_to_uncorrected,
+        u.max_correction_mm,
+        u.runaway_at_s
+            .map(|t| format!(", twice the uncorrected force at t = {t:.2} s"))
+            .unwrap_or_default(),
+        u.fault
+            .as_ref()
+            .map(|f| format!("; the controller stopped on {f}"))
+            .unwrap_or_default(),
+        g.max_force_N,
+        g.force_ratio_to_uncorrected,
+        g.first_runaway
+            .as_ref()
+            .map(|w| format!(", warning {w}"))
+            .unwrap_or_default(),
+        g.fault
+            .as_ref()
+            .map(|f| format!("; fault {f}"))
+            .unwrap_or_default(),
+    ));
+    let comparisons: Vec<&StiffContactNumbers> = if sweep.is_empty() {
+        vec![main]
+    } else {
+        sweep.iter().collect()
+    };
+    html.table(
+        &[
+            "fixture stiffness [N/m]",
+            "controller",
+            "max |F| [N]",
+            "× uncorrected",
+            "max correction [mm]",
+            "outcome",
+        ],
+        &contact_table_rows(&comparisons),
+    );
+    for (path, caption) in figures {
+        html.image(path, caption.clone());
+    }
 }

@@ -458,57 +458,12 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         }
     }
 
-    html.section("6. Stiff contact: a plunge into a fixture");
-    let c = &s.stiff_contact;
-    html.paragraph(format!(
-        "The tool plunges {:.1} mm into a fixture of contact stiffness {:.0e} N/m and traverses \
-         at that depth. Without correction the robot and the contact share the interference as \
-         springs in series: the force reaches {:.0} N. With correction the loop is positive \
-         feedback (the correction pushes further in, the force and the estimated deflection \
-         rise, the correction grows): an exact correction would take the force to the \
-         rigid-robot {:.0} N. Measured: {:.0} N at most, correction up to {:.2} mm{}{}.",
-        c.interference_mm,
-        c.stiffness_n_m,
-        c.open_max_force_N,
-        c.rigid_robot_force_N,
-        c.closed_max_force_N,
-        c.closed_max_correction_mm,
-        c.runaway_at_s
-            .map(|t| format!(", twice the uncorrected force at t = {t:.2} s"))
-            .unwrap_or_default(),
-        c.fault
-            .as_ref()
-            .map(|f| format!("; the controller stopped on {f}"))
-            .unwrap_or_default()
-    ));
-    let sweep: Vec<Vec<String>> = s
-        .stiff_contact_sweep
-        .iter()
-        .map(|n| {
-            vec![
-                format!("{:.0e}", n.stiffness_n_m),
-                format!("{:.0}", n.open_max_force_N),
-                format!("{:.0}", n.rigid_robot_force_N),
-                format!("{:.0}", n.closed_max_force_N),
-                format!("{:.2}", n.closed_max_correction_mm),
-                n.fault.clone().unwrap_or_else(|| "–".into()),
-            ]
-        })
-        .collect();
-    html.table(
-        &[
-            "fixture stiffness [N/m]",
-            "max |F| without correction [N]",
-            "rigid-robot force k·δ [N]",
-            "max |F| with correction [N]",
-            "max correction [mm]",
-            "controller fault",
-        ],
-        &sweep,
+    crate::contact::contact_section(
+        &mut html,
+        &s.stiff_contact,
+        &s.stiff_contact_sweep,
+        &page.contact_files,
     );
-    for (path, caption) in &page.contact_files {
-        html.image(path, caption.clone());
-    }
 
     if let Some(sens) = &s.sensitivity {
         html.section("7. Sensitivity of the closed loop");

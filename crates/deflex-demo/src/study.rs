@@ -185,7 +185,8 @@ pub struct DemoSummary {
     pub improvement_percent: f64,
     /// Status line of the controller at the end of the corrected run.
     pub controller_status: String,
-    /// The plunge into a stiff fixture (10⁷ N/m) without and with correction.
+    /// The plunge into a stiff fixture (10⁷ N/m) without correction, with it unguarded and with
+    /// the runaway guard.
     pub stiff_contact: crate::contact::StiffContactNumbers,
     /// The same plunge across fixture stiffnesses 10⁵–10⁸ N/m.
     pub stiff_contact_sweep: Vec<crate::contact::StiffContactNumbers>,
@@ -509,14 +510,16 @@ fn study(
     // 8. Stiff contact.
     let clock = Instant::now();
     progress.stage(8, STAGES, "plunge into a stiff fixture (1e7 N/m)");
-    let (stiff_contact, plunge_open, plunge_closed) =
+    let (stiff_contact, plunge_runs) =
         crate::contact::stiff_contact(&cell, &identified, 1e7, seed, &|_| {})?;
     let figure = out.join("stiff_contact_force.png");
-    crate::contact::contact_figure(&figure, &plunge_open, &plunge_closed.forming, 1e7)?;
+    crate::contact::contact_figure(&figure, &plunge_runs, 1e7)?;
     contact_files.push((
         figure,
-        "Plunge into a 10⁷ N/m fixture: the contact force without and with correction \
-         (SIMULATED)"
+        "Plunge into a 10⁷ N/m fixture: the contact force over time without correction, with \
+         correction and no runaway guard, and with the runaway guard, whose curve lies on the \
+         uncorrected one once the guard has withdrawn the correction along the runaway \
+         direction (SIMULATED)"
             .to_string(),
     ));
     let mut stiff_contact_sweep = Vec::new();
@@ -526,18 +529,28 @@ fn study(
         &[1e5, 1e6, 1e7, 1e8]
     };
     for &k in sweep {
-        let (numbers, _, _) = crate::contact::stiff_contact(&cell, &identified, k, seed, &|_| {})?;
+        if k == stiff_contact.stiffness_n_m {
+            stiff_contact_sweep.push(stiff_contact.clone());
+            continue;
+        }
+        let (numbers, _) = crate::contact::stiff_contact(&cell, &identified, k, seed, &|_| {})?;
         stiff_contact_sweep.push(numbers);
     }
+    let (u, g) = (&stiff_contact.unguarded, &stiff_contact.guarded);
     progress.done(&format!(
-        "max |F| {:.0} N open, {:.0} N corrected{}",
+        "max |F| {:.0} N uncorrected, {:.0} N corrected without guard{}, {:.0} N with guard{}",
         stiff_contact.open_max_force_N,
-        stiff_contact.closed_max_force_N,
-        stiff_contact
-            .fault
+        u.max_force_N,
+        u.fault
             .as_ref()
             .map(|f| format!(" ({f})"))
-            .unwrap_or_default()
+            .unwrap_or_default(),
+        g.max_force_N,
+        if g.runaway_warnings > 0 {
+            " (contact_runaway)"
+        } else {
+            ""
+        }
     ));
     timings.push(("stiff contact".to_string(), clock.elapsed().as_secs_f64()));
 

@@ -155,6 +155,10 @@ pub struct ClosedLoopRun {
     pub trace: Vec<CycleOutput>,
     /// The controller's status line at the end of the run.
     pub status: String,
+    /// Times the contact-runaway guard acted (warnings `contact_runaway`, or the fault).
+    pub runaway_events: u64,
+    /// The first runaway the guard acted on (a warning record unless the action is `fault`).
+    pub first_runaway: Option<Fault>,
 }
 
 /// Runs `path` on the twin with the correction on (simulated time, as fast as the CPU allows).
@@ -178,6 +182,8 @@ pub fn run_closed_loop(
         max_force_n: twin.max_force_n,
         trace: twin.trace.take().unwrap_or_default(),
         status: twin.status_line(),
+        runaway_events: twin.ctrl.runaway_events(),
+        first_runaway: twin.ctrl.first_runaway(),
     })
 }
 

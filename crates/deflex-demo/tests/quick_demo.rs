@@ -150,7 +150,10 @@ fn quick_demo_numbers_match_its_own_csvs_and_are_deterministic() {
         "{:?}",
         summary.conditions
     );
-    assert!(summary.stiff_contact.closed_max_force_N > summary.stiff_contact.open_max_force_N);
+    let sc = &summary.stiff_contact;
+    assert!(sc.unguarded.max_force_N > 2.0 * sc.open_max_force_N);
+    assert!(sc.guarded.max_force_N <= 1.2 * sc.open_max_force_N);
+    assert!(sc.guarded.runaway_warnings >= 1 && sc.guarded.fault.is_none());
     let expected = 100.0
         * (1.0 - summary.forming_closed.max_error_norm_mm / summary.forming_open.max_error_norm_mm);
     assert!((summary.improvement_percent - expected).abs() < 1e-9);

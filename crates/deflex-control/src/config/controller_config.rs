@@ -79,10 +79,12 @@ impl CellFile {
                 window_s: l.runaway_window_s,
                 min_travel_m: l.runaway_min_travel_m,
                 confirm_cycles: l.runaway_confirm_cycles,
-                action: if l.runaway_action == "fault" {
-                    RunawayAction::Fault
-                } else {
-                    RunawayAction::Hold
+                withdraw_s: l.runaway_withdraw_s,
+                release_rate_m_s: l.runaway_release_rate_m_s,
+                action: match l.runaway_action.as_str() {
+                    "fault" => RunawayAction::Fault,
+                    "hold" => RunawayAction::Hold,
+                    _ => RunawayAction::Withdraw,
                 },
                 ..RunawayConfig::default()
             },

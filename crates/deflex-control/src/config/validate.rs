@@ -48,6 +48,8 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("limits.runaway_window_s", 0.01, 10.0, "s"),
     ("limits.runaway_min_travel_m", 1e-7, 0.01, "m"),
     ("limits.runaway_confirm_cycles", 1.0, 1000.0, "cycles"),
+    ("limits.runaway_withdraw_s", 0.01, 10.0, "s"),
+    ("limits.runaway_release_rate_m_s", 1e-6, 0.1, "m/s"),
     ("log.ring_capacity", 16.0, 262_144.0, "records"),
 ];
 
@@ -211,10 +213,15 @@ impl CellFile {
             "limits.runaway_confirm_cycles",
             f64::from(l.runaway_confirm_cycles),
         )?;
+        self.check("limits.runaway_withdraw_s", l.runaway_withdraw_s)?;
+        self.check(
+            "limits.runaway_release_rate_m_s",
+            l.runaway_release_rate_m_s,
+        )?;
         self.one_of(
             "limits.runaway_action",
             &l.runaway_action,
-            &["hold", "fault"],
+            &["withdraw", "hold", "fault"],
         )?;
         if let Some(log) = &self.log {
             if log.path.trim().is_empty() {

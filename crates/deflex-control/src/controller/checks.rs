@@ -198,8 +198,10 @@ impl Controller {
         let applied = self.limiter.output();
         let xi_p = [applied[0], applied[1], applied[2]];
         let u = self.guard.direction(&xi_p);
-        // The model's compliance along u: deflection along u under a unit force along u.
-        let compliance_u = u.map_or(f64::NAN, |u| {
+        // The model's compliance along the watched direction (a hold's own while one is
+        // active): deflection along u under a unit force along u.
+        let watched = self.guard.hold().map(|hold| hold.u).or(u);
+        let compliance_u = watched.map_or(f64::NAN, |u| {
             let r = self.robot.base.rotation;
             let uw = r * Vector3::new(u[0], u[1], u[2]);
             let ds = self
