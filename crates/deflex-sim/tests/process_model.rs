@@ -14,8 +14,10 @@ use deflex_sim::{ErrorSources, FormingProcess, ToolPath, run_forming, tcp_path};
 /// The default cell with every error source off and the plant reduced to its linear VJM part;
 /// the model is that linear part, base tilt about the plant's pivot.
 fn vjm_twin() -> (CellConfig, Robot) {
-    let mut config = CellConfig::default();
-    config.errors = ErrorSources::all(false);
+    let mut config = CellConfig {
+        errors: ErrorSources::all(false),
+        ..CellConfig::default()
+    };
     config.plant.j2_j3_coupling = 0.0;
     config.plant.wrist_lost_motion_rad = [0.0; 3];
     config.plant.wrist_hysteresis_nm = 0.0;
