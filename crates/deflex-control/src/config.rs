@@ -739,7 +739,7 @@ file = "tx200"
                 crate::feedforward::PathIndex::Time
             )
         );
-        assert_eq!(c.window_m, 0.01);
+        assert_eq!(c.window_m, 0.005);
         // Without the section: none.
         let plain = CellFile::parse(MINIMAL, "cell.toml", dir.clone()).unwrap();
         assert!(plain.feedforward(&robot).unwrap().is_none());

@@ -146,14 +146,14 @@ pub struct FeedForwardConfig {
 }
 
 impl Default for FeedForwardConfig {
-    /// Feed-forward mode, arc-length index, no lead, 5 mm off-path distance, 10 mm window.
+    /// Feed-forward mode, arc-length index, no lead, 5 mm off-path distance, 5 mm window.
     fn default() -> Self {
         FeedForwardConfig {
             mode: FeedForwardMode::FeedForward,
             index: PathIndex::ArcLength,
             lead_s: 0.0,
             max_offset_m: 0.005,
-            window_m: 0.01,
+            window_m: 0.005,
             time_offset_s: 0.0,
         }
     }
@@ -236,6 +236,10 @@ pub struct FeedForwardTable {
     s_m: Vec<f64>,
     t_s: Vec<f64>,
     commanded: Vec<Vector3<f64>>,
+    /// Unit direction and length of each segment of the commanded polyline (zero for a
+    /// zero-length segment; the last point's entry unused).
+    direction: Vec<Vector3<f64>>,
+    length: Vec<f64>,
     deflection: Vec<[f64; 6]>,
     compensation: Vec<[f64; 6]>,
 }
@@ -269,6 +273,8 @@ impl FeedForwardTable {
             s_m: Vec::with_capacity(rows.len()),
             t_s: Vec::with_capacity(rows.len()),
             commanded: Vec::with_capacity(rows.len()),
+            direction: Vec::with_capacity(rows.len()),
+            length: Vec::with_capacity(rows.len()),
             deflection: Vec::with_capacity(rows.len()),
             compensation: Vec::with_capacity(rows.len()),
         };
@@ -348,6 +354,19 @@ impl FeedForwardTable {
                 .compensation
                 .push(rotate6(&to_base, row.compensation.as_slice()));
         }
+        for k in 0..table.commanded.len() {
+            let d = table
+                .commanded
+                .get(k + 1)
+                .map_or(Vector3::zeros(), |b| b - table.commanded[k]);
+            let length = d.norm();
+            table.length.push(length);
+            table.direction.push(if length > 0.0 {
+                d / length
+            } else {
+                Vector3::zeros()
+            });
+        }
         Ok(table)
     }
 
@@ -377,10 +396,23 @@ impl FeedForwardTable {
         std::array::from_fn(|i| a[i] + u * (b[i] - a[i]))
     }
 
-    /// Segment and fraction at time `t_s` (clamped to the path).
-    fn locate_time(&self, t_s: f64) -> (usize, f64) {
+    /// Segment and fraction at time `t_s` (clamped to the path), searched from segment `hint`:
+    /// galloping forward from it when `t_s` lies ahead (the usual case: a lead, or the next
+    /// cycle's time), so the search touches the table near the robot's place, not all of it.
+    fn locate_time(&self, t_s: f64, hint: usize) -> (usize, f64) {
         let last = self.t_s.len() - 1;
-        let k = self.t_s.partition_point(|t| *t <= t_s).clamp(1, last) - 1;
+        let hint = hint.min(last - 1);
+        let (lo, hi) = if self.t_s[hint] <= t_s {
+            // Bracket [hint + step/2, hint + step] with doubling steps.
+            let mut step = 1;
+            while hint + step < last && self.t_s[hint + step] <= t_s {
+                step *= 2;
+            }
+            (hint + step / 2, (hint + step).min(last) + 1)
+        } else {
+            (0, hint + 1)
+        };
+        let k = (lo + self.t_s[lo..hi].partition_point(|t| *t <= t_s)).clamp(1, last) - 1;
         let span = self.t_s[k + 1] - self.t_s[k];
         let u = if span > 0.0 {
             ((t_s - self.t_s[k]) / span).clamp(0.0, 1.0)
@@ -516,20 +548,22 @@ impl FeedForward {
         self.t0 = None;
     }
 
-    /// Closest point to `x` on segment `k` with fraction at least `from`: (fraction, distance).
+    /// Closest point to `x` on segment `k` with fraction at least `from`: (fraction, squared
+    /// distance). No square root, no division: `t = (x − a)·e` clamped to `[from·L, L]`,
+    /// `|x − a − t e|² = |x − a|² − 2 t (x − a)·e + t²`.
+    #[inline]
     fn project(&self, x: &Vector3<f64>, k: usize, from: f64) -> (f64, f64) {
-        let a = &self.table.commanded[k];
-        let d = self.table.commanded[k + 1] - a;
-        let dd = d.norm_squared();
-        let u = if dd > 0.0 {
-            ((x - a).dot(&d) / dd).clamp(from, 1.0)
-        } else {
-            1.0
-        };
-        (u, (x - (a + d * u)).norm())
+        let r = x - self.table.commanded[k];
+        let length = self.table.length[k];
+        let along = r.dot(&self.table.direction[k]);
+        let t = along.clamp(from * length, length);
+        let d2 = (r.norm_squared() - 2.0 * t * along + t * t).max(0.0);
+        let u = if length > 0.0 { t / length } else { 1.0 };
+        (u, d2)
     }
 
-    /// Monotone search from `(segment, fraction)` over the window: the closest point.
+    /// Monotone search from `(segment, fraction)` over the window: the closest point
+    /// `(segment, fraction, distance)`.
     fn search(&self, x: &Vector3<f64>, segment: usize, fraction: f64) -> (usize, f64, f64) {
         let last = self.table.len() - 2;
         let horizon = self.table.s_m[segment]
@@ -537,15 +571,27 @@ impl FeedForward {
             + self.config.window_m;
         let (u0, d0) = self.project(x, segment, fraction);
         let mut best = (segment, u0, d0);
-        let mut k = segment + 1;
-        while k <= last && k < segment + MAX_SEGMENTS_PER_CYCLE && self.table.s_m[k] <= horizon {
-            let (u, d) = self.project(x, k, 0.0);
-            if d < best.2 {
-                best = (k, u, d);
+        let end = (segment + MAX_SEGMENTS_PER_CYCLE).min(last + 1);
+        for k in segment + 1..end {
+            if self.table.s_m[k] > horizon {
+                break;
             }
-            k += 1;
+            // Every 8 segments: no point of the path from a_k to the horizon is closer than
+            // |x − a_k| − (horizon − s_k) (triangle inequality, the path being no longer than
+            // its arc length): stop when that cannot beat the best.
+            if (k - segment).is_multiple_of(8) {
+                let reach = horizon - self.table.s_m[k];
+                let to_start = (x - self.table.commanded[k]).norm();
+                if to_start - reach > 0.0 && (to_start - reach).powi(2) >= best.2 {
+                    break;
+                }
+            }
+            let (u, d2) = self.project(x, k, 0.0);
+            if d2 < best.2 {
+                best = (k, u, d2);
+            }
         }
-        best
+        (best.0, best.1, best.2.sqrt())
     }
 
     fn segment_length(&self, k: usize) -> f64 {
@@ -586,7 +632,8 @@ impl FeedForward {
                 };
                 let (k, u) = self
                     .table
-                    .locate_time(now_s - t0 + self.config.time_offset_s);
+                    .locate_time(now_s - t0 + self.config.time_offset_s, self.segment);
+                self.segment = k;
                 let (a, b) = (&self.table.commanded[k], &self.table.commanded[k + 1]);
                 let d = (tcp_world - (a + (b - a) * u)).norm();
                 let s = self.table.s_m[k] + u * self.segment_length(k);
@@ -606,7 +653,7 @@ impl FeedForward {
                 let here = FeedForwardTable::lerp6(&self.table.deflection, k, u).map(|v| -v);
                 let sent = if self.config.lead_s > 0.0 {
                     let t = self.table.t_s[k] + u * (self.table.t_s[k + 1] - self.table.t_s[k]);
-                    let (kl, ul) = self.table.locate_time(t + self.config.lead_s);
+                    let (kl, ul) = self.table.locate_time(t + self.config.lead_s, k);
                     FeedForwardTable::lerp6(&self.table.deflection, kl, ul).map(|v| -v)
                 } else {
                     here
@@ -803,12 +850,42 @@ mod tests {
                 ..FeedForwardConfig::default()
             },
         );
-        let step = pre.update(&Vector3::new(1.5085, 0.0, -0.18), 0.0);
-        // (the commanded polyline is 8.5 µm below the desired one there)
-        assert!((step.path_s_m - 0.0085).abs() < 1e-7, "{step:?}");
+        let step = pre.update(&Vector3::new(1.5035, 0.0, -0.18), 0.0);
+        // (the commanded polyline is 3.5 µm below the desired one there)
+        assert!((step.path_s_m - 0.0035).abs() < 1e-7, "{step:?}");
         // compensation = −deflection (the rows above)
-        assert!((step.prior[2] + 0.0085e-3).abs() < 1e-10);
+        assert!((step.prior[2] + 0.0035e-3).abs() < 1e-10);
         assert_eq!(step.sent, [0.0; 6]);
+    }
+
+    #[test]
+    fn time_lookup_from_any_hint_matches_a_plain_search() {
+        // Times with repeats (zero-length moves) and uneven steps.
+        let line: Vec<Vector3<f64>> = (0..200)
+            .map(|i| {
+                Vector3::new(
+                    1.5 + (i / 2) as f64 * 1e-3 * (1.0 + (i % 7) as f64),
+                    0.0,
+                    0.0,
+                )
+            })
+            .collect();
+        let ff = tracker(&line, FeedForwardConfig::default());
+        let t = &ff.table().t_s;
+        let plain = |ts: f64| {
+            let last = t.len() - 1;
+            t.partition_point(|v| *v <= ts).clamp(1, last) - 1
+        };
+        let duration = ff.table().duration_s();
+        for j in 0..400 {
+            let ts = -1.0 + (duration + 2.0) * j as f64 / 399.0;
+            for hint in [0, 1, 17, 100, 198, 199, 500] {
+                let (k, u) = ff.table().locate_time(ts, hint);
+                assert_eq!(k, plain(ts), "t {ts} hint {hint}");
+                assert!((0.0..=1.0).contains(&u));
+            }
+        }
+        assert_eq!(ff.table().locate_time(f64::NAN, 50), (0, 0.0));
     }
 
     #[test]
