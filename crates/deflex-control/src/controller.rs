@@ -158,6 +158,8 @@ pub struct Controller {
     runaway_events: u64,
     first_runaway: Option<Fault>,
     feedforward: Option<FeedForward>,
+    /// The feed-forward sent with the last cycle's law (part of the limiter's output).
+    feedforward_sent: [f64; 6],
 }
 
 /// Error building a controller.
@@ -223,6 +225,7 @@ impl Controller {
             runaway_events: 0,
             first_runaway: None,
             feedforward: None,
+            feedforward_sent: [0.0; 6],
         })
     }
 
@@ -434,7 +437,12 @@ impl Controller {
             if self.robot.forward_kinematics(&mut self.data, q).is_ok() {
                 kinematics_ok = true;
                 if let Some(feedforward) = self.feedforward.as_mut() {
-                    ff = feedforward.update(&self.data.tcp_position(), now);
+                    // The robot's place on its program: the commanded TCP minus the correction
+                    // this controller sends (base axes → world).
+                    let xi = self.limiter.output();
+                    let sent =
+                        self.robot.base.rotation * nalgebra::Vector3::new(xi[0], xi[1], xi[2]);
+                    ff = feedforward.update(&(self.data.tcp_position() - sent), now);
                 }
                 if self.phase == Phase::Taring {
                     let pose = self.wrench.sensor_pose(&self.data);
@@ -476,14 +484,21 @@ impl Controller {
             for (i, solution) in law.iter_mut().enumerate() {
                 if self.config.limiter.enabled[i] {
                     *solution = self.pid.solve(i, out.delta_s_hat[i] + ff.prior[i], h);
-                    xi_law[i] = solution.xi + ff.sent[i];
+                    xi_law[i] = solution.xi;
                 } else {
                     self.pid.reset_axis(i);
                     xi_law[i] = 0.0;
                 }
             }
+            // The guard acts on the feedback, the part that can run away through the contact;
+            // the feed-forward is open loop, bounded by the table (crate::feedforward).
             if self.guard.limit(&mut xi_law) {
                 flags.set(Flags::RUNAWAY_HOLD);
+            }
+            for i in 0..6 {
+                if self.config.limiter.enabled[i] {
+                    xi_law[i] += ff.sent[i];
+                }
             }
         }
         if self.guard.hold().is_some() {
@@ -504,6 +519,7 @@ impl Controller {
             self.phase = Phase::Stopped;
         }
         out.xi = limited.xi;
+        self.feedforward_sent = if follow { ff.sent } else { [0.0; 6] };
         out.feedforward = ff.prior;
         out.path_s_m = ff.path_s_m;
         for i in 0..6 {

@@ -47,12 +47,18 @@
 //!
 //! ## Indexing the table
 //!
-//! * **Arc length** ([`PathIndex::ArcLength`], default): every cycle, the TCP from forward
-//!   kinematics of the robot's reported joints (the *commanded* TCP: motor encoders do not see
-//!   the deflection) is projected on the table's *commanded* polyline (`desired ⊕ c`, where the
-//!   robot is sent in either mode), **monotonically**: from the current point, forward, over at
-//!   most `window_m` of arc length and [`MAX_SEGMENTS_PER_CYCLE`] table segments, the closest
-//!   point (the earliest on a tie). The arc length never decreases, and a helix's next turn or
+//! * **Arc length** ([`PathIndex::ArcLength`], default): every cycle, the robot's place on its
+//!   *program* — the TCP from forward kinematics of the reported joints (the *commanded* TCP:
+//!   motor encoders do not see the deflection) minus the controller's own last correction ξ —
+//!   is projected on the program's polyline (the desired path in feed-forward mode, the
+//!   compensated one `desired ⊕ c` in pre-compensated mode), **monotonically**: from the
+//!   current point, forward, over at most `window_m` of arc length and
+//!   [`MAX_SEGMENTS_PER_CYCLE`] table segments, the closest point (the earliest on a tie).
+//!   Taking the correction out matters where the path runs along the correction (a plunge): the
+//!   raw TCP, offset by a feed-forward that follows the arc length, would feed back into the
+//!   arc length it is projected to (a lagging loop of gain `|dc/ds| / |dz/ds|`, close to 1 on a
+//!   plunge into the sheet); the robot's place on its program does not depend on the
+//!   correction, up to the robot's delay in applying it. The arc length never decreases, and a helix's next turn or
 //!   a pocket's next pass, further along than `window_m`, cannot capture it. Tracking starts
 //!   at the path's first point: until the TCP comes within `max_offset_m` of the first
 //!   `window_m` of the path (an approach move), the state is *acquiring* and the prior is zero.
@@ -61,8 +67,8 @@
 //! * **Time** ([`PathIndex::Time`]): the table's time column (the path at its programmed
 //!   feeds, no acceleration) at the time since the controller's first start plus
 //!   `time_offset_s`. Only for a robot that follows the feeds exactly from that instant
-//!   (simulation, a test bench); the TCP is still checked against the commanded point at that
-//!   time.
+//!   (simulation, a test bench); the robot's place is still checked against the program's
+//!   point at that time.
 //!
 //! **Off the path**: when the TCP is farther than `max_offset_m` from the point found, the prior
 //! is zero (the rate limit smooths the change) and [`crate::safety::Flags::FEEDFORWARD_OFF_PATH`]
@@ -235,11 +241,8 @@ pub enum FeedForwardError {
 pub struct FeedForwardTable {
     s_m: Vec<f64>,
     t_s: Vec<f64>,
+    desired: Vec<Vector3<f64>>,
     commanded: Vec<Vector3<f64>>,
-    /// Unit direction and length of each segment of the commanded polyline (zero for a
-    /// zero-length segment; the last point's entry unused).
-    direction: Vec<Vector3<f64>>,
-    length: Vec<f64>,
     deflection: Vec<[f64; 6]>,
     compensation: Vec<[f64; 6]>,
 }
@@ -272,9 +275,8 @@ impl FeedForwardTable {
         let mut table = FeedForwardTable {
             s_m: Vec::with_capacity(rows.len()),
             t_s: Vec::with_capacity(rows.len()),
+            desired: Vec::with_capacity(rows.len()),
             commanded: Vec::with_capacity(rows.len()),
-            direction: Vec::with_capacity(rows.len()),
-            length: Vec::with_capacity(rows.len()),
             deflection: Vec::with_capacity(rows.len()),
             compensation: Vec::with_capacity(rows.len()),
         };
@@ -346,6 +348,7 @@ impl FeedForwardTable {
             }
             table.s_m.push(row.arc_length_m);
             table.t_s.push(row.time_s);
+            table.desired.push(row.desired.translation.vector);
             table.commanded.push(commanded);
             table
                 .deflection
@@ -353,19 +356,6 @@ impl FeedForwardTable {
             table
                 .compensation
                 .push(rotate6(&to_base, row.compensation.as_slice()));
-        }
-        for k in 0..table.commanded.len() {
-            let d = table
-                .commanded
-                .get(k + 1)
-                .map_or(Vector3::zeros(), |b| b - table.commanded[k]);
-            let length = d.norm();
-            table.length.push(length);
-            table.direction.push(if length > 0.0 {
-                d / length
-            } else {
-                Vector3::zeros()
-            });
         }
         Ok(table)
     }
@@ -423,6 +413,35 @@ impl FeedForwardTable {
     }
 }
 
+/// The polyline the robot's place is tracked on, with the unit direction and length of each
+/// segment (zero for a zero-length segment; the last point's entry unused).
+#[derive(Clone, Debug)]
+struct Polyline {
+    points: Vec<Vector3<f64>>,
+    direction: Vec<Vector3<f64>>,
+    length: Vec<f64>,
+}
+
+impl Polyline {
+    fn new(points: &[Vector3<f64>]) -> Polyline {
+        let mut direction = Vec::with_capacity(points.len());
+        let mut length = Vec::with_capacity(points.len());
+        for k in 0..points.len() {
+            let d = points
+                .get(k + 1)
+                .map_or(Vector3::zeros(), |b| b - points[k]);
+            let l = d.norm();
+            length.push(l);
+            direction.push(if l > 0.0 { d / l } else { Vector3::zeros() });
+        }
+        Polyline {
+            points: points.to_vec(),
+            direction,
+            length,
+        }
+    }
+}
+
 /// Where the tracker is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TrackState {
@@ -468,6 +487,7 @@ impl FeedForwardStep {
 #[derive(Clone, Debug)]
 pub struct FeedForward {
     table: FeedForwardTable,
+    track: Polyline,
     config: FeedForwardConfig,
     locked: bool,
     segment: usize,
@@ -513,7 +533,12 @@ impl FeedForward {
         config: FeedForwardConfig,
     ) -> Result<FeedForward, FeedForwardError> {
         check_config(&config)?;
+        let track = Polyline::new(match config.mode {
+            FeedForwardMode::FeedForward => &table.desired,
+            FeedForwardMode::Precompensated => &table.commanded,
+        });
         Ok(FeedForward {
+            track,
             table,
             config,
             locked: false,
@@ -553,9 +578,9 @@ impl FeedForward {
     /// `|x − a − t e|² = |x − a|² − 2 t (x − a)·e + t²`.
     #[inline]
     fn project(&self, x: &Vector3<f64>, k: usize, from: f64) -> (f64, f64) {
-        let r = x - self.table.commanded[k];
-        let length = self.table.length[k];
-        let along = r.dot(&self.table.direction[k]);
+        let r = x - self.track.points[k];
+        let length = self.track.length[k];
+        let along = r.dot(&self.track.direction[k]);
         let t = along.clamp(from * length, length);
         let d2 = (r.norm_squared() - 2.0 * t * along + t * t).max(0.0);
         let u = if length > 0.0 { t / length } else { 1.0 };
@@ -581,7 +606,7 @@ impl FeedForward {
             // its arc length): stop when that cannot beat the best.
             if (k - segment).is_multiple_of(8) {
                 let reach = horizon - self.table.s_m[k];
-                let to_start = (x - self.table.commanded[k]).norm();
+                let to_start = (x - self.track.points[k]).norm();
                 if to_start - reach > 0.0 && (to_start - reach).powi(2) >= best.2 {
                     break;
                 }
@@ -598,9 +623,12 @@ impl FeedForward {
         self.table.s_m[k + 1] - self.table.s_m[k]
     }
 
-    /// One control cycle: `tcp_world` is the commanded TCP (forward kinematics of the reported
-    /// joints, world frame of the model), `now_s` the controller time.
-    pub fn update(&mut self, tcp_world: &Vector3<f64>, now_s: f64) -> FeedForwardStep {
+    /// One control cycle: `place_world` is where the robot is on its *program* (world frame of
+    /// the model): the commanded TCP (forward kinematics of the reported joints) minus the
+    /// controller's own correction (see the module documentation); `now_s` the controller
+    /// time.
+    pub fn update(&mut self, place_world: &Vector3<f64>, now_s: f64) -> FeedForwardStep {
+        let tcp_world = place_world;
         if !tcp_world.iter().all(|v| v.is_finite()) {
             return FeedForwardStep::off(TrackState::OffPath, f64::NAN, f64::NAN);
         }
@@ -634,7 +662,7 @@ impl FeedForward {
                     .table
                     .locate_time(now_s - t0 + self.config.time_offset_s, self.segment);
                 self.segment = k;
-                let (a, b) = (&self.table.commanded[k], &self.table.commanded[k + 1]);
+                let (a, b) = (&self.track.points[k], &self.track.points[k + 1]);
                 let d = (tcp_world - (a + (b - a) * u)).norm();
                 let s = self.table.s_m[k] + u * self.segment_length(k);
                 if d.is_nan() || d > self.config.max_offset_m {

@@ -21,15 +21,48 @@ use deflex_model::{Data, Displacement, IkOptions, Pose, Robot, Wrench};
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 
-const FEED_M_S: f64 = 0.01;
-const LENGTH_M: f64 = 0.04;
 const DELAY_CYCLES: usize = 2;
 const FORCE_N: f64 = 1000.0;
 
-/// The process force at arc length `s` (world axes, on the tool: pushes up).
+/// A straight path: direction (world), feed, length, and where the force ramps (arc length of
+/// its start, length of the ramp).
+#[derive(Clone, Copy)]
+struct Line {
+    direction: [f64; 3],
+    feed_m_s: f64,
+    length_m: f64,
+    ramp_m: (f64, f64),
+}
+
+/// 40 mm along x at 10 mm/s, the force ramping between 10 and 12 mm.
+const ALONG_X: Line = Line {
+    direction: [1.0, 0.0, 0.0],
+    feed_m_s: 0.01,
+    length_m: 0.04,
+    ramp_m: (0.010, 0.002),
+};
+
+/// A plunge: 4 mm down at 2 mm/s, the force ramping over 0.6 mm from 1 mm down (the path runs
+/// along the correction).
+const PLUNGE: Line = Line {
+    direction: [0.0, 0.0, -1.0],
+    feed_m_s: 0.002,
+    length_m: 0.004,
+    ramp_m: (0.001, 0.0006),
+};
+
+const LENGTH_M: f64 = ALONG_X.length_m;
+
+impl Line {
+    /// The process force at arc length `s` (world axes, on the tool: pushes up).
+    fn force(&self, s: f64, scale: f64) -> Wrench {
+        let f = FORCE_N * scale * ((s - self.ramp_m.0) / self.ramp_m.1).clamp(0.0, 1.0);
+        Wrench::new(0.0, 0.0, f, 0.0, 0.0, 0.0)
+    }
+}
+
 fn force(s: f64, scale: f64) -> Wrench {
-    let f = FORCE_N * scale * ((s - 0.010) / 0.002).clamp(0.0, 1.0);
-    Wrench::new(0.0, 0.0, f, 0.0, 0.0, 0.0)
+    ALONG_X.force(s, scale)
 }
 
 struct Robotic {
@@ -37,10 +70,15 @@ struct Robotic {
     start: Pose,
     data: Data,
     q: Vec<f64>,
+    line: Line,
 }
 
 impl Robotic {
     fn new() -> Self {
+        Robotic::along(ALONG_X)
+    }
+
+    fn along(line: Line) -> Self {
         let robot = common::robot();
         let q = common::q0().to_vec();
         let start = robot.tcp_pose(&q).unwrap();
@@ -49,12 +87,13 @@ impl Robotic {
             start,
             data: Data::new(),
             q,
+            line,
         }
     }
 
     fn desired(&self, s: f64) -> Pose {
         let mut p = self.start;
-        p.translation.vector += Vector3::new(s.min(LENGTH_M), 0.0, 0.0);
+        p.translation.vector += Vector3::from(self.line.direction) * s.min(self.line.length_m);
         p
     }
 
@@ -75,12 +114,17 @@ impl Robotic {
 /// The offline table: the path every 0.5 mm with the deflection predicted for `scale` × the
 /// force, compensation = −deflection (position only, as for the twin).
 fn table(scale: f64) -> Vec<TableRow> {
-    let mut robotic = Robotic::new();
-    (0..=80)
+    table_along(ALONG_X, scale, 80)
+}
+
+fn table_along(line: Line, scale: f64, points: usize) -> Vec<TableRow> {
+    let mut robotic = Robotic::along(line);
+    let step = line.length_m / points as f64;
+    (0..=points)
         .map(|i| {
-            let s = i as f64 * 0.5e-3;
+            let s = i as f64 * step;
             let desired = robotic.desired(s);
-            let w = force(s, scale);
+            let w = line.force(s, scale);
             // Deflection at the compensated configuration (one fixed-point step is enough
             // at this size).
             let d0 = robotic.command(&desired, &w);
@@ -90,7 +134,7 @@ fn table(scale: f64) -> Vec<TableRow> {
             TableRow {
                 line: i + 2,
                 arc_length_m: s,
-                time_s: s / FEED_M_S,
+                time_s: s / line.feed_m_s,
                 desired,
                 compensation: Displacement::new(-d[0], -d[1], -d[2], 0.0, 0.0, 0.0),
                 wrench: w,
@@ -102,7 +146,15 @@ fn table(scale: f64) -> Vec<TableRow> {
 }
 
 fn feedforward(scale: f64, mode: FeedForwardMode, lead_s: f64) -> FeedForward {
-    let rows = table(scale);
+    feedforward_along(ALONG_X, table(scale), mode, lead_s)
+}
+
+fn feedforward_along(
+    _line: Line,
+    rows: Vec<TableRow>,
+    mode: FeedForwardMode,
+    lead_s: f64,
+) -> FeedForward {
     let table = FeedForwardTable::from_rows(&rows, &common::robot(), "table.csv").unwrap();
     FeedForward::new(
         table,
@@ -130,12 +182,23 @@ struct Run {
     final_error_m: f64,
     off_path_cycles: usize,
     path_s_m: f64,
+    /// Largest |tracked − true arc length| while on the path (m).
+    max_tracking_error_m: f64,
 }
 
 /// One run along the path: `program` is the compensated program (`Some(table rows)`) or the
 /// original; `ff` the controller's feed-forward.
 fn run(config: ControllerConfig, ff: Option<FeedForward>, program: Option<&[TableRow]>) -> Run {
-    let mut robotic = Robotic::new();
+    run_along(ALONG_X, config, ff, program)
+}
+
+fn run_along(
+    line: Line,
+    config: ControllerConfig,
+    ff: Option<FeedForward>,
+    program: Option<&[TableRow]>,
+) -> Run {
+    let mut robotic = Robotic::along(line);
     let mut ctrl = Controller::new(robotic.robot.clone(), config).unwrap();
     ctrl.set_feedforward(ff);
     ctrl.start(0.0);
@@ -143,15 +206,17 @@ fn run(config: ControllerConfig, ff: Option<FeedForward>, program: Option<&[Tabl
     let mut out = Run::default();
     let mut t = 0.0;
     let mut last_xi = [0.0; 6];
-    while t < LENGTH_M / FEED_M_S + 1.5 {
+    let ramp_t = line.ramp_m.0 / line.feed_m_s;
+    while t < line.length_m / line.feed_m_s + 1.5 {
         t += 0.01;
-        let s = (t * FEED_M_S).min(LENGTH_M);
+        let s = (t * line.feed_m_s).min(line.length_m);
         let desired = robotic.desired(s);
         let xi = applied.pop_front().unwrap();
         // The program's compensation (interpolated between the table's points).
         let c = program.map_or(Vector3::zeros(), |rows| {
-            let k = ((s / 0.5e-3) as usize).min(rows.len() - 2);
-            let u = (s - rows[k].arc_length_m) / 0.5e-3;
+            let step = rows[1].arc_length_m;
+            let k = ((s / step) as usize).min(rows.len() - 2);
+            let u = (s - rows[k].arc_length_m) / step;
             let (a, b) = (&rows[k].compensation, &rows[k + 1].compensation);
             Vector3::new(
                 a[0] + u * (b[0] - a[0]),
@@ -164,7 +229,7 @@ fn run(config: ControllerConfig, ff: Option<FeedForward>, program: Option<&[Tabl
         commanded.rotation =
             nalgebra::Rotation3::from_scaled_axis(Vector3::new(xi[3], xi[4], xi[5]))
                 * commanded.rotation;
-        let w = force(s, 1.0);
+        let w = line.force(s, 1.0);
         let d = robotic.command(&commanded, &w);
         let error = (commanded.translation.vector + Vector3::new(d[0], d[1], d[2])
             - desired.translation.vector)
@@ -176,7 +241,7 @@ fn run(config: ControllerConfig, ff: Option<FeedForward>, program: Option<&[Tabl
         if t > 0.6 {
             out.max_error_m = out.max_error_m.max(error);
         }
-        if (1.0..2.0).contains(&t) {
+        if (ramp_t..ramp_t + 1.0).contains(&t) {
             out.ramp_error_integral_m_s += error * 0.01;
         }
         if o.flags.has(Flags::FEEDFORWARD_OFF_PATH) {
@@ -193,6 +258,11 @@ fn run(config: ControllerConfig, ff: Option<FeedForward>, program: Option<&[Tabl
             };
         out.final_error_m = error;
         out.path_s_m = o.path_s_m;
+        // The robot is where it was commanded DELAY_CYCLES ago: s of the cycle that sent it.
+        if o.path_s_m.is_finite() && s < line.length_m {
+            let lag = DELAY_CYCLES as f64 * 0.01 * line.feed_m_s;
+            out.max_tracking_error_m = out.max_tracking_error_m.max((o.path_s_m - s).abs() - lag);
+        }
     }
     assert!(last_xi.iter().all(|v| v.is_finite()));
     assert_eq!(ctrl.fault(), None);
@@ -297,4 +367,44 @@ fn a_lead_covers_the_robots_delay() {
     eprintln!("no lead {no_lead:?}\nlead 30 ms {lead:?}");
     assert!(lead.ramp_error_integral_m_s < no_lead.ramp_error_integral_m_s);
     assert!(lead.max_error_m < no_lead.max_error_m);
+}
+
+/// A plunge along the correction's direction: the arc length is tracked from the robot's place
+/// on its program (the TCP minus the controller's own correction), so the feed-forward does not
+/// feed back into the arc length it is read at, and the ramp is taken without lag.
+#[test]
+fn a_plunge_into_a_force_ramp_is_tracked_and_fed_forward() {
+    let rows = table_along(PLUNGE, 1.0, 40);
+    let ff = run_along(
+        PLUNGE,
+        config(),
+        Some(feedforward_along(
+            PLUNGE,
+            rows.clone(),
+            FeedForwardMode::FeedForward,
+            0.0,
+        )),
+        None,
+    );
+    let online = run_along(PLUNGE, config(), None, None);
+    let pre = run_along(
+        PLUNGE,
+        config(),
+        Some(feedforward_along(
+            PLUNGE,
+            rows.clone(),
+            FeedForwardMode::Precompensated,
+            0.0,
+        )),
+        Some(&rows),
+    );
+    eprintln!("plunge: online {online:?}\nfeed-forward {ff:?}\npre-compensated {pre:?}");
+    // Arc length within 20 µm of the truth (the robot's delay taken out), with 3.3 mm of
+    // deflection along the path.
+    assert!(ff.max_tracking_error_m < 20e-6, "{ff:?}");
+    assert!(pre.max_tracking_error_m < 20e-6, "{pre:?}");
+    assert!(ff.delta_s_hat_z > 1e-3, "{ff:?}");
+    assert!(ff.ramp_error_integral_m_s < 0.5 * online.ramp_error_integral_m_s);
+    assert!(pre.ramp_error_integral_m_s < 0.5 * online.ramp_error_integral_m_s);
+    assert!(ff.max_error_m < online.max_error_m && pre.max_error_m < online.max_error_m);
 }

@@ -21,6 +21,7 @@ pub(crate) struct Page<'a> {
     pub forming_files: Vec<Figure>,
     pub contact_files: Vec<Figure>,
     pub sensitivity_files: Vec<Figure>,
+    pub compensation_files: Vec<Figure>,
 }
 
 fn fmt_k(v: Option<f64>, is_shift: bool) -> String {
@@ -352,6 +353,7 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
         }
     }
 
+    crate::compensation::page::section(&mut html, &s.compensation, &page.compensation_files);
     html.section("Run");
     let timings: Vec<Vec<String>> = s
         .stage_seconds
