@@ -49,6 +49,11 @@ pub struct CompensateArgs {
     /// Only the first part of the path (mm of travel).
     #[arg(long)]
     pub length_mm: Option<f64>,
+    /// Split moves longer than this (mm, 0.001–10000) before compensating: a compensation
+    /// moves each waypoint, so a long move into the sheet (a plunge written as one line) is
+    /// only compensated at its ends otherwise. Default: the program's moves as they are.
+    #[arg(long)]
+    pub max_segment_mm: Option<f64>,
     /// Compensate the position only (keep the desired orientation).
     #[arg(long)]
     pub position_only: bool,
@@ -145,6 +150,11 @@ fn setup(args: &CompensateArgs) -> Result<Setup, String> {
         Some(l) if l.is_finite() && l > 0.0 => tool_path = tool_path.truncated(l),
         Some(l) => return Err(format!("--length-mm must be positive, got {l}")),
         None => {}
+    }
+    if let Some(max) = args.max_segment_mm {
+        tool_path = tool_path
+            .subdivided(max)
+            .map_err(|e| format!("--max-segment-mm: {e}"))?;
     }
     let rotation = robot
         .tcp_pose(&seed)
@@ -541,6 +551,7 @@ mod tests {
             seed_deg: None,
             twin: None,
             length_mm: Some(400.0),
+            max_segment_mm: None,
             position_only: false,
             include_gravity: false,
             tolerance_um: 1.0,

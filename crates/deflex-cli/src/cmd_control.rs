@@ -67,6 +67,8 @@ pub struct RunOutcome {
     pub robot_kind: RobotKind,
     /// Largest step allowed between two answers (m): max rate × robot cycle.
     pub step_limit_m: f64,
+    /// The feed-forward in use (`[feedforward]`), described.
+    pub feedforward: Option<String>,
 }
 
 /// The `deflex run` session: links, threads, live status, summary. `stop` ends it early.
@@ -75,7 +77,28 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
     let cell = load_cell_file(&args.config)?;
     let model = deflex_model::load_robot(&cell.model_spec())
         .map_err(|e| format!("{}: model.file: {e}", cell.origin))?;
-    let controller = Controller::new(model, cell.controller_config()).map_err(|e| e.to_string())?;
+    let feedforward = cell.feedforward(&model).map_err(|e| e.to_string())?;
+    let feedforward_text = feedforward.as_ref().map(|ff| {
+        let c = ff.config();
+        format!(
+            "{} from {} ({} points, {:.1} mm), indexed by {}{}",
+            c.mode.name(),
+            cell.feedforward_table_path()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
+            ff.table().len(),
+            ff.table().length_m() * 1e3,
+            c.index.name(),
+            if c.lead_s > 0.0 {
+                format!(", lead {:.3} s", c.lead_s)
+            } else {
+                String::new()
+            }
+        )
+    });
+    let mut controller =
+        Controller::new(model, cell.controller_config()).map_err(|e| e.to_string())?;
+    controller.set_feedforward(feedforward);
     let joints = controller.robot().joint_count();
     let robot = cell
         .open_robot_link(joints)
@@ -103,6 +126,9 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         idle_exit_s: Some(args.idle_exit_s),
     };
     let step_limit_m = cell.limits.max_rate_m_s * cell.robot.cycle_s;
+    if live && let Some(text) = &feedforward_text {
+        eprintln!("deflex run: feed-forward: {text}");
+    }
     if live {
         eprintln!(
             "deflex run: waiting for the robot ({}) on {} and the sensor at {} (Ctrl-C or \
@@ -168,6 +194,7 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         log_committed,
         robot_kind: cell.robot.kind,
         step_limit_m,
+        feedforward: feedforward_text,
     })
 }
 
@@ -201,6 +228,7 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             "max_step_sent_m": s.max_step_sent[..3].iter().fold(0.0f64, |m, v| m.max(*v)),
             "max_step_sent_rad": s.max_step_sent[3..].iter().fold(0.0f64, |m, v| m.max(*v)),
             "step_limit_m": o.step_limit_m,
+            "feedforward": o.feedforward,
             "samples": s.samples, "sample_gaps": s.sample_gaps, "sensor_faults": s.sensor_faults,
             "sensor_errors": s.sensor_errors, "sensor_foreign": s.sensor_foreign,
             "fault": s.fault.as_ref().map(fault_json),
@@ -231,6 +259,9 @@ fn print_summary(o: &RunOutcome) {
         s.phase_text()
     );
     println!("  control cycle:     {}", s.control);
+    if let Some(text) = &o.feedforward {
+        println!("  feed-forward:      {text}");
+    }
     println!(
         "  {} ({} joints) reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; {} telegrams          answered, {} answered later than one robot cycle{}",
         o.robot_kind.name(),

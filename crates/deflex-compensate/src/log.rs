@@ -345,12 +345,15 @@ pub fn resample_on_path(
     let mut off_path_rows = 0;
     let mut max_offset: f64 = 0.0;
     let mut current: usize = 0;
+    let mut current_s: f64 = 0.0;
     let mut last_position: Option<Vector3<f64>> = None;
     for sample in &log.samples {
         let p = &sample.position_m;
         let j = current;
         let step = last_position.map_or(0.0, |q| (p - q).norm());
-        let reach = path.points()[j].arc_length_m + options.window_m.max(3.0 * step);
+        // The window runs ahead of the last row's place on the path, not of its segment's
+        // start: a segment longer than the window must not hide the next one.
+        let reach = current_s.max(path.points()[j].arc_length_m) + options.window_m.max(3.0 * step);
         let range_end = path.points()[j..]
             .partition_point(|pt| pt.arc_length_m <= reach)
             .max(1)
@@ -368,6 +371,7 @@ pub fn resample_on_path(
             Some((distance, s, k)) if distance <= options.max_offset_m => {
                 max_offset = max_offset.max(distance);
                 current = k;
+                current_s = s;
                 last_position = Some(*p);
                 located.push((s, sample.wrench));
             }

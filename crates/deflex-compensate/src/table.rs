@@ -160,6 +160,8 @@ pub enum TableError {
 /// One row read back.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TableRow {
+    /// 1-based line of the file the row was read from (for messages).
+    pub line: usize,
     /// Arc length (m).
     pub arc_length_m: f64,
     /// Time (s).
@@ -238,6 +240,7 @@ pub fn read_csv(text: &str, file: &str) -> Result<Vec<TableRow>, TableError> {
         };
         let pose = six(&SIX)?;
         rows.push(TableRow {
+            line,
             arc_length_m: get("s_m")?,
             time_s: get("t_s")?,
             desired: Pose::from_parts(

@@ -303,3 +303,56 @@ fn bad_logs_are_refused_with_file_line_and_column() {
     let e = resample_on_path(&far, &straight_path(), &ResampleOptions::default()).unwrap_err();
     assert!(matches!(e, LogError::NoRowNearPath { rows: 5, .. }), "{e}");
 }
+
+/// A path whose first segment (a 15 mm rapid, as CAM programs start) is longer than the
+/// resampling window, then 1 mm moves at right angles: the rows of the later segments are found
+/// (the window runs ahead of the last row's arc length, not of its segment's start).
+#[test]
+fn a_segment_longer_than_the_window_does_not_hide_the_next_ones() {
+    let down = builtin("tx200")
+        .unwrap()
+        .tcp_pose(&TX200_FORMING_Q_DEG.map(f64::to_radians))
+        .unwrap()
+        .rotation;
+    let corners: Vec<[f64; 2]> = std::iter::once([0.0, 0.0])
+        .chain((0..=10).map(|i| [15.0, i as f64]))
+        .collect();
+    let poses = corners.iter().map(|[x, y]| {
+        let p = part() * nalgebra::Point3::new(x * 1e-3, y * 1e-3, 0.0);
+        (
+            Pose::from_parts(Translation3::from(p.coords), down),
+            Some(0.01),
+        )
+    });
+    let path = TcpPath::new("rapid then moves", poses, 0.05).unwrap();
+    // Rows every 0.5 mm along the polyline; fz = 10 N per mm of arc length.
+    let mut text = String::from(
+        "# SIMULATED\ntime_s,des_x_mm,des_y_mm,des_z_mm,fx_N,fy_N,fz_N,mx_Nm,my_Nm,mz_Nm\n",
+    );
+    for i in 0..=50 {
+        let s = 0.5 * i as f64;
+        let (x, y) = if s <= 15.0 {
+            (s, 0.0)
+        } else {
+            (15.0, s - 15.0)
+        };
+        let _ = writeln!(
+            text,
+            "{:.2},{x},{y},0,0,0,{},0,0,0",
+            0.05 * i as f64,
+            10.0 * s
+        );
+    }
+    let robot = builtin("tx200").unwrap();
+    let log = parse_log(&text, "log.csv", &robot, &part()).unwrap();
+    let options = ResampleOptions {
+        half_width_m: 0.0,
+        ..ResampleOptions::default()
+    };
+    let r = resample_on_path(&log, &path, &options).unwrap();
+    assert_eq!(r.used_rows, 51, "{r:?}");
+    for (point, w) in path.points().iter().zip(&r.wrenches) {
+        let expected = 10.0 * point.arc_length_m * 1e3;
+        assert!((w[2] - expected).abs() < 1e-6, "{} vs {expected}", w[2]);
+    }
+}

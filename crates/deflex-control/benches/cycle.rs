@@ -1,7 +1,9 @@
 //! One control cycle: wrench processing (bias, gravity, low-pass, move to the TCP) + deflection
 //! estimate δŝ = J K_θ⁻¹ Jᵀ w (eq. 15) + the PID of eq. 17 with limiter, safety and the
-//! contact-runaway guard. Target: ≤ 1 µs median. Also the per-cycle extras of the runtime: the
-//! joint-correction map (RSI `AK` answers) and the per-answer send shaper.
+//! contact-runaway guard. Target: ≤ 1 µs median. The same with a feed-forward table
+//! (`control_cycle_feedforward`, 100 000 points 0.1 mm apart, arc-length tracking and a lead;
+//! `feedforward_update`: the tracking and lookup alone). Also the per-cycle extras of the
+//! runtime: the joint-correction map (RSI `AK` answers) and the per-answer send shaper.
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
@@ -60,5 +62,140 @@ fn bench_link_extras(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench_cycle, bench_link_extras);
+/// The same cycle with a feed-forward table of 100 000 points (arc-length tracking by forward
+/// kinematics of the reported joints, a 30 ms lead), the robot moving 10 µm per cycle along the
+/// table's path (joint 1 turning, the TCP on a 1.5 m arc).
+fn bench_cycle_feedforward(c: &mut Criterion) {
+    use deflex_compensate::table::TableRow;
+    use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardTable};
+    use deflex_model::{Data, Displacement, Wrench};
+    let robot = builtin("tx200").expect("built-in tx200");
+    let q0 = TX200_FORMING_Q_DEG.map(f64::to_radians);
+    const POINTS: usize = 100_000;
+    // 0.1 mm between table points, 10 µm per control cycle.
+    let step = 1e-4 / 1.5;
+    let mut data = Data::new();
+    let mut s = 0.0;
+    let mut previous: Option<nalgebra::Vector3<f64>> = None;
+    let rows: Vec<TableRow> = (0..POINTS)
+        .map(|i| {
+            let mut q = q0;
+            q[0] += i as f64 * step;
+            robot.forward_kinematics(&mut data, &q).unwrap();
+            let p = data.tcp_position();
+            if let Some(prev) = previous {
+                s += (p - prev).norm();
+            }
+            previous = Some(p);
+            let d = (i as f64 * 0.01).sin() * 1e-3;
+            TableRow {
+                line: i + 2,
+                arc_length_m: s,
+                time_s: s / 0.01,
+                desired: data.tcp,
+                compensation: Displacement::new(0.0, 0.0, -d, 0.0, 0.0, 0.0),
+                wrench: Wrench::zeros(),
+                deflection: Displacement::new(0.0, 0.0, d, 0.0, 0.0, 0.0),
+                status: "ok".into(),
+            }
+        })
+        .collect();
+    let table = FeedForwardTable::from_rows(&rows, &robot, "bench").unwrap();
+    let ff = FeedForward::new(
+        table,
+        FeedForwardConfig {
+            lead_s: 0.03,
+            ..FeedForwardConfig::default()
+        },
+    )
+    .unwrap();
+    let config = ControllerConfig {
+        bias: Some([1.0, -2.0, 3.0, 0.1, 0.2, -0.1]),
+        ..ControllerConfig::default()
+    };
+    let mut fresh = Controller::new(robot, config).expect("controller");
+    fresh.set_feedforward(Some(ff));
+    // One run of the program is (POINTS − 1) × 10 cycles; a new run (a fresh controller: the
+    // joints jump back to the start) is set up outside the timed loop.
+    let cycles = (POINTS - 1) * 10;
+    // What is timed does the work: the law is active and the robot on the table's path.
+    let mut check = fresh.clone();
+    check.start(0.0);
+    for k in 0..2000 {
+        let mut q = q0;
+        q[0] += k as f64 * step * 0.1;
+        let out = check.cycle(k as f64 * 0.01, &q, &[10.0, -5.0, -600.0, 1.0, -0.3, 0.5]);
+        if k > 100 {
+            assert!(out.flags.has(deflex_control::Flags::ACTIVE), "{k}");
+            assert!(
+                !out.flags.has(deflex_control::Flags::FEEDFORWARD_OFF_PATH),
+                "{k}"
+            );
+        }
+    }
+    // The tracking and lookup alone.
+    if let Some(ff) = fresh.feedforward() {
+        let mut data = Data::new();
+        let tcps: Vec<nalgebra::Vector3<f64>> = (0..cycles)
+            .map(|k| {
+                let mut q = q0;
+                q[0] += k as f64 * step * 0.1;
+                robot_fk(&fresh, &mut data, &q)
+            })
+            .collect();
+        let template = ff.clone();
+        c.bench_function("feedforward_update", |b| {
+            b.iter_custom(|iters| {
+                let mut total = std::time::Duration::ZERO;
+                let mut done = 0u64;
+                while done < iters {
+                    let mut ff = template.clone();
+                    ff.start(0.0);
+                    let n = (iters - done).min(cycles as u64) as usize;
+                    let start = std::time::Instant::now();
+                    for (k, x) in tcps[..n].iter().enumerate() {
+                        black_box(ff.update(black_box(x), k as f64 * 0.01));
+                    }
+                    total += start.elapsed();
+                    done += n as u64;
+                }
+                total
+            })
+        });
+    }
+    c.bench_function("control_cycle_feedforward", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            let mut done = 0u64;
+            while done < iters {
+                let mut ctrl = fresh.clone();
+                ctrl.start(0.0);
+                let n = (iters - done).min(cycles as u64);
+                let start = std::time::Instant::now();
+                for k in 0..n {
+                    let t = k as f64 * 0.01;
+                    let mut q = q0;
+                    q[0] += k as f64 * step * 0.1;
+                    let w = [10.0, -5.0, -600.0, 1.0, -0.3, 0.5];
+                    black_box(ctrl.cycle(black_box(t), black_box(&q), black_box(&w)));
+                }
+                total += start.elapsed();
+                done += n;
+            }
+            total
+        })
+    });
+}
+
+fn robot_fk(ctrl: &Controller, data: &mut deflex_model::Data, q: &[f64]) -> nalgebra::Vector3<f64> {
+    ctrl.robot().forward_kinematics(data, q).unwrap();
+    data.tcp_position()
+}
+
+criterion_group!(
+    benches,
+    bench_cycle,
+    bench_cycle_feedforward,
+    bench_link_extras
+);
 criterion_main!(benches);

@@ -5,6 +5,7 @@
 //! `docs/cell.example.toml`.
 
 mod controller_config;
+mod feedforward;
 mod links;
 mod validate;
 
@@ -289,6 +290,34 @@ pub struct LimitsSection {
     pub runaway_action: String,
 }
 
+/// `[feedforward]`: the online correction on top of an offline compensation
+/// ([`crate::feedforward`]).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeedForwardSection {
+    /// `compensated_path.csv` of `deflex compensate` (relative to the config file).
+    pub table: String,
+    /// `feed-forward` (the robot runs the original program; default) or `precompensated` (the
+    /// robot runs the compensated program).
+    #[serde(default = "default_ff_mode")]
+    pub mode: String,
+    /// `arc-length` (default) or `time`.
+    #[serde(default = "default_ff_index")]
+    pub index: String,
+    /// Feed-forward mode: read the table this much path time ahead (s).
+    #[serde(default)]
+    pub lead_s: f64,
+    /// Farther than this from the path, the TCP is off the path (m).
+    #[serde(default = "default_ff_offset")]
+    pub max_offset_m: f64,
+    /// Arc length searched ahead per control cycle (m).
+    #[serde(default = "default_ff_window")]
+    pub window_m: f64,
+    /// Time index: the table's time at the controller's start (s).
+    #[serde(default)]
+    pub time_offset_s: f64,
+}
+
 /// `[log]`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -322,6 +351,9 @@ pub struct CellFile {
     /// Log; absent = no CSV.
     #[serde(default)]
     pub log: Option<LogSection>,
+    /// Feed-forward from an offline compensation; absent = the online correction alone.
+    #[serde(default)]
+    pub feedforward: Option<FeedForwardSection>,
     /// Directory of the file (for relative paths); set by [`CellFile::load`].
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -452,6 +484,20 @@ fn default_limits() -> LimitsSection {
 }
 fn default_ring() -> usize {
     8192
+}
+fn default_ff_mode() -> String {
+    crate::feedforward::FeedForwardMode::FeedForward
+        .name()
+        .into()
+}
+fn default_ff_index() -> String {
+    crate::feedforward::PathIndex::ArcLength.name().into()
+}
+fn default_ff_offset() -> f64 {
+    crate::feedforward::FeedForwardConfig::default().max_offset_m
+}
+fn default_ff_window() -> f64 {
+    crate::feedforward::FeedForwardConfig::default().window_m
 }
 
 /// Axis names in ξ order.
@@ -657,6 +703,120 @@ file = "tx200"
         // Yaw 90°: the work object's x is the base's y.
         assert!((egm.work_object_in_base[1][0] - 1.0).abs() < 1e-12);
         assert!(cell.open_robot_link(6).unwrap().answers_in_joint_space());
+    }
+
+    /// A compensated-path table (the columns `deflex compensate` writes), `rows` rows along x.
+    fn table_text(rows: usize, status_of_row_2: &str) -> String {
+        let mut t = String::from(
+            "# SIMULATED\nindex,s_m,t_s,x_m,y_m,z_m,rx_rad,ry_rad,rz_rad,dx_m,dy_m,dz_m,drx_rad,dry_rad,\
+             drz_rad,fx_N,fy_N,fz_N,mx_Nm,my_Nm,mz_Nm,defl_x_m,defl_y_m,defl_z_m,defl_rx_rad,\
+             defl_ry_rad,defl_rz_rad,status\n",
+        );
+        for i in 0..rows {
+            let s = i as f64 * 1e-3;
+            let status = if i == 2 { status_of_row_2 } else { "ok" };
+            t.push_str(&format!(
+                "{i},{s},{},{},0,-0.18,0,0,0,0,0,-1e-4,0,0,0,0,0,100,0,0,0,0,0,1e-4,0,0,0,{status}\n",
+                s / 0.01,
+                1.5 + s
+            ));
+        }
+        t
+    }
+
+    #[test]
+    fn feedforward_section_reads_its_table() {
+        let dir = std::env::temp_dir().join(format!("deflex-ff-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("good.csv"), table_text(5, "ok")).unwrap();
+        std::fs::write(
+            dir.join("failed.csv"),
+            table_text(5, "compensated:out_of_reach"),
+        )
+        .unwrap();
+        let robot = deflex_model::builtin("tx200").unwrap();
+        let with = |extra: &str| {
+            CellFile::parse(
+                &format!("{MINIMAL}[feedforward]\n{extra}"),
+                "cell.toml",
+                dir.clone(),
+            )
+        };
+        let cell =
+            with("table = \"good.csv\"\nmode = \"precompensated\"\nindex = \"time\"\n").unwrap();
+        let ff = cell.feedforward(&robot).unwrap().unwrap();
+        assert_eq!(ff.table().len(), 5);
+        assert!((ff.table().length_m() - 0.004).abs() < 1e-12);
+        let c = ff.config();
+        assert_eq!(
+            (c.mode, c.index),
+            (
+                crate::feedforward::FeedForwardMode::Precompensated,
+                crate::feedforward::PathIndex::Time
+            )
+        );
+        assert_eq!(c.window_m, 0.005);
+        // Without the section: none.
+        let plain = CellFile::parse(MINIMAL, "cell.toml", dir.clone()).unwrap();
+        assert!(plain.feedforward(&robot).unwrap().is_none());
+        // Failed points, a missing file: the file and the line or the field named.
+        let e = with("table = \"failed.csv\"\n")
+            .unwrap()
+            .feedforward(&robot)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("feedforward.table")
+                && e.contains("failed.csv:5")
+                && e.contains("out_of_reach"),
+            "{e}"
+        );
+        let e = with("table = \"missing.csv\"\n")
+            .unwrap()
+            .feedforward(&robot)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("missing.csv"), "{e}");
+        for (extra, field) in [
+            (
+                "table = \"good.csv\"\nmode = \"twice\"\n",
+                "feedforward.mode",
+            ),
+            (
+                "table = \"good.csv\"\nindex = \"angle\"\n",
+                "feedforward.index",
+            ),
+            ("table = \"good.csv\"\nlead_s = 5.0\n", "feedforward.lead_s"),
+            ("table = \"good.csv\"\nlead_s = nan\n", "feedforward.lead_s"),
+            (
+                "table = \"good.csv\"\nmax_offset_m = 0.0\n",
+                "feedforward.max_offset_m",
+            ),
+            (
+                "table = \"good.csv\"\nwindow_m = 1e9\n",
+                "feedforward.window_m",
+            ),
+            (
+                "table = \"good.csv\"\ntime_offset_s = -1.0\n",
+                "feedforward.time_offset_s",
+            ),
+            (
+                "table = \"good.csv\"\nmode = \"precompensated\"\nlead_s = 0.02\n",
+                "feedforward.lead_s",
+            ),
+            ("table = \" \"\n", "feedforward.table"),
+            ("mode = \"feed-forward\"\n", "table"),
+        ] {
+            let e = with(extra)
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {extra}"))
+                .to_string();
+            assert!(
+                e.contains("cell.toml") && e.contains(field),
+                "{extra} → {e}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// docs/cell.example.toml documents every key of every section (read from this file's

@@ -11,6 +11,7 @@
 //! then the law) → [`Controller::stop`] → `Stopping` (ramp-out) → `Stopped`. Any fault latches
 //! `Faulted` (see [`crate::safety`]); [`Controller::reset_faults`] returns to `Idle`.
 
+use crate::feedforward::{FeedForward, FeedForwardStep, TrackState};
 use crate::limiter::{Limiter, LimiterConfig, RampState};
 use crate::pid::{Pid, PidGains, PidSolution};
 use crate::runaway::{RunawayConfig, RunawayGuard};
@@ -126,6 +127,12 @@ pub struct CycleOutput {
     /// Loop gain through the contact estimated by the runaway guard along the corrected
     /// direction ([`crate::runaway`]); NaN when it cannot be estimated.
     pub loop_gain: f64,
+    /// The prior of [`crate::feedforward`] at the robot's place on the path (the feed-forward,
+    /// or the compensated program's compensation), base axes; zero without one or off the path.
+    pub feedforward: [f64; 6],
+    /// Arc length of the robot's place on the feed-forward table's path (m); NaN without a
+    /// table or while acquiring.
+    pub path_s_m: f64,
     /// Status bits.
     pub flags: Flags,
 }
@@ -150,6 +157,9 @@ pub struct Controller {
     guard: RunawayGuard,
     runaway_events: u64,
     first_runaway: Option<Fault>,
+    feedforward: Option<FeedForward>,
+    /// The feed-forward sent with the last cycle's law (part of the limiter's output).
+    feedforward_sent: [f64; 6],
 }
 
 /// Error building a controller.
@@ -214,6 +224,8 @@ impl Controller {
             guard: RunawayGuard::new(config.runaway),
             runaway_events: 0,
             first_runaway: None,
+            feedforward: None,
+            feedforward_sent: [0.0; 6],
         })
     }
 
@@ -259,6 +271,22 @@ impl Controller {
         self.wrench.bias()
     }
 
+    /// Feed-forward plus feedback ([`crate::feedforward`]): the online correction on top of an
+    /// offline compensation (`None`: the correction alone). Set it before [`Controller::start`].
+    pub fn set_feedforward(&mut self, feedforward: Option<FeedForward>) {
+        self.feedforward = feedforward;
+    }
+
+    /// The feed-forward, when set.
+    pub fn feedforward(&self) -> Option<&FeedForward> {
+        self.feedforward.as_ref()
+    }
+
+    /// The feed-forward, when set, to reset its tracking for a new run of the program.
+    pub fn feedforward_mut(&mut self) -> Option<&mut FeedForward> {
+        self.feedforward.as_mut()
+    }
+
     /// Starts: tare (unless a bias is configured), then ramp in. Only from `Idle` or `Stopped`.
     pub fn start(&mut self, now_s: f64) {
         if !matches!(self.phase, Phase::Idle | Phase::Stopped) {
@@ -267,6 +295,9 @@ impl Controller {
         self.pid.reset();
         self.wrench.reset_filter();
         self.guard.reset();
+        if let Some(ff) = self.feedforward.as_mut() {
+            ff.start(now_s);
+        }
         self.phase_t0 = now_s;
         if self.config.bias.is_some() || self.config.tare_s <= 0.0 {
             self.limiter.start(now_s);
@@ -392,6 +423,13 @@ impl Controller {
             ..self.last
         };
         let mut kinematics_ok = false;
+        let mut ff = FeedForwardStep {
+            prior: [0.0; 6],
+            sent: [0.0; 6],
+            path_s_m: f64::NAN,
+            offset_m: f64::NAN,
+            state: TrackState::OffPath,
+        };
         if let Some(kind) = detected {
             flags.set(kind.flag());
         }
@@ -402,6 +440,14 @@ impl Controller {
             let q = &input.q_rad[..self.robot.joint_count()];
             if self.robot.forward_kinematics(&mut self.data, q).is_ok() {
                 kinematics_ok = true;
+                if let Some(feedforward) = self.feedforward.as_mut() {
+                    // The robot's place on its program: the commanded TCP minus the correction
+                    // this controller sends (base axes → world).
+                    let xi = self.limiter.output();
+                    let sent =
+                        self.robot.base.rotation * nalgebra::Vector3::new(xi[0], xi[1], xi[2]);
+                    ff = feedforward.update(&(self.data.tcp_position() - sent), now);
+                }
                 if self.phase == Phase::Taring {
                     let pose = self.wrench.sensor_pose(&self.data);
                     self.wrench.tare_add(input.wrench_sensor, &pose);
@@ -426,7 +472,12 @@ impl Controller {
                 self.phase = Phase::Running;
             }
         }
-        // The law (eq. 17 solved with eq. 5–7), only on trusted data while it drives ξ.
+        if self.feedforward.is_some() && ff.state != TrackState::OnPath {
+            flags.set(Flags::FEEDFORWARD_OFF_PATH);
+        }
+        // The law (eq. 17 solved with eq. 5–7), only on trusted data while it drives ξ. With a
+        // feed-forward the PID sees δŝ + prior and the feed-forward is added to its output
+        // (derivation in crate::feedforward).
         let follow = self.limiter.follows_law() && self.phase == Phase::Running && data_ok;
         if follow && kinematics_ok {
             self.watch_runaway(&mut out, now, h, &mut flags);
@@ -436,15 +487,22 @@ impl Controller {
         if follow {
             for (i, solution) in law.iter_mut().enumerate() {
                 if self.config.limiter.enabled[i] {
-                    *solution = self.pid.solve(i, out.delta_s_hat[i], h);
+                    *solution = self.pid.solve(i, out.delta_s_hat[i] + ff.prior[i], h);
                     xi_law[i] = solution.xi;
                 } else {
                     self.pid.reset_axis(i);
                     xi_law[i] = 0.0;
                 }
             }
+            // The guard acts on the feedback, the part that can run away through the contact;
+            // the feed-forward is open loop, bounded by the table (crate::feedforward).
             if self.guard.limit(&mut xi_law) {
                 flags.set(Flags::RUNAWAY_HOLD);
+            }
+            for i in 0..6 {
+                if self.config.limiter.enabled[i] {
+                    xi_law[i] += ff.sent[i];
+                }
             }
         }
         if self.guard.hold().is_some() {
@@ -455,7 +513,9 @@ impl Controller {
             for (i, solution) in law.iter().enumerate() {
                 if self.config.limiter.enabled[i] {
                     let bound = self.config.limiter.max_abs[i];
-                    self.pid.commit(i, solution, limited.xi[i], h, bound, false);
+                    let applied_feedback = limited.xi[i] - ff.sent[i];
+                    self.pid
+                        .commit(i, solution, applied_feedback, h, bound, false);
                 }
             }
         }
@@ -463,8 +523,12 @@ impl Controller {
             self.phase = Phase::Stopped;
         }
         out.xi = limited.xi;
+        self.feedforward_sent = if follow { ff.sent } else { [0.0; 6] };
+        out.feedforward = ff.prior;
+        out.path_s_m = ff.path_s_m;
         for i in 0..6 {
-            out.epsilon[i] = -out.xi[i] - out.delta_s_hat[i];
+            // ε = −ξ_fb − prior − δŝ with ξ_fb = ξ − sent (eq. 5–7; crate::feedforward).
+            out.epsilon[i] = -(out.xi[i] - ff.sent[i]) - ff.prior[i] - out.delta_s_hat[i];
         }
         if limited.saturated_size {
             flags.set(Flags::SATURATED_SIZE);

@@ -19,6 +19,10 @@
 //! 6. **safety** ([`safety`]): latched faults (force over limit, sensor silent, robot link lost,
 //!    non-finite or out-of-range values) freeze the integrator and ramp ξ to the safe value.
 //!
+//! With an offline compensation (`deflex compensate`), [`feedforward`] adds the predicted
+//! correction as a feed-forward, or accounts for the compensation a pre-compensated program
+//! already applies, so the feedback corrects only the residual.
+//!
 //! Around it: [`clock`] (injectable wall/simulated time), [`rt`] (SCHED_FIFO, mlockall),
 //! [`log`] (lock-free ring buffer → CSV writer thread), [`stats`] (cycle-time histogram),
 //! [`config`] (`CELL.toml`) and [`runtime`] (robot-link, sensor and control threads).
@@ -32,6 +36,7 @@
 pub mod clock;
 pub mod config;
 pub mod controller;
+pub mod feedforward;
 pub mod limiter;
 pub mod log;
 pub mod pid;
@@ -47,6 +52,9 @@ pub mod wrench;
 pub use clock::{Clock, SimClock, WallClock};
 pub use config::{CellFile, ConfigError};
 pub use controller::{Controller, ControllerConfig, CycleInput, CycleOutput, Phase};
+pub use feedforward::{
+    FeedForward, FeedForwardConfig, FeedForwardError, FeedForwardMode, FeedForwardTable, PathIndex,
+};
 pub use limiter::{Limiter, LimiterConfig};
 pub use pid::{Pid, PidGains};
 pub use runaway::{RunawayAction, RunawayConfig, RunawayGuard};

@@ -6,7 +6,9 @@
 //! Columns: `time_s`, `q1_rad…qN_rad`, the raw reading `raw_fx_n…raw_mz_nm` (sensor frame), the
 //! compensated reading `ws_fx_n…ws_mz_nm` (sensor frame), the TCP wrench `w_fx_n…w_mz_nm` (eq. 2,
 //! base axes), δŝ `ds_x_m…ds_rz_rad` (eq. 15), ξ `xi_x_m…xi_rz_rad` (eq. 7), ε `eps_x_m…eps_rz_rad`
-//! (eq. 5), `loop_gain` (the runaway guard's estimate, empty when unknown), `cycle_us`, `flags`
+//! (eq. 5), the feed-forward's prior `ff_x_m…ff_rz_rad` and the arc length `path_s_m` (empty
+//! without a table or while acquiring; [`crate::feedforward`]), `loop_gain` (the runaway
+//! guard's estimate, empty when unknown), `cycle_us`, `flags`
 //! (integer) and `status` (the flags and the latched fault by name).
 //!
 //! The writer streams into a [`LogTarget`]; for `deflex run` that is a
@@ -133,10 +135,10 @@ pub fn csv_header(joint_count: usize) -> String {
     for prefix in ["raw", "ws", "w"] {
         cols.extend(WRENCH.iter().map(|s| format!("{prefix}_{s}")));
     }
-    for prefix in ["ds", "xi", "eps"] {
+    for prefix in ["ds", "xi", "eps", "ff"] {
         cols.extend(SUFFIXES.iter().map(|s| format!("{prefix}_{s}")));
     }
-    cols.extend(["loop_gain", "cycle_us", "flags", "status"].map(String::from));
+    cols.extend(["path_s_m", "loop_gain", "cycle_us", "flags", "status"].map(String::from));
     cols.join(",")
 }
 
@@ -153,10 +155,20 @@ pub fn csv_row(r: &LogRecord) -> String {
             let _ = write!(s, ",{v:.4}");
         }
     }
-    for block in [&r.out.delta_s_hat, &r.out.xi, &r.out.epsilon] {
+    for block in [
+        &r.out.delta_s_hat,
+        &r.out.xi,
+        &r.out.epsilon,
+        &r.out.feedforward,
+    ] {
         for v in block {
             let _ = write!(s, ",{v:.9}");
         }
+    }
+    if r.out.path_s_m.is_finite() {
+        let _ = write!(s, ",{:.6}", r.out.path_s_m);
+    } else {
+        s.push(',');
     }
     if r.out.loop_gain.is_finite() {
         let _ = write!(s, ",{:.4}", r.out.loop_gain);
@@ -275,7 +287,7 @@ mod tests {
         let mut lines = text.lines();
         let header = lines.next().unwrap();
         let n = header.split(',').count();
-        assert_eq!(n, 1 + 6 + 18 + 18 + 4);
+        assert_eq!(n, 1 + 6 + 18 + 24 + 5);
         let row = lines.next().unwrap();
         assert_eq!(row.split(',').count(), n);
         assert!(row.ends_with("sensor_timeout|latched"));

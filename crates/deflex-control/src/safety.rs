@@ -270,6 +270,9 @@ impl Flags {
     pub const STALE_WRENCH: u32 = 1 << 22;
     /// The runaway guard holds the correction's growth along the corrected direction.
     pub const RUNAWAY_HOLD: u32 = 1 << 23;
+    /// A feed-forward table is set but the robot is not on its path (acquiring the start, off
+    /// the path, past its end): no prior this cycle ([`crate::feedforward`]).
+    pub const FEEDFORWARD_OFF_PATH: u32 = 1 << 24;
 
     /// True if `bit` is set.
     pub fn has(self, bit: u32) -> bool {
@@ -283,7 +286,7 @@ impl Flags {
 
     /// `|`-separated names of the set bits (allocates: for writer threads and humans only).
     pub fn describe(self) -> String {
-        const STATES: [(u32, &str); 8] = [
+        const STATES: [(u32, &str); 9] = [
             (Flags::LATCHED, "latched"),
             (Flags::SATURATED_SIZE, "saturated_size"),
             (Flags::SATURATED_RATE, "saturated_rate"),
@@ -292,6 +295,7 @@ impl Flags {
             (Flags::TARING, "taring"),
             (Flags::STALE_WRENCH, "stale_wrench"),
             (Flags::RUNAWAY_HOLD, "runaway_hold"),
+            (Flags::FEEDFORWARD_OFF_PATH, "feedforward_off_path"),
         ];
         let names: Vec<&str> = FaultKind::ALL
             .iter()

@@ -158,3 +158,91 @@ fn runaway_guard_allocates_nothing() {
         "{allocations} allocations in the guard's cycles"
     );
 }
+
+/// Joint values along a short arc of joint 1 and the table of that path (TCP by forward
+/// kinematics, a deflection growing along it).
+fn path_and_table() -> (Vec<[f64; 6]>, deflex_control::FeedForwardTable) {
+    use deflex_compensate::table::TableRow;
+    use deflex_model::{Data, Displacement, Wrench};
+    let robot = common::robot();
+    let q0 = common::q0();
+    let qs: Vec<[f64; 6]> = (0..3000)
+        .map(|k| {
+            let mut q = q0;
+            q[0] += k as f64 * 5e-6;
+            q
+        })
+        .collect();
+    let mut data = Data::new();
+    let mut s = 0.0;
+    let mut previous: Option<nalgebra::Vector3<f64>> = None;
+    let rows: Vec<TableRow> = qs
+        .iter()
+        .step_by(10)
+        .enumerate()
+        .map(|(i, q)| {
+            robot.forward_kinematics(&mut data, q).unwrap();
+            let p = data.tcp_position();
+            if let Some(prev) = previous {
+                s += (p - prev).norm();
+            }
+            previous = Some(p);
+            let d = Displacement::new(0.0, 0.0, s * 0.01, 0.0, 0.0, s * 0.001);
+            TableRow {
+                line: i + 2,
+                arc_length_m: s,
+                time_s: i as f64 * 0.1,
+                desired: data.tcp,
+                compensation: Displacement::new(0.0, 0.0, -s * 0.01, 0.0, 0.0, 0.0),
+                wrench: Wrench::zeros(),
+                deflection: d,
+                status: "ok".into(),
+            }
+        })
+        .collect();
+    let table = deflex_control::FeedForwardTable::from_rows(&rows, &robot, "t.csv").unwrap();
+    (qs, table)
+}
+
+#[test]
+fn control_cycle_with_feedforward_allocates_nothing() {
+    use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode, Flags, PathIndex};
+    let (qs, table) = path_and_table();
+    let config = common::config();
+    let settings = [
+        (FeedForwardMode::FeedForward, PathIndex::ArcLength, 0.03),
+        (FeedForwardMode::Precompensated, PathIndex::ArcLength, 0.0),
+        (FeedForwardMode::FeedForward, PathIndex::Time, 0.02),
+    ];
+    for (mode, index, lead_s) in settings {
+        let mut ctrl = common::controller(config);
+        let ff = FeedForward::new(
+            table.clone(),
+            FeedForwardConfig {
+                mode,
+                index,
+                lead_s,
+                ..FeedForwardConfig::default()
+            },
+        )
+        .unwrap();
+        ctrl.set_feedforward(Some(ff));
+        ctrl.start(0.0);
+        let raw = common::raw_reading(&config, &qs[0], [0.0, 0.0, 800.0, 0.0, 0.0, 0.0]);
+        ctrl.cycle(0.0, &qs[0], &raw);
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        COUNTING.with(|c| c.set(true));
+        let mut on_path = 0;
+        for (k, q) in qs.iter().enumerate().skip(1) {
+            let out = ctrl.cycle(k as f64 * 0.01, q, &raw);
+            if !out.flags.has(Flags::FEEDFORWARD_OFF_PATH) {
+                on_path += 1;
+            }
+        }
+        COUNTING.with(|c| c.set(false));
+        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        assert_eq!(after - before, 0, "{mode:?} {index:?}");
+        // The work was done: the robot was on the path.
+        assert!(on_path > 2900, "{mode:?} {index:?}: {on_path}");
+    }
+}

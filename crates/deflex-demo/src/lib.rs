@@ -8,13 +8,15 @@
 //! spiral (Figure 14), form the paper's cone without and with the online correction (Section 4),
 //! plunge into a stiff fixture without and with it ([`contact`]), and measure the sensitivity of
 //! the closed loop to delay, model scale, sensor gain, bias drift and contact stiffness
-//! ([`sensitivity`]). Everything lands in one folder, swapped in whole at the end: the CSV data
+//! ([`sensitivity`]), and compare offline compensation, online correction and both on the cone and
+//! a CAM part ([`compensation`]). Everything lands in one folder, swapped in whole at the end: the CSV data
 //! behind every number, PNG figures and a self-contained `index.html`.
 //!
 //! The twin's plant is read only to *label* ground truth in the report (e.g. the plant's
 //! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
 //! the controller sees only joint values and raw F/T samples.
 
+pub mod compensation;
 mod conditions;
 pub mod contact;
 pub mod fig7;

@@ -23,6 +23,7 @@ pub(crate) struct Page<'a> {
     pub controller_files: Vec<Figure>,
     pub contact_files: Vec<Figure>,
     pub sensitivity_files: Vec<Figure>,
+    pub compensation_files: Vec<Figure>,
 }
 
 /// A stiffness in 10⁶ N·m/rad, or a centre shift in mm (each in its own table: one unit per
@@ -525,6 +526,8 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), String> {
             }
         }
     }
+
+    crate::compensation::page::section(&mut html, &s.compensation, &page.compensation_files);
 
     html.section("Data files");
     html.paragraph(

@@ -192,6 +192,8 @@ pub struct DemoSummary {
     pub stiff_contact_sweep: Vec<crate::contact::StiffContactNumbers>,
     /// The sensitivity study, when run.
     pub sensitivity: Option<crate::sensitivity::SensitivityResult>,
+    /// Offline compensation, online correction and both, on the cone and a CAM part.
+    pub compensation: crate::compensation::CompensationStudy,
     /// Wall time of each stage (s).
     pub stage_seconds: Vec<(String, f64)>,
 }
@@ -210,7 +212,7 @@ pub(crate) const IDENTIFIED: &str = "identified (deflex)";
 pub(crate) const BASELINE: &str = "one eDoF per joint";
 pub(crate) const TABLE1: &str = "paper Table 1";
 
-const STAGES: usize = 9;
+const STAGES: usize = 10;
 
 /// Run the whole study; writes every output into `options.out_dir`, which appears whole at the
 /// end (or not at all when the study fails).
@@ -477,7 +479,7 @@ fn study(
     progress.stage(7, STAGES, "form the cone with online correction");
     let closed = run_closed_loop(
         &cell,
-        path,
+        path.clone(),
         seed,
         identified.clone(),
         controller_config_for(&cell),
@@ -603,6 +605,24 @@ fn study(
     };
     timings.push(("sensitivity".to_string(), clock.elapsed().as_secs_f64()));
 
+    // 10. Offline, online and both.
+    let clock = Instant::now();
+    progress.stage(
+        10,
+        STAGES,
+        "compare offline compensation, online correction and both",
+    );
+    let (compensation, compensation_files) = crate::compensation::study(
+        &cell,
+        &identified,
+        seed,
+        options.quick,
+        (&path, &open, &closed.forming),
+        out,
+    )?;
+    progress.done(&crate::compensation::one_line(&compensation));
+    timings.push(("compensation".to_string(), clock.elapsed().as_secs_f64()));
+
     let summary = DemoSummary {
         simulated: true,
         robot: nominal.name.clone(),
@@ -628,6 +648,7 @@ fn study(
         stiff_contact,
         stiff_contact_sweep,
         sensitivity,
+        compensation,
         stage_seconds: timings,
     };
     write_text(
@@ -651,6 +672,7 @@ fn study(
         controller_files,
         contact_files,
         sensitivity_files,
+        compensation_files,
     };
     crate::page::write(out, &page)?;
     Ok(summary)

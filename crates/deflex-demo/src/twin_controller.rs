@@ -5,7 +5,9 @@
 //! joint values the robot reports and the raw F/T samples of the period (averaged), plus the
 //! mounting and tool data an integrator takes from drawings and datasheets. Never the plant.
 
-use deflex_control::{Controller, ControllerConfig, CycleInput, CycleOutput, Fault, Phase};
+use deflex_control::{
+    Controller, ControllerConfig, CycleInput, CycleOutput, Fault, FeedForward, Phase,
+};
 use deflex_model::Robot;
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_sim::{CellConfig, ControllerInput, CorrectionController, FormingRun, ToolPath};
@@ -54,6 +56,12 @@ impl TwinController {
             trace: keep_trace.then(|| Vec::with_capacity(64 * 1024)),
             max_force_n: 0.0,
         })
+    }
+
+    /// Feed-forward plus feedback (`deflex_control::feedforward`): the table of an offline
+    /// compensation in the model's world frame, as `deflex run` takes it from `[feedforward]`.
+    pub fn set_feedforward(&mut self, feedforward: Option<FeedForward>) {
+        self.ctrl.set_feedforward(feedforward);
     }
 }
 
@@ -171,10 +179,47 @@ pub fn run_closed_loop(
     keep_trace: bool,
     progress: &mut dyn FnMut(f64),
 ) -> Result<ClosedLoopRun, String> {
-    let mut twin = TwinController::new(model, config, keep_trace)?;
-    let forming =
-        deflex_sim::run_forming_with_progress(cell, path, seed, Some(&mut twin), progress)
-            .map_err(|e| e.to_string())?;
+    let twin = TwinController::new(model, config, keep_trace)?;
+    run_twin_controller(
+        cell,
+        &Program {
+            path,
+            reference: None,
+        },
+        seed,
+        twin,
+        progress,
+    )
+}
+
+/// What the twin's robot runs: `path`, meaning `reference` when it is a compensated program
+/// (`deflex_sim::run_program_with_progress`).
+#[derive(Clone, Debug)]
+pub struct Program {
+    /// The robot program.
+    pub path: ToolPath,
+    /// The path it means (`None`: itself).
+    pub reference: Option<ToolPath>,
+}
+
+/// Runs `program` on the twin with `twin` (a controller set up by the caller, e.g. with a
+/// feed-forward).
+pub fn run_twin_controller(
+    cell: &CellConfig,
+    program: &Program,
+    seed: u64,
+    mut twin: TwinController,
+    progress: &mut dyn FnMut(f64),
+) -> Result<ClosedLoopRun, String> {
+    let forming = deflex_sim::run_program_with_progress(
+        cell,
+        program.path.clone(),
+        program.reference.as_ref(),
+        seed,
+        Some(&mut twin),
+        progress,
+    )
+    .map_err(|e| e.to_string())?;
     Ok(ClosedLoopRun {
         forming,
         phase: twin.ctrl.phase(),

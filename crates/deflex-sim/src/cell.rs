@@ -181,16 +181,31 @@ impl Cell {
     /// Build the cell for a path: plans the joint trajectory (IK of every waypoint), sets up the
     /// plant, the workpiece and the sensors. All randomness comes from `seed`.
     pub fn new(config: &CellConfig, path: ToolPath, seed: u64) -> Result<Cell, SimError> {
+        Cell::with_reference(config, path, None, seed)
+    }
+
+    /// [`Cell::new`] for a robot program that means another path (an offline-compensated
+    /// program, one waypoint per reference waypoint): the robot runs `path`, the error is
+    /// measured against `reference` (see [`ControllerEmulation::with_reference`]), and the
+    /// sheet's Aerens level comes from the reference's step-down and wall angle.
+    pub fn with_reference(
+        config: &CellConfig,
+        path: ToolPath,
+        reference: Option<&ToolPath>,
+        seed: u64,
+    ) -> Result<Cell, SimError> {
         config.validate()?;
+        let meant = reference.unwrap_or(&path);
         let nominal = config.nominal_robot()?;
         let flange = config.flange(&nominal);
         let mut plant = Plant::new(&config.plant, &nominal, &flange, config.errors.geometry)?;
         let part = config.part_frame();
-        let controller = ControllerEmulation::new(
+        let controller = ControllerEmulation::with_reference(
             &nominal,
             &config.controller,
             config.errors.servo,
             &path,
+            reference,
             &part,
             &config.seed_q_rad(),
         )?;
@@ -234,9 +249,11 @@ impl Cell {
         let work = match config.process.kind {
             ProcessKind::Sheet => Workpiece::Sheet(Box::new(Sheet::new(
                 &config.sheet,
-                path.step_down_mm
+                meant
+                    .step_down_mm
                     .unwrap_or(config.sheet.default_step_down_mm),
-                path.wall_angle_deg
+                meant
+                    .wall_angle_deg
                     .unwrap_or(config.sheet.default_wall_angle_deg),
             )?)),
             ProcessKind::Fixture => Workpiece::Fixture(Fixture::new(

@@ -238,7 +238,38 @@ impl ControllerEmulation {
         part_frame: &Pose,
         seed_q: &[f64; 6],
     ) -> Result<ControllerEmulation, SimError> {
+        ControllerEmulation::with_reference(robot, config, servo, path, None, part_frame, seed_q)
+    }
+
+    /// [`ControllerEmulation::new`] for a robot program `path` that means another path,
+    /// `reference`: an offline-compensated program (each waypoint the compensated target of the
+    /// reference's waypoint with the same index). The robot interpolates the program; the
+    /// *desired* pose and the feed direction are the reference's at the same segment and
+    /// fraction, so the twin measures the error against what the part should be. `None`: the
+    /// program is its own reference.
+    pub fn with_reference(
+        robot: &Robot,
+        config: &ControllerConfig,
+        servo: bool,
+        path: &ToolPath,
+        reference: Option<&ToolPath>,
+        part_frame: &Pose,
+        seed_q: &[f64; 6],
+    ) -> Result<ControllerEmulation, SimError> {
         path.validate()?;
+        if let Some(reference) = reference {
+            reference.validate()?;
+            if reference.waypoints.len() != path.waypoints.len() {
+                return Err(SimError::Path(format!(
+                    "the program \"{}\" has {} waypoints, its reference \"{}\" {}: a compensated \
+                     program has one waypoint per reference waypoint",
+                    path.name,
+                    path.waypoints.len(),
+                    reference.name,
+                    reference.waypoints.len()
+                )));
+            }
+        }
         if robot.joint_count() != 6 {
             return Err(SimError::config(
                 "part.robot",
@@ -283,6 +314,11 @@ impl ControllerEmulation {
             times.push(t);
             qs.push(q);
             ps.push(p.coords);
+        }
+        if let Some(reference) = reference {
+            for (p, w) in ps.iter_mut().zip(&reference.waypoints) {
+                *p = (part_frame * nalgebra::Point3::from(Vector3::from(w.p_mm) * 1e-3)).coords;
+            }
         }
         Ok(ControllerEmulation {
             robot: robot.clone(),

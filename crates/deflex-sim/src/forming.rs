@@ -255,16 +255,32 @@ pub fn run_forming_with_progress(
     config: &CellConfig,
     path: ToolPath,
     seed: u64,
+    controller: Option<&mut dyn CorrectionController>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<FormingRun, SimError> {
+    run_program_with_progress(config, path, None, seed, controller, progress)
+}
+
+/// [`run_forming_with_progress`] for a robot program `program` that means the path
+/// `reference` (an offline-compensated program, one waypoint per reference waypoint; see
+/// [`Cell::with_reference`]): the errors, the log's desired positions and the summary's target
+/// depth are the reference's. `None`: the program is its own reference.
+pub fn run_program_with_progress(
+    config: &CellConfig,
+    program: ToolPath,
+    reference: Option<&ToolPath>,
+    seed: u64,
     mut controller: Option<&mut dyn CorrectionController>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<FormingRun, SimError> {
     let start = std::time::Instant::now();
-    let target_depth_mm = path
+    let target_depth_mm = reference
+        .unwrap_or(&program)
         .waypoints
         .iter()
         .map(|w| -w.p_mm[2])
         .fold(0.0, f64::max);
-    let mut cell = Cell::new(config, path, seed)?;
+    let mut cell = Cell::with_reference(config, program, reference, seed)?;
     let duration = cell.path_duration_s().max(1e-9);
     let period = match controller.as_ref() {
         Some(c) => {

@@ -13,12 +13,27 @@
 //! [`FormingProcess::max_step_m`] and forms the sheet at each step, returning the wrench at the
 //! point itself.
 //!
+//! **The twin's law, state included.** Each sub-step does what the twin's cell does each robot
+//! cycle (`Workpiece::commit` in [`crate::cell`]): the sheet flows at the tool's predicted
+//! position, and, in contact, the pass is recorded ([`Sheet::observe_pass`]): the sheet's
+//! per-sector memory of the last pass gives the *actual* step-down and wall angle, hence the
+//! Aerens level, which grows with the actual depth ([`Sheet::flow_force`]). A tool predicted to
+//! deflect upwards forms smaller steps at a lower level; a compensated one forms the programmed
+//! steps at the programmed level and deeper, at a higher force, as in the twin. (Without the pass
+//! record the level would stay at the programmed step-down and wall angle: the twin's law before
+//! it learnt to push back, which over-predicts the uncompensated force and under-predicts the
+//! compensated depth's growth.)
+//!
 //! With the default [`crate::sheet::SheetConfig`] the process model *is* the twin's forming law:
 //! an optimistic assumption that a real process model (FE, Aerens' formula, a previous run) does
-//! not meet. Pass another `SheetConfig` to study a mismatched model.
+//! not meet. Pass another `SheetConfig` to study a mismatched model. What it cannot share with
+//! the twin is the plant: it deflects with the robot *model's* compliance (eq. 15), not the
+//! twin's large-rotation spring chain with its unmodelled effects.
 //!
 //! Also here: [`tcp_path`] (a [`ToolPath`] in the part frame → a `TcpPath` in the world, tool
-//! orientation fixed) and [`tool_path_by_name`] (the built-in paths or a G-code file).
+//! orientation fixed), [`compensated_tool_path`] (the way back: a compensation → the robot
+//! program as a [`ToolPath`] the twin can run) and [`tool_path_by_name`] (the built-in paths or
+//! a G-code file).
 
 use crate::config::CellConfig;
 use crate::error::SimError;
@@ -87,6 +102,11 @@ impl FormingProcess {
     /// Steady-state (Aerens) force level of this sheet (N).
     pub fn steady_force_n(&self) -> f64 {
         self.flat.steady_force_n()
+    }
+
+    /// The sheet as formed by the pass so far (its surface, pass memory and Aerens level).
+    pub fn sheet(&self) -> &Sheet {
+        &self.sheet
     }
 
     /// Quasi-static equilibrium at commanded position `p_cmd` (part frame) with compliance
@@ -214,7 +234,12 @@ impl ProcessModel for FormingProcess {
         for k in 1..=steps {
             let p = start + (p_cmd - start) * (k as f64 / steps as f64);
             let (w, p_true, contact) = self.equilibrium(&p, &compliance, &feed_dir);
+            // As the twin's cell does each cycle (`Workpiece::commit`): flow, then record the
+            // pass, which sets the Aerens level at the actual step-down and wall angle.
             self.sheet.form(&p_true, &contact);
+            if contact.force_n > 0.0 {
+                self.sheet.observe_pass(&p_true, contact.depth_m);
+            }
             self.last_force = w[2];
             wrench = w;
         }
@@ -244,6 +269,47 @@ pub fn tcp_path(
     });
     TcpPath::new(&path.name, poses, rapid_feed_mm_s * 1e-3)
         .map_err(|e| SimError::Path(e.to_string()))
+}
+
+/// The robot program of a compensation as a [`ToolPath`] the twin can run against `path` (its
+/// reference, see [`crate::cell::Cell::with_reference`]): waypoint i is the commanded position
+/// of point i (`points[i]`, world, m) in the part frame, mm, with the reference's feeds,
+/// step-down and wall angle. The twin holds the tool orientation, so only positions are taken
+/// (compensate position only for the twin). `points` must have one entry per waypoint.
+pub fn compensated_tool_path(
+    path: &ToolPath,
+    commanded_m: &[Vector3<f64>],
+    part_frame: &Pose,
+) -> Result<ToolPath, SimError> {
+    if commanded_m.len() != path.waypoints.len() {
+        return Err(SimError::Path(format!(
+            "{} compensated points for the {} waypoints of \"{}\"",
+            commanded_m.len(),
+            path.waypoints.len(),
+            path.name
+        )));
+    }
+    let to_part = part_frame.inverse();
+    let waypoints = path
+        .waypoints
+        .iter()
+        .zip(commanded_m)
+        .map(|(w, c)| {
+            let p = to_part * nalgebra::Point3::from(*c) * 1e3;
+            crate::toolpath::Waypoint {
+                p_mm: [p.x, p.y, p.z],
+                feed_mm_s: w.feed_mm_s,
+            }
+        })
+        .collect();
+    let program = ToolPath {
+        name: format!("{} (compensated)", path.name),
+        waypoints,
+        step_down_mm: path.step_down_mm,
+        wall_angle_deg: path.wall_angle_deg,
+    };
+    program.validate()?;
+    Ok(program)
 }
 
 /// A built-in path by name (`cone`: the paper's helical cone, `cone-contour`, `pyramid`) or a

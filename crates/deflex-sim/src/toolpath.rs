@@ -345,6 +345,47 @@ impl ToolPath {
         out
     }
 
+    /// The same path with every move longer than `max_segment_mm` split into equal moves at the
+    /// same feed (a rapid stays rapid): the geometry and the timing do not change, but an
+    /// offline compensation, which moves each waypoint, then acts along a move instead of only
+    /// at its ends (a plunge into the sheet written as one move reaches its force halfway).
+    /// At most [`crate::gcode::MAX_WAYPOINTS`] waypoints.
+    pub fn subdivided(&self, max_segment_mm: f64) -> Result<ToolPath, SimError> {
+        if !(max_segment_mm.is_finite() && (1e-3..=1e4).contains(&max_segment_mm)) {
+            return Err(SimError::Path(format!(
+                "the longest move must be within 0.001 ..= 10000 mm, got {max_segment_mm}"
+            )));
+        }
+        let mut waypoints = Vec::with_capacity(self.waypoints.len());
+        if let Some(first) = self.waypoints.first() {
+            waypoints.push(*first);
+        }
+        for w in self.waypoints.windows(2) {
+            let pieces = (distance(&w[0], &w[1]) / max_segment_mm).ceil().max(1.0);
+            if waypoints.len() as f64 + pieces > crate::gcode::MAX_WAYPOINTS as f64 {
+                return Err(SimError::Path(format!(
+                    "\"{}\" split into moves of at most {max_segment_mm} mm has more than {} waypoints",
+                    self.name,
+                    crate::gcode::MAX_WAYPOINTS
+                )));
+            }
+            let pieces = pieces as usize;
+            for k in 1..=pieces {
+                let f = k as f64 / pieces as f64;
+                waypoints.push(Waypoint {
+                    p_mm: std::array::from_fn(|i| w[0].p_mm[i] + f * (w[1].p_mm[i] - w[0].p_mm[i])),
+                    feed_mm_s: w[1].feed_mm_s,
+                });
+            }
+        }
+        Ok(ToolPath {
+            name: format!("{} (moves ≤ {max_segment_mm} mm)", self.name),
+            waypoints,
+            step_down_mm: self.step_down_mm,
+            wall_angle_deg: self.wall_angle_deg,
+        })
+    }
+
     /// Check the path is usable: at least two distinct points, finite values, positive feeds.
     pub fn validate(&self) -> Result<(), SimError> {
         if self.waypoints.len() < 2 {
@@ -384,6 +425,58 @@ fn distance(a: &Waypoint, b: &Waypoint) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn subdividing_keeps_geometry_timing_and_feeds() {
+        let path = ToolPath {
+            name: "p".into(),
+            waypoints: vec![
+                Waypoint {
+                    p_mm: [0.0, 0.0, 2.0],
+                    feed_mm_s: None,
+                },
+                Waypoint {
+                    p_mm: [0.0, 0.0, -0.4],
+                    feed_mm_s: Some(2.0),
+                },
+                Waypoint {
+                    p_mm: [0.3, 0.0, -0.4],
+                    feed_mm_s: Some(15.0),
+                },
+                Waypoint {
+                    p_mm: [0.3, 0.0, 5.0],
+                    feed_mm_s: None,
+                },
+            ],
+            step_down_mm: Some(0.4),
+            wall_angle_deg: None,
+        };
+        let fine = path.subdivided(0.5).unwrap();
+        // 2.4 mm → 5 moves of 0.48 mm, 0.3 mm stays one, 5.4 mm → 11 moves.
+        assert_eq!(fine.waypoints.len(), 1 + 5 + 1 + 11);
+        assert!((fine.length_mm() - path.length_mm()).abs() < 1e-12);
+        assert!((fine.duration_s(50.0) - path.duration_s(50.0)).abs() < 1e-12);
+        assert_eq!(fine.waypoints[3].p_mm, [0.0, 0.0, 2.0 - 3.0 * 0.48]);
+        assert_eq!(fine.waypoints[3].feed_mm_s, Some(2.0));
+        assert_eq!(fine.waypoints[6].feed_mm_s, Some(15.0));
+        assert_eq!(fine.waypoints[17].feed_mm_s, None);
+        assert_eq!(fine.waypoints[17].p_mm, [0.3, 0.0, 5.0]);
+        assert_eq!(fine.step_down_mm, Some(0.4));
+        assert!(path.subdivided(0.0).is_err());
+        assert!(path.subdivided(f64::NAN).is_err());
+        // Bounded: a 1 m move in 1 µm pieces is refused, not allocated.
+        let long = ToolPath {
+            waypoints: vec![
+                path.waypoints[0],
+                Waypoint {
+                    p_mm: [1000.0, 0.0, 2.0],
+                    feed_mm_s: Some(10.0),
+                },
+            ],
+            ..path.clone()
+        };
+        assert!(long.subdivided(0.001).is_err());
+    }
 
     #[test]
     fn paper_cone_geometry_and_duration() {

@@ -51,6 +51,10 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("limits.runaway_withdraw_s", 0.01, 10.0, "s"),
     ("limits.runaway_release_rate_m_s", 1e-6, 0.1, "m/s"),
     ("log.ring_capacity", 16.0, 262_144.0, "records"),
+    ("feedforward.lead_s", 0.0, 1.0, "s"),
+    ("feedforward.max_offset_m", 1e-4, 0.1, "m"),
+    ("feedforward.window_m", 1e-3, 1.0, "m"),
+    ("feedforward.time_offset_s", 0.0, 1e6, "s"),
 ];
 
 /// The bounds of `field` (as in [`BOUNDS`]).
@@ -223,6 +227,31 @@ impl CellFile {
             &l.runaway_action,
             &["withdraw", "hold", "fault"],
         )?;
+        if let Some(f) = &self.feedforward {
+            if f.table.trim().is_empty() {
+                return Err(self.invalid("feedforward.table", "must name a compensated_path.csv"));
+            }
+            self.one_of(
+                "feedforward.mode",
+                &f.mode,
+                &["feed-forward", "precompensated"],
+            )?;
+            self.one_of("feedforward.index", &f.index, &["arc-length", "time"])?;
+            self.check("feedforward.lead_s", f.lead_s)?;
+            self.check("feedforward.max_offset_m", f.max_offset_m)?;
+            self.check("feedforward.window_m", f.window_m)?;
+            self.check("feedforward.time_offset_s", f.time_offset_s)?;
+            if f.mode == "precompensated" && f.lead_s > 0.0 {
+                return Err(self.invalid(
+                    "feedforward.lead_s",
+                    format!(
+                        "a lead applies to mode = \"feed-forward\" only (the program applies \
+                         its compensation itself), got {} s",
+                        f.lead_s
+                    ),
+                ));
+            }
+        }
         if let Some(log) = &self.log {
             if log.path.trim().is_empty() {
                 return Err(self.invalid("log.path", "must not be empty"));

@@ -195,7 +195,9 @@ impl Controller {
         if !self.guard.config().enabled {
             return;
         }
-        let applied = self.limiter.output();
+        // The feedback part of the applied correction (without the feed-forward).
+        let output = self.limiter.output();
+        let applied: [f64; 6] = std::array::from_fn(|i| output[i] - self.feedforward_sent[i]);
         let xi_p = [applied[0], applied[1], applied[2]];
         let u = self.guard.direction(&xi_p);
         // The model's compliance along the watched direction (a hold's own while one is

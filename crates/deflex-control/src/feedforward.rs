@@ -1,0 +1,965 @@
+//! Feed-forward plus feedback: the online correction on top of an offline compensation
+//! (`deflex compensate`, its `compensated_path.csv`).
+//!
+//! ## Two modes
+//!
+//! * **Feed-forward** ([`FeedForwardMode::FeedForward`]): the robot runs the *original* program;
+//!   the controller adds the predicted correction `f(s) = −δ_pred(s)` (the table's predicted
+//!   deflection at the compensated configuration) to its output, so the feedback only has to
+//!   correct what the prediction got wrong. With `lead_s` the feed-forward is read that much
+//!   path time ahead, to cover the robot's delay in applying a correction.
+//! * **Pre-compensated** ([`FeedForwardMode::Precompensated`]): the robot runs the *compensated*
+//!   program (`commanded = desired ⊕ c(s)`, the table's compensation `c`); the controller sends
+//!   only its feedback, and accounts for `c` in its tracking error, so it does not correct the
+//!   deflection a second time.
+//!
+//! ## What the loop converges to, and why it cannot double-correct
+//!
+//! Let `u` be the robot's total offset from the desired path. The controller knows it as
+//! `u = p(s) + ξ_fb`, where `p(s)` is the **prior** at the robot's place on the path — `f(s)` in
+//! feed-forward mode (the controller sends it), `c(s)` in pre-compensated mode (the program
+//! contains it) — and `ξ_fb` is the PID's output. The real TCP is `ŝ_real = s_des + u + δŝ`
+//! (eq. 5–7 with the prior in the set-point), so the tracking error is
+//!
+//! `ε = s_des − ŝ_real = −ξ_fb − (δŝ + p(s))`.
+//!
+//! This is the loop of [`crate::pid`] with `δŝ` replaced by `δŝ + p(s)`: [`crate::pid::Pid::solve`]
+//! is called with that sum, and the controller sends `ξ = ξ_fb + f(s + lead)` (feed-forward) or
+//! `ξ = ξ_fb` (pre-compensated). With the integral, the loop settles where `ε = 0`:
+//!
+//! `ξ_fb → −(δŝ + p)`, i.e. `u = p + ξ_fb → −δŝ`,
+//!
+//! the same fixed point as the online correction alone (`ξ → −δŝ`): the robot's total offset
+//! cancels the deflection the model estimates from the *measured* wrench, whatever the prior.
+//! The feedback only carries the residual: `δ_pred − δŝ` in feed-forward mode (zero when the
+//! prediction is right: the process's deviation from the predicted wrench and the change of the
+//! model's compliance along it), `−c − δŝ` in pre-compensated mode. A correction of twice the
+//! deflection would need `u = −2δŝ`, i.e. `ε = δŝ ≠ 0`, which the integral does not leave
+//! standing. A controller *not* told about a compensated program (no `[feedforward]`) settles
+//! at `ξ = −δŝ` on top of `c ≈ −δ`: `u ≈ −2δ`, the double correction this module prevents.
+//!
+//! The prior is an exogenous input of the loop: the loop's own dynamics (the PID against the
+//! robot's and the contact's compliance, and its stability condition against a stiff contact,
+//! [`crate::runaway`]) are unchanged. What changes is the transient: at a force ramp the
+//! prior moves with the path, without waiting for the wrench to be measured and the integral to
+//! build up. The limiter bounds the *sent* correction (feed-forward included) in size and rate,
+//! and anti-windup tracks `ξ_fb = ξ_sent − f`.
+//!
+//! ## Indexing the table
+//!
+//! * **Arc length** ([`PathIndex::ArcLength`], default): every cycle, the robot's place on its
+//!   *program* — the TCP from forward kinematics of the reported joints (the *commanded* TCP:
+//!   motor encoders do not see the deflection) minus the controller's own last correction ξ —
+//!   is projected on the program's polyline (the desired path in feed-forward mode, the
+//!   compensated one `desired ⊕ c` in pre-compensated mode), **monotonically**: from the
+//!   current point, forward, over at most `window_m` of arc length and
+//!   [`MAX_SEGMENTS_PER_CYCLE`] table segments, the closest point (the earliest on a tie).
+//!   Taking the correction out matters where the path runs along the correction (a plunge): the
+//!   raw TCP, offset by a feed-forward that follows the arc length, would feed back into the
+//!   arc length it is projected to (a lagging loop of gain `|dc/ds| / |dz/ds|`, close to 1 on a
+//!   plunge into the sheet); the robot's place on its program does not depend on the
+//!   correction, up to the robot's delay in applying it. The arc length never decreases, and a helix's next turn or
+//!   a pocket's next pass, further along than `window_m`, cannot capture it. Tracking starts
+//!   at the path's first point: until the TCP comes within `max_offset_m` of the first
+//!   `window_m` of the path (an approach move), the state is *acquiring* and the prior is zero.
+//!   It then runs for the whole session (a stop and restart of the controller keeps it: one
+//!   table is one run of the program).
+//! * **Time** ([`PathIndex::Time`]): the table's time column (the path at its programmed
+//!   feeds, no acceleration) at the time since the controller's first start plus
+//!   `time_offset_s`. Only for a robot that follows the feeds exactly from that instant
+//!   (simulation, a test bench); the robot's place is still checked against the program's
+//!   point at that time.
+//!
+//! **Off the path**: when the TCP is farther than `max_offset_m` from the point found, the prior
+//! is zero (the rate limit smooths the change) and [`crate::safety::Flags::FEEDFORWARD_OFF_PATH`]
+//! is set; in arc-length mode the arc length is kept, so the tracker locks on again when the
+//! TCP comes back within the window. **After the end** the arc length stays at the path's end:
+//! the prior is the last point's while the TCP stays within `max_offset_m` of it, zero beyond.
+//! A TCP that leaves the path and joins it again more than `window_m` further on is not found
+//! again (the flag stays on). In pre-compensated mode a zero prior off the path means the
+//! controller does not know the program's compensation there: keep approach moves out of
+//! contact.
+//!
+//! Every per-cycle call is allocation-free and does bounded work.
+
+use deflex_compensate::table::TableRow;
+use deflex_model::Robot;
+use nalgebra::Vector3;
+
+/// Most table segments examined per control cycle (arc-length tracking).
+pub const MAX_SEGMENTS_PER_CYCLE: usize = 64;
+/// Largest predicted deflection or compensation accepted in a table, position (m) and rotation
+/// (rad): the compensation's own limits (`deflex compensate`).
+pub const MAX_TABLE_POSITION_M: f64 = 0.05;
+/// See [`MAX_TABLE_POSITION_M`].
+pub const MAX_TABLE_ROTATION_RAD: f64 = 0.1;
+/// Largest |coordinate| of a table position (m).
+pub const MAX_TABLE_COORDINATE_M: f64 = 100.0;
+
+/// How the prior is used (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FeedForwardMode {
+    /// The robot runs the original program; the controller adds `−δ_pred`.
+    FeedForward,
+    /// The robot runs the compensated program; the controller accounts for its compensation.
+    Precompensated,
+}
+
+impl FeedForwardMode {
+    /// The name used in `CELL.toml`.
+    pub fn name(self) -> &'static str {
+        match self {
+            FeedForwardMode::FeedForward => "feed-forward",
+            FeedForwardMode::Precompensated => "precompensated",
+        }
+    }
+}
+
+/// How the table is indexed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PathIndex {
+    /// Arc length tracked monotonically from the commanded TCP.
+    ArcLength,
+    /// Time since the controller's first start.
+    Time,
+}
+
+impl PathIndex {
+    /// The name used in `CELL.toml`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PathIndex::ArcLength => "arc-length",
+            PathIndex::Time => "time",
+        }
+    }
+}
+
+/// Settings of the feed-forward (`[feedforward]` of `CELL.toml`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedForwardConfig {
+    /// Mode.
+    pub mode: FeedForwardMode,
+    /// Index.
+    pub index: PathIndex,
+    /// Feed-forward mode: read the feed-forward this much path time ahead (s).
+    pub lead_s: f64,
+    /// Farther than this from the path, the TCP is off the path (m).
+    pub max_offset_m: f64,
+    /// Arc length searched ahead per cycle (m).
+    pub window_m: f64,
+    /// Time index: table time at the controller's first start (s).
+    pub time_offset_s: f64,
+}
+
+impl Default for FeedForwardConfig {
+    /// Feed-forward mode, arc-length index, no lead, 5 mm off-path distance, 5 mm window.
+    fn default() -> Self {
+        FeedForwardConfig {
+            mode: FeedForwardMode::FeedForward,
+            index: PathIndex::ArcLength,
+            lead_s: 0.0,
+            max_offset_m: 0.005,
+            window_m: 0.005,
+            time_offset_s: 0.0,
+        }
+    }
+}
+
+/// A compensated-path table that cannot be used as a feed-forward.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum FeedForwardError {
+    /// Fewer than two rows, or a path of zero length.
+    #[error(
+        "{file}: a feed-forward table needs at least two rows and a path of positive length; got {rows} row(s), {length_m} m"
+    )]
+    TooShort {
+        /// The table.
+        file: String,
+        /// Rows.
+        rows: usize,
+        /// Path length (m).
+        length_m: f64,
+    },
+    /// A point the compensation could not compensate: no program was written from this table.
+    #[error(
+        "{file}:{line}: point {index} has status \"{status}\": the compensation failed there and no robot program was written from this table"
+    )]
+    NotCompensated {
+        /// The table.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// Point index.
+        index: usize,
+        /// Its status.
+        status: String,
+    },
+    /// Arc length or time decreases.
+    #[error("{file}:{line}: column `{column}` decreases ({value} after {previous})")]
+    NotMonotone {
+        /// The table.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// Column.
+        column: &'static str,
+        /// Value.
+        value: f64,
+        /// Previous row's value.
+        previous: f64,
+    },
+    /// A value beyond its bound.
+    #[error("{file}:{line}: column `{column}`: {value} is beyond ±{limit}")]
+    OutOfBounds {
+        /// The table.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// Column.
+        column: &'static str,
+        /// Value.
+        value: f64,
+        /// Bound.
+        limit: f64,
+    },
+    /// A setting out of its bounds.
+    #[error("feedforward.{field}: expected {expected}, got {value}")]
+    Setting {
+        /// Field.
+        field: &'static str,
+        /// Value.
+        value: f64,
+        /// What was expected.
+        expected: &'static str,
+    },
+}
+
+/// The compensated path as the controller uses it: arc length, time, the commanded position
+/// (world) and, in the robot's **base axes** (those of ξ), the predicted deflection and the
+/// compensation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FeedForwardTable {
+    s_m: Vec<f64>,
+    t_s: Vec<f64>,
+    desired: Vec<Vector3<f64>>,
+    commanded: Vec<Vector3<f64>>,
+    deflection: Vec<[f64; 6]>,
+    compensation: Vec<[f64; 6]>,
+}
+
+fn rotate6(r: &nalgebra::Rotation3<f64>, v: &[f64]) -> [f64; 6] {
+    let a = r * Vector3::new(v[0], v[1], v[2]);
+    let b = r * Vector3::new(v[3], v[4], v[5]);
+    [a.x, a.y, a.z, b.x, b.y, b.z]
+}
+
+impl FeedForwardTable {
+    /// From the rows of a compensated-path table (`deflex_compensate::table::read_csv`, world
+    /// frame of `robot`), checked: every status `ok`, arc length and time non-decreasing,
+    /// deflections and compensations within [`MAX_TABLE_POSITION_M`] / [`MAX_TABLE_ROTATION_RAD`],
+    /// positions within [`MAX_TABLE_COORDINATE_M`]. `file` names the table in errors.
+    pub fn from_rows(
+        rows: &[TableRow],
+        robot: &Robot,
+        file: &str,
+    ) -> Result<FeedForwardTable, FeedForwardError> {
+        let length_m = rows.last().map_or(0.0, |r| r.arc_length_m);
+        if rows.len() < 2 || length_m.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return Err(FeedForwardError::TooShort {
+                file: file.to_string(),
+                rows: rows.len(),
+                length_m,
+            });
+        }
+        let to_base = robot.base.rotation.inverse();
+        let mut table = FeedForwardTable {
+            s_m: Vec::with_capacity(rows.len()),
+            t_s: Vec::with_capacity(rows.len()),
+            desired: Vec::with_capacity(rows.len()),
+            commanded: Vec::with_capacity(rows.len()),
+            deflection: Vec::with_capacity(rows.len()),
+            compensation: Vec::with_capacity(rows.len()),
+        };
+        for (i, row) in rows.iter().enumerate() {
+            let bound = |column: &'static str, value: f64, limit: f64| {
+                if value.abs() <= limit {
+                    Ok(())
+                } else {
+                    Err(FeedForwardError::OutOfBounds {
+                        file: file.to_string(),
+                        line: row.line,
+                        column,
+                        value,
+                        limit,
+                    })
+                }
+            };
+            if row.status != "ok" {
+                return Err(FeedForwardError::NotCompensated {
+                    file: file.to_string(),
+                    line: row.line,
+                    index: i,
+                    status: row.status.clone(),
+                });
+            }
+            if i > 0 {
+                for (column, value, previous) in [
+                    ("s_m", row.arc_length_m, rows[i - 1].arc_length_m),
+                    ("t_s", row.time_s, rows[i - 1].time_s),
+                ] {
+                    if value < previous {
+                        return Err(FeedForwardError::NotMonotone {
+                            file: file.to_string(),
+                            line: row.line,
+                            column,
+                            value,
+                            previous,
+                        });
+                    }
+                }
+            }
+            const DEFLECTION: [&str; 6] = [
+                "defl_x_m",
+                "defl_y_m",
+                "defl_z_m",
+                "defl_rx_rad",
+                "defl_ry_rad",
+                "defl_rz_rad",
+            ];
+            const COMPENSATION: [&str; 6] =
+                ["dx_m", "dy_m", "dz_m", "drx_rad", "dry_rad", "drz_rad"];
+            for k in 0..6 {
+                let limit = if k < 3 {
+                    MAX_TABLE_POSITION_M
+                } else {
+                    MAX_TABLE_ROTATION_RAD
+                };
+                bound(DEFLECTION[k], row.deflection[k], limit)?;
+                bound(COMPENSATION[k], row.compensation[k], limit)?;
+            }
+            let commanded = row.desired.translation.vector
+                + Vector3::new(
+                    row.compensation[0],
+                    row.compensation[1],
+                    row.compensation[2],
+                );
+            for (k, column) in ["x_m", "y_m", "z_m"].into_iter().enumerate() {
+                bound(column, commanded[k], MAX_TABLE_COORDINATE_M)?;
+            }
+            table.s_m.push(row.arc_length_m);
+            table.t_s.push(row.time_s);
+            table.desired.push(row.desired.translation.vector);
+            table.commanded.push(commanded);
+            table
+                .deflection
+                .push(rotate6(&to_base, row.deflection.as_slice()));
+            table
+                .compensation
+                .push(rotate6(&to_base, row.compensation.as_slice()));
+        }
+        Ok(table)
+    }
+
+    /// Points.
+    pub fn len(&self) -> usize {
+        self.s_m.len()
+    }
+
+    /// Never empty (at least two points).
+    pub fn is_empty(&self) -> bool {
+        self.s_m.is_empty()
+    }
+
+    /// Path length (m).
+    pub fn length_m(&self) -> f64 {
+        self.s_m[self.s_m.len() - 1]
+    }
+
+    /// Path duration at the programmed feeds (s).
+    pub fn duration_s(&self) -> f64 {
+        self.t_s[self.t_s.len() - 1]
+    }
+
+    /// Linear interpolation of a per-point quantity on segment `k` at fraction `u`.
+    fn lerp6(values: &[[f64; 6]], k: usize, u: f64) -> [f64; 6] {
+        let (a, b) = (&values[k], &values[(k + 1).min(values.len() - 1)]);
+        std::array::from_fn(|i| a[i] + u * (b[i] - a[i]))
+    }
+
+    /// Segment and fraction at time `t_s` (clamped to the path), searched from segment `hint`:
+    /// galloping forward from it when `t_s` lies ahead (the usual case: a lead, or the next
+    /// cycle's time), so the search touches the table near the robot's place, not all of it.
+    fn locate_time(&self, t_s: f64, hint: usize) -> (usize, f64) {
+        let last = self.t_s.len() - 1;
+        let hint = hint.min(last - 1);
+        let (lo, hi) = if self.t_s[hint] <= t_s {
+            // Bracket [hint + step/2, hint + step] with doubling steps.
+            let mut step = 1;
+            while hint + step < last && self.t_s[hint + step] <= t_s {
+                step *= 2;
+            }
+            (hint + step / 2, (hint + step).min(last) + 1)
+        } else {
+            (0, hint + 1)
+        };
+        let k = (lo + self.t_s[lo..hi].partition_point(|t| *t <= t_s)).clamp(1, last) - 1;
+        let span = self.t_s[k + 1] - self.t_s[k];
+        let u = if span > 0.0 {
+            ((t_s - self.t_s[k]) / span).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        (k, if t_s.is_nan() { 0.0 } else { u })
+    }
+}
+
+/// The polyline the robot's place is tracked on, with the unit direction and length of each
+/// segment (zero for a zero-length segment; the last point's entry unused).
+#[derive(Clone, Debug)]
+struct Polyline {
+    points: Vec<Vector3<f64>>,
+    direction: Vec<Vector3<f64>>,
+    length: Vec<f64>,
+}
+
+impl Polyline {
+    fn new(points: &[Vector3<f64>]) -> Polyline {
+        let mut direction = Vec::with_capacity(points.len());
+        let mut length = Vec::with_capacity(points.len());
+        for k in 0..points.len() {
+            let d = points
+                .get(k + 1)
+                .map_or(Vector3::zeros(), |b| b - points[k]);
+            let l = d.norm();
+            length.push(l);
+            direction.push(if l > 0.0 { d / l } else { Vector3::zeros() });
+        }
+        Polyline {
+            points: points.to_vec(),
+            direction,
+            length,
+        }
+    }
+}
+
+/// Where the tracker is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TrackState {
+    /// Not yet on the path's start (arc length) or not started (time).
+    Acquiring,
+    /// On the path.
+    OnPath,
+    /// Farther than `max_offset_m` from the path.
+    OffPath,
+}
+
+/// What the feed-forward gives one control cycle (base axes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedForwardStep {
+    /// The prior `p(s)` the robot already has at its place on the path: added to δŝ in the
+    /// PID's error.
+    pub prior: [f64; 6],
+    /// What the controller adds to its output: `f(s + lead)` in feed-forward mode, zero in
+    /// pre-compensated mode.
+    pub sent: [f64; 6],
+    /// Arc length of the robot's place on the path (m); NaN while acquiring.
+    pub path_s_m: f64,
+    /// Distance of the TCP from the path's commanded point there (m).
+    pub offset_m: f64,
+    /// Tracking state.
+    pub state: TrackState,
+}
+
+impl FeedForwardStep {
+    fn off(state: TrackState, path_s_m: f64, offset_m: f64) -> Self {
+        FeedForwardStep {
+            prior: [0.0; 6],
+            sent: [0.0; 6],
+            path_s_m,
+            offset_m,
+            state,
+        }
+    }
+}
+
+/// The table with its tracking state (see the module documentation). Per-cycle calls do not
+/// allocate.
+#[derive(Clone, Debug)]
+pub struct FeedForward {
+    table: FeedForwardTable,
+    track: Polyline,
+    config: FeedForwardConfig,
+    locked: bool,
+    segment: usize,
+    fraction: f64,
+    t0: Option<f64>,
+}
+
+/// Checks the settings' bounds (those documented in `docs/cell.example.toml`).
+pub fn check_config(config: &FeedForwardConfig) -> Result<(), FeedForwardError> {
+    let check = |field, value: f64, lo: f64, hi: f64, expected| {
+        if value >= lo && value <= hi {
+            Ok(())
+        } else {
+            Err(FeedForwardError::Setting {
+                field,
+                value,
+                expected,
+            })
+        }
+    };
+    check("lead_s", config.lead_s, 0.0, 1.0, "0 to 1 s")?;
+    check(
+        "max_offset_m",
+        config.max_offset_m,
+        1e-4,
+        0.1,
+        "1e-4 to 0.1 m",
+    )?;
+    check("window_m", config.window_m, 1e-3, 1.0, "1e-3 to 1 m")?;
+    check(
+        "time_offset_s",
+        config.time_offset_s,
+        0.0,
+        1e6,
+        "0 to 1e6 s",
+    )
+}
+
+impl FeedForward {
+    /// A feed-forward over `table` with `config` (checked against its bounds).
+    pub fn new(
+        table: FeedForwardTable,
+        config: FeedForwardConfig,
+    ) -> Result<FeedForward, FeedForwardError> {
+        check_config(&config)?;
+        let track = Polyline::new(match config.mode {
+            FeedForwardMode::FeedForward => &table.desired,
+            FeedForwardMode::Precompensated => &table.commanded,
+        });
+        Ok(FeedForward {
+            track,
+            table,
+            config,
+            locked: false,
+            segment: 0,
+            fraction: 0.0,
+            t0: None,
+        })
+    }
+
+    /// Settings.
+    pub fn config(&self) -> &FeedForwardConfig {
+        &self.config
+    }
+
+    /// The table.
+    pub fn table(&self) -> &FeedForwardTable {
+        &self.table
+    }
+
+    /// The controller started at `now_s`: the time index's origin (the first start only).
+    pub fn start(&mut self, now_s: f64) {
+        if self.t0.is_none() && now_s.is_finite() {
+            self.t0 = Some(now_s);
+        }
+    }
+
+    /// Forget the tracking (a new run of the program).
+    pub fn reset(&mut self) {
+        self.locked = false;
+        self.segment = 0;
+        self.fraction = 0.0;
+        self.t0 = None;
+    }
+
+    /// Closest point to `x` on segment `k` with fraction at least `from`: (fraction, squared
+    /// distance). No square root, no division: `t = (x − a)·e` clamped to `[from·L, L]`,
+    /// `|x − a − t e|² = |x − a|² − 2 t (x − a)·e + t²`.
+    #[inline]
+    fn project(&self, x: &Vector3<f64>, k: usize, from: f64) -> (f64, f64) {
+        let r = x - self.track.points[k];
+        let length = self.track.length[k];
+        let along = r.dot(&self.track.direction[k]);
+        let t = along.clamp(from * length, length);
+        let d2 = (r.norm_squared() - 2.0 * t * along + t * t).max(0.0);
+        let u = if length > 0.0 { t / length } else { 1.0 };
+        (u, d2)
+    }
+
+    /// Monotone search from `(segment, fraction)` over the window: the closest point
+    /// `(segment, fraction, distance)`.
+    fn search(&self, x: &Vector3<f64>, segment: usize, fraction: f64) -> (usize, f64, f64) {
+        let last = self.table.len() - 2;
+        let horizon = self.table.s_m[segment]
+            + fraction * self.segment_length(segment)
+            + self.config.window_m;
+        let (u0, d0) = self.project(x, segment, fraction);
+        let mut best = (segment, u0, d0);
+        let end = (segment + MAX_SEGMENTS_PER_CYCLE).min(last + 1);
+        for k in segment + 1..end {
+            if self.table.s_m[k] > horizon {
+                break;
+            }
+            // Every 8 segments: no point of the path from a_k to the horizon is closer than
+            // |x − a_k| − (horizon − s_k) (triangle inequality, the path being no longer than
+            // its arc length): stop when that cannot beat the best.
+            if (k - segment).is_multiple_of(8) {
+                let reach = horizon - self.table.s_m[k];
+                let to_start = (x - self.track.points[k]).norm();
+                if to_start - reach > 0.0 && (to_start - reach).powi(2) >= best.2 {
+                    break;
+                }
+            }
+            let (u, d2) = self.project(x, k, 0.0);
+            if d2 < best.2 {
+                best = (k, u, d2);
+            }
+        }
+        (best.0, best.1, best.2.sqrt())
+    }
+
+    fn segment_length(&self, k: usize) -> f64 {
+        self.table.s_m[k + 1] - self.table.s_m[k]
+    }
+
+    /// One control cycle: `place_world` is where the robot is on its *program* (world frame of
+    /// the model): the commanded TCP (forward kinematics of the reported joints) minus the
+    /// controller's own correction (see the module documentation); `now_s` the controller
+    /// time.
+    pub fn update(&mut self, place_world: &Vector3<f64>, now_s: f64) -> FeedForwardStep {
+        let tcp_world = place_world;
+        if !tcp_world.iter().all(|v| v.is_finite()) {
+            return FeedForwardStep::off(TrackState::OffPath, f64::NAN, f64::NAN);
+        }
+        let (k, u, offset) = match self.config.index {
+            PathIndex::ArcLength => {
+                let (k, u, d) = self.search(
+                    tcp_world,
+                    self.segment,
+                    if self.locked { self.fraction } else { 0.0 },
+                );
+                if !self.locked {
+                    if d > self.config.max_offset_m {
+                        return FeedForwardStep::off(TrackState::Acquiring, f64::NAN, d);
+                    }
+                    self.locked = true;
+                }
+                if d > self.config.max_offset_m {
+                    let s = self.table.s_m[self.segment]
+                        + self.fraction * self.segment_length(self.segment);
+                    return FeedForwardStep::off(TrackState::OffPath, s, d);
+                }
+                self.segment = k;
+                self.fraction = u;
+                (k, u, d)
+            }
+            PathIndex::Time => {
+                let Some(t0) = self.t0 else {
+                    return FeedForwardStep::off(TrackState::Acquiring, f64::NAN, f64::NAN);
+                };
+                let (k, u) = self
+                    .table
+                    .locate_time(now_s - t0 + self.config.time_offset_s, self.segment);
+                self.segment = k;
+                let (a, b) = (&self.track.points[k], &self.track.points[k + 1]);
+                let d = (tcp_world - (a + (b - a) * u)).norm();
+                let s = self.table.s_m[k] + u * self.segment_length(k);
+                if d.is_nan() || d > self.config.max_offset_m {
+                    return FeedForwardStep::off(TrackState::OffPath, s, d);
+                }
+                (k, u, d)
+            }
+        };
+        let s = self.table.s_m[k] + u * self.segment_length(k);
+        let (prior, sent) = match self.config.mode {
+            FeedForwardMode::Precompensated => (
+                FeedForwardTable::lerp6(&self.table.compensation, k, u),
+                [0.0; 6],
+            ),
+            FeedForwardMode::FeedForward => {
+                let here = FeedForwardTable::lerp6(&self.table.deflection, k, u).map(|v| -v);
+                let sent = if self.config.lead_s > 0.0 {
+                    let t = self.table.t_s[k] + u * (self.table.t_s[k + 1] - self.table.t_s[k]);
+                    let (kl, ul) = self.table.locate_time(t + self.config.lead_s, k);
+                    FeedForwardTable::lerp6(&self.table.deflection, kl, ul).map(|v| -v)
+                } else {
+                    here
+                };
+                (here, sent)
+            }
+        };
+        FeedForwardStep {
+            prior,
+            sent,
+            path_s_m: s,
+            offset_m: offset,
+            state: TrackState::OnPath,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use deflex_model::{Displacement, Pose, Wrench};
+    use nalgebra::{Rotation3, Translation3};
+    use std::f64::consts::PI;
+
+    /// A table row at `p` (world, m) with deflection `defl` and compensation −defl (position).
+    fn row(i: usize, s: f64, t: f64, p: Vector3<f64>, defl: [f64; 6]) -> TableRow {
+        let d = Displacement::from_row_slice(&defl);
+        TableRow {
+            line: i + 2,
+            arc_length_m: s,
+            time_s: t,
+            desired: Pose::from_parts(Translation3::from(p), Rotation3::identity()),
+            compensation: Displacement::new(-defl[0], -defl[1], -defl[2], 0.0, 0.0, 0.0),
+            wrench: Wrench::zeros(),
+            deflection: d,
+            status: "ok".into(),
+        }
+    }
+
+    /// Rows along a polyline at 10 mm/s; the deflection's z is the point's arc length (a
+    /// marker: 1 m of arc length ↦ 1 m of "deflection", scaled by 1e-3 to stay in bounds).
+    fn rows_along(points: &[Vector3<f64>]) -> Vec<TableRow> {
+        let mut s = 0.0;
+        let mut out = Vec::new();
+        for (i, p) in points.iter().enumerate() {
+            if i > 0 {
+                s += (p - points[i - 1]).norm();
+            }
+            out.push(row(i, s, s / 0.01, *p, [0.0, 0.0, s * 1e-3, 0.0, 0.0, 0.0]));
+        }
+        out
+    }
+
+    /// A helix of radius 20 mm, 0.24 mm down per turn, 5° steps: two turns.
+    fn helix() -> Vec<Vector3<f64>> {
+        (0..=144)
+            .map(|i| {
+                let a = (i as f64 * 5.0).to_radians();
+                Vector3::new(0.02 * a.cos(), 0.02 * a.sin(), -0.24e-3 * a / (2.0 * PI))
+            })
+            .collect()
+    }
+
+    fn robot() -> Robot {
+        deflex_model::builtin("tx200").unwrap()
+    }
+
+    fn tracker(points: &[Vector3<f64>], config: FeedForwardConfig) -> FeedForward {
+        let table = FeedForwardTable::from_rows(&rows_along(points), &robot(), "t.csv").unwrap();
+        FeedForward::new(table, config).unwrap()
+    }
+
+    /// Arc length of the helix at angle `a` (rad).
+    fn helix_s(a: f64) -> f64 {
+        let pitch = 0.24e-3 / (2.0 * PI);
+        a * (0.02f64.powi(2) + pitch * pitch).sqrt()
+    }
+
+    #[test]
+    fn tracking_follows_the_turn_it_is_on_even_far_below_it() {
+        // The TCP runs the helix 2 mm below it (a compensated robot pushing into the sheet): the
+        // next turn is 0.24 mm further down, far closer than the path, yet the arc length
+        // follows the turn the robot is on.
+        let points = helix();
+        let mut ff = tracker(&points, FeedForwardConfig::default());
+        let mut previous = f64::NEG_INFINITY;
+        for k in 0..=700 {
+            let a = k as f64 * 0.5f64.to_radians() * 1.02;
+            let a = a.min(4.0 * PI);
+            let p = Vector3::new(0.02 * a.cos(), 0.02 * a.sin(), -0.24e-3 * a / (2.0 * PI))
+                + Vector3::new(0.0, 0.0, -2e-3);
+            let step = ff.update(&p, k as f64 * 0.01);
+            assert_eq!(step.state, TrackState::OnPath, "{k}");
+            // Between chord and arc: within the 5° polyline's sagitta (15 µm) plus the chord's
+            // shortening of the arc length (2 µm per 5°).
+            let expected = helix_s(a);
+            assert!(
+                (step.path_s_m - expected).abs() < 0.05e-3,
+                "{k}: {} vs {expected}",
+                step.path_s_m
+            );
+            assert!(step.path_s_m >= previous);
+            previous = step.path_s_m;
+            // Feed-forward mode: the prior is minus the deflection there (the marker).
+            assert!((step.prior[2] + step.path_s_m * 1e-3).abs() < 1e-9);
+            assert_eq!(step.prior, step.sent);
+        }
+    }
+
+    #[test]
+    fn acquiring_off_the_path_and_after_the_end() {
+        let points = helix();
+        let config = FeedForwardConfig {
+            max_offset_m: 1e-3,
+            ..FeedForwardConfig::default()
+        };
+        let mut ff = tracker(&points, config);
+        // An approach from 30 mm above: acquiring, no prior.
+        let above = points[0] + Vector3::new(0.0, 0.0, 0.03);
+        let step = ff.update(&above, 0.0);
+        assert_eq!(step.state, TrackState::Acquiring);
+        assert_eq!(step.prior, [0.0; 6]);
+        assert!(step.path_s_m.is_nan());
+        // A point of the path's second turn is not where the path starts: still acquiring.
+        let step = ff.update(&points[80], 0.01);
+        assert_eq!(step.state, TrackState::Acquiring);
+        // At the start: locked.
+        let step = ff.update(&(points[0] + Vector3::new(0.0, 0.0, 0.5e-3)), 0.02);
+        assert_eq!(step.state, TrackState::OnPath);
+        assert!(step.path_s_m < 1e-6);
+        // Along the first points, then 3 mm off: off the path, the arc length is kept.
+        let mut s = 0.0;
+        for p in &points[1..5] {
+            s = ff.update(p, 0.03).path_s_m;
+        }
+        let off = ff.update(&(points[5] + Vector3::new(0.003, 0.0, 0.0)), 0.04);
+        assert_eq!(off.state, TrackState::OffPath);
+        assert_eq!(off.prior, [0.0; 6]);
+        assert_eq!(off.path_s_m, s);
+        // Back on: locks on again.
+        let back = ff.update(&points[6], 0.05);
+        assert_eq!(back.state, TrackState::OnPath);
+        assert!((back.path_s_m - helix_s(6.0 * 5f64.to_radians())).abs() < 0.05e-3);
+        // Run to the end and beyond along the tangent.
+        for p in &points[7..] {
+            ff.update(p, 0.06);
+        }
+        let end = *points.last().unwrap();
+        let length = ff.table().length_m();
+        let near = ff.update(&(end + Vector3::new(0.0, 0.5e-3, 0.0)), 0.07);
+        assert_eq!(near.state, TrackState::OnPath);
+        assert!((near.path_s_m - length).abs() < 1e-12);
+        assert!((near.prior[2] + length * 1e-3).abs() < 1e-12);
+        let gone = ff.update(&(end + Vector3::new(0.0, 5e-3, 0.0)), 0.08);
+        assert_eq!(gone.state, TrackState::OffPath);
+        assert_eq!(gone.prior, [0.0; 6]);
+    }
+
+    #[test]
+    fn time_index_lead_and_precompensated_mode() {
+        let line: Vec<Vector3<f64>> = (0..=20)
+            .map(|i| Vector3::new(1.5 + i as f64 * 1e-3, 0.0, -0.18))
+            .collect();
+        // Time index from the start at t0 = 2 s, table time offset 0.1 s: at controller time
+        // 2.5 s the table is at 0.6 s, i.e. 6 mm along.
+        let config = FeedForwardConfig {
+            index: PathIndex::Time,
+            time_offset_s: 0.1,
+            lead_s: 0.3,
+            ..FeedForwardConfig::default()
+        };
+        let mut ff = tracker(&line, config);
+        assert_eq!(
+            ff.update(&line[0], 1.0).state,
+            TrackState::Acquiring,
+            "not started"
+        );
+        ff.start(2.0);
+        ff.start(3.0); // only the first start sets the origin
+        let p = Vector3::new(1.506, 0.0, -0.18);
+        let step = ff.update(&p, 2.5);
+        assert_eq!(step.state, TrackState::OnPath);
+        assert!((step.path_s_m - 0.006).abs() < 1e-12);
+        assert!((step.prior[2] + 0.006e-3).abs() < 1e-15);
+        // The feed-forward sent is 0.3 s (3 mm) ahead.
+        assert!((step.sent[2] + 0.009e-3).abs() < 1e-15);
+        // A robot that stopped: the time runs on, the TCP is left behind → off the path.
+        assert_eq!(ff.update(&p, 3.5).state, TrackState::OffPath);
+        // Pre-compensated: the prior is the program's compensation, nothing is sent.
+        let mut pre = tracker(
+            &line,
+            FeedForwardConfig {
+                mode: FeedForwardMode::Precompensated,
+                ..FeedForwardConfig::default()
+            },
+        );
+        let step = pre.update(&Vector3::new(1.5035, 0.0, -0.18), 0.0);
+        // (the commanded polyline is 3.5 µm below the desired one there)
+        assert!((step.path_s_m - 0.0035).abs() < 1e-7, "{step:?}");
+        // compensation = −deflection (the rows above)
+        assert!((step.prior[2] + 0.0035e-3).abs() < 1e-10);
+        assert_eq!(step.sent, [0.0; 6]);
+    }
+
+    #[test]
+    fn time_lookup_from_any_hint_matches_a_plain_search() {
+        // Times with repeats (zero-length moves) and uneven steps.
+        let line: Vec<Vector3<f64>> = (0..200)
+            .map(|i| {
+                Vector3::new(
+                    1.5 + (i / 2) as f64 * 1e-3 * (1.0 + (i % 7) as f64),
+                    0.0,
+                    0.0,
+                )
+            })
+            .collect();
+        let ff = tracker(&line, FeedForwardConfig::default());
+        let t = &ff.table().t_s;
+        let plain = |ts: f64| {
+            let last = t.len() - 1;
+            t.partition_point(|v| *v <= ts).clamp(1, last) - 1
+        };
+        let duration = ff.table().duration_s();
+        for j in 0..400 {
+            let ts = -1.0 + (duration + 2.0) * j as f64 / 399.0;
+            for hint in [0, 1, 17, 100, 198, 199, 500] {
+                let (k, u) = ff.table().locate_time(ts, hint);
+                assert_eq!(k, plain(ts), "t {ts} hint {hint}");
+                assert!((0.0..=1.0).contains(&u));
+            }
+        }
+        assert_eq!(ff.table().locate_time(f64::NAN, 50), (0, 0.0));
+    }
+
+    #[test]
+    fn tables_are_rotated_into_base_axes_and_checked() {
+        let line: Vec<Vector3<f64>> = (0..=4)
+            .map(|i| Vector3::new(i as f64 * 1e-3, 0.0, 0.0))
+            .collect();
+        let mut rows = rows_along(&line);
+        rows[2].deflection = Displacement::new(1e-3, 0.0, 0.0, 0.0, 0.0, 2e-3);
+        // A base turned 90° about z: world x is base −y... base axes = R_baseᵀ · world.
+        let mut turned = robot();
+        turned.base = Pose::from_parts(
+            Translation3::new(0.0, 0.0, 0.0),
+            Rotation3::from_axis_angle(&Vector3::z_axis(), PI / 2.0),
+        );
+        let table = FeedForwardTable::from_rows(&rows, &turned, "t.csv").unwrap();
+        let d = table.deflection[2];
+        assert!((d[0]).abs() < 1e-15 && (d[1] + 1e-3).abs() < 1e-15, "{d:?}");
+        assert!((d[5] - 2e-3).abs() < 1e-15);
+        let fails = |rows: Vec<TableRow>| {
+            FeedForwardTable::from_rows(&rows, &robot(), "t.csv")
+                .unwrap_err()
+                .to_string()
+        };
+        let mut bad = rows_along(&line);
+        bad[3].status = "compensated:joint_limit:J3".into();
+        let e = fails(bad);
+        assert!(e.contains("t.csv:5") && e.contains("joint_limit"), "{e}");
+        let mut bad = rows_along(&line);
+        bad[3].time_s = 0.0;
+        let e = fails(bad);
+        assert!(e.contains("t.csv:5") && e.contains("t_s"), "{e}");
+        let mut bad = rows_along(&line);
+        bad[1].deflection[4] = 0.5;
+        let e = fails(bad);
+        assert!(e.contains("t.csv:3") && e.contains("defl_ry_rad"), "{e}");
+        let mut bad = rows_along(&line);
+        bad[1].compensation[0] = -0.2;
+        assert!(fails(bad).contains("dx_m"));
+        assert!(fails(rows_along(&line[..1])).contains("at least two rows"));
+        let config = FeedForwardConfig {
+            window_m: 0.0,
+            ..FeedForwardConfig::default()
+        };
+        let table = FeedForwardTable::from_rows(&rows_along(&line), &robot(), "t.csv").unwrap();
+        let e = FeedForward::new(table, config).unwrap_err().to_string();
+        assert!(e.contains("feedforward.window_m"), "{e}");
+    }
+}

@@ -1,0 +1,231 @@
+//! The offline process model (`FormingProcess`) against the twin it claims to represent
+//! (SIMULATED): with the twin's plant reduced to what a VJM model represents (no error sources,
+//! no coupling, lost motion or geometric stiffness) and the process model given that same
+//! linear robot, the model's prediction of the uncompensated run — force along the path, the
+//! Aerens level the sheet ends at, the path error — must be the twin's own run, computed by
+//! different code (the cell's per-cycle equilibrium at 250 Hz with the plant's spring chain,
+//! against the adapter's sub-stepped equilibrium with eq. 15).
+
+use deflex_compensate::{ProcessModel, ProcessPoint};
+use deflex_model::{IkOptions, Robot};
+use deflex_sim::config::CellConfig;
+use deflex_sim::{ErrorSources, FormingProcess, ToolPath, run_forming, tcp_path};
+
+/// The default cell with every error source off and the plant reduced to its linear VJM part;
+/// the model is that linear part, base tilt about the plant's pivot.
+fn vjm_twin() -> (CellConfig, Robot) {
+    let mut config = CellConfig {
+        errors: ErrorSources::all(false),
+        ..CellConfig::default()
+    };
+    config.plant.j2_j3_coupling = 0.0;
+    config.plant.wrist_lost_motion_rad = [0.0; 3];
+    config.plant.wrist_hysteresis_nm = 0.0;
+    config.plant.large_rotation = false;
+    let nominal = config.nominal_robot().unwrap();
+    let mut model = config.plant.linear_robot(&nominal).unwrap();
+    model.base_pivot = nalgebra::Vector3::from(config.plant.base_pivot_m);
+    (config, model)
+}
+
+struct Prediction {
+    /// Predicted vertical force at each path point (N).
+    fz: Vec<f64>,
+    /// Predicted path error norm at each point (m): the deflection under the predicted wrench.
+    error: Vec<f64>,
+    /// The sheet's Aerens level at the end (N).
+    level_n: f64,
+    /// Actual step-down (mm) and wall angle (deg) the sheet ends with.
+    step_and_angle: (f64, f64),
+}
+
+/// The process model's pass over the uncompensated path (commanded = desired), each point with
+/// the model's compliance at its own IK configuration.
+fn predict(config: &CellConfig, model: &Robot, path: &ToolPath) -> Prediction {
+    let seed = config.seed_q_rad();
+    let rotation = model.tcp_pose(&seed).unwrap().rotation;
+    let tcp = tcp_path(
+        path,
+        &config.part_frame(),
+        &rotation,
+        config.controller.rapid_feed_mm_s,
+    )
+    .unwrap();
+    let mut process = FormingProcess::from_cell(config, path).unwrap();
+    process.begin_pass();
+    let mut data = deflex_model::Data::new();
+    let mut q = seed.to_vec();
+    let (mut fz, mut error) = (Vec::new(), Vec::new());
+    for (i, point) in tcp.points().iter().enumerate() {
+        q = model
+            .inverse_kinematics(&point.pose, &q, &IkOptions::default())
+            .unwrap()
+            .q;
+        model.forward_kinematics(&mut data, &q).unwrap();
+        let compliance = model.compliance_matrix(&data);
+        let w = process
+            .wrench(&ProcessPoint {
+                index: i,
+                arc_length_m: point.arc_length_m,
+                desired: &point.pose,
+                commanded: &point.pose,
+                compliance: &compliance,
+                travel_direction: tcp.travel_direction(i),
+                rapid: point.feed_m_s.is_none(),
+            })
+            .unwrap();
+        fz.push(w[2]);
+        error.push((compliance * w).fixed_rows::<3>(0).norm());
+    }
+    Prediction {
+        fz,
+        error,
+        level_n: process.sheet().level_force_n(),
+        step_and_angle: process.sheet().actual_step_and_angle(),
+    }
+}
+
+#[test]
+fn the_process_model_predicts_the_twins_uncompensated_run() {
+    let (config, model) = vjm_twin();
+    // 18 turns of the cone: the force builds up and the actual step-down settles.
+    let path = ToolPath::paper_cone().truncated(2200.0);
+    let twin = run_forming(&config, path.clone(), 1, None).unwrap();
+    let predicted = predict(&config, &model, &path);
+    let s = &twin.summary;
+
+    // The level the sheet ends at, from the actual step-down and wall angle of the passes:
+    // the twin's and the model's agree, and both are well below the programmed level (the
+    // robot deflects up and forms smaller steps), which the adapter without the pass record
+    // would have kept.
+    let (step, angle) = predicted.step_and_angle;
+    eprintln!(
+        "level: twin {:.1} N (step {:.4} mm, {:.2}°), model {:.1} N (step {step:.4} mm, \
+         {angle:.2}°), programmed {:.1} N",
+        s.aerens_actual_fz_N,
+        s.actual_step_down_mm,
+        s.actual_wall_angle_deg,
+        predicted.level_n,
+        s.aerens_steady_fz_N
+    );
+    assert!(
+        (predicted.level_n - s.aerens_actual_fz_N).abs() < 0.01 * s.aerens_actual_fz_N,
+        "model level {} N vs twin {} N",
+        predicted.level_n,
+        s.aerens_actual_fz_N
+    );
+    assert!(s.aerens_steady_fz_N - s.aerens_actual_fz_N > 0.02 * s.aerens_steady_fz_N);
+
+    // The force and the path error along the path, point by point against the twin's log at
+    // the same time (the log is at 50 Hz, the points 5° apart).
+    let times: Vec<f64> = twin.log.rows.iter().map(|r| r.time_s).collect();
+    let rotation = model.tcp_pose(&config.seed_q_rad()).unwrap().rotation;
+    let tcp = tcp_path(&path, &config.part_frame(), &rotation, 50.0).unwrap();
+    let (mut worst_f, mut worst_e, mut sum_sq_e, mut compared) = (0.0f64, 0.0f64, 0.0, 0);
+    for (i, point) in tcp.points().iter().enumerate() {
+        let k = times.partition_point(|t| *t < point.time_s);
+        let Some(row) = twin.log.rows.get(k) else {
+            continue;
+        };
+        if (row.time_s - point.time_s).abs() > 0.011 || row.truth.wrench[2] < 200.0 {
+            continue;
+        }
+        let err = (row.truth.true_m - row.truth.desired_m).norm();
+        worst_f = worst_f.max((predicted.fz[i] - row.truth.wrench[2]).abs());
+        worst_e = worst_e.max((predicted.error[i] - err).abs());
+        sum_sq_e += (predicted.error[i] - err).powi(2);
+        compared += 1;
+    }
+    let rms_e = (sum_sq_e / compared.max(1) as f64).sqrt();
+    eprintln!(
+        "{compared} points compared: largest force difference {worst_f:.1} N, error \
+         difference RMS {:.1} µm, largest {:.1} µm (twin max Fz {:.0} N, max error {:.3} mm)",
+        rms_e * 1e6,
+        worst_e * 1e6,
+        s.max_fz_N,
+        s.max_error_norm_mm
+    );
+    // Measured: 0.6 N, 9 µm RMS and 81 µm at one point where the log row and the path point
+    // are 0.1 mm apart on a turn.
+    assert!(compared > 500, "{compared}");
+    assert!(worst_f < 0.01 * s.max_fz_N, "force differs by {worst_f} N");
+    assert!(
+        rms_e < 0.015 * s.max_error_norm_mm * 1e-3,
+        "error differs by {rms_e} m RMS"
+    );
+    assert!(
+        worst_e < 0.08 * s.max_error_norm_mm * 1e-3,
+        "error differs by {worst_e} m"
+    );
+}
+
+/// A program that means another path: the robot runs the program, the twin measures against
+/// the reference. Above the sheet (no contact, no error source) the measured error is the
+/// program's offset from the reference, and the compensated program survives the round trip
+/// world ↔ part frame.
+#[test]
+fn a_program_is_measured_against_its_reference() {
+    use deflex_sim::{Waypoint, compensated_tool_path, run_program_with_progress};
+    let (config, model) = vjm_twin();
+    // A 10 mm square in 1 mm moves, 5 mm above the sheet.
+    let corners = [
+        [0.0, 0.0],
+        [10.0, 0.0],
+        [10.0, 10.0],
+        [0.0, 10.0],
+        [0.0, 0.0],
+    ];
+    let mut waypoints = vec![Waypoint {
+        p_mm: [0.0, 0.0, 5.0],
+        feed_mm_s: None,
+    }];
+    for pair in corners.windows(2) {
+        for k in 1..=10 {
+            let f = k as f64 / 10.0;
+            waypoints.push(Waypoint {
+                p_mm: [
+                    pair[0][0] + f * (pair[1][0] - pair[0][0]),
+                    pair[0][1] + f * (pair[1][1] - pair[0][1]),
+                    5.0,
+                ],
+                feed_mm_s: Some(10.0),
+            });
+        }
+    }
+    let reference = ToolPath {
+        name: "square above the sheet".into(),
+        waypoints,
+        step_down_mm: None,
+        wall_angle_deg: None,
+    };
+    let offset = nalgebra::Vector3::new(0.3e-3, -0.2e-3, 0.1e-3);
+    let rotation = model.tcp_pose(&config.seed_q_rad()).unwrap().rotation;
+    let world = tcp_path(&reference, &config.part_frame(), &rotation, 50.0).unwrap();
+    let commanded: Vec<_> = world
+        .points()
+        .iter()
+        .map(|p| p.pose.translation.vector + offset)
+        .collect();
+    let program = compensated_tool_path(&reference, &commanded, &config.part_frame()).unwrap();
+    for (p, r) in program.waypoints.iter().zip(&reference.waypoints) {
+        let d = nalgebra::Vector3::from(p.p_mm) - nalgebra::Vector3::from(r.p_mm);
+        assert!((d - offset * 1e3).norm() < 1e-9, "{d}");
+        assert_eq!(p.feed_mm_s, r.feed_mm_s);
+    }
+    let run = run_program_with_progress(&config, program, Some(&reference), 1, None, &mut |_| {})
+        .unwrap();
+    for row in &run.log.rows {
+        let e = row.truth.true_m - row.truth.desired_m;
+        // Joint interpolation departs from the straight line by 0.1 µm over 1 mm.
+        assert!((e - offset).norm() < 0.5e-6, "{e} at {} s", row.time_s);
+    }
+    assert!((run.summary.max_error_norm_mm - offset.norm() * 1e3).abs() < 1e-3);
+    // One program waypoint per reference waypoint, or an error naming both.
+    let mut short = reference.clone();
+    short.waypoints.pop();
+    let e = run_program_with_progress(&config, short, Some(&reference), 1, None, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("40 waypoints") && e.contains("41"), "{e}");
+    assert!(compensated_tool_path(&reference, &commanded[..3], &config.part_frame()).is_err());
+}
