@@ -61,10 +61,6 @@ impl Line {
     }
 }
 
-fn force(s: f64, scale: f64) -> Wrench {
-    ALONG_X.force(s, scale)
-}
-
 struct Robotic {
     robot: Robot,
     start: Pose,
@@ -74,10 +70,6 @@ struct Robotic {
 }
 
 impl Robotic {
-    fn new() -> Self {
-        Robotic::along(ALONG_X)
-    }
-
     fn along(line: Line) -> Self {
         let robot = common::robot();
         let q = common::q0().to_vec();
@@ -146,15 +138,10 @@ fn table_along(line: Line, scale: f64, points: usize) -> Vec<TableRow> {
 }
 
 fn feedforward(scale: f64, mode: FeedForwardMode, lead_s: f64) -> FeedForward {
-    feedforward_along(ALONG_X, table(scale), mode, lead_s)
+    feedforward_along(table(scale), mode, lead_s)
 }
 
-fn feedforward_along(
-    _line: Line,
-    rows: Vec<TableRow>,
-    mode: FeedForwardMode,
-    lead_s: f64,
-) -> FeedForward {
+fn feedforward_along(rows: Vec<TableRow>, mode: FeedForwardMode, lead_s: f64) -> FeedForward {
     let table = FeedForwardTable::from_rows(&rows, &common::robot(), "table.csv").unwrap();
     FeedForward::new(
         table,
@@ -379,7 +366,6 @@ fn a_plunge_into_a_force_ramp_is_tracked_and_fed_forward() {
         PLUNGE,
         config(),
         Some(feedforward_along(
-            PLUNGE,
             rows.clone(),
             FeedForwardMode::FeedForward,
             0.0,
@@ -391,7 +377,6 @@ fn a_plunge_into_a_force_ramp_is_tracked_and_fed_forward() {
         PLUNGE,
         config(),
         Some(feedforward_along(
-            PLUNGE,
             rows.clone(),
             FeedForwardMode::Precompensated,
             0.0,

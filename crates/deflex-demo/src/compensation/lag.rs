@@ -257,6 +257,7 @@ mod tests {
                 saturated_samples: 0,
             },
             profile_mm: Vec::new(),
+            programmed_profile_mm: Vec::new(),
             wall_time_s: 0.0,
         }
     }
