@@ -62,6 +62,8 @@ pub const FEED_FORWARD: &str = "offline + online: feed-forward (process-model ta
 /// See [`UNCORRECTED`].
 pub const PRECOMPENSATED: &str = "offline + online: pre-compensated program, controller told";
 /// See [`UNCORRECTED`].
+pub const ONLINE_UNGUARDED: &str = "online only, contact-runaway guard off";
+/// See [`UNCORRECTED`].
 pub const DOUBLE: &str =
     "pre-compensated program + online, controller NOT told (double correction)";
 
@@ -77,6 +79,9 @@ pub struct CompensationPlan {
     pub gcode_length_mm: Option<f64>,
     /// Also run the double-correction case on the CAM part.
     pub double_correction: bool,
+    /// Also run the online correction with the contact-runaway guard off (on the CAM part its
+    /// plunges' elastic onset trips the guard).
+    pub online_unguarded: bool,
 }
 
 impl Default for CompensationPlan {
@@ -86,6 +91,7 @@ impl Default for CompensationPlan {
             threads: 2,
             gcode_length_mm: None,
             double_correction: true,
+            online_unguarded: true,
         }
     }
 }
@@ -286,8 +292,11 @@ fn controlled(
     program: &Program,
     seed: u64,
     feedforward: Option<FeedForward>,
+    guard: bool,
 ) -> Result<ClosedLoopRun, String> {
-    let mut twin = TwinController::new(model.clone(), controller_config_for(cell), false)?;
+    let mut config = controller_config_for(cell);
+    config.runaway.enabled = guard;
+    let mut twin = TwinController::new(model.clone(), config, false)?;
     twin.set_feedforward(feedforward);
     let run = run_twin_controller(cell, program, seed, twin, &mut |_| {})?;
     if let Some(fault) = run.fault {
@@ -378,7 +387,7 @@ pub fn compare_part(
             };
             Ok((
                 None,
-                Some(controlled(cell, model, &p, seed, None)?.forming),
+                Some(controlled(cell, model, &p, seed, None, true)?.forming),
                 None,
             ))
         }));
@@ -455,7 +464,7 @@ pub fn compare_part(
         }),
         Box::new(|| {
             simple(Ok(
-                controlled(cell, model, &original, seed, Some(ff))?.forming
+                controlled(cell, model, &original, seed, Some(ff), true)?.forming
             ))
         }),
         Box::new(|| {
@@ -465,6 +474,7 @@ pub fn compare_part(
                 &process_program,
                 seed,
                 Some(pre),
+                true,
             )?
             .forming))
         }),
@@ -472,8 +482,13 @@ pub fn compare_part(
     if plan.double_correction {
         second.push(Box::new(|| {
             simple(Ok(
-                controlled(cell, model, &process_program, seed, None)?.forming
+                controlled(cell, model, &process_program, seed, None, true)?.forming
             ))
+        }));
+    }
+    if plan.online_unguarded {
+        second.push(Box::new(|| {
+            simple(Ok(controlled(cell, model, &original, seed, None, false)?.forming))
         }));
     }
     if given_log.is_none() {
@@ -501,6 +516,9 @@ pub fn compare_part(
     runs.push((PRECOMPENSATED.into(), next()?));
     if plan.double_correction {
         runs.push((DOUBLE.into(), next()?));
+    }
+    if plan.online_unguarded {
+        runs.push((ONLINE_UNGUARDED.into(), next()?));
     }
     let ramps = lag::ramps(open);
     let ways = runs
@@ -567,6 +585,7 @@ pub(crate) fn study(
     // The double correction is shown on the CAM part only (one run fewer on the long cone).
     let cone_plan = CompensationPlan {
         double_correction: false,
+        online_unguarded: false,
         ..plan.clone()
     };
     let (cone_numbers, cone_runs) = compare_part(

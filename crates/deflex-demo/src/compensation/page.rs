@@ -188,7 +188,10 @@ pub(crate) fn section(html: &mut HtmlReport, study: &CompensationStudy, figures:
          SIMULATED: the twin's robot with every error source on; the process model is the twin's \
          own forming law (optimistic), driven by the identified robot model, not the plant; the \
          compensations are position only (the twin holds the tool orientation); feed-forward \
-         lead {:.3} s. Lag: {}.",
+         lead {:.3} s. The controller runs with its defaults, the contact-runaway guard on; \
+         on the CAM part each plunge's elastic onset into the sheet reads as a loop gain of \
+         0.8–1.2 and trips it (the guard cannot tell that onset from a fixture), so the part \
+         also shows the online correction with the guard off. Lag: {}.",
         study.lead_s, study.lag_definition
     ));
     for part in &study.parts {
