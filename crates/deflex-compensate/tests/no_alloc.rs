@@ -8,31 +8,13 @@ use deflex_compensate::{
 };
 use deflex_model::{Pose, TX200_FORMING_Q_DEG, Wrench, builtin};
 use nalgebra::{Translation3, Vector3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(Cell::get)
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
+
+fn allocations() -> u64 {
+    deflex_alloc_count::allocations()
+}
 
 fn path(points: usize) -> TcpPath {
     let robot = builtin("tx200").unwrap();
@@ -50,7 +32,7 @@ fn path(points: usize) -> TcpPath {
     TcpPath::new("circle", poses, 0.05).unwrap()
 }
 
-fn count(points: usize, process: bool) -> usize {
+fn count(points: usize, process: bool) -> u64 {
     let robot = builtin("tx200").unwrap();
     let seed = TX200_FORMING_Q_DEG.map(f64::to_radians);
     let path = path(points);

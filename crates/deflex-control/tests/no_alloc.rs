@@ -8,39 +8,10 @@ mod common;
 use deflex_control::log::{LogRecord, Plain, spawn_writer};
 use deflex_control::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use deflex_control::slot::SeqSlot;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicU64, Ordering};
 
-struct Counting;
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
-
-thread_local! {
-    // Only the measuring thread counts (the log writer thread allocates by design).
-    static COUNTING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-fn note() {
-    if COUNTING.with(|c| c.get()) {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
+// Counts only this thread's allocations (the log writer thread allocates by design).
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
 
 #[test]
 fn control_cycle_allocates_nothing() {
@@ -57,8 +28,7 @@ fn control_cycle_allocates_nothing() {
     ctrl.start(0.0);
     // Warm-up outside the measurement (first use of lazily initialised statics, if any).
     ctrl.cycle(0.01, &q, &raw_free);
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    COUNTING.with(|c| c.set(true));
+    let before = deflex_alloc_count::allocations();
     let mut t = 0.01;
     for k in 0..5000 {
         t += 0.01;
@@ -80,8 +50,7 @@ fn control_cycle_allocates_nothing() {
         let out = ctrl.cycle(t, &q, &nan);
         sink.push(LogRecord::new(&q, &nan, &out, 1.0));
     }
-    COUNTING.with(|c| c.set(false));
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = deflex_alloc_count::allocations();
     assert!(ctrl.fault().is_some());
     assert_eq!(
         after - before,
@@ -92,11 +61,9 @@ fn control_cycle_allocates_nothing() {
     drop(sink);
     writer.finish(true).unwrap();
     // The counter itself works.
-    COUNTING.with(|c| c.set(true));
     let v: Vec<u8> = Vec::with_capacity(std::hint::black_box(64));
-    COUNTING.with(|c| c.set(false));
     drop(v);
-    assert!(ALLOCATIONS.load(Ordering::SeqCst) > after);
+    assert!(deflex_alloc_count::allocations() > after);
 }
 
 /// The runaway guard's whole cycle (estimate, trip, withdrawal, latched hold, release at its rate)
@@ -135,12 +102,10 @@ fn runaway_guard_allocates_nothing() {
         let surface = 800.0 / k_eff - 2e-3 * (t - 5.0).clamp(0.0, 1.0);
         let force = (k_eff * (surface - xi[2])).max(0.0);
         let raw = common::raw_reading(&config, &q, [0.0, 0.0, force, 0.0, 0.0, 0.0]);
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
-        COUNTING.with(|c| c.set(true));
+        let before = deflex_alloc_count::allocations();
         let out = ctrl.cycle(t, &q, &raw);
         let hold = ctrl.runaway_hold();
-        COUNTING.with(|c| c.set(false));
-        allocations += ALLOCATIONS.load(Ordering::SeqCst) - before;
+        allocations += deflex_alloc_count::allocations() - before;
         delayed[k % 2] = out.xi;
         if let Some(h) = hold {
             phases[match h.phase {
@@ -230,8 +195,7 @@ fn control_cycle_with_feedforward_allocates_nothing() {
         ctrl.start(0.0);
         let raw = common::raw_reading(&config, &qs[0], [0.0, 0.0, 800.0, 0.0, 0.0, 0.0]);
         ctrl.cycle(0.0, &qs[0], &raw);
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
-        COUNTING.with(|c| c.set(true));
+        let before = deflex_alloc_count::allocations();
         let mut on_path = 0;
         for (k, q) in qs.iter().enumerate().skip(1) {
             let out = ctrl.cycle(k as f64 * 0.01, q, &raw);
@@ -239,8 +203,7 @@ fn control_cycle_with_feedforward_allocates_nothing() {
                 on_path += 1;
             }
         }
-        COUNTING.with(|c| c.set(false));
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = deflex_alloc_count::allocations();
         assert_eq!(after - before, 0, "{mode:?} {index:?}");
         // The work was done: the robot was on the path.
         assert!(on_path > 2900, "{mode:?} {index:?}: {on_path}");

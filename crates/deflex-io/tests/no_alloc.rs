@@ -8,35 +8,13 @@ use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
 use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
 use deflex_io::{Correction, ForceSensorLink, Pose6, RobotLink, RobotSideLink, RobotState};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::time::Duration;
 
-struct Counting;
-
-thread_local! {
-    static ALLOCS: Cell<u64> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) }
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(p, l, n) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
 
 fn allocs() -> u64 {
-    ALLOCS.with(|c| c.get())
+    deflex_alloc_count::allocations()
 }
 
 const T: Duration = Duration::from_secs(2);

@@ -463,9 +463,15 @@ pub fn compare_part(
             )
         }),
         Box::new(|| {
-            simple(Ok(
-                controlled(cell, model, &original, seed, Some(ff), true)?.forming
-            ))
+            simple(Ok(controlled(
+                cell,
+                model,
+                &original,
+                seed,
+                Some(ff),
+                true,
+            )?
+            .forming))
         }),
         Box::new(|| {
             simple(Ok(controlled(
@@ -481,14 +487,22 @@ pub fn compare_part(
     ];
     if plan.double_correction {
         second.push(Box::new(|| {
-            simple(Ok(
-                controlled(cell, model, &process_program, seed, None, true)?.forming
-            ))
+            simple(Ok(controlled(
+                cell,
+                model,
+                &process_program,
+                seed,
+                None,
+                true,
+            )?
+            .forming))
         }));
     }
     if plan.online_unguarded {
         second.push(Box::new(|| {
-            simple(Ok(controlled(cell, model, &original, seed, None, false)?.forming))
+            simple(Ok(
+                controlled(cell, model, &original, seed, None, false)?.forming
+            ))
         }));
     }
     if given_log.is_none() {
