@@ -109,6 +109,12 @@ pub struct ErrorNumbers {
     pub max_error_mm: f64,
     /// RMS of the path error norm over the run (mm).
     pub rms_error_mm: f64,
+    /// Largest and RMS path error norm over the logged rows in contact (contact force norm at
+    /// least [`CONTACT_FORCE_N`]): the error that forms the part, without the transients in the
+    /// air after a retract (mm); `None` when never in contact.
+    pub max_contact_error_mm: Option<f64>,
+    /// See `max_contact_error_mm`.
+    pub rms_contact_error_mm: Option<f64>,
     /// Mean over the ramps of ∫|e| dt over [`INTEGRAL_WINDOW_S`] from the 50 % point (mm·s);
     /// `None` without a ramp.
     pub ramp_error_integral_mm_s: Option<f64>,
@@ -120,6 +126,9 @@ pub struct ErrorNumbers {
     /// Largest contact force norm (N).
     pub max_force_N: f64,
 }
+
+/// A logged row is *in contact* when the contact force norm is at least this (N).
+pub const CONTACT_FORCE_N: f64 = 20.0;
 
 /// The numbers of `run` at the ramps `ramps` (reference arc lengths, m).
 pub fn error_numbers(run: &FormingRun, ramps: &[f64]) -> ErrorNumbers {
@@ -173,9 +182,21 @@ pub fn error_numbers(run: &FormingRun, ramps: &[f64]) -> ErrorNumbers {
     }
     let n = ramps.len() as f64;
     let mean = |total: f64| (!ramps.is_empty()).then(|| total / n);
+    let (mut contact_max, mut contact_sq, mut contact_rows) = (0.0f64, 0.0, 0usize);
+    for (r, e) in rows.iter().zip(&error_mm) {
+        let w = &r.truth.wrench;
+        if (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt() >= CONTACT_FORCE_N {
+            contact_max = contact_max.max(*e);
+            contact_sq += e * e;
+            contact_rows += 1;
+        }
+    }
+    let in_contact = contact_rows > 0;
     ErrorNumbers {
         max_error_mm: run.summary.max_error_norm_mm,
         rms_error_mm: run.summary.rms_error_norm_mm,
+        max_contact_error_mm: in_contact.then_some(contact_max),
+        rms_contact_error_mm: in_contact.then(|| (contact_sq / contact_rows as f64).sqrt()),
         ramp_error_integral_mm_s: mean(integral),
         ramp_settle_s: mean(settle),
         ramps_not_settled: not_settled,
@@ -312,6 +333,34 @@ mod tests {
         let none = error_numbers(&run(steps, |_| 1.0), &[]);
         assert_eq!(
             (none.ramp_error_integral_mm_s, none.ramp_settle_s),
+            (None, None)
+        );
+    }
+
+    #[test]
+    fn contact_error_leaves_out_the_rows_in_the_air() {
+        // 1000 N from 1.08 s to 3 s and from 4.08 s on (the steps), nothing between; an error of
+        // 2 mm in the air and 0.3 mm (0.4 mm at one row) in contact.
+        let error = |t: f64| {
+            if steps(t) < CONTACT_FORCE_N {
+                2.0
+            } else if (t - 2.0).abs() < 1e-9 {
+                0.4
+            } else {
+                0.3
+            }
+        };
+        let numbers = error_numbers(&run(steps, error), &[]);
+        assert!(
+            (numbers.max_contact_error_mm.unwrap() - 0.4).abs() < 1e-9,
+            "{numbers:?}"
+        );
+        let rms = numbers.rms_contact_error_mm.unwrap();
+        assert!(rms > 0.3 && rms < 0.31, "{numbers:?}");
+        // Never in contact: no contact numbers.
+        let air = error_numbers(&run(|_| 0.0, |_| 2.0), &[]);
+        assert_eq!(
+            (air.max_contact_error_mm, air.rms_contact_error_mm),
             (None, None)
         );
     }

@@ -31,8 +31,8 @@ pub(crate) fn write_files(
 ) -> Result<(), String> {
     let mut csv = String::from(
         "# SIMULATED: the digital twin, every error source on\n\
-         part,way,max_error_mm,rms_error_mm,ramp_error_integral_mm_s,ramp_settle_s,\
-         ramps_not_settled,max_force_N\n",
+         part,way,max_error_mm,rms_error_mm,max_contact_error_mm,rms_contact_error_mm,\
+         ramp_error_integral_mm_s,ramp_settle_s,ramps_not_settled,max_force_N\n",
     );
     for part in &study.parts {
         for w in &part.ways {
@@ -42,11 +42,13 @@ pub(crate) fn write_files(
             };
             let _ = writeln!(
                 csv,
-                "\"{}\",\"{}\",{:.4},{:.4},{},{},{},{:.1}",
+                "\"{}\",\"{}\",{:.4},{:.4},{},{},{},{},{},{:.1}",
                 part.part,
                 w.way,
                 n.max_error_mm,
                 n.rms_error_mm,
+                optional(n.max_contact_error_mm, 4),
+                optional(n.rms_contact_error_mm, 4),
                 optional(n.ramp_error_integral_mm_s, 5),
                 optional(n.ramp_settle_s, 3),
                 n.ramps_not_settled,
@@ -191,8 +193,13 @@ pub(crate) fn section(html: &mut HtmlReport, study: &CompensationStudy, figures:
          lead {:.3} s. The controller runs with its defaults, the contact-runaway guard on; \
          on the CAM part each plunge's elastic onset into the sheet reads as a loop gain of \
          0.8–1.2 and trips it (the guard cannot tell that onset from a fixture), so the part \
-         also shows the online correction with the guard off. Lag: {}.",
-        study.lead_s, study.lag_definition
+         also shows the online correction with the guard off. In contact: the rows whose \
+         contact force is at least {:.0} N (the error that forms the part, without the \
+         transients in the air after a retract, where a correction still ramping out at its \
+         rate limit moves the tool). Lag: {}.",
+        study.lead_s,
+        super::lag::CONTACT_FORCE_N,
+        study.lag_definition
     ));
     for part in &study.parts {
         let p = &part.offline_process;
@@ -223,6 +230,10 @@ pub(crate) fn section(html: &mut HtmlReport, study: &CompensationStudy, figures:
                     w.way.clone(),
                     format!("{:.3}", n.max_error_mm),
                     format!("{:.3}", n.rms_error_mm),
+                    n.max_contact_error_mm
+                        .map_or("–".into(), |v| format!("{v:.3}")),
+                    n.rms_contact_error_mm
+                        .map_or("–".into(), |v| format!("{v:.3}")),
                     n.ramp_error_integral_mm_s
                         .map_or("– (no force ramp)".into(), |v| format!("{v:.4}")),
                     match n.ramp_settle_s {
@@ -241,6 +252,8 @@ pub(crate) fn section(html: &mut HtmlReport, study: &CompensationStudy, figures:
                 "way",
                 "max |e| [mm]",
                 "RMS |e| [mm]",
+                "max |e| in contact [mm]",
+                "RMS |e| in contact [mm]",
                 "ramp ∫|e|dt [mm·s]",
                 "ramp settle [s]",
                 "max |F| [N]",
