@@ -248,88 +248,122 @@ fn session(kind: Kind, pause: Duration) -> Session {
     }
 }
 
+/// Sessions tried per pause until one had a sizeable correction when the robot fell silent.
+const ATTEMPTS: usize = 5;
+
 fn check(kind: Kind) {
-    let limits = common::config().limiter;
     for pause_ms in [50u64, 300, 1000] {
-        let s = session(kind, Duration::from_millis(pause_ms));
-        assert!(s.summary.error.is_none(), "{kind:?}: {:?}", s.summary.error);
-        assert!(s.resumed_at > 0, "{kind:?}: never paused");
-        let before = s.received[s.resumed_at - 1];
-        assert!(
-            before[2].abs() > 2e-4,
-            "{kind:?} {pause_ms} ms: the correction was not active before the pause: {before:?}"
-        );
-        let mut largest = [0.0f64; 6];
-        for w in s.received.windows(2) {
-            for i in 0..6 {
-                largest[i] = largest[i].max((w[1][i] - w[0][i]).abs());
+        // On a loaded machine a scheduling gap longer than the link timeout (50 ms) can latch
+        // `robot_link_lost` during the warm-up, so that the correction is already ramped out
+        // when the robot pauses: such a session still has its step bound checked, and is
+        // repeated to exercise a pause under an active correction.
+        let mut attempt = 1;
+        loop {
+            let s = session(kind, Duration::from_millis(pause_ms));
+            assert!(s.summary.error.is_none(), "{kind:?}: {:?}", s.summary.error);
+            assert!(s.resumed_at > 0, "{kind:?}: never paused");
+            check_steps(kind, pause_ms, &s);
+            let before = s.received[s.resumed_at - 1];
+            if before[2].abs() > 2e-4 {
+                check_ramp_out(kind, pause_ms, &s);
+                break;
             }
-        }
-        let step_limit = limits.max_rate[0] * CYCLE_S;
-        let after_pause = s.received[s.resumed_at - 1..]
-            .windows(2)
-            .map(|w| {
-                (0..3)
-                    .map(|i| (w[1][i] - w[0][i]).abs())
-                    .fold(0.0, f64::max)
-            })
-            .fold(0.0, f64::max);
-        let largest_p = largest[..3].iter().fold(0.0f64, |m, v| m.max(*v));
-        eprintln!(
-            "{kind:?}, pause {pause_ms} ms: largest step received {:.4} mm (from the pause on \
-             {:.4} mm; limit {:.4} mm), \
-             correction before the pause {:.4} mm, the controller's own ξz when the robot \
-             resumed {:.4} mm, first answer after it {:.4} mm, {} answers, fault {}",
-            largest_p * 1e3,
-            after_pause * 1e3,
-            step_limit * 1e3,
-            before[2] * 1e3,
-            s.controller_xi_z_at_resume * 1e3,
-            s.received
-                .get(s.resumed_at)
-                .map_or(f64::NAN, |c| c[2] * 1e3),
-            s.received.len(),
-            s.summary
-                .fault
-                .map_or("none".to_string(), |f| f.to_string())
-        );
-        for i in 0..3 {
             assert!(
-                largest[i] <= step_limit + kind.resolution_m() + 1e-15,
-                "{kind:?} {pause_ms} ms: axis {i} stepped {} m, limit {step_limit} m",
-                largest[i]
+                attempt < ATTEMPTS,
+                "{kind:?} {pause_ms} ms: in {ATTEMPTS} sessions the correction was never active \
+                 before the pause (last: {before:?}, fault {:?})",
+                s.summary.fault
             );
-        }
-        for i in 3..6 {
-            // RSI prints A B C with four decimals of a degree.
-            let resolution = if kind == Kind::Rsi { 2e-6 } else { 1e-9 };
-            assert!(
-                largest[i] <= limits.max_rate[i] * CYCLE_S + resolution,
-                "{kind:?} {pause_ms} ms: axis {i} stepped {} rad",
-                largest[i]
+            eprintln!(
+                "{kind:?} {pause_ms} ms: the correction was not active before the pause (fault \
+                 {:?} on this loaded machine); session repeated",
+                s.summary.fault.map(|f| f.to_string())
             );
+            attempt += 1;
         }
-        if s.summary
+    }
+}
+
+/// The robot never received a step above the rate limit × its cycle (any session).
+fn check_steps(kind: Kind, pause_ms: u64, s: &Session) {
+    let limits = common::config().limiter;
+    let before = s.received[s.resumed_at - 1];
+    let mut largest = [0.0f64; 6];
+    for w in s.received.windows(2) {
+        for i in 0..6 {
+            largest[i] = largest[i].max((w[1][i] - w[0][i]).abs());
+        }
+    }
+    let step_limit = limits.max_rate[0] * CYCLE_S;
+    let after_pause = s.received[s.resumed_at - 1..]
+        .windows(2)
+        .map(|w| {
+            (0..3)
+                .map(|i| (w[1][i] - w[0][i]).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    let largest_p = largest[..3].iter().fold(0.0f64, |m, v| m.max(*v));
+    eprintln!(
+        "{kind:?}, pause {pause_ms} ms: largest step received {:.4} mm (from the pause on \
+         {:.4} mm; limit {:.4} mm), \
+         correction before the pause {:.4} mm, the controller's own ξz when the robot \
+         resumed {:.4} mm, first answer after it {:.4} mm, {} answers, fault {}",
+        largest_p * 1e3,
+        after_pause * 1e3,
+        step_limit * 1e3,
+        before[2] * 1e3,
+        s.controller_xi_z_at_resume * 1e3,
+        s.received
+            .get(s.resumed_at)
+            .map_or(f64::NAN, |c| c[2] * 1e3),
+        s.received.len(),
+        s.summary
             .fault
-            .is_some_and(|f| f.kind == FaultKind::RobotLinkLost)
-        {
-            // The controller ramped out on its own clock while the robot heard nothing…
-            if pause_ms >= 1000 {
-                assert!(
-                    s.controller_xi_z_at_resume.abs() < 1e-6,
-                    "{kind:?}: the controller had not ramped out after 1 s: {}",
-                    s.controller_xi_z_at_resume
-                );
-            }
-            // …but the robot sees the ramp, in its own cycles, down to zero.
-            let after = &s.received[s.resumed_at..];
-            assert_eq!(after.last().unwrap()[2], 0.0, "{kind:?} {pause_ms} ms");
+            .map_or("none".to_string(), |f| f.to_string())
+    );
+    for i in 0..3 {
+        assert!(
+            largest[i] <= step_limit + kind.resolution_m() + 1e-15,
+            "{kind:?} {pause_ms} ms: axis {i} stepped {} m, limit {step_limit} m",
+            largest[i]
+        );
+    }
+    for i in 3..6 {
+        // RSI prints A B C with four decimals of a degree.
+        let resolution = if kind == Kind::Rsi { 2e-6 } else { 1e-9 };
+        assert!(
+            largest[i] <= limits.max_rate[i] * CYCLE_S + resolution,
+            "{kind:?} {pause_ms} ms: axis {i} stepped {} rad",
+            largest[i]
+        );
+    }
+}
+
+/// After the pause, a controller that latched `robot_link_lost` ramps out in robot cycles.
+fn check_ramp_out(kind: Kind, pause_ms: u64, s: &Session) {
+    let step_limit = common::config().limiter.max_rate[0] * CYCLE_S;
+    let before = s.received[s.resumed_at - 1];
+    if s.summary
+        .fault
+        .is_some_and(|f| f.kind == FaultKind::RobotLinkLost)
+    {
+        // The controller ramped out on its own clock while the robot heard nothing…
+        if pause_ms >= 1000 {
             assert!(
-                after.len() as f64 >= before[2].abs() / step_limit - 1.0,
-                "{kind:?} {pause_ms} ms: ramped out in {} answers",
-                after.len()
+                s.controller_xi_z_at_resume.abs() < 1e-6,
+                "{kind:?}: the controller had not ramped out after 1 s: {}",
+                s.controller_xi_z_at_resume
             );
         }
+        // …but the robot sees the ramp, in its own cycles, down to zero.
+        let after = &s.received[s.resumed_at..];
+        assert_eq!(after.last().unwrap()[2], 0.0, "{kind:?} {pause_ms} ms");
+        assert!(
+            after.len() as f64 >= before[2].abs() / step_limit - 1.0,
+            "{kind:?} {pause_ms} ms: ramped out in {} answers",
+            after.len()
+        );
     }
 }
 
