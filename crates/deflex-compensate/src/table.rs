@@ -35,8 +35,10 @@ pub const MAX_TABLE_ROWS: usize = crate::path::MAX_PATH_POINTS;
 
 const SIX: [&str; 6] = ["x_m", "y_m", "z_m", "rx_rad", "ry_rad", "rz_rad"];
 const WRENCH: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"];
-const COMPENSATION: [&str; 6] = ["dx_m", "dy_m", "dz_m", "drx_rad", "dry_rad", "drz_rad"];
-const DEFLECTION: [&str; 6] = [
+/// Column names of the compensation (base of `compensated_path.csv`).
+pub const COMPENSATION: [&str; 6] = ["dx_m", "dy_m", "dz_m", "drx_rad", "dry_rad", "drz_rad"];
+/// Column names of the predicted deflection.
+pub const DEFLECTION: [&str; 6] = [
     "defl_x_m",
     "defl_y_m",
     "defl_z_m",

@@ -4,7 +4,7 @@
 use super::{
     FeedForwardError, MAX_TABLE_COORDINATE_M, MAX_TABLE_POSITION_M, MAX_TABLE_ROTATION_RAD,
 };
-use deflex_compensate::table::TableRow;
+use deflex_compensate::table::{COMPENSATION, DEFLECTION, TableRow};
 use deflex_model::Robot;
 use nalgebra::Vector3;
 
@@ -92,16 +92,6 @@ impl FeedForwardTable {
                     }
                 }
             }
-            const DEFLECTION: [&str; 6] = [
-                "defl_x_m",
-                "defl_y_m",
-                "defl_z_m",
-                "defl_rx_rad",
-                "defl_ry_rad",
-                "defl_rz_rad",
-            ];
-            const COMPENSATION: [&str; 6] =
-                ["dx_m", "dy_m", "dz_m", "drx_rad", "dry_rad", "drz_rad"];
             for k in 0..6 {
                 let limit = if k < 3 {
                     MAX_TABLE_POSITION_M
