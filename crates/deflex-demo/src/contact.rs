@@ -72,10 +72,6 @@ pub fn fixture_cell(cell: &CellConfig, stiffness_n_m: f64) -> CellConfig {
     c
 }
 
-fn contact_force(row: &deflex_sim::forming::LogRow) -> f64 {
-    row.truth.wrench.fixed_rows::<3>(0).norm()
-}
-
 fn loop_numbers(run: &ClosedLoopRun, guard: bool, open_max: f64) -> ContactLoopNumbers {
     let summary = &run.forming.summary;
     ContactLoopNumbers {
@@ -89,7 +85,7 @@ fn loop_numbers(run: &ClosedLoopRun, guard: bool, open_max: f64) -> ContactLoopN
             .log
             .rows
             .iter()
-            .find(|r| contact_force(r) > 2.0 * open_max)
+            .find(|r| r.truth.force_norm_n() > 2.0 * open_max)
             .map(|r| r.time_s),
         runaway_warnings: run.runaway_events,
         first_runaway: run.first_runaway.map(|f| f.to_string()),
@@ -175,7 +171,7 @@ pub fn contact_figure(
         deflex_report::Series::line(
             label,
             run.log.column(|r| r.time_s),
-            run.log.column(contact_force),
+            run.log.column(|r| r.truth.force_norm_n()),
         )
     };
     let outcome = |run: &ClosedLoopRun| match (run.fault, run.first_runaway) {

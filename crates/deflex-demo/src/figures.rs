@@ -204,7 +204,7 @@ pub(crate) fn forming_figures(
                     .rows
                     .iter()
                     .map(|r| {
-                        let e = r.truth.true_m - r.truth.desired_m;
+                        let e = r.truth.path_error_m();
                         [e.x * 1e3, e.y * 1e3, e.z * 1e3]
                     })
                     .collect(),
@@ -238,7 +238,7 @@ pub(crate) fn forming_figures(
                 .map(|(label, run)| {
                     let t = run.log.column(|r| r.time_s);
                     let v = run.log.column(|r| {
-                        let e = r.truth.true_m - r.truth.desired_m;
+                        let e = r.truth.path_error_m();
                         if k < 3 { e[k] * 1e3 } else { e.norm() * 1e3 }
                     });
                     Series::line(*label, t, v)
@@ -283,9 +283,8 @@ pub(crate) fn forming_figures(
         .map(|(label, run)| {
             Series::points(
                 *label,
-                run.log.column(|r| r.truth.wrench.fixed_rows::<3>(0).norm()),
-                run.log
-                    .column(|r| (r.truth.true_m - r.truth.desired_m).norm() * 1e3),
+                run.log.column(|r| r.truth.force_norm_n()),
+                run.log.column(|r| r.truth.path_error_m().norm() * 1e3),
             )
         })
         .collect();

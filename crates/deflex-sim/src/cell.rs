@@ -88,6 +88,18 @@ pub struct TruthState {
     pub correction: [f64; 6],
 }
 
+impl TruthState {
+    /// The path error p_true − p_desired of the TCP, R_p (m).
+    pub fn path_error_m(&self) -> Vector3<f64> {
+        self.true_m - self.desired_m
+    }
+
+    /// The norm of the contact force on the tool, |f| (N).
+    pub fn force_norm_n(&self) -> f64 {
+        self.wrench.fixed_rows::<3>(0).norm()
+    }
+}
+
 /// The plant's exact large-rotation equilibrium is solved at least every this many cycles.
 const EXACT_EVERY: u32 = 5;
 

@@ -80,7 +80,7 @@ impl FormingLog {
         );
         for r in &self.rows {
             let t = &r.truth;
-            let e = t.true_m - t.desired_m;
+            let e = t.path_error_m();
             let _ = write!(s, "{:.4}", r.time_s);
             for v in [t.desired_m, t.commanded_m, t.true_m, r.tracked_m, e] {
                 let _ = write!(s, ",{:.5},{:.5},{:.5}", v.x * 1e3, v.y * 1e3, v.z * 1e3);
@@ -138,7 +138,7 @@ pub struct RunningStats {
 
 impl RunningStats {
     pub(crate) fn add(&mut self, t: &TruthState) {
-        let e = t.true_m - t.desired_m;
+        let e = t.path_error_m();
         let n = e.norm();
         self.cycles += 1;
         if t.wrench[2] > 0.0 {

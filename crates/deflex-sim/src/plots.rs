@@ -249,8 +249,8 @@ pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, SimEr
     let mode = mode.as_str();
     let t = log.column(|r| r.time_s);
     let err = |i: usize| log.column(move |r| (r.truth.true_m[i] - r.truth.desired_m[i]) * 1e3);
-    let norm = log.column(|r| (r.truth.true_m - r.truth.desired_m).norm() * 1e3);
-    let force_norm = log.column(|r| r.truth.wrench.fixed_rows::<3>(0).norm());
+    let norm = log.column(|r| r.truth.path_error_m().norm() * 1e3);
+    let force_norm = log.column(|r| r.truth.force_norm_n());
 
     // Fig. 17: deviation cloud.
     let path = dir.join("deviation_cloud.png");

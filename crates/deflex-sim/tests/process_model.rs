@@ -130,7 +130,7 @@ fn the_process_model_predicts_the_twins_uncompensated_run() {
         if (row.time_s - point.time_s).abs() > 0.011 || row.truth.wrench[2] < 200.0 {
             continue;
         }
-        let err = (row.truth.true_m - row.truth.desired_m).norm();
+        let err = row.truth.path_error_m().norm();
         worst_f = worst_f.max((predicted.fz[i] - row.truth.wrench[2]).abs());
         worst_e = worst_e.max((predicted.error[i] - err).abs());
         sum_sq_e += (predicted.error[i] - err).powi(2);
@@ -215,7 +215,7 @@ fn a_program_is_measured_against_its_reference() {
     let run = run_program_with_progress(&config, program, Some(&reference), 1, None, &mut |_| {})
         .unwrap();
     for row in &run.log.rows {
-        let e = row.truth.true_m - row.truth.desired_m;
+        let e = row.truth.path_error_m();
         // Joint interpolation departs from the straight line by 0.1 µm over 1 mm.
         assert!((e - offset).norm() < 0.5e-6, "{e} at {} s", row.time_s);
     }

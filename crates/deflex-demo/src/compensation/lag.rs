@@ -136,7 +136,7 @@ pub fn error_numbers(run: &FormingRun, ramps: &[f64]) -> ErrorNumbers {
     let arc = desired_arc_length(run);
     let error_mm: Vec<f64> = rows
         .iter()
-        .map(|r| (r.truth.true_m - r.truth.desired_m).norm() * 1e3)
+        .map(|r| r.truth.path_error_m().norm() * 1e3)
         .collect();
     let (mut integral, mut settle, mut not_settled) = (0.0, 0.0, 0);
     for &s in ramps {
@@ -184,8 +184,7 @@ pub fn error_numbers(run: &FormingRun, ramps: &[f64]) -> ErrorNumbers {
     let mean = |total: f64| (!ramps.is_empty()).then(|| total / n);
     let (mut contact_max, mut contact_sq, mut contact_rows) = (0.0f64, 0.0, 0usize);
     for (r, e) in rows.iter().zip(&error_mm) {
-        let w = &r.truth.wrench;
-        if (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt() >= CONTACT_FORCE_N {
+        if r.truth.force_norm_n() >= CONTACT_FORCE_N {
             contact_max = contact_max.max(*e);
             contact_sq += e * e;
             contact_rows += 1;

@@ -95,12 +95,7 @@ fn error_series(
 ) -> (Vec<f64>, Vec<f64>) {
     run.log.rows[from..to]
         .iter()
-        .map(|r| {
-            (
-                r.time_s - t0,
-                (r.truth.true_m - r.truth.desired_m).norm() * 1e3,
-            )
-        })
+        .map(|r| (r.time_s - t0, r.truth.path_error_m().norm() * 1e3))
         .unzip()
 }
 
