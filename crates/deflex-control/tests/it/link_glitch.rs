@@ -10,7 +10,7 @@
 //! on the ramp after the pause apply only when the controller did latch `robot_link_lost`.
 #![allow(clippy::needless_range_loop)] // per-axis loops over several arrays
 
-mod common;
+use crate::common;
 
 use deflex_control::runtime::{RuntimeOptions, spawn};
 use deflex_control::{FaultKind, WallClock};
@@ -369,25 +369,30 @@ fn check_ramp_out(kind: Kind, pause_ms: u64, s: &Session) {
 
 #[test]
 fn kuka_rsi_pauses() {
+    let _turn = crate::realtime_turn();
     check(Kind::Rsi);
 }
 
 #[test]
 fn abb_egm_pauses() {
+    let _turn = crate::realtime_turn();
     check(Kind::Egm);
 }
 
 #[test]
 fn staubli_pauses() {
+    let _turn = crate::realtime_turn();
     check(Kind::Staubli);
 }
 
 #[test]
 fn simple_udp_pauses() {
+    let _turn = crate::realtime_turn();
     check(Kind::SimpleUdp);
 }
 
 #[test]
 fn simple_tcp_pauses() {
+    let _turn = crate::realtime_turn();
     check(Kind::SimpleTcp);
 }

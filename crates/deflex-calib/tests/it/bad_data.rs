@@ -1,7 +1,5 @@
 //! Bad data gets a clear message, never a panic.
 
-mod common;
-
 use deflex_calib::data::parse_rows;
 use deflex_calib::fit::{Status, Structure, calibrate_fixed};
 use deflex_calib::search::{SearchOptions, search_structure};

@@ -10,7 +10,7 @@
 //! carrying only the residual δ_pred − δŝ), no double correction with a pre-compensated program
 //! (and the double correction without telling the controller), and the lag at the ramp.
 
-mod common;
+use crate::common;
 
 use deflex_compensate::table::TableRow;
 use deflex_control::{

@@ -2,7 +2,7 @@
 //! and the status and the log say why. Nothing panics.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use deflex_control::controller::{CycleInput, CycleOutput};
 use deflex_control::log::{LogRecord, csv_row};

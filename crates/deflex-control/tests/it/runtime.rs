@@ -3,7 +3,7 @@
 //! robot that stops talking latches the right fault while the correction the robot receives
 //! stays bounded and ramps to zero.
 
-mod common;
+use crate::common;
 
 use deflex_control::runtime::{RuntimeOptions, spawn};
 use deflex_control::{FaultKind, WallClock};
@@ -111,6 +111,7 @@ fn check_bounded(corrections: &[[f64; 6]]) {
 
 #[test]
 fn sensor_goes_silent() {
+    let _turn = crate::realtime_turn();
     let o = run(3.0, 1.5);
     let s = &o.summary;
     assert_eq!(s.error, None);
@@ -144,6 +145,7 @@ fn sensor_goes_silent() {
 /// `robot_link_lost` fault), and the correction it last heard was bounded.
 #[test]
 fn robot_program_end_is_an_end_not_a_fault() {
+    let _turn = crate::realtime_turn();
     let o = run(1.5, 3.0);
     let s = &o.summary;
     assert_eq!(s.error, None);

@@ -45,6 +45,7 @@ fn cell_file(dir: &Path, kind: &str, extra: &str) -> (PathBuf, u16, u16) {
 
 #[test]
 fn numeric_flags_are_checked() {
+    let _turn = crate::realtime_turn();
     let dir = scratch("flags");
     let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
     let cell = cell.to_str().unwrap();
@@ -100,6 +101,7 @@ fn numeric_flags_are_checked() {
 
 #[test]
 fn absurd_cell_values_are_refused_with_the_field() {
+    let _turn = crate::realtime_turn();
     let dir = scratch("fields");
     for (extra, field) in [
         ("rate_hz = 1e-300\n", "control.rate_hz"),
@@ -123,6 +125,7 @@ fn absurd_cell_values_are_refused_with_the_field() {
 /// A run that fails (nobody answers within the start-up time) leaves the previous log alone.
 #[test]
 fn failed_run_keeps_the_existing_log() {
+    let _turn = crate::realtime_turn();
     let dir = scratch("log");
     let (cell, ..) = cell_file(&dir, "simple-udp", "[log]\npath = \"run.csv\"\n");
     std::fs::write(dir.join("run.csv"), "a previous session\n").unwrap();
@@ -156,6 +159,7 @@ fn sigterm(pid: u32) {
 
 #[test]
 fn sigterm_before_the_start_ends_cleanly() {
+    let _turn = crate::realtime_turn();
     let dir = scratch("term0");
     let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
     let mut child = deflex()
@@ -186,6 +190,7 @@ fn sigterm_before_the_start_ends_cleanly() {
 /// the correction out before the process ends: the robot's last answers come down to zero.
 #[test]
 fn sigterm_in_a_session_ramps_the_correction_out() {
+    let _turn = crate::realtime_turn();
     let dir = scratch("term1");
     let (cell, robot_port, sensor_port) = cell_file(
         &dir,

@@ -1,7 +1,7 @@
 //! Measured link rotations (6-DoF probe): their equations enter the fit, recover the truth, and
 //! sharpen stiffnesses that positions alone determine poorly.
 
-mod common;
+use crate::common;
 
 use common::kr_like;
 use deflex_calib::data::{MeasurementRow, format_rows, parse_rows};

@@ -4,9 +4,6 @@
 
 use deflex_model::{Axis, Data, EdofSite, Wrench, builtin};
 
-#[global_allocator]
-static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
-
 fn allocations() -> u64 {
     deflex_alloc_count::allocations()
 }

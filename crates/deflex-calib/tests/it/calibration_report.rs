@@ -1,7 +1,7 @@
 //! The calibration report: plots and tables written, one unit per column, and the χ²/dof note
 //! when the residuals are larger than the noise the file claims.
 
-mod common;
+use crate::common;
 
 use deflex_calib::calib_report::{CalibrationReport, residuals, write_calibration_report};
 use deflex_calib::fit::{CHI2_WELL_ABOVE_ONE, Calibration, Structure, calibrate_fixed};

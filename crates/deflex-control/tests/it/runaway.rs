@@ -10,7 +10,7 @@
 //! the guard and gives the same correction as without it.
 #![allow(clippy::needless_range_loop)] // per-axis loops over several arrays
 
-mod common;
+use crate::common;
 
 use deflex_control::runaway::{HoldPhase, RunawayHold};
 use deflex_control::{Controller, ControllerConfig, FaultKind, Flags, RunawayAction};

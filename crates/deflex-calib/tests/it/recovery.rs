@@ -3,7 +3,7 @@
 //! in their reported 95 % intervals, and predictions on a separate validation set must be within
 //! 1.5× the noise floor.
 
-mod common;
+use crate::common;
 
 use common::{campaign, kr_like, tx200_truth};
 use deflex_calib::design::edof_label;

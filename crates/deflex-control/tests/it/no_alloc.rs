@@ -3,15 +3,11 @@
 //! per-answer work (send shaper, joint-correction map, TCP orientation) allocate nothing. It
 //! counts only its own thread's allocations.
 
-mod common;
+use crate::common;
 
 use deflex_control::log::{LogRecord, Plain, spawn_writer};
 use deflex_control::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use deflex_control::slot::SeqSlot;
-
-// Counts only this thread's allocations (the log writer thread allocates by design).
-#[global_allocator]
-static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
 
 #[test]
 fn control_cycle_allocates_nothing() {

@@ -10,9 +10,6 @@ use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
 use deflex_io::{Correction, ForceSensorLink, Pose6, RobotLink, RobotSideLink, RobotState};
 use std::time::Duration;
 
-#[global_allocator]
-static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
-
 fn allocs() -> u64 {
     deflex_alloc_count::allocations()
 }

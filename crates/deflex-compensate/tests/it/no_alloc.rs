@@ -9,9 +9,6 @@ use deflex_compensate::{
 use deflex_model::{Pose, TX200_FORMING_Q_DEG, Wrench, builtin};
 use nalgebra::{Translation3, Vector3};
 
-#[global_allocator]
-static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
-
 fn allocations() -> u64 {
     deflex_alloc_count::allocations()
 }

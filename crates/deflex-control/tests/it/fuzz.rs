@@ -13,7 +13,7 @@ use deflex_control::config::{CellFile, bounds_of};
 use deflex_fuzz::{count_from_env, fuzz};
 use std::path::PathBuf;
 
-const EXAMPLE: &str = include_str!("../../../docs/cell.example.toml");
+const EXAMPLE: &str = include_str!("../../../../docs/cell.example.toml");
 const MINIMAL: &str = "[robot]\nkind = \"kuka-rsi\"\nbind = \"127.0.0.1:59152\"\n\
 [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n\
 [log]\npath = \"x.csv\"\nring_capacity = 100\n";

@@ -1,0 +1,32 @@
+//! # deflex-telemetry
+//!
+//! The one telemetry stream of a deflex session. The control thread publishes one typed
+//! [`CycleSample`] per control cycle into a [`Broadcast`] ring: wait-free, allocation-free and
+//! never waiting for a reader. Any number of non-real-time sinks (the CSV log, the live view, the
+//! MCAP recorder, the ROS 2 bridge, a Python caller) each hold a [`Subscriber`] and read at their
+//! own pace; a sink that falls more than the ring's capacity behind loses the oldest samples and
+//! counts them ([`Subscriber::lost`]), it never slows the publisher.
+//!
+//! [`SeqCell`] is the same mechanism for one value: the latest state handed from one thread to
+//! others (the runtime's joint, wrench and correction messages).
+//!
+//! Both carry any [`bytemuck::Pod`] type, stored as relaxed atomic words under a sequence
+//! number, so a reader never sees a torn value and the code has no data race (no `unsafe`).
+//!
+//! [`SessionInfo`] is what does not change during a session (robot, joint names, limits, rates,
+//! frame names); it is built once before the threads start and shared by `Arc`.
+
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod broadcast;
+mod sample;
+mod seqcell;
+mod words;
+
+pub use broadcast::{Broadcast, Publisher, Subscriber, broadcast};
+pub use sample::{CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, Source};
+pub use seqcell::SeqCell;
+
+/// Re-exported so that users can derive [`bytemuck::Pod`] for their own messages.
+pub use bytemuck;
