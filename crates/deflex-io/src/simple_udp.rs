@@ -204,7 +204,7 @@ pub fn format_state_line(q: &[f64], seq: Option<u64>, out: &mut [u8]) -> Result<
     let n = write_values(out, "q ", q, " ", "")?;
     let mut w = SliceWriter::new(&mut out[n..]);
     let r = match seq {
-        Some(s) => write!(w, " seq={s}\n"),
+        Some(s) => writeln!(w, " seq={s}"),
         None => w.write_str("\n"),
     };
     r.map_err(|_| LinkError::BufferTooSmall {
