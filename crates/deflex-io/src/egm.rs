@@ -28,7 +28,14 @@
 //! external joint; [`EgmConfig::seven_axis`] maps them back to chain order.
 //!
 //! **Peer.** [`EgmLink`] answers only the robot it is locked to (configured
-//! address, or the first valid sender; see [`crate::udp::PeerLock`]).
+//! address, or the first valid sender; see [`crate::peer`]).
+//!
+//! **Session rules.** A message from that robot is dropped unanswered
+//! ([`LinkError::Dropped`], counted in [`RobotLink::counters`]) when its joint count differs
+//! from the session's, its header `seqno` does not advance (a duplicate or a replay) or its
+//! `tm` goes back ([`crate::guard`]); a message without `seqno` or `tm` is malformed. deflex's
+//! own `seqno` counts the answers actually sent: it advances only when a path correction left
+//! the socket, so the robot sees 1, 2, 3… without gaps.
 //!
 //! The message structs of [`msg`] are written by hand with
 //! `#[derive(prost::Message)]` and the field numbers of ABB's `egm.proto`
@@ -39,9 +46,11 @@
 //! the tests.
 
 use crate::error::{LinkError, Protocol};
+use crate::guard::{LinkCounters, SessionGuard, Stamp};
 use crate::link::{Correction, Pose6, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
 use crate::link::{MAX_JOINTS, rotation_transpose_apply};
-use crate::udp::{PeerLock, UdpEndpoint};
+use crate::peer::{PeerLock, PeerPolicy};
+use crate::udp::UdpEndpoint;
 use prost::Message;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::{Duration, Instant};
@@ -519,6 +528,8 @@ pub struct EgmLink {
     tcp_in_base: [[f64; 3]; 3],
     last: Option<RobotFrame>,
     peers: PeerLock,
+    guard: SessionGuard,
+    answers: u64,
 }
 
 impl EgmLink {
@@ -535,11 +546,17 @@ impl EgmLink {
             tcp_in_base: IDENTITY,
             last: None,
             peers: PeerLock::first_sender(),
+            guard: SessionGuard::new(),
+            answers: 0,
         })
     }
     /// Accepts messages only from `peer` (port 0: any port of that IP).
     pub fn expect_peer(&mut self, peer: SocketAddr) {
         self.peers.set_configured(Some(peer));
+    }
+    /// Sets the peer policy (see [`crate::peer::validate_peer`]).
+    pub fn set_peer_policy(&mut self, policy: PeerPolicy) {
+        self.peers.set_policy(policy);
     }
     /// The sender lock.
     pub fn peers(&self) -> &PeerLock {
@@ -567,6 +584,15 @@ impl RobotLink for EgmLink {
         self.peers.check(P, from)?;
         let f = decode_robot(&self.rx[..n])?;
         let (q, count) = self.cfg.chain_joints(&f)?;
+        let (Some(seqno), Some(tm)) = (f.seqno, f.tm_ms) else {
+            return Err(bad("EgmRobot header lacks seqno or tm"));
+        };
+        self.guard
+            .admit(count, Some(u64::from(seqno)), Some(Stamp::Millis32(tm)))
+            .map_err(|reason| LinkError::Dropped {
+                protocol: P,
+                reason,
+            })?;
         self.peers.lock(from);
         self.ep.set_peer(from);
         self.last = Some(f);
@@ -574,25 +600,40 @@ impl RobotLink for EgmLink {
             q_rad: q,
             joint_count: count,
             tcp_pose: f.tcp_pose,
-            cycle_id: u64::from(f.seqno.unwrap_or(0)),
-            robot_time_s: f.tm_ms.map(|t| f64::from(t) * 1e-3),
+            cycle_id: u64::from(seqno),
+            robot_time_s: Some(f64::from(tm) * 1e-3),
             status: 0,
             late_answers: None,
         }))
     }
 
     /// Sends `correction.dp_m` rotated from base axes into the configured
-    /// frame; the rotation part is ignored.
+    /// frame; the rotation part is ignored. The answer's `seqno` is deflex's
+    /// count of answers sent, including this one: it advances only when the
+    /// datagram was sent.
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         if self.ep.peer().is_none() {
             return Err(LinkError::NoPeer { protocol: P });
         }
         let frame = self.cfg.correction_frame(&self.tcp_in_base);
         let dp = rotation_transpose_apply(&frame, c.dp_m);
-        self.seqno = self.seqno.wrapping_add(1);
+        let seqno = self.seqno.wrapping_add(1);
         let tm = self.epoch.elapsed().as_millis() as u32;
-        let n = encode_path_corr(self.seqno, tm, dp, self.cfg.age_ms, &mut self.tx[..])?;
-        self.ep.send(&self.tx[..n])
+        let n = encode_path_corr(seqno, tm, dp, self.cfg.age_ms, &mut self.tx[..])?;
+        self.ep.send(&self.tx[..n])?;
+        self.seqno = seqno;
+        self.answers += 1;
+        Ok(())
+    }
+
+    fn counters(&self) -> LinkCounters {
+        let mut c = LinkCounters {
+            answers: self.answers,
+            foreign: self.peers.foreign(),
+            ..LinkCounters::default()
+        };
+        self.guard.add_to(&mut c);
+        c
     }
 
     fn set_tcp_rotation(&mut self, rotation: &[[f64; 3]; 3]) {

@@ -243,7 +243,9 @@ fn loopback_exchange() {
     let mut rng = StdRng::seed_from_u64(3);
     for k in 0..20u64 {
         let mut s = random_state(&mut rng);
+        // A robot's clock and sequence number advance (the link drops messages whose do not).
         s.cycle_id = k;
+        s.robot_time_s = Some(0.004 * k as f64);
         robot.send_state(&s).unwrap();
         let got = pc.receive(t).unwrap().unwrap();
         assert_eq!(got.cycle_id, k);

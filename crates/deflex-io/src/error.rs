@@ -107,6 +107,33 @@ pub enum LinkError {
         /// Where the packet came from.
         from: std::net::SocketAddr,
     },
+    /// A message from the locked robot that cannot be this session's next cycle (joint count
+    /// changed, sequence number not advancing, robot time going back, see
+    /// [`crate::guard`]): counted by reason and dropped unanswered; the link is still usable.
+    #[error("{protocol}: dropped a robot message unanswered: {reason}")]
+    Dropped {
+        /// Protocol of the endpoint.
+        protocol: Protocol,
+        /// Which rule the message broke, with its values.
+        reason: crate::guard::DropReason,
+    },
+    /// TCP: a connection arrived while another one held the session; it was closed at once,
+    /// unanswered. `starving`: the holder was not serving robot lines (none yet, or none for
+    /// [`crate::simple_tcp::STARVE_SILENCE`]), so the refused client may be the robot kept out.
+    #[error(
+        "{protocol}: refused a second connection from {from} while {holder} holds the session{}",
+        if *starving { " and sends no robot lines (the robot may be starved)" } else { "" }
+    )]
+    SecondConnection {
+        /// Protocol of the endpoint.
+        protocol: Protocol,
+        /// The refused client.
+        from: std::net::SocketAddr,
+        /// The connection holding the session.
+        holder: std::net::SocketAddr,
+        /// The holder was not serving robot lines.
+        starving: bool,
+    },
     /// A value was rejected before sending (e.g. non-finite number, or a
     /// configuration string with forbidden characters).
     #[error("{protocol}: invalid value: {reason}")]
@@ -125,7 +152,9 @@ impl LinkError {
     }
 
     /// True for errors caused by the content of a received packet (as opposed
-    /// to socket failures): the link itself is still usable.
+    /// to socket failures): the link itself is still usable. This includes a
+    /// well-formed robot message dropped by the session rules
+    /// ([`LinkError::Dropped`], see [`LinkError::is_dropped`]).
     pub fn is_bad_packet(&self) -> bool {
         matches!(
             self,
@@ -133,12 +162,40 @@ impl LinkError {
                 | LinkError::Truncated { .. }
                 | LinkError::Checksum { .. }
                 | LinkError::Oversize { .. }
+                | LinkError::Dropped { .. }
         )
     }
 
-    /// True for a packet or connection from a host other than the locked
-    /// peer ([`LinkError::ForeignSender`]): dropped, the link is still usable.
+    /// True for a robot message dropped unanswered by the session rules
+    /// ([`LinkError::Dropped`]).
+    pub fn is_dropped(&self) -> bool {
+        matches!(self, LinkError::Dropped { .. })
+    }
+
+    /// True for a packet or connection from anyone but the session's robot: another host
+    /// ([`LinkError::ForeignSender`]) or, over TCP, a second connection
+    /// ([`LinkError::SecondConnection`]). Refused, the link is still usable.
     pub fn is_foreign(&self) -> bool {
-        matches!(self, LinkError::ForeignSender { .. })
+        matches!(
+            self,
+            LinkError::ForeignSender { .. } | LinkError::SecondConnection { .. }
+        )
+    }
+
+    /// The refused sender of a [`LinkError::ForeignSender`] or
+    /// [`LinkError::SecondConnection`].
+    pub fn foreign_source(&self) -> Option<std::net::SocketAddr> {
+        match self {
+            LinkError::ForeignSender { from, .. } | LinkError::SecondConnection { from, .. } => {
+                Some(*from)
+            }
+            _ => None,
+        }
+    }
+
+    /// True for a [`LinkError::SecondConnection`] refused while the holder was not serving
+    /// robot lines: the robot may be kept out, the session must end as faulted.
+    pub fn is_starving(&self) -> bool {
+        matches!(self, LinkError::SecondConnection { starving: true, .. })
     }
 }

@@ -30,8 +30,10 @@
 
 pub mod egm;
 pub mod error;
+pub mod guard;
 pub mod link;
 pub mod netft;
+pub mod peer;
 pub mod rsi;
 pub mod simple_tcp;
 pub mod simple_udp;
@@ -40,7 +42,9 @@ pub mod udp;
 pub mod xml;
 
 pub use error::{LinkError, Protocol};
+pub use guard::{DropReason, LinkCounters};
 pub use link::{
     Correction, ForceSensorLink, MAX_JOINTS, Pose6, ReceivedCorrection, RobotLink, RobotSideLink,
     RobotState, WrenchSample,
 };
+pub use peer::{PeerConfigError, PeerPolicy, PeerWarning, validate_peer};

@@ -225,6 +225,11 @@ pub trait RobotLink {
     }
     /// The protocol, for messages.
     fn protocol(&self) -> crate::Protocol;
+    /// What the link has accepted, answered, refused and dropped so far (all zero for a link
+    /// that does not count).
+    fn counters(&self) -> crate::LinkCounters {
+        crate::LinkCounters::default()
+    }
 }
 
 /// Robot side of a robot link (used by the simulated cell).

@@ -47,15 +47,24 @@
 //! (the robot's accumulated correction restarts at zero).
 //!
 //! **Peer.** [`RsiLink`] answers only the robot it is locked to: the
-//! configured address ([`RsiLink::expect_peer`]) or the first valid sender
-//! of the session ([`crate::udp::PeerLock`]).
+//! configured address ([`RsiLink::expect_peer`], [`RsiLink::set_peer_policy`]) or the first
+//! valid sender of the session ([`crate::peer`]).
+//!
+//! **Session rules.** A telegram from that robot whose `IPOC` does not advance over the last
+//! accepted one (a duplicate or a replay; 32-bit serial arithmetic, see [`crate::guard`]) is
+//! dropped unanswered ([`LinkError::Dropped`], counted in [`RobotLink::counters`]) before it
+//! touches anything: the answer still echoes the last accepted `IPOC`, and in relative mode
+//! its `Delay` does not enter the book (a replayed lower `Delay` would otherwise look like a
+//! new RSI session and reset the accumulated correction).
 //!
 //! Parsing uses the allocation-free scanner of [`crate::xml`]; formatting
 //! writes into caller-provided byte slices.
 
 use crate::error::{LinkError, Protocol};
+use crate::guard::{LinkCounters, SessionGuard};
 use crate::link::{Correction, Pose6, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
-use crate::udp::{PeerLock, SliceWriter, UdpEndpoint, parse_f64, parse_u64};
+use crate::peer::{PeerLock, PeerPolicy};
+use crate::udp::{SliceWriter, UdpEndpoint, parse_f64, parse_u64};
 use crate::xml::{Attributes, XmlEvent, XmlScanner, name_eq};
 use core::fmt::Write;
 use std::net::{SocketAddr, ToSocketAddrs};
@@ -551,6 +560,8 @@ pub struct RsiLink {
     last: Option<RobTelegram>,
     peers: PeerLock,
     relative: RelativeBook,
+    guard: SessionGuard,
+    answers: u64,
 }
 
 impl RsiLink {
@@ -570,7 +581,14 @@ impl RsiLink {
             last: None,
             peers: PeerLock::first_sender(),
             relative: RelativeBook::default(),
+            guard: SessionGuard::new(),
+            answers: 0,
         })
+    }
+
+    /// Sets the peer policy (see [`crate::peer::validate_peer`]).
+    pub fn set_peer_policy(&mut self, policy: PeerPolicy) {
+        self.peers.set_policy(policy);
     }
 
     /// Accepts telegrams only from `peer` (port 0: any port of that IP)
@@ -632,6 +650,7 @@ impl RsiLink {
             }
         };
         self.ep.send(&self.tx[..n])?;
+        self.answers += 1;
         if relative {
             // The robot accumulates what was printed: book the rounded value
             // so that rounding does not drift either.
@@ -654,6 +673,12 @@ impl RobotLink for RsiLink {
         self.peers.check(P, from)?;
         let t = parse_rob(&self.rx[..n])?;
         let q = t.q_rad.ok_or(bad("telegram has no AIPos"))?;
+        self.guard
+            .admit(q.len(), Some(t.ipoc), None)
+            .map_err(|reason| LinkError::Dropped {
+                protocol: P,
+                reason,
+            })?;
         self.peers.lock(from);
         self.ep.set_peer(from);
         self.relative.on_telegram(t.delay);
@@ -683,6 +708,16 @@ impl RobotLink for RsiLink {
 
     fn answers_in_joint_space(&self) -> bool {
         matches!(self.cfg.answer, RsiAnswer::Joint(_))
+    }
+
+    fn counters(&self) -> LinkCounters {
+        let mut c = LinkCounters {
+            answers: self.answers,
+            foreign: self.peers.foreign(),
+            ..LinkCounters::default()
+        };
+        self.guard.add_to(&mut c);
+        c
     }
 
     /// Sends `<AK A1..A6>` (degrees on the wire) from `dq_rad` (the first six

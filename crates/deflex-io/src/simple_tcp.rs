@@ -28,22 +28,40 @@
 //! connection stays open and the next call continues with the next line. Partial lines are kept
 //! across reads and across calls (a timeout does not lose them).
 //!
-//! Connection handling on the PC side: one robot at a time. While
-//! disconnected, [`RobotLink::receive`] waits for a connection within its
-//! timeout; when the robot closes or resets the connection the link drops
-//! it (together with any partial line) and waits for the next one, so a
-//! disconnect shows up as timeouts (`Ok(None)`), like a silent UDP robot.
-//! A robot that reconnects while its old connection still looks alive (a
-//! half-open connection after a cable pull or a controller reboot) takes
-//! over: when a receive times out, a pending new connection replaces the
-//! current one. [`SimpleTcpLink::connections`] counts accepted connections.
+//! **One robot connection.** The PC side serves exactly one connection at a time, the
+//! *holder*. While it is held:
 //!
-//! One client: the link serves only the robot's host: the configured address
-//! ([`SimpleTcpLink::expect_peer`], IP only, as a client's source port is
-//! ephemeral) or, otherwise, the host of the first connection that sent a
-//! valid line, until the link is dropped. A connection from any other host
-//! is closed at once and reported as [`LinkError::ForeignSender`]
-//! ([`SimpleTcpLink::refused`] counts them); it never takes over.
+//! * any other connection — from another host or from the robot's own — is accepted by the
+//!   kernel and closed at once, unanswered, and reported as [`LinkError::SecondConnection`]
+//!   (counted in [`LinkCounters::refused_busy`]); it never takes over, whatever it sends.
+//!   The holder's lines come first: at most one refusal is made per line delivered or per
+//!   silent wait, so a flood of connections delays a robot line by one `accept` + `close` at
+//!   most, and pending connections wait in the kernel's backlog (bounded by the system, 128
+//!   on Linux by default), never in deflex;
+//! * a refusal while the holder is not serving robot lines (it has sent no valid line yet, or
+//!   none for [`STARVE_SILENCE`]) is flagged `starving` and counted in
+//!   [`LinkCounters::refused_starving`]: the refused client may be the robot kept out by a
+//!   squatter, and a runtime must end such a session as faulted;
+//! * a holder that sends no valid line for the idle timeout ([`DEFAULT_IDLE_TIMEOUT`],
+//!   [`SimpleTcpLink::set_idle_timeout`] within [`MIN_IDLE_TIMEOUT`]–[`MAX_IDLE_TIMEOUT`]) is
+//!   closed ([`LinkCounters::idle_closed`]) and the next connection is served: this is how a
+//!   half-open connection (a cable pull, a controller reboot) ends, and how a squatter loses
+//!   the session. A robot that reconnects meanwhile is refused and must connect again.
+//!
+//! When the holder closes or resets the connection the link drops it (with any partial line)
+//! and serves the next connection, so a disconnect shows up as timeouts (`Ok(None)`), like a
+//! silent UDP robot. [`LinkCounters::connections`] counts the connections served.
+//!
+//! **Robot's host.** Under [`PeerPolicy::Fixed`] ([`SimpleTcpLink::expect_peer`], the IP only,
+//! as a client's source port is ephemeral) only that host is served; under
+//! [`PeerPolicy::FirstLocalSender`] only loopback clients; otherwise any host. Once a
+//! connection has sent a valid line, its host is the session's for good. A connection from any
+//! other host is closed at once and reported as [`LinkError::ForeignSender`]
+//! ([`SimpleTcpLink::refused`] and [`LinkCounters::foreign`] count them).
+//!
+//! **Session rules.** As over UDP ([`crate::guard`]): a line whose joint count differs from the
+//! session's is dropped unanswered ([`LinkError::Dropped`]); a line's optional `seq=` must
+//! advance within one connection (a new connection starts a new count).
 //!
 //! After construction the hot path does not allocate: lines are assembled
 //! in a fixed buffer that is reused, replies are formatted into another.
@@ -51,16 +69,21 @@
 //! not wait for Nagle's algorithm).
 
 use crate::error::{LinkError, Protocol};
+use crate::guard::{LinkCounters, SessionGuard};
 use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
+use crate::peer::PeerPolicy;
 use crate::simple_udp::{
     LINE_BUFFER, ReplyStyle, format_correction_line, format_joints_line, parse_correction_line,
-    parse_joints_line,
+    parse_state_line,
 };
-use crate::udp::trim;
-use std::io::{ErrorKind, Read, Write};
-use std::net::IpAddr;
-use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
+use std::io::ErrorKind;
+use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
+
+#[path = "simple_tcp_stream.rs"]
+mod stream;
+pub use stream::LineBuf;
+use stream::{Conn, Fill, Read1, deadline_after, fill_line, is_disconnect, nonzero};
 
 /// Default TCP port the PC listens on (see the module documentation).
 pub const DEFAULT_PORT: u16 = 50161;
@@ -69,254 +92,61 @@ pub const DEFAULT_PORT: u16 = 50161;
 /// [`SimpleTcpLink::set_write_timeout`]).
 pub const DEFAULT_WRITE_TIMEOUT: Duration = Duration::from_millis(50);
 
+/// Default idle timeout: a held connection without a valid line for this long is closed. As
+/// long as the longest `robot.timeout_s` a `CELL.toml` accepts, so a session the runtime still
+/// considers alive is never cut under it.
+pub const DEFAULT_IDLE_TIMEOUT: Duration = Duration::from_secs(10);
+/// Shortest idle timeout [`SimpleTcpLink::set_idle_timeout`] accepts.
+pub const MIN_IDLE_TIMEOUT: Duration = Duration::from_millis(10);
+/// Longest idle timeout [`SimpleTcpLink::set_idle_timeout`] accepts.
+pub const MAX_IDLE_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// A holder without a valid line for this long is not serving robot lines: a connection
+/// refused then is flagged `starving`. Ten cycles of the slowest robot cycle deflex serves
+/// (KUKA RSI's 12 ms rounds to 10 ms; UR CB3 8 ms).
+pub const STARVE_SILENCE: Duration = Duration::from_millis(100);
+
 const P: Protocol = Protocol::SimpleLine;
 
 /// Poll period of the listening socket while waiting for a robot.
 const ACCEPT_POLL: Duration = Duration::from_millis(1);
 
-// ------------------------------------------------------------ line buffer
-
-impl Default for LineBuf {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// Assembles newline-terminated lines from a byte stream in a fixed buffer (the framing of
-/// both ends of the TCP link; public so that it can be fuzzed on its own). Feed it with
-/// [`LineBuf::space`] + [`LineBuf::commit`], take lines with [`LineBuf::take_line`] and read them
-/// with [`LineBuf::line`].
-#[derive(Debug)]
-pub struct LineBuf {
-    buf: [u8; LINE_BUFFER],
-    /// Start of the unconsumed bytes.
-    start: usize,
-    /// End of the received bytes.
-    end: usize,
-    /// Dropping the rest of an overlong line, up to its newline.
-    discarding: bool,
-}
-
-impl LineBuf {
-    /// Empty.
-    pub const fn new() -> Self {
-        LineBuf {
-            buf: [0; LINE_BUFFER],
-            start: 0,
-            end: 0,
-            discarding: false,
-        }
-    }
-
-    /// The bytes of a line returned by [`LineBuf::take_line`] (valid until the next
-    /// [`LineBuf::space`]).
-    pub fn line(&self, range: core::ops::Range<usize>) -> &[u8] {
-        self.buf.get(range).unwrap_or(&[])
-    }
-
-    fn clear(&mut self) {
-        self.start = 0;
-        self.end = 0;
-        self.discarding = false;
-    }
-
-    /// Range of the next complete line (newline excluded) and consumes it.
-    /// The bytes stay valid until the next [`LineBuf::space`].
-    pub fn take_line(&mut self) -> Option<core::ops::Range<usize>> {
-        loop {
-            let pending = &self.buf[self.start..self.end];
-            let Some(pos) = pending.iter().position(|&b| b == b'\n') else {
-                if self.discarding {
-                    // No newline yet: everything buffered belongs to the
-                    // overlong line.
-                    self.start = 0;
-                    self.end = 0;
-                }
-                return None;
-            };
-            let line = self.start..self.start + pos;
-            self.start += pos + 1;
-            if self.discarding {
-                self.discarding = false;
-                continue;
-            }
-            return Some(line);
-        }
-    }
-
-    /// Free space to read into, after moving unconsumed bytes to the front.
-    /// Must be called only when [`LineBuf::take_line`] returned `None`; a
-    /// full buffer then holds a line without newline that is too long.
-    pub fn space(&mut self) -> Result<&mut [u8], LinkError> {
-        if self.start > 0 {
-            self.buf.copy_within(self.start..self.end, 0);
-            self.end -= self.start;
-            self.start = 0;
-        }
-        if self.end == LINE_BUFFER {
-            self.end = 0;
-            self.discarding = true;
-            return Err(LinkError::Oversize {
-                protocol: P,
-                capacity: LINE_BUFFER,
-            });
-        }
-        Ok(&mut self.buf[self.end..])
-    }
-
-    /// Marks `n` bytes of the last [`LineBuf::space`] as received.
-    pub fn commit(&mut self, n: usize) {
-        self.end = (self.end + n).min(LINE_BUFFER);
-    }
-}
-
-// ------------------------------------------------------------- connection
-
-/// A connected stream with cached read mode.
-#[derive(Debug)]
-struct Conn {
-    stream: TcpStream,
-    /// `Some(None)`: non-blocking; `Some(Some(d))`: blocking, read timeout
-    /// d; `None`: not configured yet.
-    mode: Option<Option<Duration>>,
-}
-
-/// Outcome of one read.
-enum Read1 {
-    Data(usize),
-    Timeout,
-    /// Orderly close or reset by the peer.
-    Closed,
-}
-
-impl Conn {
-    fn new(stream: TcpStream, write_timeout: Duration) -> Result<Self, LinkError> {
-        // Accepted sockets do not inherit the listener's non-blocking flag
-        // on Linux, but other systems differ: be explicit.
-        stream.set_nonblocking(false)?;
-        stream.set_nodelay(true)?;
-        stream.set_write_timeout(nonzero(write_timeout))?;
-        Ok(Conn { stream, mode: None })
-    }
-
-    fn set_read_mode(&mut self, timeout: Duration) -> Result<(), LinkError> {
-        let wanted = nonzero(timeout);
-        if self.mode == Some(wanted) {
-            return Ok(());
-        }
-        match wanted {
-            None => self.stream.set_nonblocking(true)?,
-            Some(d) => {
-                if !matches!(self.mode, Some(Some(_))) {
-                    self.stream.set_nonblocking(false)?;
-                }
-                self.stream.set_read_timeout(Some(d))?;
-            }
-        }
-        self.mode = Some(wanted);
-        Ok(())
-    }
-
-    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<Read1, LinkError> {
-        self.set_read_mode(timeout)?;
-        match self.stream.read(buf) {
-            Ok(0) => Ok(Read1::Closed),
-            Ok(n) => Ok(Read1::Data(n)),
-            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
-                Ok(Read1::Timeout)
-            }
-            Err(e) if e.kind() == ErrorKind::Interrupted => Ok(Read1::Timeout),
-            Err(e) if is_disconnect(e.kind()) => Ok(Read1::Closed),
-            Err(e) => Err(e.into()),
-        }
-    }
-
-    /// Writes the whole line in blocking mode (bounded by the write timeout).
-    fn write_line(&mut self, data: &[u8]) -> Result<(), LinkError> {
-        if self.mode == Some(None) {
-            // A partial write in non-blocking mode would break the framing.
-            self.stream.set_nonblocking(false)?;
-            self.mode = None;
-        }
-        self.stream.write_all(data)?;
-        Ok(())
-    }
-}
-
-/// `now + timeout`, saturating far in the future for huge timeouts.
-fn deadline_after(timeout: Duration) -> Instant {
-    let now = Instant::now();
-    now.checked_add(timeout)
-        .or_else(|| now.checked_add(Duration::from_secs(1 << 32)))
-        .unwrap_or(now)
-}
-
-fn nonzero(d: Duration) -> Option<Duration> {
-    (!d.is_zero()).then_some(d)
-}
-
-fn is_disconnect(kind: ErrorKind) -> bool {
-    matches!(
-        kind,
-        ErrorKind::ConnectionReset
-            | ErrorKind::ConnectionAborted
-            | ErrorKind::BrokenPipe
-            | ErrorKind::NotConnected
-            | ErrorKind::UnexpectedEof
-    )
-}
-
-/// Reads until `lines` yields a complete, non-blank line, a read times out
-/// or the peer closes. The first read waits `first` (constant in a control
-/// loop, so the cached read timeout is reused), later ones the time left
-/// before `deadline`.
-fn fill_line(
-    conn: &mut Conn,
-    lines: &mut LineBuf,
-    first: Duration,
-    deadline: Instant,
-) -> Result<Fill, LinkError> {
-    let mut wait = first;
-    loop {
-        if let Some(r) = lines.take_line() {
-            if trim(&lines.buf[r.clone()]).is_empty() {
-                continue;
-            }
-            return Ok(Fill::Line(r));
-        }
-        let space = lines.space()?;
-        match conn.read(space, wait)? {
-            Read1::Data(n) => lines.commit(n),
-            Read1::Timeout => return Ok(Fill::Timeout),
-            Read1::Closed => return Ok(Fill::Closed),
-        }
-        wait = deadline.saturating_duration_since(Instant::now());
-    }
-}
-
-enum Fill {
-    Line(core::ops::Range<usize>),
-    Timeout,
-    Closed,
-}
-
 // ---------------------------------------------------------------- PC side
+
+/// The connection holding the session.
+#[derive(Debug)]
+struct Holder {
+    conn: Conn,
+    addr: SocketAddr,
+    accepted: Instant,
+    last_valid: Option<Instant>,
+}
+
+impl Holder {
+    /// Since when it has sent no valid line.
+    fn silent_since(&self) -> Instant {
+        self.last_valid.unwrap_or(self.accepted)
+    }
+}
 
 /// PC side: listens for the robot, receives `q` lines, answers
 /// `(dx,dy,dz,rx,ry,rz)` lines on the same connection.
 #[derive(Debug)]
 pub struct SimpleTcpLink {
     listener: TcpListener,
-    conn: Option<Conn>,
-    peer: Option<SocketAddr>,
+    holder: Option<Holder>,
     rx: LineBuf,
     tx: [u8; LINE_BUFFER],
     write_timeout: Duration,
+    idle_timeout: Duration,
     count: u64,
-    connections: u64,
-    expected_ip: Option<IpAddr>,
+    policy: PeerPolicy,
     locked_ip: Option<IpAddr>,
-    refused: u64,
+    guard: SessionGuard,
+    /// One refusal may be made: a line was delivered or a wait ended in silence since the
+    /// last one.
+    refusal_credit: bool,
+    stats: LinkCounters,
 }
 
 impl SimpleTcpLink {
@@ -328,32 +158,42 @@ impl SimpleTcpLink {
         listener.set_nonblocking(true)?;
         Ok(SimpleTcpLink {
             listener,
-            conn: None,
-            peer: None,
+            holder: None,
             rx: LineBuf::new(),
             tx: [0; LINE_BUFFER],
             write_timeout: DEFAULT_WRITE_TIMEOUT,
+            idle_timeout: DEFAULT_IDLE_TIMEOUT,
             count: 0,
-            connections: 0,
-            expected_ip: None,
+            policy: PeerPolicy::FirstSender,
             locked_ip: None,
-            refused: 0,
+            guard: SessionGuard::new(),
+            refusal_credit: true,
+            stats: LinkCounters::default(),
         })
     }
 
     /// Serves only connections from `peer`'s IP (its port is ignored).
     pub fn expect_peer(&mut self, peer: SocketAddr) {
-        self.expected_ip = Some(peer.ip().to_canonical());
+        self.policy = PeerPolicy::Fixed(peer);
+    }
+
+    /// Sets the peer policy (see [`crate::peer::validate_peer`]; a fixed peer's port is
+    /// ignored).
+    pub fn set_peer_policy(&mut self, policy: PeerPolicy) {
+        self.policy = policy;
     }
 
     /// Connections from other hosts closed so far.
     pub fn refused(&self) -> u64 {
-        self.refused
+        self.stats.foreign
     }
 
     /// The host the link serves: configured, or locked to the first robot.
     pub fn robot_host(&self) -> Option<IpAddr> {
-        self.expected_ip.or(self.locked_ip)
+        match self.policy {
+            PeerPolicy::Fixed(p) => Some(p.ip().to_canonical()),
+            _ => self.locked_ip,
+        }
     }
 
     /// Listens on all interfaces, port [`DEFAULT_PORT`].
@@ -368,17 +208,17 @@ impl SimpleTcpLink {
 
     /// True while a robot connection is open.
     pub fn is_connected(&self) -> bool {
-        self.conn.is_some()
+        self.holder.is_some()
     }
 
     /// Address of the connected robot.
     pub fn peer_addr(&self) -> Option<SocketAddr> {
-        self.conn.as_ref().and(self.peer)
+        self.holder.as_ref().map(|h| h.addr)
     }
 
-    /// Number of robot connections accepted so far.
+    /// Number of robot connections served so far.
     pub fn connections(&self) -> u64 {
-        self.connections
+        self.stats.connections
     }
 
     /// Bounds the time [`RobotLink::send_correction`] may block when the
@@ -387,55 +227,117 @@ impl SimpleTcpLink {
     /// the line may have been sent. Default [`DEFAULT_WRITE_TIMEOUT`].
     pub fn set_write_timeout(&mut self, timeout: Duration) -> Result<(), LinkError> {
         self.write_timeout = timeout;
-        if let Some(c) = &self.conn {
-            c.stream.set_write_timeout(nonzero(timeout))?;
+        if let Some(h) = &self.holder {
+            h.conn.stream.set_write_timeout(nonzero(timeout))?;
         }
         Ok(())
     }
 
+    /// Sets the idle timeout (see the module documentation); refused outside
+    /// [`MIN_IDLE_TIMEOUT`]–[`MAX_IDLE_TIMEOUT`].
+    pub fn set_idle_timeout(&mut self, timeout: Duration) -> Result<(), LinkError> {
+        if !(MIN_IDLE_TIMEOUT..=MAX_IDLE_TIMEOUT).contains(&timeout) {
+            return Err(LinkError::InvalidValue {
+                protocol: P,
+                reason: "idle timeout outside 10 ms to 600 s",
+            });
+        }
+        self.idle_timeout = timeout;
+        Ok(())
+    }
+
+    /// The idle timeout.
+    pub fn idle_timeout(&self) -> Duration {
+        self.idle_timeout
+    }
+
     /// Closes the robot connection, if any (the listener stays open).
     pub fn disconnect(&mut self) {
-        self.conn = None;
-        self.peer = None;
+        self.holder = None;
         self.rx.clear();
     }
 
-    /// Accepts one pending connection without waiting; true if one was. A
-    /// connection from a host other than the robot's is closed and reported.
+    /// True if a client of host `ip` may hold the session.
+    fn admits(&self, ip: IpAddr) -> bool {
+        self.policy.admits_host(ip) && self.locked_ip.is_none_or(|l| l == ip.to_canonical())
+    }
+
+    /// Accepts one pending connection without waiting, if any. Without a holder it becomes
+    /// the holder (`Ok(true)`); otherwise, or from a host that may not hold the session, it is
+    /// closed at once and reported.
     fn try_accept(&mut self) -> Result<bool, LinkError> {
-        match self.listener.accept() {
-            Ok((stream, peer)) => {
-                if self
-                    .robot_host()
-                    .is_some_and(|host| host != peer.ip().to_canonical())
-                {
-                    drop(stream);
-                    self.refused += 1;
-                    return Err(LinkError::ForeignSender {
-                        protocol: P,
-                        from: peer,
-                    });
-                }
-                let conn = Conn::new(stream, self.write_timeout)?;
-                self.disconnect();
-                self.conn = Some(conn);
-                self.peer = Some(peer);
-                self.connections += 1;
-                Ok(true)
-            }
+        let (stream, from) = match self.listener.accept() {
+            Ok(pair) => pair,
             Err(e)
                 if matches!(
                     e.kind(),
                     ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
                 ) || is_disconnect(e.kind()) =>
             {
-                Ok(false)
+                return Ok(false);
             }
-            Err(e) => Err(e.into()),
+            Err(e) => return Err(e.into()),
+        };
+        if !self.admits(from.ip()) {
+            drop(stream);
+            self.stats.foreign += 1;
+            return Err(LinkError::ForeignSender { protocol: P, from });
+        }
+        if self.holder.is_some() && !self.holder_closed() {
+            let Some(h) = &self.holder else {
+                return Ok(false);
+            };
+            drop(stream);
+            let starving = h.last_valid.is_none_or(|t| t.elapsed() >= STARVE_SILENCE);
+            self.stats.refused_busy += 1;
+            if starving {
+                self.stats.refused_starving += 1;
+            }
+            return Err(LinkError::SecondConnection {
+                protocol: P,
+                from,
+                holder: h.addr,
+                starving,
+            });
+        }
+        let conn = Conn::new(stream, self.write_timeout)?;
+        self.disconnect();
+        self.guard.restart_stream();
+        self.holder = Some(Holder {
+            conn,
+            addr: from,
+            accepted: Instant::now(),
+            last_valid: None,
+        });
+        self.stats.connections += 1;
+        Ok(true)
+    }
+
+    /// True if the holder has closed (or reset) its connection, checked without waiting
+    /// before a newcomer is refused: a robot that closes and reconnects at once is served, not
+    /// refused because its close was not read yet. Bytes read meanwhile stay in the line
+    /// buffer for the next receive.
+    fn holder_closed(&mut self) -> bool {
+        let Some(h) = self.holder.as_mut() else {
+            return true;
+        };
+        if self.rx.is_full() {
+            return false;
+        }
+        let Ok(space) = self.rx.space() else {
+            return false;
+        };
+        match h.conn.read(space, Duration::ZERO) {
+            Ok(Read1::Data(n)) => {
+                self.rx.commit(n);
+                false
+            }
+            Ok(Read1::Timeout) => false,
+            Ok(Read1::Closed) | Err(_) => true,
         }
     }
 
-    /// Waits for a robot until `deadline` (at least one attempt).
+    /// Waits for a holder until `deadline` (at least one attempt).
     fn accept_until(&mut self, deadline: Instant) -> Result<bool, LinkError> {
         loop {
             if self.try_accept()? {
@@ -448,51 +350,94 @@ impl SimpleTcpLink {
             std::thread::sleep(left.min(ACCEPT_POLL));
         }
     }
+
+    /// Refuses one pending connection if a refusal is due; `Err` is the refusal.
+    fn refuse_one(&mut self) -> Result<(), LinkError> {
+        if !self.refusal_credit {
+            return Ok(());
+        }
+        match self.try_accept() {
+            Ok(_) => Ok(()),
+            Err(e) => {
+                if e.is_foreign() {
+                    self.refusal_credit = false;
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Turns a complete line of the holder into the robot's state, or the error that drops it.
+    fn take_state(&mut self, r: core::ops::Range<usize>) -> Result<RobotState, LinkError> {
+        self.refusal_credit = true;
+        let line = parse_state_line(self.rx.line(r))?;
+        self.guard
+            .admit(line.joint_count, line.seq, None)
+            .map_err(|reason| LinkError::Dropped {
+                protocol: P,
+                reason,
+            })?;
+        self.count += 1;
+        if let Some(h) = self.holder.as_mut() {
+            h.last_valid = Some(Instant::now());
+            if self.locked_ip.is_none() {
+                self.locked_ip = Some(h.addr.ip().to_canonical());
+            }
+        }
+        Ok(RobotState {
+            q_rad: line.q_rad,
+            joint_count: line.joint_count,
+            cycle_id: line.seq.unwrap_or(self.count),
+            ..Default::default()
+        })
+    }
 }
 
 impl RobotLink for SimpleTcpLink {
-    /// `cycle_id` is the count of valid `q` lines received since
-    /// construction (it keeps counting across reconnections).
+    /// `cycle_id` is the line's `seq=` when it carries one, otherwise the count of valid `q`
+    /// lines received since construction (it keeps counting across reconnections).
+    ///
+    /// Order of work, so that the holder's lines always come first: a line already buffered;
+    /// one refusal of a pending connection when due (see the module documentation); the idle
+    /// check; then a wait for the holder's next line. Without a holder, the wait is for a
+    /// connection.
     fn receive(&mut self, timeout: Duration) -> Result<Option<RobotState>, LinkError> {
         let deadline = deadline_after(timeout);
         let mut wait = timeout;
-        let mut takeover_checked = false;
         loop {
-            if self.conn.is_none() {
+            if self.holder.is_none() {
                 if !self.accept_until(deadline)? {
                     return Ok(None);
                 }
                 wait = deadline.saturating_duration_since(Instant::now());
             }
-            let Some(conn) = self.conn.as_mut() else {
-                return Ok(None);
+            if let Some(r) = self.rx.take_nonblank_line() {
+                return self.take_state(r).map(Some);
+            }
+            self.refuse_one()?;
+            let idle = self
+                .holder
+                .as_ref()
+                .is_some_and(|h| h.silent_since().elapsed() > self.idle_timeout);
+            if idle {
+                self.disconnect();
+                self.stats.idle_closed += 1;
+                continue;
+            }
+            let Some(h) = self.holder.as_mut() else {
+                continue;
             };
-            match fill_line(conn, &mut self.rx, wait, deadline)? {
-                Fill::Line(r) => {
-                    let (q, joint_count) = parse_joints_line(&self.rx.buf[r])?;
-                    self.count += 1;
-                    if self.locked_ip.is_none() {
-                        self.locked_ip = self.peer.map(|p| p.ip().to_canonical());
-                    }
-                    return Ok(Some(RobotState {
-                        q_rad: q,
-                        joint_count,
-                        cycle_id: self.count,
-                        ..Default::default()
-                    }));
-                }
+            match fill_line(&mut h.conn, &mut self.rx, wait, deadline)? {
+                Fill::Line(r) => return self.take_state(r).map(Some),
                 Fill::Closed => {
                     self.disconnect();
                     wait = deadline.saturating_duration_since(Instant::now());
                 }
                 Fill::Timeout => {
-                    // A silent connection may be half-open while the robot
-                    // has reconnected: let a pending connection take over.
-                    if takeover_checked || !self.try_accept()? {
-                        return Ok(None);
-                    }
-                    takeover_checked = true;
-                    wait = deadline.saturating_duration_since(Instant::now());
+                    // The holder was silent for the whole wait: a refusal costs it nothing.
+                    self.refusal_credit = true;
+                    self.refuse_one()?;
+                    return Ok(None);
                 }
             }
         }
@@ -502,15 +447,22 @@ impl RobotLink for SimpleTcpLink {
     /// is connected; a failed write closes the connection.
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         let n = format_correction_line(c, ReplyStyle::Tuple, &mut self.tx)?;
-        let conn = self
-            .conn
+        let h = self
+            .holder
             .as_mut()
             .ok_or(LinkError::NoPeer { protocol: P })?;
-        if let Err(e) = conn.write_line(&self.tx[..n]) {
+        if let Err(e) = h.conn.write_line(&self.tx[..n]) {
             self.disconnect();
             return Err(e);
         }
+        self.stats.answers += 1;
         Ok(())
+    }
+
+    fn counters(&self) -> LinkCounters {
+        let mut c = self.stats;
+        self.guard.add_to(&mut c);
+        c
     }
 
     fn protocol(&self) -> Protocol {
@@ -578,7 +530,7 @@ impl RobotSideLink for SimpleTcpRobotEndpoint {
         let deadline = deadline_after(timeout);
         match fill_line(&mut self.conn, &mut self.rx, timeout, deadline)? {
             Fill::Line(r) => {
-                let correction = parse_correction_line(&self.rx.buf[r])?;
+                let correction = parse_correction_line(self.rx.line(r))?;
                 self.count += 1;
                 Ok(Some(ReceivedCorrection {
                     correction,

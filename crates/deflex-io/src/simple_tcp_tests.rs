@@ -1,6 +1,8 @@
 //! Loopback tests of [`super`]: 127.0.0.1 and ephemeral ports only.
 
 use super::*;
+use crate::DropReason;
+use crate::simple_udp::parse_joints_line;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::io::{Read, Write};
@@ -275,29 +277,134 @@ fn reconnect_after_the_robot_drops() {
     assert_eq!(recv_q(&mut pc), [3.0; 6]);
 }
 
+/// A second connection never takes over, not even from the robot's host while the holder is
+/// silent (the old behaviour handed the session to it when a receive timed out): it is closed
+/// unanswered and reported, and the holder keeps the session.
 #[test]
-fn a_new_connection_takes_over_a_silent_one() {
+fn a_second_connection_never_takes_over() {
     let mut pc = pc();
     let mut r1 = robot(&pc);
     r1.send_state(&state([1.0; 6])).unwrap();
     assert_eq!(recv_q(&mut pc), [1.0; 6]);
-    // r1 stays open but silent (half-open after a cable pull, say); the
-    // robot program restarts and connects again.
+    let holder = r1.local_addr().unwrap();
+    // r1 stays open but silent; another client of the same host connects and sends.
     let mut r2 = robot(&pc);
     r2.send_state(&state([2.0; 6])).unwrap();
-    let mut got = None;
+    let mut refusals = 0;
     for _ in 0..50 {
-        if let Some(s) = pc.receive(SHORT).unwrap() {
-            got = Some(s);
-            break;
+        match pc.receive(SHORT) {
+            Ok(None) => {}
+            Err(LinkError::SecondConnection {
+                from,
+                holder: h,
+                starving,
+                ..
+            }) => {
+                assert_eq!(from, r2.local_addr().unwrap());
+                assert_eq!(h, holder);
+                // The holder's last line may be older than STARVE_SILENCE by now, or not.
+                let _ = starving;
+                refusals += 1;
+                break;
+            }
+            other => panic!("{other:?}"),
         }
     }
-    assert_eq!(got.unwrap().joints(), &[2.0; 6]);
-    assert_eq!(pc.connections(), 2);
-    assert_eq!(pc.peer_addr(), Some(r2.local_addr().unwrap()));
+    assert_eq!(refusals, 1);
+    assert_eq!(pc.connections(), 1);
+    assert_eq!(pc.peer_addr(), Some(holder));
+    assert_eq!(pc.counters().refused_busy, 1);
+    // The refused client gets nothing but the close.
+    assert!(r2.receive_correction(T).is_err());
+    // The holder is still served.
+    r1.send_state(&state([3.0; 6])).unwrap();
+    assert_eq!(recv_q(&mut pc), [3.0; 6]);
     pc.send_correction(&Correction::ZERO).unwrap();
-    assert!(r2.receive_correction(T).unwrap().is_some());
-    assert!(r1.receive_correction(T).is_err());
+    assert!(r1.receive_correction(T).unwrap().is_some());
+}
+
+/// A client that connects first and sends nothing holds the session; the robot that connects
+/// next is refused with `starving`; after the idle timeout the squatter is closed and the
+/// robot's next connection is served.
+#[test]
+fn a_squatter_is_reported_as_starving_and_times_out() {
+    let mut pc = pc();
+    pc.set_idle_timeout(Duration::from_millis(50)).unwrap();
+    assert!(pc.set_idle_timeout(Duration::from_millis(1)).is_err());
+    assert!(pc.set_idle_timeout(Duration::from_secs(601)).is_err());
+    let squatter = raw_robot(&pc);
+    // The squatter becomes the holder (no line: the receive times out).
+    assert!(pc.receive(SHORT).unwrap().is_none());
+    assert_eq!(pc.peer_addr(), Some(squatter.local_addr().unwrap()));
+    let mut robot1 = robot(&pc);
+    robot1.send_state(&state([1.0; 6])).unwrap();
+    let e = loop {
+        match pc.receive(SHORT) {
+            Ok(None) => {}
+            Err(e) => break e,
+            Ok(Some(s)) => panic!("the squatter's session served {s:?}"),
+        }
+    };
+    assert!(e.is_starving() && e.is_foreign(), "{e}");
+    assert!(robot1.receive_correction(T).is_err());
+    let c = pc.counters();
+    assert_eq!((c.refused_busy, c.refused_starving), (1, 1));
+    assert!(c.robot_starved());
+    // Idle for longer than the idle timeout: closed at the next receive, the robot's new
+    // connection is served.
+    std::thread::sleep(Duration::from_millis(60));
+    let mut robot2 = robot(&pc);
+    robot2.send_state(&state([2.0; 6])).unwrap();
+    assert_eq!(recv_q(&mut pc), [2.0; 6]);
+    assert_eq!(pc.counters().idle_closed, 1);
+    assert_eq!(pc.connections(), 2);
+    let mut buf = [0u8; 8];
+    let mut squatter = squatter;
+    squatter.set_read_timeout(Some(T)).unwrap();
+    assert!(matches!(squatter.read(&mut buf), Ok(0) | Err(_)));
+    pc.send_correction(&Correction::ZERO).unwrap();
+    assert!(robot2.receive_correction(T).unwrap().is_some());
+    assert_eq!(pc.counters().answers, 1);
+}
+
+/// Over TCP as over UDP, a line whose joint count differs from the session's is dropped, and
+/// an optional `seq=` must advance within the connection.
+#[test]
+fn session_rules_over_tcp() {
+    let mut pc = pc();
+    let mut raw = raw_robot(&pc);
+    raw.write_all(b"q 1 2 3 4 5 6 seq=7\nq 1 2 3 4 5 seq=8\nq 1 2 3 4 5 6 seq=7\nq 1 2 3 4 5 6\nq 6 5 4 3 2 1 seq=9\n")
+        .unwrap();
+    assert_eq!(pc.receive(T).unwrap().unwrap().cycle_id, 7);
+    for want in [
+        DropReason::JointCount { got: 5, session: 6 },
+        DropReason::SequenceNotAdvancing { got: 7, last: 7 },
+        DropReason::SequenceMismatch {
+            message_has_one: false,
+        },
+    ] {
+        match pc.receive(T) {
+            Err(LinkError::Dropped { reason, .. }) => assert_eq!(reason, want),
+            other => panic!("{other:?}"),
+        }
+    }
+    let s = pc.receive(T).unwrap().unwrap();
+    assert_eq!(
+        (s.cycle_id, s.joints()),
+        (9, &[6.0, 5.0, 4.0, 3.0, 2.0, 1.0][..])
+    );
+    let c = pc.counters();
+    assert_eq!((c.accepted, c.dropped()), (2, 3));
+    // A new connection restarts the count (not the joint count).
+    drop(raw);
+    let mut raw = raw_robot(&pc);
+    raw.write_all(b"q 0 0 0 0 0 0 seq=1\n").unwrap();
+    let s = loop {
+        if let Some(s) = pc.receive(T).unwrap() {
+            break s;
+        }
+    };
+    assert_eq!(s.cycle_id, 1);
 }
 
 #[test]
@@ -342,7 +449,7 @@ fn line_buffer_fuzz() {
         while fed < len {
             if let Some(r) = lb.take_line() {
                 assert!(r.end <= LINE_BUFFER && r.start <= r.end);
-                assert!(!lb.buf[r].contains(&b'\n'));
+                assert!(!lb.line(r).contains(&b'\n'));
                 lines += 1;
                 continue;
             }

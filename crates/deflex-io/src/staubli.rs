@@ -24,13 +24,21 @@
 //!   ([`FLAG_ACTIVE`]) set means "apply"; clear means "go back to zero".
 //! * state payload (56 bytes, total [`STATE_LEN`]): six joint positions in
 //!   **rad** (f64), status word (u32, [`STATUS_ALTER_ACTIVE`]…), reserved u32.
+//!
+//! [`StaubliLink`] answers only its robot ([`crate::peer`]) and drops unanswered
+//! ([`LinkError::Dropped`], counted in [`RobotLink::counters`]) a state whose `seq` does not
+//! advance over the last accepted one (a duplicate or a replay) or whose timestamp goes back
+//! ([`crate::guard`]). Its own `seq` counts the corrections actually sent (no gaps), and its
+//! `ack` is the `seq` of the last accepted state.
 
 use crate::error::{LinkError, Protocol};
+use crate::guard::{LinkCounters, SessionGuard, Stamp};
 use crate::link::{
     Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState, matrix_to_rotvec,
     rotvec_to_matrix,
 };
-use crate::udp::{PeerLock, UdpEndpoint};
+use crate::peer::{PeerLock, PeerPolicy};
+use crate::udp::UdpEndpoint;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
@@ -298,6 +306,8 @@ pub struct StaubliLink {
     last_state_seq: u32,
     epoch: Instant,
     peers: PeerLock,
+    guard: SessionGuard,
+    answers: u64,
 }
 
 impl StaubliLink {
@@ -311,11 +321,17 @@ impl StaubliLink {
             last_state_seq: 0,
             epoch: Instant::now(),
             peers: PeerLock::first_sender(),
+            guard: SessionGuard::new(),
+            answers: 0,
         })
     }
     /// Accepts states only from `peer` (port 0: any port of that IP).
     pub fn expect_peer(&mut self, peer: SocketAddr) {
         self.peers.set_configured(Some(peer));
+    }
+    /// Sets the peer policy (see [`crate::peer::validate_peer`]).
+    pub fn set_peer_policy(&mut self, policy: PeerPolicy) {
+        self.peers.set_policy(policy);
     }
     /// The sender lock.
     pub fn peers(&self) -> &PeerLock {
@@ -334,18 +350,21 @@ impl StaubliLink {
         if self.ep.peer().is_none() {
             return Err(LinkError::NoPeer { protocol: P });
         }
-        self.seq = self.seq.wrapping_add(1);
+        let seq = self.seq.wrapping_add(1);
         let m = CorrectionMsg {
             header: Header {
                 flags,
-                seq: self.seq,
+                seq,
                 ack: self.last_state_seq,
                 timestamp_s: self.epoch.elapsed().as_secs_f64(),
             },
             values: correction_to_wire(c),
         };
         let n = encode_correction(&m, &mut self.tx)?;
-        self.ep.send(&self.tx[..n])
+        self.ep.send(&self.tx[..n])?;
+        self.seq = seq;
+        self.answers += 1;
+        Ok(())
     }
 }
 
@@ -356,6 +375,16 @@ impl RobotLink for StaubliLink {
         };
         self.peers.check(P, from)?;
         let m = decode_state(&self.rx[..n])?;
+        self.guard
+            .admit(
+                m.q_rad.len(),
+                Some(u64::from(m.header.seq)),
+                Some(Stamp::Seconds(m.header.timestamp_s)),
+            )
+            .map_err(|reason| LinkError::Dropped {
+                protocol: P,
+                reason,
+            })?;
         self.peers.lock(from);
         self.ep.set_peer(from);
         self.last_state_seq = m.header.seq;
@@ -367,6 +396,15 @@ impl RobotLink for StaubliLink {
     }
     fn send_correction(&mut self, c: &Correction) -> Result<(), LinkError> {
         self.send(c, FLAG_ACTIVE)
+    }
+    fn counters(&self) -> LinkCounters {
+        let mut c = LinkCounters {
+            answers: self.answers,
+            foreign: self.peers.foreign(),
+            ..LinkCounters::default()
+        };
+        self.guard.add_to(&mut c);
+        c
     }
     fn protocol(&self) -> Protocol {
         P

@@ -10,6 +10,8 @@ use std::io::ErrorKind;
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
 use std::time::Duration;
 
+pub use crate::peer::PeerLock;
+
 /// A UDP socket with timeout caching and an optional remembered peer.
 #[derive(Debug)]
 pub struct UdpEndpoint {
@@ -110,95 +112,6 @@ impl UdpEndpoint {
     pub fn send_to(&mut self, data: &[u8], to: SocketAddr) -> Result<(), LinkError> {
         self.socket.send_to(data, to)?;
         Ok(())
-    }
-}
-
-/// Which host a controller-side link accepts packets from.
-///
-/// Until the first valid telegram the link accepts any sender (unless a peer
-/// is configured); from then on it is locked to that sender's address (IP
-/// and port) until the link is dropped, i.e. for the whole session. A
-/// configured peer locks from the start; its port 0 means "any port of that
-/// IP" (for controllers whose source port is not fixed). Packets from other
-/// hosts are counted and refused with [`LinkError::ForeignSender`] before
-/// they are parsed, so a stray datagram can neither redirect the answers nor
-/// be taken for robot state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct PeerLock {
-    configured: Option<SocketAddr>,
-    locked: Option<SocketAddr>,
-    foreign: u64,
-    last_foreign: Option<SocketAddr>,
-}
-
-impl PeerLock {
-    /// Locks to the first valid sender.
-    pub const fn first_sender() -> Self {
-        PeerLock {
-            configured: None,
-            locked: None,
-            foreign: 0,
-            last_foreign: None,
-        }
-    }
-
-    /// Locks to `peer` from the start (port 0: any port of that IP).
-    pub const fn configured(peer: SocketAddr) -> Self {
-        PeerLock {
-            configured: Some(peer),
-            locked: None,
-            foreign: 0,
-            last_foreign: None,
-        }
-    }
-
-    /// Sets (or clears) the configured peer.
-    pub fn set_configured(&mut self, peer: Option<SocketAddr>) {
-        self.configured = peer;
-    }
-
-    fn matches(&self, from: SocketAddr) -> bool {
-        if let Some(p) = self.configured {
-            let ip_ok = p.ip() == from.ip() || (p.ip().to_canonical() == from.ip().to_canonical());
-            if !ip_ok || (p.port() != 0 && p.port() != from.port()) {
-                return false;
-            }
-        }
-        self.locked.is_none_or(|l| l == from)
-    }
-
-    /// Checks a packet's sender before parsing; a foreign sender is counted
-    /// and refused.
-    pub fn check(&mut self, protocol: Protocol, from: SocketAddr) -> Result<(), LinkError> {
-        if self.matches(from) {
-            Ok(())
-        } else {
-            self.foreign += 1;
-            self.last_foreign = Some(from);
-            Err(LinkError::ForeignSender { protocol, from })
-        }
-    }
-
-    /// Locks to `from` after its packet parsed (no effect once locked).
-    pub fn lock(&mut self, from: SocketAddr) {
-        if self.locked.is_none() {
-            self.locked = Some(from);
-        }
-    }
-
-    /// The address the link is locked to, if any.
-    pub fn locked(&self) -> Option<SocketAddr> {
-        self.locked
-    }
-
-    /// Packets refused so far.
-    pub fn foreign(&self) -> u64 {
-        self.foreign
-    }
-
-    /// The last refused sender.
-    pub fn last_foreign(&self) -> Option<SocketAddr> {
-        self.last_foreign
     }
 }
 
@@ -370,39 +283,6 @@ mod tests {
         assert_eq!(parse_u64(b"123"), Some(123));
         assert_eq!(parse_u64(b"+1"), None);
         assert_eq!(parse_u64(b"99999999999999999999999"), None);
-    }
-
-    #[test]
-    fn peer_lock_first_sender_and_configured() {
-        let a: SocketAddr = "10.0.0.2:6000".parse().unwrap();
-        let b: SocketAddr = "10.0.0.3:6000".parse().unwrap();
-        let a2: SocketAddr = "10.0.0.2:6001".parse().unwrap();
-        let mut l = PeerLock::first_sender();
-        assert!(
-            l.check(Protocol::Rsi, b).is_ok(),
-            "anyone until the first telegram"
-        );
-        l.lock(a);
-        l.lock(b);
-        assert_eq!(l.locked(), Some(a));
-        assert!(l.check(Protocol::Rsi, a).is_ok());
-        assert!(l.check(Protocol::Rsi, b).unwrap_err().is_foreign());
-        assert!(l.check(Protocol::Rsi, a2).is_err(), "same host, other port");
-        assert_eq!((l.foreign(), l.last_foreign()), (2, Some(a2)));
-        let mut c = PeerLock::configured("10.0.0.2:0".parse().unwrap());
-        assert!(c.check(Protocol::Egm, b).is_err());
-        assert!(
-            c.check(Protocol::Egm, a2).is_ok(),
-            "port 0: any port of the IP"
-        );
-        c.lock(a2);
-        assert!(
-            c.check(Protocol::Egm, a).is_err(),
-            "then locked to that port"
-        );
-        let mut d = PeerLock::configured(a);
-        assert!(d.check(Protocol::Egm, a2).is_err());
-        assert!(d.check(Protocol::Egm, a).is_ok());
     }
 
     #[test]

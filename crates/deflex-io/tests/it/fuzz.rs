@@ -2,7 +2,10 @@
 //! TCP stream framing + lines, ATI Net F/T), on the shared `deflex-fuzz` mutation fuzzer: random
 //! bytes and mutations of valid messages must never make a parser panic, and whatever a parser
 //! accepts must keep its promises (finite values, counts in range, a message that formats
-//! again). A quick count here; the full count:
+//! again). The session rules (`deflex_io::guard`) are fuzzed on streams of messages: each
+//! protocol's parsed messages fed in order to a `SessionGuard`, whose every verdict must match
+//! an oracle written here from the rules (not from the guard's code). A quick count here; the
+//! full count:
 //!
 //! ```sh
 //! DEFLEX_FUZZ_COUNT=1000000 cargo test --release -p deflex-io --test fuzz -- --nocapture
@@ -10,9 +13,13 @@
 
 use deflex_fuzz::{count_from_env, fuzz};
 use deflex_io::egm::{EgmConfig, decode_path_corr, decode_robot, fill_robot_msg};
+use deflex_io::guard::{SessionGuard, Stamp};
 use deflex_io::rsi::{JointTag, format_rob, format_sen, format_sen_joints, parse_rob, parse_sen};
 use deflex_io::simple_tcp::LineBuf;
-use deflex_io::simple_udp::{format_joints_line, parse_correction_line, parse_joints_line};
+use deflex_io::simple_udp::{
+    format_joints_line, format_state_line, parse_correction_line, parse_joints_line,
+    parse_state_line,
+};
 use deflex_io::{LinkError, MAX_JOINTS, Pose6, RobotState};
 
 const QUICK: usize = 30_000;
@@ -290,6 +297,239 @@ fn netft_decoders() {
                 assert!(c.counts_per_force > 0.0 && c.counts_per_force.is_finite());
                 assert!(c.counts_per_torque > 0.0 && c.counts_per_torque.is_finite());
             }
+        },
+    );
+}
+
+// ------------------------------------------------------------- session rules
+
+/// The session rules, written again from their statement: joint count equal to the first
+/// accepted message's; sequence number present iff the first accepted message's was, and then
+/// ahead of the last accepted one (for two 32-bit values: (new − last) mod 2³² in 1..2³¹,
+/// computed here in i128; otherwise new > last); robot time not before the last accepted
+/// (32-bit ms: (t − l) mod 2³² < 2³¹; seconds: t ≥ l).
+#[derive(Default)]
+struct Oracle {
+    first: Option<(usize, bool)>,
+    seq: Option<u64>,
+    time: Option<Stamp>,
+}
+
+impl Oracle {
+    fn verdict(&mut self, joints: usize, seq: Option<u64>, time: Option<Stamp>) -> bool {
+        let ok = match self.first {
+            None => true,
+            Some((n, has_seq)) => {
+                let seq_ok = match (has_seq, seq, self.seq) {
+                    (false, None, _) => true,
+                    (true, Some(new), Some(last)) => {
+                        if new <= u64::from(u32::MAX) && last <= u64::from(u32::MAX) {
+                            let d = (i128::from(new) - i128::from(last)).rem_euclid(1 << 32);
+                            d > 0 && d < 1 << 31
+                        } else {
+                            new > last
+                        }
+                    }
+                    _ => false,
+                };
+                let time_ok = match (time, self.time) {
+                    (Some(Stamp::Millis32(t)), Some(Stamp::Millis32(l))) => {
+                        (i128::from(t) - i128::from(l)).rem_euclid(1 << 32) < 1 << 31
+                    }
+                    (Some(Stamp::Seconds(t)), Some(Stamp::Seconds(l))) => t >= l,
+                    _ => true,
+                };
+                joints == n && seq_ok && time_ok
+            }
+        };
+        if ok {
+            self.first.get_or_insert((joints, seq.is_some()));
+            self.seq = seq;
+            if time.is_some() {
+                self.time = time;
+            }
+        }
+        ok
+    }
+}
+
+/// Feeds the frames of `b` (each prefixed by its length, one byte) through `parse` and the
+/// guard, checking every verdict against the oracle and the counters at the end.
+fn check_stream(b: &[u8], parse: impl Fn(&[u8]) -> Option<(usize, Option<u64>, Option<Stamp>)>) {
+    let (mut guard, mut oracle) = (SessionGuard::new(), Oracle::default());
+    let (mut rest, mut admitted) = (b, 0u64);
+    while let [len, tail @ ..] = rest {
+        let n = usize::from(*len).min(tail.len());
+        let (frame, next) = tail.split_at(n);
+        rest = next;
+        let Some((joints, seq, time)) = parse(frame) else {
+            continue;
+        };
+        admitted += 1;
+        let got = guard.admit(joints, seq, time);
+        let want = oracle.verdict(joints, seq, time);
+        assert_eq!(got.is_ok(), want, "{joints} {seq:?} {time:?}: {got:?}");
+    }
+    let mut c = deflex_io::LinkCounters::default();
+    guard.add_to(&mut c);
+    assert_eq!(c.accepted + c.dropped(), admitted);
+}
+
+/// Frames each message with its length byte.
+fn framed(messages: &[Vec<u8>]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for m in messages {
+        out.push(m.len() as u8);
+        out.extend_from_slice(m);
+    }
+    out
+}
+
+#[test]
+fn session_rules_on_egm_streams() {
+    let msg = |seq: u32, tm: u32, n: usize| {
+        let mut m = deflex_io::egm::msg::EgmRobot::default();
+        fill_robot_msg(
+            &mut m,
+            &RobotState::with_joints(&[0.1; 6][..n]),
+            seq,
+            tm,
+            false,
+        );
+        prost::Message::encode_to_vec(&m)
+    };
+    let corpus = [
+        framed(&[
+            msg(1, 4, 6),
+            msg(2, 8, 6),
+            msg(2, 0, 6),
+            msg(3, 12, 5),
+            msg(9, 40, 6),
+        ]),
+        framed(&[msg(u32::MAX, u32::MAX, 6), msg(0, 3, 6), msg(1, 2, 6)]),
+    ];
+    run("EGM session rules", &corpus, 1024, |b| {
+        check_stream(b, |f| {
+            let r = decode_robot(f).ok()?;
+            let (_, n) = EgmConfig::default().chain_joints(&r).ok()?;
+            Some((
+                n,
+                Some(u64::from(r.seqno?)),
+                Some(Stamp::Millis32(r.tm_ms?)),
+            ))
+        });
+    });
+}
+
+#[test]
+fn session_rules_on_rsi_streams() {
+    let rob = |ipoc: u64| {
+        format!(
+            "<Rob><AIPos A1=\"0\" A2=\"0\" A3=\"0\" A4=\"0\" A5=\"0\" A6=\"0\"/><IPOC>{ipoc}</IPOC></Rob>"
+        )
+        .into_bytes()
+    };
+    let corpus = [
+        framed(&[rob(1000), rob(1004), rob(1004), rob(1000), rob(1008)]),
+        framed(&[
+            rob(4_294_967_292),
+            rob(0),
+            rob(4),
+            rob(8_589_934_592),
+            rob(3),
+        ]),
+    ];
+    run("RSI session rules", &corpus, 1024, |b| {
+        check_stream(b, |f| {
+            let t = parse_rob(f).ok()?;
+            t.q_rad?;
+            Some((6, Some(t.ipoc), None))
+        });
+    });
+}
+
+#[test]
+fn session_rules_on_staubli_streams() {
+    use deflex_io::staubli::*;
+    let state = |seq: u32, t: f64| {
+        let mut b = [0u8; STATE_LEN];
+        encode_state(
+            &StateMsg {
+                header: Header {
+                    seq,
+                    timestamp_s: t,
+                    ..Header::default()
+                },
+                ..StateMsg::default()
+            },
+            &mut b,
+        )
+        .unwrap();
+        b.to_vec()
+    };
+    let corpus = [framed(&[
+        state(1, 0.004),
+        state(2, 0.008),
+        state(2, 0.008),
+        state(3, 0.0),
+        state(4, 0.016),
+    ])];
+    run("Staubli session rules", &corpus, 1024, |b| {
+        check_stream(b, |f| {
+            let m = decode_state(f).ok()?;
+            Some((
+                6,
+                Some(u64::from(m.header.seq)),
+                Some(Stamp::Seconds(m.header.timestamp_s)),
+            ))
+        });
+    });
+}
+
+#[test]
+fn session_rules_on_simple_line_streams() {
+    let lines: Vec<Vec<u8>> = [
+        "q 0 0 0 0 0 0 seq=1",
+        "q 0 0 0 0 0 0 seq=2",
+        "q 0 0 0 0 0 0 seq=2",
+        "q 0 0 0 0 0 seq=3",
+        "q 0 0 0 0 0 0",
+        "q 1 1 1 1 1 1 seq=18446744073709551615",
+        "q 1 1 1 1 1 1 seq=4294967296",
+    ]
+    .iter()
+    .map(|l| l.as_bytes().to_vec())
+    .collect();
+    run("simple line session rules", &[framed(&lines)], 1024, |b| {
+        check_stream(b, |f| {
+            let l = parse_state_line(f).ok()?;
+            Some((l.joint_count, l.seq, None))
+        });
+    });
+}
+
+/// `parse_state_line`: what parses formats again and parses to the same line.
+#[test]
+fn simple_state_lines() {
+    let mut corpus = line_corpus();
+    corpus.push(b"q 0.1 -1.57 1.2 0 3.25 -6 seq=42\n".to_vec());
+    corpus.push(b"q [0.1, 0.2] SEQ=18446744073709551615".to_vec());
+    run(
+        "simple UDP state lines",
+        &corpus,
+        1024,
+        |b| match parse_state_line(b) {
+            Ok(l) => {
+                assert!((1..=MAX_JOINTS).contains(&l.joint_count) && finite(&l.q_rad));
+                let mut out = [0u8; 512];
+                if let Ok(n) = format_state_line(&l.q_rad[..l.joint_count], l.seq, &mut out) {
+                    let again = parse_state_line(&out[..n]).unwrap();
+                    assert_eq!((again.joint_count, again.seq), (l.joint_count, l.seq));
+                } else {
+                    assert!(l.q_rad.iter().any(|v| v.abs() >= 1e6));
+                }
+            }
+            Err(e) => packet_error(&e),
         },
     );
 }

@@ -8,4 +8,7 @@ static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::Count
 
 mod fuzz;
 mod no_alloc;
+mod peer_policy;
 mod peers;
+mod replays;
+mod tcp_abuse;
