@@ -443,8 +443,8 @@ impl Controller {
     ///
     /// In order: the cycle's time step; the inputs checked and, when they can be trusted, the
     /// robot's pose, its place on a feed-forward table, the tare and the estimate
-    /// ([`Self::sense`]); the tare's end; the law, the runaway guard and the limiter
-    /// ([`Self::apply_law`]); the output with its error and status flags.
+    /// (`sense`); the tare's end; the law, the runaway guard and the limiter
+    /// (`apply_law`); the output with its error and status flags.
     pub fn cycle_input(&mut self, input: &CycleInput) -> CycleOutput {
         let (now, h) = self.time_step(input.now_s);
         let mut flags = Flags::default();

@@ -2,7 +2,7 @@
 //! robot telegram, so the robot never sees a correction step larger than the rate limit times
 //! its own cycle, whatever happened in between.
 //!
-//! The controller's [`crate::limiter::Limiter`] bounds the rate of ξ in control time. That is
+//! The controller's [`deflex_control::Limiter`] bounds the rate of ξ in control time. That is
 //! not enough at the robot: while the robot is silent (a link glitch of 50 ms to 1 s, inside
 //! RSI's own break-off budget) the controller latches `robot_link_lost` and ramps ξ out on its
 //! own clock, so the first answer after the pause would jump by everything the ramp did in the

@@ -1,6 +1,6 @@
 //! The threads of `deflex run` (Fig. 16 of the paper, with the CompactRIO replaced by a PC):
 //!
-//! * **robot-link thread** ([`robot`]): blocks on the robot link; for every state telegram it
+//! * **robot-link thread** (`robot`): blocks on the robot link; for every state telegram it
 //!   publishes a [`JointSample`](crate::messages::JointSample) and answers at once with the
 //!   latest [`CorrectionCommand`](crate::messages::CorrectionCommand) (ξ of eq. 7), passed
 //!   through the [`SendShaper`](crate::send_shaper::SendShaper) so the robot never sees a step
@@ -10,10 +10,10 @@
 //!   Jacobian ([`Controller::joint_correction_map`]); links whose frame follows the tool (ABB
 //!   EGM) get the TCP orientation. The reply latency (receipt → reply sent) is recorded in a
 //!   histogram;
-//! * **sensor thread** ([`sensor`]): receives force/torque samples and publishes a running sum
+//! * **sensor thread** (`sensor`): receives force/torque samples and publishes a running sum
 //!   ([`WrenchAccumulation`](crate::messages::WrenchAccumulation)), so the control thread
 //!   averages every sample of its period;
-//! * **control thread** ([`control`]): paced by an injectable [`Clock`] at the control rate
+//! * **control thread** (`control`): paced by an injectable [`Clock`] at the control rate
 //!   (100 Hz), runs [`Controller::cycle_input`] (eq. 5–7, 15, 17), publishes the correction
 //!   command and one telemetry [`CycleSample`] ([`crate::telemetry`]: the CSV log, the live
 //!   status and any other sink read it), and measures its cycle time and deadline misses.

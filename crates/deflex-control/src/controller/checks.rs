@@ -1,7 +1,8 @@
 //! The controller's per-cycle checks and estimates: input supervision (each fault names its
-//! check, joint or channel, value and limit), the wrench path and the deflection estimate (eq. 2;
-//! eq. 15 is [`crate::estimate`]), the force/torque limits, the runaway guard's update, and the frames the robot links need
-//! (TCP orientation, the joint-space map of a correction). All allocation-free.
+//! check, joint or channel, value and limit), the wrench path and the deflection estimate
+//! (eq. 2; eq. 15 is [`crate::estimate`]), the force/torque limits, the runaway guard's update,
+//! and the frames the robot links need (TCP orientation, the joint-space map of a correction).
+//! All allocation-free.
 
 use super::{Controller, CycleInput, CycleOutput, JointCorrectionMap, Phase};
 use crate::estimate::tcp_deflection_in_base;

@@ -1,5 +1,6 @@
-//! Shared set-up (as in deflex-control's tests): the built-in TX200 at the paper's cone centre configuration, a controller with
-//! a known bias and a tool, and raw sensor readings synthesised for a TCP wrench.
+//! Shared set-up (as in deflex-control's tests): the built-in TX200 at the paper's cone centre
+//! configuration, a controller with a known bias and a tool, and raw sensor readings synthesised
+//! for a TCP wrench; plus a KUKA and a Net F/T on loopback, and the telemetry of a session.
 #![allow(dead_code)]
 
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
