@@ -682,8 +682,8 @@ mod tests {
 
     #[test]
     fn a_deflex_run_log_serves_as_the_wrench_source() {
-        use deflex_control::log::{LogRecord, csv_header, csv_row};
         use deflex_control::{CycleOutput, Flags};
+        use deflex_runtime::log::{LogRecord, csv_header, csv_row};
         // The skipped flag bits are deflex-control's.
         assert_eq!(
             deflex_compensate::log::RUN_LOG_SKIP_FLAGS,

@@ -486,7 +486,7 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
     let path = tool_path(&args)?;
     // Closed loop: the deflex correction controller in-process, in simulated time.
     let mut twin = match args.correction.as_str() {
-        "on" => Some(deflex_demo::twin_controller::twin_controller(
+        "on" => Some(deflex_twin::twin_controller(
             &config,
             args.model.as_deref(),
         )?),

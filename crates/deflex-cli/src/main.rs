@@ -2,7 +2,6 @@
 
 mod args;
 mod cell_server;
-mod closed_loop;
 mod cmd_calib;
 mod cmd_compensate;
 mod cmd_control;
@@ -14,15 +13,6 @@ mod cmd_sim;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-
-/// Tests that run the real-time threads (wall-clock loopback sessions, and the simulated-time
-/// runtime whose lockstep threads keep both cores busy) take this lock, so one cannot starve
-/// another's 4 ms deadlines on a 2-core machine.
-#[cfg(test)]
-pub(crate) fn realtime_test_lock() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
 
 /// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,
 /// force-feedback correction, digital twin). SI units in files; human output in mm, degrees.

@@ -6,11 +6,11 @@
 //! on by default). The numbers show how far the force runs away without the guard and where the
 //! guard holds it.
 
-use crate::twin_controller::{ClosedLoopRun, controller_config_for, run_closed_loop};
 use deflex_control::ControllerConfig;
 use deflex_model::Robot;
 use deflex_report::HtmlReport;
 use deflex_sim::{CellConfig, FormingRun, PlungeParams, ProcessKind, ToolPath};
+use deflex_twin::{ClosedLoopRun, controller_config_for, run_closed_loop};
 use serde::Serialize;
 
 /// What one closed-loop plunge measured.

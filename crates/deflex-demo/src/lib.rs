@@ -26,7 +26,6 @@ pub mod paper;
 pub mod sensitivity;
 mod study;
 mod tables;
-pub mod twin_controller;
 
 pub use conditions::{conditions, one_edof_start};
 pub use study::{

@@ -9,10 +9,10 @@
 //! the improvement is that of the maximum path error norm. Runs are independent and seeded, so
 //! they are spread over threads without changing a number.
 
-use crate::twin_controller::{controller_config_for, run_closed_loop};
 use deflex_model::{Axis, EdofSite, Robot};
 use deflex_sim::sheet::{aerens_fz, scallop_height_mm};
 use deflex_sim::{CellConfig, ConeParams, ToolPath};
+use deflex_twin::{controller_config_for, run_closed_loop};
 use serde::Serialize;
 use std::fmt::Write as _;
 

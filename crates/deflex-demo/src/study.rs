@@ -6,7 +6,6 @@ use crate::tables::{
     error_numbers, grid_rows, paper_vs_deflex_csv, predictions_csv, stiffness_csv, stiffness_rows,
     write_text,
 };
-use crate::twin_controller::{controller_config_for, run_closed_loop};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_calib::validate::predict;
 use deflex_calib::{SearchOptions, Structure, calibrate_fixed, search_structure};
@@ -16,6 +15,7 @@ use deflex_sim::campaign::{
 };
 use deflex_sim::profile::Maker;
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
+use deflex_twin::{controller_config_for, run_closed_loop};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Instant;

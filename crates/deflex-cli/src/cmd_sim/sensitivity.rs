@@ -76,7 +76,7 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CliResult {
             if !json {
                 eprintln!("identifying the controller's model from a campaign on the twin …");
             }
-            deflex_demo::twin_controller::identify_from_twin_campaign(&config, args.seed)?
+            deflex_twin::identify_from_twin_campaign(&config, args.seed)?
         }
     };
     let bar = if json {

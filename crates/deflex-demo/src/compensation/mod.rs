@@ -26,17 +26,17 @@
 pub mod lag;
 pub(crate) mod page;
 
-use crate::twin_controller::{
-    ClosedLoopRun, Program, TwinController, controller_config_for, run_twin_controller,
-};
 use deflex_compensate::log::{ResampleOptions, parse_log, resample_on_path};
 use deflex_compensate::table::{read_csv, write_csv};
 use deflex_compensate::{
     Compensation, CompensationOptions, TcpPath, WrenchSource, commanded_pose, compensate,
 };
-use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode, FeedForwardTable};
+use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode};
 use deflex_model::Robot;
 use deflex_sim::{CellConfig, FormingProcess, FormingRun, ToolPath, compensated_tool_path};
+use deflex_twin::{
+    ClosedLoopRun, Program, TwinController, controller_config_for, run_twin_controller,
+};
 use lag::ErrorNumbers;
 use serde::Serialize;
 
@@ -425,7 +425,7 @@ pub fn compare_part(
         &["SIMULATED: forces from the twin's forming model".to_string()],
     );
     let rows = read_csv(&table_csv, "compensated_path.csv").map_err(|e| e.to_string())?;
-    let table = FeedForwardTable::from_rows(&rows, model, "compensated_path.csv")
+    let table = deflex_runtime::feedforward::table_of(&rows, model, "compensated_path.csv")
         .map_err(|e| e.to_string())?;
     let feedforward = |mode, lead_s| {
         FeedForward::new(

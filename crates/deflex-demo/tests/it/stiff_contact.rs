@@ -7,11 +7,9 @@
 //! source on, seed 1) the guard changes nothing.
 
 use deflex_demo::contact::{StiffContactNumbers, stiff_contact_with};
-use deflex_demo::twin_controller::{
-    controller_config_for, identify_from_twin_campaign, run_closed_loop,
-};
 use deflex_model::Robot;
 use deflex_sim::{CellConfig, PlungeParams, ToolPath};
+use deflex_twin::{controller_config_for, identify_from_twin_campaign, run_closed_loop};
 use std::sync::OnceLock;
 
 /// The stated bound: with the guard the largest contact force stays within this factor of the
