@@ -79,11 +79,8 @@ macro_rules! header_deps {
 pub const TIME_SCHEMA: &str = time_msg!();
 
 /// `std_msgs/msg/Header`.
-pub const HEADER_SCHEMA: &str = concat!(
-    header_msg!(),
-    sep!("builtin_interfaces/Time"),
-    time_msg!()
-);
+pub const HEADER_SCHEMA: &str =
+    concat!(header_msg!(), sep!("builtin_interfaces/Time"), time_msg!());
 
 /// `geometry_msgs/msg/Vector3`.
 pub const VECTOR3_SCHEMA: &str = vector3_msg!();

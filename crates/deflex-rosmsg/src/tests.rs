@@ -127,8 +127,8 @@ fn time_converts_nanoseconds_both_ways() {
 /// section appears once: what a schema reader needs to resolve the message.
 fn check_definition(name: &str, text: &str) {
     const PRIMITIVES: [&str; 15] = [
-        "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16",
-        "int32", "uint32", "int64", "uint64", "string", "wstring",
+        "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
+        "uint32", "int64", "uint64", "string", "wstring",
     ];
     let sep = "=".repeat(80);
     let mut sections: Vec<(String, Vec<String>)> = Vec::new();
