@@ -60,15 +60,17 @@ impl SyntheticCell {
         info
     }
 
-    /// Gaussian-ish noise in [−1, 1] (sum of uniforms from a xorshift generator).
+    /// Uniform in [0, 1) (xorshift64).
+    fn uniform(&mut self) -> f64 {
+        self.state ^= self.state << 13;
+        self.state ^= self.state >> 7;
+        self.state ^= self.state << 17;
+        (self.state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Bell-shaped noise in [−1, 1] (mean of three uniforms).
     fn noise(&mut self) -> f64 {
-        let mut sum = 0.0;
-        for _ in 0..3 {
-            self.state ^= self.state << 13;
-            self.state ^= self.state >> 7;
-            self.state ^= self.state << 17;
-            sum += (self.state >> 11) as f64 / (1u64 << 53) as f64;
-        }
+        let sum = self.uniform() + self.uniform() + self.uniform();
         (sum / 3.0 - 0.5) * 2.0
     }
 
@@ -152,7 +154,8 @@ impl SyntheticCell {
             1.2 - 0.02 * angle.cos(),
             angle * 0.1,
         ]);
-        let spike = self.noise() > 0.97;
+        // A scheduling hiccup now and then (0.3 % of the cycles): a slow cycle and a late answer.
+        let spike = self.uniform() < 0.003;
         s.cycle_time_s = 350e-6 + 60e-6 * self.noise() + if spike { 1.5e-3 } else { 0.0 };
         if spike {
             self.late += 1;

@@ -25,6 +25,8 @@ const view = {
   stopSent: 0,
 };
 window.deflexView = view;
+// Points held by each chart (for tests).
+view.chartLengths = () => Object.fromEntries(Object.entries(charts).map(([k, c]) => [k, c.data[0].length]));
 
 let fieldIndex = {};
 let maxBuckets = 15000;
@@ -167,7 +169,7 @@ function init3d() {
   Object.assign(three, { ok: true, renderer, scene, camera, controls, program, corrected, marker, cap,
     origin: null, prog: [], corr: [], fitted: false });
   document.getElementById("fit").onclick = () => fit3d();
-  document.getElementById("exaggerate").onchange = () => rebuild3d();
+  document.getElementById("exaggerate").onchange = () => { rebuild3d(); fit3d(); dirty = true; };
   new ResizeObserver(() => {
     renderer.setSize(host.clientWidth, host.clientHeight);
     camera.aspect = host.clientWidth / host.clientHeight;
@@ -217,8 +219,13 @@ function rebuild3d() {
 
 function fit3d() {
   if (!three.ok || three.n === 0) return;
-  three.program.computeBoundingSphere();
-  const s = three.program.boundingSphere;
+  // Both paths (the corrected one as exaggerated) inside the view.
+  const box = new THREE.Box3();
+  for (const g of [three.program, three.corrected]) {
+    g.computeBoundingBox();
+    box.union(g.boundingBox);
+  }
+  const s = box.getBoundingSphere(new THREE.Sphere());
   const r = Math.max(s.radius, 5);
   three.controls.target.copy(s.center);
   three.camera.position.set(s.center.x + 1.6 * r, s.center.y - 1.6 * r, s.center.z + 1.2 * r);

@@ -35,8 +35,13 @@ fn publish(c: &mut Criterion) {
 
     let (mut publisher, ring) = broadcast::<CycleSample>(RING);
     let info = Arc::new(SyntheticCell::new(0.004, 1, true).session_info());
-    let view = deflex_view::serve("127.0.0.1:0".parse().unwrap(), ring.clone(), info.clone(), None)
-        .expect("view");
+    let view = deflex_view::serve(
+        "127.0.0.1:0".parse().unwrap(),
+        ring.clone(),
+        info.clone(),
+        None,
+    )
+    .expect("view");
     // A page that connects and then never reads: its socket buffer fills up.
     let mut page = TcpStream::connect(view.local_addr()).expect("connect");
     write!(
@@ -52,12 +57,15 @@ fn publish(c: &mut Criterion) {
         deflex_record::McapRecorder::spawn(dir.join("bench.mcap"), &ring, info).expect("recorder");
     let idle = ring.subscribe();
     let mut i = 0;
-    group.bench_function("3 sinks: view with a stalled page, MCAP recorder, idle subscriber", |b| {
-        b.iter(|| {
-            i = (i + 1) % samples.len();
-            publisher.publish(black_box(&samples[i]));
-        })
-    });
+    group.bench_function(
+        "3 sinks: view with a stalled page, MCAP recorder, idle subscriber",
+        |b| {
+            b.iter(|| {
+                i = (i + 1) % samples.len();
+                publisher.publish(black_box(&samples[i]));
+            })
+        },
+    );
     group.finish();
     let stats = view.stats();
     eprintln!(

@@ -47,7 +47,9 @@ fn main() -> ExitCode {
         publisher.publish(&cell.next_sample());
     }
     let callback: Option<deflex_view::StopCallback> = if stop {
-        Some(Box::new(|| eprintln!("stop requested from the page (SIMULATED: nothing to stop)")))
+        Some(Box::new(|| {
+            eprintln!("stop requested from the page (SIMULATED: nothing to stop)")
+        }))
     } else {
         None
     };
@@ -58,7 +60,10 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    println!("SIMULATED synthetic stream at {rate_hz} Hz: open {}", view.url());
+    println!(
+        "SIMULATED synthetic stream at {rate_hz} Hz: open {}",
+        view.url()
+    );
     let start = Instant::now();
     let mut n: u64 = 0;
     loop {

@@ -5,7 +5,7 @@
 //! Bounds: the request head is at most [`MAX_REQUEST_BYTES`] and must arrive within
 //! [`REQUEST_TIMEOUT`]; a page's incoming messages are at most [`MAX_INCOMING_BYTES`]; its queue
 //! holds [`crate::ViewOptions::queue_messages`] messages and its socket write buffer
-//! [`MAX_WRITE_BUFFER_BYTES`]; a page that takes nothing for [`STALL_TIMEOUT`] is disconnected
+//! [`crate::ViewOptions::write_buffer_bytes`]; a page that takes nothing for [`STALL_TIMEOUT`] is disconnected
 //! (it reconnects by itself and gets the history again).
 
 use crate::hub::{ClientSlot, Encoded};
@@ -25,8 +25,10 @@ pub const MAX_REQUEST_BYTES: usize = 8 * 1024;
 pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 /// Largest message a page may send (bytes).
 pub const MAX_INCOMING_BYTES: usize = 4 * 1024;
-/// Largest unsent data held for one page (bytes).
+/// Default of the unsent data held for one page (bytes).
 pub const MAX_WRITE_BUFFER_BYTES: usize = 4 << 20;
+/// Smallest write buffer: room for the largest message (a history piece) and a write chunk.
+pub const MIN_WRITE_BUFFER_BYTES: usize = 1 << 20;
 /// A page whose socket takes nothing for this long is disconnected.
 pub const STALL_TIMEOUT: Duration = Duration::from_secs(10);
 /// Longest wait of a page's loop (its latency to commands and shutdown).
@@ -94,10 +96,8 @@ fn read_request(stream: &mut TcpStream) -> std::io::Result<Head> {
                         .map(|v| v.trim().to_string())
                 };
                 let has_token = |name: &str, token: &str| {
-                    header(name).is_some_and(|v| {
-                        v.split(',')
-                            .any(|t| t.trim().eq_ignore_ascii_case(token))
-                    })
+                    header(name)
+                        .is_some_and(|v| v.split(',').any(|t| t.trim().eq_ignore_ascii_case(token)))
                 };
                 return Ok(Head::Complete(Request {
                     method: req.method.unwrap_or("").to_string(),
@@ -175,8 +175,17 @@ pub(crate) fn handle(mut stream: TcpStream, shared: Arc<Shared>) {
         Ok(Head::Bad(status, reason)) => return refuse(&mut stream, status, reason, &shared),
         Err(_) => return,
     };
-    if !request.host.as_deref().is_some_and(|h| host_allowed(h, &shared)) {
-        return refuse(&mut stream, 421, "misdirected request (unexpected Host)", &shared);
+    if !request
+        .host
+        .as_deref()
+        .is_some_and(|h| host_allowed(h, &shared))
+    {
+        return refuse(
+            &mut stream,
+            421,
+            "misdirected request (unexpected Host)",
+            &shared,
+        );
     }
     if request.method != "GET" {
         return refuse(&mut stream, 405, "method not allowed", &shared);
@@ -186,7 +195,14 @@ pub(crate) fn handle(mut stream: TcpStream, shared: Arc<Shared>) {
     }
     match assets::find(&request.path) {
         Some(asset) => {
-            let _ = respond(&mut stream, 200, "OK", asset.content_type, asset.body, &shared);
+            let _ = respond(
+                &mut stream,
+                200,
+                "OK",
+                asset.content_type,
+                asset.body,
+                &shared,
+            );
         }
         None => refuse(&mut stream, 404, "not found", &shared),
     }
@@ -227,8 +243,13 @@ fn websocket(mut stream: TcpStream, request: Request, shared: Arc<Shared>) {
     let config = WebSocketConfig::default()
         .max_message_size(Some(MAX_INCOMING_BYTES))
         .max_frame_size(Some(MAX_INCOMING_BYTES))
-        .write_buffer_size(64 * 1024)
-        .max_write_buffer_size(MAX_WRITE_BUFFER_BYTES);
+        .write_buffer_size(32 * 1024)
+        .max_write_buffer_size(
+            shared
+                .options
+                .write_buffer_bytes
+                .max(MIN_WRITE_BUFFER_BYTES),
+        );
     let ws = WebSocket::from_partially_read(stream, request.body_start, Role::Server, Some(config));
     page_loop(ws, &shared);
 }
@@ -265,28 +286,35 @@ fn page_loop(mut ws: WebSocket<TcpStream>, shared: &Shared) {
         });
     let mut last_progress = Instant::now();
     let mut last_stop: Option<Instant> = None;
+    // A message the socket's write buffer had no room for: held (only one) until it has, while
+    // the page's queue fills up behind it and the pump drops for this page.
+    let mut pending: Option<Message> = None;
     loop {
         if shared.shutdown.load(Ordering::Acquire) {
             let _ = ws.close(None);
             let _ = ws.flush();
             return;
         }
-        match rx.recv_timeout(POLL) {
-            Ok(message) => {
-                let mut bytes = message.to_vec();
-                frame::set_dropped(&mut bytes, dropped.load(Ordering::Relaxed));
-                match ws.write(Message::binary(bytes)) {
-                    Ok(()) => {}
-                    Err(tungstenite::Error::WriteBufferFull(_)) => {
-                        dropped.fetch_add(1, Ordering::Relaxed);
-                        shared.stats.frames_dropped.fetch_add(1, Ordering::Relaxed);
-                    }
-                    Err(e) if would_block(&e) => {}
-                    Err(_) => return,
+        if pending.is_none() {
+            match rx.recv_timeout(POLL) {
+                Ok(message) => {
+                    let mut bytes = message.to_vec();
+                    frame::set_dropped(&mut bytes, dropped.load(Ordering::Relaxed));
+                    pending = Some(Message::binary(bytes));
                 }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return,
             }
-            Err(RecvTimeoutError::Timeout) => {}
-            Err(RecvTimeoutError::Disconnected) => return,
+        } else {
+            std::thread::sleep(POLL);
+        }
+        if let Some(message) = pending.take() {
+            match ws.write(message) {
+                Ok(()) => {}
+                Err(tungstenite::Error::WriteBufferFull(back)) => pending = Some(*back),
+                Err(e) if would_block(&e) => {}
+                Err(_) => return,
+            }
         }
         match ws.flush() {
             Ok(()) => last_progress = Instant::now(),

@@ -3,11 +3,11 @@
 //! `try_send`. A full queue drops the message for that page and counts it; nothing here can
 //! make the publisher wait (it never looks at its subscribers).
 
+use crate::Shared;
 use crate::frame::{
     self, BUCKET_S, Bucket, Decimator, HISTORY_BUCKETS, KIND_HISTORY, KIND_LIVE,
     MAX_BUCKETS_PER_MESSAGE,
 };
-use crate::Shared;
 use deflex_telemetry::{CycleSample, Subscriber};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -66,7 +66,10 @@ pub(crate) fn run(mut subscriber: Subscriber<CycleSample>, shared: Arc<Shared>) 
             b[41] = lost as f64;
             fresh.push(b);
         }
-        shared.stats.samples_received.store(subscriber.received(), Ordering::Relaxed);
+        shared
+            .stats
+            .samples_received
+            .store(subscriber.received(), Ordering::Relaxed);
         shared.stats.samples_lost.store(lost, Ordering::Relaxed);
         for b in &fresh {
             if history.len() == HISTORY_BUCKETS {

@@ -47,7 +47,8 @@ pub mod frame;
 mod hub;
 
 pub use connection::{
-    MAX_INCOMING_BYTES, MAX_REQUEST_BYTES, MAX_WRITE_BUFFER_BYTES, REQUEST_TIMEOUT, STALL_TIMEOUT,
+    MAX_INCOMING_BYTES, MAX_REQUEST_BYTES, MAX_WRITE_BUFFER_BYTES, MIN_WRITE_BUFFER_BYTES,
+    REQUEST_TIMEOUT, STALL_TIMEOUT,
 };
 
 use deflex_control::Flags;
@@ -70,6 +71,10 @@ pub struct ViewOptions {
     pub max_connections: u64,
     /// Messages queued per page (a full queue drops the newest message for that page).
     pub queue_messages: usize,
+    /// Unsent bytes held per page beyond the kernel's socket buffer (at least
+    /// [`MIN_WRITE_BUFFER_BYTES`]); when it is full the page's queue fills, then the pump drops
+    /// messages for that page.
+    pub write_buffer_bytes: usize,
 }
 
 impl Default for ViewOptions {
@@ -78,6 +83,7 @@ impl Default for ViewOptions {
             max_clients: 8,
             max_connections: 32,
             queue_messages: 64,
+            write_buffer_bytes: MAX_WRITE_BUFFER_BYTES,
         }
     }
 }
@@ -125,7 +131,8 @@ pub struct ViewStats {
     pub buckets: u64,
     /// Live messages made (each offered to every page).
     pub frames_sent: u64,
-    /// Messages dropped for a page whose queue or socket buffer was full.
+    /// Messages dropped for a page whose queue was full (its socket and write buffer full
+    /// behind it).
     pub frames_dropped: u64,
     /// Pages connected now.
     pub clients: u64,
@@ -277,7 +284,8 @@ pub fn serve_with(
         connections: AtomicU64::new(0),
         stats: Counters::default(),
     });
-    let subscriber = ring.subscribe();
+    // What the ring still holds is shown too (a view opened after the session started).
+    let subscriber = ring.subscribe_from_oldest();
     let mut threads = Vec::new();
     let pump_shared = shared.clone();
     threads.push(

@@ -43,7 +43,10 @@ fn buckets_keep_the_last_value_and_the_peaks() {
             })
             .fold(f64::MIN, f64::max);
         assert!((b[index("f_norm_max_n")] - peak).abs() < 1e-9);
-        let slowest = group.iter().map(|s| s.cycle_time_s).fold(f64::MIN, f64::max);
+        let slowest = group
+            .iter()
+            .map(|s| s.cycle_time_s)
+            .fold(f64::MIN, f64::max);
         assert_eq!(b[index("cycle_time_max_s")], slowest);
         let flags = group.iter().fold(0u32, |a, s| a | s.flags);
         assert_eq!(b[index("flags")] as u32, flags);
