@@ -21,7 +21,7 @@ pub mod channels;
 mod read;
 mod session;
 pub mod synthetic;
-// pub mod trace;
+pub mod trace;
 mod write;
 
 #[cfg(test)]
