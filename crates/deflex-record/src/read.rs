@@ -100,13 +100,12 @@ pub fn for_each_cycle(
     let mut current: Option<(u32, u64, CycleSample)> = None;
     let mut carried: Option<Carried> = None;
     let mut first_time: Option<u64> = None;
-    let mut index = 0u64;
-    for message in reader {
+    for (i, message) in reader.enumerate() {
         let message = message.map_err(|e| ReadError::Mcap {
             path: name.clone(),
             message: e.to_string(),
         })?;
-        index += 1;
+        let index = i as u64 + 1;
         let topic = message.channel.topic.as_str();
         if !topics_seen.iter().any(|t| t == topic) && topics_seen.len() < 64 {
             topics_seen.push(topic.to_string());
@@ -157,77 +156,26 @@ pub fn for_each_cycle(
             current = Some((key.0, key.1, sample));
         }
         let sample = &mut current.as_mut().expect("set above").2;
-        let decode_err = |e| ReadError::Decode {
+        let applied = apply(sample, topic, &message.data).map_err(|e| ReadError::Decode {
             path: name.clone(),
             topic: topic.to_string(),
             index,
             source: e,
-        };
-        let data = &message.data[..];
-        match topic {
-            ch::JOINT_STATES => {
-                let m: JointState = deflex_rosmsg::decode(data).map_err(decode_err)?;
-                sample.set_q(&m.position);
+        })?;
+        match applied {
+            Applied::PathError => summary.path_error_known = true,
+            Applied::Diagnostics => {
+                carried = Some(Carried {
+                    phase_code: sample.phase_code,
+                    flags: sample.flags,
+                    fault: sample.fault,
+                    late_answers: sample.late_answers,
+                    robot_late: sample.robot_late,
+                    robot_telegrams: sample.robot_telegrams,
+                    sensor_samples: sample.sensor_samples,
+                });
             }
-            ch::WRENCH_RAW | ch::WRENCH_SENSOR | ch::WRENCH_TCP => {
-                let m: WrenchStamped = deflex_rosmsg::decode(data).map_err(decode_err)?;
-                let w = &m.wrench;
-                let v = [
-                    w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z,
-                ];
-                match topic {
-                    ch::WRENCH_RAW => sample.wrench_raw = v,
-                    ch::WRENCH_SENSOR => sample.wrench_sensor = v,
-                    _ => sample.wrench_tcp = v,
-                }
-            }
-            ch::TCP_POSE => {
-                let m: PoseStamped = deflex_rosmsg::decode(data).map_err(decode_err)?;
-                let p = m.pose.position;
-                sample.tcp_position_m = [p.x, p.y, p.z];
-                let o = m.pose.orientation;
-                let q = UnitQuaternion::from_quaternion(Quaternion::new(o.w, o.x, o.y, o.z));
-                sample.set_tcp_rotation(&q.to_rotation_matrix());
-            }
-            ch::PROGRAM_POSE => {} // derived: tcp − ξ
-            ch::DEFLECTION | ch::CORRECTION | ch::ERROR | ch::FEEDFORWARD => {
-                let m: TwistStamped = deflex_rosmsg::decode(data).map_err(decode_err)?;
-                let t = &m.twist;
-                let v = [
-                    t.linear.x,
-                    t.linear.y,
-                    t.linear.z,
-                    t.angular.x,
-                    t.angular.y,
-                    t.angular.z,
-                ];
-                match topic {
-                    ch::DEFLECTION => sample.deflection = v,
-                    ch::CORRECTION => sample.correction = v,
-                    ch::ERROR => sample.error = v,
-                    _ => sample.feedforward = v,
-                }
-            }
-            ch::PATH_ERROR => {
-                let m: Vector3Stamped = deflex_rosmsg::decode(data).map_err(decode_err)?;
-                sample.truth_error_m = m.vector.to_array();
-                summary.path_error_known = true;
-            }
-            _ => {
-                let m: DiagnosticArray = deflex_rosmsg::decode(data).map_err(decode_err)?;
-                if let Some(status) = m.status.iter().find(|s| s.name == ch::STATUS_NAME) {
-                    apply_diagnostics(sample, status);
-                    carried = Some(Carried {
-                        phase_code: sample.phase_code,
-                        flags: sample.flags,
-                        fault: sample.fault,
-                        late_answers: sample.late_answers,
-                        robot_late: sample.robot_late,
-                        robot_telegrams: sample.robot_telegrams,
-                        sensor_samples: sample.sensor_samples,
-                    });
-                }
-            }
+            Applied::Other => {}
         }
     }
     if let Some((_, _, sample)) = current.take() {
@@ -241,6 +189,82 @@ pub fn for_each_cycle(
         });
     }
     Ok(summary)
+}
+
+/// What a message changed besides the sample's values.
+enum Applied {
+    PathError,
+    Diagnostics,
+    Other,
+}
+
+/// Decodes one message of a known topic into the cycle's sample.
+fn apply(
+    sample: &mut CycleSample,
+    topic: &str,
+    data: &[u8],
+) -> Result<Applied, deflex_rosmsg::CdrError> {
+    match topic {
+        ch::JOINT_STATES => {
+            let m: JointState = deflex_rosmsg::decode(data)?;
+            sample.set_q(&m.position);
+        }
+        ch::WRENCH_RAW | ch::WRENCH_SENSOR | ch::WRENCH_TCP => {
+            let m: WrenchStamped = deflex_rosmsg::decode(data)?;
+            let w = &m.wrench;
+            let v = [
+                w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z,
+            ];
+            match topic {
+                ch::WRENCH_RAW => sample.wrench_raw = v,
+                ch::WRENCH_SENSOR => sample.wrench_sensor = v,
+                _ => sample.wrench_tcp = v,
+            }
+        }
+        ch::TCP_POSE => {
+            let m: PoseStamped = deflex_rosmsg::decode(data)?;
+            let p = m.pose.position;
+            sample.tcp_position_m = [p.x, p.y, p.z];
+            let o = m.pose.orientation;
+            let q = UnitQuaternion::from_quaternion(Quaternion::new(o.w, o.x, o.y, o.z));
+            sample.set_tcp_rotation(&q.to_rotation_matrix());
+        }
+        ch::PROGRAM_POSE => {
+            // Derived on reading (corrected TCP − ξ); decoded only to check it.
+            let _: PoseStamped = deflex_rosmsg::decode(data)?;
+        }
+        ch::DEFLECTION | ch::CORRECTION | ch::ERROR | ch::FEEDFORWARD => {
+            let m: TwistStamped = deflex_rosmsg::decode(data)?;
+            let t = &m.twist;
+            let v = [
+                t.linear.x,
+                t.linear.y,
+                t.linear.z,
+                t.angular.x,
+                t.angular.y,
+                t.angular.z,
+            ];
+            match topic {
+                ch::DEFLECTION => sample.deflection = v,
+                ch::CORRECTION => sample.correction = v,
+                ch::ERROR => sample.error = v,
+                _ => sample.feedforward = v,
+            }
+        }
+        ch::PATH_ERROR => {
+            let m: Vector3Stamped = deflex_rosmsg::decode(data)?;
+            sample.truth_error_m = m.vector.to_array();
+            return Ok(Applied::PathError);
+        }
+        _ => {
+            let m: DiagnosticArray = deflex_rosmsg::decode(data)?;
+            if let Some(status) = m.status.iter().find(|s| s.name == ch::STATUS_NAME) {
+                apply_diagnostics(sample, status);
+                return Ok(Applied::Diagnostics);
+            }
+        }
+    }
+    Ok(Applied::Other)
 }
 
 fn apply_diagnostics(sample: &mut CycleSample, status: &deflex_rosmsg::DiagnosticStatus) {

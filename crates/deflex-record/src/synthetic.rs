@@ -108,13 +108,13 @@ impl SyntheticCell {
         // The sensor sees the same wrench in its own frame (tool pointing down: x, −y, −z).
         s.wrench_sensor = [f.x, -f.y, -f.z, m.x, -m.y, -m.z];
         let bias = [3.0, -2.0, 12.0, 0.1, 0.05, -0.02];
-        for i in 0..6 {
-            s.wrench_raw[i] = s.wrench_sensor[i] + bias[i] + 2.0 * self.noise();
+        for (i, b) in bias.iter().enumerate() {
+            s.wrench_raw[i] = s.wrench_sensor[i] + b + 2.0 * self.noise();
         }
         // δŝ = C w with a diagonal compliance (m/N, rad/(N·m)).
         let c = [2.0e-6, 2.5e-6, 3.0e-6, 1.0e-6, 1.0e-6, 2.0e-6];
-        for i in 0..6 {
-            s.deflection[i] = c[i] * s.wrench_tcp[i];
+        for (i, c) in c.iter().enumerate() {
+            s.deflection[i] = c * s.wrench_tcp[i];
         }
         // ξ follows −δŝ (time constant 0.4 s) within its size and rate bounds.
         let running = t > 0.5;

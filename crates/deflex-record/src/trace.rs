@@ -345,8 +345,8 @@ fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError
         let mut q = vec![0.0; n];
         let mut program = Vec::with_capacity(xi.x.len());
         for row in 0..xi.x.len() {
-            for j in 0..n {
-                q[j] = joints[j][row];
+            for (qj, column) in q.iter_mut().zip(&joints) {
+                *qj = column[row];
             }
             let p = match robot.forward_kinematics(&mut data, &q) {
                 Ok(()) => data.tcp_position() - Vector3::new(xi.x[row], xi.y[row], xi.z[row]),

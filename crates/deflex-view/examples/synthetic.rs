@@ -73,7 +73,7 @@ fn main() -> ExitCode {
         if let Some(wait) = due.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
         }
-        if n % (10 * rate_hz as u64) == 0 {
+        if n.is_multiple_of(10 * rate_hz as u64) {
             let s = view.stats();
             eprintln!(
                 "{n} samples published; view: {} pages, {} received, {} lost, {} messages dropped",
