@@ -286,21 +286,24 @@ fn page_loop(mut ws: WebSocket<TcpStream>, shared: &Shared) {
         });
     let mut last_progress = Instant::now();
     let mut last_stop: Option<Instant> = None;
-    // A message the socket's write buffer had no room for: held (only one) until it has, while
-    // the page's queue fills up behind it and the pump drops for this page.
-    let mut pending: Option<Message> = None;
+    // Messages taken from the queue and not yet in the socket's write buffer (one queue slot:
+    // a live message or the history), held until it has room while the page's queue fills up
+    // behind them and the pump drops for this page.
+    let mut pending: std::collections::VecDeque<Message> = std::collections::VecDeque::new();
     loop {
         if shared.shutdown.load(Ordering::Acquire) {
             let _ = ws.close(None);
             let _ = ws.flush();
             return;
         }
-        if pending.is_none() {
+        if pending.is_empty() {
             match rx.recv_timeout(POLL) {
-                Ok(message) => {
-                    let mut bytes = message.to_vec();
-                    frame::set_dropped(&mut bytes, dropped.load(Ordering::Relaxed));
-                    pending = Some(Message::binary(bytes));
+                Ok(batch) => {
+                    for message in batch.iter() {
+                        let mut bytes = message.to_vec();
+                        frame::set_dropped(&mut bytes, dropped.load(Ordering::Relaxed));
+                        pending.push_back(Message::binary(bytes));
+                    }
                 }
                 Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => return,
@@ -308,10 +311,13 @@ fn page_loop(mut ws: WebSocket<TcpStream>, shared: &Shared) {
         } else {
             std::thread::sleep(POLL);
         }
-        if let Some(message) = pending.take() {
+        while let Some(message) = pending.pop_front() {
             match ws.write(message) {
                 Ok(()) => {}
-                Err(tungstenite::Error::WriteBufferFull(back)) => pending = Some(*back),
+                Err(tungstenite::Error::WriteBufferFull(back)) => {
+                    pending.push_front(*back);
+                    break;
+                }
                 Err(e) if would_block(&e) => {}
                 Err(_) => return,
             }

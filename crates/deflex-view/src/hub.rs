@@ -15,8 +15,9 @@ use std::sync::mpsc::{SyncSender, TrySendError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-/// An encoded message shared by all pages.
-pub(crate) type Encoded = Arc<[u8]>;
+/// Encoded messages in one queue slot: a live message, or a new page's whole history (so that
+/// a short queue never drops the history).
+pub(crate) type Encoded = Arc<Vec<Arc<[u8]>>>;
 
 /// A page's end of the pump: its queue and its dropped count.
 pub(crate) struct ClientSlot {
@@ -97,18 +98,17 @@ pub(crate) fn run(mut subscriber: Subscriber<CycleSample>, shared: Arc<Shared>) 
                 .take(history.len() - fresh.len().min(history.len()))
                 .copied()
                 .collect();
-            let mut alive = true;
-            for chunk in all.chunks(MAX_BUCKETS_PER_MESSAGE) {
-                let message: Encoded = frame::encode(KIND_HISTORY, chunk, 0).into();
-                alive &= offer(&slot, &message, &shared);
-            }
-            if alive {
+            let pieces: Vec<Arc<[u8]>> = all
+                .chunks(MAX_BUCKETS_PER_MESSAGE)
+                .map(|chunk| frame::encode(KIND_HISTORY, chunk, 0).into())
+                .collect();
+            if pieces.is_empty() || offer(&slot, &Arc::new(pieces), &shared) {
                 clients.push(slot);
             }
         }
 
         for chunk in fresh.chunks(MAX_BUCKETS_PER_MESSAGE) {
-            let message: Encoded = frame::encode(KIND_LIVE, chunk, 0).into();
+            let message: Encoded = Arc::new(vec![frame::encode(KIND_LIVE, chunk, 0).into()]);
             clients.retain(|slot| offer(slot, &message, &shared));
             shared.stats.frames_sent.fetch_add(1, Ordering::Relaxed);
         }

@@ -107,10 +107,10 @@ fn a_page_gets_the_history_then_live_buckets_of_the_stream() {
 
 #[test]
 fn a_page_that_reads_nothing_costs_only_its_own_dropped_messages() {
-    // 10 minutes of history (5 MB) against a 1 MiB write buffer and a 4-message queue.
+    // 10 minutes of history (5 MB) against a 1 MiB write buffer and a 32-message queue (1.3 s).
     let publisher = Publisher::start(100.0, 60_000);
     let options = ViewOptions {
-        queue_messages: 4,
+        queue_messages: 32,
         write_buffer_bytes: deflex_view::MIN_WRITE_BUFFER_BYTES,
         ..ViewOptions::default()
     };
