@@ -1,7 +1,10 @@
 //! What a subscriber costs the publisher: `Publisher::publish` of one cycle sample with no
-//! subscriber, and with three real sinks reading the same ring on their own threads — the live
-//! view with a connected page that never reads (its socket fills, its messages are dropped and
-//! counted), the MCAP recorder writing a file, and a subscriber that never reads at all.
+//! subscriber, with three subscribers that never read, and with three real sinks reading the
+//! same ring on their own threads — the live view with a connected page that never reads (its
+//! socket fills, its messages are dropped and counted), the MCAP recorder writing a file, and a
+//! subscriber that never reads at all. The publisher runs flat out here (millions of samples a
+//! second, not 100–250), so the active sinks read the very cache lines it is writing: the
+//! worst case of the coherence traffic between them.
 //!
 //! `cargo bench -p deflex-view --bench publish`
 
@@ -32,6 +35,18 @@ fn publish(c: &mut Criterion) {
             publisher.publish(black_box(&samples[i]));
         })
     });
+
+    // Three subscribers that never read (an absent sink): the publisher never looks at them.
+    let (mut publisher, ring) = broadcast::<CycleSample>(RING);
+    let absent: Vec<_> = (0..3).map(|_| ring.subscribe()).collect();
+    let mut i = 0;
+    group.bench_function("3 subscribers that never read", |b| {
+        b.iter(|| {
+            i = (i + 1) % samples.len();
+            publisher.publish(black_box(&samples[i]));
+        })
+    });
+    drop(absent);
 
     let (mut publisher, ring) = broadcast::<CycleSample>(RING);
     let info = Arc::new(SyntheticCell::new(0.004, 1, true).session_info());

@@ -202,8 +202,8 @@ impl ViewHandle {
         }
     }
 
-    /// Stops the server: closes the pages' connections and waits for its threads (at most
-    /// about one tick and one poll of each page loop).
+    /// Stops the server: closes the pages' connections and waits for its threads (a tick of
+    /// the pump and a poll of each page, or up to [`REQUEST_TIMEOUT`] for a request being read).
     pub fn shutdown(mut self) {
         self.stop_threads();
     }

@@ -155,6 +155,14 @@ fn a_page_that_reads_nothing_costs_only_its_own_dropped_messages() {
     // The publisher went on at its rate: the view never made it wait.
     assert!(publisher.published.load(Ordering::Relaxed) > published_before);
     let stats = view.stats();
+    eprintln!(
+        "stalled page beside a reading one: {} samples published, {} read by the view, {} lost; \
+         {} messages dropped (all for the stalled page), 0 for the reading page",
+        publisher.published.load(Ordering::Relaxed),
+        stats.samples_received,
+        stats.samples_lost,
+        stats.frames_dropped
+    );
     assert_eq!(stats.samples_lost, 0, "{stats:?}");
     assert!(stats.frames_dropped > 0);
     drop(stalled);
