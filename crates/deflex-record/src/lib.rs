@@ -19,6 +19,7 @@
 
 pub mod channels;
 mod read;
+mod recorder;
 mod session;
 pub mod synthetic;
 pub mod trace;
@@ -28,10 +29,10 @@ mod write;
 mod tests;
 
 pub use read::{MAX_RECORD_BYTES, MCAP_MAGIC, RecordingSummary, for_each_cycle, is_mcap};
+pub use recorder::{McapRecorder, RecordReport};
 pub use session::{SESSION_JSON_SCHEMA, SessionRecord};
 pub use write::{
-    CHUNK_BYTES, DEFAULT_MAX_BYTES, MIN_MAX_BYTES, McapRecorder, McapSink, RecordOptions,
-    RecordReport, RecordStats,
+    CHUNK_BYTES, DEFAULT_MAX_BYTES, MIN_MAX_BYTES, McapSink, RecordOptions, RecordStats,
 };
 
 /// Why a recording failed. Every variant names the file.
