@@ -9,6 +9,7 @@ mod cmd_demo;
 mod cmd_egcal;
 mod cmd_model;
 mod cmd_plan;
+mod cmd_plot;
 mod cmd_sim;
 
 use clap::{Parser, Subcommand};
@@ -70,6 +71,8 @@ enum Command {
     Cell(cell_server::CellArgs),
     /// The paper's whole study on the built-in SIMULATED cell, with an HTML report.
     Demo(cmd_demo::DemoArgs),
+    /// Figures of a run's log (deflex run CSV, sim isf log.csv or MCAP), or two overlaid.
+    Plot(cmd_plot::PlotArgs),
 }
 
 fn main() -> ExitCode {
@@ -92,6 +95,7 @@ fn main() -> ExitCode {
         Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cell_server::cell(args, cli.json),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
+        Command::Plot(args) => cmd_plot::plot(args, cli.json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

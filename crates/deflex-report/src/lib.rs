@@ -16,6 +16,7 @@
 //! | [`scatter_heatmap`] | the same over scattered measurement points |
 //! | [`cloud_3d`] | 3D deviation cloud (Fig. 17) |
 //! | [`timeline_plot`] | on/off states over time (a controller's flags) |
+//! | [`write_run_figures`] | one run's log, or two overlaid on path position (`deflex plot`) |
 //! | [`HtmlReport`] | one self-contained page embedding all of them |
 //!
 //! The output format is chosen by the file extension: `.png` or `.svg`.
@@ -49,6 +50,7 @@ mod heatmap;
 mod html;
 mod plot;
 mod render;
+mod run_figures;
 mod timeline;
 
 use std::path::{Path, PathBuf};
@@ -60,6 +62,7 @@ pub use heatmap::{heatmap, scatter_heatmap};
 pub use html::{FileLink, HtmlReport, html_escape};
 pub use plot::{PanelLayout, line_plot, panels_plot, parity_plot};
 pub use render::{MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, text_width_px, title_layout};
+pub use run_figures::{MAX_POINTS, RunFigures, RunTrace, Xyz, write_run_figures};
 pub use timeline::{Lane, timeline_plot};
 
 /// Errors from drawing plots or writing reports. Every variant names the
