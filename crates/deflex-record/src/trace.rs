@@ -478,7 +478,7 @@ mod tests {
     fn a_run_log_uses_its_path_column_or_none() {
         let d = dir("run");
         let p = d.join("run.csv");
-        let mut header = deflex_control::log::csv_header(2);
+        let mut header = deflex_runtime::log::csv_header(2);
         header.push('\n');
         let row = |t: f64, s: &str| {
             let mut cells = vec![format!("{t}"), "0.1".into(), "0.2".into()];
@@ -513,7 +513,7 @@ mod tests {
         let p = d.join("run.csv");
         let robot = deflex_model::load_robot("tx200").unwrap();
         let n = robot.joint_count();
-        let mut text = deflex_control::log::csv_header(n) + "\n";
+        let mut text = deflex_runtime::log::csv_header(n) + "\n";
         let mut data = Data::new();
         let mut expected = Vec::new();
         let mut previous: Option<Vector3<f64>> = None;
