@@ -258,7 +258,7 @@ mod tests {
         let config = dir.join("cell.toml");
         std::fs::write(
             &config,
-            "[robot]\nkind = \"kuka-rsi\"\nbind = \"10.0.0.2:59152\"\n\
+            "[robot]\nkind = \"kuka-rsi\"\nbind = \"10.0.0.2:59152\"\npeer = \"10.0.0.3:0\"\n\
              [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n",
         )
         .unwrap();

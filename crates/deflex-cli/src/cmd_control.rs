@@ -114,6 +114,12 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
     let run = CellRun::start(&cell, args.startup_timeout_s, Some(args.idle_exit_s))
         .map_err(|e| e.to_string())?;
     let feedforward = run.feedforward.as_ref().map(describe_feedforward);
+    if let Ok(policy) = cell.peer_policy()
+        && let Some(warning) = policy.warning()
+        && !args.quiet
+    {
+        eprintln!("deflex run: warning: {warning}");
+    }
     if live && let Some(text) = &feedforward {
         eprintln!("deflex run: feed-forward: {text}");
     }
@@ -192,12 +198,36 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             "log_dropped": s.log_dropped, "warnings": s.warnings,
             "error": s.error.as_ref().map(ToString::to_string),
         });
+        let mut value = value;
+        let link = &s.robot_link;
+        for (key, v) in [
+            ("robot_dropped", json!(s.robot_dropped)),
+            ("robot_starved", json!(s.robot_starved)),
+            (
+                "robot_dropped_sequence",
+                json!(link.dropped_sequence + link.dropped_sequence_mismatch),
+            ),
+            ("robot_dropped_time", json!(link.dropped_time)),
+            ("robot_dropped_joint_count", json!(link.dropped_joint_count)),
+            (
+                "robot_refused_connections",
+                json!(link.refused_busy + link.refused_starving),
+            ),
+        ] {
+            value[key] = v;
+        }
         print_json(&value);
     } else {
         print_summary(&o);
     }
     match &s.error {
         Some(e) => Err(e.to_string()),
+        None if s.robot_starved => Err(
+            "the session ended faulted: another connection held the robot link while the robot \
+             was served no answers (robot_link_starved); the robot may not have received its \
+             corrections"
+                .into(),
+        ),
         None => Ok(()),
     }
 }
@@ -216,7 +246,7 @@ fn print_summary(o: &RunOutcome) {
         println!("  feed-forward:      {text}");
     }
     println!(
-        "  {} ({} joints) reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; {} telegrams          answered, {} answered later than one robot cycle{}",
+        "  {} ({} joints) reply latency: p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; {} telegrams answered, {} answered later than one robot cycle{}",
         o.session.robot_kind.name(),
         s.robot_joints,
         s.reply_latency.p50_us,
@@ -230,14 +260,18 @@ fn print_summary(o: &RunOutcome) {
         }
     );
     println!(
-        "  robot link: {} receive timeouts, {} malformed packets, {} errors, {} from other hosts          refused{}",
+        "  robot link: {} receive timeouts, {} malformed packets, {} errors, {} from other hosts or second connections refused{}; {} robot messages dropped as no new state ({} sequence not advancing, {} clock going back, {} joint count)",
         s.robot_timeouts,
         s.robot_bad_packets,
         s.robot_errors,
         s.robot_foreign,
         s.last_foreign
             .map(|a| format!(" (last {a})"))
-            .unwrap_or_default()
+            .unwrap_or_default(),
+        s.robot_dropped,
+        s.robot_link.dropped_sequence + s.robot_link.dropped_sequence_mismatch,
+        s.robot_link.dropped_time,
+        s.robot_link.dropped_joint_count,
     );
     println!(
         "  largest correction step sent: {:.4} mm (limit {:.4} mm per robot cycle)",
@@ -245,7 +279,7 @@ fn print_summary(o: &RunOutcome) {
         o.session.step_limit_m * 1e3
     );
     println!(
-        "  sensor: {} samples, {} lost, {} flagged by the status word, {} malformed or failed, {}          from other hosts refused",
+        "  sensor: {} samples, {} lost, {} flagged by the status word, {} malformed or failed, {} from other hosts refused",
         s.samples, s.sample_gaps, s.sensor_faults, s.sensor_errors, s.sensor_foreign
     );
     println!(

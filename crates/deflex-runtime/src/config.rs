@@ -98,6 +98,9 @@ pub enum ConfigError {
 /// Why a value of `CELL.toml` cannot be used (besides bounds and unknown choices).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InvalidReason {
+    /// `robot.peer` / `robot.bind` / `robot.allow_any_peer` that cannot be served safely.
+    #[error("{0}")]
+    Peer(deflex_io::PeerConfigError),
     /// An empty text where a name is needed.
     #[error("must {0}")]
     Empty(&'static str),

@@ -19,7 +19,8 @@ use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
 use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
 use deflex_io::{
-    ForceSensorLink, LinkError, ReceivedCorrection, RobotLink, RobotSideLink, RobotState,
+    ForceSensorLink, LinkError, PeerPolicy, ReceivedCorrection, RobotLink, RobotSideLink,
+    RobotState,
 };
 use deflex_model::spatial::pose_from_xyz_rpy;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -79,43 +80,42 @@ impl CellFile {
         joint_count: usize,
     ) -> Result<Box<dyn RobotLink + Send>, LinkError> {
         let r = &self.robot;
+        let policy = self.peer_policy()?;
         Ok(match r.kind {
             RobotKind::KukaRsi => {
                 let mut link = RsiLink::bind(r.bind, self.rsi_config())?;
-                if let Some(p) = r.peer {
-                    link.expect_peer(p);
-                }
+                link.set_peer_policy(policy);
                 Box::new(link)
             }
             RobotKind::AbbEgm => {
                 let mut link = EgmLink::bind(r.bind, self.egm_config(joint_count))?;
-                if let Some(p) = r.peer {
-                    link.expect_peer(p);
-                }
+                link.set_peer_policy(policy);
                 Box::new(link)
             }
             RobotKind::Staubli => {
                 let mut link = StaubliLink::bind(r.bind)?;
-                if let Some(p) = r.peer {
-                    link.expect_peer(p);
-                }
+                link.set_peer_policy(policy);
                 Box::new(link)
             }
             RobotKind::SimpleUdp => {
                 let mut link = SimpleUdpLink::bind(r.bind, ReplyStyle::default())?;
-                if let Some(p) = r.peer {
-                    link.expect_peer(p);
-                }
+                link.set_peer_policy(policy);
                 Box::new(link)
             }
             RobotKind::SimpleTcp => {
                 let mut link = SimpleTcpLink::bind(r.bind)?;
-                if let Some(p) = r.peer {
-                    link.expect_peer(p);
-                }
+                link.set_peer_policy(policy);
                 Box::new(link)
             }
         })
+    }
+
+    /// The robot link's peer policy from `robot.peer`, `robot.bind` and `robot.allow_any_peer`
+    /// ([`deflex_io::validate_peer`]; a loaded file has passed it already). Its
+    /// [`PeerPolicy::warning`] is what a session without a peer prints at start.
+    pub fn peer_policy(&self) -> Result<PeerPolicy, LinkError> {
+        let r = &self.robot;
+        deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer).map_err(LinkError::from)
     }
 
     /// Controller side: binds the sensor client of `[sensor]`.

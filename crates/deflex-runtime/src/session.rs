@@ -258,6 +258,7 @@ impl Runtime {
                 summary.reply_latency = report.latency.summary();
                 summary.warnings.extend(report.warnings);
                 summary.max_step_sent = report.max_step;
+                summary.robot_link = report.counters;
             }
             Err(payload) => {
                 summary.error.get_or_insert(SessionError::ThreadPanicked {
@@ -276,6 +277,11 @@ impl Runtime {
             summary.end = SessionEnd::Failed;
         }
         self.shared.fill_counters(&mut summary);
+        if summary.error.is_none() && (summary.robot_starved || summary.robot_link.robot_starved())
+        {
+            summary.robot_starved = true;
+            summary.end = SessionEnd::RobotStarved;
+        }
         summary.warnings.sort();
         summary.warnings.dedup();
         summary

@@ -40,6 +40,10 @@ pub struct RobotSection {
     /// IP; the simple TCP link compares the IP only). Absent: the link locks to the first host
     /// that sends a valid telegram, for the whole session.
     pub peer: Option<SocketAddr>,
+    /// Without `peer`, let the first host on the network that sends a valid message own the
+    /// session (default `false`: a network `bind` without `peer` is refused; a loopback `bind`
+    /// without `peer` accepts the first local sender, with a warning at start).
+    pub allow_any_peer: bool,
     /// RSI correction interpretation: `absolute` (default) or `relative`.
     #[serde(with = "CorrectionModeDef")]
     pub correction_mode: CorrectionMode,
@@ -74,6 +78,7 @@ impl Default for RobotSection {
             kind: RobotKind::KukaRsi,
             bind: SocketAddr::from(([0, 0, 0, 0], 59152)),
             peer: None,
+            allow_any_peer: false,
             correction_mode: CorrectionMode::Absolute,
             sen_type: "ImFree".into(),
             rsi_answer: RsiAnswerKind::Cartesian,

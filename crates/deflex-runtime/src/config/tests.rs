@@ -297,3 +297,40 @@ fn the_example_documents_every_key() {
     }
     assert!(checked > 40, "{checked}");
 }
+
+/// Issue 18, item 10: a network `bind` without `peer` is refused unless `allow_any_peer`; an
+/// unspecified peer is refused; both name the field. A loopback bind without a peer is served
+/// with a warning.
+#[test]
+fn robot_peer_rules_name_the_field() {
+    let network = MINIMAL.replace("127.0.0.1:59152", "0.0.0.0:59152");
+    let e = CellFile::parse(&network, "cell.toml", PathBuf::new())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cell.toml") && e.contains("robot.bind") && e.contains("allow_any_peer"),
+        "{e}"
+    );
+    let allowed = network.replace(
+        "bind = \"0.0.0.0:59152\"",
+        "bind = \"0.0.0.0:59152\"\nallow_any_peer = true",
+    );
+    let cell = CellFile::parse(&allowed, "cell.toml", PathBuf::new()).unwrap();
+    assert!(cell.peer_policy().unwrap().warning().is_some());
+    let unspecified = network.replace(
+        "bind = \"0.0.0.0:59152\"",
+        "bind = \"0.0.0.0:59152\"\npeer = \"0.0.0.0:0\"",
+    );
+    let e = CellFile::parse(&unspecified, "cell.toml", PathBuf::new())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("robot.peer") && e.contains("unspecified"), "{e}");
+    let locked = network.replace(
+        "bind = \"0.0.0.0:59152\"",
+        "bind = \"0.0.0.0:59152\"\npeer = \"192.168.1.147:0\"",
+    );
+    let cell = CellFile::parse(&locked, "cell.toml", PathBuf::new()).unwrap();
+    assert!(cell.peer_policy().unwrap().warning().is_none());
+    let cell = CellFile::parse(MINIMAL, "cell.toml", PathBuf::new()).unwrap();
+    assert!(cell.peer_policy().unwrap().warning().is_some());
+}

@@ -127,6 +127,14 @@ impl CellFile {
         self.check_all("robot.egm_work_object_rpy_rad", &r.egm_work_object_rpy_rad)?;
         self.check("robot.cycle_s", r.cycle_s)?;
         self.check("robot.timeout_s", r.timeout_s)?;
+        if let Err(e) = deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer) {
+            let field = match e {
+                deflex_io::PeerConfigError::NoPeerOnNetworkBind { .. } => "robot.bind",
+                deflex_io::PeerConfigError::PeerAndAllowAny { .. } => "robot.allow_any_peer",
+                _ => "robot.peer",
+            };
+            return Err(self.invalid(field, InvalidReason::Peer(e)));
+        }
         if r.timeout_s < r.cycle_s {
             return Err(self.invalid(
                 "robot.timeout_s",

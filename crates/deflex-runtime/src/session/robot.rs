@@ -7,7 +7,7 @@ use crate::messages::{JointSample, LATE_UNKNOWN};
 use crate::rt::try_realtime;
 use crate::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use crate::stats::CycleStats;
-use deflex_io::{Correction, LinkError, RobotLink, RobotState};
+use deflex_io::{Correction, LinkCounters, LinkError, RobotLink, RobotState};
 use deflex_model::MAX_JOINTS;
 use nalgebra::Vector6;
 use std::sync::atomic::Ordering;
@@ -18,6 +18,7 @@ pub(super) struct RobotReport {
     pub(super) latency: CycleStats,
     pub(super) warnings: Vec<String>,
     pub(super) max_step: [f64; 6],
+    pub(super) counters: LinkCounters,
 }
 
 /// The thread's state between telegrams.
@@ -94,11 +95,22 @@ fn count_failed_receive(result: Result<(), LinkError>, shared: &Shared) {
         Ok(()) => {
             shared.robot_timeouts.fetch_add(1, Ordering::Relaxed);
         }
-        Err(LinkError::ForeignSender { from, .. }) => {
+        Err(e) if e.is_foreign() => {
+            // A host other than the robot, or a second connection while the robot holds the
+            // session: refused unanswered. A refusal while the connection holding the session
+            // serves no robot lines means the robot itself may be locked out: the session
+            // ends as faulted.
             shared.robot_foreign.fetch_add(1, Ordering::Relaxed);
-            if let Ok(mut last) = shared.last_foreign.lock() {
+            if e.is_starving() {
+                shared.robot_starved.store(true, Ordering::Relaxed);
+            }
+            if let (Some(from), Ok(mut last)) = (e.foreign_source(), shared.last_foreign.lock()) {
                 *last = Some(from);
             }
+        }
+        Err(e) if e.is_dropped() => {
+            // From the robot, but not a new state (replay, joint count, time going back).
+            shared.robot_dropped.fetch_add(1, Ordering::Relaxed);
         }
         Err(e) if e.is_bad_packet() => {
             shared.robot_bad_packets.fetch_add(1, Ordering::Relaxed);
@@ -154,5 +166,6 @@ pub(super) fn robot_loop<C: Clock>(
         latency: answering.latency,
         warnings,
         max_step: answering.max_step,
+        counters: link.counters(),
     }
 }

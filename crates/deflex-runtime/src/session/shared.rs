@@ -29,6 +29,8 @@ pub(super) struct Shared {
     pub(super) robot_bad_packets: AtomicU64,
     pub(super) robot_errors: AtomicU64,
     pub(super) robot_foreign: AtomicU64,
+    pub(super) robot_dropped: AtomicU64,
+    pub(super) robot_starved: AtomicBool,
     pub(super) last_foreign: Mutex<Option<SocketAddr>>,
     pub(super) first_late: AtomicU64,
     pub(super) last_late: AtomicU64,
@@ -56,6 +58,8 @@ impl Shared {
             robot_bad_packets: AtomicU64::new(0),
             robot_errors: AtomicU64::new(0),
             robot_foreign: AtomicU64::new(0),
+            robot_dropped: AtomicU64::new(0),
+            robot_starved: AtomicBool::new(false),
             last_foreign: Mutex::new(None),
             first_late: AtomicU64::new(NO_LATE),
             last_late: AtomicU64::new(NO_LATE),
@@ -92,6 +96,8 @@ impl Shared {
         summary.robot_bad_packets = self.robot_bad_packets.load(Ordering::Relaxed);
         summary.robot_errors = self.robot_errors.load(Ordering::Relaxed);
         summary.robot_foreign = self.robot_foreign.load(Ordering::Relaxed);
+        summary.robot_dropped = self.robot_dropped.load(Ordering::Relaxed);
+        summary.robot_starved = self.robot_starved.load(Ordering::Relaxed);
         summary.last_foreign = self.last_foreign.lock().ok().and_then(|g| *g);
         summary.robot_late = self.robot_late();
         summary.samples = self.samples.load(Ordering::Relaxed);

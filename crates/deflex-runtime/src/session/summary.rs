@@ -3,6 +3,7 @@
 
 use crate::stats::StatsSummary;
 use deflex_control::{Fault, FaultKind, Flags, Phase};
+use deflex_io::LinkCounters;
 use std::net::SocketAddr;
 
 /// The thread a failure came from.
@@ -164,6 +165,9 @@ pub enum SessionEnd {
     StoppedBeforeStart,
     /// The run failed ([`RunSummary::error`] says why).
     Failed,
+    /// The robot link was held by a connection that served no robot lines while another was
+    /// refused ([`RunSummary::robot_starved`]): the robot may have been locked out.
+    RobotStarved,
 }
 
 impl SessionEnd {
@@ -178,6 +182,9 @@ impl SessionEnd {
             SessionEnd::Stopped => "stopped (correction ramped out)".into(),
             SessionEnd::StoppedBeforeStart => "stopped before start".into(),
             SessionEnd::Failed => "failed".into(),
+            SessionEnd::RobotStarved => "faulted (robot_link_starved: another connection held \
+                 the robot link while the robot was served no answers)"
+                .into(),
         }
     }
 
@@ -188,6 +195,7 @@ impl SessionEnd {
             SessionEnd::Stopped => "stopped",
             SessionEnd::StoppedBeforeStart => "stopped_before_start",
             SessionEnd::Failed => "failed",
+            SessionEnd::RobotStarved => "robot_starved",
         }
     }
 }
@@ -216,6 +224,15 @@ pub struct RunSummary {
     pub robot_foreign: u64,
     /// The last refused host.
     pub last_foreign: Option<SocketAddr>,
+    /// Messages from the robot dropped unanswered because they were no new state (a sequence
+    /// number that did not advance, a robot clock going back, another joint count).
+    pub robot_dropped: u64,
+    /// A second connection was refused while the one holding the session served no robot
+    /// lines: the robot may have been locked out. The session counts as faulted.
+    pub robot_starved: bool,
+    /// The robot link's own counters at the end (accepted, answers, refusals and drops by
+    /// reason).
+    pub robot_link: LinkCounters,
     /// Answers the robot itself counted as late or missing over the session, when its protocol
     /// reports it (KUKA RSI `Delay D`, last minus first).
     pub robot_late: Option<u64>,
@@ -270,6 +287,9 @@ impl RunSummary {
             robot_errors: 0,
             robot_foreign: 0,
             last_foreign: None,
+            robot_dropped: 0,
+            robot_starved: false,
+            robot_link: LinkCounters::default(),
             robot_late: None,
             samples: 0,
             sample_gaps: 0,

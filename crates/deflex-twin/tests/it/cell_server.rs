@@ -24,7 +24,7 @@ fn the_model_geometry_is_checked_against_the_robot_played() {
 #[test]
 fn cell_refuses_non_loopback_addresses() {
     let file = CellFile::parse(
-        "[robot]\nkind = \"kuka-rsi\"\nbind = \"10.0.0.2:59152\"\n\
+        "[robot]\nkind = \"kuka-rsi\"\nbind = \"10.0.0.2:59152\"\npeer = \"10.0.0.3:0\"\n\
          [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n",
         "cell.toml",
         PathBuf::new(),
