@@ -27,7 +27,7 @@
 //! [`ResampleOptions::max_offset_m`] from the path are counted and skipped.
 //!
 //! **The rows as the tool moved along the path.** Only a row that advances along the path
-//! (its arc length beyond the last kept row's by more than 1 nm) is kept: a standstill logs a
+//! (its arc length beyond the last kept row's by more than 1 µm) is kept: a standstill logs a
 //! pile of rows at one place (a dwell, the end of the program with the force fading while the
 //! tool rests, a pause in contact), and averaging them with the few rows of the pass would
 //! weigh the pass by the time spent, not by the path. On an unseen plant, 200 rows logged at
@@ -328,8 +328,10 @@ pub struct Resampled {
     pub max_offset_m: f64,
 }
 
-/// A kept row must lie this far along the path beyond the previous one (m).
-const ADVANCE_M: f64 = 1e-9;
+/// A kept row must lie this far along the path beyond the previous kept one (m): more than the
+/// jitter of a robot at rest (encoder noise, the inverse kinematics of a log's joints), less
+/// than a row's advance at the slowest feed worth compensating.
+const ADVANCE_M: f64 = 1e-6;
 
 /// The wrench as a function of arc length: linear between the kept rows `(s_k, w_k)` (strictly
 /// increasing `s`), with its running integral `P_k = ∫_{s_0}^{s_k} w ds` (trapezoids, exact for
