@@ -6,3 +6,4 @@ mod cells;
 mod forming;
 mod fuzz;
 mod process_model;
+mod unseen_plant;
