@@ -465,10 +465,24 @@ fn write_outputs(
     for line in &program_report {
         let _ = writeln!(text, "  {line}");
     }
+    let programs = written
+        .iter()
+        .filter(|f| f.starts_with("programs/"))
+        .count();
+    let others: Vec<&str> = written
+        .iter()
+        .filter(|f| !f.starts_with("programs/"))
+        .map(String::as_str)
+        .collect();
     let _ = writeln!(
         text,
-        "  wrote {}; none of the programs has been run on a real controller",
-        written.join(", ")
+        "  wrote {}{}; none of the programs has been run on a real controller",
+        others.join(", "),
+        if programs > 0 {
+            format!(" and {programs} program file(s) in programs/")
+        } else {
+            String::new()
+        }
     );
     deflex_files::write_atomic(
         dir.path().join("summary.json"),

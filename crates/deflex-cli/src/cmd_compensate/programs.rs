@@ -211,18 +211,21 @@ pub fn write_programs(
         checks.push(ProgramCheck {
             format: *format,
             bytes: files.iter().map(|f| f.contents.len()).sum(),
-            parts: files
-                .iter()
-                .filter(|f| {
-                    f.path.contains("_p0") || f.path.contains("_p1") || f.path.contains("/part")
-                })
-                .count()
-                .max(1),
+            parts: files.iter().filter(|f| is_part(&f.path)).count().max(1),
             files: files.iter().map(|f| f.path.clone()).collect(),
             ..check
         });
     }
     Ok(checks)
+}
+
+/// A part file: `NAME_p01.src` … or `NAME/part1.pgx` ….
+fn is_part(path: &str) -> bool {
+    let stem = path.rsplit('/').next().unwrap_or(path);
+    let stem = stem.split('.').next().unwrap_or(stem);
+    let digits = |s: &str| !s.is_empty() && s.chars().all(|c| c.is_ascii_digit());
+    stem.rsplit_once("_p").is_some_and(|(_, n)| digits(n))
+        || stem.strip_prefix("part").is_some_and(digits)
 }
 
 /// The program read back against the input: path points, clearance points.

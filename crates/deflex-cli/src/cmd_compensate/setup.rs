@@ -198,7 +198,11 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
         Err(e) => return Err(e),
     };
     let mut placement: Vec<&str> = Vec::new();
-    let cell_name = format!("the {} cell", args.robot);
+    let cell_name = if deflex_model::builtin(&args.robot).is_some() {
+        format!("the {} cell", args.robot)
+    } else {
+        format!("the cell of {}", args.robot)
+    };
     let mut part_origin_mm = config.as_ref().map_or([0.0; 3], |c| c.part.origin_mm);
     if let Some(text) = &args.part_xyz_mm {
         let v = parsed("--part-xyz-mm", text)?;
