@@ -7,6 +7,7 @@ mod cmd_compensate;
 mod cmd_control;
 mod cmd_demo;
 mod cmd_egcal;
+mod cmd_export;
 mod cmd_model;
 mod cmd_plan;
 mod cmd_plot;
@@ -65,6 +66,8 @@ enum Command {
     },
     /// Compensate a tool path offline and write robot programs (no real-time option needed).
     Compensate(cmd_compensate::CompensateArgs),
+    /// Write a calibrated robot as a URDF, a UR calibration file or a DH-corrections table.
+    Export(cmd_export::ExportArgs),
     /// Run the real-time correction controller against a robot and a force sensor.
     Run(cmd_control::RunArgs),
     /// Serve the simulated cell over the robot and sensor protocols on loopback.
@@ -92,6 +95,7 @@ fn main() -> ExitCode {
         Command::Plan(args) => cmd_calib::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
         Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json),
+        Command::Export(args) => cmd_export::export(args, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cell_server::cell(args, cli.json),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),

@@ -46,6 +46,15 @@ fn cone_path(points: usize) -> Vec<ProgramPoint> {
 
 fn input(points: Vec<ProgramPoint>) -> ProgramInput {
     ProgramInput {
+        tool_load: Some(deflex_program::ToolLoad {
+            mass_kg: 2.5,
+            cog_m: [0.0, 0.0, 0.08],
+            source: "test",
+        }),
+        coordinates: Coordinates::Part,
+        frame_name: None,
+        configurations: Vec::new(),
+        clearance_configurations: None,
         description: vec![
             "SIMULATED test path: cone Ø40 mm, 45° — δ ≤ 3 mm (µm-level check)".into(),
             "second line (with parentheses) and ; semicolons".into(),
@@ -79,10 +88,19 @@ fn check_round_trip(format: Format, input: &ProgramInput, settings: &ProgramSett
         );
     }
     let read = read_files(format, &files).unwrap();
-    assert_eq!(read.len(), input.points.len(), "{format:?}");
+    let n = input.points.len();
+    // The clearance point above the start, the path, the clearance point above the end.
+    assert_eq!(read.len(), n + 2, "{format:?}");
+    let clear = input.clearance_poses(settings).unwrap();
+    for (k, back) in [(0, &read[0]), (1, &read[n + 1])] {
+        let dp = (clear[k].translation.vector - back.position_m).norm();
+        assert!(dp <= 1e-6, "{format:?}: clearance point {k} off by {dp} m");
+    }
+    // The first motion after the start reaches the clearance point from above the part: the
+    // approach and the retract stay outside the path's bounding box but for their ends.
     let mut worst_position: f64 = 0.0;
     let mut worst_rotation: f64 = 0.0;
-    for (i, (written, back)) in input.points.iter().zip(&read).enumerate() {
+    for (i, (written, back)) in input.points.iter().zip(&read[1..=n]).enumerate() {
         let dp = (written.pose.translation.vector - back.position_m).norm();
         worst_position = worst_position.max(dp);
         if let Some(rotation) = back.rotation {
@@ -91,14 +109,17 @@ fn check_round_trip(format: Format, input: &ProgramInput, settings: &ProgramSett
         } else {
             assert_eq!(format, Format::Gcode);
         }
-        match (i, back.speed_m_s) {
-            (0, s) => assert_eq!(s, None, "{format:?}: the first motion is the approach"),
-            (_, None) => {
-                assert_eq!(format, Format::Gcode, "only G-code keeps rapids as rapids");
-                assert!(written.speed_m_s.is_none());
+        let want = if i == 0 {
+            settings.program.approach_speed_mm_s * 1e-3
+        } else {
+            expected_speed_m_s(written, settings)
+        };
+        match back.speed_m_s {
+            None => {
+                assert_eq!(format, Format::Gcode, "only G-code keeps rapids as G0");
+                assert!(written.speed_m_s.is_none() && i > 0);
             }
-            (_, Some(v)) => {
-                let want = expected_speed_m_s(written, settings);
+            Some(v) => {
                 // Speeds are written to 0.01 mm/s.
                 assert!(
                     (v - want).abs() <= 0.5e-5 + 1e-12,
@@ -152,7 +173,12 @@ fn orientations_at_and_near_gimbal_lock_round_trip() {
             }
         }
     }
-    let input = ProgramInput::new(points);
+    let mut input = ProgramInput::new(points);
+    input.tool_load = Some(deflex_program::ToolLoad {
+        mass_kg: 1.0,
+        cog_m: [0.0; 3],
+        source: "test",
+    });
     for format in Format::ALL {
         check_round_trip(format, &input, &ProgramSettings::default());
     }
@@ -173,6 +199,8 @@ fn programs_carry_the_vendor_keywords_units_and_frames() {
     assert!(krl.contains("== deflex_path.src") && krl.contains("== deflex_path.dat"));
     assert!(krl.contains("DEF deflex_path( )") && krl.contains("DEFDAT deflex_path"));
     assert!(krl.contains("$TOOL = TOOL_DATA[1]") && krl.contains("$BASE = BASE_DATA[1]"));
+    assert!(krl.contains("PTP $H_POS") && krl.contains("$LOAD = LOAD_DATA[1]"));
+    assert!(krl.contains("; approach") && krl.contains("; retract"));
     assert!(krl.contains("$VEL.CP = 0.01000"), "10 mm/s written in m/s");
     assert!(krl.contains("} C_DIS\r\n") && krl.contains("DECL REAL DEFLEX_CDIS = 0.200"));
     // The expected base: X 1500 mm, turned 0.3 rad = 17.188734° about z.
@@ -186,6 +214,10 @@ fn programs_carry_the_vendor_keywords_units_and_frames() {
     assert!(rapid.contains("\\WObj:=deflex_wobj;"));
     assert!(rapid.contains("PERS tooldata deflex_tool := [TRUE,[[0.0000,0.0000,250.0000],"));
     assert!(
+        rapid.contains("[2.500,[0.000,0.000,80.000],"),
+        "the tool load"
+    );
+    assert!(
         rapid.contains("fine, deflex_tool"),
         "the last move ends exactly"
     );
@@ -198,7 +230,10 @@ fn programs_carry_the_vendor_keywords_units_and_frames() {
     ] {
         assert!(val3.contains(&format!("== {part}")), "{part}");
     }
-    assert!(val3.contains("movel(pPath[l_i], tTool, mPath[nSpeed[l_i]])"));
+    assert!(val3.contains("movel(pPath1[l_i], tTool, mPath[nSpeed1[l_i]])"));
+    assert!(
+        val3.contains("call part1()") && val3.contains("movel(pClear[1], tTool, mApproach[1])")
+    );
     assert!(val3.contains("fatherId=\"fPart[0]\"") && val3.contains("fatherId=\"flange[0]\""));
     assert!(val3.contains("millimeterUnit=\"true\""));
     let ur = text(Format::UrScript);
@@ -211,9 +246,9 @@ fn programs_carry_the_vendor_keywords_units_and_frames() {
     ));
     assert!(ur.contains("v=0.01000"));
     let gcode = text(Format::Gcode);
-    assert!(gcode.contains("G21\nG90\nG0 X20.0000 Y0.0000 Z0.0000\n"));
+    assert!(gcode.contains("G17 G40 G49 G80 G90 G21 G54\nG0 X20.0000 Y0.0000 Z20.0000 ( clearance point )\nG1 X20.0000 Y0.0000 Z0.0000 F600.00 ( approach )\n"), "{gcode}");
     assert!(gcode.contains(" F600.00\n"));
-    assert!(gcode.trim_end().ends_with("M30"));
+    assert!(gcode.trim_end().ends_with("M30\n%"));
     // Comments never break the language: no parentheses inside G-code comments.
     for line in gcode.lines().filter(|l| l.starts_with('(')) {
         assert_eq!(line.matches('(').count(), 1, "{line}");
@@ -241,10 +276,18 @@ fn blends_shrink_on_short_segments_and_vanish_at_the_end() {
         .lines()
         .filter_map(|l| l.split("r=").nth(1))
         .collect();
-    // 45 % of 0.1 mm = 0.045 mm < the 0.2 mm setting; the last move has none.
+    // The approach has none; 45 % of 0.1 mm = 0.045 mm < the 0.2 mm setting; the last move and
+    // the retract have none.
     assert_eq!(
         radii,
-        ["0.0000450)", "0.0000450)", "0.0000450)", "0.0000000)"]
+        [
+            "0.0000000)",
+            "0.0000450)",
+            "0.0000450)",
+            "0.0000450)",
+            "0.0000000)",
+            "0.0000000)"
+        ]
     );
 }
 
@@ -376,4 +419,136 @@ fn the_template_file_documents_the_defaults() {
     assert!(e.to_string().contains("speed"), "{e}");
     let e = ProgramSettings::from_toml_str("[program]\nblend_mm = nan\n", "t.toml").unwrap_err();
     assert!(e.to_string().contains("program.blend_mm"), "{e}");
+}
+
+/// The configuration of a TX200-like arm at joint values (the sides written out for the
+/// test: in front of axis 1, in front of the lower arm, elbow short of stretched).
+fn arm(q: [f64; 6]) -> deflex_program::ArmConfiguration {
+    deflex_program::ArmConfiguration {
+        joints_rad: q,
+        wrist_behind_axis_1: false,
+        wrist_behind_lower_arm: false,
+        elbow_beyond_stretched: q[2] > 0.3,
+    }
+}
+
+#[test]
+fn long_paths_are_split_into_parts_that_read_back_in_order() {
+    let settings = ProgramSettings {
+        program: deflex_program::settings::CommonSettings {
+            max_points_per_part: 300,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut input = input(cone_path(1000));
+    input.configurations = (0..1000)
+        .map(|i| arm([0.1, 0.8, 1.5 - 1e-4 * i as f64, 0.0, 0.7, -0.2]))
+        .collect();
+    input.clearance_configurations = Some([arm([0.1, 0.8, 1.4, 0.0, 0.7, -0.2]); 2]);
+    for format in Format::ALL {
+        check_round_trip(format, &input, &settings);
+        let files = export(format, &input, &settings).unwrap();
+        let parts: Vec<&str> = files
+            .iter()
+            .map(|f| f.path.as_str())
+            .filter(|p| p.contains("_p0") || p.contains("/part"))
+            .collect();
+        match format {
+            // 999 moves after the first point in parts of 300: 4 parts.
+            Format::Krl | Format::Rapid | Format::UrScript | Format::Val3 => {
+                assert_eq!(parts.len(), 4, "{format:?}: {parts:?}")
+            }
+            Format::Gcode => assert!(parts.is_empty()),
+        }
+    }
+    let text = |format| -> String {
+        export(format, &input, &settings)
+            .unwrap()
+            .iter()
+            .map(|f| f.contents.clone())
+            .collect()
+    };
+    let krl = text(Format::Krl);
+    for k in 1..=4 {
+        assert!(
+            krl.contains(&format!("deflex_path_p0{k}( )\r\n")),
+            "call {k}"
+        );
+        assert!(
+            krl.contains(&format!("DEF deflex_path_p0{k}( )")),
+            "part {k}"
+        );
+    }
+    // KUKA Status/Turn on the PTP to the clearance point: S 2 (A3 beyond stretched), T 32
+    // (A6 negative).
+    assert!(
+        krl.contains(", S 2, T 32} ; clearance point"),
+        "{}",
+        &krl[..2000]
+    );
+    // ABB: robconf at every target, configuration monitoring on, the start joint move.
+    let rapid = text(Format::Rapid);
+    assert!(rapid.contains("ConfJ \\On;") && rapid.contains("ConfL \\On;"));
+    assert!(
+        rapid.contains("],[0,0,-1,0],[9E9"),
+        "robconf of A6 = -0.2 rad"
+    );
+    assert!(rapid.contains("MoveAbsJ deflex_start,"));
+    assert!(rapid.contains(
+        "CONST jointtarget deflex_start := [[5.7296,45.8366,80.2141,0.0000,40.1070,-11.4592]"
+    ));
+    let val3 = text(Format::Val3);
+    assert!(val3.contains("shoulder=\"righty\" elbow=\"epositive\" wrist=\"wpositive\""));
+    assert!(val3.contains("movej(jStart[0], tTool, mApproach[0])"));
+    let ur = text(Format::UrScript);
+    assert!(ur.contains(
+        "movej([0.100000, 0.800000, 1.400000, 0.000000, 0.700000, -0.200000], a=0.500, v=0.200)"
+    ));
+    assert!(ur.contains("set_payload(2.500, [0.0000, 0.0000, 0.0800])"));
+}
+
+#[test]
+fn robot_coordinates_write_no_base_and_headers_wrap_at_words() {
+    let settings = ProgramSettings {
+        program: deflex_program::settings::CommonSettings {
+            coordinates: Coordinates::Robot,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut input = input(cone_path(20));
+    input.coordinates = Coordinates::Robot;
+    input.description = vec![format!(
+        "SIMULATED deflex offline compensation {} end",
+        "of a rather long description line with many words ".repeat(4)
+    )];
+    let krl = &export(Format::Krl, &input, &settings).unwrap()[0].contents;
+    assert!(krl.contains("$BASE = $NULLFRAME"), "{krl}");
+    assert!(!krl.contains("$BASE = BASE_DATA"));
+    let comments: Vec<&str> = krl
+        .lines()
+        .filter_map(|l| l.strip_prefix("; "))
+        .take(4)
+        .collect();
+    assert!(comments.iter().all(|l| l.len() <= 90), "{comments:?}");
+    let joined = comments.join(" ");
+    let words: Vec<&str> = joined.split_whitespace().take(8).collect();
+    assert_eq!(
+        words,
+        [
+            "SIMULATED",
+            "deflex",
+            "offline",
+            "compensation",
+            "of",
+            "a",
+            "rather",
+            "long"
+        ]
+    );
+    // RAPID refuses to guess a tool load.
+    input.tool_load = None;
+    let e = export(Format::Rapid, &input, &settings).unwrap_err();
+    assert!(e.to_string().contains("program.tool_mass_kg"), "{e}");
 }

@@ -2,6 +2,8 @@
 //! executable for this crate instead of one per file.
 
 mod calibration;
+mod cells;
 mod forming;
 mod fuzz;
 mod process_model;
+mod unseen_plant;
