@@ -227,6 +227,7 @@ fn simulate(truth: &Truth, seed: u64) -> Simulated {
                 wrench: None,
                 temperature_c: None,
                 time_s: None,
+                approach_rad: None,
             });
         }
     }
