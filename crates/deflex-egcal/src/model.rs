@@ -11,8 +11,8 @@
 //! of origin o_b, rotation R_b; payload folded into the last body) and of an external wrench
 //! (f, μ) at the target. First order in the deflection, like eq. 15 of the paper.
 //!
-//! With a residual model ([`crate::residual_model`]) its correction `Δ(q)` is added to
-//! `p_w + δp_w`.
+//! With a residual model ([`crate::residual_model`]) its correction `R_1(q) Δ(q)` (learnt in
+//! joint 1's frame R_1) is added to `p_w + δp_w`.
 //!
 //! **Measured orientation** of the same target (a 6-DoF probe):
 //! `R_tracker = R_s · exp(θ_sag) · R_F(q') · R_t`, with `θ_sag = Σ_e c_e τ_e v_e` the sag's
@@ -111,10 +111,7 @@ impl EgModel {
             target_world,
             target_rotation,
             sag_world: Vector3::zeros(),
-            correction_world: self
-                .residual
-                .as_ref()
-                .map_or_else(Vector3::zeros, |r| r.predict(&q[..n])),
+            correction_world: Vector3::zeros(),
             sag_rotation: Vector3::zeros(),
             torque: [0.0; MAX_EDOFS],
             screw_linear: [Vector3::zeros(); MAX_EDOFS],
@@ -127,6 +124,9 @@ impl EgModel {
             body_moment: [Vector3::zeros(); MAX_JOINTS],
             payload: (0.0, Vector3::zeros()),
         };
+        if let Some(r) = &self.residual {
+            out.correction_world = out.data.joint_frames[0].rotation * r.predict(&q[..n]);
+        }
         let (mass, moment) = self.body_weights(&mut out, conditions);
         for (e, edof) in robot.edofs().enumerate() {
             let (axis, center) = out.data.edof_axis_center(robot, edof.site, edof.axis);

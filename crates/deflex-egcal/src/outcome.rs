@@ -130,6 +130,8 @@ pub struct StepReport {
     pub cross_groups: Vec<TestGroup>,
     /// Held-out verdict of an opt-in step, when there were held-out groups to judge by.
     pub acceptance: Option<Acceptance>,
+    /// Hyper-parameters of the residual model, when the step has one.
+    pub residual_hyper: Option<crate::residual_model::ResidualHyper>,
     /// LM iterations.
     pub iterations: usize,
 }

@@ -35,6 +35,8 @@ pub struct ResidualRecord {
     pub length_scale_rad: f64,
     /// Ridge σ_n²/σ_f².
     pub ridge: f64,
+    /// Joints the kernel looks at (1-based).
+    pub joints: Vec<usize>,
     /// Inducing configurations (rad).
     pub inducing_q_rad: Vec<Vec<f64>>,
     /// Their weights per world axis (m).
@@ -158,6 +160,10 @@ impl CalibrationTerms {
             residual_model: model.residual.as_ref().map(|r| ResidualRecord {
                 length_scale_rad: r.hyper.length_scale_rad,
                 ridge: r.hyper.ridge,
+                joints: (0..model.robot.joint_count().min(16))
+                    .filter(|j| r.hyper.joints & (1 << j) != 0)
+                    .map(|j| j + 1)
+                    .collect(),
                 inducing_q_rad: r.inducing.clone(),
                 weights_m: r.weights.clone(),
             }),
@@ -309,10 +315,22 @@ fn residual_model(
             finite("residual_model.weights_m", *v, 1e3)?;
         }
     }
+    let mut mask = 0u16;
+    for &j in &r.joints {
+        if j == 0 || j > joints {
+            return Err(TermsError::Joint {
+                what: "residual_model.joints",
+                value: j,
+                joints,
+            });
+        }
+        mask |= 1 << (j - 1);
+    }
     Ok(ResidualModel {
         hyper: ResidualHyper {
             length_scale_rad: r.length_scale_rad,
             ridge: r.ridge,
+            joints: mask,
         },
         inducing: r.inducing_q_rad.clone(),
         weights: r.weights_m.clone(),

@@ -381,6 +381,7 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "left_out_groups": s.cross_groups.iter().map(&group_json).collect::<Vec<_>>(),
             "left_out_rms_m": cross_rms(s),
             "fit_orientation": s.fit_orientation.as_ref().map(stats),
+            "residual_hyper": s.residual_hyper.map(|h| json!({"length_scale_rad": h.length_scale_rad, "ridge": h.ridge, "joint_mask": h.joints})),
             "acceptance": s.acceptance.map(|a| json!({"before_m": a.before_m, "after_m": a.after_m, "accepted": a.accepted})),
         })).collect::<Vec<_>>(),
         "estimates": result.estimates.iter().map(|e| json!({
@@ -404,7 +405,7 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "joint": h.joint + 1, "order": h.order, "term": if h.sine {"sin"} else {"cos"}, "value_rad": h.value,
         })).collect::<Vec<_>>(),
         "backlash_rad": result.model.backlash,
-        "residual_model": result.model.residual.as_ref().map(|r| json!({"length_scale_rad": r.hyper.length_scale_rad, "ridge": r.hyper.ridge, "inducing": r.inducing.len()})),
+        "residual_model": result.model.residual.as_ref().map(|r| json!({"length_scale_rad": r.hyper.length_scale_rad, "ridge": r.hyper.ridge, "joint_mask": r.hyper.joints, "inducing": r.inducing.len()})),
         "kept_steps": result.kept_steps.iter().map(|s| s.name()).collect::<Vec<_>>(),
         "orientations_fitted": !campaign.orientation_rows.is_empty(),
     })

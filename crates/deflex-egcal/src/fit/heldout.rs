@@ -25,8 +25,8 @@ pub struct Refit<'a> {
     pub residual: Option<ResidualHyper>,
 }
 
-/// World-frame residuals of the fitted absolute rows, with their joint values, for training
-/// a residual model.
+/// Residuals of the fitted absolute rows in joint 1's frame, with their joint values, for
+/// training a residual model.
 pub fn residual_training_set(
     model: &EgModel,
     campaign: &Campaign,
@@ -35,10 +35,17 @@ pub fn residual_training_set(
     let mut q = Vec::new();
     let mut y = Vec::new();
     for i in (0..campaign.absolute.len()).filter(|&i| mult[i] > 0.0) {
-        let r = campaign.residual(model, i, &[], None);
-        let rotation = model.setups[campaign.setup_of[i]].pose.rotation;
-        q.push(campaign.absolute[i].q_rad.clone());
-        y.push(rotation.inverse() * r);
+        let row = &campaign.absolute[i];
+        let ev = model.evaluate(
+            &row.q_rad,
+            campaign.target_of[i],
+            &campaign.conditions(model, i),
+        );
+        let r = nalgebra::Vector3::from(row.position_m)
+            - model.tracker_position(&ev, campaign.setup_of[i]);
+        let world = model.setups[campaign.setup_of[i]].pose.rotation.inverse() * r;
+        q.push(row.q_rad.clone());
+        y.push(ev.data.joint_frames[0].rotation.inverse() * world);
     }
     (q, y)
 }

@@ -261,6 +261,7 @@ fn score_step(
             test,
             cross_groups,
             acceptance: None,
+            residual_hyper: refit_with.residual,
             iterations: solved.iterations,
         },
         with_series,
