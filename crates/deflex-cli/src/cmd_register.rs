@@ -140,23 +140,22 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
     let all = vec![1.0; campaign.len()];
     let result =
         register_session(&mut model, &campaign, &all, &options).map_err(|e| e.to_string())?;
-    if let Some(t) = target {
-        if model.targets[t].rotation.is_none() && !campaign.orientation_rows.is_empty() {
-            deflex_egcal::register::start::initialise_target_rotations(
-                &mut model,
-                &campaign,
-                &[t],
-                &all,
-            );
-        }
+    // Orientations measured but not fitted: the new target's frame in closed form, so that
+    // `predict` can report orientation errors.
+    if let Some(t) = target.filter(|&t| model.targets[t].rotation.is_none()) {
+        deflex_egcal::register::start::initialise_target_rotations(
+            &mut model,
+            &campaign,
+            &[t],
+            &all,
+        );
     }
     let robot_out = model.to_robot();
     let toml = deflex_model::robot_to_toml_for(&robot_out, &args.out);
-    if let Some(terms) = &terms {
+    if terms.is_some() {
         let from = terms_path(std::path::Path::new(&args.robot));
         let text = read_bounded(&from, 64 << 20)?;
         let to = terms_path(&args.out);
-        let _ = terms;
         deflex_files::write_atomic(&to, text).map_err(|e| format!("{}: {e}", to.display()))?;
     }
     deflex_files::write_atomic(&args.out, toml)
