@@ -7,7 +7,8 @@
 //! ([`crate::register`]), predict the group's other readings and score them; repeat for
 //! [`HeldOutProtocol::draws`] draws and pool the errors. With `register_readings` 0 the group's
 //! configurations alternate (every other one registers, the rest score; one draw).
-//! Orientation errors are the angle of `R_measured · R_predictedᵀ`.
+//! A target no fitted reading has seen (another probe) is registered with the set-up whatever
+//! the protocol says. Orientation errors are the angle of `R_measured · R_predictedᵀ`.
 
 use crate::campaign::Campaign;
 use crate::fit::HeldOutProtocol;
@@ -48,6 +49,10 @@ pub fn score_group(
     configs.sort_unstable();
     configs.dedup();
     let target = rows.first().map(|&i| campaign.target_of[i]);
+    // A target no fitted reading has seen (a new probe in a held-out series) is always
+    // registered with the set-up.
+    let register_target = protocol.register_target
+        || target.is_some_and(|t| model.targets[t].position == nalgebra::Vector3::zeros());
     let draws = if protocol.register_readings == 0 {
         1
     } else {
@@ -88,13 +93,15 @@ pub fn score_group(
         }
         let options = RegisterOptions {
             setup,
-            target: target.filter(|_| protocol.register_target),
+            target: target.filter(|_| register_target),
             loss,
             recalibrate_above_m: None,
             restart_setup: true,
         };
-        if let Ok(r) = register::register(&mut scored, campaign, &mult, &options) {
-            registered = r.readings;
+        match register::register(&mut scored, campaign, &mult, &options) {
+            Ok(r) => registered = r.readings,
+            // Too few readings in this group to register: nothing to score.
+            Err(_) => continue,
         }
         if let Some(t) = target
             && scored.targets[t].rotation.is_none()

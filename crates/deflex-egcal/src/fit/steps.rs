@@ -6,7 +6,7 @@
 use super::heldout::{self, Refit};
 use super::options::{ACCEPTANCE_GAIN, FitOptions, Step};
 use super::roles::Roles;
-use crate::campaign::{Campaign, ReadingKind};
+use crate::campaign::Campaign;
 use crate::identify::{self, Reduction};
 use crate::outcome::{Acceptance, ErrorStats, StepReport, TestGroup};
 use crate::params::{EgModel, Param};
@@ -248,7 +248,6 @@ fn score_step(
         refit_with,
         &context.solve_options,
     );
-    let _ = ReadingKind::Position;
     (
         StepReport {
             step,

@@ -297,7 +297,7 @@ pub fn register(
         chi2_per_dof,
         warnings: Vec::new(),
     };
-    result.warnings = warnings(&start, model, campaign, &positions, options, &result);
+    result.warnings = warnings(&start, campaign, &positions, options, &result);
     Ok(result)
 }
 
@@ -333,7 +333,6 @@ fn registered_value(model: &EgModel, reference: &EgModel, param: Param) -> f64 {
 /// The warnings of a registration (module documentation).
 fn warnings(
     start: &EgModel,
-    model: &EgModel,
     campaign: &Campaign,
     positions: &[usize],
     options: &RegisterOptions,
@@ -388,7 +387,6 @@ fn warnings(
             bound_m,
         });
     }
-    let _ = model;
     out
 }
 
