@@ -11,6 +11,7 @@ mod cmd_export;
 mod cmd_model;
 mod cmd_plan;
 mod cmd_plot;
+mod cmd_register;
 mod cmd_sim;
 
 use clap::{Parser, Subcommand};
@@ -50,6 +51,9 @@ enum Command {
     CalibrateGeometry(cmd_egcal::CalibrateGeometryArgs),
     /// Predict absolute readings (each row's target in its set-up's tracker frame).
     Predict(cmd_egcal::PredictArgs),
+    /// Register a new measuring session (tracker set-up) and, optionally, a new target from a
+    /// few readings, the calibrated robot frozen.
+    Register(cmd_register::RegisterArgs),
     /// Convert a public data set into deflex's absolute measurement format.
     Import {
         #[command(subcommand)]
@@ -90,6 +94,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => cmd_calib::calibrate(args, cli.json),
         Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json),
         Command::Predict(args) => cmd_egcal::predict(args, cli.json),
+        Command::Register(args) => cmd_register::register(args, cli.json),
         Command::Import { command } => cmd_egcal::import(command, cli.json),
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
         Command::Plan(args) => cmd_calib::plan(args, cli.json),

@@ -130,6 +130,7 @@ struct NamedPoseSection {
 struct TargetSection {
     name: String,
     xyz: [f64; 3],
+    rpy: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -264,11 +265,16 @@ fn parse_robot(
     let targets = file
         .targets
         .iter()
-        .map(|t| NamedPoint {
-            name: t.name.clone(),
-            position: Vector3::from(t.xyz),
+        .enumerate()
+        .map(|(i, t)| {
+            let pose = checked_pose(Some(t.xyz), t.rpy, &format!("target[{}]", i + 1), &invalid)?;
+            Ok(NamedPoint {
+                name: t.name.clone(),
+                position: Vector3::from(t.xyz),
+                rotation: t.rpy.map(|_| pose.rotation),
+            })
         })
-        .collect();
+        .collect::<Result<Vec<_>, ModelError>>()?;
     let mut robot = Robot {
         name: file.name.clone(),
         base,
@@ -689,6 +695,9 @@ fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> Str
         let _ = writeln!(out, "\n[[target]]");
         let _ = writeln!(out, "name = {}", toml_string(&target.name));
         let _ = writeln!(out, "xyz = {}", toml_array(&[p.x, p.y, p.z]));
+        if let Some(rotation) = &target.rotation {
+            let _ = writeln!(out, "rpy = {}", toml_array(&rpy_from_rotation(rotation)));
+        }
     }
     out
 }

@@ -1,36 +1,48 @@
-//! Outputs of an elasto-geometric fit: text tables, JSON (SI), CSV files, plots and an HTML
-//! page.
+//! The report of an elasto-geometric calibration (`deflex calibrate-geometry --report`): text
+//! tables, JSON (SI), CSV files, plots ([`super::plots`]) and an HTML page, rendered from the
+//! `deflex-egcal` fit result.
 
-use crate::campaign::Campaign;
-use crate::fit::{ErrorStats, FitResult};
-use crate::params::Unit;
+use super::plots;
+use deflex_egcal::campaign::{Campaign, ReadingKind};
+use deflex_egcal::fit::{ErrorStats, FitResult, StepReport, TestGroup};
+use deflex_egcal::params::Unit;
 use deflex_report::{HtmlReport, html_escape};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// A report that could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum ReportWriteError {
-    /// File system.
-    #[error("{path}: {source}")]
-    Io {
-        /// File.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// Plot.
-    #[error(transparent)]
-    Plot(#[from] deflex_report::ReportError),
+fn mm(v: f64) -> String {
+    format!("{:.3}", v * 1e3)
 }
 
-fn mm(v: f64) -> String {
+fn mrad(v: f64) -> String {
     format!("{:.3}", v * 1e3)
 }
 
 fn stats_cells(s: &ErrorStats) -> [String; 4] {
     [mm(s.rms), mm(s.mean), mm(s.p95), mm(s.max)]
+}
+
+fn orientation_cells(s: Option<&ErrorStats>) -> [String; 2] {
+    match s {
+        Some(s) => [mrad(s.rms), mrad(s.p95)],
+        None => ["-".into(), "-".into()],
+    }
+}
+
+/// Pooled RMS of the left-out groups of a step (m).
+fn cross_rms(step: &StepReport) -> Option<f64> {
+    let groups: Vec<&TestGroup> = step.cross_groups.iter().collect();
+    deflex_egcal::fit::pooled_rms(&groups)
+}
+
+/// Whether a step is in the written model.
+fn kept_cell(step: &StepReport) -> String {
+    match step.acceptance {
+        Some(a) if a.accepted => "yes (held out)".into(),
+        Some(_) => "no (held out)".into(),
+        None => "yes".into(),
+    }
 }
 
 /// Format a parameter value in display units.
@@ -63,7 +75,8 @@ fn table(headers: &[&str], rows: &[Vec<String>]) -> String {
     out
 }
 
-/// The iteration table's rows: step, params, fit RMS, CV RMS, then each test group's RMS.
+/// The iteration table's rows: step, params, fit RMS, CV RMS, loaded RMS, each test group's
+/// RMS, the left-out groups' pooled RMS, orientation RMS (fit), and whether the step is kept.
 pub fn iteration_rows(result: &FitResult) -> (Vec<String>, Vec<Vec<String>>) {
     let mut headers = vec![
         "step".to_string(),
@@ -71,14 +84,25 @@ pub fn iteration_rows(result: &FitResult) -> (Vec<String>, Vec<Vec<String>>) {
         "RMS fit (mm)".to_string(),
         "RMS CV (mm)".to_string(),
     ];
-    if let Some(first) = result.steps.first() {
-        if first.loaded_rms.is_some() {
-            headers.push("loaded RMS (mm)".into());
-        }
+    let first = result.steps.first();
+    let loaded = first.is_some_and(|s| s.loaded_rms.is_some());
+    let cross = result.steps.iter().any(|s| !s.cross_groups.is_empty());
+    let orientation = result.steps.iter().any(|s| s.fit_orientation.is_some());
+    if loaded {
+        headers.push("loaded RMS (mm)".into());
+    }
+    if let Some(first) = first {
         for g in &first.test {
             headers.push(format!("RMS held out (mm): {}", g.name));
         }
     }
+    if cross {
+        headers.push("RMS left-out groups (mm)".into());
+    }
+    if orientation {
+        headers.push("orientation RMS fit (mrad)".into());
+    }
+    headers.push("kept".into());
     let rows = result
         .steps
         .iter()
@@ -89,10 +113,17 @@ pub fn iteration_rows(result: &FitResult) -> (Vec<String>, Vec<Vec<String>>) {
                 mm(s.fit.rms),
                 s.cv_rms.map_or("-".into(), mm),
             ];
-            if let Some(l) = s.loaded_rms {
-                row.push(mm(l));
+            if loaded {
+                row.push(s.loaded_rms.map_or("-".into(), mm));
             }
             row.extend(s.test.iter().map(|g| mm(g.stats.rms)));
+            if cross {
+                row.push(cross_rms(s).map_or("-".into(), mm));
+            }
+            if orientation {
+                row.push(s.fit_orientation.map_or("-".into(), |o| mrad(o.rms)));
+            }
+            row.push(kept_cell(s));
             row
         })
         .collect();
@@ -141,16 +172,28 @@ const ESTIMATE_HEADERS: [&str; 8] = [
 fn heldout_rows(result: &FitResult) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     for s in &result.steps {
-        for g in &s.test {
+        for g in s.test.iter().chain(&s.cross_groups) {
             let mut row = vec![s.step.name(), g.name.clone(), g.stats.count.to_string()];
             row.extend(stats_cells(&g.stats));
+            row.push(draw_spread(g));
+            row.extend(orientation_cells(g.orientation.as_ref()));
             rows.push(row);
         }
     }
     rows
 }
 
-const HELDOUT_HEADERS: [&str; 7] = [
+/// Spread of the per-draw RMS: `min … max` over the registration draws.
+fn draw_spread(g: &TestGroup) -> String {
+    if g.draw_rms.len() < 2 {
+        return "-".into();
+    }
+    let lo = g.draw_rms.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = g.draw_rms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    format!("{} … {}", mm(lo), mm(hi))
+}
+
+const HELDOUT_HEADERS: [&str; 10] = [
     "model",
     "held-out readings",
     "n",
@@ -158,6 +201,9 @@ const HELDOUT_HEADERS: [&str; 7] = [
     "mean (mm)",
     "p95 (mm)",
     "max (mm)",
+    "RMS per draw (mm)",
+    "orientation RMS (mrad)",
+    "orientation p95 (mrad)",
 ];
 
 /// The human-readable report.
@@ -176,7 +222,12 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
     );
     let _ = writeln!(
         out,
-        "Errors are norms of the 3-D position error.\n\nIteration table:"
+        "Errors are norms of the 3-D position error; orientation errors are rotation angles.{}\n\nIteration table:",
+        if campaign.orientation_rows.is_empty() {
+            ""
+        } else {
+            " Orientations are fitted with the positions."
+        }
     );
     let (headers, rows) = iteration_rows(result);
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
@@ -230,7 +281,7 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         .kept
         .iter()
         .zip(&result.reduction.independence)
-        .filter(|(_, i)| **i < crate::identify::WEAK_THRESHOLD)
+        .filter(|(_, i)| **i < deflex_egcal::identify::WEAK_THRESHOLD)
         .map(|(p, i)| format!("{} ({i:.1e})", result.model.param_name(*p)))
         .collect();
     if !weak.is_empty() {
@@ -275,10 +326,28 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
             result.outliers.len() - 20
         );
     }
-    if !result.model.harmonics.is_empty() {
+    let rejected: Vec<String> = result
+        .steps
+        .iter()
+        .filter(|s| s.acceptance.is_some_and(|a| !a.accepted))
+        .map(|s| s.step.name())
+        .collect();
+    if !rejected.is_empty() {
         let _ = writeln!(
             out,
-            "Note: joint-angle harmonics are part of this fit but have no place in a robot file; the written robot omits them."
+            "Not kept (no held-out gain of at least {:.1} %): {}",
+            deflex_egcal::fit::ACCEPTANCE_GAIN * 100.0,
+            rejected.join("; ")
+        );
+    }
+    let model = &result.model;
+    if !model.harmonics.is_empty()
+        || model.backlash.iter().any(|b| *b != 0.0)
+        || model.residual.is_some()
+    {
+        let _ = writeln!(
+            out,
+            "Note: joint-angle terms and the residual model have no place in a robot file; they are written to the terms file beside it."
         );
     }
     out
@@ -287,6 +356,15 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
 /// The JSON report (SI).
 pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
     let stats = |s: &ErrorStats| json!({"count": s.count, "rms_m": s.rms, "mean_m": s.mean, "p95_m": s.p95, "max_m": s.max});
+    let group_json = |g: &TestGroup| {
+        json!({
+            "group": g.name,
+            "stats": stats(&g.stats),
+            "orientation_rad": g.orientation.as_ref().map(stats),
+            "draw_rms_m": g.draw_rms,
+            "registered": g.registered,
+        })
+    };
     json!({
         "absolute_readings": campaign.absolute.len(),
         "loaded_readings": campaign.loaded.len(),
@@ -299,7 +377,12 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "cv_rms_m": s.cv_rms,
             "loaded_rms_m": s.loaded_rms,
             "iterations": s.iterations,
-            "held_out": s.test.iter().map(|g| json!({"group": g.name, "stats": stats(&g.stats)})).collect::<Vec<_>>(),
+            "held_out": s.test.iter().map(&group_json).collect::<Vec<_>>(),
+            "left_out_groups": s.cross_groups.iter().map(&group_json).collect::<Vec<_>>(),
+            "left_out_rms_m": cross_rms(s),
+            "fit_orientation": s.fit_orientation.as_ref().map(stats),
+            "residual_hyper": s.residual_hyper.map(|h| json!({"length_scale_rad": h.length_scale_rad, "ridge": h.ridge, "joint_mask": h.joints})),
+            "acceptance": s.acceptance.map(|a| json!({"before_m": a.before_m, "after_m": a.after_m, "accepted": a.accepted})),
         })).collect::<Vec<_>>(),
         "estimates": result.estimates.iter().map(|e| json!({
             "name": e.name, "unit": e.unit.si(), "nominal": e.start, "estimate": e.value,
@@ -321,14 +404,15 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
         "harmonics": result.model.harmonics.iter().map(|h| json!({
             "joint": h.joint + 1, "order": h.order, "term": if h.sine {"sin"} else {"cos"}, "value_rad": h.value,
         })).collect::<Vec<_>>(),
+        "backlash_rad": result.model.backlash,
+        "residual_model": result.model.residual.as_ref().map(|r| json!({"length_scale_rad": r.hyper.length_scale_rad, "ridge": r.hyper.ridge, "joint_mask": r.hyper.joints, "inducing": r.inducing.len()})),
+        "kept_steps": result.kept_steps.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        "orientations_fitted": !campaign.orientation_rows.is_empty(),
     })
 }
 
-fn write_text(path: &Path, text: &str) -> Result<(), ReportWriteError> {
-    deflex_files::write_atomic(path, text).map_err(|source| ReportWriteError::Io {
-        path: path.display().to_string(),
-        source,
-    })
+fn write_text(path: &Path, text: &str) -> Result<(), String> {
+    deflex_files::write_atomic(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
@@ -337,15 +421,12 @@ pub fn write_report(
     result: &FitResult,
     campaign: &Campaign,
     dir: &Path,
-) -> Result<Vec<PathBuf>, ReportWriteError> {
-    let io = |source| ReportWriteError::Io {
-        path: dir.display().to_string(),
-        source,
-    };
+) -> Result<Vec<PathBuf>, String> {
+    let io = |e: std::io::Error| format!("{}: {e}", dir.display());
     let staging = deflex_files::AtomicDir::create(dir).map_err(io)?;
     let root = staging.path().to_path_buf();
     let mut files = Vec::new();
-    let mut put = |name: &str, text: &str| -> Result<(), ReportWriteError> {
+    let mut put = |name: &str, text: &str| -> Result<(), String> {
         write_text(&root.join(name), text)?;
         files.push(dir.join(name));
         Ok(())
@@ -389,18 +470,27 @@ pub fn write_report(
     )?;
     let mut residual_rows = Vec::new();
     for r in &result.residuals {
-        let (label, line, q) = if campaign.is_absolute(r.index) {
-            let row = &campaign.absolute[r.index];
-            (row.setup.clone(), row.line, row.q_rad.clone())
-        } else {
-            let row = &campaign.loaded[r.index - campaign.absolute.len()];
-            (row.load_case.clone(), 0, row.q_rad.clone())
+        let (label, line, q) = match campaign.absolute_row(r.index) {
+            Some(i) => {
+                let row = &campaign.absolute[i];
+                (row.setup.clone(), row.line, row.q_rad.clone())
+            }
+            None => {
+                let row = &campaign.loaded[r.index - campaign.absolute.len()];
+                (row.load_case.clone(), 0, row.q_rad.clone())
+            }
+        };
+        let kind = match campaign.kind(r.index) {
+            ReadingKind::Position => "position_m",
+            ReadingKind::Loaded => "displacement_m",
+            ReadingKind::Orientation => "orientation_rad",
         };
         let mut cells = vec![
             r.index.to_string(),
             line.to_string(),
             label,
-            r.role.to_string(),
+            r.role.name().to_string(),
+            kind.to_string(),
             format!("{:e}", r.residual.x),
             format!("{:e}", r.residual.y),
             format!("{:e}", r.residual.z),
@@ -414,9 +504,10 @@ pub fn write_report(
         "line",
         "setup_or_case",
         "role",
-        "ex_m",
-        "ey_m",
-        "ez_m",
+        "kind",
+        "ex",
+        "ey",
+        "ez",
     ]
     .into_iter()
     .map(String::from)
@@ -444,7 +535,7 @@ pub fn write_report(
         .map(String::from)
         .collect();
     put("outliers.csv", &csv_text(&outlier_headers, &outlier_rows))?;
-    let images = crate::plots::draw(result, campaign, &root)?;
+    let images = plots::draw(result, campaign, &root).map_err(|e| e.to_string())?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
     html.section("Summary").preformatted(text_report.clone());
     if let Some(w) = &result.warning {
@@ -465,7 +556,8 @@ pub fn write_report(
         html.image(root.join(file), caption.clone());
         files.push(dir.join(file));
     }
-    html.write(&root.join("index.html"))?;
+    html.write(&root.join("index.html"))
+        .map_err(|e| e.to_string())?;
     files.push(dir.join("index.html"));
     staging.commit().map_err(io)?;
     Ok(files)

@@ -1,6 +1,7 @@
 //! Starting values for set-up registrations and target offsets: closed-form point-set
 //! registration (Kabsch/Horn, by SVD) alternated with a linear least-squares fit of the target
-//! on the flange, so the LM loop starts within millimetres wherever the tracker stood.
+//! on the flange, so the LM loop starts within millimetres wherever the tracker stood; and the
+//! target frame's rotation as the chordal mean of what each measured orientation implies.
 
 use crate::campaign::Campaign;
 use crate::params::EgModel;
@@ -48,9 +49,9 @@ pub fn initialise(
             let mut world = Vec::new();
             let mut tracker = Vec::new();
             for &i in rows.iter().filter(|&&i| campaign.setup_of[i] == s) {
-                let loads = campaign.loads(model, i);
+                let loads = campaign.conditions(model, i);
                 let ev = model.evaluate(&campaign.absolute[i].q_rad, campaign.target_of[i], &loads);
-                world.push(ev.target_world + ev.sag_world);
+                world.push(ev.predicted_world());
                 tracker.push(Vector3::from(campaign.absolute[i].position_m));
             }
             if let Some((r, t)) = kabsch(&world, &tracker) {
@@ -66,7 +67,7 @@ pub fn initialise(
             let mut rhs = Vector3::zeros();
             for &i in rows.iter().filter(|&&i| campaign.target_of[i] == t) {
                 let s = campaign.setup_of[i];
-                let loads = campaign.loads(model, i);
+                let loads = campaign.conditions(model, i);
                 let row = &campaign.absolute[i];
                 let ev = model.evaluate(&row.q_rad, t, &loads);
                 let setup = &model.setups[s].pose;
@@ -74,7 +75,9 @@ pub fn initialise(
                 let flange_origin = ev.data.flange.translation.vector;
                 let b = Vector3::from(row.position_m)
                     - setup
-                        .transform_point(&(flange_origin + ev.sag_world).into())
+                        .transform_point(
+                            &(flange_origin + ev.sag_world + ev.correction_world).into(),
+                        )
                         .coords;
                 normal += a.transpose() * a;
                 rhs += a.transpose() * b;
@@ -82,6 +85,53 @@ pub fn initialise(
             if let Some(x) = normal.try_inverse().map(|inv| inv * rhs) {
                 model.targets[t].position = x;
             }
+        }
+    }
+}
+
+/// The rotation nearest (Frobenius) to a 3×3 matrix: `U·diag(1, 1, det(U Vᵀ))·Vᵀ`.
+fn nearest_rotation(m: &Matrix3<f64>) -> Option<Rotation3<f64>> {
+    let svd = m.svd(true, true);
+    let (u, v_t) = (svd.u?, svd.v_t?);
+    let mut d = Matrix3::identity();
+    if (u * v_t).determinant() < 0.0 {
+        d[(2, 2)] = -1.0;
+    }
+    Some(Rotation3::from_matrix_unchecked(u * d * v_t))
+}
+
+/// Initialise the frame rotation of `targets` from the measured orientations of the readings
+/// with `multiplicity > 0`: each implies `R_t = (R_s exp(θ_sag) R_F)ᵀ R_measured`; their
+/// chordal mean (the rotation nearest to the sum). Targets without such readings are left as
+/// they are.
+pub fn initialise_target_rotations(
+    model: &mut EgModel,
+    campaign: &Campaign,
+    targets: &[usize],
+    multiplicity: &[f64],
+) {
+    for &t in targets {
+        let mut sum = Matrix3::zeros();
+        let mut count = 0;
+        for i in (0..campaign.absolute.len()).filter(|&i| multiplicity[i] > 0.0) {
+            if campaign.target_of[i] != t {
+                continue;
+            }
+            let Some(measured) = campaign.measured_orientation(i) else {
+                continue;
+            };
+            let row = &campaign.absolute[i];
+            let ev = model.evaluate(&row.q_rad, t, &campaign.conditions(model, i));
+            let flange = model.setups[campaign.setup_of[i]].pose.rotation
+                * Rotation3::from_scaled_axis(ev.sag_rotation)
+                * ev.data.flange.rotation;
+            sum += (flange.inverse() * measured).into_inner();
+            count += 1;
+        }
+        if count > 0
+            && let Some(r) = nearest_rotation(&sum)
+        {
+            model.targets[t].rotation = Some(r);
         }
     }
 }

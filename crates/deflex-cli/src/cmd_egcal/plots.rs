@@ -1,8 +1,8 @@
 //! Residual plots of an elasto-geometric fit: per axis, against each joint, a map over the
 //! measured volume, and the held-out error distribution.
 
-use crate::campaign::Campaign;
-use crate::fit::FitResult;
+use deflex_egcal::campaign::{Campaign, ReadingKind};
+use deflex_egcal::fit::{FitResult, Role, RowResidual};
 use deflex_report::{
     PanelLayout, PlotSpec, ReportError, Series, line_plot, panels_plot, scatter_heatmap,
 };
@@ -15,17 +15,16 @@ pub fn draw(
     dir: &Path,
 ) -> Result<Vec<(String, String)>, ReportError> {
     let mut images = Vec::new();
-    let absolute: Vec<&crate::fit::RowResidual> = result
+    let absolute: Vec<&RowResidual> = result
         .residuals
         .iter()
-        .filter(|r| campaign.is_absolute(r.index))
+        .filter(|r| campaign.kind(r.index) == ReadingKind::Position)
         .collect();
     if absolute.is_empty() {
         return Ok(images);
     }
-    let fit: Vec<&&crate::fit::RowResidual> = absolute.iter().filter(|r| r.role == "fit").collect();
-    let held: Vec<&&crate::fit::RowResidual> =
-        absolute.iter().filter(|r| r.role == "test").collect();
+    let fit: Vec<&&RowResidual> = absolute.iter().filter(|r| r.role == Role::Fit).collect();
+    let held: Vec<&&RowResidual> = absolute.iter().filter(|r| r.role != Role::Fit).collect();
     // Per axis, fit readings in file order.
     if !fit.is_empty() {
         let panels: Vec<(PlotSpec, Vec<Series>)> = ["x", "y", "z"]

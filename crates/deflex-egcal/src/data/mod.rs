@@ -11,24 +11,31 @@
 //! |---|---|---|
 //! | `config` | – | configuration label: rows sharing it were measured at the same joint values (cross-validation and bootstrap hold out or resample whole configurations); default: rows with equal joint values (to 1 µrad) |
 //! | `sigma_m` | m | standard deviation of each position component (default [`DEFAULT_ABSOLUTE_SIGMA_M`]) |
-//! | `rx_rad, ry_rad, rz_rad` | rad | measured orientation of the target frame in the tracker frame, as a rotation vector (axis × angle); kept and written, not fitted |
-//! | `sigma_rad` | rad | its standard deviation |
+//! | `rx_rad, ry_rad, rz_rad` | rad | measured orientation of the target frame in the tracker frame, as a rotation vector (axis × angle); fitted when the fit uses orientations |
+//! | `sigma_rad` | rad | its standard deviation (each component; default [`DEFAULT_ORIENTATION_SIGMA_RAD`] or the caller's) |
 //! | `payload_kg` | kg | payload on the flange for this row (overrides the robot's `[payload]`) |
 //! | `payload_com_x_m, payload_com_y_m, payload_com_z_m` | m | its centre of mass, flange frame |
 //! | `fx_N, fy_N, fz_N, mx_Nm, my_Nm, mz_Nm` | N, N·m | external wrench applied at the target, robot world axes, moment about the target |
 //! | `temperature_C` | °C | air or robot temperature at the reading |
 //! | `time_s` | s | time stamp (any origin) |
+//! | `approach_q1_rad … approach_qN_rad` | rad | joint motion that brought the robot to this reading (q here − q at the previous reading of the time-ordered sequence; [`approach_from_sequence`]): its sign is each joint's approach direction |
 //!
 //! Lines starting with `#` are comments. A file with one bad row is refused whole, naming the
 //! line and the column. Every value is bounded (see [`limits`]).
 
 use std::collections::HashMap;
-use std::path::Path;
-use thiserror::Error;
+
+mod parse;
+pub use parse::{AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute};
 
 /// Standard deviation of an absolute position component when the file gives none (m): a laser
 /// tracker at 2–4 m (the UR10 data set: 16–23 µm median).
 pub const DEFAULT_ABSOLUTE_SIGMA_M: f64 = 25e-6;
+
+/// Standard deviation of a measured orientation (each rotation-vector component, rad) when the
+/// file gives none: a 6-DoF probe on a laser tracker (the UR10 data set's T-Mac reports
+/// 20–70 µrad repeatability; its stated accuracy is about 0.01° ≈ 175 µrad).
+pub const DEFAULT_ORIENTATION_SIGMA_RAD: f64 = 100e-6;
 
 /// Bounds on file values: anything outside is refused with the column named.
 pub mod limits {
@@ -107,6 +114,10 @@ pub struct AbsoluteRow {
     pub temperature_c: Option<f64>,
     /// Time stamp (s).
     pub time_s: Option<f64>,
+    /// Joint motion that brought the robot to this reading (`q` here minus `q` at the previous
+    /// reading of the measuring sequence, rad), when the file is time-ordered: its sign is the
+    /// direction each joint approached from (backlash, hysteresis).
+    pub approach_rad: Option<Vec<f64>>,
 }
 
 impl AbsoluteRow {
@@ -116,307 +127,39 @@ impl AbsoluteRow {
     }
 }
 
-/// A bad absolute measurement file. Nothing of a file with an error is used.
-#[derive(Debug, Error)]
-pub enum AbsoluteDataError {
-    /// The file could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// File.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// A problem with the header.
-    #[error("{path}: header: {message}")]
-    Header {
-        /// File.
-        path: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// A problem with one row.
-    #[error("{path}:{line}: column `{column}`: {message}")]
-    Row {
-        /// File.
-        path: String,
-        /// 1-based line.
-        line: u64,
-        /// Column concerned.
-        column: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// The file as a whole cannot be used.
-    #[error("{path}: {message}")]
-    Content {
-        /// File.
-        path: String,
-        /// What is wrong.
-        message: String,
-    },
+/// Fill every row's [`AbsoluteRow::approach_rad`] from the order of `rows` (the measuring
+/// sequence, first to last): per joint, the last motion `q_i − q_{i−1}` larger than
+/// [`crate::params::APPROACH_DEADBAND_RAD`] (a joint that stood still keeps the flank it last
+/// came from); zero before a joint's first motion (direction unknown). Call it on the whole
+/// sequence, before any decimation.
+pub fn approach_from_sequence(rows: &mut [AbsoluteRow]) {
+    let mut previous: Option<(Vec<f64>, Vec<f64>)> = None;
+    for row in rows {
+        let n = row.q_rad.len();
+        let motion: Vec<f64> = match &previous {
+            Some((q, last)) if q.len() == n => (0..n)
+                .map(|j| {
+                    let step = row.q_rad[j] - q[j];
+                    if step.abs() > crate::params::APPROACH_DEADBAND_RAD {
+                        step
+                    } else {
+                        last[j]
+                    }
+                })
+                .collect(),
+            _ => vec![0.0; n],
+        };
+        previous = Some((row.q_rad.clone(), motion.clone()));
+        row.approach_rad = Some(motion);
+    }
 }
 
 const POSITION: [&str; 3] = ["x_m", "y_m", "z_m"];
 const ORIENTATION: [&str; 3] = ["rx_rad", "ry_rad", "rz_rad"];
 const PAYLOAD_COM: [&str; 3] = ["payload_com_x_m", "payload_com_y_m", "payload_com_z_m"];
 const WRENCH: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"];
-
-/// Read an absolute measurement file for a robot with `joint_count` joints.
-pub fn read_absolute(
-    path: &Path,
-    joint_count: usize,
-) -> Result<Vec<AbsoluteRow>, AbsoluteDataError> {
-    let origin = path.display().to_string();
-    let io = |source| AbsoluteDataError::Io {
-        path: origin.clone(),
-        source,
-    };
-    let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > limits::MAX_FILE_BYTES {
-        return Err(AbsoluteDataError::Content {
-            path: origin,
-            message: format!(
-                "{size} bytes is more than the {} bytes an absolute measurement file may have",
-                limits::MAX_FILE_BYTES
-            ),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(io)?;
-    parse_absolute(&text, &origin, joint_count)
-}
-
-/// Parse absolute measurement CSV text; `origin` names the file in errors.
-pub fn parse_absolute(
-    text: &str,
-    origin: &str,
-    joint_count: usize,
-) -> Result<Vec<AbsoluteRow>, AbsoluteDataError> {
-    let header_error = |message: String| AbsoluteDataError::Header {
-        path: origin.to_string(),
-        message,
-    };
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .flexible(true)
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes());
-    let headers = reader
-        .headers()
-        .map_err(|e| header_error(e.to_string()))?
-        .clone();
-    let mut index: HashMap<String, usize> = HashMap::new();
-    for (i, name) in headers.iter().enumerate() {
-        if index.insert(name.to_string(), i).is_some() {
-            return Err(header_error(format!("column `{name}` appears twice")));
-        }
-    }
-    let mut found = 0;
-    while index.contains_key(&format!("q{}_rad", found + 1)) {
-        found += 1;
-    }
-    if found != joint_count {
-        return Err(header_error(format!(
-            "the file has {found} joint columns (q1_rad…) but the robot has {joint_count} joints"
-        )));
-    }
-    let mut required: Vec<&str> = vec!["setup", "target"];
-    required.extend(POSITION);
-    let missing: Vec<String> = required
-        .iter()
-        .filter(|c| !index.contains_key(**c))
-        .map(|c| format!("`{c}`"))
-        .collect();
-    if !missing.is_empty() {
-        return Err(header_error(format!(
-            "missing column(s) {}",
-            missing.join(", ")
-        )));
-    }
-    let all_or_none = |group: &[&str]| -> Result<bool, AbsoluteDataError> {
-        let present = group.iter().filter(|c| index.contains_key(**c)).count();
-        if present != 0 && present != group.len() {
-            return Err(header_error(format!(
-                "columns {} go together: give all or none",
-                group.join(", ")
-            )));
-        }
-        Ok(present == group.len())
-    };
-    let has_orientation = all_or_none(&ORIENTATION)?;
-    let has_payload_com = all_or_none(&PAYLOAD_COM)?;
-    let has_wrench = all_or_none(&WRENCH)?;
-    let width = headers.len();
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| AbsoluteDataError::Row {
-            path: origin.to_string(),
-            line: e.position().map(|p| p.line()).unwrap_or(0),
-            column: "-".into(),
-            message: e.to_string(),
-        })?;
-        let line = record.position().map(|p| p.line()).unwrap_or(0);
-        if rows.len() >= limits::MAX_ROWS {
-            return Err(AbsoluteDataError::Content {
-                path: origin.to_string(),
-                message: format!("more than {} rows", limits::MAX_ROWS),
-            });
-        }
-        let error = |column: &str, message: String| AbsoluteDataError::Row {
-            path: origin.to_string(),
-            line,
-            column: column.to_string(),
-            message,
-        };
-        if record.len() != width {
-            return Err(error(
-                "-",
-                format!(
-                    "expected {width} fields as in the header, found {}",
-                    record.len()
-                ),
-            ));
-        }
-        let text_of = |name: &str| index.get(name).and_then(|&i| record.get(i)).unwrap_or("");
-        let number = |name: &str, limit: f64, unit: &str| -> Result<f64, AbsoluteDataError> {
-            let text = text_of(name);
-            let value: f64 = text
-                .parse()
-                .map_err(|_| error(name, format!("expected a number in {unit}, got \"{text}\"")))?;
-            if !value.is_finite() || value.abs() > limit {
-                return Err(error(
-                    name,
-                    format!("expected a finite value within ±{limit} {unit}, got {text}"),
-                ));
-            }
-            Ok(value)
-        };
-        let optional =
-            |name: &str, limit: f64, unit: &str| -> Result<Option<f64>, AbsoluteDataError> {
-                if index.contains_key(name) && !text_of(name).is_empty() {
-                    number(name, limit, unit).map(Some)
-                } else {
-                    Ok(None)
-                }
-            };
-        let label = |name: &str| -> Result<String, AbsoluteDataError> {
-            let text = text_of(name);
-            if text.is_empty() {
-                return Err(error(name, "empty label".into()));
-            }
-            if text.len() > limits::MAX_LABEL_BYTES {
-                return Err(error(
-                    name,
-                    format!("label longer than {} bytes", limits::MAX_LABEL_BYTES),
-                ));
-            }
-            Ok(text.to_string())
-        };
-        let positive = |value: Option<f64>, name: &str| -> Result<Option<f64>, AbsoluteDataError> {
-            match value {
-                Some(v) if v <= 0.0 => Err(error(name, format!("must be positive, got {v}"))),
-                other => Ok(other),
-            }
-        };
-        let q_rad = (1..=joint_count)
-            .map(|i| number(&format!("q{i}_rad"), limits::MAX_JOINT_RAD, "rad"))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut position_m = [0.0; 3];
-        for (v, name) in position_m.iter_mut().zip(POSITION) {
-            *v = number(name, limits::MAX_POSITION_M, "m")?;
-        }
-        let config = if index.contains_key("config") && !text_of("config").is_empty() {
-            Some(label("config")?)
-        } else {
-            None
-        };
-        let sigma_m = positive(optional("sigma_m", limits::MAX_SIGMA_M, "m")?, "sigma_m")?;
-        let orientation = if has_orientation && !text_of(ORIENTATION[0]).is_empty() {
-            let mut v = [0.0; 3];
-            for (value, name) in v.iter_mut().zip(ORIENTATION) {
-                *value = number(name, limits::MAX_ROTATION_RAD, "rad")?;
-            }
-            Some(RowOrientation {
-                rotation_vector_rad: v,
-                sigma_rad: positive(
-                    optional("sigma_rad", limits::MAX_SIGMA_RAD, "rad")?,
-                    "sigma_rad",
-                )?,
-            })
-        } else {
-            None
-        };
-        let payload = match optional("payload_kg", limits::MAX_PAYLOAD_KG, "kg")? {
-            Some(mass) if mass < 0.0 => {
-                return Err(error(
-                    "payload_kg",
-                    format!("must not be negative, got {mass}"),
-                ));
-            }
-            Some(mass_kg) => {
-                let mut com_m = [0.0; 3];
-                if has_payload_com {
-                    for (v, name) in com_m.iter_mut().zip(PAYLOAD_COM) {
-                        *v = optional(name, limits::MAX_COM_M, "m")?.unwrap_or(0.0);
-                    }
-                }
-                Some(RowPayload { mass_kg, com_m })
-            }
-            None => None,
-        };
-        let wrench = if has_wrench && !text_of(WRENCH[0]).is_empty() {
-            let mut w = [0.0; 6];
-            for (k, (value, name)) in w.iter_mut().zip(WRENCH).enumerate() {
-                let (limit, unit) = if k < 3 {
-                    (limits::MAX_FORCE_N, "N")
-                } else {
-                    (limits::MAX_MOMENT_NM, "N·m")
-                };
-                *value = number(name, limit, unit)?;
-            }
-            Some(w)
-        } else {
-            None
-        };
-        let temperature_c = match optional("temperature_C", 1e3, "°C")? {
-            Some(t)
-                if !(limits::TEMPERATURE_RANGE_C[0]..=limits::TEMPERATURE_RANGE_C[1])
-                    .contains(&t) =>
-            {
-                return Err(error(
-                    "temperature_C",
-                    format!(
-                        "expected {}…{} °C, got {t}",
-                        limits::TEMPERATURE_RANGE_C[0],
-                        limits::TEMPERATURE_RANGE_C[1]
-                    ),
-                ));
-            }
-            other => other,
-        };
-        rows.push(AbsoluteRow {
-            line,
-            setup: label("setup")?,
-            target: label("target")?,
-            config,
-            q_rad,
-            position_m,
-            sigma_m,
-            orientation,
-            payload,
-            wrench,
-            temperature_c,
-            time_s: optional("time_s", limits::MAX_TIME_S, "s")?,
-        });
-    }
-    if rows.is_empty() {
-        return Err(AbsoluteDataError::Content {
-            path: origin.to_string(),
-            message: "no data rows".into(),
-        });
-    }
-    Ok(rows)
-}
+/// Prefix of the approach columns `approach_q1_rad … approach_qN_rad`.
+const APPROACH: &str = "approach_q";
 
 /// Format rows as CSV (full precision); optional columns are written when any row has them.
 /// `comments` are written first as `# ` lines.
@@ -431,6 +174,7 @@ pub fn format_absolute(rows: &[AbsoluteRow], comments: &[String]) -> String {
     let with_wrench = any(&|r| r.wrench.is_some());
     let with_temperature = any(&|r| r.temperature_c.is_some());
     let with_time = any(&|r| r.time_s.is_some());
+    let with_approach = any(&|r| r.approach_rad.is_some());
     let mut header: Vec<String> = vec!["setup".into(), "target".into()];
     if with_config {
         header.push("config".into());
@@ -458,6 +202,9 @@ pub fn format_absolute(rows: &[AbsoluteRow], comments: &[String]) -> String {
     }
     if with_time {
         header.push("time_s".into());
+    }
+    if with_approach {
+        header.extend((1..=joint_count).map(|i| format!("{APPROACH}{i}_rad")));
     }
     let mut out = String::new();
     for comment in comments {
@@ -510,6 +257,12 @@ pub fn format_absolute(rows: &[AbsoluteRow], comments: &[String]) -> String {
         }
         if with_time {
             record.push(opt(row.time_s));
+        }
+        if with_approach {
+            match &row.approach_rad {
+                Some(a) if a.len() == joint_count => record.extend(a.iter().map(|v| num(*v))),
+                _ => record.extend(std::iter::repeat_n(String::new(), joint_count)),
+            }
         }
         let _ = writer.write_record(&record);
     }
@@ -565,6 +318,7 @@ mod tests {
                 wrench: Some([0.0, 0.0, -100.0, 0.0, 1.0, 0.0]),
                 temperature_c: Some(22.5),
                 time_s: Some(1.5e9),
+                approach_rad: Some(vec![0.0, 0.5, -0.25, 0.0, 1e-3, -2.0]),
             },
             AbsoluteRow {
                 line: 0,
@@ -579,6 +333,7 @@ mod tests {
                 wrench: None,
                 temperature_c: None,
                 time_s: None,
+                approach_rad: None,
             },
         ]
     }
