@@ -497,4 +497,3 @@ pub fn compensate(
         max_compensation_rad,
     })
 }
-

@@ -31,7 +31,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 mod resample;
-pub use resample::{Resampled, ResampleOptions, resample_on_path};
+pub use resample::{ResampleOptions, Resampled, resample_on_path};
 
 /// Largest log read (bytes).
 pub const MAX_LOG_BYTES: u64 = 1 << 30;
@@ -304,4 +304,3 @@ pub fn parse_log(
         measured,
     })
 }
-

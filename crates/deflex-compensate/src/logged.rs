@@ -170,8 +170,13 @@ impl Law {
             return g + slope * self.width * (x - centre(last));
         }
         let k = (x.floor() as usize).clamp(first, last);
-        let below = (first..=k).rev().find(|&j| self.fits[j].is_some()).unwrap_or(first);
-        let above = (k + 1..=last).find(|&j| self.fits[j].is_some()).unwrap_or(last);
+        let below = (first..=k)
+            .rev()
+            .find(|&j| self.fits[j].is_some())
+            .unwrap_or(first);
+        let above = (k + 1..=last)
+            .find(|&j| self.fits[j].is_some())
+            .unwrap_or(last);
         let (g0, _) = self.fits[below].expect("has a value");
         let (g1, _) = self.fits[above].expect("has a value");
         if above == below {
@@ -302,9 +307,11 @@ impl LoggedProcess {
         let fits: Vec<Option<(f64, f64)>> = (0..bins)
             .map(|k| {
                 let mut window = Moments::default();
-                for j in k.saturating_sub(reach)..=(k + reach).min(bins - 1) {
-                    if moments[j].count > 0 {
-                        window.add_shifted(&moments[j], (centre(j) - centre(k)) / h);
+                let first = k.saturating_sub(reach);
+                let last = (k + reach).min(bins - 1);
+                for (j, bin) in moments[first..=last].iter().enumerate() {
+                    if bin.count > 0 {
+                        window.add_shifted(bin, (centre(first + j) - centre(k)) / h);
                     }
                 }
                 // Slope per unit of h → per metre.
@@ -409,7 +416,9 @@ impl Moments {
         let (lo, hi) = (eigen.min(), eigen.max());
         if self.count >= 8
             && lo > 1e-6 * hi
-            && let Some(c) = normal.cholesky().map(|ch| ch.solve(&(Vector3::new(t0, t1, t2) / s0)))
+            && let Some(c) = normal
+                .cholesky()
+                .map(|ch| ch.solve(&(Vector3::new(t0, t1, t2) / s0)))
         {
             return Some((c[0], c[1]));
         }
@@ -556,7 +565,11 @@ impl ProcessModel for LoggedProcess {
             contact_points: contact.len(),
             law_bins: fits.len(),
             sloped_bins: sloped,
-            depth_range_m: if contact.is_empty() { [0.0; 2] } else { [lo, hi] },
+            depth_range_m: if contact.is_empty() {
+                [0.0; 2]
+            } else {
+                [lo, hi]
+            },
             force_range_n: match (fits.first(), fits.last()) {
                 (Some(a), Some(b)) => [a.0, b.0],
                 _ => [0.0; 2],

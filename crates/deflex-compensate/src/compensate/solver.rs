@@ -453,13 +453,14 @@ impl<'a> Solver<'a> {
             s
         };
         let (rm, rr) = norms(&r);
-        let small = rm <= 10.0 * self.options.tolerance_m && rr <= 10.0 * self.options.tolerance_rad;
+        let small =
+            rm <= 10.0 * self.options.tolerance_m && rr <= 10.0 * self.options.tolerance_rad;
         if small {
             let (now, before) = (scaled(&r), scaled(&r_previous));
             let dot = now.dot(&before);
             let reversed = dot < 0.0;
-            let contracting = dot >= 0.9 * now.norm() * before.norm()
-                && now.norm() <= 0.5 * before.norm();
+            let contracting =
+                dot >= 0.9 * now.norm() * before.norm() && now.norm() <= 0.5 * before.norm();
             if !(reversed || contracting) {
                 return *x_hat;
             }
@@ -503,12 +504,13 @@ impl<'a> Solver<'a> {
             }
             pass.solved += 1;
             let x = self.points[i].compensation;
-            let (start_x, start_q) = match (x == Displacement::zeros(), pass.previous_x, pass.previous_q) {
-                // A point without a compensation yet starts from its neighbour's, which differs
-                // little along a path (saves one fixed-point step and most of the IK's).
-                (true, Some(px), Some(pq)) => (px, pq),
-                _ => (x, self.points[i].q),
-            };
+            let (start_x, start_q) =
+                match (x == Displacement::zeros(), pass.previous_x, pass.previous_q) {
+                    // A point without a compensation yet starts from its neighbour's, which differs
+                    // little along a path (saves one fixed-point step and most of the IK's).
+                    (true, Some(px), Some(pq)) => (px, pq),
+                    _ => (x, self.points[i].q),
+                };
             match self.solve_point(i, start_x, start_q, pass.previous_q) {
                 Err(failure) => {
                     self.points[i].failure = Some(failure);

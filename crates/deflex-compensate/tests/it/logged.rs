@@ -176,7 +176,10 @@ fn a_force_linear_in_the_actual_depth_is_identified_and_meets_its_closed_form() 
     assert_eq!(result.failure_count(), 0);
     let id = model.identification().unwrap().clone();
     assert_eq!(id.contact_points, path.len());
-    assert!(id.sloped_bins > 0 && id.sloped_bins == id.law_bins, "{id:?}");
+    assert!(
+        id.sloped_bins > 0 && id.sloped_bins == id.law_bins,
+        "{id:?}"
+    );
     let mut worst: f64 = 0.0;
     for (i, point) in result.points.iter().enumerate() {
         let desired = &path.points()[i].pose;
@@ -186,7 +189,11 @@ fn a_force_linear_in_the_actual_depth_is_identified_and_meets_its_closed_form() 
         let got = axial(&path, i, &point.wrench);
         worst = worst.max((got - expected).abs());
         // The compensated tool is deeper than the uncorrected one: it pushes harder.
-        assert!(got > logged_force[i] + 50.0, "{i}: {got} vs {}", logged_force[i]);
+        assert!(
+            got > logged_force[i] + 50.0,
+            "{i}: {got} vs {}",
+            logged_force[i]
+        );
     }
     // 1 µm of tolerance on the compensation is 0.3 N of force.
     assert!(worst < 0.6, "largest force error {worst} N");
@@ -212,12 +219,7 @@ fn saturating(u: f64) -> f64 {
 
 /// The model's predicted tool error of each point when `commands` run against `process`: the
 /// oracle's own equilibrium at the commanded configuration (IK of the command).
-fn error_under(
-    robot: &Robot,
-    path: &TcpPath,
-    process: &TrueProcess,
-    result: &Compensation,
-) -> f64 {
+fn error_under(robot: &Robot, path: &TcpPath, process: &TrueProcess, result: &Compensation) -> f64 {
     let mut data = Data::new();
     let mut worst: f64 = 0.0;
     for (i, point) in result.points.iter().enumerate() {
@@ -286,9 +288,13 @@ fn a_saturating_law_is_followed_closely_where_fixed_wrenches_fall_short() {
             inside = inside.max((a - b).abs() / b);
         } else {
             beyond = beyond.max(a - b);
-            let tangent = saturating(deepest_logged) + slope(deepest_logged) * (depth - deepest_logged);
+            let tangent =
+                saturating(deepest_logged) + slope(deepest_logged) * (depth - deepest_logged);
             bound = bound.max(tangent - saturating(depth));
-            assert!(a > b - 1.0, "point {i}: the tangent of a concave law overshoots: {a} vs {b}");
+            assert!(
+                a > b - 1.0,
+                "point {i}: the tangent of a concave law overshoots: {a} vs {b}"
+            );
         }
     }
     let force_error = beyond;
@@ -299,7 +305,10 @@ fn a_saturating_law_is_followed_closely_where_fixed_wrenches_fall_short() {
         e_exact * 1e3
     );
     assert!(e_exact < 2e-6, "{e_exact}");
-    assert!(e_fixed > 0.05e-3, "the logged wrenches fall short: {e_fixed}");
+    assert!(
+        e_fixed > 0.05e-3,
+        "the logged wrenches fall short: {e_fixed}"
+    );
     println!(
         "  within the logged depths the force is within {:.2} % of the true law's; beyond, {beyond:.1} N over it (tangent bound {bound:.1} N)",
         inside * 100.0
@@ -329,10 +338,16 @@ fn measured_positions_correct_a_robot_softer_than_its_model() {
     let log = logged_run(&robot, &path, &truth);
     let mut unmeasured_log = log.clone();
     unmeasured_log.measured_m = None;
-    let mut measured = LoggedProcess::new("test", true, log, LoggedProcessOptions::default()).unwrap();
+    let mut measured =
+        LoggedProcess::new("test", true, log, LoggedProcessOptions::default()).unwrap();
     let with = run(&robot, &path, WrenchSource::Process(&mut measured));
-    let mut unmeasured =
-        LoggedProcess::new("test", true, unmeasured_log, LoggedProcessOptions::default()).unwrap();
+    let mut unmeasured = LoggedProcess::new(
+        "test",
+        true,
+        unmeasured_log,
+        LoggedProcessOptions::default(),
+    )
+    .unwrap();
     let without = run(&robot, &path, WrenchSource::Process(&mut unmeasured));
     assert!(with.converged && without.converged);
     let id = measured.identification().unwrap();
@@ -387,7 +402,8 @@ fn a_force_that_does_not_follow_the_depth_is_kept_in_one_pass() {
             .collect(),
         measured_m: None,
     };
-    let mut model = LoggedProcess::new("test", false, log, LoggedProcessOptions::default()).unwrap();
+    let mut model =
+        LoggedProcess::new("test", false, log, LoggedProcessOptions::default()).unwrap();
     let result = run(&robot, &path, WrenchSource::Process(&mut model));
     assert_eq!(model.identification().unwrap().sloped_bins, 0);
     assert!(!model.follows_command());
@@ -409,8 +425,8 @@ fn bad_options_and_mismatched_logs_are_refused() {
         commanded_m: vec![Vector3::zeros(); 2],
         measured_m: None,
     };
-    let e = LoggedProcess::new("x", false, empty.clone(), LoggedProcessOptions::default())
-        .unwrap_err();
+    let e =
+        LoggedProcess::new("x", false, empty.clone(), LoggedProcessOptions::default()).unwrap_err();
     assert!(e.message.contains("differ in length"), "{e}");
     let e = LoggedProcess::new(
         "x",
