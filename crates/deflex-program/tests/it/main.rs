@@ -3,3 +3,4 @@
 
 mod orientation;
 mod round_trip;
+mod streaming;
