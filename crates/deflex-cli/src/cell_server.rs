@@ -79,7 +79,8 @@ impl CellArgs {
             check_flag("--length-mm", l, 1e-3, 1e6, "mm")?;
         }
         check_flag("--wait-s", self.wait_s, 0.0, 3600.0, "s")?;
-        check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")
+        check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")?;
+        Ok(())
     }
 }
 
@@ -131,9 +132,9 @@ pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
 /// twin file's settings over it.
 pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
     match (&args.twin, &args.robot) {
-        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
+        (Some(p), robot) => deflex_load::load_cell(p, robot.as_deref()).map_err(|e| e.to_string()),
         (None, Some(robot)) => {
-            CellConfig::for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
+            deflex_load::cell_for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
         }
         (None, None) => Ok(CellConfig::default()),
     }
@@ -304,7 +305,7 @@ pub fn cell_session(
             ));
         }
     }
-    let model = deflex_model::load_robot(&file.model_spec())
+    let model = deflex_load::load_robot(&file.model_spec())
         .map_err(|e| format!("{}: model.file: {e}", file.origin))?;
     let twin = twin_config(args)?;
     let nominal = twin.nominal_robot().map_err(|e| e.to_string())?;
@@ -565,9 +566,9 @@ mod tests {
         // a TX200 model is not a UR10e.
         let nominal = ur.nominal_robot().unwrap();
         assert_eq!(geometry_note(&nominal, &nominal), "");
-        let builtin = deflex_model::load_robot("ur10e").unwrap();
+        let builtin = deflex_load::load_robot("ur10e").unwrap();
         assert!(geometry_note(&builtin, &nominal).contains("another tool"));
-        let tx = deflex_model::load_robot("tx200").unwrap();
+        let tx = deflex_load::load_robot("tx200").unwrap();
         assert!(geometry_note(&tx, &nominal).contains("is not the geometry"));
     }
 

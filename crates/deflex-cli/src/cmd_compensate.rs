@@ -113,7 +113,7 @@ struct Setup {
 fn setup(args: &CompensateArgs) -> Result<Setup, String> {
     let robot = robot(&args.robot)?;
     let mut config = match &args.twin {
-        Some(p) => CellConfig::load(p).map_err(|e| e.to_string())?,
+        Some(p) => deflex_load::load_cell(p, None).map_err(|e| e.to_string())?,
         None => CellConfig::default(),
     };
     if let Some(text) = &args.part_xyz_mm {

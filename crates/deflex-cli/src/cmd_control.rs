@@ -47,7 +47,8 @@ impl RunArgs {
             0.1,
             3600.0,
             "s",
-        )
+        )?;
+        Ok(())
     }
 }
 
@@ -75,7 +76,7 @@ pub struct RunOutcome {
 pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunOutcome, String> {
     args.check()?;
     let cell = load_cell_file(&args.config)?;
-    let model = deflex_model::load_robot(&cell.model_spec())
+    let model = deflex_load::load_robot(&cell.model_spec())
         .map_err(|e| format!("{}: model.file: {e}", cell.origin))?;
     let feedforward = cell.feedforward(&model).map_err(|e| e.to_string())?;
     let feedforward_text = feedforward.as_ref().map(|ff| {

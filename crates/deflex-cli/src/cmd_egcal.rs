@@ -224,7 +224,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let test = read_all(&args.test_data, n)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
-        loaded.extend(deflex_calib::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
+        loaded.extend(deflex_load::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
     }
     let fit_count = absolute.len();
     let mut all = absolute;
@@ -251,7 +251,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let result = fit(&model, &campaign, &options).map_err(|e| e.to_string())?;
     let elapsed = started.elapsed().as_secs_f64();
     let robot_out = result.model.to_robot();
-    let toml = deflex_model::robot_to_toml_for(&robot_out, &args.out);
+    let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
     deflex_files::write_atomic(&args.out, toml)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     let files = match &args.report {

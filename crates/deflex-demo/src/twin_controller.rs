@@ -125,7 +125,7 @@ impl CorrectionController for TwinController {
 pub fn twin_controller(cell: &CellConfig, model: Option<&Path>) -> Result<TwinController, String> {
     let path =
         model.ok_or("--correction on needs --model MODEL.toml (the identified robot model)")?;
-    let robot = deflex_model::load_robot(&path.display().to_string())
+    let robot = deflex_load::load_robot(&path.display().to_string())
         .map_err(|e| format!("--model {}: {e}", path.display()))?;
     TwinController::new(robot, controller_config_for(cell), false)
 }
@@ -244,8 +244,8 @@ pub fn identify_from_twin_campaign(cell: &CellConfig, seed: u64) -> Result<Robot
     };
     let plan =
         deflex_calib::plan::plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
-    let rows =
-        deflex_sim::campaign::run_campaign(cell, &plan.rows, seed).map_err(|e| e.to_string())?;
+    let rows = deflex_sim::twin_campaign::run_campaign(cell, &plan.rows, seed)
+        .map_err(|e| e.to_string())?;
     let result = deflex_calib::search_structure(
         &nominal,
         &rows,
@@ -365,7 +365,7 @@ mod tests {
     /// With the paper's Table 1 model (stiffer than the twin's robot) the loop still helps.
     #[test]
     fn table1_model_still_improves_a_short_run() {
-        let model = deflex_model::load_robot("tx200").unwrap();
+        let model = deflex_load::load_robot("tx200").unwrap();
         let c = compare(ToolPath::paper_cone().truncated(600.0), model, 2);
         let (o, k) = (&c.open.summary, &c.closed.forming.summary);
         assert!(k.max_error_norm_mm < 0.9 * o.max_error_norm_mm);

@@ -11,7 +11,7 @@
 //! Bounds (each an error naming the line): a file of at most [`MAX_GCODE_BYTES`], at most
 //! [`MAX_WAYPOINTS`] moves, coordinates within ±[`MAX_COORDINATE_MM`] of R_p's origin, feeds
 //! from [`MIN_FEED_MM_MIN`] to [`MAX_FEED_MM_MIN`] mm/min (in the unit in force). A run of the
-//! program is further bounded in time by the cell (`deflex_sim::config::MAX_RUN_S`).
+//! program is further bounded in time by the cell (`deflex_sim::cell_config::MAX_RUN_S`).
 
 use crate::error::SimError;
 use crate::toolpath::{ToolPath, Waypoint};
