@@ -2,8 +2,8 @@
 //! the full structure search on 2,000 rows (< 5 s). Data: synthetic TX200 (Table 1 + base tilt),
 //! 15 µm noise, 600–1400 N.
 use criterion::{Criterion, criterion_group, criterion_main};
-use deflex_calib::fit::{Structure, calibrate_fixed};
 use deflex_calib::search::{SearchOptions, search_structure};
+use deflex_calib::stiffness_fit::{Structure, calibrate_fixed};
 use deflex_calib::synthetic::{SyntheticOptions, measure, measure_with_rotations, random_campaign};
 use deflex_model::{Axis, EdofSite, builtin};
 use std::hint::black_box;

@@ -1,8 +1,8 @@
 //! Bad data gets a clear message, never a panic.
 
 use deflex_calib::data::parse_rows;
-use deflex_calib::fit::{Status, Structure, calibrate_fixed};
 use deflex_calib::search::{SearchOptions, search_structure};
+use deflex_calib::stiffness_fit::{Status, Structure, calibrate_fixed};
 use deflex_calib::synthetic::{SyntheticOptions, measure, random_campaign};
 use deflex_model::builtin;
 

@@ -79,7 +79,7 @@ fn base_point_separates_tilt_from_joint_one() {
 /// it assumes R0.
 #[test]
 fn the_base_tilts_about_the_robots_pivot_in_the_fit() {
-    use deflex_calib::fit::{Structure, calibrate_fixed};
+    use deflex_calib::stiffness_fit::{Structure, calibrate_fixed};
     let mut truth = builtin("tx200").unwrap();
     truth.base_pivot = nalgebra::Vector3::new(0.0, 0.0, -0.642);
     truth.set_stiffness(EdofSite::Base, Axis::X, Some(8.0e6));

@@ -2,8 +2,8 @@
 //! measure the planned campaign many times with tracker noise, calibrate each with the shift
 //! free, and compare the spread of the fitted shifts with the prediction.
 
-use deflex_calib::fit::{Structure, calibrate_fixed};
 use deflex_calib::plan::{PlanOptions, plan_experiments};
+use deflex_calib::stiffness_fit::{Structure, calibrate_fixed};
 use deflex_calib::synthetic::{SyntheticOptions, measure};
 
 #[test]

@@ -4,10 +4,10 @@
 //! A quick count here (deterministic, a few seconds in debug); ≥ 10⁶ with
 //! `DEFLEX_FUZZ_COUNT=1000000 cargo test --release -p deflex-calib --test fuzz -- --nocapture`.
 
-use deflex_calib::cell::parse_points;
 use deflex_calib::consistency::check_geometry;
+use deflex_calib::data::points::parse_points;
 use deflex_calib::data::{MeasuredRotation, format_rows_for, parse_file};
-use deflex_calib::fit::{Structure, calibrate_fixed};
+use deflex_calib::stiffness_fit::{Structure, calibrate_fixed};
 use deflex_calib::synthetic::{SyntheticOptions, measure, random_campaign};
 use deflex_fuzz::{count_from_env, fuzz};
 use deflex_model::builtin;

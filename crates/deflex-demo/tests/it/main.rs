@@ -1,5 +1,6 @@
 //! Integration tests of `deflex-demo`: one test binary (modules below), so a fresh clone links one
 //! executable for this crate instead of one per file.
 
-mod quick_demo;
+// The quick study end to end, with its files: deflex-report (study), which writes them.
 mod stiff_contact;
+mod twin_calibration;
