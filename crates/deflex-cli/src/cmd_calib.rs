@@ -5,12 +5,6 @@ use crate::args::{check_range, finite_or_null, robot};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
 
-use deflex_calib::consistency::{
-    GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
-};
-use deflex_calib::search::{Criterion, SearchOptions, SearchStep, search_structure};
-use deflex_calib::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_calib::validation::{predict, validate as run_validation};
 use deflex_files::{AtomicDir, AtomicFile};
 use deflex_load::{read_file, robot_to_toml_for};
 use deflex_model::Robot;
@@ -23,6 +17,12 @@ use deflex_report::text_table::render_table;
 use deflex_report::validation_report::{
     VALIDATION_HEADERS, validation_rotation_summary, validation_rows, write_validation_report,
 };
+use deflex_stiffness::consistency::{
+    GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
+};
+use deflex_stiffness::search::{Criterion, SearchOptions, SearchStep, search_structure};
+use deflex_stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
+use deflex_stiffness::validation::{predict, validate as run_validation};
 use serde_json::{Value, json};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -165,7 +165,7 @@ fn calibration_json(cal: &Calibration) -> Value {
         "residual_max_norm_m": r.max_norm_m,
         "rotation_rows": cal.rotation_rows,
         "residual_rotation_rms_rad": r.rotation_rms_rad,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_calib::stiffness_fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "warnings": cal.warnings,
     })
@@ -173,7 +173,7 @@ fn calibration_json(cal: &Calibration) -> Value {
 
 /// A measurement file read and checked against the robot's forward kinematics.
 struct CheckedFile {
-    rows: Vec<deflex_calib::MeasurementRow>,
+    rows: Vec<deflex_stiffness::MeasurementRow>,
     check: GeometryCheck,
     /// Warnings to print.
     warnings: Vec<String>,
@@ -236,7 +236,7 @@ fn geometry_json(check: &GeometryCheck) -> Value {
         "checked_loads": check.checked_loads,
         "disagreeing_rows": check.disagreeing_rows(),
         "max_distance_m": check.max_distance_m,
-        "first_disagreements": check.disagreements.iter().take(deflex_calib::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
+        "first_disagreements": check.disagreements.iter().take(deflex_stiffness::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
         "unchecked": check.unchecked,
         "header_mismatch": check.header_mismatch,
     })
@@ -377,7 +377,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
 fn identify(
     args: &CalibrateArgs,
     start: &Robot,
-    rows: &[deflex_calib::MeasurementRow],
+    rows: &[deflex_stiffness::MeasurementRow],
     json_output: bool,
 ) -> Result<(Calibration, Vec<SearchStep>, Option<String>), CliError> {
     Ok(if args.structure == StructureChoice::Fixed {
@@ -445,7 +445,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
         None => Vec::new(),
     };
     if json_output {
-        let m = |e: &deflex_calib::validation::ModelErrors| {
+        let m = |e: &deflex_stiffness::validation::ModelErrors| {
             let rotation = e.rotation.as_ref().map(|r| {
                 let s = &r.stats;
                 json!({"rows": s.rows, "rms_rad": s.rms_rad, "max_abs_rad": s.max_abs_rad, "mean_rad": s.mean_rad, "rms_norm_rad": s.rms_norm_rad, "max_norm_rad": s.max_norm_rad})

@@ -1,9 +1,9 @@
 //! `deflex demo`: the paper's whole study on the SIMULATED cell of the TX200 or another robot
-//! (`--robot`), with progress bars and a summary table; the work is done by `deflex-demo`.
+//! (`--robot`), with progress bars and a summary table; the work is done by `deflex-study`.
 
 use crate::error::CommandResult;
 use clap::Args;
-use deflex_demo::{DemoOptions, Progress, run_study};
+use deflex_study::{DemoOptions, Progress, run_study};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
@@ -92,7 +92,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
     );
     if summary.paper_comparison {
         println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
-        for (quantity, paper, ours, unit) in deflex_demo::paper_vs_deflex_rows(&summary) {
+        for (quantity, paper, ours, unit) in deflex_study::paper_vs_deflex_rows(&summary) {
             println!(
                 "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
                 quantity, paper, ours
@@ -122,7 +122,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
     );
     let sc = &summary.stiff_contact;
     let outcome =
-        |l: &deflex_demo::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
+        |l: &deflex_study::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
             (Some(f), _) => format!(" ({f})"),
             (None, 0) => String::new(),
             (None, n) => format!(

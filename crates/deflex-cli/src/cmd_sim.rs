@@ -445,7 +445,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
     };
     let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())?;
     deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
-    let cases = deflex_calib::data::load_case_count(&rows);
+    let cases = deflex_stiffness::data::load_case_count(&rows);
     let max_disp = rows
         .iter()
         .filter_map(|r| r.displacement_m)

@@ -27,7 +27,7 @@ pub enum CliError {
     Point(#[from] deflex_measurements::points::PointProblem),
     /// Calibration, planning or validation refused the data.
     #[error(transparent)]
-    Calib(#[from] deflex_calib::CalibError),
+    Calib(#[from] deflex_stiffness::CalibError),
     /// The twin refused its settings or a path.
     #[error(transparent)]
     Sim(#[from] deflex_sim::SimError),
@@ -39,7 +39,7 @@ pub enum CliError {
     Twin(#[from] deflex_twin::TwinError),
     /// The study could not be run.
     #[error(transparent)]
-    Demo(#[from] deflex_demo::DemoError),
+    Demo(#[from] deflex_study::DemoError),
     /// A report could not be written.
     #[error(transparent)]
     Page(#[from] deflex_report::PageError),

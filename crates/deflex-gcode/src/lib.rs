@@ -247,3 +247,6 @@ impl Program {
 pub fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
     interpreter::read(text, options)
 }
+
+#[cfg(test)]
+mod it_tests;

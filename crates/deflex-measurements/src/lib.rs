@@ -30,7 +30,7 @@
 //! say which robot the file was made for ([`FileHeader`]): `# robot: <name>` and
 //! `# geometry: <16 hex digits>` (`Robot::geometry_fingerprint`). Plans and simulated
 //! measurements carry them; `calibrate` and `validate` compare them with the robot they are
-//! given (`deflex_calib::consistency`).
+//! given (`deflex_stiffness::consistency`).
 //!
 //! **Bounds.** Every number must be finite and within a physical bound, checked with the line
 //! and column named: joint values ±[`MAX_JOINT_RAD`], forces ±[`MAX_FORCE_N`], moments

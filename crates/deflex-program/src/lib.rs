@@ -293,3 +293,6 @@ pub fn write_files(dir: &Path, files: &[ProgramFile]) -> Result<(), ProgramError
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod it_tests;

@@ -18,9 +18,9 @@ use crate::{
     FileLink, HtmlReport, PageError, PlotSpec, ReportError, Series, SeriesStyle, heatmap,
     line_plot, parity_plot,
 };
-use deflex_calib::data::MeasurementRow;
-use deflex_calib::search::SearchStep;
-use deflex_calib::stiffness_fit::Calibration;
+use deflex_stiffness::data::MeasurementRow;
+use deflex_stiffness::search::SearchStep;
+use deflex_stiffness::stiffness_fit::Calibration;
 use std::path::{Path, PathBuf};
 
 /// Longest plot title (characters), with the `SIMULATED — ` prefix of simulated data: short
@@ -39,7 +39,7 @@ pub struct CalibrationReport<'a> {
     /// The calibration.
     pub calibration: &'a Calibration,
     /// The calibrated robot's prediction of every row's displacement (m, world axes):
-    /// `deflex_calib::validation::predict`.
+    /// `deflex_stiffness::validation::predict`.
     pub predicted: &'a [[f64; 3]],
     /// The search's steps (empty for a fixed structure).
     pub steps: &'a [SearchStep],

@@ -3,8 +3,8 @@
 //! centre shifts, the correlation matrix and the residual summary.
 
 use crate::text_table::render_table;
-use deflex_calib::search::SearchStep;
-use deflex_calib::stiffness_fit::{Calibration, Status};
+use deflex_stiffness::search::SearchStep;
+use deflex_stiffness::stiffness_fit::{Calibration, Status};
 use std::fmt::Write as _;
 
 fn um(x: f64) -> String {
@@ -117,8 +117,8 @@ pub fn shift_rows(cal: &Calibration) -> Vec<Vec<String>> {
             .se_m
             .map(|v| {
                 (
-                    mm(s.value_m - deflex_calib::stiffness_fit::Z95 * v),
-                    mm(s.value_m + deflex_calib::stiffness_fit::Z95 * v),
+                    mm(s.value_m - deflex_stiffness::stiffness_fit::Z95 * v),
+                    mm(s.value_m + deflex_stiffness::stiffness_fit::Z95 * v),
                 )
             })
             .unwrap_or(("-".into(), "-".into()));
@@ -128,10 +128,10 @@ pub fn shift_rows(cal: &Calibration) -> Vec<Vec<String>> {
             se,
             lo,
             hi,
-            if s.free && s.value_m.abs() >= deflex_calib::MAX_SHIFT_M * (1.0 - 1e-9) {
+            if s.free && s.value_m.abs() >= deflex_stiffness::MAX_SHIFT_M * (1.0 - 1e-9) {
                 format!(
                     "at the ±{} m search bound: not identified",
-                    deflex_calib::MAX_SHIFT_M
+                    deflex_stiffness::MAX_SHIFT_M
                 )
             } else if s.free {
                 "fitted".into()

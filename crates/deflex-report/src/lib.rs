@@ -14,7 +14,7 @@
 //! | [`forming_run`] | a forming run of the twin: its folder and plots (`deflex sim isf`) |
 //! | [`study`] | the paper's study on the twin: its folder, figures and page (`deflex demo`) |
 //!
-//! The maths crates (`deflex-calib`, `deflex-sim`, …) take and return data; the files, plots
+//! The maths crates (`deflex-stiffness`, `deflex-sim`, …) take and return data; the files, plots
 //! and pages are made here (and by the front ends).
 //!
 //! Plot kinds, matching the figures of Johra et al. (Robotics 2022, 11, 48):

@@ -1,7 +1,7 @@
 //! An experiment plan as tables: the expected standard errors of the stiffnesses and centre
 //! shifts, and the technician's sheet.
 
-use deflex_calib::plan::Plan;
+use deflex_stiffness::plan::Plan;
 
 fn k_fmt(k: f64) -> String {
     if k.is_infinite() {

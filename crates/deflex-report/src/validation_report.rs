@@ -7,7 +7,7 @@ use crate::{
     HtmlReport, PageError, PlotSpec, ReportError, Series, SeriesStyle, line_plot, parity_plot,
     scatter_heatmap,
 };
-use deflex_calib::validation::Validation;
+use deflex_stiffness::validation::Validation;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

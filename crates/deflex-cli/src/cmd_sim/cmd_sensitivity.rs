@@ -1,5 +1,5 @@
 //! `deflex sim sensitivity`: the closed loop across delay, model scale, sensor gain, bias drift
-//! and contact stiffness (the work is `deflex_demo::sensitivity`).
+//! and contact stiffness (the work is `deflex_study::sensitivity`).
 
 use super::{TwinArgs, load_config, robot_name};
 use crate::args::{parse_list, print_json};
@@ -46,7 +46,7 @@ pub struct SensitivityArgs {
 }
 
 pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
-    use deflex_demo::sensitivity::{SensitivityPlan, run_sensitivity};
+    use deflex_study::sensitivity::{SensitivityPlan, run_sensitivity};
     let config = load_config(&args.twin)?;
     let list = |text: &str, name: &str, scale: f64| -> Result<Vec<f64>, UsageError> {
         if text.trim().is_empty() {
@@ -66,7 +66,7 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         threads: args.threads,
         length_mm: args.length_mm,
     };
-    plan.validate().map_err(deflex_demo::DemoError::from)?;
+    plan.validate().map_err(deflex_study::DemoError::from)?;
     if plan.delays_s.is_empty() || plan.model_scales.is_empty() {
         return Err(UsageError::Missing {
             what: "--delays-ms and --model-scales",

@@ -1,11 +1,11 @@
 //! End-to-end tests of `deflex plan`, `calibrate` and `validate` through the real binary:
 //! files that know their robot, the planner's cell, and every bad input of issue 12.
 
-use deflex_calib::plan::{PlanOptions, plan_experiments};
-use deflex_calib::synthetic::{SyntheticOptions, measure};
-use deflex_calib::{MeasurementRow, format_rows_for};
+use deflex_stiffness::plan::{PlanOptions, plan_experiments};
+use deflex_stiffness::synthetic::{SyntheticOptions, measure};
+use deflex_stiffness::{MeasurementRow, format_rows_for};
 
-/// Write rows for `robot` as a measurement file (what `deflex_calib::write_rows_for` did).
+/// Write rows for `robot` as a measurement file (what `deflex_stiffness::write_rows_for` did).
 fn write_rows_for(
     path: &std::path::Path,
     robot: &deflex_model::Robot,

@@ -2,11 +2,11 @@
 //! twin's, the controller's per-cycle log, the Fig. 7 points, the sensitivity runs and the
 //! compensation comparison. Every file says SIMULATED in its first line.
 
-use deflex_calib::MeasurementRow;
-use deflex_demo::compensation::{CompensationStudy, PartRuns};
-use deflex_demo::fig7::Fig7Point;
-use deflex_demo::sensitivity::SensitivityResult;
-use deflex_demo::{BASELINE, DemoSummary, IDENTIFIED, StiffnessRow, paper_vs_deflex_rows};
+use deflex_stiffness::MeasurementRow;
+use deflex_study::compensation::{CompensationStudy, PartRuns};
+use deflex_study::fig7::Fig7Point;
+use deflex_study::sensitivity::SensitivityResult;
+use deflex_study::{BASELINE, DemoSummary, IDENTIFIED, StiffnessRow, paper_vs_deflex_rows};
 use std::fmt::Write as _;
 
 /// Per-row measured and predicted displacements (m) of every model.

@@ -10,14 +10,14 @@ use crate::{
     Cloud3, Lane, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotSpec, ReportError, Series,
     cloud_3d, heatmap, line_plot, panels_plot, parity_plot, scatter_heatmap, timeline_plot,
 };
-use deflex_calib::MeasurementRow;
 use deflex_control::{CycleOutput, FaultKind, Flags};
-use deflex_demo::compensation::PartRuns;
-use deflex_demo::contact::StiffContactRuns;
-use deflex_demo::fig7::Fig7Point;
-use deflex_demo::sensitivity::SensitivityResult;
-use deflex_demo::{BASELINE, IDENTIFIED};
 use deflex_sim::FormingRun;
+use deflex_stiffness::MeasurementRow;
+use deflex_study::compensation::PartRuns;
+use deflex_study::contact::StiffContactRuns;
+use deflex_study::fig7::Fig7Point;
+use deflex_study::sensitivity::SensitivityResult;
+use deflex_study::{BASELINE, IDENTIFIED};
 use deflex_twin::ClosedLoopRun;
 use std::path::Path;
 
@@ -39,7 +39,7 @@ pub fn grid_figures(
 ) -> Result<Vec<Figure>, ReportError> {
     let mut figures = Vec::new();
     for (index, &load) in loads_n.iter().enumerate() {
-        let selected = deflex_demo::numbers::grid_rows(grid, load);
+        let selected = deflex_study::numbers::grid_rows(grid, load);
         let x: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[0] * 1e3).collect();
         let y: Vec<f64> = selected.iter().map(|&i| grid[i].point_m[1] * 1e3).collect();
         let measured: Vec<f64> = selected
@@ -568,11 +568,11 @@ pub fn sensitivity_heatmap(result: &SensitivityResult, path: &Path) -> Result<()
 
 /// Ways drawn in the figures (the double correction and the log compensation are in the table).
 const DRAWN: [&str; 5] = [
-    deflex_demo::compensation::UNCORRECTED,
-    deflex_demo::compensation::OFFLINE_PROCESS,
-    deflex_demo::compensation::ONLINE,
-    deflex_demo::compensation::FEED_FORWARD,
-    deflex_demo::compensation::PRECOMPENSATED,
+    deflex_study::compensation::UNCORRECTED,
+    deflex_study::compensation::OFFLINE_PROCESS,
+    deflex_study::compensation::ONLINE,
+    deflex_study::compensation::FEED_FORWARD,
+    deflex_study::compensation::PRECOMPENSATED,
 ];
 
 fn error_series(
@@ -627,12 +627,12 @@ pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>
             .iter()
             .filter(|(way, _)| DRAWN.contains(&way.as_str()))
             .map(|(way, run)| {
-                let arc = deflex_demo::compensation::lag::desired_arc_length(run);
+                let arc = deflex_study::compensation::lag::desired_arc_length(run);
                 let start = arc.partition_point(|a| *a < s);
                 let t0 = run.log.rows.get(start).map_or(0.0, |r| r.time_s);
                 let from = run.log.rows.partition_point(|r| r.time_s < t0 - 0.5);
                 let to = run.log.rows.partition_point(|r| {
-                    r.time_s <= t0 + deflex_demo::compensation::lag::SETTLE_WINDOW_S
+                    r.time_s <= t0 + deflex_study::compensation::lag::SETTLE_WINDOW_S
                 });
                 let (t, e) = error_series(run, from, to, t0);
                 Series::line(way.clone(), t, e)

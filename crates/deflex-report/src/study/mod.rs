@@ -1,7 +1,7 @@
 //! The paper's study on the twin (`deflex demo`) on disk: one folder, swapped in whole, with the
 //! CSV data behind every number ([`csv_files`]), the PNG figures after the paper's
 //! ([`figures`]) and the self-contained `index.html` (`page`). The numbers are
-//! `deflex_demo::run_study`'s; this module only renders them.
+//! `deflex_study::run_study`'s; this module only renders them.
 
 pub mod csv_files;
 pub mod figures;
@@ -11,10 +11,10 @@ mod page;
 mod tests;
 
 use crate::{PageError, ReportError};
-use deflex_calib::format_rows_for;
-use deflex_demo::Study;
 use deflex_model::robot_to_toml;
 use deflex_sim::twin_campaign::campaign_text;
+use deflex_stiffness::format_rows_for;
+use deflex_study::Study;
 use std::path::{Path, PathBuf};
 
 /// A figure file and its caption.
@@ -128,7 +128,7 @@ fn write_calibration_files(study: &Study, out: &Path) -> Result<(), ReportError>
 /// A campaign of the twin in the measurement format (`# SIMULATED …` header).
 fn campaign_file(
     study: &Study,
-    rows: &[deflex_calib::MeasurementRow],
+    rows: &[deflex_stiffness::MeasurementRow],
     what: &str,
     seed: u64,
 ) -> Result<String, ReportError> {

@@ -3,11 +3,11 @@
 
 use super::Figure;
 use crate::{FileLink, HtmlReport, ReportError};
-use deflex_calib::SearchResult;
-use deflex_calib::plan::Plan;
-use deflex_demo::compensation::CompensationStudy;
-use deflex_demo::contact::StiffContactNumbers;
-use deflex_demo::{BASELINE, DemoSummary, IDENTIFIED, paper};
+use deflex_stiffness::SearchResult;
+use deflex_stiffness::plan::Plan;
+use deflex_study::compensation::CompensationStudy;
+use deflex_study::contact::StiffContactNumbers;
+use deflex_study::{BASELINE, DemoSummary, IDENTIFIED, paper};
 use std::path::Path;
 
 /// What the page shows.
@@ -307,7 +307,7 @@ fn identification_section(html: &mut HtmlReport, s: &DemoSummary, search: &Searc
         &crate::calibration_tables::ITERATION_HEADERS,
         &crate::calibration_tables::iteration_rows(&search.steps),
     );
-    let row = |r: &deflex_demo::StiffnessRow, shift: bool| {
+    let row = |r: &deflex_study::StiffnessRow, shift: bool| {
         vec![
             r.name.trim_end_matches(" [m]").to_string(),
             fmt_k(r.identified, shift),
@@ -323,7 +323,7 @@ fn identification_section(html: &mut HtmlReport, s: &DemoSummary, search: &Searc
             fmt_k(r.plant, shift),
         ]
     };
-    let is_shift = |r: &&deflex_demo::StiffnessRow| r.name.starts_with('δ');
+    let is_shift = |r: &&deflex_study::StiffnessRow| r.name.starts_with('δ');
     let stiffness: Vec<Vec<String>> = s
         .stiffness
         .iter()
@@ -396,7 +396,7 @@ fn validation_section(html: &mut HtmlReport, page: &Page) {
         page.spiral.length_m,
         page.spiral.center_m[2],
         page.spiral.load_n,
-        deflex_demo::TABLE1,
+        deflex_study::TABLE1,
     ));
     let validation: Vec<Vec<String>> = s
         .validation
@@ -515,7 +515,7 @@ fn sensitivity_section(html: &mut HtmlReport, s: &DemoSummary, figures: &[Figure
             }
         }
         for (index, factor) in factors.into_iter().enumerate() {
-            let group: Vec<&deflex_demo::sensitivity::SensitivityRow> =
+            let group: Vec<&deflex_study::sensitivity::SensitivityRow> =
                 sens.rows.iter().filter(|r| r.factor == factor).collect();
             let mut headers: Vec<String> = group[0]
                 .condition_columns
@@ -684,7 +684,7 @@ fn fig7_section(html: &mut HtmlReport, s: &DemoSummary, figures: &[Figure]) {
          one-eDoF model cannot produce and the joint-3 x-eDoF with its shifted centre (δr3) \
          does. The paper saw M1 move along x0 as well and traced it to the baseplate tilting \
          about y0, which neither of its models represents{}.",
-        deflex_demo::fig7::FIG7_FY_N,
+        deflex_study::fig7::FIG7_FY_N,
         m1.map(|p| format!("; on the twin M1 moves {:.3} mm along x0", p.measured_mm[0]))
             .unwrap_or_default()
     ));
@@ -857,7 +857,7 @@ fn compensation_section(html: &mut HtmlReport, study: &CompensationStudy, figure
          transients in the air after a retract, where a correction still ramping out at its \
          rate limit moves the tool). Lag: {}.",
         study.lead_s,
-        deflex_demo::compensation::lag::CONTACT_FORCE_N,
+        deflex_study::compensation::lag::CONTACT_FORCE_N,
         study.lag_definition
     ));
     for part in &study.parts {

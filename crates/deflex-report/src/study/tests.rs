@@ -1,9 +1,9 @@
-//! Runs the shortened study end to end (computed by deflex-demo, written here) and checks the
+//! Runs the shortened study end to end (computed by deflex-study, written here) and checks the
 //! report's numbers against the run's own CSV files (independent re-computation), plus
 //! determinism under a seed.
 
 use super::write_study;
-use deflex_demo::{DemoOptions, DemoSummary, Progress, run_study};
+use deflex_study::{DemoOptions, DemoSummary, Progress, run_study};
 use std::path::{Path, PathBuf};
 
 struct Silent;
@@ -14,7 +14,7 @@ impl Progress for Silent {
 }
 
 fn out_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("deflex-demo-{tag}-{}", std::process::id()))
+    std::env::temp_dir().join(format!("deflex-study-{tag}-{}", std::process::id()))
 }
 
 fn run(tag: &str, seed: u64) -> (DemoSummary, PathBuf) {

@@ -1,23 +1,25 @@
-//! The calibration report (moved from deflex-calib with it): plots and tables written, one unit per column, and the χ²/dof note
+//! The calibration report (moved from deflex-stiffness with it): plots and tables written, one unit per column, and the χ²/dof note
 //! when the residuals are larger than the noise the file claims.
 
 use crate::calibration_report::{CalibrationReport, write_calibration_report};
 use crate::calibration_tables::{SHIFT_HEADERS, residual_summary, shift_rows};
-use deflex_calib::plan::{BasePoint, PlanOptions, plan_experiments};
-use deflex_calib::stiffness_fit::{CHI2_WELL_ABOVE_ONE, Calibration, Structure, calibrate_fixed};
-use deflex_calib::synthetic::{SyntheticOptions, measure, random_campaign};
-use deflex_calib::validation::{predict, residuals};
 use deflex_model::Robot;
+use deflex_stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
+use deflex_stiffness::stiffness_fit::{
+    CHI2_WELL_ABOVE_ONE, Calibration, Structure, calibrate_fixed,
+};
+use deflex_stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
+use deflex_stiffness::validation::{predict, residuals};
 use rand::{Rng, SeedableRng};
 
-/// deflex-calib's identification campaign fixture: the planner's full-family plan with load
+/// deflex-stiffness's identification campaign fixture: the planner's full-family plan with load
 /// magnitudes redrawn in 600–1400 N, plus random load cases.
 fn campaign(
     robot: &Robot,
     plan_cases: usize,
     random_cases: usize,
     seed: u64,
-) -> Vec<deflex_calib::MeasurementRow> {
+) -> Vec<deflex_stiffness::MeasurementRow> {
     let plan = plan_experiments(
         robot,
         &PlanOptions {
@@ -55,7 +57,7 @@ fn campaign(
 
 /// Calibrate the TX200 (Table 1 structure, δr3 free) on a campaign whose true noise is
 /// `noise_m` while every row claims 15 µm.
-fn calibrate(noise_m: f64) -> (Calibration, Vec<deflex_calib::MeasurementRow>) {
+fn calibrate(noise_m: f64) -> (Calibration, Vec<deflex_stiffness::MeasurementRow>) {
     let truth = deflex_model::builtin("tx200").unwrap();
     let plan = campaign(&truth, 16, 8, 2);
     let mut rows = measure(
@@ -124,7 +126,7 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
         cal.residuals.rms_all_m
     );
 
-    let dir = std::env::temp_dir().join(format!("deflex-calib-report-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("deflex-stiffness-report-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let report = CalibrationReport {
         start_name: "TX200",
@@ -181,7 +183,10 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
 
     // The same data said to be simulated by its file header: labelled on the page, in the
     // plot captions and in residuals.csv.
-    let dir = std::env::temp_dir().join(format!("deflex-calib-report-sim-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "deflex-stiffness-report-sim-{}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let notes = [
         "SIMULATED deflex digital-twin campaign (calibration campaign) of `tx200`, seed 1: not a \

@@ -1,10 +1,10 @@
 //! The plan's tables: the technician's sheet against the identifiability table (moved from
-//! deflex-calib's planner tests when the tables moved here).
+//! deflex-stiffness's planner tests when the tables moved here).
 
 use crate::plan_tables::{expected_se_rows, technician_rows};
-use deflex_calib::campaign_cell::default_force_n;
-use deflex_calib::plan::{PlanOptions, plan_experiments};
 use deflex_model::builtin;
+use deflex_stiffness::campaign_cell::default_force_n;
+use deflex_stiffness::plan::{PlanOptions, plan_experiments};
 
 #[test]
 fn the_technicians_sheet_agrees_with_the_identifiability_table() {
@@ -52,7 +52,7 @@ fn the_technicians_sheet_agrees_with_the_identifiability_table() {
         }
         // Every axis-by-axis case named in the table is on the sheet for that eDoF.
         for a in &plan.axis_cases {
-            let label = deflex_calib::edof_label(a.id);
+            let label = deflex_stiffness::edof_label(a.id);
             let line = sheet.iter().find(|l| l[0] == a.load_case).unwrap();
             assert!(
                 line[5].split(' ').any(|w| w == label),

@@ -3,8 +3,10 @@
 use crate::validation_report::{
     validation_rotation_summary, write_validation_report as write_report,
 };
-use deflex_calib::synthetic::{SyntheticOptions, measure, measure_with_rotations, random_campaign};
-use deflex_calib::validation::validate;
+use deflex_stiffness::synthetic::{
+    SyntheticOptions, measure, measure_with_rotations, random_campaign,
+};
+use deflex_stiffness::validation::validate;
 
 #[test]
 fn a_report_that_fails_half_way_leaves_the_folder_as_it_was() {
