@@ -40,6 +40,8 @@
 //! assert!(files[0].contents.contains("# retract"));
 //! ```
 
+#![warn(missing_docs)]
+
 mod common;
 pub mod config;
 pub mod error;
