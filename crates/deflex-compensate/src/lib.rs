@@ -11,7 +11,7 @@
 //! * [`WrenchSource`]: a [`ProcessModel`] (documented so others can be added; the twin's forming
 //!   model is adapted in `deflex_sim::process_model`) or fixed wrenches, e.g. a previous run's
 //!   log resampled on arc length ([`log`]).
-//! * [`compensate`]: the iteration against the process model until the commanded path
+//! * [`compensate()`]: the iteration against the process model until the commanded path
 //!   converges, with a report per iteration; points that cannot be compensated are kept and
 //!   flagged with their reason ([`PointFailure`]).
 //! * [`table`]: the compensated path as a CSV text (SI columns) and back, and the
