@@ -12,7 +12,7 @@
 //!   model is adapted in `deflex_sim::process_model`), a process law identified from a previous
 //!   run's log ([`LoggedProcess`]: the force follows the depth the tool reaches) or fixed
 //!   wrenches, e.g. that log resampled on arc length ([`log`]).
-//! * [`compensate`]: the iteration against the process model until the commanded path
+//! * [`compensate()`]: the iteration against the process model until the commanded path
 //!   converges, with a report per iteration; points that cannot be compensated are kept and
 //!   flagged with their reason ([`PointFailure`]).
 //! * [`table`]: the compensated path as a CSV text (SI columns) and back, and the
