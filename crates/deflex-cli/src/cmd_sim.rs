@@ -18,18 +18,16 @@
 
 use crate::args::{CliResult, bounded, parse_list, print_json};
 use clap::{Args, Subcommand};
+use deflex_sim::CellConfig;
 use deflex_sim::campaign::{
     GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
 };
-use deflex_sim::gcode::read_gcode;
-use deflex_sim::{
-    CellConfig, ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath,
-    run_forming_with_progress,
-};
 use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
+mod isf;
 mod sensitivity;
+use isf::{IsfArgs, isf};
 use sensitivity::{SensitivityArgs, sensitivity};
 
 #[derive(Subcommand)]
@@ -121,38 +119,6 @@ pub struct CampaignArgs {
     pub seed: u64,
     #[command(flatten)]
     pub twin: TwinArgs,
-}
-
-#[derive(Args)]
-pub struct IsfArgs {
-    /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid`, `plunge` (1 mm
-    /// into a stiff fixture, then 20 mm along x), or a G-code file.
-    #[arg(long, default_value = "cone")]
-    pub path: String,
-    /// Output folder (log.csv, summary.json, plots), swapped in whole at the end.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Random seed (sensor and tracker noise).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    #[command(flatten)]
-    pub twin: TwinArgs,
-    /// Only the first part of the path (mm of travel, within (0, 10⁶]).
-    #[arg(long)]
-    pub length_mm: Option<f64>,
-    /// Feed rate for the built-in paths (mm/s, 0.1–1000).
-    #[arg(long)]
-    pub feed_mm_s: Option<f64>,
-    /// Contact stiffness of the fixture for `--path plunge` (N/m, 10⁴–10⁹; default the twin's
-    /// `[cell.process] fixture_stiffness_n_m`, 10⁷).
-    #[arg(long)]
-    pub fixture_stiffness_n_m: Option<f64>,
-    /// Online correction: `off` (default) or `on` (needs --model).
-    #[arg(long, default_value = "off")]
-    pub correction: String,
-    /// Identified model used by the correction controller (robot TOML).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
 }
 
 pub fn sim(command: SimCommand, json: bool) -> CliResult {
@@ -412,165 +378,6 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
             max_disp * 1e3,
             args.out.display()
         );
-    }
-    Ok(())
-}
-
-fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
-    let feed = match args.feed_mm_s {
-        Some(f) => Some(bounded("--feed-mm-s", f, 0.1, 1000.0, "mm/s")?),
-        None => None,
-    };
-    let path = match args.path.as_str() {
-        "cone" | "cone-contour" => {
-            let mut p = ConeParams {
-                helical: args.path == "cone",
-                ..ConeParams::default()
-            };
-            if let Some(f) = feed {
-                p.feed_mm_s = f;
-            }
-            ToolPath::cone(&p).map_err(|e| e.to_string())?
-        }
-        "pyramid" => {
-            let mut p = PyramidParams::default();
-            if let Some(f) = feed {
-                p.feed_mm_s = f;
-            }
-            ToolPath::pyramid(&p).map_err(|e| e.to_string())?
-        }
-        "plunge" => {
-            let mut p = PlungeParams::default();
-            if let Some(f) = feed {
-                p.traverse_feed_mm_s = f;
-            }
-            ToolPath::plunge(&p).map_err(|e| e.to_string())?
-        }
-        file => {
-            if feed.is_some() {
-                return Err(
-                    "--feed-mm-s applies to the built-in paths; a G-code file sets its own F"
-                        .into(),
-                );
-            }
-            read_gcode(Path::new(file)).map_err(|e| e.to_string())?
-        }
-    };
-    Ok(match args.length_mm {
-        Some(l) => path.truncated(bounded("--length-mm", l, 1e-3, 1e6, "mm")?),
-        None => path,
-    })
-}
-
-fn isf(args: IsfArgs, json: bool) -> CliResult {
-    match args.correction.as_str() {
-        "off" => {
-            if args.model.is_some() {
-                return Err("--model is only used with --correction on".into());
-            }
-        }
-        "on" => {}
-        other => return Err(format!("--correction: expected on or off, got \"{other}\"")),
-    }
-    let mut config = load_config(&args.twin)?;
-    if args.path == "plunge" {
-        config.process.kind = ProcessKind::Fixture;
-    }
-    if let Some(k) = args.fixture_stiffness_n_m {
-        if args.path != "plunge" {
-            return Err("--fixture-stiffness-n-m applies to --path plunge".into());
-        }
-        config.process.fixture_stiffness_n_m =
-            bounded("--fixture-stiffness-n-m", k, 1e4, 1e9, "N/m")?;
-    }
-    let path = tool_path(&args)?;
-    // Closed loop: the deflex correction controller in-process, in simulated time.
-    let mut twin = match args.correction.as_str() {
-        "on" => Some(deflex_twin::twin_controller(
-            &config,
-            args.model.as_deref(),
-        )?),
-        _ => None,
-    };
-    let name = path.name.clone();
-    let bar = if json {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(1000)
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "SIMULATED forming {bar:40} {percent:>3}% {elapsed}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    let controller = twin
-        .as_mut()
-        .map(|t| t as &mut dyn deflex_sim::CorrectionController);
-    let run = run_forming_with_progress(&config, path, args.seed, controller, &mut |f| {
-        bar.set_position((f * 1000.0) as u64)
-    })
-    .map_err(|e| e.to_string())?;
-    bar.finish_and_clear();
-    let files = run.write_outputs(&args.out).map_err(|e| e.to_string())?;
-    let s = &run.summary;
-    if json {
-        let mut value: serde_json::Value =
-            serde_json::from_str(&run.summary_json()).unwrap_or_default();
-        if let Some(map) = value.as_object_mut() {
-            map.insert("robot_spec".into(), json!(config.part.robot));
-            map.insert(
-                "files".into(),
-                json!(
-                    files
-                        .iter()
-                        .map(|f| f.display().to_string())
-                        .collect::<Vec<_>>()
-                ),
-            );
-        }
-        print_json(&value);
-    } else {
-        let mode = if twin.is_some() {
-            "closed-loop"
-        } else {
-            "open-loop"
-        };
-        println!(
-            "SIMULATED {mode} run on the twin of the {}: {name} (seed {})",
-            s.robot, args.seed
-        );
-        if let Some(t) = &twin {
-            println!("  {}", t.status_line());
-        }
-        println!(
-            "  {:.1} s simulated in {:.2} s ({} cycles)",
-            s.duration_s, run.wall_time_s, s.cycles
-        );
-        println!(
-            "  TCP error: max {:.3} mm, RMS {:.3} mm (max |x| {:.3}, |y| {:.3}, |z| {:.3} mm)",
-            s.max_error_norm_mm,
-            s.rms_error_norm_mm,
-            s.max_error_abs_mm[0],
-            s.max_error_abs_mm[1],
-            s.max_error_abs_mm[2]
-        );
-        if config.process.kind == ProcessKind::Fixture {
-            println!(
-                "  force: max |F| {:.0} N against a {:.0e} N/m fixture, deepest penetration {:.3} mm",
-                s.max_force_norm_N, config.process.fixture_stiffness_n_m, s.final_part_depth_mm
-            );
-        } else {
-            println!(
-                "  force: max |F| {:.0} N, max Fz {:.0} N, max in-plane {:.0} N (Aerens level {:.0} N)",
-                s.max_force_norm_N, s.max_fz_N, s.max_fxy_N, s.aerens_steady_fz_N
-            );
-            println!(
-                "  part depth {:.2} mm of {:.2} mm programmed",
-                s.final_part_depth_mm, s.target_depth_mm
-            );
-        }
-        println!("  wrote {} files to {}", files.len(), args.out.display());
     }
     Ok(())
 }

@@ -13,6 +13,7 @@ mod cmd_plan;
 mod cmd_plot;
 mod cmd_register;
 mod cmd_sim;
+mod live;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
