@@ -196,7 +196,7 @@ function init3d() {
   };
   const program = make(0x546e7a);
   const corrected = make(0xef6c00);
-  const truth = make(0x1565c0);
+  const truth = make(0x2e7d32);
   const marker = new THREE.Mesh(new THREE.SphereGeometry(1.2, 16, 12), new THREE.MeshBasicMaterial({ color: 0xef6c00 }));
   scene.add(marker);
   scene.add(new THREE.AxesHelper(20));
