@@ -39,7 +39,7 @@ pub enum SimError {
     Model(#[from] deflex_model::ModelError),
     /// Measurement/plan file problem.
     #[error(transparent)]
-    Data(#[from] deflex_calib::data::DataError),
+    Data(#[from] deflex_stiffness::data::DataError),
     /// The run was stopped before the end of its path (an observer asked, e.g. on Ctrl-C).
     #[error("stopped at {time_s:.1} s of simulated time, before the end of the path")]
     Stopped {
