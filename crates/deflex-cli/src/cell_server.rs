@@ -138,9 +138,9 @@ pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
 /// twin file's settings over it.
 pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
     match (&args.twin, &args.robot) {
-        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
+        (Some(p), robot) => deflex_twin::load_cell(p, robot.as_deref()).map_err(|e| e.to_string()),
         (None, Some(robot)) => {
-            CellConfig::for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
+            deflex_twin::cell_for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
         }
         (None, None) => Ok(CellConfig::default()),
     }
@@ -218,7 +218,7 @@ pub fn cell_session(
                 Ok(v) => Some(v),
                 Err(e) => {
                     let _ = recorder.finish_with(false);
-                    return Err(e);
+                    return Err(e.to_string());
                 }
             }
         }

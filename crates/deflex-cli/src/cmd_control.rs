@@ -246,7 +246,7 @@ fn start_sinks(
                     if let Some(r) = recorder {
                         let _ = r.finish_with(false);
                     }
-                    return Err(e);
+                    return Err(e.to_string());
                 }
             }
         }

@@ -16,19 +16,20 @@
 //! Every output names the robot the twin played. Every numeric option is checked (finite, within
 //! its documented range); the error names the option.
 
-use crate::args::{CliResult, bounded, parse_list, print_json};
-use clap::{Args, Subcommand};
+use crate::args::{bounded, parse_list, print_json};
+use crate::error::{CliError, CommandResult, UsageError};
+use clap::{Args, Subcommand, ValueEnum};
 use deflex_sim::CellConfig;
-use deflex_sim::campaign::{
+use deflex_sim::twin_campaign::{
     GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
 };
 use serde_json::json;
 use std::path::PathBuf;
 
+mod cmd_sensitivity;
 mod isf;
-mod sensitivity;
+use cmd_sensitivity::{SensitivityArgs, sensitivity};
 use isf::{IsfArgs, isf};
-use sensitivity::{SensitivityArgs, sensitivity};
 
 #[derive(Subcommand)]
 pub enum SimCommand {
@@ -72,8 +73,15 @@ pub struct CampaignArgs {
     /// A validation grid: `cell` (default: the robot cell's grid, the paper's for the TX200) or
     /// `paper` (200 poses, 600 N and 1100 N, at the TX200's work area). The `--grid-*` options
     /// change it.
-    #[arg(long, num_args = 0..=1, default_missing_value = "cell", conflicts_with = "spiral")]
-    pub grid: Option<String>,
+    #[arg(
+        long,
+        value_enum,
+        num_args = 0..=1,
+        default_missing_value = "cell",
+        conflicts_with = "spiral",
+        hide_possible_values = true
+    )]
+    pub grid: Option<GridChoice>,
     /// Grid centre x,y (m, world).
     #[arg(long)]
     pub grid_center_m: Option<String>,
@@ -121,7 +129,16 @@ pub struct CampaignArgs {
     pub twin: TwinArgs,
 }
 
-pub fn sim(command: SimCommand, json: bool) -> CliResult {
+/// `--grid`: which validation grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GridChoice {
+    // The robot cell's grid (plain comments: doc comments would change `--help`).
+    Cell,
+    // The paper's grid.
+    Paper,
+}
+
+pub fn sim(command: SimCommand, json: bool) -> CommandResult {
     match command {
         SimCommand::Campaign(args) => campaign(args, json),
         SimCommand::Isf(args) => isf(args, json),
@@ -131,17 +148,16 @@ pub fn sim(command: SimCommand, json: bool) -> CliResult {
 }
 
 /// `deflex sim robot`: the nominal robot of the simulated cell as a robot file.
-fn cell_robot(args: RobotArgs, json: bool) -> CliResult {
+fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
-    let robot = config.nominal_robot().map_err(|e| e.to_string())?;
+    let robot = config.nominal_robot()?;
     let text = format!(
         "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
          # cell's tool and base pivot, as a user would describe that cell.\n{}",
         config.part.robot,
-        deflex_model::robot_to_toml_for(&robot, &args.out)
+        deflex_load::robot_to_toml_for(&robot, &args.out)
     );
-    deflex_files::write_atomic(&args.out, text)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
     if json {
         crate::args::print_json(&serde_json::json!({
             "simulated": true,
@@ -167,10 +183,10 @@ fn cell_robot(args: RobotArgs, json: bool) -> CliResult {
 
 /// The cell: the robot's (`--robot`, else the file's, else the TX200's), with the twin file's
 /// settings over it.
-pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, String> {
+pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, CliError> {
     match (&twin.config, &twin.robot) {
-        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
-        (None, Some(robot)) => CellConfig::for_robot(robot).map_err(|e| e.to_string()),
+        (Some(p), robot) => Ok(deflex_twin::load_cell(p, robot.as_deref())?),
+        (None, Some(robot)) => Ok(deflex_twin::cell_for_robot(robot)?),
         (None, None) => Ok(CellConfig::default()),
     }
 }
@@ -183,15 +199,10 @@ pub(super) fn robot_name(config: &CellConfig) -> String {
         .unwrap_or_else(|_| config.part.robot.clone())
 }
 
-fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, String> {
-    let mut params = match args.grid.as_deref() {
-        Some("paper") => GridParams::paper(),
-        Some("cell") | None => GridParams::for_cell(config).map_err(|e| e.to_string())?,
-        Some(other) => {
-            return Err(format!(
-                "--grid: expected `cell` (default) or `paper`, got \"{other}\""
-            ));
-        }
+fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, CliError> {
+    let mut params = match args.grid {
+        Some(GridChoice::Paper) => GridParams::paper(),
+        Some(GridChoice::Cell) | None => GridParams::for_cell(config)?,
     };
     if let Some(text) = &args.grid_center_m {
         let v = crate::args::parse_fixed::<2>(text, "--grid-center-m")?;
@@ -205,11 +216,15 @@ fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, S
         let size = match v.as_slice() {
             [s] => [*s, *s],
             [a, b] => [*a, *b],
-            _ => return Err("--grid-size-m: give one or two values (m)".into()),
+            _ => {
+                return Err(
+                    UsageError::invalid("--grid-size-m", "one or two values (m)", v.len()).into(),
+                );
+            }
         };
         for s in size {
             if !(s > 0.0 && s <= 5.0) {
-                return Err(format!("--grid-size-m: within (0, 5] m, got {s}"));
+                return Err(UsageError::invalid("--grid-size-m", "within (0, 5] m", s).into());
             }
         }
         params.size_xy_m = size;
@@ -221,27 +236,28 @@ fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, S
         let step = bounded("--grid-step-m", step, 1e-4, 5.0, "m")?;
         for (i, size) in params.size_xy_m.into_iter().enumerate() {
             params.points_xy[i] = GridParams::points_for_step(size, step)
-                .map_err(|e| format!("--grid-step-m: {e}"))?;
+                .map_err(|e| CliError::in_context("--grid-step-m")(e.into()))?;
         }
     }
     if let Some(text) = &args.grid_loads_n {
         params.loads_n = parse_list(text, "--grid-loads-n")?;
     }
-    params.validate().map_err(|e| e.to_string())?;
+    params.validate()?;
     Ok(params)
 }
 
-fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParams, String> {
-    let mut p = SpiralParams::for_cell(config).map_err(|e| e.to_string())?;
+fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParams, CliError> {
+    let mut p = SpiralParams::for_cell(config)?;
     if let Some(text) = &args.spiral_center_m {
         p.center_m = crate::args::parse_fixed::<3>(text, "--spiral-center-m")?;
     }
-    let set = |target: &mut f64, value: Option<f64>, name: &str, lo: f64, hi: f64, unit: &str| {
-        if let Some(v) = value {
-            *target = bounded(name, v, lo, hi, unit)?;
-        }
-        Ok::<(), String>(())
-    };
+    let set =
+        |target: &mut f64, value: Option<f64>, name: &str, lo: f64, hi: f64, unit: &'static str| {
+            if let Some(v) = value {
+                *target = bounded(name, v, lo, hi, unit)?;
+            }
+            Ok::<(), UsageError>(())
+        };
     set(
         &mut p.initial_radius_m,
         args.spiral_radius_m,
@@ -282,11 +298,11 @@ fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParam
         1e5,
         "N",
     )?;
-    p.validate().map_err(|e| e.to_string())?;
+    p.validate()?;
     Ok(p)
 }
 
-fn campaign(args: CampaignArgs, json: bool) -> CliResult {
+fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
     let grid_options = args.grid_center_m.is_some()
         || args.grid_size_m.is_some()
@@ -300,25 +316,31 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         || args.spiral_speed_m_s.is_some()
         || args.spiral_load_n.is_some();
     if grid_options && args.grid.is_none() {
-        return Err("the --grid-* options need --grid".into());
+        return Err(UsageError::DoesNotApply {
+            flag: "the --grid-* options",
+            applies: "need --grid",
+        }
+        .into());
     }
     if spiral_options && !args.spiral {
-        return Err("the --spiral-* options need --spiral".into());
+        return Err(UsageError::DoesNotApply {
+            flag: "the --spiral-* options",
+            applies: "need --spiral",
+        }
+        .into());
     }
     let mut plan_header = None;
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
-            let plan_file =
-                deflex_stiffness::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
-            let rows =
-                run_campaign(&config, &plan_file.rows, args.seed).map_err(|e| e.to_string())?;
+            let plan_file = deflex_load::read_file(plan, None, false)?;
+            let rows = run_campaign(&config, &plan_file.rows, args.seed)?;
             plan_header = Some(plan_file.header);
             (format!("plan {}", plan.display()), rows)
         }
         (None, Some(_), false) => {
             let params = grid_params(&args, &config)?;
-            let plan = validation_grid(&config, &params).map_err(|e| e.to_string())?;
-            let rows = run_campaign(&config, &plan, args.seed).map_err(|e| e.to_string())?;
+            let plan = validation_grid(&config, &params)?;
+            let rows = run_campaign(&config, &plan, args.seed)?;
             let loads: Vec<String> = params.loads_n.iter().map(|l| format!("{l:.0} N")).collect();
             (
                 format!(
@@ -335,7 +357,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         }
         (None, None, true) => {
             let params = spiral_params(&args, &config)?;
-            let rows = spiral(&config, &params, args.seed).map_err(|e| e.to_string())?;
+            let rows = spiral(&config, &params, args.seed)?;
             (
                 format!(
                     "spiral (Fig. 14) {:.3} m long at z = {:.3} m, {:.0} N",
@@ -344,12 +366,16 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
                 rows,
             )
         }
-        _ => return Err("give one of --plan PLAN.csv, --grid [cell|paper] or --spiral".into()),
+        _ => {
+            return Err(UsageError::Missing {
+                what: "what to measure",
+                give: "give one of --plan PLAN.csv, --grid [cell|paper] or --spiral",
+            }
+            .into());
+        }
     };
-    let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())
-        .map_err(|e| e.to_string())?;
-    deflex_files::write_atomic(&args.out, text)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())?;
+    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
     let cases = deflex_stiffness::data::load_case_count(&rows);
     let max_disp = rows
         .iter()

@@ -2,8 +2,9 @@
 //! session: the `--view [ADDR]` flag and its server (`deflex-view`), and the MCAP recording's
 //! file name beside the CSV log (`deflex-record`).
 
+use crate::error::UsageError;
 use deflex_runtime::telemetry::{Broadcast, CycleSample, SessionInfo};
-use deflex_view::{StopCallback, ViewHandle, ViewStats};
+use deflex_view::{StopCallback, ViewError, ViewHandle, ViewStats};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -16,10 +17,14 @@ pub const CELL_VIEW: &str = "127.0.0.1:8766";
 pub const SIM_VIEW: &str = "127.0.0.1:8767";
 
 /// `--view` value: `HOST:PORT` (an IP address or `localhost`) or a bare `PORT` on 127.0.0.1.
-pub fn view_address(text: &str) -> Result<SocketAddr, String> {
+pub fn view_address(text: &str) -> Result<SocketAddr, UsageError> {
     let text = text.trim();
     let expected = || {
-        format!("--view: expected an address such as 127.0.0.1:8765 (or a port), got \"{text}\"")
+        UsageError::invalid(
+            "--view",
+            "an address such as 127.0.0.1:8765 (or a port)",
+            format!("\"{text}\""),
+        )
     };
     if let Ok(port) = text.parse::<u16>() {
         return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
@@ -39,9 +44,9 @@ pub fn start_view(
     info: Arc<SessionInfo>,
     stop: Option<StopCallback>,
     quiet: bool,
-) -> Result<ViewHandle, String> {
+) -> Result<ViewHandle, ViewError> {
     let simulated = info.simulated;
-    let view = deflex_view::serve(addr, ring, info, stop).map_err(|e| e.to_string())?;
+    let view = deflex_view::serve(addr, ring, info, stop)?;
     if !quiet {
         eprintln!(
             "live view{}: open {}",
@@ -63,13 +68,14 @@ pub fn view_line(stats: &ViewStats) -> String {
 
 /// The MCAP recording beside the CSV log `log`: the same name with the extension `.mcap`
 /// (`deflex-run.csv` → `deflex-run.mcap`). A log already named `.mcap` is refused, naming it.
-pub fn mcap_beside(log: &Path, field: &str) -> Result<PathBuf, String> {
+pub fn mcap_beside(log: &Path, field: &str) -> Result<PathBuf, UsageError> {
     let mcap = log.with_extension("mcap");
     if mcap == log {
-        return Err(format!(
-            "{field} {}: the MCAP recording is written beside the CSV log with the extension \
-             .mcap; give the log another extension (.csv)",
-            log.display()
+        return Err(UsageError::invalid(
+            field,
+            "a log name other than NAME.mcap (the MCAP recording is written beside the CSV log \
+             with the extension .mcap; give the log another extension, .csv)",
+            log.display(),
         ));
     }
     Ok(mcap)
@@ -90,7 +96,7 @@ mod tests {
             view_address("0.0.0.0:8765").unwrap().to_string(),
             "0.0.0.0:8765"
         );
-        let e = view_address("example.com:80").unwrap_err();
+        let e = view_address("example.com:80").unwrap_err().to_string();
         assert!(e.contains("--view") && e.contains("example.com"), "{e}");
         assert!(view_address("70000").is_err());
         assert_eq!(
@@ -101,7 +107,9 @@ mod tests {
             mcap_beside(Path::new("run"), "log.path").unwrap(),
             Path::new("run.mcap")
         );
-        let e = mcap_beside(Path::new("run.mcap"), "log.path").unwrap_err();
-        assert!(e.contains("log.path run.mcap"), "{e}");
+        let e = mcap_beside(Path::new("run.mcap"), "log.path")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("log.path") && e.contains("run.mcap"), "{e}");
     }
 }

@@ -39,20 +39,22 @@ pub enum SimError {
     Model(#[from] deflex_model::ModelError),
     /// Measurement/plan file problem.
     #[error(transparent)]
-    Data(#[from] deflex_stiffness::data::DataError),
+    Data(#[from] deflex_measurements::DataError),
     /// The run was stopped before the end of its path (an observer asked, e.g. on Ctrl-C).
     #[error("stopped at {time_s:.1} s of simulated time, before the end of the path")]
     Stopped {
         /// Simulated time when it stopped (s).
         time_s: f64,
     },
-    /// Writing outputs failed.
-    #[error("{path}: {message}")]
-    Output {
-        /// File or folder.
-        path: String,
-        /// Cause.
-        message: String,
+    /// A robot spec that is not a built-in robot, given where the twin cannot read the file (it
+    /// reads no file: `deflex_twin::cell_for_robot` reads robot files).
+    #[error(
+        "part.robot: `{spec}` is not a built-in robot ({}); a robot file is read by the caller (deflex_twin::cell_for_robot)",
+        builtin_names()
+    )]
+    NotBuiltin {
+        /// The spec given.
+        spec: String,
     },
 }
 
@@ -63,11 +65,12 @@ impl SimError {
             message: message.into(),
         }
     }
+}
 
-    pub(crate) fn output(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
-        SimError::Output {
-            path: path.display().to_string(),
-            message: message.to_string(),
-        }
-    }
+fn builtin_names() -> String {
+    deflex_model::BUILTIN_ROBOTS
+        .iter()
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>()
+        .join(", ")
 }

@@ -7,8 +7,9 @@
 //! loop the twin's own stream (`deflex_twin::twin_stream`: ground truth at every log row).
 
 use super::{TwinArgs, load_config};
-use crate::args::{CliResult, bounded, print_json};
-use clap::Args;
+use crate::args::{bounded, print_json};
+use crate::error::{CliError, CommandResult, UsageError};
+use clap::{Args, ValueEnum};
 use deflex_record::{McapSink, RecordError, RecordOptions, RecordStats};
 use deflex_sim::gcode::read_gcode;
 use deflex_sim::{ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath};
@@ -28,8 +29,8 @@ pub const PLOT_DIR: &str = "plot";
 pub struct IsfArgs {
     /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid`, `plunge` (1 mm
     /// into a stiff fixture, then 20 mm along x), or a G-code file.
-    #[arg(long, default_value = "cone")]
-    pub path: String,
+    #[arg(long, default_value = "cone", value_parser = parse_path_choice)]
+    pub path: PathChoice,
     /// Output folder (log.csv, summary.json, plots), swapped in whole at the end.
     #[arg(long)]
     pub out: PathBuf,
@@ -49,8 +50,8 @@ pub struct IsfArgs {
     #[arg(long)]
     pub fixture_stiffness_n_m: Option<f64>,
     /// Online correction: `off` (default) or `on` (needs --model).
-    #[arg(long, default_value = "off")]
-    pub correction: String,
+    #[arg(long, value_enum, default_value = "off", hide_possible_values = true)]
+    pub correction: Correction,
     /// Identified model used by the correction controller (robot TOML).
     #[arg(long)]
     pub model: Option<PathBuf>,
@@ -67,44 +68,80 @@ pub struct IsfArgs {
     pub speed: Option<f64>,
 }
 
-fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
+/// `--correction`: the online correction off or on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Correction {
+    // Open loop (plain comments: doc comments would change `--help`).
+    Off,
+    // The correction controller with `--model`.
+    On,
+}
+
+/// `--path`: a built-in tool path or a G-code file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PathChoice {
+    /// The paper's helical cone.
+    Cone,
+    /// The cone in contours.
+    ConeContour,
+    /// The pyramid.
+    Pyramid,
+    /// 1 mm into a stiff fixture, then 20 mm along x.
+    Plunge,
+    /// A G-code file.
+    Gcode(PathBuf),
+}
+
+/// `cone`, `cone-contour`, `pyramid`, `plunge`, or a G-code file.
+fn parse_path_choice(text: &str) -> Result<PathChoice, std::convert::Infallible> {
+    Ok(match text {
+        "cone" => PathChoice::Cone,
+        "cone-contour" => PathChoice::ConeContour,
+        "pyramid" => PathChoice::Pyramid,
+        "plunge" => PathChoice::Plunge,
+        file => PathChoice::Gcode(PathBuf::from(file)),
+    })
+}
+
+fn tool_path(args: &IsfArgs) -> Result<ToolPath, CliError> {
     let feed = match args.feed_mm_s {
         Some(f) => Some(bounded("--feed-mm-s", f, 0.1, 1000.0, "mm/s")?),
         None => None,
     };
-    let path = match args.path.as_str() {
-        "cone" | "cone-contour" => {
+    let path = match &args.path {
+        PathChoice::Cone | PathChoice::ConeContour => {
             let mut p = ConeParams {
-                helical: args.path == "cone",
+                helical: args.path == PathChoice::Cone,
                 ..ConeParams::default()
             };
             if let Some(f) = feed {
                 p.feed_mm_s = f;
             }
-            ToolPath::cone(&p).map_err(|e| e.to_string())?
+            ToolPath::cone(&p)?
         }
-        "pyramid" => {
+        PathChoice::Pyramid => {
             let mut p = PyramidParams::default();
             if let Some(f) = feed {
                 p.feed_mm_s = f;
             }
-            ToolPath::pyramid(&p).map_err(|e| e.to_string())?
+            ToolPath::pyramid(&p)?
         }
-        "plunge" => {
+        PathChoice::Plunge => {
             let mut p = PlungeParams::default();
             if let Some(f) = feed {
                 p.traverse_feed_mm_s = f;
             }
-            ToolPath::plunge(&p).map_err(|e| e.to_string())?
+            ToolPath::plunge(&p)?
         }
-        file => {
+        PathChoice::Gcode(file) => {
             if feed.is_some() {
-                return Err(
-                    "--feed-mm-s applies to the built-in paths; a G-code file sets its own F"
-                        .into(),
-                );
+                return Err(UsageError::DoesNotApply {
+                    flag: "--feed-mm-s",
+                    applies: "applies to the built-in paths; a G-code file sets its own F",
+                }
+                .into());
             }
-            read_gcode(Path::new(file)).map_err(|e| e.to_string())?
+            read_gcode(file)?
         }
     };
     Ok(match args.length_mm {
@@ -113,35 +150,37 @@ fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
     })
 }
 
-pub fn isf(args: IsfArgs, json: bool) -> CliResult {
-    match args.correction.as_str() {
-        "off" => {
-            if args.model.is_some() {
-                return Err("--model is only used with --correction on".into());
-            }
+pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
+    if args.correction == Correction::Off && args.model.is_some() {
+        return Err(UsageError::DoesNotApply {
+            flag: "--model",
+            applies: "only used with --correction on",
         }
-        "on" => {}
-        other => return Err(format!("--correction: expected on or off, got \"{other}\"")),
+        .into());
     }
     let mut config = load_config(&args.twin)?;
-    if args.path == "plunge" {
+    if args.path == PathChoice::Plunge {
         config.process.kind = ProcessKind::Fixture;
     }
     if let Some(k) = args.fixture_stiffness_n_m {
-        if args.path != "plunge" {
-            return Err("--fixture-stiffness-n-m applies to --path plunge".into());
+        if args.path != PathChoice::Plunge {
+            return Err(UsageError::DoesNotApply {
+                flag: "--fixture-stiffness-n-m",
+                applies: "applies to --path plunge",
+            }
+            .into());
         }
         config.process.fixture_stiffness_n_m =
             bounded("--fixture-stiffness-n-m", k, 1e4, 1e9, "N/m")?;
     }
     let path = tool_path(&args)?;
     // Closed loop: the deflex correction controller in-process, in simulated time.
-    let mut twin = match args.correction.as_str() {
-        "on" => Some(deflex_twin::twin_controller(
+    let mut twin = match args.correction {
+        Correction::On => Some(deflex_twin::twin_controller(
             &config,
             args.model.as_deref(),
         )?),
-        _ => None,
+        Correction::Off => None,
     };
     let name = path.name.clone();
     let bar = if json {
@@ -166,10 +205,10 @@ pub fn isf(args: IsfArgs, json: bool) -> CliResult {
         .map(crate::live::view_address)
         .transpose()?;
     // Built aside, swapped in whole at the end: a failed or stopped run leaves `--out` whole.
-    let building = deflex_files::AtomicDir::create(&args.out)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    let building =
+        deflex_files::AtomicDir::create(&args.out).map_err(CliError::write(&args.out))?;
     let recording_path = building.path().join(RECORDING);
-    let nominal = config.nominal_robot().map_err(|e| e.to_string())?;
+    let nominal = config.nominal_robot()?;
     let info = match &twin {
         Some(t) => t.session_info(config.robot_period_s()),
         None => twin_cell_session_info(&nominal, &config),
@@ -230,23 +269,19 @@ pub fn isf(args: IsfArgs, json: bool) -> CliResult {
         stats
     });
     let run = run.map_err(|e| match e {
-        deflex_sim::SimError::Stopped { .. } => format!(
-            "{e}: nothing written ({} keeps what it held)",
-            args.out.display()
-        ),
-        e => e.to_string(),
+        e @ deflex_sim::SimError::Stopped { .. } => CliError::Stopped {
+            out: args.out.clone(),
+            source: e,
+        },
+        e => e.into(),
     })?;
-    let record_stats = recorder.finish()?;
-    let mut names = run
-        .write_outputs_into(building.path())
-        .map_err(|e| e.to_string())?;
+    let record_stats = recorder.finish(&args.out.join(RECORDING))?;
+    let mut names = run_files(&run, building.path())?;
     names.push(RECORDING.into());
     if !args.no_plot {
         names.push(plot_page(building.path())?);
     }
-    building
-        .commit()
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    building.commit().map_err(CliError::write(&args.out))?;
     let files: Vec<PathBuf> = names.iter().map(|n| args.out.join(n)).collect();
     let s = &run.summary;
     if json {
@@ -352,14 +387,34 @@ fn info_key(closed_loop: bool) -> &'static str {
     }
 }
 
+/// `log.csv`, `summary.json`, `profile.csv` and the run's PNG plots
+/// (`deflex_report::forming_run`) written into the folder being built; returns their names.
+fn run_files(run: &deflex_sim::FormingRun, folder: &Path) -> Result<Vec<String>, CliError> {
+    let mut names = Vec::new();
+    for (name, text) in [
+        ("log.csv", run.log.to_csv()),
+        ("summary.json", run.summary_json()),
+        ("profile.csv", run.profile_csv()),
+    ] {
+        let path = folder.join(name);
+        deflex_files::write_atomic(&path, text).map_err(CliError::write(&path))?;
+        names.push(name.to_string());
+    }
+    for plot in deflex_report::forming_run::forming_plots(run, folder)? {
+        if let Some(name) = plot.file_name() {
+            names.push(name.to_string_lossy().into_owned());
+        }
+    }
+    Ok(names)
+}
+
 /// The `deflex plot` page of the run, from its `log.csv`, into `plot/` of the folder being
 /// built; returns the page's name in the folder.
-fn plot_page(folder: &Path) -> Result<String, String> {
-    let trace = deflex_record::trace::read_run_log(&folder.join("log.csv"), "this run", None)
-        .map_err(|e| e.to_string())?;
+fn plot_page(folder: &Path) -> Result<String, CliError> {
+    let trace = deflex_record::trace::read_run_log(&folder.join("log.csv"), "this run", None)?;
     let dir = folder.join(PLOT_DIR);
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    deflex_report::write_run_figures(&dir, &[trace]).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&dir).map_err(CliError::write(&dir))?;
+    deflex_report::write_run_figures(&dir, &[trace])?;
     Ok(format!("{PLOT_DIR}/index.html"))
 }
 
@@ -376,15 +431,14 @@ struct Recording {
 
 impl Recording {
     /// A recording into `path` (in the folder being built), named `shown` in errors.
-    fn create(path: &Path, shown: &Path, info: &SessionInfo) -> Result<Recording, String> {
-        let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", shown.display()))?;
+    fn create(path: &Path, shown: &Path, info: &SessionInfo) -> Result<Recording, CliError> {
+        let file = std::fs::File::create(path).map_err(CliError::write(shown))?;
         let sink = McapSink::new(
             BufWriter::new(file),
             shown.display().to_string(),
             info,
             RecordOptions::default(),
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         Ok(Recording {
             state: Arc::new(Mutex::new((Some(sink), None))),
         })
@@ -406,17 +460,22 @@ impl Recording {
     }
 
     /// Closes the file; the first error of the run, if any.
-    fn finish(self) -> Result<RecordStats, String> {
+    fn finish(self, shown: &Path) -> Result<RecordStats, CliError> {
         let mut guard = self.state.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(e) = guard.1.take() {
-            return Err(e.to_string());
+            return Err(e.into());
         }
-        let sink = guard.0.take().ok_or("the recording was closed twice")?;
-        let (writer, stats) = sink.finish().map_err(|e| e.to_string())?;
-        writer
+        // `finish` takes the recording: the sink is there unless a write panicked with it.
+        let Some(sink) = guard.0.take() else {
+            return Err(CliError::write(shown)(std::io::Error::other(
+                "the recording was lost",
+            )));
+        };
+        let (writer, stats) = sink.finish()?;
+        let file = writer
             .into_inner()
-            .map_err(|e| e.to_string())
-            .and_then(|f| f.sync_all().map_err(|e| e.to_string()))?;
+            .map_err(|e| CliError::write(shown)(e.into_error()))?;
+        file.sync_all().map_err(CliError::write(shown))?;
         Ok(stats)
     }
 }

@@ -143,7 +143,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     };
 
     // `deflex run`'s threads from the same file, paced by the counting clock.
-    let robot = deflex_model::load_robot(&file.model_spec()).unwrap();
+    let robot = deflex_load::load_robot(&file.model_spec()).unwrap();
     let controller = Controller::new(robot, file.controller_config()).unwrap();
     let joints = controller.robot().joint_count();
     let info = session_info(
