@@ -9,6 +9,12 @@ use clap::Args;
 use deflex_control::Fault;
 use deflex_runtime::cell_run::FeedForwardInUse;
 use deflex_runtime::stats::StatsSummary;
+use deflex_ros2::sensor::SensorCountsHandle;
+use deflex_ros2::{
+    BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2SensorLink, SensorCounts,
+    SensorSettings,
+};
+use deflex_runtime::config::SensorKind;
 use deflex_runtime::{CellFile, CellRun, CellRunOutcome, LiveStatus};
 use serde_json::json;
 use std::path::PathBuf;
@@ -62,6 +68,35 @@ pub struct RunOutcome {
     pub wall_s: f64,
     /// The feed-forward in use, described.
     pub feedforward: Option<String>,
+    /// What the ROS 2 bridge published (with `[ros2]`).
+    pub bridge: Option<(Vec<String>, BridgeReport)>,
+    /// What the ROS 2 sensor link took and refused (`sensor.kind = "ros2"`).
+    pub ros2_sensor: Option<(String, SensorCounts)>,
+}
+
+/// The ROS 2 parts of a run: the sensor link of `sensor.kind = "ros2"` (opened before the
+/// session, handed to it) and the bridge of `[ros2]` (subscribed before the threads start).
+struct Ros2Parts {
+    sensor: Option<Ros2SensorLink>,
+    sensor_counts: Option<(String, SensorCountsHandle)>,
+    bridge: Option<Ros2Bridge>,
+}
+
+fn open_ros2_sensor(cell: &CellFile) -> Result<Ros2Parts, String> {
+    let mut parts = Ros2Parts {
+        sensor: None,
+        sensor_counts: None,
+        bridge: None,
+    };
+    if cell.sensor.kind == SensorKind::Ros2 {
+        // Validation made sure [ros2] is present.
+        let settings = SensorSettings::from_cell(cell)
+            .ok_or_else(|| format!("{}: sensor.kind = \"ros2\" needs [ros2]", cell.origin))?;
+        let link = Ros2SensorLink::open(&settings).map_err(|e| format!("sensor.topic: {e}"))?;
+        parts.sensor_counts = Some((link.topic().to_string(), link.counts_handle()));
+        parts.sensor = Some(link);
+    }
+    Ok(parts)
 }
 
 /// The feed-forward in use, for people.
@@ -111,8 +146,39 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
     args.check()?;
     let cell = load_cell_file(&args.config)?;
     let started = Instant::now();
-    let run = CellRun::start(&cell, args.startup_timeout_s, Some(args.idle_exit_s))
-        .map_err(|e| e.to_string())?;
+    let mut ros2 = open_ros2_sensor(&cell)?;
+    let mut bridge_error = None;
+    let run = CellRun::start_with(
+        &cell,
+        args.startup_timeout_s,
+        Some(args.idle_exit_s),
+        ros2.sensor.take().map(|link| Box::new(link) as _),
+        &mut |telemetry| {
+            // The bridge is a sink of the telemetry stream, subscribed before the threads
+            // start: it publishes every cycle, never from the control thread.
+            if let Some(settings) = BridgeSettings::from_cell(&cell) {
+                match Ros2Bridge::spawn(&settings, telemetry.subscribe(), telemetry.info().clone())
+                {
+                    Ok(bridge) => ros2.bridge = Some(bridge),
+                    Err(e) => bridge_error = Some(e.to_string()),
+                }
+            }
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    if let Some(e) = bridge_error {
+        run.runtime.request_stop();
+        let _ = run.finish();
+        return Err(e);
+    }
+    if live && let Some(bridge) = &ros2.bridge {
+        eprintln!(
+            "deflex run: ROS 2: publishing {} topics under {} (domain {})",
+            bridge.topics().len(),
+            cell.ros2.as_ref().map_or("/", |r| r.namespace.as_str()),
+            cell.ros2.as_ref().map_or(0, |r| r.domain_id),
+        );
+    }
     let feedforward = run.feedforward.as_ref().map(describe_feedforward);
     if let Ok(policy) = cell.peer_policy()
         && let Some(warning) = policy.warning()
@@ -149,10 +215,19 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         }
     }
     let session = run.finish().map_err(|e| format!("log writer: {e}"))?;
+    let bridge = match ros2.bridge {
+        Some(b) => {
+            let topics = b.topics().to_vec();
+            Some((topics, b.finish().map_err(|e| e.to_string())?))
+        }
+        None => None,
+    };
     Ok(RunOutcome {
         session,
         wall_s: started.elapsed().as_secs_f64(),
         feedforward,
+        bridge,
+        ros2_sensor: ros2.sensor_counts.map(|(topic, h)| (topic, h.counts())),
     })
 }
 
@@ -199,6 +274,19 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             "error": s.error.as_ref().map(ToString::to_string),
         });
         let mut value = value;
+        if let Some((topics, r)) = &o.bridge {
+            value["ros2_bridge"] = json!({"topics": topics, "cycles_read": r.cycles_read,
+                "cycles_published": r.cycles_published, "diagnostics": r.diagnostics,
+                "messages": r.messages, "write_errors": r.write_errors, "lost": r.lost});
+        }
+        if let Some((topic, c)) = &o.ros2_sensor {
+            let refused: serde_json::Map<String, serde_json::Value> = Refusal::ALL
+                .iter()
+                .map(|r| (r.name().to_string(), json!(c.refused_for(*r))))
+                .collect();
+            value["ros2_sensor"] = json!({"topic": topic, "received": c.received,
+                "accepted": c.accepted, "refused": refused, "overflow": c.overflow});
+        }
         let link = &s.robot_link;
         for (key, v) in [
             ("robot_dropped", json!(s.robot_dropped)),
@@ -282,6 +370,30 @@ fn print_summary(o: &RunOutcome) {
         "  sensor: {} samples, {} lost, {} flagged by the status word, {} malformed or failed, {} from other hosts refused",
         s.samples, s.sample_gaps, s.sensor_faults, s.sensor_errors, s.sensor_foreign
     );
+    if let Some((topic, c)) = &o.ros2_sensor {
+        let refused: Vec<String> = Refusal::ALL
+            .iter()
+            .map(|r| format!("{} {}", c.refused_for(*r), r.name()))
+            .collect();
+        println!(
+            "  ROS 2 sensor {topic}: {} messages, {} accepted, refused: {}; {} dropped from the full queue",
+            c.received,
+            c.accepted,
+            refused.join(", "),
+            c.overflow
+        );
+    }
+    if let Some((topics, r)) = &o.bridge {
+        println!(
+            "  ROS 2 bridge: {} cycles published on {} topics ({} messages, {} diagnostics), {} not written, {} lost",
+            r.cycles_published,
+            topics.len(),
+            r.messages,
+            r.diagnostics,
+            r.write_errors,
+            r.lost
+        );
+    }
     println!(
         "  max force {:.1} N, max |ξp| {:.3} mm",
         s.max_force_n,

@@ -149,7 +149,10 @@ struct Publishing {
     publishers: Publishers,
     info: Arc<SessionInfo>,
     period_s: f64,
-    last_published_s: f64,
+    /// Half a control period (s): the tolerance of the publishing grid.
+    half_cycle_s: f64,
+    /// Session time at which the next cycle is due (s).
+    next_due_s: f64,
     pacer: DiagnosticsPacer,
     epoch_ns: Option<u64>,
     counters: Arc<Counters>,
@@ -184,13 +187,19 @@ impl Publishing {
             );
             c.diagnostics.fetch_add(1, Ordering::Relaxed);
         }
-        // Due when a publishing period of session time has passed (or time went back).
-        let due = s.time_s - self.last_published_s + 1e-9 >= self.period_s
-            || s.time_s < self.last_published_s;
-        if !due {
+        // On a grid of session time: the first cycle at or past each grid point (within half a
+        // control period, the cycles' own jitter) is due, so the average rate is the configured
+        // one whatever the cycles' jitter; after a gap (or time going back) the grid restarts at
+        // the cycle, never sending a burst.
+        if s.time_s + self.half_cycle_s < self.next_due_s
+            && s.time_s + self.period_s >= self.next_due_s
+        {
             return;
         }
-        self.last_published_s = s.time_s;
+        self.next_due_s += self.period_s;
+        if self.next_due_s <= s.time_s || self.next_due_s > s.time_s + 2.0 * self.period_s {
+            self.next_due_s = s.time_s + self.period_s;
+        }
         let p = &self.publishers;
         let m = CycleMessages::new(&self.info, s, stamp);
         put(&p.joint_states, m.joint_states, c);
@@ -227,6 +236,7 @@ impl Ros2Bridge {
         let handle = std::thread::Builder::new()
             .name("deflex-ros2".into())
             .spawn(move || {
+                crate::lower_priority();
                 let s = &thread_settings;
                 let joined = join(s.domain_id, &s.namespace, &s.node_name).and_then(|mut node| {
                     let publishers = Publishers::new(&mut node, s)?;
@@ -244,9 +254,10 @@ impl Ros2Bridge {
                 };
                 let mut publishing = Publishing {
                     publishers,
+                    half_cycle_s: 0.5 * info.control_period_s,
                     info,
                     period_s: 1.0 / s.publish_rate_hz,
-                    last_published_s: f64::NEG_INFINITY,
+                    next_due_s: f64::NEG_INFINITY,
                     pacer: DiagnosticsPacer::new(1.0 / s.diagnostics_rate_hz),
                     epoch_ns: None,
                     counters: thread_counters,

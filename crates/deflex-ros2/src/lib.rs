@@ -93,7 +93,20 @@ pub fn message_type<T: RosMessage>() -> MessageTypeName {
     MessageTypeName::new(package, name)
 }
 
+/// Nice value of the bridge's threads and of the DDS threads they start (RustDDS's event loop
+/// and discovery threads inherit it): a traffic burst on the graph yields the CPU to the
+/// runtime's loop threads (nice 0, or SCHED_FIFO with `control.realtime`) instead of competing
+/// with them on equal terms.
+pub const DDS_NICE: i32 = 10;
+
+/// Lowers the calling thread to [`DDS_NICE`] (Linux: the nice value is per thread, and threads
+/// started from it inherit it). Best effort: a refusal leaves the priority as it was.
+pub(crate) fn lower_priority() {
+    let _ = rustix::process::setpriority_process(None, DDS_NICE);
+}
+
 /// A DDS participant on `domain_id` and a node `node` in `namespace` (`/` for none).
+/// Called from the bridge's and the reader's threads after [`lower_priority`].
 pub(crate) fn join(domain_id: u16, namespace: &str, node: &str) -> Result<Node, Ros2Error> {
     let context =
         Context::with_options(ContextOptions::new().domain_id(domain_id)).map_err(|e| {

@@ -217,6 +217,7 @@ impl Ros2SensorLink {
         let handle = std::thread::Builder::new()
             .name("deflex-ros2-ft".into())
             .spawn(move || {
+                crate::lower_priority();
                 let subscribed =
                     join(s.domain_id, &s.namespace, &s.node_name).and_then(|mut node| {
                         let error = |e: String| Ros2Error::Topic {
