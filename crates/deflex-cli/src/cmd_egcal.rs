@@ -1,5 +1,5 @@
 //! `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict`: elasto-geometric
-//! calibration from absolute tracker readings (maths in `deflex-egcal`; the files, the report
+//! calibration from absolute tracker readings (maths in `deflex-absolute`; the files, the report
 //! and the plots here).
 
 mod plots;
@@ -7,16 +7,16 @@ pub mod report;
 
 use crate::args::{CliResult, print_json, robot};
 use clap::{Args, Subcommand, ValueEnum};
-use deflex_egcal::campaign::Campaign;
-use deflex_egcal::data::{
+use deflex_absolute::campaign::Campaign;
+use deflex_absolute::data::{
     AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute,
 };
-use deflex_egcal::fit::{FitOptions, HeldOutProtocol, Step, fit, session_groups};
-use deflex_egcal::params::EgModel;
-use deflex_egcal::predict;
-use deflex_egcal::solve::Loss;
-use deflex_egcal::terms::CalibrationTerms;
-use deflex_egcal::ur10_tracker::{ImportOptions, MAX_SERIES_BYTES, parse_series};
+use deflex_absolute::fit::{FitOptions, HeldOutProtocol, Step, fit, session_groups};
+use deflex_absolute::params::EgModel;
+use deflex_absolute::predict;
+use deflex_absolute::solve::Loss;
+use deflex_absolute::terms::CalibrationTerms;
+use deflex_absolute::ur10_tracker::{ImportOptions, MAX_SERIES_BYTES, parse_series};
 use std::path::{Path, PathBuf};
 
 /// Gap between time stamps that starts a new measuring session (`--cv-by session`).
@@ -362,7 +362,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let test = read_all(&args.test_data, n)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
-        loaded.extend(deflex_calib::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
+        loaded.extend(deflex_stiffness::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
     }
     let series_of: Vec<usize> = series
         .iter()

@@ -1,15 +1,15 @@
 //! `deflex register`: a new measuring session (where the tracker stands) and, optionally, a new
 //! target (probe) registered from a handful of readings with the calibrated robot frozen
-//! (maths in `deflex_egcal::register`).
+//! (maths in `deflex_absolute::register`).
 
 use crate::args::{CliResult, check_flag, print_json};
 use crate::cmd_egcal::{load_model, read_absolute, read_bounded, terms_path};
 use clap::Args;
-use deflex_egcal::campaign::Campaign;
-use deflex_egcal::data::{DEFAULT_ORIENTATION_SIGMA_RAD, limits};
-use deflex_egcal::params::Unit;
-use deflex_egcal::register::{RegisterOptions, Registration, register as register_session};
-use deflex_egcal::solve::Loss;
+use deflex_absolute::campaign::Campaign;
+use deflex_absolute::data::{DEFAULT_ORIENTATION_SIGMA_RAD, limits};
+use deflex_absolute::params::Unit;
+use deflex_absolute::register::{RegisterOptions, Registration, register as register_session};
+use deflex_absolute::solve::Loss;
 use std::path::PathBuf;
 
 /// Margin over the calibration's held-out RMS above which a registration residual says the
@@ -143,7 +143,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
     // Orientations measured but not fitted: the new target's frame in closed form, so that
     // `predict` can report orientation errors.
     if let Some(t) = target.filter(|&t| model.targets[t].rotation.is_none()) {
-        deflex_egcal::register::start::initialise_target_rotations(
+        deflex_absolute::register::start::initialise_target_rotations(
             &mut model,
             &campaign,
             &[t],
@@ -224,7 +224,7 @@ fn json(
     target: Option<&str>,
     out: &std::path::Path,
 ) -> serde_json::Value {
-    let stats = |s: &deflex_egcal::outcome::ErrorStats| serde_json::json!({"count": s.count, "rms": s.rms, "mean": s.mean, "p95": s.p95, "max": s.max});
+    let stats = |s: &deflex_absolute::outcome::ErrorStats| serde_json::json!({"count": s.count, "rms": s.rms, "mean": s.mean, "p95": s.p95, "max": s.max});
     serde_json::json!({
         "setup": setup,
         "target": target,

@@ -343,7 +343,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
             let plan_file =
-                deflex_calib::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
+                deflex_stiffness::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
             let rows =
                 run_campaign(&config, &plan_file.rows, args.seed).map_err(|e| e.to_string())?;
             plan_header = Some(plan_file.header);
@@ -384,7 +384,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         .map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, text)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
-    let cases = deflex_calib::data::load_case_count(&rows);
+    let cases = deflex_stiffness::data::load_case_count(&rows);
     let max_disp = rows
         .iter()
         .filter_map(|r| r.displacement_m)

@@ -300,16 +300,16 @@ pub fn run_twin_controller(
 /// runs the same steps with its reporting around them.
 pub fn identify_from_twin_campaign(cell: &CellConfig, seed: u64) -> Result<Robot, TwinError> {
     let nominal = cell.nominal_robot()?;
-    let options = deflex_calib::plan::PlanOptions {
+    let options = deflex_stiffness::plan::PlanOptions {
         full_family: true,
-        ..deflex_calib::plan::PlanOptions::for_a_real_cell()
+        ..deflex_stiffness::plan::PlanOptions::for_a_real_cell()
     };
-    let plan = deflex_calib::plan::plan_experiments(&nominal, &options)?;
+    let plan = deflex_stiffness::plan::plan_experiments(&nominal, &options)?;
     let rows = deflex_sim::campaign::run_campaign(cell, &plan.rows, seed)?;
-    let result = deflex_calib::search_structure(
+    let result = deflex_stiffness::search_structure(
         &nominal,
         &rows,
-        &deflex_calib::SearchOptions::default(),
+        &deflex_stiffness::SearchOptions::default(),
         &mut |_, _, _| {},
     )?;
     Ok(result.calibration.to_robot(&nominal))

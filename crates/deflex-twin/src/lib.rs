@@ -41,7 +41,7 @@ pub enum TwinError {
     Sim(#[from] deflex_sim::SimError),
     /// The identification from the twin's campaign failed.
     #[error(transparent)]
-    Calibration(#[from] deflex_calib::CalibError),
+    Calibration(#[from] deflex_stiffness::CalibError),
     /// The correction needs the identified model, and none was given.
     #[error("the correction needs the identified robot model: --model MODEL.toml")]
     ModelRequired,

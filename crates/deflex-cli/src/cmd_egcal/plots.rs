@@ -1,8 +1,8 @@
 //! Residual plots of an elasto-geometric fit: per axis, against each joint, a map over the
 //! measured volume, and the held-out error distribution.
 
-use deflex_egcal::campaign::{Campaign, ReadingKind};
-use deflex_egcal::fit::{FitResult, Role, RowResidual};
+use deflex_absolute::campaign::{Campaign, ReadingKind};
+use deflex_absolute::fit::{FitResult, Role, RowResidual};
 use deflex_report::{
     PanelLayout, PlotSpec, ReportError, Series, line_plot, panels_plot, scatter_heatmap,
 };

@@ -1,11 +1,11 @@
 //! The report of an elasto-geometric calibration (`deflex calibrate-geometry --report`): text
 //! tables, JSON (SI), CSV files, plots ([`super::plots`]) and an HTML page, rendered from the
-//! `deflex-egcal` fit result.
+//! `deflex-absolute` fit result.
 
 use super::plots;
-use deflex_egcal::campaign::{Campaign, ReadingKind};
-use deflex_egcal::fit::{ErrorStats, FitResult, StepReport, TestGroup};
-use deflex_egcal::params::Unit;
+use deflex_absolute::campaign::{Campaign, ReadingKind};
+use deflex_absolute::fit::{ErrorStats, FitResult, StepReport, TestGroup};
+use deflex_absolute::params::Unit;
 use deflex_report::{HtmlReport, html_escape};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -33,7 +33,7 @@ fn orientation_cells(s: Option<&ErrorStats>) -> [String; 2] {
 /// Pooled RMS of the left-out groups of a step (m).
 fn cross_rms(step: &StepReport) -> Option<f64> {
     let groups: Vec<&TestGroup> = step.cross_groups.iter().collect();
-    deflex_egcal::fit::pooled_rms(&groups)
+    deflex_absolute::fit::pooled_rms(&groups)
 }
 
 /// Whether a step is in the written model.
@@ -281,7 +281,7 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         .kept
         .iter()
         .zip(&result.reduction.independence)
-        .filter(|(_, i)| **i < deflex_egcal::identify::WEAK_THRESHOLD)
+        .filter(|(_, i)| **i < deflex_absolute::identify::WEAK_THRESHOLD)
         .map(|(p, i)| format!("{} ({i:.1e})", result.model.param_name(*p)))
         .collect();
     if !weak.is_empty() {
@@ -336,7 +336,7 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         let _ = writeln!(
             out,
             "Not kept (no held-out gain of at least {:.1} %): {}",
-            deflex_egcal::fit::ACCEPTANCE_GAIN * 100.0,
+            deflex_absolute::fit::ACCEPTANCE_GAIN * 100.0,
             rejected.join("; ")
         );
     }
