@@ -65,7 +65,8 @@ impl CellArgs {
             check_flag("--length-mm", l, 1e-3, 1e6, "mm")?;
         }
         check_flag("--wait-s", self.wait_s, 0.0, 3600.0, "s")?;
-        check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")
+        check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")?;
+        Ok(())
     }
 }
 
@@ -89,9 +90,9 @@ pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
 /// twin file's settings over it.
 pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
     match (&args.twin, &args.robot) {
-        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
+        (Some(p), robot) => deflex_twin::load_cell(p, robot.as_deref()).map_err(|e| e.to_string()),
         (None, Some(robot)) => {
-            CellConfig::for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
+            deflex_twin::cell_for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
         }
         (None, None) => Ok(CellConfig::default()),
     }

@@ -362,7 +362,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let test = read_all(&args.test_data, n)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
-        loaded.extend(deflex_stiffness::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
+        loaded.extend(deflex_load::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
     }
     let series_of: Vec<usize> = series
         .iter()
@@ -417,7 +417,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let result = fit(&model, &campaign, &options).map_err(|e| e.to_string())?;
     let elapsed = started.elapsed().as_secs_f64();
     let robot_out = result.model.to_robot();
-    let toml = deflex_model::robot_to_toml_for(&robot_out, &args.out);
+    let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
     let terms = CalibrationTerms::of(&result);
     let terms_file = terms_path(&args.out);
     deflex_files::write_atomic(&terms_file, terms.to_json())

@@ -81,7 +81,7 @@ pub enum ExportCommandError {
 }
 
 fn load(flag: &'static str, spec: &str) -> Result<Robot, ExportCommandError> {
-    deflex_model::load_robot(spec).map_err(|source| ExportCommandError::Robot {
+    deflex_load::load_robot(spec).map_err(|source| ExportCommandError::Robot {
         flag,
         spec: spec.to_string(),
         source,
@@ -252,7 +252,7 @@ mod tests {
             assert!(out.exists(), "{file}");
         }
         // The URDF's robot file loads from disk with the stiffnesses.
-        let robot = deflex_model::load_robot(dir.join("ur10e.toml").to_str().unwrap()).unwrap();
+        let robot = deflex_load::load_robot(dir.join("ur10e.toml").to_str().unwrap()).unwrap();
         let original = deflex_model::builtin("ur10e").unwrap();
         assert_eq!(robot.edof_count(), original.edof_count());
         // A KUKA arm has no UR calibration: refused, nothing written.

@@ -151,7 +151,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
         );
     }
     let robot_out = model.to_robot();
-    let toml = deflex_model::robot_to_toml_for(&robot_out, &args.out);
+    let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
     if terms.is_some() {
         let from = terms_path(std::path::Path::new(&args.robot));
         let text = read_bounded(&from, 64 << 20)?;

@@ -13,8 +13,10 @@ mod cmd_plan;
 mod cmd_plot;
 mod cmd_register;
 mod cmd_sim;
+mod error;
 
 use clap::{Parser, Subcommand};
+use error::CliError;
 use std::process::ExitCode;
 
 /// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,
@@ -62,7 +64,7 @@ enum Command {
     /// Prediction errors of a model against measurements, with plots.
     Validate(cmd_calib::ValidateArgs),
     /// Propose a measurement campaign for identification.
-    Plan(cmd_calib::PlanArgs),
+    Plan(cmd_plan::PlanArgs),
     /// The digital twin of the robotised ISF cell (SIMULATED).
     Sim {
         #[command(subcommand)]
@@ -92,24 +94,35 @@ fn main() -> ExitCode {
         Command::Ik(args) => cmd_model::ik(args, cli.json),
         Command::Map(args) => cmd_model::map(args, cli.json),
         Command::Calibrate(args) => cmd_calib::calibrate(args, cli.json),
-        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json),
-        Command::Predict(args) => cmd_egcal::predict(args, cli.json),
-        Command::Register(args) => cmd_register::register(args, cli.json),
-        Command::Import { command } => cmd_egcal::import(command, cli.json),
+        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json)
+            .map_err(CliError::command("calibrate-geometry")),
+        Command::Predict(args) => {
+            cmd_egcal::predict(args, cli.json).map_err(CliError::command("predict"))
+        }
+        Command::Register(args) => {
+            cmd_register::register(args, cli.json).map_err(CliError::command("register"))
+        }
+        Command::Import { command } => {
+            cmd_egcal::import(command, cli.json).map_err(CliError::command("import"))
+        }
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
-        Command::Plan(args) => cmd_calib::plan(args, cli.json),
+        Command::Plan(args) => cmd_plan::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
-        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json),
-        Command::Export(args) => cmd_export::export(args, cli.json),
-        Command::Run(args) => cmd_control::run(args, cli.json),
-        Command::Cell(args) => cell_server::cell(args, cli.json),
+        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json)
+            .map_err(CliError::command("compensate")),
+        Command::Export(args) => {
+            cmd_export::export(args, cli.json).map_err(CliError::command("export"))
+        }
+        Command::Run(args) => cmd_control::run(args, cli.json).map_err(CliError::command("run")),
+        Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
-        Command::Plot(args) => cmd_plot::plot(args, cli.json),
+        Command::Plot(args) => cmd_plot::plot(args, cli.json).map_err(CliError::command("plot")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
+        Err(error) => {
+            // The one place a command's error becomes text.
+            eprintln!("error: {error}");
             ExitCode::FAILURE
         }
     }

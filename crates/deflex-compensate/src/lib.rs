@@ -20,6 +20,8 @@
 //!
 //! The maths is free of I/O; [`log`] reads log text (and, for convenience, files).
 
+#![warn(missing_docs)]
+
 pub mod compensate;
 pub mod error;
 pub mod ik;

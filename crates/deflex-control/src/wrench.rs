@@ -8,7 +8,7 @@
 //! sensor pose is `flange × sensor_in_flange`, with the flange from forward kinematics (eq. 1).
 //! Everything here is allocation-free.
 
-use deflex_model::wrench::sensor_wrench_at_point;
+use deflex_model::wrench_transport::sensor_wrench_at_point;
 use deflex_model::{Data, Pose, Wrench};
 use nalgebra::Vector3;
 

@@ -50,6 +50,8 @@
 //! assert!(program.notes.iter().any(|n| n.word == "T1"));
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod arc;
 mod error;
 mod interpreter;
@@ -247,3 +249,6 @@ impl Program {
 pub fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
     interpreter::read(text, options)
 }
+
+#[cfg(test)]
+mod it_tests;

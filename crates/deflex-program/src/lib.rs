@@ -40,6 +40,8 @@
 //! assert!(files[0].contents.contains("# retract"));
 //! ```
 
+#![warn(missing_docs)]
+
 mod common;
 pub mod config;
 pub mod error;
@@ -293,3 +295,6 @@ pub fn write_files(dir: &Path, files: &[ProgramFile]) -> Result<(), ProgramError
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod it_tests;

@@ -511,7 +511,7 @@ mod tests {
     fn a_run_log_with_a_robot_gets_the_program_arc_length() {
         let d = dir("fk");
         let p = d.join("run.csv");
-        let robot = deflex_model::load_robot("tx200").unwrap();
+        let robot = deflex_load::load_robot("tx200").unwrap();
         let n = robot.joint_count();
         let mut text = deflex_runtime::log::csv_header(n) + "\n";
         let mut data = Data::new();

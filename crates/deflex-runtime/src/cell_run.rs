@@ -121,11 +121,10 @@ pub struct CellRunOutcome {
 
 /// Loads the model, the feed-forward and the controller of `cell`.
 fn controller_of(cell: &CellFile) -> Result<(Controller, Option<FeedForwardInUse>), StartError> {
-    let model =
-        deflex_model::load_robot(&cell.model_spec()).map_err(|error| StartError::Model {
-            origin: cell.origin.clone(),
-            error,
-        })?;
+    let model = deflex_load::load_robot(&cell.model_spec()).map_err(|error| StartError::Model {
+        origin: cell.origin.clone(),
+        error,
+    })?;
     let feedforward = cell.feedforward(&model)?;
     let in_use = feedforward.as_ref().map(|ff| {
         let c = ff.config();

@@ -8,7 +8,7 @@
 //! Bounds: a file of at most [`MAX_GCODE_BYTES`], at most [`MAX_WAYPOINTS`] path points,
 //! coordinates within ±[`MAX_COORDINATE_MM`], feeds from [`MIN_FEED_MM_MIN`] to
 //! [`MAX_FEED_MM_MIN`] mm/min. A run of the program is further bounded in time by the cell
-//! (`deflex_sim::config::MAX_RUN_S`).
+//! (`deflex_sim::cell_config::MAX_RUN_S`).
 
 use crate::error::SimError;
 use crate::toolpath::{ToolPath, Waypoint};

@@ -35,7 +35,7 @@
 //! program as a [`ToolPath`] the twin can run) and [`tool_path_by_name`] (the built-in paths or
 //! a G-code file).
 
-use crate::config::CellConfig;
+use crate::cell_config::CellConfig;
 use crate::error::SimError;
 use crate::sheet::{ContactState, Sheet, SheetConfig};
 use crate::toolpath::{ConeParams, PyramidParams, ToolPath};

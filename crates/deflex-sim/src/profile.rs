@@ -24,7 +24,7 @@
 //! The description's stiffnesses of the non-TX200 built-in robots are placeholders; so the
 //! derived plant is a plausible robot, not the maker's.
 
-use crate::config::{CellConfig, ControllerConfig, PartConfig, SensorConfig};
+use crate::cell_config::{CellConfig, ControllerConfig, PartConfig, SensorConfig};
 use crate::error::SimError;
 use crate::plant::PlantConfig;
 use crate::sheet::SheetConfig;
@@ -76,8 +76,9 @@ impl Maker {
 }
 
 impl CellConfig {
-    /// The cell of a robot (built-in name or robot file): see the [module](crate::profile)
-    /// documentation.
+    /// The cell of a built-in robot: see the [module](crate::profile) documentation. The cell of
+    /// a robot file is [`CellConfig::for_robot_description`] (the twin reads no file:
+    /// `deflex_twin::cell_for_robot` reads it).
     pub fn for_robot(spec: &str) -> Result<CellConfig, SimError> {
         if spec.trim().is_empty() {
             return Err(SimError::config("part.robot", "must name a robot"));
@@ -85,7 +86,17 @@ impl CellConfig {
         if spec == "tx200" {
             return Ok(CellConfig::default());
         }
-        let robot = deflex_model::load_robot(spec)?;
+        let robot = deflex_model::builtin(spec).ok_or_else(|| SimError::NotBuiltin {
+            spec: spec.to_string(),
+        })?;
+        Self::for_robot_description(spec, robot)
+    }
+
+    /// The cell of the robot `robot`, read from the robot file `spec` (or built in as `spec`).
+    pub fn for_robot_description(spec: &str, robot: Robot) -> Result<CellConfig, SimError> {
+        if spec.trim().is_empty() {
+            return Err(SimError::config("part.robot", "must name a robot"));
+        }
         crate::plant::check_six_joints(&robot)?;
         let maker = Maker::of(spec, &robot.name);
         let mut cell = match maker {
@@ -94,6 +105,9 @@ impl CellConfig {
             Maker::Kuka | Maker::Abb | Maker::Other => generic_cell(&robot, maker)?,
         };
         cell.part.robot = spec.to_string();
+        if deflex_model::builtin(spec).is_none() {
+            cell.part.description = Some(robot);
+        }
         cell.validate()?;
         Ok(cell)
     }

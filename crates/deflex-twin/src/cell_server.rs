@@ -252,7 +252,7 @@ fn check_cell_file(file: &CellFile, twin: &CellConfig) -> Result<(Robot, Robot),
         }
     }
     let model =
-        deflex_model::load_robot(&file.model_spec()).map_err(|error| CellServeError::Model {
+        deflex_load::load_robot(&file.model_spec()).map_err(|error| CellServeError::Model {
             origin: file.origin.clone(),
             error,
         })?;

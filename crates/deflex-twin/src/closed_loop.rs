@@ -182,12 +182,11 @@ pub fn twin_controller(
     model: Option<&Path>,
 ) -> Result<TwinController, TwinError> {
     let path = model.ok_or(TwinError::ModelRequired)?;
-    let robot = deflex_model::load_robot(&path.display().to_string()).map_err(|error| {
-        TwinError::Model {
+    let robot =
+        deflex_load::load_robot(&path.display().to_string()).map_err(|error| TwinError::Model {
             path: path.to_path_buf(),
             error,
-        }
-    })?;
+        })?;
     TwinController::new(robot, controller_config_for(cell), false)
 }
 
@@ -305,7 +304,7 @@ pub fn identify_from_twin_campaign(cell: &CellConfig, seed: u64) -> Result<Robot
         ..deflex_stiffness::plan::PlanOptions::for_a_real_cell()
     };
     let plan = deflex_stiffness::plan::plan_experiments(&nominal, &options)?;
-    let rows = deflex_sim::campaign::run_campaign(cell, &plan.rows, seed)?;
+    let rows = deflex_sim::twin_campaign::run_campaign(cell, &plan.rows, seed)?;
     let result = deflex_stiffness::search_structure(
         &nominal,
         &rows,

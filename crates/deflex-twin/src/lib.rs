@@ -18,10 +18,12 @@
 
 #![warn(missing_docs)]
 
+pub mod cell_file;
 pub mod cell_server;
 pub mod closed_loop;
 pub mod sim_time;
 
+pub use cell_file::{CellFileError, cell_for_robot, load_cell};
 pub use closed_loop::{
     ClosedLoopRun, Program, TwinController, controller_config_for, identify_from_twin_campaign,
     run_closed_loop, run_twin_controller, twin_controller,

@@ -5,12 +5,12 @@
 //! stiffnesses within their intervals; a 1 mm glitch on one reading is named as an outlier and
 //! moves no parameter by as much as its standard error.
 
-use deflex_stiffness::MeasurementRow;
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::AbsoluteRow;
 use deflex_absolute::fit::{FitOptions, FitResult, Step, fit};
 use deflex_absolute::params::{DhField, EgModel, Param};
 use deflex_absolute::solve::Loss;
+use deflex_stiffness::MeasurementRow;
 use nalgebra::{Matrix4, Vector3, Vector4};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

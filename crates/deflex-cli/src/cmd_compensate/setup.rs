@@ -31,7 +31,7 @@ pub enum SetupError {
         /// The robot.
         robot: String,
         /// Why.
-        source: deflex_sim::SimError,
+        source: deflex_twin::CellFileError,
     },
     /// The path.
     #[error("--path {spec}: {source}")]
@@ -153,7 +153,10 @@ fn option(flag: &'static str, message: impl Into<String>) -> SetupError {
 }
 
 fn parsed(flag: &'static str, text: &str) -> Result<Vec<f64>, SetupError> {
-    parse_list(text, flag).map_err(|message| SetupError::Option { flag, message })
+    parse_list(text, flag).map_err(|message| SetupError::Option {
+        flag,
+        message: message.to_string(),
+    })
 }
 
 /// The robot's cell: the twin file over it, else the cell of the robot (built-in or file).
@@ -163,8 +166,9 @@ fn cell(args: &CompensateArgs) -> Result<CellConfig, SetupError> {
         source,
     };
     match &args.twin {
-        Some(p) => CellConfig::load_for(p, Some(&args.robot)).map_err(error),
-        None => CellConfig::for_robot(&args.robot).map_err(error),
+        Some(p) => deflex_twin::load_cell(p, Some(&args.robot)).map_err(error),
+        None => deflex_twin::cell_for_robot(&args.robot)
+            .map_err(|e| error(deflex_twin::CellFileError::from(e))),
     }
 }
 
@@ -181,7 +185,7 @@ fn cell_tool_load(config: &CellConfig) -> ToolLoad {
 }
 
 pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
-    let robot = deflex_model::load_robot(&args.robot).map_err(|source| SetupError::Robot {
+    let robot = deflex_load::load_robot(&args.robot).map_err(|source| SetupError::Robot {
         spec: args.robot.clone(),
         source,
     })?;

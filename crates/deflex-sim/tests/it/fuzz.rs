@@ -59,7 +59,7 @@ fn parsed_programs_plan_or_are_refused() {
     ] {
         let path: ToolPath = parse_gcode(text, "p.nc").unwrap();
         match deflex_sim::Cell::new(&config, path, 1) {
-            Ok(cell) => assert!(cell.path_duration_s() <= deflex_sim::config::MAX_RUN_S),
+            Ok(cell) => assert!(cell.path_duration_s() <= deflex_sim::cell_config::MAX_RUN_S),
             Err(e) => {
                 let e = e.to_string();
                 assert!(

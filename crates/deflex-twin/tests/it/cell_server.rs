@@ -14,9 +14,9 @@ fn the_model_geometry_is_checked_against_the_robot_played() {
     let ur = CellConfig::for_robot("ur10e").unwrap();
     let nominal = ur.nominal_robot().unwrap();
     assert_eq!(geometry_note(&nominal, &nominal), "");
-    let builtin = deflex_model::load_robot("ur10e").unwrap();
+    let builtin = deflex_load::load_robot("ur10e").unwrap();
     assert!(geometry_note(&builtin, &nominal).contains("another tool"));
-    let tx = deflex_model::load_robot("tx200").unwrap();
+    let tx = deflex_load::load_robot("tx200").unwrap();
     assert!(geometry_note(&tx, &nominal).contains("is not the geometry"));
 }
 

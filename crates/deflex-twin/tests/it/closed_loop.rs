@@ -113,7 +113,7 @@ fn paper_cone_closed_loop_with_calibrated_model() {
 /// With the paper's Table 1 model (stiffer than the twin's robot) the loop still helps.
 #[test]
 fn table1_model_still_improves_a_short_run() {
-    let model = deflex_model::load_robot("tx200").unwrap();
+    let model = deflex_load::load_robot("tx200").unwrap();
     let c = compare(ToolPath::paper_cone().truncated(600.0), model, 2);
     let (o, k) = (&c.open.summary, &c.closed.forming.summary);
     assert!(k.max_error_norm_mm < 0.9 * o.max_error_norm_mm);

@@ -4,7 +4,7 @@
 
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
 use deflex_model::spatial::pose_from_xyz_rpy;
-use deflex_model::wrench::world_wrench_in_sensor;
+use deflex_model::wrench_transport::world_wrench_in_sensor;
 use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
 
 pub const BIAS: [f64; 6] = [4.0, -3.0, 7.0, 0.2, -0.1, 0.05];
