@@ -7,14 +7,14 @@
 use crate::args::{CliResult, check_flag, print_json};
 use clap::Args;
 use deflex_control::Fault;
-use deflex_runtime::cell_run::FeedForwardInUse;
-use deflex_runtime::stats::StatsSummary;
 use deflex_ros2::sensor::SensorCountsHandle;
 use deflex_ros2::{
-    BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2SensorLink, SensorCounts,
+    BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2Error, Ros2SensorLink, SensorCounts,
     SensorSettings,
 };
+use deflex_runtime::cell_run::FeedForwardInUse;
 use deflex_runtime::config::SensorKind;
+use deflex_runtime::stats::StatsSummary;
 use deflex_runtime::{CellFile, CellRun, CellRunOutcome, LiveStatus};
 use serde_json::json;
 use std::path::PathBuf;
@@ -83,17 +83,18 @@ struct Ros2Parts {
     bridge: Option<Ros2Bridge>,
 }
 
-fn open_ros2_sensor(cell: &CellFile) -> Result<Ros2Parts, String> {
+/// Opens the ROS 2 sensor link of `sensor.kind = "ros2"` (validation made sure `[ros2]` is
+/// there; without it the runtime's own factory refuses the kind, naming it).
+fn open_ros2_sensor(cell: &CellFile) -> Result<Ros2Parts, Ros2Error> {
     let mut parts = Ros2Parts {
         sensor: None,
         sensor_counts: None,
         bridge: None,
     };
-    if cell.sensor.kind == SensorKind::Ros2 {
-        // Validation made sure [ros2] is present.
-        let settings = SensorSettings::from_cell(cell)
-            .ok_or_else(|| format!("{}: sensor.kind = \"ros2\" needs [ros2]", cell.origin))?;
-        let link = Ros2SensorLink::open(&settings).map_err(|e| format!("sensor.topic: {e}"))?;
+    if cell.sensor.kind == SensorKind::Ros2
+        && let Some(settings) = SensorSettings::from_cell(cell)
+    {
+        let link = Ros2SensorLink::open(&settings)?;
         parts.sensor_counts = Some((link.topic().to_string(), link.counts_handle()));
         parts.sensor = Some(link);
     }
@@ -147,7 +148,8 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
     args.check()?;
     let cell = load_cell_file(&args.config)?;
     let started = Instant::now();
-    let mut ros2 = open_ros2_sensor(&cell)?;
+    let mut ros2 =
+        open_ros2_sensor(&cell).map_err(|e| format!("{}: sensor.topic: {e}", cell.origin))?;
     let mut bridge_error = None;
     let run = CellRun::start_with(
         &cell,

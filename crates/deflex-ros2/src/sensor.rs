@@ -4,7 +4,8 @@
 //! A DDS reader thread of its own takes the `geometry_msgs/WrenchStamped` messages of
 //! `sensor.topic` and checks each one ([`Refusal`]): it must decode, carry six finite values,
 //! the frame id `ros2.sensor_frame`, a stamp within `sensor.max_age_s` of this machine's clock
-//! (in the past or the future) and not older than the last accepted one. Accepted readings go
+//! (in the past or the future) and not older than the last accepted one, and come from the
+//! session's writer. Accepted readings go
 //! into a bounded [`Handover`] queue of `sensor.queue_depth` (the oldest dropped and counted
 //! when full); the runtime's sensor thread pops them in [`ForceSensorLink::receive`] as it reads
 //! a Net F/T socket.
@@ -16,6 +17,14 @@
 //! wrench cell. A sample's size is bounded by the DDS transport (a UDP datagram, 64 KiB, unless
 //! fragmented) and its frame id is compared, never kept.
 //!
+//! **One writer per session**, as every link of the runtime locks to its first valid peer
+//! ([`deflex_io::PeerPolicy`], `robot.allow_any_peer`): the DDS writer (its GID) of the first
+//! accepted message is the sensor for the rest of the session; messages of any other writer on
+//! the topic are refused and counted ([`Refusal::OtherWriter`]), so a second driver, a replayed
+//! bag or a stray `ros2 topic pub` cannot mix its wrench into the loop. Which hosts may join
+//! the DDS domain is the DDS domain's business (`ros2.domain_id`, the network): the link does
+//! not filter by address.
+//!
 //! The driver's bias and the tool's weight are removed by deflex (the tare at start and the tool
 //! gravity of `[mounting]`): publish the raw reading, not a zeroed one. [`ForceSensorLink::bias`]
 //! does nothing (ROS 2 has no standard bias request), start and stop neither.
@@ -24,6 +33,7 @@ use crate::handover::Handover;
 use crate::{Ros2Error, SensorSettings, join, message_type, qos_profile, ros_name};
 use deflex_io::{ForceSensorLink, LinkError, Protocol, WrenchSample};
 use deflex_rosmsg::WrenchStamped;
+use ros2_client::Gid;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
@@ -47,17 +57,24 @@ pub enum Refusal {
     Future,
     /// A stamp older than the last accepted one.
     OutOfOrder,
+    /// Another DDS writer than the one the link locked to (the writer of the first accepted
+    /// message).
+    OtherWriter,
 }
+
+/// Number of [`Refusal`] reasons.
+pub const REFUSALS: usize = Refusal::ALL.len();
 
 impl Refusal {
     /// Every reason, in counter order.
-    pub const ALL: [Refusal; 6] = [
+    pub const ALL: [Refusal; 7] = [
         Refusal::Malformed,
         Refusal::NonFinite,
         Refusal::WrongFrame,
         Refusal::Stale,
         Refusal::Future,
         Refusal::OutOfOrder,
+        Refusal::OtherWriter,
     ];
 
     /// Snake-case name (summaries, JSON).
@@ -69,6 +86,7 @@ impl Refusal {
             Refusal::Stale => "stale",
             Refusal::Future => "future",
             Refusal::OutOfOrder => "out_of_order",
+            Refusal::OtherWriter => "other_writer",
         }
     }
 
@@ -85,6 +103,9 @@ impl Refusal {
                 "refused a WrenchStamped stamped ahead by more than sensor.max_age_s"
             }
             Refusal::OutOfOrder => "refused a WrenchStamped older than the previous one",
+            Refusal::OtherWriter => {
+                "refused a WrenchStamped from another writer than the session's sensor"
+            }
         }
     }
 }
@@ -97,7 +118,7 @@ pub struct SensorCounts {
     /// Messages accepted.
     pub accepted: u64,
     /// Refused, by [`Refusal`] (in [`Refusal::ALL`] order).
-    pub refused: [u64; 6],
+    pub refused: [u64; REFUSALS],
     /// Accepted readings dropped because the handover queue was full (the sensor thread did
     /// not keep up).
     pub overflow: u64,
@@ -119,7 +140,7 @@ impl SensorCounts {
 struct Counters {
     received: AtomicU64,
     accepted: AtomicU64,
-    refused: [AtomicU64; 6],
+    refused: [AtomicU64; REFUSALS],
 }
 
 /// One accepted reading.
@@ -134,10 +155,20 @@ struct Checker {
     frame_id: String,
     max_age_ns: i128,
     last_stamp_ns: Option<i128>,
+    /// The writer the link locked to (the writer of the first accepted message).
+    writer: Option<Gid>,
 }
 
 impl Checker {
-    fn check(&mut self, msg: &WrenchStamped, now_ns: i128) -> Result<Reading, Refusal> {
+    fn check(
+        &mut self,
+        msg: &WrenchStamped,
+        writer: Gid,
+        now_ns: i128,
+    ) -> Result<Reading, Refusal> {
+        if self.writer.is_some_and(|w| w != writer) {
+            return Err(Refusal::OtherWriter);
+        }
         let w = &msg.wrench;
         let wrench = [
             w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z,
@@ -161,6 +192,7 @@ impl Checker {
             return Err(Refusal::OutOfOrder);
         }
         self.last_stamp_ns = Some(stamp_ns);
+        self.writer = Some(writer);
         Ok(Reading { wrench })
     }
 }
@@ -178,7 +210,7 @@ pub struct Ros2SensorLink {
     stop: Arc<AtomicBool>,
     handle: Option<JoinHandle<()>>,
     /// Refusals already reported to the runtime, by reason.
-    reported: [u64; 6],
+    reported: [u64; REFUSALS],
     dropped_reported: u64,
     sequence: u32,
     topic: String,
@@ -251,17 +283,20 @@ impl Ros2SensorLink {
                     frame_id: s.frame_id.clone(),
                     max_age_ns: s.max_age.as_nanos() as i128,
                     last_stamp_ns: None,
+                    writer: None,
                 };
                 let per_wake = 4 * s.queue_depth.max(1);
                 while !st.load(Ordering::Acquire) {
                     for _ in 0..per_wake {
                         let taken = match sub.take() {
-                            Ok(Some((msg, _info))) => Ok(msg),
+                            Ok(Some((msg, info))) => Ok((msg, info.publisher_gid())),
                             Ok(None) => break,
                             Err(_) => Err(Refusal::Malformed),
                         };
                         c.received.fetch_add(1, Ordering::Relaxed);
-                        match taken.and_then(|msg| checker.check(&msg, unix_now_ns())) {
+                        let checked = taken
+                            .and_then(|(msg, writer)| checker.check(&msg, writer, unix_now_ns()));
+                        match checked {
                             Ok(reading) => {
                                 c.accepted.fetch_add(1, Ordering::Relaxed);
                                 q.push(reading);
@@ -298,7 +333,7 @@ impl Ros2SensorLink {
             counters,
             stop,
             handle: Some(handle),
-            reported: [0; 6],
+            reported: [0; REFUSALS],
             dropped_reported: 0,
             sequence: 0,
             topic: settings.topic.clone(),

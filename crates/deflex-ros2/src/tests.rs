@@ -14,10 +14,12 @@ use ros2_client::{Node, Publisher, Subscription};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+mod no_alloc;
+
 /// A DDS domain of this test process alone (other processes on the machine may use DDS):
-/// 150–229 from the process id, plus `offset` (0–2) per test.
+/// 100–227 from the process id, plus `offset` (0–7) per test.
 fn domain(offset: u16) -> u16 {
-    150 + (std::process::id() % 26) as u16 * 3 + offset
+    100 + (std::process::id() % 16) as u16 * 8 + offset
 }
 
 const DISCOVERY: Duration = Duration::from_secs(20);
@@ -330,4 +332,47 @@ fn a_flood_is_bounded_and_counted() {
     let c = link.counts();
     assert!(c.received > 1 && c.received <= 5000 + 1000, "{c:?}");
     assert_eq!(c.accepted, popped + c.overflow, "{c:?}");
+}
+
+/// The link locks to the writer of its first accepted message: a second driver publishing on
+/// the same topic (another participant, valid messages) is refused and counted as
+/// `other_writer`, and its values never reach `receive`; the first writer goes on.
+#[test]
+fn a_second_writer_is_refused_and_counted() {
+    let d = domain(3);
+    let mut link = Ros2SensorLink::open(&sensor_settings(d, 64, Ros2Qos::Reliable)).unwrap();
+    let mut first = join(d, "/", "driver").unwrap();
+    let tx = publisher::<WrenchStamped>(&mut first, "/ati/wrench", Ros2Qos::Reliable);
+    wait_until("a first reading", || {
+        tx.publish(wrench("ati_ft", now_ns(), -1.0)).unwrap();
+        matches!(link.receive(Duration::from_millis(20)), Ok(Some(_)))
+    });
+    let mut second = join(d, "/", "intruder").unwrap();
+    let intruder = publisher::<WrenchStamped>(&mut second, "/ati/wrench", Ros2Qos::Reliable);
+    let mut values = Vec::new();
+    let mut errors = 0u64;
+    wait_until("the intruder's messages refused", || {
+        intruder.publish(wrench("ati_ft", now_ns(), 999.0)).unwrap();
+        tx.publish(wrench("ati_ft", now_ns(), -1.0)).unwrap();
+        loop {
+            match link.receive(Duration::from_millis(5)) {
+                Ok(Some(s)) => values.push(s.wrench[2]),
+                Ok(None) => break,
+                Err(e) => {
+                    assert!(e.is_bad_packet(), "{e}");
+                    errors += 1;
+                }
+            }
+        }
+        link.counts().refused_for(Refusal::OtherWriter) >= 5
+    });
+    let c = link.counts();
+    assert!(values.iter().all(|&fz| fz == -1.0), "{values:?}");
+    assert!(!values.is_empty());
+    assert_eq!(
+        c.refused_total(),
+        c.refused_for(Refusal::OtherWriter),
+        "{c:?}"
+    );
+    assert!(errors <= c.refused_total());
 }

@@ -61,6 +61,9 @@ SENSOR_DATA = xcdr1(Policy.Reliability.BestEffort, Policy.History.KeepLast(10),
 
 @pytest.fixture(scope="module")
 def deflex():
+    """The `deflex` binary: $DEFLEX_BIN when set, otherwise built here with cargo."""
+    if os.environ.get("DEFLEX_BIN"):
+        return Path(os.environ["DEFLEX_BIN"])
     subprocess.run(["cargo", "build", "-q", "-p", "deflex-cli"], cwd=ROOT, check=True)
     target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
     return target / "debug" / "deflex"
@@ -283,7 +286,9 @@ class NetFtRelay:
                 w = [c / 1e6 for c in fields[3:]]
                 self.publish(w)
                 n += 1
-                if not self.bad or n < 500:
+                # Bad input only between the tare and well before the program's end (the twin's
+                # sensor streams on after `deflex run` has left; what is sent then is not taken).
+                if not self.bad or n < 500 or n >= 3000:
                     continue
                 # After the tare: every 7th reading is followed by a bad message.
                 if n % 7 == 0:
@@ -343,6 +348,7 @@ def test_ros2_wrench_drives_the_closed_loop_like_the_net_ft(deflex, tmp_path):
     # The same correction as with the Net F/T: the twin's truth and the law's ξ against force.
     for key in ("max_correction_mm", "max_force_norm_n"):
         a, b = cell_out[key], base_cell[key]
+        print(f"\n{key}: ROS 2 sensor {a:.4f}, Net F/T {b:.4f}")
         assert abs(a - b) <= 0.05 * abs(b), (key, a, b)
     ros_profile = correction_profile(read_log(ros_dir / "run.csv"))
     base_profile = correction_profile(read_log(netft_dir / "run.csv"))
@@ -351,6 +357,7 @@ def test_ros2_wrench_drives_the_closed_loop_like_the_net_ft(deflex, tmp_path):
     for (f, x) in ros_profile:
         (fb, xb) = min(base_profile, key=lambda p: abs(p[0] - f))
         if abs(fb - f) < 1.0:
+            print(f"fz {f:.1f} N: xi_z ROS 2 {x * 1e3:.4f} mm, Net F/T {xb * 1e3:.4f} mm")
             assert abs(x - xb) <= 0.05 * scale, (f, x, xb, scale)
 
 
@@ -361,7 +368,7 @@ def test_bad_sensor_input_is_refused_and_counted(deflex, tmp_path):
     run_config.write_text(cell_toml(ROS2_SENSOR, ros2_section(DOMAIN + 2, topics=[],
                                                               qos="sensor-data")))
     relay = NetFtRelay(DOMAIN + 2, bad=True)
-    run, _ = session(deflex, tmp_path, cell, run_config, 40.0, during=relay)
+    run, _ = session(deflex, tmp_path, cell, run_config, 80.0, during=relay)
     sensor = run["ros2_sensor"]
     refused = sensor["refused"]
     sent = relay.sent
@@ -369,8 +376,9 @@ def test_bad_sensor_input_is_refused_and_counted(deflex, tmp_path):
     # Best effort on loopback: nearly all arrive; each bad one is refused, under its reason.
     for reason, kind in [("non_finite", "nan"), ("wrong_frame", "frame"), ("stale", "stale"),
                          ("future", "future")]:
-        assert 0.8 * sent[kind] <= refused[reason] <= sent[kind], (reason, refused, sent)
-    assert refused["malformed"] == 0
+        assert 0.9 * sent[kind] <= refused[reason] <= sent[kind], (reason, refused, sent)
+    assert refused["malformed"] == 0 and refused["other_writer"] == 0, refused
+    assert sensor["received"] == sensor["accepted"] + sum(refused.values()), sensor
     # Every refusal reached the run's count of sensor errors; the flood was bounded by the
     # queue (dropped and counted, or never taken from the DDS history).
     assert run["sensor_errors"] == sum(refused.values()), (run["sensor_errors"], refused)
@@ -382,4 +390,48 @@ def test_bad_sensor_input_is_refused_and_counted(deflex, tmp_path):
     times = [float(r["time_s"]) for r in rows]
     gaps = sorted(b - a for a, b in zip(times, times[1:]))
     assert gaps[-1] < 0.05, gaps[-5:]
-    assert run["control_cycle"]["p99_us"] < 2000, run["control_cycle"]
+    # Bounded, not a timing claim (the machine may be shared): the 99th percentile of the
+    # control cycle's work stays below one control period (10 ms).
+    assert run["control_cycle"]["p99_us"] < 10000, run["control_cycle"]
+
+
+def test_cycle_time_with_the_bridge_on_and_off(deflex, tmp_path):
+    """The same SIMULATED session twice, `[ros2]` off then on (every topic at 100 Hz, reliable,
+    a Cyclone DDS subscriber on joint_states and diagnostics): the control cycle's statistics
+    of each run are printed and written to target/ros2-cycle-time.json (the README's numbers).
+    Asserted: both sessions end without a fault, publish and read what they should, and keep
+    the 99th percentile under one control period; the comparison itself is reported, not
+    asserted (a shared machine's timing is not a test)."""
+    results = {}
+    for label, ros2 in [("bridge_off", ""), ("bridge_on", "on")]:
+        d = tmp_path / label
+        d.mkdir()
+        config = d / "cell.toml"
+        section = ""
+        if ros2:
+            section = ros2_section(DOMAIN + 3).replace(f"publish_rate_hz = {RATE_HZ}",
+                                                       "publish_rate_hz = 100.0")
+        config.write_text(cell_toml(NETFT, section))
+        during = None
+        got = []
+        if ros2:
+            dp = DomainParticipant(DOMAIN + 3)
+            reader = DataReader(dp, Topic(dp, f"rt{NS}/joint_states", JointState), qos=RELIABLE)
+
+            def during(stop):
+                while not stop.is_set():
+                    got.extend(take(reader))
+                    time.sleep(0.005)
+        run, _ = session(deflex, d, config, config, 100.0, during=during)
+        assert run["fault"] is None, run["fault"]
+        if ros2:
+            assert run["ros2_bridge"]["cycles_published"] > 0
+            assert run["ros2_bridge"]["write_errors"] == 0, run["ros2_bridge"]
+            assert len(got) > 0.5 * run["ros2_bridge"]["cycles_published"], len(got)
+        cycle = run["control_cycle"]
+        assert cycle["p99_us"] < 10000, cycle
+        results[label] = {"cycles": run["cycles"], **cycle,
+                          "bridge": run.get("ros2_bridge"), "received": len(got)}
+        print(f"\n{label}: {results[label]}")
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    (target / "ros2-cycle-time.json").write_text(json.dumps(results, indent=1))
