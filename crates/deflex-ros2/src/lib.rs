@@ -93,10 +93,11 @@ pub fn message_type<T: RosMessage>() -> MessageTypeName {
     MessageTypeName::new(package, name)
 }
 
-/// Nice value of the bridge's threads and of the DDS threads they start (RustDDS's event loop
-/// and discovery threads inherit it): a traffic burst on the graph yields the CPU to the
-/// runtime's loop threads (nice 0, or SCHED_FIFO with `control.realtime`) instead of competing
-/// with them on equal terms.
+/// Nice value of the bridge's thread and of the DDS threads it starts (RustDDS's event loop
+/// and discovery threads inherit it): publishing yields the CPU to the runtime's loop threads
+/// (nice 0, or SCHED_FIFO with `control.realtime`) instead of competing with them on equal
+/// terms. The sensor link's reader is not lowered: it is the force's path (with
+/// `control.realtime` the loop threads preempt it anyway).
 pub const DDS_NICE: i32 = 10;
 
 /// Lowers the calling thread to [`DDS_NICE`] (Linux: the nice value is per thread, and threads
@@ -106,7 +107,7 @@ pub(crate) fn lower_priority() {
 }
 
 /// A DDS participant on `domain_id` and a node `node` in `namespace` (`/` for none).
-/// Called from the bridge's and the reader's threads after [`lower_priority`].
+/// Called from the bridge's and the reader's threads (the bridge's after [`lower_priority`]).
 pub(crate) fn join(domain_id: u16, namespace: &str, node: &str) -> Result<Node, Ros2Error> {
     let context =
         Context::with_options(ContextOptions::new().domain_id(domain_id)).map_err(|e| {

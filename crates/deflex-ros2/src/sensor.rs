@@ -249,7 +249,9 @@ impl Ros2SensorLink {
         let handle = std::thread::Builder::new()
             .name("deflex-ros2-ft".into())
             .spawn(move || {
-                crate::lower_priority();
+                // Not lowered (unlike the bridge): this thread and the DDS threads it starts
+                // are the sensor's path, and a starved sensor times the loop out. Its work per
+                // wake is bounded (see the module documentation).
                 let subscribed =
                     join(s.domain_id, &s.namespace, &s.node_name).and_then(|mut node| {
                         let error = |e: String| Ros2Error::Topic {
