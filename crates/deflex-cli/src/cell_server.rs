@@ -195,6 +195,14 @@ pub fn cell_session(
     }
     args.check()?;
     let file = load_cell_file(&args.config)?;
+    if file.sensor.kind == deflex_runtime::config::SensorKind::Ros2 {
+        return Err(format!(
+            "{}: sensor.kind = \"ros2\": the simulated cell plays the robot and an ATI Net F/T; \
+             give `deflex cell --sim` a CELL.toml with sensor.kind = \"netft\" and relay its \
+             readings onto the WrenchStamped topic (as crates/deflex-ros2/tests/python does)",
+            file.origin
+        ));
+    }
     let options = ServeOptions {
         twin: twin_config(args)?,
         path: twin_path(args)?,

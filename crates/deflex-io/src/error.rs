@@ -22,6 +22,8 @@ pub enum Protocol {
     SimpleLine,
     /// The small XML scanner of [`crate::xml`].
     Xml,
+    /// A ROS 2 topic over DDS (the `deflex-ros2` bridge's sensor link).
+    Ros2,
 }
 
 impl fmt::Display for Protocol {
@@ -33,6 +35,7 @@ impl fmt::Display for Protocol {
             Protocol::NetFt => "ATI Net F/T RDT",
             Protocol::SimpleLine => "simple line",
             Protocol::Xml => "XML",
+            Protocol::Ros2 => "ROS 2",
         };
         f.write_str(s)
     }

@@ -1,5 +1,6 @@
 //! The channels of a deflex MCAP file: topic names, message types and frames.
 //!
+//! The messages are those of [`deflex_rosmsg::cycle`] (the mapping the ROS 2 bridge shares).
 //! Every channel but [`SESSION`] carries ROS 2 messages (schema encoding `ros2msg`, message
 //! encoding `cdr`, profile `ros2`), one message per control cycle unless said otherwise. All
 //! messages of a cycle share its log time (the recording's start epoch plus the cycle's session
@@ -52,34 +53,12 @@ pub const DIAGNOSTICS: &str = "/diagnostics";
 pub const SESSION: &str = "/deflex/session";
 
 /// Name of the diagnostic status.
-pub const STATUS_NAME: &str = "deflex/controller";
+pub use deflex_rosmsg::cycle::STATUS_NAME;
 
-/// Keys of the `deflex/controller` diagnostic status (values are decimal text, SI units).
+/// Keys of the `deflex/controller` diagnostic status (values are decimal text, SI units): those
+/// of [`deflex_rosmsg::cycle::diag`] and the recorder's own count.
 pub mod diag {
-    /// Controller phase name (`idle`, `taring`, `running`, `stopping`, `stopped`, `faulted`).
-    pub const PHASE: &str = "phase";
-    /// Status bits as an integer (`deflex_control::Flags`).
-    pub const FLAGS: &str = "flags";
-    /// Status bits by name (`Flags::describe`).
-    pub const STATUS: &str = "status";
-    /// Latched fault name, empty when none.
-    pub const FAULT: &str = "fault";
-    /// Cycle number.
-    pub const CYCLE: &str = "cycle";
-    /// Computation time of the cycle (s).
-    pub const CYCLE_TIME_S: &str = "cycle_time_s";
-    /// Answers sent later than one robot cycle after the telegram.
-    pub const LATE_ANSWERS: &str = "late_answers";
-    /// Answers the robot counted late (empty when it does not say).
-    pub const ROBOT_LATE: &str = "robot_late";
-    /// Robot telegrams answered.
-    pub const ROBOT_TELEGRAMS: &str = "robot_telegrams";
-    /// F/T samples received.
-    pub const SENSOR_SAMPLES: &str = "sensor_samples";
-    /// Arc length on the feed-forward path (m), empty when unknown.
-    pub const PATH_S_M: &str = "path_s_m";
-    /// The runaway guard's loop-gain estimate, empty when unknown.
-    pub const LOOP_GAIN: &str = "loop_gain";
+    pub use deflex_rosmsg::cycle::diag::*;
     /// Samples the recorder lost so far (overwritten in the telemetry ring before it read them).
     pub const RECORDER_LOST: &str = "recorder_lost";
 }

@@ -3,16 +3,14 @@
 
 use crate::channels as ch;
 use crate::{RecordError, SessionRecord};
-use deflex_control::Flags;
+use deflex_rosmsg::cycle::{self, CycleMessages, DiagnosticsPacer, seconds_to_ns};
 use deflex_rosmsg::{
-    DiagnosticArray, DiagnosticStatus, Header, JointState, KeyValue, Point, Pose, PoseStamped,
-    Quaternion, RosMessage, Time, Twist, TwistStamped, Vector3, Vector3Stamped, Wrench,
+    DiagnosticArray, JointState, PoseStamped, RosMessage, Time, TwistStamped, Vector3Stamped,
     WrenchStamped,
 };
-use deflex_telemetry::{CycleSample, LATE_UNKNOWN, SessionInfo};
+use deflex_telemetry::{CycleSample, SessionInfo};
 use mcap::records::MessageHeader;
 use mcap::write::NoSeek;
-use nalgebra::{Rotation3, UnitQuaternion, Vector3 as V3};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::sync::Arc;
@@ -107,8 +105,7 @@ pub struct McapSink<W: Write> {
     epoch_ns: Option<u64>,
     stats: RecordStats,
     capped: bool,
-    last_diag_time: f64,
-    last_state: Option<(u32, u32, u32)>,
+    pacer: DiagnosticsPacer,
     recorder_lost: u64,
     bytes: Arc<AtomicU64>,
 }
@@ -174,6 +171,7 @@ impl<W: Write> McapSink<W> {
         })()
         .map_err(mcap_err)?;
         Ok(McapSink {
+            pacer: DiagnosticsPacer::new(options.diagnostics_period_s),
             writer,
             channels,
             info: info.clone(),
@@ -182,8 +180,6 @@ impl<W: Write> McapSink<W> {
             epoch_ns: None,
             stats: RecordStats::default(),
             capped: false,
-            last_diag_time: f64::NEG_INFINITY,
-            last_state: None,
             recorder_lost: 0,
             bytes,
         })
@@ -242,153 +238,33 @@ impl<W: Write> McapSink<W> {
             publish_time: t_ns,
         };
         let stamp = Time::from_nanos(t_ns);
-        let frame = |name: &str| Header {
-            stamp,
-            frame_id: name.to_string(),
-        };
-        let base = self.info.base_frame.clone();
-        let sensor = self.info.sensor_frame.clone();
-
-        let joints = JointState {
-            header: frame(""),
-            name: self.info.joint_names.clone(),
-            position: s.q().to_vec(),
-            velocity: Vec::new(),
-            effort: Vec::new(),
-        };
-        self.put(self.channels.joint_states, &header, &joints)?;
-        for (id, w, f) in [
-            (self.channels.wrench_raw, &s.wrench_raw, &sensor),
-            (self.channels.wrench_sensor, &s.wrench_sensor, &sensor),
-            (self.channels.wrench_tcp, &s.wrench_tcp, &base),
-        ] {
-            let msg = WrenchStamped {
-                header: frame(f),
-                wrench: Wrench {
-                    force: Vector3::from_slice(&w[..3]),
-                    torque: Vector3::from_slice(&w[3..]),
-                },
-            };
-            self.put(id, &header, &msg)?;
+        let m = CycleMessages::new(&self.info, s, stamp);
+        let c = &self.channels;
+        let ids = (c.joint_states, c.wrench_raw, c.wrench_sensor, c.wrench_tcp);
+        self.put(ids.0, &header, &m.joint_states)?;
+        self.put(ids.1, &header, &m.wrench_raw)?;
+        self.put(ids.2, &header, &m.wrench_sensor)?;
+        self.put(ids.3, &header, &m.wrench_tcp)?;
+        let c = &self.channels;
+        let ids = (c.tcp_pose, c.program_pose);
+        self.put(ids.0, &header, &m.tcp_pose)?;
+        self.put(ids.1, &header, &m.program_pose)?;
+        let c = &self.channels;
+        let ids = (c.deflection, c.correction, c.error, c.feedforward);
+        self.put(ids.0, &header, &m.deflection)?;
+        self.put(ids.1, &header, &m.correction)?;
+        self.put(ids.2, &header, &m.error)?;
+        self.put(ids.3, &header, &m.feedforward)?;
+        if let Some(path_error) = &m.path_error {
+            self.put(self.channels.path_error, &header, path_error)?;
         }
-        let rotation = s.tcp_rotation();
-        let program_rotation =
-            Rotation3::from_scaled_axis(-V3::from_column_slice(&s.correction[3..])) * rotation;
-        for (id, p, r) in [
-            (self.channels.tcp_pose, s.tcp_position(), rotation),
-            (
-                self.channels.program_pose,
-                s.program_position_m(),
-                program_rotation,
-            ),
-        ] {
-            let msg = PoseStamped {
-                header: frame(&base),
-                pose: pose(p, &r),
-            };
-            self.put(id, &header, &msg)?;
-        }
-        for (id, v) in [
-            (self.channels.deflection, &s.deflection),
-            (self.channels.correction, &s.correction),
-            (self.channels.error, &s.error),
-            (self.channels.feedforward, &s.feedforward),
-        ] {
-            let msg = TwistStamped {
-                header: frame(&base),
-                twist: Twist {
-                    linear: Vector3::from_slice(&v[..3]),
-                    angular: Vector3::from_slice(&v[3..]),
-                },
-            };
-            self.put(id, &header, &msg)?;
-        }
-        if s.truth_error_m.iter().all(|v| v.is_finite()) {
-            let msg = Vector3Stamped {
-                header: frame(&base),
-                vector: Vector3::from_slice(&s.truth_error_m),
-            };
-            self.put(self.channels.path_error, &header, &msg)?;
-        }
-        let state = (s.phase_code, s.flags, s.fault);
-        if self.last_state != Some(state)
-            || s.time_s - self.last_diag_time + 1e-9 >= self.options.diagnostics_period_s
-            || s.time_s < self.last_diag_time
-        {
-            self.last_state = Some(state);
-            self.last_diag_time = s.time_s;
-            let msg = self.diagnostics(s, frame(""));
+        if self.pacer.due(s) {
+            let extra = [(ch::diag::RECORDER_LOST, self.recorder_lost.to_string())];
+            let msg = cycle::diagnostics(&self.info, s, stamp, &extra);
             self.put(self.channels.diagnostics, &header, &msg)?;
         }
         self.stats.recorded += 1;
         Ok(true)
-    }
-
-    fn diagnostics(&self, s: &CycleSample, header: Header) -> DiagnosticArray {
-        let flags = s.status_flags();
-        let fault = s.fault_kind();
-        let level = if fault.is_some() {
-            DiagnosticStatus::ERROR
-        } else if flags.0
-            & (Flags::SATURATED_SIZE | Flags::SATURATED_RATE | Flags::RUNAWAY_HOLD | Flags::RAMPING)
-            != 0
-        {
-            DiagnosticStatus::WARN
-        } else {
-            DiagnosticStatus::OK
-        };
-        let finite = |v: f64| {
-            if v.is_finite() {
-                format!("{v}")
-            } else {
-                String::new()
-            }
-        };
-        let kv = |k: &str, v: String| KeyValue {
-            key: k.to_string(),
-            value: v,
-        };
-        let phase = self.info.source.phase_name(s.phase_code);
-        let status = flags.describe();
-        let message = match fault {
-            Some(kind) => format!("{phase}: fault {}", kind.name()),
-            None if status.is_empty() => phase.to_string(),
-            None => format!("{phase}: {status}"),
-        };
-        DiagnosticArray {
-            header,
-            status: vec![DiagnosticStatus {
-                level,
-                name: ch::STATUS_NAME.to_string(),
-                message,
-                hardware_id: self.info.robot.clone(),
-                values: vec![
-                    kv(ch::diag::PHASE, phase.to_string()),
-                    kv(ch::diag::FLAGS, flags.0.to_string()),
-                    kv(ch::diag::STATUS, status),
-                    kv(
-                        ch::diag::FAULT,
-                        fault.map_or(String::new(), |k| k.name().to_string()),
-                    ),
-                    kv(ch::diag::CYCLE, s.cycle.to_string()),
-                    kv(ch::diag::CYCLE_TIME_S, finite(s.cycle_time_s)),
-                    kv(ch::diag::LATE_ANSWERS, s.late_answers.to_string()),
-                    kv(
-                        ch::diag::ROBOT_LATE,
-                        if s.robot_late == LATE_UNKNOWN {
-                            String::new()
-                        } else {
-                            s.robot_late.to_string()
-                        },
-                    ),
-                    kv(ch::diag::ROBOT_TELEGRAMS, s.robot_telegrams.to_string()),
-                    kv(ch::diag::SENSOR_SAMPLES, s.sensor_samples.to_string()),
-                    kv(ch::diag::PATH_S_M, finite(s.path_s_m)),
-                    kv(ch::diag::LOOP_GAIN, finite(s.loop_gain)),
-                    kv(ch::diag::RECORDER_LOST, self.recorder_lost.to_string()),
-                ],
-            }],
-        }
     }
 
     fn write_session(&mut self, epoch: u64) -> Result<(), RecordError> {
@@ -461,30 +337,5 @@ impl<W: Write> McapSink<W> {
         result.map_err(|e| RecordError::from_mcap(&self.target, self.stats.bytes, e))?;
         let counting = self.writer.into_inner().into_inner();
         Ok((counting.inner, self.stats))
-    }
-}
-
-fn seconds_to_ns(t: f64) -> u64 {
-    if t.is_finite() && t > 0.0 {
-        (t * 1e9).round().min(u64::MAX as f64) as u64
-    } else {
-        0
-    }
-}
-
-fn pose(p: V3<f64>, r: &Rotation3<f64>) -> Pose {
-    let q = UnitQuaternion::from_rotation_matrix(r);
-    Pose {
-        position: Point {
-            x: p.x,
-            y: p.y,
-            z: p.z,
-        },
-        orientation: Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        },
     }
 }

@@ -1,6 +1,6 @@
 //! # deflex-rosmsg
 //!
-//! The ROS 2 messages deflex writes (to MCAP files today, to a ROS 2 bridge later): plain serde
+//! The ROS 2 messages deflex writes (to MCAP files and on the ROS 2 graph): plain serde
 //! structs whose field names, types and order are exactly those of the `.msg` definitions in
 //! `ros2/common_interfaces` and `ros2/rcl_interfaces` (`builtin_interfaces/Time`), each with its
 //! full concatenated definition ([`RosMessage::DEFINITION`], the `ros2msg` schema of an MCAP
@@ -11,6 +11,9 @@
 //! primitives aligned to their size from the end of the header, strings as a `u32` length that
 //! counts the terminating NUL, then the bytes and the NUL, sequences as a `u32` count then the
 //! elements. ROS `byte` is an octet (`u8`).
+//!
+//! [`cycle`] is the one mapping of a telemetry [`deflex_telemetry::CycleSample`] to these
+//! messages (topics, frames, diagnostics keys), shared by the recorder and the bridge.
 //!
 //! ```
 //! use deflex_rosmsg::{Header, Time, Vector3, Vector3Stamped, decode, encode};
@@ -26,6 +29,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod cycle;
 mod definitions;
 mod messages;
 

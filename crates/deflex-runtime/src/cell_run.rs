@@ -14,7 +14,7 @@ use crate::log::{LogWriter, spawn_writer};
 use crate::session::{RunSummary, Runtime, RuntimeOptions, spawn};
 use crate::telemetry::{DEFAULT_CAPACITY, Source, Telemetry, session_info};
 use deflex_control::{ControlError, Controller, FeedForwardMode, PathIndex};
-use deflex_io::LinkError;
+use deflex_io::{ForceSensorLink, LinkError};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
@@ -151,6 +151,19 @@ impl CellRun {
         startup_timeout_s: f64,
         idle_exit_s: Option<f64>,
     ) -> Result<CellRun, StartError> {
+        Self::start_with(cell, startup_timeout_s, idle_exit_s, None, &mut |_| {})
+    }
+
+    /// [`CellRun::start`] with a sensor link opened by a front end (`sensor.kind = "ros2"`: the
+    /// ROS 2 bridge's; `None`: the link of `[sensor]`), and `subscribe` called with the session's
+    /// telemetry before the threads start, so a sink it subscribes sees every cycle.
+    pub fn start_with(
+        cell: &CellFile,
+        startup_timeout_s: f64,
+        idle_exit_s: Option<f64>,
+        sensor: Option<Box<dyn ForceSensorLink + Send>>,
+        subscribe: &mut dyn FnMut(&Telemetry),
+    ) -> Result<CellRun, StartError> {
         let (controller, feedforward) = controller_of(cell)?;
         let joints = controller.robot().joint_count();
         let robot = cell
@@ -159,18 +172,26 @@ impl CellRun {
                 bind: cell.robot.bind,
                 error,
             })?;
-        let sensor = cell
-            .open_sensor_link()
-            .map_err(|error| StartError::SensorLink {
-                address: cell.sensor.address,
-                error,
-            })?;
-        let info = session_info(
+        let sensor = match sensor {
+            Some(link) => link,
+            None => cell
+                .open_sensor_link()
+                .map_err(|error| StartError::SensorLink {
+                    address: cell.sensor.address,
+                    error,
+                })?,
+        };
+        let mut info = session_info(
             &controller,
             Source::Runtime,
             cell.robot.kind.key(),
             cell.robot.cycle_s,
         );
+        if let Some(ros2) = &cell.ros2 {
+            info.base_frame = ros2.base_frame.clone();
+            info.sensor_frame = ros2.sensor_frame.clone();
+            info.tcp_frame = ros2.tcp_frame.clone();
+        }
         let capacity = cell
             .log
             .as_ref()
@@ -196,6 +217,7 @@ impl CellRun {
             }
             None => None,
         };
+        subscribe(&telemetry);
         let options = RuntimeOptions {
             robot_cycle_s: cell.robot.cycle_s,
             realtime: cell.control.realtime,

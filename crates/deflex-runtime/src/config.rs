@@ -13,12 +13,12 @@ mod controller_config;
 pub mod sections;
 mod validate;
 
-pub use choices::{Axis, RobotKind, RsiAnswerKind, SensorKind};
+pub use choices::{Axis, RobotKind, Ros2Qos, Ros2Topic, RsiAnswerKind, SensorKind};
 pub use sections::{
     ControlSection, FeedForwardSection, LimitsSection, LogSection, ModelSection, MountingSection,
-    REQUIRED_KEYS, RobotSection, SensorSection,
+    REQUIRED_KEYS, RobotSection, Ros2Section, SensorSection,
 };
-pub use validate::{BOUNDS, bounds_of};
+pub use validate::{BOUNDS, bounds_of, valid_ros2_name};
 
 use crate::feedforward::TableLoadError;
 use serde::Deserialize;
@@ -123,6 +123,28 @@ pub enum InvalidReason {
         /// `limits.runaway_gain_limit`.
         limit: f64,
     },
+    /// A ROS 2 name (namespace, node or topic) that ROS 2 refuses.
+    #[error(
+        "expected a ROS 2 name ({0}: letters, digits and _ between single /, not starting with a \
+         digit, at most 255 characters), got \"{1}\""
+    )]
+    Ros2Name(&'static str, String),
+    /// A frame id that cannot be one.
+    #[error("expected a frame id (1–255 printable characters, no spaces), got \"{0}\"")]
+    FrameId(String),
+    /// `sensor.kind = "ros2"` without the `[ros2]` section that says which DDS domain and QoS.
+    #[error(
+        "sensor.kind = \"ros2\" needs a [ros2] section (domain_id, qos; topics = [] to publish nothing)"
+    )]
+    Ros2SectionMissing,
+    /// The publishing rate is above the control rate.
+    #[error("must be at most control.rate_hz ({control_hz} Hz), got {rate_hz} Hz")]
+    PublishAboveControlRate {
+        /// `ros2.publish_rate_hz`.
+        rate_hz: f64,
+        /// `control.rate_hz`.
+        control_hz: f64,
+    },
     /// A lead with a pre-compensated program.
     #[error(
         "a lead applies to mode = \"feed-forward\" only (the program applies its compensation \
@@ -159,6 +181,9 @@ pub struct CellFile {
     /// Feed-forward from an offline compensation; absent = the online correction alone.
     #[serde(default)]
     pub feedforward: Option<FeedForwardSection>,
+    /// ROS 2 bridge; absent = deflex stays off the ROS 2 graph.
+    #[serde(default)]
+    pub ros2: Option<Ros2Section>,
     /// Directory of the file (for relative paths); set by [`CellFile::load`].
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -189,13 +214,20 @@ fn dotted_key_at(text: &str, offset: usize) -> Option<String> {
     })
 }
 
-/// The first key of [`REQUIRED_KEYS`] missing from a section that is present.
+/// The first key of [`REQUIRED_KEYS`] missing from a section that is present (`sensor.address`
+/// only for a sensor on the network: `sensor.kind = "ros2"` takes a topic instead).
 fn missing_required(table: &toml::Table) -> Option<(&'static str, &'static str)> {
+    let sensor = table.get("sensor").and_then(toml::Value::as_table);
+    let ros2_sensor = sensor
+        .and_then(|s| s.get("kind"))
+        .and_then(toml::Value::as_str)
+        == Some("ros2");
     REQUIRED_KEYS.iter().copied().find(|(section, key)| {
-        table
-            .get(*section)
-            .and_then(toml::Value::as_table)
-            .is_some_and(|s| !s.contains_key(*key))
+        !(ros2_sensor && (*section, *key) == ("sensor", "address"))
+            && table
+                .get(*section)
+                .and_then(toml::Value::as_table)
+                .is_some_and(|s| !s.contains_key(*key))
     })
 }
 

@@ -118,7 +118,9 @@ impl CellFile {
         deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer).map_err(LinkError::from)
     }
 
-    /// Controller side: binds the sensor client of `[sensor]`.
+    /// Controller side: binds the sensor client of `[sensor]`. A ROS 2 sensor
+    /// (`sensor.kind = "ros2"`) is opened by the `deflex-ros2` bridge, a layer above this one,
+    /// and handed to [`crate::CellRun::start_with_sensor`]; here it is an error.
     pub fn open_sensor_link(&self) -> Result<Box<dyn ForceSensorLink + Send>, LinkError> {
         Ok(match self.sensor.kind {
             SensorKind::Netft => Box::new(NetFtClient::new(
@@ -126,6 +128,12 @@ impl CellFile {
                 self.sensor.address,
                 self.calibration(),
             )?),
+            SensorKind::Ros2 => {
+                return Err(LinkError::InvalidValue {
+                    protocol: deflex_io::Protocol::Ros2,
+                    reason: "sensor.kind = \"ros2\" is opened by the ROS 2 bridge (deflex-ros2)",
+                });
+            }
         })
     }
 

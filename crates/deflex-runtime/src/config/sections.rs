@@ -6,7 +6,7 @@
 
 use super::choices::{
     Axis, CorrectionModeDef, EgmFrameDef, FeedForwardModeDef, JointTagDef, PathIndexDef, RobotKind,
-    RsiAnswerKind, RunawayActionDef, SafeActionDef, SensorKind,
+    Ros2Qos, Ros2Topic, RsiAnswerKind, RunawayActionDef, SafeActionDef, SensorKind,
 };
 use deflex_control::{
     FeedForwardConfig, FeedForwardMode, LimiterConfig, PathIndex, PidGains, RunawayAction,
@@ -110,6 +110,14 @@ pub struct SensorSection {
     pub timeout_s: f64,
     /// Range of each channel `[fx, fy, fz, mx, my, mz]` (N, N·m); beyond it a reading is garbage.
     pub range: [f64; 6],
+    /// `ros2` only: the `geometry_msgs/WrenchStamped` topic (an absolute ROS name).
+    pub topic: String,
+    /// `ros2` only: a message whose stamp is older than this (or as far in the future), on
+    /// this machine's clock, is refused as stale (s).
+    pub max_age_s: f64,
+    /// `ros2` only: messages held between the DDS reader and the sensor thread (and the DDS
+    /// reader's history depth); beyond, the oldest is dropped and counted.
+    pub queue_depth: usize,
 }
 
 impl Default for SensorSection {
@@ -123,6 +131,9 @@ impl Default for SensorSection {
             counts_per_torque: 1_000_000.0,
             timeout_s: SafetyConfig::default().sensor_timeout_s,
             range: SafetyConfig::default().sensor_range,
+            topic: "/ft_sensor/wrench".into(),
+            max_age_s: 0.05,
+            queue_depth: 16,
         }
     }
 }
@@ -348,6 +359,57 @@ impl Default for LogSection {
         LogSection {
             path: String::new(),
             ring_capacity: 8192,
+        }
+    }
+}
+
+/// `[ros2]`: deflex on the ROS 2 graph (the `deflex-ros2` bridge). Present: `deflex run`
+/// publishes `topics` under `namespace`; needed by `sensor.kind = "ros2"`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Ros2Section {
+    /// DDS domain (`ROS_DOMAIN_ID`).
+    pub domain_id: u16,
+    /// Namespace of the topics and of the node (an absolute ROS name, `/` for none).
+    pub namespace: String,
+    /// Node name.
+    pub node_name: String,
+    /// QoS profile of the published topics and of the sensor subscription.
+    pub qos: Ros2Qos,
+    /// History depth of the QoS (keep last).
+    pub depth: usize,
+    /// Rate of the published cycle topics (Hz); the bridge sends the newest cycle at most this
+    /// often (at most the control rate).
+    pub publish_rate_hz: f64,
+    /// Rate of `diagnostics` between changes of phase, flags or fault (Hz).
+    pub diagnostics_rate_hz: f64,
+    /// The topics published.
+    pub topics: Vec<Ros2Topic>,
+    /// Frame id of the robot base (positions, TCP wrench, δŝ, ξ).
+    pub base_frame: String,
+    /// Frame id of the F/T sensor (raw and compensated wrench; the frame `sensor.kind = "ros2"`
+    /// expects in the messages it takes).
+    pub sensor_frame: String,
+    /// Frame id of the TCP.
+    pub tcp_frame: String,
+}
+
+impl Default for Ros2Section {
+    /// Domain 0, namespace `/deflex`, node `deflex`, sensor-data QoS of depth 10, 100 Hz,
+    /// diagnostics at 10 Hz, every topic, frames `base`, `ft_sensor`, `tcp`.
+    fn default() -> Self {
+        Ros2Section {
+            domain_id: 0,
+            namespace: "/deflex".into(),
+            node_name: "deflex".into(),
+            qos: Ros2Qos::SensorData,
+            depth: 10,
+            publish_rate_hz: 100.0,
+            diagnostics_rate_hz: 10.0,
+            topics: Ros2Topic::ALL.to_vec(),
+            base_frame: "base".into(),
+            sensor_frame: "ft_sensor".into(),
+            tcp_frame: "tcp".into(),
         }
     }
 }

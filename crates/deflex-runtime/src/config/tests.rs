@@ -334,3 +334,83 @@ fn robot_peer_rules_name_the_field() {
     let cell = CellFile::parse(MINIMAL, "cell.toml", PathBuf::new()).unwrap();
     assert!(cell.peer_policy().unwrap().warning().is_some());
 }
+
+/// `[ros2]` and `sensor.kind = "ros2"`: no address needed, the section required, every field
+/// checked and named.
+#[test]
+fn ros2_section_and_sensor() {
+    let ros2 = "[robot]\nkind = \"kuka-rsi\"\nbind = \"127.0.0.1:59152\"\n[sensor]\nkind = \"ros2\"\n\
+                topic = \"/ati/wrench\"\n[model]\nfile = \"tx200\"\n";
+    let e = CellFile::parse(ros2, "cell.toml", PathBuf::new())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sensor.kind") && e.contains("[ros2]"), "{e}");
+    let with = |extra: &str| {
+        CellFile::parse(
+            &format!("{ros2}[ros2]\n{extra}"),
+            "cell.toml",
+            PathBuf::new(),
+        )
+    };
+    let cell = with("").unwrap();
+    assert_eq!(cell.sensor.kind, SensorKind::Ros2);
+    let r = cell.ros2.as_ref().unwrap();
+    assert_eq!(
+        (r.domain_id, r.namespace.as_str(), r.qos),
+        (0, "/deflex", Ros2Qos::SensorData)
+    );
+    assert_eq!(r.topics, Ros2Topic::ALL.to_vec());
+    let cell = with("topics = [\"joint_states\", \"diagnostics\"]\nqos = \"reliable\"\n").unwrap();
+    assert_eq!(
+        cell.ros2.unwrap().topics,
+        vec![Ros2Topic::JointStates, Ros2Topic::Diagnostics]
+    );
+    for (extra, field) in [
+        ("domain_id = 233\n", "ros2.domain_id"),
+        ("namespace = \"deflex\"\n", "ros2.namespace"),
+        ("namespace = \"/a//b\"\n", "ros2.namespace"),
+        ("namespace = \"/1a\"\n", "ros2.namespace"),
+        ("node_name = \"a/b\"\n", "ros2.node_name"),
+        ("qos = \"fast\"\n", "ros2.qos"),
+        ("depth = 0\n", "ros2.depth"),
+        ("publish_rate_hz = 200.0\n", "ros2.publish_rate_hz"),
+        ("publish_rate_hz = nan\n", "ros2.publish_rate_hz"),
+        ("diagnostics_rate_hz = 0.0\n", "ros2.diagnostics_rate_hz"),
+        ("topics = [\"wrenches\"]\n", "ros2.topics"),
+        ("sensor_frame = \"\"\n", "ros2.sensor_frame"),
+        ("base_frame = \"base link\"\n", "ros2.base_frame"),
+        ("colour = 1\n", "colour"),
+    ] {
+        let e = with(extra)
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {extra}"))
+            .to_string();
+        assert!(
+            e.contains("cell.toml") && e.contains(field),
+            "{extra} → {e}"
+        );
+    }
+    for (sensor, field) in [
+        ("topic = \"ati/wrench\"", "sensor.topic"),
+        ("max_age_s = 0.0", "sensor.max_age_s"),
+        ("queue_depth = 100000", "sensor.queue_depth"),
+    ] {
+        let text = format!(
+            "{}[ros2]\n",
+            ros2.replace("topic = \"/ati/wrench\"", sensor)
+        );
+        let e = CellFile::parse(&text, "cell.toml", PathBuf::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(field), "{sensor} → {e}");
+    }
+    // A Net F/T still needs its address.
+    let e = CellFile::parse(
+        &MINIMAL.replace("address = \"127.0.0.1:49152\"\n", ""),
+        "cell.toml",
+        PathBuf::new(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("sensor.address"), "{e}");
+}

@@ -3,6 +3,7 @@
 //! what was expected. The bounds keep every duration, rate, size and count the runtime derives
 //! from the file (sleep periods, buffer sizes, ramp lengths) finite and small enough to act on.
 
+use super::SensorKind;
 use super::{CellFile, ConfigError, InvalidReason};
 use deflex_control::FeedForwardMode;
 
@@ -51,7 +52,13 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("limits.runaway_confirm_cycles", 1.0, 1000.0, "cycles"),
     ("limits.runaway_withdraw_s", 0.01, 10.0, "s"),
     ("limits.runaway_release_rate_m_s", 1e-6, 0.1, "m/s"),
+    ("sensor.max_age_s", 0.001, 10.0, "s"),
+    ("sensor.queue_depth", 1.0, 1024.0, "messages"),
     ("log.ring_capacity", 16.0, 262_144.0, "records"),
+    ("ros2.domain_id", 0.0, 232.0, ""),
+    ("ros2.depth", 1.0, 1000.0, "messages"),
+    ("ros2.publish_rate_hz", 0.1, 1000.0, "Hz"),
+    ("ros2.diagnostics_rate_hz", 0.1, 100.0, "Hz"),
     ("feedforward.lead_s", 0.0, 1.0, "s"),
     ("feedforward.max_offset_m", 1e-4, 0.1, "m"),
     ("feedforward.window_m", 1e-3, 1.0, "m"),
@@ -115,7 +122,65 @@ impl CellFile {
             ));
         }
         self.validate_control_and_limits()?;
-        self.validate_feedforward_and_log()
+        self.validate_feedforward_and_log()?;
+        self.validate_ros2()
+    }
+
+    fn validate_ros2(&self) -> Result<(), ConfigError> {
+        if self.sensor.kind == SensorKind::Ros2 {
+            self.check("sensor.max_age_s", self.sensor.max_age_s)?;
+            self.check("sensor.queue_depth", self.sensor.queue_depth as f64)?;
+            if !valid_ros2_name(&self.sensor.topic, true) {
+                return Err(self.invalid(
+                    "sensor.topic",
+                    InvalidReason::Ros2Name("absolute", self.sensor.topic.clone()),
+                ));
+            }
+            if self.ros2.is_none() {
+                return Err(self.invalid("sensor.kind", InvalidReason::Ros2SectionMissing));
+            }
+        }
+        let Some(r) = &self.ros2 else {
+            return Ok(());
+        };
+        self.check("ros2.domain_id", f64::from(r.domain_id))?;
+        self.check("ros2.depth", r.depth as f64)?;
+        self.check("ros2.publish_rate_hz", r.publish_rate_hz)?;
+        self.check("ros2.diagnostics_rate_hz", r.diagnostics_rate_hz)?;
+        if r.publish_rate_hz > self.control.rate_hz {
+            return Err(self.invalid(
+                "ros2.publish_rate_hz",
+                InvalidReason::PublishAboveControlRate {
+                    rate_hz: r.publish_rate_hz,
+                    control_hz: self.control.rate_hz,
+                },
+            ));
+        }
+        if r.namespace != "/" && !valid_ros2_name(&r.namespace, true) {
+            return Err(self.invalid(
+                "ros2.namespace",
+                InvalidReason::Ros2Name("absolute, or / alone", r.namespace.clone()),
+            ));
+        }
+        if !valid_ros2_name(&r.node_name, false) || r.node_name.contains('/') {
+            return Err(self.invalid(
+                "ros2.node_name",
+                InvalidReason::Ros2Name("one token", r.node_name.clone()),
+            ));
+        }
+        for (field, frame) in [
+            ("ros2.base_frame", &r.base_frame),
+            ("ros2.sensor_frame", &r.sensor_frame),
+            ("ros2.tcp_frame", &r.tcp_frame),
+        ] {
+            let ok = !frame.is_empty()
+                && frame.len() <= 255
+                && frame.chars().all(|c| c.is_ascii_graphic());
+            if !ok {
+                return Err(self.invalid(field, InvalidReason::FrameId(frame.clone())));
+            }
+        }
+        Ok(())
     }
 
     fn validate_robot(&self) -> Result<(), ConfigError> {
@@ -237,4 +302,22 @@ impl CellFile {
         }
         Ok(())
     }
+}
+
+/// A ROS 2 name (topic, namespace or node): tokens of letters, digits and `_`, not starting with
+/// a digit, separated by single `/`, no trailing `/`, at most 255 characters; `absolute` names
+/// start with `/`.
+pub fn valid_ros2_name(name: &str, absolute: bool) -> bool {
+    let body = match name.strip_prefix('/') {
+        Some(rest) => rest,
+        None if absolute => return false,
+        None => name,
+    };
+    name.len() <= 255
+        && !body.is_empty()
+        && body.split('/').all(|token| {
+            !token.is_empty()
+                && !token.starts_with(|c: char| c.is_ascii_digit())
+                && token.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        })
 }
