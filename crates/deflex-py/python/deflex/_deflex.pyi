@@ -1,0 +1,355 @@
+"""Type stubs of deflex's Rust extension module (``deflex._deflex``). The public API is the
+``deflex`` package; the ``_``-prefixed functions are its engine calls."""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from .log import Log
+
+__version__: str
+
+_PathLike = Union[str, "os.PathLike[str]"]
+_ArrayLike = npt.ArrayLike
+_Source = Union[Tuple[str, str], Tuple[str, str, str]]
+_RobotLike = Union["Robot", str, "os.PathLike[str]"]
+
+class Robot:
+    """A serial robot with its elastic structure (VJM eDoF springs); immutable, SI units."""
+
+    @staticmethod
+    def builtin(name: str) -> Robot:
+        """A built-in robot by name (``tx200``, ``tx200-1edof``, ``ur10``, ``ur10e``, ``kr210-r2700``, ``irb4600``)."""
+    @staticmethod
+    def builtins() -> List[str]:
+        """Names of the built-in robots."""
+    @staticmethod
+    def load(path: _PathLike) -> Robot:
+        """A robot from a robot file (TOML, possibly naming a URDF) or a built-in name."""
+    @staticmethod
+    def from_toml(text: str, origin: str = "<text>", base_dir: Optional[_PathLike] = None) -> Robot:
+        """A robot from robot-file TOML text."""
+    @property
+    def name(self) -> str:
+        """Human-readable name."""
+    @property
+    def joint_count(self) -> int:
+        """Number of motorised joints ``n``."""
+    @property
+    def joint_names(self) -> List[str]:
+        """Joint names, base to flange."""
+    @property
+    def limits(self) -> np.ndarray:
+        """Joint limits ``(n, 2)`` (rad), NaN where none."""
+    @property
+    def edofs(self) -> List[str]:
+        """eDoF labels (``J3.x``…), in eDoF Jacobian column order."""
+    @property
+    def stiffness(self) -> np.ndarray:
+        """eDoF stiffnesses (N·m/rad), same order as ``edofs``."""
+    @property
+    def geometry_fingerprint(self) -> str:
+        """Geometry fingerprint (16 hex digits)."""
+    @property
+    def tool(self) -> np.ndarray:
+        """Flange → TCP placement, 4×4."""
+    @property
+    def base(self) -> np.ndarray:
+        """World → R0 placement, 4×4."""
+    def pose(self, q: _ArrayLike) -> np.ndarray:
+        """TCP pose(s), ``(4, 4)`` or ``(N, 4, 4)``."""
+    def jacobian(self, q: _ArrayLike) -> np.ndarray:
+        """Geometric Jacobian(s) at the TCP, ``(6, n)`` or ``(N, 6, n)``."""
+    def compliance(self, q: _ArrayLike) -> np.ndarray:
+        """Cartesian compliance(s) ``J K⁻¹ Jᵀ`` (eq. 15), ``(6, 6)`` or ``(N, 6, 6)``."""
+    def deflect(self, q: _ArrayLike, wrench: _ArrayLike) -> np.ndarray:
+        """TCP deflection(s) ``[δp; δφ]`` (m, rad), ``(6,)`` or ``(N, 6)``."""
+    def gravity_sag(self, q: _ArrayLike) -> Optional[np.ndarray]:
+        """Sag under the arm's own weight ``[δp; δφ]``, or None without masses."""
+    def ik(
+        self,
+        pose: _ArrayLike,
+        seed: Optional[_ArrayLike] = None,
+        on_failure: Literal["raise", "nan"] = "raise",
+    ) -> np.ndarray:
+        """Joint values (rad) reaching the pose(s), ``(n,)`` or ``(N, n)``."""
+    def to_toml(self) -> str:
+        """The robot file text."""
+    def save(self, path: _PathLike) -> None:
+        """Write the robot file, whole or not at all."""
+
+class StiffnessCalibration:
+    """A stiffness identification's estimates, uncertainties, residuals and calibrated robot."""
+
+    @property
+    def robot(self) -> Robot:
+        """The calibrated robot."""
+    @property
+    def structure(self) -> str:
+        """The identified structure."""
+    @property
+    def edofs(self) -> List[str]:
+        """eDoF labels of the estimates."""
+    @property
+    def status(self) -> List[str]:
+        """``identified``, ``weak`` or ``not_identifiable`` per eDoF."""
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Stiffness estimates (N·m/rad)."""
+    @property
+    def stiffness_se(self) -> np.ndarray:
+        """Standard errors of the stiffnesses."""
+    @property
+    def interval95(self) -> np.ndarray:
+        """95 % intervals ``(k, 2)``."""
+    @property
+    def compliance(self) -> np.ndarray:
+        """Compliance estimates (rad/(N·m))."""
+    @property
+    def compliance_se(self) -> np.ndarray:
+        """Standard errors of the compliances."""
+    @property
+    def residuals(self) -> np.ndarray:
+        """Measured − predicted ``(N, 3)`` (m)."""
+    @property
+    def predicted(self) -> np.ndarray:
+        """Predicted displacements ``(N, 3)`` (m)."""
+    @property
+    def correlation(self) -> np.ndarray:
+        """Parameter correlation matrix."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The CLI's JSON as a dict."""
+    def report(self) -> str:
+        """The CLI's text report."""
+    def save(self, path: _PathLike, report: Optional[_PathLike] = None) -> None:
+        """Write the calibrated robot file (and the report folder)."""
+
+class Validation:
+    """Prediction errors of a model (and a baseline)."""
+
+    @property
+    def measured(self) -> np.ndarray:
+        """Measured displacements ``(N, 3)``."""
+    @property
+    def predicted(self) -> np.ndarray:
+        """Predictions ``(N, 3)``."""
+    @property
+    def errors(self) -> np.ndarray:
+        """Measured − predicted ``(N, 3)``."""
+    @property
+    def baseline_errors(self) -> Optional[np.ndarray]:
+        """The baseline's errors, or None."""
+    def to_dict(self) -> Dict[str, Any]:
+        """Error statistics."""
+    def save(self, dir: _PathLike) -> List[str]:
+        """Plots and HTML page into ``dir``."""
+
+class GeometryCalibration:
+    """An elasto-geometric calibration's iteration table, estimates and calibrated robot."""
+
+    @property
+    def robot(self) -> Robot:
+        """The calibrated robot."""
+    @property
+    def parameters(self) -> List[str]:
+        """Identified parameter names."""
+    @property
+    def units(self) -> List[str]:
+        """SI unit of each parameter."""
+    @property
+    def nominal(self) -> np.ndarray:
+        """Nominal values."""
+    @property
+    def estimates(self) -> np.ndarray:
+        """Estimates."""
+    @property
+    def standard_errors(self) -> np.ndarray:
+        """Standard errors (scaled)."""
+    @property
+    def intervals95(self) -> np.ndarray:
+        """95 % intervals ``(p, 2)``."""
+    @property
+    def bootstrap_se(self) -> np.ndarray:
+        """Bootstrap standard errors (NaN without bootstrap)."""
+    @property
+    def covariance(self) -> np.ndarray:
+        """Covariance ``(p, p)``."""
+    @property
+    def residuals(self) -> np.ndarray:
+        """Residual of every reading ``(N, 3)``."""
+    @property
+    def roles(self) -> List[str]:
+        """``fit``, ``test`` or ``registration`` per reading."""
+    @property
+    def chi2_per_dof(self) -> float:
+        """χ²/dof."""
+    @property
+    def elapsed_s(self) -> float:
+        """Fit wall time (s)."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The CLI's JSON report."""
+    def report(self) -> str:
+        """The CLI's text report."""
+    def save(self, path: _PathLike, report: Optional[_PathLike] = None) -> None:
+        """Write the calibrated robot file (and the report folder)."""
+
+class Prediction:
+    """Per-row predictions of a calibrated robot."""
+
+    @property
+    def table(self) -> Log:
+        """The predictions as columns."""
+    def to_dict(self) -> Dict[str, Any]:
+        """Summary."""
+    def report(self) -> str:
+        """The CLI's summary line."""
+    def save(self, path: _PathLike) -> None:
+        """Write the prediction CSV."""
+
+class Compensation:
+    """A compensated tool path."""
+
+    def __len__(self) -> int: ...
+    @property
+    def converged(self) -> bool:
+        """Whether it converged."""
+    @property
+    def simulated(self) -> bool:
+        """Whether the wrenches are simulated."""
+    @property
+    def source(self) -> str:
+        """The wrench source."""
+    @property
+    def desired(self) -> np.ndarray:
+        """Desired positions ``(N, 3)``."""
+    @property
+    def commanded(self) -> np.ndarray:
+        """Commanded positions ``(N, 3)``."""
+    @property
+    def commanded_poses(self) -> np.ndarray:
+        """Commanded poses ``(N, 4, 4)``."""
+    @property
+    def compensation(self) -> np.ndarray:
+        """Compensation ``(N, 6)``."""
+    @property
+    def wrench(self) -> np.ndarray:
+        """Wrenches ``(N, 6)``."""
+    @property
+    def deflection(self) -> np.ndarray:
+        """Predicted deflections ``(N, 6)``."""
+    @property
+    def q(self) -> np.ndarray:
+        """Joint values ``(N, n)``."""
+    @property
+    def predicted_error(self) -> np.ndarray:
+        """Remaining predicted error ``(N,)``."""
+    @property
+    def status(self) -> List[str]:
+        """``ok`` or the failure per point."""
+    def to_dict(self) -> Dict[str, Any]:
+        """Summary."""
+    def to_csv(self) -> str:
+        """``compensated_path.csv`` text."""
+    def save(self, path: _PathLike) -> None:
+        """Write ``compensated_path.csv``."""
+    def program(self, format: str, settings: Optional[_PathLike] = None) -> Dict[str, str]:
+        """The program in ``format`` as ``{path: text}``."""
+    def write_programs(
+        self,
+        dir: _PathLike,
+        formats: Sequence[str] = ...,
+        settings: Optional[_PathLike] = None,
+    ) -> List[str]:
+        """Write programs under ``dir``."""
+
+class TwinRun:
+    """A SIMULATED forming run."""
+
+    @property
+    def log(self) -> Log:
+        """The run's log (SI columns)."""
+    @property
+    def summary(self) -> Dict[str, Any]:
+        """``summary.json`` as a dict."""
+    @property
+    def controller_status(self) -> Optional[str]:
+        """The correction controller's status line, or None."""
+    @property
+    def profile(self) -> np.ndarray:
+        """Formed and programmed profile ``(M, 3)``."""
+    def save(self, dir: _PathLike) -> List[str]:
+        """Write the run's outputs into ``dir``."""
+
+def _calibrate(
+    robot: _RobotLike,
+    data: _Source,
+    structure: str,
+    fit_shifts: bool,
+    criterion: str,
+    folds: int,
+    min_cv_gain: float,
+    target_rms_m: Optional[float],
+    min_bic_gain: float,
+    allow_base: bool,
+    fk_tolerance_m: float,
+    ignore_fk_check: bool,
+) -> StiffnessCalibration: ...
+def _validate(
+    robot: _RobotLike,
+    data: _Source,
+    baseline: Optional[_RobotLike],
+    fk_tolerance_m: float,
+    ignore_fk_check: bool,
+) -> Validation: ...
+def _predict_displacements(robot: _RobotLike, data: _Source) -> np.ndarray: ...
+def _calibrate_geometry(
+    robot: _RobotLike,
+    data: Sequence[_Source],
+    loaded: Sequence[_Source],
+    test_data: Sequence[_Source],
+    steps: Sequence[str],
+    elastic: Sequence[str],
+    loss: str,
+    folds: int,
+    bootstrap: int,
+    test_fraction: float,
+    seed: int,
+) -> GeometryCalibration: ...
+def _predict(robot: _RobotLike, data: _Source, fit_setup: bool) -> Prediction: ...
+def _import_ur10_tracker(
+    series: str, setup: str, target: str, tracker_sigma: bool, every: int
+) -> Tuple[str, Dict[str, Any]]: ...
+def _compensate(
+    robot: _RobotLike,
+    path: Any,
+    wrench: Any,
+    frame: str,
+    feed_m_s: Optional[float],
+    twin_config: Optional[str],
+    part_xyz_m: Optional[Sequence[float]],
+    seed_q: Optional[Sequence[float]],
+    length_m: Optional[float],
+    max_segment_m: Optional[float],
+    position_only: bool,
+    include_gravity: bool,
+    tolerance_m: float,
+    max_iterations: int,
+) -> Compensation: ...
+def _form(
+    path: str,
+    correction: str,
+    model: Optional[_RobotLike],
+    robot: Optional[str],
+    config: Optional[str],
+    seed: int,
+    length_m: Optional[float],
+    feed_m_s: Optional[float],
+    fixture_stiffness_n_m: Optional[float],
+) -> TwinRun: ...
+def _cell_robot(robot: Optional[str] = None, config: Optional[str] = None) -> Robot: ...
+def _read_table(path: str) -> Log: ...
+def _parse_table(text: str, origin: str) -> Log: ...
