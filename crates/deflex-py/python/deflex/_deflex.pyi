@@ -4,12 +4,34 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
 from .log import Log
+
+__all__ = [
+    "Robot",
+    "StiffnessCalibration",
+    "Validation",
+    "GeometryCalibration",
+    "Prediction",
+    "Compensation",
+    "TwinRun",
+    "_calibrate",
+    "_validate",
+    "_predict_displacements",
+    "_calibrate_geometry",
+    "_predict",
+    "_import_ur10_tracker",
+    "_compensate",
+    "_form",
+    "_cell_robot",
+    "_read_table",
+    "_parse_table",
+    "__version__",
+]
 
 __version__: str
 
@@ -18,6 +40,7 @@ _ArrayLike = npt.ArrayLike
 _Source = Union[Tuple[str, str], Tuple[str, str, str]]
 _RobotLike = Union["Robot", str, "os.PathLike[str]"]
 
+@final
 class Robot:
     """A serial robot with its elastic structure (VJM eDoF springs); immutable, SI units."""
 
@@ -82,6 +105,7 @@ class Robot:
     def save(self, path: _PathLike) -> None:
         """Write the robot file, whole or not at all."""
 
+@final
 class StiffnessCalibration:
     """A stiffness identification's estimates, uncertainties, residuals and calibrated robot."""
 
@@ -128,6 +152,7 @@ class StiffnessCalibration:
     def save(self, path: _PathLike, report: Optional[_PathLike] = None) -> None:
         """Write the calibrated robot file (and the report folder)."""
 
+@final
 class Validation:
     """Prediction errors of a model (and a baseline)."""
 
@@ -148,6 +173,7 @@ class Validation:
     def save(self, dir: _PathLike) -> List[str]:
         """Plots and HTML page into ``dir``."""
 
+@final
 class GeometryCalibration:
     """An elasto-geometric calibration's iteration table, estimates and calibrated robot."""
 
@@ -197,6 +223,7 @@ class GeometryCalibration:
     def save(self, path: _PathLike, report: Optional[_PathLike] = None) -> None:
         """Write the calibrated robot file (and the report folder)."""
 
+@final
 class Prediction:
     """Per-row predictions of a calibrated robot."""
 
@@ -210,6 +237,7 @@ class Prediction:
     def save(self, path: _PathLike) -> None:
         """Write the prediction CSV."""
 
+@final
 class Compensation:
     """A compensated tool path."""
 
@@ -266,6 +294,7 @@ class Compensation:
     ) -> List[str]:
         """Write programs under ``dir``."""
 
+@final
 class TwinRun:
     """A SIMULATED forming run."""
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import io
 import math
 import os
-from typing import Any, Mapping, Sequence, Tuple, Union
+from typing import Any, List, Mapping, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -83,7 +83,7 @@ def source(data: Table, name: str = "data") -> Source:
     )
 
 
-def sources(data: Union[Table, Sequence[Table], None], name: str) -> list:
+def sources(data: Union[Table, Sequence[Table], None], name: str) -> List[Source]:
     """Several tables (a list) or one."""
     if data is None:
         return []

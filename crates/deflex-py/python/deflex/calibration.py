@@ -8,13 +8,13 @@ units: ``q1_rad``, ``fz_N``, ``dx_m``…); the checks and messages are the CLI's
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Optional, Sequence, Union
+from typing import Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _deflex
 from ._deflex import GeometryCalibration, Prediction, Robot, StiffnessCalibration, Validation
-from ._tables import Table, source, sources
+from ._tables import Source, Table, source, sources
 from .log import Log
 
 __all__ = [
@@ -156,7 +156,9 @@ def import_ur10_tracker(
     return AbsoluteData(text, summary, f"{os.fspath(series)} (set-up {setup})")
 
 
-def _absolute_sources(data: Union[Table, AbsoluteData, Sequence[Union[Table, AbsoluteData]], None], name: str) -> list:
+def _absolute_sources(
+    data: Union[Table, AbsoluteData, Sequence[Union[Table, AbsoluteData]], None], name: str
+) -> List[Source]:
     items: Sequence[Any]
     if data is None:
         items = []
@@ -164,7 +166,7 @@ def _absolute_sources(data: Union[Table, AbsoluteData, Sequence[Union[Table, Abs
         items = data
     else:
         items = [data]
-    out = []
+    out: List[Source] = []
     for d in items:
         if isinstance(d, AbsoluteData):
             out.append(("table", d.text, d.name))
@@ -201,7 +203,7 @@ def calibrate_geometry(
     table (fit, cross-validated and held-out errors)."""
     step_list = [s.strip() for s in steps.split(",")] if isinstance(steps, str) else list(steps)
     if elastic is None:
-        elastic_list: list = []
+        elastic_list: List[str] = []
     elif isinstance(elastic, str):
         elastic_list = [e.strip() for e in elastic.split(",") if e.strip()]
     else:

@@ -5,7 +5,7 @@ KUKA (KRL), ABB (RAPID), Stäubli (VAL3), UR (URScript) and G-code."""
 from __future__ import annotations
 
 import os
-from typing import Any, Optional, Sequence, Union
+from typing import Any, List, Optional, Sequence, Union
 
 import numpy as np
 
@@ -73,7 +73,7 @@ def compensate(
     return result
 
 
-def _three(values: Any, name: str) -> list:
+def _three(values: Any, name: str) -> List[float]:
     from ._errors import InputError
 
     v = [float(x) for x in values]

@@ -58,7 +58,7 @@ class Log:
     def to_pandas(self) -> Any:
         """The log as a ``pandas.DataFrame`` (needs pandas; deflex itself does not)."""
         try:
-            import pandas as pd
+            import pandas as pd  # type: ignore[import-untyped,unused-ignore]
         except ImportError as e:  # pragma: no cover - depends on the environment
             raise ImportError(
                 "Log.to_pandas() needs pandas (pip install pandas); the columns are in Log.columns as numpy arrays"
