@@ -117,7 +117,7 @@ class AbsoluteData:
 
     @property
     def columns(self) -> Dict[str, Any]:
-        """The readings as columns (numpy arrays; text columns as lists)."""
+        """The readings as columns (numpy arrays; text columns of dtype object)."""
         return self.table().columns
 
     def table(self) -> Log:

@@ -13,17 +13,19 @@ from . import _deflex
 
 __all__ = ["Log", "read_log"]
 
-Column = Union[np.ndarray, List[str]]
+Column = np.ndarray
 
 
 class Log:
     """Named columns of equal length: numeric columns are float64 numpy arrays (empty cells
-    NaN), text columns lists of ``str``. Column names carry their unit (``time_s``,
+    NaN), text columns numpy arrays of Python ``str`` (dtype object). Column names carry their unit (``time_s``,
     ``fz_N``, ``q3_rad``). ``comments`` holds the file's header comments; ``simulated`` is
     true when they say SIMULATED."""
 
-    def __init__(self, columns: Dict[str, Column], comments: List[str], simulated: bool) -> None:
-        self.columns: Dict[str, Column] = dict(columns)
+    def __init__(self, columns: Dict[str, Any], comments: List[str], simulated: bool) -> None:
+        self.columns: Dict[str, Column] = {
+            k: v if isinstance(v, np.ndarray) else np.array(v, dtype=object) for k, v in columns.items()
+        }
         self.comments: List[str] = list(comments)
         self.simulated: bool = bool(simulated)
 

@@ -43,8 +43,8 @@ def test_an_array_path_under_given_wrenches_lands_on_the_desired_path() -> None:
         rotated = log_so3(desired_rotation.T @ commanded[:3, :3]) + desired_rotation.T @ d[3:]
         assert np.abs(rotated).max() < 1e-7
     np.testing.assert_allclose(comp.wrench, np.tile(W, (len(path), 1)))
-    d = comp.to_dict()
-    assert d["simulated"] is False and d["final_max_predicted_error_m"] < 1e-7
+    summary = comp.to_dict()
+    assert summary["simulated"] is False and summary["final_max_predicted_error_m"] < 1e-7
     # (N, 6) poses in the world frame, one wrench per point, position only.
     poses = np.column_stack([comp.desired, np.zeros((len(path), 3))])
     poses[:, 3] = np.pi  # tool pointing down: a half turn about x

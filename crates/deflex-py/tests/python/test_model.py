@@ -181,11 +181,11 @@ def test_wrong_shapes_nan_and_types_raise_clear_errors() -> None:
     with pytest.raises(deflex.InputTypeError, match="q: expected an array of numbers.*got str"):
         robot.pose("0,0,0,0,0,0")
     with pytest.raises(TypeError, match="got NoneType"):
-        robot.compliance(None)
+        robot.compliance(None)  # type: ignore[arg-type]
     with pytest.raises(TypeError):
         robot.deflect(q, ["a"] * 6)
     with pytest.raises(deflex.InputError, match="on_failure"):
-        robot.ik(np.eye(4), on_failure="ignore")
+        robot.ik(np.eye(4), on_failure="ignore")  # type: ignore[arg-type]
     with pytest.raises(deflex.InputError, match="not a built-in robot"):
         deflex.Robot.builtin("tx201")
     with pytest.raises(deflex.ModelError, match="cannot read file"):
