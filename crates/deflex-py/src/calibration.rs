@@ -8,10 +8,13 @@ use crate::error::{Error, Result, bounded};
 use deflex_calib::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
+use deflex_calib::fit::Status;
 use deflex_calib::fit::{Calibration, Structure, calibrate_fixed};
-use deflex_calib::search::{Criterion, SearchOptions, SearchStep, search_structure};
+pub use deflex_calib::search::Criterion;
+use deflex_calib::search::{SearchOptions, SearchStep, search_structure};
 use deflex_calib::{DataError, MeasurementFile, MeasurementRow};
 use deflex_model::Robot;
+use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// Where measurement rows come from.
@@ -306,6 +309,74 @@ pub fn calibrate(
     })
 }
 
+/// `identified`, `weak` (the 95 % interval reaches k = ∞) or `not_identifiable`.
+pub fn status_name(status: &Status) -> &'static str {
+    match status {
+        Status::Identified => "identified",
+        Status::Weak => "weak",
+        Status::NotIdentifiable(_) => "not_identifiable",
+    }
+}
+
+fn finite_or_null(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
+/// The calibration as the CLI's `--json` (SI): estimates, shifts, fit statistics, iterations,
+/// file check, warnings.
+pub fn summary_json(s: &StiffnessCalibration) -> Value {
+    let cal = &s.calibration;
+    let edofs: Vec<Value> = cal
+        .edofs
+        .iter()
+        .map(|e| {
+            let reason = match &e.status {
+                Status::NotIdentifiable(r) => Some(r.clone()),
+                _ => None,
+            };
+            json!({"edof": e.label, "status": status_name(&e.status), "reason": reason,
+                   "stiffness_Nm_per_rad": e.stiffness, "stiffness_se": e.stiffness_se,
+                   "interval95": e.interval95.map(|(a, b)| json!([a, finite_or_null(b)])),
+                   "compliance": e.compliance, "compliance_se": finite_or_null(e.compliance_se)})
+        })
+        .collect();
+    let r = &cal.residuals;
+    let steps: Vec<Value> = s
+        .steps
+        .iter()
+        .map(|st| {
+            json!({"step": st.iteration, "change": st.change, "structure": st.structure,
+                   "parameters": st.parameters, "rms_m": st.residuals.rms_all_m,
+                   "rms_axis_m": st.residuals.rms_m, "bic": st.bic,
+                   "delta_bic": finite_or_null(st.delta_bic), "cv_rms_m": st.cv_rms_m})
+        })
+        .collect();
+    let c = &s.check;
+    json!({
+        "structure": cal.structure.label(),
+        "edofs": edofs,
+        "center_shifts": cal.shifts.iter().map(|sh| json!({"joint": sh.joint, "center_shift_m": sh.value_m, "se_m": sh.se_m, "fitted": sh.free})).collect::<Vec<_>>(),
+        "parameters": cal.parameter_labels,
+        "condition_number": finite_or_null(cal.condition_number),
+        "reduced_chi2": cal.reduced_chi2,
+        "bic": cal.bic,
+        "rows": cal.rows,
+        "residual_rms_m": r.rms_m, "residual_max_m": r.max_abs_m, "residual_rms_all_m": r.rms_all_m,
+        "residual_rms_norm_m": r.rms_norm_m, "residual_max_norm_m": r.max_norm_m,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_calib::fit::CHI2_WELL_ABOVE_ONE,
+        "model_form_note": cal.model_form_note(),
+        "iterations": steps,
+        "stop_reason": s.stop_reason,
+        "elapsed_s": s.elapsed_s,
+        "geometry_check": {"robot": c.robot, "geometry": c.geometry, "tolerance_m": c.tolerance_m,
+            "rows": c.rows, "checked_points": c.checked_points, "checked_loads": c.checked_loads,
+            "disagreeing_rows": c.disagreeing_rows(), "max_distance_m": c.max_distance_m,
+            "header_mismatch": c.header_mismatch},
+        "warnings": s.warnings,
+        "simulated_data": s.notes.iter().any(|n| n.contains("SIMULATED")),
+    })
+}
+
 /// The CLI's text output of `deflex calibrate` (iteration table, estimates, residuals,
 /// correlation, file check, warnings).
 pub fn report_text(cal: &StiffnessCalibration) -> String {
@@ -404,6 +475,19 @@ pub fn validate(
         check: checked.check,
         warnings: checked.warnings,
     })
+}
+
+/// The validation as the CLI's `--json` (SI).
+pub fn validation_json(v: &Validation) -> Value {
+    let m = |e: &deflex_calib::validate::ModelErrors| {
+        json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m,
+               "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m,
+               "max_norm_m": e.stats.max_norm_m})
+    };
+    let val = &v.validation;
+    json!({"rows": val.measured.len(), "model": m(&val.model), "baseline": val.baseline.as_ref().map(m),
+           "measured_rms_m": val.measured_rms_m, "warnings": v.warnings,
+           "geometry_check": {"max_distance_m": v.check.max_distance_m, "tolerance_m": v.check.tolerance_m}})
 }
 
 /// The validation's plots and HTML page (`deflex validate --out`).

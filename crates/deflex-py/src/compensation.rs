@@ -185,15 +185,8 @@ fn tcp(
     Ok(tcp_path(tool_path, part_frame, rotation, rapid_feed_mm_s)?)
 }
 
-/// `deflex compensate`: the CLI's checks, then the compensation against the process model, a
-/// log's forces or given wrenches.
-pub fn compensate(
-    robot: &Robot,
-    path_spec: &PathSpec,
-    wrench: &WrenchSpec,
-    options: &Options,
-) -> Result<CompensationRun> {
-    let config = cell(options)?;
+/// The IK seed: the option, else the cell's forming configuration for a 6-joint robot.
+fn seed(robot: &Robot, options: &Options, config: &CellConfig) -> Result<Vec<f64>> {
     let n = robot.joint_count();
     let seed: Vec<f64> = match &options.seed_q {
         Some(s) => s.clone(),
@@ -218,9 +211,21 @@ pub fn compensate(
             ),
         ));
     }
+    Ok(seed)
+}
+
+/// The desired TCP path: the spec's tool path, cut to `length_m`, its moves split to
+/// `max_segment_m`, in the world with the seed's tool orientation (or the array's).
+fn desired_path(
+    robot: &Robot,
+    spec: &PathSpec,
+    options: &Options,
+    config: &CellConfig,
+    seed: &[f64],
+) -> Result<(ToolPath, TcpPath)> {
     let part_frame = config.part_frame();
-    let mut tool_path = tool_path(path_spec, &part_frame)?;
-    let array_poses = matches!(path_spec, PathSpec::Array { cols: 6, .. });
+    let mut tool_path = tool_path(spec, &part_frame)?;
+    let array_poses = matches!(spec, PathSpec::Array { cols: 6, .. });
     if array_poses && (options.length_m.is_some() || options.max_segment_m.is_some()) {
         return Err(Error::invalid(
             "length_m",
@@ -237,16 +242,21 @@ pub fn compensate(
             .map_err(|e| Error::invalid("max_segment_m", e.to_string()))?;
     }
     let rotation = robot
-        .tcp_pose(&seed)
+        .tcp_pose(seed)
         .map_err(|e| Error::invalid("seed_q", e.to_string()))?
         .rotation;
     let path = tcp(
-        path_spec,
+        spec,
         &tool_path,
         &part_frame,
         &rotation,
         config.controller.rapid_feed_mm_s,
     )?;
+    Ok((tool_path, path))
+}
+
+/// The iteration's settings, checked as the CLI checks its flags.
+fn compensation_options(options: &Options) -> Result<CompensationOptions> {
     bounded("tolerance_m", options.tolerance_m, 1e-9, 1e-3, "m")?;
     if !(1..=200).contains(&options.max_iterations) {
         return Err(Error::invalid(
@@ -254,28 +264,46 @@ pub fn compensate(
             format!("expected 1 ..= 200, got {}", options.max_iterations),
         ));
     }
-    let compensation_options = CompensationOptions {
+    Ok(CompensationOptions {
         orientation: !options.position_only,
         include_gravity: options.include_gravity,
         tolerance_m: options.tolerance_m,
         tolerance_rad: options.tolerance_m,
         max_iterations: options.max_iterations,
         ..CompensationOptions::default()
-    };
+    })
+}
+
+/// `deflex compensate`: the CLI's checks, then the compensation against the process model, a
+/// log's forces or given wrenches.
+pub fn compensate(
+    robot: &Robot,
+    path_spec: &PathSpec,
+    wrench: &WrenchSpec,
+    options: &Options,
+) -> Result<CompensationRun> {
+    let config = cell(options)?;
+    let seed = seed(robot, options, &config)?;
+    let part_frame = config.part_frame();
+    let (tool_path, path) = desired_path(robot, path_spec, options, &config, &seed)?;
+    let compensation_options = compensation_options(options)?;
     let started = std::time::Instant::now();
     let mut source_lines = Vec::new();
     let mut progress = |_: &deflex_compensate::Progress| {};
+    let mut run = |source: WrenchSource| {
+        deflex_compensate::compensate(
+            robot,
+            &path,
+            &seed,
+            source,
+            &compensation_options,
+            &mut progress,
+        )
+    };
     let result = match wrench {
         WrenchSpec::Process => {
             let mut process = FormingProcess::from_cell(&config, &tool_path)?;
-            deflex_compensate::compensate(
-                robot,
-                &path,
-                &seed,
-                WrenchSource::Process(&mut process),
-                &compensation_options,
-                &mut progress,
-            )?
+            run(WrenchSource::Process(&mut process))?
         }
         WrenchSpec::Log(file) => {
             let log = read_log(file, robot, &part_frame)?;
@@ -290,47 +318,19 @@ pub fn compensate(
                 resampled.off_path_rows,
                 resampled.max_offset_m * 1e3
             ));
-            deflex_compensate::compensate(
-                robot,
-                &path,
-                &seed,
-                WrenchSource::Fixed {
-                    label: format!("{simulated}{} {shown}", log.kind.name()),
-                    simulated: log.simulated,
-                    wrenches: &resampled.wrenches,
-                },
-                &compensation_options,
-                &mut progress,
-            )?
+            run(WrenchSource::Fixed {
+                label: format!("{simulated}{} {shown}", log.kind.name()),
+                simulated: log.simulated,
+                wrenches: &resampled.wrenches,
+            })?
         }
         WrenchSpec::Array(values) => {
-            let wrenches: Vec<Wrench> = if values.len() == 6 {
-                vec![Wrench::from_row_slice(values); path.len()]
-            } else if values.len() == 6 * path.len() {
-                values.chunks(6).map(Wrench::from_row_slice).collect()
-            } else {
-                return Err(Error::invalid(
-                    "wrench",
-                    format!(
-                        "{} wrenches for the {} points of the path: give one (shape (6,)) or one per point (shape ({}, 6))",
-                        values.len() / 6,
-                        path.len(),
-                        path.len()
-                    ),
-                ));
-            };
-            deflex_compensate::compensate(
-                robot,
-                &path,
-                &seed,
-                WrenchSource::Fixed {
-                    label: "wrenches given from Python".into(),
-                    simulated: false,
-                    wrenches: &wrenches,
-                },
-                &compensation_options,
-                &mut progress,
-            )?
+            let wrenches = given_wrenches(values, path.len())?;
+            run(WrenchSource::Fixed {
+                label: "wrenches given from Python".into(),
+                simulated: false,
+                wrenches: &wrenches,
+            })?
         }
     };
     Ok(CompensationRun {
@@ -342,6 +342,23 @@ pub fn compensate(
         tolerance_m: options.tolerance_m,
         elapsed_s: started.elapsed().as_secs_f64(),
     })
+}
+
+/// One wrench for every point (6 values) or one per point.
+fn given_wrenches(values: &[f64], points: usize) -> Result<Vec<Wrench>> {
+    if values.len() == 6 {
+        Ok(vec![Wrench::from_row_slice(values); points])
+    } else if values.len() == 6 * points {
+        Ok(values.chunks(6).map(Wrench::from_row_slice).collect())
+    } else {
+        Err(Error::invalid(
+            "wrench",
+            format!(
+                "{} wrenches for the {points} points of the path: give one (shape (6,)) or one per point (shape ({points}, 6))",
+                values.len() / 6,
+            ),
+        ))
+    }
 }
 
 /// The CLI's header lines of the table and the programs.
@@ -371,6 +388,47 @@ pub fn description(run: &CompensationRun) -> Vec<String> {
             r.max_compensation_rad * 1e3
         ),
     ]
+}
+
+/// The compensation's summary as the CLI's `summary.json` (SI).
+pub fn summary_json(run: &CompensationRun) -> serde_json::Value {
+    use serde_json::json;
+    let r = &run.result;
+    json!({
+        "simulated": r.simulated,
+        "robot": run.robot.name,
+        "robot_geometry": run.robot.geometry_fingerprint(),
+        "path": run.path.name(),
+        "points": run.path.len(),
+        "path_length_m": run.path.length_m(),
+        "wrench_source": r.source,
+        "source_lines": run.source_lines,
+        "tolerance_m": run.tolerance_m,
+        "converged": r.converged,
+        "iterations": r.iterations.iter().map(|i| json!({
+            "iteration": i.iteration, "max_predicted_error_m": i.max_predicted_error_m,
+            "max_predicted_error_rad": i.max_predicted_error_rad, "max_force_N": i.max_force_n,
+            "max_deflection_m": i.max_deflection_m, "max_change_m": i.max_change_m,
+            "max_change_rad": i.max_change_rad, "failed_points": i.failed_points})).collect::<Vec<_>>(),
+        "final_max_predicted_error_m": r.final_max_error_m,
+        "final_max_predicted_error_rad": r.final_max_error_rad,
+        "final_max_force_N": r.final_max_force_n,
+        "max_compensation_m": r.max_compensation_m,
+        "max_compensation_rad": r.max_compensation_rad,
+        "failed_points": r.failure_count(),
+        "failures": r.failures().take(1000).map(|(i, f)| json!({"index": i, "status": f.code(), "reason": f.to_string()})).collect::<Vec<_>>(),
+        "elapsed_s": run.elapsed_s,
+        "run_on_a_real_controller": false,
+    })
+}
+
+/// Per point `ok` or the code of the reason it was not compensated.
+pub fn statuses(run: &CompensationRun) -> Vec<String> {
+    run.result
+        .points
+        .iter()
+        .map(|p| p.failure.map_or_else(|| "ok".to_string(), |f| f.code()))
+        .collect()
 }
 
 /// `compensated_path.csv` as the CLI writes it.

@@ -166,6 +166,18 @@ pub fn calibrate_geometry(
     })
 }
 
+/// 95 % intervals `estimate ± 1.96 SE` of the identified parameters.
+pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
+    cal.result
+        .estimates
+        .iter()
+        .map(|e| {
+            let h = deflex_calib::fit::Z95 * e.standard_error;
+            [e.value - h, e.value + h]
+        })
+        .collect()
+}
+
 /// The CLI's text report.
 pub fn report_text(cal: &GeometryCalibration) -> String {
     deflex_egcal::report::text(&cal.result, &cal.campaign)

@@ -40,6 +40,14 @@ impl Table {
     }
 }
 
+/// Write `text` to `path`, whole or not at all.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    deflex_files::write_atomic(path, text).map_err(|source| Error::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
 /// Read a table file (bounded).
 pub fn read(path: &Path) -> Result<Table> {
     let origin = path.display().to_string();

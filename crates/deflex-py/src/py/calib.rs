@@ -3,14 +3,12 @@
 
 use super::convert::{json_to_py, make_log, rows_to_numpy, run, to_numpy, to_py, type_error};
 use super::robot::{PyRobot, robot_arg};
-use crate::calibration::{self, CalibrateOptions, Source, StructureChoice};
+use crate::calibration::{self, CalibrateOptions, Criterion, Source, StructureChoice};
 use crate::error::Error;
 use crate::geometry::{self, GeometryOptions};
-use deflex_calib::fit::Status;
-use deflex_calib::search::Criterion;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::PathBuf;
 
 /// A data source from the Python layer: `("file", path)` or `("table", csv_text, origin)`.
@@ -30,10 +28,6 @@ pub fn source_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Source> {
 
 fn sources(py: Python<'_>, list: &[Bound<'_, PyAny>]) -> PyResult<Vec<Source>> {
     list.iter().map(|o| source_arg(py, o)).collect()
-}
-
-fn finite_or_null(x: f64) -> Value {
-    if x.is_finite() { json!(x) } else { Value::Null }
 }
 
 /// The result of a stiffness identification (``deflex.calibrate``): the estimates with their
@@ -77,11 +71,7 @@ impl PyStiffnessCalibration {
             .calibration
             .edofs
             .iter()
-            .map(|e| match e.status {
-                Status::Identified => "identified",
-                Status::Weak => "weak",
-                Status::NotIdentifiable(_) => "not_identifiable",
-            })
+            .map(|e| calibration::status_name(&e.status))
             .collect()
     }
 
@@ -181,53 +171,7 @@ impl PyStiffnessCalibration {
     /// The fit as a dict (the CLI's ``--json``: estimates, shifts, χ²/dof, BIC, residual
     /// statistics, iterations, file check, warnings).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let s = &self.inner;
-        let cal = &s.calibration;
-        let edofs: Vec<Value> = cal
-            .edofs
-            .iter()
-            .map(|e| {
-                let (status, reason) = match &e.status {
-                    Status::Identified => ("identified", None),
-                    Status::Weak => ("weak", None),
-                    Status::NotIdentifiable(r) => ("not_identifiable", Some(r.clone())),
-                };
-                json!({"edof": e.label, "status": status, "reason": reason,
-                   "stiffness_Nm_per_rad": e.stiffness, "stiffness_se": e.stiffness_se,
-                   "interval95": e.interval95.map(|(a, b)| json!([a, finite_or_null(b)])),
-                   "compliance": e.compliance, "compliance_se": finite_or_null(e.compliance_se)})
-            })
-            .collect();
-        let r = &cal.residuals;
-        let steps: Vec<Value> = s.steps.iter().map(|st| json!({
-            "step": st.iteration, "change": st.change, "structure": st.structure, "parameters": st.parameters,
-            "rms_m": st.residuals.rms_all_m, "rms_axis_m": st.residuals.rms_m, "bic": st.bic,
-            "delta_bic": finite_or_null(st.delta_bic), "cv_rms_m": st.cv_rms_m})).collect();
-        let c = &s.check;
-        let value = json!({
-            "structure": cal.structure.label(),
-            "edofs": edofs,
-            "center_shifts": cal.shifts.iter().map(|sh| json!({"joint": sh.joint, "center_shift_m": sh.value_m, "se_m": sh.se_m, "fitted": sh.free})).collect::<Vec<_>>(),
-            "parameters": cal.parameter_labels,
-            "condition_number": finite_or_null(cal.condition_number),
-            "reduced_chi2": cal.reduced_chi2,
-            "bic": cal.bic,
-            "rows": cal.rows,
-            "residual_rms_m": r.rms_m, "residual_max_m": r.max_abs_m, "residual_rms_all_m": r.rms_all_m,
-            "residual_rms_norm_m": r.rms_norm_m, "residual_max_norm_m": r.max_norm_m,
-            "chi2_well_above_one": cal.reduced_chi2 > deflex_calib::fit::CHI2_WELL_ABOVE_ONE,
-            "model_form_note": cal.model_form_note(),
-            "iterations": steps,
-            "stop_reason": s.stop_reason,
-            "elapsed_s": s.elapsed_s,
-            "geometry_check": {"robot": c.robot, "geometry": c.geometry, "tolerance_m": c.tolerance_m, "rows": c.rows,
-                "checked_points": c.checked_points, "checked_loads": c.checked_loads,
-                "disagreeing_rows": c.disagreeing_rows(), "max_distance_m": c.max_distance_m,
-                "header_mismatch": c.header_mismatch},
-            "warnings": s.warnings,
-            "simulated_data": s.notes.iter().any(|n| n.contains("SIMULATED")),
-        });
-        json_to_py(py, &value.to_string())
+        json_to_py(py, &calibration::summary_json(&self.inner).to_string())
     }
 
     /// The CLI's text report (iteration table, estimates, residuals, correlation, file check).
@@ -366,12 +310,7 @@ impl PyValidation {
 
     /// Error statistics as a dict (the CLI's ``--json``).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let v = &self.inner.validation;
-        let m = |e: &deflex_calib::validate::ModelErrors| json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m, "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m, "max_norm_m": e.stats.max_norm_m});
-        let value = json!({"rows": v.measured.len(), "model": m(&v.model), "baseline": v.baseline.as_ref().map(m),
-            "measured_rms_m": v.measured_rms_m, "warnings": self.inner.warnings,
-            "geometry_check": {"max_distance_m": self.inner.check.max_distance_m, "tolerance_m": self.inner.check.tolerance_m}});
-        json_to_py(py, &value.to_string())
+        json_to_py(py, &calibration::validation_json(&self.inner).to_string())
     }
 
     /// The validation's plots and HTML page (``validation.html``) into the folder ``dir``,
@@ -503,17 +442,7 @@ impl PyGeometryCalibration {
     /// 95 % intervals ``estimate ± 1.96 SE``, shape ``(p, 2)``.
     #[getter]
     fn intervals95<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let rows: Vec<[f64; 2]> = self
-            .inner
-            .result
-            .estimates
-            .iter()
-            .map(|e| {
-                let h = deflex_calib::fit::Z95 * e.standard_error;
-                [e.value - h, e.value + h]
-            })
-            .collect();
-        rows_to_numpy(py, &rows)
+        rows_to_numpy(py, &geometry::intervals95(&self.inner))
     }
 
     /// Bootstrap standard errors (NaN without ``bootstrap``).
@@ -672,12 +601,7 @@ impl PyPrediction {
     /// Write the prediction CSV (``deflex predict --out``), whole.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let csv = &self.csv;
-        run(py, || {
-            deflex_files::write_atomic(&path, csv).map_err(|source| Error::Io {
-                path: path.display().to_string(),
-                source,
-            })
-        })
+        run(py, || crate::table::write_text(&path, csv))
     }
 }
 

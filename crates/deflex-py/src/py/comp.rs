@@ -9,7 +9,6 @@ use crate::error::Error;
 use crate::twin::{self, FormOptions, TwinRun};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
-use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -131,43 +130,14 @@ impl PyCompensation {
     /// Per point ``ok`` or the reason it was not compensated (``compensated:joint_limit:J3``…).
     #[getter]
     fn status(&self) -> Vec<String> {
-        self.inner
-            .result
-            .points
-            .iter()
-            .map(|p| p.failure.map_or_else(|| "ok".to_string(), |f| f.code()))
-            .collect()
+        compensation::statuses(&self.inner)
     }
 
-    /// Summary as a dict: iterations (predicted error, force, change, failed points),
-    /// convergence, final predicted error, largest compensation, failures.
+    /// Summary as a dict (the CLI's ``summary.json``): iterations (predicted error, force,
+    /// change, failed points), convergence, final predicted error, largest compensation,
+    /// failures.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let r = &self.inner.result;
-        let value = json!({
-            "simulated": r.simulated,
-            "robot": self.inner.robot.name,
-            "path": self.inner.path.name(),
-            "points": self.inner.path.len(),
-            "path_length_m": self.inner.path.length_m(),
-            "wrench_source": r.source,
-            "source_lines": self.inner.source_lines,
-            "converged": r.converged,
-            "iterations": r.iterations.iter().map(|i| json!({
-                "iteration": i.iteration, "max_predicted_error_m": i.max_predicted_error_m,
-                "max_predicted_error_rad": i.max_predicted_error_rad, "max_force_N": i.max_force_n,
-                "max_deflection_m": i.max_deflection_m, "max_change_m": i.max_change_m,
-                "max_change_rad": i.max_change_rad, "failed_points": i.failed_points})).collect::<Vec<_>>(),
-            "final_max_predicted_error_m": r.final_max_error_m,
-            "final_max_predicted_error_rad": r.final_max_error_rad,
-            "final_max_force_N": r.final_max_force_n,
-            "max_compensation_m": r.max_compensation_m,
-            "max_compensation_rad": r.max_compensation_rad,
-            "failed_points": r.failure_count(),
-            "failures": r.failures().take(1000).map(|(i, f)| json!({"index": i, "status": f.code(), "reason": f.to_string()})).collect::<Vec<_>>(),
-            "elapsed_s": self.inner.elapsed_s,
-            "run_on_a_real_controller": false,
-        });
-        json_to_py(py, &value.to_string())
+        json_to_py(py, &compensation::summary_json(&self.inner).to_string())
     }
 
     /// The compensated path as ``compensated_path.csv`` text (the CLI's, SI columns).
@@ -180,12 +150,7 @@ impl PyCompensation {
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let inner = &self.inner;
         run(py, || {
-            deflex_files::write_atomic(&path, compensation::table_csv(inner)).map_err(|source| {
-                Error::Io {
-                    path: path.display().to_string(),
-                    source,
-                }
-            })
+            crate::table::write_text(&path, &compensation::table_csv(inner))
         })
     }
 
