@@ -37,6 +37,7 @@ __version__: str
 
 _PathLike = Union[str, "os.PathLike[str]"]
 _ArrayLike = npt.ArrayLike
+_F64 = npt.NDArray[np.float64]
 _Source = Union[Tuple[str, str], Tuple[str, str, str]]
 _RobotLike = Union["Robot", str, "os.PathLike[str]"]
 
@@ -66,39 +67,39 @@ class Robot:
     def joint_names(self) -> List[str]:
         """Joint names, base to flange."""
     @property
-    def limits(self) -> np.ndarray:
+    def limits(self) -> _F64:
         """Joint limits ``(n, 2)`` (rad), NaN where none."""
     @property
     def edofs(self) -> List[str]:
         """eDoF labels (``J3.x``…), in eDoF Jacobian column order."""
     @property
-    def stiffness(self) -> np.ndarray:
+    def stiffness(self) -> _F64:
         """eDoF stiffnesses (N·m/rad), same order as ``edofs``."""
     @property
     def geometry_fingerprint(self) -> str:
         """Geometry fingerprint (16 hex digits)."""
     @property
-    def tool(self) -> np.ndarray:
+    def tool(self) -> _F64:
         """Flange → TCP placement, 4×4."""
     @property
-    def base(self) -> np.ndarray:
+    def base(self) -> _F64:
         """World → R0 placement, 4×4."""
-    def pose(self, q: _ArrayLike) -> np.ndarray:
+    def pose(self, q: _ArrayLike) -> _F64:
         """TCP pose(s), ``(4, 4)`` or ``(N, 4, 4)``."""
-    def jacobian(self, q: _ArrayLike) -> np.ndarray:
+    def jacobian(self, q: _ArrayLike) -> _F64:
         """Geometric Jacobian(s) at the TCP, ``(6, n)`` or ``(N, 6, n)``."""
-    def compliance(self, q: _ArrayLike) -> np.ndarray:
+    def compliance(self, q: _ArrayLike) -> _F64:
         """Cartesian compliance(s) ``J K⁻¹ Jᵀ`` (eq. 15), ``(6, 6)`` or ``(N, 6, 6)``."""
-    def deflect(self, q: _ArrayLike, wrench: _ArrayLike) -> np.ndarray:
+    def deflect(self, q: _ArrayLike, wrench: _ArrayLike) -> _F64:
         """TCP deflection(s) ``[δp; δφ]`` (m, rad), ``(6,)`` or ``(N, 6)``."""
-    def gravity_sag(self, q: _ArrayLike) -> Optional[np.ndarray]:
+    def gravity_sag(self, q: _ArrayLike) -> Optional[_F64]:
         """Sag under the arm's own weight ``[δp; δφ]``, or None without masses."""
     def ik(
         self,
         pose: _ArrayLike,
         seed: Optional[_ArrayLike] = None,
         on_failure: Literal["raise", "nan"] = "raise",
-    ) -> np.ndarray:
+    ) -> _F64:
         """Joint values (rad) reaching the pose(s), ``(n,)`` or ``(N, n)``."""
     def to_toml(self) -> str:
         """The robot file text."""
@@ -122,28 +123,28 @@ class StiffnessCalibration:
     def status(self) -> List[str]:
         """``identified``, ``weak`` or ``not_identifiable`` per eDoF."""
     @property
-    def stiffness(self) -> np.ndarray:
+    def stiffness(self) -> _F64:
         """Stiffness estimates (N·m/rad)."""
     @property
-    def stiffness_se(self) -> np.ndarray:
+    def stiffness_se(self) -> _F64:
         """Standard errors of the stiffnesses."""
     @property
-    def interval95(self) -> np.ndarray:
+    def interval95(self) -> _F64:
         """95 % intervals ``(k, 2)``."""
     @property
-    def compliance(self) -> np.ndarray:
+    def compliance(self) -> _F64:
         """Compliance estimates (rad/(N·m))."""
     @property
-    def compliance_se(self) -> np.ndarray:
+    def compliance_se(self) -> _F64:
         """Standard errors of the compliances."""
     @property
-    def residuals(self) -> np.ndarray:
+    def residuals(self) -> _F64:
         """Measured − predicted ``(N, 3)`` (m)."""
     @property
-    def predicted(self) -> np.ndarray:
+    def predicted(self) -> _F64:
         """Predicted displacements ``(N, 3)`` (m)."""
     @property
-    def correlation(self) -> np.ndarray:
+    def correlation(self) -> _F64:
         """Parameter correlation matrix."""
     def to_dict(self) -> Dict[str, Any]:
         """The CLI's JSON as a dict."""
@@ -157,16 +158,16 @@ class Validation:
     """Prediction errors of a model (and a baseline)."""
 
     @property
-    def measured(self) -> np.ndarray:
+    def measured(self) -> _F64:
         """Measured displacements ``(N, 3)``."""
     @property
-    def predicted(self) -> np.ndarray:
+    def predicted(self) -> _F64:
         """Predictions ``(N, 3)``."""
     @property
-    def errors(self) -> np.ndarray:
+    def errors(self) -> _F64:
         """Measured − predicted ``(N, 3)``."""
     @property
-    def baseline_errors(self) -> Optional[np.ndarray]:
+    def baseline_errors(self) -> Optional[_F64]:
         """The baseline's errors, or None."""
     def to_dict(self) -> Dict[str, Any]:
         """Error statistics."""
@@ -187,25 +188,25 @@ class GeometryCalibration:
     def units(self) -> List[str]:
         """SI unit of each parameter."""
     @property
-    def nominal(self) -> np.ndarray:
+    def nominal(self) -> _F64:
         """Nominal values."""
     @property
-    def estimates(self) -> np.ndarray:
+    def estimates(self) -> _F64:
         """Estimates."""
     @property
-    def standard_errors(self) -> np.ndarray:
+    def standard_errors(self) -> _F64:
         """Standard errors (scaled)."""
     @property
-    def intervals95(self) -> np.ndarray:
+    def intervals95(self) -> _F64:
         """95 % intervals ``(p, 2)``."""
     @property
-    def bootstrap_se(self) -> np.ndarray:
+    def bootstrap_se(self) -> _F64:
         """Bootstrap standard errors (NaN without bootstrap)."""
     @property
-    def covariance(self) -> np.ndarray:
+    def covariance(self) -> _F64:
         """Covariance ``(p, p)``."""
     @property
-    def residuals(self) -> np.ndarray:
+    def residuals(self) -> _F64:
         """Residual of every reading ``(N, 3)``."""
     @property
     def roles(self) -> List[str]:
@@ -252,28 +253,28 @@ class Compensation:
     def source(self) -> str:
         """The wrench source."""
     @property
-    def desired(self) -> np.ndarray:
+    def desired(self) -> _F64:
         """Desired positions ``(N, 3)``."""
     @property
-    def commanded(self) -> np.ndarray:
+    def commanded(self) -> _F64:
         """Commanded positions ``(N, 3)``."""
     @property
-    def commanded_poses(self) -> np.ndarray:
+    def commanded_poses(self) -> _F64:
         """Commanded poses ``(N, 4, 4)``."""
     @property
-    def compensation(self) -> np.ndarray:
+    def compensation(self) -> _F64:
         """Compensation ``(N, 6)``."""
     @property
-    def wrench(self) -> np.ndarray:
+    def wrench(self) -> _F64:
         """Wrenches ``(N, 6)``."""
     @property
-    def deflection(self) -> np.ndarray:
+    def deflection(self) -> _F64:
         """Predicted deflections ``(N, 6)``."""
     @property
-    def q(self) -> np.ndarray:
+    def q(self) -> _F64:
         """Joint values ``(N, n)``."""
     @property
-    def predicted_error(self) -> np.ndarray:
+    def predicted_error(self) -> _F64:
         """Remaining predicted error ``(N,)``."""
     @property
     def status(self) -> List[str]:
@@ -308,7 +309,7 @@ class TwinRun:
     def controller_status(self) -> Optional[str]:
         """The correction controller's status line, or None."""
     @property
-    def profile(self) -> np.ndarray:
+    def profile(self) -> _F64:
         """Formed and programmed profile ``(M, 3)``."""
     def save(self, dir: _PathLike) -> List[str]:
         """Write the run's outputs into ``dir``."""
@@ -334,7 +335,7 @@ def _validate(
     fk_tolerance_m: float,
     ignore_fk_check: bool,
 ) -> Validation: ...
-def _predict_displacements(robot: _RobotLike, data: _Source) -> np.ndarray: ...
+def _predict_displacements(robot: _RobotLike, data: _Source) -> _F64: ...
 def _calibrate_geometry(
     robot: _RobotLike,
     data: Sequence[_Source],

@@ -11,6 +11,7 @@ import os
 from typing import Any, Dict, List, Optional, Sequence, Union
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _deflex
 from ._deflex import GeometryCalibration, Prediction, Robot, StiffnessCalibration, Validation
@@ -94,10 +95,10 @@ def validate(
     return result
 
 
-def predict_displacements(robot: RobotLike, data: Table) -> np.ndarray:
+def predict_displacements(robot: RobotLike, data: Table) -> npt.NDArray[np.float64]:
     """Predicted ``[δx, δy, δz, δφx, δφy, δφz]`` (m, rad) of every row of a measurement or plan
     table (the point's displacement under the row's load), shape ``(N, 6)``."""
-    result: np.ndarray = _deflex._predict_displacements(robot, source(data))
+    result: npt.NDArray[np.float64] = _deflex._predict_displacements(robot, source(data))
     return result
 
 

@@ -8,6 +8,7 @@ import os
 from typing import Any, List, Optional, Sequence, Union
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _deflex
 from ._deflex import Compensation, Robot
@@ -22,9 +23,9 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 def compensate(
     robot: Union[Robot, PathLike],
-    path: Union[str, PathLike, np.ndarray, Sequence[Sequence[float]]] = "cone",
+    path: Union[PathLike, npt.ArrayLike] = "cone",
     *,
-    wrench: Union[str, PathLike, np.ndarray, Sequence[float], Sequence[Sequence[float]]] = "process",
+    wrench: Union[PathLike, npt.ArrayLike] = "process",
     frame: str = "part",
     feed_m_s: Optional[float] = None,
     twin_config: Optional[PathLike] = None,

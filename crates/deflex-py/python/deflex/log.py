@@ -8,12 +8,13 @@ import os
 from typing import Any, Dict, Iterator, List, Union
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _deflex
 
 __all__ = ["Log", "read_log"]
 
-Column = np.ndarray
+Column = npt.NDArray[Any]
 
 
 class Log:
@@ -53,7 +54,7 @@ class Log:
     def __iter__(self) -> Iterator[str]:
         return iter(self.columns)
 
-    def array(self, *names: str) -> np.ndarray:
+    def array(self, *names: str) -> npt.NDArray[np.float64]:
         """The numeric columns ``names`` side by side, shape ``(rows, len(names))``."""
         return np.column_stack([np.asarray(self[n], dtype=np.float64) for n in names])
 
