@@ -216,11 +216,11 @@ impl PyCompensation {
     }
 }
 
-fn array_or_name(
-    py: Python<'_>,
-    obj: &Bound<'_, PyAny>,
+fn array_or_name<'py>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
     name: &'static str,
-) -> PyResult<Option<super::convert::FloatArray>> {
+) -> PyResult<Option<super::convert::FloatArray<'py>>> {
     if obj.is_instance_of::<PyString>() || obj.extract::<PathBuf>().is_ok() {
         return Ok(None);
     }
@@ -264,9 +264,9 @@ pub fn _compensate(
     };
     let path_spec = match array_or_name(py, path, "path")? {
         None => PathSpec::Named(path.extract::<PathBuf>()?.display().to_string()),
-        Some(a) => match a.shape.as_slice() {
+        Some(a) => match a.shape.clone().as_slice() {
             [r, c @ (3 | 6)] if *r >= 2 => PathSpec::Array {
-                values: a.values,
+                values: a.into_vec(),
                 cols: *c,
                 frame,
                 feed_m_s,
@@ -313,7 +313,7 @@ pub fn _compensate(
             }
         })?;
         match w.shape.as_slice() {
-            [6] | [_, 6] => WrenchSpec::Array(w.values),
+            [6] | [_, 6] => WrenchSpec::Array(w.into_vec()),
             other => return Err(shape_error(py, "wrench", "(6,) or (N, 6)".into(), other)),
         }
     };

@@ -72,34 +72,57 @@ pub fn type_error(py: Python<'_>, name: &str, expected: &str, got: &Bound<'_, Py
     )
 }
 
-/// A checked float array argument: its shape and its values in C order.
-pub struct FloatArray {
+/// A checked float array argument: its shape and its values in C order, borrowed from a
+/// C-ordered float64 numpy array (no copy) or copied from anything else.
+pub struct FloatArray<'py> {
     /// Shape.
     pub shape: Vec<usize>,
-    /// Values, C order.
-    pub values: Vec<f64>,
+    values: Values<'py>,
+}
+
+enum Values<'py> {
+    Borrowed(PyReadonlyArrayDyn<'py, f64>),
+    Owned(Vec<f64>),
+}
+
+impl FloatArray<'_> {
+    /// The values, C order.
+    pub fn values(&self) -> &[f64] {
+        match &self.values {
+            // Only C-ordered arrays are kept borrowed (checked in `float_array`).
+            Values::Borrowed(a) => a.as_slice().unwrap_or(&[]),
+            Values::Owned(v) => v,
+        }
+    }
+
+    /// The values as an owned vector.
+    pub fn into_vec(self) -> Vec<f64> {
+        match self.values {
+            Values::Borrowed(a) => a.as_slice().map(<[f64]>::to_vec).unwrap_or_default(),
+            Values::Owned(v) => v,
+        }
+    }
 }
 
 /// Read `obj` (a numpy array of any numeric dtype, a list, a tuple, a scalar) as float64
 /// values: wrong types raise `deflex.InputTypeError`; NaN and infinities raise
 /// `deflex.InputError` naming the index. `expected` describes the shape in messages.
-pub fn float_array(
-    py: Python<'_>,
-    obj: &Bound<'_, PyAny>,
+pub fn float_array<'py>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
     name: &'static str,
     expected: &str,
-) -> PyResult<FloatArray> {
+) -> PyResult<FloatArray<'py>> {
     let what = format!("an array of numbers of shape {expected}");
     if obj.is_none() || obj.is_instance_of::<PyString>() {
         return Err(type_error(py, name, &what, obj));
     }
-    let array: Bound<'_, PyArrayDyn<f64>> = match obj.cast::<PyArrayDyn<f64>>() {
+    let array: Bound<'py, PyArrayDyn<f64>> = match obj.cast::<PyArrayDyn<f64>>() {
         Ok(a) => a.clone(),
         Err(_) => {
             let numpy = py.import("numpy")?;
             let kwargs = PyDict::new(py);
             kwargs.set_item("dtype", "float64")?;
-            // Refuse object arrays of non-numbers and strings before converting.
             let converted = numpy
                 .getattr("asarray")?
                 .call((obj,), Some(&kwargs))
@@ -109,7 +132,7 @@ pub fn float_array(
                 .map_err(|_| type_error(py, name, &what, obj))?
         }
     };
-    let readonly: PyReadonlyArrayDyn<'_, f64> = array.try_readonly().map_err(|e| {
+    let readonly: PyReadonlyArrayDyn<'py, f64> = array.try_readonly().map_err(|e| {
         to_py(
             py,
             Error::invalid(name, format!("the array cannot be read: {e}")),
@@ -118,17 +141,19 @@ pub fn float_array(
     let shape = readonly.shape().to_vec();
     // `as_slice` also succeeds on Fortran-ordered arrays (memory order): only a C-ordered
     // array's memory is row-major.
-    let values: Vec<f64> = match readonly.as_slice() {
-        Ok(slice) if array.is_c_contiguous() => slice.to_vec(),
-        _ => readonly.as_array().iter().copied().collect(),
+    let values = if array.is_c_contiguous() && readonly.as_slice().is_ok() {
+        Values::Borrowed(readonly)
+    } else {
+        Values::Owned(readonly.as_array().iter().copied().collect())
     };
-    let cols = if shape.len() >= 2 {
-        Some(shape[1..].iter().product())
+    let array = FloatArray { shape, values };
+    let cols = if array.shape.len() >= 2 {
+        Some(array.shape[1..].iter().product())
     } else {
         None
     };
-    crate::model::check_finite(name, &values, cols).map_err(|e| to_py(py, e))?;
-    Ok(FloatArray { shape, values })
+    crate::model::check_finite(name, array.values(), cols).map_err(|e| to_py(py, e))?;
+    Ok(array)
 }
 
 /// Python's way of writing a shape: `(6,)`, `(3, 6)`.
@@ -161,7 +186,7 @@ pub fn shape_error(py: Python<'_>, name: &'static str, expected: String, got: &[
 /// Rows of a `(cols,)` or `(N, cols)` argument: `(rows, batched)`.
 pub fn rows_of(
     py: Python<'_>,
-    array: &FloatArray,
+    array: &FloatArray<'_>,
     name: &'static str,
     cols: usize,
     what: &str,

@@ -24,7 +24,11 @@ impl PyRobot {
     }
 
     /// `q` as `(rows, batched)`, checked against the joint count.
-    fn joints(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<(FloatArray, usize, bool)> {
+    fn joints<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<(FloatArray<'py>, usize, bool)> {
         let n = self.robot.joint_count();
         let q = float_array(py, q, "q", &format!("({n},) or (N, {n})"))?;
         let (rows, batched) = rows_of(
@@ -150,7 +154,8 @@ impl PyRobot {
     fn pose<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
-        let out = run(py, || model::poses(robot, &q.values, rows))?;
+        let qv = q.values();
+        let out = run(py, || model::poses(robot, qv, rows))?;
         to_numpy(py, out, &shape(batched, rows, &[4, 4]))
     }
 
@@ -160,7 +165,8 @@ impl PyRobot {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
         let n = robot.joint_count();
-        let out = run(py, || model::jacobians(robot, &q.values, rows))?;
+        let qv = q.values();
+        let out = run(py, || model::jacobians(robot, qv, rows))?;
         to_numpy(py, out, &shape(batched, rows, &[6, n]))
     }
 
@@ -173,7 +179,8 @@ impl PyRobot {
     ) -> PyResult<Bound<'py, PyAny>> {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
-        let out = run(py, || model::compliances(robot, &q.values, rows))?;
+        let qv = q.values();
+        let out = run(py, || model::compliances(robot, qv, rows))?;
         to_numpy(py, out, &shape(batched, rows, &[6, 6]))
     }
 
@@ -203,7 +210,8 @@ impl PyRobot {
             ));
         }
         let robot = &self.robot;
-        let out = run(py, || model::deflections(robot, &q.values, rows, &w.values))?;
+        let (qv, wv) = (q.values(), w.values());
+        let out = run(py, || model::deflections(robot, qv, rows, wv))?;
         to_numpy(py, out, &shape(batched, rows, &[6]))
     }
 
@@ -216,7 +224,8 @@ impl PyRobot {
     ) -> PyResult<Option<Bound<'py, PyAny>>> {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
-        match run(py, || model::gravity_sags(robot, &q.values, rows))? {
+        let qv = q.values();
+        match run(py, || model::gravity_sags(robot, qv, rows))? {
             Some(out) => Ok(Some(to_numpy(py, out, &shape(batched, rows, &[6]))?)),
             None => Ok(None),
         }
@@ -277,11 +286,12 @@ impl PyRobot {
                         &s.shape,
                     ));
                 }
-                s.values
+                s.into_vec()
             }
         };
+        let pv = p.values();
         let out = run(py, || {
-            model::inverse_kinematics(robot, &p.values, rows, &seeds, on_failure)
+            model::inverse_kinematics(robot, pv, rows, &seeds, on_failure)
         })?;
         to_numpy(py, out, &shape(batched, rows, &[n]))
     }
