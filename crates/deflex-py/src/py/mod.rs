@@ -5,7 +5,9 @@
 mod calib;
 mod comp;
 mod convert;
+mod geometry;
 mod robot;
+mod twin;
 
 use pyo3::prelude::*;
 
@@ -15,21 +17,21 @@ fn _deflex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<robot::PyRobot>()?;
     m.add_class::<calib::PyStiffnessCalibration>()?;
     m.add_class::<calib::PyValidation>()?;
-    m.add_class::<calib::PyGeometryCalibration>()?;
-    m.add_class::<calib::PyPrediction>()?;
+    m.add_class::<geometry::PyGeometryCalibration>()?;
+    m.add_class::<geometry::PyPrediction>()?;
     m.add_class::<comp::PyCompensation>()?;
-    m.add_class::<comp::PyTwinRun>()?;
+    m.add_class::<twin::PyTwinRun>()?;
     m.add_function(wrap_pyfunction!(calib::_calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(calib::_validate, m)?)?;
     m.add_function(wrap_pyfunction!(calib::_predict_displacements, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::_calibrate_geometry, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::_predict, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::_import_ur10_tracker, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::_calibrate_geometry, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::_import_ur10_tracker, m)?)?;
     m.add_function(wrap_pyfunction!(comp::_compensate, m)?)?;
-    m.add_function(wrap_pyfunction!(comp::_form, m)?)?;
-    m.add_function(wrap_pyfunction!(comp::_cell_robot, m)?)?;
-    m.add_function(wrap_pyfunction!(comp::_read_table, m)?)?;
-    m.add_function(wrap_pyfunction!(comp::_parse_table, m)?)?;
+    m.add_function(wrap_pyfunction!(twin::_form, m)?)?;
+    m.add_function(wrap_pyfunction!(twin::_cell_robot, m)?)?;
+    m.add_function(wrap_pyfunction!(twin::_read_table, m)?)?;
+    m.add_function(wrap_pyfunction!(twin::_parse_table, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
