@@ -2,7 +2,7 @@
 //! digital twin in simulated time: the twin's robot and sensor are served through in-memory
 //! [`RobotLink`]/[`ForceSensorLink`] implementations and the control thread is paced by a driven
 //! [`SimClock`], so the exact runtime code of the hardware path runs as fast as the CPU allows.
-//! The in-process adapter itself lives in [`deflex_demo::twin_controller`].
+//! The in-process adapter itself lives in [`deflex_study::twin_controller`].
 
 use deflex_control::runtime::{self, RunSummary, RuntimeOptions};
 use deflex_control::{Clock, SimClock};
@@ -228,7 +228,7 @@ pub fn run_runtime_in_sim_time(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use deflex_demo::twin_controller::{
+    use deflex_study::twin_controller::{
         controller_config_for, identify_from_twin_campaign, run_closed_loop,
     };
 

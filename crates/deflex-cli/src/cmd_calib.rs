@@ -4,18 +4,18 @@
 use crate::args::{CliResult, robot};
 pub use crate::cmd_plan::{PlanArgs, plan};
 use clap::Args;
-use deflex_calib::calib_report::{CalibrationReport, write_calibration_report};
-use deflex_calib::consistency::{
+use deflex_stiffness::calib_report::{CalibrationReport, write_calibration_report};
+use deflex_stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
-use deflex_calib::fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_calib::read_file;
-use deflex_calib::report::{
+use deflex_stiffness::fit::{Calibration, Status, Structure, calibrate_fixed};
+use deflex_stiffness::read_file;
+use deflex_stiffness::report::{
     ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, VALIDATION_HEADERS, correlation_table,
     iteration_rows, render_table, residual_summary, shift_rows, stiffness_rows, validation_rows,
 };
-use deflex_calib::search::{Criterion, SearchOptions, SearchStep, search_structure};
-use deflex_calib::validate::{validate as run_validation, write_report};
+use deflex_stiffness::search::{Criterion, SearchOptions, SearchStep, search_structure};
+use deflex_stiffness::validate::{validate as run_validation, write_report};
 use deflex_files::{AtomicDir, AtomicFile};
 use deflex_model::{Robot, robot_to_toml_for};
 use serde_json::{Value, json};
@@ -146,7 +146,7 @@ fn calibration_json(cal: &Calibration) -> Value {
         "residual_max_norm_m": r.max_norm_m,
         "rotation_rows": cal.rotation_rows,
         "residual_rotation_rms_rad": r.rotation_rms_rad,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_calib::fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "warnings": cal.warnings,
     })
@@ -154,7 +154,7 @@ fn calibration_json(cal: &Calibration) -> Value {
 
 /// A measurement file read and checked against the robot's forward kinematics.
 struct CheckedFile {
-    rows: Vec<deflex_calib::MeasurementRow>,
+    rows: Vec<deflex_stiffness::MeasurementRow>,
     check: GeometryCheck,
     /// Warnings to print.
     warnings: Vec<String>,
@@ -213,7 +213,7 @@ fn geometry_json(check: &GeometryCheck) -> Value {
         "checked_loads": check.checked_loads,
         "disagreeing_rows": check.disagreeing_rows(),
         "max_distance_m": check.max_distance_m,
-        "first_disagreements": check.disagreements.iter().take(deflex_calib::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
+        "first_disagreements": check.disagreements.iter().take(deflex_stiffness::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
         "unchecked": check.unchecked,
         "header_mismatch": check.header_mismatch,
     })
@@ -421,7 +421,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         None => Vec::new(),
     };
     if json_output {
-        let m = |e: &deflex_calib::validate::ModelErrors| {
+        let m = |e: &deflex_stiffness::validate::ModelErrors| {
             let rotation = e.rotation.as_ref().map(|r| {
                 let s = &r.stats;
                 json!({"rows": s.rows, "rms_rad": s.rms_rad, "max_abs_rad": s.max_abs_rad, "mean_rad": s.mean_rad, "rms_norm_rad": s.rms_norm_rad, "max_norm_rad": s.max_norm_rad})
@@ -453,7 +453,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         "{}",
         render_table(&VALIDATION_HEADERS, &validation_rows(&v))
     );
-    if let Some(rotation) = deflex_calib::report::validation_rotation_summary(&v) {
+    if let Some(rotation) = deflex_stiffness::report::validation_rotation_summary(&v) {
         print!("{rotation}");
     }
     for w in &warnings {

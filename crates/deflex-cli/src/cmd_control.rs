@@ -334,7 +334,7 @@ fn print_summary(o: &RunOutcome) {
 mod tests {
     use super::*;
     use crate::cell_server::{CellArgs, cell_session, twin_path};
-    use deflex_demo::twin_controller::{controller_config_for, run_closed_loop};
+    use deflex_study::twin_controller::{controller_config_for, run_closed_loop};
     use deflex_sim::CellConfig;
 
     fn free_port() -> u16 {
@@ -374,7 +374,7 @@ mod tests {
     /// paper's TX200 cell with a model identified from the twin's campaign.
     fn loopback(kind: &str, length_mm: f64, seed: u64) -> Loopback {
         let twin = CellConfig::default();
-        let model = deflex_demo::twin_controller::identify_from_twin_campaign(&twin, 11).unwrap();
+        let model = deflex_study::twin_controller::identify_from_twin_campaign(&twin, 11).unwrap();
         loopback_for(None, model, kind, length_mm, seed)
     }
 

@@ -1,9 +1,9 @@
 //! `deflex demo`: the paper's whole study on the SIMULATED cell of the TX200 or another robot
-//! (`--robot`), with progress bars and a summary table; the work is done by `deflex-demo`.
+//! (`--robot`), with progress bars and a summary table; the work is done by `deflex-study`.
 
 use crate::args::CliResult;
 use clap::Args;
-use deflex_demo::{DemoOptions, Progress, run_demo};
+use deflex_study::{DemoOptions, Progress, run_demo};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
@@ -90,7 +90,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
     );
     if summary.paper_comparison {
         println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
-        for (quantity, paper, ours, unit) in deflex_demo::paper_vs_deflex_rows(&summary) {
+        for (quantity, paper, ours, unit) in deflex_study::paper_vs_deflex_rows(&summary) {
             println!(
                 "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
                 quantity, paper, ours
@@ -120,7 +120,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
     );
     let sc = &summary.stiff_contact;
     let outcome =
-        |l: &deflex_demo::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
+        |l: &deflex_study::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
             (Some(f), _) => format!(" ({f})"),
             (None, 0) => String::new(),
             (None, n) => format!(

@@ -1,15 +1,15 @@
 //! `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict`: elasto-geometric
-//! calibration from absolute tracker readings (logic in `deflex-egcal`).
+//! calibration from absolute tracker readings (logic in `deflex-absolute`).
 
 use crate::args::{CliResult, print_json, robot};
 use clap::{Args, Subcommand};
-use deflex_egcal::campaign::Campaign;
-use deflex_egcal::data::{AbsoluteRow, format_absolute, read_absolute};
-use deflex_egcal::fit::{FitOptions, Step, fit};
-use deflex_egcal::params::EgModel;
-use deflex_egcal::solve::Loss;
-use deflex_egcal::ur10_tracker::{ImportOptions, import_series};
-use deflex_egcal::{predict, report};
+use deflex_absolute::campaign::Campaign;
+use deflex_absolute::data::{AbsoluteRow, format_absolute, read_absolute};
+use deflex_absolute::fit::{FitOptions, Step, fit};
+use deflex_absolute::params::EgModel;
+use deflex_absolute::solve::Loss;
+use deflex_absolute::ur10_tracker::{ImportOptions, import_series};
+use deflex_absolute::{predict, report};
 use std::path::PathBuf;
 
 #[derive(Subcommand)]
@@ -224,7 +224,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let test = read_all(&args.test_data, n)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
-        loaded.extend(deflex_calib::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
+        loaded.extend(deflex_stiffness::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
     }
     let fit_count = absolute.len();
     let mut all = absolute;

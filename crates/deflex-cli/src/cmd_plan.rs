@@ -4,18 +4,18 @@
 use crate::args::{CliResult, robot};
 use crate::cmd_calib::{check_range, finite_or_null};
 use clap::Args;
-use deflex_calib::cell::{
+use deflex_stiffness::cell::{
     MAX_PLAN_FORCE_N, MAX_USER_POINTS, default_force_n, parse_directions, parse_point_flag,
     read_points,
 };
-use deflex_calib::plan::{
+use deflex_stiffness::plan::{
     BasePoint, Floor, LoadKind, PlanOptions, PointSet, Table, TableOption, plan_experiments,
 };
-use deflex_calib::report::{
+use deflex_stiffness::report::{
     EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
     expected_shift_rows, render_table, technician_rows,
 };
-use deflex_calib::write_rows_for;
+use deflex_stiffness::write_rows_for;
 use deflex_model::Robot;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -228,7 +228,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
     let options = plan_options(&args, &nominal)?;
     let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
     write_rows_for(&args.out, &nominal, &plan.rows, &[]).map_err(|e| e.to_string())?;
-    let cases = deflex_calib::data::load_case_count(&plan.rows);
+    let cases = deflex_stiffness::data::load_case_count(&plan.rows);
     let setup = &plan.setup;
     let load_text = match &setup.load {
         LoadKind::Cable { directions } => format!(
@@ -263,7 +263,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
         let axis: Vec<Value> = plan
             .axis_cases
             .iter()
-            .map(|a| json!({"edof": deflex_calib::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
+            .map(|a| json!({"edof": deflex_stiffness::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
             .collect();
         let setup_json = json!({
             "force_N": setup.force_n,

@@ -343,7 +343,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
             let plan_file =
-                deflex_calib::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
+                deflex_stiffness::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
             let rows =
                 run_campaign(&config, &plan_file.rows, args.seed).map_err(|e| e.to_string())?;
             plan_header = Some(plan_file.header);
@@ -384,7 +384,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         .map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, text)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
-    let cases = deflex_calib::data::load_case_count(&rows);
+    let cases = deflex_stiffness::data::load_case_count(&rows);
     let max_disp = rows
         .iter()
         .filter_map(|r| r.displacement_m)
@@ -486,7 +486,7 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
     let path = tool_path(&args)?;
     // Closed loop: the deflex correction controller in-process, in simulated time.
     let mut twin = match args.correction.as_str() {
-        "on" => Some(deflex_demo::twin_controller::twin_controller(
+        "on" => Some(deflex_study::twin_controller::twin_controller(
             &config,
             args.model.as_deref(),
         )?),

@@ -1,18 +1,18 @@
 //! Stiffness identification (`deflex calibrate`) and validation (`deflex validate`) from a
 //! measurement file or an in-memory table, with the CLI's checks and messages.
 //!
-//! Thin layer over `deflex-calib` (re-pointed at merge time): [`read_checked`],
+//! Thin layer over `deflex-stiffness` (re-pointed at merge time): [`read_checked`],
 //! [`calibrate`], [`validate`], [`report_text`], [`write_report`].
 
 use crate::error::{Error, Result, bounded};
-use deflex_calib::consistency::{
+use deflex_stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
-use deflex_calib::fit::Status;
-use deflex_calib::fit::{Calibration, Structure, calibrate_fixed};
-pub use deflex_calib::search::Criterion;
-use deflex_calib::search::{SearchOptions, SearchStep, search_structure};
-use deflex_calib::{DataError, MeasurementFile, MeasurementRow};
+use deflex_stiffness::fit::Status;
+use deflex_stiffness::fit::{Calibration, Structure, calibrate_fixed};
+pub use deflex_stiffness::search::Criterion;
+use deflex_stiffness::search::{SearchOptions, SearchStep, search_structure};
+use deflex_stiffness::{DataError, MeasurementFile, MeasurementRow};
 use deflex_model::Robot;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -52,7 +52,7 @@ pub fn table_row_error(origin: &str, line: u64, message: String) -> Error {
     }
 }
 
-/// The joint-count check of `deflex_calib::read_file`, for tables made in memory: a table with
+/// The joint-count check of `deflex_stiffness::read_file`, for tables made in memory: a table with
 /// another robot's joint columns is reported as such before any row-level check.
 fn check_joint_columns(text: &str, origin: &str, joint_count: usize) -> Result<()> {
     let header = text
@@ -79,10 +79,10 @@ fn check_joint_columns(text: &str, origin: &str, joint_count: usize) -> Result<(
 /// Read measurement rows (displacements required when `measured`).
 pub fn read_rows(source: &Source, joint_count: usize, measured: bool) -> Result<MeasurementFile> {
     match source {
-        Source::File(path) => Ok(deflex_calib::read_file(path, Some(joint_count), measured)?),
+        Source::File(path) => Ok(deflex_stiffness::read_file(path, Some(joint_count), measured)?),
         Source::Table { text, origin } => {
             check_joint_columns(text, origin, joint_count)?;
-            deflex_calib::data::parse_file(text, origin, measured).map_err(|e| match e {
+            deflex_stiffness::data::parse_file(text, origin, measured).map_err(|e| match e {
                 DataError::Row {
                     path,
                     line,
@@ -280,7 +280,7 @@ pub fn calibrate(
         "{geometry} — calibrated from {data_name} ({})",
         calibration.structure.label()
     );
-    let predicted = deflex_calib::validate::predict(&model, &checked.rows)?;
+    let predicted = deflex_stiffness::validate::predict(&model, &checked.rows)?;
     let residuals = checked
         .rows
         .iter()
@@ -363,7 +363,7 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
         "rows": cal.rows,
         "residual_rms_m": r.rms_m, "residual_max_m": r.max_abs_m, "residual_rms_all_m": r.rms_all_m,
         "residual_rms_norm_m": r.rms_norm_m, "residual_max_norm_m": r.max_norm_m,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_calib::fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "iterations": steps,
         "stop_reason": s.stop_reason,
@@ -380,7 +380,7 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
 /// The CLI's text output of `deflex calibrate` (iteration table, estimates, residuals,
 /// correlation, file check, warnings).
 pub fn report_text(cal: &StiffnessCalibration) -> String {
-    use deflex_calib::report::{
+    use deflex_stiffness::report::{
         ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
         render_table, residual_summary, shift_rows, stiffness_rows,
     };
@@ -427,7 +427,7 @@ pub fn report_text(cal: &StiffnessCalibration) -> String {
 /// The calibration's HTML report with plots and CSV tables (`deflex calibrate --report`),
 /// written whole into `dir`; `output_name` is where the model was (or will be) saved.
 pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -> Result<()> {
-    use deflex_calib::calib_report::{CalibrationReport, write_calibration_report};
+    use deflex_stiffness::calib_report::{CalibrationReport, write_calibration_report};
     let io = |source| Error::Io {
         path: dir.display().to_string(),
         source,
@@ -453,7 +453,7 @@ pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -
 /// A validation with its file check.
 pub struct Validation {
     /// Prediction errors of the model (and the baseline).
-    pub validation: deflex_calib::validate::Validation,
+    pub validation: deflex_stiffness::validate::Validation,
     /// The forward-kinematics check.
     pub check: GeometryCheck,
     /// Warnings.
@@ -469,7 +469,7 @@ pub fn validate(
     ignore_fk_check: bool,
 ) -> Result<Validation> {
     let checked = read_checked(model, source, fk_tolerance_m, ignore_fk_check)?;
-    let validation = deflex_calib::validate::validate(model, baseline, &checked.rows)?;
+    let validation = deflex_stiffness::validate::validate(model, baseline, &checked.rows)?;
     Ok(Validation {
         validation,
         check: checked.check,
@@ -479,7 +479,7 @@ pub fn validate(
 
 /// The validation as the CLI's `--json` (SI).
 pub fn validation_json(v: &Validation) -> Value {
-    let m = |e: &deflex_calib::validate::ModelErrors| {
+    let m = |e: &deflex_stiffness::validate::ModelErrors| {
         json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m,
                "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m,
                "max_norm_m": e.stats.max_norm_m})
@@ -492,13 +492,13 @@ pub fn validation_json(v: &Validation) -> Value {
 
 /// The validation's plots and HTML page (`deflex validate --out`).
 pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(deflex_calib::validate::write_report(&v.validation, dir)?)
+    Ok(deflex_stiffness::validate::write_report(&v.validation, dir)?)
 }
 
 /// Predicted displacement `[δp; δφ]` of every row of a measurement or plan table (m, rad).
 pub fn predict_displacements(robot: &Robot, source: &Source) -> Result<Vec<[f64; 6]>> {
     let file = read_rows(source, robot.joint_count(), false)?;
-    Ok(deflex_calib::validate::predict_full(robot, &file.rows)?)
+    Ok(deflex_stiffness::validate::predict_full(robot, &file.rows)?)
 }
 
 #[cfg(test)]

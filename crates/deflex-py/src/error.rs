@@ -73,10 +73,10 @@ pub enum Error {
     Model(#[from] deflex_model::ModelError),
     /// Measurement or plan file.
     #[error(transparent)]
-    Data(#[from] deflex_calib::DataError),
+    Data(#[from] deflex_stiffness::DataError),
     /// Stiffness identification or validation.
     #[error(transparent)]
-    Calib(#[from] deflex_calib::CalibError),
+    Calib(#[from] deflex_stiffness::CalibError),
     /// A stiffness calibration that identified nothing (the CLI's refusal).
     #[error(
         "{data}: no eDoF could be identified from this data (every compliance is at its bound or not observable); nothing written"
@@ -87,22 +87,22 @@ pub enum Error {
     },
     /// Absolute measurement file.
     #[error(transparent)]
-    Absolute(#[from] deflex_egcal::data::AbsoluteDataError),
+    Absolute(#[from] deflex_absolute::data::AbsoluteDataError),
     /// Elasto-geometric campaign.
     #[error(transparent)]
-    Campaign(#[from] deflex_egcal::campaign::CampaignError),
+    Campaign(#[from] deflex_absolute::campaign::CampaignError),
     /// Elasto-geometric fit.
     #[error(transparent)]
-    Fit(#[from] deflex_egcal::fit::FitError),
+    Fit(#[from] deflex_absolute::fit::FitError),
     /// Elasto-geometric prediction.
     #[error(transparent)]
-    Predict(#[from] deflex_egcal::predict::PredictError),
+    Predict(#[from] deflex_absolute::predict::PredictError),
     /// UR10 tracker data import.
     #[error(transparent)]
-    Import(#[from] deflex_egcal::ur10_tracker::ImportError),
+    Import(#[from] deflex_absolute::ur10_tracker::ImportError),
     /// Elasto-geometric report.
     #[error(transparent)]
-    GeometryReport(#[from] deflex_egcal::report::ReportWriteError),
+    GeometryReport(#[from] deflex_absolute::report::ReportWriteError),
     /// Offline compensation.
     #[error(transparent)]
     Compensate(#[from] deflex_compensate::CompensateError),

@@ -2,18 +2,18 @@
 //! per-row prediction and set-up re-registration (`deflex predict [--fit-setup]`) and the UR10
 //! tracker importer (`deflex import ur10-tracker`), with the CLI's checks and messages.
 //!
-//! Thin layer over `deflex-egcal` (re-pointed at merge time): [`parse_steps`], [`parse_loss`],
+//! Thin layer over `deflex-absolute` (re-pointed at merge time): [`parse_steps`], [`parse_loss`],
 //! [`calibrate_geometry`], [`predict`], [`import_ur10_tracker`], [`report_text`],
 //! [`report_json`], [`write_report`].
 
 use crate::calibration::{Source, table_row_error};
 use crate::error::{Error, Result};
-use deflex_egcal::campaign::Campaign;
-use deflex_egcal::data::{AbsoluteDataError, AbsoluteRow, format_absolute, parse_absolute};
-use deflex_egcal::fit::{FitOptions, FitResult, Step, fit};
-use deflex_egcal::params::EgModel;
-use deflex_egcal::solve::Loss;
-use deflex_egcal::ur10_tracker::{ImportOptions, ImportSummary, import_series};
+use deflex_absolute::campaign::Campaign;
+use deflex_absolute::data::{AbsoluteDataError, AbsoluteRow, format_absolute, parse_absolute};
+use deflex_absolute::fit::{FitOptions, FitResult, Step, fit};
+use deflex_absolute::params::EgModel;
+use deflex_absolute::solve::Loss;
+use deflex_absolute::ur10_tracker::{ImportOptions, ImportSummary, import_series};
 use deflex_model::Robot;
 use std::path::Path;
 
@@ -73,7 +73,7 @@ pub fn parse_loss(text: &str) -> Result<Loss> {
 /// Absolute readings of one source for a robot of `joints` joints.
 pub fn read_absolute(source: &Source, joints: usize) -> Result<Vec<AbsoluteRow>> {
     match source {
-        Source::File(path) => Ok(deflex_egcal::data::read_absolute(path, joints)?),
+        Source::File(path) => Ok(deflex_absolute::data::read_absolute(path, joints)?),
         Source::Table { text, origin } => {
             parse_absolute(text, origin, joints).map_err(|e| match e {
                 AbsoluteDataError::Row {
@@ -172,7 +172,7 @@ pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
         .estimates
         .iter()
         .map(|e| {
-            let h = deflex_calib::fit::Z95 * e.standard_error;
+            let h = deflex_stiffness::fit::Z95 * e.standard_error;
             [e.value - h, e.value + h]
         })
         .collect()
@@ -180,17 +180,17 @@ pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
 
 /// The CLI's text report.
 pub fn report_text(cal: &GeometryCalibration) -> String {
-    deflex_egcal::report::text(&cal.result, &cal.campaign)
+    deflex_absolute::report::text(&cal.result, &cal.campaign)
 }
 
 /// The CLI's JSON report (`--json`), as text.
 pub fn report_json(cal: &GeometryCalibration) -> String {
-    deflex_egcal::report::json(&cal.result, &cal.campaign).to_string()
+    deflex_absolute::report::json(&cal.result, &cal.campaign).to_string()
 }
 
 /// The report folder (text, JSON, CSV, plots, HTML), written whole.
 pub fn write_report(cal: &GeometryCalibration, dir: &Path) -> Result<Vec<std::path::PathBuf>> {
-    Ok(deflex_egcal::report::write_report(
+    Ok(deflex_absolute::report::write_report(
         &cal.result,
         &cal.campaign,
         dir,
@@ -204,9 +204,9 @@ pub fn predict(
     robot: &Robot,
     source: &Source,
     fit_setup: bool,
-) -> Result<deflex_egcal::predict::Prediction> {
+) -> Result<deflex_absolute::predict::Prediction> {
     let rows = read_absolute(source, robot.joint_count())?;
-    Ok(deflex_egcal::predict::predict_rows(robot, rows, fit_setup)?)
+    Ok(deflex_absolute::predict::predict_rows(robot, rows, fit_setup)?)
 }
 
 /// `deflex import ur10-tracker`: the absolute CSV text of a series (every `every`-th reading)

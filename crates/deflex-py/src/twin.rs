@@ -3,7 +3,7 @@
 //! robot file (`deflex sim robot`).
 //!
 //! Thin layer over `deflex-sim` and, for the closed loop, the controller↔twin glue that today
-//! lives in `deflex-demo::twin_controller` (re-pointed at merge time to its new home, the twin
+//! lives in `deflex-study::twin_controller` (re-pointed at merge time to its new home, the twin
 //! crate): [`cell_config`], [`tool_path`], [`form`], [`log_columns`], [`cell_robot`].
 
 use crate::error::{Error, Result, bounded};
@@ -128,9 +128,9 @@ pub fn form(path: &str, options: &FormOptions) -> Result<TwinRun> {
     // nominal mounting and tool of the cell (never the plant's).
     let mut controller = match &options.correction_model {
         Some(model) => Some(
-            deflex_demo::twin_controller::TwinController::new(
+            deflex_study::twin_controller::TwinController::new(
                 model.clone(),
-                deflex_demo::twin_controller::controller_config_for(&config),
+                deflex_study::twin_controller::controller_config_for(&config),
                 false,
             )
             .map_err(|message| Error::Controller { message })?,

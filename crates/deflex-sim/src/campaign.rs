@@ -1,5 +1,5 @@
 //! Calibration and validation campaigns on the twin (SIMULATED), written in the measurement
-//! format of `deflex_calib::data`.
+//! format of `deflex_stiffness::data`.
 //!
 //! * [`run_campaign`]: a plan (load cases: configuration, load by cable tension or dead weight,
 //!   points to measure, all named in the robot description's coordinates) → for each load case
@@ -22,7 +22,7 @@ use crate::error::SimError;
 use crate::plant::Plant;
 use crate::profile::Maker;
 use crate::tracker::LaserTracker;
-use deflex_calib::MeasurementRow;
+use deflex_stiffness::MeasurementRow;
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::{IkOptions, Pose, Robot, Wrench};
 use nalgebra::{Point3, Rotation3, Vector3};
@@ -158,7 +158,7 @@ pub fn run_campaign(
 
 /// A campaign file's text: the `# SIMULATED` header naming what was measured and the robot the
 /// twin played, then the rows in the measurement format. The robot lines (`# robot:`,
-/// `# geometry:`, which deflex-calib reads and checks) are those of `plan_header` when the
+/// `# geometry:`, which deflex-stiffness reads and checks) are those of `plan_header` when the
 /// campaign measured a plan that names its robot (the point coordinates are the plan's), else
 /// those of the twin's nominal robot (its cell's tool included).
 pub fn campaign_text(
@@ -166,7 +166,7 @@ pub fn campaign_text(
     rows: &[MeasurementRow],
     what: &str,
     seed: u64,
-    plan_header: Option<&deflex_calib::data::FileHeader>,
+    plan_header: Option<&deflex_stiffness::data::FileHeader>,
 ) -> Result<String, SimError> {
     let note = format!(
         "SIMULATED deflex digital-twin campaign ({what}) of `{}`, seed {seed}: not a measurement",
@@ -174,9 +174,9 @@ pub fn campaign_text(
     );
     let robot_lines = match plan_header {
         Some(header) if header.robot.is_some() && header.geometry.is_some() => header.clone(),
-        _ => deflex_calib::data::FileHeader::for_robot(&config.nominal_robot()?),
+        _ => deflex_stiffness::data::FileHeader::for_robot(&config.nominal_robot()?),
     };
-    Ok(deflex_calib::data::format_rows_with_header(
+    Ok(deflex_stiffness::data::format_rows_with_header(
         &robot_lines,
         rows,
         &[&note],

@@ -39,7 +39,7 @@ pub enum SimError {
     Model(#[from] deflex_model::ModelError),
     /// Measurement/plan file problem.
     #[error(transparent)]
-    Data(#[from] deflex_calib::data::DataError),
+    Data(#[from] deflex_stiffness::data::DataError),
     /// Writing outputs failed.
     #[error("{path}: {message}")]
     Output {

@@ -1,5 +1,5 @@
 //! `deflex sim sensitivity`: the closed loop across delay, model scale, sensor gain, bias drift
-//! and contact stiffness (the work is `deflex_demo::sensitivity`).
+//! and contact stiffness (the work is `deflex_study::sensitivity`).
 
 use super::{TwinArgs, load_config, robot_name};
 use crate::args::{CliResult, parse_list, print_json};
@@ -45,7 +45,7 @@ pub struct SensitivityArgs {
 }
 
 pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CliResult {
-    use deflex_demo::sensitivity::{SensitivityPlan, run_sensitivity};
+    use deflex_study::sensitivity::{SensitivityPlan, run_sensitivity};
     let config = load_config(&args.twin)?;
     let list = |text: &str, name: &str, scale: f64| -> Result<Vec<f64>, String> {
         if text.trim().is_empty() {
@@ -76,7 +76,7 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CliResult {
             if !json {
                 eprintln!("identifying the controller's model from a campaign on the twin …");
             }
-            deflex_demo::twin_controller::identify_from_twin_campaign(&config, args.seed)?
+            deflex_study::twin_controller::identify_from_twin_campaign(&config, args.seed)?
         }
     };
     let bar = if json {

@@ -1,9 +1,9 @@
 //! End-to-end tests of `deflex plan`, `calibrate` and `validate` through the real binary:
 //! files that know their robot, the planner's cell, and every bad input of issue 12.
 
-use deflex_calib::plan::{PlanOptions, plan_experiments};
-use deflex_calib::synthetic::{SyntheticOptions, measure};
-use deflex_calib::{MeasurementRow, write_rows_for};
+use deflex_stiffness::plan::{PlanOptions, plan_experiments};
+use deflex_stiffness::synthetic::{SyntheticOptions, measure};
+use deflex_stiffness::{MeasurementRow, write_rows_for};
 use deflex_model::{Robot, builtin};
 use std::path::{Path, PathBuf};
 use std::process::Command;

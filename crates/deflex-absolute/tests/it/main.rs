@@ -1,0 +1,7 @@
+//! Integration tests of `deflex-absolute`: one test binary (modules below), so a fresh clone links one
+//! executable for this crate instead of one per file.
+
+mod fuzz;
+mod jacobian;
+mod simulated;
+mod ur10_real;

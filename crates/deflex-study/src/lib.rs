@@ -1,0 +1,35 @@
+//! # deflex-study
+//!
+//! The paper's whole study in one call, on the **SIMULATED** cell of the built-in TX200 or of any
+//! other 6-joint robot (the digital twin of `deflex-sim`, with every error source of a real cell
+//! on): plan the calibration campaign, run it on the twin with tracker noise, identify the model
+//! structure and stiffnesses (automatic structure search, Section 3), validate on a grid of
+//! dead-weight loads (the paper's 200-pose grid at 600 N and 1100 N for the TX200) and along a
+//! spiral (Figure 14), form the paper's cone without and with the online correction (Section 4),
+//! plunge into a stiff fixture without and with it ([`contact`]), and measure the sensitivity of
+//! the closed loop to delay, model scale, sensor gain, bias drift and contact stiffness
+//! ([`sensitivity`]), and compare offline compensation, online correction and both on the cone and
+//! a CAM part ([`compensation`]). Everything lands in one folder, swapped in whole at the end: the CSV data
+//! behind every number, PNG figures and a self-contained `index.html`.
+//!
+//! The twin's plant is read only to *label* ground truth in the report (e.g. the plant's
+//! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
+//! the controller sees only joint values and raw F/T samples.
+
+pub mod compensation;
+mod conditions;
+pub mod contact;
+pub mod fig7;
+mod figures;
+mod page;
+pub mod paper;
+pub mod sensitivity;
+mod study;
+mod tables;
+pub mod twin_controller;
+
+pub use conditions::{conditions, one_edof_start};
+pub use study::{
+    DemoOptions, DemoSummary, FormingNumbers, ModelErrorNumbers, Progress, StiffnessRow, run_demo,
+};
+pub use tables::paper_vs_deflex as paper_vs_deflex_rows;
