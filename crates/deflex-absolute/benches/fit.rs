@@ -7,7 +7,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::AbsoluteRow;
 use deflex_absolute::fit::{FitOptions, Step, fit};
-use deflex_absolute::model::Loads;
+use deflex_absolute::model::Conditions;
 use deflex_absolute::params::EgModel;
 use deflex_model::{NamedPoint, NamedPose, spatial::pose_from_xyz_rpy};
 use nalgebra::Vector3;
@@ -25,6 +25,7 @@ fn campaign() -> (EgModel, Campaign) {
     truth.targets.push(NamedPoint {
         name: "probe".into(),
         position: Vector3::new(0.0, 0.0, 0.093),
+        rotation: None,
     });
     let params = truth.geometric_params();
     let deltas: Vec<f64> = (0..params.len())
@@ -43,7 +44,7 @@ fn campaign() -> (EgModel, Campaign) {
                 rng.gen_range(-2.0..2.0),
                 rng.gen_range(-3.0..3.0),
             ];
-            let p = truth.predict_tracker(&q, 0, 0, &Loads::default());
+            let p = truth.predict_tracker(&q, 0, 0, &Conditions::default());
             AbsoluteRow {
                 line: i as u64 + 2,
                 setup: "A".into(),
@@ -61,6 +62,7 @@ fn campaign() -> (EgModel, Campaign) {
                 wrench: None,
                 temperature_c: None,
                 time_s: None,
+                approach_rad: None,
             }
         })
         .collect();

@@ -218,6 +218,9 @@ fn reason(model: &EgModel, param: Param, others: &[Param], no_effect: bool) -> S
         ParamGroup::Harmonic => {
             "this joint-angle harmonic is a combination of constant offsets or other terms over the measured joint range".into()
         }
+        ParamGroup::Backlash => {
+            "this direction-dependent offset is a combination of constant offsets over the measured approach directions (a joint always approached from the same side)".into()
+        }
         ParamGroup::Setup | ParamGroup::Target => {
             "a combination of the listed parameters has the same effect on every reading".into()
         }

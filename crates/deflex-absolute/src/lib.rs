@@ -2,21 +2,29 @@
 //!
 //! Elasto-geometric calibration from absolute laser-tracker measurements: the robot's kinematic
 //! errors (DH rows with Hayati β), where each tracker set-up stands, where each target sits on
-//! the flange, the arm's sag under its own weight and payload through the VJM eDoFs, and the
-//! compliances that loaded-displacement campaigns measure, identified together in one robust,
-//! reduced, uncertainty-quantified least-squares fit.
+//! the flange (and how its frame is turned, from measured orientations), the arm's sag under
+//! its own weight and payload through the VJM eDoFs, the compliances that loaded-displacement
+//! campaigns measure, and opt-in joint terms and a residual model that must earn their place on
+//! held-out data, identified together in one robust, reduced, uncertainty-quantified
+//! least-squares fit. Pure maths on data: no files, no plots (the CLI and `deflex-report` do
+//! those).
 //!
-//! * [`data`]: the absolute measurement file format;
+//! * [`data`]: the absolute measurement format (parse and format);
 //! * [`ur10_tracker`]: importer for the public UR10 laser-tracker data set (Landgraf et al.,
 //!   CASE 2021);
 //! * [`params`]: the error parameters and the model state they correct;
-//! * [`model`]: prediction and analytic Jacobians;
+//! * [`model`]: predictions; [`jacobian`]: their analytic Jacobians;
+//! * [`campaign`]: readings resolved against a model;
 //! * [`identify`]: reduction to the identifiable parameter set;
 //! * [`solve`]: Levenberg–Marquardt with robust (Huber/Cauchy) reweighting;
-//! * [`fit`]: registration, model steps, uncertainty; [`outcome`]: what a fit produces;
+//! * [`fit`]: registration, model steps, held-out acceptance, uncertainty; [`outcome`]: what a
+//!   fit produces;
+//! * [`register`]: a new session or probe registered from a few readings, robot frozen;
+//! * [`protocol`]: the held-out protocol (register from some readings, score the rest);
+//! * [`residual_model`]: a Gaussian-process residual model on the joint angles;
+//! * [`terms`]: what a calibration keeps beyond the robot file;
 //! * [`resample`]: cross-validation and bootstrap by configuration;
-//! * [`report`], [`plots`]: text, JSON and HTML outputs;
-//! * [`predict`]: per-row predictions of a calibrated robot file.
+//! * [`predict`]: per-row predictions of a calibrated model.
 
 #![warn(missing_docs)]
 
@@ -24,13 +32,15 @@ pub mod campaign;
 pub mod data;
 pub mod fit;
 pub mod identify;
+pub mod jacobian;
 pub mod model;
 pub mod outcome;
 pub mod params;
-pub mod plots;
 pub mod predict;
+pub mod protocol;
 pub mod register;
-pub mod report;
 pub mod resample;
+pub mod residual_model;
 pub mod solve;
+pub mod terms;
 pub mod ur10_tracker;

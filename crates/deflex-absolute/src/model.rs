@@ -1,58 +1,49 @@
-//! Prediction of absolute and loaded readings, and their analytic Jacobians.
+//! Prediction of absolute and loaded readings (their Jacobians: [`crate::jacobian`]).
 //!
 //! **Absolute reading** of target t in set-up s at joint values q:
 //!
 //! `p_tracker = R_s · (p_w + δp_w) + t_s`, with `p_w = F(q')·t` the target on the flange of the
-//! rigid model (`q' = q + Δθ(q)`, the joint-angle harmonics) and
-//! `δp_w = Σ_e c_e · τ_e · (v_e × (p_w − O_e))` the elastic sag: eDoF e (axis v_e, centre O_e,
-//! compliance c_e) turns by `c_e τ_e` under the torque
+//! rigid model (`q' = q + Δθ(q, approach)`: the joint-angle harmonics and the
+//! direction-dependent offsets) and `δp_w = Σ_e c_e · τ_e · (v_e × (p_w − O_e))` the elastic
+//! sag: eDoF e (axis v_e, centre O_e, compliance c_e) turns by `c_e τ_e` under the torque
 //! `τ_e = Σ_{b ≥ site(e)} (v_e × (m_b (o_b − O_e) + R_b h_b)) · g + (v_e × (p_w − O_e)) · f + v_e · μ`
 //! of gravity on the bodies it carries (mass m_b, first moment h_b = m_b c_b in joint frame b
 //! of origin o_b, rotation R_b; payload folded into the last body) and of an external wrench
 //! (f, μ) at the target. First order in the deflection, like eq. 15 of the paper.
 //!
+//! With a residual model ([`crate::residual_model`]) its correction `R_1(q) Δ(q)` (learnt in
+//! joint 1's frame R_1) is added to `p_w + δp_w`.
+//!
+//! **Measured orientation** of the same target (a 6-DoF probe):
+//! `R_tracker = R_s · exp(θ_sag) · R_F(q') · R_t`, with `θ_sag = Σ_e c_e τ_e v_e` the sag's
+//! rotation (world axes) and `R_t` the target frame on the flange.
+//!
 //! **Loaded reading** (the stiffness campaign's rows): displacement loaded − unloaded of point P
 //! on link k under wrench w at A on link l, `Σ_{e: site ≤ min(k,l)} c_e j_e(P) j_e(A)ᵀ w`.
-//!
-//! **Jacobian.** Every kinematic parameter is a screw at a known frame of the chain:
-//! a rotation δ about unit axis u through point o moves p by `u × (p − o) δ`, a translation
-//! along u by `u δ`. With the model's joint frames R_i:
-//!
-//! * standard DH (`F_i = R_i·TransX(a_i)·RotX(α_i)·RotY(β_i)`, R_i after `TransZ(d_i)·RotZ`):
-//!   θ_i: `z_i × (p − o_i)`; d_i: `z_i`; a_i: `x_i`; α_i: `x_i × (p − o_i − a_i x_i)`;
-//!   β_i: `y'_i × (p − o_i − a_i x_i)` with `y'_i = R_i RotX(α_i) e_y`;
-//! * modified DH (`R_i = R_{i−1}·RotX(α_i)·RotY(β_i)·TransX(a_i)·TransZ(d_i)·RotZ`):
-//!   α_i: `x_{i−1} × (p − o_{i−1})`; β_i: `y'_{i−1} × (p − o_{i−1})` with
-//!   `y'_{i−1} = R_{i−1} RotX(α_i) e_y`; a_i: `R_{i−1}RotX(α_i)RotY(β_i) e_x`; d_i: `z_i`;
-//!   θ_i: `z_i × (p − o_i)`.
-//!
-//! Target coordinate k: the flange's axis u_k, plus the change of the sag as the target moves
-//! (`Σ_e c_e [τ_e (v_e × u_k) + j_e ((v_e × u_k)·f)]`). Compliance c_e: `τ_e j_e(p)`. Lumped mass and
-//! first moment of body b: `Σ_e c_e j_e(p) ∂τ_e/∂(m_b, h_b)`, with `∂τ_e/∂m_b = (v_e × (o_b −
-//! O_e))·g` and `∂τ_e/∂h_b = R_bᵀ (g × v_e)`. Harmonic `cos(n q_j)`: the θ_j column times
-//! `cos(n q_j)`. Set-up s (increments in robot-world axes, `R_s ← R_s exp(φ)`,
-//! `t_s ← t_s + R_s δt`): rotation k: `R_s (e_k × p̂_w)`; translation k: `R_s e_k`. World columns
-//! are turned into the tracker frame by `R_s`.
-//!
-//! Each kinematic column also carries the change of the sag: the parameter's small rigid
-//! motion ([`Twist`]) moves the eDoF axes and centres, the bodies, the payload and the target
-//! distal to it, which changes both the screws and the gravity torques. `tests/jacobian.rs`
-//! checks every column against central finite differences of the full prediction.
 
-use crate::params::{DhField, EgModel, Param};
-use deflex_model::{Data, DhConvention, MAX_EDOFS, MAX_JOINTS};
+use crate::campaign::LoadedRow;
+use crate::params::EgModel;
+use deflex_model::{Data, MAX_EDOFS, MAX_JOINTS};
 use nalgebra::{Rotation3, Vector3};
 
-/// Which joint frame quantities a kinematic column needs, precomputed per configuration.
+/// Which joint frame quantities a column needs, precomputed per configuration.
 pub struct Evaluation {
     /// Forward kinematics of the rigid model at q'.
     pub data: Data,
     /// Joint values as measured (before the harmonic offsets).
     pub q_raw: [f64; MAX_JOINTS],
+    /// Approach motion of each joint (rad; 0 = unknown), see [`Conditions::approach_rad`].
+    pub approach: [f64; MAX_JOINTS],
     /// Target on the flange, world, rigid (m).
     pub target_world: Vector3<f64>,
+    /// Target frame's rotation, world, rigid: `R_F R_t`.
+    pub target_rotation: Rotation3<f64>,
     /// Elastic sag of the target, world (m).
     pub sag_world: Vector3<f64>,
+    /// Correction of the residual model at q, world (m; zero without one).
+    pub correction_world: Vector3<f64>,
+    /// Elastic rotation of the flange, world rotation vector `Σ c_e τ_e v_e` (rad).
+    pub sag_rotation: Vector3<f64>,
     /// Torque on each eDoF (N·m), [`deflex_model::Robot::edofs`] order.
     pub torque: [f64; MAX_EDOFS],
     /// Linear part of each eDoF's screw at the target: `v_e × (p − O_e)`.
@@ -75,44 +66,33 @@ pub struct Evaluation {
     pub payload: (f64, Vector3<f64>),
 }
 
-/// A kinematic parameter as a small rigid motion of everything distal to where it acts:
-/// a rotation about `axis` through `point` (per unit parameter) plus a translation `linear`;
-/// joint frames with index ≥ `first_frame` (0-based), their bodies and eDoFs, the flange, the
-/// target and the payload move.
-#[derive(Clone, Copy, Debug)]
-pub struct Twist {
-    /// Rotation axis × rate (zero for a translation).
-    pub axis: Vector3<f64>,
-    /// A point on the rotation axis.
-    pub point: Vector3<f64>,
-    /// Translation rate (zero for a rotation).
-    pub linear: Vector3<f64>,
-    /// First joint frame moved.
-    pub first_frame: usize,
-}
-
-impl Twist {
-    fn point_rate(&self, x: &Vector3<f64>) -> Vector3<f64> {
-        self.axis.cross(&(x - self.point)) + self.linear
+impl Evaluation {
+    /// Predicted target position, world: rigid + sag + residual model (m).
+    pub fn predicted_world(&self) -> Vector3<f64> {
+        self.target_world + self.sag_world + self.correction_world
     }
 }
 
-/// A payload and an external wrench for one evaluation.
+/// What acts on one reading besides its joint values: a payload, an external wrench, and the
+/// direction each joint approached from.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Loads {
+pub struct Conditions {
     /// Payload mass (kg) and centre of mass in the flange frame (m).
     pub payload: Option<(f64, Vector3<f64>)>,
     /// External wrench at the target, world axes, moment about the target.
     pub wrench: Option<[f64; 6]>,
+    /// Joint motion that brought the robot here (rad; its sign is the approach direction, 0 =
+    /// unknown).
+    pub approach_rad: [f64; MAX_JOINTS],
 }
 
 impl EgModel {
     /// Evaluate the rigid pose, torques and sag of target `target` at joint values `q`.
-    pub fn evaluate(&self, q: &[f64], target: usize, loads: &Loads) -> Evaluation {
+    pub fn evaluate(&self, q: &[f64], target: usize, conditions: &Conditions) -> Evaluation {
         let robot = &self.robot;
         let n = robot.joint_count();
         let mut q_effective = [0.0; MAX_JOINTS];
-        self.effective_q(q, &mut q_effective);
+        self.effective_q(q, &conditions.approach_rad[..n], &mut q_effective);
         let mut data = Data::new();
         robot
             .forward_kinematics(&mut data, &q_effective[..n])
@@ -121,42 +101,33 @@ impl EgModel {
             .flange
             .transform_point(&self.targets[target].position.into())
             .coords;
+        let target_rotation = data.flange.rotation * self.target_rotation(target);
         let mut q_raw = [0.0; MAX_JOINTS];
         q_raw[..n].copy_from_slice(q);
         let mut out = Evaluation {
             data,
             q_raw,
+            approach: conditions.approach_rad,
             target_world,
+            target_rotation,
             sag_world: Vector3::zeros(),
+            correction_world: Vector3::zeros(),
+            sag_rotation: Vector3::zeros(),
             torque: [0.0; MAX_EDOFS],
             screw_linear: [Vector3::zeros(); MAX_EDOFS],
             axis_center: [(Vector3::zeros(), Vector3::zeros()); MAX_EDOFS],
             site: [0; MAX_EDOFS],
             edof_count: 0,
-            force: loads.wrench.map(|w| Vector3::new(w[0], w[1], w[2])),
-            moment: loads.wrench.map(|w| Vector3::new(w[3], w[4], w[5])),
+            force: conditions.wrench.map(|w| Vector3::new(w[0], w[1], w[2])),
+            moment: conditions.wrench.map(|w| Vector3::new(w[3], w[4], w[5])),
             body_mass: [0.0; MAX_JOINTS],
             body_moment: [Vector3::zeros(); MAX_JOINTS],
             payload: (0.0, Vector3::zeros()),
         };
-        // Body weights: m_b and the world first moment m_b c_b (payload folded into the last).
-        let g = robot.gravity;
-        let mut mass = [0.0; MAX_JOINTS];
-        let mut moment = [Vector3::zeros(); MAX_JOINTS];
-        for (b, lumped) in self.lumped.iter().enumerate().take(n) {
-            let frame = &out.data.joint_frames[b];
-            mass[b] = lumped[0];
-            moment[b] = frame.translation.vector * lumped[0]
-                + frame.rotation * Vector3::new(lumped[1], lumped[2], lumped[3]);
+        if let Some(r) = &self.residual {
+            out.correction_world = out.data.joint_frames[0].rotation * r.predict(&q[..n]);
         }
-        out.body_mass = mass;
-        out.body_moment = moment;
-        if let Some((m, com)) = loads.payload {
-            let com_world = out.data.flange.transform_point(&com.into()).coords;
-            out.payload = (m, com_world * m);
-            mass[n - 1] += m;
-            moment[n - 1] += com_world * m;
-        }
+        let (mass, moment) = self.body_weights(&mut out, conditions);
         for (e, edof) in robot.edofs().enumerate() {
             let (axis, center) = out.data.edof_axis_center(robot, edof.site, edof.axis);
             let site = edof.site.link_index();
@@ -164,10 +135,12 @@ impl EgModel {
             let mut torque = 0.0;
             for b in first_body..n {
                 // Σ (v × (m c − m O)) · g
-                torque += axis.cross(&(moment[b] - center * mass[b])).dot(&g);
+                torque += axis
+                    .cross(&(moment[b] - center * mass[b]))
+                    .dot(&robot.gravity);
             }
             let linear = axis.cross(&(target_world - center));
-            if let Some(w) = loads.wrench {
+            if let Some(w) = conditions.wrench {
                 torque += linear.dot(&Vector3::new(w[0], w[1], w[2]))
                     + axis.dot(&Vector3::new(w[3], w[4], w[5]));
             }
@@ -176,9 +149,37 @@ impl EgModel {
             out.axis_center[e] = (axis, center);
             out.site[e] = site;
             out.sag_world += linear * (self.compliance[e] * torque);
+            out.sag_rotation += axis * (self.compliance[e] * torque);
             out.edof_count = e + 1;
         }
         out
+    }
+
+    /// Fill the bodies' masses and world first moments (payload excluded) into `ev`; return
+    /// them with the payload folded into the last body.
+    fn body_weights(
+        &self,
+        ev: &mut Evaluation,
+        conditions: &Conditions,
+    ) -> ([f64; MAX_JOINTS], [Vector3<f64>; MAX_JOINTS]) {
+        let n = self.robot.joint_count();
+        let mut mass = [0.0; MAX_JOINTS];
+        let mut moment = [Vector3::zeros(); MAX_JOINTS];
+        for (b, lumped) in self.lumped.iter().enumerate().take(n) {
+            let frame = &ev.data.joint_frames[b];
+            mass[b] = lumped[0];
+            moment[b] = frame.translation.vector * lumped[0]
+                + frame.rotation * Vector3::new(lumped[1], lumped[2], lumped[3]);
+        }
+        ev.body_mass = mass;
+        ev.body_moment = moment;
+        if let Some((m, com)) = conditions.payload {
+            let com_world = ev.data.flange.transform_point(&com.into()).coords;
+            ev.payload = (m, com_world * m);
+            mass[n - 1] += m;
+            moment[n - 1] += com_world * m;
+        }
+        (mass, moment)
     }
 
     /// Predicted target position in set-up `setup`'s tracker frame.
@@ -187,222 +188,38 @@ impl EgModel {
         q: &[f64],
         setup: usize,
         target: usize,
-        loads: &Loads,
+        conditions: &Conditions,
     ) -> Vector3<f64> {
-        let ev = self.evaluate(q, target, loads);
+        let ev = self.evaluate(q, target, conditions);
+        self.tracker_position(&ev, setup)
+    }
+
+    /// Target position of an evaluation in set-up `setup`'s tracker frame.
+    pub fn tracker_position(&self, ev: &Evaluation, setup: usize) -> Vector3<f64> {
         self.setups[setup]
             .pose
-            .transform_point(&(ev.target_world + ev.sag_world).into())
+            .transform_point(&ev.predicted_world().into())
             .coords
     }
 
-    /// World-frame column of one kinematic, target, compliance, mass or harmonic parameter at
-    /// an evaluation (set-up parameters: see [`EgModel::tracker_column`]).
-    pub fn world_column(&self, ev: &Evaluation, param: Param) -> Vector3<f64> {
-        let frames = &ev.data.joint_frames;
-        let frame_axis = |pose: &deflex_model::Pose, k: usize| -> Vector3<f64> {
-            pose.rotation.matrix().column(k).into_owned()
-        };
-        match param {
-            Param::SetupRotation(..) | Param::SetupTranslation(..) => Vector3::zeros(),
-            Param::Target(_, k) => {
-                // The rigid point moves along the flange axis u; the sag's screws and the
-                // external wrench's torques move with it.
-                let u = frame_axis(&ev.data.flange, k);
-                let mut column = u;
-                for e in 0..ev.edof_count {
-                    let (axis, _) = ev.axis_center[e];
-                    let d_linear = axis.cross(&u);
-                    let d_torque = ev.force.map_or(0.0, |f| d_linear.dot(&f));
-                    column += (d_linear * ev.torque[e] + ev.screw_linear[e] * d_torque)
-                        * self.compliance[e];
-                }
-                column
-            }
-            Param::Dh(..) | Param::Harmonic { .. } => {
-                let twist = self
-                    .kinematic_twist(ev, param)
-                    .expect("a DH or harmonic parameter has a twist");
-                self.kinematic_column(ev, &twist)
-            }
-            Param::Compliance(e) => ev.screw_linear[e] * ev.torque[e],
-            Param::Mass(b) | Param::FirstMoment(b, _) => {
-                let g = self.robot.gravity;
-                let frame = &frames[b];
-                let mut column = Vector3::zeros();
-                for e in 0..ev.edof_count {
-                    if ev.site[e].max(1) - 1 > b {
-                        continue;
-                    }
-                    let (axis, center) = ev.axis_center[e];
-                    let dtau = match param {
-                        Param::Mass(_) => axis.cross(&(frame.translation.vector - center)).dot(&g),
-                        Param::FirstMoment(_, k) => (frame.rotation.inverse() * g.cross(&axis))[k],
-                        _ => 0.0,
-                    };
-                    column += ev.screw_linear[e] * (self.compliance[e] * dtau);
-                }
-                column
-            }
-        }
+    /// Target frame's orientation of an evaluation in set-up `setup`'s tracker frame:
+    /// `R_s · exp(θ_sag) · R_F · R_t`.
+    pub fn tracker_orientation(&self, ev: &Evaluation, setup: usize) -> Rotation3<f64> {
+        self.setups[setup].pose.rotation
+            * Rotation3::from_scaled_axis(ev.sag_rotation)
+            * ev.target_rotation
     }
 
-    /// The small rigid motion a kinematic parameter (DH field or harmonic) applies (module
-    /// documentation); `None` for other parameters.
-    pub fn kinematic_twist(&self, ev: &Evaluation, param: Param) -> Option<Twist> {
-        let frames = &ev.data.joint_frames;
-        let axis = |rotation: &Rotation3<f64>, k: usize| -> Vector3<f64> {
-            rotation.matrix().column(k).into_owned()
-        };
-        let rotation = |axis: Vector3<f64>, point: Vector3<f64>, first_frame: usize| Twist {
-            axis,
-            point,
-            linear: Vector3::zeros(),
-            first_frame,
-        };
-        let translation = |linear: Vector3<f64>, first_frame: usize| Twist {
-            axis: Vector3::zeros(),
-            point: Vector3::zeros(),
-            linear,
-            first_frame,
-        };
-        let (j, field, factor) = match param {
-            Param::Dh(j, field) => (j, field, 1.0),
-            Param::Harmonic { joint, order, sine } => {
-                let x = f64::from(order) * ev.q_raw[joint];
-                (joint, DhField::Theta, if sine { x.sin() } else { x.cos() })
-            }
-            _ => return None,
-        };
-        let joint = &self.robot.joints[j];
-        let dh = joint.dh.unwrap_or_default();
-        let frame = &frames[j];
-        let z = axis(&frame.rotation, 2);
-        let origin = frame.translation.vector;
-        let twist = match self.robot.dh_convention.unwrap_or_default() {
-            DhConvention::Standard => {
-                let x = axis(&frame.rotation, 0);
-                let link_origin = origin + x * dh.a;
-                match field {
-                    DhField::Theta => rotation(z, origin, j),
-                    DhField::D => translation(z, j),
-                    DhField::A => translation(x, j + 1),
-                    DhField::Alpha => rotation(x, link_origin, j + 1),
-                    DhField::Beta => {
-                        let y = frame.rotation
-                            * Rotation3::from_axis_angle(&Vector3::x_axis(), dh.alpha)
-                            * Vector3::y();
-                        rotation(y, link_origin, j + 1)
-                    }
-                }
-            }
-            DhConvention::Modified => {
-                let previous = if j == 0 {
-                    ev.data.base_frame
-                } else {
-                    frames[j - 1]
-                };
-                let prev_origin = previous.translation.vector;
-                let after_alpha =
-                    previous.rotation * Rotation3::from_axis_angle(&Vector3::x_axis(), dh.alpha);
-                match field {
-                    DhField::Alpha => rotation(axis(&previous.rotation, 0), prev_origin, j),
-                    DhField::Beta => rotation(axis(&after_alpha, 1), prev_origin, j),
-                    DhField::A => {
-                        let after_beta =
-                            after_alpha * Rotation3::from_axis_angle(&Vector3::y_axis(), dh.beta);
-                        translation(axis(&after_beta, 0), j)
-                    }
-                    DhField::D => translation(z, j),
-                    DhField::Theta => rotation(z, origin, j),
-                }
-            }
-        };
-        Some(Twist {
-            axis: twist.axis * factor,
-            linear: twist.linear * factor,
-            ..twist
-        })
-    }
-
-    /// World column of a kinematic parameter: the target's rigid motion plus the change of
-    /// the sag (eDoF axes and centres, bodies, payload and target all move with the twist).
-    pub fn kinematic_column(&self, ev: &Evaluation, twist: &Twist) -> Vector3<f64> {
-        let p = ev.target_world;
-        let dp = twist.point_rate(&p);
-        let mut column = dp;
-        if self.compliance.iter().all(|c| *c == 0.0) {
-            return column;
-        }
-        let n = self.robot.joint_count();
-        let g = self.robot.gravity;
-        // Rates of the bodies' first moments (payload on the last body).
-        let mut d_moment = [Vector3::zeros(); MAX_JOINTS];
-        for (b, rate) in d_moment
-            .iter_mut()
-            .enumerate()
-            .take(n)
-            .skip(twist.first_frame)
-        {
-            *rate = twist
-                .axis
-                .cross(&(ev.body_moment[b] - twist.point * ev.body_mass[b]))
-                + twist.linear * ev.body_mass[b];
-        }
-        let (payload_mass, payload_moment) = ev.payload;
-        d_moment[n - 1] += twist
-            .axis
-            .cross(&(payload_moment - twist.point * payload_mass))
-            + twist.linear * payload_mass;
-        let mut mass = ev.body_mass;
-        let mut moment = ev.body_moment;
-        mass[n - 1] += payload_mass;
-        moment[n - 1] += payload_moment;
-        for e in 0..ev.edof_count {
-            let c = self.compliance[e];
-            if c == 0.0 {
-                continue;
-            }
-            let (a, center) = ev.axis_center[e];
-            let site = ev.site[e];
-            let moved = site > twist.first_frame;
-            let (da, dcenter) = if moved {
-                (twist.axis.cross(&a), twist.point_rate(&center))
-            } else {
-                (Vector3::zeros(), Vector3::zeros())
-            };
-            let d_linear = da.cross(&(p - center)) + a.cross(&(dp - dcenter));
-            let mut d_torque = 0.0;
-            for b in (site.max(1) - 1)..n {
-                let arm = moment[b] - center * mass[b];
-                let d_arm = d_moment[b] - dcenter * mass[b];
-                d_torque += (da.cross(&arm) + a.cross(&d_arm)).dot(&g);
-            }
-            if let Some(f) = ev.force {
-                d_torque += d_linear.dot(&f);
-            }
-            if let Some(mu) = ev.moment {
-                d_torque += da.dot(&mu);
-            }
-            column += (d_linear * ev.torque[e] + ev.screw_linear[e] * d_torque) * c;
-        }
-        column
-    }
-
-    /// Column of `param` for an absolute reading in set-up `setup` (tracker frame).
-    pub fn tracker_column(&self, ev: &Evaluation, setup: usize, param: Param) -> Vector3<f64> {
-        let rotation = self.setups[setup].pose.rotation;
-        match param {
-            Param::SetupRotation(s, k) | Param::SetupTranslation(s, k) if s != setup => {
-                let _ = k;
-                Vector3::zeros()
-            }
-            Param::SetupRotation(_, k) => {
-                rotation * Vector3::ith(k, 1.0).cross(&(ev.target_world + ev.sag_world))
-            }
-            Param::SetupTranslation(_, k) => rotation * Vector3::ith(k, 1.0),
-            other => rotation * self.world_column(ev, other),
-        }
+    /// Predicted target orientation in set-up `setup`'s tracker frame.
+    pub fn predict_orientation(
+        &self,
+        q: &[f64],
+        setup: usize,
+        target: usize,
+        conditions: &Conditions,
+    ) -> Rotation3<f64> {
+        let ev = self.evaluate(q, target, conditions);
+        self.tracker_orientation(&ev, setup)
     }
 
     /// Predicted displacement (loaded − unloaded) of a loaded reading (the stiffness
@@ -410,7 +227,7 @@ impl EgModel {
     /// compliance in `columns` (others zero).
     pub fn loaded_displacement(
         &self,
-        row: &deflex_stiffness::MeasurementRow,
+        row: &LoadedRow,
         columns: &mut [Vector3<f64>; MAX_EDOFS],
     ) -> Vector3<f64> {
         let (q, point, point_link) = (&row.q_rad, Vector3::from(row.point_m), row.point_link);
@@ -418,7 +235,7 @@ impl EgModel {
             (Vector3::from(row.load_point_m), row.load_link, &row.wrench);
         let n = self.robot.joint_count();
         let mut q_effective = [0.0; MAX_JOINTS];
-        self.effective_q(q, &mut q_effective);
+        self.effective_q(q, &[], &mut q_effective);
         let mut data = Data::new();
         self.robot
             .forward_kinematics(&mut data, &q_effective[..n])

@@ -4,6 +4,7 @@
 use crate::fit::Step;
 use crate::identify::Reduction;
 use crate::params::{EgModel, Param, Unit};
+use crate::protocol::GroupScore;
 use crate::solve::Loss;
 use nalgebra::{DMatrix, Vector3};
 
@@ -47,8 +48,62 @@ impl ErrorStats {
 pub struct TestGroup {
     /// Description (e.g. `A: held-out configurations`).
     pub name: String,
-    /// Error distribution.
+    /// Position error distribution (m).
     pub stats: ErrorStats,
+    /// Orientation error distribution (rad), when measured.
+    pub orientation: Option<ErrorStats>,
+    /// Position RMS of each registration draw (m; one entry for configurations of a fit
+    /// set-up, scored with its own registration).
+    pub draw_rms: Vec<f64>,
+    /// Whether the group is a held-out series or session (registered by the protocol) rather
+    /// than held-out configurations of a fit set-up.
+    pub registered: bool,
+}
+
+impl TestGroup {
+    /// A group scored by the registration protocol.
+    pub fn registered(name: String, score: GroupScore) -> TestGroup {
+        TestGroup {
+            name,
+            stats: score.position,
+            orientation: score.orientation,
+            draw_rms: score.draw_rms,
+            registered: true,
+        }
+    }
+}
+
+/// The part a reading played.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// Fitted.
+    Fit,
+    /// Held out from a fit set-up (test configurations, a test file of a known set-up).
+    Test,
+    /// A held-out series: its own registration by the protocol, then scored.
+    HeldOutSeries,
+}
+
+impl Role {
+    /// Name in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Fit => "fit",
+            Role::Test => "test",
+            Role::HeldOutSeries => "held-out series",
+        }
+    }
+}
+
+/// How an opt-in step fared on held-out data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Acceptance {
+    /// Pooled held-out position RMS of the model before the step (m).
+    pub before_m: f64,
+    /// The same with the step (m).
+    pub after_m: f64,
+    /// Whether the step is kept in the written model.
+    pub accepted: bool,
 }
 
 /// One row of the iteration table.
@@ -60,14 +115,23 @@ pub struct StepReport {
     pub candidates: usize,
     /// Identifiable (fitted) parameters.
     pub identifiable: usize,
-    /// Absolute readings in the fit: error distribution.
+    /// Absolute readings in the fit: position error distribution.
     pub fit: ErrorStats,
+    /// Orientation error distribution of the fitted readings (rad), when measured.
+    pub fit_orientation: Option<ErrorStats>,
     /// Loaded readings in the fit: RMS of the displacement error (m), if any.
     pub loaded_rms: Option<f64>,
     /// Cross-validated RMS over absolute readings (m), if folds > 0.
     pub cv_rms: Option<f64>,
     /// Test groups.
     pub test: Vec<TestGroup>,
+    /// Groups of the fit data left out in turn (sessions, set-ups, series) and scored by the
+    /// registration protocol.
+    pub cross_groups: Vec<TestGroup>,
+    /// Held-out verdict of an opt-in step, when there were held-out groups to judge by.
+    pub acceptance: Option<Acceptance>,
+    /// Hyper-parameters of the residual model, when the step has one.
+    pub residual_hyper: Option<crate::residual_model::ResidualHyper>,
     /// LM iterations.
     pub iterations: usize,
 }
@@ -112,10 +176,10 @@ pub struct Outlier {
 pub struct RowResidual {
     /// Reading index.
     pub index: usize,
-    /// Measured − predicted (m; tracker frame for absolute readings).
+    /// Measured − predicted (m; tracker frame for absolute readings; rad for orientations).
     pub residual: Vector3<f64>,
-    /// Role: `fit`, `test`, `registration`.
-    pub role: &'static str,
+    /// Role.
+    pub role: Role,
 }
 
 /// Everything a fit produces.
@@ -151,4 +215,6 @@ pub struct FitResult {
     pub loss: Loss,
     /// Set-ups fitted on registration only (test set-ups).
     pub registration_only_setups: Vec<String>,
+    /// Model steps kept in the written model (opt-in steps that lost on held-out data are not).
+    pub kept_steps: Vec<Step>,
 }

@@ -1,8 +1,9 @@
 //! The error parameters of the elasto-geometric model and the state they act on.
 //!
 //! Every parameter is a small correction applied to an [`EgModel`] by [`EgModel::apply`]:
-//! additive for DH rows, θ offsets, target offsets, compliances, lumped masses and harmonics;
-//! on SO(3) for set-up rotations (`R ← R·exp(δφ)`, the increment in robot-world axes). The LM
+//! additive for DH rows, θ offsets, target offsets, compliances, lumped masses, harmonics and
+//! backlash; on SO(3) for set-up rotations (`R ← R·exp(δφ)`, the increment in robot-world axes)
+//! and target rotations (`R_t ← exp(δφ)·R_t`, the increment in flange axes). The LM
 //! loop linearises around the current model, so every increment is small and every parameter
 //! has a clear physical reading.
 
@@ -46,6 +47,9 @@ pub enum Param {
     SetupTranslation(usize, usize),
     /// Target `t`: coordinate `k` of its position in the flange frame (m).
     Target(usize, usize),
+    /// Target `t`: rotation of its frame about flange axis `k` (rad; fitted from measured
+    /// orientations only).
+    TargetRotation(usize, usize),
     /// DH field of joint `j` (0-based).
     Dh(usize, DhField),
     /// Compliance 1/k of eDoF `e` (index in [`Robot::edofs`] order), rad/(N·m).
@@ -55,15 +59,19 @@ pub enum Param {
     /// First moment m·c of body `b` about axis `k` of its joint frame R_b (kg·m).
     FirstMoment(usize, usize),
     /// Joint-angle-dependent offset of joint `j`: `Δθ_j = a·cos(n q_j)` (`sine` false) or
-    /// `b·sin(n q_j)`, order `n` (rad): gear or encoder eccentricity.
+    /// `b·sin(n q_j)`, order `n` (rad): encoder eccentricity (low orders) or a gear's
+    /// transmission error (orders at the gear ratio and its multiples).
     Harmonic {
         /// Joint (0-based).
         joint: usize,
-        /// Order n ≥ 1.
-        order: u8,
+        /// Order n ≥ 1 (cycles per joint turn).
+        order: u16,
         /// Sine (true) or cosine (false) term.
         sine: bool,
     },
+    /// Direction-dependent offset of joint `j` (rad): `Δθ_j = b_j · sign(approach_j)`, half the
+    /// lost motion (backlash, hysteresis) between approaching from below and from above.
+    Backlash(usize),
 }
 
 /// Coarse groups, for tables and the identifiability reasons.
@@ -79,8 +87,10 @@ pub enum ParamGroup {
     Compliance,
     /// Lumped masses.
     Mass,
-    /// Joint-angle harmonics.
+    /// Joint-angle harmonics (eccentricity, gear periodic error).
     Harmonic,
+    /// Direction-dependent joint offsets (backlash, hysteresis).
+    Backlash,
 }
 
 /// Physical unit of a parameter, for display.
@@ -124,13 +134,27 @@ impl Unit {
 
 const XYZ: [&str; 3] = ["x", "y", "z"];
 
+/// Below this joint motion (rad) a reading's approach direction is unknown (sign 0).
+pub const APPROACH_DEADBAND_RAD: f64 = 1e-6;
+
+/// Sign of an approach motion: −1, 0 (within [`APPROACH_DEADBAND_RAD`]) or +1.
+pub fn approach_sign(motion: f64) -> f64 {
+    if motion > APPROACH_DEADBAND_RAD {
+        1.0
+    } else if motion < -APPROACH_DEADBAND_RAD {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
 /// One joint-angle harmonic term with its coefficient.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HarmonicTerm {
     /// Joint (0-based).
     pub joint: usize,
     /// Order n ≥ 1.
-    pub order: u8,
+    pub order: u16,
     /// Sine (true) or cosine (false).
     pub sine: bool,
     /// Coefficient (rad).
@@ -153,6 +177,10 @@ pub struct EgModel {
     pub lumped: Vec<[f64; 4]>,
     /// Joint-angle harmonics.
     pub harmonics: Vec<HarmonicTerm>,
+    /// Direction-dependent offset `b_j` of each joint (rad; 0 = none).
+    pub backlash: Vec<f64>,
+    /// Residual model on the joint angles, added to the predicted positions (world axes).
+    pub residual: Option<crate::residual_model::ResidualModel>,
 }
 
 impl EgModel {
@@ -180,15 +208,22 @@ impl EgModel {
             compliance,
             lumped,
             harmonics: Vec::new(),
+            backlash: vec![0.0; robot.joint_count()],
+            residual: None,
         }
     }
 
-    /// Joint values with the harmonic offsets added (FK adds `θ_offset` to these).
-    pub fn effective_q(&self, q: &[f64], out: &mut [f64]) {
+    /// Joint values with the harmonic and direction-dependent offsets added (FK adds
+    /// `θ_offset` to these): `q'_j = q_j + Σ_n (a_n cos(n q_j) + b_n sin(n q_j)) +
+    /// b_j sign(approach_j)`.
+    pub fn effective_q(&self, q: &[f64], approach: &[f64], out: &mut [f64]) {
         out[..q.len()].copy_from_slice(q);
         for h in &self.harmonics {
             let x = f64::from(h.order) * q[h.joint];
             out[h.joint] += h.value * if h.sine { x.sin() } else { x.cos() };
+        }
+        for (j, b) in self.backlash.iter().enumerate().take(q.len()) {
+            out[j] += b * approach_sign(approach.get(j).copied().unwrap_or(0.0));
         }
     }
 
@@ -216,6 +251,10 @@ impl EgModel {
                 format!("setup[{}].t{}", self.setups[s].name, XYZ[k])
             }
             Param::Target(t, k) => format!("target[{}].{}", self.targets[t].name, XYZ[k]),
+            Param::TargetRotation(t, k) => {
+                format!("target[{}].r{}", self.targets[t].name, XYZ[k])
+            }
+            Param::Backlash(j) => format!("J{}.backlash", j + 1),
             Param::Dh(j, f) => format!("J{}.{}", j + 1, f.name()),
             Param::Compliance(e) => format!("c[{}]", edof_label(e)),
             Param::Mass(b) => format!("body{}.m", b + 1),
@@ -233,7 +272,8 @@ impl EgModel {
     pub fn group(param: Param) -> ParamGroup {
         match param {
             Param::SetupRotation(..) | Param::SetupTranslation(..) => ParamGroup::Setup,
-            Param::Target(..) => ParamGroup::Target,
+            Param::Target(..) | Param::TargetRotation(..) => ParamGroup::Target,
+            Param::Backlash(_) => ParamGroup::Backlash,
             Param::Dh(..) => ParamGroup::Geometry,
             Param::Compliance(_) => ParamGroup::Compliance,
             Param::Mass(_) | Param::FirstMoment(..) => ParamGroup::Mass,
@@ -245,8 +285,10 @@ impl EgModel {
     pub fn unit(param: Param) -> Unit {
         match param {
             Param::SetupRotation(..)
+            | Param::TargetRotation(..)
             | Param::Dh(_, DhField::Theta | DhField::Alpha | DhField::Beta)
-            | Param::Harmonic { .. } => Unit::Radian,
+            | Param::Harmonic { .. }
+            | Param::Backlash(_) => Unit::Radian,
             Param::SetupTranslation(..) | Param::Target(..) | Param::Dh(_, _) => Unit::Metre,
             Param::Compliance(_) => Unit::Compliance,
             Param::Mass(_) => Unit::Kilogram,
@@ -254,10 +296,11 @@ impl EgModel {
         }
     }
 
-    /// Current value of a parameter (for set-up rotations: 0, they are increments).
+    /// Current value of a parameter (for set-up and target rotations: 0, they are increments).
     pub fn value(&self, param: Param) -> f64 {
         match param {
-            Param::SetupRotation(..) => 0.0,
+            Param::SetupRotation(..) | Param::TargetRotation(..) => 0.0,
+            Param::Backlash(j) => self.backlash[j],
             Param::SetupTranslation(s, k) => {
                 let pose = &self.setups[s].pose;
                 (pose.rotation.inverse() * pose.translation.vector)[k]
@@ -290,12 +333,15 @@ impl EgModel {
     pub fn apply(&mut self, params: &[Param], delta: &[f64]) {
         let mut rotations = vec![Vector3::zeros(); self.setups.len()];
         let mut translations = vec![Vector3::zeros(); self.setups.len()];
+        let mut target_rotations = vec![Vector3::zeros(); self.targets.len()];
         let mut geometry = false;
         for (&param, &d) in params.iter().zip(delta) {
             match param {
                 Param::SetupRotation(s, k) => rotations[s][k] += d,
                 Param::SetupTranslation(s, k) => translations[s][k] += d,
                 Param::Target(t, k) => self.targets[t].position[k] += d,
+                Param::TargetRotation(t, k) => target_rotations[t][k] += d,
+                Param::Backlash(j) => self.backlash[j] += d,
                 Param::Dh(j, f) => {
                     geometry = true;
                     let joint = &mut self.robot.joints[j];
@@ -341,9 +387,20 @@ impl EgModel {
                 setup.pose.rotation = r * Rotation3::from_scaled_axis(phi);
             }
         }
+        for (target, phi) in self.targets.iter_mut().zip(target_rotations) {
+            if phi != Vector3::zeros() {
+                let r = target.rotation.unwrap_or_else(Rotation3::identity);
+                target.rotation = Some(Rotation3::from_scaled_axis(phi) * r);
+            }
+        }
         if geometry {
             self.robot.rebuild_dh_geometry();
         }
+    }
+
+    /// Rotation of target `t`'s frame in the flange frame (identity when unknown).
+    pub fn target_rotation(&self, t: usize) -> Rotation3<f64> {
+        self.targets[t].rotation.unwrap_or_else(Rotation3::identity)
     }
 
     /// The candidate geometric parameters of a DH robot: θ, d, a, α of every joint, and β of
@@ -372,8 +429,9 @@ impl EgModel {
         out
     }
 
-    /// Registration parameters of every set-up and target.
-    pub fn registration_params(&self) -> Vec<Param> {
+    /// Registration parameters of every set-up and target (target rotations too when
+    /// `orientations`: they are seen only by measured orientations).
+    pub fn registration_params(&self, orientations: bool) -> Vec<Param> {
         let mut out = Vec::new();
         for s in 0..self.setups.len() {
             for k in 0..3 {
@@ -387,14 +445,19 @@ impl EgModel {
             for k in 0..3 {
                 out.push(Param::Target(t, k));
             }
+            if orientations {
+                for k in 0..3 {
+                    out.push(Param::TargetRotation(t, k));
+                }
+            }
         }
         out
     }
 
     /// Write the identified quantities back into a robot: DH rows and θ offsets (already
     /// there), stiffness = 1/compliance (an eDoF with compliance ≤ 0 becomes rigid), masses and
-    /// centres of mass from the lumped parameters, set-ups and targets. Harmonic terms have no
-    /// place in a robot file; the caller reports them.
+    /// centres of mass from the lumped parameters, set-ups and targets. Joint-angle terms
+    /// (harmonics, backlash) have no place in a robot file: see [`crate::terms`].
     pub fn to_robot(&self) -> Robot {
         let mut robot = self.robot.clone();
         let edofs: Vec<_> = robot.edofs().collect();

@@ -1,35 +1,51 @@
-//! Per-row predictions of a calibrated robot file (`deflex predict`): each absolute reading's
-//! target in its set-up's tracker frame, with the error where measured.
+//! Per-row predictions of a calibrated model (`deflex predict`): each absolute reading's
+//! target in its set-up's tracker frame (and its orientation when the target's frame is
+//! known), with the error where measured.
 
 use crate::campaign::Campaign;
 use crate::data::AbsoluteRow;
-use crate::fit::ErrorStats;
+use crate::outcome::ErrorStats;
 use crate::params::{EgModel, Param};
+use crate::protocol::row_errors;
 use crate::solve::{Loss, SolveOptions};
-use deflex_model::Robot;
-use serde_json::{Value, json};
+use deflex_model::NamedPose;
 
-fn mm(v: f64) -> String {
-    format!("{:.3}", v * 1e3)
+/// One row's prediction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RowPrediction {
+    /// The input row.
+    pub row: AbsoluteRow,
+    /// Predicted target position, tracker frame (m).
+    pub predicted_m: [f64; 3],
+    /// Predicted target orientation, tracker frame (rotation vector, rad), when the target's
+    /// frame is known.
+    pub predicted_rotation_rad: Option<[f64; 3]>,
+    /// Position error norm (m).
+    pub error_m: f64,
+    /// Orientation error angle (rad), when measured and predicted.
+    pub orientation_error_rad: Option<f64>,
 }
 
-/// Per-row predictions of a calibrated robot (`deflex predict`).
+/// Per-row predictions of a calibrated model.
+#[derive(Clone, Debug)]
 pub struct Prediction {
-    /// CSV: the input columns that identify the row, predicted position, error when measured.
-    pub csv: String,
-    /// Summary text.
-    pub text: String,
-    /// Summary JSON.
-    pub json: Value,
+    /// Each row.
+    pub rows: Vec<RowPrediction>,
+    /// Position error distribution (m).
+    pub position: ErrorStats,
+    /// Orientation error distribution (rad), when measured and predicted.
+    pub orientation: Option<ErrorStats>,
+    /// Whether the set-ups were registered on these rows first.
+    pub fit_setup: bool,
+    /// The set-ups used.
+    pub setups: Vec<NamedPose>,
 }
 
 /// Why rows cannot be predicted.
 #[derive(Debug, thiserror::Error)]
 pub enum PredictError {
     /// A row names a set-up or target the robot file does not have.
-    #[error(
-        "line {line}: {what} `{name}` is not in the robot file (it knows: {known}); calibrate with it, or use --fit-setup for a set-up"
-    )]
+    #[error("line {line}: {what} `{name}` is not in the robot file (it knows: {known}); {hint}")]
     Unknown {
         /// Line.
         line: u64,
@@ -39,33 +55,36 @@ pub enum PredictError {
         name: String,
         /// Known names.
         known: String,
+        /// What to do.
+        hint: &'static str,
     },
     /// Campaign error.
     #[error(transparent)]
     Campaign(#[from] crate::campaign::CampaignError),
 }
 
-/// Predict each row's target in its set-up's tracker frame with the robot's calibrated
-/// geometry, gravity sag and set-ups. With `fit_setup`, the registration of every set-up in the
-/// rows is fitted first (on all rows; new set-ups are registered from scratch).
+fn known(names: impl Iterator<Item = String>) -> String {
+    names.collect::<Vec<_>>().join(", ")
+}
+
+/// Predict each row's target in its set-up's tracker frame with the model's calibrated
+/// geometry, gravity sag, joint terms and set-ups. With `fit_setup`, the registration of every
+/// set-up in the rows is fitted first (on all rows; new set-ups are registered from scratch):
+/// optimistic, for a quick look — `deflex register` registers from a few readings instead.
 pub fn predict_rows(
-    robot: &Robot,
+    model: &EgModel,
     rows: Vec<AbsoluteRow>,
     fit_setup: bool,
 ) -> Result<Prediction, PredictError> {
-    let mut model = EgModel::from_robot(robot);
+    let mut model = model.clone();
     for row in &rows {
         if model.target_index(&row.target).is_none() {
             return Err(PredictError::Unknown {
                 line: row.line,
                 what: "target",
                 name: row.target.clone(),
-                known: model
-                    .targets
-                    .iter()
-                    .map(|t| t.name.clone())
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                known: known(model.targets.iter().map(|t| t.name.clone())),
+                hint: "register it first (deflex register --target NAME)",
             });
         }
         if !fit_setup && model.setup_index(&row.setup).is_none() {
@@ -73,99 +92,71 @@ pub fn predict_rows(
                 line: row.line,
                 what: "set-up",
                 name: row.setup.clone(),
-                known: model
-                    .setups
-                    .iter()
-                    .map(|t| t.name.clone())
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                known: known(model.setups.iter().map(|s| s.name.clone())),
+                hint: "register it first (deflex register --setup NAME), or use --fit-setup",
             });
         }
     }
     let campaign = Campaign::new(&mut model, rows, Vec::new())?;
     if fit_setup {
-        let setups: Vec<usize> = campaign
-            .setup_of
-            .iter()
-            .copied()
-            .collect::<std::collections::BTreeSet<_>>()
-            .into_iter()
-            .collect();
-        let all = vec![1.0; campaign.len()];
-        let fresh: Vec<usize> = setups
-            .iter()
-            .copied()
-            .filter(|&s| model.setups[s].pose == deflex_model::Pose::identity())
-            .collect();
-        crate::register::initialise(&mut model, &campaign, &fresh, &[], &all, 1);
-        let params: Vec<Param> = setups
-            .iter()
-            .flat_map(|&s| {
-                (0..3)
-                    .map(move |k| Param::SetupRotation(s, k))
-                    .chain((0..3).map(move |k| Param::SetupTranslation(s, k)))
-            })
-            .collect();
-        let options = SolveOptions {
-            loss: Loss::HUBER_DEFAULT,
-            ..SolveOptions::default()
-        };
-        crate::solve::solve(&mut model, &campaign, &params, &all, &options);
+        register_all(&mut model, &campaign);
     }
-    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
-    let n = robot.joint_count();
-    let mut header: Vec<String> = vec!["line".into(), "setup".into(), "target".into()];
-    header.extend((1..=n).map(|i| format!("q{i}_rad")));
-    header.extend(
-        [
-            "predicted_x_m",
-            "predicted_y_m",
-            "predicted_z_m",
-            "x_m",
-            "y_m",
-            "z_m",
-            "error_m",
-        ]
-        .map(String::from),
-    );
-    let _ = writer.write_record(&header);
-    let mut norms = Vec::new();
+    let mut out = Vec::with_capacity(campaign.absolute.len());
     for (i, row) in campaign.absolute.iter().enumerate() {
-        let loads = campaign.loads(&model, i);
-        let p = model.predict_tracker(
-            &row.q_rad,
-            campaign.setup_of[i],
-            campaign.target_of[i],
-            &loads,
-        );
-        let error = (nalgebra::Vector3::from(row.position_m) - p).norm();
-        norms.push(error);
-        let mut record = vec![row.line.to_string(), row.setup.clone(), row.target.clone()];
-        record.extend(row.q_rad.iter().map(|v| format!("{v:?}")));
-        record.extend([p.x, p.y, p.z].iter().map(|v| format!("{v:?}")));
-        record.extend(row.position_m.iter().map(|v| format!("{v:?}")));
-        record.push(format!("{error:e}"));
-        let _ = writer.write_record(&record);
+        let (s, t) = (campaign.setup_of[i], campaign.target_of[i]);
+        let ev = model.evaluate(&row.q_rad, t, &campaign.conditions(&model, i));
+        let p = model.tracker_position(&ev, s);
+        let rotation = model.targets[t].rotation.map(|_| {
+            let v = deflex_model::spatial::rotation_log(&model.tracker_orientation(&ev, s));
+            [v.x, v.y, v.z]
+        });
+        let (error_m, orientation_error_rad) = row_errors(&model, &campaign, i);
+        out.push(RowPrediction {
+            row: row.clone(),
+            predicted_m: [p.x, p.y, p.z],
+            predicted_rotation_rad: rotation,
+            error_m,
+            orientation_error_rad,
+        });
     }
-    let csv = String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default();
-    let stats = ErrorStats::of(&norms);
-    let text = format!(
-        "{} rows predicted{}; error norm (measured − predicted): RMS {} mm, mean {} mm, p95 {} mm, max {} mm\n",
-        stats.count,
-        if fit_setup {
-            " (set-up registration fitted on these rows)"
-        } else {
-            ""
-        },
-        mm(stats.rms),
-        mm(stats.mean),
-        mm(stats.p95),
-        mm(stats.max)
-    );
-    let json = json!({
-        "rows": stats.count, "fit_setup": fit_setup,
-        "rms_m": stats.rms, "mean_m": stats.mean, "p95_m": stats.p95, "max_m": stats.max,
-        "setups": model.setups.iter().map(|s| json!({"name": s.name, "xyz_m": [s.pose.translation.vector.x, s.pose.translation.vector.y, s.pose.translation.vector.z], "rpy_rad": deflex_model::spatial::rpy_from_rotation(&s.pose.rotation)})).collect::<Vec<_>>(),
-    });
-    Ok(Prediction { csv, text, json })
+    let position = ErrorStats::of(&out.iter().map(|r| r.error_m).collect::<Vec<_>>());
+    let orientation: Vec<f64> = out.iter().filter_map(|r| r.orientation_error_rad).collect();
+    Ok(Prediction {
+        rows: out,
+        position,
+        orientation: (!orientation.is_empty()).then(|| ErrorStats::of(&orientation)),
+        fit_setup,
+        setups: model.setups.clone(),
+    })
+}
+
+/// Register every set-up of the campaign on all its rows.
+fn register_all(model: &mut EgModel, campaign: &Campaign) {
+    let setups: Vec<usize> = campaign
+        .setup_of
+        .iter()
+        .copied()
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    let all = vec![1.0; campaign.len()];
+    let fresh: Vec<usize> = setups
+        .iter()
+        .copied()
+        .filter(|&s| model.setups[s].pose == deflex_model::Pose::identity())
+        .collect();
+    crate::register::start::initialise(model, campaign, &fresh, &[], &all, 1);
+    let params: Vec<Param> = setups
+        .iter()
+        .flat_map(|&s| {
+            (0..3)
+                .map(move |k| Param::SetupRotation(s, k))
+                .chain((0..3).map(move |k| Param::SetupTranslation(s, k)))
+        })
+        .collect();
+    let options = SolveOptions {
+        loss: Loss::HUBER_DEFAULT,
+        ..SolveOptions::default()
+    };
+    crate::solve::solve(model, campaign, &params, &all, &options);
 }

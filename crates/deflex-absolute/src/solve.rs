@@ -10,7 +10,8 @@
 //!
 //! **Robust loss.** Each reading's standardised residual `u = |r|/(σ s)` (3 components, σ its
 //! standard deviation, s a robust scale: the median of `|r|/σ` over the readings of its kind
-//! divided by 1.5382, the median of a χ with 3 degrees of freedom) enters through ρ(u):
+//! divided by 1.5382, the median of a χ with 3 degrees of freedom; positions, loaded
+//! displacements and orientations each have their own) enters through ρ(u):
 //! Huber (`u²/2` up to k, then `k u − k²/2`; weight `min(1, k/u)`) or Cauchy
 //! (`k²/2 · ln(1 + (u/k)²)`; weight `1/(1 + (u/k)²)`). Each LM step is a weighted least-squares
 //! step with the weights at the current point (IRLS); a step is accepted when it lowers
@@ -109,8 +110,8 @@ pub struct SolveOutcome {
     pub cost: f64,
     /// IRLS weight of every reading (0 for readings not in the fit).
     pub weights: Vec<f64>,
-    /// Robust scale of absolute and loaded readings (1 = the stated σ).
-    pub scale: [f64; 2],
+    /// Robust scale of position, loaded and orientation readings (1 = the stated σ).
+    pub scale: [f64; 3],
 }
 
 /// Standardised residual `r/σ` of every reading in the fit (`multiplicity > 0`).
@@ -127,14 +128,14 @@ pub fn standardised_residuals(
         .collect()
 }
 
-/// Robust scales of absolute and loaded readings from standardised residuals.
-pub fn robust_scales(campaign: &Campaign, residuals: &[Option<Vector3<f64>>]) -> [f64; 2] {
-    let mut out = [1.0; 2];
+/// Robust scales of position, loaded and orientation readings from standardised residuals.
+pub fn robust_scales(campaign: &Campaign, residuals: &[Option<Vector3<f64>>]) -> [f64; 3] {
+    let mut out = [1.0; 3];
     for (kind, slot) in out.iter_mut().enumerate() {
         let mut norms: Vec<f64> = residuals
             .iter()
             .enumerate()
-            .filter(|(i, _)| campaign.is_absolute(*i) == (kind == 0))
+            .filter(|(i, _)| campaign.kind(*i).index() == kind)
             .filter_map(|(_, r)| r.map(|r| r.norm()))
             .collect();
         if norms.is_empty() {
@@ -159,14 +160,14 @@ fn robust_cost(
     campaign: &Campaign,
     residuals: &[Option<Vector3<f64>>],
     multiplicity: &[f64],
-    scale: [f64; 2],
+    scale: [f64; 3],
     loss: Loss,
 ) -> Evaluated {
     let mut cost = 0.0;
     let mut weights = vec![0.0; residuals.len()];
     for (i, r) in residuals.iter().enumerate() {
         if let Some(r) = r {
-            let s = scale[usize::from(!campaign.is_absolute(i))];
+            let s = scale[campaign.kind(i).index()];
             let u = r.norm() / s;
             cost += multiplicity[i] * s * s * loss.rho(u);
             weights[i] = loss.weight(u);
@@ -228,7 +229,7 @@ pub fn solve(
     let mut converged = params.is_empty();
     let mut residuals = standardised_residuals(model, campaign, multiplicity);
     let mut scale = match options.loss {
-        Loss::Squared => [1.0; 2],
+        Loss::Squared => [1.0; 3],
         _ => robust_scales(campaign, &residuals),
     };
     let mut current = robust_cost(campaign, &residuals, multiplicity, scale, options.loss);
@@ -286,7 +287,7 @@ pub fn solve(
             break;
         }
         let new_scale = robust_scales(campaign, &residuals);
-        let settled = (0..2).all(|k| (new_scale[k] / scale[k] - 1.0).abs() < 0.01);
+        let settled = (0..3).all(|k| (new_scale[k] / scale[k] - 1.0).abs() < 0.01);
         scale = new_scale;
         current = robust_cost(campaign, &residuals, multiplicity, scale, options.loss);
         if settled {

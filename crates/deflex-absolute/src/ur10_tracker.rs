@@ -13,7 +13,7 @@
 
 use crate::data::{AbsoluteRow, RowOrientation};
 use nalgebra::{Rotation3, Vector3};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use thiserror::Error;
 
 /// The UR joint columns, base to flange.
@@ -26,47 +26,69 @@ pub const JOINT_COLUMNS: [&str; 6] = [
     "wrist_3_joint",
 ];
 
-/// Largest series file read (bytes).
+/// Largest series file a caller should read (bytes).
 pub const MAX_SERIES_BYTES: u64 = 256 << 20;
 
 /// A series file that cannot be imported.
 #[derive(Debug, Error)]
 pub enum ImportError {
-    /// Read error.
-    #[error("{path}: {source}")]
-    Io {
-        /// File.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// A folder with no single `measurements_*.csv`.
-    #[error("{path}: {message}")]
-    Folder {
-        /// Folder.
-        path: String,
-        /// What was found.
-        message: String,
-    },
     /// Bad header.
-    #[error("{path}: header: {message}")]
+    #[error("{path}: header: {problem}")]
     Header {
         /// File.
         path: String,
         /// What is wrong.
-        message: String,
+        problem: SeriesHeaderProblem,
     },
     /// Bad row.
-    #[error("{path}:{line}: column `{column}`: {message}")]
+    #[error("{path}:{line}: column `{column}`: {problem}")]
     Row {
         /// File.
         path: String,
         /// 1-based line.
         line: usize,
-        /// Column.
+        /// Column (`-`: the line as a whole).
         column: String,
         /// What is wrong.
-        message: String,
+        problem: SeriesRowProblem,
+    },
+}
+
+/// What is wrong with a series header.
+#[derive(Debug, Error)]
+pub enum SeriesHeaderProblem {
+    /// Nothing in the file.
+    #[error("empty file")]
+    Empty,
+    /// A required column is missing.
+    #[error("missing column `{0}`")]
+    Missing(&'static str),
+    /// A header and no data.
+    #[error("no data rows")]
+    NoRows,
+}
+
+/// What is wrong with a series row.
+#[derive(Debug, Error)]
+pub enum SeriesRowProblem {
+    /// More rows than the absolute format allows.
+    #[error("more than {0} rows")]
+    TooManyRows(usize),
+    /// Not as many fields as the header.
+    #[error("expected {expected} fields, found {found}")]
+    FieldCount {
+        /// Header width.
+        expected: usize,
+        /// Fields found.
+        found: usize,
+    },
+    /// Not a decimal-comma number within the bound.
+    #[error("expected a decimal-comma number within ±{limit}, got \"{text}\"")]
+    Number {
+        /// The cell.
+        text: String,
+        /// The bound.
+        limit: f64,
     },
 }
 
@@ -101,58 +123,6 @@ pub struct ImportOptions {
     pub tracker_sigma: bool,
 }
 
-/// The single `measurements_*.csv` of a series folder (or the file itself).
-pub fn series_file(path: &Path) -> Result<PathBuf, ImportError> {
-    if path.is_file() {
-        return Ok(path.to_path_buf());
-    }
-    let shown = path.display().to_string();
-    let entries = std::fs::read_dir(path).map_err(|source| ImportError::Io {
-        path: shown.clone(),
-        source,
-    })?;
-    let mut found: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("measurements") && n.ends_with(".csv"))
-        })
-        .collect();
-    found.sort();
-    match found.len() {
-        1 => Ok(found.remove(0)),
-        n => Err(ImportError::Folder {
-            path: shown,
-            message: format!("expected one measurements_*.csv, found {n}"),
-        }),
-    }
-}
-
-/// Read a series (folder or file) into absolute rows.
-pub fn import_series(
-    path: &Path,
-    options: &ImportOptions,
-) -> Result<(Vec<AbsoluteRow>, ImportSummary), ImportError> {
-    let file = series_file(path)?;
-    let shown = file.display().to_string();
-    let io = |source| ImportError::Io {
-        path: shown.clone(),
-        source,
-    };
-    let size = std::fs::metadata(&file).map_err(io)?.len();
-    if size > MAX_SERIES_BYTES {
-        return Err(ImportError::Folder {
-            path: shown,
-            message: format!("{size} bytes: more than the {MAX_SERIES_BYTES} bytes read"),
-        });
-    }
-    let text = std::fs::read_to_string(&file).map_err(io)?;
-    let (rows, mut summary) = parse_series(&text, &shown, options)?;
-    summary.file = file;
-    Ok((rows, summary))
-}
-
 /// A decimal-comma number (`-0,5`, `2,02011E+13`).
 fn decimal_comma(text: &str) -> Option<f64> {
     let value: f64 = text.trim().replace(',', ".").parse().ok()?;
@@ -183,7 +153,155 @@ fn timestamp_seconds(text: &str) -> Option<f64> {
     Some((days * 86_400 + hh * 3600 + mm * 60 + ss) as f64)
 }
 
-/// Parse series text (see the module documentation).
+/// Where the used columns sit in a series header.
+struct SeriesColumns {
+    width: usize,
+    names: Vec<String>,
+    joints: Vec<usize>,
+    position: [usize; 3],
+    position_std: Option<[usize; 3]>,
+    rotation: Option<[usize; 3]>,
+    rotation_std: Option<[usize; 3]>,
+    temperature: Option<usize>,
+    timestamp: Option<usize>,
+}
+
+impl SeriesColumns {
+    fn of(header: &str, origin: &str) -> Result<SeriesColumns, ImportError> {
+        let names: Vec<String> = header.split(';').map(|n| n.trim().to_string()).collect();
+        let column = |name: &str| names.iter().position(|n| n == name);
+        let require = |name: &'static str| {
+            column(name).ok_or_else(|| ImportError::Header {
+                path: origin.into(),
+                problem: SeriesHeaderProblem::Missing(name),
+            })
+        };
+        let group = |three: [&str; 3]| -> Option<[usize; 3]> {
+            Some([column(three[0])?, column(three[1])?, column(three[2])?])
+        };
+        Ok(SeriesColumns {
+            joints: JOINT_COLUMNS
+                .iter()
+                .map(|n| require(n))
+                .collect::<Result<Vec<_>, _>>()?,
+            position: [
+                require("measurement_x")?,
+                require("measurement_y")?,
+                require("measurement_z")?,
+            ],
+            position_std: group([
+                "measurement_std_x",
+                "measurement_std_y",
+                "measurement_std_z",
+            ]),
+            rotation: group(["measurement_rx", "measurement_ry", "measurement_rz"]),
+            rotation_std: group([
+                "measurement_std_rx",
+                "measurement_std_ry",
+                "measurement_std_rz",
+            ]),
+            temperature: column("measurement_temperature"),
+            timestamp: column("Timestamp"),
+            width: names.len(),
+            names,
+        })
+    }
+}
+
+/// One series line, split, with its checked numbers.
+struct SeriesLine<'a> {
+    fields: Vec<&'a str>,
+    columns: &'a SeriesColumns,
+    origin: &'a str,
+    line: usize,
+}
+
+impl SeriesLine<'_> {
+    fn number(&self, i: usize, limit: f64) -> Result<f64, ImportError> {
+        decimal_comma(self.fields[i])
+            .filter(|v| v.abs() <= limit)
+            .ok_or_else(|| ImportError::Row {
+                path: self.origin.into(),
+                line: self.line,
+                column: self.columns.names[i].clone(),
+                problem: SeriesRowProblem::Number {
+                    text: self.fields[i].to_string(),
+                    limit,
+                },
+            })
+    }
+
+    /// RMS over three columns (mm or deg in the file) times `unit`.
+    fn rms(&self, three: [usize; 3], unit: f64) -> Result<f64, ImportError> {
+        let mut sum = 0.0;
+        for i in three {
+            sum += (self.number(i, 1e3)? * unit).powi(2);
+        }
+        Ok((sum / 3.0).sqrt())
+    }
+
+    fn orientation(&self, tracker_sigma: bool) -> Result<Option<RowOrientation>, ImportError> {
+        let Some(rotation) = self.columns.rotation else {
+            return Ok(None);
+        };
+        let mut angles = [0.0; 3];
+        for (v, i) in angles.iter_mut().zip(rotation) {
+            *v = self.number(i, 720.0)?.to_radians();
+        }
+        // Intrinsic X-Y-Z (checked on the data: the probe's orientation in the flange frame
+        // then stays constant to 1 mrad over Series A, against 0.2–0.7 rad for the other orders).
+        let r = Rotation3::from_axis_angle(&Vector3::x_axis(), angles[0])
+            * Rotation3::from_axis_angle(&Vector3::y_axis(), angles[1])
+            * Rotation3::from_axis_angle(&Vector3::z_axis(), angles[2]);
+        let v = deflex_model::spatial::rotation_log(&r);
+        let sigma_rad = match (tracker_sigma, self.columns.rotation_std) {
+            (true, Some(three)) => Some(self.rms(three, 1f64.to_radians())?).filter(|s| *s > 0.0),
+            _ => None,
+        };
+        Ok(Some(RowOrientation {
+            rotation_vector_rad: [v.x, v.y, v.z],
+            sigma_rad,
+        }))
+    }
+
+    fn row(&self, options: &ImportOptions) -> Result<(AbsoluteRow, Option<f64>), ImportError> {
+        let c = self.columns;
+        let q_rad = c
+            .joints
+            .iter()
+            .map(|&i| self.number(i, crate::data::limits::MAX_JOINT_RAD))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut position_m = [0.0; 3];
+        for (v, &i) in position_m.iter_mut().zip(&c.position) {
+            *v = self.number(i, 1e5)? * 1e-3;
+        }
+        let position_std = c
+            .position_std
+            .map(|three| self.rms(three, 1e-3))
+            .transpose()?;
+        let temperature_c = c.temperature.map(|i| self.number(i, 1e3)).transpose()?;
+        let row = AbsoluteRow {
+            line: self.line as u64,
+            setup: options.setup.clone(),
+            target: options.target.clone(),
+            config: None,
+            q_rad,
+            position_m,
+            sigma_m: position_std.filter(|s| options.tracker_sigma && *s > 0.0),
+            orientation: self.orientation(options.tracker_sigma)?,
+            payload: None,
+            wrench: None,
+            temperature_c,
+            time_s: c.timestamp.and_then(|i| timestamp_seconds(self.fields[i])),
+            approach_rad: None,
+        };
+        Ok((row, position_std))
+    }
+}
+
+/// Parse series text (see the module documentation). Every row gets its approach motion
+/// ([`crate::data::approach_from_sequence`]) from the measuring sequence: time-stamp order when
+/// every row has one, file order otherwise.
 pub fn parse_series(
     text: &str,
     origin: &str,
@@ -196,157 +314,90 @@ pub fn parse_series(
         .map(|(_, l)| l)
         .ok_or_else(|| ImportError::Header {
             path: origin.into(),
-            message: "empty file".into(),
+            problem: SeriesHeaderProblem::Empty,
         })?;
-    let names: Vec<&str> = header_line.split(';').map(str::trim).collect();
-    let column = |name: &str| names.iter().position(|n| *n == name);
-    let require = |name: &str| {
-        column(name).ok_or_else(|| ImportError::Header {
-            path: origin.into(),
-            message: format!("missing column `{name}`"),
-        })
-    };
-    let joints = JOINT_COLUMNS
-        .iter()
-        .map(|n| require(n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let position = [
-        require("measurement_x")?,
-        require("measurement_y")?,
-        require("measurement_z")?,
-    ];
-    let rotation = ["measurement_rx", "measurement_ry", "measurement_rz"].map(column);
-    let std = [
-        "measurement_std_x",
-        "measurement_std_y",
-        "measurement_std_z",
-    ]
-    .map(column);
-    let has_std = std.iter().all(Option::is_some);
-    let has_rotation = rotation.iter().all(Option::is_some);
-    let temperature = column("measurement_temperature");
-    let timestamp = column("Timestamp");
+    let columns = SeriesColumns::of(header_line, origin)?;
     let mut rows = Vec::new();
     let mut stds = Vec::new();
-    let mut without_time = 0;
-    let mut t_range = [f64::INFINITY, f64::NEG_INFINITY];
     for (index, line) in lines {
         if line.trim().is_empty() {
             continue;
         }
-        let line_no = index + 1;
+        let row_error = |problem| ImportError::Row {
+            path: origin.into(),
+            line: index + 1,
+            column: "-".into(),
+            problem,
+        };
         if rows.len() >= crate::data::limits::MAX_ROWS {
-            return Err(ImportError::Row {
-                path: origin.into(),
-                line: line_no,
-                column: "-".into(),
-                message: format!("more than {} rows", crate::data::limits::MAX_ROWS),
-            });
+            return Err(row_error(SeriesRowProblem::TooManyRows(
+                crate::data::limits::MAX_ROWS,
+            )));
         }
         let fields: Vec<&str> = line.split(';').collect();
-        if fields.len() != names.len() {
-            return Err(ImportError::Row {
-                path: origin.into(),
-                line: line_no,
-                column: "-".into(),
-                message: format!("expected {} fields, found {}", names.len(), fields.len()),
-            });
+        if fields.len() != columns.width {
+            return Err(row_error(SeriesRowProblem::FieldCount {
+                expected: columns.width,
+                found: fields.len(),
+            }));
         }
-        let number = |i: usize, limit: f64| -> Result<f64, ImportError> {
-            decimal_comma(fields[i])
-                .filter(|v| v.abs() <= limit)
-                .ok_or_else(|| ImportError::Row {
-                    path: origin.into(),
-                    line: line_no,
-                    column: names[i].to_string(),
-                    message: format!(
-                        "expected a decimal-comma number within ±{limit}, got \"{}\"",
-                        fields[i]
-                    ),
-                })
+        let parsed = SeriesLine {
+            fields,
+            columns: &columns,
+            origin,
+            line: index + 1,
         };
-        let q_rad = joints
-            .iter()
-            .map(|&i| number(i, crate::data::limits::MAX_JOINT_RAD))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut position_m = [0.0; 3];
-        for (v, &i) in position_m.iter_mut().zip(&position) {
-            *v = number(i, 1e5)? * 1e-3;
-        }
-        let orientation = if has_rotation {
-            let mut angles = [0.0; 3];
-            for (v, i) in angles.iter_mut().zip(rotation) {
-                *v = number(i.unwrap_or(0), 720.0)?.to_radians();
-            }
-            let r = Rotation3::from_axis_angle(&Vector3::x_axis(), angles[0])
-                * Rotation3::from_axis_angle(&Vector3::y_axis(), angles[1])
-                * Rotation3::from_axis_angle(&Vector3::z_axis(), angles[2]);
-            let v = deflex_model::spatial::rotation_log(&r);
-            Some(RowOrientation {
-                rotation_vector_rad: [v.x, v.y, v.z],
-                sigma_rad: None,
-            })
-        } else {
-            None
-        };
-        let row_std = if has_std {
-            let mut s = 0.0;
-            for i in std {
-                let v = number(i.unwrap_or(0), 1e3)? * 1e-3;
-                s += v * v;
-            }
-            let rms = (s / 3.0).sqrt();
-            stds.push(rms);
-            (rms > 0.0).then_some(rms)
-        } else {
-            None
-        };
-        let temperature_c = match temperature {
-            Some(i) => {
-                let t = number(i, 1e3)?;
-                t_range = [t_range[0].min(t), t_range[1].max(t)];
-                Some(t)
-            }
-            None => None,
-        };
-        let time_s = timestamp.and_then(|i| timestamp_seconds(fields[i]));
-        if time_s.is_none() {
-            without_time += 1;
-        }
-        rows.push(AbsoluteRow {
-            line: line_no as u64,
-            setup: options.setup.clone(),
-            target: options.target.clone(),
-            config: None,
-            q_rad,
-            position_m,
-            sigma_m: if options.tracker_sigma { row_std } else { None },
-            orientation,
-            payload: None,
-            wrench: None,
-            temperature_c,
-            time_s,
-        });
+        let (row, std) = parsed.row(options)?;
+        stds.extend(std);
+        rows.push(row);
     }
     if rows.is_empty() {
         return Err(ImportError::Header {
             path: origin.into(),
-            message: "no data rows".into(),
+            problem: SeriesHeaderProblem::NoRows,
         });
     }
-    let median_tracker_std_m = (!stds.is_empty()).then(|| {
-        stds.sort_by(f64::total_cmp);
-        stds[stds.len() / 2]
-    });
+    fill_approach(&mut rows);
+    let temperatures: Vec<f64> = rows.iter().filter_map(|r| r.temperature_c).collect();
     let summary = ImportSummary {
         file: PathBuf::from(origin),
         rows: rows.len(),
-        rows_without_time: without_time,
-        has_tracker_std: has_std,
-        median_tracker_std_m,
-        temperature_range_c: t_range[0].is_finite().then_some(t_range),
+        rows_without_time: rows.iter().filter(|r| r.time_s.is_none()).count(),
+        has_tracker_std: columns.position_std.is_some(),
+        median_tracker_std_m: (!stds.is_empty()).then(|| {
+            stds.sort_by(f64::total_cmp);
+            stds[stds.len() / 2]
+        }),
+        temperature_range_c: (!temperatures.is_empty()).then(|| {
+            [
+                temperatures.iter().copied().fold(f64::INFINITY, f64::min),
+                temperatures
+                    .iter()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max),
+            ]
+        }),
     };
     Ok((rows, summary))
+}
+
+/// Approach motions in the measuring order: by time stamp when every row has one (Series A
+/// ends with ten re-measured readings out of time order), else in file order.
+fn fill_approach(rows: &mut [AbsoluteRow]) {
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    if rows.iter().all(|r| r.time_s.is_some()) {
+        order.sort_by(|&a, &b| {
+            rows[a]
+                .time_s
+                .unwrap_or(0.0)
+                .total_cmp(&rows[b].time_s.unwrap_or(0.0))
+        });
+    }
+    let mut sequence: Vec<AbsoluteRow> = order.iter().map(|&i| rows[i].clone()).collect();
+    crate::data::approach_from_sequence(&mut sequence);
+    for (row, &i) in sequence.into_iter().zip(&order) {
+        rows[i].approach_rad = row.approach_rad;
+    }
 }
 
 #[cfg(test)]

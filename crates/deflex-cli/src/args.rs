@@ -1,69 +1,90 @@
 //! Shared argument parsing: joint values, wrenches, lengths, robot loading.
 
-use deflex_model::{Robot, load_robot};
+use crate::error::{CliError, UsageError};
+use deflex_load::load_robot;
+use deflex_model::Robot;
 
-/// Result type of every command: errors are user-facing messages.
+/// Result of the commands that still report text (`run`, `cell`, `compensate`,
+/// `calibrate-geometry`, converted by their own tracks); the others return
+/// [`crate::error::CommandResult`].
 pub type CliResult = Result<(), String>;
 
 /// A numeric flag within `[lo, hi]` (NaN and infinities refused), or an error naming the flag,
 /// the bounds and the value.
-pub fn check_flag(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<(), String> {
+pub fn check_flag(
+    name: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    unit: &'static str,
+) -> Result<(), UsageError> {
     bounded(name, value, lo, hi, unit).map(|_| ())
 }
 
 /// [`check_flag`] returning the value.
-pub fn bounded(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
+pub fn bounded(
+    name: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    unit: &'static str,
+) -> Result<f64, UsageError> {
     if value >= lo && value <= hi {
         Ok(value)
     } else {
-        let unit = if unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {unit}")
-        };
-        Err(format!(
-            "{name}: expected a number from {} to {}{unit}, got {}",
-            compact(lo),
-            compact(hi),
-            compact(value)
-        ))
+        Err(UsageError::Range {
+            flag: name.to_string(),
+            lo,
+            hi,
+            unit,
+            got: value,
+        })
     }
 }
 
-/// A number for a message: plain when readable, in exponent form when very large or small
-/// (`1e308`, not three hundred digits).
-pub fn compact(value: f64) -> String {
-    let magnitude = value.abs();
-    if value.is_finite() && value != 0.0 && !(1e-3..1e6).contains(&magnitude) {
-        format!("{value:e}")
+/// A number flag within a range (no unit), named in the error.
+pub fn check_range(flag: &str, value: f64, lo: f64, hi: f64) -> Result<(), UsageError> {
+    check_flag(flag, value, lo, hi, "")
+}
+
+/// A number, or JSON null when it is infinite or NaN (not identifiable).
+pub fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
     } else {
-        format!("{value}")
+        serde_json::Value::Null
     }
 }
 
 /// Parse a comma-separated list of finite numbers; `what` names the option in errors.
-pub fn parse_list(text: &str, what: &str) -> Result<Vec<f64>, String> {
+pub fn parse_list(text: &str, what: &str) -> Result<Vec<f64>, UsageError> {
     text.split(',')
         .map(|item| {
             let item = item.trim();
             item.parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{what}: expected comma-separated numbers, \"{item}\" is not a finite number"))
+                .ok_or_else(|| {
+                    UsageError::invalid(
+                        what,
+                        "comma-separated numbers",
+                        format!("\"{item}\", which is not a finite number"),
+                    )
+                })
         })
         .collect()
 }
 
 /// Parse a fixed number of comma-separated values.
-pub fn parse_fixed<const N: usize>(text: &str, what: &str) -> Result<[f64; N], String> {
+pub fn parse_fixed<const N: usize>(text: &str, what: &str) -> Result<[f64; N], UsageError> {
     let values = parse_list(text, what)?;
     values
         .try_into()
-        .map_err(|v: Vec<f64>| format!("{what}: expected {N} values, got {}", v.len()))
+        .map_err(|v: Vec<f64>| UsageError::invalid(what, format!("{N} values"), v.len()))
 }
 
 /// A length with an optional unit suffix (`600mm`, `0.6m`); a bare number is in millimetres.
-pub fn parse_length_mm_default(text: &str, what: &str) -> Result<f64, String> {
+pub fn parse_length_mm_default(text: &str, what: &str) -> Result<f64, UsageError> {
     let text = text.trim();
     let (number, scale) = if let Some(n) = text.strip_suffix("mm") {
         (n, 1e-3)
@@ -78,7 +99,9 @@ pub fn parse_length_mm_default(text: &str, what: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite())
         .map(|v| v * scale)
-        .ok_or_else(|| format!("{what}: expected a length like 600mm or 0.6m, got \"{text}\""))
+        .ok_or_else(|| {
+            UsageError::invalid(what, "a length like 600mm or 0.6m", format!("\"{text}\""))
+        })
 }
 
 /// Joint values from `--q-deg` or `--q-rad`, checked against the robot's joint count.
@@ -86,32 +109,39 @@ pub fn joint_values(
     robot: &Robot,
     q_deg: Option<&str>,
     q_rad: Option<&str>,
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>, UsageError> {
     let q = match (q_deg, q_rad) {
         (Some(d), None) => parse_list(d, "--q-deg")?
             .into_iter()
             .map(f64::to_radians)
             .collect(),
         (None, Some(r)) => parse_list(r, "--q-rad")?,
-        (Some(_), Some(_)) => return Err("give either --q-deg or --q-rad, not both".into()),
+        (Some(_), Some(_)) => {
+            return Err(UsageError::NotBoth {
+                first: "--q-deg",
+                second: "--q-rad",
+            });
+        }
         (None, None) => {
-            return Err("joint values needed: --q-deg a,b,c,... or --q-rad a,b,c,...".into());
+            return Err(UsageError::Missing {
+                what: "joint values needed",
+                give: "--q-deg a,b,c,... or --q-rad a,b,c,...",
+            });
         }
     };
     if q.len() != robot.joint_count() {
-        return Err(format!(
-            "robot \"{}\" has {} joints, but {} joint values were given",
-            robot.name,
-            robot.joint_count(),
-            q.len()
-        ));
+        return Err(UsageError::JointCount {
+            robot: robot.name.clone(),
+            joints: robot.joint_count(),
+            given: q.len(),
+        });
     }
     Ok(q)
 }
 
 /// Load a robot by built-in name or file path.
-pub fn robot(spec: &str) -> Result<Robot, String> {
-    load_robot(spec).map_err(|e| e.to_string())
+pub fn robot(spec: &str) -> Result<Robot, CliError> {
+    Ok(load_robot(spec)?)
 }
 
 /// Print a JSON value, pretty, to stdout (the `--json` output of every command).

@@ -1,23 +1,28 @@
 //! `deflex calibrate`, `validate` (and `plan`, in `cmd_plan`): identification of the
 //! elasto-geometrical model (Johra et al. 2022, Section 3) from laser-tracker measurements.
 
-use crate::args::{CliResult, robot};
-pub use crate::cmd_plan::{PlanArgs, plan};
-use clap::Args;
-use deflex_stiffness::calib_report::{CalibrationReport, write_calibration_report};
+use crate::args::{check_range, finite_or_null, robot};
+use crate::error::{CliError, CommandResult, UsageError};
+use clap::{Args, ValueEnum};
+
+use deflex_files::{AtomicDir, AtomicFile};
+use deflex_load::{read_file, robot_to_toml_for};
+use deflex_model::Robot;
+use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
+use deflex_report::calibration_tables::{
+    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
+    residual_summary, shift_rows, stiffness_rows,
+};
+use deflex_report::text_table::render_table;
+use deflex_report::validation_report::{
+    VALIDATION_HEADERS, validation_rotation_summary, validation_rows, write_validation_report,
+};
 use deflex_stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
-use deflex_stiffness::fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_stiffness::read_file;
-use deflex_stiffness::report::{
-    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, VALIDATION_HEADERS, correlation_table,
-    iteration_rows, render_table, residual_summary, shift_rows, stiffness_rows, validation_rows,
-};
 use deflex_stiffness::search::{Criterion, SearchOptions, SearchStep, search_structure};
-use deflex_stiffness::validate::{validate as run_validation, write_report};
-use deflex_files::{AtomicDir, AtomicFile};
-use deflex_model::{Robot, robot_to_toml_for};
+use deflex_stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
+use deflex_stiffness::validation::{predict, validate as run_validation};
 use serde_json::{Value, json};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -33,8 +38,8 @@ pub struct CalibrateArgs {
     pub data: PathBuf,
     /// auto: structure search from one z-eDoF per joint (see --criterion); fixed: the start
     /// model's eDoFs and centre shifts as given.
-    #[arg(long, default_value = "auto", value_parser = ["auto", "fixed"])]
-    pub structure: String,
+    #[arg(long, value_enum, default_value = "auto")]
+    pub structure: StructureChoice,
     /// Stop the search once the RMS residual (all components) is at most this (mm, 0 to 1000).
     #[arg(long)]
     pub target_rms_mm: Option<f64>,
@@ -49,8 +54,8 @@ pub struct CalibrateArgs {
     pub min_bic_gain: f64,
     /// How the search ranks structures: bic, or cv (held-out χ² of k-fold cross-validation by
     /// load case). The iteration table shows the cross-validated RMS either way.
-    #[arg(long, default_value = "bic", value_parser = ["bic", "cv"])]
-    pub criterion: String,
+    #[arg(long, value_enum, default_value = "bic")]
+    pub criterion: CriterionChoice,
     /// Folds of the cross-validation (by load case; 2 to 100, at most one per load case).
     #[arg(long, default_value_t = 5)]
     pub folds: usize,
@@ -72,6 +77,25 @@ pub struct CalibrateArgs {
     /// Folder for an HTML report with plots and CSV tables (replaced whole).
     #[arg(long)]
     pub report: Option<PathBuf>,
+}
+
+/// `--structure`: how the calibrated structure is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StructureChoice {
+    // Structure search from one z-eDoF per joint. (Plain comments: a doc comment would become
+    // the value's help and change `--help`.)
+    Auto,
+    // The start model's eDoFs and centre shifts.
+    Fixed,
+}
+
+/// `--criterion`: how the search ranks structures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CriterionChoice {
+    // Bayesian information criterion.
+    Bic,
+    // Held-out χ² of k-fold cross-validation by load case.
+    Cv,
 }
 
 #[derive(Args)]
@@ -96,11 +120,6 @@ pub struct ValidateArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
-/// A number, or JSON null when it is infinite or NaN (not identifiable).
-pub(crate) fn finite_or_null(x: f64) -> Value {
-    if x.is_finite() { json!(x) } else { Value::Null }
-}
-
 fn calibration_json(cal: &Calibration) -> Value {
     let edofs: Vec<Value> = cal
         .edofs
@@ -146,7 +165,7 @@ fn calibration_json(cal: &Calibration) -> Value {
         "residual_max_norm_m": r.max_norm_m,
         "rotation_rows": cal.rotation_rows,
         "residual_rotation_rms_rad": r.rotation_rms_rad,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "warnings": cal.warnings,
     })
@@ -169,17 +188,22 @@ fn read_checked(
     data: &Path,
     tolerance_mm: f64,
     ignore: bool,
-) -> Result<CheckedFile, String> {
+) -> Result<CheckedFile, CliError> {
     if !(tolerance_mm.is_finite()
         && (MIN_FK_TOLERANCE_M * 1e3..=MAX_FK_TOLERANCE_M * 1e3).contains(&tolerance_mm))
     {
-        return Err(format!(
-            "--fk-tolerance-mm: expected {} to {} mm, got {tolerance_mm}",
-            MIN_FK_TOLERANCE_M * 1e3,
-            MAX_FK_TOLERANCE_M * 1e3
-        ));
+        return Err(UsageError::invalid(
+            "--fk-tolerance-mm",
+            format!(
+                "{} to {} mm",
+                MIN_FK_TOLERANCE_M * 1e3,
+                MAX_FK_TOLERANCE_M * 1e3
+            ),
+            tolerance_mm,
+        )
+        .into());
     }
-    let file = read_file(data, Some(robot.joint_count()), true).map_err(|e| e.to_string())?;
+    let file = read_file(data, Some(robot.joint_count()), true)?;
     let check = check_geometry(
         robot,
         &file.rows,
@@ -187,14 +211,13 @@ fn read_checked(
         Some(&file.header),
         tolerance_mm * 1e-3,
     )
-    .map_err(|e| format!("{}: {e}", data.display()))?;
+    .map_err(|e| CliError::in_context(data.display().to_string())(e.into()))?;
     let warnings = enforce(
         &check,
         &data.display().to_string(),
         ignore,
         "Is this the robot the file was measured on? Widen the tolerance with --fk-tolerance-mm, or use the file anyway with --ignore-fk-check.",
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     Ok(CheckedFile {
         rows: file.rows,
         check,
@@ -219,12 +242,7 @@ fn geometry_json(check: &GeometryCheck) -> Value {
     })
 }
 
-/// A number flag within a range, named in the error.
-pub(crate) fn check_range(flag: &str, value: f64, lo: f64, hi: f64) -> Result<(), String> {
-    crate::args::check_flag(flag, value, lo, hi, "")
-}
-
-pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
+pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
     if let Some(t) = args.target_rms_mm {
         check_range("--target-rms-mm", t, 0.0, 1000.0)?;
     }
@@ -236,7 +254,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
         99.999,
     )?;
     if !(2..=100).contains(&args.folds) {
-        return Err(format!("--folds: expected 2 to 100, got {}", args.folds));
+        return Err(UsageError::invalid("--folds", "2 to 100", args.folds).into());
     }
     let start = robot(&args.robot)?;
     let CheckedFile {
@@ -251,58 +269,12 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
         args.ignore_fk_check,
     )?;
     let t0 = std::time::Instant::now();
-    let (cal, steps, stop): (Calibration, Vec<SearchStep>, Option<String>) =
-        if args.structure == "fixed" {
-            let mut st = Structure::from_robot(&start);
-            if args.fit_shifts {
-                st = st.with_free_shifts();
-            }
-            let cal = calibrate_fixed(&start, &rows, &st).map_err(|e| e.to_string())?;
-            (cal, Vec::new(), None)
-        } else {
-            let criterion = if args.criterion == "cv" {
-                Criterion::CrossValidated {
-                    folds: args.folds,
-                    min_relative_gain: args.min_cv_gain_percent / 100.0,
-                }
-            } else {
-                Criterion::Bic
-            };
-            let options = SearchOptions {
-                criterion,
-                report_folds: args.folds,
-                target_rms_m: args.target_rms_mm.map(|v| v * 1e-3),
-                min_bic_gain: args.min_bic_gain,
-                allow_base: !args.no_base,
-                ..SearchOptions::default()
-            };
-            let bar = if json_output {
-                indicatif::ProgressBar::hidden()
-            } else {
-                indicatif::ProgressBar::new(1)
-            };
-            bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "structure search {msg} [{bar:30}] {pos}/{len} candidates",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-            );
-            let mut progress = |iteration: usize, done: usize, total: usize| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-                bar.set_message(format!("step {iteration}"));
-            };
-            let result = search_structure(&start, &rows, &options, &mut progress)
-                .map_err(|e| e.to_string())?;
-            bar.finish_and_clear();
-            (result.calibration, result.steps, Some(result.stop_reason))
-        };
+    let (cal, steps, stop) = identify(&args, &start, &rows, json_output)?;
     let elapsed = t0.elapsed();
     if !cal.edofs.iter().any(|e| e.stiffness.is_some()) {
-        return Err(format!(
-            "{}: no eDoF could be identified from this data (every compliance is at its bound or not observable); nothing written",
-            args.data.display()
-        ));
+        return Err(CliError::NothingIdentified {
+            data: args.data.clone(),
+        });
     }
     let mut model = cal.to_robot(&start);
     // The geometry is the start model's; the elasticity is new: say so in the name.
@@ -319,31 +291,29 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
     );
     // Everything is built aside and appears only when complete: the report folder first,
     // then the model.
-    fn io(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
-        move |e| format!("{}: {e}", path.display())
-    }
-    let mut model_file = AtomicFile::create(&args.out).map_err(io(&args.out))?;
+    let mut model_file = AtomicFile::create(&args.out).map_err(CliError::write(&args.out))?;
     model_file
         .write_all(robot_to_toml_for(&model, &args.out).as_bytes())
-        .map_err(io(&args.out))?;
+        .map_err(CliError::write(&args.out))?;
     if let Some(dir) = &args.report {
-        let folder = AtomicDir::create(dir).map_err(io(dir))?;
+        let folder = AtomicDir::create(dir).map_err(CliError::write(dir))?;
+        let predicted = predict(&model, &rows)?;
         let report = CalibrationReport {
             start_name: &start.name,
             data_name: &args.data.display().to_string(),
             output_name: &args.out.display().to_string(),
             calibration: &cal,
-            model: &model,
+            predicted: &predicted,
             steps: &steps,
             stop_reason: stop.as_deref(),
             rows: &rows,
             warnings: &warnings,
             data_notes: &data_notes,
         };
-        write_calibration_report(folder.path(), &report).map_err(|e| e.to_string())?;
-        folder.commit().map_err(io(dir))?;
+        write_calibration_report(folder.path(), &report)?;
+        folder.commit().map_err(CliError::write(dir))?;
     }
-    model_file.commit().map_err(io(&args.out))?;
+    model_file.commit().map_err(CliError::write(&args.out))?;
     warnings.extend(cal.warnings.iter().cloned());
     let it_rows = iteration_rows(&steps);
     let st_rows = stiffness_rows(&cal);
@@ -401,7 +371,61 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CliResult {
     Ok(())
 }
 
-pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
+/// The calibration `args` ask for: the start model's structure (`--structure fixed`) or the
+/// structure search, with a progress bar unless the output is JSON. Returns the calibration, the
+/// search's steps and why it stopped.
+fn identify(
+    args: &CalibrateArgs,
+    start: &Robot,
+    rows: &[deflex_stiffness::MeasurementRow],
+    json_output: bool,
+) -> Result<(Calibration, Vec<SearchStep>, Option<String>), CliError> {
+    Ok(if args.structure == StructureChoice::Fixed {
+        let mut st = Structure::from_robot(start);
+        if args.fit_shifts {
+            st = st.with_free_shifts();
+        }
+        let cal = calibrate_fixed(start, rows, &st)?;
+        (cal, Vec::new(), None)
+    } else {
+        let criterion = match args.criterion {
+            CriterionChoice::Cv => Criterion::CrossValidated {
+                folds: args.folds,
+                min_relative_gain: args.min_cv_gain_percent / 100.0,
+            },
+            CriterionChoice::Bic => Criterion::Bic,
+        };
+        let options = SearchOptions {
+            criterion,
+            report_folds: args.folds,
+            target_rms_m: args.target_rms_mm.map(|v| v * 1e-3),
+            min_bic_gain: args.min_bic_gain,
+            allow_base: !args.no_base,
+            ..SearchOptions::default()
+        };
+        let bar = if json_output {
+            indicatif::ProgressBar::hidden()
+        } else {
+            indicatif::ProgressBar::new(1)
+        };
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "structure search {msg} [{bar:30}] {pos}/{len} candidates",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        let mut progress = |iteration: usize, done: usize, total: usize| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+            bar.set_message(format!("step {iteration}"));
+        };
+        let result = search_structure(start, rows, &options, &mut progress)?;
+        bar.finish_and_clear();
+        (result.calibration, result.steps, Some(result.stop_reason))
+    })
+}
+
+pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
     let model = robot(&args.robot)?;
     let baseline = args.baseline.as_deref().map(robot).transpose()?;
     let CheckedFile {
@@ -415,13 +439,13 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         args.fk_tolerance_mm,
         args.ignore_fk_check,
     )?;
-    let v = run_validation(&model, baseline.as_ref(), &rows).map_err(|e| e.to_string())?;
+    let v = run_validation(&model, baseline.as_ref(), &rows)?;
     let files = match &args.out {
-        Some(dir) => write_report(&v, dir).map_err(|e| e.to_string())?,
+        Some(dir) => write_validation_report(&v, dir)?,
         None => Vec::new(),
     };
     if json_output {
-        let m = |e: &deflex_stiffness::validate::ModelErrors| {
+        let m = |e: &deflex_stiffness::validation::ModelErrors| {
             let rotation = e.rotation.as_ref().map(|r| {
                 let s = &r.stats;
                 json!({"rows": s.rows, "rms_rad": s.rms_rad, "max_abs_rad": s.max_abs_rad, "mean_rad": s.mean_rad, "rms_norm_rad": s.rms_norm_rad, "max_norm_rad": s.max_norm_rad})
@@ -453,7 +477,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CliResult {
         "{}",
         render_table(&VALIDATION_HEADERS, &validation_rows(&v))
     );
-    if let Some(rotation) = deflex_stiffness::report::validation_rotation_summary(&v) {
+    if let Some(rotation) = validation_rotation_summary(&v) {
         print!("{rotation}");
     }
     for w in &warnings {

@@ -1,59 +1,104 @@
 //! `deflex compensate`: offline compensation of a tool path and robot programs, for cells
-//! without a real-time option. Parsing, progress and printing only: the compensation is
-//! `deflex_compensate`, the process model `deflex_sim::process_model`, the programs
-//! `deflex_program`.
+//! without a real-time option. Parsing, checks, progress and printing only: the compensation is
+//! `deflex_compensate`, the process model `deflex_sim::process_model`, the G-code reader
+//! `deflex_gcode`, the programs `deflex_program`.
+//!
+//! The robot's twin cell ([`deflex_sim::CellConfig::for_robot`]: part frame, seed
+//! configuration, sheet, tool) places the path unless `--part-xyz-mm` / `--seed-deg` say
+//! otherwise; the command prints which it used. The path's tool axis is −Z of its part frame (a
+//! 3-axis CAM program); a seed that holds the tool more than 1° off it is refused.
 //!
 //! Outputs in `--out DIR` (written whole, or not at all): `compensated_path.csv`,
 //! `summary.json`, `summary.txt` and, when every point is compensated and the iteration
-//! converged, `programs/` with one program per `--format`. When points cannot be compensated
-//! (limits, reach) or the iteration did not converge, the table and the summaries are still
-//! written (the `status` column names each failed point and why), no program is, and the
-//! command fails listing the failed points.
+//! converged, `programs/` with one program per `--format`, each read back and compared. When
+//! points cannot be compensated (limits, reach) or the iteration did not converge, the table
+//! and the summaries are still written (the `status` column names each failed point and why),
+//! no program is, and the command fails listing the failed points.
 
-use crate::args::{CliResult, parse_fixed, parse_list, print_json, robot};
-use clap::Args;
+mod programs;
+mod setup;
+
+use crate::args::{CliResult, print_json};
+use clap::{Args, ValueEnum};
 use deflex_compensate::log::{ResampleOptions, read_log, resample_on_path};
-use deflex_compensate::table::write_csv;
-use deflex_compensate::{
-    Compensation, CompensationOptions, Progress, Stage, TcpPath, WrenchSource, compensate,
-};
-use deflex_program::{Format, ProgramInput, ProgramSettings, export, write_files};
-use deflex_sim::{CellConfig, FormingProcess, tcp_path, tool_path_by_name};
+use deflex_compensate::table::write_csv_to;
+use deflex_compensate::{Compensation, Progress, Stage, WrenchSource, compensate};
+use deflex_sim::FormingProcess;
 use serde_json::json;
+use setup::Setup;
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
+
+/// A program format on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    /// KUKA KRL (`.src` + `.dat`).
+    Krl,
+    /// ABB RAPID (`.mod`).
+    Rapid,
+    /// Stäubli VAL3 (an SRS application folder).
+    Val3,
+    /// Universal Robots URScript (`.script`).
+    Urscript,
+    /// G-code in the part frame.
+    Gcode,
+    /// No program.
+    None,
+}
+
+impl FormatArg {
+    fn format(self) -> Option<deflex_program::Format> {
+        use deflex_program::Format;
+        match self {
+            FormatArg::Krl => Some(Format::Krl),
+            FormatArg::Rapid => Some(Format::Rapid),
+            FormatArg::Val3 => Some(Format::Val3),
+            FormatArg::Urscript => Some(Format::UrScript),
+            FormatArg::Gcode => Some(Format::Gcode),
+            FormatArg::None => None,
+        }
+    }
+}
 
 #[derive(Args)]
 pub struct CompensateArgs {
-    /// Robot model: a built-in name or a robot TOML (calibrated or nominal).
+    /// Robot model: a built-in name or a robot TOML (calibrated or nominal). Its twin cell gives
+    /// the part frame, the seed configuration and the sheet unless the options below say
+    /// otherwise.
     #[arg(long)]
     pub robot: String,
-    /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid` or a G-code
-    /// file (part frame, mm).
+    /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid` or a CAM G-code
+    /// file (ISO/Fanuc subset: lines, arcs, helices, G17-G19, G20/G21, G90/G91, G54-G59; the
+    /// TCP in the work offset's frame, mm).
     #[arg(long, default_value = "cone")]
     pub path: String,
     /// Wrench source: `process` (the twin's forming model, SIMULATED) or `log:FILE` (a `deflex
     /// run` log or a `deflex sim isf` log.csv of a previous run of this path).
     #[arg(long, default_value = "process")]
     pub wrench: String,
-    /// Part frame origin in the robot's world (mm); default: the twin's [1500, 0, −183].
-    #[arg(long)]
+    /// Part frame origin in the robot's world (mm, `x,y,z`); default: the robot cell's (printed
+    /// by `deflex sim robot`). Negative values may follow directly (`--part-xyz-mm -20,0,5`).
+    #[arg(long, allow_hyphen_values = true)]
     pub part_xyz_mm: Option<String>,
-    /// IK seed near the start of the path (deg); the tool keeps the TCP orientation of this
-    /// configuration. Default: the twin's forming configuration (6-joint robots).
-    #[arg(long)]
+    /// IK seed near the start of the path (deg, one per joint); the tool keeps the orientation
+    /// of this configuration about its axis. Default: the robot cell's seed.
+    #[arg(long, allow_hyphen_values = true)]
     pub seed_deg: Option<String>,
-    /// Twin settings (`[cell]` TOML): part placement, seed, sheet of the process model.
+    /// Twin settings (`[cell]` TOML) over the robot's cell: part placement, seed, sheet.
     #[arg(long)]
     pub twin: Option<PathBuf>,
     /// Only the first part of the path (mm of travel).
     #[arg(long)]
     pub length_mm: Option<f64>,
-    /// Split moves longer than this (mm, 0.001–10000) before compensating: a compensation
-    /// moves each waypoint, so a long move into the sheet (a plunge written as one line) is
-    /// only compensated at its ends otherwise. Default: the program's moves as they are.
+    /// Split feed moves longer than this (mm, 0.001–10000) before compensating: a
+    /// compensation moves each waypoint, so a long move into the sheet (a plunge written as one
+    /// line) is only compensated at its ends otherwise. Rapids stay one move.
     #[arg(long)]
     pub max_segment_mm: Option<f64>,
+    /// Chord tolerance of G-code arcs (mm, 0.0001–1).
+    #[arg(long, default_value_t = 0.005)]
+    pub chord_tolerance_mm: f64,
     /// Compensate the position only (keep the desired orientation).
     #[arg(long)]
     pub position_only: bool,
@@ -69,137 +114,81 @@ pub struct CompensateArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
-    /// Programs to write: comma-separated `krl`, `rapid`, `val3`, `urscript`, `gcode`, or
-    /// `none`.
-    #[arg(long, default_value = "krl,rapid,val3,urscript,gcode")]
-    pub format: String,
+    /// Programs to write (comma-separated).
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "krl,rapid,val3,urscript,gcode"
+    )]
+    pub format: Vec<FormatArg>,
     /// Program template (TOML, see docs/program.example.toml): frame and tool names, speeds,
-    /// zones, limits.
+    /// zones, clearance, tool load, limits.
     #[arg(long)]
     pub program_config: Option<PathBuf>,
 }
 
-fn formats(text: &str) -> Result<Vec<Format>, String> {
-    if text.trim() == "none" {
-        return Ok(Vec::new());
-    }
-    let mut out = Vec::new();
-    for name in text.split(',') {
-        let format = Format::parse(name).ok_or_else(|| {
-            format!(
-                "--format: unknown format \"{}\"; expected krl, rapid, val3, urscript, gcode or none",
-                name.trim()
-            )
-        })?;
-        if !out.contains(&format) {
-            out.push(format);
-        }
-    }
-    Ok(out)
+/// Why `deflex compensate` stops.
+#[derive(Debug, thiserror::Error)]
+pub enum CompensateCommandError {
+    /// A robot file, cell, path, template or option that cannot be used.
+    #[error("{0}")]
+    Setup(#[from] Box<setup::SetupError>),
+    /// The log cannot serve as the wrench source.
+    #[error(transparent)]
+    Log(#[from] deflex_compensate::LogError),
+    /// The twin's process model cannot be built.
+    #[error("the twin's process model: {0}")]
+    Process(deflex_sim::SimError),
+    /// The compensation stopped.
+    #[error(transparent)]
+    Compensate(#[from] deflex_compensate::CompensateError),
+    /// Writing the output folder failed.
+    #[error("{path}: {source}")]
+    Output {
+        /// The file or folder.
+        path: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A program could not be written or did not read back.
+    #[error(transparent)]
+    Program(#[from] programs::ProgramCheckError),
+    /// Points could not be compensated (the table and summaries are written).
+    #[error(
+        "{count} of {points} points cannot be compensated (status column of compensated_path.csv); no robot program written:\n{list}\n{hint}"
+    )]
+    Points {
+        /// How many.
+        count: usize,
+        /// Path points.
+        points: usize,
+        /// The first ones, one per line.
+        list: String,
+        /// What to try.
+        hint: String,
+    },
+    /// The iteration did not converge (the table and summaries are written).
+    #[error(
+        "the compensation did not converge in {iterations} iterations (last change {change_mm:.4} mm, {change_mrad:.4} mrad, tolerance {tolerance_mm:.4} mm); no robot program written"
+    )]
+    NotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// Last change (mm).
+        change_mm: f64,
+        /// Last change (mrad).
+        change_mrad: f64,
+        /// The tolerance (mm).
+        tolerance_mm: f64,
+    },
 }
 
-/// Everything the run needs, parsed and checked before any work.
-struct Setup {
-    robot: deflex_model::Robot,
-    config: CellConfig,
-    tool_path: deflex_sim::ToolPath,
-    path: TcpPath,
-    seed: Vec<f64>,
-    formats: Vec<Format>,
-    settings: ProgramSettings,
-    options: CompensationOptions,
-}
-
-fn setup(args: &CompensateArgs) -> Result<Setup, String> {
-    let robot = robot(&args.robot)?;
-    let mut config = match &args.twin {
-        Some(p) => CellConfig::load(p).map_err(|e| e.to_string())?,
-        None => CellConfig::default(),
-    };
-    if let Some(text) = &args.part_xyz_mm {
-        let xyz = parse_fixed::<3>(text, "--part-xyz-mm")?;
-        if xyz.iter().any(|v| v.abs() > 1e5) {
-            return Err(format!("--part-xyz-mm: {xyz:?} is farther than 100 m"));
-        }
-        config.part.origin_mm = xyz;
+fn output_error(path: &Path) -> impl Fn(std::io::Error) -> CompensateCommandError + '_ {
+    move |source| CompensateCommandError::Output {
+        path: path.display().to_string(),
+        source,
     }
-    let seed: Vec<f64> = match &args.seed_deg {
-        Some(text) => parse_list(text, "--seed-deg")?
-            .into_iter()
-            .map(f64::to_radians)
-            .collect(),
-        None if robot.joint_count() == 6 => config.seed_q_rad().to_vec(),
-        None => {
-            return Err(format!(
-                "robot \"{}\" has {} joints: give --seed-deg (a configuration near the start of the path)",
-                robot.name,
-                robot.joint_count()
-            ));
-        }
-    };
-    if seed.len() != robot.joint_count() {
-        return Err(format!(
-            "--seed-deg: robot \"{}\" has {} joints, {} values given",
-            robot.name,
-            robot.joint_count(),
-            seed.len()
-        ));
-    }
-    let mut tool_path = tool_path_by_name(&args.path).map_err(|e| e.to_string())?;
-    match args.length_mm {
-        Some(l) if l.is_finite() && l > 0.0 => tool_path = tool_path.truncated(l),
-        Some(l) => return Err(format!("--length-mm must be positive, got {l}")),
-        None => {}
-    }
-    if let Some(max) = args.max_segment_mm {
-        tool_path = tool_path
-            .subdivided(max)
-            .map_err(|e| format!("--max-segment-mm: {e}"))?;
-    }
-    let rotation = robot
-        .tcp_pose(&seed)
-        .map_err(|e| format!("--seed-deg: {e}"))?
-        .rotation;
-    let path = tcp_path(
-        &tool_path,
-        &config.part_frame(),
-        &rotation,
-        config.controller.rapid_feed_mm_s,
-    )
-    .map_err(|e| e.to_string())?;
-    if !(args.tolerance_um.is_finite() && (0.001..=1000.0).contains(&args.tolerance_um)) {
-        return Err(format!(
-            "--tolerance-um: expected 0.001 ..= 1000, got {}",
-            args.tolerance_um
-        ));
-    }
-    if !(1..=200).contains(&args.max_iterations) {
-        return Err(format!(
-            "--max-iterations: expected 1 ..= 200, got {}",
-            args.max_iterations
-        ));
-    }
-    let settings = match &args.program_config {
-        Some(p) => ProgramSettings::load(p).map_err(|e| e.to_string())?,
-        None => ProgramSettings::default(),
-    };
-    Ok(Setup {
-        robot,
-        config,
-        tool_path,
-        path,
-        seed,
-        formats: formats(&args.format)?,
-        settings,
-        options: CompensationOptions {
-            orientation: !args.position_only,
-            include_gravity: args.include_gravity,
-            tolerance_m: args.tolerance_um * 1e-6,
-            tolerance_rad: args.tolerance_um * 1e-6,
-            max_iterations: args.max_iterations,
-            ..CompensationOptions::default()
-        },
-    })
 }
 
 fn progress_bar(json: bool, points: usize) -> indicatif::ProgressBar {
@@ -215,8 +204,19 @@ fn progress_bar(json: bool, points: usize) -> indicatif::ProgressBar {
     bar
 }
 
+/// `deflex compensate` (the CLI's string error at its boundary).
 pub fn compensate_command(args: CompensateArgs, json: bool) -> CliResult {
-    let s = setup(&args)?;
+    run(args, json).map_err(|e| e.to_string())
+}
+
+/// The command with its typed error.
+pub fn run(args: CompensateArgs, json: bool) -> Result<(), CompensateCommandError> {
+    let s = setup::setup(&args).map_err(Box::new)?;
+    if !json {
+        for line in &s.notes {
+            eprintln!("{line}");
+        }
+    }
     let started = std::time::Instant::now();
     let bar = progress_bar(json, s.path.len());
     let mut on_progress = |p: &Progress| {
@@ -229,103 +229,117 @@ pub fn compensate_command(args: CompensateArgs, json: bool) -> CliResult {
         bar.set_message(stage);
         bar.set_position(p.done as u64);
     };
-    let part = s.config.part_frame();
+    let part = s.part_frame;
     let mut source_lines: Vec<String> = Vec::new();
-    let result = if let Some(file) = args.wrench.strip_prefix("log:") {
-        let log = read_log(Path::new(file), &s.robot, &part).map_err(|e| e.to_string())?;
-        let resampled = resample_on_path(&log, &s.path, &ResampleOptions::default())
-            .map_err(|e| e.to_string())?;
-        source_lines.push(format!(
-            "{}{} {file}: {} rows used, {} skipped (flags), {} off the path (max offset {:.2} mm)",
-            if log.simulated { "SIMULATED " } else { "" },
-            log.kind.name(),
-            resampled.used_rows,
-            log.skipped_rows,
-            resampled.off_path_rows,
-            resampled.max_offset_m * 1e3
-        ));
-        let label = format!(
-            "{}{} {file}",
-            if log.simulated { "SIMULATED " } else { "" },
-            log.kind.name()
-        );
-        compensate(
-            &s.robot,
-            &s.path,
-            &s.seed,
-            WrenchSource::Fixed {
-                label,
-                simulated: log.simulated,
-                wrenches: &resampled.wrenches,
-            },
-            &s.options,
-            &mut on_progress,
-        )
-    } else if args.wrench == "process" {
-        let mut process =
-            FormingProcess::from_cell(&s.config, &s.tool_path).map_err(|e| e.to_string())?;
-        compensate(
-            &s.robot,
-            &s.path,
-            &s.seed,
-            WrenchSource::Process(&mut process),
-            &s.options,
-            &mut on_progress,
-        )
-    } else {
-        return Err(format!(
-            "--wrench: expected `process` or `log:FILE`, got \"{}\"",
-            args.wrench
-        ));
-    }
-    .map_err(|e| e.to_string())?;
+    let result = match &s.wrench {
+        setup::WrenchArg::Log(file) => {
+            let log = read_log(file, &s.robot, &part)?;
+            let resampled = resample_on_path(&log, &s.path, &ResampleOptions::default())?;
+            source_lines.push(format!(
+                "{}{} {}: {} rows used, {} at a standstill (not used), {} skipped (flags), {} off the path (max offset {:.2} mm)",
+                if log.simulated { "SIMULATED " } else { "" },
+                log.kind.name(),
+                file.display(),
+                resampled.used_rows,
+                resampled.standstill_rows,
+                log.skipped_rows,
+                resampled.off_path_rows,
+                resampled.max_offset_m * 1e3
+            ));
+            let label = format!(
+                "{}{} {}",
+                if log.simulated { "SIMULATED " } else { "" },
+                log.kind.name(),
+                file.display()
+            );
+            compensate(
+                &s.robot,
+                &s.path,
+                &s.seed,
+                WrenchSource::Fixed {
+                    label,
+                    simulated: log.simulated,
+                    wrenches: &resampled.wrenches,
+                },
+                &s.options,
+                &mut on_progress,
+            )?
+        }
+        setup::WrenchArg::Process => {
+            let mut process = FormingProcess::from_cell(&s.config, &s.tool_path)
+                .map_err(CompensateCommandError::Process)?;
+            compensate(
+                &s.robot,
+                &s.path,
+                &s.seed,
+                WrenchSource::Process(&mut process),
+                &s.options,
+                &mut on_progress,
+            )?
+        }
+    };
     bar.finish_and_clear();
     let elapsed_s = started.elapsed().as_secs_f64();
-    let written = write_outputs(&args, &s, &result, &source_lines, elapsed_s)?;
-    let summary = summary_json(&args, &s, &result, &written, elapsed_s);
+    let summary = write_outputs(&args, &s, result, &source_lines, elapsed_s, json)?;
     if json {
-        print_json(&summary);
+        print_json(&summary.json);
     } else {
-        print!(
-            "{}",
-            summary_text(&s, &result, &source_lines, &written, elapsed_s)
-        );
+        print!("{}", summary.text);
     }
-    refusal(&result, &s)
+    match summary.refusal {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// What the run reports.
+struct Summary {
+    json: serde_json::Value,
+    text: String,
+    refusal: Option<CompensateCommandError>,
 }
 
 /// The command fails (after writing the table and summaries) when points are not compensated
 /// or the iteration did not converge.
-fn refusal(result: &Compensation, s: &Setup) -> CliResult {
-    let failures: Vec<String> = result
-        .failures()
-        .take(20)
-        .map(|(i, f)| format!("  point {i}: {f}"))
-        .collect();
-    if !failures.is_empty() {
-        let count = result.failure_count();
-        return Err(format!(
-            "{count} of {} points cannot be compensated (status column of compensated_path.csv); no robot program written:\n{}{}",
-            s.path.len(),
-            failures.join("\n"),
-            if count > 20 {
-                format!("\n  … and {} more", count - 20)
-            } else {
-                String::new()
-            }
-        ));
+fn refusal(result: &Compensation, s: &Setup) -> Option<CompensateCommandError> {
+    let count = result.failure_count();
+    if count > 0 {
+        let mut list: Vec<String> = result
+            .failures()
+            .take(20)
+            .map(|(i, f)| format!("  point {i}: {f}"))
+            .collect();
+        if count > 20 {
+            list.push(format!("  … and {} more", count - 20));
+        }
+        return Some(CompensateCommandError::Points {
+            count,
+            points: s.path.len(),
+            list: list.join("\n"),
+            hint: format!(
+                "The path was placed with the part frame at ({:.1}, {:.1}, {:.1}) mm and the seed ({}) deg ({}): move the part with --part-xyz-mm x,y,z or choose the arm's branch with --seed-deg (deflex sim robot --robot R prints the robot's cell).",
+                s.part_origin_mm[0],
+                s.part_origin_mm[1],
+                s.part_origin_mm[2],
+                s.seed
+                    .iter()
+                    .map(|q| format!("{:.2}", q.to_degrees()))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                s.placement_source
+            ),
+        });
     }
     if !result.converged {
         let last = result.iterations.last();
-        return Err(format!(
-            "the compensation did not converge in {} iterations (last change {:.4} mm, {:.4} mrad, tolerance {:.4} mm); no robot program written",
-            result.iterations.len(),
-            last.map_or(f64::NAN, |r| r.max_change_m * 1e3),
-            last.map_or(f64::NAN, |r| r.max_change_rad * 1e3),
-            s.options.tolerance_m * 1e3
-        ));
+        return Some(CompensateCommandError::NotConverged {
+            iterations: result.iterations.len(),
+            change_mm: last.map_or(f64::NAN, |r| r.max_change_m * 1e3),
+            change_mrad: last.map_or(f64::NAN, |r| r.max_change_rad * 1e3),
+            tolerance_mm: s.options.tolerance_m * 1e3,
+        });
     }
-    Ok(())
+    None
 }
 
 /// Header lines of the table and of the programs.
@@ -344,6 +358,7 @@ fn description(s: &Setup, result: &Compensation) -> Vec<String> {
             s.robot.geometry_fingerprint(),
             result.source
         ),
+        s.placement_line(),
         format!(
             "predicted error {:.4} mm uncompensated, {:.4} mm compensated; largest compensation {:.4} mm, {:.4} mrad",
             result
@@ -357,70 +372,135 @@ fn description(s: &Setup, result: &Compensation) -> Vec<String> {
     ]
 }
 
-/// Write the output folder whole; returns the relative paths written.
+/// Write the output folder whole; returns the summaries (and the refusal, if any).
 fn write_outputs(
     args: &CompensateArgs,
     s: &Setup,
-    result: &Compensation,
+    result: Compensation,
     source_lines: &[String],
     elapsed_s: f64,
-) -> Result<Vec<String>, String> {
-    let out_error = |e: std::io::Error| format!("{}: {e}", args.out.display());
-    let dir = deflex_files::AtomicDir::create(&args.out).map_err(out_error)?;
+    json: bool,
+) -> Result<Summary, CompensateCommandError> {
+    let dir = deflex_files::AtomicDir::create(&args.out).map_err(output_error(&args.out))?;
     let mut written = Vec::new();
-    let mut comments = description(s, result);
+    let mut comments = description(s, &result);
     comments.extend(source_lines.iter().cloned());
-    comments.push("SI units; commanded = desired ⊕ compensation (dx_m … drz_rad); world frame of the robot model".into());
-    let table = write_csv(&s.path, result, s.robot.joint_count(), &comments);
-    deflex_files::write_atomic(dir.path().join("compensated_path.csv"), table)
-        .map_err(out_error)?;
+    comments.push("SI units; commanded = desired ⊕ compensation (dx_m … drz_rad); world frame of the robot model; rx_rad … rz_rad: the TCP orientation (rotation vector, world)".into());
+    let table_path = dir.path().join("compensated_path.csv");
+    let mut table =
+        deflex_files::AtomicFile::create(&table_path).map_err(output_error(&table_path))?;
+    write_csv_to(
+        &mut table,
+        &s.path,
+        &result,
+        s.robot.joint_count(),
+        &comments,
+    )
+    .and_then(|()| table.flush())
+    .map_err(output_error(&table_path))?;
+    table.commit().map_err(output_error(&table_path))?;
     written.push("compensated_path.csv".to_string());
-    if result.failure_count() == 0 && result.converged && !s.formats.is_empty() {
-        let input = ProgramInput::from_world_poses(
-            s.path
-                .points()
-                .iter()
-                .zip(&result.points)
-                .map(|(p, c)| (c.commanded(&p.pose), p.feed_m_s)),
-            &s.robot.base,
-            &s.config.part_frame(),
-            s.settings.program.coordinates,
-            &s.robot.tool,
-            description(s, result),
-        );
-        let programs = dir.path().join("programs");
-        std::fs::create_dir_all(&programs).map_err(out_error)?;
-        for format in &s.formats {
-            let files = export(*format, &input, &s.settings).map_err(|e| e.to_string())?;
-            write_files(&programs, &files).map_err(|e| e.to_string())?;
-            written.extend(files.iter().map(|f| format!("programs/{}", f.path)));
+    let refusal = refusal(&result, s);
+    let mut program_report = Vec::new();
+    let mut program_json = Vec::new();
+    let iterations = iteration_json(&result);
+    let text_head = summary_text(s, &result, source_lines, elapsed_s);
+    let failures: Vec<serde_json::Value> = result
+        .failures()
+        .take(1000)
+        .map(|(i, f)| json!({"index": i, "status": f.code(), "reason": f.to_string()}))
+        .collect();
+    let numbers = json!({
+        "simulated": result.simulated,
+        "wrench_source": result.source,
+        "converged": result.converged,
+        "iterations": iterations,
+        "final_max_predicted_error_m": result.final_max_error_m,
+        "final_max_predicted_error_rad": result.final_max_error_rad,
+        "final_max_force_N": result.final_max_force_n,
+        "max_compensation_m": result.max_compensation_m,
+        "max_compensation_rad": result.max_compensation_rad,
+        "failed_points": result.failure_count(),
+        "failures": failures,
+    });
+    if refusal.is_none() && !s.formats.is_empty() {
+        let programs_dir = dir.path().join("programs");
+        std::fs::create_dir_all(&programs_dir).map_err(output_error(&programs_dir))?;
+        let description = description(s, &result);
+        // The programs need the commanded poses and the joints; the rest of the result is in
+        // the table and the summaries: hand it over and free it.
+        let checks = programs::write_programs(s, result, description, &programs_dir, json)?;
+        for c in &checks {
+            written.extend(c.files.iter().map(|f| format!("programs/{f}")));
+            program_report.push(c.line());
+            program_json.push(c.json());
         }
+    } else {
+        drop(result);
     }
     written.push("summary.json".into());
     written.push("summary.txt".into());
-    let summary = summary_json(args, s, result, &written, elapsed_s);
+    let summary_json = json!({
+        "robot": s.robot.name,
+        "robot_geometry": s.robot.geometry_fingerprint(),
+        "path": s.path.name(),
+        "points": s.path.len(),
+        "path_length_m": s.path.length_m(),
+        "part_frame": s.frame_name,
+        "part_origin_m": s.part_origin_mm.map(|v| v * 1e-3),
+        "seed_q_rad": s.seed,
+        "placement": s.placement_source,
+        "gcode_notes": s.notes,
+        "orientation_compensated": s.options.orientation,
+        "tolerance_m": s.options.tolerance_m,
+        "tolerance_rad": s.options.tolerance_rad,
+        "compensation": numbers,
+        "programs": program_json,
+        "out": args.out.display().to_string(),
+        "files": written,
+        "run_on_a_real_controller": false,
+        "elapsed_s": elapsed_s,
+    });
+    let mut text = text_head;
+    for line in &program_report {
+        let _ = writeln!(text, "  {line}");
+    }
+    let programs = written
+        .iter()
+        .filter(|f| f.starts_with("programs/"))
+        .count();
+    let others: Vec<&str> = written
+        .iter()
+        .filter(|f| !f.starts_with("programs/"))
+        .map(String::as_str)
+        .collect();
+    let _ = writeln!(
+        text,
+        "  wrote {}{}; none of the programs has been run on a real controller",
+        others.join(", "),
+        if programs > 0 {
+            format!(" and {programs} program file(s) in programs/")
+        } else {
+            String::new()
+        }
+    );
     deflex_files::write_atomic(
         dir.path().join("summary.json"),
-        serde_json::to_string_pretty(&summary).unwrap_or_default(),
+        serde_json::to_string_pretty(&summary_json).unwrap_or_default(),
     )
-    .map_err(out_error)?;
-    deflex_files::write_atomic(
-        dir.path().join("summary.txt"),
-        summary_text(s, result, source_lines, &written, elapsed_s),
-    )
-    .map_err(out_error)?;
-    dir.commit().map_err(out_error)?;
-    Ok(written)
+    .map_err(output_error(&args.out))?;
+    deflex_files::write_atomic(dir.path().join("summary.txt"), &text)
+        .map_err(output_error(&args.out))?;
+    dir.commit().map_err(output_error(&args.out))?;
+    Ok(Summary {
+        json: summary_json,
+        text,
+        refusal,
+    })
 }
 
-fn summary_json(
-    args: &CompensateArgs,
-    s: &Setup,
-    result: &Compensation,
-    written: &[String],
-    elapsed_s: f64,
-) -> serde_json::Value {
-    let iterations: Vec<serde_json::Value> = result
+fn iteration_json(result: &Compensation) -> Vec<serde_json::Value> {
+    result
         .iterations
         .iter()
         .map(|r| {
@@ -433,50 +513,20 @@ fn summary_json(
                 "max_change_m": r.max_change_m,
                 "max_change_rad": r.max_change_rad,
                 "failed_points": r.failed_points,
+                "solved_points": r.solved_points,
             })
         })
-        .collect();
-    let failures: Vec<serde_json::Value> = result
-        .failures()
-        .take(1000)
-        .map(|(i, f)| json!({"index": i, "status": f.code(), "reason": f.to_string()}))
-        .collect();
-    json!({
-        "simulated": result.simulated,
-        "robot": s.robot.name,
-        "robot_geometry": s.robot.geometry_fingerprint(),
-        "path": s.path.name(),
-        "points": s.path.len(),
-        "path_length_m": s.path.length_m(),
-        "wrench_source": result.source,
-        "orientation_compensated": s.options.orientation,
-        "tolerance_m": s.options.tolerance_m,
-        "tolerance_rad": s.options.tolerance_rad,
-        "converged": result.converged,
-        "iterations": iterations,
-        "final_max_predicted_error_m": result.final_max_error_m,
-        "final_max_predicted_error_rad": result.final_max_error_rad,
-        "final_max_force_N": result.final_max_force_n,
-        "max_compensation_m": result.max_compensation_m,
-        "max_compensation_rad": result.max_compensation_rad,
-        "failed_points": result.failure_count(),
-        "failures": failures,
-        "out": args.out.display().to_string(),
-        "files": written,
-        "run_on_a_real_controller": false,
-        "elapsed_s": elapsed_s,
-    })
+        .collect()
 }
 
 fn summary_text(
     s: &Setup,
     result: &Compensation,
     source_lines: &[String],
-    written: &[String],
     elapsed_s: f64,
 ) -> String {
     let mut t = String::new();
-    for line in description(s, result).iter().take(2) {
+    for line in description(s, result).iter().take(3) {
         let _ = writeln!(t, "{line}");
     }
     for line in source_lines {
@@ -484,18 +534,19 @@ fn summary_text(
     }
     let _ = writeln!(
         t,
-        "  iteration   predicted error (mm, mrad)   max force (N)   max change (mm, mrad)   failed"
+        "  iteration   predicted error (mm, mrad)   max force (N)   max change (mm, mrad)   solved   failed"
     );
     for r in &result.iterations {
         let _ = writeln!(
             t,
-            "  {:>9}   {:>10.4} {:>10.4}        {:>10.1}      {:>9.5} {:>9.5}   {:>6}",
+            "  {:>9}   {:>10.4} {:>10.4}        {:>10.1}      {:>9.5} {:>9.5}   {:>6}   {:>6}",
             r.iteration,
             r.max_predicted_error_m * 1e3,
             r.max_predicted_error_rad * 1e3,
             r.max_force_n,
             r.max_change_m * 1e3,
             r.max_change_rad * 1e3,
+            r.solved_points,
             r.failed_points
         );
     }
@@ -521,285 +572,8 @@ fn summary_text(
         result.failure_count(),
         elapsed_s
     );
-    let _ = writeln!(
-        t,
-        "  wrote {}; none of the programs has been run on a real controller",
-        written.join(", ")
-    );
     t
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use deflex_compensate::table::read_csv;
-
-    fn scratch(name: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("deflex-compensate-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
-    fn args(out: &Path) -> CompensateArgs {
-        CompensateArgs {
-            robot: "tx200".into(),
-            path: "cone".into(),
-            wrench: "process".into(),
-            part_xyz_mm: None,
-            seed_deg: None,
-            twin: None,
-            length_mm: Some(400.0),
-            max_segment_mm: None,
-            position_only: false,
-            include_gravity: false,
-            tolerance_um: 1.0,
-            max_iterations: 30,
-            out: out.to_path_buf(),
-            format: "krl,rapid,val3,urscript,gcode".into(),
-            program_config: None,
-        }
-    }
-
-    #[test]
-    fn the_command_writes_the_table_summaries_and_programs_that_read_back() {
-        let dir = scratch("ok");
-        let out = dir.join("out");
-        compensate_command(args(&out), true).unwrap();
-        let table = std::fs::read_to_string(out.join("compensated_path.csv")).unwrap();
-        assert!(table.starts_with("# SIMULATED"));
-        let rows = read_csv(&table, "compensated_path.csv").unwrap();
-        assert!(rows.iter().all(|r| r.status == "ok"));
-        let summary: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
-        assert_eq!(summary["simulated"], true);
-        assert_eq!(summary["converged"], true);
-        assert_eq!(summary["run_on_a_real_controller"], false);
-        assert!(summary["final_max_predicted_error_m"].as_f64().unwrap() < 1e-6);
-        assert!(
-            summary["iterations"][0]["max_predicted_error_m"]
-                .as_f64()
-                .unwrap()
-                > 1e-4
-        );
-        // Commanded positions in the part frame (mm), from the table.
-        let part = CellConfig::default().part_frame();
-        let commanded: Vec<Vector3> = rows
-            .iter()
-            .map(|r| {
-                let c = deflex_compensate::commanded_pose(&r.desired, &r.compensation);
-                (part.inverse() * nalgebra::Point3::from(c.translation.vector)).coords
-            })
-            .collect();
-        // The twin's own G-code reader reads the program back (after its start at the origin).
-        let gcode = deflex_sim::gcode::read_gcode(&out.join("programs/deflex_path.gcode")).unwrap();
-        assert_eq!(gcode.waypoints.len(), rows.len() + 1);
-        for (w, c) in gcode.waypoints[1..].iter().zip(&commanded) {
-            let d = (Vector3::from(w.p_mm) * 1e-3 - c).norm();
-            assert!(d < 1e-6, "{d}");
-        }
-        // Every vendor program reads back to the commanded poses within 1 µm and 1 µrad.
-        for (format, file) in [
-            (Format::Krl, "programs/deflex_path.src"),
-            (Format::Rapid, "programs/deflex_path.mod"),
-            (Format::Val3, "programs/deflex_path/deflex_path.dtx"),
-            (Format::UrScript, "programs/deflex_path.script"),
-        ] {
-            let text = std::fs::read_to_string(out.join(file)).unwrap();
-            let files = [deflex_program::ProgramFile {
-                path: file.into(),
-                contents: text,
-            }];
-            let read = deflex_program::readback::read_files(format, &files).unwrap();
-            assert_eq!(read.len(), rows.len(), "{format:?}");
-            for ((p, c), row) in read.iter().zip(&commanded).zip(&rows) {
-                assert!((p.position_m - c).norm() < 1e-6, "{format:?}");
-                let want = deflex_compensate::commanded_pose(&row.desired, &row.compensation);
-                let got = p.rotation.unwrap();
-                let angle = deflex_program::orientation::rotation_distance(&want.rotation, &got);
-                assert!(angle < 2e-6, "{format:?}: {angle}");
-            }
-        }
-        std::fs::remove_dir_all(dir).unwrap();
-    }
-
-    type Vector3 = nalgebra::Vector3<f64>;
-
-    #[test]
-    fn uncompensable_points_fail_the_command_with_their_indices_and_no_program() {
-        let dir = scratch("limits");
-        // The TX200 with joint 3 stopped just beyond the desired path's values: the compensated
-        // poses need more.
-        let mut robot = deflex_model::builtin("tx200").unwrap();
-        let path = tool_path_by_name("cone").unwrap().truncated(60.0);
-        let config = CellConfig::default();
-        let seed = config.seed_q_rad();
-        let rotation = robot.tcp_pose(&seed).unwrap().rotation;
-        let tcp = tcp_path(&path, &config.part_frame(), &rotation, 50.0).unwrap();
-        let mut q = seed.to_vec();
-        let mut range = [f64::MAX, f64::MIN];
-        for p in tcp.points() {
-            q = robot
-                .inverse_kinematics(&p.pose, &q, &Default::default())
-                .unwrap()
-                .q;
-            range = [range[0].min(q[2]), range[1].max(q[2])];
-        }
-        robot.joints[2].limits = Some([range[0] - 1e-6, range[1] + 1e-6]);
-        let robot_file = dir.join("tight.toml");
-        std::fs::write(&robot_file, deflex_model::robot_to_toml(&robot)).unwrap();
-        let out = dir.join("out");
-        let mut a = args(&out);
-        a.robot = robot_file.display().to_string();
-        a.length_mm = Some(60.0);
-        let e = compensate_command(a, true).unwrap_err();
-        assert!(e.contains("cannot be compensated"), "{e}");
-        assert!(e.contains("joint 3"), "{e}");
-        let rows = read_csv(
-            &std::fs::read_to_string(out.join("compensated_path.csv")).unwrap(),
-            "t",
-        )
-        .unwrap();
-        let failed: Vec<usize> = rows
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| r.status != "ok")
-            .map(|(i, _)| i)
-            .collect();
-        assert!(!failed.is_empty());
-        for i in &failed {
-            assert_eq!(rows[*i].status, "compensated:joint_limit:J3");
-            assert!(e.contains(&format!("point {i}:")), "{e}");
-        }
-        assert!(
-            !out.join("programs").exists(),
-            "no program with failed points"
-        );
-        std::fs::remove_dir_all(dir).unwrap();
-    }
-
-    #[test]
-    fn a_deflex_run_log_serves_as_the_wrench_source() {
-        use deflex_control::log::{LogRecord, csv_header, csv_row};
-        use deflex_control::{CycleOutput, Flags};
-        // The skipped flag bits are deflex-control's.
-        assert_eq!(
-            deflex_compensate::log::RUN_LOG_SKIP_FLAGS,
-            Flags::FORCE_OVER_LIMIT
-                | Flags::TORQUE_OVER_LIMIT
-                | Flags::SENSOR_TIMEOUT
-                | Flags::SENSOR_STATUS
-                | Flags::ROBOT_LINK_LOST
-                | Flags::NON_FINITE
-                | Flags::SENSOR_OVER_RANGE
-                | Flags::JOINT_OUT_OF_LIMITS
-                | Flags::JOINT_JUMP
-                | Flags::JOINT_COUNT_MISMATCH
-                | Flags::CONTACT_RUNAWAY
-                | Flags::LATCHED
-                | Flags::TARING
-                | Flags::STALE_WRENCH
-        );
-        let dir = scratch("runlog");
-        let robot = deflex_model::builtin("tx200").unwrap();
-        let config = CellConfig::default();
-        let path = tool_path_by_name("cone").unwrap().truncated(40.0);
-        let seed = config.seed_q_rad();
-        let rotation = robot.tcp_pose(&seed).unwrap().rotation;
-        let tcp = tcp_path(&path, &config.part_frame(), &rotation, 50.0).unwrap();
-        // A log written by deflex-control's own writer functions: 0.1 mm steps, a constant
-        // 900 N push up, taring rows with nonsense at the start.
-        let mut text = csv_header(6);
-        text.push('\n');
-        let mut q = seed.to_vec();
-        let steps = (tcp.length_m() / 1e-4) as usize;
-        for k in 0..=steps + 5 {
-            let s = (k as f64 * 1e-4).min(tcp.length_m());
-            let (i, f) = tcp.locate(s);
-            let a = tcp.points()[i].pose;
-            let b = tcp.points()[i + 1].pose;
-            let p = a.translation.vector + (b.translation.vector - a.translation.vector) * f;
-            let target = deflex_model::Pose::from_parts(p.into(), a.rotation);
-            q = robot
-                .inverse_kinematics(&target, &q, &Default::default())
-                .unwrap()
-                .q;
-            let taring = k < 5;
-            let out = CycleOutput {
-                time_s: k as f64 * 0.01,
-                wrench_tcp: if taring {
-                    [0.0, 0.0, 1e5, 0.0, 0.0, 0.0]
-                } else {
-                    [0.0, 0.0, 900.0, 0.0, 0.0, 0.0]
-                },
-                flags: Flags(if taring { Flags::TARING } else { Flags::ACTIVE }),
-                ..CycleOutput::default()
-            };
-            text.push_str(&csv_row(&LogRecord::new(&q, &[0.0; 6], &out, 10.0)));
-            text.push('\n');
-        }
-        let log_file = dir.join("run.csv");
-        std::fs::write(&log_file, text).unwrap();
-        let out = dir.join("out");
-        let mut a = args(&out);
-        a.length_mm = Some(40.0);
-        a.wrench = format!("log:{}", log_file.display());
-        a.format = "gcode".into();
-        compensate_command(a, true).unwrap();
-        let rows = read_csv(
-            &std::fs::read_to_string(out.join("compensated_path.csv")).unwrap(),
-            "t",
-        )
-        .unwrap();
-        for r in &rows {
-            assert!((r.wrench[2] - 900.0).abs() < 1e-6, "{}", r.wrench[2]);
-        }
-        let summary: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
-        assert_eq!(
-            summary["simulated"], false,
-            "a deflex run log is a measurement"
-        );
-        assert_eq!(summary["iterations"].as_array().unwrap().len(), 1);
-        std::fs::remove_dir_all(dir).unwrap();
-    }
-
-    #[test]
-    fn bad_options_are_refused_before_any_work() {
-        let dir = scratch("bad");
-        let out = dir.join("out");
-        for (change, expected) in [
-            (
-                Box::new(|a: &mut CompensateArgs| a.format = "krl,fanuc".into())
-                    as Box<dyn Fn(&mut CompensateArgs)>,
-                "unknown format \"fanuc\"",
-            ),
-            (Box::new(|a| a.wrench = "sensor".into()), "--wrench"),
-            (Box::new(|a| a.tolerance_um = 0.0), "--tolerance-um"),
-            (Box::new(|a| a.max_iterations = 0), "--max-iterations"),
-            (
-                Box::new(|a| a.seed_deg = Some("0,1,2".into())),
-                "3 values given",
-            ),
-            (
-                Box::new(|a| a.part_xyz_mm = Some("1,2".into())),
-                "--part-xyz-mm",
-            ),
-            (Box::new(|a| a.length_mm = Some(-1.0)), "--length-mm"),
-            (
-                Box::new(|a| a.path = "/nonexistent/part.gcode".into()),
-                "/nonexistent/part.gcode",
-            ),
-        ] {
-            let mut a = args(&out);
-            change(&mut a);
-            let e = compensate_command(a, true).unwrap_err();
-            assert!(e.contains(expected), "{e}");
-        }
-        assert!(!out.exists());
-        std::fs::remove_dir_all(dir).unwrap();
-    }
-}
+mod tests;

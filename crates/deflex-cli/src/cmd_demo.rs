@@ -1,9 +1,9 @@
 //! `deflex demo`: the paper's whole study on the SIMULATED cell of the TX200 or another robot
 //! (`--robot`), with progress bars and a summary table; the work is done by `deflex-study`.
 
-use crate::args::CliResult;
+use crate::error::CommandResult;
 use clap::Args;
-use deflex_study::{DemoOptions, Progress, run_demo};
+use deflex_study::{DemoOptions, Progress, run_study};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
@@ -60,9 +60,8 @@ impl Progress for Bars {
     }
 }
 
-pub fn demo(args: DemoArgs, json: bool) -> CliResult {
+pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
     let options = DemoOptions {
-        out_dir: args.out.clone(),
         seed: args.seed,
         quick: args.quick,
         robot: args.robot.clone(),
@@ -73,7 +72,10 @@ pub fn demo(args: DemoArgs, json: bool) -> CliResult {
         bar: None,
         quiet: json,
     };
-    let summary = run_demo(&options, &mut bars)?;
+    let cell = deflex_twin::cell_for_robot(&options.robot)?;
+    let study = run_study(&options, cell, &mut bars)?;
+    deflex_report::study::write_study(&study, &args.out)?;
+    let summary = study.summary;
     if json {
         println!(
             "{}",

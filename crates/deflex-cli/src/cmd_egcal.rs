@@ -1,16 +1,106 @@
 //! `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict`: elasto-geometric
-//! calibration from absolute tracker readings (logic in `deflex-absolute`).
+//! calibration from absolute tracker readings (maths in `deflex-absolute`; the report, plots and
+//! prediction tables in `deflex_report::absolute_report`, shared with the Python package; the
+//! files here).
 
 use crate::args::{CliResult, print_json, robot};
-use clap::{Args, Subcommand};
+use clap::{Args, Subcommand, ValueEnum};
 use deflex_absolute::campaign::Campaign;
-use deflex_absolute::data::{AbsoluteRow, format_absolute, read_absolute};
-use deflex_absolute::fit::{FitOptions, Step, fit};
+use deflex_absolute::data::{
+    AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute,
+};
+use deflex_absolute::fit::{FitOptions, HeldOutProtocol, Step, fit, session_groups};
 use deflex_absolute::params::EgModel;
+use deflex_absolute::predict;
 use deflex_absolute::solve::Loss;
-use deflex_absolute::ur10_tracker::{ImportOptions, import_series};
-use deflex_absolute::{predict, report};
-use std::path::PathBuf;
+use deflex_absolute::terms::CalibrationTerms;
+use deflex_absolute::ur10_tracker::{ImportOptions, MAX_SERIES_BYTES, parse_series};
+use deflex_report::absolute_report as report;
+use std::path::{Path, PathBuf};
+
+/// Gap between time stamps that starts a new measuring session (`--cv-by session`).
+pub const SESSION_GAP_S: f64 = 3600.0;
+/// Largest terms file read (bytes).
+const MAX_TERMS_BYTES: u64 = 64 << 20;
+
+/// Read a text file of at most `limit` bytes, naming it in errors.
+pub fn read_bounded(path: &Path, limit: u64) -> Result<String, String> {
+    let size = std::fs::metadata(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .len();
+    if size > limit {
+        return Err(format!(
+            "{}: {size} bytes is more than the {limit} bytes read",
+            path.display()
+        ));
+    }
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Read an absolute measurement file.
+pub fn read_absolute(path: &Path, joints: usize) -> Result<Vec<AbsoluteRow>, String> {
+    let text = read_bounded(path, limits::MAX_FILE_BYTES)?;
+    parse_absolute(&text, &path.display().to_string(), joints).map_err(|e| e.to_string())
+}
+
+/// The single `measurements_*.csv` of a series folder (or the file itself).
+fn series_file(path: &Path) -> Result<PathBuf, String> {
+    if path.is_file() {
+        return Ok(path.to_path_buf());
+    }
+    let entries = std::fs::read_dir(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("measurements") && n.ends_with(".csv"))
+        })
+        .collect();
+    found.sort();
+    match found.len() {
+        1 => Ok(found.remove(0)),
+        n => Err(format!(
+            "{}: expected one measurements_*.csv, found {n}",
+            path.display()
+        )),
+    }
+}
+
+/// The terms file written beside a calibrated robot file: `NAME.toml` → `NAME.terms.json`.
+pub fn terms_path(robot_file: &Path) -> PathBuf {
+    robot_file.with_extension("terms.json")
+}
+
+/// A calibrated model: the robot (built-in name or file) and, for a file with a terms file
+/// beside it, the joint terms and residual model it keeps.
+pub fn load_model(spec: &str) -> Result<(EgModel, Option<CalibrationTerms>), String> {
+    let robot = robot(spec)?;
+    let mut model = EgModel::from_robot(&robot);
+    let path = Path::new(spec);
+    let terms_file = terms_path(path);
+    if !path.is_file() || !terms_file.is_file() {
+        return Ok((model, None));
+    }
+    let text = read_bounded(&terms_file, MAX_TERMS_BYTES)?;
+    let terms =
+        CalibrationTerms::from_json(&text).map_err(|e| format!("{}: {e}", terms_file.display()))?;
+    terms
+        .apply(&mut model)
+        .map_err(|e| format!("{}: {e}", terms_file.display()))?;
+    Ok((model, Some(terms)))
+}
+
+/// Groups of `--cv-by`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CvBy {
+    /// Measuring sessions (time stamps more than an hour apart; one per set-up without them).
+    Session,
+    /// Tracker set-ups.
+    Setup,
+    /// Data files (`--data`), one series each.
+    Series,
+}
 
 #[derive(Subcommand)]
 pub enum ImportCommand {
@@ -57,9 +147,32 @@ pub struct CalibrateGeometryArgs {
     #[arg(long)]
     pub test_data: Vec<PathBuf>,
     /// Model steps, comma-separated, each adding to the previous: registration, geometry,
-    /// compliance, masses, harmonics:N.
+    /// compliance, and opt-in masses, harmonics:N (N ≤ 4), periodic:N (N cycles per joint
+    /// turn, a gear's ratio), backlash, residual (a residual model on the joint angles).
+    /// Opt-in steps are kept only when they improve the held-out groups (--test-data,
+    /// --cv-by).
     #[arg(long, default_value = "registration,geometry,compliance")]
     pub steps: String,
+    /// Fit the measured orientations (rx_rad…) with the positions.
+    #[arg(long)]
+    pub orientations: bool,
+    /// Standard deviation of an orientation component for rows without sigma_rad (rad).
+    #[arg(long, default_value_t = DEFAULT_ORIENTATION_SIGMA_RAD)]
+    pub sigma_rad: f64,
+    /// Leave out each session, set-up or series of the fit data in turn: refit without it,
+    /// register it by the protocol, score it (and judge opt-in steps by it).
+    #[arg(long, value_enum)]
+    pub cv_by: Option<CvBy>,
+    /// Readings drawn at random to register each held-out series or group (0: every other
+    /// configuration registers, the rest score).
+    #[arg(long, default_value_t = 0)]
+    pub register_readings: usize,
+    /// Random draws of those readings.
+    #[arg(long, default_value_t = 1)]
+    pub register_draws: usize,
+    /// Register the target offset too (a new probe), not only the set-up.
+    #[arg(long)]
+    pub register_target: bool,
     /// eDoFs whose compliance is fitted (e.g. J2.z,J3.z); default: all of the robot's.
     #[arg(long)]
     pub elastic: Option<String>,
@@ -78,7 +191,8 @@ pub struct CalibrateGeometryArgs {
     /// Seed of the splits and the bootstrap.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Calibrated robot file (DH rows, stiffness, masses, set-ups, targets).
+    /// Calibrated robot file (DH rows, stiffness, masses, set-ups, targets); the joint terms,
+    /// residual model and the calibration's accuracy go beside it as NAME.terms.json.
     #[arg(long)]
     pub out: PathBuf,
     /// Report folder (text, JSON, CSV, plots, HTML).
@@ -94,8 +208,8 @@ pub struct PredictArgs {
     /// Absolute measurement CSV; position columns may be left empty in a plan-like file.
     #[arg(long)]
     pub data: PathBuf,
-    /// Fit the registration of the rows' set-ups (all rows) before predicting: for a set-up
-    /// the model does not know, or a tracker that was moved.
+    /// Fit the registration of the rows' set-ups on all the rows before predicting (optimistic;
+    /// `deflex register` registers from a few readings instead).
     #[arg(long)]
     pub fit_setup: bool,
     /// Output CSV: each row with predicted_x_m … and, when measured, the error.
@@ -113,12 +227,16 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
         target: args.target.clone(),
         tracker_sigma: args.tracker_sigma,
     };
-    let (rows, summary) = import_series(&args.series, &options).map_err(|e| e.to_string())?;
+    let file = series_file(&args.series)?;
+    let text = read_bounded(&file, MAX_SERIES_BYTES)?;
+    let (rows, mut summary) =
+        parse_series(&text, &file.display().to_string(), &options).map_err(|e| e.to_string())?;
+    summary.file = file;
     let kept: Vec<AbsoluteRow> = rows.into_iter().step_by(args.every).collect();
     let comments = vec![
         "UR10 laser-tracker data: Landgraf, Ernst, Schleth, Fabritius, Huber, IEEE CASE 2021 (MIT licence)".to_string(),
         format!(
-            "imported by deflex from {} (every {} reading(s)); T-Mac probe in the tracker frame",
+            "imported by deflex from {} (every {} reading(s); approach_q*_rad from the whole time-ordered series); T-Mac probe in the tracker frame",
             summary.file.display(),
             args.every
         ),
@@ -166,18 +284,34 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
 }
 
 fn parse_steps(text: &str) -> Result<Vec<Step>, String> {
+    let bad = |other: &str| {
+        format!(
+            "--steps: unknown step \"{other}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, residual)"
+        )
+    };
     text.split(',')
         .map(|item| match item.trim() {
             "registration" => Ok(Step::Registration),
             "geometry" => Ok(Step::Geometry),
             "compliance" | "gravity" => Ok(Step::Compliance),
             "masses" => Ok(Step::Masses),
-            other => match other.strip_prefix("harmonics:").map(str::parse::<u8>) {
-                Some(Ok(n)) if (1..=4).contains(&n) => Ok(Step::Harmonics(n)),
-                _ => Err(format!(
-                    "--steps: unknown step \"{other}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4)"
-                )),
-            },
+            "backlash" => Ok(Step::Backlash),
+            "residual" => Ok(Step::ResidualModel),
+            other => {
+                if let Some(n) = other.strip_prefix("harmonics:") {
+                    match n.parse::<u8>() {
+                        Ok(n) if (1..=4).contains(&n) => Ok(Step::Harmonics(n)),
+                        _ => Err(bad(other)),
+                    }
+                } else if let Some(n) = other.strip_prefix("periodic:") {
+                    match n.parse::<u16>() {
+                        Ok(n) if (1..=10_000).contains(&n) => Ok(Step::Periodic(n)),
+                        _ => Err(bad(other)),
+                    }
+                } else {
+                    Err(bad(other))
+                }
+            }
         })
         .collect()
 }
@@ -207,31 +341,56 @@ fn parse_loss(text: &str) -> Result<Loss, String> {
     }
 }
 
-fn read_all(paths: &[PathBuf], joints: usize) -> Result<Vec<AbsoluteRow>, String> {
-    let mut rows = Vec::new();
-    for path in paths {
-        rows.extend(read_absolute(path, joints).map_err(|e| e.to_string())?);
-    }
-    Ok(rows)
+fn read_all(paths: &[PathBuf], joints: usize) -> Result<Vec<Vec<AbsoluteRow>>, String> {
+    paths.iter().map(|p| read_absolute(p, joints)).collect()
 }
 
 pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CliResult {
     let steps = parse_steps(&args.steps)?;
     let loss = parse_loss(&args.loss)?;
+    crate::args::check_flag(
+        "--sigma-rad",
+        args.sigma_rad,
+        1e-9,
+        limits::MAX_SIGMA_RAD,
+        "rad",
+    )?;
     let start_robot = robot(&args.robot)?;
     let n = start_robot.joint_count();
-    let absolute = read_all(&args.data, n)?;
+    let series = read_all(&args.data, n)?;
     let test = read_all(&args.test_data, n)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
-        loaded.extend(deflex_stiffness::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
+        loaded.extend(deflex_load::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
     }
-    let fit_count = absolute.len();
-    let mut all = absolute;
+    let series_of: Vec<usize> = series
+        .iter()
+        .enumerate()
+        .flat_map(|(k, rows)| std::iter::repeat_n(k, rows.len()))
+        .collect();
+    let fit_count = series_of.len();
+    let mut all: Vec<AbsoluteRow> = series.into_iter().flatten().collect();
     // Test readings go after the fitted ones and are held out by index.
-    all.extend(test);
+    let test_count: usize = test.iter().map(Vec::len).sum();
+    all.extend(test.into_iter().flatten());
     let mut model = EgModel::from_robot(&start_robot);
-    let campaign = Campaign::new(&mut model, all, loaded).map_err(|e| e.to_string())?;
+    let mut campaign = Campaign::new(&mut model, all, loaded).map_err(|e| e.to_string())?;
+    if args.orientations {
+        campaign.use_orientations(args.sigma_rad);
+        if campaign.orientation_rows.is_empty() {
+            return Err("--orientations: no row of the data has rx_rad, ry_rad, rz_rad".into());
+        }
+    }
+    let groups = args.cv_by.map(|by| {
+        let mut g: Vec<usize> = match by {
+            CvBy::Session => session_groups(&campaign, SESSION_GAP_S),
+            CvBy::Setup => campaign.setup_of.clone(),
+            CvBy::Series => series_of.clone(),
+        };
+        // Test rows are never fitted: their group does not matter.
+        g.resize(fit_count + test_count, usize::MAX);
+        g
+    });
     let options = FitOptions {
         steps,
         loss,
@@ -245,13 +404,23 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
             .map(|t| t.split(',').map(|s| s.trim().to_string()).collect())
             .unwrap_or_default(),
         held_out_readings: (fit_count..campaign.absolute.len()).collect(),
+        groups,
+        protocol: HeldOutProtocol {
+            register_readings: args.register_readings,
+            draws: args.register_draws,
+            register_target: args.register_target,
+        },
         ..FitOptions::default()
     };
     let started = std::time::Instant::now();
     let result = fit(&model, &campaign, &options).map_err(|e| e.to_string())?;
     let elapsed = started.elapsed().as_secs_f64();
     let robot_out = result.model.to_robot();
-    let toml = deflex_model::robot_to_toml_for(&robot_out, &args.out);
+    let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
+    let terms = CalibrationTerms::of(&result);
+    let terms_file = terms_path(&args.out);
+    deflex_files::write_atomic(&terms_file, terms.to_json())
+        .map_err(|e| format!("{}: {e}", terms_file.display()))?;
     deflex_files::write_atomic(&args.out, toml)
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     let files = match &args.report {
@@ -262,6 +431,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
         let mut value = report::json(&result, &campaign);
         value["elapsed_s"] = serde_json::json!(elapsed);
         value["out"] = serde_json::json!(args.out.display().to_string());
+        value["terms"] = serde_json::json!(terms_file.display().to_string());
         value["report_files"] = serde_json::json!(
             files
                 .iter()
@@ -272,8 +442,9 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     } else {
         print!("{}", report::text(&result, &campaign));
         println!(
-            "fit time {elapsed:.2} s; calibrated robot written to {}",
-            args.out.display()
+            "fit time {elapsed:.2} s; calibrated robot written to {} (terms: {})",
+            args.out.display(),
+            terms_file.display()
         );
         if let Some(dir) = &args.report {
             println!("report: {}", dir.join("index.html").display());
@@ -283,16 +454,16 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
 }
 
 pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
-    let robot = robot(&args.robot)?;
-    let rows = read_absolute(&args.data, robot.joint_count()).map_err(|e| e.to_string())?;
+    let (model, _) = load_model(&args.robot)?;
+    let rows = read_absolute(&args.data, model.robot.joint_count())?;
     let prediction =
-        predict::predict_rows(&robot, rows, args.fit_setup).map_err(|e| e.to_string())?;
-    deflex_files::write_atomic(&args.out, &prediction.csv)
+        predict::predict_rows(&model, rows, args.fit_setup).map_err(|e| e.to_string())?;
+    deflex_files::write_atomic(&args.out, report::prediction::prediction_csv(&prediction))
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     if json_output {
-        print_json(&prediction.json);
+        print_json(&report::prediction::prediction_json(&prediction));
     } else {
-        print!("{}", prediction.text);
+        print!("{}", report::prediction::prediction_text(&prediction));
         println!("predictions written to {}", args.out.display());
     }
     Ok(())

@@ -1,8 +1,7 @@
 //! `deflex model show`, `pose`, `deflect`, `ik`, `map`.
 
-use crate::args::{
-    CliResult, fixed, joint_values, parse_fixed, parse_length_mm_default, print_json, robot,
-};
+use crate::args::{fixed, joint_values, parse_fixed, parse_length_mm_default, print_json, robot};
+use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, Subcommand};
 use deflex_model::spatial::{pose_from_xyz_rpy, rpy_from_rotation};
 use deflex_model::{Data, IkOptions, Robot, TX200_FORMING_Q_DEG, Wrench};
@@ -32,7 +31,7 @@ pub struct JointArgs {
 
 impl JointArgs {
     /// The joint values in radians, checked against `robot`'s joint count.
-    pub fn values(&self, robot: &Robot) -> Result<Vec<f64>, String> {
+    pub fn values(&self, robot: &Robot) -> Result<Vec<f64>, UsageError> {
         joint_values(robot, self.q_deg.as_deref(), self.q_rad.as_deref())
     }
 }
@@ -99,7 +98,7 @@ pub struct MapArgs {
     pub out: PathBuf,
 }
 
-pub fn model(command: ModelCommand, json_output: bool) -> CliResult {
+pub fn model(command: ModelCommand, json_output: bool) -> CommandResult {
     match command {
         ModelCommand::Show { robot: spec } => {
             let robot = robot(&spec)?;
@@ -315,13 +314,13 @@ fn rotation_rows(rotation: &nalgebra::Rotation3<f64>) -> Vec<[f64; 3]> {
     (0..3).map(|r| [m[(r, 0)], m[(r, 1)], m[(r, 2)]]).collect()
 }
 
-pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
+pub fn pose(args: PoseArgs, json_output: bool) -> CommandResult {
     let robot = robot(&args.robot)?;
     let q = args.joints.values(&robot)?;
     let mut data = Data::new();
     robot
         .forward_kinematics(&mut data, &q)
-        .map_err(|e| e.to_string())?;
+        .map_err(deflex_model::ModelError::from)?;
     let pose = data.tcp;
     let p = pose.translation.vector;
     let rpy = rpy_from_rotation(&pose.rotation);
@@ -368,7 +367,7 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CliResult {
     Ok(())
 }
 
-pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
+pub fn deflect(args: DeflectArgs, json_output: bool) -> CommandResult {
     let robot = robot(&args.robot)?;
     let q = args.joints.values(&robot)?;
     let w = parse_fixed::<6>(&args.wrench, "--wrench")?;
@@ -376,7 +375,7 @@ pub fn deflect(args: DeflectArgs, json_output: bool) -> CliResult {
     let mut data = Data::new();
     robot
         .forward_kinematics(&mut data, &q)
-        .map_err(|e| e.to_string())?;
+        .map_err(deflex_model::ModelError::from)?;
     let compliance = robot.compliance_matrix(&data);
     let ds = robot.tcp_deflection(&data, &wrench);
     let p = data.tcp_position();
@@ -426,7 +425,7 @@ pub fn default_seed(robot: &Robot) -> Vec<f64> {
     }
 }
 
-pub fn ik(args: IkArgs, json_output: bool) -> CliResult {
+pub fn ik(args: IkArgs, json_output: bool) -> CommandResult {
     let robot = robot(&args.robot)?;
     let xyz = parse_fixed::<3>(&args.xyz_mm, "--xyz-mm")?;
     let rpy = parse_fixed::<3>(&args.rpy_deg, "--rpy-deg")?;
@@ -437,7 +436,11 @@ pub fn ik(args: IkArgs, json_output: bool) -> CliResult {
     let target = pose_from_xyz_rpy(xyz.map(|v| v * 1e-3), rpy.map(f64::to_radians));
     let solution = robot
         .inverse_kinematics_search(&target, Some(&seed), &IkOptions::default())
-        .map_err(|e| format!("{e} (target {xyz:?} mm, rpy {rpy:?}°)"))?;
+        .map_err(|source| CliError::Unreachable {
+            xyz_mm: xyz,
+            rpy_deg: rpy,
+            source,
+        })?;
     if json_output {
         let value = json!({
             "q_rad": solution.q,
@@ -486,30 +489,42 @@ pub fn deflection_grid(
     size_m: f64,
     step_m: f64,
     wrench: &Wrench,
-) -> Result<(Vec<MapNode>, usize), String> {
+) -> Result<(Vec<MapNode>, usize), CliError> {
     if !(step_m > 0.0 && size_m >= 0.0) {
-        return Err("--step must be positive and --size non-negative".into());
+        return Err(UsageError::invalid(
+            "--step",
+            "a positive step over a non-negative --size",
+            format!("{} mm over {} mm", step_m * 1e3, size_m * 1e3),
+        )
+        .into());
     }
     if size_m > MAX_MAP_SIZE_M {
-        return Err(format!(
-            "--size {:.1} mm: at most {:.0} mm",
-            size_m * 1e3,
-            MAX_MAP_SIZE_M * 1e3
-        ));
+        return Err(UsageError::invalid(
+            "--size",
+            format!("at most {:.0} mm", MAX_MAP_SIZE_M * 1e3),
+            format!("{:.1} mm", size_m * 1e3),
+        )
+        .into());
     }
     let per_side = size_m / step_m + 1e-9;
     if per_side >= MAX_MAP_NODES_PER_SIDE as f64 {
-        return Err(format!(
-            "--step {:.4} mm over --size {:.1} mm gives {:.0} nodes per side; at most {} (raise --step)",
-            step_m * 1e3,
-            size_m * 1e3,
-            per_side.floor() + 1.0,
-            MAX_MAP_NODES_PER_SIDE
-        ));
+        return Err(UsageError::invalid(
+            "--step",
+            format!("at most {MAX_MAP_NODES_PER_SIDE} nodes per side (raise --step)"),
+            format!(
+                "{:.4} mm over --size {:.1} mm, {:.0} nodes per side",
+                step_m * 1e3,
+                size_m * 1e3,
+                per_side.floor() + 1.0
+            ),
+        )
+        .into());
     }
     let count = per_side.floor() as usize + 1;
     let seed = default_seed(robot);
-    let reference = robot.tcp_pose(&seed).map_err(|e| e.to_string())?;
+    let reference = robot
+        .tcp_pose(&seed)
+        .map_err(deflex_model::ModelError::from)?;
     let mut data = Data::new();
     let mut nodes = Vec::with_capacity(count * count);
     let mut unreachable = 0;
@@ -527,7 +542,7 @@ pub fn deflection_grid(
                 Ok(solution) => {
                     robot
                         .forward_kinematics(&mut data, &solution.q)
-                        .map_err(|e| e.to_string())?;
+                        .map_err(deflex_model::ModelError::from)?;
                     let deflection = robot.tcp_deflection(&data, wrench);
                     row_seed = solution.q.clone();
                     nodes.push(MapNode {
@@ -544,16 +559,20 @@ pub fn deflection_grid(
     Ok((nodes, unreachable))
 }
 
-pub fn map(args: MapArgs, json_output: bool) -> CliResult {
+pub fn map(args: MapArgs, json_output: bool) -> CommandResult {
     let robot = robot(&args.robot)?;
     let plane = args.plane.trim();
     let z_text = plane.strip_prefix("z=").ok_or_else(|| {
-        format!("--plane: only horizontal planes are supported, write z=100mm (got \"{plane}\")")
+        UsageError::invalid(
+            "--plane",
+            "a horizontal plane, written z=100mm",
+            format!("\"{plane}\""),
+        )
     })?;
     let z_m = parse_length_mm_default(z_text, "--plane")?;
     let center: Vec<&str> = args.center.split(',').collect();
     let [cx, cy] = center.as_slice() else {
-        return Err(format!("--center: expected x,y, got \"{}\"", args.center));
+        return Err(UsageError::invalid("--center", "x,y", format!("\"{}\"", args.center)).into());
     };
     let center_m = [
         parse_length_mm_default(cx, "--center")?,
@@ -567,9 +586,9 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
     let (nodes, unreachable) = deflection_grid(&robot, z_m, center_m, size_m, step_m, &wrench)?;
     let elapsed = started.elapsed();
     if nodes.is_empty() {
-        return Err("no grid node is reachable; check --plane, --center and --size".into());
+        return Err(CliError::NoReachableNode);
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out).map_err(CliError::write(&args.out))?;
     let n = robot.joint_count();
     let mut csv = String::from("x_m,y_m,z_m,");
     for i in 1..=n {
@@ -593,8 +612,7 @@ pub fn map(args: MapArgs, json_output: bool) -> CliResult {
         );
     }
     let csv_path = args.out.join("deflection_map.csv");
-    deflex_files::write_atomic(&csv_path, csv)
-        .map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    deflex_files::write_atomic(&csv_path, csv).map_err(CliError::write(&csv_path))?;
     let norms: Vec<f64> = nodes
         .iter()
         .map(|n| n.deflection.fixed_rows::<3>(0).norm())
@@ -636,7 +654,7 @@ pub fn map_plots(
     nodes: &[MapNode],
     robot_name: &str,
     wrench: &[f64; 6],
-) -> Result<Vec<PathBuf>, String> {
+) -> Result<Vec<PathBuf>, deflex_report::ReportError> {
     let mut xs: Vec<f64> = nodes.iter().map(|n| n.position_m[0] * 1e3).collect();
     let mut ys: Vec<f64> = nodes.iter().map(|n| n.position_m[1] * 1e3).collect();
     for v in [&mut xs, &mut ys] {
@@ -672,7 +690,7 @@ pub fn map_plots(
             "y [mm]",
         )
         .size(1000, 800);
-        deflex_report::heatmap(&path, &spec, &xs, &ys, values, label).map_err(|e| e.to_string())?;
+        deflex_report::heatmap(&path, &spec, &xs, &ys, values, label)?;
         written.push(path);
     }
     Ok(written)

@@ -1,24 +1,27 @@
 //! `deflex plan`: the measurement campaign for a real cell (floor, table, cable or dead-weight
 //! loads, bracket, measured points), with expected standard errors and the technician's sheet.
 
-use crate::args::{CliResult, robot};
-use crate::cmd_calib::{check_range, finite_or_null};
-use clap::Args;
-use deflex_stiffness::cell::{
-    MAX_PLAN_FORCE_N, MAX_USER_POINTS, default_force_n, parse_directions, parse_point_flag,
-    read_points,
+use crate::args::robot;
+use crate::args::{check_range, finite_or_null};
+use crate::error::{CliError, CommandResult, UsageError};
+use clap::{Args, ValueEnum};
+use deflex_load::read_points;
+use deflex_measurements::format_rows_for;
+use deflex_measurements::points::parse_point_flag;
+use deflex_model::Robot;
+use deflex_report::plan_tables::{
+    EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
+    expected_shift_rows, technician_rows,
+};
+use deflex_report::text_table::render_table;
+use deflex_stiffness::campaign_cell::{
+    MAX_PLAN_FORCE_N, MAX_USER_POINTS, default_force_n, parse_directions,
 };
 use deflex_stiffness::plan::{
     BasePoint, Floor, LoadKind, PlanOptions, PointSet, Table, TableOption, plan_experiments,
 };
-use deflex_stiffness::report::{
-    EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
-    expected_shift_rows, render_table, technician_rows,
-};
-use deflex_stiffness::write_rows_for;
-use deflex_model::Robot;
 use serde_json::{Value, json};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct PlanArgs {
@@ -32,8 +35,8 @@ pub struct PlanArgs {
     pub max_force_n: Option<f64>,
     /// How loads are applied: cable (tension along --cable-directions) or dead-weight (masses
     /// along gravity, --masses-kg).
-    #[arg(long, default_value = "cable", value_parser = ["cable", "dead-weight"])]
-    pub load: String,
+    #[arg(long, value_enum, default_value = "cable")]
+    pub load: LoadChoice,
     /// Directions a cable may lead from the attachment (world axes): x,-x,y,-y,z,-z (default
     /// all; +z needs an overhead anchor).
     #[arg(long)]
@@ -55,8 +58,8 @@ pub struct PlanArgs {
     pub full_family: bool,
     /// Points measured on the arm besides the TCP: `standard` (two mid-arm points), `none`, or
     /// a CSV file with columns name,link,x_m,y_m,z_m (position in the link's frame).
-    #[arg(long, default_value = "standard")]
-    pub points: String,
+    #[arg(long, default_value = "standard", value_parser = parse_points_choice)]
+    pub points: PointsChoice,
     /// An extra measured point `NAME,LINK,X,Y,Z` (m, link frame; repeatable).
     #[arg(long)]
     pub point: Vec<String>,
@@ -101,20 +104,49 @@ pub struct PlanArgs {
     pub out: PathBuf,
 }
 
+/// `--load`: how loads are applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LoadChoice {
+    // A cable (plain comments: a doc comment would become the value's help in `--help`).
+    Cable,
+    // Dead weights.
+    DeadWeight,
+}
+
+/// `--points`: the points measured besides the TCP.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PointsChoice {
+    /// Two mid-arm points.
+    Standard,
+    /// None.
+    None,
+    /// The points of a CSV file.
+    File(PathBuf),
+}
+
+/// `standard`, `none`, or a file name.
+fn parse_points_choice(text: &str) -> Result<PointsChoice, std::convert::Infallible> {
+    Ok(match text {
+        "standard" => PointsChoice::Standard,
+        "none" => PointsChoice::None,
+        file => PointsChoice::File(PathBuf::from(file)),
+    })
+}
+
 /// Comma-separated numbers of a flag, exactly `N` of them.
-fn fixed<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], String> {
+fn fixed<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], UsageError> {
     crate::args::parse_fixed::<N>(text, flag)
 }
 
 /// The plan options from the flags (every number checked, the flag named).
-fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, String> {
+fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, CliError> {
     let n = nominal.joint_count();
     let max_force_n = match args.max_force_n {
         Some(f) => {
             check_range("--max-force-N", f, 1e-3, MAX_PLAN_FORCE_N)?;
             f
         }
-        None => default_force_n(nominal).map_err(|e| e.to_string())?,
+        None => default_force_n(nominal)?,
     };
     check_range("--noise-um", args.noise_um, 1e-3, 1e4)?;
     check_range("--clearance-m", args.clearance_m, 0.0, 1.0)?;
@@ -122,73 +154,40 @@ fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, String>
     if let Some(z) = args.floor_z_m {
         check_range("--floor-z-m", z, -100.0, 100.0)?;
     }
-    let load = if args.load == "dead-weight" {
-        if args.cable_directions.is_some() {
-            return Err("--cable-directions: only with --load cable".into());
-        }
-        let g = nominal.gravity.norm();
-        let masses_kg = match &args.masses_kg {
-            Some(text) => crate::args::parse_list(text, "--masses-kg")?,
-            None if g > 0.0 => vec![(max_force_n / g).round().max(1.0)],
-            None => {
-                return Err(format!(
-                    "--load dead-weight: robot \"{}\" has no gravity",
-                    nominal.name
-                ));
-            }
-        };
-        LoadKind::DeadWeight { masses_kg }
-    } else {
-        if args.masses_kg.is_some() {
-            return Err("--masses-kg: only with --load dead-weight".into());
-        }
-        match &args.cable_directions {
-            Some(text) => LoadKind::Cable {
-                directions: parse_directions(text)
-                    .map_err(|e| format!("--cable-directions: {e}"))?,
-            },
-            None => LoadKind::cable_all_axes(),
-        }
-    };
-    let mut points = match args.points.as_str() {
-        "standard" => PointSet::Standard,
-        "none" => PointSet::Custom(Vec::new()),
-        file => {
-            PointSet::Custom(read_points(Path::new(file), n).map_err(|e| format!("--points: {e}"))?)
-        }
-    };
-    if !args.point.is_empty() {
-        let mut list = match points {
-            PointSet::Standard => Vec::new(),
-            PointSet::Custom(list) => list,
-        };
-        if args.points == "standard" {
-            return Err(
-                "--point: give --points none (or a file) with it; the standard mid-arm points are not combined with others".into(),
-            );
-        }
-        for text in args.point.iter().take(MAX_USER_POINTS + 1) {
-            list.push(parse_point_flag(text, n).map_err(|e| format!("--point {text}: {e}"))?);
-        }
-        if list.len() > MAX_USER_POINTS {
-            return Err(format!("--point: at most {MAX_USER_POINTS} points"));
-        }
-        points = PointSet::Custom(list);
-    }
+    let load = load_kind(args, nominal, max_force_n)?;
+    let points = point_set(args, n)?;
     let base_point = match (&args.base_point_m, args.no_base_point) {
-        (Some(_), true) => return Err("give --base-point-m or --no-base-point, not both".into()),
+        (Some(_), true) => {
+            return Err(UsageError::NotBoth {
+                first: "--base-point-m",
+                second: "--no-base-point",
+            }
+            .into());
+        }
         (Some(text), false) => BasePoint::At(fixed::<3>("--base-point-m", text)?),
         (None, true) => BasePoint::Off,
         (None, false) => BasePoint::Default,
     };
     let floor = match (args.floor_z_m, args.no_floor) {
-        (Some(_), true) => return Err("give --floor-z-m or --no-floor, not both".into()),
+        (Some(_), true) => {
+            return Err(UsageError::NotBoth {
+                first: "--floor-z-m",
+                second: "--no-floor",
+            }
+            .into());
+        }
         (Some(z), false) => Floor::At(z),
         (None, true) => Floor::Off,
         (None, false) => Floor::Default,
     };
     let table = match (&args.table, args.no_table) {
-        (Some(_), true) => return Err("give --table or --no-table, not both".into()),
+        (Some(_), true) => {
+            return Err(UsageError::NotBoth {
+                first: "--table",
+                second: "--no-table",
+            }
+            .into());
+        }
         (Some(text), false) => {
             let [x0, x1, y0, y1, top] = fixed::<5>("--table", text)?;
             TableOption::At(Table {
@@ -223,11 +222,102 @@ fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, String>
     })
 }
 
-pub fn plan(args: PlanArgs, json_output: bool) -> CliResult {
+/// The loads from `--load`, `--cable-directions` and `--masses-kg`.
+fn load_kind(args: &PlanArgs, nominal: &Robot, max_force_n: f64) -> Result<LoadKind, CliError> {
+    Ok(match args.load {
+        LoadChoice::DeadWeight => {
+            if args.cable_directions.is_some() {
+                return Err(UsageError::DoesNotApply {
+                    flag: "--cable-directions",
+                    applies: "only with --load cable",
+                }
+                .into());
+            }
+            let g = nominal.gravity.norm();
+            let masses_kg = match &args.masses_kg {
+                Some(text) => crate::args::parse_list(text, "--masses-kg")?,
+                None if g > 0.0 => vec![(max_force_n / g).round().max(1.0)],
+                None => {
+                    return Err(deflex_stiffness::CalibError::from(
+                        deflex_stiffness::PlanError::NoGravity {
+                            robot: nominal.name.clone(),
+                        },
+                    )
+                    .into());
+                }
+            };
+            LoadKind::DeadWeight { masses_kg }
+        }
+        LoadChoice::Cable => {
+            if args.masses_kg.is_some() {
+                return Err(UsageError::DoesNotApply {
+                    flag: "--masses-kg",
+                    applies: "only with --load dead-weight",
+                }
+                .into());
+            }
+            match &args.cable_directions {
+                Some(text) => LoadKind::Cable {
+                    directions: parse_directions(text).map_err(|e| {
+                        UsageError::invalid(
+                            "--cable-directions",
+                            "directions among x, -x, y, -y, z, -z",
+                            format!("\"{}\"", e.text),
+                        )
+                    })?,
+                },
+                None => LoadKind::cable_all_axes(),
+            }
+        }
+    })
+}
+
+/// The measured points from `--points` and `--point`, for a robot with `n` joints.
+fn point_set(args: &PlanArgs, n: usize) -> Result<PointSet, CliError> {
+    let mut points = match &args.points {
+        PointsChoice::Standard => PointSet::Standard,
+        PointsChoice::None => PointSet::Custom(Vec::new()),
+        PointsChoice::File(file) => PointSet::Custom(
+            read_points(file, n).map_err(|e| CliError::in_context("--points")(e.into()))?,
+        ),
+    };
+    if !args.point.is_empty() {
+        let mut list = match points {
+            PointSet::Standard => Vec::new(),
+            PointSet::Custom(list) => list,
+        };
+        if args.points == PointsChoice::Standard {
+            return Err(UsageError::DoesNotApply {
+                flag: "--point",
+                applies: "give --points none (or a file) with it; the standard mid-arm points are not combined with others",
+            }
+            .into());
+        }
+        for text in args.point.iter().take(MAX_USER_POINTS + 1) {
+            list.push(
+                parse_point_flag(text, n)
+                    .map_err(|e| CliError::in_context(format!("--point {text}"))(e.into()))?,
+            );
+        }
+        if list.len() > MAX_USER_POINTS {
+            return Err(UsageError::invalid(
+                "--point",
+                format!("at most {MAX_USER_POINTS} points"),
+                list.len(),
+            )
+            .into());
+        }
+        points = PointSet::Custom(list);
+    }
+    Ok(points)
+}
+
+pub fn plan(args: PlanArgs, json_output: bool) -> CommandResult {
     let nominal = robot(&args.robot)?;
     let options = plan_options(&args, &nominal)?;
-    let plan = plan_experiments(&nominal, &options).map_err(|e| e.to_string())?;
-    write_rows_for(&args.out, &nominal, &plan.rows, &[]).map_err(|e| e.to_string())?;
+    let plan = plan_experiments(&nominal, &options)?;
+    deflex_files::write_atomic(&args.out, format_rows_for(&nominal, &plan.rows, &[]))
+        .map_err(CliError::write(&args.out))?;
     let cases = deflex_stiffness::data::load_case_count(&plan.rows);
     let setup = &plan.setup;
     let load_text = match &setup.load {

@@ -16,21 +16,22 @@
 //! Every output names the robot the twin played. Every numeric option is checked (finite, within
 //! its documented range); the error names the option.
 
-use crate::args::{CliResult, bounded, parse_list, print_json};
-use clap::{Args, Subcommand};
-use deflex_sim::campaign::{
+use crate::args::{bounded, parse_list, print_json};
+use crate::error::{CliError, CommandResult, UsageError};
+use clap::{Args, Subcommand, ValueEnum};
+use deflex_sim::gcode::read_gcode;
+use deflex_sim::twin_campaign::{
     GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
 };
-use deflex_sim::gcode::read_gcode;
 use deflex_sim::{
     CellConfig, ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath,
     run_forming_with_progress,
 };
 use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-mod sensitivity;
-use sensitivity::{SensitivityArgs, sensitivity};
+mod cmd_sensitivity;
+use cmd_sensitivity::{SensitivityArgs, sensitivity};
 
 #[derive(Subcommand)]
 pub enum SimCommand {
@@ -74,8 +75,15 @@ pub struct CampaignArgs {
     /// A validation grid: `cell` (default: the robot cell's grid, the paper's for the TX200) or
     /// `paper` (200 poses, 600 N and 1100 N, at the TX200's work area). The `--grid-*` options
     /// change it.
-    #[arg(long, num_args = 0..=1, default_missing_value = "cell", conflicts_with = "spiral")]
-    pub grid: Option<String>,
+    #[arg(
+        long,
+        value_enum,
+        num_args = 0..=1,
+        default_missing_value = "cell",
+        conflicts_with = "spiral",
+        hide_possible_values = true
+    )]
+    pub grid: Option<GridChoice>,
     /// Grid centre x,y (m, world).
     #[arg(long)]
     pub grid_center_m: Option<String>,
@@ -127,8 +135,8 @@ pub struct CampaignArgs {
 pub struct IsfArgs {
     /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid`, `plunge` (1 mm
     /// into a stiff fixture, then 20 mm along x), or a G-code file.
-    #[arg(long, default_value = "cone")]
-    pub path: String,
+    #[arg(long, default_value = "cone", value_parser = parse_path_choice)]
+    pub path: PathChoice,
     /// Output folder (log.csv, summary.json, plots), swapped in whole at the end.
     #[arg(long)]
     pub out: PathBuf,
@@ -148,14 +156,58 @@ pub struct IsfArgs {
     #[arg(long)]
     pub fixture_stiffness_n_m: Option<f64>,
     /// Online correction: `off` (default) or `on` (needs --model).
-    #[arg(long, default_value = "off")]
-    pub correction: String,
+    #[arg(long, value_enum, default_value = "off", hide_possible_values = true)]
+    pub correction: Correction,
     /// Identified model used by the correction controller (robot TOML).
     #[arg(long)]
     pub model: Option<PathBuf>,
 }
 
-pub fn sim(command: SimCommand, json: bool) -> CliResult {
+/// `--grid`: which validation grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GridChoice {
+    // The robot cell's grid (plain comments: doc comments would change `--help`).
+    Cell,
+    // The paper's grid.
+    Paper,
+}
+
+/// `--correction`: the online correction off or on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Correction {
+    // Open loop.
+    Off,
+    // The correction controller with `--model`.
+    On,
+}
+
+/// `--path`: a built-in tool path or a G-code file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PathChoice {
+    /// The paper's helical cone.
+    Cone,
+    /// The cone in contours.
+    ConeContour,
+    /// The pyramid.
+    Pyramid,
+    /// 1 mm into a stiff fixture, then 20 mm along x.
+    Plunge,
+    /// A G-code file.
+    Gcode(PathBuf),
+}
+
+/// `cone`, `cone-contour`, `pyramid`, `plunge`, or a G-code file.
+fn parse_path_choice(text: &str) -> Result<PathChoice, std::convert::Infallible> {
+    Ok(match text {
+        "cone" => PathChoice::Cone,
+        "cone-contour" => PathChoice::ConeContour,
+        "pyramid" => PathChoice::Pyramid,
+        "plunge" => PathChoice::Plunge,
+        file => PathChoice::Gcode(PathBuf::from(file)),
+    })
+}
+
+pub fn sim(command: SimCommand, json: bool) -> CommandResult {
     match command {
         SimCommand::Campaign(args) => campaign(args, json),
         SimCommand::Isf(args) => isf(args, json),
@@ -165,17 +217,16 @@ pub fn sim(command: SimCommand, json: bool) -> CliResult {
 }
 
 /// `deflex sim robot`: the nominal robot of the simulated cell as a robot file.
-fn cell_robot(args: RobotArgs, json: bool) -> CliResult {
+fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
-    let robot = config.nominal_robot().map_err(|e| e.to_string())?;
+    let robot = config.nominal_robot()?;
     let text = format!(
         "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
          # cell's tool and base pivot, as a user would describe that cell.\n{}",
         config.part.robot,
-        deflex_model::robot_to_toml_for(&robot, &args.out)
+        deflex_load::robot_to_toml_for(&robot, &args.out)
     );
-    deflex_files::write_atomic(&args.out, text)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
     if json {
         crate::args::print_json(&serde_json::json!({
             "simulated": true,
@@ -201,10 +252,10 @@ fn cell_robot(args: RobotArgs, json: bool) -> CliResult {
 
 /// The cell: the robot's (`--robot`, else the file's, else the TX200's), with the twin file's
 /// settings over it.
-pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, String> {
+pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, CliError> {
     match (&twin.config, &twin.robot) {
-        (Some(p), robot) => CellConfig::load_for(p, robot.as_deref()).map_err(|e| e.to_string()),
-        (None, Some(robot)) => CellConfig::for_robot(robot).map_err(|e| e.to_string()),
+        (Some(p), robot) => Ok(deflex_twin::load_cell(p, robot.as_deref())?),
+        (None, Some(robot)) => Ok(deflex_twin::cell_for_robot(robot)?),
         (None, None) => Ok(CellConfig::default()),
     }
 }
@@ -217,15 +268,10 @@ pub(super) fn robot_name(config: &CellConfig) -> String {
         .unwrap_or_else(|_| config.part.robot.clone())
 }
 
-fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, String> {
-    let mut params = match args.grid.as_deref() {
-        Some("paper") => GridParams::paper(),
-        Some("cell") | None => GridParams::for_cell(config).map_err(|e| e.to_string())?,
-        Some(other) => {
-            return Err(format!(
-                "--grid: expected `cell` (default) or `paper`, got \"{other}\""
-            ));
-        }
+fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, CliError> {
+    let mut params = match args.grid {
+        Some(GridChoice::Paper) => GridParams::paper(),
+        Some(GridChoice::Cell) | None => GridParams::for_cell(config)?,
     };
     if let Some(text) = &args.grid_center_m {
         let v = crate::args::parse_fixed::<2>(text, "--grid-center-m")?;
@@ -239,11 +285,15 @@ fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, S
         let size = match v.as_slice() {
             [s] => [*s, *s],
             [a, b] => [*a, *b],
-            _ => return Err("--grid-size-m: give one or two values (m)".into()),
+            _ => {
+                return Err(
+                    UsageError::invalid("--grid-size-m", "one or two values (m)", v.len()).into(),
+                );
+            }
         };
         for s in size {
             if !(s > 0.0 && s <= 5.0) {
-                return Err(format!("--grid-size-m: within (0, 5] m, got {s}"));
+                return Err(UsageError::invalid("--grid-size-m", "within (0, 5] m", s).into());
             }
         }
         params.size_xy_m = size;
@@ -255,27 +305,28 @@ fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, S
         let step = bounded("--grid-step-m", step, 1e-4, 5.0, "m")?;
         for (i, size) in params.size_xy_m.into_iter().enumerate() {
             params.points_xy[i] = GridParams::points_for_step(size, step)
-                .map_err(|e| format!("--grid-step-m: {e}"))?;
+                .map_err(|e| CliError::in_context("--grid-step-m")(e.into()))?;
         }
     }
     if let Some(text) = &args.grid_loads_n {
         params.loads_n = parse_list(text, "--grid-loads-n")?;
     }
-    params.validate().map_err(|e| e.to_string())?;
+    params.validate()?;
     Ok(params)
 }
 
-fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParams, String> {
-    let mut p = SpiralParams::for_cell(config).map_err(|e| e.to_string())?;
+fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParams, CliError> {
+    let mut p = SpiralParams::for_cell(config)?;
     if let Some(text) = &args.spiral_center_m {
         p.center_m = crate::args::parse_fixed::<3>(text, "--spiral-center-m")?;
     }
-    let set = |target: &mut f64, value: Option<f64>, name: &str, lo: f64, hi: f64, unit: &str| {
-        if let Some(v) = value {
-            *target = bounded(name, v, lo, hi, unit)?;
-        }
-        Ok::<(), String>(())
-    };
+    let set =
+        |target: &mut f64, value: Option<f64>, name: &str, lo: f64, hi: f64, unit: &'static str| {
+            if let Some(v) = value {
+                *target = bounded(name, v, lo, hi, unit)?;
+            }
+            Ok::<(), UsageError>(())
+        };
     set(
         &mut p.initial_radius_m,
         args.spiral_radius_m,
@@ -316,11 +367,11 @@ fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParam
         1e5,
         "N",
     )?;
-    p.validate().map_err(|e| e.to_string())?;
+    p.validate()?;
     Ok(p)
 }
 
-fn campaign(args: CampaignArgs, json: bool) -> CliResult {
+fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
     let grid_options = args.grid_center_m.is_some()
         || args.grid_size_m.is_some()
@@ -334,25 +385,31 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         || args.spiral_speed_m_s.is_some()
         || args.spiral_load_n.is_some();
     if grid_options && args.grid.is_none() {
-        return Err("the --grid-* options need --grid".into());
+        return Err(UsageError::DoesNotApply {
+            flag: "the --grid-* options",
+            applies: "need --grid",
+        }
+        .into());
     }
     if spiral_options && !args.spiral {
-        return Err("the --spiral-* options need --spiral".into());
+        return Err(UsageError::DoesNotApply {
+            flag: "the --spiral-* options",
+            applies: "need --spiral",
+        }
+        .into());
     }
     let mut plan_header = None;
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
-            let plan_file =
-                deflex_stiffness::data::read_file(plan, None, false).map_err(|e| e.to_string())?;
-            let rows =
-                run_campaign(&config, &plan_file.rows, args.seed).map_err(|e| e.to_string())?;
+            let plan_file = deflex_load::read_file(plan, None, false)?;
+            let rows = run_campaign(&config, &plan_file.rows, args.seed)?;
             plan_header = Some(plan_file.header);
             (format!("plan {}", plan.display()), rows)
         }
         (None, Some(_), false) => {
             let params = grid_params(&args, &config)?;
-            let plan = validation_grid(&config, &params).map_err(|e| e.to_string())?;
-            let rows = run_campaign(&config, &plan, args.seed).map_err(|e| e.to_string())?;
+            let plan = validation_grid(&config, &params)?;
+            let rows = run_campaign(&config, &plan, args.seed)?;
             let loads: Vec<String> = params.loads_n.iter().map(|l| format!("{l:.0} N")).collect();
             (
                 format!(
@@ -369,7 +426,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
         }
         (None, None, true) => {
             let params = spiral_params(&args, &config)?;
-            let rows = spiral(&config, &params, args.seed).map_err(|e| e.to_string())?;
+            let rows = spiral(&config, &params, args.seed)?;
             (
                 format!(
                     "spiral (Fig. 14) {:.3} m long at z = {:.3} m, {:.0} N",
@@ -378,12 +435,16 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
                 rows,
             )
         }
-        _ => return Err("give one of --plan PLAN.csv, --grid [cell|paper] or --spiral".into()),
+        _ => {
+            return Err(UsageError::Missing {
+                what: "what to measure",
+                give: "give one of --plan PLAN.csv, --grid [cell|paper] or --spiral",
+            }
+            .into());
+        }
     };
-    let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())
-        .map_err(|e| e.to_string())?;
-    deflex_files::write_atomic(&args.out, text)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())?;
+    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
     let cases = deflex_stiffness::data::load_case_count(&rows);
     let max_disp = rows
         .iter()
@@ -416,44 +477,45 @@ fn campaign(args: CampaignArgs, json: bool) -> CliResult {
     Ok(())
 }
 
-fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
+fn tool_path(args: &IsfArgs) -> Result<ToolPath, CliError> {
     let feed = match args.feed_mm_s {
         Some(f) => Some(bounded("--feed-mm-s", f, 0.1, 1000.0, "mm/s")?),
         None => None,
     };
-    let path = match args.path.as_str() {
-        "cone" | "cone-contour" => {
+    let path = match &args.path {
+        PathChoice::Cone | PathChoice::ConeContour => {
             let mut p = ConeParams {
-                helical: args.path == "cone",
+                helical: args.path == PathChoice::Cone,
                 ..ConeParams::default()
             };
             if let Some(f) = feed {
                 p.feed_mm_s = f;
             }
-            ToolPath::cone(&p).map_err(|e| e.to_string())?
+            ToolPath::cone(&p)?
         }
-        "pyramid" => {
+        PathChoice::Pyramid => {
             let mut p = PyramidParams::default();
             if let Some(f) = feed {
                 p.feed_mm_s = f;
             }
-            ToolPath::pyramid(&p).map_err(|e| e.to_string())?
+            ToolPath::pyramid(&p)?
         }
-        "plunge" => {
+        PathChoice::Plunge => {
             let mut p = PlungeParams::default();
             if let Some(f) = feed {
                 p.traverse_feed_mm_s = f;
             }
-            ToolPath::plunge(&p).map_err(|e| e.to_string())?
+            ToolPath::plunge(&p)?
         }
-        file => {
+        PathChoice::Gcode(file) => {
             if feed.is_some() {
-                return Err(
-                    "--feed-mm-s applies to the built-in paths; a G-code file sets its own F"
-                        .into(),
-                );
+                return Err(UsageError::DoesNotApply {
+                    flag: "--feed-mm-s",
+                    applies: "applies to the built-in paths; a G-code file sets its own F",
+                }
+                .into());
             }
-            read_gcode(Path::new(file)).map_err(|e| e.to_string())?
+            read_gcode(file)?
         }
     };
     Ok(match args.length_mm {
@@ -462,35 +524,37 @@ fn tool_path(args: &IsfArgs) -> Result<ToolPath, String> {
     })
 }
 
-fn isf(args: IsfArgs, json: bool) -> CliResult {
-    match args.correction.as_str() {
-        "off" => {
-            if args.model.is_some() {
-                return Err("--model is only used with --correction on".into());
-            }
+fn isf(args: IsfArgs, json: bool) -> CommandResult {
+    if args.correction == Correction::Off && args.model.is_some() {
+        return Err(UsageError::DoesNotApply {
+            flag: "--model",
+            applies: "only used with --correction on",
         }
-        "on" => {}
-        other => return Err(format!("--correction: expected on or off, got \"{other}\"")),
+        .into());
     }
     let mut config = load_config(&args.twin)?;
-    if args.path == "plunge" {
+    if args.path == PathChoice::Plunge {
         config.process.kind = ProcessKind::Fixture;
     }
     if let Some(k) = args.fixture_stiffness_n_m {
-        if args.path != "plunge" {
-            return Err("--fixture-stiffness-n-m applies to --path plunge".into());
+        if args.path != PathChoice::Plunge {
+            return Err(UsageError::DoesNotApply {
+                flag: "--fixture-stiffness-n-m",
+                applies: "applies to --path plunge",
+            }
+            .into());
         }
         config.process.fixture_stiffness_n_m =
             bounded("--fixture-stiffness-n-m", k, 1e4, 1e9, "N/m")?;
     }
     let path = tool_path(&args)?;
     // Closed loop: the deflex correction controller in-process, in simulated time.
-    let mut twin = match args.correction.as_str() {
-        "on" => Some(deflex_study::twin_controller::twin_controller(
+    let mut twin = match args.correction {
+        Correction::On => Some(deflex_twin::twin_controller(
             &config,
             args.model.as_deref(),
         )?),
-        _ => None,
+        Correction::Off => None,
     };
     let name = path.name.clone();
     let bar = if json {
@@ -509,10 +573,9 @@ fn isf(args: IsfArgs, json: bool) -> CliResult {
         .map(|t| t as &mut dyn deflex_sim::CorrectionController);
     let run = run_forming_with_progress(&config, path, args.seed, controller, &mut |f| {
         bar.set_position((f * 1000.0) as u64)
-    })
-    .map_err(|e| e.to_string())?;
+    })?;
     bar.finish_and_clear();
-    let files = run.write_outputs(&args.out).map_err(|e| e.to_string())?;
+    let files = deflex_report::forming_run::write_forming_run(&run, &args.out)?;
     let s = &run.summary;
     if json {
         let mut value: serde_json::Value =

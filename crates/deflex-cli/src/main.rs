@@ -2,27 +2,22 @@
 
 mod args;
 mod cell_server;
-mod closed_loop;
 mod cmd_calib;
 mod cmd_compensate;
 mod cmd_control;
 mod cmd_demo;
 mod cmd_egcal;
+mod cmd_export;
 mod cmd_model;
 mod cmd_plan;
+mod cmd_plot;
+mod cmd_register;
 mod cmd_sim;
+mod error;
 
 use clap::{Parser, Subcommand};
+use error::CliError;
 use std::process::ExitCode;
-
-/// Tests that run the real-time threads (wall-clock loopback sessions, and the simulated-time
-/// runtime whose lockstep threads keep both cores busy) take this lock, so one cannot starve
-/// another's 4 ms deadlines on a 2-core machine.
-#[cfg(test)]
-pub(crate) fn realtime_test_lock() -> std::sync::MutexGuard<'static, ()> {
-    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
 
 /// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,
 /// force-feedback correction, digital twin). SI units in files; human output in mm, degrees.
@@ -58,6 +53,9 @@ enum Command {
     CalibrateGeometry(cmd_egcal::CalibrateGeometryArgs),
     /// Predict absolute readings (each row's target in its set-up's tracker frame).
     Predict(cmd_egcal::PredictArgs),
+    /// Register a new measuring session (tracker set-up) and, optionally, a new target from a
+    /// few readings, the calibrated robot frozen.
+    Register(cmd_register::RegisterArgs),
     /// Convert a public data set into deflex's absolute measurement format.
     Import {
         #[command(subcommand)]
@@ -66,7 +64,7 @@ enum Command {
     /// Prediction errors of a model against measurements, with plots.
     Validate(cmd_calib::ValidateArgs),
     /// Propose a measurement campaign for identification.
-    Plan(cmd_calib::PlanArgs),
+    Plan(cmd_plan::PlanArgs),
     /// The digital twin of the robotised ISF cell (SIMULATED).
     Sim {
         #[command(subcommand)]
@@ -74,12 +72,16 @@ enum Command {
     },
     /// Compensate a tool path offline and write robot programs (no real-time option needed).
     Compensate(cmd_compensate::CompensateArgs),
+    /// Write a calibrated robot as a URDF, a UR calibration file or a DH-corrections table.
+    Export(cmd_export::ExportArgs),
     /// Run the real-time correction controller against a robot and a force sensor.
     Run(cmd_control::RunArgs),
     /// Serve the simulated cell over the robot and sensor protocols on loopback.
     Cell(cell_server::CellArgs),
     /// The paper's whole study on the built-in SIMULATED cell, with an HTML report.
     Demo(cmd_demo::DemoArgs),
+    /// Figures of a run's log (deflex run CSV, sim isf log.csv or MCAP), or two overlaid.
+    Plot(cmd_plot::PlotArgs),
 }
 
 fn main() -> ExitCode {
@@ -92,21 +94,35 @@ fn main() -> ExitCode {
         Command::Ik(args) => cmd_model::ik(args, cli.json),
         Command::Map(args) => cmd_model::map(args, cli.json),
         Command::Calibrate(args) => cmd_calib::calibrate(args, cli.json),
-        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json),
-        Command::Predict(args) => cmd_egcal::predict(args, cli.json),
-        Command::Import { command } => cmd_egcal::import(command, cli.json),
+        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json)
+            .map_err(CliError::command("calibrate-geometry")),
+        Command::Predict(args) => {
+            cmd_egcal::predict(args, cli.json).map_err(CliError::command("predict"))
+        }
+        Command::Register(args) => {
+            cmd_register::register(args, cli.json).map_err(CliError::command("register"))
+        }
+        Command::Import { command } => {
+            cmd_egcal::import(command, cli.json).map_err(CliError::command("import"))
+        }
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
-        Command::Plan(args) => cmd_calib::plan(args, cli.json),
+        Command::Plan(args) => cmd_plan::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
-        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json),
-        Command::Run(args) => cmd_control::run(args, cli.json),
-        Command::Cell(args) => cell_server::cell(args, cli.json),
+        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json)
+            .map_err(CliError::command("compensate")),
+        Command::Export(args) => {
+            cmd_export::export(args, cli.json).map_err(CliError::command("export"))
+        }
+        Command::Run(args) => cmd_control::run(args, cli.json).map_err(CliError::command("run")),
+        Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
+        Command::Plot(args) => cmd_plot::plot(args, cli.json).map_err(CliError::command("plot")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
+        Err(error) => {
+            // The one place a command's error becomes text.
+            eprintln!("error: {error}");
             ExitCode::FAILURE
         }
     }

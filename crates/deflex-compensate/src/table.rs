@@ -69,59 +69,78 @@ pub fn write_csv(
     joints: usize,
     comments: &[String],
 ) -> String {
-    let mut out = String::with_capacity(path.len() * 420 + 1024);
+    let mut out = Vec::with_capacity(path.len() * 420 + 1024);
+    write_csv_to(&mut out, path, compensation, joints, comments)
+        .expect("writing to memory does not fail");
+    String::from_utf8(out).expect("the table is UTF-8")
+}
+
+/// [`write_csv`] streamed to `out` (a file of a million rows is 400 MB: it need not be held in
+/// memory).
+pub fn write_csv_to<W: std::io::Write>(
+    out: &mut W,
+    path: &TcpPath,
+    compensation: &Compensation,
+    joints: usize,
+    comments: &[String],
+) -> std::io::Result<()> {
     for c in comments {
         for line in c.lines() {
-            let _ = writeln!(out, "# {line}");
+            writeln!(out, "# {line}")?;
         }
     }
-    let _ = writeln!(out, "{}", csv_header(joints));
+    writeln!(out, "{}", csv_header(joints))?;
+    let mut row = String::with_capacity(512);
     for (i, (point, result)) in path.points().iter().zip(&compensation.points).enumerate() {
+        row.clear();
         let d = &point.pose;
         let r = rotation_log(&d.rotation);
         let c = commanded_pose(d, &result.compensation).translation.vector;
-        let _ = write!(out, "{i},{:.9},{:.6}", point.arc_length_m, point.time_s);
+        let _ = write!(row, "{i},{:.9},{:.6}", point.arc_length_m, point.time_s);
         let t = d.translation.vector;
         for v in [t.x, t.y, t.z] {
-            let _ = write!(out, ",{v:.9}");
+            let _ = write!(row, ",{v:.9}");
         }
         for v in r.iter() {
-            let _ = write!(out, ",{v:.10}");
+            let _ = write!(row, ",{v:.10}");
         }
         for v in c.iter() {
-            let _ = write!(out, ",{v:.9}");
+            let _ = write!(row, ",{v:.9}");
         }
         for (k, v) in result.compensation.iter().enumerate() {
             let _ = if k < 3 {
-                write!(out, ",{v:.9}")
+                write!(row, ",{v:.9}")
             } else {
-                write!(out, ",{v:.10}")
+                write!(row, ",{v:.10}")
             };
         }
         for v in result.wrench.iter() {
-            let _ = write!(out, ",{v:.4}");
+            let _ = write!(row, ",{v:.4}");
         }
         for (k, v) in result.deflection.iter().enumerate() {
             let _ = if k < 3 {
-                write!(out, ",{v:.9}")
+                write!(row, ",{v:.9}")
             } else {
-                write!(out, ",{v:.10}")
+                write!(row, ",{v:.10}")
             };
         }
         let _ = write!(
-            out,
+            row,
             ",{:.9},{:.10}",
             result.predicted_error_m, result.predicted_error_rad
         );
         for q in &result.q[..joints] {
-            let _ = write!(out, ",{q:.10}");
+            let _ = write!(row, ",{q:.10}");
         }
-        let status = result
-            .failure
-            .map_or_else(|| "ok".to_string(), |f| f.code());
-        let _ = writeln!(out, ",{status}");
+        match result.failure {
+            None => row.push_str(",ok\n"),
+            Some(f) => {
+                let _ = writeln!(row, ",{}", f.code());
+            }
+        }
+        out.write_all(row.as_bytes())?;
     }
-    out
+    Ok(())
 }
 
 /// A compensated-path table that cannot be read.

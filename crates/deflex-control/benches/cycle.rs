@@ -2,13 +2,14 @@
 //! estimate δŝ = J K_θ⁻¹ Jᵀ w (eq. 15) + the PID of eq. 17 with limiter, safety and the
 //! contact-runaway guard. Target: ≤ 1 µs median. The same with a feed-forward table
 //! (`control_cycle_feedforward`, 100 000 points 0.1 mm apart, arc-length tracking and a lead;
-//! `feedforward_update`: the tracking and lookup alone). Also the per-cycle extras of the
-//! runtime: the joint-correction map (RSI `AK` answers) and the per-answer send shaper.
+//! `feedforward_update`: the tracking and lookup alone). Also the joint-correction map the
+//! runtime sends with RSI `AK` answers (the per-answer send shaper is benched in
+//! deflex-runtime's `link` bench).
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
 use deflex_model::spatial::pose_from_xyz_rpy;
-use deflex_model::{TX200_FORMING_Q_DEG, builtin};
+use deflex_model::{TX200_FORMING_Q_DEG, Wrench, builtin};
 
 fn bench_cycle(c: &mut Criterion) {
     let robot = builtin("tx200").expect("built-in tx200");
@@ -36,29 +37,19 @@ fn bench_cycle(c: &mut Criterion) {
             k += 1;
             let s = (k % 100) as f64 * 1e-4;
             let q = [q0[0] + s, q0[1], q0[2] - s, q0[3], q0[4] + s, q0[5]];
-            let w = [100.0 + s, -50.0, -600.0 - s * 1e3, 5.0, -3.0, 0.5];
+            let w = Wrench::new(100.0 + s, -50.0, -600.0 - s * 1e3, 5.0, -3.0, 0.5);
             black_box(ctrl.cycle(black_box(t), black_box(&q), black_box(&w)))
         })
     });
 }
 
 fn bench_link_extras(c: &mut Criterion) {
-    use deflex_control::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
     let robot = builtin("tx200").expect("built-in tx200");
     let mut ctrl = Controller::new(robot, ControllerConfig::default()).expect("controller");
     let q0 = TX200_FORMING_Q_DEG.map(f64::to_radians);
-    ctrl.cycle(0.01, &q0, &[0.0; 6]);
+    ctrl.cycle(0.01, &q0, &Wrench::zeros());
     c.bench_function("joint_correction_map", |b| {
         b.iter(|| black_box(ctrl.joint_correction_map()))
-    });
-    let mut shaper = SendShaper::new(SendShaperConfig::new([0.02; 6], [0.008; 6], 0.004, 0.5));
-    let mut k = 0u64;
-    c.bench_function("send_shaper_next", |b| {
-        b.iter(|| {
-            k += 1;
-            let t = [(k % 7) as f64 * 1e-3; 6];
-            black_box(shaper.next(black_box(&t), LinkDirective::Follow))
-        })
     });
 }
 
@@ -66,9 +57,8 @@ fn bench_link_extras(c: &mut Criterion) {
 /// kinematics of the reported joints, a 30 ms lead), the robot moving 10 µm per cycle along the
 /// table's path (joint 1 turning, the TCP on a 1.5 m arc).
 fn bench_cycle_feedforward(c: &mut Criterion) {
-    use deflex_compensate::table::TableRow;
-    use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardTable};
-    use deflex_model::{Data, Displacement, Wrench};
+    use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardPoint, FeedForwardTable};
+    use deflex_model::{Data, Displacement};
     let robot = builtin("tx200").expect("built-in tx200");
     let q0 = TX200_FORMING_Q_DEG.map(f64::to_radians);
     const POINTS: usize = 100_000;
@@ -77,7 +67,7 @@ fn bench_cycle_feedforward(c: &mut Criterion) {
     let mut data = Data::new();
     let mut s = 0.0;
     let mut previous: Option<nalgebra::Vector3<f64>> = None;
-    let rows: Vec<TableRow> = (0..POINTS)
+    let rows: Vec<FeedForwardPoint> = (0..POINTS)
         .map(|i| {
             let mut q = q0;
             q[0] += i as f64 * step;
@@ -88,19 +78,16 @@ fn bench_cycle_feedforward(c: &mut Criterion) {
             }
             previous = Some(p);
             let d = (i as f64 * 0.01).sin() * 1e-3;
-            TableRow {
-                line: i + 2,
+            FeedForwardPoint {
                 arc_length_m: s,
                 time_s: s / 0.01,
-                desired: data.tcp,
+                desired_m: data.tcp_position(),
                 compensation: Displacement::new(0.0, 0.0, -d, 0.0, 0.0, 0.0),
-                wrench: Wrench::zeros(),
                 deflection: Displacement::new(0.0, 0.0, d, 0.0, 0.0, 0.0),
-                status: "ok".into(),
             }
         })
         .collect();
-    let table = FeedForwardTable::from_rows(&rows, &robot, "bench").unwrap();
+    let table = FeedForwardTable::from_points(&rows, &robot).unwrap();
     let ff = FeedForward::new(
         table,
         FeedForwardConfig {
@@ -124,7 +111,8 @@ fn bench_cycle_feedforward(c: &mut Criterion) {
     for k in 0..2000 {
         let mut q = q0;
         q[0] += k as f64 * step * 0.1;
-        let out = check.cycle(k as f64 * 0.01, &q, &[10.0, -5.0, -600.0, 1.0, -0.3, 0.5]);
+        let w = Wrench::new(10.0, -5.0, -600.0, 1.0, -0.3, 0.5);
+        let out = check.cycle(k as f64 * 0.01, &q, &w);
         if k > 100 {
             assert!(out.flags.has(deflex_control::Flags::ACTIVE), "{k}");
             assert!(
@@ -176,7 +164,7 @@ fn bench_cycle_feedforward(c: &mut Criterion) {
                     let t = k as f64 * 0.01;
                     let mut q = q0;
                     q[0] += k as f64 * step * 0.1;
-                    let w = [10.0, -5.0, -600.0, 1.0, -0.3, 0.5];
+                    let w = Wrench::new(10.0, -5.0, -600.0, 1.0, -0.3, 0.5);
                     black_box(ctrl.cycle(black_box(t), black_box(&q), black_box(&w)));
                 }
                 total += start.elapsed();

@@ -12,12 +12,13 @@
 //! `Faulted` (see [`crate::safety`]); [`Controller::reset_faults`] returns to `Idle`.
 
 use crate::feedforward::{FeedForward, FeedForwardStep, TrackState};
-use crate::limiter::{Limiter, LimiterConfig, RampState};
+use crate::limiter::{Limiter, LimiterConfig, LimiterOutput, RampState};
 use crate::pid::{Pid, PidGains, PidSolution};
 use crate::runaway::{RunawayConfig, RunawayGuard};
 use crate::safety::{FAULT_KINDS, Fault, FaultKind, Flags, SafeAction, Safety, SafetyConfig};
 use crate::wrench::{WrenchConfig, WrenchProcessor};
-use deflex_model::{Data, MAX_JOINTS, Robot};
+use deflex_model::{Data, MAX_JOINTS, Robot, Wrench};
+use nalgebra::SMatrix;
 
 mod checks;
 
@@ -100,7 +101,7 @@ pub struct CycleInput<'a> {
     /// Age of `q_rad` (s).
     pub q_age_s: f64,
     /// Raw force/torque reading, sensor frame (N, N·m).
-    pub wrench_sensor: &'a [f64; 6],
+    pub wrench_sensor: Wrench,
     /// Age of the reading (s).
     pub wrench_age_s: f64,
     /// False when no new sample arrived since the previous cycle.
@@ -162,50 +163,102 @@ pub struct Controller {
     feedforward_sent: [f64; 6],
 }
 
-/// Error building a controller.
-#[derive(Debug, thiserror::Error, PartialEq)]
+/// Error building a controller: the setting and the value that make it unusable.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ControlError {
-    /// A configuration value is unusable.
-    #[error("invalid controller setting {field}: {message}")]
-    Invalid {
-        /// The setting.
-        field: &'static str,
-        /// Why.
-        message: String,
+    /// The control period is not a positive number of seconds.
+    Period {
+        /// The period given (s).
+        period_s: f64,
+    },
+    /// The model has no joints or more than [`MAX_JOINTS`].
+    JointCount {
+        /// Its joints.
+        joints: usize,
+    },
+    /// A gain of eq. 17 is negative or not finite.
+    Gains {
+        /// The gains given.
+        gains: PidGains,
+    },
+    /// A size or rate limit of the limiter is negative or NaN.
+    Limit {
+        /// Axis (0..6: x, y, z, rx, ry, rz).
+        axis: usize,
+        /// Largest |ξ| given for it.
+        max_abs: f64,
+        /// Largest rate given for it.
+        max_rate: f64,
     },
 }
 
-fn invalid(field: &'static str, message: impl Into<String>) -> ControlError {
-    ControlError::Invalid {
-        field,
-        message: message.into(),
+impl std::fmt::Display for ControlError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ControlError::Period { period_s } => write!(
+                f,
+                "invalid controller setting period_s: must be a positive number of seconds, got \
+                 {period_s}"
+            ),
+            ControlError::JointCount { joints } => write!(
+                f,
+                "invalid controller setting robot: 1..={MAX_JOINTS} joints needed, the model has \
+                 {joints}"
+            ),
+            ControlError::Gains { gains } => write!(
+                f,
+                "invalid controller setting gains: kc, ti_s, td_s must be finite and ≥ 0, got \
+                 kc {}, ti_s {}, td_s {}",
+                gains.kc, gains.ti_s, gains.td_s
+            ),
+            ControlError::Limit {
+                axis,
+                max_abs,
+                max_rate,
+            } => write!(
+                f,
+                "invalid controller setting limits: max_abs and max_rate must be ≥ 0, got {max_abs} \
+                 and {max_rate} on axis {axis}"
+            ),
+        }
     }
 }
+
+impl std::error::Error for ControlError {}
+
+/// The least-squares map from a correction ξ (base axes) to joint corrections: row i is joint i,
+/// Δq = P ξ ([`Controller::joint_correction_map`]); rows past the joint count are zero.
+pub type JointCorrectionMap = SMatrix<f64, MAX_JOINTS, 6>;
 
 impl Controller {
     /// A controller for `robot` (the model calibrated for the cell, never the plant).
     pub fn new(robot: Robot, config: ControllerConfig) -> Result<Self, ControlError> {
         if !(config.period_s > 0.0 && config.period_s.is_finite()) {
-            return Err(invalid("period_s", "must be a positive number of seconds"));
+            return Err(ControlError::Period {
+                period_s: config.period_s,
+            });
         }
         if robot.joint_count() == 0 || robot.joint_count() > MAX_JOINTS {
-            return Err(invalid("robot", format!("1..={MAX_JOINTS} joints needed")));
+            return Err(ControlError::JointCount {
+                joints: robot.joint_count(),
+            });
         }
         let g = &config.gains;
         if !(g.kc.is_finite() && g.kc >= 0.0 && g.ti_s >= 0.0 && g.td_s >= 0.0) {
-            return Err(invalid("gains", "kc, ti_s, td_s must be finite and ≥ 0"));
+            return Err(ControlError::Gains { gains: *g });
         }
         let l = &config.limiter;
-        if l.max_abs
-            .iter()
-            .chain(&l.max_rate)
-            .any(|v| v.is_nan() || *v < 0.0)
-        {
-            return Err(invalid("limits", "max_abs and max_rate must be ≥ 0"));
+        let bad = |v: f64| v.is_nan() || v < 0.0;
+        if let Some(axis) = (0..6).find(|&i| bad(l.max_abs[i]) || bad(l.max_rate[i])) {
+            return Err(ControlError::Limit {
+                axis,
+                max_abs: l.max_abs[axis],
+                max_rate: l.max_rate[axis],
+            });
         }
         let mut wrench = WrenchProcessor::new(config.wrench);
         if let Some(bias) = config.bias {
-            wrench.set_bias(bias);
+            wrench.set_bias(Wrench::from(bias));
         }
         Ok(Controller {
             robot,
@@ -266,8 +319,8 @@ impl Controller {
     pub fn last_output(&self) -> &CycleOutput {
         &self.last
     }
-    /// Current sensor bias.
-    pub fn bias(&self) -> [f64; 6] {
+    /// Current sensor bias (sensor frame, gravity excluded).
+    pub fn bias(&self) -> Wrench {
         self.wrench.bias()
     }
 
@@ -374,17 +427,12 @@ impl Controller {
 
     /// One control cycle with fresh inputs (ages 0).
     #[inline]
-    pub fn cycle(
-        &mut self,
-        now_s: f64,
-        q_rad: &[f64],
-        raw_wrench_sensor: &[f64; 6],
-    ) -> CycleOutput {
+    pub fn cycle(&mut self, now_s: f64, q_rad: &[f64], raw_wrench_sensor: &Wrench) -> CycleOutput {
         self.cycle_input(&CycleInput {
             now_s,
             q_rad,
             q_age_s: 0.0,
-            wrench_sensor: raw_wrench_sensor,
+            wrench_sensor: *raw_wrench_sensor,
             wrench_age_s: 0.0,
             wrench_fresh: true,
             sensor_status: 0,
@@ -392,18 +440,13 @@ impl Controller {
     }
 
     /// One control cycle (eq. 5–7, 15, 17). Never panics, never allocates.
+    ///
+    /// In order: the cycle's time step; the inputs checked and, when they can be trusted, the
+    /// robot's pose, its place on a feed-forward table, the tare and the estimate
+    /// (`sense`); the tare's end; the law, the runaway guard and the limiter
+    /// (`apply_law`); the output with its error and status flags.
     pub fn cycle_input(&mut self, input: &CycleInput) -> CycleOutput {
-        let period = self.config.period_s;
-        let now = if input.now_s.is_finite() {
-            input.now_s
-        } else {
-            self.last_time.map_or(0.0, |t| t + period)
-        };
-        let h = match self.last_time {
-            Some(t) if now - t > 0.0 => (now - t).min(10.0 * period),
-            _ => period,
-        };
-        self.last_time = Some(now);
+        let (now, h) = self.time_step(input.now_s);
         let mut flags = Flags::default();
         let detected = self.check_inputs(input, now);
         // Inputs that cannot be trusted at all: the law does not see them.
@@ -422,47 +465,116 @@ impl Controller {
             loop_gain: f64::NAN,
             ..self.last
         };
-        let mut kinematics_ok = false;
-        let mut ff = FeedForwardStep {
-            prior: [0.0; 6],
-            sent: [0.0; 6],
-            path_s_m: f64::NAN,
-            offset_m: f64::NAN,
-            state: TrackState::OffPath,
-        };
         if let Some(kind) = detected {
             flags.set(kind.flag());
         }
         if !input.wrench_fresh {
             flags.set(Flags::STALE_WRENCH);
         }
-        if data_ok {
-            let q = &input.q_rad[..self.robot.joint_count()];
-            if self.robot.forward_kinematics(&mut self.data, q).is_ok() {
-                kinematics_ok = true;
-                if let Some(feedforward) = self.feedforward.as_mut() {
-                    // The robot's place on its program: the commanded TCP minus the correction
-                    // this controller sends (base axes → world).
-                    let xi = self.limiter.output();
-                    let sent =
-                        self.robot.base.rotation * nalgebra::Vector3::new(xi[0], xi[1], xi[2]);
-                    ff = feedforward.update(&(self.data.tcp_position() - sent), now);
-                }
-                if self.phase == Phase::Taring {
-                    let pose = self.wrench.sensor_pose(&self.data);
-                    self.wrench.tare_add(input.wrench_sensor, &pose);
-                }
-                self.estimate(input.wrench_sensor, h, &mut out);
-                if !self.check_estimate(&out, now, &mut flags) {
-                    // Never let a non-finite estimate reach ξ, ε or the log.
-                    out.delta_s_hat = self.last.delta_s_hat;
-                    out.wrench_tcp = self.last.wrench_tcp;
-                    out.wrench_sensor = self.last.wrench_sensor;
-                }
-            }
-            self.q_prev[..q.len()].copy_from_slice(q);
-            self.q_prev_valid = true;
+        let (kinematics_ok, ff) = if data_ok {
+            self.sense(input, now, h, &mut out, &mut flags)
+        } else {
+            (false, FeedForwardStep::none())
+        };
+        self.advance_tare(now, &mut flags);
+        if self.feedforward.is_some() && ff.state != TrackState::OnPath {
+            flags.set(Flags::FEEDFORWARD_OFF_PATH);
         }
+        // The law (eq. 17 solved with eq. 5–7), only on trusted data while it drives ξ.
+        let follow = self.limiter.follows_law() && self.phase == Phase::Running && data_ok;
+        if follow && kinematics_ok {
+            self.watch_runaway(&mut out, now, h, &mut flags);
+        }
+        let limited = self.apply_law(&out, &ff, follow, now, h, &mut flags);
+        if self.phase == Phase::Stopping && self.limiter.is_off() {
+            self.phase = Phase::Stopped;
+        }
+        out.xi = limited.xi;
+        self.feedforward_sent = if follow { ff.sent } else { [0.0; 6] };
+        out.feedforward = ff.prior;
+        out.path_s_m = ff.path_s_m;
+        for i in 0..6 {
+            // ε = −ξ_fb − prior − δŝ with ξ_fb = ξ − sent (eq. 5–7; crate::feedforward).
+            out.epsilon[i] = -(out.xi[i] - ff.sent[i]) - ff.prior[i] - out.delta_s_hat[i];
+        }
+        for (on, bit) in [
+            (limited.saturated_size, Flags::SATURATED_SIZE),
+            (limited.saturated_rate, Flags::SATURATED_RATE),
+            (limited.ramping, Flags::RAMPING),
+            (follow, Flags::ACTIVE),
+        ] {
+            if on {
+                flags.set(bit);
+            }
+        }
+        if let Some(fault) = self.safety.latched() {
+            flags.set(Flags::LATCHED);
+            flags.set(fault.kind.flag());
+        }
+        out.flags = flags;
+        self.last = out;
+        out
+    }
+
+    /// The cycle's time (a non-finite time continues from the last one) and its step h since
+    /// the previous cycle (one period at first or when time did not advance, at most ten).
+    fn time_step(&mut self, now_s: f64) -> (f64, f64) {
+        let period = self.config.period_s;
+        let now = if now_s.is_finite() {
+            now_s
+        } else {
+            self.last_time.map_or(0.0, |t| t + period)
+        };
+        let h = match self.last_time {
+            Some(t) if now - t > 0.0 => (now - t).min(10.0 * period),
+            _ => period,
+        };
+        self.last_time = Some(now);
+        (now, h)
+    }
+
+    /// On trusted inputs: forward kinematics of the reported joints, the robot's place on the
+    /// feed-forward table, the tare's reading, the wrench path and the estimate (eq. 2, 15)
+    /// into `out`. Returns whether the kinematics are known and the feed-forward's step.
+    fn sense(
+        &mut self,
+        input: &CycleInput,
+        now: f64,
+        h: f64,
+        out: &mut CycleOutput,
+        flags: &mut Flags,
+    ) -> (bool, FeedForwardStep) {
+        let mut ff = FeedForwardStep::none();
+        let q = &input.q_rad[..self.robot.joint_count()];
+        let kinematics_ok = self.robot.forward_kinematics(&mut self.data, q).is_ok();
+        if kinematics_ok {
+            if let Some(feedforward) = self.feedforward.as_mut() {
+                // The robot's place on its program: the commanded TCP minus the correction
+                // this controller sends (base axes → world).
+                let xi = self.limiter.output();
+                let sent = self.robot.base.rotation * nalgebra::Vector3::new(xi[0], xi[1], xi[2]);
+                ff = feedforward.update(&(self.data.tcp_position() - sent), now);
+            }
+            if self.phase == Phase::Taring {
+                let pose = self.wrench.sensor_pose(&self.data);
+                self.wrench.tare_add(&input.wrench_sensor, &pose);
+            }
+            self.estimate(&input.wrench_sensor, h, out);
+            if !self.check_estimate(out, now, flags) {
+                // Never let a non-finite estimate reach ξ, ε or the log.
+                out.delta_s_hat = self.last.delta_s_hat;
+                out.wrench_tcp = self.last.wrench_tcp;
+                out.wrench_sensor = self.last.wrench_sensor;
+            }
+        }
+        self.q_prev[..q.len()].copy_from_slice(q);
+        self.q_prev_valid = true;
+        (kinematics_ok, ff)
+    }
+
+    /// While taring: flags it, and once `tare_s` has passed with readings, takes the bias and
+    /// starts the ramp-in.
+    fn advance_tare(&mut self, now: f64, flags: &mut Flags) {
         if self.phase == Phase::Taring {
             flags.set(Flags::TARING);
             if now - self.phase_t0 >= self.config.tare_s && self.wrench.tare_count() > 0 {
@@ -472,16 +584,21 @@ impl Controller {
                 self.phase = Phase::Running;
             }
         }
-        if self.feedforward.is_some() && ff.state != TrackState::OnPath {
-            flags.set(Flags::FEEDFORWARD_OFF_PATH);
-        }
-        // The law (eq. 17 solved with eq. 5–7), only on trusted data while it drives ξ. With a
-        // feed-forward the PID sees δŝ + prior and the feed-forward is added to its output
-        // (derivation in crate::feedforward).
-        let follow = self.limiter.follows_law() && self.phase == Phase::Running && data_ok;
-        if follow && kinematics_ok {
-            self.watch_runaway(&mut out, now, h, &mut flags);
-        }
+    }
+
+    /// The law of eq. 17 per enabled axis when `follow` (with a feed-forward the PID sees
+    /// δŝ + prior and the feed-forward is added to its output: derivation in
+    /// crate::feedforward), the runaway guard on the feedback, the limiter, and the PID's
+    /// anti-windup commit of what the limiter let through.
+    fn apply_law(
+        &mut self,
+        out: &CycleOutput,
+        ff: &FeedForwardStep,
+        follow: bool,
+        now: f64,
+        h: f64,
+        flags: &mut Flags,
+    ) -> LimiterOutput {
         let mut law = [PidSolution::default(); 6];
         let mut xi_law = self.limiter.output();
         if follow {
@@ -519,35 +636,6 @@ impl Controller {
                 }
             }
         }
-        if self.phase == Phase::Stopping && self.limiter.is_off() {
-            self.phase = Phase::Stopped;
-        }
-        out.xi = limited.xi;
-        self.feedforward_sent = if follow { ff.sent } else { [0.0; 6] };
-        out.feedforward = ff.prior;
-        out.path_s_m = ff.path_s_m;
-        for i in 0..6 {
-            // ε = −ξ_fb − prior − δŝ with ξ_fb = ξ − sent (eq. 5–7; crate::feedforward).
-            out.epsilon[i] = -(out.xi[i] - ff.sent[i]) - ff.prior[i] - out.delta_s_hat[i];
-        }
-        if limited.saturated_size {
-            flags.set(Flags::SATURATED_SIZE);
-        }
-        if limited.saturated_rate {
-            flags.set(Flags::SATURATED_RATE);
-        }
-        if limited.ramping {
-            flags.set(Flags::RAMPING);
-        }
-        if follow {
-            flags.set(Flags::ACTIVE);
-        }
-        if let Some(fault) = self.safety.latched() {
-            flags.set(Flags::LATCHED);
-            flags.set(fault.kind.flag());
-        }
-        out.flags = flags;
-        self.last = out;
-        out
+        limited
     }
 }

@@ -84,7 +84,7 @@
 
 mod table;
 
-pub use table::FeedForwardTable;
+pub use table::{FeedForwardPoint, FeedForwardTable};
 
 use nalgebra::Vector3;
 
@@ -167,67 +167,73 @@ impl Default for FeedForwardConfig {
     }
 }
 
-/// A compensated-path table that cannot be used as a feed-forward.
-#[derive(Debug, thiserror::Error, PartialEq)]
+/// A quantity of a feed-forward table, named in errors (the runtime names the file's column).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TableColumn {
+    /// Arc length along the desired path (m).
+    ArcLength,
+    /// Time at the programmed feeds (s).
+    Time,
+    /// Coordinate `i` (x, y, z) of the commanded TCP, desired + compensation (m, world).
+    CommandedPosition(usize),
+    /// Component `i` (x, y, z, rx, ry, rz) of the predicted deflection.
+    Deflection(usize),
+    /// Component `i` (x, y, z, rx, ry, rz) of the compensation.
+    Compensation(usize),
+}
+
+const AXIS_NAMES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+
+impl std::fmt::Display for TableColumn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let axis = |i: &usize| AXIS_NAMES.get(*i).copied().unwrap_or("?");
+        match self {
+            TableColumn::ArcLength => f.write_str("arc length"),
+            TableColumn::Time => f.write_str("time"),
+            TableColumn::CommandedPosition(i) => write!(f, "commanded position {}", axis(i)),
+            TableColumn::Deflection(i) => write!(f, "deflection {}", axis(i)),
+            TableColumn::Compensation(i) => write!(f, "compensation {}", axis(i)),
+        }
+    }
+}
+
+/// A compensated-path table that cannot be used as a feed-forward, with the point (0-based, in
+/// table order) and the values that make it so.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FeedForwardError {
-    /// Fewer than two rows, or a path of zero length.
-    #[error(
-        "{file}: a feed-forward table needs at least two rows and a path of positive length; got {rows} row(s), {length_m} m"
-    )]
+    /// Fewer than two points, or a path of zero length.
     TooShort {
-        /// The table.
-        file: String,
-        /// Rows.
-        rows: usize,
+        /// Points.
+        points: usize,
         /// Path length (m).
         length_m: f64,
     },
-    /// A point the compensation could not compensate: no program was written from this table.
-    #[error(
-        "{file}:{line}: point {index} has status \"{status}\": the compensation failed there and no robot program was written from this table"
-    )]
-    NotCompensated {
-        /// The table.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// Point index.
-        index: usize,
-        /// Its status.
-        status: String,
-    },
     /// Arc length or time decreases.
-    #[error("{file}:{line}: column `{column}` decreases ({value} after {previous})")]
     NotMonotone {
-        /// The table.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// Column.
-        column: &'static str,
-        /// Value.
+        /// The point.
+        point: usize,
+        /// Arc length or time.
+        column: TableColumn,
+        /// Its value.
         value: f64,
-        /// Previous row's value.
+        /// The previous point's value.
         previous: f64,
     },
-    /// A value beyond its bound.
-    #[error("{file}:{line}: column `{column}`: {value} is beyond ±{limit}")]
+    /// A value beyond its bound ([`MAX_TABLE_POSITION_M`], [`MAX_TABLE_ROTATION_RAD`],
+    /// [`MAX_TABLE_COORDINATE_M`]).
     OutOfBounds {
-        /// The table.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// Column.
-        column: &'static str,
-        /// Value.
+        /// The point.
+        point: usize,
+        /// The quantity.
+        column: TableColumn,
+        /// Its value.
         value: f64,
-        /// Bound.
+        /// The bound on its magnitude.
         limit: f64,
     },
     /// A setting out of its bounds.
-    #[error("feedforward.{field}: expected {expected}, got {value}")]
     Setting {
-        /// Field.
+        /// Field of `[feedforward]`.
         field: &'static str,
         /// Value.
         value: f64,
@@ -235,6 +241,40 @@ pub enum FeedForwardError {
         expected: &'static str,
     },
 }
+
+impl std::fmt::Display for FeedForwardError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FeedForwardError::TooShort { points, length_m } => write!(
+                f,
+                "a feed-forward table needs at least two rows and a path of positive length; \
+                 got {points} row(s), {length_m} m"
+            ),
+            FeedForwardError::NotMonotone {
+                point,
+                column,
+                value,
+                previous,
+            } => write!(
+                f,
+                "point {point}: {column} decreases ({value} after {previous})"
+            ),
+            FeedForwardError::OutOfBounds {
+                point,
+                column,
+                value,
+                limit,
+            } => write!(f, "point {point}: {column}: {value} is beyond ±{limit}"),
+            FeedForwardError::Setting {
+                field,
+                value,
+                expected,
+            } => write!(f, "feedforward.{field}: expected {expected}, got {value}"),
+        }
+    }
+}
+
+impl std::error::Error for FeedForwardError {}
 
 /// The polyline the robot's place is tracked on, with the unit direction and length of each
 /// segment (zero for a zero-length segment; the last point's entry unused).
@@ -294,6 +334,11 @@ pub struct FeedForwardStep {
 }
 
 impl FeedForwardStep {
+    /// No feed-forward this cycle (none set, or the robot's pose unknown).
+    pub(crate) fn none() -> Self {
+        Self::off(TrackState::OffPath, f64::NAN, f64::NAN)
+    }
+
     fn off(state: TrackState, path_s_m: f64, offset_m: f64) -> Self {
         FeedForwardStep {
             prior: [0.0; 6],
@@ -525,36 +570,31 @@ impl FeedForward {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use deflex_compensate::table::TableRow;
-    use deflex_model::{Displacement, Pose, Robot, Wrench};
+    use deflex_model::{Displacement, Pose, Robot};
     use nalgebra::{Rotation3, Translation3};
     use std::f64::consts::PI;
 
-    /// A table row at `p` (world, m) with deflection `defl` and compensation −defl (position).
-    fn row(i: usize, s: f64, t: f64, p: Vector3<f64>, defl: [f64; 6]) -> TableRow {
-        let d = Displacement::from_row_slice(&defl);
-        TableRow {
-            line: i + 2,
+    /// A table point at `p` (world, m) with deflection `defl` and compensation −defl (position).
+    fn row(s: f64, t: f64, p: Vector3<f64>, defl: [f64; 6]) -> FeedForwardPoint {
+        FeedForwardPoint {
             arc_length_m: s,
             time_s: t,
-            desired: Pose::from_parts(Translation3::from(p), Rotation3::identity()),
+            desired_m: p,
             compensation: Displacement::new(-defl[0], -defl[1], -defl[2], 0.0, 0.0, 0.0),
-            wrench: Wrench::zeros(),
-            deflection: d,
-            status: "ok".into(),
+            deflection: Displacement::from_row_slice(&defl),
         }
     }
 
-    /// Rows along a polyline at 10 mm/s; the deflection's z is the point's arc length (a
+    /// Points along a polyline at 10 mm/s; the deflection's z is the point's arc length (a
     /// marker: 1 m of arc length ↦ 1 m of "deflection", scaled by 1e-3 to stay in bounds).
-    fn rows_along(points: &[Vector3<f64>]) -> Vec<TableRow> {
+    fn rows_along(points: &[Vector3<f64>]) -> Vec<FeedForwardPoint> {
         let mut s = 0.0;
         let mut out = Vec::new();
         for (i, p) in points.iter().enumerate() {
             if i > 0 {
                 s += (p - points[i - 1]).norm();
             }
-            out.push(row(i, s, s / 0.01, *p, [0.0, 0.0, s * 1e-3, 0.0, 0.0, 0.0]));
+            out.push(row(s, s / 0.01, *p, [0.0, 0.0, s * 1e-3, 0.0, 0.0, 0.0]));
         }
         out
     }
@@ -574,7 +614,7 @@ mod tests {
     }
 
     fn tracker(points: &[Vector3<f64>], config: FeedForwardConfig) -> FeedForward {
-        let table = FeedForwardTable::from_rows(&rows_along(points), &robot(), "t.csv").unwrap();
+        let table = FeedForwardTable::from_points(&rows_along(points), &robot()).unwrap();
         FeedForward::new(table, config).unwrap()
     }
 
@@ -753,36 +793,51 @@ mod tests {
             Translation3::new(0.0, 0.0, 0.0),
             Rotation3::from_axis_angle(&Vector3::z_axis(), PI / 2.0),
         );
-        let table = FeedForwardTable::from_rows(&rows, &turned, "t.csv").unwrap();
+        let table = FeedForwardTable::from_points(&rows, &turned).unwrap();
         let d = table.deflection[2];
         assert!((d[0]).abs() < 1e-15 && (d[1] + 1e-3).abs() < 1e-15, "{d:?}");
         assert!((d[5] - 2e-3).abs() < 1e-15);
-        let fails = |rows: Vec<TableRow>| {
-            FeedForwardTable::from_rows(&rows, &robot(), "t.csv")
-                .unwrap_err()
-                .to_string()
+        // Each failure names the point and the quantity (the runtime turns them into the file's
+        // line and column: deflex-runtime's feed-forward loading tests).
+        let fails = |rows: Vec<FeedForwardPoint>| {
+            FeedForwardTable::from_points(&rows, &robot()).unwrap_err()
         };
         let mut bad = rows_along(&line);
-        bad[3].status = "compensated:joint_limit:J3".into();
-        let e = fails(bad);
-        assert!(e.contains("t.csv:5") && e.contains("joint_limit"), "{e}");
-        let mut bad = rows_along(&line);
         bad[3].time_s = 0.0;
-        let e = fails(bad);
-        assert!(e.contains("t.csv:5") && e.contains("t_s"), "{e}");
+        assert_eq!(
+            fails(bad),
+            FeedForwardError::NotMonotone {
+                point: 3,
+                column: TableColumn::Time,
+                value: 0.0,
+                previous: 0.2
+            }
+        );
         let mut bad = rows_along(&line);
         bad[1].deflection[4] = 0.5;
         let e = fails(bad);
-        assert!(e.contains("t.csv:3") && e.contains("defl_ry_rad"), "{e}");
+        assert!(
+            matches!(e, FeedForwardError::OutOfBounds { point: 1, column: TableColumn::Deflection(4), value, .. } if value == 0.5),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("point 1: deflection ry"), "{e}");
         let mut bad = rows_along(&line);
         bad[1].compensation[0] = -0.2;
-        assert!(fails(bad).contains("dx_m"));
-        assert!(fails(rows_along(&line[..1])).contains("at least two rows"));
+        assert!(matches!(
+            fails(bad),
+            FeedForwardError::OutOfBounds {
+                point: 1,
+                column: TableColumn::Compensation(0),
+                ..
+            }
+        ));
+        let e = fails(rows_along(&line[..1]));
+        assert!(e.to_string().contains("at least two rows"), "{e}");
         let config = FeedForwardConfig {
             window_m: 0.0,
             ..FeedForwardConfig::default()
         };
-        let table = FeedForwardTable::from_rows(&rows_along(&line), &robot(), "t.csv").unwrap();
+        let table = FeedForwardTable::from_points(&rows_along(&line), &robot()).unwrap();
         let e = FeedForward::new(table, config).unwrap_err().to_string();
         assert!(e.contains("feedforward.window_m"), "{e}");
     }

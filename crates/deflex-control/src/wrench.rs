@@ -8,7 +8,7 @@
 //! sensor pose is `flange × sensor_in_flange`, with the flange from forward kinematics (eq. 1).
 //! Everything here is allocation-free.
 
-use deflex_model::wrench::sensor_wrench_at_point;
+use deflex_model::wrench_transport::sensor_wrench_at_point;
 use deflex_model::{Data, Pose, Wrench};
 use nalgebra::Vector3;
 
@@ -55,19 +55,19 @@ impl Default for WrenchConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct ProcessedWrench {
     /// Bias- and gravity-compensated, filtered reading in the sensor frame.
-    pub sensor: [f64; 6],
+    pub sensor: Wrench,
     /// Environment wrench `w` (eq. 2) at the TCP in world axes, moment about the TCP.
-    pub tcp_world: [f64; 6],
+    pub tcp_world: Wrench,
 }
 
 /// Stateful wrench processing: bias, tare accumulation and low-pass state.
 #[derive(Clone, Debug)]
 pub struct WrenchProcessor {
     config: WrenchConfig,
-    bias: [f64; 6],
-    tare_sum: [f64; 6],
+    bias: Wrench,
+    tare_sum: Wrench,
     tare_count: u32,
-    filtered: [f64; 6],
+    filtered: Wrench,
     filter_primed: bool,
     /// Cached (dt, α) of the low-pass: `exp` only when the sample time changes.
     alpha_cache: (f64, f64),
@@ -78,10 +78,10 @@ impl WrenchProcessor {
     pub fn new(config: WrenchConfig) -> Self {
         WrenchProcessor {
             config,
-            bias: [0.0; 6],
-            tare_sum: [0.0; 6],
+            bias: Wrench::zeros(),
+            tare_sum: Wrench::zeros(),
             tare_count: 0,
-            filtered: [0.0; 6],
+            filtered: Wrench::zeros(),
             filter_primed: false,
             alpha_cache: (f64::NAN, 0.0),
         }
@@ -101,26 +101,26 @@ impl WrenchProcessor {
     /// What the sensor reads from the tool's weight alone at `sensor_pose`: force `Rᵀ m g`, moment
     /// `c × f` about the sensor origin (sensor axes).
     #[inline]
-    pub fn gravity_in_sensor(&self, sensor_pose: &Pose) -> [f64; 6] {
+    pub fn gravity_in_sensor(&self, sensor_pose: &Pose) -> Wrench {
         let g = Vector3::from(self.config.gravity_world) * self.config.tool.mass_kg;
         let f = sensor_pose.rotation.matrix().transpose() * g;
         let m = Vector3::from(self.config.tool.com_in_sensor_m).cross(&f);
-        [f.x, f.y, f.z, m.x, m.y, m.z]
+        Wrench::new(f.x, f.y, f.z, m.x, m.y, m.z)
     }
 
     /// Current bias (sensor frame, gravity excluded).
-    pub fn bias(&self) -> [f64; 6] {
+    pub fn bias(&self) -> Wrench {
         self.bias
     }
 
     /// Sets the bias directly (e.g. from a configuration file).
-    pub fn set_bias(&mut self, bias: [f64; 6]) {
+    pub fn set_bias(&mut self, bias: Wrench) {
         self.bias = bias;
     }
 
     /// Adds one out-of-contact reading to the tare: its gravity part for the current orientation
     /// is removed first, so the tool may move during the tare.
-    pub fn tare_add(&mut self, raw: &[f64; 6], sensor_pose: &Pose) {
+    pub fn tare_add(&mut self, raw: &Wrench, sensor_pose: &Pose) {
         let g = self.gravity_in_sensor(sensor_pose);
         for i in 0..6 {
             self.tare_sum[i] += raw[i] - g[i];
@@ -143,16 +143,16 @@ impl WrenchProcessor {
         for i in 0..6 {
             self.bias[i] = self.tare_sum[i] / n;
         }
-        self.tare_sum = [0.0; 6];
+        self.tare_sum = Wrench::zeros();
         self.tare_count = 0;
         true
     }
 
     /// Bias and gravity compensation of one raw reading (sensor frame).
     #[inline]
-    pub fn compensate(&self, raw: &[f64; 6], sensor_pose: &Pose) -> [f64; 6] {
+    pub fn compensate(&self, raw: &Wrench, sensor_pose: &Pose) -> Wrench {
         let g = self.gravity_in_sensor(sensor_pose);
-        let mut out = [0.0; 6];
+        let mut out = Wrench::zeros();
         for i in 0..6 {
             out[i] = raw[i] - self.bias[i] - g[i];
         }
@@ -162,7 +162,7 @@ impl WrenchProcessor {
     /// First-order low-pass with cut-off `lowpass_hz`, sampled every `dt_s`; the identity when the
     /// filter is off. The first sample primes the state.
     #[inline]
-    pub fn filter(&mut self, wrench: &[f64; 6], dt_s: f64) -> [f64; 6] {
+    pub fn filter(&mut self, wrench: &Wrench, dt_s: f64) -> Wrench {
         let Some(fc) = self.config.lowpass_hz.filter(|f| *f > 0.0) else {
             return *wrench;
         };
@@ -190,15 +190,14 @@ impl WrenchProcessor {
     /// The full path for one reading with `data` filled by forward kinematics at the robot's
     /// reported joint values: compensated, filtered, and moved to the TCP in world axes.
     #[inline]
-    pub fn process(&mut self, raw: &[f64; 6], data: &Data, dt_s: f64) -> ProcessedWrench {
+    pub fn process(&mut self, raw: &Wrench, data: &Data, dt_s: f64) -> ProcessedWrench {
         let sensor_pose = self.sensor_pose(data);
         let compensated = self.compensate(raw, &sensor_pose);
         let filtered = self.filter(&compensated, dt_s);
-        let w = Wrench::from(filtered);
-        let at_tcp = sensor_wrench_at_point(&w, &sensor_pose, &data.tcp_position());
+        let at_tcp = sensor_wrench_at_point(&filtered, &sensor_pose, &data.tcp_position());
         ProcessedWrench {
             sensor: filtered,
-            tcp_world: at_tcp.into(),
+            tcp_world: at_tcp,
         }
     }
 }
@@ -223,7 +222,7 @@ mod tests {
         // Tare at one orientation (reading = bias + gravity there).
         let tare_pose = pose_from_xyz_rpy([1.0, 0.0, 1.0], [0.2, 2.8, -0.4]);
         let g0 = p.gravity_in_sensor(&tare_pose);
-        let raw0: [f64; 6] = std::array::from_fn(|i| bias[i] + g0[i]);
+        let raw0 = Wrench::from_fn(|i, _| bias[i] + g0[i]);
         p.tare_add(&raw0, &tare_pose);
         assert!(p.tare_finish());
         let mut worst: f64 = 0.0;
@@ -234,7 +233,7 @@ mod tests {
                 [(t * 0.37).sin() * 3.0, (t * 0.11).cos() * 1.5, t * 0.73],
             );
             let g = p.gravity_in_sensor(&pose);
-            let raw: [f64; 6] = std::array::from_fn(|i| bias[i] + g[i]);
+            let raw = Wrench::from_fn(|i, _| bias[i] + g[i]);
             let out = p.compensate(&raw, &pose);
             worst = out.iter().fold(worst, |a, v| a.max(v.abs()));
         }
@@ -244,18 +243,19 @@ mod tests {
     #[test]
     fn lowpass_converges_and_is_off_by_default() {
         let mut off = WrenchProcessor::new(WrenchConfig::default());
-        assert_eq!(off.filter(&[1.0; 6], 0.01), [1.0; 6]);
+        let ones = Wrench::repeat(1.0);
+        assert_eq!(off.filter(&ones, 0.01), ones);
         let mut on = WrenchProcessor::new(WrenchConfig {
             lowpass_hz: Some(10.0),
             ..WrenchConfig::default()
         });
-        on.filter(&[0.0; 6], 0.01);
-        let y = on.filter(&[1.0; 6], 0.01);
+        on.filter(&Wrench::zeros(), 0.01);
+        let y = on.filter(&ones, 0.01);
         let alpha = 1.0 - (-2.0 * std::f64::consts::PI * 10.0 * 0.01f64).exp();
         assert!((y[0] - alpha).abs() < 1e-12);
         for _ in 0..200 {
-            on.filter(&[1.0; 6], 0.01);
+            on.filter(&ones, 0.01);
         }
-        assert!((on.filter(&[1.0; 6], 0.01)[5] - 1.0).abs() < 1e-9);
+        assert!((on.filter(&ones, 0.01)[5] - 1.0).abs() < 1e-9);
     }
 }

@@ -283,14 +283,14 @@ mod tests {
         let dir = scratch("through");
         let path = dir.join("plot.png");
         fs::write(&path, "old").unwrap();
-        let failed: Result<(), String> = write_through(
+        let failed: io::Result<()> = write_through(
             &path,
             |tmp| {
                 assert_eq!(tmp.extension().unwrap(), "png");
                 fs::write(tmp, "half").unwrap();
-                Err("drawing failed".into())
+                Err(io::Error::other("drawing failed"))
             },
-            |e| e.to_string(),
+            |e| e,
         );
         assert!(failed.is_err());
         assert_eq!(fs::read_to_string(&path).unwrap(), "old");

@@ -45,6 +45,9 @@ pub enum LinkError {
     /// `Ok(None)` by the `receive` functions).
     #[error("I/O error: {0}")]
     Io(#[from] std::io::Error),
+    /// The link's peer configuration cannot be served safely ([`crate::validate_peer`]).
+    #[error("robot peer configuration: {0}")]
+    PeerConfig(#[from] crate::PeerConfigError),
     /// The packet does not follow the protocol.
     #[error("malformed {protocol} packet: {reason}")]
     Malformed {

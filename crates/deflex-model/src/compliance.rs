@@ -4,23 +4,9 @@
 
 use crate::kinematics::Data;
 use crate::robot::{Axis, Edof, EdofSite, Robot};
-use crate::spatial::{Displacement, Wrench};
+use crate::spatial::{Displacement, Wrench, edof_screw};
 use crate::{MAX_EDOFS, MAX_JOINTS};
 use nalgebra::{DMatrix, Matrix6, Vector3, Vector6};
-
-/// Column of the eDoF Jacobian of eq. 13 for a spring of axis `v` (unit, world) centred at `c`,
-/// evaluated at world point `p`: `[v × (p − c); v]`. The same screw maps the spring's small
-/// rotation to the displacement of `p`, and (transposed) a wrench at `p` to the spring torque
-/// (eq. 14).
-#[inline]
-pub fn edof_screw(
-    axis: &Vector3<f64>,
-    center: &Vector3<f64>,
-    point: &Vector3<f64>,
-) -> Vector6<f64> {
-    let linear = axis.cross(&(point - center));
-    Vector6::new(linear.x, linear.y, linear.z, axis.x, axis.y, axis.z)
-}
 
 /// The eDoF Jacobian at one point as fixed-size storage (eq. 13): `columns[..count]` are the
 /// columns in [`Robot::edofs`] order. No heap.

@@ -11,7 +11,7 @@ use crate::spatial::{Pose, pose_from_xyz_rpy, rpy_from_rotation};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Built-in robots, selectable by name wherever a robot file is accepted: `(name, TOML text)`.
 pub const BUILTIN_ROBOTS: &[(&str, &str)] = &[
@@ -40,44 +40,34 @@ pub fn builtin(name: &str) -> Option<Robot> {
         })
 }
 
-/// Largest robot file (TOML or URDF) read (bytes): far above any real description.
-pub const MAX_ROBOT_FILE_BYTES: u64 = 64 << 20;
-
-/// Read a text file of at most [`MAX_ROBOT_FILE_BYTES`].
-pub(crate) fn read_bounded(path: &Path, shown: &str) -> Result<String, ModelError> {
-    let io_error = |source| ModelError::Io {
-        path: shown.to_string(),
-        source,
-    };
-    let size = std::fs::metadata(path).map_err(io_error)?.len();
-    if size > MAX_ROBOT_FILE_BYTES {
-        return Err(ModelError::Invalid {
-            path: shown.to_string(),
-            field: "file".into(),
-            message: format!(
-                "{size} bytes is more than the {MAX_ROBOT_FILE_BYTES} bytes a robot description may have"
-            ),
-        });
-    }
-    std::fs::read_to_string(path).map_err(io_error)
+/// Supplies the text of the URDF a robot TOML names with `urdf = "…"`: the model reads no file,
+/// so whoever gives it a TOML that names a URDF gives it the URDF too (`deflex-load` reads it from
+/// disk next to the TOML; [`robot_from_toml_and_urdf_str`] takes it as text).
+pub trait UrdfResolver {
+    /// The URDF the TOML names as `reference`: where it was found and its XML text.
+    fn resolve(&self, reference: &str) -> Result<ResolvedUrdf, ModelError>;
 }
 
-/// Load a robot from a built-in name or a TOML file path. A URDF named in the TOML is resolved
-/// relative to the TOML file's folder.
-pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
-    if let Some(robot) = builtin(spec) {
-        return Ok(robot);
+/// A URDF as a [`UrdfResolver`] found it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedUrdf {
+    /// Where it was read from (named in messages; kept in [`UrdfSource::resolved`] so the robot
+    /// can be written to another folder and still name it).
+    pub path: PathBuf,
+    /// The XML text.
+    pub xml: String,
+}
+
+/// A URDF given as text: resolves any reference to itself.
+struct UrdfText<'a>(&'a str);
+
+impl UrdfResolver for UrdfText<'_> {
+    fn resolve(&self, reference: &str) -> Result<ResolvedUrdf, ModelError> {
+        Ok(ResolvedUrdf {
+            path: PathBuf::from(reference),
+            xml: self.0.to_string(),
+        })
     }
-    let path = Path::new(spec);
-    if !path.exists() {
-        let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
-        return Err(ModelError::Io {
-            path: format!("{spec} (not a built-in robot: {})", names.join(", ")),
-            source: std::io::Error::from(std::io::ErrorKind::NotFound),
-        });
-    }
-    let text = read_bounded(path, spec)?;
-    robot_from_toml_str(&text, spec, path.parent())
 }
 
 #[derive(Deserialize)]
@@ -130,6 +120,7 @@ struct NamedPoseSection {
 struct TargetSection {
     name: String,
     xyz: [f64; 3],
+    rpy: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -192,16 +183,14 @@ fn checked_pose(
     Ok(pose_from_xyz_rpy(xyz, rpy))
 }
 
-/// Parse a robot TOML. `origin` names the file in error messages; `base_dir` resolves a relative
-/// `urdf` path.
+/// Parse a robot TOML. `origin` names the file in error messages; `urdf` supplies the URDF the
+/// TOML may name (without one, a TOML naming a URDF is refused).
 pub fn robot_from_toml_str(
     text: &str,
     origin: &str,
-    base_dir: Option<&Path>,
+    urdf: Option<&dyn UrdfResolver>,
 ) -> Result<Robot, ModelError> {
-    parse_robot(text, origin, base_dir, &|resolved, shown| {
-        read_bounded(resolved, shown)
-    })
+    parse_robot(text, origin, urdf)
 }
 
 /// Parse a robot TOML whose `urdf = "…"` names a URDF given here as text (not read from disk):
@@ -211,16 +200,13 @@ pub fn robot_from_toml_and_urdf_str(
     urdf_xml: &str,
     origin: &str,
 ) -> Result<Robot, ModelError> {
-    parse_robot(text, origin, None, &|_, _| Ok(urdf_xml.to_string()))
+    parse_robot(text, origin, Some(&UrdfText(urdf_xml)))
 }
-
-type ReadUrdf<'a> = &'a dyn Fn(&Path, &str) -> Result<String, ModelError>;
 
 fn parse_robot(
     text: &str,
     origin: &str,
-    base_dir: Option<&Path>,
-    read_urdf: ReadUrdf,
+    resolver: Option<&dyn UrdfResolver>,
 ) -> Result<Robot, ModelError> {
     let file: RobotFile = toml::from_str(text).map_err(|e| ModelError::Parse {
         path: origin.to_string(),
@@ -264,11 +250,16 @@ fn parse_robot(
     let targets = file
         .targets
         .iter()
-        .map(|t| NamedPoint {
-            name: t.name.clone(),
-            position: Vector3::from(t.xyz),
+        .enumerate()
+        .map(|(i, t)| {
+            let pose = checked_pose(Some(t.xyz), t.rpy, &format!("target[{}]", i + 1), &invalid)?;
+            Ok(NamedPoint {
+                name: t.name.clone(),
+                position: Vector3::from(t.xyz),
+                rotation: t.rpy.map(|_| pose.rotation),
+            })
         })
-        .collect();
+        .collect::<Result<Vec<_>, ModelError>>()?;
     let mut robot = Robot {
         name: file.name.clone(),
         base,
@@ -290,159 +281,194 @@ fn parse_robot(
     };
 
     match &file.urdf {
-        None => {
-            if file.base_link.is_some() || file.tip_link.is_some() {
-                return Err(invalid(
-                    "base_link".into(),
-                    "base_link/tip_link are only meaningful with `urdf = \"...\"`".into(),
-                ));
-            }
-            let convention = file.dh.unwrap_or_default();
-            let rows: Vec<DhParams> = file
-                .joints
-                .iter()
-                .map(|s| DhParams {
-                    alpha: s.alpha.unwrap_or(0.0),
-                    a: s.a.unwrap_or(0.0),
-                    d: s.d.unwrap_or(0.0),
-                    beta: s.beta.unwrap_or(0.0),
-                })
-                .collect();
-            // Bounds before trigonometry: a twist of 1e308 rad has no meaningful sine.
-            for (i, (row, section)) in rows.iter().zip(&file.joints).enumerate() {
-                let name = section
-                    .name
-                    .clone()
-                    .unwrap_or_else(|| format!("joint_{}", i + 1));
-                check_dh_row(row, &format!("joint[{}] ({name})", i + 1), &invalid)?;
-            }
-            let (placements, flange) = dh_placements(convention, &rows);
-            for (i, ((section, row), placement)) in
-                file.joints.iter().zip(&rows).zip(placements).enumerate()
-            {
-                let link_frame = match convention {
-                    DhConvention::Modified => Pose::identity(),
-                    DhConvention::Standard => standard_dh_link(row),
-                };
-                robot.joints.push(Joint {
-                    name: section
-                        .name
-                        .clone()
-                        .unwrap_or_else(|| format!("joint_{}", i + 1)),
-                    placement,
-                    theta_offset: section.theta_offset.unwrap_or(0.0),
-                    limits: section.limits,
-                    center_shift: section.center_shift.unwrap_or(0.0),
-                    stiffness: section
-                        .stiffness
-                        .as_ref()
-                        .map(StiffnessSection::to_axes)
-                        .unwrap_or_default(),
-                    dh: Some(*row),
-                    inertia: inertia_in_joint_frame(section, &link_frame, None),
-                    link_frame,
-                });
-            }
-            robot.flange = flange * flange_offset;
-            robot.dh_convention = Some(convention);
-        }
-        Some(urdf_path) => {
-            if file.dh.is_some() {
-                return Err(invalid(
-                    "dh".into(),
-                    "the geometry comes from the URDF; remove `dh`".into(),
-                ));
-            }
-            let resolved = match base_dir {
-                Some(dir) if Path::new(urdf_path).is_relative() => dir.join(urdf_path),
-                _ => Path::new(urdf_path).to_path_buf(),
-            };
-            let resolved_str = resolved.display().to_string();
-            let xml = read_urdf(&resolved, &resolved_str)?;
-            let chain = crate::urdf::parse_chain(
-                &xml,
-                &resolved_str,
-                file.base_link.as_deref(),
-                file.tip_link.as_deref(),
-            )?;
-            if file.joints.len() != chain.joints.len() {
-                return Err(invalid(
-                    "joint".into(),
-                    format!(
-                        "the URDF chain {} → {} has {} revolute joints ({}), but the TOML lists {} [[joint]] entries; give one per URDF joint, by name, in chain order",
-                        chain.base_link,
-                        chain.tip_link,
-                        chain.joints.len(),
-                        chain
-                            .joints
-                            .iter()
-                            .map(|j| j.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", "),
-                        file.joints.len()
-                    ),
-                ));
-            }
-            let mut joints = chain.joints;
-            for (i, (joint, section)) in joints.iter_mut().zip(&file.joints).enumerate() {
-                let field = format!("joint[{}]", i + 1);
-                match &section.name {
-                    Some(name) if *name == joint.name => {}
-                    Some(name) => {
-                        return Err(invalid(
-                            format!("{field}.name"),
-                            format!(
-                                "expected URDF joint `{}` at this position of the chain, got `{name}`",
-                                joint.name
-                            ),
-                        ));
-                    }
-                    None => {
-                        return Err(invalid(
-                            format!("{field}.name"),
-                            format!(
-                                "with a URDF every [[joint]] needs `name`; expected `{}`",
-                                joint.name
-                            ),
-                        ));
-                    }
-                }
-                if section.alpha.is_some()
-                    || section.a.is_some()
-                    || section.d.is_some()
-                    || section.beta.is_some()
-                    || section.theta_offset.is_some()
-                {
-                    return Err(invalid(
-                        field,
-                        "alpha/a/d/beta/theta_offset come from the URDF; remove them from the TOML"
-                            .into(),
-                    ));
-                }
-                if section.limits.is_some() {
-                    joint.limits = section.limits;
-                }
-                joint.center_shift = section.center_shift.unwrap_or(0.0);
-                joint.stiffness = section
-                    .stiffness
-                    .as_ref()
-                    .map(StiffnessSection::to_axes)
-                    .unwrap_or_default();
-                joint.inertia = inertia_in_joint_frame(section, &joint.link_frame, joint.inertia);
-            }
-            robot.joints = joints;
-            // The URDF's fixed joints after the last revolute joint lead to the flange (tip link).
-            robot.flange = chain.tip_offset * flange_offset;
-            robot.urdf = Some(UrdfSource {
-                path: urdf_path.clone(),
-                resolved,
-                base_link: chain.base_link,
-                tip_link: chain.tip_link,
-            });
-        }
+        None => dh_geometry(&file, &mut robot, flange_offset, &invalid)?,
+        Some(urdf_path) => urdf_geometry(
+            &file,
+            &mut robot,
+            flange_offset,
+            urdf_path,
+            resolver,
+            &invalid,
+        )?,
     }
     robot.validate(origin)?;
     Ok(robot)
+}
+
+/// The robot's joints and flange from the TOML's DH table (modified by default).
+fn dh_geometry(
+    file: &RobotFile,
+    robot: &mut Robot,
+    flange_offset: Pose,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    if file.base_link.is_some() || file.tip_link.is_some() {
+        return Err(invalid(
+            "base_link".into(),
+            "base_link/tip_link are only meaningful with `urdf = \"...\"`".into(),
+        ));
+    }
+    let convention = file.dh.unwrap_or_default();
+    let rows: Vec<DhParams> = file
+        .joints
+        .iter()
+        .map(|s| DhParams {
+            alpha: s.alpha.unwrap_or(0.0),
+            a: s.a.unwrap_or(0.0),
+            d: s.d.unwrap_or(0.0),
+            beta: s.beta.unwrap_or(0.0),
+        })
+        .collect();
+    // Bounds before trigonometry: a twist of 1e308 rad has no meaningful sine.
+    for (i, (row, section)) in rows.iter().zip(&file.joints).enumerate() {
+        let name = section
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("joint_{}", i + 1));
+        check_dh_row(row, &format!("joint[{}] ({name})", i + 1), &invalid)?;
+    }
+    let (placements, flange) = dh_placements(convention, &rows);
+    for (i, ((section, row), placement)) in
+        file.joints.iter().zip(&rows).zip(placements).enumerate()
+    {
+        let link_frame = match convention {
+            DhConvention::Modified => Pose::identity(),
+            DhConvention::Standard => standard_dh_link(row),
+        };
+        robot.joints.push(Joint {
+            name: section
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("joint_{}", i + 1)),
+            placement,
+            theta_offset: section.theta_offset.unwrap_or(0.0),
+            limits: section.limits,
+            center_shift: section.center_shift.unwrap_or(0.0),
+            stiffness: section
+                .stiffness
+                .as_ref()
+                .map(StiffnessSection::to_axes)
+                .unwrap_or_default(),
+            dh: Some(*row),
+            inertia: inertia_in_joint_frame(section, &link_frame, None),
+            link_frame,
+        });
+    }
+    robot.flange = flange * flange_offset;
+    robot.dh_convention = Some(convention);
+    Ok(())
+}
+
+/// The robot's joints and flange from the URDF the TOML names (the TOML's `[[joint]]` entries
+/// name the URDF's revolute joints in chain order and add what a URDF lacks: stiffness, centre
+/// shift, limits, masses).
+fn urdf_geometry(
+    file: &RobotFile,
+    robot: &mut Robot,
+    flange_offset: Pose,
+    urdf_path: &str,
+    resolver: Option<&dyn UrdfResolver>,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    if file.dh.is_some() {
+        return Err(invalid(
+            "dh".into(),
+            "the geometry comes from the URDF; remove `dh`".into(),
+        ));
+    }
+    let Some(resolver) = resolver else {
+        return Err(invalid(
+            "urdf".into(),
+            format!(
+                "names the URDF `{urdf_path}`, but no URDF was supplied with the text (read robot files with deflex-load)"
+            ),
+        ));
+    };
+    let ResolvedUrdf {
+        path: resolved,
+        xml,
+    } = resolver.resolve(urdf_path)?;
+    let resolved_str = resolved.display().to_string();
+    let chain = crate::urdf::parse_chain(
+        &xml,
+        &resolved_str,
+        file.base_link.as_deref(),
+        file.tip_link.as_deref(),
+    )?;
+    if file.joints.len() != chain.joints.len() {
+        return Err(invalid(
+            "joint".into(),
+            format!(
+                "the URDF chain {} → {} has {} revolute joints ({}), but the TOML lists {} [[joint]] entries; give one per URDF joint, by name, in chain order",
+                chain.base_link,
+                chain.tip_link,
+                chain.joints.len(),
+                chain
+                    .joints
+                    .iter()
+                    .map(|j| j.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                file.joints.len()
+            ),
+        ));
+    }
+    let mut joints = chain.joints;
+    for (i, (joint, section)) in joints.iter_mut().zip(&file.joints).enumerate() {
+        let field = format!("joint[{}]", i + 1);
+        match &section.name {
+            Some(name) if *name == joint.name => {}
+            Some(name) => {
+                return Err(invalid(
+                    format!("{field}.name"),
+                    format!(
+                        "expected URDF joint `{}` at this position of the chain, got `{name}`",
+                        joint.name
+                    ),
+                ));
+            }
+            None => {
+                return Err(invalid(
+                    format!("{field}.name"),
+                    format!(
+                        "with a URDF every [[joint]] needs `name`; expected `{}`",
+                        joint.name
+                    ),
+                ));
+            }
+        }
+        if section.alpha.is_some()
+            || section.a.is_some()
+            || section.d.is_some()
+            || section.beta.is_some()
+            || section.theta_offset.is_some()
+        {
+            return Err(invalid(
+                field,
+                "alpha/a/d/beta/theta_offset come from the URDF; remove them from the TOML".into(),
+            ));
+        }
+        if section.limits.is_some() {
+            joint.limits = section.limits;
+        }
+        joint.center_shift = section.center_shift.unwrap_or(0.0);
+        joint.stiffness = section
+            .stiffness
+            .as_ref()
+            .map(StiffnessSection::to_axes)
+            .unwrap_or_default();
+        joint.inertia = inertia_in_joint_frame(section, &joint.link_frame, joint.inertia);
+    }
+    robot.joints = joints;
+    // The URDF's fixed joints after the last revolute joint lead to the flange (tip link).
+    robot.flange = chain.tip_offset * flange_offset;
+    robot.urdf = Some(UrdfSource {
+        path: urdf_path.to_string(),
+        resolved,
+        base_link: chain.base_link,
+        tip_link: chain.tip_link,
+    });
+    Ok(())
 }
 
 /// The TOML's `mass`/`com` of a joint (com in the description's link frame) in the joint frame,
@@ -509,60 +535,15 @@ impl Robot {
 }
 
 /// Write a robot as TOML in the same schema (the calibration result is a drop-in robot file).
-/// A URDF path is written as the robot file had it; use [`robot_to_toml_for`] when the TOML goes
+/// A URDF path is written as the robot file had it; use `deflex_load::robot_to_toml_for` when the TOML goes
 /// to another folder.
 pub fn robot_to_toml(robot: &Robot) -> String {
     robot_to_toml_with_urdf_path(robot, robot.urdf.as_ref().map(|u| u.path.clone()))
 }
 
-/// [`robot_to_toml`] for a file that will be written at `destination`: a URDF path is rewritten
-/// relative to `destination`'s folder (absolute when no relative path exists), so the written
-/// robot still finds its URDF.
-pub fn robot_to_toml_for(robot: &Robot, destination: &Path) -> String {
-    let urdf_path = robot.urdf.as_ref().map(|urdf| {
-        let target = absolute(&urdf.resolved);
-        let folder = destination
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        relative_path(&absolute(folder), &target)
-            .unwrap_or(target)
-            .display()
-            .to_string()
-    });
-    robot_to_toml_with_urdf_path(robot, urdf_path)
-}
-
-/// An absolute, symlink-free path when the file exists; otherwise the path joined to the
-/// current folder.
-fn absolute(path: &Path) -> PathBuf {
-    path.canonicalize().unwrap_or_else(|_| {
-        std::env::current_dir()
-            .map(|cwd| cwd.join(path))
-            .unwrap_or_else(|_| path.to_path_buf())
-    })
-}
-
-/// `target` relative to folder `from` (both absolute), e.g. `../robots/arm.urdf`.
-fn relative_path(from: &Path, target: &Path) -> Option<PathBuf> {
-    use std::path::Component;
-    let from: Vec<Component> = from.components().collect();
-    let to: Vec<Component> = target.components().collect();
-    if from.first() != to.first() {
-        return None;
-    }
-    let common = from.iter().zip(&to).take_while(|(a, b)| a == b).count();
-    let mut out = PathBuf::new();
-    for _ in common..from.len() {
-        out.push("..");
-    }
-    for component in &to[common..] {
-        out.push(component.as_os_str());
-    }
-    Some(out)
-}
-
-fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> String {
+/// [`robot_to_toml`] naming the URDF as `urdf_path` (e.g. relative to the folder the TOML will
+/// be written to: `deflex_load::robot_to_toml_for`); `None` leaves the URDF lines out.
+pub fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -689,6 +670,9 @@ fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> Str
         let _ = writeln!(out, "\n[[target]]");
         let _ = writeln!(out, "name = {}", toml_string(&target.name));
         let _ = writeln!(out, "xyz = {}", toml_array(&[p.x, p.y, p.z]));
+        if let Some(rotation) = &target.rotation {
+            let _ = writeln!(out, "rpy = {}", toml_array(&rpy_from_rotation(rotation)));
+        }
     }
     out
 }

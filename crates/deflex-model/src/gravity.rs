@@ -12,10 +12,10 @@
 //! order, like eq. 15). The base eDoFs carry every body. Bodies without a known inertia weigh
 //! nothing. Allocation-free.
 
-use crate::compliance::edof_screw;
 use crate::kinematics::Data;
 use crate::robot::Robot;
 use crate::spatial::Displacement;
+use crate::spatial::edof_screw;
 use crate::{MAX_EDOFS, MAX_JOINTS};
 use nalgebra::Vector3;
 

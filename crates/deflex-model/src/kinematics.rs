@@ -1,8 +1,8 @@
 //! Forward kinematics (eq. 1) and the geometric Jacobian of the motorised joints.
 
-use crate::compliance::edof_screw;
 use crate::error::QLengthError;
 use crate::robot::Robot;
+use crate::spatial::edof_screw;
 use crate::spatial::{Pose, rot_z};
 use crate::{MAX_JOINTS, robot::EdofSite};
 use nalgebra::{DMatrix, Vector3, Vector6};

@@ -26,26 +26,26 @@ mod description;
 pub mod dh;
 mod error;
 mod gravity;
-mod ik;
+mod inverse_kinematics;
 mod kinematics;
 mod robot;
 pub mod spatial;
 mod urdf;
-pub mod wrench;
+pub mod wrench_transport;
 
-pub use compliance::{EdofColumns, edof_screw};
+pub use compliance::EdofColumns;
 pub use description::{
-    BUILTIN_ROBOTS, MAX_ROBOT_FILE_BYTES, builtin, geometry_fingerprint, load_robot,
-    robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml, robot_to_toml_for,
+    BUILTIN_ROBOTS, ResolvedUrdf, UrdfResolver, builtin, geometry_fingerprint,
+    robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml, robot_to_toml_with_urdf_path,
 };
 pub use error::{ModelError, QLengthError};
-pub use ik::{IkOptions, IkSolution, damped_gram, damped_least_squares_step};
+pub use inverse_kinematics::{IkOptions, IkSolution, damped_gram, damped_least_squares_step};
 pub use kinematics::Data;
 pub use robot::{
     Axis, AxisStiffness, DhConvention, DhParams, Edof, EdofSite, Joint, LinkInertia, NamedPoint,
     NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, bounds,
 };
-pub use spatial::{Displacement, Pose, Wrench};
+pub use spatial::{Displacement, Pose, Wrench, edof_screw};
 
 /// The paper's forming configuration of the TX200, in degrees: the TCP at the part origin
 /// (≈ [1499, 0, −183] mm), tool pointing down. A good IK seed near the ISF cell.

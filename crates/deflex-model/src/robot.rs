@@ -132,6 +132,9 @@ pub struct NamedPoint {
     pub name: String,
     /// Position in the flange frame (m).
     pub position: Vector3<f64>,
+    /// Orientation of the target's own frame in the flange frame, when known (a 6-DoF probe
+    /// whose orientation the tracker measures); written as `rpy` in the robot file.
+    pub rotation: Option<nalgebra::Rotation3<f64>>,
 }
 
 /// One motorised revolute joint: a fixed placement in the previous joint frame followed by a

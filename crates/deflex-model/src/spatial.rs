@@ -68,3 +68,17 @@ pub fn rotation_log(rotation: &Rotation3<f64>) -> Vector3<f64> {
     }
     skew * (0.5 * angle / sin_norm)
 }
+
+/// Column of the eDoF Jacobian of eq. 13 for a spring of axis `v` (unit, world) centred at `c`,
+/// evaluated at world point `p`: `[v × (p − c); v]`. The same screw maps the spring's small
+/// rotation to the displacement of `p`, and (transposed) a wrench at `p` to the spring torque
+/// (eq. 14).
+#[inline]
+pub fn edof_screw(
+    axis: &Vector3<f64>,
+    center: &Vector3<f64>,
+    point: &Vector3<f64>,
+) -> Vector6<f64> {
+    let linear = axis.cross(&(point - center));
+    Vector6::new(linear.x, linear.y, linear.z, axis.x, axis.y, axis.z)
+}

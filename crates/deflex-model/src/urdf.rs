@@ -149,6 +149,43 @@ pub(crate) fn parse_chain(
     base_link: Option<&str>,
     tip_link: Option<&str>,
 ) -> Result<UrdfChain, ModelError> {
+    let document = parse_document(xml, path)?;
+    let robot = document.root_element();
+    let inertials = read_inertials(robot, path)?;
+    let joints = robot
+        .children()
+        .filter(|n| n.has_tag_name("joint"))
+        .map(|node| read_joint(node, path))
+        .collect::<Result<Vec<_>, _>>()?;
+    let tree = JointTree::new(&joints, path)?;
+    let root = match base_link {
+        Some(b) => b.to_string(),
+        None => tree.root(&joints, path)?,
+    };
+    let tip = match tip_link {
+        Some(t) => t.to_string(),
+        None => tree.leaf(&joints, &root, path)?,
+    };
+    let chain = tree.chain(&joints, &root, &tip, path)?;
+    let (out, tip_offset) = assemble(&joints, &chain, &inertials, path)?;
+    if out.is_empty() {
+        return Err(invalid(
+            path,
+            "joint",
+            format!("no revolute joint between \"{root}\" and \"{tip}\""),
+        ));
+    }
+    Ok(UrdfChain {
+        joints: out,
+        base_link: root,
+        tip_link: tip,
+        tip_offset,
+    })
+}
+
+/// The XML document, its nesting depth bounded before the (recursive) parser sees it, with a
+/// `<robot>` root.
+fn parse_document<'x>(xml: &'x str, path: &str) -> Result<roxmltree::Document<'x>, ModelError> {
     let depth = nesting_depth(xml, MAX_URDF_DEPTH);
     if depth > MAX_URDF_DEPTH {
         return Err(ModelError::Parse {
@@ -175,6 +212,14 @@ pub(crate) fn parse_chain(
             format!("the root element is <{}>", robot.tag_name().name()),
         ));
     }
+    Ok(document)
+}
+
+/// The mass and centre of mass (link frame) of every link with an `<inertial><mass>`.
+fn read_inertials(
+    robot: roxmltree::Node,
+    path: &str,
+) -> Result<HashMap<String, LinkInertia>, ModelError> {
     let mut inertials: HashMap<String, LinkInertia> = HashMap::new();
     for link in robot.children().filter(|n| n.has_tag_name("link")) {
         let name = link.attribute("name").unwrap_or("?");
@@ -220,182 +265,216 @@ pub(crate) fn parse_chain(
             },
         );
     }
-    let mut joints = Vec::new();
-    for node in robot.children().filter(|n| n.has_tag_name("joint")) {
-        let name = node.attribute("name").unwrap_or("?").to_string();
-        let field = |f: &str| format!("joint \"{name}\" {f}");
-        let kind = node.attribute("type").unwrap_or("").to_string();
-        let child_attr = |tag: &str| {
-            node.children()
-                .find(|c| c.has_tag_name(tag))
-                .and_then(|c| c.attribute("link"))
-                .map(str::to_string)
-                .ok_or_else(|| {
-                    invalid(path, &field(&format!("<{tag} link=...>")), "missing".into())
-                })
-        };
-        let parent = child_attr("parent")?;
-        let child = child_attr("child")?;
-        let origin_node = node.children().find(|c| c.has_tag_name("origin"));
-        let xyz = parse_triplet(
-            origin_node.and_then(|o| o.attribute("xyz")),
-            path,
-            &field("<origin xyz>"),
-        )?;
-        let rpy = parse_triplet(
-            origin_node.and_then(|o| o.attribute("rpy")),
-            path,
-            &field("<origin rpy>"),
-        )?;
-        if let Some(bad) = xyz
-            .iter()
-            .find(|v| v.abs() > crate::robot::bounds::MAX_LENGTH_M)
-            .or_else(|| {
-                rpy.iter()
-                    .find(|v| v.abs() > crate::robot::bounds::MAX_ANGLE_RAD)
-            })
-        {
-            return Err(invalid(
-                path,
-                &field("<origin>"),
-                format!(
-                    "{bad} is out of range (lengths within ±{} m, angles within ±{} rad)",
-                    crate::robot::bounds::MAX_LENGTH_M,
-                    crate::robot::bounds::MAX_ANGLE_RAD
-                ),
-            ));
-        }
-        let axis_node = node.children().find(|c| c.has_tag_name("axis"));
-        let axis = match axis_node.and_then(|a| a.attribute("xyz")) {
-            Some(text) => Vector3::from(parse_triplet(Some(text), path, &field("<axis xyz>"))?),
-            None => Vector3::x(),
-        };
-        let limits = match node.children().find(|c| c.has_tag_name("limit")) {
-            Some(limit) if kind == "revolute" => {
-                let read = |attr: &str| -> Result<f64, ModelError> {
-                    limit
-                        .attribute(attr)
-                        .unwrap_or("0")
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| {
-                            invalid(
-                                path,
-                                &field(&format!("<limit {attr}>")),
-                                "expected a finite number in rad".into(),
-                            )
-                        })
-                };
-                Some([read("lower")?, read("upper")?])
-            }
-            _ => None,
-        };
-        joints.push(UrdfJoint {
-            name,
-            kind,
-            parent,
-            child,
-            origin: pose_from_xyz_rpy(xyz, rpy),
-            axis,
-            limits,
-        });
-    }
-    let mut by_child: HashMap<&str, usize> = HashMap::with_capacity(joints.len());
-    let mut by_parent: HashMap<&str, Vec<usize>> = HashMap::with_capacity(joints.len());
-    for (i, joint) in joints.iter().enumerate() {
-        if by_child.insert(joint.child.as_str(), i).is_some() {
-            return Err(invalid(
-                path,
-                &format!("joint \"{}\" <child>", joint.name),
-                format!(
-                    "link \"{}\" is the child of two joints; a URDF is a tree",
-                    joint.child
-                ),
-            ));
-        }
-        by_parent.entry(joint.parent.as_str()).or_default().push(i);
-    }
-    let root = match base_link {
-        Some(b) => b.to_string(),
-        None => {
-            let roots: Vec<&str> = joints
-                .iter()
-                .map(|j| j.parent.as_str())
-                .filter(|p| !by_child.contains_key(p))
-                .collect::<std::collections::BTreeSet<_>>()
-                .into_iter()
-                .take(5)
-                .collect();
-            match roots.as_slice() {
-                [one] => one.to_string(),
-                [] => {
-                    return Err(invalid(
-                        path,
-                        "base_link",
-                        "every link has a parent: the joints form a cycle".into(),
-                    ));
-                }
-                _ => {
-                    return Err(invalid(
-                        path,
-                        "base_link",
-                        format!(
-                            "cannot tell the root link (candidates include: {roots:?}); set base_link in the TOML"
-                        ),
-                    ));
-                }
-            }
-        }
+    Ok(inertials)
+}
+
+/// One `<joint>`: its links, origin (bounded before any trigonometry), axis and limits.
+fn read_joint(node: roxmltree::Node, path: &str) -> Result<UrdfJoint, ModelError> {
+    let name = node.attribute("name").unwrap_or("?").to_string();
+    let field = |f: &str| format!("joint \"{name}\" {f}");
+    let kind = node.attribute("type").unwrap_or("").to_string();
+    let child_attr = |tag: &str| {
+        node.children()
+            .find(|c| c.has_tag_name(tag))
+            .and_then(|c| c.attribute("link"))
+            .map(str::to_string)
+            .ok_or_else(|| invalid(path, &field(&format!("<{tag} link=...>")), "missing".into()))
     };
-    let cycle = |link: &str| {
-        invalid(
+    let parent = child_attr("parent")?;
+    let child = child_attr("child")?;
+    let origin_node = node.children().find(|c| c.has_tag_name("origin"));
+    let xyz = parse_triplet(
+        origin_node.and_then(|o| o.attribute("xyz")),
+        path,
+        &field("<origin xyz>"),
+    )?;
+    let rpy = parse_triplet(
+        origin_node.and_then(|o| o.attribute("rpy")),
+        path,
+        &field("<origin rpy>"),
+    )?;
+    if let Some(bad) = xyz
+        .iter()
+        .find(|v| v.abs() > crate::robot::bounds::MAX_LENGTH_M)
+        .or_else(|| {
+            rpy.iter()
+                .find(|v| v.abs() > crate::robot::bounds::MAX_ANGLE_RAD)
+        })
+    {
+        return Err(invalid(
             path,
-            "joint",
-            format!("the joints form a cycle through link \"{link}\"; a URDF is a tree"),
-        )
+            &field("<origin>"),
+            format!(
+                "{bad} is out of range (lengths within ±{} m, angles within ±{} rad)",
+                crate::robot::bounds::MAX_LENGTH_M,
+                crate::robot::bounds::MAX_ANGLE_RAD
+            ),
+        ));
+    }
+    let axis_node = node.children().find(|c| c.has_tag_name("axis"));
+    let axis = match axis_node.and_then(|a| a.attribute("xyz")) {
+        Some(text) => Vector3::from(parse_triplet(Some(text), path, &field("<axis xyz>"))?),
+        None => Vector3::x(),
     };
-    let tip = match tip_link {
-        Some(t) => t.to_string(),
-        None => {
-            let mut link = root.as_str();
-            let mut visited = HashSet::new();
-            loop {
-                if !visited.insert(link) {
-                    return Err(cycle(link));
-                }
-                match by_parent.get(link).map(Vec::as_slice) {
-                    None | Some([]) => break link.to_string(),
-                    Some([one]) => link = joints[*one].child.as_str(),
-                    Some(_) => {
-                        return Err(invalid(
+    let limits = match node.children().find(|c| c.has_tag_name("limit")) {
+        Some(limit) if kind == "revolute" => {
+            let read = |attr: &str| -> Result<f64, ModelError> {
+                limit
+                    .attribute(attr)
+                    .unwrap_or("0")
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        invalid(
                             path,
-                            "tip_link",
-                            format!("link \"{link}\" branches; set tip_link in the TOML"),
-                        ));
-                    }
+                            &field(&format!("<limit {attr}>")),
+                            "expected a finite number in rad".into(),
+                        )
+                    })
+            };
+            Some([read("lower")?, read("upper")?])
+        }
+        _ => None,
+    };
+    Ok(UrdfJoint {
+        name,
+        kind,
+        parent,
+        child,
+        origin: pose_from_xyz_rpy(xyz, rpy),
+        axis,
+        limits,
+    })
+}
+
+/// The joints indexed by child and by parent link (hash maps: linear time on any input).
+struct JointTree<'j> {
+    by_child: HashMap<&'j str, usize>,
+    by_parent: HashMap<&'j str, Vec<usize>>,
+}
+
+impl<'j> JointTree<'j> {
+    /// Index `joints`; a link that is the child of two joints is refused (a URDF is a tree).
+    fn new(joints: &'j [UrdfJoint], path: &str) -> Result<JointTree<'j>, ModelError> {
+        let mut by_child: HashMap<&str, usize> = HashMap::with_capacity(joints.len());
+        let mut by_parent: HashMap<&str, Vec<usize>> = HashMap::with_capacity(joints.len());
+        for (i, joint) in joints.iter().enumerate() {
+            if by_child.insert(joint.child.as_str(), i).is_some() {
+                return Err(invalid(
+                    path,
+                    &format!("joint \"{}\" <child>", joint.name),
+                    format!(
+                        "link \"{}\" is the child of two joints; a URDF is a tree",
+                        joint.child
+                    ),
+                ));
+            }
+            by_parent.entry(joint.parent.as_str()).or_default().push(i);
+        }
+        Ok(JointTree {
+            by_child,
+            by_parent,
+        })
+    }
+
+    /// The one link that is no joint's child.
+    fn root(&self, joints: &[UrdfJoint], path: &str) -> Result<String, ModelError> {
+        let roots: Vec<&str> = joints
+            .iter()
+            .map(|j| j.parent.as_str())
+            .filter(|p| !self.by_child.contains_key(p))
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .take(5)
+            .collect();
+        match roots.as_slice() {
+            [one] => Ok(one.to_string()),
+            [] => Err(invalid(
+                path,
+                "base_link",
+                "every link has a parent: the joints form a cycle".into(),
+            )),
+            _ => Err(invalid(
+                path,
+                "base_link",
+                format!(
+                    "cannot tell the root link (candidates include: {roots:?}); set base_link in the TOML"
+                ),
+            )),
+        }
+    }
+
+    /// The leaf reached from `root` by following the only child at every link.
+    fn leaf(&self, joints: &[UrdfJoint], root: &str, path: &str) -> Result<String, ModelError> {
+        let mut link = root;
+        let mut visited = HashSet::new();
+        loop {
+            if !visited.insert(link) {
+                return Err(cycle(path, link));
+            }
+            match self.by_parent.get(link).map(Vec::as_slice) {
+                None | Some([]) => return Ok(link.to_string()),
+                Some([one]) => link = joints[*one].child.as_str(),
+                Some(_) => {
+                    return Err(invalid(
+                        path,
+                        "tip_link",
+                        format!("link \"{link}\" branches; set tip_link in the TOML"),
+                    ));
                 }
             }
         }
-    };
-    // Walk from the tip up to the root; a chain visits each joint at most once.
-    let mut chain = Vec::new();
-    let mut link = tip.as_str();
-    while link != root {
-        let Some(&index) = by_child.get(link) else {
-            return Err(invalid(
-                path,
-                "tip_link",
-                format!("link \"{tip}\" is not below \"{root}\""),
-            ));
-        };
-        if chain.len() > joints.len() {
-            return Err(cycle(link));
-        }
-        chain.push(index);
-        link = joints[index].parent.as_str();
     }
-    chain.reverse();
+
+    /// The joints from `root` down to `tip`, in order: walked from the tip up (a chain visits
+    /// each joint at most once, so a longer walk is a cycle).
+    fn chain(
+        &self,
+        joints: &[UrdfJoint],
+        root: &str,
+        tip: &str,
+        path: &str,
+    ) -> Result<Vec<usize>, ModelError> {
+        let mut chain = Vec::new();
+        let mut link = tip;
+        while link != root {
+            let Some(&index) = self.by_child.get(link) else {
+                return Err(invalid(
+                    path,
+                    "tip_link",
+                    format!("link \"{tip}\" is not below \"{root}\""),
+                ));
+            };
+            if chain.len() > joints.len() {
+                return Err(cycle(path, link));
+            }
+            chain.push(index);
+            link = joints[index].parent.as_str();
+        }
+        chain.reverse();
+        Ok(chain)
+    }
+}
+
+fn cycle(path: &str, link: &str) -> ModelError {
+    invalid(
+        path,
+        "joint",
+        format!("the joints form a cycle through link \"{link}\"; a URDF is a tree"),
+    )
+}
+
+/// The model's joints along `chain`: each revolute joint is a placement `T · R_a` (the
+/// fixed joints before it folded in) and a rotation about local z; every body's links are
+/// summed into its inertia. Returns the joints and the fixed placement from the last one to the
+/// tip.
+fn assemble(
+    joints: &[UrdfJoint],
+    chain: &[usize],
+    inertials: &HashMap<String, LinkInertia>,
+    path: &str,
+) -> Result<(Vec<Joint>, Pose), ModelError> {
     let mut pending = Pose::identity();
     let mut out: Vec<Joint> = Vec::new();
     // Mass-weighted sum of the current body's centres of mass (joint frame) and its mass.
@@ -411,26 +490,13 @@ pub(crate) fn parse_chain(
         }
         *body = (Vector3::zeros(), 0.0);
     };
-    for index in chain {
+    for &index in chain {
         let joint = &joints[index];
         match joint.kind.as_str() {
             "fixed" => pending *= joint.origin,
             "revolute" | "continuous" => {
                 flush_body(&mut out, &mut body);
-                let norm = joint.axis.norm();
-                if norm.is_nan() || norm <= 1e-9 {
-                    return Err(invalid(
-                        path,
-                        &format!("joint \"{}\" <axis xyz>", joint.name),
-                        "axis must be non-zero".into(),
-                    ));
-                }
-                let axis = Unit::new_normalize(joint.axis);
-                let align =
-                    Rotation3::rotation_between(&Vector3::z(), &axis).unwrap_or_else(|| {
-                        Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-                    });
-                let align_pose = Pose::from_parts(Translation3::identity(), align);
+                let align_pose = axis_alignment(joint, path)?;
                 out.push(Joint {
                     name: joint.name.clone(),
                     placement: pending * joint.origin * align_pose,
@@ -465,19 +531,23 @@ pub(crate) fn parse_chain(
         }
     }
     flush_body(&mut out, &mut body);
-    if out.is_empty() {
+    Ok((out, pending))
+}
+
+/// `R_a` as a pose: the rotation taking z onto the joint's (non-zero) axis `a`.
+fn axis_alignment(joint: &UrdfJoint, path: &str) -> Result<Pose, ModelError> {
+    let norm = joint.axis.norm();
+    if norm.is_nan() || norm <= 1e-9 {
         return Err(invalid(
             path,
-            "joint",
-            format!("no revolute joint between \"{root}\" and \"{tip}\""),
+            &format!("joint \"{}\" <axis xyz>", joint.name),
+            "axis must be non-zero".into(),
         ));
     }
-    Ok(UrdfChain {
-        joints: out,
-        base_link: root,
-        tip_link: tip,
-        tip_offset: pending,
-    })
+    let axis = Unit::new_normalize(joint.axis);
+    let align = Rotation3::rotation_between(&Vector3::z(), &axis)
+        .unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
+    Ok(Pose::from_parts(Translation3::identity(), align))
 }
 
 #[cfg(test)]

@@ -65,6 +65,18 @@ pub enum ProgramError {
         /// Largest allowed.
         max: usize,
     },
+    /// Per-point data of the wrong length.
+    #[error("{format}: {got} {what} for {expected} points")]
+    Mismatch {
+        /// Output format.
+        format: &'static str,
+        /// What.
+        what: &'static str,
+        /// Given.
+        got: usize,
+        /// Expected.
+        expected: usize,
+    },
     /// A generated line would exceed the format's line length bound (a bug or an absurd value).
     #[error("{format}: line {line} is {length} characters long, more than {max}")]
     LineTooLong {

@@ -2,27 +2,35 @@
 //! isf --path FILE.gcode` read.
 //!
 //! ```text
+//! %
 //! ( deflex path … )
-//! G21
-//! G90
-//! G0 X20.0000 Y0.0000 Z0.0000
+//! ( safe start )
+//! G17 G40 G49 G80 G90 G21 G54
+//! G0 X20.0000 Y0.0000 Z20.0000 ( clearance point )
+//! G1 X20.0000 Y0.0000 Z0.0000 F600.00 ( approach )
 //! G1 X19.9239 Y1.7431 Z-0.0033 F600.00
 //! …
+//! G1 X… Y… Z20.0000 F600.00 ( retract )
 //! M30
+//! %
 //! ```
 //!
-//! Millimetres (`G21`), absolute (`G90`), `G0` for rapid moves and `G1 … F` (mm/min, modal) for
-//! feed moves. G-code carries **positions only**: a compensated orientation is lost, and the
-//! header says by how much the orientation varies along the path (a robot running G-code holds
-//! its own tool orientation). Comments are `( … )` without parentheses inside, which is what
-//! deflex's own G-code reader accepts.
+//! The safe start sets the XY plane, cancels tool radius and length compensation and canned
+//! cycles, absolute millimetres and the work offset of the path (`G54` unless the path named
+//! another). `G0` for rapid moves and for the move to the clearance point above the start,
+//! `G1 … F` (mm/min, modal) for feed moves, the approach and the retract. G-code carries
+//! **positions only**: a compensated orientation is lost, and the header says by how much the
+//! orientation varies along the path (a robot running G-code holds its own tool orientation).
+//! Comments are `( … )` without parentheses inside. The program reads back with
+//! `deflex-gcode`, the reader of CAM programs.
 
 use crate::ProgramFile;
 use crate::ProgramInput;
-use crate::common::{check_lines, check_points, comment_text, header_lines, num};
+use crate::common::{Checked, check_lines, comment_text, header_lines, num};
 use crate::error::ProgramError;
 use crate::names::{GCODE_FILE, sanitize};
 use crate::orientation::rotation_distance;
+use crate::plan::plan;
 use crate::settings::ProgramSettings;
 use std::fmt::Write as _;
 
@@ -32,10 +40,13 @@ pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>, ProgramError> {
-    let points = check_points(FORMAT, input, settings)?;
+    // G-code is not split: CNC controls stream long programs (the line bound is max_points).
+    let plan = plan(FORMAT, input, settings, 1)?;
+    let points = &plan.points;
     let name = sanitize(&settings.program.name, &GCODE_FILE);
     let d = settings.gcode.decimals;
     let mut out = String::with_capacity(points.len() * 48 + 1024);
+    let _ = writeln!(out, "%");
     for line in header_lines(input) {
         let _ = writeln!(out, "( {} )", comment_text(&line, &['(', ')']));
     }
@@ -48,28 +59,45 @@ pub(crate) fn export(
         "( positions only: the orientation varies by up to {} mrad along the path and is not written )",
         num(spread * 1e3, 4)
     );
-    let _ = writeln!(out, "G21\nG90");
-    let mut feed: Option<f64> = None;
-    for (i, p) in points.iter().enumerate() {
-        let xyz = format!(
+    let offset = input.frame_name.as_deref().unwrap_or("G54");
+    let _ = writeln!(out, "( safe start )\nG17 G40 G49 G80 G90 G21 {offset}");
+    let xyz = |p: &Checked| {
+        format!(
             "X{} Y{} Z{}",
             num(p.position_mm.x, d),
             num(p.position_mm.y, d),
             num(p.position_mm.z, d)
-        );
-        if i == 0 || p.rapid {
-            let _ = writeln!(out, "G0 {xyz}");
+        )
+    };
+    let f = |v: f64| num((v * 60.0 * 100.0).round() / 100.0, 2);
+    let _ = writeln!(out, "G0 {} ( clearance point )", xyz(&plan.clear[0]));
+    let _ = writeln!(
+        out,
+        "G1 {} F{} ( approach )",
+        xyz(&points[0]),
+        f(plan.clear[0].speed_mm_s)
+    );
+    let mut feed: Option<String> = None;
+    for p in &points[1..] {
+        if p.rapid {
+            let _ = writeln!(out, "G0 {}", xyz(p));
             continue;
         }
-        let f = (p.speed_mm_s * 60.0 * 100.0).round() / 100.0;
-        if feed == Some(f) {
-            let _ = writeln!(out, "G1 {xyz}");
+        let this = f(p.speed_mm_s);
+        if feed.as_ref() == Some(&this) {
+            let _ = writeln!(out, "G1 {}", xyz(p));
         } else {
-            let _ = writeln!(out, "G1 {xyz} F{}", num(f, 2));
-            feed = Some(f);
+            let _ = writeln!(out, "G1 {} F{this}", xyz(p));
+            feed = Some(this);
         }
     }
-    let _ = writeln!(out, "M30");
+    let _ = writeln!(
+        out,
+        "G1 {} F{} ( retract )",
+        xyz(&plan.clear[1]),
+        f(plan.clear[1].speed_mm_s)
+    );
+    let _ = writeln!(out, "M30\n%");
     check_lines(FORMAT, &out)?;
     Ok(vec![ProgramFile {
         path: format!("{name}.gcode"),

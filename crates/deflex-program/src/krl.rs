@@ -3,32 +3,38 @@
 //!
 //! ```text
 //! DEF deflex_path( )
+//! ; header: what the path is, the TCP, the load and the base the program assumes
+//! ;FOLD safe start
 //! BAS(#INITMOV, 0)
 //! $TOOL = TOOL_DATA[1]
-//! $BASE = BASE_DATA[1]
-//! $ADVANCE = 3
-//! $APO.CDIS = DEFLEX_CDIS
-//! $VEL.ORI1 = DEFLEX_ORI_VEL
-//! $VEL.ORI2 = DEFLEX_ORI_VEL
-//! BAS(#VEL_PTP, DEFLEX_PTP_VEL)
-//! PTP {X 20.0000, Y 0.0000, Z 0.0000, A 180.000000, B 0.000000, C 180.000000}
+//! $LOAD = LOAD_DATA[1]
+//! $BASE = BASE_DATA[1]            ($NULLFRAME with coordinates = "robot")
+//! $ADVANCE = 3 … BAS(#VEL_PTP, DEFLEX_PTP_VEL)
+//! PTP $H_POS                      BCO run to HOME
+//! ;ENDFOLD
+//! PTP {X 20.0, Y 0.0, Z 35.0, A 180.0, B 0.0, C 180.0, S 2, T 10} ; clearance point
 //! $VEL.CP = 0.01000
-//! LIN {X 19.9239, Y 1.7431, Z -0.0033, A 180.000000, B 0.000000, C 180.000000} C_DIS
+//! LIN {X 20.0, Y 0.0, Z 0.0, …} ; approach
+//! $VEL.CP = 0.01000
+//! LIN {X 19.9239, Y 1.7431, Z -0.0033, …} C_DIS      (or deflex_path_p01( ) … when split)
 //! …
+//! LIN {X …, Z 35.0, …} ; retract
+//! PTP $H_POS
 //! END
 //! ```
 //!
 //! * Positions in mm in the frame `$BASE` (BASE_DATA\[n\], taught on the controller as the part
-//!   frame; `base = 0` gives `$NULLFRAME`, the robot's world); orientation A-B-C in degrees
-//!   (`Rz(A)·Ry(B)·Rx(C)`, see [`crate::orientation`]). `$TOOL` is TOOL_DATA\[n\], which must
-//!   hold the model's TCP: the header prints the values the program assumes.
+//!   frame; `$NULLFRAME` with `coordinates = "robot"` or `base = 0`); orientation A-B-C in
+//!   degrees (`Rz(A)·Ry(B)·Rx(C)`, see [`crate::orientation`]). `$TOOL` is TOOL_DATA\[n\], which
+//!   must hold the model's TCP, and `$LOAD` LOAD_DATA\[n\], which must hold the tool load: the
+//!   header prints the values the program assumes.
 //! * `$VEL.CP` is in **m/s** and is set before a `LIN` whenever the speed changes; `$VEL.ORI1/2`
 //!   in deg/s; `$APO.CDIS` (mm) is the approximation distance of `C_DIS` (the controller
 //!   shortens it to half a segment when the points are closer, KUKA's approximation rule). The
-//!   last `LIN` has no `C_DIS`, so the program ends exactly on the last point.
-//! * The first motion is a slow `PTP` to the first point (axis speed `BAS(#VEL_PTP, …)`), given
-//!   as a frame without Status/Turn: the controller keeps the current configuration, so start
-//!   the program near the path (as with any CAM program).
+//!   approach, a rapid, the last path point and the retract have no `C_DIS`.
+//! * The first motion is a `PTP $H_POS` (KUKA's BCO run to HOME), then a `PTP` to the clearance
+//!   point above the start with Status and Turn from the model's IK branch ([`crate::config`]),
+//!   so the controller takes the configuration the compensation was computed for.
 //! * Angles stay in KUKA's display ranges (A, C ∈ (−180°, 180°], B ∈ [−90°, 90°]), so a tool
 //!   pointing down (A ≈ C ≈ ±180°) may print A = 180 at one point and −179.99999 at the next:
 //!   the same rotation. KUKA's `LIN` interpolates the orientation as a rotation, not the three
@@ -37,13 +43,18 @@
 //!   at B = ±90° exactly KUKA itself sets A = 0, as [`crate::orientation::kuka_abc_deg`] does
 //!   without a previous point.
 //! * Positions are written inline in the `.src`, as CAM post-processors do for long paths, rather
-//!   than as one `E6POS` declaration per point in the `.dat`; the `.dat` holds the settings.
+//!   than as one `E6POS` declaration per point in the `.dat`; the `.dat` holds the settings. A
+//!   long path is split into `NAME_p01.src` … (global subprograms the main `.src` calls in order;
+//!   see [`crate::plan`] for the limits).
 
 use crate::ProgramFile;
-use crate::common::{Checked, check_lines, check_points, comment_text, header_lines, num};
+use crate::common::{Checked, check_lines, comment_text, header_lines, num};
+use crate::config::kuka_status_turn;
 use crate::error::ProgramError;
 use crate::names::{KRL, sanitize};
 use crate::orientation::kuka_abc_deg;
+use crate::plan::{part_name, plan};
+use crate::settings::Coordinates;
 use crate::settings::ProgramSettings;
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
@@ -68,15 +79,37 @@ fn pose_literal(pose: &Pose) -> String {
     frame_literal([t.x, t.y, t.z], kuka_abc_deg(&pose.rotation, None))
 }
 
+/// Longest motion line (characters and `\r\n`).
+const LINE_BYTES: usize = 120;
+
+/// `{X …, …, S s, T t}` for a PTP to a Cartesian point with its configuration.
+fn ptp_literal(p: &Checked, abc: [f64; 3]) -> String {
+    let frame = frame_literal(p.position_mm.into(), abc);
+    match &p.config {
+        Some(c) => {
+            let (status, turn) = kuka_status_turn(c);
+            format!("{}, S {status}, T {turn}}}", &frame[..frame.len() - 1])
+        }
+        None => frame,
+    }
+}
+
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>, ProgramError> {
-    let points = check_points(FORMAT, input, settings)?;
+    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
+    let points = &plan.points;
     let name = sanitize(&settings.program.name, &KRL);
+    // Part names add `_p01`: keep room for them within KRL's 24 characters.
+    let name = if plan.split() && name.len() > 20 {
+        name[..20].to_string()
+    } else {
+        name
+    };
     let k = &settings.kuka;
     let blend = settings.program.blend_mm;
-    let mut src = String::with_capacity(points.len() * 96 + 2048);
+    let mut src = String::with_capacity(4096 + if plan.split() { 0 } else { points.len() * 96 });
     let _ = writeln!(src, "&ACCESS RVP\r\n&REL 1\r\nDEF {name}( )\r");
     for line in header_lines(input) {
         let _ = writeln!(src, "; {}\r", comment_text(&line, &[]));
@@ -87,43 +120,126 @@ pub(crate) fn export(
         k.tool,
         pose_literal(&input.tool_in_flange)
     );
-    let base = if k.base == 0 {
+    match &plan.tool_load {
+        Some(l) => {
+            let _ = writeln!(
+                src,
+                "; LOAD_DATA[{}] must hold the tool load: M {} kg, CM {{X {}, Y {}, Z {}}} mm\r",
+                k.tool,
+                num(l.mass_kg, 3),
+                num(l.cog_m[0] * 1e3, 1),
+                num(l.cog_m[1] * 1e3, 1),
+                num(l.cog_m[2] * 1e3, 1)
+            );
+        }
+        None => {
+            let _ = writeln!(
+                src,
+                "; LOAD_DATA[{}] must hold the tool load (not known to deflex)\r",
+                k.tool
+            );
+        }
+    }
+    // Positions in the robot base frame: no base, whatever `kuka.base` says.
+    let base = if k.base == 0 || input.coordinates == Coordinates::Robot {
         "$NULLFRAME".to_string()
     } else {
         format!("BASE_DATA[{}]", k.base)
     };
     let _ = writeln!(
         src,
-        "; {base} must hold the program frame relative to $WORLD (= $ROBROOT assumed): {}\r",
+        "; {base} must hold the program frame{} relative to $WORLD (= $ROBROOT assumed): {}\r",
+        input
+            .frame_name
+            .as_ref()
+            .map_or(String::new(), |n| format!(" ({n})")),
         pose_literal(&input.frame_in_robot)
     );
+    let _ = writeln!(src, ";FOLD safe start\r");
     let _ = writeln!(src, "BAS(#INITMOV, 0)\r");
     let _ = writeln!(src, "$TOOL = TOOL_DATA[{}]\r", k.tool);
+    let _ = writeln!(src, "$LOAD = LOAD_DATA[{}]\r", k.tool);
     let _ = writeln!(src, "$BASE = {base}\r");
     let _ = writeln!(src, "$ADVANCE = {}\r", k.advance);
     let _ = writeln!(src, "$APO.CDIS = DEFLEX_CDIS\r");
     let _ = writeln!(src, "$VEL.ORI1 = DEFLEX_ORI_VEL\r");
     let _ = writeln!(src, "$VEL.ORI2 = DEFLEX_ORI_VEL\r");
     let _ = writeln!(src, "BAS(#VEL_PTP, DEFLEX_PTP_VEL)\r");
+    let _ = writeln!(
+        src,
+        "; BCO run: the first motion goes to the robot's HOME ($H_POS)\r"
+    );
+    let _ = writeln!(src, "PTP $H_POS\r");
+    let _ = writeln!(src, ";ENDFOLD\r");
     let mut previous: Option<[f64; 3]> = None;
     let mut speed: Option<f64> = None;
+    let start_abc = kuka_abc_deg(&plan.clear[0].rotation, None);
+    let _ = writeln!(
+        src,
+        "PTP {} ; clearance point above the start\r",
+        ptp_literal(&plan.clear[0], start_abc)
+    );
+    previous = previous.or(Some(start_abc));
+    // Approach: straight down onto the first point, exact stop.
+    write_speed(&mut src, &plan.clear[0], &mut speed);
+    let abc = kuka_abc_deg(&points[0].rotation, previous);
+    previous = Some(abc);
+    let _ = writeln!(
+        src,
+        "LIN {} ; approach\r",
+        frame_literal(points[0].position_mm.into(), abc)
+    );
     let last = points.len() - 1;
-    for (i, p) in points.iter().enumerate() {
-        let abc = kuka_abc_deg(&p.rotation, previous);
-        previous = Some(abc);
-        let literal = frame_literal(p.position_mm.into(), abc);
-        if i == 0 {
-            let _ = writeln!(src, "PTP {literal}\r");
-            continue;
-        }
-        write_speed(&mut src, p, &mut speed);
-        let approximate = if i < last && blend > 0.0 {
-            " C_DIS"
+    let mut parts = Vec::new();
+    for (part, range) in plan.parts.iter().enumerate() {
+        let body = if plan.split() {
+            let part_name = part_name(&name, part);
+            let _ = writeln!(src, "{part_name}( )\r");
+            let mut text = String::with_capacity(range.len() * 96 + 512);
+            let _ = writeln!(text, "&ACCESS RVP\r\n&REL 1\r\nDEF {part_name}( )\r");
+            let _ = writeln!(
+                text,
+                "; part {} of {} of {name}: path points {} to {}\r",
+                part + 1,
+                plan.parts.len(),
+                range.start,
+                range.end - 1
+            );
+            // Each part sets its speed (a part must not rely on the previous one's).
+            speed = None;
+            parts.push((part_name, text));
+            &mut parts.last_mut().expect("just pushed").1
         } else {
-            ""
+            &mut src
         };
-        let _ = writeln!(src, "LIN {literal}{approximate}\r");
+        for i in range.clone() {
+            let p = &points[i];
+            let abc = kuka_abc_deg(&p.rotation, previous);
+            previous = Some(abc);
+            let literal = frame_literal(p.position_mm.into(), abc);
+            write_speed(body, p, &mut speed);
+            let approximate = if i < last && blend > 0.0 && !p.rapid {
+                " C_DIS"
+            } else {
+                ""
+            };
+            let rapid = if p.rapid { " ; rapid" } else { "" };
+            let _ = writeln!(body, "LIN {literal}{approximate}{rapid}\r");
+        }
+        if plan.split() {
+            let _ = writeln!(body, "END\r");
+        }
     }
+    // Retract: straight up to the clearance point, then HOME.
+    speed = None;
+    write_speed(&mut src, &plan.clear[1], &mut speed);
+    let abc = kuka_abc_deg(&plan.clear[1].rotation, previous);
+    let _ = writeln!(
+        src,
+        "LIN {} ; retract\r",
+        frame_literal(plan.clear[1].position_mm.into(), abc)
+    );
+    let _ = writeln!(src, "PTP $H_POS\r");
     let _ = writeln!(src, "END\r");
     let mut dat = String::with_capacity(1024);
     let _ = writeln!(dat, "&ACCESS RVP\r\n&REL 1\r\nDEFDAT {name}\r");
@@ -136,7 +252,7 @@ pub(crate) fn export(
         "DECL REAL DEFLEX_ORI_VEL = {}\r",
         num(settings.program.orientation_speed_deg_s, 3)
     );
-    let _ = writeln!(dat, "; Axis speed of the first PTP motion (%):\r");
+    let _ = writeln!(dat, "; Axis speed of the PTP motions (%):\r");
     let _ = writeln!(
         dat,
         "DECL REAL DEFLEX_PTP_VEL = {}\r",
@@ -145,7 +261,7 @@ pub(crate) fn export(
     let _ = writeln!(dat, "ENDDAT\r");
     check_lines(FORMAT, &src)?;
     check_lines(FORMAT, &dat)?;
-    Ok(vec![
+    let mut files = vec![
         ProgramFile {
             path: format!("{name}.src"),
             contents: src,
@@ -154,7 +270,15 @@ pub(crate) fn export(
             path: format!("{name}.dat"),
             contents: dat,
         },
-    ])
+    ];
+    for (part_name, text) in parts {
+        check_lines(FORMAT, &text)?;
+        files.push(ProgramFile {
+            path: format!("{part_name}.src"),
+            contents: text,
+        });
+    }
+    Ok(files)
 }
 
 /// `$VEL.CP = …` (m/s) before a motion whose speed differs from the current one.

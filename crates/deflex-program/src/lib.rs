@@ -11,8 +11,16 @@
 //! | [`Format::UrScript`] UR | `NAME.script` | `movel(p[x,y,z,rx,ry,rz], a, v, r=…)` | m, rad, m/s | rotation vector |
 //! | [`Format::Gcode`] CAM / twin | `NAME.gcode` | `G1 X Y Z F` | mm, mm/min | none (positions only) |
 //!
+//! Every program runs safely from wherever the robot is: a safe-start block, a joint move to a
+//! clearance point above the start (with the vendor's configuration data, [`config`]), an
+//! approach straight onto the first point at the approach speed, the path (rapids as one
+//! straight move at the rapid speed), a retract to a clearance point above the end; a long path
+//! is split into parts a main program calls in order (the limits and their sources are in
+//! `plan`'s documentation: 5000 moves and 1 MiB per file by default).
+//!
 //! The conventions and their sources are in [`orientation`]; the user's template (frame and
-//! tool names, speeds, zones, limits) is [`ProgramSettings`], read from TOML. Every exporter
+//! tool names, speeds, zones, clearance, limits, tool load) is [`ProgramSettings`], read from
+//! TOML. Every exporter
 //! bounds the number of points and the line length, names things within the language's rules
 //! ([`names`]) and has a reader ([`readback`]) that the round-trip tests use: poses read back
 //! from a program agree with the path to the printed precision (≤ 1 µm, ≤ 1e-6 rad).
@@ -29,14 +37,17 @@
 //! let input = ProgramInput::new(points);
 //! let files = export(Format::UrScript, &input, &ProgramSettings::default()).unwrap();
 //! assert!(files[0].contents.contains("movel(pose_trans("));
+//! assert!(files[0].contents.contains("# retract"));
 //! ```
 
 mod common;
+pub mod config;
 pub mod error;
 mod gcode;
 mod krl;
 pub mod names;
 pub mod orientation;
+mod plan;
 mod rapid;
 pub mod readback;
 pub mod settings;
@@ -44,7 +55,7 @@ mod urscript;
 mod val3;
 
 pub use error::ProgramError;
-pub use settings::{Coordinates, ProgramSettings};
+pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
 
 use nalgebra::IsometryMatrix3;
 use std::path::Path;
@@ -58,9 +69,38 @@ pub type Pose = IsometryMatrix3<f64>;
 pub struct ProgramPoint {
     /// TCP pose in the program frame (m).
     pub pose: Pose,
-    /// TCP speed of the move ending here (m/s); `None`: a rapid move (the settings' rapid
-    /// speed). The first point is reached by the approach move.
+    /// TCP speed of the move ending here (m/s); `None`: a rapid move (one straight move at the
+    /// settings' rapid speed). The first point is reached by the approach move.
     pub speed_m_s: Option<f64>,
+}
+
+/// The arm's configuration at a pose: the joint values (rad, the controller's axes) and where
+/// the wrist centre lies, from which each vendor's configuration data is written (KUKA
+/// Status/Turn, ABB `robconf`, Stäubli `config`). The caller computes it with the robot model
+/// (`deflex compensate` does); the conventions are in [`config`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArmConfiguration {
+    /// Joint values A1 … A6 (rad).
+    pub joints_rad: [f64; 6],
+    /// The wrist centre lies behind axis 1 (negative x in the frame of axis 1, which turns with
+    /// it): KUKA's "overhead area", ABB's "behind axis 1", Stäubli's `lefty`.
+    pub wrist_behind_axis_1: bool,
+    /// The wrist centre lies behind the lower arm (the line from axis 2 to axis 3, seen in the
+    /// arm's plane): ABB's `cfx` second criterion.
+    pub wrist_behind_lower_arm: bool,
+    /// Axis 3 at or beyond its stretched value φ (the elbow straight): KUKA Status bit 1.
+    pub elbow_beyond_stretched: bool,
+}
+
+/// The tool's load for the programs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolLoad {
+    /// Mass (kg).
+    pub mass_kg: f64,
+    /// Centre of gravity in the flange frame (m).
+    pub cog_m: [f64; 3],
+    /// Where the values come from, for the header (`program template`, `twin cell`, …).
+    pub source: &'static str,
 }
 
 /// What an exporter writes: the points plus the frames a program declares or checks.
@@ -71,10 +111,24 @@ pub struct ProgramInput {
     /// The program frame (part frame or robot base) in the robot base frame R0: the value of the
     /// KUKA base, ABB work object, Stäubli frame or UR feature the positions refer to.
     pub frame_in_robot: Pose,
+    /// Whether the program frame is the part frame or the robot base (`$NULLFRAME`, no work
+    /// offset).
+    pub coordinates: Coordinates,
+    /// Name of the part frame on the controller when the path names one (a G-code work offset
+    /// such as `G54`), for the headers and the G-code safe start.
+    pub frame_name: Option<String>,
     /// The TCP in the flange frame (the robot model's tool).
     pub tool_in_flange: Pose,
+    /// The tool's load, when known ([`settings::CommonSettings::tool_mass_kg`] overrides it).
+    pub tool_load: Option<ToolLoad>,
     /// The points, in order.
     pub points: Vec<ProgramPoint>,
+    /// The configuration at each point (empty: unknown; else one per point).
+    pub configurations: Vec<ArmConfiguration>,
+    /// The configuration at the clearance points above the start and the end
+    /// ([`ProgramInput::clearance_poses`]), when known: the start joint move and the
+    /// configuration data of the first motion.
+    pub clearance_configurations: Option<[ArmConfiguration; 2]>,
 }
 
 impl ProgramInput {
@@ -83,8 +137,13 @@ impl ProgramInput {
         ProgramInput {
             description: Vec::new(),
             frame_in_robot: Pose::identity(),
+            coordinates: Coordinates::Part,
+            frame_name: None,
             tool_in_flange: Pose::identity(),
+            tool_load: None,
             points,
+            configurations: Vec::new(),
+            clearance_configurations: None,
         }
     }
 
@@ -107,7 +166,10 @@ impl ProgramInput {
         ProgramInput {
             description,
             frame_in_robot: robot_base.inverse() * frame_in_world,
+            coordinates,
+            frame_name: None,
             tool_in_flange: *tool_in_flange,
+            tool_load: None,
             points: world_points
                 .into_iter()
                 .map(|(pose, speed_m_s)| ProgramPoint {
@@ -115,7 +177,16 @@ impl ProgramInput {
                     speed_m_s,
                 })
                 .collect(),
+            configurations: Vec::new(),
+            clearance_configurations: None,
         }
+    }
+
+    /// The clearance poses above the first and the last point (program frame), where the
+    /// approach starts and the retract ends ([`settings::Clearance`]); the tool keeps the
+    /// orientation of the first and the last point.
+    pub fn clearance_poses(&self, settings: &ProgramSettings) -> Option<[Pose; 2]> {
+        plan::clearance_poses(self, settings)
     }
 }
 
@@ -222,3 +293,6 @@ pub fn write_files(dir: &Path, files: &[ProgramFile]) -> Result<(), ProgramError
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod it_tests;

@@ -2,16 +2,20 @@
 //!
 //! ```text
 //! MODULE deflex_path
-//!   PERS tooldata deflex_tool := [TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,50],[1,0,0,0],0,0,0]];
+//!   PERS tooldata deflex_tool := [TRUE,[[0,0,200],[1,0,0,0]],[3.35,[3,-2,105],[1,0,0,0],0,0,0]];
 //!   PERS wobjdata deflex_wobj := [FALSE,TRUE,"",[[1500,0,-183],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-//!   CONST speeddata deflex_v1 := [10,30,5000,1000];
+//!   CONST jointtarget deflex_start := [[0,45.9,88.4,0,45.7,0],[9E9,…]];
+//!   CONST speeddata deflex_vapp := [10,30,5000,1000];  deflex_vrapid, deflex_v1 …
 //!   CONST zonedata deflex_zone := [FALSE,0.2,0.2,0.2,0.02,0.2,0.02];
 //!   PROC main()
-//!     ConfJ \Off;
-//!     ConfL \Off;
-//!     MoveJ [[20,0,0],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], deflex_vapp, fine, deflex_tool \WObj:=deflex_wobj;
-//!     MoveL [[19.9239,1.7431,-0.0033],[0,0,1,0],[0,0,0,0],[9E9,…]], deflex_v1, deflex_zone, deflex_tool \WObj:=deflex_wobj;
-//!     …
+//!     ConfJ \On;
+//!     ConfL \On;
+//!     MoveAbsJ deflex_start, deflex_vrapid, fine, deflex_tool \WObj:=deflex_wobj;
+//!     MoveJ [[20,0,35],[0,0,1,0],[0,0,0,1],[9E9,…]], deflex_vrapid, fine, …;   clearance point
+//!     MoveL [[20,0,0],…], deflex_vapp, fine, …;                                approach
+//!     MoveL [[19.9239,1.7431,-0.0033],[0,0,1,0],[0,0,0,1],[9E9,…]], deflex_v1, deflex_zone, …;
+//!     …                                              (or deflex_path_p01; … when split)
+//!     MoveL [[…,35],…], deflex_vapp, fine, …;                                  retract
 //!   ENDPROC
 //! ENDMODULE
 //! ```
@@ -19,24 +23,32 @@
 //! * `robtarget` = `[trans (mm), rot (quaternion q1..q4, q1 = w), robconf, extax]`; positions
 //!   are relative to the work object (`\WObj`), whose `uframe` is the program frame in the
 //!   robot's world. Quaternion sign: continuous along the path (see [`crate::orientation`]).
-//! * `robconf` is written `[0,0,0,0]` with `ConfJ \Off` and `ConfL \Off`: the controller takes
-//!   the configuration closest to the current one instead of checking the quadrants, since the
-//!   model's joint zeros need not be ABB's.
+//! * `robconf` `[cf1, cf4, cf6, cfx]` is written from the model's joint values at every target
+//!   ([`crate::config`]) with `ConfJ \On` and `ConfL \On`: the controller checks that it reaches
+//!   each target in the configuration the compensation was computed for. Without configurations
+//!   (a caller that gave none) it writes `[0,0,0,0]` with both `\Off`.
+//! * The start joint move `MoveAbsJ deflex_start` goes to the joint values of the clearance
+//!   point above the start (the model's IK, in degrees).
 //! * `speeddata` = `[v_tcp (mm/s), v_ori (deg/s), v_leax (mm/s), v_reax (deg/s)]`, one `CONST`
 //!   per distinct speed (at most [`MAX_SPEEDS`]); `zonedata` = `[finep, pzone_tcp, pzone_ori,
 //!   pzone_eax (mm), zone_ori (deg), zone_leax (mm), zone_reax (deg)]` from `blend_mm` (the
 //!   controller shrinks a zone to half the distance to the neighbouring points, RAPID
-//!   reference, `zonedata`); the last move is `fine`.
+//!   reference, `zonedata`); the approach, rapids, the last move and the retract are `fine`.
 //! * `tooldata` = `[robhold, tframe [[x,y,z],[q]], tload [mass, cog, aom, ix, iy, iz]]`, declared
-//!   from the model's TCP and the settings' mass unless `declare_tool = false`; `wobjdata` =
+//!   from the model's TCP and the tool load (the template's `program.tool_mass_kg`, else the
+//!   caller's; refused when neither is known) unless `declare_tool = false`; `wobjdata` =
 //!   `[robhold, ufprog, ufmec, uframe, oframe]`, declared with the program frame unless
 //!   `declare_wobj = false`.
+//! * A long path is split into modules `NAME_p01.mod` … each with one `PROC` of the same name,
+//!   called in order from `main` (data declared in the main module are global to the task).
 
 use crate::ProgramFile;
-use crate::common::{check_lines, check_points, comment_text, header_lines, num, speed_table};
+use crate::common::{Checked, check_lines, comment_text, header_lines, num, speed_table};
+use crate::config::abb_robconf;
 use crate::error::ProgramError;
 use crate::names::{RAPID, sanitize};
 use crate::orientation::abb_quaternion;
+use crate::plan::{part_name, plan};
 use crate::settings::ProgramSettings;
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
@@ -67,36 +79,77 @@ fn pose_text(pose: &Pose) -> String {
     )
 }
 
+/// Longest motion line (characters and `\r\n`).
+const LINE_BYTES: usize = 200;
+
+/// A robtarget aggregate with its `robconf` (`[0,0,0,0]` when the configuration is unknown).
+fn robtarget(p: &Checked, q: [f64; 4]) -> String {
+    let conf = p.config.as_ref().map_or([0; 4], abb_robconf);
+    format!(
+        "[[{},{},{}],{},[{},{},{},{}],[9E9,9E9,9E9,9E9,9E9,9E9]]",
+        num(p.position_mm.x, 4),
+        num(p.position_mm.y, 4),
+        num(p.position_mm.z, 4),
+        quaternion_text(q),
+        conf[0],
+        conf[1],
+        conf[2],
+        conf[3]
+    )
+}
+
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>, ProgramError> {
-    let points = check_points(FORMAT, input, settings)?;
+    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
+    let points = &plan.points;
     let (speeds, speed_index) = speed_table(FORMAT, &points[1..], MAX_SPEEDS)?;
     let name = sanitize(&settings.program.name, &RAPID);
+    let name = if plan.split() && name.len() > 28 {
+        name[..28].to_string()
+    } else {
+        name
+    };
     let a = &settings.abb;
     let common = &settings.program;
     let tool = &a.tool_name;
     let wobj = &a.wobj_name;
-    let mut out = String::with_capacity(points.len() * 180 + 4096);
+    let configured = points.iter().all(|p| p.config.is_some());
+    let mut out = String::with_capacity(8192 + if plan.split() { 0 } else { points.len() * 180 });
     let _ = writeln!(out, "MODULE {name}\r");
     for line in header_lines(input) {
         let _ = writeln!(out, "  ! {}\r", comment_text(&line, &[]));
     }
     if a.declare_tool {
+        let load = match (a.tool_mass_kg, &plan.tool_load) {
+            (Some(m), _) => (m, a.tool_cog_mm.unwrap_or([0.0; 3])),
+            (None, Some(l)) => (l.mass_kg, l.cog_m.map(|v| v * 1e3)),
+            (None, None) => {
+                return Err(ProgramError::Settings {
+                    source_name: "program template".into(),
+                    key: "program.tool_mass_kg".into(),
+                    message: "RAPID declares the tool with its load and deflex knows none: give \
+                              your tool's mass and centre of gravity (program.tool_mass_kg, \
+                              program.tool_cog_mm), or use an existing tool (abb.declare_tool = \
+                              false)"
+                        .into(),
+                });
+            }
+        };
         let _ = writeln!(
             out,
             "  PERS tooldata {tool} := [TRUE,{},[{},[{},{},{}],[1,0,0,0],0,0,0]];\r",
             pose_text(&input.tool_in_flange),
-            num(a.tool_mass_kg, 3),
-            num(a.tool_cog_mm[0], 3),
-            num(a.tool_cog_mm[1], 3),
-            num(a.tool_cog_mm[2], 3)
+            num(load.0, 3),
+            num(load.1[0], 3),
+            num(load.1[1], 3),
+            num(load.1[2], 3)
         );
     } else {
         let _ = writeln!(
             out,
-            "  ! The existing tool {tool} must hold the model's TCP: {}\r",
+            "  ! The existing tool {tool} must hold the model's TCP and the tool load: {}\r",
             pose_text(&input.tool_in_flange)
         );
     }
@@ -113,12 +166,30 @@ pub(crate) fn export(
             pose_text(&input.frame_in_robot)
         );
     }
+    if let Some(c) = &plan.clear[0].config {
+        let q = c.joints_rad.map(f64::to_degrees);
+        let _ = writeln!(
+            out,
+            "  CONST jointtarget deflex_start := [[{},{},{},{},{},{}],[9E9,9E9,9E9,9E9,9E9,9E9]];\r",
+            num(q[0], 4),
+            num(q[1], 4),
+            num(q[2], 4),
+            num(q[3], 4),
+            num(q[4], 4),
+            num(q[5], 4)
+        );
+    }
     let ori = num(common.orientation_speed_deg_s, 2);
-    let _ = writeln!(
-        out,
-        "  CONST speeddata deflex_vapp := [{},{ori},5000,1000];\r",
-        num(common.rapid_speed_mm_s, 2)
-    );
+    for (label, v) in [
+        ("deflex_vapp", common.approach_speed_mm_s),
+        ("deflex_vrapid", common.rapid_speed_mm_s),
+    ] {
+        let _ = writeln!(
+            out,
+            "  CONST speeddata {label} := [{},{ori},5000,1000];\r",
+            num(v, 2)
+        );
+    }
     for (k, v) in speeds.iter().enumerate() {
         let _ = writeln!(
             out,
@@ -144,38 +215,98 @@ pub(crate) fn export(
         "fine"
     };
     let _ = writeln!(out, "  PROC main()\r");
-    let _ = writeln!(out, "    ConfJ \\Off;\r");
-    let _ = writeln!(out, "    ConfL \\Off;\r");
-    let mut previous: Option<[f64; 4]> = None;
-    let last = points.len() - 1;
-    for (i, p) in points.iter().enumerate() {
-        let q = abb_quaternion(&p.rotation, previous);
-        previous = Some(q);
-        let target = format!(
-            "[[{},{},{}],{},[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]",
-            num(p.position_mm.x, 4),
-            num(p.position_mm.y, 4),
-            num(p.position_mm.z, 4),
-            quaternion_text(q)
-        );
-        if i == 0 {
-            let _ = writeln!(
-                out,
-                "    MoveJ {target}, deflex_vapp, fine, {tool} \\WObj:={wobj};\r"
-            );
-            continue;
-        }
-        let speed = format!("deflex_v{}", speed_index[i - 1] + 1);
-        let zone = if i == last { "fine" } else { zone };
+    if configured {
+        let _ = writeln!(out, "    ConfJ \\On;\r");
+        let _ = writeln!(out, "    ConfL \\On;\r");
+    } else {
         let _ = writeln!(
             out,
-            "    MoveL {target}, {speed}, {zone}, {tool} \\WObj:={wobj};\r"
+            "    ! configuration unknown: the nearest one is taken\r"
+        );
+        let _ = writeln!(out, "    ConfJ \\Off;\r");
+        let _ = writeln!(out, "    ConfL \\Off;\r");
+    }
+    if plan.clear[0].config.is_some() {
+        let _ = writeln!(
+            out,
+            "    MoveAbsJ deflex_start, deflex_vrapid, fine, {tool} \\WObj:={wobj};\r"
         );
     }
+    let mut previous: Option<[f64; 4]> = None;
+    let q = abb_quaternion(&plan.clear[0].rotation, previous);
+    previous = Some(q);
+    let _ = writeln!(
+        out,
+        "    MoveJ {}, deflex_vrapid, fine, {tool} \\WObj:={wobj};\r",
+        robtarget(&plan.clear[0], q)
+    );
+    let q = abb_quaternion(&points[0].rotation, previous);
+    previous = Some(q);
+    let _ = writeln!(
+        out,
+        "    MoveL {}, deflex_vapp, fine, {tool} \\WObj:={wobj};\r",
+        robtarget(&points[0], q)
+    );
+    let last = points.len() - 1;
+    let mut parts = Vec::new();
+    for (part, range) in plan.parts.iter().enumerate() {
+        let (body, indent) = if plan.split() {
+            let part_name = part_name(&name, part);
+            let _ = writeln!(out, "    {part_name};\r");
+            let mut text = String::with_capacity(range.len() * 180 + 512);
+            let _ = writeln!(text, "MODULE {part_name}\r");
+            let _ = writeln!(
+                text,
+                "  ! part {} of {} of {name}: path points {} to {}\r",
+                part + 1,
+                plan.parts.len(),
+                range.start,
+                range.end - 1
+            );
+            let _ = writeln!(text, "  PROC {part_name}()\r");
+            parts.push((part_name, text));
+            (&mut parts.last_mut().expect("just pushed").1, "    ")
+        } else {
+            (&mut out, "    ")
+        };
+        for i in range.clone() {
+            let p = &points[i];
+            let q = abb_quaternion(&p.rotation, previous);
+            previous = Some(q);
+            let speed = if p.rapid {
+                "deflex_vrapid".to_string()
+            } else {
+                format!("deflex_v{}", speed_index[i - 1] + 1)
+            };
+            let zone = if i == last || p.rapid { "fine" } else { zone };
+            let _ = writeln!(
+                body,
+                "{indent}MoveL {}, {speed}, {zone}, {tool} \\WObj:={wobj};\r",
+                robtarget(p, q)
+            );
+        }
+        if plan.split() {
+            let _ = writeln!(body, "  ENDPROC\r\nENDMODULE\r");
+        }
+    }
+    let q = abb_quaternion(&plan.clear[1].rotation, previous);
+    let _ = writeln!(
+        out,
+        "    MoveL {}, deflex_vapp, fine, {tool} \\WObj:={wobj};\r",
+        robtarget(&plan.clear[1], q)
+    );
     let _ = writeln!(out, "  ENDPROC\r\nENDMODULE\r");
     check_lines(FORMAT, &out)?;
-    Ok(vec![ProgramFile {
+    let mut files = vec![ProgramFile {
         path: format!("{name}.mod"),
         contents: out,
-    }])
+    }];
+    for (part_name, text) in parts {
+        check_lines(FORMAT, &text)?;
+        files.push(ProgramFile {
+            path: format!("{part_name}.mod"),
+            contents: text,
+        });
+    }
+    Ok(files)
 }

@@ -34,10 +34,11 @@ pub struct ReadPoint {
     pub speed_m_s: Option<f64>,
 }
 
-/// A reader of one program file: `(text, file name)` → motions.
-type Reader = fn(&str, &str) -> Result<Vec<ReadPoint>, ProgramError>;
-
-/// Read the motions of the files `export` produced for `format`.
+/// Read the motions of the files `export` produced for `format`, main program and parts in
+/// the order the program runs them: the clearance point above the start, the path (its first
+/// point is the approach's target), the clearance point above the end. Joint moves (KUKA
+/// `PTP $H_POS`, RAPID `MoveAbsJ`, VAL3 `movej(jStart…)`, UR `movej([…])`) are not Cartesian
+/// motions and are skipped.
 pub fn read_files(format: Format, files: &[ProgramFile]) -> Result<Vec<ReadPoint>, ProgramError> {
     let find = |suffix: &str| {
         files
@@ -49,15 +50,69 @@ pub fn read_files(format: Format, files: &[ProgramFile]) -> Result<Vec<ReadPoint
                 message: format!("no {suffix} file among the {} program files", format.name()),
             })
     };
-    let (file, read): (&ProgramFile, Reader) = match format {
-        Format::Krl => (find(".src")?, read_krl),
-        Format::Rapid => (find(".mod")?, read_rapid),
-        Format::Val3 => (find(".dtx")?, read_val3_data),
-        Format::UrScript => (find(".script")?, read_urscript),
-        Format::Gcode => (find(".gcode")?, read_gcode),
+    let by_name = |name: &str, extension: &str| {
+        files
+            .iter()
+            .find(|f| f.path == format!("{name}.{extension}"))
+            .ok_or_else(|| ProgramError::Read {
+                file: format!("{name}.{extension}"),
+                line: 0,
+                message: "the main program calls it, but it is not among the files".into(),
+            })
     };
-    read(&file.contents, &file.path)
+    match format {
+        Format::Krl => {
+            let main = find(".src")?;
+            let mut points = Vec::new();
+            let mut speed = None;
+            read_krl_into(
+                &main.contents,
+                &main.path,
+                &mut points,
+                &mut speed,
+                Some(&|name| by_name(name, "src")),
+            )?;
+            Ok(points)
+        }
+        Format::Rapid => {
+            let main = find(".mod")?;
+            let mut points = Vec::new();
+            read_rapid_into(
+                &main.contents,
+                &main.path,
+                &mut points,
+                &mut HashMap::new(),
+                Some(&|name| by_name(name, "mod")),
+            )?;
+            Ok(points)
+        }
+        Format::Val3 => {
+            let data = find(".dtx")?;
+            read_val3_data(&data.contents, &data.path)
+        }
+        Format::UrScript => {
+            let mut points = Vec::new();
+            for file in files.iter().filter(|f| f.path.ends_with(".script")) {
+                points.extend(read_urscript(&file.contents, &file.path)?);
+                if points.len() > MAX_POINTS_LIMIT + 2 {
+                    return Err(ProgramError::Read {
+                        file: file.path.clone(),
+                        line: 0,
+                        message: format!("more than {MAX_POINTS_LIMIT} motions"),
+                    });
+                }
+            }
+            Ok(points)
+        }
+        Format::Gcode => {
+            let file = find(".gcode")?;
+            read_gcode(&file.contents, &file.path)
+        }
+    }
 }
+
+/// A program file by name (a part a main program calls).
+type PartLookup<'a> = dyn Fn(&str) -> Result<&'a ProgramFile, ProgramError> + 'a;
 
 struct Lines<'a> {
     file: &'a str,
@@ -111,23 +166,46 @@ impl Lines<'_> {
     }
 }
 
-/// KUKA `.src`: `PTP {…}` (approach), `$VEL.CP = v` (m/s) and `LIN {X …, A …}` lines.
+/// KUKA `.src`: `PTP {…}` (a Cartesian joint move; `PTP $H_POS` is skipped), `$VEL.CP = v`
+/// (m/s) and `LIN {X …, A …}` lines (a single file; [`read_files`] follows the part calls).
 pub fn read_krl(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
-    let r = Lines { file };
     let mut points = Vec::new();
-    let mut speed: Option<f64> = None;
+    read_krl_into(text, file, &mut points, &mut None, None)?;
+    Ok(points)
+}
+
+fn read_krl_into(
+    text: &str,
+    file: &str,
+    points: &mut Vec<ReadPoint>,
+    speed: &mut Option<f64>,
+    part: Option<&PartLookup>,
+) -> Result<(), ProgramError> {
+    let r = Lines { file };
     for (n, line) in r.check(text)? {
+        let line = line.split(';').next().unwrap_or("").trim();
         if let Some(v) = line.strip_prefix("$VEL.CP =") {
-            speed = Some(r.number(n, v, "$VEL.CP")?);
+            *speed = Some(r.number(n, v, "$VEL.CP")?);
             continue;
         }
-        let (approach, rest) = if let Some(rest) = line.strip_prefix("PTP ") {
+        if let (Some(lookup), Some(name)) = (part, line.strip_suffix("( )"))
+            && !name.is_empty()
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        {
+            let file = lookup(name)?;
+            read_krl_into(&file.contents, &file.path, points, speed, None)?;
+            continue;
+        }
+        let (joint_move, rest) = if let Some(rest) = line.strip_prefix("PTP ") {
             (true, rest)
         } else if let Some(rest) = line.strip_prefix("LIN ") {
             (false, rest)
         } else {
             continue;
         };
+        if rest.trim_start().starts_with('$') {
+            continue; // PTP $H_POS: HOME, a joint position
+        }
         let open = rest
             .find('{')
             .ok_or_else(|| r.error(n, "expected a frame {X …}"))?;
@@ -139,6 +217,13 @@ pub fn read_krl(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> 
                 return Err(r.error(n, format!("expected `KEY value`, got \"{item}\"")));
             };
             values.insert(key, r.number(n, value, key)?);
+        }
+        for key in ["S", "T"] {
+            if let Some(v) = values.get(key)
+                && !(v.fract() == 0.0 && (0.0..64.0).contains(v))
+            {
+                return Err(r.error(n, format!("{key} {v}: expected a whole number 0 … 63")));
+            }
         }
         let get = |key: &str| {
             values
@@ -153,15 +238,15 @@ pub fn read_krl(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> 
                 get("B")?,
                 get("C")?,
             ])),
-            speed_m_s: if approach {
+            speed_m_s: if joint_move {
                 None
             } else {
                 Some(speed.ok_or_else(|| r.error(n, "LIN before any $VEL.CP"))?)
             },
         };
-        r.push(&mut points, n, point)?;
+        r.push(points, n, point)?;
     }
-    Ok(points)
+    Ok(())
 }
 
 /// Every number in a RAPID aggregate such as `[[1,2,3],[1,0,0,0],…]`.
@@ -174,11 +259,22 @@ fn aggregate_numbers(r: &Lines, line: usize, text: &str) -> Result<Vec<f64>, Pro
 }
 
 /// ABB `.mod`: `CONST speeddata NAME := [v, …];` declarations and `MoveJ`/`MoveL` lines with an
-/// inline robtarget.
+/// inline robtarget (`MoveAbsJ` joint moves are skipped; a single module, [`read_files`] follows
+/// the part calls).
 pub fn read_rapid(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
-    let r = Lines { file };
     let mut points = Vec::new();
-    let mut speeds: HashMap<String, f64> = HashMap::new();
+    read_rapid_into(text, file, &mut points, &mut HashMap::new(), None)?;
+    Ok(points)
+}
+
+fn read_rapid_into(
+    text: &str,
+    file: &str,
+    points: &mut Vec<ReadPoint>,
+    speeds: &mut HashMap<String, f64>,
+    part: Option<&PartLookup>,
+) -> Result<(), ProgramError> {
+    let r = Lines { file };
     for (n, line) in r.check(text)? {
         if let Some(rest) = line.strip_prefix("CONST speeddata ") {
             let (name, value) = rest
@@ -191,7 +287,15 @@ pub fn read_rapid(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError
             speeds.insert(name.trim().to_string(), v * 1e-3);
             continue;
         }
-        let (approach, rest) = if let Some(rest) = line.strip_prefix("MoveJ ") {
+        if let (Some(lookup), Some(name)) = (part, line.strip_suffix(';'))
+            && name.contains("_p")
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        {
+            let file = lookup(name)?;
+            read_rapid_into(&file.contents, &file.path, points, speeds, None)?;
+            continue;
+        }
+        let (joint_move, rest) = if let Some(rest) = line.strip_prefix("MoveJ ") {
             (true, rest)
         } else if let Some(rest) = line.strip_prefix("MoveL ") {
             (false, rest)
@@ -202,15 +306,21 @@ pub fn read_rapid(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError
             .find("]],")
             .ok_or_else(|| r.error(n, "expected an inline robtarget [[…]]"))?;
         let values = aggregate_numbers(&r, n, &rest[..end + 2])?;
-        if values.len() < 7 {
-            return Err(r.error(n, "robtarget with fewer than 7 values"));
+        if values.len() < 11 {
+            return Err(r.error(n, "robtarget with fewer than 11 values"));
+        }
+        if values[7..11]
+            .iter()
+            .any(|c| c.fract() != 0.0 || c.abs() > 8.0)
+        {
+            return Err(r.error(n, "robconf values must be whole numbers"));
         }
         let speed_name = rest[end + 3..]
             .split(',')
             .next()
             .map(str::trim)
             .unwrap_or_default();
-        let speed = if approach {
+        let speed = if joint_move {
             None
         } else {
             Some(
@@ -226,9 +336,9 @@ pub fn read_rapid(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError
             ])),
             speed_m_s: speed,
         };
-        r.push(&mut points, n, point)?;
+        r.push(points, n, point)?;
     }
-    Ok(points)
+    Ok(())
 }
 
 /// The value of attribute `name` in an XML element line (`name="value"`).
@@ -239,13 +349,20 @@ fn attribute<'t>(line: &'t str, name: &str) -> Option<&'t str> {
     Some(&line[start..start + len])
 }
 
-/// Stäubli `.dtx`: the `pPath` (pointRx), `nSpeed` (num) and `mPath` (mdesc) arrays.
+/// A pose of a data array: `(key, position, rotation)`.
+type KeyedPose = (usize, Vector3<f64>, Rotation3<f64>);
+
+/// Stäubli `.dtx`: `pClear` (the clearance points), the parts' `pPathK` (pointRx) and
+/// `nSpeedK` (num) arrays, `mPath` and `mApproach` (mdesc), in the order `start.pgx` runs them:
+/// `pClear[0]`, `pPath1[0]` (the approach), the parts' points (their `mPath` speeds),
+/// `pClear[1]` (the retract); the clearance points and the approach at `mApproach[1]`.
 pub fn read_val3_data(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
     let r = Lines { file };
     let mut block = String::new();
-    let mut poses: Vec<(usize, Vector3<f64>, Rotation3<f64>)> = Vec::new();
-    let mut speed_index: HashMap<usize, usize> = HashMap::new();
-    let mut speeds: HashMap<usize, f64> = HashMap::new();
+    let mut arrays: HashMap<String, Vec<KeyedPose>> = HashMap::new();
+    let mut numbers: HashMap<String, HashMap<usize, usize>> = HashMap::new();
+    let mut speeds: HashMap<String, HashMap<usize, f64>> = HashMap::new();
+    let mut total = 0usize;
     for (n, line) in r.check(text)? {
         if line.starts_with("<Data ") {
             block = attribute(line, "name").unwrap_or_default().to_string();
@@ -262,52 +379,76 @@ pub fn read_val3_data(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramE
                 .ok_or_else(|| r.error(n, format!("Value without {name}")))
                 .and_then(|v| r.number(n, v, name))
         };
-        match block.as_str() {
-            "pPath" => {
-                if poses.len() >= MAX_POINTS_LIMIT {
-                    return Err(r.error(n, format!("more than {MAX_POINTS_LIMIT} points")));
-                }
-                poses.push((
-                    key,
-                    Vector3::new(get("x")?, get("y")?, get("z")?) * 1e-3,
-                    rotation_from_staubli_rxryrz_deg([get("rx")?, get("ry")?, get("rz")?]),
-                ));
+        if block == "pClear" || block.starts_with("pPath") {
+            total += 1;
+            if total > MAX_POINTS_LIMIT + 2 {
+                return Err(r.error(n, format!("more than {MAX_POINTS_LIMIT} points")));
             }
-            "nSpeed" => {
-                speed_index.insert(key, get("value")? as usize);
-            }
-            "mPath" => {
-                speeds.insert(key, get("tmax")? * 1e-3);
-            }
-            _ => {}
+            arrays.entry(block.clone()).or_default().push((
+                key,
+                Vector3::new(get("x")?, get("y")?, get("z")?) * 1e-3,
+                rotation_from_staubli_rxryrz_deg([get("rx")?, get("ry")?, get("rz")?]),
+            ));
+        } else if block.starts_with("nSpeed") {
+            numbers
+                .entry(block.clone())
+                .or_default()
+                .insert(key, get("value")? as usize);
+        } else if block == "mPath" || block == "mApproach" {
+            speeds
+                .entry(block.clone())
+                .or_default()
+                .insert(key, get("tmax")? * 1e-3);
         }
     }
-    poses
-        .into_iter()
-        .enumerate()
-        .map(|(i, (key, position_m, rotation))| {
-            if key != i {
-                return Err(r.error(0, format!("pPath keys out of order at {key}")));
+    let ordered = |name: &str| -> Result<Vec<KeyedPose>, ProgramError> {
+        let list = arrays.get(name).cloned().unwrap_or_default();
+        for (i, (key, ..)) in list.iter().enumerate() {
+            if *key != i {
+                return Err(r.error(0, format!("{name} keys out of order at {key}")));
             }
-            let speed = if i == 0 {
-                None
+        }
+        Ok(list)
+    };
+    let approach = speeds
+        .get("mApproach")
+        .and_then(|m| m.get(&1))
+        .copied()
+        .ok_or_else(|| r.error(0, "no mApproach[1]"))?;
+    let clear = ordered("pClear")?;
+    if clear.len() != 2 {
+        return Err(r.error(0, format!("pClear has {} points, expected 2", clear.len())));
+    }
+    let point = |(_, position_m, rotation): &KeyedPose, speed: f64| ReadPoint {
+        position_m: *position_m,
+        rotation: Some(*rotation),
+        speed_m_s: Some(speed),
+    };
+    let mut out = vec![point(&clear[0], approach)];
+    for part in 1..=MAX_POINTS_LIMIT {
+        let name = format!("pPath{part}");
+        if !arrays.contains_key(&name) {
+            break;
+        }
+        let list = ordered(&name)?;
+        let indices = numbers.get(&format!("nSpeed{part}"));
+        for (i, pose) in list.iter().enumerate() {
+            let speed = if part == 1 && i == 0 {
+                approach
             } else {
-                let k = speed_index
-                    .get(&i)
-                    .ok_or_else(|| r.error(0, format!("no nSpeed[{i}]")))?;
-                Some(
-                    *speeds
-                        .get(k)
-                        .ok_or_else(|| r.error(0, format!("no mPath[{k}]")))?,
-                )
+                let k = indices
+                    .and_then(|m| m.get(&i))
+                    .ok_or_else(|| r.error(0, format!("no nSpeed{part}[{i}]")))?;
+                *speeds
+                    .get("mPath")
+                    .and_then(|m| m.get(k))
+                    .ok_or_else(|| r.error(0, format!("no mPath[{k}]")))?
             };
-            Ok(ReadPoint {
-                position_m,
-                rotation: Some(rotation),
-                speed_m_s: speed,
-            })
-        })
-        .collect()
+            out.push(point(pose, speed));
+        }
+    }
+    out.push(point(&clear[1], approach));
+    Ok(out)
 }
 
 /// UR `.script`: `movej(pose_trans(deflex_frame, p[…]), …)` and `movel(…, v=…, …)` lines.
@@ -315,7 +456,9 @@ pub fn read_urscript(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramEr
     let r = Lines { file };
     let mut points = Vec::new();
     for (n, line) in r.check(text)? {
-        let approach = if line.starts_with("movej(") {
+        let approach = if line.starts_with("movej([") {
+            continue; // a joint move
+        } else if line.starts_with("movej(") {
             true
         } else if line.starts_with("movel(") {
             false
@@ -358,12 +501,14 @@ pub fn read_urscript(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramEr
     Ok(points)
 }
 
-/// G-code: `G0`/`G1` lines with `X Y Z` and modal `F` (mm/min); comments `( … )`.
+/// G-code: `G0`/`G1` lines with `X Y Z` and modal `F` (mm/min); comments `( … )` (also after
+/// a motion); the safe-start and end lines are not motions.
 pub fn read_gcode(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
     let r = Lines { file };
     let mut points = Vec::new();
     let mut feed: Option<f64> = None;
     for (n, line) in r.check(text)? {
+        let line = line.split('(').next().unwrap_or("").trim();
         let rapid = if line.starts_with("G0 ") {
             true
         } else if line.starts_with("G1 ") {

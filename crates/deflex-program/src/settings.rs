@@ -20,6 +20,44 @@ pub enum Coordinates {
     Robot,
 }
 
+/// How the clearance points above the start and the end of the path are placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Clearance {
+    /// A clearance plane `clearance_mm` above the highest point of the path (program frame z):
+    /// the approach comes straight down onto the first point from it, the retract goes
+    /// straight up to it from the last.
+    Height,
+    /// `clearance_mm` back along the tool axis (the TCP's z axis) from the first and the last
+    /// point: for tilted tools.
+    ToolAxis,
+}
+
+/// Stäubli `mdesc.blend`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub enum StaubliBlend {
+    /// No blending.
+    #[serde(rename = "off")]
+    Off,
+    /// Joint blending.
+    #[serde(rename = "joint")]
+    Joint,
+    /// Cartesian blending.
+    #[serde(rename = "Cartesian")]
+    Cartesian,
+}
+
+impl StaubliBlend {
+    /// The VAL3 word.
+    pub fn word(self) -> &'static str {
+        match self {
+            StaubliBlend::Off => "off",
+            StaubliBlend::Joint => "joint",
+            StaubliBlend::Cartesian => "Cartesian",
+        }
+    }
+}
+
 /// Settings common to every format.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -30,6 +68,25 @@ pub struct CommonSettings {
     pub coordinates: Coordinates,
     /// Largest number of points (1 ..= 1 000 000); a longer path is refused, not cut.
     pub max_points: usize,
+    /// Most path moves in one program file (10 ..= 100 000); a longer path is split into parts
+    /// (`NAME_p01` …) that a main program calls in order (see the crate documentation for the
+    /// controllers' limits behind the default).
+    pub max_points_per_part: usize,
+    /// Largest program file (kB, 16 ..= 100 000); parts are sized to stay below it.
+    pub max_part_kb: usize,
+    /// Where the approach starts and the retract ends.
+    pub clearance: Clearance,
+    /// Height of the clearance plane above the path's highest point, or distance along the tool
+    /// axis (mm, 1 ..= 2000).
+    pub clearance_mm: f64,
+    /// TCP speed of the approach onto the first point and of the retract (mm/s, 0.1 ..= 500).
+    pub approach_speed_mm_s: f64,
+    /// Mass of the tool (kg, 0.001 ..= 500): the load of the programs (KUKA LOAD_DATA
+    /// expected, ABB `tooldata`, UR `set_payload`). Absent: the caller's (the twin cell's or the
+    /// robot model's payload); RAPID refuses to guess.
+    pub tool_mass_kg: Option<f64>,
+    /// Centre of gravity of the tool in the flange frame (mm, |·| ≤ 5000), with `tool_mass_kg`.
+    pub tool_cog_mm: Option<[f64; 3]>,
     /// Largest TCP speed of a feed move (mm/s, 0.1 ..= 2000): faster path feeds are capped.
     pub max_speed_mm_s: f64,
     /// TCP speed of rapid moves (G0) and of the approach to the first point (mm/s, 0.1 ..= 2000).
@@ -47,7 +104,14 @@ impl Default for CommonSettings {
         CommonSettings {
             name: "deflex_path".into(),
             coordinates: Coordinates::Part,
-            max_points: 200_000,
+            max_points: 1_000_000,
+            max_points_per_part: 5000,
+            max_part_kb: 1024,
+            clearance: Clearance::Height,
+            clearance_mm: 20.0,
+            approach_speed_mm_s: 10.0,
+            tool_mass_kg: None,
+            tool_cog_mm: None,
             max_speed_mm_s: 50.0,
             rapid_speed_mm_s: 20.0,
             blend_mm: 0.2,
@@ -92,10 +156,11 @@ pub struct AbbSettings {
     /// Declare the `tooldata` in the module with the model's TCP (`true`), or use a tool that
     /// already exists on the controller under `tool_name` (`false`).
     pub declare_tool: bool,
-    /// Mass of the tool for the declared `tooldata` (kg, 0.001 ..= 500): RAPID needs a load.
-    pub tool_mass_kg: f64,
+    /// Mass of the tool for the declared `tooldata` (kg, 0.001 ..= 500), when it differs from
+    /// `program.tool_mass_kg`.
+    pub tool_mass_kg: Option<f64>,
     /// Centre of gravity of the tool in the flange frame for the declared `tooldata` (mm).
-    pub tool_cog_mm: [f64; 3],
+    pub tool_cog_mm: Option<[f64; 3]>,
     /// Name of the `wobjdata` (work object) of every move.
     pub wobj_name: String,
     /// Declare the `wobjdata` with the program frame (`true`) or use an existing one (`false`).
@@ -107,8 +172,8 @@ impl Default for AbbSettings {
         AbbSettings {
             tool_name: "deflex_tool".into(),
             declare_tool: true,
-            tool_mass_kg: 1.0,
-            tool_cog_mm: [0.0, 0.0, 50.0],
+            tool_mass_kg: None,
+            tool_cog_mm: None,
             wobj_name: "deflex_wobj".into(),
             declare_wobj: true,
         }
@@ -126,7 +191,7 @@ pub struct StaubliSettings {
     /// `mdesc.accel`, `vel`, `decel` (% of nominal, 1 ..= 100).
     pub joint_percent: f64,
     /// `mdesc.blend`: `"off"`, `"joint"` or `"Cartesian"`.
-    pub blend: String,
+    pub blend: StaubliBlend,
 }
 
 impl Default for StaubliSettings {
@@ -135,7 +200,7 @@ impl Default for StaubliSettings {
             tool_name: "tTool".into(),
             frame_name: "fPart".into(),
             joint_percent: 20.0,
-            blend: "Cartesian".into(),
+            blend: StaubliBlend::Cartesian,
         }
     }
 }
@@ -256,6 +321,36 @@ impl ProgramSettings {
         check("program.rapid_speed_mm_s", p.rapid_speed_mm_s, 0.1, 2000.0)?;
         check("program.blend_mm", p.blend_mm, 0.0, 50.0)?;
         check(
+            "program.max_points_per_part",
+            p.max_points_per_part as f64,
+            10.0,
+            100_000.0,
+        )?;
+        check("program.max_part_kb", p.max_part_kb as f64, 16.0, 100_000.0)?;
+        check("program.clearance_mm", p.clearance_mm, 1.0, 2000.0)?;
+        check(
+            "program.approach_speed_mm_s",
+            p.approach_speed_mm_s,
+            0.1,
+            500.0,
+        )?;
+        for (key, mass) in [
+            ("program.tool_mass_kg", p.tool_mass_kg),
+            ("abb.tool_mass_kg", self.abb.tool_mass_kg),
+        ] {
+            if let Some(m) = mass {
+                check(key, m, 0.001, 500.0)?;
+            }
+        }
+        for (key, cog) in [
+            ("program.tool_cog_mm", p.tool_cog_mm),
+            ("abb.tool_cog_mm", self.abb.tool_cog_mm),
+        ] {
+            for (i, v) in cog.iter().flatten().enumerate() {
+                check(&format!("{key}[{i}]"), *v, -5000.0, 5000.0)?;
+            }
+        }
+        check(
             "program.orientation_speed_deg_s",
             p.orientation_speed_deg_s,
             1.0,
@@ -267,10 +362,6 @@ impl ProgramSettings {
         check("kuka.ptp_speed_percent", k.ptp_speed_percent, 1.0, 100.0)?;
         check("kuka.advance", f64::from(k.advance), 1.0, 5.0)?;
         let a = &self.abb;
-        check("abb.tool_mass_kg", a.tool_mass_kg, 0.001, 500.0)?;
-        for (i, v) in a.tool_cog_mm.iter().enumerate() {
-            check(&format!("abb.tool_cog_mm[{i}]"), *v, -5000.0, 5000.0)?;
-        }
         for (key, name) in [
             ("abb.tool_name", &a.tool_name),
             ("abb.wobj_name", &a.wobj_name),
@@ -285,16 +376,6 @@ impl ProgramSettings {
             crate::names::check_identifier(name, crate::names::VAL3, key, source)?;
         }
         check("staubli.joint_percent", s.joint_percent, 1.0, 100.0)?;
-        if !["off", "joint", "Cartesian"].contains(&s.blend.as_str()) {
-            return Err(ProgramError::Settings {
-                source_name: source.to_string(),
-                key: "staubli.blend".into(),
-                message: format!(
-                    "expected \"off\", \"joint\" or \"Cartesian\", got \"{}\"",
-                    s.blend
-                ),
-            });
-        }
         let u = &self.ur;
         check("ur.acceleration_m_s2", u.acceleration_m_s2, 0.01, 5.0)?;
         check(

@@ -2,27 +2,38 @@
 //!
 //! ```text
 //! def deflex_path():
-//!   set_tcp(p[0.0000000, 0.0000000, 0.0000000, 0.00000000, 0.00000000, 0.00000000])
-//!   deflex_frame = p[1.5000000, 0.0000000, -0.1830000, 0.00000000, 0.00000000, 0.00000000]
-//!   movej(pose_trans(deflex_frame, p[0.0200000, …]), a=0.5, v=0.2)
+//!   set_tcp(p[0.0000000, 0.0000000, 0.1500000, 0.00000000, 0.00000000, 0.00000000])
+//!   set_payload(1.050, [0.0020, -0.0010, 0.0850])
+//!   deflex_frame = p[0.7200000, 0.0000000, 0.0200000, 0.00000000, 0.00000000, 0.00000000]
+//!   movej([0.1, -1.9, 2.0, -1.6, -1.57, 0.1], a=0.5, v=0.2)      start joint move
+//!   movel(pose_trans(deflex_frame, p[0.0250000, 0, 0.0250000, …]), a=0.2, v=0.01000, r=0)  clearance
+//!   movel(pose_trans(deflex_frame, p[0.0250000, 0, 0.0050000, …]), …)                      approach
 //!   movel(pose_trans(deflex_frame, p[0.0199239, 0.0017431, -0.0000033, 0.00000000, 3.14159265, 0.00000000]), a=0.2, v=0.01000, r=0.0002000)
 //!   …
+//!   movel(…)                                                                               retract
 //! end
 //! deflex_path()
 //! ```
 //!
 //! * Poses `p[x, y, z, rx, ry, rz]`: metres and a rotation vector in radians (URScript manual,
 //!   module *motion*), relative to `deflex_frame`, the program frame in the robot base frame
-//!   (`pose_trans(frame, pose)` composes them); `set_tcp` installs the model's TCP.
+//!   (`pose_trans(frame, pose)` composes them); `set_tcp` installs the model's TCP and
+//!   `set_payload` the tool load (mass kg, centre of gravity m in the flange frame).
 //! * `movel(pose, a, v, r)`: `a` in m/s², `v` in m/s, blend radius `r` in m, at most 45 % of the
-//!   shorter neighbouring segment (UR refuses overlapping blends) and 0 on the last move.
-//! * The first move is a slow `movej` to the first pose (inverse kinematics on the controller).
+//!   shorter neighbouring segment (UR refuses overlapping blends) and 0 on the approach, rapids,
+//!   the last move and the retract.
+//! * The start joint move `movej([q1 … q6])` goes to the joint values of the clearance point
+//!   above the start (the model's IK), so the controller does not choose a configuration.
+//! * URScript cannot call another file: a long path is split into complete scripts
+//!   `NAME_p01.script` … run one after the other (each part continues from where the previous
+//!   one ended; the first holds the start and the approach, the last the retract).
 
 use crate::ProgramFile;
-use crate::common::{blend_radii, check_lines, check_points, comment_text, header_lines, num};
+use crate::common::{Checked, blend_radii, check_lines, comment_text, header_lines, num};
 use crate::error::ProgramError;
 use crate::names::{URSCRIPT, sanitize};
 use crate::orientation::ur_rotation_vector;
+use crate::plan::{part_name, plan};
 use crate::settings::ProgramSettings;
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
@@ -46,53 +57,128 @@ fn frame_text(pose: &Pose) -> String {
     pose_text([t.x, t.y, t.z], ur_rotation_vector(&pose.rotation, None))
 }
 
+/// Longest motion line.
+const LINE_BYTES: usize = 170;
+
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>, ProgramError> {
-    let points = check_points(FORMAT, input, settings)?;
+    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
+    let points = &plan.points;
     let name = sanitize(&settings.program.name, &URSCRIPT);
     let u = &settings.ur;
-    let blends = blend_radii(&points, settings.program.blend_mm);
-    let mut out = String::with_capacity(points.len() * 150 + 2048);
-    for line in header_lines(input) {
-        let _ = writeln!(out, "# {}", comment_text(&line, &[]));
-    }
-    let _ = writeln!(out, "def {name}():");
-    let _ = writeln!(out, "  set_tcp({})", frame_text(&input.tool_in_flange));
-    let _ = writeln!(
-        out,
-        "  deflex_frame = {}",
-        frame_text(&input.frame_in_robot)
-    );
+    let blends = blend_radii(points, settings.program.blend_mm);
+    let a = num(u.acceleration_m_s2, 3);
+    let mut files = Vec::new();
     let mut previous: Option<[f64; 3]> = None;
-    for (i, p) in points.iter().enumerate() {
-        let r = ur_rotation_vector(&p.rotation, previous);
-        previous = Some(r);
-        let position = p.position_mm * 1e-3;
-        let pose = pose_text(position.into(), r);
-        if i == 0 {
+    let count = plan.parts.len();
+    for (part, range) in plan.parts.iter().enumerate() {
+        let (first, last) = (part == 0, part + 1 == count);
+        let function = if plan.split() {
+            part_name(&name, part)
+        } else {
+            name.clone()
+        };
+        let mut out = String::with_capacity(range.len() * 160 + 4096);
+        for line in header_lines(input) {
+            let _ = writeln!(out, "# {}", comment_text(&line, &[]));
+        }
+        if plan.split() {
             let _ = writeln!(
                 out,
-                "  movej(pose_trans(deflex_frame, {pose}), a={}, v={})",
-                num(u.approach_joint_acceleration_rad_s2, 3),
-                num(u.approach_joint_speed_rad_s, 3)
+                "# part {} of {count} of {name}: path points {} to {}; run the parts in order \
+                 (URScript cannot call another file)",
+                part + 1,
+                range.start,
+                range.end - 1
             );
-            continue;
+        }
+        let _ = writeln!(out, "def {function}():");
+        let _ = writeln!(out, "  set_tcp({})", frame_text(&input.tool_in_flange));
+        if let Some(l) = &plan.tool_load {
+            let _ = writeln!(
+                out,
+                "  set_payload({}, [{}, {}, {}])",
+                num(l.mass_kg, 3),
+                num(l.cog_m[0], 4),
+                num(l.cog_m[1], 4),
+                num(l.cog_m[2], 4)
+            );
         }
         let _ = writeln!(
             out,
-            "  movel(pose_trans(deflex_frame, {pose}), a={}, v={}, r={})",
-            num(u.acceleration_m_s2, 3),
-            num(p.speed_mm_s * 1e-3, 5),
-            num(blends[i] * 1e-3, 7)
+            "  deflex_frame = {}",
+            frame_text(&input.frame_in_robot)
         );
+        let movel = |out: &mut String, p: &Checked, r: [f64; 3], v_mm_s: f64, blend_mm: f64| {
+            let position = p.position_mm * 1e-3;
+            let _ = writeln!(
+                out,
+                "  movel(pose_trans(deflex_frame, {}), a={a}, v={}, r={})",
+                pose_text(position.into(), r),
+                num(v_mm_s * 1e-3, 5),
+                num(blend_mm * 1e-3, 7)
+            );
+        };
+        if first {
+            let r = ur_rotation_vector(&plan.clear[0].rotation, previous);
+            previous = Some(r);
+            match &plan.clear[0].config {
+                Some(c) => {
+                    let q = c.joints_rad;
+                    let _ = writeln!(
+                        out,
+                        "  # start joint move: the clearance point above the start\n  movej([{}, {}, {}, {}, {}, {}], a={}, v={})",
+                        num(q[0], 6),
+                        num(q[1], 6),
+                        num(q[2], 6),
+                        num(q[3], 6),
+                        num(q[4], 6),
+                        num(q[5], 6),
+                        num(u.approach_joint_acceleration_rad_s2, 3),
+                        num(u.approach_joint_speed_rad_s, 3)
+                    );
+                }
+                None => {
+                    let position = plan.clear[0].position_mm * 1e-3;
+                    let _ = writeln!(
+                        out,
+                        "  movej(pose_trans(deflex_frame, {}), a={}, v={})",
+                        pose_text(position.into(), r),
+                        num(u.approach_joint_acceleration_rad_s2, 3),
+                        num(u.approach_joint_speed_rad_s, 3)
+                    );
+                }
+            }
+            if plan.clear[0].config.is_some() {
+                // The clearance point as a Cartesian motion too (the readers compare it).
+                movel(&mut out, &plan.clear[0], r, plan.clear[0].speed_mm_s, 0.0);
+            }
+            let _ = writeln!(out, "  # approach");
+            let r = ur_rotation_vector(&points[0].rotation, previous);
+            previous = Some(r);
+            movel(&mut out, &points[0], r, plan.clear[0].speed_mm_s, 0.0);
+        }
+        for i in range.clone() {
+            let p = &points[i];
+            let r = ur_rotation_vector(&p.rotation, previous);
+            previous = Some(r);
+            let blend = if p.rapid { 0.0 } else { blends[i] };
+            movel(&mut out, p, r, p.speed_mm_s, blend);
+        }
+        if last {
+            let _ = writeln!(out, "  # retract");
+            let r = ur_rotation_vector(&plan.clear[1].rotation, previous);
+            movel(&mut out, &plan.clear[1], r, plan.clear[1].speed_mm_s, 0.0);
+        }
+        let _ = writeln!(out, "end");
+        let _ = writeln!(out, "{function}()");
+        check_lines(FORMAT, &out)?;
+        files.push(ProgramFile {
+            path: format!("{function}.script"),
+            contents: out,
+        });
     }
-    let _ = writeln!(out, "end");
-    let _ = writeln!(out, "{name}()");
-    check_lines(FORMAT, &out)?;
-    Ok(vec![ProgramFile {
-        path: format!("{name}.script"),
-        contents: out,
-    }])
+    Ok(files)
 }

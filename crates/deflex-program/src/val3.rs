@@ -12,29 +12,39 @@
 //! `start()`.
 //!
 //! ```text
-//! NAME/NAME.pjx   project: start.pgx, stop.pgx, NAME.dtx, millimeterUnit="true"
-//! NAME/NAME.dtx   fPart (frame, in world), tTool (tool, in flange), mApproach + mPath[k]
-//!                 (mdesc), nSpeed[i] (num: index into mPath), pPath[i] (pointRx in fPart)
-//! NAME/start.pgx  movej(pPath[0], tTool, mApproach)
-//!                 for l_i = 1 to size(pPath) - 1
-//!                   movel(pPath[l_i], tTool, mPath[nSpeed[l_i]])
-//!                 endFor
+//! NAME/NAME.pjx   project: start.pgx, stop.pgx, part1.pgx …, NAME.dtx, millimeterUnit="true"
+//! NAME/NAME.dtx   fPart (frame, in world), tTool (tool, in flange), mApproach[0..1] (joint
+//!                 and approach moves) + mPath[k] (mdesc), jStart (jointRx: the start joint
+//!                 move), pClear[0..1] (the clearance points), pPathK / nSpeedK (pointRx in
+//!                 fPart with their config; num: index into mPath), one pair per part
+//! NAME/start.pgx  movej(jStart[0], tTool, mApproach[0])       start joint move
+//!                 movel(pClear[0] …), movel(pPath1[0], tTool, mApproach[1])   approach
+//!                 call part1() … call partK()
+//!                 movel(pClear[1], tTool, mApproach[1])       retract
 //!                 waitEndMove()
+//! NAME/partK.pgx  for l_i = … to size(pPathK) - 1
+//!                   movel(pPathK[l_i], tTool, mPath[nSpeedK[l_i]])
+//!                 endFor
 //! NAME/stop.pgx   resetMotion()
 //! ```
 //!
 //! * Points: `x, y, z` in mm, `rx, ry, rz` in degrees, `R = Rx(rx)·Ry(ry)·Rz(rz)` (see
 //!   [`crate::orientation`]), expressed in the frame `fPart` (the program frame, child of
-//!   `world`); the tool `tTool` (child of `flange`) holds the model's TCP.
+//!   `world`); the tool `tTool` (child of `flange`) holds the model's TCP. Each point carries
+//!   its `config` (`shoulder`, `elbow`, `wrist`, [`crate::config`]) when known; `movel` keeps
+//!   the configuration it starts in, the start joint move sets it.
 //! * `mdesc`: `accel`, `vel`, `decel` in % of the nominal joint values (`joint_percent`),
 //!   `tmax` the TCP speed (mm/s), `rmax` the reorientation speed (deg/s), `blend`
 //!   (`off`/`joint`/`Cartesian`) with `leave` = `reach` = `blend_mm` (mm).
+//! * VAL3 has no tool load in a `tool`; the header prints the one the cell assumes.
 
 use crate::ProgramFile;
-use crate::common::{check_lines, check_points, comment_text, header_lines, num, speed_table};
+use crate::common::{Checked, check_lines, comment_text, header_lines, num, speed_table};
+use crate::config::staubli_config;
 use crate::error::ProgramError;
 use crate::names::{VAL3, sanitize};
 use crate::orientation::staubli_rxryrz_deg;
+use crate::plan::plan;
 use crate::settings::ProgramSettings;
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
@@ -71,19 +81,31 @@ fn data_open(out: &mut String, name: &str, kind: &str, size: usize) {
     );
 }
 
+/// ` shoulder="righty" elbow="epositive" wrist="wpositive"` when the configuration is known.
+fn config_attributes(p: &Checked) -> String {
+    p.config.as_ref().map_or(String::new(), |c| {
+        let (shoulder, elbow, wrist) = staubli_config(c);
+        format!(" shoulder=\"{shoulder}\" elbow=\"{elbow}\" wrist=\"{wrist}\"")
+    })
+}
+
+/// Longest `pointRx` line of the data file.
+const LINE_BYTES: usize = 200;
+
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>, ProgramError> {
-    let points = check_points(FORMAT, input, settings)?;
-    let (speeds, speed_index) = speed_table(FORMAT, &points, MAX_SPEEDS)?;
+    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
+    let points = &plan.points;
+    let (speeds, speed_index) = speed_table(FORMAT, points, MAX_SPEEDS)?;
     let name = sanitize(&settings.program.name, &VAL3);
     let s = &settings.staubli;
     let common = &settings.program;
     let (tool, frame) = (&s.tool_name, &s.frame_name);
     let percent = num(s.joint_percent, 1);
     let blend = if common.blend_mm > 0.0 {
-        s.blend.as_str()
+        s.blend.word()
     } else {
         "off"
     };
@@ -97,7 +119,7 @@ pub(crate) fn export(
         )
     };
 
-    let mut dtx = String::with_capacity(points.len() * 140 + 4096);
+    let mut dtx = String::with_capacity(points.len() * 150 + 4096);
     let _ = writeln!(dtx, "{XML_HEADER}");
     let _ = writeln!(
         dtx,
@@ -123,11 +145,16 @@ pub(crate) fn export(
         "      <Value key=\"0\" {} fatherId=\"flange[0]\" />\n    </Data>",
         pose_attributes(&input.tool_in_flange)
     );
-    data_open(&mut dtx, "mApproach", "mdesc", 1);
+    data_open(&mut dtx, "mApproach", "mdesc", 2);
     let _ = writeln!(
         dtx,
-        "      <Value key=\"0\" {} />\n    </Data>",
+        "      <Value key=\"0\" {} />",
         mdesc(common.rapid_speed_mm_s, "off", 0.0)
+    );
+    let _ = writeln!(
+        dtx,
+        "      <Value key=\"1\" {} />\n    </Data>",
+        mdesc(common.approach_speed_mm_s, "off", 0.0)
     );
     data_open(&mut dtx, "mPath", "mdesc", speeds.len());
     for (k, v) in speeds.iter().enumerate() {
@@ -138,52 +165,124 @@ pub(crate) fn export(
         );
     }
     let _ = writeln!(dtx, "    </Data>");
-    data_open(&mut dtx, "nSpeed", "num", points.len());
-    for (i, k) in speed_index.iter().enumerate() {
-        let _ = writeln!(dtx, "      <Value key=\"{i}\" value=\"{k}\" />");
+    if let Some(c) = &plan.clear[0].config {
+        let q = c.joints_rad.map(f64::to_degrees);
+        data_open(&mut dtx, "jStart", "jointRx", 1);
+        let _ = writeln!(
+            dtx,
+            "      <Value key=\"0\" j1=\"{}\" j2=\"{}\" j3=\"{}\" j4=\"{}\" j5=\"{}\" j6=\"{}\" />\n    </Data>",
+            num(q[0], 4),
+            num(q[1], 4),
+            num(q[2], 4),
+            num(q[3], 4),
+            num(q[4], 4),
+            num(q[5], 4)
+        );
     }
-    let _ = writeln!(dtx, "    </Data>");
-    data_open(&mut dtx, "pPath", "pointRx", points.len());
+    // The clearance points (start, end), then each part's points and speed indices; part 1
+    // starts with the first path point (the approach's target).
+    data_open(&mut dtx, "pClear", "pointRx", 2);
     let mut previous: Option<[f64; 3]> = None;
-    for (i, p) in points.iter().enumerate() {
-        let r = staubli_rxryrz_deg(&p.rotation, previous);
+    for (k, c) in plan.clear.iter().enumerate() {
+        let r = staubli_rxryrz_deg(&c.rotation, previous);
         previous = Some(r);
         let _ = writeln!(
             dtx,
-            "      <Value key=\"{i}\" {} fatherId=\"{frame}[0]\" />",
-            trsf_attributes(p.position_mm.into(), r)
+            "      <Value key=\"{k}\" {}{} fatherId=\"{frame}[0]\" />",
+            trsf_attributes(c.position_mm.into(), r),
+            config_attributes(c)
         );
     }
-    let _ = writeln!(dtx, "    </Data>\n  </Datas>\n</Database>");
+    let _ = writeln!(dtx, "    </Data>");
+    let mut previous: Option<[f64; 3]> = None;
+    let mut programs = Vec::new();
+    for (part, range) in plan.parts.iter().enumerate() {
+        let start = if part == 0 { 0 } else { range.start };
+        let indices: Vec<usize> = (start..range.end).collect();
+        let array = format!("pPath{}", part + 1);
+        let speeds_array = format!("nSpeed{}", part + 1);
+        data_open(&mut dtx, &speeds_array, "num", indices.len());
+        for (key, i) in indices.iter().enumerate() {
+            let _ = writeln!(
+                dtx,
+                "      <Value key=\"{key}\" value=\"{}\" />",
+                speed_index[*i]
+            );
+        }
+        let _ = writeln!(dtx, "    </Data>");
+        data_open(&mut dtx, &array, "pointRx", indices.len());
+        for (key, i) in indices.iter().enumerate() {
+            let p = &points[*i];
+            let r = staubli_rxryrz_deg(&p.rotation, previous);
+            previous = Some(r);
+            let _ = writeln!(
+                dtx,
+                "      <Value key=\"{key}\" {}{} fatherId=\"{frame}[0]\" />",
+                trsf_attributes(p.position_mm.into(), r),
+                config_attributes(p)
+            );
+        }
+        let _ = writeln!(dtx, "    </Data>");
+        let program = format!("part{}", part + 1);
+        let first = if part == 0 { 1 } else { 0 };
+        let text = format!(
+            "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"{program}\" access=\"public\">\n    \
+             <Locals>\n      <Local name=\"l_i\" type=\"num\" xsi:type=\"array\" size=\"1\" />\n    \
+             </Locals>\n    <Code><![CDATA[\nbegin\n  \
+             // part {} of {}: path points {} to {}\n  \
+             for l_i = {first} to size({array}) - 1\n    \
+             movel({array}[l_i], {tool}, mPath[{speeds_array}[l_i]])\n  \
+             endFor\nend\n]]></Code>\n  </Program>\n</Programs>\n",
+            part + 1,
+            plan.parts.len(),
+            start,
+            range.end - 1
+        );
+        programs.push((program, text));
+    }
+    let _ = writeln!(dtx, "  </Datas>\n</Database>");
 
+    let program_list: String = programs
+        .iter()
+        .map(|(p, _)| format!("    <Program file=\"{p}.pgx\" />\n"))
+        .collect();
     let pjx = format!(
         "{XML_HEADER}\n<Project xmlns=\"http://www.staubli.com/robotics/VAL3/Project/3\">\n  \
          <Parameters version=\"s7.3.1\" stackSize=\"5000\" millimeterUnit=\"true\" />\n  \
-         <Programs>\n    <Program file=\"start.pgx\" />\n    <Program file=\"stop.pgx\" />\n  \
+         <Programs>\n    <Program file=\"start.pgx\" />\n    <Program file=\"stop.pgx\" />\n{program_list}  \
          </Programs>\n  <Database>\n    <Data file=\"{name}.dtx\" />\n  </Database>\n  \
          <Libraries>\n  </Libraries>\n</Project>\n"
     );
-    let programs_open = "<Programs xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" xmlns=\"http://www.staubli.com/robotics/VAL3/Program/2\">";
+    let start_move = if plan.clear[0].config.is_some() {
+        format!("movej(jStart[0], {tool}, mApproach[0])\n  ")
+    } else {
+        format!("movej(pClear[0], {tool}, mApproach[0])\n  ")
+    };
+    let calls: String = programs
+        .iter()
+        .map(|(p, _)| format!("call {p}()\n  "))
+        .collect();
     let start = format!(
-        "{XML_HEADER}\n{programs_open}\n  <Program name=\"start\" access=\"public\">\n    \
-         <Locals>\n      <Local name=\"l_i\" type=\"num\" xsi:type=\"array\" size=\"1\" />\n    \
-         </Locals>\n    <Code><![CDATA[\nbegin\n  \
+        "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"start\" access=\"public\">\n    \
+         <Code><![CDATA[\nbegin\n  \
          // deflex path: {} points in {frame}, tool {tool}; see {name}.dtx\n  \
-         movej(pPath[0], {tool}, mApproach)\n  \
-         for l_i = 1 to size(pPath) - 1\n    \
-         movel(pPath[l_i], {tool}, mPath[nSpeed[l_i]])\n  \
-         endFor\n  \
+         // start joint move to the clearance point above the start, approach, parts, retract\n  \
+         {start_move}\
+         movel(pClear[0], {tool}, mApproach[1])\n  \
+         movel(pPath1[0], {tool}, mApproach[1])\n  \
+         {calls}\
+         movel(pClear[1], {tool}, mApproach[1])\n  \
          waitEndMove()\nend\n]]></Code>\n  </Program>\n</Programs>\n",
         points.len()
     );
     let stop = format!(
-        "{XML_HEADER}\n{programs_open}\n  <Program name=\"stop\" access=\"public\">\n    \
+        "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"stop\" access=\"public\">\n    \
          <Code><![CDATA[\nbegin\n  resetMotion()\nend\n]]></Code>\n  </Program>\n</Programs>\n"
     );
     for text in [&dtx, &pjx, &start, &stop] {
         check_lines(FORMAT, text)?;
     }
-    Ok(vec![
+    let mut files = vec![
         ProgramFile {
             path: format!("{name}/{name}.pjx"),
             contents: pjx,
@@ -200,5 +299,15 @@ pub(crate) fn export(
             path: format!("{name}/stop.pgx"),
             contents: stop,
         },
-    ])
+    ];
+    for (program, text) in programs {
+        check_lines(FORMAT, &text)?;
+        files.push(ProgramFile {
+            path: format!("{name}/{program}.pgx"),
+            contents: text,
+        });
+    }
+    Ok(files)
 }
+
+const PROGRAMS_OPEN: &str = "<Programs xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" xmlns=\"http://www.staubli.com/robotics/VAL3/Program/2\">";

@@ -5,15 +5,14 @@
 //! [`calibrate`], [`validate`], [`report_text`], [`write_report`].
 
 use crate::error::{Error, Result, bounded};
+use deflex_model::Robot;
 use deflex_stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
-use deflex_stiffness::fit::Status;
-use deflex_stiffness::fit::{Calibration, Structure, calibrate_fixed};
 pub use deflex_stiffness::search::Criterion;
 use deflex_stiffness::search::{SearchOptions, SearchStep, search_structure};
+use deflex_stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
 use deflex_stiffness::{DataError, MeasurementFile, MeasurementRow};
-use deflex_model::Robot;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -52,42 +51,18 @@ pub fn table_row_error(origin: &str, line: u64, message: String) -> Error {
     }
 }
 
-/// The joint-count check of `deflex_stiffness::read_file`, for tables made in memory: a table with
-/// another robot's joint columns is reported as such before any row-level check.
-fn check_joint_columns(text: &str, origin: &str, joint_count: usize) -> Result<()> {
-    let header = text
-        .lines()
-        .find(|l| !l.trim_start().starts_with('#'))
-        .unwrap_or("");
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let mut found = 0;
-    while names.contains(&format!("q{}_rad", found + 1).as_str()) {
-        found += 1;
-    }
-    if found > 0 && found != joint_count {
-        return Err(DataError::Content {
-            path: origin.to_string(),
-            message: format!(
-                "the data has {found} joint columns (q1_rad…q{found}_rad) but the robot has {joint_count} joints"
-            ),
-        }
-        .into());
-    }
-    Ok(())
-}
-
 /// Read measurement rows (displacements required when `measured`).
 pub fn read_rows(source: &Source, joint_count: usize, measured: bool) -> Result<MeasurementFile> {
     match source {
-        Source::File(path) => Ok(deflex_stiffness::read_file(path, Some(joint_count), measured)?),
+        Source::File(path) => Ok(deflex_load::read_file(path, Some(joint_count), measured)?),
         Source::Table { text, origin } => {
-            check_joint_columns(text, origin, joint_count)?;
-            deflex_stiffness::data::parse_file(text, origin, measured).map_err(|e| match e {
+            deflex_measurements::check_joint_columns(text, origin, joint_count)?;
+            deflex_measurements::parse_file(text, origin, measured).map_err(|e| match e {
                 DataError::Row {
                     path,
                     line,
-                    message,
-                } => table_row_error(&path, line, message),
+                    problem,
+                } => table_row_error(&path, line, problem.to_string()),
                 other => other.into(),
             })
         }
@@ -280,7 +255,7 @@ pub fn calibrate(
         "{geometry} — calibrated from {data_name} ({})",
         calibration.structure.label()
     );
-    let predicted = deflex_stiffness::validate::predict(&model, &checked.rows)?;
+    let predicted = deflex_stiffness::validation::predict(&model, &checked.rows)?;
     let residuals = checked
         .rows
         .iter()
@@ -363,7 +338,7 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
         "rows": cal.rows,
         "residual_rms_m": r.rms_m, "residual_max_m": r.max_abs_m, "residual_rms_all_m": r.rms_all_m,
         "residual_rms_norm_m": r.rms_norm_m, "residual_max_norm_m": r.max_norm_m,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "iterations": steps,
         "stop_reason": s.stop_reason,
@@ -380,10 +355,11 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
 /// The CLI's text output of `deflex calibrate` (iteration table, estimates, residuals,
 /// correlation, file check, warnings).
 pub fn report_text(cal: &StiffnessCalibration) -> String {
-    use deflex_stiffness::report::{
+    use deflex_report::calibration_tables::{
         ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
-        render_table, residual_summary, shift_rows, stiffness_rows,
+        residual_summary, shift_rows, stiffness_rows,
     };
+    use deflex_report::text_table::render_table;
     let c = &cal.calibration;
     let mut t = String::new();
     if !cal.steps.is_empty() {
@@ -427,7 +403,7 @@ pub fn report_text(cal: &StiffnessCalibration) -> String {
 /// The calibration's HTML report with plots and CSV tables (`deflex calibrate --report`),
 /// written whole into `dir`; `output_name` is where the model was (or will be) saved.
 pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -> Result<()> {
-    use deflex_stiffness::calib_report::{CalibrationReport, write_calibration_report};
+    use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
     let io = |source| Error::Io {
         path: dir.display().to_string(),
         source,
@@ -438,7 +414,7 @@ pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -
         data_name: &cal.data_name,
         output_name,
         calibration: &cal.calibration,
-        model: &cal.model,
+        predicted: &cal.predicted,
         steps: &cal.steps,
         stop_reason: cal.stop_reason.as_deref(),
         rows: &cal.rows,
@@ -453,7 +429,7 @@ pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -
 /// A validation with its file check.
 pub struct Validation {
     /// Prediction errors of the model (and the baseline).
-    pub validation: deflex_stiffness::validate::Validation,
+    pub validation: deflex_stiffness::validation::Validation,
     /// The forward-kinematics check.
     pub check: GeometryCheck,
     /// Warnings.
@@ -469,7 +445,7 @@ pub fn validate(
     ignore_fk_check: bool,
 ) -> Result<Validation> {
     let checked = read_checked(model, source, fk_tolerance_m, ignore_fk_check)?;
-    let validation = deflex_stiffness::validate::validate(model, baseline, &checked.rows)?;
+    let validation = deflex_stiffness::validation::validate(model, baseline, &checked.rows)?;
     Ok(Validation {
         validation,
         check: checked.check,
@@ -479,7 +455,7 @@ pub fn validate(
 
 /// The validation as the CLI's `--json` (SI).
 pub fn validation_json(v: &Validation) -> Value {
-    let m = |e: &deflex_stiffness::validate::ModelErrors| {
+    let m = |e: &deflex_stiffness::validation::ModelErrors| {
         json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m,
                "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m,
                "max_norm_m": e.stats.max_norm_m})
@@ -492,13 +468,18 @@ pub fn validation_json(v: &Validation) -> Value {
 
 /// The validation's plots and HTML page (`deflex validate --out`).
 pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(deflex_stiffness::validate::write_report(&v.validation, dir)?)
+    Ok(deflex_report::validation_report::write_validation_report(
+        &v.validation,
+        dir,
+    )?)
 }
 
 /// Predicted displacement `[δp; δφ]` of every row of a measurement or plan table (m, rad).
 pub fn predict_displacements(robot: &Robot, source: &Source) -> Result<Vec<[f64; 6]>> {
     let file = read_rows(source, robot.joint_count(), false)?;
-    Ok(deflex_stiffness::validate::predict_full(robot, &file.rows)?)
+    Ok(deflex_stiffness::validation::predict_full(
+        robot, &file.rows,
+    )?)
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use deflex_compensate::log::{ResampleOptions, read_log, resample_on_path};
 use deflex_compensate::table::write_csv;
 use deflex_compensate::{Compensation, CompensationOptions, TcpPath, WrenchSource};
 use deflex_model::{Pose, Robot, Wrench};
-use deflex_program::{Format, ProgramFile, ProgramInput, ProgramSettings, export};
+use deflex_program::{Format, ProgramFile, ProgramInput, ProgramSettings, ToolLoad, export};
 use deflex_sim::{CellConfig, FormingProcess, ToolPath, Waypoint, tcp_path, tool_path_by_name};
 use nalgebra::{Rotation3, Translation3, Vector3};
 use std::path::{Path, PathBuf};
@@ -86,6 +86,9 @@ pub struct CompensationRun {
     pub part_frame: Pose,
     /// The desired path.
     pub path: TcpPath,
+    /// The tool's load declared in the programs (RAPID's tooldata): the cell's nominal tool,
+    /// as the CLI's.
+    pub tool_load: ToolLoad,
     /// The result.
     pub result: Compensation,
     /// Lines on the wrench source (log rows used, …).
@@ -98,7 +101,7 @@ pub struct CompensationRun {
 
 fn cell(options: &Options) -> Result<CellConfig> {
     let mut config = match &options.twin_config {
-        Some(p) => CellConfig::load(p)?,
+        Some(p) => deflex_twin::load_cell(p, None)?,
         None => CellConfig::default(),
     };
     if let Some(xyz) = options.part_xyz_m {
@@ -337,6 +340,7 @@ pub fn compensate(
         robot: robot.clone(),
         part_frame,
         path,
+        tool_load: cell_tool_load(&config),
         result,
         source_lines,
         tolerance_m: options.tolerance_m,
@@ -491,6 +495,18 @@ pub fn format(name: &str) -> Result<Format> {
     })
 }
 
+/// The cell's nominal tool load in the flange frame (the sensor's tool mass and centre of mass,
+/// sensor frame → flange), as the CLI's `deflex compensate` declares it.
+fn cell_tool_load(config: &CellConfig) -> ToolLoad {
+    let com = config.sensor_in_flange()
+        * nalgebra::Point3::from(nalgebra::Vector3::from(config.tool_com_in_sensor_m()));
+    ToolLoad {
+        mass_kg: config.tool_mass_kg(),
+        cog_m: [com.x, com.y, com.z],
+        source: "the robot's twin cell",
+    }
+}
+
 /// Program settings from a TOML file (`--program-config`), or the defaults.
 pub fn settings(path: Option<&Path>) -> Result<ProgramSettings> {
     Ok(match path {
@@ -506,7 +522,7 @@ pub fn programs(
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>> {
     refusal(run)?;
-    let input = ProgramInput::from_world_poses(
+    let mut input = ProgramInput::from_world_poses(
         run.path
             .points()
             .iter()
@@ -518,6 +534,7 @@ pub fn programs(
         &run.robot.tool,
         description(run),
     );
+    input.tool_load = Some(run.tool_load);
     Ok(export(format, &input, settings)?)
 }
 

@@ -100,9 +100,38 @@ pub enum Error {
     /// UR10 tracker data import.
     #[error(transparent)]
     Import(#[from] deflex_absolute::ur10_tracker::ImportError),
-    /// Elasto-geometric report.
+    /// A report (page, plots, tables) that could not be written.
     #[error(transparent)]
-    GeometryReport(#[from] deflex_absolute::report::ReportWriteError),
+    Report(#[from] deflex_report::PageError),
+    /// A set-up registration.
+    #[error(transparent)]
+    Register(#[from] deflex_absolute::register::RegisterError),
+    /// A calibration's terms file that cannot be used.
+    #[error("{path}: {source}")]
+    Terms {
+        /// The terms file.
+        path: String,
+        /// Why.
+        source: deflex_absolute::terms::TermsError,
+    },
+    /// An input file (or folder) that cannot be read.
+    #[error("{path}: {source}")]
+    Read {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A file larger than deflex reads.
+    #[error("{path}: {bytes} bytes is more than the {limit} bytes read")]
+    TooLarge {
+        /// The file.
+        path: String,
+        /// Its size.
+        bytes: u64,
+        /// The limit.
+        limit: u64,
+    },
     /// Offline compensation.
     #[error(transparent)]
     Compensate(#[from] deflex_compensate::CompensateError),
@@ -124,12 +153,12 @@ pub enum Error {
     /// The digital twin.
     #[error(transparent)]
     Sim(#[from] deflex_sim::SimError),
-    /// The twin's correction controller could not be built.
-    #[error("correction controller: {message}")]
-    Controller {
-        /// What the controller said.
-        message: String,
-    },
+    /// The twin's cell file.
+    #[error(transparent)]
+    Cell(#[from] deflex_twin::CellFileError),
+    /// The twin with the correction controller (closed loop).
+    #[error(transparent)]
+    Twin(#[from] deflex_twin::TwinError),
     /// A file that could not be read or written.
     #[error("{path}: {source}")]
     Io {
@@ -166,18 +195,23 @@ impl Error {
             | Error::Absolute(_)
             | Error::Import(_)
             | Error::Log(_)
-            | Error::Table { .. } => ErrorKind::Data,
+            | Error::Table { .. }
+            | Error::Read { .. }
+            | Error::TooLarge { .. } => ErrorKind::Data,
             Error::Calib(_)
             | Error::NothingIdentified { .. }
             | Error::Campaign(_)
             | Error::Fit(_)
-            | Error::Predict(_) => ErrorKind::Calibration,
+            | Error::Predict(_)
+            | Error::Register(_)
+            | Error::Terms { .. } => ErrorKind::Calibration,
             Error::Compensate(_) | Error::Path(_) | Error::NotCompensated { .. } => {
                 ErrorKind::Compensation
             }
             Error::Program(_) => ErrorKind::Program,
-            Error::Sim(_) | Error::Controller { .. } => ErrorKind::Simulation,
-            Error::Io { .. } | Error::GeometryReport(_) => ErrorKind::Io,
+            Error::Sim(_) | Error::Twin(_) => ErrorKind::Simulation,
+            Error::Cell(_) => ErrorKind::Data,
+            Error::Io { .. } | Error::Report(_) => ErrorKind::Io,
             Error::Panic(_) => ErrorKind::Internal,
         }
     }

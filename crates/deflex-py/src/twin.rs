@@ -2,16 +2,16 @@
 //! closed loop with the deflex correction controller, its log as SI columns, and the cell's
 //! robot file (`deflex sim robot`).
 //!
-//! Thin layer over `deflex-sim` and, for the closed loop, the controller↔twin glue that today
-//! lives in `deflex-study::twin_controller` (re-pointed at merge time to its new home, the twin
-//! crate): [`cell_config`], [`tool_path`], [`form`], [`log_columns`], [`cell_robot`].
+//! Thin layer over `deflex-sim` (the twin), `deflex-twin` (its cell files and, for the closed
+//! loop, the controller↔twin glue) and `deflex-report` (the run's folder): [`cell_config`],
+//! [`tool_path`], [`form`], [`log_columns`], [`cell_robot`].
 
 use crate::error::{Error, Result, bounded};
 use deflex_model::Robot;
 use deflex_sim::gcode::read_gcode;
 use deflex_sim::{
-    CellConfig, ConeParams, CorrectionController, FormingRun, PlungeParams, ProcessKind,
-    PyramidParams, ToolPath, run_forming,
+    CellConfig, ConeParams, FormingRun, PlungeParams, ProcessKind, PyramidParams, ToolPath,
+    run_forming,
 };
 use std::path::{Path, PathBuf};
 
@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 /// robot file, else the twin file's, else the TX200's) with the twin file's settings over it.
 pub fn cell_config(robot: Option<&str>, config: Option<&Path>) -> Result<CellConfig> {
     Ok(match (config, robot) {
-        (Some(p), robot) => CellConfig::load_for(p, robot)?,
-        (None, Some(robot)) => CellConfig::for_robot(robot)?,
+        (Some(p), robot) => deflex_twin::load_cell(p, robot)?,
+        (None, Some(robot)) => deflex_twin::cell_for_robot(robot)?,
         (None, None) => CellConfig::default(),
     })
 }
@@ -126,29 +126,25 @@ pub fn form(path: &str, options: &FormOptions) -> Result<TwinRun> {
     let tool_path = tool_path(path, options.feed_m_s, options.length_m)?;
     // Closed loop: the deflex correction controller in-process, in simulated time, with the
     // nominal mounting and tool of the cell (never the plant's).
-    let mut controller = match &options.correction_model {
-        Some(model) => Some(
-            deflex_study::twin_controller::TwinController::new(
+    let (run, controller_status) = match &options.correction_model {
+        Some(model) => {
+            let closed = deflex_twin::run_closed_loop(
+                &config,
+                tool_path,
+                options.seed,
                 model.clone(),
-                deflex_study::twin_controller::controller_config_for(&config),
+                deflex_twin::controller_config_for(&config),
                 false,
-            )
-            .map_err(|message| Error::Controller { message })?,
-        ),
-        None => None,
+                &mut |_| {},
+            )?;
+            (closed.forming, Some(closed.status))
+        }
+        None => (run_forming(&config, tool_path, options.seed, None)?, None),
     };
-    let run = run_forming(
-        &config,
-        tool_path,
-        options.seed,
-        controller
-            .as_mut()
-            .map(|c| c as &mut dyn CorrectionController),
-    )?;
     Ok(TwinRun {
         run,
         config,
-        controller_status: controller.as_ref().map(|c| c.status_line()),
+        controller_status,
     })
 }
 
@@ -160,7 +156,12 @@ pub fn summary_json(run: &TwinRun) -> String {
 /// The run's outputs (`log.csv`, `summary.json`, `profile.csv`, plots), written whole into
 /// `dir`.
 pub fn write_outputs(run: &TwinRun, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(run.run.write_outputs(dir)?)
+    deflex_report::forming_run::write_forming_run(&run.run, dir).map_err(|source| {
+        Error::Report(deflex_report::PageError {
+            report: "forming run",
+            source,
+        })
+    })
 }
 
 /// The log as SI columns (part frame R_p; the wrench on the tool at the TCP; the correction

@@ -19,6 +19,8 @@ impl Noise {
     }
 }
 
+// One sample of every plot kind, drawn in sequence: a script of independent steps, kept as one
+// function (≈ 275 lines) so that it reads top to bottom like the gallery it writes.
 fn main() -> Result<(), ReportError> {
     let out = std::env::args()
         .nth(1)

@@ -10,8 +10,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::colormap::viridis_rgb;
 use crate::render::{
-    axis_desc_style, check_range, draw_axes, err, finite_extent, padded, render, tick_formatter,
-    tick_style, titled_area,
+    BackendError, axis_desc_style, check_range, draw_axes, err, finite_extent, padded, render,
+    tick_formatter, tick_style, titled_area,
 };
 use crate::{PlotSpec, ReportError};
 
@@ -86,7 +86,7 @@ type MainAndBar<DB> = (DrawingArea<DB, Shift>, DrawingArea<DB, Shift>);
 fn layout<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
-) -> Result<MainAndBar<DB>, String> {
+) -> Result<MainAndBar<DB>, BackendError> {
     let body = titled_area(root, title, 24)?;
     let (w, _) = body.dim_in_pixel();
     Ok(body.split_horizontally(w.saturating_sub(BAR_AREA)))
@@ -98,7 +98,7 @@ fn main_chart<'a, DB: DrawingBackend>(
     (x0, x1): (f64, f64),
     (y0, y1): (f64, f64),
     grid_lines: bool,
-) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>, String> {
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>, BackendError> {
     let mut chart = ChartBuilder::on(area)
         .margin(MARGIN)
         .margin_right(4)
@@ -116,7 +116,7 @@ fn colorbar<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     (lo, hi): (f64, f64),
     label: &str,
-) -> Result<(), String> {
+) -> Result<(), BackendError> {
     let ticks = tick_formatter((lo, hi));
     let mut bar = ChartBuilder::on(area)
         .margin_top(MARGIN)

@@ -1,9 +1,22 @@
 //! # deflex-report
 //!
 //! Plots (PNG, and SVG where cheap) and self-contained HTML reports, built
-//! from plain data: slices of `f64` and strings. This crate deliberately
-//! depends on no other deflex crate, so every crate of the workspace can use
-//! it to show what it computed.
+//! from plain data: slices of `f64` and strings; and, above them, what deflex's
+//! computations look like on disk, one module per thing rendered:
+//!
+//! | module | renders |
+//! | --- | --- |
+//! | [`text_table`] | aligned text and CSV tables |
+//! | [`calibration_tables`] | a calibration as tables: search steps, stiffnesses, shifts, residuals |
+//! | [`calibration_report`] | the calibration's HTML report with plots (`deflex calibrate --report`) |
+//! | [`plan_tables`] | an experiment plan: expected standard errors, the technician's sheet |
+//! | [`validation_report`] | a validation: tables, plots and page (`deflex validate --out`) |
+//! | [`absolute_report`] | an elasto-geometric calibration: text, JSON, CSV, plots, page (`deflex calibrate-geometry --report`) |
+//! | [`forming_run`] | a forming run of the twin: its folder and plots (`deflex sim isf`) |
+//! | [`study`] | the paper's study on the twin: its folder, figures and page (`deflex demo`) |
+//!
+//! The maths crates (`deflex-stiffness`, `deflex-sim`, …) take and return data; the files, plots
+//! and pages are made here (and by the front ends).
 //!
 //! Plot kinds, matching the figures of Johra et al. (Robotics 2022, 11, 48):
 //!
@@ -16,6 +29,7 @@
 //! | [`scatter_heatmap`] | the same over scattered measurement points |
 //! | [`cloud_3d`] | 3D deviation cloud (Fig. 17) |
 //! | [`timeline_plot`] | on/off states over time (a controller's flags) |
+//! | [`write_run_figures`] | one run's log, or two overlaid on path position (`deflex plot`) |
 //! | [`HtmlReport`] | one self-contained page embedding all of them |
 //!
 //! The output format is chosen by the file extension: `.png` or `.svg`.
@@ -41,15 +55,24 @@
 
 #![warn(missing_docs)]
 
+pub mod absolute_report;
 mod base64;
+pub mod calibration_report;
+pub mod calibration_tables;
 mod cloud;
 mod colormap;
 mod font;
+pub mod forming_run;
 mod heatmap;
 mod html;
+pub mod plan_tables;
 mod plot;
 mod render;
+mod run_figures;
+pub mod study;
+pub mod text_table;
 mod timeline;
+pub mod validation_report;
 
 use std::path::{Path, PathBuf};
 
@@ -60,6 +83,7 @@ pub use heatmap::{heatmap, scatter_heatmap};
 pub use html::{FileLink, HtmlReport, html_escape};
 pub use plot::{PanelLayout, line_plot, panels_plot, parity_plot};
 pub use render::{MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, text_width_px, title_layout};
+pub use run_figures::{MAX_POINTS, RunFigures, RunTrace, Xyz, write_run_figures};
 pub use timeline::{Lane, timeline_plot};
 
 /// Errors from drawing plots or writing reports. Every variant names the
@@ -118,6 +142,25 @@ impl ReportError {
             | ReportError::Draw { path, .. }
             | ReportError::Io { path, .. } => path,
         }
+    }
+}
+
+/// A report (a page with its plots and tables) that could not be written: which report, and
+/// the file that failed.
+#[derive(Debug, thiserror::Error)]
+#[error("{report}: {source}")]
+pub struct PageError {
+    /// Which report (`validation report`, `calibration report`, …).
+    pub report: &'static str,
+    /// The file that failed, and why.
+    #[source]
+    pub source: ReportError,
+}
+
+impl PageError {
+    /// A function turning a [`ReportError`] into a `PageError` of `report`.
+    pub fn of(report: &'static str) -> impl Fn(ReportError) -> PageError {
+        move |source| PageError { report, source }
     }
 }
 

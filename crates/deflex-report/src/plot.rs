@@ -9,7 +9,8 @@ use plotters::prelude::*;
 
 use crate::colormap::palette_rgb;
 use crate::render::{
-    check_range, draw_axes, draw_legend, err, finite_extent, fmt_tick, padded, render, titled_area,
+    BackendError, check_range, draw_axes, draw_legend, err, finite_extent, fmt_tick, padded,
+    render, titled_area,
 };
 use crate::{LineStyle, PlotSpec, ReportError, Series, SeriesStyle};
 
@@ -192,7 +193,7 @@ fn draw_chart<DB: DrawingBackend>(
     (y0, y1): (f64, f64),
     marker_size: u32,
     colors: &[RGBColor],
-) -> Result<(), String> {
+) -> Result<(), BackendError> {
     let body = titled_area(area, &spec.title, 24)?;
     let mut chart = ChartBuilder::on(&body)
         .margin(14)

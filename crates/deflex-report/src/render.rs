@@ -33,7 +33,7 @@ impl Format {
     }
 }
 
-/// Runs `$body` (an expression of type `Result<(), String>` using `$root`, a
+/// Runs `$body` (an expression of type `Result<(), BackendError>` using `$root`, a
 /// `&DrawingArea<_, Shift>`) on a PNG or SVG backend chosen by the path's
 /// extension, then saves the file. Evaluates to `Result<(), ReportError>`.
 macro_rules! render {
@@ -45,8 +45,9 @@ macro_rules! render {
             .fill(&::plotters::prelude::WHITE)
             .map_err(|e| $fail(e.to_string()))?;
         #[allow(clippy::redundant_closure_call)]
-        let drawn: Result<(), String> = (|| -> Result<(), String> { $body })();
-        drawn.map_err($fail)?;
+        let drawn: Result<(), $crate::render::BackendError> =
+            (|| -> Result<(), $crate::render::BackendError> { $body })();
+        drawn.map_err(|e| $fail(e.0))?;
         $root.present().map_err(|e| $fail(e.to_string()))
     }};
     ($path:expr, ($w:expr, $h:expr), |$root:ident| $body:expr) => {{
@@ -83,9 +84,14 @@ macro_rules! render {
 }
 pub(crate) use render;
 
-/// Converts any displayable error into the `String` used inside drawing code.
-pub(crate) fn err<E: std::fmt::Display>(e: E) -> String {
-    e.to_string()
+/// A failure of the plotting backend inside drawing code: its message, which becomes the
+/// `reason` of [`ReportError::Draw`] naming the file.
+#[derive(Debug)]
+pub(crate) struct BackendError(pub(crate) String);
+
+/// Converts any displayable error of the backend into a [`BackendError`].
+pub(crate) fn err<E: std::fmt::Display>(e: E) -> BackendError {
+    BackendError(e.to_string())
 }
 
 /// Rejects degenerate or absurd image sizes.
@@ -281,7 +287,7 @@ pub(crate) fn titled_area<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
     preferred: u32,
-) -> Result<DrawingArea<DB, plotters::coord::Shift>, String> {
+) -> Result<DrawingArea<DB, plotters::coord::Shift>, BackendError> {
     let (width, height) = root.dim_in_pixel();
     let layout = title_layout(title, width, preferred);
     if layout.lines.is_empty() {
@@ -309,7 +315,7 @@ pub(crate) fn draw_axes<DB: DrawingBackend>(
     x: (f64, f64),
     y: (f64, f64),
     grid_lines: bool,
-) -> Result<(), String> {
+) -> Result<(), BackendError> {
     let (fx, fy) = (tick_formatter(x), tick_formatter(y));
     let (pw, ph) = chart.plotting_area().dim_in_pixel();
     let mut mesh = chart.configure_mesh();
@@ -333,7 +339,7 @@ pub(crate) fn draw_axes<DB: DrawingBackend>(
 pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
-) -> Result<(), String> {
+) -> Result<(), BackendError> {
     chart
         .configure_series_labels()
         .position(position)

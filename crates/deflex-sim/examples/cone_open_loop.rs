@@ -1,5 +1,6 @@
 //! The paper's uncorrected cone run on the twin (SIMULATED), with the acceptance numbers.
-//! `cargo run --release -p deflex-sim --example cone_open_loop [OUT_DIR]`
+//! `cargo run --release -p deflex-sim --example cone_open_loop [OUT_DIR]` (`log.csv`,
+//! `summary.json` and `profile.csv` into OUT_DIR; `deflex sim isf` also draws the plots).
 use deflex_sim::{CellConfig, ToolPath, run_forming};
 
 fn main() {
@@ -20,11 +21,15 @@ fn main() {
         s.duration_s
     );
     if let Some(dir) = std::env::args().nth(1) {
-        let files = run
-            .write_outputs(std::path::Path::new(&dir))
-            .expect("outputs");
-        for f in files {
-            println!("wrote {}", f.display());
+        let dir = std::path::Path::new(&dir);
+        std::fs::create_dir_all(dir).expect("output folder");
+        for (name, text) in [
+            ("log.csv", run.log.to_csv()),
+            ("summary.json", run.summary_json()),
+            ("profile.csv", run.profile_csv()),
+        ] {
+            std::fs::write(dir.join(name), text).expect("output file");
+            println!("wrote {}", dir.join(name).display());
         }
     }
 }

@@ -16,11 +16,11 @@
 //! A correction controller only ever sees [`ControllerInput`]: time, measured joints and raw F/T
 //! samples.
 
-use crate::config::{CellConfig, MAX_LOG_ROWS, MAX_RUN_S, ProcessKind};
+use crate::cell_config::{CellConfig, MAX_LOG_ROWS, MAX_RUN_S, ProcessKind};
 use crate::controller_emulation::{ControllerCycle, ControllerEmulation};
 use crate::error::SimError;
 use crate::fixture::Fixture;
-use crate::forming::{FormingLog, LogRow, RunningStats};
+use crate::forming_log::{FormingLog, LogRow, RunningStats};
 use crate::plant::{Plant, displacement};
 use crate::sensor::ForceSensor;
 use crate::sheet::{ContactState, Sheet};

@@ -13,7 +13,7 @@
 //!   through the Jacobian as a joint offset `δq = J⁻¹ ξ` (small corrections, so no IK per
 //!   cycle): `s_com = s_des + ξ` (eq. 7).
 
-use crate::config::ControllerConfig;
+use crate::cell_config::ControllerConfig;
 use crate::error::SimError;
 use crate::toolpath::ToolPath;
 use deflex_model::{Data, IkOptions, Pose, Robot};

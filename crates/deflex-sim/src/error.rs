@@ -39,14 +39,16 @@ pub enum SimError {
     Model(#[from] deflex_model::ModelError),
     /// Measurement/plan file problem.
     #[error(transparent)]
-    Data(#[from] deflex_stiffness::data::DataError),
-    /// Writing outputs failed.
-    #[error("{path}: {message}")]
-    Output {
-        /// File or folder.
-        path: String,
-        /// Cause.
-        message: String,
+    Data(#[from] deflex_measurements::DataError),
+    /// A robot spec that is not a built-in robot, given where the twin cannot read the file (it
+    /// reads no file: `deflex_twin::cell_for_robot` reads robot files).
+    #[error(
+        "part.robot: `{spec}` is not a built-in robot ({}); a robot file is read by the caller (deflex_twin::cell_for_robot)",
+        builtin_names()
+    )]
+    NotBuiltin {
+        /// The spec given.
+        spec: String,
     },
 }
 
@@ -57,11 +59,12 @@ impl SimError {
             message: message.into(),
         }
     }
+}
 
-    pub(crate) fn output(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
-        SimError::Output {
-            path: path.display().to_string(),
-            message: message.to_string(),
-        }
-    }
+fn builtin_names() -> String {
+    deflex_model::BUILTIN_ROBOTS
+        .iter()
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>()
+        .join(", ")
 }

@@ -9,9 +9,9 @@
 //! ([`tracker`]), a sheet formed by a hemispherical tool with an elastic–plastic contact whose
 //! Aerens force level follows the tool's actual step-down and wall angle ([`sheet`]) or a stiff
 //! fixture ([`fixture`]), tool paths (cone, pyramid, plunge, G-code: [`toolpath`], [`gcode`]),
-//! calibration campaigns ([`campaign`]) and the forming run ([`forming`]) driven through the
+//! calibration campaigns ([`twin_campaign`]) and the forming run ([`forming`]) driven through the
 //! steppable [`cell::Cell`]. Every error source is documented where it is configured
-//! ([`config`]) and switchable.
+//! ([`cell_config`]) and switchable.
 //!
 //! **The plant is never read by a controller or by calibration**: they only get
 //! [`cell::ControllerInput`] (time, measured joints, raw F/T samples) or campaign measurement
@@ -41,29 +41,30 @@
 //!     }
 //! }
 //! let run = run_forming(&CellConfig::default(), ToolPath::paper_cone(), 1, Some(&mut Hold)).unwrap();
-//! run.write_outputs(std::path::Path::new("out")).unwrap();
+//! println!("{}", run.summary_json());
 //! ```
 
-pub mod campaign;
 pub mod cell;
+pub mod cell_config;
 pub mod chain;
-pub mod config;
 pub mod controller_emulation;
 pub mod error;
 pub mod fixture;
 pub mod forming;
+pub mod forming_log;
 pub mod gcode;
 pub mod plant;
-pub mod plots;
 pub mod process_model;
 pub mod profile;
+mod range_check;
 pub mod sensor;
 pub mod sheet;
 pub mod toolpath;
 pub mod tracker;
+pub mod twin_campaign;
 
 pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};
-pub use config::{CellConfig, ErrorSources, ProcessKind};
+pub use cell_config::{CellConfig, ErrorSources, ProcessKind};
 pub use error::SimError;
 pub use forming::{
     FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress,

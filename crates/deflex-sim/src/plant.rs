@@ -30,7 +30,7 @@
 //! # PLANT: what the true TX200 is made of, and why (the defaults)
 //!
 //! The plant starts from the paper's identified TX200 (Table 1) carrying a real tool
-//! ([`crate::config::PartConfig`]: 0.2 m from flange to ball centre) and adds what that model
+//! ([`crate::cell_config::PartConfig`]: 0.2 m from flange to ball centre) and adds what that model
 //! cannot represent, so that calibrating from twin data is not circular and the identified model
 //! keeps an honest residual. Stiffnesses in N·m/rad.
 //!
@@ -68,10 +68,10 @@ use crate::error::SimError;
 use deflex_model::{Displacement, Pose, Robot, Wrench};
 use nalgebra::{Rotation3, Vector3};
 
-mod settings;
+mod plant_config;
 mod springs;
-pub(crate) use settings::check_six_joints;
-pub use settings::{MAX_STIFFNESS, MIN_STIFFNESS, PlantConfig};
+pub(crate) use plant_config::check_six_joints;
+pub use plant_config::{MAX_STIFFNESS, MIN_STIFFNESS, PlantConfig};
 use springs::Springs;
 
 /// Largest number of fixed-point iterations of one equilibrium.

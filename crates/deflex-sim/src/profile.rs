@@ -24,7 +24,7 @@
 //! The description's stiffnesses of the non-TX200 built-in robots are placeholders; so the
 //! derived plant is a plausible robot, not the maker's.
 
-use crate::config::{CellConfig, ControllerConfig, PartConfig, SensorConfig};
+use crate::cell_config::{CellConfig, ControllerConfig, PartConfig, SensorConfig};
 use crate::error::SimError;
 use crate::plant::PlantConfig;
 use crate::sheet::SheetConfig;
@@ -76,8 +76,9 @@ impl Maker {
 }
 
 impl CellConfig {
-    /// The cell of a robot (built-in name or robot file): see the [module](crate::profile)
-    /// documentation.
+    /// The cell of a built-in robot: see the [module](crate::profile) documentation. The cell of
+    /// a robot file is [`CellConfig::for_robot_description`] (the twin reads no file:
+    /// `deflex_twin::cell_for_robot` reads it).
     pub fn for_robot(spec: &str) -> Result<CellConfig, SimError> {
         if spec.trim().is_empty() {
             return Err(SimError::config("part.robot", "must name a robot"));
@@ -85,7 +86,17 @@ impl CellConfig {
         if spec == "tx200" {
             return Ok(CellConfig::default());
         }
-        let robot = deflex_model::load_robot(spec)?;
+        let robot = deflex_model::builtin(spec).ok_or_else(|| SimError::NotBuiltin {
+            spec: spec.to_string(),
+        })?;
+        Self::for_robot_description(spec, robot)
+    }
+
+    /// The cell of the robot `robot`, read from the robot file `spec` (or built in as `spec`).
+    pub fn for_robot_description(spec: &str, robot: Robot) -> Result<CellConfig, SimError> {
+        if spec.trim().is_empty() {
+            return Err(SimError::config("part.robot", "must name a robot"));
+        }
         crate::plant::check_six_joints(&robot)?;
         let maker = Maker::of(spec, &robot.name);
         let mut cell = match maker {
@@ -94,6 +105,9 @@ impl CellConfig {
             Maker::Kuka | Maker::Abb | Maker::Other => generic_cell(&robot, maker)?,
         };
         cell.part.robot = spec.to_string();
+        if deflex_model::builtin(spec).is_none() {
+            cell.part.description = Some(robot);
+        }
         cell.validate()?;
         Ok(cell)
     }
@@ -145,8 +159,40 @@ fn tool_down() -> Rotation3<f64> {
     Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
 }
 
+/// Least height a forming pose must keep between the arm and the floor, and between the links
+/// that reach over the table (the elbow, the wrist, the flange) and the part's plane (m).
+pub const POSE_CLEARANCE_M: f64 = 0.05;
+
+/// The floor of a robot: its base pivot when below R0 (a baseplate bolted to the floor, the
+/// TX200's 0.642 m below its shoulder-height R0), else R0's mounting plane (world z, m).
+pub fn floor_z_m(robot: &Robot) -> f64 {
+    let pivot = robot.base * nalgebra::Point3::from(robot.base_pivot);
+    pivot.z.min(robot.base.translation.vector.z)
+}
+
+/// How far the arm at `q` (rad) stays clear (m; negative: it dips in): the least of the heights
+/// of the joint origins from the second on above the floor, and of the joint origins from the
+/// third on (elbow, wrist) and the flange above the higher of the floor and `part_z_m` (the
+/// shoulder sits at the base, away from the part).
+pub fn pose_clearance_m(robot: &Robot, q: &[f64], part_z_m: f64) -> Result<f64, SimError> {
+    let mut data = deflex_model::Data::new();
+    robot
+        .forward_kinematics(&mut data, q)
+        .map_err(deflex_model::ModelError::from)?;
+    let floor = floor_z_m(robot);
+    let over_table = floor.max(part_z_m);
+    let mut clearance = f64::INFINITY;
+    for i in 2..=robot.joint_count() {
+        let z = data.link_frame(i).translation.vector.z;
+        let above = if i >= 3 { over_table } else { floor };
+        clearance = clearance.min(z - above);
+    }
+    Ok(clearance.min(data.flange.translation.vector.z - over_table))
+}
+
 /// Joint values (deg) that put the TCP of `robot` (with its tool) at `p` (world, m) pointing
-/// down, trying a few seeds; `None` when none converges within the joint limits.
+/// down with the arm clear of the floor and the part's plane ([`POSE_CLEARANCE_M`]), trying a
+/// few seeds; `None` when none converges within the joint limits and the clearance.
 fn ik_down(robot: &Robot, p: &Vector3<f64>, seeds: &[[f64; 6]]) -> Option<[f64; 6]> {
     let target = Pose::from_parts((*p).into(), tool_down());
     let options = IkOptions {
@@ -156,7 +202,11 @@ fn ik_down(robot: &Robot, p: &Vector3<f64>, seeds: &[[f64; 6]]) -> Option<[f64; 
     };
     for seed in seeds {
         let seed_rad: Vec<f64> = seed.iter().map(|d| d.to_radians()).collect();
-        if let Ok(solution) = robot.inverse_kinematics(&target, &seed_rad, &options) {
+        if let Ok(mut solution) = robot.inverse_kinematics(&target, &seed_rad, &options) {
+            // The same pose with each joint nearest zero (a Newton solution may wrap by 2π).
+            for q in solution.q.iter_mut() {
+                *q -= std::f64::consts::TAU * (*q / std::f64::consts::TAU).round();
+            }
             let within = robot
                 .joints
                 .iter()
@@ -165,7 +215,9 @@ fn ik_down(robot: &Robot, p: &Vector3<f64>, seeds: &[[f64; 6]]) -> Option<[f64; 
                     Some([lo, hi]) => *q >= lo && *q <= hi,
                     None => true,
                 });
-            if within {
+            let clear =
+                pose_clearance_m(robot, &solution.q, p.z).is_ok_and(|c| c >= POSE_CLEARANCE_M);
+            if within && clear {
                 return Some(std::array::from_fn(|i| solution.q[i].to_degrees()));
             }
         }
@@ -173,12 +225,16 @@ fn ik_down(robot: &Robot, p: &Vector3<f64>, seeds: &[[f64; 6]]) -> Option<[f64; 
     None
 }
 
-/// Seeds for the tool-down IK: elbow-up postures around the robot.
+/// Seeds for the tool-down IK: elbow-up postures around the robot (UR-like arms: shoulder
+/// lifted, elbow bent down towards the part).
 fn seeds() -> Vec<[f64; 6]> {
     let mut out = Vec::new();
     for q1 in [0.0, 180.0, 90.0, -90.0] {
         for (q2, q3) in [
             (-90.0, 90.0),
+            (-60.0, 100.0),
+            (-45.0, 110.0),
+            (-30.0, 120.0),
             (45.0, 90.0),
             (-45.0, 45.0),
             (60.0, 60.0),
@@ -236,6 +292,10 @@ pub fn place_part_among(
                     robot.base.translation.vector.y + s * fraction * reach,
                     shoulder.z + height * reach,
                 );
+                // The part (20 mm deep) must sit on something above the floor.
+                if origin.z - 0.02 < floor_z_m(robot) + POSE_CLEARANCE_M {
+                    continue;
+                }
                 let Some(q) = ik_down(robot, &origin, &seeds) else {
                     continue;
                 };
@@ -275,9 +335,11 @@ pub fn place_part_among(
 /// * **process**: a 0.5 mm AA3003-H14 sheet (Rm ≈ 150 MPa), 10 mm ball: the Aerens level of
 ///   the paper's cone is ≈ 170 N, in the 100–300 N a 12.5 kg-payload arm can push without
 ///   stalling; the same cone as the paper.
-/// * **part**: 0.45 of the reach in front of the base, 0.1 of it below the shoulder (for the
-///   UR10e: 0.72 m in front, 20 mm above the mounting face: a sheet clamped in a frame on the
-///   robot's table), tool pointing down ([`place_part_among`]).
+/// * **part**: 0.45 of the reach in front of the base, 0.06 of it below the shoulder (for the
+///   UR10e: 0.72 m in front, about 0.1 m above the mounting face: a sheet clamped in a frame on
+///   the robot's table), tool pointing down, the arm at least [`POSE_CLEARANCE_M`] above the
+///   mounting plane and the sheet ([`place_part_among`]; the elbow once sat 174 mm below the
+///   mounting plane).
 pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
     let mut cell = CellConfig {
         controller: ControllerConfig {
@@ -317,7 +379,11 @@ pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
     cell.part.base_pivot_m = None;
     let mut with_tool = robot.clone();
     with_tool.tool = cell.tool();
-    let (origin, seed) = place_part_among(&with_tool, &[0.45, 0.5, 0.4], &[-0.1, 0.0, -0.2])?;
+    let (origin, seed) = place_part_among(
+        &with_tool,
+        &[0.45, 0.5, 0.4],
+        &[-0.06, -0.04, -0.02, 0.0, 0.05],
+    )?;
     cell.part = PartConfig {
         origin_mm: origin,
         seed_q_deg: seed,
@@ -356,4 +422,134 @@ pub fn generic_cell(robot: &Robot, maker: Maker) -> Result<CellConfig, SimError>
         origin[2] * 1e-3 + 0.5,
     ];
     Ok(cell)
+}
+
+/// A robot's twin cell as `deflex compensate`, `deflex sim` and `deflex demo` use it: where the
+/// part is, the seed configuration, the tool, the sheet and its force level, and how far the
+/// arm stays from the floor and the part's plane at the seed. Printed by `deflex sim robot` and
+/// `deflex model show` (`Display`, and [`CellSummary::to_json`] with `--json`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellSummary {
+    /// The robot (built-in name or file).
+    pub robot: String,
+    /// Part frame origin in R0 (mm); axes parallel to R0's.
+    pub part_origin_mm: [f64; 3],
+    /// Seed configuration near the part origin (deg): the IK seed of the cell's paths.
+    pub seed_q_deg: [f64; 6],
+    /// The forming pose (deg): the TCP at the part origin with the seed's tool orientation, by
+    /// inverse kinematics from the seed.
+    pub forming_q_deg: [f64; 6],
+    /// The tool, flange → TCP (m).
+    pub tool_xyz_m: [f64; 3],
+    /// Sheet thickness (mm), tensile strength (MPa), tool ball diameter (mm).
+    pub sheet: [f64; 3],
+    /// The forming force level of the paper's cone on this sheet (N).
+    pub forming_force_n: f64,
+    /// Lowest joint origin (after the first) or flange above the higher of the floor and the
+    /// part's plane in the forming pose (m).
+    pub clearance_m: f64,
+    /// The floor (world z, m).
+    pub floor_z_m: f64,
+}
+
+impl CellConfig {
+    /// The cell's summary (see [`CellSummary`]).
+    pub fn summary(&self) -> Result<CellSummary, SimError> {
+        let robot = self.nominal_robot()?;
+        let part_z = self.part.origin_mm[2] * 1e-3;
+        let seed = self.seed_q_rad();
+        let rotation = robot
+            .tcp_pose(&seed)
+            .map_err(deflex_model::ModelError::from)?
+            .rotation;
+        let target = Pose::from_parts(self.part_frame().translation, rotation);
+        let forming = robot
+            .inverse_kinematics(&target, &seed, &IkOptions::default())
+            .map_err(|source| SimError::Unreachable {
+                what: "part origin".into(),
+                source,
+            })?
+            .q;
+        Ok(CellSummary {
+            forming_q_deg: std::array::from_fn(|i| forming[i].to_degrees()),
+            robot: self.part.robot.clone(),
+            part_origin_mm: self.part.origin_mm,
+            seed_q_deg: self.part.seed_q_deg,
+            tool_xyz_m: self.part.tool_xyz_m,
+            sheet: [
+                self.sheet.thickness_mm,
+                self.sheet.rm_mpa,
+                self.sheet.tool_diameter_mm,
+            ],
+            forming_force_n: self.forming_force_level_n(),
+            clearance_m: pose_clearance_m(&robot, &forming, part_z)?,
+            floor_z_m: floor_z_m(&robot),
+        })
+    }
+}
+
+impl CellSummary {
+    /// SI JSON (`part_origin_m`, `seed_q_rad`, …).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "robot": self.robot,
+            "part_origin_m": self.part_origin_mm.map(|v| v * 1e-3),
+            "seed_q_rad": self.seed_q_deg.map(f64::to_radians),
+            "forming_q_rad": self.forming_q_deg.map(f64::to_radians),
+            "tool_xyz_m": self.tool_xyz_m,
+            "sheet_thickness_m": self.sheet[0] * 1e-3,
+            "sheet_rm_Pa": self.sheet[1] * 1e6,
+            "tool_ball_diameter_m": self.sheet[2] * 1e-3,
+            "forming_force_N": self.forming_force_n,
+            "forming_pose_clearance_m": self.clearance_m,
+            "floor_z_m": self.floor_z_m,
+        })
+    }
+}
+
+impl std::fmt::Display for CellSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let o = self.part_origin_mm;
+        let q = self.seed_q_deg;
+        writeln!(
+            f,
+            "twin cell of {} (SIMULATED; deflex compensate, sim and demo use it):",
+            self.robot
+        )?;
+        writeln!(
+            f,
+            "  part frame origin (mm, R0 axes): {:.1}, {:.1}, {:.1}   (--part-xyz-mm)",
+            o[0], o[1], o[2]
+        )?;
+        writeln!(
+            f,
+            "  seed configuration (deg): {:.2}, {:.2}, {:.2}, {:.2}, {:.2}, {:.2}   (--seed-deg)",
+            q[0], q[1], q[2], q[3], q[4], q[5]
+        )?;
+        let q = self.forming_q_deg;
+        writeln!(
+            f,
+            "  forming pose, TCP at the part origin (deg): {:.2}, {:.2}, {:.2}, {:.2}, {:.2}, {:.2}",
+            q[0], q[1], q[2], q[3], q[4], q[5]
+        )?;
+        let t = self.tool_xyz_m;
+        writeln!(
+            f,
+            "  tool, flange → TCP (mm): {:.1}, {:.1}, {:.1}",
+            t[0] * 1e3,
+            t[1] * 1e3,
+            t[2] * 1e3
+        )?;
+        writeln!(
+            f,
+            "  sheet: {} mm, Rm {} MPa, {} mm ball; forming force level {:.0} N",
+            self.sheet[0], self.sheet[1], self.sheet[2], self.forming_force_n
+        )?;
+        write!(
+            f,
+            "  in the forming pose the arm is {:.0} mm above the higher of the floor (z {:.0} mm) and the part's plane",
+            self.clearance_m * 1e3,
+            self.floor_z_m * 1e3
+        )
+    }
 }

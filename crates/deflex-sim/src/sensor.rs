@@ -1,16 +1,16 @@
 //! The 6-axis force/torque sensor between flange and tool (defaults: ATI Omega160 SI-1500-240,
-//! see [`crate::config::SensorConfig`]).
+//! see [`crate::cell_config::SensorConfig`]).
 //!
 //! A reading is the sum of the loads on everything below the sensing plane, expressed in the
 //! sensor frame with the moment about the sensor origin: the contact wrench of the environment on
 //! the tool (the model's w) plus the tool's weight, scaled by the calibration's gain error, plus
 //! a bias that drifts as the sensor warms and Gaussian noise, each channel clipped at the
 //! calibrated range (the sample is then flagged `saturated`). The sensor sits at its *true*
-//! mounting and carries the *true* tool (see [`crate::config::SensorConfig`]), which differ from
+//! mounting and carries the *true* tool (see [`crate::cell_config::SensorConfig`]), which differ from
 //! the nominal ones a controller is told. A controller must therefore tare the bias and
 //! compensate the tool weight, which rotates with the tool, as on hardware.
 
-use crate::config::{CellConfig, SensorConfig};
+use crate::cell_config::{CellConfig, SensorConfig};
 use deflex_model::{Pose, Wrench};
 use nalgebra::{Rotation3, Vector3};
 use rand::Rng;
@@ -279,7 +279,7 @@ mod tests {
         let drift = later.wrench_sensor[2] - unloaded.wrench_sensor[2];
         assert!((drift - 100.0 * cell.sensor.bias_drift_per_s[2]).abs() < 1e-9);
         // Every error off: the ideal sensor of the nominal mounting.
-        cell.errors = crate::config::ErrorSources::all(false);
+        cell.errors = crate::cell_config::ErrorSources::all(false);
         let mut ideal = ForceSensor::for_cell(&cell, ChaCha8Rng::seed_from_u64(1));
         let plain = ForceSensor::new(
             &cell.sensor,

@@ -102,7 +102,7 @@ impl Default for SheetConfig {
 impl SheetConfig {
     /// Check ranges.
     pub fn validate(&self) -> Result<(), SimError> {
-        use crate::config::bounded;
+        use crate::range_check::bounded;
         bounded("sheet.thickness_mm", self.thickness_mm, 0.01, 20.0, "mm")?;
         bounded("sheet.rm_mpa", self.rm_mpa, 1.0, 3000.0, "MPa")?;
         bounded(

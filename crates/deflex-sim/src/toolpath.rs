@@ -345,8 +345,8 @@ impl ToolPath {
         out
     }
 
-    /// The same path with every move longer than `max_segment_mm` split into equal moves at the
-    /// same feed (a rapid stays rapid): the geometry and the timing do not change, but an
+    /// The same path with every feed move longer than `max_segment_mm` split into equal moves at
+    /// the same feed (a rapid stays one rapid move): the geometry and the timing do not change, but an
     /// offline compensation, which moves each waypoint, then acts along a move instead of only
     /// at its ends (a plunge into the sheet written as one move reaches its force halfway).
     /// At most [`crate::gcode::MAX_WAYPOINTS`] waypoints.
@@ -361,7 +361,12 @@ impl ToolPath {
             waypoints.push(*first);
         }
         for w in self.waypoints.windows(2) {
-            let pieces = (distance(&w[0], &w[1]) / max_segment_mm).ceil().max(1.0);
+            // A rapid stays one move: it is in the air, and a robot program writes it as one.
+            let pieces = if w[1].feed_mm_s.is_none() {
+                1.0
+            } else {
+                (distance(&w[0], &w[1]) / max_segment_mm).ceil().max(1.0)
+            };
             if waypoints.len() as f64 + pieces > crate::gcode::MAX_WAYPOINTS as f64 {
                 return Err(SimError::Path(format!(
                     "\"{}\" split into moves of at most {max_segment_mm} mm has more than {} waypoints",
@@ -452,15 +457,15 @@ mod tests {
             wall_angle_deg: None,
         };
         let fine = path.subdivided(0.5).unwrap();
-        // 2.4 mm → 5 moves of 0.48 mm, 0.3 mm stays one, 5.4 mm → 11 moves.
-        assert_eq!(fine.waypoints.len(), 1 + 5 + 1 + 11);
+        // 2.4 mm → 5 moves of 0.48 mm, 0.3 mm stays one, the 5.4 mm rapid stays one.
+        assert_eq!(fine.waypoints.len(), 1 + 5 + 1 + 1);
         assert!((fine.length_mm() - path.length_mm()).abs() < 1e-12);
         assert!((fine.duration_s(50.0) - path.duration_s(50.0)).abs() < 1e-12);
         assert_eq!(fine.waypoints[3].p_mm, [0.0, 0.0, 2.0 - 3.0 * 0.48]);
         assert_eq!(fine.waypoints[3].feed_mm_s, Some(2.0));
         assert_eq!(fine.waypoints[6].feed_mm_s, Some(15.0));
-        assert_eq!(fine.waypoints[17].feed_mm_s, None);
-        assert_eq!(fine.waypoints[17].p_mm, [0.3, 0.0, 5.0]);
+        assert_eq!(fine.waypoints[7].feed_mm_s, None);
+        assert_eq!(fine.waypoints[7].p_mm, [0.3, 0.0, 5.0]);
         assert_eq!(fine.step_down_mm, Some(0.4));
         assert!(path.subdivided(0.0).is_err());
         assert!(path.subdivided(f64::NAN).is_err());

@@ -2,7 +2,7 @@
 //! deviation grows with range, σ(d) = σ₀ + σ₁·d (defaults 10 µm + 5 µm/m, the datasheet envelope
 //! used as 1σ), at up to 50 Hz.
 
-use crate::config::TrackerConfig;
+use crate::cell_config::TrackerConfig;
 use nalgebra::Vector3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;

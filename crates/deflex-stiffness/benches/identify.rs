@@ -2,10 +2,12 @@
 //! the full structure search on 2,000 rows (< 5 s). Data: synthetic TX200 (Table 1 + base tilt),
 //! 15 µm noise, 600–1400 N.
 use criterion::{Criterion, criterion_group, criterion_main};
-use deflex_stiffness::fit::{Structure, calibrate_fixed};
-use deflex_stiffness::search::{SearchOptions, search_structure};
-use deflex_stiffness::synthetic::{SyntheticOptions, measure, measure_with_rotations, random_campaign};
 use deflex_model::{Axis, EdofSite, builtin};
+use deflex_stiffness::search::{SearchOptions, search_structure};
+use deflex_stiffness::stiffness_fit::{Structure, calibrate_fixed};
+use deflex_stiffness::synthetic::{
+    SyntheticOptions, measure, measure_with_rotations, random_campaign,
+};
 use std::hint::black_box;
 
 fn identify(c: &mut Criterion) {

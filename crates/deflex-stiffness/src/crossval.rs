@@ -9,12 +9,12 @@
 //! the other folds, and the held-out fold is predicted with the same linear model as the fit
 //! (eq. 13–15 through [`crate::design`]).
 
-use crate::CalibError;
 use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId};
-use crate::fit::Structure;
 use crate::shift;
+use crate::stiffness_fit::Structure;
 use crate::uncertainty::residual_stats;
+use crate::{CalibError, RowsError, StructureError};
 use deflex_model::Robot;
 
 /// Default number of folds.
@@ -64,15 +64,11 @@ impl CrossValidation {
         folds: usize,
     ) -> Result<Self, CalibError> {
         if folds < 2 {
-            return Err(CalibError::Invalid(format!(
-                "cross-validation needs at least 2 folds, got {folds}"
-            )));
+            return Err(StructureError::TooFewFolds { folds }.into());
         }
         let (assignment, k) = fold_assignment(rows, folds);
         if k < 2 {
-            return Err(CalibError::Invalid(
-                "cross-validation needs at least 2 load cases".into(),
-            ));
+            return Err(RowsError::TooFewLoadCases.into());
         }
         let mut out = Vec::with_capacity(k);
         for f in 0..k {
@@ -80,8 +76,10 @@ impl CrossValidation {
                 rows.iter().zip(&assignment).partition(|(_, a)| **a == f);
             let train: Vec<MeasurementRow> = train.into_iter().map(|(r, _)| r.clone()).collect();
             let test: Vec<MeasurementRow> = test.into_iter().map(|(r, _)| r.clone()).collect();
-            let context = |e: CalibError| {
-                CalibError::Invalid(format!("cross-validation fold {} of {k}: {e}", f + 1))
+            let context = |e: CalibError| CalibError::Fold {
+                fold: f + 1,
+                folds: k,
+                source: Box::new(e),
             };
             let train = Design::build(robot, &train, candidates, true).map_err(context)?;
             let test = Design::build(robot, &test, candidates, true).map_err(context)?;
@@ -126,9 +124,9 @@ impl CrossValidation {
 mod tests {
     use super::*;
     use crate::design::all_edofs;
-    use crate::fit::calibrate_fixed;
+    use crate::stiffness_fit::calibrate_fixed;
     use crate::synthetic::{SyntheticOptions, measure, random_campaign};
-    use crate::validate::predict_full;
+    use crate::validation::predict_full;
 
     /// The fold score equals an independent computation: calibrate on the training rows with
     /// the public fixed-structure calibration, write the robot, and predict every held-out row

@@ -33,20 +33,15 @@
 //! structure, with any centre shifts, then costs O(p²) inner products of precomputed numbers,
 //! independent of the number of rows: this is what makes the structure search fast.
 
-use crate::CalibError;
 use crate::data::MeasurementRow;
+use crate::{CalibError, RowRef, RowsError, StructureError};
 use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One eDoF, by site and axis.
 pub type EdofId = (EdofSite, Axis);
 
-/// Default tracker standard deviation when a row has no `sigma_m` (15 µm).
-pub const DEFAULT_SIGMA_M: f64 = 15e-6;
-
-/// Default standard deviation of a measured rotation component when a row has no `sigma_rad`
-/// (20 µrad, a 6-DoF tracker probe).
-pub const DEFAULT_SIGMA_RAD: f64 = 20e-6;
+pub use deflex_measurements::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD};
 
 /// Label of an eDoF as in the paper's Table 1: `J3.x`, `base.y`.
 pub fn edof_label(id: EdofId) -> String {
@@ -125,10 +120,12 @@ impl Design {
             if let EdofSite::Joint(i) = site
                 && (i == 0 || i > n)
             {
-                return Err(CalibError::Invalid(format!(
-                    "eDoF J{i}.{} does not exist: the robot has {n} joints",
-                    axis.letter()
-                )));
+                return Err(StructureError::NoSuchEdof {
+                    joint: i,
+                    axis: axis.letter(),
+                    joints: n,
+                }
+                .into());
             }
             let k = match (site, axis) {
                 (EdofSite::Joint(_), Axis::X | Axis::Y) => 3,
@@ -148,9 +145,7 @@ impl Design {
         let mut last_q: Option<&[f64]> = None;
         for (r, row) in rows.iter().enumerate() {
             if last_q != Some(row.q_rad.as_slice()) {
-                robot
-                    .forward_kinematics(&mut data, &row.q_rad)
-                    .map_err(|e| CalibError::Invalid(e.to_string()))?;
+                robot.forward_kinematics(&mut data, &row.q_rad)?;
                 last_q = Some(row.q_rad.as_slice());
             }
             let s = row.sigma_m.unwrap_or(DEFAULT_SIGMA_M);
@@ -229,9 +224,7 @@ impl Design {
             && gram.iter().all(|v| v.is_finite())
             && xty.iter().all(|v| v.is_finite()))
         {
-            return Err(CalibError::Invalid(
-                "the data's magnitudes overflow the least-squares problem (check the loads, coordinates and sigma_m)".into(),
-            ));
+            return Err(RowsError::Overflow.into());
         }
         let warnings = observability_warnings(rows, candidates, n);
         Ok(Design {
@@ -316,48 +309,10 @@ fn check_rows(
     robot: &Robot,
     rows: &[MeasurementRow],
     require_displacement: bool,
-) -> Result<(), CalibError> {
-    let n = robot.joint_count();
-    if rows.is_empty() {
-        return Err(CalibError::Invalid("no data rows".into()));
-    }
-    for (i, row) in rows.iter().enumerate() {
-        let at = || {
-            format!(
-                "row {} (load case {}, point {})",
-                i + 1,
-                row.load_case,
-                row.point
-            )
-        };
-        if row.q_rad.len() != n {
-            return Err(CalibError::Invalid(format!(
-                "the data has {} joint columns (q1_rad…q{}_rad) but robot \"{}\" has {n} joints",
-                row.q_rad.len(),
-                row.q_rad.len(),
-                robot.name
-            )));
-        }
-        if row.point_link > n || row.load_link > n {
-            return Err(CalibError::Invalid(format!(
-                "{}: link index out of range (0 = base … {n} = last link)",
-                at()
-            )));
-        }
-        if let Err(message) = crate::data::check_row_values(row) {
-            return Err(CalibError::Invalid(format!("{}: {message}", at())));
-        }
-        if require_displacement && row.displacement_m.is_none() {
-            return Err(CalibError::Invalid(format!(
-                "{}: no measured displacement (dx_m, dy_m, dz_m)",
-                at()
-            )));
-        }
-    }
+) -> Result<(), RowsError> {
+    check_row_set(robot, rows, require_displacement)?;
     if rows.iter().all(|r| r.wrench.iter().all(|v| *v == 0.0)) {
-        return Err(CalibError::Invalid(
-            "every load is zero: nothing to identify".into(),
-        ));
+        return Err(RowsError::AllLoadsZero);
     }
     if require_displacement
         && rows.iter().all(|r| {
@@ -365,9 +320,59 @@ fn check_rows(
                 .is_some_and(|d| d.iter().all(|v| *v == 0.0))
         })
     {
-        return Err(CalibError::Invalid(
-            "every measured displacement is exactly zero: nothing to identify (were the loaded readings recorded?)".into(),
-        ));
+        return Err(RowsError::AllDisplacementsZero);
+    }
+    Ok(())
+}
+
+/// Rows the model can predict: at least one, one joint value per joint, links within the arm,
+/// every value within the bounds of the file format (rows built in code are checked as a file's
+/// are at parse time), and with `require_displacement` a measured displacement on every row.
+pub(crate) fn check_row_set(
+    robot: &Robot,
+    rows: &[MeasurementRow],
+    require_displacement: bool,
+) -> Result<(), RowsError> {
+    if rows.is_empty() {
+        return Err(RowsError::NoRows);
+    }
+    for (i, row) in rows.iter().enumerate() {
+        check_row_fits(robot, i, row)?;
+        if let Err(source) = deflex_measurements::check_row_values(row) {
+            return Err(RowsError::Value {
+                row: RowRef::of(i, row),
+                source,
+            });
+        }
+        if require_displacement && row.displacement_m.is_none() {
+            return Err(RowsError::NoDisplacement {
+                row: RowRef::of(i, row),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A row the robot can predict: one joint value per joint, links within the arm (what a file's
+/// parser cannot know: it does not know the robot).
+pub(crate) fn check_row_fits(
+    robot: &Robot,
+    index: usize,
+    row: &MeasurementRow,
+) -> Result<(), RowsError> {
+    let n = robot.joint_count();
+    if row.q_rad.len() != n {
+        return Err(RowsError::JointCount {
+            found: row.q_rad.len(),
+            robot: robot.name.clone(),
+            joints: n,
+        });
+    }
+    if row.point_link > n || row.load_link > n {
+        return Err(RowsError::LinkOutOfRange {
+            row: RowRef::of(index, row),
+            joints: n,
+        });
     }
     Ok(())
 }

@@ -16,12 +16,14 @@
 //! cross-validated RMS (when the data has at least two load cases), the out-of-sample number an
 //! engineer should trust over the in-sample RMS.
 
-use crate::CalibError;
 use crate::crossval::{CrossValidation, CvScore, DEFAULT_FOLDS};
 use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId, all_edofs, edof_label};
-use crate::fit::{Calibration, ResidualStats, Structure, bic, fit_in_design, residual_stats};
 use crate::shift::{self, Inner, normal_system, scales};
+use crate::stiffness_fit::{
+    Calibration, ResidualStats, Structure, bic, fit_in_design, residual_stats,
+};
+use crate::{CalibError, StructureError};
 use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::DMatrix;
 
@@ -199,9 +201,7 @@ pub fn search_structure(
         Criterion::CrossValidated { .. } => score.map(|s| s.chi2),
     };
     let Some(mut current_value) = criterion_of(current_bic, start_cv) else {
-        return Err(CalibError::Invalid(
-            "cross-validation cannot score the start structure".into(),
-        ));
+        return Err(StructureError::UnscoredStart.into());
     };
     let mut steps = vec![SearchStep {
         iteration: 0,

@@ -12,7 +12,7 @@ use crate::nnls::nnls;
 use nalgebra::{DMatrix, DVector};
 
 /// Largest centre shift magnitude considered (m).
-pub(crate) const MAX_SHIFT_M: f64 = 5.0;
+pub const MAX_SHIFT_M: f64 = 5.0;
 
 /// Result of the inner problem.
 #[derive(Clone, Debug)]

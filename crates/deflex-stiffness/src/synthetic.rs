@@ -6,9 +6,10 @@
 //! Used by the recovery tests, the benches and demos.
 
 use crate::CalibError;
+pub use crate::campaign_cell::random_q;
+use crate::campaign_cell::standard_points;
 use crate::data::{MeasuredRotation, MeasurementRow};
 use crate::design::EdofId;
-use crate::plan::standard_points;
 use deflex_model::{Data, Robot, Wrench};
 use nalgebra::{Vector3, Vector6};
 use rand::{Rng, SeedableRng};
@@ -82,21 +83,25 @@ fn measure_rows(
     // Salted so that the noise stream never equals a campaign generated with the same seed
     // (which would correlate the noise with the design and bias the fit).
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed ^ 0x9E37_79B9_7F4A_7C15);
-    let noise = Normal::new(0.0, options.noise_sigma_m.max(0.0))
-        .map_err(|e| CalibError::Invalid(format!("noise: {e}")))?;
+    let noise =
+        Normal::new(0.0, options.noise_sigma_m.max(0.0)).map_err(|source| CalibError::Noise {
+            what: "noise",
+            source,
+        })?;
     let mut rotation_rng = ChaCha8Rng::seed_from_u64(options.seed ^ 0x6A09_E667_F3BC_C908);
     let rotation_noise = rotation_noise_sigma_rad
         .map(|s| Normal::new(0.0, s.max(0.0)))
         .transpose()
-        .map_err(|e| CalibError::Invalid(format!("rotation noise: {e}")))?;
+        .map_err(|source| CalibError::Noise {
+            what: "rotation noise",
+            source,
+        })?;
     let mut data = Data::new();
     let mut out = Vec::with_capacity(plan.len());
     let mut last_q: Option<Vec<f64>> = None;
     for row in plan {
         if last_q.as_deref() != Some(row.q_rad.as_slice()) {
-            truth
-                .forward_kinematics(&mut data, &row.q_rad)
-                .map_err(|e| CalibError::Invalid(e.to_string()))?;
+            truth.forward_kinematics(&mut data, &row.q_rad)?;
             last_q = Some(row.q_rad.clone());
         }
         let p = Vector3::from(row.point_m);
@@ -179,20 +184,6 @@ pub fn random_campaign(
         ));
     }
     rows
-}
-
-/// Random joint values within the limits (uniform; ±π for a joint without limits).
-pub fn random_q(robot: &Robot, rng: &mut impl Rng) -> Vec<f64> {
-    robot
-        .joints
-        .iter()
-        .map(|j| {
-            let [lo, hi] = j
-                .limits
-                .unwrap_or([-std::f64::consts::PI, std::f64::consts::PI]);
-            if hi > lo { rng.gen_range(lo..hi) } else { lo }
-        })
-        .collect()
 }
 
 /// The rows of one load case: force at the TCP (link N), measuring the standard points.

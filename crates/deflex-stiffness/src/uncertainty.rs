@@ -7,11 +7,11 @@
 //! included. Stiffness `k = 1/c`: SE by the delta method (`SE_k = SE_c / c²`), interval by
 //! mapping the c-interval (upper bound ∞ when `c − 1.96 SE_c ≤ 0`: weakly identified).
 
-use crate::design::{Design, EdofId, edof_label};
-use crate::fit::{
+use crate::calibration::{
     Calibration, EdofEstimate, MAX_RELATIVE_SE, ResidualStats, ShiftEstimate, Status, Structure,
     Z95,
 };
+use crate::design::{Design, EdofId, edof_label};
 use crate::shift::{self, Inner, jacobian, normal_system, scales};
 use deflex_model::{Axis, EdofSite};
 use nalgebra::{DMatrix, DVector};
@@ -88,6 +88,96 @@ pub(crate) fn unscaled_covariance(
     }
 }
 
+/// A fit and its scaled covariance, for the estimates of its parameters.
+struct Fitted<'a> {
+    design: &'a Design,
+    idx: &'a [usize],
+    shifts: &'a [f64],
+    /// Compliances of the active eDoFs.
+    c: &'a [f64],
+    active: &'a [EdofId],
+    dropped: &'a [(EdofId, String)],
+    labels: &'a [Result<usize, usize>],
+    /// Covariance scaled by the residual variance `s²`.
+    cov: &'a DMatrix<f64>,
+    s2: f64,
+}
+
+impl Fitted<'_> {
+    /// Standard error of parameter `k`.
+    fn se(&self, k: usize) -> f64 {
+        self.cov[(k, k)].max(0.0).sqrt()
+    }
+
+    /// The estimate of eDoF `id` of the structure: not identifiable when it was dropped, at the
+    /// c ≥ 0 bound or too uncertain; weak when its 95 % interval reaches c = 0; else identified,
+    /// with its stiffness, standard error and interval. `None` when it is not in the fit.
+    fn edof(&self, id: EdofId) -> Option<EdofEstimate> {
+        let label = edof_label(id);
+        let not = |reason: String| EdofEstimate {
+            id,
+            label: label.clone(),
+            status: Status::NotIdentifiable(reason),
+            compliance: 0.0,
+            compliance_se: f64::NAN,
+            stiffness: None,
+            stiffness_se: None,
+            interval95: None,
+        };
+        if let Some((_, reason)) = self.dropped.iter().find(|(d, _)| *d == id) {
+            return Some(not(reason.clone()));
+        }
+        let k = self.active.iter().position(|a| *a == id)?;
+        let c = self.c[k];
+        if c <= 0.0 {
+            let bound = bound_se(self.design, self.idx, self.shifts, self.c, k, self.s2)
+                .map(|se| format!(" (k > {:.3e} N·m/rad at 95 %)", 1.0 / (Z95 * se)))
+                .unwrap_or_default();
+            return Some(not(format!(
+                "not identifiable: the fit hit the c ≥ 0 bound, stiffer than the data can resolve{bound}"
+            )));
+        }
+        let pos = self.labels.iter().position(|l| *l == Ok(k)).unwrap_or(0);
+        let sc = self.se(pos);
+        let rel = sc / c;
+        let status = if !(rel.is_finite()) || rel > MAX_RELATIVE_SE {
+            Status::NotIdentifiable(format!(
+                "not identifiable: relative standard error of the compliance {:.0} %",
+                100.0 * rel
+            ))
+        } else if c - Z95 * sc <= 0.0 {
+            Status::Weak
+        } else {
+            Status::Identified
+        };
+        if matches!(status, Status::NotIdentifiable(_)) {
+            let mut e = not(match &status {
+                Status::NotIdentifiable(r) => r.clone(),
+                _ => String::new(),
+            });
+            e.compliance = c;
+            e.compliance_se = sc;
+            return Some(e);
+        }
+        let lo_c = c - Z95 * sc;
+        let hi = if lo_c > 0.0 {
+            1.0 / lo_c
+        } else {
+            f64::INFINITY
+        };
+        Some(EdofEstimate {
+            id,
+            label,
+            status,
+            compliance: c,
+            compliance_se: sc,
+            stiffness: Some(1.0 / c),
+            stiffness_se: Some(sc / (c * c)),
+            interval95: Some((1.0 / (c + Z95 * sc), hi)),
+        })
+    }
+}
+
 /// Standard errors, status and statistics of a fitted structure.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn analyse(
@@ -120,76 +210,22 @@ pub(crate) fn analyse(
         if den > 0.0 { cov[(i, j)] / den } else { 0.0 }
     });
 
-    let mut edofs = Vec::new();
-    for &id in &structure.edofs {
-        let label = edof_label(id);
-        let not = |reason: String| EdofEstimate {
-            id,
-            label: label.clone(),
-            status: Status::NotIdentifiable(reason),
-            compliance: 0.0,
-            compliance_se: f64::NAN,
-            stiffness: None,
-            stiffness_se: None,
-            interval95: None,
-        };
-        if let Some((_, reason)) = dropped.iter().find(|(d, _)| *d == id) {
-            edofs.push(not(reason.clone()));
-            continue;
-        }
-        let Some(k) = active.iter().position(|a| *a == id) else {
-            continue;
-        };
-        let c = sol.c[k];
-        if c <= 0.0 {
-            let bound = bound_se(design, idx, shifts, &sol.c, k, s2)
-                .map(|se| format!(" (k > {:.3e} N·m/rad at 95 %)", 1.0 / (Z95 * se)))
-                .unwrap_or_default();
-            edofs.push(not(format!(
-                "not identifiable: the fit hit the c ≥ 0 bound, stiffer than the data can resolve{bound}"
-            )));
-            continue;
-        }
-        let pos = labels.iter().position(|l| *l == Ok(k)).unwrap_or(0);
-        let sc = se(pos);
-        let rel = sc / c;
-        let status = if !(rel.is_finite()) || rel > MAX_RELATIVE_SE {
-            Status::NotIdentifiable(format!(
-                "not identifiable: relative standard error of the compliance {:.0} %",
-                100.0 * rel
-            ))
-        } else if c - Z95 * sc <= 0.0 {
-            Status::Weak
-        } else {
-            Status::Identified
-        };
-        if matches!(status, Status::NotIdentifiable(_)) {
-            let mut e = not(match &status {
-                Status::NotIdentifiable(r) => r.clone(),
-                _ => String::new(),
-            });
-            e.compliance = c;
-            e.compliance_se = sc;
-            edofs.push(e);
-            continue;
-        }
-        let lo_c = c - Z95 * sc;
-        let hi = if lo_c > 0.0 {
-            1.0 / lo_c
-        } else {
-            f64::INFINITY
-        };
-        edofs.push(EdofEstimate {
-            id,
-            label,
-            status,
-            compliance: c,
-            compliance_se: sc,
-            stiffness: Some(1.0 / c),
-            stiffness_se: Some(sc / (c * c)),
-            interval95: Some((1.0 / (c + Z95 * sc), hi)),
-        });
-    }
+    let fitted = Fitted {
+        design,
+        idx,
+        shifts,
+        c: &sol.c,
+        active,
+        dropped,
+        labels: &labels,
+        cov: &cov,
+        s2,
+    };
+    let edofs: Vec<EdofEstimate> = structure
+        .edofs
+        .iter()
+        .filter_map(|&id| fitted.edof(id))
+        .collect();
 
     let mut shift_estimates = Vec::new();
     for j in 1..=design.joint_count {

@@ -6,11 +6,11 @@
 //! on by default). The numbers show how far the force runs away without the guard and where the
 //! guard holds it.
 
-use crate::twin_controller::{ClosedLoopRun, controller_config_for, run_closed_loop};
+use crate::DemoError;
 use deflex_control::ControllerConfig;
 use deflex_model::Robot;
-use deflex_report::HtmlReport;
 use deflex_sim::{CellConfig, FormingRun, PlungeParams, ProcessKind, ToolPath};
+use deflex_twin::{ClosedLoopRun, controller_config_for, run_closed_loop};
 use serde::Serialize;
 
 /// What one closed-loop plunge measured.
@@ -102,7 +102,7 @@ pub fn stiff_contact(
     stiffness_n_m: f64,
     seed: u64,
     configure: &dyn Fn(&mut ControllerConfig),
-) -> Result<(StiffContactNumbers, StiffContactRuns), String> {
+) -> Result<(StiffContactNumbers, StiffContactRuns), DemoError> {
     stiff_contact_with(
         cell,
         model,
@@ -121,10 +121,10 @@ pub fn stiff_contact_with(
     params: &PlungeParams,
     seed: u64,
     configure: &dyn Fn(&mut ControllerConfig),
-) -> Result<(StiffContactNumbers, StiffContactRuns), String> {
-    let path = ToolPath::plunge(params).map_err(|e| e.to_string())?;
+) -> Result<(StiffContactNumbers, StiffContactRuns), DemoError> {
+    let path = ToolPath::plunge(params)?;
     let c = fixture_cell(cell, stiffness_n_m);
-    let open = deflex_sim::run_forming(&c, path.clone(), seed, None).map_err(|e| e.to_string())?;
+    let open = deflex_sim::run_forming(&c, path.clone(), seed, None)?;
     let mut guarded_config = controller_config_for(&c);
     configure(&mut guarded_config);
     let mut unguarded_config = guarded_config;
@@ -139,6 +139,7 @@ pub fn stiff_contact_with(
             false,
             &mut |_| {},
         )
+        .map_err(DemoError::from)
     };
     let unguarded = closed(unguarded_config)?;
     let guarded = closed(guarded_config)?;
@@ -159,156 +160,4 @@ pub fn stiff_contact_with(
             guarded,
         },
     ))
-}
-
-/// Force over time along the plunge without correction, with it unguarded and guarded (PNG).
-pub fn contact_figure(
-    path: &std::path::Path,
-    runs: &StiffContactRuns,
-    stiffness_n_m: f64,
-) -> Result<(), String> {
-    let series = |run: &FormingRun, label: &str| {
-        deflex_report::Series::line(
-            label,
-            run.log.column(|r| r.time_s),
-            run.log.column(|r| r.truth.force_norm_n()),
-        )
-    };
-    let outcome = |run: &ClosedLoopRun| match (run.fault, run.first_runaway) {
-        (Some(f), _) => format!(", stopped by {}", f.kind.name()),
-        (None, Some(_)) => ", contact_runaway reported".to_string(),
-        (None, None) => String::new(),
-    };
-    deflex_report::line_plot(
-        path,
-        &deflex_report::PlotSpec::new(
-            format!(
-                "SIMULATED — plunge into a {stiffness_n_m:.0e} N/m fixture: contact force over time"
-            ),
-            "time [s]",
-            "contact force norm [N]",
-        )
-        .size(1000, 500),
-        &[
-            series(&runs.open, "without correction"),
-            series(
-                &runs.unguarded.forming,
-                &format!(
-                    "with correction, no runaway guard{}",
-                    outcome(&runs.unguarded)
-                ),
-            ),
-            series(
-                &runs.guarded.forming,
-                &format!(
-                    "with correction and runaway guard{}",
-                    outcome(&runs.guarded)
-                ),
-            ),
-        ],
-    )
-    .map_err(|e| e.to_string())
-}
-
-/// The rows of the stiff-contact table: per stiffness, without correction, unguarded, guarded.
-pub fn contact_table_rows(comparisons: &[&StiffContactNumbers]) -> Vec<Vec<String>> {
-    let mut rows = Vec::new();
-    for n in comparisons {
-        let k = format!("{:.0e}", n.stiffness_n_m);
-        rows.push(vec![
-            k.clone(),
-            "without correction".into(),
-            format!("{:.0}", n.open_max_force_N),
-            "1.00".into(),
-            "–".into(),
-            format!("rigid-robot force k·δ {:.0} N", n.rigid_robot_force_N),
-        ]);
-        for l in [&n.unguarded, &n.guarded] {
-            let outcome = match (&l.fault, &l.first_runaway) {
-                (Some(f), _) => f.clone(),
-                (None, Some(w)) => format!("warning {w}"),
-                (None, None) if l.runaway_at_s.is_some() => "force more than doubled".into(),
-                (None, None) => "settles".into(),
-            };
-            rows.push(vec![
-                k.clone(),
-                if l.guard {
-                    "correction + runaway guard".into()
-                } else {
-                    "correction, no guard".into()
-                },
-                format!("{:.0}", l.max_force_N),
-                format!("{:.2}", l.force_ratio_to_uncorrected),
-                format!("{:.2}", l.max_correction_mm),
-                outcome,
-            ]);
-        }
-    }
-    rows
-}
-
-/// Section 6 of the report page: the plunge at `main` (its figures in `figures`) and the sweep.
-pub(crate) fn contact_section(
-    html: &mut HtmlReport,
-    main: &StiffContactNumbers,
-    sweep: &[StiffContactNumbers],
-    figures: &[crate::figures::Figure],
-) {
-    html.section("6. Stiff contact: a plunge into a fixture");
-    let (u, g) = (&main.unguarded, &main.guarded);
-    html.paragraph(format!(
-        "SIMULATED. The tool plunges {:.1} mm into a fixture of contact stiffness {:.0e} N/m and \
-         traverses at that depth. Without correction the robot and the contact share the \
-         interference as springs in series: the force reaches {:.0} N. With correction the loop is \
-         positive feedback (the correction pushes further in, the force and the estimated \
-         deflection rise, the correction grows): an exact correction would take the force to the \
-         rigid-robot {:.0} N, a model softer than the robot has no equilibrium at all. Without the \
-         runaway guard: {:.0} N at most ({:.2}× the uncorrected force), correction up to {:.2} mm{}{}. \
-         With the controller's runaway guard (deflex-control `runaway.rs`: it estimates the loop \
-         gain through the contact online, withdraws the correction along the runaway direction and \
-         latches until the contact goes away): {:.0} N at most ({:.2}×){}{}.",
-        main.interference_mm,
-        main.stiffness_n_m,
-        main.open_max_force_N,
-        main.rigid_robot_force_N,
-        u.max_force_N,
-        u.force_ratio_to_uncorrected,
-        u.max_correction_mm,
-        u.runaway_at_s
-            .map(|t| format!(", twice the uncorrected force at t = {t:.2} s"))
-            .unwrap_or_default(),
-        u.fault
-            .as_ref()
-            .map(|f| format!("; the controller stopped on {f}"))
-            .unwrap_or_default(),
-        g.max_force_N,
-        g.force_ratio_to_uncorrected,
-        g.first_runaway
-            .as_ref()
-            .map(|w| format!(", warning {w}"))
-            .unwrap_or_default(),
-        g.fault
-            .as_ref()
-            .map(|f| format!("; fault {f}"))
-            .unwrap_or_default(),
-    ));
-    let comparisons: Vec<&StiffContactNumbers> = if sweep.is_empty() {
-        vec![main]
-    } else {
-        sweep.iter().collect()
-    };
-    html.table(
-        &[
-            "fixture stiffness [N/m]",
-            "controller",
-            "max |F| [N]",
-            "× uncorrected",
-            "max correction [mm]",
-            "outcome",
-        ],
-        &contact_table_rows(&comparisons),
-    );
-    for (path, caption) in figures {
-        html.image(path, caption.clone());
-    }
 }

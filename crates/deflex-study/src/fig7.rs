@@ -8,15 +8,13 @@
 //! elbow (joint 3), M3 on link 4 a quarter of the forearm before the wrist centre, and the end
 //! effector (TCP) carries the load, as in the paper.
 
-use deflex_stiffness::MeasurementRow;
-use deflex_stiffness::validate::predict;
+use crate::DemoError;
 use deflex_model::{Data, Robot};
-use deflex_report::{LineStyle, PALETTE, PanelLayout, PlotSpec, Series, panels_plot};
 use deflex_sim::CellConfig;
-use deflex_sim::campaign::run_campaign;
+use deflex_sim::twin_campaign::run_campaign;
+use deflex_stiffness::MeasurementRow;
+use deflex_stiffness::validation::predict;
 use nalgebra::Vector3;
-use std::fmt::Write as _;
-use std::path::Path;
 
 /// The Fig. 7 configuration (rad).
 pub const FIG7_Q_RAD: [f64; 6] = [0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0];
@@ -42,18 +40,17 @@ pub struct Fig7Point {
 
 /// The plan rows of the test: the four points of one load case (world coordinates of the
 /// nominal robot at [`FIG7_Q_RAD`]).
-pub fn fig7_rows(nominal: &Robot) -> Result<Vec<MeasurementRow>, String> {
+pub fn fig7_rows(nominal: &Robot) -> Result<Vec<MeasurementRow>, DemoError> {
     if nominal.joint_count() != 6 {
-        return Err(format!(
-            "the Fig. 7 test needs a 6-joint arm; {} has {}",
-            nominal.name,
-            nominal.joint_count()
-        ));
+        return Err(DemoError::Fig7Joints {
+            robot: nominal.name.clone(),
+            joints: nominal.joint_count(),
+        });
     }
     let mut data = Data::new();
     nominal
         .forward_kinematics(&mut data, &FIG7_Q_RAD)
-        .map_err(|e| e.to_string())?;
+        .map_err(deflex_model::ModelError::from)?;
     let origin = |link: usize| data.link_frame(link).translation.vector;
     let (j2, j3, wrist) = (origin(2), origin(3), origin(4));
     let forearm = (wrist - j3).normalize();
@@ -89,12 +86,12 @@ pub fn fig7_study(
     nominal: &Robot,
     models: &[(&str, &Robot)],
     seed: u64,
-) -> Result<(Vec<MeasurementRow>, Vec<Fig7Point>), String> {
+) -> Result<(Vec<MeasurementRow>, Vec<Fig7Point>), DemoError> {
     let plan = fig7_rows(nominal)?;
-    let measured = run_campaign(cell, &plan, seed).map_err(|e| e.to_string())?;
+    let measured = run_campaign(cell, &plan, seed)?;
     let mut predictions = Vec::new();
     for (name, robot) in models {
-        predictions.push((*name, predict(robot, &measured).map_err(|e| e.to_string())?));
+        predictions.push((*name, predict(robot, &measured)?));
     }
     let points = measured
         .iter()
@@ -115,92 +112,6 @@ pub fn fig7_study(
         })
         .collect();
     Ok((measured, points))
-}
-
-/// `fig7_points.csv`: per point its position, the SIMULATED measurement and each model's
-/// prediction (SI units).
-pub fn fig7_csv(rows: &[MeasurementRow], points: &[Fig7Point]) -> String {
-    let mut s = String::from(
-        "# SIMULATED Fig. 7 test on the deflex digital twin: q = 0, 90°, 0, 0, 0, 0; fy = 1400 N \
-         at the TCP; displacements measured by the simulated tracker and predicted by each model\n\
-         point,point_link,x_m,y_m,z_m,fy_N,dx_m,dy_m,dz_m,sigma_m",
-    );
-    if let Some(first) = points.first() {
-        for (name, _) in &first.predicted_mm {
-            let tag = crate::tables::column_tag(name);
-            let _ = write!(s, ",{tag}_dx_m,{tag}_dy_m");
-        }
-    }
-    s.push('\n');
-    for (row, point) in rows.iter().zip(points) {
-        let d = row.displacement_m.unwrap_or([f64::NAN; 3]);
-        let _ = write!(
-            s,
-            "{},{},{:?},{:?},{:?},{},{:e},{:e},{:e},{:e}",
-            row.point,
-            row.point_link,
-            row.point_m[0],
-            row.point_m[1],
-            row.point_m[2],
-            row.wrench[1],
-            d[0],
-            d[1],
-            d[2],
-            row.sigma_m.unwrap_or(f64::NAN)
-        );
-        for (_, p) in &point.predicted_mm {
-            let _ = write!(s, ",{:e},{:e}", p[0] * 1e-3, p[1] * 1e-3);
-        }
-        s.push('\n');
-    }
-    s
-}
-
-/// Figs. 8 and 9 in one image: δp_x and δp_y against the points' position along x0, the
-/// SIMULATED measurement as markers, each model as a line with markers (identified solid,
-/// one-eDoF dashed, the robot file's model dotted).
-pub fn fig7_figure(path: &Path, points: &[Fig7Point]) -> Result<(), String> {
-    let x: Vec<f64> = points.iter().map(|p| p.x_mm).collect();
-    let styles = [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted];
-    let panel = |axis: usize, name: &str, figure: u32| {
-        let mut series = vec![
-            Series::points(
-                "measured (SIMULATED tracker)",
-                x.clone(),
-                points.iter().map(|p| p.measured_mm[axis]).collect(),
-            )
-            .with_color((0, 0, 0)),
-        ];
-        if let Some(first) = points.first() {
-            for (k, (model, _)) in first.predicted_mm.iter().enumerate() {
-                series.push(
-                    Series::line_and_points(
-                        format!("{model} model"),
-                        x.clone(),
-                        points.iter().map(|p| p.predicted_mm[k].1[axis]).collect(),
-                    )
-                    .with_line(styles[k % styles.len()])
-                    .with_color(PALETTE[k % PALETTE.len()]),
-                );
-            }
-        }
-        (
-            PlotSpec::new(
-                format!("δp_{name} of M1, M2, M3 and the TCP (cf. Fig. {figure})"),
-                "position of the point along x0 [mm]",
-                format!("δp_{name} [mm]"),
-            )
-            .size(crate::figures::FULL_WIDTH_PX, 420),
-            series,
-        )
-    };
-    panels_plot(
-        path,
-        "SIMULATED cell — q = (0, 90°, 0, 0, 0, 0), f_y = 1400 N at the TCP (cf. Figs. 7–9)",
-        PanelLayout::Column,
-        &[panel(0, "x", 8), panel(1, "y", 9)],
-    )
-    .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

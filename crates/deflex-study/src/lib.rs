@@ -9,8 +9,11 @@
 //! plunge into a stiff fixture without and with it ([`contact`]), and measure the sensitivity of
 //! the closed loop to delay, model scale, sensor gain, bias drift and contact stiffness
 //! ([`sensitivity`]), and compare offline compensation, online correction and both on the cone and
-//! a CAM part ([`compensation`]). Everything lands in one folder, swapped in whole at the end: the CSV data
-//! behind every number, PNG figures and a self-contained `index.html`.
+//! a CAM part ([`compensation`]).
+//!
+//! [`run_study`] computes it all in memory and returns it as a [`Study`]; the CSV data behind
+//! every number, the PNG figures and the self-contained `index.html` are written by
+//! `deflex_report::study::write_study` (`deflex demo` does both).
 //!
 //! The twin's plant is read only to *label* ground truth in the report (e.g. the plant's
 //! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
@@ -19,17 +22,21 @@
 pub mod compensation;
 mod conditions;
 pub mod contact;
+mod error;
 pub mod fig7;
-mod figures;
-mod page;
+pub mod numbers;
 pub mod paper;
 pub mod sensitivity;
 mod study;
-mod tables;
-pub mod twin_controller;
+mod summary;
 
 pub use conditions::{conditions, one_edof_start};
-pub use study::{
-    DemoOptions, DemoSummary, FormingNumbers, ModelErrorNumbers, Progress, StiffnessRow, run_demo,
+pub use error::DemoError;
+pub use numbers::paper_vs_deflex as paper_vs_deflex_rows;
+pub use study::{DemoOptions, Predictions, Progress, Study, run_study};
+pub use summary::{
+    BASELINE, DemoSummary, FormingNumbers, IDENTIFIED, ModelErrorNumbers, StiffnessRow, TABLE1,
 };
-pub use tables::paper_vs_deflex as paper_vs_deflex_rows;
+
+#[cfg(test)]
+mod it_tests;

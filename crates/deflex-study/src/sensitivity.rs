@@ -9,12 +9,12 @@
 //! the improvement is that of the maximum path error norm. Runs are independent and seeded, so
 //! they are spread over threads without changing a number.
 
-use crate::twin_controller::{controller_config_for, run_closed_loop};
+use crate::DemoError;
 use deflex_model::{Axis, EdofSite, Robot};
 use deflex_sim::sheet::{aerens_fz, scallop_height_mm};
 use deflex_sim::{CellConfig, ConeParams, ToolPath};
+use deflex_twin::{controller_config_for, run_closed_loop};
 use serde::Serialize;
-use std::fmt::Write as _;
 
 /// What to vary. Empty lists leave a factor out.
 #[derive(Clone, Debug, Serialize)]
@@ -66,26 +66,36 @@ impl SensitivityPlan {
     }
 
     /// Check every value; messages name the option.
-    pub fn validate(&self) -> Result<(), String> {
-        let check = |name: &str, values: &[f64], lo: f64, hi: f64| -> Result<(), String> {
-            if values.len() > 20 {
-                return Err(format!("{name}: at most 20 values, got {}", values.len()));
+    pub fn validate(&self) -> Result<(), SensitivityPlanError> {
+        use SensitivityPlanError as E;
+        let check = |option: &'static str, values: &[f64], lo: f64, hi: f64| {
+            if values.len() > MAX_VALUES {
+                return Err(E::TooManyValues {
+                    option,
+                    count: values.len(),
+                });
             }
-            for v in values {
-                if !(v.is_finite() && *v >= lo && *v <= hi) {
-                    return Err(format!("{name}: {v} is outside {lo}..{hi}"));
-                }
+            match values
+                .iter()
+                .find(|v| !(v.is_finite() && **v >= lo && **v <= hi))
+            {
+                Some(&value) => Err(E::OutOfRange {
+                    option,
+                    value,
+                    lo,
+                    hi,
+                }),
+                None => Ok(()),
             }
-            Ok(())
         };
         check("--delays-ms (s)", &self.delays_s, 0.0, 1.0)?;
         check("--model-scales", &self.model_scales, 0.1, 10.0)?;
-        for (name, values) in [
+        for (option, values) in [
             ("--delays-ms", &self.delays_s),
             ("--model-scales", &self.model_scales),
         ] {
             if values.windows(2).any(|w| w[1] <= w[0]) {
-                return Err(format!("{name}: give increasing values"));
+                return Err(E::NotIncreasing { option });
             }
         }
         check("--gain-errors", &self.gain_errors, -0.5, 0.5)?;
@@ -97,15 +107,61 @@ impl SensitivityPlan {
             1e9,
         )?;
         if !(1..=64).contains(&self.threads) {
-            return Err(format!("--threads: 1..64, got {}", self.threads));
+            return Err(E::Threads { got: self.threads });
         }
         if let Some(l) = self.length_mm
             && !(l.is_finite() && l > 0.0 && l <= 1e5)
         {
-            return Err(format!("--length-mm: within (0, 100000], got {l}"));
+            return Err(E::Length { got: l });
         }
         Ok(())
     }
+}
+
+/// Most values per factor.
+pub const MAX_VALUES: usize = 20;
+
+/// A sensitivity plan outside its ranges; the message names the `deflex sim sensitivity` option.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SensitivityPlanError {
+    /// More than [`MAX_VALUES`] values.
+    #[error("{option}: at most 20 values, got {count}")]
+    TooManyValues {
+        /// The option.
+        option: &'static str,
+        /// Values given.
+        count: usize,
+    },
+    /// A value outside its range (or not finite).
+    #[error("{option}: {value} is outside {lo}..{hi}")]
+    OutOfRange {
+        /// The option.
+        option: &'static str,
+        /// The value.
+        value: f64,
+        /// Smallest allowed.
+        lo: f64,
+        /// Largest allowed.
+        hi: f64,
+    },
+    /// Values that do not increase.
+    #[error("{option}: give increasing values")]
+    NotIncreasing {
+        /// The option.
+        option: &'static str,
+    },
+    /// Threads outside 1–64.
+    #[error("--threads: 1..64, got {got}")]
+    Threads {
+        /// Threads asked for.
+        got: usize,
+    },
+    /// A path length outside (0, 100 000] mm.
+    #[error("--length-mm: within (0, 100000], got {got}")]
+    Length {
+        /// The length given (mm).
+        got: f64,
+    },
 }
 
 /// One condition of the study.
@@ -154,7 +210,7 @@ pub struct SensitivityResult {
 
 /// The sensitivity cone for a cell and the cell with its sheet strength scaled so that the
 /// Aerens level of the 1 mm step-down equals that of the paper's 0.24 mm.
-pub fn sensitivity_cone(cell: &CellConfig) -> Result<(ToolPath, CellConfig), String> {
+pub fn sensitivity_cone(cell: &CellConfig) -> Result<(ToolPath, CellConfig), DemoError> {
     let paper = ConeParams::default();
     let fast = ConeParams {
         step_down_mm: 1.0,
@@ -173,7 +229,7 @@ pub fn sensitivity_cone(cell: &CellConfig) -> Result<(ToolPath, CellConfig), Str
     };
     let mut scaled = cell.clone();
     scaled.sheet.rm_mpa *= level(paper.step_down_mm) / level(fast.step_down_mm);
-    let mut path = ToolPath::cone(&fast).map_err(|e| e.to_string())?;
+    let mut path = ToolPath::cone(&fast)?;
     path.name = format!("sensitivity cone ({})", path.name);
     Ok((path, scaled))
 }
@@ -218,7 +274,7 @@ fn run_job(
     model: &Robot,
     seed: u64,
     closed: bool,
-) -> Result<Outcome, String> {
+) -> Result<Outcome, DemoError> {
     if closed {
         let run = run_closed_loop(
             &job.cell,
@@ -228,7 +284,8 @@ fn run_job(
             controller_config_for(&job.cell),
             false,
             &mut |_| {},
-        )?;
+        )
+        .map_err(DemoError::from)?;
         let s = &run.forming.summary;
         Ok(Outcome {
             max_mm: s.max_error_norm_mm,
@@ -237,8 +294,7 @@ fn run_job(
             fault: run.fault.map(|f| f.to_string()),
         })
     } else {
-        let run = deflex_sim::run_forming(&job.cell, path.clone(), seed, None)
-            .map_err(|e| e.to_string())?;
+        let run = deflex_sim::run_forming(&job.cell, path.clone(), seed, None)?;
         let s = &run.summary;
         Ok(Outcome {
             max_mm: s.max_error_norm_mm,
@@ -249,20 +305,9 @@ fn run_job(
     }
 }
 
-/// Run the study for `cell` with the controller's (identified) `model`; `progress` receives the
-/// fraction of runs done.
-pub fn run_sensitivity(
-    cell: &CellConfig,
-    model: &Robot,
-    plan: &SensitivityPlan,
-    seed: u64,
-    progress: &(dyn Fn(f64) + Sync),
-) -> Result<SensitivityResult, String> {
-    plan.validate()?;
-    let (mut path, base) = sensitivity_cone(cell)?;
-    if let Some(l) = plan.length_mm {
-        path = path.truncated(l);
-    }
+/// One closed-loop job per condition of `plan`, on the sensitivity cell `base` and `path`: the
+/// delay × model-scale cells first, then gain, drift and contact stiffness.
+fn sensitivity_jobs(plan: &SensitivityPlan, base: &CellConfig, path: &ToolPath) -> Vec<Job> {
     let mut jobs: Vec<Job> = Vec::new();
     let with = |f: &dyn Fn(&mut CellConfig)| {
         let mut c = base.clone();
@@ -321,6 +366,24 @@ pub fn run_sensitivity(
             scale: 1.0,
         });
     }
+    jobs
+}
+
+/// Run the study for `cell` with the controller's (identified) `model`; `progress` receives the
+/// fraction of runs done.
+pub fn run_sensitivity(
+    cell: &CellConfig,
+    model: &Robot,
+    plan: &SensitivityPlan,
+    seed: u64,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<SensitivityResult, DemoError> {
+    plan.validate()?;
+    let (mut path, base) = sensitivity_cone(cell)?;
+    if let Some(l) = plan.length_mm {
+        path = path.truncated(l);
+    }
+    let jobs = sensitivity_jobs(plan, &base, &path);
     // Open loop depends on the cell's plant and process only: one run per distinct process.
     let open_key = |c: &CellConfig| c.sheet.contact_stiffness_n_mm.to_bits();
     let mut open_cells: Vec<(u64, CellConfig)> = Vec::new();
@@ -340,7 +403,7 @@ pub fn run_sensitivity(
         .chain((0..jobs.len()).map(|i| (i, true)))
         .collect();
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let results: std::sync::Mutex<Vec<Option<Result<Outcome, String>>>> =
+    let results: std::sync::Mutex<Vec<Option<Result<Outcome, DemoError>>>> =
         std::sync::Mutex::new((0..work.len()).map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..plan.threads.min(work.len()).max(1) {
@@ -371,12 +434,14 @@ pub fn run_sensitivity(
             });
         }
     });
-    let results = results
-        .into_inner()
-        .map_err(|_| "a sensitivity run panicked".to_string())?;
+    let results = results.into_inner().map_err(|_| DemoError::Worker {
+        what: "a sensitivity run panicked",
+    })?;
     let mut outcomes = Vec::with_capacity(results.len());
     for r in results {
-        outcomes.push(r.ok_or("a sensitivity run did not finish")??);
+        outcomes.push(r.ok_or(DemoError::Worker {
+            what: "a sensitivity run did not finish",
+        })??);
     }
     let (open, closed) = outcomes.split_at(open_cells.len());
     let mut rows = Vec::with_capacity(jobs.len());
@@ -385,7 +450,9 @@ pub fn run_sensitivity(
             .iter()
             .position(|(k, _)| *k == open_key(&job.cell))
             .map(|i| &open[i])
-            .ok_or("missing open-loop run")?;
+            .ok_or(DemoError::Worker {
+                what: "missing open-loop run",
+            })?;
         rows.push(SensitivityRow {
             factor: job.factor.clone(),
             condition: job.condition.clone(),
@@ -413,85 +480,4 @@ pub fn run_sensitivity(
         rows,
         runs: total,
     })
-}
-
-impl SensitivityResult {
-    /// `sensitivity.csv` (SIMULATED).
-    pub fn csv(&self) -> String {
-        let mut s = format!(
-            "# SIMULATED closed-loop sensitivity on the deflex digital twin (sensitivity cone); robot: {}\n\
-             factor,condition,open_max_mm,closed_max_mm,closed_rms_mm,improvement_percent,closed_max_force_N,fault\n",
-            self.robot
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "\"{}\",\"{}\",{:.4},{:.4},{:.4},{:.2},{:.1},\"{}\"",
-                r.factor,
-                r.condition,
-                r.open_max_mm,
-                r.closed_max_mm,
-                r.closed_rms_mm,
-                r.improvement_percent,
-                r.closed_max_force_N,
-                r.fault.clone().unwrap_or_default()
-            );
-        }
-        s
-    }
-
-    /// Rows for a table: factor, condition, open, closed max, improvement, force, fault.
-    pub fn table_rows(&self) -> Vec<Vec<String>> {
-        self.rows
-            .iter()
-            .map(|r| {
-                vec![
-                    r.factor.clone(),
-                    r.condition.clone(),
-                    format!("{:.3}", r.open_max_mm),
-                    format!("{:.3}", r.closed_max_mm),
-                    format!("{:.1}", r.improvement_percent),
-                    format!("{:.0}", r.closed_max_force_N),
-                    r.fault.clone().unwrap_or_else(|| "–".into()),
-                ]
-            })
-            .collect()
-    }
-
-    /// Headers of [`SensitivityResult::table_rows`].
-    pub const HEADERS: [&'static str; 7] = [
-        "factor",
-        "condition",
-        "open max |e| [mm]",
-        "closed max |e| [mm]",
-        "improvement [%]",
-        "closed max |F| [N]",
-        "fault",
-    ];
-
-    /// The delay × model-scale heatmap of the improvement (PNG).
-    pub fn heatmap(&self, path: &std::path::Path) -> Result<(), String> {
-        if self.heatmap_delays_s.len() < 2 || self.heatmap_scales.len() < 2 {
-            return Ok(());
-        }
-        let spec = deflex_report::PlotSpec::new(
-            format!(
-                "SIMULATED {} — improvement of the max path error [%]: delay × model compliance scale",
-                self.robot
-            ),
-            "correction delay [ms]",
-            "model compliance scale (1.3 = 30 % too soft)",
-        )
-        .size(900, 650);
-        let x: Vec<f64> = self.heatmap_delays_s.iter().map(|d| d * 1e3).collect();
-        deflex_report::heatmap(
-            path,
-            &spec,
-            &x,
-            &self.heatmap_scales,
-            &self.heatmap_improvement_percent,
-            "improvement [%]",
-        )
-        .map_err(|e| e.to_string())
-    }
 }

@@ -1,37 +1,39 @@
-//! The study pipeline: plan → campaign → identification → validation → forming → report.
+//! The study pipeline: plan → campaign → identification → validation → forming → stiff contact
+//! → sensitivity → compensation, computed in memory ([`run_study`]); its files, figures and page
+//! are `deflex_report::study`'s.
 
+use crate::DemoError;
+use crate::compensation::PartRuns;
 use crate::conditions::{conditions, one_edof_start};
+use crate::contact::StiffContactRuns;
+use crate::numbers::{error_numbers, grid_rows, stiffness_rows};
 use crate::sensitivity::{SensitivityPlan, run_sensitivity};
-use crate::tables::{
-    error_numbers, grid_rows, paper_vs_deflex_csv, predictions_csv, stiffness_csv, stiffness_rows,
-    write_text,
+use crate::summary::{
+    BASELINE, DemoSummary, FormingNumbers, IDENTIFIED, ModelErrorNumbers, TABLE1,
 };
-use crate::twin_controller::{controller_config_for, run_closed_loop};
-use deflex_stiffness::plan::{PlanOptions, plan_experiments};
-use deflex_stiffness::validate::predict;
-use deflex_stiffness::{SearchOptions, Structure, calibrate_fixed, search_structure};
-use deflex_model::{Robot, robot_to_toml};
-use deflex_sim::campaign::{
-    GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
-};
+use deflex_model::Robot;
 use deflex_sim::profile::Maker;
+use deflex_sim::twin_campaign::{GridParams, SpiralParams, run_campaign, spiral, validation_grid};
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
-use serde::Serialize;
-use std::path::PathBuf;
+use deflex_stiffness::plan::{Plan, PlanOptions, plan_experiments};
+use deflex_stiffness::validation::predict;
+use deflex_stiffness::{
+    MeasurementRow, SearchOptions, SearchResult, Structure, calibrate_fixed, search_structure,
+};
+use deflex_twin::{ClosedLoopRun, controller_config_for, run_closed_loop};
 use std::time::Instant;
 
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct DemoOptions {
-    /// Output folder (built aside and swapped in whole at the end).
-    pub out_dir: PathBuf,
     /// Seed of every random draw (campaign noise, sensor noise, planner).
     pub seed: u64,
     /// A shortened study for tests: fewer load cases, a short spiral, the first part of the cone,
     /// a 2 × 2 sensitivity on a short path.
     pub quick: bool,
-    /// The robot the twin plays (built-in name or robot file): its cell comes from
-    /// `deflex_sim::profile`. The paper's comparisons are shown for the TX200 only.
+    /// The robot the twin plays (built-in name or robot file) as the user named it: the cell
+    /// given to [`run_study`] is this robot's (`deflex_twin::cell_for_robot`). The paper's
+    /// comparisons are shown for the TX200 only.
     pub robot: String,
     /// Run the sensitivity section.
     pub sensitivity: bool,
@@ -40,7 +42,6 @@ pub struct DemoOptions {
 impl Default for DemoOptions {
     fn default() -> Self {
         DemoOptions {
-            out_dir: PathBuf::from("deflex-report"),
             seed: 1,
             quick: false,
             robot: "tx200".into(),
@@ -59,188 +60,238 @@ pub trait Progress {
     fn done(&mut self, note: &str);
 }
 
-/// Prediction error of one model on one data set (δz as in the paper's Figs. 10–13, and the
-/// norm), mm.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct ModelErrorNumbers {
-    /// Model name.
-    pub model: String,
-    /// Data set (`grid 600 N`, `grid 1100 N`, `spiral 600 N`).
-    pub data: String,
-    /// Points.
-    pub points: usize,
-    /// RMS of the δz error (mm).
-    pub rms_z_mm: f64,
-    /// Largest |δz error| (mm).
-    pub max_z_mm: f64,
-    /// RMS of the 3D error norm (mm).
-    pub rms_norm_mm: f64,
-    /// Largest 3D error norm (mm).
-    pub max_norm_mm: f64,
-    /// RMS of the measured δz, for scale (mm).
-    pub measured_rms_z_mm: f64,
-}
-
-/// One identified stiffness beside the paper's Table 1 and the twin's (simulated) truth.
-#[derive(Clone, Debug, Serialize)]
-pub struct StiffnessRow {
-    /// eDoF label (`J3.x`) or shift (`δr3`).
-    pub name: String,
-    /// Identified value (N·m/rad, or m for a shift).
-    pub identified: Option<f64>,
-    /// Standard error.
-    pub se: Option<f64>,
-    /// 95 % interval.
-    pub interval95: Option<(f64, f64)>,
-    /// Status from the calibration.
-    pub status: String,
-    /// The paper's Table 1 value.
-    pub table1: Option<f64>,
-    /// The twin plant's linear value (SIMULATED ground truth).
-    pub plant: Option<f64>,
-}
-
-/// Numbers of one forming run.
-#[derive(Clone, Debug, Default, Serialize)]
-#[allow(non_snake_case)]
-pub struct FormingNumbers {
-    /// Largest TCP error norm (mm).
-    pub max_error_norm_mm: f64,
-    /// RMS TCP error norm (mm).
-    pub rms_error_norm_mm: f64,
-    /// Largest vertical force (N).
-    pub max_fz_N: f64,
-    /// Largest in-plane force (N).
-    pub max_fxy_N: f64,
-    /// Largest force norm (N).
-    pub max_force_norm_N: f64,
-    /// Deepest formed point (mm).
-    pub final_part_depth_mm: f64,
-    /// Programmed depth (mm).
-    pub target_depth_mm: f64,
-    /// Simulated duration (s).
-    pub duration_s: f64,
-}
-
-impl FormingNumbers {
-    fn from_run(run: &FormingRun) -> Self {
-        let s = &run.summary;
-        FormingNumbers {
-            max_error_norm_mm: s.max_error_norm_mm,
-            rms_error_norm_mm: s.rms_error_norm_mm,
-            max_fz_N: s.max_fz_N,
-            max_fxy_N: s.max_fxy_N,
-            max_force_norm_N: s.max_force_norm_N,
-            final_part_depth_mm: s.final_part_depth_mm,
-            target_depth_mm: s.target_depth_mm,
-            duration_s: s.duration_s,
-        }
-    }
-}
-
-/// Everything the study measured (`summary.json`).
-#[derive(Clone, Debug, Serialize)]
-pub struct DemoSummary {
-    /// Always true: the cell is the digital twin.
-    pub simulated: bool,
-    /// The robot the twin played (its description's name) and the spec it was given as.
-    pub robot: String,
-    /// The robot spec (`tx200`, `ur10e`, a file).
-    pub robot_spec: String,
-    /// The paper's comparisons apply (the TX200 cell).
-    pub paper_comparison: bool,
-    /// The error sources and effects of the twin, with their levels and whether they were on:
-    /// `(source, level, on)`.
-    pub conditions: Vec<(String, String, bool)>,
-    /// Seed.
-    pub seed: u64,
-    /// Shortened study.
-    pub quick: bool,
-    /// Load cases and measured points of the campaign.
-    pub campaign_load_cases: usize,
-    /// Rows of the campaign file.
-    pub campaign_rows: usize,
-    /// Identified structure label.
-    pub identified_structure: String,
-    /// Search iterations accepted.
-    pub search_steps: usize,
-    /// Why the search stopped.
-    pub search_stop_reason: String,
-    /// RMS residual of the identification (µm, all components).
-    pub identification_rms_um: f64,
-    /// χ²/dof of the identification.
-    pub identification_reduced_chi2: f64,
-    /// Identified stiffnesses and shifts beside Table 1 and the plant.
-    pub stiffness: Vec<StiffnessRow>,
-    /// Validation errors (grid and spiral, every model).
-    pub validation: Vec<ModelErrorNumbers>,
-    /// The paper's Figs. 8–9 test (Fig. 7 configuration, lateral 1400 N): per point the
-    /// SIMULATED measurement and each model's prediction. Empty for robots other than the TX200.
-    pub fig7: Vec<crate::fig7::Fig7Point>,
-    /// Forming without correction.
-    pub forming_open: FormingNumbers,
-    /// Forming with correction.
-    pub forming_closed: FormingNumbers,
-    /// `100 (1 − closed/open)` of the maximum error norm.
-    pub improvement_percent: f64,
-    /// Status line of the controller at the end of the corrected run.
-    pub controller_status: String,
-    /// The plunge into a stiff fixture (10⁷ N/m) without correction, with it unguarded and with
-    /// the runaway guard.
-    pub stiff_contact: crate::contact::StiffContactNumbers,
-    /// The same plunge across fixture stiffnesses 10⁵–10⁸ N/m.
-    pub stiff_contact_sweep: Vec<crate::contact::StiffContactNumbers>,
-    /// The sensitivity study, when run.
-    pub sensitivity: Option<crate::sensitivity::SensitivityResult>,
-    /// Offline compensation, online correction and both, on the cone and a CAM part.
-    pub compensation: crate::compensation::CompensationStudy,
-    /// Wall time of each stage (s).
-    pub stage_seconds: Vec<(String, f64)>,
-}
-
-impl DemoSummary {
-    /// The validation numbers of one model on one data set.
-    pub fn errors(&self, model: &str, data: &str) -> Option<&ModelErrorNumbers> {
-        self.validation
-            .iter()
-            .find(|v| v.model == model && v.data == data)
-    }
-}
-
-/// Model names used in the report.
-pub(crate) const IDENTIFIED: &str = "identified (deflex)";
-pub(crate) const BASELINE: &str = "one eDoF per joint";
-pub(crate) const TABLE1: &str = "paper Table 1";
-
 const STAGES: usize = 10;
 
-/// Run the whole study; writes every output into `options.out_dir`, which appears whole at the
-/// end (or not at all when the study fails).
-pub fn run_demo(options: &DemoOptions, progress: &mut dyn Progress) -> Result<DemoSummary, String> {
-    let building = deflex_files::AtomicDir::create(&options.out_dir)
-        .map_err(|e| format!("{}: {e}", options.out_dir.display()))?;
-    let out = building.path().to_path_buf();
-    let summary = study(options, &out, progress)?;
-    building
-        .commit()
-        .map_err(|e| format!("{}: {e}", options.out_dir.display()))?;
-    Ok(summary)
+/// Predicted displacements (m) of every row, per model: `(model name, one per row)`.
+pub type Predictions = Vec<(&'static str, Vec<[f64; 3]>)>;
+
+/// Everything the study computed: its numbers ([`Study::summary`], `summary.json`) and the data
+/// behind its files and figures.
+pub struct Study {
+    /// The numbers.
+    pub summary: DemoSummary,
+    /// The twin's cell.
+    pub cell: CellConfig,
+    /// The cell's nominal robot (what the planner and the controller start from).
+    pub nominal: Robot,
+    /// The calibration campaign's plan.
+    pub plan: Plan,
+    /// The campaign measured on the twin (SIMULATED).
+    pub campaign: Vec<MeasurementRow>,
+    /// The structure search.
+    pub search: SearchResult,
+    /// The identified model.
+    pub identified: Robot,
+    /// The one-eDoF-per-joint model calibrated on the same campaign.
+    pub baseline: Robot,
+    /// The Fig. 7 test's rows (empty for robots other than the TX200); its points are in the
+    /// summary.
+    pub fig7_rows: Vec<MeasurementRow>,
+    /// The validation grid's parameters.
+    pub grid_params: GridParams,
+    /// The grid measured on the twin.
+    pub grid: Vec<MeasurementRow>,
+    /// Every model's prediction of the grid.
+    pub grid_predictions: Predictions,
+    /// The spiral's parameters.
+    pub spiral_params: SpiralParams,
+    /// The spiral measured on the twin.
+    pub spiral: Vec<MeasurementRow>,
+    /// Every model's prediction of the spiral.
+    pub spiral_predictions: Predictions,
+    /// The cone without correction.
+    pub open: FormingRun,
+    /// The cone with the correction (and the controller's per-cycle trace).
+    pub closed: ClosedLoopRun,
+    /// The plunge into the 10⁷ N/m fixture: the three runs.
+    pub plunge: StiffContactRuns,
+    /// The runs of the compensation comparison: the cone, then the CAM part.
+    pub compensation_runs: [PartRuns; 2],
 }
 
-fn study(
-    options: &DemoOptions,
-    out: &std::path::Path,
-    progress: &mut dyn Progress,
-) -> Result<DemoSummary, String> {
-    let seed = options.seed;
-    let cell = CellConfig::for_robot(&options.robot).map_err(|e| e.to_string())?;
-    let nominal = cell.nominal_robot().map_err(|e| e.to_string())?;
-    let paper_comparison = Maker::of(&options.robot, &nominal.name) == Maker::StaubliTx200;
-    let mut timings = Vec::new();
+/// Stage timings of the run (`summary.json`'s `stage_seconds`).
+struct Timings(Vec<(String, f64)>);
 
-    // 1. Plan.
-    let clock = Instant::now();
+impl Timings {
+    /// Run `work`, timing it as `name`.
+    fn time<T>(&mut self, name: &str, work: impl FnOnce() -> T) -> T {
+        let clock = Instant::now();
+        let out = work();
+        self.0
+            .push((name.to_string(), clock.elapsed().as_secs_f64()));
+        out
+    }
+}
+
+/// The identified model and the baseline, with the search behind them.
+struct Identification {
+    search: SearchResult,
+    identified: Robot,
+    baseline: Robot,
+}
+
+/// Run the whole study on `cell` (the cell of `options.robot`), in memory; `progress` hears of
+/// every stage. Write it with `deflex_report::study::write_study`.
+pub fn run_study(
+    options: &DemoOptions,
+    cell: CellConfig,
+    progress: &mut dyn Progress,
+) -> Result<Study, DemoError> {
+    let seed = options.seed;
+    let nominal = cell.nominal_robot()?;
+    let paper_comparison = Maker::of(&options.robot, &nominal.name) == Maker::StaubliTx200;
+    let mut timings = Timings(Vec::new());
+
+    // 1–2. Plan and campaign.
+    let plan = timings.time("plan", || plan_stage(options, &cell, &nominal, progress))?;
+    let load_cases = deflex_stiffness::data::load_case_count(&plan.rows);
+    let campaign = timings.time("campaign", || {
+        progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
+        let campaign = run_campaign(&cell, &plan.rows, seed)?;
+        progress.done(&format!("{} measured points", campaign.len()));
+        Ok::<_, DemoError>(campaign)
+    })?;
+
+    // 3. Identification.
+    let id = timings.time("identification", || identify(&nominal, &campaign, progress))?;
+    let plant_robot = cell.plant.linear_robot(&nominal)?;
+    let stiffness = stiffness_rows(&id.search, &plant_robot);
+    let models: [(&'static str, &Robot); 3] = [
+        (IDENTIFIED, &id.identified),
+        (BASELINE, &id.baseline),
+        (TABLE1, &nominal),
+    ];
+
+    // The paper's Figs. 8–9: M1–M3 at the Fig. 7 configuration (TX200 only).
+    let (fig7_rows, fig7) = if paper_comparison {
+        timings.time("Fig. 7 test", || {
+            crate::fig7::fig7_study(&cell, &nominal, &models, seed.wrapping_add(3))
+        })?
+    } else {
+        (Vec::new(), Vec::new())
+    };
+
+    // 4–5. Validation on the grid and along the spiral.
+    let (grid_params, grid, grid_predictions, mut validation) = timings
+        .time("grid validation", || {
+            grid_stage(&cell, seed, &models, progress)
+        })?;
+    let (spiral_params, spiral_rows, spiral_predictions) = timings
+        .time("spiral validation", || {
+            spiral_stage(options, &cell, &models, &mut validation, progress)
+        })?;
+
+    // 6–7. Forming without and with correction.
+    let path = if options.quick {
+        ToolPath::paper_cone().truncated(1500.0)
+    } else {
+        ToolPath::paper_cone()
+    };
+    let open = timings.time("forming without correction", || {
+        progress.stage(6, STAGES, "form the cone without correction");
+        let open = run_forming_with_progress(&cell, path.clone(), seed, None, &mut |f| {
+            progress.fraction(f)
+        })?;
+        progress.done(&format!(
+            "max error norm {:.2} mm, max |F| {:.0} N",
+            open.summary.max_error_norm_mm, open.summary.max_force_norm_N
+        ));
+        Ok::<_, DemoError>(open)
+    })?;
+    let closed = timings.time("forming with correction", || {
+        closed_loop_stage(&cell, &path, seed, &id.identified, &open, progress)
+    })?;
+    let improvement =
+        100.0 * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
+
+    // 8. Stiff contact.
+    let (stiff_contact, stiff_contact_sweep, plunge) = timings.time("stiff contact", || {
+        stiff_contact_stage(options, &cell, &id.identified, progress)
+    })?;
+
+    // 9. Sensitivity.
+    let sensitivity = timings.time("sensitivity", || {
+        sensitivity_stage(options, &cell, &id.identified, progress)
+    })?;
+
+    // 10. Offline, online and both.
+    let (compensation, compensation_runs) = timings.time("compensation", || {
+        progress.stage(
+            10,
+            STAGES,
+            "compare offline compensation, online correction and both",
+        );
+        let (study, runs) = crate::compensation::study(
+            &cell,
+            &id.identified,
+            seed,
+            options.quick,
+            (&path, &open, &closed.forming),
+        )?;
+        progress.done(&crate::compensation::one_line(&study));
+        Ok::<_, DemoError>((study, runs))
+    })?;
+
+    let summary = DemoSummary {
+        simulated: true,
+        robot: nominal.name.clone(),
+        robot_spec: options.robot.clone(),
+        paper_comparison,
+        conditions: conditions(&cell),
+        seed,
+        quick: options.quick,
+        campaign_load_cases: load_cases,
+        campaign_rows: campaign.len(),
+        identified_structure: id.search.calibration.structure.label(),
+        search_steps: id.search.steps.len().saturating_sub(1),
+        search_stop_reason: id.search.stop_reason.clone(),
+        identification_rms_um: id.search.calibration.residuals.rms_all_m * 1e6,
+        identification_reduced_chi2: id.search.calibration.reduced_chi2,
+        stiffness,
+        validation,
+        fig7,
+        forming_open: FormingNumbers::from_run(&open),
+        forming_closed: FormingNumbers::from_run(&closed.forming),
+        improvement_percent: improvement,
+        controller_status: closed.status.clone(),
+        stiff_contact,
+        stiff_contact_sweep,
+        sensitivity,
+        compensation,
+        stage_seconds: timings.0,
+    };
+    Ok(Study {
+        summary,
+        cell,
+        nominal,
+        plan,
+        campaign,
+        search: id.search,
+        identified: id.identified,
+        baseline: id.baseline,
+        fig7_rows,
+        grid_params,
+        grid,
+        grid_predictions,
+        spiral_params,
+        spiral: spiral_rows,
+        spiral_predictions,
+        open,
+        closed,
+        plunge,
+        compensation_runs,
+    })
+}
+
+/// Stage 1: plan the calibration campaign in the cell's floor and work table.
+fn plan_stage(
+    options: &DemoOptions,
+    cell: &CellConfig,
+    nominal: &Robot,
+    progress: &mut dyn Progress,
+) -> Result<Plan, DemoError> {
     progress.stage(1, STAGES, "plan the calibration campaign");
+    let paper_comparison = Maker::of(&options.robot, &nominal.name) == Maker::StaubliTx200;
     let level = cell.forming_force_level_n();
     let plan_options = PlanOptions {
         // The paper loads its TX200 to 1.4 kN; other cells to 1.1 × their forming force.
@@ -251,136 +302,93 @@ fn study(
         },
         load_cases: if options.quick { 24 } else { 40 },
         configurations: if options.quick { 300 } else { 600 },
-        seed,
+        seed: options.seed,
         full_family: true,
         // The cell's floor and work table, as `deflex plan` checks them.
         ..PlanOptions::for_a_real_cell()
     };
-    let plan = plan_experiments(&nominal, &plan_options).map_err(|e| e.to_string())?;
-    deflex_stiffness::data::write_rows_for(&out.join("plan.csv"), &nominal, &plan.rows, &[])
-        .map_err(|e| e.to_string())?;
-    let load_cases = deflex_stiffness::data::load_case_count(&plan.rows);
+    let plan = plan_experiments(nominal, &plan_options)?;
     progress.done(&format!(
-        "{load_cases} load cases, {} points to measure",
+        "{} load cases, {} points to measure",
+        deflex_stiffness::data::load_case_count(&plan.rows),
         plan.rows.len()
     ));
-    timings.push(("plan".to_string(), clock.elapsed().as_secs_f64()));
+    Ok(plan)
+}
 
-    // 2. Campaign on the twin.
-    let clock = Instant::now();
-    progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
-    let campaign = run_campaign(&cell, &plan.rows, seed).map_err(|e| e.to_string())?;
-    let campaign_file = |rows: &[deflex_stiffness::MeasurementRow], what: &str, seed: u64| {
-        campaign_text(&cell, rows, what, seed, None).map_err(|e| e.to_string())
-    };
-    write_text(
-        &out.join("campaign.csv"),
-        &campaign_file(&campaign, "calibration campaign", seed)?,
-    )?;
-    progress.done(&format!("{} measured points", campaign.len()));
-    timings.push(("campaign".to_string(), clock.elapsed().as_secs_f64()));
-
-    // 3. Identification: structure search from one z-eDoF per joint, and the one-eDoF baseline
-    // calibrated on the same data.
-    let clock = Instant::now();
+/// Stage 3: structure search from one z-eDoF per joint, and the one-eDoF baseline calibrated on
+/// the same data.
+fn identify(
+    nominal: &Robot,
+    campaign: &[MeasurementRow],
+    progress: &mut dyn Progress,
+) -> Result<Identification, DemoError> {
     progress.stage(3, STAGES, "identify the model structure and stiffnesses");
-    let start = one_edof_start(&nominal);
+    let start = one_edof_start(nominal);
     let search = search_structure(
         &start,
-        &campaign,
+        campaign,
         &SearchOptions::default(),
         &mut |_iteration, done, total| {
             if total > 0 {
                 progress.fraction(done as f64 / total as f64);
             }
         },
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let mut identified = search.calibration.to_robot(&start);
     identified.name = format!(
         "deflex-identified {} (from the SIMULATED twin campaign)",
         nominal.name
     );
-    let baseline_calibration = calibrate_fixed(&start, &campaign, &Structure::from_robot(&start))
-        .map_err(|e| e.to_string())?;
+    let baseline_calibration = calibrate_fixed(&start, campaign, &Structure::from_robot(&start))?;
     let mut baseline = baseline_calibration.to_robot(&start);
     baseline.name = "one eDoF per joint, calibrated on the SIMULATED twin campaign".into();
-    write_text(&out.join("identified.toml"), &robot_to_toml(&identified))?;
-    write_text(&out.join("baseline-1edof.toml"), &robot_to_toml(&baseline))?;
-    write_text(
-        &out.join("search_iterations.csv"),
-        &deflex_stiffness::report::table_csv(
-            &deflex_stiffness::report::ITERATION_HEADERS,
-            &deflex_stiffness::report::iteration_rows(&search.steps),
-        ),
-    )?;
-    let plant_robot = cell
-        .plant
-        .linear_robot(&nominal)
-        .map_err(|e| e.to_string())?;
-    let stiffness = stiffness_rows(&search, &plant_robot);
-    write_text(&out.join("stiffness.csv"), &stiffness_csv(&stiffness))?;
     progress.done(&format!(
         "{} in {} steps, RMS residual {:.1} µm",
         search.calibration.structure.label(),
         search.steps.len().saturating_sub(1),
         search.calibration.residuals.rms_all_m * 1e6
     ));
-    timings.push(("identification".to_string(), clock.elapsed().as_secs_f64()));
+    Ok(Identification {
+        search,
+        identified,
+        baseline,
+    })
+}
 
-    // The paper's Figs. 8–9: M1–M3 at the Fig. 7 configuration (TX200 only).
-    let clock = Instant::now();
-    let mut fig7_files = Vec::new();
-    let fig7 = if paper_comparison {
-        let models: [(&str, &Robot); 3] = [
-            (IDENTIFIED, &identified),
-            (BASELINE, &baseline),
-            (TABLE1, &nominal),
-        ];
-        let (rows, points) =
-            crate::fig7::fig7_study(&cell, &nominal, &models, seed.wrapping_add(3))?;
-        write_text(
-            &out.join("fig7_points.csv"),
-            &crate::fig7::fig7_csv(&rows, &points),
-        )?;
-        let figure = out.join("fig7_displacements.png");
-        crate::fig7::fig7_figure(&figure, &points)?;
-        fig7_files.push((
-            figure,
-            "Elastic displacements δp_x (top, cf. Fig. 8) and δp_y (bottom, cf. Fig. 9) of M1, M2, \
-             M3 and the TCP at q = (0, 90°, 0, 0, 0, 0) under f_y = 1400 N at the TCP: the \
-             twin's tracker (SIMULATED) against each model"
-                .to_string(),
-        ));
-        timings.push(("Fig. 7 test".to_string(), clock.elapsed().as_secs_f64()));
-        points
-    } else {
-        Vec::new()
-    };
-
-    // 4. Validation on the grid.
-    let clock = Instant::now();
-    progress.stage(4, STAGES, "validate on the grid of dead-weight loads");
-    let grid_params = GridParams::for_cell(&cell).map_err(|e| e.to_string())?;
-    let grid_plan = validation_grid(&cell, &grid_params).map_err(|e| e.to_string())?;
-    let grid = run_campaign(&cell, &grid_plan, seed.wrapping_add(1)).map_err(|e| e.to_string())?;
-    write_text(
-        &out.join("grid.csv"),
-        &campaign_file(&grid, "validation grid", seed.wrapping_add(1))?,
-    )?;
-    let models: [(&str, &Robot); 3] = [
-        (IDENTIFIED, &identified),
-        (BASELINE, &baseline),
-        (TABLE1, &nominal),
-    ];
-    let mut grid_predictions = Vec::new();
+/// Every model's prediction of `rows`.
+fn predictions(
+    models: &[(&'static str, &Robot)],
+    rows: &[MeasurementRow],
+) -> Result<Predictions, DemoError> {
+    let mut out = Vec::new();
     for (name, robot) in models {
-        grid_predictions.push((name, predict(robot, &grid).map_err(|e| e.to_string())?));
+        out.push((*name, predict(robot, rows)?));
     }
-    write_text(
-        &out.join("grid_predictions.csv"),
-        &predictions_csv(&grid, &grid_predictions),
-    )?;
+    Ok(out)
+}
+
+/// Stage 4: the grid of dead-weight loads measured on the twin, predicted by every model, with
+/// the error numbers per load.
+fn grid_stage(
+    cell: &CellConfig,
+    seed: u64,
+    models: &[(&'static str, &Robot)],
+    progress: &mut dyn Progress,
+) -> Result<
+    (
+        GridParams,
+        Vec<MeasurementRow>,
+        Predictions,
+        Vec<ModelErrorNumbers>,
+    ),
+    DemoError,
+> {
+    progress.stage(4, STAGES, "validate on the grid of dead-weight loads");
+    let grid_params = GridParams::for_cell(cell)?;
+    let grid_plan = validation_grid(cell, &grid_params)?;
+    let grid = run_campaign(cell, &grid_plan, seed.wrapping_add(1))?;
+    let grid_predictions = predictions(models, &grid)?;
     let mut validation = Vec::new();
     for &load in &grid_params.loads_n {
         let selected = grid_rows(&grid, load);
@@ -394,8 +402,6 @@ fn study(
             ));
         }
     }
-    let grid_files =
-        crate::figures::grid_figures(out, &grid, &grid_params.loads_n, &grid_predictions)?;
     let last = validation.len().saturating_sub(3);
     progress.done(&format!(
         "δz RMS at {:.0}/{:.0} N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
@@ -406,125 +412,94 @@ fn study(
         validation[1].rms_z_mm,
         validation[last + 1].rms_z_mm
     ));
-    timings.push(("grid validation".to_string(), clock.elapsed().as_secs_f64()));
+    Ok((grid_params, grid, grid_predictions, validation))
+}
 
-    // 5. Spiral (Fig. 14).
-    let clock = Instant::now();
+/// Stage 5: the spiral (Fig. 14) tracked on the twin and predicted by every model; its error
+/// numbers are appended to `validation`.
+fn spiral_stage(
+    options: &DemoOptions,
+    cell: &CellConfig,
+    models: &[(&'static str, &Robot)],
+    validation: &mut Vec<ModelErrorNumbers>,
+    progress: &mut dyn Progress,
+) -> Result<(SpiralParams, Vec<MeasurementRow>, Predictions), DemoError> {
     progress.stage(5, STAGES, "validate along the spiral");
-    let mut spiral_params = SpiralParams::for_cell(&cell).map_err(|e| e.to_string())?;
+    let mut spiral_params = SpiralParams::for_cell(cell)?;
     if options.quick {
         spiral_params.length_m *= 0.3 / 2.7;
     }
-    let spiral_rows =
-        spiral(&cell, &spiral_params, seed.wrapping_add(2)).map_err(|e| e.to_string())?;
-    write_text(
-        &out.join("spiral.csv"),
-        &campaign_file(&spiral_rows, "spiral", seed.wrapping_add(2))?,
-    )?;
+    let spiral_rows = spiral(cell, &spiral_params, options.seed.wrapping_add(2))?;
     let all: Vec<usize> = (0..spiral_rows.len()).collect();
-    let mut spiral_predictions = Vec::new();
     let spiral_label = format!("spiral {:.0} N", spiral_params.load_n);
-    for (name, robot) in models {
-        let predicted = predict(robot, &spiral_rows).map_err(|e| e.to_string())?;
+    let spiral_predictions = predictions(models, &spiral_rows)?;
+    for (name, predicted) in &spiral_predictions {
         validation.push(error_numbers(
             name,
             &spiral_label,
             &spiral_rows,
-            &predicted,
+            predicted,
             &all,
         ));
-        spiral_predictions.push((name, predicted));
     }
-    write_text(
-        &out.join("spiral_predictions.csv"),
-        &predictions_csv(&spiral_rows, &spiral_predictions),
-    )?;
-    let spiral_files =
-        crate::figures::spiral_figures(out, &spiral_rows, &spiral_params, &spiral_predictions)?;
     let spiral_identified = &validation[validation.len() - 3];
     progress.done(&format!(
         "{} samples, identified δz RMS {:.3} mm",
         spiral_rows.len(),
         spiral_identified.rms_z_mm
     ));
-    timings.push((
-        "spiral validation".to_string(),
-        clock.elapsed().as_secs_f64(),
-    ));
+    Ok((spiral_params, spiral_rows, spiral_predictions))
+}
 
-    // 6–7. Forming without and with correction.
-    let path = if options.quick {
-        ToolPath::paper_cone().truncated(1500.0)
-    } else {
-        ToolPath::paper_cone()
-    };
-    let clock = Instant::now();
-    progress.stage(6, STAGES, "form the cone without correction");
-    let open = run_forming_with_progress(&cell, path.clone(), seed, None, &mut |f| {
-        progress.fraction(f)
-    })
-    .map_err(|e| e.to_string())?;
-    open.write_outputs(&out.join("forming_open"))
-        .map_err(|e| e.to_string())?;
-    progress.done(&format!(
-        "max error norm {:.2} mm, max |F| {:.0} N",
-        open.summary.max_error_norm_mm, open.summary.max_force_norm_N
-    ));
-    timings.push((
-        "forming without correction".to_string(),
-        clock.elapsed().as_secs_f64(),
-    ));
-
-    let clock = Instant::now();
+/// Stage 7: the cone with the online correction by the identified model.
+fn closed_loop_stage(
+    cell: &CellConfig,
+    path: &ToolPath,
+    seed: u64,
+    identified: &Robot,
+    open: &FormingRun,
+    progress: &mut dyn Progress,
+) -> Result<ClosedLoopRun, DemoError> {
     progress.stage(7, STAGES, "form the cone with online correction");
     let closed = run_closed_loop(
-        &cell,
+        cell,
         path.clone(),
         seed,
         identified.clone(),
-        controller_config_for(&cell),
+        controller_config_for(cell),
         true,
         &mut |f| progress.fraction(f),
-    )?;
-    closed
-        .forming
-        .write_outputs(&out.join("forming_closed"))
-        .map_err(|e| e.to_string())?;
-    write_text(
-        &out.join("forming_closed").join("controller_log.csv"),
-        &crate::tables::controller_log_csv(&closed.trace, &nominal.name),
-    )?;
+    )
+    .map_err(DemoError::from)?;
     let improvement =
         100.0 * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
     progress.done(&format!(
         "max error norm {:.2} mm ({improvement:.0} % better), max |F| {:.0} N",
         closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_force_norm_N
     ));
-    timings.push((
-        "forming with correction".to_string(),
-        clock.elapsed().as_secs_f64(),
-    ));
-    let forming_files = crate::figures::forming_figures(out, &open, &closed.forming)?;
-    let controller_files = crate::figures::controller_figures(out, &closed.trace)?;
-    let mut contact_files = Vec::new();
-    let mut sensitivity_files = Vec::new();
+    Ok(closed)
+}
 
-    // 8. Stiff contact.
-    let clock = Instant::now();
+/// Stage 8: the plunge into a 10⁷ N/m fixture (its runs kept for the figure) and the sweep over
+/// fixture stiffnesses.
+fn stiff_contact_stage(
+    options: &DemoOptions,
+    cell: &CellConfig,
+    identified: &Robot,
+    progress: &mut dyn Progress,
+) -> Result<
+    (
+        crate::contact::StiffContactNumbers,
+        Vec<crate::contact::StiffContactNumbers>,
+        StiffContactRuns,
+    ),
+    DemoError,
+> {
     progress.stage(8, STAGES, "plunge into a stiff fixture (1e7 N/m)");
+    let seed = options.seed;
     let (stiff_contact, plunge_runs) =
-        crate::contact::stiff_contact(&cell, &identified, 1e7, seed, &|_| {})?;
-    let figure = out.join("stiff_contact_force.png");
-    crate::contact::contact_figure(&figure, &plunge_runs, 1e7)?;
-    contact_files.push((
-        figure,
-        "Plunge into a 10⁷ N/m fixture: the contact force over time without correction, with \
-         correction and no runaway guard, and with the runaway guard, whose curve lies on the \
-         uncorrected one once the guard has withdrawn the correction along the runaway \
-         direction (SIMULATED)"
-            .to_string(),
-    ));
-    let mut stiff_contact_sweep = Vec::new();
+        crate::contact::stiff_contact(cell, identified, 1e7, seed, &|_| {})?;
+    let mut sweep_numbers = Vec::new();
     let sweep: &[f64] = if options.quick {
         &[]
     } else {
@@ -532,11 +507,11 @@ fn study(
     };
     for &k in sweep {
         if k == stiff_contact.stiffness_n_m {
-            stiff_contact_sweep.push(stiff_contact.clone());
+            sweep_numbers.push(stiff_contact.clone());
             continue;
         }
-        let (numbers, _) = crate::contact::stiff_contact(&cell, &identified, k, seed, &|_| {})?;
-        stiff_contact_sweep.push(numbers);
+        let (numbers, _) = crate::contact::stiff_contact(cell, identified, k, seed, &|_| {})?;
+        sweep_numbers.push(numbers);
     }
     let (u, g) = (&stiff_contact.unguarded, &stiff_contact.guarded);
     progress.done(&format!(
@@ -554,126 +529,49 @@ fn study(
             ""
         }
     ));
-    timings.push(("stiff contact".to_string(), clock.elapsed().as_secs_f64()));
+    Ok((stiff_contact, sweep_numbers, plunge_runs))
+}
 
-    // 9. Sensitivity.
-    let clock = Instant::now();
+/// Stage 9: the sensitivity of the closed loop (when asked for).
+fn sensitivity_stage(
+    options: &DemoOptions,
+    cell: &CellConfig,
+    identified: &Robot,
+    progress: &mut dyn Progress,
+) -> Result<Option<crate::sensitivity::SensitivityResult>, DemoError> {
     progress.stage(9, STAGES, "sensitivity of the closed loop");
-    let sensitivity = if options.sensitivity {
-        let plan = if options.quick {
-            SensitivityPlan {
-                delays_s: vec![0.008, 0.060],
-                model_scales: vec![1.0, 1.3],
-                gain_errors: vec![],
-                drift_factors: vec![],
-                contact_stiffness_n_m: vec![],
-                threads: 2,
-                length_mm: Some(300.0),
-            }
-        } else {
-            SensitivityPlan::demo()
-        };
-        let fraction = std::sync::Mutex::new(0.0f64);
-        let result = run_sensitivity(&cell, &identified, &plan, seed, &|f| {
-            if let Ok(mut v) = fraction.lock() {
-                *v = f;
-            }
-        })?;
-        progress.fraction(1.0);
-        write_text(&out.join("sensitivity.csv"), &result.csv())?;
-        let figure = out.join("sensitivity_heatmap.png");
-        result.heatmap(&figure)?;
-        sensitivity_files.push((
-            figure,
-            "Improvement of the max path error across the correction delay and the model's \
-             compliance scale (SIMULATED, sensitivity cone)"
-                .to_string(),
-        ));
-        let worst = result
-            .rows
-            .iter()
-            .map(|r| r.improvement_percent)
-            .fold(f64::INFINITY, f64::min);
-        progress.done(&format!(
-            "{} runs, worst improvement {worst:.0} %",
-            result.runs
-        ));
-        Some(result)
-    } else {
+    if !options.sensitivity {
         progress.done("skipped");
-        None
+        return Ok(None);
+    }
+    let plan = if options.quick {
+        SensitivityPlan {
+            delays_s: vec![0.008, 0.060],
+            model_scales: vec![1.0, 1.3],
+            gain_errors: vec![],
+            drift_factors: vec![],
+            contact_stiffness_n_m: vec![],
+            threads: 2,
+            length_mm: Some(300.0),
+        }
+    } else {
+        SensitivityPlan::demo()
     };
-    timings.push(("sensitivity".to_string(), clock.elapsed().as_secs_f64()));
-
-    // 10. Offline, online and both.
-    let clock = Instant::now();
-    progress.stage(
-        10,
-        STAGES,
-        "compare offline compensation, online correction and both",
-    );
-    let (compensation, compensation_files) = crate::compensation::study(
-        &cell,
-        &identified,
-        seed,
-        options.quick,
-        (&path, &open, &closed.forming),
-        out,
-    )?;
-    progress.done(&crate::compensation::one_line(&compensation));
-    timings.push(("compensation".to_string(), clock.elapsed().as_secs_f64()));
-
-    let summary = DemoSummary {
-        simulated: true,
-        robot: nominal.name.clone(),
-        robot_spec: options.robot.clone(),
-        paper_comparison,
-        conditions: conditions(&cell),
-        seed,
-        quick: options.quick,
-        campaign_load_cases: load_cases,
-        campaign_rows: campaign.len(),
-        identified_structure: search.calibration.structure.label(),
-        search_steps: search.steps.len().saturating_sub(1),
-        search_stop_reason: search.stop_reason.clone(),
-        identification_rms_um: search.calibration.residuals.rms_all_m * 1e6,
-        identification_reduced_chi2: search.calibration.reduced_chi2,
-        stiffness,
-        validation,
-        fig7,
-        forming_open: FormingNumbers::from_run(&open),
-        forming_closed: FormingNumbers::from_run(&closed.forming),
-        improvement_percent: improvement,
-        controller_status: closed.status,
-        stiff_contact,
-        stiff_contact_sweep,
-        sensitivity,
-        compensation,
-        stage_seconds: timings,
-    };
-    write_text(
-        &out.join("summary.json"),
-        &serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?,
-    )?;
-    write_text(
-        &out.join("paper_vs_deflex.csv"),
-        &paper_vs_deflex_csv(&summary),
-    )?;
-    let page = crate::page::Page {
-        summary: &summary,
-        search: &search,
-        plan: &plan,
-        grid: &grid_params,
-        spiral: &spiral_params,
-        fig7_files,
-        grid_files,
-        spiral_files,
-        forming_files,
-        controller_files,
-        contact_files,
-        sensitivity_files,
-        compensation_files,
-    };
-    crate::page::write(out, &page)?;
-    Ok(summary)
+    let fraction = std::sync::Mutex::new(0.0f64);
+    let result = run_sensitivity(cell, identified, &plan, options.seed, &|f| {
+        if let Ok(mut v) = fraction.lock() {
+            *v = f;
+        }
+    })?;
+    progress.fraction(1.0);
+    let worst = result
+        .rows
+        .iter()
+        .map(|r| r.improvement_percent)
+        .fold(f64::INFINITY, f64::min);
+    progress.done(&format!(
+        "{} runs, worst improvement {worst:.0} %",
+        result.runs
+    ));
+    Ok(Some(result))
 }

@@ -95,6 +95,26 @@ impl<T: Pod> Broadcast<T> {
         self.head.load(Ordering::Acquire)
     }
 
+    /// The latest sample published, or `None` before the first. Lock-free: retries while the
+    /// publisher overwrites the slot it reads (a live status line, a dashboard).
+    pub fn latest(&self) -> Option<T> {
+        loop {
+            let head = self.head.load(Ordering::Acquire);
+            let p = head.checked_sub(1)?;
+            let slot = (p % self.capacity) as usize;
+            let expected = 2 * p + 2;
+            if self.seqs[slot].load(Ordering::Acquire) != expected {
+                std::hint::spin_loop();
+                continue;
+            }
+            let value = load::<T>(self.slot_words(slot));
+            fence(Ordering::Acquire);
+            if self.seqs[slot].load(Ordering::Relaxed) == expected {
+                return Some(value);
+            }
+        }
+    }
+
     /// How many samples the ring holds.
     pub fn capacity(&self) -> usize {
         self.capacity as usize

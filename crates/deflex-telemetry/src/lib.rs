@@ -30,3 +30,13 @@ pub use seqcell::SeqCell;
 
 /// Re-exported so that users can derive [`bytemuck::Pod`] for their own messages.
 pub use bytemuck;
+
+// The tests are unit tests (one test binary for the crate, no integration-test target): the
+// counting allocator counts only the calling thread's allocations (see `deflex-alloc-count`),
+// so the no-allocation test is undisturbed by the other tests running in parallel.
+#[cfg(test)]
+#[global_allocator]
+static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
+
+#[cfg(test)]
+mod tests;

@@ -1,8 +1,10 @@
-//! Every analytic Jacobian column against central finite differences of the full prediction,
+//! Every analytic Jacobian column (position and orientation) against central finite differences
+//! of the full prediction,
 //! and the model's gravity sag against deflex-model's own `gravity_displacement`.
 
-use deflex_absolute::model::Loads;
+use deflex_absolute::model::Conditions;
 use deflex_absolute::params::{EgModel, Param};
+use deflex_model::spatial::rotation_log;
 use deflex_model::{NamedPoint, NamedPose, builtin, spatial::pose_from_xyz_rpy};
 use nalgebra::Vector3;
 
@@ -24,6 +26,7 @@ fn model(name: &str, compliance_factor: f64) -> EgModel {
     m.targets.push(NamedPoint {
         name: "probe".into(),
         position: Vector3::new(0.01, -0.02, 0.093),
+        rotation: Some(nalgebra::Rotation3::from_euler_angles(0.3, -0.2, 1.1)),
     });
     for c in &mut m.compliance {
         *c *= compliance_factor;
@@ -47,7 +50,7 @@ fn model(name: &str, compliance_factor: f64) -> EgModel {
 }
 
 fn all_params(m: &EgModel) -> Vec<Param> {
-    let mut params = m.registration_params();
+    let mut params = m.registration_params(true);
     params.extend(m.geometric_params());
     params.extend((0..m.compliance.len()).map(Param::Compliance));
     for b in 0..m.robot.joint_count() {
@@ -56,8 +59,9 @@ fn all_params(m: &EgModel) -> Vec<Param> {
             params.push(Param::FirstMoment(b, k));
         }
     }
+    params.extend((0..m.robot.joint_count()).map(Param::Backlash));
     for j in 0..m.robot.joint_count() {
-        for order in 1..=2 {
+        for order in [1, 2, 101] {
             for sine in [false, true] {
                 params.push(Param::Harmonic {
                     joint: j,
@@ -74,9 +78,10 @@ fn all_params(m: &EgModel) -> Vec<Param> {
 /// built-in compliances, payload), to differencing precision.
 fn check(name: &str, compliance_factor: f64, relative_tolerance: f64) {
     let m = model(name, compliance_factor);
-    let loads = Loads {
+    let loads = Conditions {
         payload: Some((3.0, Vector3::new(0.0, 0.02, 0.05))),
         wrench: Some([30.0, -50.0, 120.0, 2.0, -1.0, 0.5]),
+        approach_rad: [0.1, -0.2, 0.0, 1e-3, -0.5, 2.0, 0.0, 0.0],
     };
     let params = all_params(&m);
     for q in [
@@ -99,10 +104,23 @@ fn check(name: &str, compliance_factor: f64, relative_tolerance: f64) {
             let numeric = (plus.predict_tracker(&q, 0, 0, &loads)
                 - minus.predict_tracker(&q, 0, 0, &loads))
                 / (2.0 * h);
-            let tolerance = relative_tolerance * numeric.norm().max(analytic.norm()) + 1e-9;
+            let analytic_p = analytic.position;
+            let tolerance = relative_tolerance * numeric.norm().max(analytic_p.norm()) + 1e-9;
             assert!(
-                (analytic - numeric).norm() <= tolerance,
-                "{name} {} at {q:?}: analytic {analytic:?} numeric {numeric:?}",
+                (analytic_p - numeric).norm() <= tolerance,
+                "{name} {} at {q:?}: position analytic {analytic_p:?} numeric {numeric:?}",
+                m.param_name(p)
+            );
+            // Orientation: ω with dR·Rᵀ = [ω]×, from log(R₊ R₋ᵀ)/(2h).
+            let numeric = rotation_log(
+                &(plus.predict_orientation(&q, 0, 0, &loads)
+                    * minus.predict_orientation(&q, 0, 0, &loads).inverse()),
+            ) / (2.0 * h);
+            let analytic_r = analytic.rotation;
+            let tolerance = relative_tolerance * numeric.norm().max(analytic_r.norm()) + 1e-9;
+            assert!(
+                (analytic_r - numeric).norm() <= tolerance,
+                "{name} {} at {q:?}: rotation analytic {analytic_r:?} numeric {numeric:?}",
                 m.param_name(p)
             );
         }
@@ -132,7 +150,7 @@ fn sag_matches_the_model_crate() {
         ..m
     };
     let q = [0.3, -1.2, 1.1, -0.4, 1.3, 0.7];
-    let ev = m.evaluate(&q, 0, &Loads::default());
+    let ev = m.evaluate(&q, 0, &Conditions::default());
     let mut data = deflex_model::Data::new();
     robot.forward_kinematics(&mut data, &q).unwrap();
     let p = ev.target_world;

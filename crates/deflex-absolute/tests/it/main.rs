@@ -3,5 +3,6 @@
 
 mod fuzz;
 mod jacobian;
+mod registration;
 mod simulated;
 mod ur10_real;

@@ -5,28 +5,28 @@
 //! stiffnesses within their intervals; a 1 mm glitch on one reading is named as an outlier and
 //! moves no parameter by as much as its standard error.
 
-use deflex_stiffness::MeasurementRow;
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::AbsoluteRow;
 use deflex_absolute::fit::{FitOptions, FitResult, Step, fit};
 use deflex_absolute::params::{DhField, EgModel, Param};
 use deflex_absolute::solve::Loss;
+use deflex_stiffness::MeasurementRow;
 use nalgebra::{Matrix4, Vector3, Vector4};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 /// The "true" robot of the simulation, in plain numbers.
-struct Truth {
+pub(crate) struct Truth {
     /// Standard DH rows (θ offset, d, a, α, β).
-    dh: [[f64; 5]; 6],
+    pub(crate) dh: [[f64; 5]; 6],
     /// Compliance of each joint's z-eDoF (rad/(N·m)).
-    compliance: [f64; 6],
+    pub(crate) compliance: [f64; 6],
     /// Mass (kg) and centre of mass in the DH frame F_i of each body.
-    mass: [f64; 6],
-    com: [[f64; 3]; 6],
+    pub(crate) mass: [f64; 6],
+    pub(crate) com: [[f64; 3]; 6],
     /// Probe in the flange frame F_6.
-    target: [f64; 3],
+    pub(crate) target: [f64; 3],
     /// Tracker set-ups: p_tracker = R p + t, R from roll-pitch-yaw.
     setups: [([f64; 3], [f64; 3]); 2],
 }
@@ -54,13 +54,13 @@ fn trans(x: f64, y: f64, z: f64) -> Matrix4<f64> {
         1.0, 0.0, 0.0, x, 0.0, 1.0, 0.0, y, 0.0, 0.0, 1.0, z, 0.0, 0.0, 0.0, 1.0,
     )
 }
-fn point(m: &Matrix4<f64>, p: [f64; 3]) -> Vector3<f64> {
+pub(crate) fn point(m: &Matrix4<f64>, p: [f64; 3]) -> Vector3<f64> {
     (m * Vector4::new(p[0], p[1], p[2], 1.0)).xyz()
 }
-fn origin(m: &Matrix4<f64>) -> Vector3<f64> {
+pub(crate) fn origin(m: &Matrix4<f64>) -> Vector3<f64> {
     m.fixed_view::<3, 1>(0, 3).into_owned()
 }
-fn z_axis(m: &Matrix4<f64>) -> Vector3<f64> {
+pub(crate) fn z_axis(m: &Matrix4<f64>) -> Vector3<f64> {
     m.fixed_view::<3, 1>(0, 2).into_owned()
 }
 
@@ -68,7 +68,7 @@ const G: Vector3<f64> = Vector3::new(0.0, 0.0, -9.80665);
 
 impl Truth {
     /// F_0 … F_6 (F_0 = identity): `F_i = F_{i−1} RotZ(q_i+θ_i) TransZ(d_i) TransX(a_i) RotX(α_i) RotY(β_i)`.
-    fn frames(&self, q: &[f64]) -> Vec<Matrix4<f64>> {
+    pub(crate) fn frames(&self, q: &[f64]) -> Vec<Matrix4<f64>> {
         let mut frames = vec![Matrix4::identity()];
         for (i, row) in self.dh.iter().enumerate() {
             let [theta, d, a, alpha, beta] = *row;
@@ -84,7 +84,7 @@ impl Truth {
     }
 
     /// Torque on each joint's z-eDoF under gravity and a force `force` at `at`.
-    fn torques(
+    pub(crate) fn torques(
         &self,
         frames: &[Matrix4<f64>],
         force: Option<(Vector3<f64>, Vector3<f64>)>,
@@ -105,7 +105,7 @@ impl Truth {
     }
 
     /// Displacement of world point `p` (on the last link) by eDoF rotations `c τ`.
-    fn deflection(
+    pub(crate) fn deflection(
         &self,
         frames: &[Matrix4<f64>],
         tau: &[f64; 6],
@@ -128,7 +128,7 @@ impl Truth {
 }
 
 /// Nominal UR10 (UR's table) with planted errors on parameters the data can identify.
-fn truth() -> Truth {
+pub(crate) fn truth() -> Truth {
     let nominal = deflex_model::builtin("ur10").unwrap();
     let mut dh = [[0.0; 5]; 6];
     let mut mass = [0.0; 6];
@@ -227,6 +227,7 @@ fn simulate(truth: &Truth, seed: u64) -> Simulated {
                 wrench: None,
                 temperature_c: None,
                 time_s: None,
+                approach_rad: None,
             });
         }
     }
@@ -289,7 +290,7 @@ fn run(sim: &Simulated) -> (FitResult, EgModel) {
 }
 
 /// True value of a parameter in the model's terms.
-fn true_value(truth: &Truth, param: Param) -> Option<f64> {
+pub(crate) fn true_value(truth: &Truth, param: Param) -> Option<f64> {
     let nominal = deflex_model::builtin("ur10").unwrap();
     match param {
         Param::Dh(j, field) => {

@@ -4,7 +4,7 @@
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::fit::{FitOptions, Step, fit};
 use deflex_absolute::params::EgModel;
-use deflex_absolute::ur10_tracker::{ImportOptions, import_series};
+use deflex_absolute::ur10_tracker::{ImportOptions, parse_series};
 use std::path::Path;
 
 fn series(name: &str, setup: &str) -> Vec<deflex_absolute::data::AbsoluteRow> {
@@ -16,7 +16,15 @@ fn series(name: &str, setup: &str) -> Vec<deflex_absolute::data::AbsoluteRow> {
         target: "tmac".into(),
         tracker_sigma: false,
     };
-    import_series(&dir, &options).unwrap().0
+    let file = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "csv"))
+        .unwrap();
+    let text = std::fs::read_to_string(&file).unwrap();
+    parse_series(&text, &file.display().to_string(), &options)
+        .unwrap()
+        .0
 }
 
 #[test]
@@ -144,9 +152,10 @@ fn calibrated_robot_file_predicts_like_the_fit() {
     }
     // Written with full precision: agreement to well below a micrometre.
     assert!(worst < 1e-8, "{worst}");
-    let prediction = deflex_absolute::predict::predict_rows(&robot, rows, false).unwrap();
+    let prediction =
+        deflex_absolute::predict::predict_rows(&EgModel::from_robot(&robot), rows, false).unwrap();
     let fit_rms = result.steps.last().unwrap().fit.rms;
-    let predicted_rms = prediction.json["rms_m"].as_f64().unwrap();
+    let predicted_rms = prediction.position.rms;
     assert!(
         (predicted_rms - fit_rms).abs() < 1e-9,
         "{predicted_rms} vs {fit_rms}"

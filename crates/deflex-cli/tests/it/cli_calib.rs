@@ -3,7 +3,17 @@
 
 use deflex_stiffness::plan::{PlanOptions, plan_experiments};
 use deflex_stiffness::synthetic::{SyntheticOptions, measure};
-use deflex_stiffness::{MeasurementRow, write_rows_for};
+use deflex_stiffness::{MeasurementRow, format_rows_for};
+
+/// Write rows for `robot` as a measurement file (what `deflex_stiffness::write_rows_for` did).
+fn write_rows_for(
+    path: &std::path::Path,
+    robot: &deflex_model::Robot,
+    rows: &[MeasurementRow],
+    notes: &[&str],
+) -> std::io::Result<()> {
+    std::fs::write(path, format_rows_for(robot, rows, notes))
+}
 use deflex_model::{Robot, builtin};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -359,7 +369,7 @@ fn a_calibrated_urdf_robot_written_elsewhere_finds_its_urdf() {
     }
     let robot_file = dir.join("arm.toml");
     std::fs::write(&robot_file, toml).unwrap();
-    let robot = deflex_model::load_robot(s(&robot_file)).unwrap();
+    let robot = deflex_load::load_robot(s(&robot_file)).unwrap();
     let data = dir.join("meas.csv");
     campaign(&robot, 150.0, &data);
     std::fs::create_dir_all(dir.join("sub")).unwrap();

@@ -197,3 +197,143 @@ fn bad_inputs_are_named() {
     assert!(!ok && stderr.contains("wobble"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The two user protocols on the shipped subset: calibrate on Series A (with orientations),
+/// then a new session (30 readings of Series B, set-up only) and a new probe in a new place
+/// (30 readings, set-up + target), each registered by `deflex register` and scored by
+/// `deflex predict` on B's other readings, positions and orientations.
+#[test]
+fn register_a_new_session_and_a_new_probe() {
+    let dir = scratch("register");
+    let s = |p: &Path| p.display().to_string();
+    let a = dir.join("A.csv");
+    let b = dir.join("B.csv");
+    for (series, setup, out) in [("Series_A", "A", &a), ("Series_B", "B", &b)] {
+        json(&[
+            "import",
+            "ur10-tracker",
+            "--series",
+            &s(&data(series)),
+            "--setup",
+            setup,
+            "--out",
+            &s(out),
+        ]);
+    }
+    let model = dir.join("ur10.toml");
+    json(&[
+        "calibrate-geometry",
+        "--robot",
+        "ur10",
+        "--data",
+        &s(&a),
+        "--elastic",
+        "J2.z,J3.z",
+        "--orientations",
+        "--folds",
+        "0",
+        "--out",
+        &s(&model),
+    ]);
+    assert!(dir.join("ur10.terms.json").exists());
+    // Split B: the first 30 configurations register, the rest are scored.
+    let text = std::fs::read_to_string(&b).unwrap();
+    let lines: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
+    let header = lines[0];
+    let few = dir.join("few.csv");
+    let rest = dir.join("rest.csv");
+    let probe = |rows: &[&str]| -> String {
+        let mut out = vec![header.to_string()];
+        out.extend(rows.iter().map(|l| l.replacen(",tmac,", ",tmac2,", 1)));
+        out.join("\n") + "\n"
+    };
+    std::fs::write(&few, lines[..31].join("\n") + "\n").unwrap();
+    std::fs::write(&rest, format!("{header}\n{}\n", lines[31..].join("\n"))).unwrap();
+    let updated = dir.join("session.toml");
+    let r = json(&[
+        "register",
+        "--robot",
+        &s(&model),
+        "--data",
+        &s(&few),
+        "--orientations",
+        "--out",
+        &s(&updated),
+    ]);
+    assert_eq!(r["readings"], 30);
+    assert_eq!(r["params"].as_array().unwrap().len(), 6);
+    assert!(r["position_m"]["rms"].as_f64().unwrap() < 0.8e-3, "{r}");
+    assert!(dir.join("session.terms.json").exists());
+    let p = json(&[
+        "predict",
+        "--robot",
+        &s(&updated),
+        "--data",
+        &s(&rest),
+        "--out",
+        &s(&dir.join("p1.csv")),
+    ]);
+    let rms = p["rms_m"].as_f64().unwrap();
+    assert!(rms < 0.7e-3, "new session, held-out RMS {rms}");
+    assert!(p["orientation_rms_rad"].as_f64().unwrap() < 3e-3, "{p}");
+    // A new probe: the data name a target the robot does not know; predict refuses it until
+    // it is registered.
+    let few2 = dir.join("few2.csv");
+    let rest2 = dir.join("rest2.csv");
+    std::fs::write(&few2, probe(&lines[1..31])).unwrap();
+    std::fs::write(&rest2, probe(&lines[31..])).unwrap();
+    let (ok, _, stderr) = deflex(&[
+        "predict",
+        "--robot",
+        &s(&updated),
+        "--data",
+        &s(&rest2),
+        "--out",
+        &s(&dir.join("x.csv")),
+    ]);
+    assert!(
+        !ok && stderr.contains("tmac2") && stderr.contains("register"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = deflex(&[
+        "register",
+        "--robot",
+        &s(&model),
+        "--data",
+        &s(&few2),
+        "--out",
+        &s(&dir.join("x.toml")),
+    ]);
+    assert!(!ok && stderr.contains("--target tmac2"), "{stderr}");
+    let probe_model = dir.join("probe.toml");
+    let r = json(&[
+        "register",
+        "--robot",
+        &s(&model),
+        "--data",
+        &s(&few2),
+        "--target",
+        "tmac2",
+        "--orientations",
+        "--out",
+        &s(&probe_model),
+    ]);
+    assert_eq!(r["params"].as_array().unwrap().len(), 12);
+    let p = json(&[
+        "predict",
+        "--robot",
+        &s(&probe_model),
+        "--data",
+        &s(&rest2),
+        "--out",
+        &s(&dir.join("p2.csv")),
+    ]);
+    let rms = p["rms_m"].as_f64().unwrap();
+    assert!(rms < 0.7e-3, "new probe, held-out RMS {rms}");
+    let written = std::fs::read_to_string(&probe_model).unwrap();
+    assert!(
+        written.contains("name = \"tmac2\"") && written.contains("rpy"),
+        "{written}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -356,3 +356,48 @@ fn a_segment_longer_than_the_window_does_not_hide_the_next_ones() {
         assert!((w[2] - expected).abs() < 1e-6, "{} vs {expected}", w[2]);
     }
 }
+
+/// The case: a pass whose last millimetre has a dozen moving rows, then 200 rows logged
+/// at rest at the end with the force fading, and a mid-path dwell with the force dropping. The
+/// rows are weighted by path advance: the standstills do not count, every point gets the pass's
+/// force (a time average would give the last points about half of it).
+#[test]
+fn standstill_rows_do_not_swamp_the_pass() {
+    let robot = builtin("tx200").unwrap();
+    let mut text = String::from(
+        "time_s,des_x_mm,des_y_mm,des_z_mm,err_x_mm,fx_N,fy_N,fz_N,mx_Nm,my_Nm,mz_Nm,contact\n",
+    );
+    let mut t = 0.0;
+    let mut row = |x: f64, fz: f64, text: &mut String| {
+        t += 0.004;
+        let _ = writeln!(text, "{t:.3},{x:.6},0,0,0,0,0,{fz:.3},0,0,0,1");
+    };
+    // 12 rows per mm along the 10 mm path at 1000 N …
+    for i in 0..=120 {
+        let x = i as f64 / 12.0;
+        row(x, 1000.0, &mut text);
+        // … a 1 s dwell at 5 mm with the force sagging to 200 N …
+        if i == 60 {
+            for k in 0..250 {
+                row(x, 1000.0 - 3.2 * k as f64, &mut text);
+            }
+        }
+    }
+    // … and 200 rows at rest at the end, the force fading out.
+    for k in 0..200 {
+        row(10.0, 1000.0 * (1.0 - k as f64 / 200.0), &mut text);
+    }
+    let log = parse_log(&text, "dwell.csv", &robot, &part()).unwrap();
+    let path = straight_path();
+    let r = resample_on_path(&log, &path, &ResampleOptions::default()).unwrap();
+    assert_eq!(r.used_rows, 121, "{r:?}");
+    assert_eq!(r.standstill_rows, 450);
+    for (point, w) in path.points().iter().zip(&r.wrenches) {
+        assert!(
+            (w[2] - 1000.0).abs() < 1e-6,
+            "s {} mm: {} N",
+            point.arc_length_m * 1e3,
+            w[2]
+        );
+    }
+}

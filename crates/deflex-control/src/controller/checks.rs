@@ -1,13 +1,15 @@
 //! The controller's per-cycle checks and estimates: input supervision (each fault names its
-//! check, joint or channel, value and limit), the wrench path and deflection estimate (eq. 2,
-//! 15), the force/torque limits, the runaway guard's update, and the frames the robot links need
-//! (TCP orientation, the joint-space map of a correction). All allocation-free.
+//! check, joint or channel, value and limit), the wrench path and the deflection estimate
+//! (eq. 2; eq. 15 is [`crate::estimate`]), the force/torque limits, the runaway guard's update,
+//! and the frames the robot links need (TCP orientation, the joint-space map of a correction).
+//! All allocation-free.
 
-use super::{Controller, CycleInput, CycleOutput, Phase};
+use super::{Controller, CycleInput, CycleOutput, JointCorrectionMap, Phase};
+use crate::estimate::tcp_deflection_in_base;
 use crate::runaway::RunawayAction;
 use crate::safety::{Channel, Fault, FaultKind, Flags};
 use deflex_model::{MAX_JOINTS, Wrench};
-use nalgebra::{Vector3, Vector6};
+use nalgebra::{Rotation3, Vector3, Vector6};
 
 /// Damping λ of the least-squares map from a Cartesian correction to joint corrections
 /// ([`Controller::joint_correction_map`]): Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ ξ. With J in metres per radian
@@ -112,25 +114,15 @@ impl Controller {
         Some(fault.kind)
     }
 
-    /// Wrench path and deflection estimate (eq. 2, 15) into `out`, in base axes.
+    /// Wrench path (eq. 2) and deflection estimate (eq. 15, [`tcp_deflection_in_base`]) into
+    /// `out`, in base axes.
     #[inline]
-    pub(super) fn estimate(&mut self, raw: &[f64; 6], h: f64, out: &mut CycleOutput) {
+    pub(super) fn estimate(&mut self, raw: &Wrench, h: f64, out: &mut CycleOutput) {
         let processed = self.wrench.process(raw, &self.data, h);
-        let w = Wrench::from(processed.tcp_world);
-        let ds = self.robot.tcp_deflection(&self.data, &w);
-        let r_t = self.robot.base.rotation.matrix().transpose();
-        let to_base = |v: &[f64], at: usize| -> [f64; 3] {
-            let b = r_t * Vector3::new(v[at], v[at + 1], v[at + 2]);
-            [b.x, b.y, b.z]
-        };
-        let (f, m) = (
-            to_base(&processed.tcp_world, 0),
-            to_base(&processed.tcp_world, 3),
-        );
-        let (dp, dphi) = (to_base(ds.as_slice(), 0), to_base(ds.as_slice(), 3));
-        out.wrench_sensor = processed.sensor;
-        out.wrench_tcp = [f[0], f[1], f[2], m[0], m[1], m[2]];
-        out.delta_s_hat = [dp[0], dp[1], dp[2], dphi[0], dphi[1], dphi[2]];
+        let estimate = tcp_deflection_in_base(&self.robot, &self.data, &processed.tcp_world);
+        out.wrench_sensor = processed.sensor.into();
+        out.wrench_tcp = estimate.wrench_tcp.into();
+        out.delta_s_hat = estimate.deflection.into();
     }
 
     /// Checks the estimate; returns false when it is not finite.
@@ -176,11 +168,11 @@ impl Controller {
         finite
     }
 
-    /// The TCP position in base axes (m), from the last forward kinematics.
-    fn tcp_in_base(&self) -> [f64; 3] {
+    /// The TCP position in the robot base frame (m), from the last forward kinematics of the
+    /// reported joints: the corrected TCP the robot realises (the program's is this minus ξ).
+    pub fn tcp_position_in_base(&self) -> Vector3<f64> {
         let base = &self.robot.base;
-        let p = base.rotation.inverse() * (self.data.tcp_position() - base.translation.vector);
-        [p.x, p.y, p.z]
+        base.rotation.inverse() * (self.data.tcp_position() - base.translation.vector)
     }
 
     /// Updates the runaway guard with this cycle's position, force and applied correction, and
@@ -211,7 +203,8 @@ impl Controller {
                 .tcp_deflection(&self.data, &Wrench::from([uw.x, uw.y, uw.z, 0.0, 0.0, 0.0]));
             ds[0] * uw.x + ds[1] * uw.y + ds[2] * uw.z
         });
-        let x = self.tcp_in_base();
+        let p = self.tcp_position_in_base();
+        let x = [p.x, p.y, p.z];
         let force = [out.wrench_tcp[0], out.wrench_tcp[1], out.wrench_tcp[2]];
         let update = self.guard.update(&x, &force, &xi_p, u, compliance_u, h);
         out.loop_gain = update.gain;
@@ -229,12 +222,10 @@ impl Controller {
         }
     }
 
-    /// Orientation of the TCP in the robot base frame (row-major), from the last forward
-    /// kinematics: what a link whose correction frame follows the tool needs (ABB EGM).
-    pub fn tcp_rotation_in_base(&self) -> [[f64; 3]; 3] {
-        let r = self.robot.base.rotation.inverse() * self.data.tcp.rotation;
-        let m = r.matrix();
-        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+    /// Orientation of the TCP in the robot base frame, from the last forward kinematics: what a
+    /// link whose correction frame follows the tool needs (ABB EGM).
+    pub fn tcp_rotation_in_base(&self) -> Rotation3<f64> {
+        self.robot.base.rotation.inverse() * self.data.tcp.rotation
     }
 
     /// The least-squares map `P` (row i: joint i) from a correction ξ (base axes, [δp; δφ]) to
@@ -242,8 +233,8 @@ impl Controller {
     /// the geometric Jacobian at the TCP in base axes and λ = [`JOINT_MAP_DAMPING`], so that
     /// J Δq ≈ ξ (the robot moves its TCP by the correction). Rows past the joint count are
     /// zero; a failed solve gives an all-zero map.
-    pub fn joint_correction_map(&self) -> [[f64; 6]; MAX_JOINTS] {
-        let mut map = [[0.0; 6]; MAX_JOINTS];
+    pub fn joint_correction_map(&self) -> JointCorrectionMap {
+        let mut map = JointCorrectionMap::zeros();
         let n = self.robot.joint_count();
         let tcp = self.data.tcp_position();
         let columns = self.robot.geometric_jacobian_columns(&self.data, &tcp);
@@ -259,10 +250,10 @@ impl Controller {
         else {
             return map;
         };
-        for (row, c) in map.iter_mut().zip(&base_columns).take(n) {
+        for (i, c) in base_columns.iter().enumerate().take(n) {
             let r = inverse * c; // (J Jᵀ + λ²I)⁻¹ is symmetric: row i of P is (inverse · j_i)ᵀ.
             if r.iter().all(|v| v.is_finite()) {
-                row.copy_from_slice(r.as_slice());
+                map.set_row(i, &r.transpose());
             }
         }
         map

@@ -3,10 +3,27 @@
 
 use super::{
     FeedForwardError, MAX_TABLE_COORDINATE_M, MAX_TABLE_POSITION_M, MAX_TABLE_ROTATION_RAD,
+    TableColumn,
 };
-use deflex_compensate::table::{COMPENSATION, DEFLECTION, TableRow};
-use deflex_model::Robot;
+use deflex_model::{Displacement, Robot};
 use nalgebra::Vector3;
+
+/// One point of an offline compensation, as data: what `deflex compensate` wrote for it in
+/// `compensated_path.csv` (the runtime reads the file and hands the points over), world frame of
+/// the model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedForwardPoint {
+    /// Arc length along the desired path (m).
+    pub arc_length_m: f64,
+    /// Time at the programmed feeds (s).
+    pub time_s: f64,
+    /// Desired TCP position, world (m).
+    pub desired_m: Vector3<f64>,
+    /// Predicted deflection at the compensated configuration, world axes [m; rad].
+    pub deflection: Displacement,
+    /// Compensation the program applies, world axes [m; rad]: commanded = desired ⊕ compensation.
+    pub compensation: Displacement,
+}
 
 /// The compensated path as the controller uses it: arc length, time, the commanded position
 /// (world) and, in the robot's **base axes** (those of ξ), the predicted deflection and the
@@ -27,99 +44,105 @@ fn rotate6(r: &nalgebra::Rotation3<f64>, v: &[f64]) -> [f64; 6] {
     [a.x, a.y, a.z, b.x, b.y, b.z]
 }
 
+/// `value` within ±`limit`, else the error naming the point and the quantity.
+fn bounded(
+    point: usize,
+    column: TableColumn,
+    value: f64,
+    limit: f64,
+) -> Result<(), FeedForwardError> {
+    if value.abs() <= limit {
+        Ok(())
+    } else {
+        Err(FeedForwardError::OutOfBounds {
+            point,
+            column,
+            value,
+            limit,
+        })
+    }
+}
+
+/// Checks one point against the previous one and the bounds; returns its commanded position.
+fn check_point(
+    i: usize,
+    p: &FeedForwardPoint,
+    previous: Option<&FeedForwardPoint>,
+) -> Result<Vector3<f64>, FeedForwardError> {
+    if let Some(prev) = previous {
+        for (column, value, previous) in [
+            (TableColumn::ArcLength, p.arc_length_m, prev.arc_length_m),
+            (TableColumn::Time, p.time_s, prev.time_s),
+        ] {
+            if value < previous {
+                return Err(FeedForwardError::NotMonotone {
+                    point: i,
+                    column,
+                    value,
+                    previous,
+                });
+            }
+        }
+    }
+    for k in 0..6 {
+        let limit = if k < 3 {
+            MAX_TABLE_POSITION_M
+        } else {
+            MAX_TABLE_ROTATION_RAD
+        };
+        bounded(i, TableColumn::Deflection(k), p.deflection[k], limit)?;
+        bounded(i, TableColumn::Compensation(k), p.compensation[k], limit)?;
+    }
+    let commanded =
+        p.desired_m + Vector3::new(p.compensation[0], p.compensation[1], p.compensation[2]);
+    for k in 0..3 {
+        bounded(
+            i,
+            TableColumn::CommandedPosition(k),
+            commanded[k],
+            MAX_TABLE_COORDINATE_M,
+        )?;
+    }
+    Ok(commanded)
+}
+
 impl FeedForwardTable {
-    /// From the rows of a compensated-path table (`deflex_compensate::table::read_csv`, world
-    /// frame of `robot`), checked: every status `ok`, arc length and time non-decreasing,
-    /// deflections and compensations within [`MAX_TABLE_POSITION_M`] / [`MAX_TABLE_ROTATION_RAD`],
-    /// positions within [`MAX_TABLE_COORDINATE_M`]. `file` names the table in errors.
-    pub fn from_rows(
-        rows: &[TableRow],
+    /// From the points of an offline compensation (world frame of `robot`), checked: arc length
+    /// and time non-decreasing, deflections and compensations within [`MAX_TABLE_POSITION_M`] /
+    /// [`MAX_TABLE_ROTATION_RAD`], commanded positions within [`MAX_TABLE_COORDINATE_M`].
+    pub fn from_points(
+        points: &[FeedForwardPoint],
         robot: &Robot,
-        file: &str,
     ) -> Result<FeedForwardTable, FeedForwardError> {
-        let length_m = rows.last().map_or(0.0, |r| r.arc_length_m);
-        if rows.len() < 2 || length_m.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        let length_m = points.last().map_or(0.0, |p| p.arc_length_m);
+        if points.len() < 2 || length_m.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(FeedForwardError::TooShort {
-                file: file.to_string(),
-                rows: rows.len(),
+                points: points.len(),
                 length_m,
             });
         }
         let to_base = robot.base.rotation.inverse();
+        let n = points.len();
         let mut table = FeedForwardTable {
-            s_m: Vec::with_capacity(rows.len()),
-            t_s: Vec::with_capacity(rows.len()),
-            desired: Vec::with_capacity(rows.len()),
-            commanded: Vec::with_capacity(rows.len()),
-            deflection: Vec::with_capacity(rows.len()),
-            compensation: Vec::with_capacity(rows.len()),
+            s_m: Vec::with_capacity(n),
+            t_s: Vec::with_capacity(n),
+            desired: Vec::with_capacity(n),
+            commanded: Vec::with_capacity(n),
+            deflection: Vec::with_capacity(n),
+            compensation: Vec::with_capacity(n),
         };
-        for (i, row) in rows.iter().enumerate() {
-            let bound = |column: &'static str, value: f64, limit: f64| {
-                if value.abs() <= limit {
-                    Ok(())
-                } else {
-                    Err(FeedForwardError::OutOfBounds {
-                        file: file.to_string(),
-                        line: row.line,
-                        column,
-                        value,
-                        limit,
-                    })
-                }
-            };
-            if row.status != "ok" {
-                return Err(FeedForwardError::NotCompensated {
-                    file: file.to_string(),
-                    line: row.line,
-                    index: i,
-                    status: row.status.clone(),
-                });
-            }
-            if i > 0 {
-                for (column, value, previous) in [
-                    ("s_m", row.arc_length_m, rows[i - 1].arc_length_m),
-                    ("t_s", row.time_s, rows[i - 1].time_s),
-                ] {
-                    if value < previous {
-                        return Err(FeedForwardError::NotMonotone {
-                            file: file.to_string(),
-                            line: row.line,
-                            column,
-                            value,
-                            previous,
-                        });
-                    }
-                }
-            }
-            for k in 0..6 {
-                let limit = if k < 3 {
-                    MAX_TABLE_POSITION_M
-                } else {
-                    MAX_TABLE_ROTATION_RAD
-                };
-                bound(DEFLECTION[k], row.deflection[k], limit)?;
-                bound(COMPENSATION[k], row.compensation[k], limit)?;
-            }
-            let commanded = row.desired.translation.vector
-                + Vector3::new(
-                    row.compensation[0],
-                    row.compensation[1],
-                    row.compensation[2],
-                );
-            for (k, column) in ["x_m", "y_m", "z_m"].into_iter().enumerate() {
-                bound(column, commanded[k], MAX_TABLE_COORDINATE_M)?;
-            }
-            table.s_m.push(row.arc_length_m);
-            table.t_s.push(row.time_s);
-            table.desired.push(row.desired.translation.vector);
+        for (i, p) in points.iter().enumerate() {
+            let commanded = check_point(i, p, i.checked_sub(1).map(|j| &points[j]))?;
+            table.s_m.push(p.arc_length_m);
+            table.t_s.push(p.time_s);
+            table.desired.push(p.desired_m);
             table.commanded.push(commanded);
             table
                 .deflection
-                .push(rotate6(&to_base, row.deflection.as_slice()));
+                .push(rotate6(&to_base, p.deflection.as_slice()));
             table
                 .compensation
-                .push(rotate6(&to_base, row.compensation.as_slice()));
+                .push(rotate6(&to_base, p.compensation.as_slice()));
         }
         Ok(table)
     }

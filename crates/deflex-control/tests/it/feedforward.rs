@@ -12,10 +12,9 @@
 
 use crate::common;
 
-use deflex_compensate::table::TableRow;
 use deflex_control::{
     Controller, ControllerConfig, FeedForward, FeedForwardConfig, FeedForwardMode,
-    FeedForwardTable, Flags,
+    FeedForwardPoint, FeedForwardTable, Flags,
 };
 use deflex_model::{Data, Displacement, IkOptions, Pose, Robot, Wrench};
 use nalgebra::Vector3;
@@ -105,11 +104,11 @@ impl Robotic {
 
 /// The offline table: the path every 0.5 mm with the deflection predicted for `scale` × the
 /// force, compensation = −deflection (position only, as for the twin).
-fn table(scale: f64) -> Vec<TableRow> {
+fn table(scale: f64) -> Vec<FeedForwardPoint> {
     table_along(ALONG_X, scale, 80)
 }
 
-fn table_along(line: Line, scale: f64, points: usize) -> Vec<TableRow> {
+fn table_along(line: Line, scale: f64, points: usize) -> Vec<FeedForwardPoint> {
     let mut robotic = Robotic::along(line);
     let step = line.length_m / points as f64;
     (0..=points)
@@ -123,15 +122,12 @@ fn table_along(line: Line, scale: f64, points: usize) -> Vec<TableRow> {
             let mut commanded = desired;
             commanded.translation.vector -= Vector3::new(d0[0], d0[1], d0[2]);
             let d = robotic.command(&commanded, &w);
-            TableRow {
-                line: i + 2,
+            FeedForwardPoint {
                 arc_length_m: s,
                 time_s: s / line.feed_m_s,
-                desired,
+                desired_m: desired.translation.vector,
                 compensation: Displacement::new(-d[0], -d[1], -d[2], 0.0, 0.0, 0.0),
-                wrench: w,
                 deflection: d,
-                status: "ok".into(),
             }
         })
         .collect()
@@ -141,8 +137,12 @@ fn feedforward(scale: f64, mode: FeedForwardMode, lead_s: f64) -> FeedForward {
     feedforward_along(table(scale), mode, lead_s)
 }
 
-fn feedforward_along(rows: Vec<TableRow>, mode: FeedForwardMode, lead_s: f64) -> FeedForward {
-    let table = FeedForwardTable::from_rows(&rows, &common::robot(), "table.csv").unwrap();
+fn feedforward_along(
+    rows: Vec<FeedForwardPoint>,
+    mode: FeedForwardMode,
+    lead_s: f64,
+) -> FeedForward {
+    let table = FeedForwardTable::from_points(&rows, &common::robot()).unwrap();
     FeedForward::new(
         table,
         FeedForwardConfig {
@@ -175,7 +175,11 @@ struct Run {
 
 /// One run along the path: `program` is the compensated program (`Some(table rows)`) or the
 /// original; `ff` the controller's feed-forward.
-fn run(config: ControllerConfig, ff: Option<FeedForward>, program: Option<&[TableRow]>) -> Run {
+fn run(
+    config: ControllerConfig,
+    ff: Option<FeedForward>,
+    program: Option<&[FeedForwardPoint]>,
+) -> Run {
     run_along(ALONG_X, config, ff, program)
 }
 
@@ -183,7 +187,7 @@ fn run_along(
     line: Line,
     config: ControllerConfig,
     ff: Option<FeedForward>,
-    program: Option<&[TableRow]>,
+    program: Option<&[FeedForwardPoint]>,
 ) -> Run {
     let mut robotic = Robotic::along(line);
     let mut ctrl = Controller::new(robotic.robot.clone(), config).unwrap();

@@ -1,13 +1,11 @@
 //! A counting global allocator proves that a control cycle (wrench path, eq. 15, eq. 17,
-//! limiter, safety, runaway guard), the seqlock slots, the log push and the robot-link thread's
-//! per-answer work (send shaper, joint-correction map, TCP orientation) allocate nothing. It
-//! counts only its own thread's allocations.
+//! limiter, safety, runaway guard, feed-forward) and the frames the robot links need per answer
+//! (joint-correction map, TCP orientation) allocate nothing. It counts only its own thread's
+//! allocations. The runtime's whole control-thread path (messages, telemetry publish, send
+//! shaper) is proven in deflex-runtime's tests.
 
 use crate::common;
-
-use deflex_control::log::{LogRecord, Plain, spawn_writer};
-use deflex_control::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
-use deflex_control::slot::SeqSlot;
+use deflex_model::Wrench;
 
 #[test]
 fn control_cycle_allocates_nothing() {
@@ -18,9 +16,6 @@ fn control_cycle_allocates_nothing() {
     let q = common::q0();
     let raw_free = common::raw_reading(&config, &q, [0.0; 6]);
     let raw_load = common::raw_reading(&config, &q, [300.0, -200.0, 900.0, 1.0, 2.0, -1.0]);
-    let xi_slot = SeqSlot::<6>::new();
-    let (mut sink, writer) = spawn_writer(1 << 14, 6, Box::new(Plain(std::io::sink()))).unwrap();
-    let mut shaper = SendShaper::new(SendShaperConfig::new([0.02; 6], [0.008; 6], 0.004, 0.5));
     ctrl.start(0.0);
     // Warm-up outside the measurement (first use of lazily initialised statics, if any).
     ctrl.cycle(0.01, &q, &raw_free);
@@ -30,21 +25,15 @@ fn control_cycle_allocates_nothing() {
         t += 0.01;
         let raw = if k < 30 { &raw_free } else { &raw_load };
         let out = ctrl.cycle(t, &q, raw);
-        xi_slot.write(&out.xi);
-        let (xi, _) = xi_slot.read();
-        // What the robot-link thread does per answer: shape, map to joints, orient.
-        let sent = shaper.next(&xi, LinkDirective::Follow);
-        let map = ctrl.joint_correction_map();
-        let dq0: f64 = (0..6).map(|j| map[0][j] * sent[j]).sum();
-        std::hint::black_box((dq0, ctrl.tcp_rotation_in_base()));
-        sink.push(LogRecord::new(&q, raw, &out, 1.0));
+        // What a robot link needs per answer: the joint map and the TCP orientation.
+        let dq = ctrl.joint_correction_map() * nalgebra::Vector6::from(out.xi);
+        std::hint::black_box((dq, ctrl.tcp_rotation_in_base()));
     }
     // Faults and the ramp to the safe value must not allocate either.
-    let nan = [f64::NAN; 6];
+    let nan = Wrench::repeat(f64::NAN);
     for _ in 0..100 {
         t += 0.01;
-        let out = ctrl.cycle(t, &q, &nan);
-        sink.push(LogRecord::new(&q, &nan, &out, 1.0));
+        std::hint::black_box(ctrl.cycle(t, &q, &nan));
     }
     let after = deflex_alloc_count::allocations();
     assert!(ctrl.fault().is_some());
@@ -54,8 +43,6 @@ fn control_cycle_allocates_nothing() {
         "{} allocations in 5100 cycles",
         after - before
     );
-    drop(sink);
-    writer.finish(true).unwrap();
     // The counter itself works.
     let v: Vec<u8> = Vec::with_capacity(std::hint::black_box(64));
     drop(v);
@@ -123,8 +110,8 @@ fn runaway_guard_allocates_nothing() {
 /// Joint values along a short arc of joint 1 and the table of that path (TCP by forward
 /// kinematics, a deflection growing along it).
 fn path_and_table() -> (Vec<[f64; 6]>, deflex_control::FeedForwardTable) {
-    use deflex_compensate::table::TableRow;
-    use deflex_model::{Data, Displacement, Wrench};
+    use deflex_control::FeedForwardPoint;
+    use deflex_model::{Data, Displacement};
     let robot = common::robot();
     let q0 = common::q0();
     let qs: Vec<[f64; 6]> = (0..3000)
@@ -137,7 +124,7 @@ fn path_and_table() -> (Vec<[f64; 6]>, deflex_control::FeedForwardTable) {
     let mut data = Data::new();
     let mut s = 0.0;
     let mut previous: Option<nalgebra::Vector3<f64>> = None;
-    let rows: Vec<TableRow> = qs
+    let rows: Vec<FeedForwardPoint> = qs
         .iter()
         .step_by(10)
         .enumerate()
@@ -149,19 +136,16 @@ fn path_and_table() -> (Vec<[f64; 6]>, deflex_control::FeedForwardTable) {
             }
             previous = Some(p);
             let d = Displacement::new(0.0, 0.0, s * 0.01, 0.0, 0.0, s * 0.001);
-            TableRow {
-                line: i + 2,
+            FeedForwardPoint {
                 arc_length_m: s,
                 time_s: i as f64 * 0.1,
-                desired: data.tcp,
+                desired_m: data.tcp_position(),
                 compensation: Displacement::new(0.0, 0.0, -s * 0.01, 0.0, 0.0, 0.0),
-                wrench: Wrench::zeros(),
                 deflection: d,
-                status: "ok".into(),
             }
         })
         .collect();
-    let table = deflex_control::FeedForwardTable::from_rows(&rows, &robot, "t.csv").unwrap();
+    let table = deflex_control::FeedForwardTable::from_points(&rows, &robot).unwrap();
     (qs, table)
 }
 

@@ -2,15 +2,8 @@
 //! built-in robots.
 
 use deflex_model::spatial::{rotation_from_rpy, rpy_from_rotation};
-use deflex_model::{BUILTIN_ROBOTS, builtin, load_robot, robot_from_toml_str};
+use deflex_model::{BUILTIN_ROBOTS, builtin, robot_from_toml_and_urdf_str, robot_from_toml_str};
 use nalgebra::{Rotation3, Vector3};
-use std::path::PathBuf;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-model-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A URDF written from the TX200's modified-DH table (each origin = RotX(α)·TransX(a)·TransZ(d)·RotZ(θ0)),
 /// with an extra fixed flange link, must give the same forward kinematics as the DH file.
@@ -47,18 +40,12 @@ fn urdf_chain_matches_modified_dh() {
     }
     joints_xml += "<joint name=\"flange_fix\" type=\"fixed\"><parent link=\"link6\"/><child link=\"flange\"/><origin xyz=\"0 0 0.05\" rpy=\"0 0 0\"/></joint>";
     links_xml += "<link name=\"flange\"/>";
-    let dir = temp_dir("urdf");
-    std::fs::write(
-        dir.join("arm.urdf"),
-        format!("<robot name=\"arm\">{links_xml}{joints_xml}</robot>"),
-    )
-    .unwrap();
+    let xml = format!("<robot name=\"arm\">{links_xml}{joints_xml}</robot>");
     let mut toml = String::from("name = \"urdf arm\"\nurdf = \"arm.urdf\"\n");
     for i in 1..=6 {
         toml += &format!("[[joint]]\nname = \"j{i}\"\nstiffness = {{ z = 1.0e6 }}\n");
     }
-    std::fs::write(dir.join("arm.toml"), &toml).unwrap();
-    let urdf = load_robot(dir.join("arm.toml").to_str().unwrap()).unwrap();
+    let urdf = robot_from_toml_and_urdf_str(&toml, &xml, "arm.toml").unwrap();
     assert_eq!(urdf.joint_count(), 6);
     assert_eq!(urdf.joints[3].limits, Some([-3.0, 3.0]));
     for q in [[0.0; 6], [0.3, -0.5, 1.1, 0.7, -0.4, 2.0]] {
@@ -71,8 +58,7 @@ fn urdf_chain_matches_modified_dh() {
     }
     // A joint count that does not match the URDF is named with both numbers.
     let short: String = toml.lines().take(2 + 3 * 5).collect::<Vec<_>>().join("\n");
-    std::fs::write(dir.join("short.toml"), short).unwrap();
-    let err = load_robot(dir.join("short.toml").to_str().unwrap())
+    let err = robot_from_toml_and_urdf_str(&short, &xml, "short.toml")
         .unwrap_err()
         .to_string();
     assert!(
@@ -115,10 +101,7 @@ fn validation_errors_name_file_and_field() {
     assert!(e.contains("1 to 8 motorised joints"), "{e}");
     let e = error_of(&format!("{ONE_JOINT}limits = [1.0, -1.0]\n"));
     assert!(e.contains("limits"), "{e}");
-    let e = load_robot("/nonexistent/robot.toml")
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("/nonexistent/robot.toml"), "{e}");
+    // (A robot file that does not exist is named in the error: deflex-load's tests.)
 }
 
 #[test]

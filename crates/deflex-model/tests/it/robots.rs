@@ -5,10 +5,11 @@
 //! geometry fingerprint, URDF paths that survive writing the robot elsewhere, bounds on file
 //! values, and hostile URDFs.
 
-use deflex_model::{Data, Wrench, builtin, robot_from_toml_str, robot_to_toml, robot_to_toml_for};
+use deflex_model::{
+    Data, Wrench, builtin, robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml,
+};
 use nalgebra::{Matrix4, Vector3};
 use std::f64::consts::{FRAC_PI_2, PI};
-use std::path::PathBuf;
 
 type M4 = Matrix4<f64>;
 
@@ -171,13 +172,6 @@ fn hayati_beta_enters_both_conventions_as_a_rotation_about_y() {
     );
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-robots-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// A URDF chain from `(name, origin xyz, axis, lower, upper)` rows plus a fixed `tool0` with
 /// `tool_rpy`; loaded through a TOML that names each joint.
 fn urdf_robot(
@@ -203,10 +197,7 @@ fn urdf_robot(
          <origin xyz=\"0 0 0\" rpy=\"{} {} {}\"/></joint></robot>",
         tool_rpy[0], tool_rpy[1], tool_rpy[2]
     );
-    let dir = temp_dir(name);
-    std::fs::write(dir.join("r.urdf"), xml).unwrap();
-    std::fs::write(dir.join("r.toml"), toml).unwrap();
-    deflex_model::load_robot(dir.join("r.toml").to_str().unwrap()).unwrap()
+    robot_from_toml_and_urdf_str(&toml, &xml, &format!("{name}.toml")).unwrap()
 }
 
 fn assert_same_flange(a: &deflex_model::Robot, b: &deflex_model::Robot, qs: &[[f64; 6]]) {
@@ -357,14 +348,12 @@ fn urdf_inertials_are_summed_per_moving_body_in_the_joint_frame() {
         <origin xyz="0 0 1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="0" velocity="1"/></joint>
       <joint name="fix" type="fixed"><parent link="link_1"/><child link="bracket"/><origin xyz="0.5 0 0"/></joint>
     </robot>"#;
-    let dir = temp_dir("inertials");
-    std::fs::write(dir.join("r.urdf"), xml).unwrap();
-    std::fs::write(
-        dir.join("r.toml"),
+    let robot = robot_from_toml_and_urdf_str(
         "name = \"r\"\nurdf = \"r.urdf\"\ntip_link = \"bracket\"\n[[joint]]\nname = \"j1\"\n",
+        xml,
+        "r.toml",
     )
     .unwrap();
-    let robot = deflex_model::load_robot(dir.join("r.toml").to_str().unwrap()).unwrap();
     let inertia = robot.joints[0].inertia.unwrap();
     assert!((inertia.mass_kg - 5.0).abs() < 1e-15);
     assert!((inertia.com - Vector3::new(1.7 / 5.0, 0.0, 0.6 / 5.0)).norm() < 1e-15);
@@ -397,31 +386,7 @@ fn fingerprints_tell_robots_apart_and_survive_a_round_trip() {
     );
 }
 
-#[test]
-fn a_urdf_robot_written_to_another_folder_still_finds_its_urdf() {
-    let dir = temp_dir("urdf-path");
-    let robot = urdf_robot(
-        "moved",
-        &[
-            ("j1", [0.0, 0.0, 0.4], [0.0, 0.0, 1.0]),
-            ("j2", [0.1, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        ],
-        [0.0, 0.0, 0.0],
-    );
-    let out = dir.join("sub").join("deeper").join("m.toml");
-    std::fs::create_dir_all(out.parent().unwrap()).unwrap();
-    std::fs::write(&out, robot_to_toml_for(&robot, &out)).unwrap();
-    let again = deflex_model::load_robot(out.to_str().unwrap()).unwrap();
-    let q = [0.3, -0.4];
-    let a = robot.tcp_pose(&q).unwrap();
-    let b = again.tcp_pose(&q).unwrap();
-    assert!((pose_matrix(&a) - pose_matrix(&b)).norm() < 1e-12);
-    let text = std::fs::read_to_string(&out).unwrap();
-    assert!(
-        text.contains("urdf = \"../../"),
-        "relative path written: {text}"
-    );
-}
+// A URDF robot written to another folder still finding its URDF: deflex-load's tests.
 
 fn error_of(text: &str) -> String {
     robot_from_toml_str(text, "robots/bad.toml", None)
@@ -465,16 +430,13 @@ fn absurd_values_are_refused_with_the_field_named() {
 }
 
 fn urdf_error(xml: &str, toml_extra: &str) -> String {
-    let dir = temp_dir(&format!("bad-urdf-{}", xml.len()));
-    std::fs::write(dir.join("r.urdf"), xml).unwrap();
-    std::fs::write(
-        dir.join("r.toml"),
-        format!("name = \"r\"\nurdf = \"r.urdf\"\n{toml_extra}[[joint]]\nname = \"j1\"\n"),
+    robot_from_toml_and_urdf_str(
+        &format!("name = \"r\"\nurdf = \"r.urdf\"\n{toml_extra}[[joint]]\nname = \"j1\"\n"),
+        xml,
+        "r.toml",
     )
-    .unwrap();
-    deflex_model::load_robot(dir.join("r.toml").to_str().unwrap())
-        .unwrap_err()
-        .to_string()
+    .unwrap_err()
+    .to_string()
 }
 
 #[test]
@@ -515,14 +477,12 @@ fn hostile_urdfs_get_errors_not_hangs() {
     }
     xml += &joint("j1", "l100000", "tip", "revolute");
     xml += "</robot>";
-    let dir = temp_dir("long-urdf");
-    std::fs::write(dir.join("r.urdf"), &xml).unwrap();
-    std::fs::write(
-        dir.join("r.toml"),
+    let robot = robot_from_toml_and_urdf_str(
         "name = \"r\"\nurdf = \"r.urdf\"\n[[joint]]\nname = \"j1\"\n",
+        &xml,
+        "r.toml",
     )
     .unwrap();
-    let robot = deflex_model::load_robot(dir.join("r.toml").to_str().unwrap()).unwrap();
     assert_eq!(robot.joint_count(), 1);
     let _ = PI;
 }

@@ -9,7 +9,8 @@ CLI does with it, numpy in and numpy out, computed in Rust with the GIL released
   ``(n,)`` or a batch ``(N, n)`` spread over the cores;
 * calibration: :func:`calibrate` (stiffness identification and structure search),
   :func:`validate`, :func:`calibrate_geometry` (elasto-geometric, absolute tracker readings),
-  :func:`predict` (with set-up re-registration), :func:`import_ur10_tracker`;
+  :func:`predict` (with set-up re-registration), :func:`register` (a new session or probe
+  from a few readings), :func:`import_ur10_tracker`;
 * compensation: :func:`compensate` and its robot programs (KRL, RAPID, VAL3, URScript, G-code);
 * the twin: :func:`deflex.sim.form` (SIMULATED forming runs, open or closed loop) and logs:
   :func:`read_log`.
@@ -25,6 +26,7 @@ from ._deflex import (
     Compensation,
     GeometryCalibration,
     Prediction,
+    Registration,
     Robot,
     StiffnessCalibration,
     TwinRun,
@@ -51,6 +53,7 @@ from .calibration import (
     import_ur10_tracker,
     predict,
     predict_displacements,
+    register,
     validate,
 )
 from .compensation import FORMATS, compensate
@@ -62,6 +65,7 @@ __all__ = [
     "Validation",
     "GeometryCalibration",
     "Prediction",
+    "Registration",
     "Compensation",
     "TwinRun",
     "AbsoluteData",
@@ -71,6 +75,7 @@ __all__ = [
     "predict_displacements",
     "calibrate_geometry",
     "predict",
+    "register",
     "import_ur10_tracker",
     "compensate",
     "FORMATS",

@@ -17,6 +17,7 @@ __all__ = [
     "Validation",
     "GeometryCalibration",
     "Prediction",
+    "Registration",
     "Compensation",
     "TwinRun",
     "_calibrate",
@@ -24,6 +25,7 @@ __all__ = [
     "_predict_displacements",
     "_calibrate_geometry",
     "_predict",
+    "_register",
     "_import_ur10_tracker",
     "_compensate",
     "_form",
@@ -239,6 +241,47 @@ class Prediction:
         """Write the prediction CSV."""
 
 @final
+class Registration:
+    """A new session's set-up (and target) registered from a few readings."""
+
+    @property
+    def robot(self) -> Robot:
+        """The updated robot."""
+    @property
+    def setup(self) -> str:
+        """The set-up registered."""
+    @property
+    def target(self) -> Optional[str]:
+        """The target registered too."""
+    @property
+    def readings(self) -> int:
+        """Readings used."""
+    @property
+    def parameters(self) -> List[str]:
+        """Registered parameter names."""
+    @property
+    def estimates(self) -> _F64:
+        """Registered values (SI)."""
+    @property
+    def standard_errors(self) -> _F64:
+        """Their standard errors (SI)."""
+    @property
+    def rms_m(self) -> float:
+        """Position residual RMS (m)."""
+    @property
+    def chi2_per_dof(self) -> float:
+        """χ²/dof."""
+    @property
+    def warnings(self) -> List[str]:
+        """What deserves a second look."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The CLI's JSON output."""
+    def report(self) -> str:
+        """The CLI's text output."""
+    def save(self, path: _PathLike) -> None:
+        """Write the updated robot file (and the terms beside it)."""
+
+@final
 class Compensation:
     """A compensated tool path."""
 
@@ -348,8 +391,25 @@ def _calibrate_geometry(
     bootstrap: int,
     test_fraction: float,
     seed: int,
+    orientations: bool,
+    sigma_rad: float,
+    cv_by: Optional[str],
+    register_readings: int,
+    register_draws: int,
+    register_target: bool,
 ) -> GeometryCalibration: ...
-def _predict(robot: _RobotLike, data: _Source, fit_setup: bool) -> Prediction: ...
+def _predict(
+    robot: Union[GeometryCalibration, _RobotLike], data: _Source, fit_setup: bool
+) -> Prediction: ...
+def _register(
+    robot: Union[GeometryCalibration, _RobotLike],
+    data: _Source,
+    setup: Optional[str],
+    target: Optional[str],
+    orientations: bool,
+    sigma_rad: float,
+    recalibrate_above_m: Optional[float],
+) -> Registration: ...
 def _import_ur10_tracker(
     series: str, setup: str, target: str, tracker_sigma: bool, every: int
 ) -> Tuple[str, Dict[str, Any]]: ...

@@ -1,7 +1,8 @@
 """Calibration from Python: stiffness identification with structure search
 (``deflex calibrate``), validation (``deflex validate``), elasto-geometric calibration from
 absolute tracker readings (``deflex calibrate-geometry``), per-row prediction and set-up
-re-registration (``deflex predict [--fit-setup]``), and the UR10 tracker importer. Data is a
+re-registration (``deflex predict [--fit-setup]``), registration of a new session or probe
+from a few readings (``deflex register``), and the UR10 tracker importer. Data is a
 CSV path, a pandas DataFrame or a mapping of columns in the CLI's formats (column names with
 units: ``q1_rad``, ``fz_N``, ``dx_m``…); the checks and messages are the CLI's."""
 
@@ -14,7 +15,14 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _deflex
-from ._deflex import GeometryCalibration, Prediction, Robot, StiffnessCalibration, Validation
+from ._deflex import (
+    GeometryCalibration,
+    Prediction,
+    Registration,
+    Robot,
+    StiffnessCalibration,
+    Validation,
+)
 from ._tables import Source, Table, source, sources
 from .log import Log
 
@@ -24,11 +32,14 @@ __all__ = [
     "predict_displacements",
     "calibrate_geometry",
     "predict",
+    "register",
     "import_ur10_tracker",
     "AbsoluteData",
 ]
 
 RobotLike = Union[Robot, str, "os.PathLike[str]"]
+CalibratedLike = Union[GeometryCalibration, Robot, str, "os.PathLike[str]"]
+DEFAULT_ORIENTATION_SIGMA_RAD = 1e-4
 
 
 def calibrate(
@@ -189,6 +200,12 @@ def calibrate_geometry(
     bootstrap: int = 0,
     test_fraction: float = 0.0,
     seed: int = 1,
+    orientations: bool = False,
+    sigma_rad: float = DEFAULT_ORIENTATION_SIGMA_RAD,
+    cv_by: Optional[str] = None,
+    register_readings: int = 0,
+    register_draws: int = 1,
+    register_target: bool = False,
 ) -> GeometryCalibration:
     """Elasto-geometric calibration from absolute tracker readings (``deflex
     calibrate-geometry``): DH errors with Hayati β, tracker set-up registrations, target
@@ -200,8 +217,14 @@ def calibrate_geometry(
     sets the threshold). ``test_fraction`` of the configurations and every ``test_data``
     reading are never fitted; a test set-up the fit has not seen gets only its own registration.
     ``folds``-fold cross-validation by configuration runs inside the fit set, ``bootstrap``
-    replicates resample configurations. The result's ``to_dict()["steps"]`` is the iteration
-    table (fit, cross-validated and held-out errors)."""
+    replicates resample configurations. ``orientations`` fits the measured orientations
+    (``rx_rad…``; σ ``sigma_rad`` where a row has none) with the positions. ``cv_by``
+    (``"session"``, ``"setup"`` or ``"series"``: each ``data`` table one series) leaves each
+    group of the fit data out in turn and registers it by the protocol: ``register_readings``
+    readings drawn at random (0: every other configuration), ``register_draws`` draws, the
+    target's offset too with ``register_target``. The result's ``to_dict()["steps"]`` is the
+    iteration table (fit, cross-validated and held-out errors); ``save(path)`` writes the robot
+    file and its terms (``NAME.terms.json``) as the CLI does."""
     step_list = [s.strip() for s in steps.split(",")] if isinstance(steps, str) else list(steps)
     if elastic is None:
         elastic_list: List[str] = []
@@ -221,12 +244,18 @@ def calibrate_geometry(
         bootstrap,
         test_fraction,
         seed,
+        orientations,
+        sigma_rad,
+        cv_by,
+        register_readings,
+        register_draws,
+        register_target,
     )
     return result
 
 
 def predict(
-    robot: RobotLike,
+    robot: CalibratedLike,
     data: Union[Table, AbsoluteData],
     *,
     fit_setup: bool = False,
@@ -234,8 +263,38 @@ def predict(
     """Each absolute reading's predicted target position in its set-up's tracker frame with a
     calibrated robot (its ``[[setup]]`` and ``[[target]]``), and the error where measured
     (``deflex predict``). With ``fit_setup`` the registration of the readings' set-ups is fitted
-    on them first: re-registration after the tracker was moved, or a set-up the robot file does
-    not know."""
+    on them first (optimistic: :func:`register` registers from a few readings instead).
+
+    ``robot`` is a :class:`GeometryCalibration`, a robot file path (its ``NAME.terms.json`` is
+    used when present, as the CLI's ``--robot FILE``) or a :class:`Robot` (no joint terms)."""
     src = ("table", data.text, data.name) if isinstance(data, AbsoluteData) else source(data)
     result: Prediction = _deflex._predict(robot, src, fit_setup)
+    return result
+
+
+def register(
+    robot: CalibratedLike,
+    data: Union[Table, AbsoluteData],
+    *,
+    setup: Optional[str] = None,
+    target: Optional[str] = None,
+    orientations: bool = False,
+    sigma_rad: float = DEFAULT_ORIENTATION_SIGMA_RAD,
+    recalibrate_above_m: Optional[float] = None,
+) -> Registration:
+    """Register a new measuring session (``deflex register``): the set-up ``setup`` (default:
+    the one set-up the readings name; a new name is registered from scratch, a known one
+    re-registered) and, with ``target``, that target's offset on the flange (a new or remounted
+    probe: 3 parameters, 6 with ``orientations``), fitted on a few readings (30 recommended,
+    spread over the working volume and the wrist orientations) with the calibrated robot
+    frozen. Warns (``.warnings``) when the readings are too few or too close together, and when
+    the residual is above ``recalibrate_above_m`` (default 1.5 × the calibration's held-out RMS
+    from its terms): the robot itself has changed. ``.robot`` (or ``.save(path)``) is the
+    updated robot for :func:`predict` and everything else.
+
+    ``robot`` as for :func:`predict`."""
+    src = ("table", data.text, data.name) if isinstance(data, AbsoluteData) else source(data)
+    result: Registration = _deflex._register(
+        robot, src, setup, target, orientations, sigma_rad, recalibrate_above_m
+    )
     return result

@@ -4,7 +4,8 @@
 use super::calib::{source_arg, sources};
 use super::convert::{json_to_py, make_log, rows_to_numpy, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
-use crate::geometry::{self, GeometryOptions};
+use crate::geometry::{self, CalibratedModel, CvBy, GeometryOptions, RegisterRequest};
+use deflex_absolute::fit::HeldOutProtocol;
 use pyo3::prelude::*;
 use serde_json::json;
 use std::path::PathBuf;
@@ -137,7 +138,12 @@ impl PyGeometryCalibration {
     /// Role of every reading in ``residuals``: ``fit``, ``test`` or ``registration``.
     #[getter]
     fn roles(&self) -> Vec<&'static str> {
-        self.inner.result.residuals.iter().map(|r| r.role).collect()
+        self.inner
+            .result
+            .residuals
+            .iter()
+            .map(|r| r.role.name())
+            .collect()
     }
 
     /// χ²/dof of the final fit with the stated σ.
@@ -167,13 +173,15 @@ impl PyGeometryCalibration {
         geometry::report_text(&self.inner)
     }
 
-    /// Write the calibrated robot file to ``path``, and with ``report`` the report folder (text,
+    /// Write the calibrated robot file to ``path`` with its terms beside it
+    /// (``NAME.terms.json``: joint terms, residual model, the held-out accuracy that
+    /// ``deflex.register`` compares against), and with ``report`` the report folder (text,
     /// JSON, CSV, plots, HTML), each whole.
     #[pyo3(signature = (path, report = None))]
     fn save(&self, py: Python<'_>, path: PathBuf, report: Option<PathBuf>) -> PyResult<()> {
         let inner = &self.inner;
         run(py, || {
-            crate::model::save(&inner.robot, &path)?;
+            geometry::save(inner, &path)?;
             if let Some(dir) = &report {
                 geometry::write_report(inner, dir)?;
             }
@@ -184,7 +192,7 @@ impl PyGeometryCalibration {
 
 /// ``deflex.calibrate_geometry``'s engine call.
 #[pyfunction]
-#[pyo3(signature = (robot, data, loaded, test_data, steps, elastic, loss, folds, bootstrap, test_fraction, seed))]
+#[pyo3(signature = (robot, data, loaded, test_data, steps, elastic, loss, folds, bootstrap, test_fraction, seed, orientations, sigma_rad, cv_by, register_readings, register_draws, register_target))]
 #[allow(clippy::too_many_arguments)]
 pub fn _calibrate_geometry(
     py: Python<'_>,
@@ -199,7 +207,28 @@ pub fn _calibrate_geometry(
     bootstrap: usize,
     test_fraction: f64,
     seed: u64,
+    orientations: bool,
+    sigma_rad: f64,
+    cv_by: Option<String>,
+    register_readings: usize,
+    register_draws: usize,
+    register_target: bool,
 ) -> PyResult<PyGeometryCalibration> {
+    let cv_by = match cv_by.as_deref() {
+        None => None,
+        Some("session") => Some(CvBy::Session),
+        Some("setup") => Some(CvBy::Setup),
+        Some("series") => Some(CvBy::Series),
+        Some(other) => {
+            return Err(to_py(
+                py,
+                crate::error::Error::invalid(
+                    "cv_by",
+                    format!("expected \"session\", \"setup\" or \"series\", got \"{other}\""),
+                ),
+            ));
+        }
+    };
     let start = robot_arg(py, robot, "robot")?;
     let data = sources(py, &data)?;
     let loaded = sources(py, &loaded)?;
@@ -212,6 +241,13 @@ pub fn _calibrate_geometry(
         test_fraction,
         seed,
         elastic,
+        orientations: orientations.then_some(sigma_rad),
+        cv_by,
+        protocol: HeldOutProtocol {
+            register_readings,
+            draws: register_draws,
+            register_target,
+        },
     };
     let inner = run(py, || {
         geometry::calibrate_geometry(&start, &data, &loaded, &test, &options)
@@ -263,7 +299,7 @@ pub fn _predict(
     data: &Bound<'_, PyAny>,
     fit_setup: bool,
 ) -> PyResult<PyPrediction> {
-    let model = robot_arg(py, robot, "robot")?;
+    let model = calibrated_arg(py, robot)?;
     let source = source_arg(py, data)?;
     let p = run(py, || geometry::predict(&model, &source, fit_setup))?;
     Ok(PyPrediction {
@@ -271,6 +307,171 @@ pub fn _predict(
         text: p.text,
         json: p.json.to_string(),
     })
+}
+
+/// A calibrated model from a ``GeometryCalibration`` (with its terms), a robot file path (with
+/// the ``NAME.terms.json`` beside it when there is one, as the CLI's ``--robot FILE``) or a
+/// ``Robot`` (no terms).
+fn calibrated_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<CalibratedModel> {
+    if let Ok(cal) = obj.cast::<PyGeometryCalibration>() {
+        let inner = &cal.get().inner;
+        return run(py, || geometry::calibrated_model_of(inner));
+    }
+    let robot = robot_arg(py, obj, "robot")?;
+    let file = if obj.cast::<PyRobot>().is_ok() {
+        None
+    } else {
+        obj.extract::<PathBuf>().ok()
+    };
+    run(py, move || {
+        geometry::calibrated_model(&robot, file.as_deref())
+    })
+}
+
+/// A new session's set-up (and a new target's offset) registered from a few readings with the
+/// calibrated robot frozen (``deflex.register``).
+#[pyclass(module = "deflex", frozen, name = "Registration")]
+pub struct PyRegistration {
+    inner: geometry::SessionRegistration,
+}
+
+#[pymethods]
+impl PyRegistration {
+    /// The updated robot: the new set-up (and target) added, everything else as it was.
+    #[getter]
+    fn robot(&self) -> PyRobot {
+        PyRobot::new(self.inner.robot.clone())
+    }
+
+    /// The set-up registered.
+    #[getter]
+    fn setup(&self) -> String {
+        self.inner.setup.clone()
+    }
+
+    /// The target registered too, if any.
+    #[getter]
+    fn target(&self) -> Option<String> {
+        self.inner.target.clone()
+    }
+
+    /// Readings used.
+    #[getter]
+    fn readings(&self) -> usize {
+        self.inner.registration.readings
+    }
+
+    /// Names of the registered parameters (set-up first, then target).
+    #[getter]
+    fn parameters(&self) -> Vec<String> {
+        self.inner
+            .registration
+            .params
+            .iter()
+            .map(|p| p.name.clone())
+            .collect()
+    }
+
+    /// Registered values (SI: m, rad).
+    #[getter]
+    fn estimates<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v: Vec<f64> = self
+            .inner
+            .registration
+            .params
+            .iter()
+            .map(|p| p.value)
+            .collect();
+        let n = v.len();
+        to_numpy(py, v, &[n])
+    }
+
+    /// Their standard errors (SI).
+    #[getter]
+    fn standard_errors<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v: Vec<f64> = self
+            .inner
+            .registration
+            .params
+            .iter()
+            .map(|p| p.standard_error)
+            .collect();
+        let n = v.len();
+        to_numpy(py, v, &[n])
+    }
+
+    /// Position residual RMS of the readings (m).
+    #[getter]
+    fn rms_m(&self) -> f64 {
+        self.inner.registration.position.rms
+    }
+
+    /// χ²/dof with the stated σ.
+    #[getter]
+    fn chi2_per_dof(&self) -> f64 {
+        self.inner.registration.chi2_per_dof
+    }
+
+    /// What deserves a second look (too few readings, a small spread, a residual above the
+    /// calibration's accuracy: the robot itself has changed).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner
+            .registration
+            .warnings
+            .iter()
+            .map(|w| w.to_string())
+            .collect()
+    }
+
+    /// The CLI's ``--json`` output as a dict (SI; ``out`` is None).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(
+            py,
+            &geometry::registration_json(&self.inner, None).to_string(),
+        )
+    }
+
+    /// The CLI's text output.
+    fn report(&self) -> String {
+        geometry::registration_text(&self.inner)
+    }
+
+    fn __str__(&self) -> String {
+        geometry::registration_text(&self.inner)
+    }
+
+    /// Write the updated robot file (with the calibration's terms beside it, unchanged), whole.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let inner = &self.inner;
+        run(py, || geometry::save_registration(inner, &path))
+    }
+}
+
+/// ``deflex.register``'s engine call.
+#[pyfunction]
+#[pyo3(signature = (robot, data, setup, target, orientations, sigma_rad, recalibrate_above_m))]
+#[allow(clippy::too_many_arguments)]
+pub fn _register(
+    py: Python<'_>,
+    robot: &Bound<'_, PyAny>,
+    data: &Bound<'_, PyAny>,
+    setup: Option<String>,
+    target: Option<String>,
+    orientations: bool,
+    sigma_rad: f64,
+    recalibrate_above_m: Option<f64>,
+) -> PyResult<PyRegistration> {
+    let model = calibrated_arg(py, robot)?;
+    let source = source_arg(py, data)?;
+    let request = RegisterRequest {
+        setup,
+        target,
+        orientations: orientations.then_some(sigma_rad),
+        recalibrate_above_m,
+    };
+    let inner = run(py, move || geometry::register(model, &source, &request))?;
+    Ok(PyRegistration { inner })
 }
 
 /// ``deflex.import_ur10_tracker``'s engine call: the absolute CSV text and a summary dict.

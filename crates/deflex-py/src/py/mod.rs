@@ -19,6 +19,7 @@ fn _deflex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<calib::PyValidation>()?;
     m.add_class::<geometry::PyGeometryCalibration>()?;
     m.add_class::<geometry::PyPrediction>()?;
+    m.add_class::<geometry::PyRegistration>()?;
     m.add_class::<comp::PyCompensation>()?;
     m.add_class::<twin::PyTwinRun>()?;
     m.add_function(wrap_pyfunction!(calib::_calibrate, m)?)?;
@@ -26,6 +27,7 @@ fn _deflex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::_predict_displacements, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::_calibrate_geometry, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::_register, m)?)?;
     m.add_function(wrap_pyfunction!(geometry::_import_ur10_tracker, m)?)?;
     m.add_function(wrap_pyfunction!(comp::_compensate, m)?)?;
     m.add_function(wrap_pyfunction!(twin::_form, m)?)?;

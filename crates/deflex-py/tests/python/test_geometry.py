@@ -109,3 +109,60 @@ def test_geometry_options_are_checked(series: Path) -> None:
         deflex.import_ur10_tracker(series / "Series_A", setup="A", every=0)
     with pytest.raises(deflex.DataError):
         deflex.import_ur10_tracker(series / "nowhere", setup="A")
+
+
+def test_register_a_new_session_from_a_few_readings(series: Path, tmp_path: Path) -> None:
+    """``deflex register`` from Python: the calibration saved with its terms, then set-up B
+    registered from 30 of its readings with the robot frozen. The registered set-up is checked by
+    recomposing those readings in numpy from the updated robot file (set-up · flange · target,
+    no compliance step: no gravity sag) and by scoring B's other readings with it."""
+    a = deflex.import_ur10_tracker(series / "Series_A", setup="A")
+    b = deflex.import_ur10_tracker(series / "Series_B", setup="B")
+    cal = deflex.calibrate_geometry("ur10", a, steps="registration,geometry", folds=0)
+    calibrated = tmp_path / "ur10-cal.toml"
+    cal.save(calibrated)
+    assert (tmp_path / "ur10-cal.terms.json").is_file()
+    table = b.table()
+    n = len(table["setup"])
+    rng = np.random.default_rng(7)
+    pick = np.sort(rng.choice(n, size=30, replace=False))
+    columns = {name: table[name][pick] for name in table.names}
+    reg = deflex.register(calibrated, columns)
+    assert reg.setup == "B" and reg.target is None and reg.readings == 30
+    assert len(reg.parameters) == 6 == len(reg.estimates) == len(reg.standard_errors)
+    assert (reg.standard_errors > 0).all()
+    assert "Registered set-up `B`" in reg.report()
+    d = reg.to_dict()
+    assert d["setup"] == "B" and d["readings"] == 30 and math.isclose(d["position_m"]["rms"], reg.rms_m)
+    out = tmp_path / "today.toml"
+    reg.save(out)
+    assert (tmp_path / "today.terms.json").read_text() == (tmp_path / "ur10-cal.terms.json").read_text()
+    with open(out, "rb") as f:
+        spec = tomllib.load(f)
+    setup = next(s for s in spec["setup"] if s["name"] == "B")
+    target = np.array(spec["target"][0]["xyz"])
+    t_setup = trans(*setup["xyz"]) @ rpy_matrix(setup["rpy"])
+    robot = deflex.Robot.load(out)
+    q = np.column_stack([table[f"q{i}_rad"] for i in range(1, 7)])
+    flange = robot.pose(q) @ np.linalg.inv(robot.tool)
+    p = flange[:, :3, :3] @ target + flange[:, :3, 3]
+    p = p @ t_setup[:3, :3].T + t_setup[:3, 3]
+    measured = np.column_stack([table["x_m"], table["y_m"], table["z_m"]])
+    errors = np.linalg.norm(measured - p, axis=1)
+    assert math.isclose(float(np.sqrt(np.mean(errors[pick] ** 2))), reg.rms_m, rel_tol=1e-6)
+    others = np.setdiff1d(np.arange(n), pick)
+    assert float(np.sqrt(np.mean(errors[others] ** 2))) < 1.5e-3
+    # predict with the updated file gives the same errors.
+    np.testing.assert_allclose(deflex.predict(out, b).table["error_m"], errors, atol=1e-9)
+    # The CLI's checks: two set-ups need setup=, an unknown target needs target=.
+    both = {name: np.concatenate([a.table()[name][:20], table[name][:20]]) for name in table.names}
+    with pytest.raises(deflex.InputError, match="the data names set-ups A, B: choose one with setup="):
+        deflex.register(calibrated, both)
+    probe = dict(columns, target=np.array(["probe2"] * 30, dtype=object))
+    with pytest.raises(deflex.InputError, match="target `probe2` is not in the robot file"):
+        deflex.register(calibrated, probe)
+    new_probe = deflex.register(calibrated, probe, target="probe2")
+    assert new_probe.target == "probe2" and len(new_probe.parameters) == 9
+    positions = {k: v for k, v in columns.items() if k not in ("rx_rad", "ry_rad", "rz_rad", "sigma_rad")}
+    with pytest.raises(deflex.InputError, match="orientations: no reading has rx_rad"):
+        deflex.register(calibrated, positions, orientations=True)

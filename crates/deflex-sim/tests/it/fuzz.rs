@@ -55,11 +55,11 @@ fn parsed_programs_plan_or_are_refused() {
     for text in [
         "G0 X0 Y0 Z1\nG1 Z0 F0.6\nG1 X5000 F0.6\n",
         "G0 X1\nG1 X2 F60000\n",
-        "G0 X9999 Y9999 Z9999\n",
+        "G0 X0 Y0 Z0\nG0 X9999 Y9999 Z9999\n",
     ] {
         let path: ToolPath = parse_gcode(text, "p.nc").unwrap();
         match deflex_sim::Cell::new(&config, path, 1) {
-            Ok(cell) => assert!(cell.path_duration_s() <= deflex_sim::config::MAX_RUN_S),
+            Ok(cell) => assert!(cell.path_duration_s() <= deflex_sim::cell_config::MAX_RUN_S),
             Err(e) => {
                 let e = e.to_string();
                 assert!(

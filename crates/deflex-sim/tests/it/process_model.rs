@@ -8,7 +8,7 @@
 
 use deflex_compensate::{ProcessModel, ProcessPoint};
 use deflex_model::{IkOptions, Robot};
-use deflex_sim::config::CellConfig;
+use deflex_sim::cell_config::CellConfig;
 use deflex_sim::{ErrorSources, FormingProcess, ToolPath, run_forming, tcp_path};
 
 /// The default cell with every error source off and the plant reduced to its linear VJM part;

@@ -2,10 +2,9 @@
 //! loaded by every allowed cable direction or dead weight at every attachment, with the Fisher
 //! information it brings.
 
-use super::invalid;
 use super::options::PlanOptions;
 use crate::CalibError;
-use crate::cell::{
+use crate::campaign_cell::{
     LoadKind, Obstacles, PointSet, point_in_world, standard_points, wrap_into_limits,
 };
 use crate::data::MeasurementRow;
@@ -106,15 +105,13 @@ pub(super) fn candidates(
     let (mut kept, mut drawn) = (0, 0);
     while kept < o.configurations && drawn < 20 * o.configurations {
         drawn += 1;
-        let mut q: Vec<f64> = crate::synthetic::random_q(robot, &mut rng);
+        let mut q: Vec<f64> = crate::campaign_cell::random_q(robot, &mut rng);
         round_within_limits(robot, &mut q);
         // The rows carry the joint values wrapped into the limits (what the technician types);
         // the information is computed at the values drawn, the same pose.
         let mut q_wrapped = q.clone();
         wrap_into_limits(robot, &mut q_wrapped);
-        robot
-            .forward_kinematics(&mut data, &q)
-            .map_err(|e| invalid(e.to_string()))?;
+        robot.forward_kinematics(&mut data, &q)?;
         let points = measured_points(robot, &data, o, base_point);
         let positions: Vec<Vector3<f64>> = points.iter().map(|p| p.2).collect();
         if !obstacles.arm_clear(robot, &data, &positions) {

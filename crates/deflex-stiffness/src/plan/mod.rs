@@ -3,7 +3,7 @@
 //! 1. **Candidates**: random configurations within the joint limits (required; angles rounded
 //!    to 0.1° inside the limits and wrapped to their smallest equivalent, so no −259° reaches
 //!    the technician), kept only when the arm, the measured points and the loads clear the
-//!    floor and the work table ([`crate::cell`]); each loaded by a cable along each allowed
+//!    floor and the work table ([`crate::campaign_cell`]); each loaded by a cable along each allowed
 //!    direction or by each dead weight, at the TCP and, with a bracket, at the bracket point.
 //! 2. **Axis by axis** (the paper's Fig. 7 and Tables A1/A2, generalised): for every eDoF, the
 //!    candidate where that eDoF's share of the predicted displacement (eq. 15, all measured
@@ -23,15 +23,15 @@
 mod candidates;
 mod options;
 
-use crate::CalibError;
-use crate::cell::require_limits;
-pub use crate::cell::{
+use crate::campaign_cell::require_limits;
+pub use crate::campaign_cell::{
     BasePoint, Floor, LoadKind, PointSet, PointSpec, Table, TableOption, standard_points,
 };
 use crate::data::MeasurementRow;
 use crate::design::{Design, EdofId, edof_label};
 use crate::uncertainty::unscaled_covariance;
-use candidates::candidates;
+use crate::{CalibError, PlanError};
+use candidates::{Candidate, candidates};
 use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::DMatrix;
 pub use options::{
@@ -125,12 +125,9 @@ pub struct Plan {
 }
 
 /// Where the base reflector `M0` sat before it became configurable, in R0: 0.3 m forward of
-/// and 0.3 m below the origin of R0 (the TX200's base casting). [`default_base_point`] keeps it
+/// and 0.3 m below the origin of R0 (the TX200's base casting). [`default_base_point`](crate::campaign_cell::default_base_point) keeps it
 /// there when the floor allows.
 pub const BASE_POINT_IN_R0_M: [f64; 3] = [0.3, 0.0, -0.3];
-pub(super) fn invalid(message: String) -> CalibError {
-    CalibError::Invalid(message)
-}
 /// `log det` of a symmetric positive definite matrix, `None` when it is not (or not finite).
 fn log_det(m: &DMatrix<f64>) -> Option<f64> {
     if !crate::all_finite(m) {
@@ -185,37 +182,66 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
     let (obstacles, base_point) = resolve_setup(robot, options)?;
     let (edofs, nominal) = planned_edofs(robot, options.full_family);
     if edofs.is_empty() {
-        return Err(invalid(format!(
-            "robot \"{}\" has no eDoF to plan for (use the full model family)",
-            robot.name
-        )));
+        return Err(PlanError::NoEdof {
+            robot: robot.name.clone(),
+        }
+        .into());
     }
     let shifts: Vec<f64> = robot.joints.iter().map(|j| j.center_shift).collect();
     let (cands, drawn, kept) = candidates(
         robot, options, &obstacles, base_point, &edofs, &nominal, &shifts,
     )?;
     if cands.is_empty() {
-        return Err(invalid(format!(
-            "no configuration out of {drawn} drawn keeps the arm{} clear of the floor (z = {}) and the table ({}): lower the floor or the table, or turn the checks off (--no-floor, --no-table)",
-            if options.bracket_m.is_some() {
-                ", the bracket"
-            } else {
-                ""
-            },
-            obstacles
-                .floor_z_m
-                .map_or("not checked".to_string(), |z| format!("{z:.3} m")),
-            obstacles
-                .table
-                .map_or("not checked".to_string(), |t| format!(
-                    "top at z = {:.3} m over x {:.3}…{:.3} m, y {:.3}…{:.3} m",
-                    t.top_z_m, t.x_m[0], t.x_m[1], t.y_m[0], t.y_m[1]
-                )),
-        )));
+        return Err(PlanError::NoClearConfiguration {
+            drawn,
+            bracket: options.bracket_m.is_some(),
+            floor_z_m: obstacles.floor_z_m,
+            table: obstacles.table,
+        }
+        .into());
     }
     let p = edofs.len();
-    // Axis by axis: for every eDoF the candidate where its share is largest while ≥ 10 σ (or
-    // the loudest one, when ≥ 3 σ).
+    let picks = axis_picks(&edofs, &cands);
+    let (chosen, info) = d_optimal(&picks, &cands, p, options.load_cases);
+    let log_det = log_det(&info).unwrap_or(f64::NEG_INFINITY);
+    let expected = expected_se(robot, &edofs, &nominal, &info);
+    let (axis_cases, rows) = case_rows(picks, chosen, &cands, &expected);
+    let expected_shifts = expected_shift_se(robot, &rows, options.noise_sigma_m)?;
+    let force_n = match &options.load {
+        LoadKind::Cable { .. } => options.max_force_n,
+        LoadKind::DeadWeight { masses_kg } => {
+            masses_kg.iter().copied().fold(0.0, f64::max) * robot.gravity.norm()
+        }
+    };
+    Ok(Plan {
+        rows,
+        axis_cases,
+        expected,
+        expected_shifts,
+        log_det,
+        setup: PlanSetup {
+            force_n,
+            load: options.load.clone(),
+            bracket_m: options.bracket_m,
+            floor_z_m: obstacles.floor_z_m,
+            table: obstacles.table,
+            base_point_r0_m: base_point,
+            configurations_drawn: drawn,
+            configurations_kept: kept,
+        },
+    })
+}
+
+/// An axis-by-axis choice: the eDoF, the candidate, its share of the candidate's signal and its
+/// signal-to-noise ratio.
+type Pick = (EdofId, usize, f64, f64);
+
+/// Ridge added to the information matrix (relative parameters) so that it stays invertible.
+const RIDGE: f64 = 1e-9;
+
+/// Axis by axis: for every eDoF the candidate where its share is largest while ≥ 10 σ (or the
+/// loudest one, when ≥ 3 σ).
+fn axis_picks(edofs: &[EdofId], cands: &[Candidate]) -> Vec<Pick> {
     let mut picks: Vec<(EdofId, usize, f64, f64)> = Vec::new();
     for (e, &id) in edofs.iter().enumerate() {
         let mut best: Option<(f64, f64, usize)> = None;
@@ -243,20 +269,30 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
             picks.push((id, c, share, snr));
         }
     }
+    picks
+}
+
+/// The axis-by-axis candidates, completed greedily to `load_cases` by D-optimality (the largest
+/// `log det` of the information); returns the candidates in selection order and their
+/// information (with [`RIDGE`]).
+fn d_optimal(
+    picks: &[Pick],
+    cands: &[Candidate],
+    p: usize,
+    load_cases: usize,
+) -> (Vec<usize>, DMatrix<f64>) {
     let mut chosen: Vec<usize> = Vec::new();
-    for &(_, c, ..) in &picks {
+    for &(_, c, ..) in picks {
         if !chosen.contains(&c) {
             chosen.push(c);
         }
     }
     let axis_count = chosen.len();
-    // Greedy D-optimal completion.
-    let ridge = 1e-9;
-    let mut info = DMatrix::<f64>::identity(p, p) * ridge;
+    let mut info = DMatrix::<f64>::identity(p, p) * RIDGE;
     for &c in &chosen {
         info += &cands[c].info;
     }
-    while chosen.len() < options.load_cases.max(axis_count) {
+    while chosen.len() < load_cases.max(axis_count) {
         let mut best: Option<(f64, usize)> = None;
         for (c, cand) in cands.iter().enumerate() {
             if chosen.contains(&c) {
@@ -273,14 +309,23 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
         info += &cands[c].info;
         chosen.push(c);
     }
-    let log_det = log_det(&info).unwrap_or(f64::NEG_INFINITY);
-    // Expected SE: the model's eDoFs from their joint information; an extra family eDoF (with
-    // `full_family`) from the information of the model's eDoFs plus that one, i.e. its precision
-    // if the structure search adds it.
+    (chosen, info)
+}
+
+/// Expected standard errors: the model's eDoFs from their joint information; an extra family
+/// eDoF (with `full_family`) from the information of the model's eDoFs plus that one, i.e. its
+/// precision if the structure search adds it.
+fn expected_se(
+    robot: &Robot,
+    edofs: &[EdofId],
+    nominal: &[f64],
+    info: &DMatrix<f64>,
+) -> Vec<ExpectedSe> {
+    let p = edofs.len();
     let own: Vec<usize> = (0..p)
         .filter(|&e| robot.stiffness(edofs[e].0, edofs[e].1).is_some())
         .collect();
-    let expected: Vec<ExpectedSe> = edofs
+    edofs
         .iter()
         .enumerate()
         .map(|(e, &id)| {
@@ -288,7 +333,7 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
             if !set.contains(&e) {
                 set.push(e);
             }
-            let rel = relative_se(&info, ridge, &set, e);
+            let rel = relative_se(info, RIDGE, &set, e);
             ExpectedSe {
                 id,
                 label: edof_label(id),
@@ -297,16 +342,23 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
                 relative: rel,
             }
         })
-        .collect();
-    // Only identifiable eDoFs keep their axis-by-axis case; a case that serves none of them
-    // becomes a D-optimal one.
+        .collect()
+}
+
+/// The plan's rows and axis-by-axis cases: only identifiable eDoFs keep their axis-by-axis
+/// case (a case that serves none of them becomes a D-optimal one); rows keep the selection
+/// order, labelled A01, A02, … (cases serving an identifiable eDoF) and D01, … (the others).
+fn case_rows(
+    picks: Vec<Pick>,
+    chosen: Vec<usize>,
+    cands: &[Candidate],
+    expected: &[ExpectedSe],
+) -> (Vec<AxisCase>, Vec<MeasurementRow>) {
     let identifiable = |id: EdofId| expected.iter().any(|x| x.id == id && x.identifiable());
     let picks: Vec<_> = picks
         .into_iter()
         .filter(|(id, ..)| identifiable(*id))
         .collect();
-    // Rows keep the selection order (axis-by-axis picks, then D-optimal); labels count the
-    // cases that serve an identifiable eDoF (A01, A02, …) and the others (D01, …) separately.
     let order = chosen;
     let mut labels: Vec<String> = Vec::with_capacity(order.len());
     let (mut a, mut d) = (0, 0);
@@ -350,30 +402,7 @@ pub fn plan_experiments(robot: &Robot, options: &PlanOptions) -> Result<Plan, Ca
             });
         }
     }
-    let expected_shifts = expected_shift_se(robot, &rows, options.noise_sigma_m)?;
-    let force_n = match &options.load {
-        LoadKind::Cable { .. } => options.max_force_n,
-        LoadKind::DeadWeight { masses_kg } => {
-            masses_kg.iter().copied().fold(0.0, f64::max) * robot.gravity.norm()
-        }
-    };
-    Ok(Plan {
-        rows,
-        axis_cases,
-        expected,
-        expected_shifts,
-        log_det,
-        setup: PlanSetup {
-            force_n,
-            load: options.load.clone(),
-            bracket_m: options.bracket_m,
-            floor_z_m: obstacles.floor_z_m,
-            table: obstacles.table,
-            base_point_r0_m: base_point,
-            configurations_drawn: drawn,
-            configurations_kept: kept,
-        },
-    })
+    (axis_cases, rows)
 }
 
 /// Expected standard error of every centre shift the calibration fits (joints with an x or y

@@ -1,13 +1,12 @@
 //! The planner's options, their bounds (named after the `deflex plan` flags) and the cell they
 //! resolve to for a robot.
 
-use super::invalid;
-use crate::CalibError;
-use crate::cell::{
+use crate::campaign_cell::{
     BasePoint, DEFAULT_CLEARANCE_M, DEFAULT_HANGING_DROP_M, Floor, LoadKind, MAX_DEAD_WEIGHT_KG,
     MAX_PLAN_FORCE_N, Obstacles, PointSet, TableOption, default_base_point, default_floor_z,
     default_table,
 };
+use crate::{CalibError, PlanError};
 use deflex_model::Robot;
 use nalgebra::{Point3, Vector3};
 
@@ -21,7 +20,7 @@ pub const MAX_DEAD_WEIGHTS: usize = 4;
 pub const NOISE_RANGE_M: [f64; 2] = [1e-9, 1e-2];
 /// Longest bracket lever arm (m).
 pub const MAX_BRACKET_M: f64 = 2.0;
-/// Settings of [`plan_experiments`]. The error messages name the `deflex plan` flags.
+/// Settings of [`plan_experiments`](super::plan_experiments). The error messages name the `deflex plan` flags.
 #[derive(Clone, Debug)]
 pub struct PlanOptions {
     /// Cable tension (N); dead weights set their own force.
@@ -62,7 +61,7 @@ pub struct PlanOptions {
 
 impl PlanOptions {
     /// The defaults of `deflex plan`: [`PlanOptions::default`] with the floor and the table
-    /// checked at their default heights ([`crate::cell`]).
+    /// checked at their default heights ([`crate::campaign_cell`]).
     pub fn for_a_real_cell() -> PlanOptions {
         PlanOptions {
             floor: Floor::Default,
@@ -94,52 +93,51 @@ impl Default for PlanOptions {
 }
 
 /// Check every option against its bound, naming the `deflex plan` flag.
-pub(super) fn check_options(robot: &Robot, o: &PlanOptions) -> Result<(), CalibError> {
+pub(super) fn check_options(robot: &Robot, o: &PlanOptions) -> Result<(), PlanError> {
+    use PlanError as E;
     if !(o.max_force_n.is_finite() && o.max_force_n > 0.0 && o.max_force_n <= MAX_PLAN_FORCE_N) {
-        return Err(invalid(format!(
-            "--max-force-N: expected a force in (0, {MAX_PLAN_FORCE_N:e}] N, got {}",
-            o.max_force_n
-        )));
+        return Err(E::option(
+            "--max-force-N",
+            format!("a force in (0, {MAX_PLAN_FORCE_N:e}] N"),
+            o.max_force_n,
+        ));
     }
     if !(1..=MAX_LOAD_CASES).contains(&o.load_cases) {
-        return Err(invalid(format!(
-            "--load-cases: expected 1 to {MAX_LOAD_CASES}, got {}",
-            o.load_cases
-        )));
+        return Err(E::option(
+            "--load-cases",
+            format!("1 to {MAX_LOAD_CASES}"),
+            o.load_cases,
+        ));
     }
     if !(1..=MAX_CONFIGURATIONS).contains(&o.configurations) {
-        return Err(invalid(format!(
-            "--configurations: expected 1 to {MAX_CONFIGURATIONS}, got {}",
-            o.configurations
-        )));
+        return Err(E::option(
+            "--configurations",
+            format!("1 to {MAX_CONFIGURATIONS}"),
+            o.configurations,
+        ));
     }
     if !(o.noise_sigma_m >= NOISE_RANGE_M[0] && o.noise_sigma_m <= NOISE_RANGE_M[1]) {
-        return Err(invalid(format!(
-            "--noise-um: expected {} to {} µm, got {} µm",
-            NOISE_RANGE_M[0] * 1e6,
-            NOISE_RANGE_M[1] * 1e6,
-            o.noise_sigma_m * 1e6
-        )));
+        return Err(E::option(
+            "--noise-um",
+            format!(
+                "{} to {} µm",
+                NOISE_RANGE_M[0] * 1e6,
+                NOISE_RANGE_M[1] * 1e6
+            ),
+            format!("{} µm", o.noise_sigma_m * 1e6),
+        ));
     }
     if !(0.0..=1.0).contains(&o.clearance_m) {
-        return Err(invalid(format!(
-            "--clearance-m: expected 0 to 1 m, got {}",
-            o.clearance_m
-        )));
+        return Err(E::option("--clearance-m", "0 to 1 m", o.clearance_m));
     }
     if !(0.0..=5.0).contains(&o.hanging_drop_m) {
-        return Err(invalid(format!(
-            "--hanging-drop-m: expected 0 to 5 m, got {}",
-            o.hanging_drop_m
-        )));
+        return Err(E::option("--hanging-drop-m", "0 to 5 m", o.hanging_drop_m));
     }
     let length = |v: f64| v.is_finite() && v.abs() <= 100.0;
     if let Floor::At(z) = o.floor
         && !length(z)
     {
-        return Err(invalid(format!(
-            "--floor-z-m: expected a height within ±100 m, got {z}"
-        )));
+        return Err(E::option("--floor-z-m", "a height within ±100 m", z));
     }
     if let TableOption::At(t) = o.table
         && !(t.x_m.iter().chain(&t.y_m).all(|v| length(*v))
@@ -147,34 +145,39 @@ pub(super) fn check_options(robot: &Robot, o: &PlanOptions) -> Result<(), CalibE
             && t.x_m[0] < t.x_m[1]
             && t.y_m[0] < t.y_m[1])
     {
-        return Err(invalid(format!(
-            "--table: expected x_min,x_max,y_min,y_max,top_z (m) with min < max, within ±100 m, got {t:?}"
-        )));
+        return Err(E::option(
+            "--table",
+            "x_min,x_max,y_min,y_max,top_z (m) with min < max, within ±100 m",
+            format!("{t:?}"),
+        ));
     }
     if let BasePoint::At(p) = o.base_point
         && !p.iter().all(|v| v.is_finite() && v.abs() <= 10.0)
     {
-        return Err(invalid(format!(
-            "--base-point-m: expected a position within ±10 m of R0, got {p:?}"
-        )));
+        return Err(E::option(
+            "--base-point-m",
+            "a position within ±10 m of R0",
+            format!("{p:?}"),
+        ));
     }
     if let Some(b) = o.bracket_m {
         let norm = Vector3::from(b).norm();
         if !(b.iter().all(|v| v.is_finite()) && (1e-3..=MAX_BRACKET_M).contains(&norm)) {
-            return Err(invalid(format!(
-                "--bracket-m: expected an offset of 1 mm to {MAX_BRACKET_M} m in the TCP frame, got {b:?}"
-            )));
+            return Err(E::option(
+                "--bracket-m",
+                format!("an offset of 1 mm to {MAX_BRACKET_M} m in the TCP frame"),
+                format!("{b:?}"),
+            ));
         }
     }
     if let PointSet::Custom(points) = &o.points {
         for p in points {
             if p.link > robot.joint_count() {
-                return Err(invalid(format!(
-                    "point {}: link {} does not exist (0 = base … {} = last link)",
-                    p.name,
-                    p.link,
-                    robot.joint_count()
-                )));
+                return Err(E::PointLink {
+                    point: p.name.clone(),
+                    link: p.link,
+                    joints: robot.joint_count(),
+                });
             }
         }
     }
@@ -186,36 +189,43 @@ pub(super) fn check_options(robot: &Robot, o: &PlanOptions) -> Result<(), CalibE
                     .iter()
                     .all(|d| (Vector3::from(*d).norm() - 1.0).abs() < 1e-9)
             {
-                return Err(invalid(
-                    "--cable-directions: expected 1 to 26 unit directions".into(),
+                return Err(E::option(
+                    "--cable-directions",
+                    "1 to 26 unit directions",
+                    format!("{} direction(s)", directions.len()),
                 ));
             }
         }
-        LoadKind::DeadWeight { masses_kg } => {
-            let g = robot.gravity.norm();
-            if g == 0.0 {
-                return Err(invalid(format!(
-                    "--load dead-weight: robot \"{}\" has no gravity, so a dead weight has no force",
-                    robot.name
-                )));
-            }
-            if masses_kg.is_empty() || masses_kg.len() > MAX_DEAD_WEIGHTS {
-                return Err(invalid(format!(
-                    "--masses-kg: expected 1 to {MAX_DEAD_WEIGHTS} masses, got {}",
-                    masses_kg.len()
-                )));
-            }
-            for &m in masses_kg {
-                if !(m.is_finite()
-                    && m > 0.0
-                    && m <= MAX_DEAD_WEIGHT_KG
-                    && m * g <= MAX_PLAN_FORCE_N)
-                {
-                    return Err(invalid(format!(
-                        "--masses-kg: expected masses in (0, {MAX_DEAD_WEIGHT_KG}] kg whose weight is at most {MAX_PLAN_FORCE_N:e} N, got {m}"
-                    )));
-                }
-            }
+        LoadKind::DeadWeight { masses_kg } => check_masses(robot, masses_kg)?,
+    }
+    Ok(())
+}
+
+/// Dead weights: 1 to [`MAX_DEAD_WEIGHTS`] masses, each positive, at most
+/// [`MAX_DEAD_WEIGHT_KG`] and weighing at most [`MAX_PLAN_FORCE_N`], on a robot with gravity.
+fn check_masses(robot: &Robot, masses_kg: &[f64]) -> Result<(), PlanError> {
+    let g = robot.gravity.norm();
+    if g == 0.0 {
+        return Err(PlanError::NoGravity {
+            robot: robot.name.clone(),
+        });
+    }
+    if masses_kg.is_empty() || masses_kg.len() > MAX_DEAD_WEIGHTS {
+        return Err(PlanError::option(
+            "--masses-kg",
+            format!("1 to {MAX_DEAD_WEIGHTS} masses"),
+            masses_kg.len(),
+        ));
+    }
+    for &m in masses_kg {
+        if !(m.is_finite() && m > 0.0 && m <= MAX_DEAD_WEIGHT_KG && m * g <= MAX_PLAN_FORCE_N) {
+            return Err(PlanError::option(
+                "--masses-kg",
+                format!(
+                    "masses in (0, {MAX_DEAD_WEIGHT_KG}] kg whose weight is at most {MAX_PLAN_FORCE_N:e} N"
+                ),
+                m,
+            ));
         }
     }
     Ok(())
@@ -235,11 +245,8 @@ pub(super) fn resolve_setup(
         TableOption::Default => {
             let floor = match floor_z {
                 Some(z) => z,
-                None => default_floor_z(robot).map_err(|_| {
-                    invalid(format!(
-                        "the default table stands on the floor, whose height is unknown for robot \"{}\": give --table or --no-table",
-                        robot.name
-                    ))
+                None => default_floor_z(robot).map_err(|_| PlanError::TableWithoutFloor {
+                    robot: robot.name.clone(),
                 })?,
             };
             Some(default_table(robot, floor))

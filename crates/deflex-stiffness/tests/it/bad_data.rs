@@ -1,10 +1,10 @@
 //! Bad data gets a clear message, never a panic.
 
-use deflex_stiffness::data::parse_rows;
-use deflex_stiffness::fit::{Status, Structure, calibrate_fixed};
-use deflex_stiffness::search::{SearchOptions, search_structure};
-use deflex_stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
 use deflex_model::builtin;
+use deflex_stiffness::data::parse_rows;
+use deflex_stiffness::search::{SearchOptions, search_structure};
+use deflex_stiffness::stiffness_fit::{Status, Structure, calibrate_fixed};
+use deflex_stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
 
 fn rows() -> Vec<deflex_stiffness::MeasurementRow> {
     let robot = builtin("tx200-1edof").unwrap();

@@ -2,10 +2,10 @@
 //! x/y eDoFs of joint 1: both rotate the TCP about axes through the same point, but only the tilt
 //! moves the base casting.
 
+use deflex_model::{Axis, EdofSite, Robot, builtin};
 use deflex_stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_stiffness::search::{SearchOptions, search_structure};
 use deflex_stiffness::synthetic::{SyntheticOptions, measure};
-use deflex_model::{Axis, EdofSite, Robot, builtin};
 
 fn identify(truth: &Robot, base_point: bool) -> Robot {
     let plan = plan_experiments(
@@ -79,7 +79,7 @@ fn base_point_separates_tilt_from_joint_one() {
 /// it assumes R0.
 #[test]
 fn the_base_tilts_about_the_robots_pivot_in_the_fit() {
-    use deflex_stiffness::fit::{Structure, calibrate_fixed};
+    use deflex_stiffness::stiffness_fit::{Structure, calibrate_fixed};
     let mut truth = builtin("tx200").unwrap();
     truth.base_pivot = nalgebra::Vector3::new(0.0, 0.0, -0.642);
     truth.set_stiffness(EdofSite::Base, Axis::X, Some(8.0e6));

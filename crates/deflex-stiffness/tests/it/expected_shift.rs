@@ -2,8 +2,8 @@
 //! measure the planned campaign many times with tracker noise, calibrate each with the shift
 //! free, and compare the spread of the fitted shifts with the prediction.
 
-use deflex_stiffness::fit::{Structure, calibrate_fixed};
 use deflex_stiffness::plan::{PlanOptions, plan_experiments};
+use deflex_stiffness::stiffness_fit::{Structure, calibrate_fixed};
 use deflex_stiffness::synthetic::{SyntheticOptions, measure};
 
 #[test]

@@ -4,13 +4,13 @@
 //! A quick count here (deterministic, a few seconds in debug); ≥ 10⁶ with
 //! `DEFLEX_FUZZ_COUNT=1000000 cargo test --release -p deflex-stiffness --test fuzz -- --nocapture`.
 
-use deflex_stiffness::cell::parse_points;
-use deflex_stiffness::consistency::check_geometry;
-use deflex_stiffness::data::{MeasuredRotation, format_rows_for, parse_file};
-use deflex_stiffness::fit::{Structure, calibrate_fixed};
-use deflex_stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
 use deflex_fuzz::{count_from_env, fuzz};
 use deflex_model::builtin;
+use deflex_stiffness::consistency::check_geometry;
+use deflex_stiffness::data::points::parse_points;
+use deflex_stiffness::data::{MeasuredRotation, format_rows_for, parse_file};
+use deflex_stiffness::stiffness_fit::{Structure, calibrate_fixed};
+use deflex_stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
 
 /// A small plan and a measurement of it (sigma, rotations, purpose), with their headers.
 fn corpus() -> Vec<String> {

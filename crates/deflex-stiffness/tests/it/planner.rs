@@ -3,14 +3,14 @@
 //! off-axis bracket that makes the wrist identifiable (with a Monte Carlo check of its expected
 //! standard error), and a technician's sheet that agrees with the identifiability table.
 
-use deflex_stiffness::cell::{
-    LoadKind, PointSet, PointSpec, default_floor_z, default_force_n, parse_points, wrapped,
-};
-use deflex_stiffness::fit::{Structure, calibrate_fixed};
-use deflex_stiffness::plan::{BasePoint, Floor, Plan, PlanOptions, TableOption, plan_experiments};
-use deflex_stiffness::report::{expected_se_rows, technician_rows};
-use deflex_stiffness::synthetic::{SyntheticOptions, measure};
 use deflex_model::{Axis, BUILTIN_ROBOTS, Data, EdofSite, Robot, builtin};
+use deflex_stiffness::campaign_cell::{
+    LoadKind, PointSet, PointSpec, default_floor_z, default_force_n, wrapped,
+};
+use deflex_stiffness::data::points::parse_points;
+use deflex_stiffness::plan::{BasePoint, Floor, Plan, PlanOptions, TableOption, plan_experiments};
+use deflex_stiffness::stiffness_fit::{Structure, calibrate_fixed};
+use deflex_stiffness::synthetic::{SyntheticOptions, measure};
 use nalgebra::{Point3, Vector3};
 
 /// Independent check of one plan against its cell: limits, wrapping, floor, table, loads.
@@ -189,69 +189,16 @@ fn joint_values_are_wrapped_into_the_limits() {
             row.q_rad
         );
     }
-    for line in technician_rows(&plan) {
-        for value in line[1].split(", ") {
-            let v: f64 = value.parse().unwrap();
-            assert!(v.abs() <= 180.0, "{}", line[1]);
+    // As the technician's sheet prints them (degrees, one decimal).
+    for row in &plan.rows {
+        for q in &row.q_rad {
+            let v: f64 = format!("{:.1}", q.to_degrees()).parse().unwrap();
+            assert!(v.abs() <= 180.0, "{:?}", row.q_rad);
         }
     }
 }
 
-#[test]
-fn the_technicians_sheet_agrees_with_the_identifiability_table() {
-    for name in ["ur10e", "tx200", "kr210-r2700"] {
-        let robot = builtin(name).unwrap();
-        let plan = plan_experiments(
-            &robot,
-            &PlanOptions {
-                max_force_n: default_force_n(&robot).unwrap(),
-                full_family: true,
-                ..PlanOptions::for_a_real_cell()
-            },
-        )
-        .unwrap();
-        let not_identifiable: Vec<&str> = plan
-            .expected
-            .iter()
-            .filter(|e| !e.identifiable())
-            .map(|e| e.label.as_str())
-            .collect();
-        assert!(
-            !not_identifiable.is_empty(),
-            "{name}: the wrist is not identifiable from TCP forces"
-        );
-        let sheet = technician_rows(&plan);
-        let table = expected_se_rows(&plan);
-        for e in &plan.expected {
-            if plan.axis_cases.iter().any(|a| a.id == e.id) {
-                assert!(e.identifiable(), "{name}: {} has an axis case", e.label);
-            }
-
-            let row = table.iter().find(|r| r[0] == e.label).unwrap();
-            if !e.identifiable() {
-                assert_eq!(row[3], "not identifiable");
-                assert_eq!(row[4], "-", "{name} {}: {row:?}", e.label);
-                for line in &sheet {
-                    assert!(
-                        !line[5].split(' ').any(|w| w == e.label),
-                        "{name}: case {} is there for {}, which the table calls not identifiable",
-                        line[0],
-                        e.label
-                    );
-                }
-            }
-        }
-        // Every axis-by-axis case named in the table is on the sheet for that eDoF.
-        for a in &plan.axis_cases {
-            let label = deflex_stiffness::edof_label(a.id);
-            let line = sheet.iter().find(|l| l[0] == a.load_case).unwrap();
-            assert!(
-                line[5].split(' ').any(|w| w == label),
-                "{name}: {line:?} should name {label}"
-            );
-        }
-    }
-}
+// The technician's sheet against the identifiability table: deflex-report (plan_tables).
 
 /// Expected SE of J6.z: infinite with loads at the TCP (on J6's axis), finite with a bracket.
 #[test]

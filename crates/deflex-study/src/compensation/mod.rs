@@ -24,19 +24,19 @@
 //! tool orientation along its paths.
 
 pub mod lag;
-pub(crate) mod page;
 
-use crate::twin_controller::{
-    ClosedLoopRun, Program, TwinController, controller_config_for, run_twin_controller,
-};
+use crate::DemoError;
 use deflex_compensate::log::{ResampleOptions, parse_log, resample_on_path};
 use deflex_compensate::table::{read_csv, write_csv};
 use deflex_compensate::{
     Compensation, CompensationOptions, TcpPath, WrenchSource, commanded_pose, compensate,
 };
-use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode, FeedForwardTable};
+use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode};
 use deflex_model::Robot;
 use deflex_sim::{CellConfig, FormingProcess, FormingRun, ToolPath, compensated_tool_path};
+use deflex_twin::{
+    ClosedLoopRun, Program, TwinController, controller_config_for, run_twin_controller,
+};
 use lag::ErrorNumbers;
 use serde::Serialize;
 
@@ -45,8 +45,8 @@ pub const GCODE_PART_FILE: &str = "docs/parts/pyramid-pocket.gcode";
 const GCODE_PART: &str = include_str!("../../../../docs/parts/pyramid-pocket.gcode");
 
 /// The CAM part as a tool path.
-pub fn gcode_part() -> Result<ToolPath, String> {
-    deflex_sim::gcode::parse_gcode(GCODE_PART, GCODE_PART_FILE).map_err(|e| e.to_string())
+pub fn gcode_part() -> Result<ToolPath, DemoError> {
+    Ok(deflex_sim::gcode::parse_gcode(GCODE_PART, GCODE_PART_FILE)?)
 }
 
 /// The ways of the comparison, in table order (labels of the report and `summary.json`).
@@ -194,14 +194,14 @@ fn offline_numbers(c: &Compensation, seconds: f64) -> OfflineNumbers {
     }
 }
 
+/// One independent run of a comparison.
+type Job<'a, T> = Box<dyn FnOnce() -> Result<T, DemoError> + Send + 'a>;
+
 /// Runs `jobs` on up to `threads` threads; results in job order.
-fn parallel<'a, T: Send>(
-    threads: usize,
-    jobs: Vec<Box<dyn FnOnce() -> Result<T, String> + Send + 'a>>,
-) -> Result<Vec<T>, String> {
+fn parallel<'a, T: Send>(threads: usize, jobs: Vec<Job<'a, T>>) -> Result<Vec<T>, DemoError> {
     let count = jobs.len();
     let queue = std::sync::Mutex::new(jobs.into_iter().enumerate().collect::<Vec<_>>());
-    let results: std::sync::Mutex<Vec<Option<Result<T, String>>>> =
+    let results: std::sync::Mutex<Vec<Option<Result<T, DemoError>>>> =
         std::sync::Mutex::new((0..count).map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..threads.clamp(1, count.max(1)) {
@@ -219,9 +219,15 @@ fn parallel<'a, T: Send>(
     });
     results
         .into_inner()
-        .map_err(|_| "a comparison thread failed".to_string())?
+        .map_err(|_| DemoError::Worker {
+            what: "a comparison thread failed",
+        })?
         .into_iter()
-        .map(|r| r.unwrap_or_else(|| Err("a comparison run did not finish".into())))
+        .map(|r| {
+            r.unwrap_or(Err(DemoError::Worker {
+                what: "a comparison run did not finish",
+            }))
+        })
         .collect()
 }
 
@@ -242,26 +248,26 @@ fn offline(
     tcp: &TcpPath,
     seed_q: &[f64],
     source: WrenchSource,
-) -> Result<(Compensation, f64), String> {
+) -> Result<(Compensation, f64), DemoError> {
     let clock = std::time::Instant::now();
     let options = CompensationOptions {
         orientation: false,
         tolerance_m: TOLERANCE_M,
         ..CompensationOptions::default()
     };
-    let c =
-        compensate(model, tcp, seed_q, source, &options, &mut |_| {}).map_err(|e| e.to_string())?;
+    let c = compensate(model, tcp, seed_q, source, &options, &mut |_| {})?;
     if c.failure_count() > 0 {
         let (i, f) = c
             .failures()
             .next()
             .map(|(i, f)| (i, f.code()))
             .unwrap_or_default();
-        return Err(format!(
-            "{}: {} point(s) could not be compensated (first: point {i}, {f})",
-            tcp.name(),
-            c.failure_count()
-        ));
+        return Err(DemoError::Uncompensated {
+            path: tcp.name().to_string(),
+            count: c.failure_count(),
+            first: i,
+            code: f,
+        });
     }
     Ok((c, clock.elapsed().as_secs_f64()))
 }
@@ -272,7 +278,7 @@ fn program(
     path: &ToolPath,
     tcp: &TcpPath,
     c: &Compensation,
-) -> Result<Program, String> {
+) -> Result<Program, DemoError> {
     let commanded: Vec<_> = tcp
         .points()
         .iter()
@@ -280,8 +286,7 @@ fn program(
         .map(|(p, r)| commanded_pose(&p.pose, &r.compensation).translation.vector)
         .collect();
     Ok(Program {
-        path: compensated_tool_path(path, &commanded, &cell.part_frame())
-            .map_err(|e| e.to_string())?,
+        path: compensated_tool_path(path, &commanded, &cell.part_frame())?,
         reference: Some(path.clone()),
     })
 }
@@ -293,19 +298,244 @@ fn controlled(
     seed: u64,
     feedforward: Option<FeedForward>,
     guard: bool,
-) -> Result<ClosedLoopRun, String> {
+) -> Result<ClosedLoopRun, DemoError> {
     let mut config = controller_config_for(cell);
     config.runaway.enabled = guard;
-    let mut twin = TwinController::new(model.clone(), config, false)?;
+    let mut twin = TwinController::new(model.clone(), config, false).map_err(DemoError::from)?;
     twin.set_feedforward(feedforward);
-    let run = run_twin_controller(cell, program, seed, twin, &mut |_| {})?;
+    let run =
+        run_twin_controller(cell, program, seed, twin, &mut |_| {}).map_err(DemoError::from)?;
     if let Some(fault) = run.fault {
-        return Err(format!(
-            "{}: the controller faulted: {fault}",
-            program.path.name
-        ));
+        return Err(DemoError::ControllerFault {
+            path: program.path.name.clone(),
+            fault,
+        });
     }
     Ok(run)
+}
+
+/// A timed compensation and the run of its program.
+type LogCompensation = (Compensation, f64, FormingRun);
+
+/// What stage 1 of a comparison gives: the uncorrected and online runs when they were not
+/// given, and the timed process-model compensation.
+struct StageOne {
+    open: Option<FormingRun>,
+    online: Option<FormingRun>,
+    process: (Compensation, f64),
+    /// The log compensation, when the uncorrected run was given (it then joins stage 1).
+    log: Option<LogCompensation>,
+}
+
+/// One part of the comparison: the cell, the controller's model, the path and its TCP path.
+struct PartSetup<'a> {
+    cell: &'a CellConfig,
+    model: &'a Robot,
+    path: &'a ToolPath,
+    tcp: TcpPath,
+    seed_q: [f64; 6],
+    seed: u64,
+}
+
+impl PartSetup<'_> {
+    /// The log compensation (forces of the uncorrected run's log, one pass) and its run.
+    fn log_compensation(&self, open: &FormingRun) -> Result<LogCompensation, DemoError> {
+        let text = open.log.to_csv();
+        let log = parse_log(
+            &text,
+            "forming_open/log.csv",
+            self.model,
+            &self.cell.part_frame(),
+        )?;
+        let resampled = resample_on_path(&log, &self.tcp, &ResampleOptions::default())?;
+        let (c, seconds) = offline(
+            self.model,
+            &self.tcp,
+            &self.seed_q,
+            WrenchSource::Fixed {
+                label: "forces of the uncorrected run's log (SIMULATED)".into(),
+                simulated: true,
+                wrenches: &resampled.wrenches,
+            },
+        )?;
+        let run = self.run_program(&program(self.cell, self.path, &self.tcp, &c)?)?;
+        Ok((c, seconds, run))
+    }
+
+    /// A compensated program run open loop, meaning the part's path.
+    fn run_program(&self, program: &Program) -> Result<FormingRun, DemoError> {
+        Ok(deflex_sim::run_program_with_progress(
+            self.cell,
+            program.path.clone(),
+            Some(self.path),
+            self.seed,
+            None,
+            &mut |_| {},
+        )?)
+    }
+
+    /// The part's own path, as a program.
+    fn original(&self) -> Program {
+        Program {
+            path: self.path.clone(),
+            reference: None,
+        }
+    }
+
+    /// Stage 1, independent runs: the process-model compensation, the uncorrected run (the
+    /// previous run of the log compensation) and the online run unless given; with a given
+    /// uncorrected run, the log compensation too.
+    fn stage_one(
+        &self,
+        threads: usize,
+        uncorrected: Option<&FormingRun>,
+        online_given: bool,
+    ) -> Result<StageOne, DemoError> {
+        type Stage1 = (
+            Option<FormingRun>,
+            Option<FormingRun>,
+            Option<(Compensation, f64)>,
+            Option<LogCompensation>,
+        );
+        let mut jobs: Vec<Job<'_, Stage1>> = vec![Box::new(|| {
+            let mut process = FormingProcess::from_cell(self.cell, self.path)?;
+            let c = offline(
+                self.model,
+                &self.tcp,
+                &self.seed_q,
+                WrenchSource::Process(&mut process),
+            )?;
+            Ok((None, None, Some(c), None))
+        })];
+        if uncorrected.is_none() {
+            jobs.push(Box::new(|| {
+                let run = deflex_sim::run_forming(self.cell, self.path.clone(), self.seed, None)?;
+                Ok((Some(run), None, None, None))
+            }));
+        }
+        if !online_given {
+            jobs.push(Box::new(|| {
+                let run = controlled(
+                    self.cell,
+                    self.model,
+                    &self.original(),
+                    self.seed,
+                    None,
+                    true,
+                )?;
+                Ok((None, Some(run.forming), None, None))
+            }));
+        }
+        if let Some(open) = uncorrected {
+            jobs.push(Box::new(|| {
+                Ok((None, None, None, Some(self.log_compensation(open)?)))
+            }));
+        }
+        let (mut open, mut online, mut process, mut log) = (None, None, None, None);
+        for (a, b, c, d) in parallel(threads, jobs)? {
+            open = open.or(a);
+            online = online.or(b);
+            process = process.or(c);
+            log = log.or(d);
+        }
+        Ok(StageOne {
+            open,
+            online,
+            process: process.ok_or(DemoError::Worker {
+                what: "no process-model compensation",
+            })?,
+            log,
+        })
+    }
+
+    /// The process-model compensation as the controller's table (`compensated_path.csv`), and
+    /// the feed-forward (with `lead_s`) and pre-compensated controllers' feed-forward from it.
+    fn feed_forwards(
+        &self,
+        process: &Compensation,
+        lead_s: f64,
+    ) -> Result<(String, FeedForward, FeedForward), DemoError> {
+        let table_csv = write_csv(
+            &self.tcp,
+            process,
+            self.model.joint_count(),
+            &["SIMULATED: forces from the twin's forming model".to_string()],
+        );
+        let rows = read_csv(&table_csv, "compensated_path.csv")?;
+        let table =
+            deflex_runtime::feedforward::table_of(&rows, self.model, "compensated_path.csv")?;
+        let feedforward = |mode, lead_s| {
+            FeedForward::new(
+                table.clone(),
+                FeedForwardConfig {
+                    mode,
+                    lead_s,
+                    ..FeedForwardConfig::default()
+                },
+            )
+            .map_err(DemoError::from)
+        };
+        let ff = feedforward(FeedForwardMode::FeedForward, lead_s)?;
+        let pre = feedforward(FeedForwardMode::Precompensated, 0.0)?;
+        Ok((table_csv, ff, pre))
+    }
+
+    /// Stage 2, independent runs: the offline program, the feed-forward and pre-compensated
+    /// controllers, the double correction and the unguarded online run when planned, and the
+    /// log compensation when stage 1 could not make it. Returns the ways' runs in table order
+    /// after the uncorrected, offline-log and online ones, and the log compensation.
+    fn stage_two(
+        &self,
+        plan: &CompensationPlan,
+        process: &Compensation,
+        (ff, pre): (FeedForward, FeedForward),
+        open: &FormingRun,
+        log: Option<LogCompensation>,
+    ) -> Result<(Vec<FormingRun>, LogCompensation), DemoError> {
+        let process_program = program(self.cell, self.path, &self.tcp, process)?;
+        let original = self.original();
+        type Stage2 = (Option<FormingRun>, Option<LogCompensation>);
+        let closed = |program: &Program, feedforward: Option<FeedForward>, guard: bool| {
+            controlled(
+                self.cell,
+                self.model,
+                program,
+                self.seed,
+                feedforward,
+                guard,
+            )
+            .map(|run| (Some(run.forming), None))
+        };
+        let mut jobs: Vec<Job<'_, Stage2>> = vec![
+            Box::new(|| Ok((Some(self.run_program(&process_program)?), None))),
+            Box::new(|| closed(&original, Some(ff), true)),
+            Box::new(|| closed(&process_program, Some(pre), true)),
+        ];
+        if plan.double_correction {
+            jobs.push(Box::new(|| closed(&process_program, None, true)));
+        }
+        if plan.online_unguarded {
+            jobs.push(Box::new(|| closed(&original, None, false)));
+        }
+        let given_log = log.is_some();
+        if !given_log {
+            jobs.push(Box::new(|| Ok((None, Some(self.log_compensation(open)?)))));
+        }
+        let mut results = parallel(plan.threads, jobs)?;
+        let log = match log {
+            Some(done) => done,
+            None => results
+                .pop()
+                .and_then(|(_, log)| log)
+                .ok_or(DemoError::Worker {
+                    what: "no log compensation",
+                })?,
+        };
+        Ok((
+            results.into_iter().filter_map(|(run, _)| run).collect(),
+            log,
+        ))
+    }
 }
 
 /// The comparison on one part. `uncorrected` and `online` are reused when the study already
@@ -318,210 +548,42 @@ pub fn compare_part(
     plan: &CompensationPlan,
     uncorrected: Option<&FormingRun>,
     online: Option<&FormingRun>,
-) -> Result<(PartComparison, PartRuns), String> {
+) -> Result<(PartComparison, PartRuns), DemoError> {
     let seed_q = cell.seed_q_rad();
-    let rotation = model.tcp_pose(&seed_q).map_err(|e| e.to_string())?.rotation;
+    let rotation = model
+        .tcp_pose(&seed_q)
+        .map_err(deflex_model::ModelError::from)?
+        .rotation;
     let tcp = deflex_sim::tcp_path(
         path,
         &cell.part_frame(),
         &rotation,
         cell.controller.rapid_feed_mm_s,
-    )
-    .map_err(|e| e.to_string())?;
-    // The log compensation and its run need only the uncorrected run: with a given one they
-    // join stage 1.
-    let log_job = |open: &FormingRun| -> Result<(Compensation, f64, FormingRun), String> {
-        let text = open.log.to_csv();
-        let log = parse_log(&text, "forming_open/log.csv", model, &cell.part_frame())
-            .map_err(|e| e.to_string())?;
-        let resampled =
-            resample_on_path(&log, &tcp, &ResampleOptions::default()).map_err(|e| e.to_string())?;
-        let (c, seconds) = offline(
-            model,
-            &tcp,
-            &seed_q,
-            WrenchSource::Fixed {
-                label: "forces of the uncorrected run's log (SIMULATED)".into(),
-                simulated: true,
-                wrenches: &resampled.wrenches,
-            },
-        )?;
-        let p = program(cell, path, &tcp, &c)?;
-        let run = deflex_sim::run_program_with_progress(
-            cell,
-            p.path,
-            Some(path),
-            seed,
-            None,
-            &mut |_| {},
-        )
-        .map_err(|e| e.to_string())?;
-        Ok((c, seconds, run))
+    )?;
+    let part = PartSetup {
+        cell,
+        model,
+        path,
+        tcp,
+        seed_q,
+        seed,
     };
-    let log_slot = std::sync::Mutex::new(None);
-    // Stage 1, independent: the uncorrected run (its log is the previous run of the log
-    // compensation) and the online run unless given, and the process-model compensation.
-    type Stage1 = (
-        Option<FormingRun>,
-        Option<FormingRun>,
-        Option<(Compensation, f64)>,
-    );
-    let mut first: Vec<Box<dyn FnOnce() -> Result<Stage1, String> + Send + '_>> = Vec::new();
-    first.push(Box::new(|| {
-        let mut process = FormingProcess::from_cell(cell, path).map_err(|e| e.to_string())?;
-        let c = offline(model, &tcp, &seed_q, WrenchSource::Process(&mut process))?;
-        Ok((None, None, Some(c)))
-    }));
-    if uncorrected.is_none() {
-        first.push(Box::new(|| {
-            let run = deflex_sim::run_forming(cell, path.clone(), seed, None)
-                .map_err(|e| e.to_string())?;
-            Ok((Some(run), None, None))
-        }));
-    }
-    if online.is_none() {
-        first.push(Box::new(|| {
-            let p = Program {
-                path: path.clone(),
-                reference: None,
-            };
-            Ok((
-                None,
-                Some(controlled(cell, model, &p, seed, None, true)?.forming),
-                None,
-            ))
-        }));
-    }
-    if let Some(open) = uncorrected {
-        first.push(Box::new(|| {
-            let result = log_job(open)?;
-            if let Ok(mut slot) = log_slot.lock() {
-                *slot = Some(result);
-            }
-            Ok((None, None, None))
-        }));
-    }
-    let (mut open_run, mut online_run, mut process_c) = (None, None, None);
-    for (a, b, c) in parallel(plan.threads, first)? {
-        open_run = open_run.or(a);
-        online_run = online_run.or(b);
-        process_c = process_c.or(c);
-    }
+    let first = part.stage_one(plan.threads, uncorrected, online.is_some())?;
+    let missing = |what| DemoError::Worker { what };
     let open = match uncorrected {
         Some(run) => run,
-        None => open_run.as_ref().ok_or("no uncorrected run")?,
+        None => first.open.as_ref().ok_or(missing("no uncorrected run"))?,
     };
     let online = match online {
         Some(run) => run,
-        None => online_run.as_ref().ok_or("no online run")?,
+        None => first.online.as_ref().ok_or(missing("no online run"))?,
     };
-    let (process_c, process_s) = process_c.ok_or("no process-model compensation")?;
-    let given_log = log_slot.into_inner().ok().flatten();
-    let process_program = program(cell, path, &tcp, &process_c)?;
-    let table_csv = write_csv(
-        &tcp,
-        &process_c,
-        model.joint_count(),
-        &["SIMULATED: forces from the twin's forming model".to_string()],
-    );
-    let rows = read_csv(&table_csv, "compensated_path.csv").map_err(|e| e.to_string())?;
-    let table = FeedForwardTable::from_rows(&rows, model, "compensated_path.csv")
-        .map_err(|e| e.to_string())?;
-    let feedforward = |mode, lead_s| {
-        FeedForward::new(
-            table.clone(),
-            FeedForwardConfig {
-                mode,
-                lead_s,
-                ..FeedForwardConfig::default()
-            },
-        )
-        .map_err(|e| e.to_string())
-    };
-    let ff = feedforward(FeedForwardMode::FeedForward, plan.lead_s)?;
-    let pre = feedforward(FeedForwardMode::Precompensated, 0.0)?;
-    let original = Program {
-        path: path.clone(),
-        reference: None,
-    };
-    // Stage 2, independent runs (and the log compensation when the uncorrected run was made
-    // in stage 1).
-    type Stage2 = (Option<FormingRun>, Option<(Compensation, f64, FormingRun)>);
-    let simple = |run: Result<FormingRun, String>| run.map(|r| (Some(r), None));
-    let mut second: Vec<Box<dyn FnOnce() -> Result<Stage2, String> + Send + '_>> = vec![
-        Box::new(|| {
-            simple(
-                deflex_sim::run_program_with_progress(
-                    cell,
-                    process_program.path.clone(),
-                    Some(path),
-                    seed,
-                    None,
-                    &mut |_| {},
-                )
-                .map_err(|e| e.to_string()),
-            )
-        }),
-        Box::new(|| {
-            simple(Ok(controlled(
-                cell,
-                model,
-                &original,
-                seed,
-                Some(ff),
-                true,
-            )?
-            .forming))
-        }),
-        Box::new(|| {
-            simple(Ok(controlled(
-                cell,
-                model,
-                &process_program,
-                seed,
-                Some(pre),
-                true,
-            )?
-            .forming))
-        }),
-    ];
-    if plan.double_correction {
-        second.push(Box::new(|| {
-            simple(Ok(controlled(
-                cell,
-                model,
-                &process_program,
-                seed,
-                None,
-                true,
-            )?
-            .forming))
-        }));
-    }
-    if plan.online_unguarded {
-        second.push(Box::new(|| {
-            simple(Ok(
-                controlled(cell, model, &original, seed, None, false)?.forming
-            ))
-        }));
-    }
-    if given_log.is_none() {
-        second.push(Box::new(|| Ok((None, Some(log_job(open)?)))));
-    }
-    let mut stage2 = parallel(plan.threads, second)?;
-    let (log_c, log_s, offline_log_run) = match given_log {
-        Some(done) => done,
-        None => stage2
-            .pop()
-            .and_then(|(_, log)| log)
-            .ok_or("no log compensation")?,
-    };
-    let mut results = stage2.into_iter().filter_map(|(run, _)| run);
-    let mut next = || {
-        results
-            .next()
-            .ok_or("a comparison run is missing".to_string())
-    };
+    let (process_c, process_s) = first.process;
+    let (table_csv, ff, pre) = part.feed_forwards(&process_c, plan.lead_s)?;
+    let (second, (log_c, log_s, offline_log_run)) =
+        part.stage_two(plan, &process_c, (ff, pre), open, first.log)?;
+    let mut results = second.into_iter();
+    let mut next = || results.next().ok_or(missing("a comparison run is missing"));
     let mut runs: Vec<(String, FormingRun)> = vec![(UNCORRECTED.into(), open.clone())];
     runs.push((OFFLINE_PROCESS.into(), next()?));
     runs.push((OFFLINE_LOG.into(), offline_log_run));
@@ -545,8 +607,8 @@ pub fn compare_part(
     Ok((
         PartComparison {
             part: path.name.clone(),
-            points: tcp.len(),
-            length_mm: tcp.length_m() * 1e3,
+            points: part.tcp.len(),
+            length_mm: part.tcp.length_m() * 1e3,
             ramps: ramps.len(),
             offline_process: offline_numbers(&process_c, process_s),
             offline_log: offline_numbers(&log_c, log_s),
@@ -581,16 +643,15 @@ pub fn lag_definition() -> String {
 }
 
 /// The demo's stage: the comparison on the study's cone (reusing its uncorrected and online
-/// runs) and on the CAM part, with the CSV files and figures in `out`. `quick` shortens the CAM
-/// part to its first levels.
-pub(crate) fn study(
+/// runs) and on the CAM part, with the runs behind it (cone first: its CSV files and figures are
+/// `deflex_report::study`'s). `quick` shortens the CAM part to its first levels.
+pub fn study(
     cell: &CellConfig,
     model: &Robot,
     seed: u64,
     quick: bool,
     cone: (&ToolPath, &FormingRun, &FormingRun),
-    out: &std::path::Path,
-) -> Result<(CompensationStudy, Vec<crate::figures::Figure>), String> {
+) -> Result<(CompensationStudy, [PartRuns; 2]), DemoError> {
     let plan = CompensationPlan {
         gcode_length_mm: quick.then_some(400.0),
         ..CompensationPlan::default()
@@ -616,7 +677,7 @@ pub(crate) fn study(
         part = part.truncated(length);
     }
     // `deflex compensate --max-segment-mm`: the plunges are single moves.
-    let part = part.subdivided(MAX_SEGMENT_MM).map_err(|e| e.to_string())?;
+    let part = part.subdivided(MAX_SEGMENT_MM)?;
     let (part_numbers, part_runs) = compare_part(cell, model, &part, seed, &plan, None, None)?;
     let study = CompensationStudy {
         simulated: true,
@@ -624,14 +685,11 @@ pub(crate) fn study(
         lag_definition: lag_definition(),
         parts: vec![cone_numbers, part_numbers],
     };
-    let runs = [cone_runs, part_runs];
-    page::write_files(out, &study, &runs)?;
-    let figures = page::figures(out, &runs)?;
-    Ok((study, figures))
+    Ok((study, [cone_runs, part_runs]))
 }
 
 /// One line for the terminal: the max error of each way on each part.
-pub(crate) fn one_line(study: &CompensationStudy) -> String {
+pub fn one_line(study: &CompensationStudy) -> String {
     study
         .parts
         .iter()

@@ -4,7 +4,7 @@
 
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
 use deflex_model::spatial::pose_from_xyz_rpy;
-use deflex_model::wrench::world_wrench_in_sensor;
+use deflex_model::wrench_transport::world_wrench_in_sensor;
 use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
 
 pub const BIAS: [f64; 6] = [4.0, -3.0, 7.0, 0.2, -0.1, 0.05];
@@ -37,7 +37,7 @@ pub fn controller(config: ControllerConfig) -> Controller {
 }
 
 /// What the sensor reads (bias + tool weight + environment wrench `w_tcp_world` at the TCP).
-pub fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) -> [f64; 6] {
+pub fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) -> Wrench {
     let robot = robot();
     let mut data = Data::new();
     robot.forward_kinematics(&mut data, q).unwrap();
@@ -50,12 +50,12 @@ pub fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) 
     let c = nalgebra::Vector3::from(config.wrench.tool.com_in_sensor_m);
     let mg = c.cross(&f);
     let grav = [f.x, f.y, f.z, mg.x, mg.y, mg.z];
-    std::array::from_fn(|i| BIAS[i] + grav[i] + env[i])
+    Wrench::from_fn(|i, _| BIAS[i] + grav[i] + env[i])
 }
 
 /// Runs `seconds` of the law against a rigid-environment-free plant (constant wrench), returns
 /// the controller time reached.
-pub fn run_steady(ctrl: &mut Controller, raw: &[f64; 6], q: &[f64], t0: f64, seconds: f64) -> f64 {
+pub fn run_steady(ctrl: &mut Controller, raw: &Wrench, q: &[f64], t0: f64, seconds: f64) -> f64 {
     let mut t = t0;
     let steps = (seconds / 0.01).round() as usize;
     for _ in 0..steps {

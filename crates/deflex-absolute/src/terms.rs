@@ -1,0 +1,338 @@
+//! What a calibration keeps beyond the robot file: joint-angle terms (harmonics, gear
+//! periodic error, backlash) and the residual model, which a robot description has no place
+//! for, and the calibration's own accuracy (what a later registration compares its residual
+//! with). Serialised as JSON (SI units) beside the robot file; tied to it by the robot's
+//! geometry fingerprint, so a terms file is never applied to another robot's geometry.
+
+use crate::outcome::FitResult;
+use crate::params::{EgModel, HarmonicTerm};
+use crate::residual_model::{MAX_INDUCING, ResidualHyper, ResidualModel};
+use deflex_model::MAX_JOINTS;
+use serde::{Deserialize, Serialize};
+
+/// Version of the format written.
+pub const FORMAT: u32 = 1;
+/// Largest number of harmonic terms read.
+pub const MAX_HARMONICS: usize = 4096;
+
+/// One harmonic term as written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HarmonicRecord {
+    /// Joint, 1-based.
+    pub joint: usize,
+    /// Cycles per joint turn.
+    pub order: u16,
+    /// `true` for the sine term.
+    pub sine: bool,
+    /// Coefficient (rad).
+    pub value_rad: f64,
+}
+
+/// The residual model as written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ResidualRecord {
+    /// Length scale (rad).
+    pub length_scale_rad: f64,
+    /// Ridge σ_n²/σ_f².
+    pub ridge: f64,
+    /// Joints the kernel looks at (1-based).
+    pub joints: Vec<usize>,
+    /// Inducing configurations (rad).
+    pub inducing_q_rad: Vec<Vec<f64>>,
+    /// Their weights per world axis (m).
+    pub weights_m: Vec<[f64; 3]>,
+}
+
+/// The terms file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationTerms {
+    /// Format version ([`FORMAT`]).
+    pub format: u32,
+    /// Geometry fingerprint of the robot file these terms belong to.
+    pub geometry_fingerprint: String,
+    /// Model steps kept.
+    pub kept_steps: Vec<String>,
+    /// Harmonic and gear-periodic terms.
+    pub harmonics: Vec<HarmonicRecord>,
+    /// Direction-dependent offset per joint (rad).
+    pub backlash_rad: Vec<f64>,
+    /// Residual model, if kept.
+    pub residual_model: Option<ResidualRecord>,
+    /// Position RMS of the fitted readings (m).
+    pub fit_rms_m: f64,
+    /// Pooled held-out position RMS of the registered held-out groups (m), when there were any.
+    pub held_out_rms_m: Option<f64>,
+}
+
+/// A terms file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum TermsError {
+    /// Not JSON of this format.
+    #[error("not a deflex calibration terms file: {0}")]
+    Json(#[from] serde_json::Error),
+    /// Another version.
+    #[error("format {found}, this deflex reads {FORMAT}")]
+    Format {
+        /// Version found.
+        found: u32,
+    },
+    /// For another geometry.
+    #[error(
+        "written for the robot geometry {expected}, but the robot file's is {found}: the terms belong to another calibration"
+    )]
+    Fingerprint {
+        /// In the terms file.
+        expected: String,
+        /// Of the robot.
+        found: String,
+    },
+    /// A joint index or count out of range.
+    #[error("{what}: {value} is outside 1…{joints} (the robot's joints)")]
+    Joint {
+        /// Field.
+        what: &'static str,
+        /// Value.
+        value: usize,
+        /// Robot joints.
+        joints: usize,
+    },
+    /// Too many entries, or a non-finite value.
+    #[error("{what}: {problem}")]
+    Value {
+        /// Field.
+        what: &'static str,
+        /// What is wrong.
+        problem: ValueProblem,
+    },
+}
+
+/// What is wrong with a value of a terms file.
+#[derive(Debug, thiserror::Error)]
+pub enum ValueProblem {
+    /// More entries than allowed.
+    #[error("{count} entries, at most {limit}")]
+    TooMany {
+        /// Entries.
+        count: usize,
+        /// Bound.
+        limit: usize,
+    },
+    /// A value that is not finite or not positive where it must be.
+    #[error("{0} is not a finite value in range")]
+    Bad(f64),
+    /// Inducing configurations and weights of different lengths.
+    #[error("{inducing} inducing configurations, {weights} weights")]
+    Shape {
+        /// Inducing.
+        inducing: usize,
+        /// Weights.
+        weights: usize,
+    },
+}
+
+impl CalibrationTerms {
+    /// The terms of a fit's final model.
+    pub fn of(result: &FitResult) -> CalibrationTerms {
+        let model = &result.model;
+        let held_out_rms_m = result.steps.iter().rev().find_map(|s| {
+            if s.acceptance.is_some_and(|a| !a.accepted) {
+                return None;
+            }
+            let groups: Vec<&crate::outcome::TestGroup> =
+                s.test.iter().chain(&s.cross_groups).collect();
+            crate::fit::pooled_rms(&groups)
+        });
+        CalibrationTerms {
+            format: FORMAT,
+            geometry_fingerprint: model.to_robot().geometry_fingerprint(),
+            kept_steps: result.kept_steps.iter().map(|s| s.name()).collect(),
+            harmonics: model
+                .harmonics
+                .iter()
+                .map(|h| HarmonicRecord {
+                    joint: h.joint + 1,
+                    order: h.order,
+                    sine: h.sine,
+                    value_rad: h.value,
+                })
+                .collect(),
+            backlash_rad: model.backlash.clone(),
+            residual_model: model.residual.as_ref().map(|r| ResidualRecord {
+                length_scale_rad: r.hyper.length_scale_rad,
+                ridge: r.hyper.ridge,
+                joints: (0..model.robot.joint_count().min(16))
+                    .filter(|j| r.hyper.joints & (1 << j) != 0)
+                    .map(|j| j + 1)
+                    .collect(),
+                inducing_q_rad: r.inducing.clone(),
+                weights_m: r.weights.clone(),
+            }),
+            fit_rms_m: result
+                .steps
+                .iter()
+                .rev()
+                .find(|s| s.acceptance.is_none_or(|a| a.accepted))
+                .map_or(0.0, |s| s.fit.rms),
+            held_out_rms_m,
+        }
+    }
+
+    /// JSON text.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Parse JSON text (the caller bounds its size) and check every value.
+    pub fn from_json(text: &str) -> Result<CalibrationTerms, TermsError> {
+        let terms: CalibrationTerms = serde_json::from_str(text)?;
+        if terms.format != FORMAT {
+            return Err(TermsError::Format {
+                found: terms.format,
+            });
+        }
+        Ok(terms)
+    }
+
+    /// Whether the terms change any prediction.
+    pub fn is_empty(&self) -> bool {
+        self.harmonics.is_empty()
+            && self.backlash_rad.iter().all(|b| *b == 0.0)
+            && self.residual_model.is_none()
+    }
+
+    /// Put the terms into a model built from their robot file.
+    pub fn apply(&self, model: &mut EgModel) -> Result<(), TermsError> {
+        let found = model.robot.geometry_fingerprint();
+        if found != self.geometry_fingerprint {
+            return Err(TermsError::Fingerprint {
+                expected: self.geometry_fingerprint.clone(),
+                found,
+            });
+        }
+        let joints = model.robot.joint_count();
+        let finite = |what: &'static str, v: f64, limit: f64| {
+            if v.is_finite() && v.abs() <= limit {
+                Ok(())
+            } else {
+                Err(TermsError::Value {
+                    what,
+                    problem: ValueProblem::Bad(v),
+                })
+            }
+        };
+        if self.harmonics.len() > MAX_HARMONICS {
+            return Err(TermsError::Value {
+                what: "harmonics",
+                problem: ValueProblem::TooMany {
+                    count: self.harmonics.len(),
+                    limit: MAX_HARMONICS,
+                },
+            });
+        }
+        let mut harmonics = Vec::new();
+        for h in &self.harmonics {
+            if h.joint == 0 || h.joint > joints {
+                return Err(TermsError::Joint {
+                    what: "harmonics.joint",
+                    value: h.joint,
+                    joints,
+                });
+            }
+            finite("harmonics.value_rad", h.value_rad, 1.0)?;
+            harmonics.push(HarmonicTerm {
+                joint: h.joint - 1,
+                order: h.order,
+                sine: h.sine,
+                value: h.value_rad,
+            });
+        }
+        if self.backlash_rad.len() != joints {
+            return Err(TermsError::Joint {
+                what: "backlash_rad (entries)",
+                value: self.backlash_rad.len(),
+                joints,
+            });
+        }
+        for b in &self.backlash_rad {
+            finite("backlash_rad", *b, 1.0)?;
+        }
+        let residual = match &self.residual_model {
+            Some(r) => Some(residual_model(r, joints, &finite)?),
+            None => None,
+        };
+        model.harmonics = harmonics;
+        model.backlash = self.backlash_rad.clone();
+        model.residual = residual;
+        Ok(())
+    }
+}
+
+fn residual_model(
+    r: &ResidualRecord,
+    joints: usize,
+    finite: &dyn Fn(&'static str, f64, f64) -> Result<(), TermsError>,
+) -> Result<ResidualModel, TermsError> {
+    if r.inducing_q_rad.len() > MAX_INDUCING {
+        return Err(TermsError::Value {
+            what: "residual_model.inducing_q_rad",
+            problem: ValueProblem::TooMany {
+                count: r.inducing_q_rad.len(),
+                limit: MAX_INDUCING,
+            },
+        });
+    }
+    if r.inducing_q_rad.len() != r.weights_m.len() {
+        return Err(TermsError::Value {
+            what: "residual_model",
+            problem: ValueProblem::Shape {
+                inducing: r.inducing_q_rad.len(),
+                weights: r.weights_m.len(),
+            },
+        });
+    }
+    finite("residual_model.length_scale_rad", r.length_scale_rad, 100.0)?;
+    if r.length_scale_rad <= 0.0 {
+        return Err(TermsError::Value {
+            what: "residual_model.length_scale_rad",
+            problem: ValueProblem::Bad(r.length_scale_rad),
+        });
+    }
+    finite("residual_model.ridge", r.ridge, 1e12)?;
+    for q in &r.inducing_q_rad {
+        if q.len() != joints || joints > MAX_JOINTS {
+            return Err(TermsError::Joint {
+                what: "residual_model.inducing_q_rad (joint values)",
+                value: q.len(),
+                joints,
+            });
+        }
+        for v in q {
+            finite("residual_model.inducing_q_rad", *v, 100.0)?;
+        }
+    }
+    for w in &r.weights_m {
+        for v in w {
+            finite("residual_model.weights_m", *v, 1e3)?;
+        }
+    }
+    let mut mask = 0u16;
+    for &j in &r.joints {
+        if j == 0 || j > joints {
+            return Err(TermsError::Joint {
+                what: "residual_model.joints",
+                value: j,
+                joints,
+            });
+        }
+        mask |= 1 << (j - 1);
+    }
+    Ok(ResidualModel {
+        hyper: ResidualHyper {
+            length_scale_rad: r.length_scale_rad,
+            ridge: r.ridge,
+            joints: mask,
+        },
+        inducing: r.inducing_q_rad.clone(),
+        weights: r.weights_m.clone(),
+    })
+}

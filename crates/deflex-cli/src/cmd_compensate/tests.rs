@@ -1,0 +1,364 @@
+use super::*;
+use clap::Parser;
+use deflex_compensate::table::read_csv;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("deflex-compensate-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The arguments as the command line gives them.
+#[derive(Parser)]
+struct Cli {
+    #[command(flatten)]
+    args: CompensateArgs,
+}
+
+fn parse(line: &[&str]) -> CompensateArgs {
+    Cli::try_parse_from(std::iter::once("deflex").chain(line.iter().copied()))
+        .unwrap()
+        .args
+}
+
+fn args(out: &Path) -> CompensateArgs {
+    parse(&[
+        "--robot",
+        "tx200",
+        "--length-mm",
+        "400",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn negative_numbers_follow_their_flags() {
+    let a = parse(&[
+        "--robot",
+        "ur10e",
+        "--seed-deg",
+        "-1,34.66,-90,0,-45,12",
+        "--part-xyz-mm",
+        "-20,0,5",
+        "--format",
+        "krl,gcode",
+        "--out",
+        "x",
+    ]);
+    assert_eq!(a.seed_deg.as_deref(), Some("-1,34.66,-90,0,-45,12"));
+    assert_eq!(a.part_xyz_mm.as_deref(), Some("-20,0,5"));
+    assert_eq!(a.format, [FormatArg::Krl, FormatArg::Gcode]);
+    assert!(
+        Cli::try_parse_from(["deflex", "--robot", "r", "--out", "x", "--format", "fanuc"]).is_err()
+    );
+}
+
+#[test]
+fn the_command_writes_safe_programs_that_read_back() {
+    let dir = scratch("ok");
+    let out = dir.join("out");
+    run(args(&out), true).unwrap();
+    let table = std::fs::read_to_string(out.join("compensated_path.csv")).unwrap();
+    assert!(table.starts_with("# SIMULATED"));
+    let rows = read_csv(&table, "compensated_path.csv").unwrap();
+    assert!(rows.iter().all(|r| r.status == "ok"));
+    // rx, ry, rz are the true orientation: the tool axis along −Z of the part frame.
+    for r in rows.iter().step_by(50) {
+        let axis = r.desired.rotation * nalgebra::Vector3::z();
+        assert!((axis + nalgebra::Vector3::z()).norm() < 1e-9, "{axis:?}");
+    }
+    let s = summary(&out);
+    assert_eq!(s["compensation"]["simulated"], true);
+    assert_eq!(s["compensation"]["converged"], true);
+    assert_eq!(s["run_on_a_real_controller"], false);
+    assert!(s["placement"].as_str().unwrap().contains("the tx200 cell"));
+    assert!(
+        s["compensation"]["final_max_predicted_error_m"]
+            .as_f64()
+            .unwrap()
+            < 1.5e-6
+    );
+    let programs = s["programs"].as_array().unwrap();
+    assert_eq!(programs.len(), 5);
+    for p in programs {
+        // Read back inside the command; the first and last motions are the clearance points,
+        // 20 mm above the path's highest point.
+        let h = p["first_last_motion_height_above_part_m"]
+            .as_array()
+            .unwrap();
+        for v in h {
+            assert!((v.as_f64().unwrap() - 0.020).abs() < 1e-6, "{p}");
+        }
+        assert!(p["readback_max_position_error_m"].as_f64().unwrap() <= 1e-6);
+    }
+    // The G-code program reads with the CAM reader too: its first point is the clearance point.
+    let gcode = std::fs::read_to_string(out.join("programs/deflex_path.gcode")).unwrap();
+    let program = deflex_gcode::read(&gcode, &deflex_gcode::ReadOptions::default()).unwrap();
+    assert_eq!(program.work_offset, Some(deflex_gcode::WorkOffset::G54));
+    let top = program
+        .points
+        .iter()
+        .map(|p| p.p_mm[2])
+        .fold(f64::MIN, f64::max);
+    assert!((program.points[0].p_mm[2] - top).abs() < 1e-9);
+    assert!((program.points.last().unwrap().p_mm[2] - top).abs() < 1e-9);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_cam_file_on_the_ur10e_cell_needs_no_flag() {
+    // The README walk-through's continuation with the built-in UR10e: the robot's own cell, a
+    // Fanuc-style CAM file with arcs and a header, all five formats.
+    let dir = scratch("ur");
+    let out = dir.join("out");
+    let part = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/parts/cone-contour-arcs.nc"
+    );
+    let a = parse(&[
+        "--robot",
+        "ur10e",
+        "--path",
+        part,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    run(a, true).unwrap();
+    let s = summary(&out);
+    assert_eq!(s["part_frame"], "G54");
+    assert!(s["placement"].as_str().unwrap().contains("the ur10e cell"));
+    let origin = CellConfig::for_robot("ur10e").unwrap().part.origin_mm;
+    assert!((s["part_origin_m"][2].as_f64().unwrap() - origin[2] * 1e-3).abs() < 1e-12);
+    assert!(
+        s["gcode_notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("T1"))
+    );
+    // ≈ 190 N on the UR's sheet, not the TX200's 1260 N.
+    let force = s["compensation"]["final_max_force_N"].as_f64().unwrap();
+    assert!(force > 50.0 && force < 400.0, "{force}");
+    assert_eq!(s["programs"].as_array().unwrap().len(), 5);
+    for p in s["programs"].as_array().unwrap() {
+        for v in p["first_last_motion_height_above_part_m"]
+            .as_array()
+            .unwrap()
+        {
+            assert!(v.as_f64().unwrap() > 0.019, "{p}");
+        }
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+use deflex_sim::CellConfig;
+
+#[test]
+fn a_tilted_seed_is_refused_and_unreachable_points_name_the_flags() {
+    let dir = scratch("refused");
+    let out = dir.join("out");
+    let mut a = args(&out);
+    a.seed_deg = Some("0,49.7,89.3,0,10,0".into());
+    let e = run(a, true).unwrap_err().to_string();
+    assert!(
+        e.contains("off the path's tool axis") && e.contains("--seed-deg"),
+        "{e}"
+    );
+    let mut a = args(&out);
+    a.part_xyz_mm = Some("3500,0,-183".into());
+    let e = run(a, true).unwrap_err().to_string();
+    assert!(
+        e.contains("beyond the arm's reach") && e.contains("--part-xyz-mm"),
+        "{e}"
+    );
+    assert!(!out.exists(), "refused before any work");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn uncompensable_points_fail_the_command_with_their_indices_and_no_program() {
+    let dir = scratch("limits");
+    // The TX200 with joint 3 stopped just beyond the desired path's values: the compensated
+    // poses need more.
+    let config = CellConfig::default();
+    let mut robot = config.nominal_robot().unwrap();
+    let probe = dir.join("probe");
+    let mut a = args(&probe);
+    a.length_mm = Some(60.0);
+    a.format = vec![FormatArg::None];
+    let s = setup::setup(&a).unwrap();
+    let mut q = s.seed.clone();
+    let mut range = [f64::MAX, f64::MIN];
+    for p in s.path.points() {
+        q = robot
+            .inverse_kinematics(&p.pose, &q, &Default::default())
+            .unwrap()
+            .q;
+        range = [range[0].min(q[2]), range[1].max(q[2])];
+    }
+    robot.joints[2].limits = Some([range[0] - 1e-6, range[1] + 1e-6]);
+    let robot_file = dir.join("tight.toml");
+    std::fs::write(&robot_file, deflex_model::robot_to_toml(&robot)).unwrap();
+    let out = dir.join("out");
+    let mut a = args(&out);
+    a.robot = robot_file.display().to_string();
+    a.length_mm = Some(60.0);
+    let e = run(a, true).unwrap_err().to_string();
+    assert!(
+        e.contains("cannot be compensated") && e.contains("joint 3"),
+        "{e}"
+    );
+    assert!(
+        e.contains("--part-xyz-mm") && e.contains("--seed-deg"),
+        "{e}"
+    );
+    let rows = read_csv(
+        &std::fs::read_to_string(out.join("compensated_path.csv")).unwrap(),
+        "t",
+    )
+    .unwrap();
+    let failed: Vec<usize> = rows
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.status != "ok")
+        .map(|(i, _)| i)
+        .collect();
+    assert!(!failed.is_empty());
+    for i in &failed {
+        assert_eq!(rows[*i].status, "compensated:joint_limit:J3");
+    }
+    assert!(
+        !out.join("programs").exists(),
+        "no program with failed points"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_deflex_run_log_serves_as_the_wrench_source() {
+    use deflex_control::{CycleOutput, Flags};
+    use deflex_runtime::log::{LogRecord, csv_header, csv_row};
+    // The skipped flag bits are deflex-control's.
+    assert_eq!(
+        deflex_compensate::log::RUN_LOG_SKIP_FLAGS,
+        Flags::FORCE_OVER_LIMIT
+            | Flags::TORQUE_OVER_LIMIT
+            | Flags::SENSOR_TIMEOUT
+            | Flags::SENSOR_STATUS
+            | Flags::ROBOT_LINK_LOST
+            | Flags::NON_FINITE
+            | Flags::SENSOR_OVER_RANGE
+            | Flags::JOINT_OUT_OF_LIMITS
+            | Flags::JOINT_JUMP
+            | Flags::JOINT_COUNT_MISMATCH
+            | Flags::CONTACT_RUNAWAY
+            | Flags::LATCHED
+            | Flags::TARING
+            | Flags::STALE_WRENCH
+    );
+    let dir = scratch("runlog");
+    let out = dir.join("out");
+    let mut a = args(&out);
+    a.length_mm = Some(40.0);
+    a.format = vec![FormatArg::Gcode];
+    let s = setup::setup(&a).unwrap();
+    let (robot, tcp) = (&s.robot, &s.path);
+    // A log written by deflex-control's own writer functions: 0.1 mm steps, a constant 900 N
+    // push up, taring rows with nonsense at the start, 100 rows at rest at the end with the
+    // force fading (not used: no advance).
+    let mut text = csv_header(6);
+    text.push('\n');
+    let mut q = s.seed.clone();
+    let steps = (tcp.length_m() / 1e-4) as usize;
+    for k in 0..=steps + 100 {
+        let s_m = (k as f64 * 1e-4).min(tcp.length_m());
+        let (i, f) = tcp.locate(s_m);
+        let pa = tcp.points()[i].pose;
+        let pb = tcp.points()[i + 1].pose;
+        let p = pa.translation.vector + (pb.translation.vector - pa.translation.vector) * f;
+        let target = deflex_model::Pose::from_parts(p.into(), pa.rotation);
+        q = robot
+            .inverse_kinematics(&target, &q, &Default::default())
+            .unwrap()
+            .q;
+        let taring = k < 5;
+        // The row reaching the end still pushes 900 N; then the tool rests and the force fades.
+        let fz = if k > steps + 1 {
+            900.0 * (1.0 - (k - steps) as f64 / 100.0)
+        } else {
+            900.0
+        };
+        let cycle = CycleOutput {
+            time_s: k as f64 * 0.01,
+            wrench_tcp: if taring {
+                [0.0, 0.0, 1e5, 0.0, 0.0, 0.0]
+            } else {
+                [0.0, 0.0, fz, 0.0, 0.0, 0.0]
+            },
+            flags: Flags(if taring { Flags::TARING } else { Flags::ACTIVE }),
+            ..CycleOutput::default()
+        };
+        text.push_str(&csv_row(&LogRecord::new(&q, &[0.0; 6], &cycle, 10.0)));
+        text.push('\n');
+    }
+    let log_file = dir.join("run.csv");
+    std::fs::write(&log_file, text).unwrap();
+    a.wrench = format!("log:{}", log_file.display());
+    run(a, true).unwrap();
+    let rows = read_csv(
+        &std::fs::read_to_string(out.join("compensated_path.csv")).unwrap(),
+        "t",
+    )
+    .unwrap();
+    for r in &rows {
+        assert!((r.wrench[2] - 900.0).abs() < 1e-6, "{}", r.wrench[2]);
+    }
+    let s = summary(&out);
+    assert_eq!(
+        s["compensation"]["simulated"], false,
+        "a deflex run log is a measurement"
+    );
+    assert_eq!(s["compensation"]["iterations"].as_array().unwrap().len(), 1);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_options_are_refused_before_any_work() {
+    let dir = scratch("bad");
+    let out = dir.join("out");
+    for (change, expected) in [
+        (
+            Box::new(|a: &mut CompensateArgs| a.wrench = "sensor".into())
+                as Box<dyn Fn(&mut CompensateArgs)>,
+            "--wrench",
+        ),
+        (Box::new(|a| a.tolerance_um = 0.0), "--tolerance-um"),
+        (Box::new(|a| a.max_iterations = 0), "--max-iterations"),
+        (
+            Box::new(|a| a.seed_deg = Some("0,1,2".into())),
+            "3 values given",
+        ),
+        (
+            Box::new(|a| a.part_xyz_mm = Some("1,2".into())),
+            "--part-xyz-mm",
+        ),
+        (Box::new(|a| a.length_mm = Some(-1.0)), "--length-mm"),
+        (
+            Box::new(|a| a.path = "/nonexistent/part.gcode".into()),
+            "/nonexistent/part.gcode",
+        ),
+    ] {
+        let mut a = args(&out);
+        change(&mut a);
+        let e = run(a, true).unwrap_err().to_string();
+        assert!(e.contains(expected), "{e}");
+    }
+    assert!(!out.exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -1,0 +1,193 @@
+//! `deflex plot LOG [LOG2] --out DIR`: the figures of a run's log (a `deflex run` CSV log, a
+//! `deflex sim isf` log.csv or an MCAP recording), or of two logs overlaid on path position, and
+//! a self-contained page. The folder is built aside and swapped in whole.
+
+use crate::args;
+use clap::Args;
+use std::path::PathBuf;
+
+/// Arguments of `deflex plot`.
+#[derive(Args)]
+pub struct PlotArgs {
+    /// The log: a `deflex run` CSV log, a `deflex sim isf` log.csv or an MCAP recording.
+    log: PathBuf,
+    /// A second log, overlaid on the first, aligned by position along the desired path (e.g.
+    /// open and closed loop).
+    log2: Option<PathBuf>,
+    /// Output folder (replaced whole when the figures are done).
+    #[arg(long)]
+    out: PathBuf,
+    /// Names of the runs in legends, comma-separated (default: the file names).
+    #[arg(long, value_delimiter = ',')]
+    labels: Vec<String>,
+    /// Robot model (built-in name or file) to place a `deflex run` log that has no `path_s_m`
+    /// on its path (forward kinematics of its joints); without it such a log is drawn against
+    /// time.
+    #[arg(long)]
+    robot: Option<String>,
+}
+
+/// Runs `deflex plot`.
+pub fn plot(a: PlotArgs, json: bool) -> Result<(), String> {
+    let logs: Vec<PathBuf> = std::iter::once(a.log).chain(a.log2).collect();
+    if !a.labels.is_empty() && a.labels.len() != logs.len() {
+        return Err(format!(
+            "--labels: {} names for {} logs",
+            a.labels.len(),
+            logs.len()
+        ));
+    }
+    let robot = a.robot.as_deref().map(args::robot).transpose()?;
+    let mut traces = Vec::new();
+    for (i, log) in logs.iter().enumerate() {
+        let label = a.labels.get(i).cloned().unwrap_or_else(|| {
+            let name = log.file_name().map_or_else(
+                || log.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            // Two logs of the same name (open/log.csv, closed/log.csv): add the folder.
+            match log.parent().and_then(|p| p.file_name()) {
+                Some(dir) if logs.len() > 1 => format!("{}/{name}", dir.to_string_lossy()),
+                _ => name,
+            }
+        });
+        let trace = deflex_record::trace::read_run_log(log, &label, robot.as_ref())
+            .map_err(|e| e.to_string())?;
+        traces.push(trace);
+    }
+    let out =
+        deflex_files::AtomicDir::create(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let figures =
+        deflex_report::write_run_figures(out.path(), &traces).map_err(|e| e.to_string())?;
+    out.commit()
+        .map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let names: Vec<String> = figures
+        .figures
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    let page = a.out.join("index.html");
+    if json {
+        args::print_json(&serde_json::json!({
+            "out": a.out.display().to_string(),
+            "page": page.display().to_string(),
+            "figures": names,
+            "by_path_position": figures.by_path_position,
+            "simulated": traces.iter().any(|t| t.simulated),
+            "runs": traces.iter().map(|t| serde_json::json!({
+                "label": t.label, "file": t.file, "kind": t.kind, "rows": t.time_s.len(),
+            })).collect::<Vec<_>>(),
+        }));
+    } else {
+        for t in &traces {
+            println!(
+                "{}{}: {} ({} rows) from {}",
+                if t.simulated { "SIMULATED " } else { "" },
+                t.label,
+                t.kind,
+                t.time_s.len(),
+                t.file
+            );
+        }
+        println!(
+            "figures against {}: {}",
+            if figures.by_path_position {
+                "position along the desired path"
+            } else {
+                "time (a log does not give its path position; --robot places a deflex run log)"
+            },
+            names.join(", ")
+        );
+        println!("page: {}", page.display());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use deflex_record::synthetic::SyntheticCell;
+
+    fn recording(path: &std::path::Path, seed: u64, seconds: usize) {
+        let mut cell = SyntheticCell::new(0.01, seed, true);
+        let info = cell.session_info();
+        let mut sink = deflex_record::McapSink::new(
+            Vec::new(),
+            "mem",
+            &info,
+            deflex_record::RecordOptions::default(),
+        )
+        .unwrap();
+        for _ in 0..seconds * 100 {
+            sink.write(&cell.next_sample()).unwrap();
+        }
+        std::fs::write(path, sink.finish().unwrap().0).unwrap();
+    }
+
+    #[test]
+    fn two_recordings_make_one_overlaid_page_and_a_foreign_file_is_named() {
+        let dir = std::env::temp_dir().join(format!("deflex-plot-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b) = (dir.join("a.mcap"), dir.join("b.mcap"));
+        recording(&a, 1, 4);
+        recording(&b, 2, 3);
+        let out = dir.join("plots");
+        plot(
+            PlotArgs {
+                log: a.clone(),
+                log2: Some(b),
+                out: out.clone(),
+                labels: vec!["first".into(), "second".into()],
+                robot: None,
+            },
+            true,
+        )
+        .unwrap();
+        let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+        assert!(html.contains("first vs second") && html.contains("SIMULATED"));
+        for f in [
+            "forces.png",
+            "correction.png",
+            "deflection.png",
+            "path_error.png",
+        ] {
+            assert!(out.join(f).is_file(), "{f}");
+        }
+        // A foreign file: the error names it, and the earlier output stays whole.
+        let foreign = dir.join("notes.txt");
+        std::fs::write(&foreign, "hello,world\n1,2\n").unwrap();
+        let e = plot(
+            PlotArgs {
+                log: foreign,
+                log2: None,
+                out: out.clone(),
+                labels: vec![],
+                robot: None,
+            },
+            false,
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("notes.txt") && e.contains("not a deflex log"),
+            "{e}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join("index.html")).unwrap(),
+            html
+        );
+        let e = plot(
+            PlotArgs {
+                log: a,
+                log2: None,
+                out,
+                labels: vec!["x".into(), "y".into()],
+                robot: None,
+            },
+            false,
+        )
+        .unwrap_err();
+        assert!(e.contains("--labels"), "{e}");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}

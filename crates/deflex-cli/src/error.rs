@@ -1,0 +1,236 @@
+//! What a command can fail with: the libraries' typed errors, and the usage errors of the command
+//! line (naming the flag, what it takes and what it was given). Only `main` turns them into text.
+
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// Result of every command.
+pub type CommandResult = Result<(), CliError>;
+
+/// Why a command failed.
+#[derive(Debug, Error)]
+pub enum CliError {
+    /// A flag, or a combination of flags, that cannot be used.
+    #[error(transparent)]
+    Usage(#[from] UsageError),
+    /// A robot description that cannot be read or used.
+    #[error(transparent)]
+    Model(#[from] deflex_model::ModelError),
+    /// A measurement or plan file that cannot be used.
+    #[error(transparent)]
+    Data(#[from] deflex_measurements::DataError),
+    /// A points file that cannot be used.
+    #[error(transparent)]
+    Points(#[from] deflex_measurements::points::PointsError),
+    /// A point given on the command line that cannot be used.
+    #[error(transparent)]
+    Point(#[from] deflex_measurements::points::PointProblem),
+    /// Calibration, planning or validation refused the data.
+    #[error(transparent)]
+    Calib(#[from] deflex_stiffness::CalibError),
+    /// The twin refused its settings or a path.
+    #[error(transparent)]
+    Sim(#[from] deflex_sim::SimError),
+    /// A twin settings file that cannot be read or used.
+    #[error(transparent)]
+    CellFile(#[from] deflex_twin::CellFileError),
+    /// The controller could not drive the twin.
+    #[error(transparent)]
+    Twin(#[from] deflex_twin::TwinError),
+    /// The study could not be run.
+    #[error(transparent)]
+    Demo(#[from] deflex_study::DemoError),
+    /// A report could not be written.
+    #[error(transparent)]
+    Page(#[from] deflex_report::PageError),
+    /// A plot or page could not be written.
+    #[error(transparent)]
+    Report(#[from] deflex_report::ReportError),
+    /// A file or folder could not be written.
+    #[error("{}: {source}", .path.display())]
+    Write {
+        /// The file or folder.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// An error about a given file or flag value, named first.
+    #[error("{context}: {source}")]
+    In {
+        /// The file, or the flag and its value (`--model m.toml`, `--points`).
+        context: String,
+        /// What went wrong with it.
+        source: Box<CliError>,
+    },
+    /// An inverse kinematics that did not reach the target.
+    #[error("{source} (target {xyz_mm:?} mm, rpy {rpy_deg:?}°)")]
+    Unreachable {
+        /// The target position (mm).
+        xyz_mm: [f64; 3],
+        /// The target orientation (roll, pitch, yaw, degrees).
+        rpy_deg: [f64; 3],
+        /// Why it was not reached.
+        source: deflex_model::ModelError,
+    },
+    /// A deflection map none of whose nodes the arm reaches.
+    #[error("no grid node is reachable; check --plane, --center and --size")]
+    NoReachableNode,
+    /// A calibration that identified nothing.
+    #[error(
+        "{}: no eDoF could be identified from this data (every compliance is at its bound or not observable); nothing written",
+        .data.display()
+    )]
+    NothingIdentified {
+        /// The measurement file.
+        data: PathBuf,
+    },
+    /// A command that still reports its failures as text (the controller, compensation and
+    /// elasto-geometric commands, converted by their own tracks).
+    #[error("{message}")]
+    Command {
+        /// The command (`run`, `compensate`, …).
+        command: &'static str,
+        /// Its message.
+        message: String,
+    },
+}
+
+impl CliError {
+    /// An error about `context` (a file, or a flag with its value), named first.
+    pub fn in_context(context: impl Into<String>) -> impl FnOnce(CliError) -> CliError {
+        let context = context.into();
+        move |source| CliError::In {
+            context,
+            source: Box::new(source),
+        }
+    }
+
+    /// The failure of a command that reports text (see [`CliError::Command`]).
+    pub fn command(command: &'static str) -> impl FnOnce(String) -> CliError {
+        move |message| CliError::Command { command, message }
+    }
+
+    /// A write to `path` failed.
+    pub fn write(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> CliError {
+        let path = path.into();
+        move |source| CliError::Write { path, source }
+    }
+}
+
+/// Transitional, for the commands that still return text (their helpers in `args` return typed
+/// errors): the error's message.
+impl From<CliError> for String {
+    fn from(error: CliError) -> String {
+        error.to_string()
+    }
+}
+
+/// Transitional, as for [`CliError`]: the usage error's message.
+impl From<UsageError> for String {
+    fn from(error: UsageError) -> String {
+        error.to_string()
+    }
+}
+
+/// A flag, or a combination of flags, that cannot be used.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum UsageError {
+    /// A number outside its range (NaN and infinities included).
+    #[error(
+        "{flag}: expected a number from {} to {}{}, got {}",
+        compact(*.lo),
+        compact(*.hi),
+        unit_suffix(.unit),
+        compact(*.got)
+    )]
+    Range {
+        /// The flag.
+        flag: String,
+        /// Smallest value accepted.
+        lo: f64,
+        /// Largest value accepted.
+        hi: f64,
+        /// Unit (empty: none).
+        unit: &'static str,
+        /// The value given.
+        got: f64,
+    },
+    /// A value not of the form the flag takes.
+    #[error("{flag}: expected {expected}, got {got}")]
+    Invalid {
+        /// The flag.
+        flag: String,
+        /// What it takes.
+        expected: String,
+        /// What it was given.
+        got: String,
+    },
+    /// Two flags that exclude each other.
+    #[error("give {first} or {second}, not both")]
+    NotBoth {
+        /// One flag.
+        first: &'static str,
+        /// The other.
+        second: &'static str,
+    },
+    /// A flag that only applies with another setting.
+    #[error("{flag}: {applies}")]
+    DoesNotApply {
+        /// The flag.
+        flag: &'static str,
+        /// Where it applies (`only with --load cable`).
+        applies: &'static str,
+    },
+    /// Something the command needs and was not given.
+    #[error("{what}: {give}")]
+    Missing {
+        /// What is missing.
+        what: &'static str,
+        /// How to give it.
+        give: &'static str,
+    },
+    /// Joint values that do not match the robot.
+    #[error("robot \"{robot}\" has {joints} joints, but {given} joint values were given")]
+    JointCount {
+        /// The robot's name.
+        robot: String,
+        /// Its joints.
+        joints: usize,
+        /// Values given.
+        given: usize,
+    },
+}
+
+impl UsageError {
+    /// A value not of the form `flag` takes.
+    pub fn invalid(
+        flag: impl Into<String>,
+        expected: impl Into<String>,
+        got: impl std::fmt::Display,
+    ) -> UsageError {
+        UsageError::Invalid {
+            flag: flag.into(),
+            expected: expected.into(),
+            got: got.to_string(),
+        }
+    }
+}
+
+/// A number for a message: plain when readable, in exponent form when very large or small
+/// (`1e308`, not three hundred digits).
+pub fn compact(value: f64) -> String {
+    let magnitude = value.abs();
+    if value.is_finite() && value != 0.0 && !(1e-3..1e6).contains(&magnitude) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
+fn unit_suffix(unit: &str) -> String {
+    if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    }
+}

@@ -1,0 +1,611 @@
+//! Any run log as the plain columns of [`deflex_report::RunTrace`] (what `deflex plot` draws):
+//!
+//! * a deflex MCAP recording ([`crate::for_each_cycle`]): forces at the TCP, ξ, δŝ, the path
+//!   error when the twin recorded it, phase and flags, cycle time; the path position is the arc
+//!   length of the program TCP (corrected TCP − ξ);
+//! * a `deflex run` CSV log (columns in `crates/deflex-control/src/log.rs`): the same, with the
+//!   path position from its `path_s_m` column when every row has one (a feed-forward table), else
+//!   — given the robot model — the arc length of the program TCP, forward kinematics of the
+//!   logged joints minus ξ; else none (then `deflex plot` draws against time);
+//! * a `deflex sim isf` `log.csv` (SIMULATED): desired TCP (its arc length is the path
+//!   position), contact force, correction and path error in the part frame, contact state.
+//!
+//! Which one a file is comes from its content (MCAP magic bytes, then the CSV header), not its
+//! name. Errors name the file, and the line and column where a value is wrong.
+
+use crate::{ReadError, for_each_cycle, is_mcap};
+use deflex_control::Flags;
+use deflex_model::{Data, Robot};
+use deflex_report::{RunTrace, Xyz};
+use deflex_telemetry::CycleSample;
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// Largest CSV log read (bytes).
+pub const MAX_LOG_BYTES: u64 = 1 << 30;
+/// Most rows read from one log.
+pub const MAX_ROWS: usize = 2_000_000;
+
+/// Why a log could not be read as a run.
+#[derive(Debug, thiserror::Error)]
+pub enum TraceError {
+    /// Reading the file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// An MCAP file that is not a readable deflex recording.
+    #[error(transparent)]
+    Recording(#[from] ReadError),
+    /// Not a log deflex knows.
+    #[error(
+        "{path}: line {line}: not a deflex log (expected a `deflex run` log with columns time_s, w_fx_n …, xi_x_m …, a `deflex sim isf` log.csv with time_s, des_x_mm …, or an MCAP recording); the header starts: {found}"
+    )]
+    Foreign {
+        /// The file.
+        path: String,
+        /// Line of the header (1-based).
+        line: usize,
+        /// Its first columns.
+        found: String,
+    },
+    /// A cell that is not what its column holds.
+    #[error("{path}: line {line}, column {column}: {message}")]
+    Cell {
+        /// The file.
+        path: String,
+        /// Line (1-based).
+        line: usize,
+        /// Column name.
+        column: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file is too large or has too many rows.
+    #[error("{path}: {message}")]
+    TooLarge {
+        /// The file.
+        path: String,
+        /// The bound passed.
+        message: String,
+    },
+    /// The log has no row.
+    #[error("{path}: no data row")]
+    Empty {
+        /// The file.
+        path: String,
+    },
+    /// The robot given does not fit the log.
+    #[error("{path}: {message}")]
+    Robot {
+        /// The file.
+        path: String,
+        /// What does not fit.
+        message: String,
+    },
+}
+
+/// Reads `path` (a recording, a `deflex run` log or a `deflex sim isf` log) as a run named
+/// `label`. `robot` gives a `deflex run` log without `path_s_m` its path position.
+pub fn read_run_log(
+    path: &Path,
+    label: &str,
+    robot: Option<&Robot>,
+) -> Result<RunTrace, TraceError> {
+    let name = path.display().to_string();
+    let io = |e| TraceError::Io {
+        path: name.clone(),
+        source: e,
+    };
+    if is_mcap(path).map_err(io)? {
+        return from_recording(path, label);
+    }
+    let size = std::fs::metadata(path).map_err(io)?.len();
+    if size > MAX_LOG_BYTES {
+        return Err(TraceError::TooLarge {
+            path: name,
+            message: format!("{size} bytes, more than the {MAX_LOG_BYTES} a log may have"),
+        });
+    }
+    let text = std::fs::read_to_string(path).map_err(io)?;
+    let simulated = text
+        .lines()
+        .take_while(|l| l.starts_with('#'))
+        .any(|l| l.contains("SIMULATED"));
+    let table = Table::parse(&text, &name)?;
+    let mut trace = if table.has("des_x_mm") {
+        from_sim_isf(&table)?
+    } else if table.has("w_fx_n") && table.has("xi_x_m") {
+        from_run_log(&table, robot)?
+    } else {
+        return Err(TraceError::Foreign {
+            path: name,
+            line: table.header_line,
+            found: table
+                .columns
+                .iter()
+                .take(6)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(","),
+        });
+    };
+    trace.label = label.to_string();
+    trace.file = name;
+    trace.simulated |= simulated;
+    Ok(trace)
+}
+
+/// A CSV log's cells, by column (empty cells are NaN).
+struct Table {
+    file: String,
+    columns: Vec<String>,
+    header_line: usize,
+    lines: Vec<usize>,
+    cells: Vec<Vec<String>>,
+}
+
+impl Table {
+    fn parse(text: &str, file: &str) -> Result<Table, TraceError> {
+        let mut reader = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .trim(csv::Trim::All)
+            .flexible(false)
+            .from_reader(text.as_bytes());
+        let csv_err = |e: csv::Error| {
+            let line = e.position().map_or(0, |p| p.line() as usize);
+            TraceError::Cell {
+                path: file.to_string(),
+                line,
+                column: "-".into(),
+                message: e.to_string(),
+            }
+        };
+        let columns: Vec<String> = reader
+            .headers()
+            .map_err(csv_err)?
+            .iter()
+            .map(String::from)
+            .collect();
+        let header_line = reader.position().line() as usize;
+        let header_line = text
+            .lines()
+            .position(|l| !l.starts_with('#'))
+            .map_or(header_line, |i| i + 1);
+        let mut lines = Vec::new();
+        let mut cells = Vec::new();
+        for record in reader.records() {
+            let record = record.map_err(csv_err)?;
+            if cells.len() == MAX_ROWS {
+                return Err(TraceError::TooLarge {
+                    path: file.to_string(),
+                    message: format!("more than {MAX_ROWS} rows"),
+                });
+            }
+            lines.push(record.position().map_or(0, |p| p.line() as usize));
+            cells.push(record.iter().map(String::from).collect());
+        }
+        if cells.is_empty() {
+            return Err(TraceError::Empty {
+                path: file.to_string(),
+            });
+        }
+        Ok(Table {
+            file: file.to_string(),
+            columns,
+            header_line,
+            lines,
+            cells,
+        })
+    }
+
+    fn has(&self, name: &str) -> bool {
+        self.columns.iter().any(|c| c == name)
+    }
+
+    /// A numeric column; empty cells are NaN, anything else that is not a number is an error.
+    fn column(&self, name: &str) -> Result<Vec<f64>, TraceError> {
+        let k = self
+            .columns
+            .iter()
+            .position(|c| c == name)
+            .ok_or_else(|| TraceError::Cell {
+                path: self.file.clone(),
+                line: self.header_line,
+                column: name.into(),
+                message: "column missing from the header".into(),
+            })?;
+        self.cells
+            .iter()
+            .zip(&self.lines)
+            .map(|(row, line)| {
+                let cell = row[k].as_str();
+                if cell.is_empty() {
+                    return Ok(f64::NAN);
+                }
+                cell.parse::<f64>().map_err(|_| TraceError::Cell {
+                    path: self.file.clone(),
+                    line: *line,
+                    column: name.into(),
+                    message: format!("expected a number, found {cell:?}"),
+                })
+            })
+            .collect()
+    }
+
+    fn xyz(&self, names: [&str; 3], scale: f64) -> Result<Xyz, TraceError> {
+        let c = |n| {
+            self.column(n)
+                .map(|v| v.iter().map(|x| x * scale).collect::<Vec<_>>())
+        };
+        Ok(Xyz {
+            x: c(names[0])?,
+            y: c(names[1])?,
+            z: c(names[2])?,
+        })
+    }
+}
+
+/// Cumulative length of a polyline (m), from 0.
+fn arc_length(points: impl Iterator<Item = Vector3<f64>>) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut previous: Option<Vector3<f64>> = None;
+    let mut s = 0.0;
+    for p in points {
+        if let Some(q) = previous
+            && p.iter().all(|v| v.is_finite())
+        {
+            s += (p - q).norm();
+        }
+        if p.iter().all(|v| v.is_finite()) {
+            previous = Some(p);
+        }
+        out.push(s);
+    }
+    out
+}
+
+fn from_sim_isf(t: &Table) -> Result<RunTrace, TraceError> {
+    let des = t.xyz(["des_x_mm", "des_y_mm", "des_z_mm"], 1e-3)?;
+    let path_s = arc_length((0..des.x.len()).map(|i| Vector3::new(des.x[i], des.y[i], des.z[i])));
+    let penetration = t.column("penetration_mm")?;
+    let mut states = vec![(
+        "in contact".to_string(),
+        penetration.iter().map(|p| *p > 0.0).collect(),
+    )];
+    if t.has("sensor_saturated") {
+        states.push((
+            "sensor saturated".into(),
+            t.column("sensor_saturated")?
+                .iter()
+                .map(|v| *v > 0.5)
+                .collect(),
+        ));
+    }
+    Ok(RunTrace {
+        kind: "deflex sim isf log".into(),
+        simulated: true,
+        time_s: t.column("time_s")?,
+        path_s_m: Some(path_s),
+        force_n: t.xyz(["fx_N", "fy_N", "fz_N"], 1.0)?,
+        axes: "part frame axes".into(),
+        correction_m: Some(t.xyz(["corr_x_mm", "corr_y_mm", "corr_z_mm"], 1e-3)?),
+        deflection_m: None,
+        path_error_m: Some(t.xyz(["err_x_mm", "err_y_mm", "err_z_mm"], 1e-3)?),
+        states,
+        cycle_time_s: None,
+        ..RunTrace::default()
+    })
+}
+
+/// On/off lanes of the controller's phase and flags.
+fn flag_states(flags: &[u32], fault: impl Fn(usize) -> bool) -> Vec<(String, Vec<bool>)> {
+    let has = |bit: u32| flags.iter().map(|f| f & bit != 0).collect::<Vec<bool>>();
+    vec![
+        ("taring".into(), has(Flags::TARING)),
+        ("correcting (active)".into(), has(Flags::ACTIVE)),
+        ("ramping".into(), has(Flags::RAMPING)),
+        (
+            "saturated (size or rate)".into(),
+            has(Flags::SATURATED_SIZE | Flags::SATURATED_RATE),
+        ),
+        ("runaway hold".into(), has(Flags::RUNAWAY_HOLD)),
+        (
+            "fault latched".into(),
+            (0..flags.len()).map(fault).collect(),
+        ),
+    ]
+}
+
+fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError> {
+    let xi = t.xyz(["xi_x_m", "xi_y_m", "xi_z_m"], 1.0)?;
+    let path_s_col = t.column("path_s_m")?;
+    let path_s_m = if path_s_col.iter().all(|s| s.is_finite()) {
+        Some(path_s_col)
+    } else if let Some(robot) = robot {
+        let n = robot.joint_count();
+        let joints: Vec<Vec<f64>> = (1..=n)
+            .map(|i| t.column(&format!("q{i}_rad")))
+            .collect::<Result<_, _>>()
+            .map_err(|e| match e {
+                TraceError::Cell { path, column, .. } => TraceError::Robot {
+                    path,
+                    message: format!(
+                        "the robot {} has {n} joints but the log has no column {column}",
+                        robot.name
+                    ),
+                },
+                other => other,
+            })?;
+        let mut data = Data::new();
+        let mut q = vec![0.0; n];
+        let mut program = Vec::with_capacity(xi.x.len());
+        for row in 0..xi.x.len() {
+            for (qj, column) in q.iter_mut().zip(&joints) {
+                *qj = column[row];
+            }
+            let p = match robot.forward_kinematics(&mut data, &q) {
+                Ok(()) => data.tcp_position() - Vector3::new(xi.x[row], xi.y[row], xi.z[row]),
+                Err(_) => Vector3::repeat(f64::NAN),
+            };
+            program.push(p);
+        }
+        Some(arc_length(program.into_iter()))
+    } else {
+        None
+    };
+    let flags: Vec<u32> = t
+        .column("flags")?
+        .iter()
+        .map(|f| if f.is_finite() { *f as u32 } else { 0 })
+        .collect();
+    let states = flag_states(&flags, |i| flags[i] & (Flags::LATCHED | 0x7FF) != 0);
+    Ok(RunTrace {
+        kind: "deflex run log".into(),
+        simulated: false,
+        time_s: t.column("time_s")?,
+        path_s_m,
+        force_n: t.xyz(["w_fx_n", "w_fy_n", "w_fz_n"], 1.0)?,
+        axes: "base axes".into(),
+        correction_m: Some(xi),
+        deflection_m: Some(t.xyz(["ds_x_m", "ds_y_m", "ds_z_m"], 1.0)?),
+        path_error_m: None,
+        states,
+        cycle_time_s: Some(t.column("cycle_us")?.iter().map(|v| v * 1e-6).collect()),
+        ..RunTrace::default()
+    })
+}
+
+fn from_recording(path: &Path, label: &str) -> Result<RunTrace, TraceError> {
+    let mut rows: Vec<CycleSample> = Vec::new();
+    let mut too_many = false;
+    let summary = for_each_cycle(path, |s| {
+        if rows.len() < MAX_ROWS {
+            rows.push(*s);
+        } else {
+            too_many = true;
+        }
+    })?;
+    let name = path.display().to_string();
+    if too_many {
+        return Err(TraceError::TooLarge {
+            path: name,
+            message: format!("more than {MAX_ROWS} cycles"),
+        });
+    }
+    let col = |f: &dyn Fn(&CycleSample) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let xyz = |f: &dyn Fn(&CycleSample) -> [f64; 3]| Xyz {
+        x: rows.iter().map(|s| f(s)[0]).collect(),
+        y: rows.iter().map(|s| f(s)[1]).collect(),
+        z: rows.iter().map(|s| f(s)[2]).collect(),
+    };
+    let flags: Vec<u32> = rows.iter().map(|s| s.flags).collect();
+    let mut states = flag_states(&flags, |i| rows[i].fault != 0);
+    states.insert(
+        0,
+        (
+            "phase running".into(),
+            rows.iter()
+                .map(|s| s.phase() == deflex_control::Phase::Running)
+                .collect(),
+        ),
+    );
+    let simulated = summary.session.as_ref().is_some_and(|s| s.simulated);
+    Ok(RunTrace {
+        label: label.to_string(),
+        file: name,
+        kind: "deflex MCAP recording".into(),
+        simulated,
+        time_s: col(&|s| s.time_s),
+        path_s_m: Some(arc_length(rows.iter().map(|s| s.program_position_m()))),
+        force_n: xyz(&|s| [s.wrench_tcp[0], s.wrench_tcp[1], s.wrench_tcp[2]]),
+        axes: "base axes".into(),
+        correction_m: Some(xyz(&|s| {
+            [s.correction[0], s.correction[1], s.correction[2]]
+        })),
+        deflection_m: Some(xyz(&|s| {
+            [s.deflection[0], s.deflection[1], s.deflection[2]]
+        })),
+        path_error_m: summary.path_error_known.then(|| xyz(&|s| s.truth_error_m)),
+        states,
+        cycle_time_s: Some(col(&|s| s.cycle_time_s)),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("deflex-trace-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn a_sim_isf_log_gives_arc_length_and_millimetres_in_metres() {
+        let d = dir("isf");
+        let p = d.join("log.csv");
+        let header = "time_s,des_x_mm,des_y_mm,des_z_mm,err_x_mm,err_y_mm,err_z_mm,fx_N,fy_N,fz_N,\
+                      corr_x_mm,corr_y_mm,corr_z_mm,penetration_mm,sensor_saturated";
+        std::fs::write(
+            &p,
+            format!(
+                "# SIMULATED deflex digital twin forming log\n{header}\n\
+                 0.00,0,0,0,0.1,0,0,1,2,3,0,0,0.5,0,0\n\
+                 0.02,3,4,0,0.2,0,0,1,2,300,0,0,0.6,0.1,0\n\
+                 0.04,3,4,-12,0.3,0,0,1,2,400,0,0,0.7,0.2,1\n"
+            ),
+        )
+        .unwrap();
+        let t = read_run_log(&p, "open", None).unwrap();
+        assert!(t.simulated);
+        assert_eq!(t.path_s_m.as_ref().unwrap(), &[0.0, 0.005, 0.017]);
+        assert_eq!(t.force_n.z, [3.0, 300.0, 400.0]);
+        assert!((t.correction_m.as_ref().unwrap().z[1] - 0.6e-3).abs() < 1e-15);
+        assert!((t.path_error_m.as_ref().unwrap().x[2] - 0.3e-3).abs() < 1e-15);
+        assert_eq!(t.states[0].1, [false, true, true]);
+        assert_eq!(t.states[1].1, [false, false, true]);
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    #[test]
+    fn a_run_log_uses_its_path_column_or_none() {
+        let d = dir("run");
+        let p = d.join("run.csv");
+        let mut header = deflex_runtime::log::csv_header(2);
+        header.push('\n');
+        let row = |t: f64, s: &str| {
+            let mut cells = vec![format!("{t}"), "0.1".into(), "0.2".into()];
+            cells.extend(std::iter::repeat_n("0".to_string(), 18)); // raw, ws, w
+            cells.extend(std::iter::repeat_n("0.001".to_string(), 24)); // ds, xi, eps, ff
+            cells.extend([
+                s.to_string(),
+                String::new(),
+                "350.5".into(),
+                "1048576".into(),
+                "active".into(),
+            ]);
+            cells.join(",") + "\n"
+        };
+        std::fs::write(&p, header.clone() + &row(0.0, "0.0") + &row(0.01, "0.0001")).unwrap();
+        let t = read_run_log(&p, "run", None).unwrap();
+        assert_eq!(t.path_s_m.unwrap(), [0.0, 0.0001]);
+        assert_eq!(t.cycle_time_s.unwrap(), [350.5e-6, 350.5e-6]);
+        assert!(
+            t.states
+                .iter()
+                .any(|(n, on)| n.starts_with("correcting") && on.iter().all(|b| *b))
+        );
+        std::fs::write(&p, header + &row(0.0, "") + &row(0.01, "")).unwrap();
+        assert!(read_run_log(&p, "run", None).unwrap().path_s_m.is_none());
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    #[test]
+    fn a_run_log_with_a_robot_gets_the_program_arc_length() {
+        let d = dir("fk");
+        let p = d.join("run.csv");
+        let robot = deflex_load::load_robot("tx200").unwrap();
+        let n = robot.joint_count();
+        let mut text = deflex_runtime::log::csv_header(n) + "\n";
+        let mut data = Data::new();
+        let mut expected = Vec::new();
+        let mut previous: Option<Vector3<f64>> = None;
+        let mut s = 0.0;
+        for k in 0..5 {
+            let q: Vec<f64> = (0..n)
+                .map(|j| 0.3 + 0.01 * k as f64 * (j as f64 + 1.0))
+                .collect();
+            let xi = [0.001 * k as f64, 0.0, -0.0005 * k as f64];
+            robot.forward_kinematics(&mut data, &q).unwrap();
+            let program = data.tcp_position() - Vector3::from(xi);
+            if let Some(prev) = previous {
+                s += (program - prev).norm();
+            }
+            previous = Some(program);
+            expected.push(s);
+            let mut cells = vec![format!("{}", k as f64 * 0.01)];
+            cells.extend(q.iter().map(|v| format!("{v:.12}")));
+            cells.extend(std::iter::repeat_n("0".to_string(), 18));
+            cells.extend(std::iter::repeat_n("0".to_string(), 6)); // ds
+            cells.extend(xi.iter().map(|v| format!("{v}")));
+            cells.extend(std::iter::repeat_n("0".to_string(), 3 + 12)); // xi rot, eps, ff
+            cells.extend([
+                String::new(),
+                String::new(),
+                "300".into(),
+                "0".into(),
+                String::new(),
+            ]);
+            text += &(cells.join(",") + "\n");
+        }
+        std::fs::write(&p, text).unwrap();
+        let t = read_run_log(&p, "fk", Some(&robot)).unwrap();
+        for (a, b) in t.path_s_m.unwrap().iter().zip(&expected) {
+            assert!((a - b).abs() < 1e-9, "{a} {b}");
+        }
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    #[test]
+    fn bad_and_foreign_files_name_the_place() {
+        let d = dir("bad");
+        let p = d.join("x.csv");
+        std::fs::write(&p, "a,b,c\n1,2,3\n").unwrap();
+        let e = read_run_log(&p, "x", None).unwrap_err().to_string();
+        assert!(
+            e.contains("x.csv") && e.contains("line 1") && e.contains("not a deflex log"),
+            "{e}"
+        );
+        std::fs::write(
+            &p,
+            "# SIMULATED\ntime_s,des_x_mm,des_y_mm,des_z_mm,err_x_mm,err_y_mm,err_z_mm,fx_N,fy_N,fz_N,corr_x_mm,corr_y_mm,corr_z_mm,penetration_mm\n\
+             0,0,0,0,0,0,0,0,0,0,0,0,0,0\n0.02,1,oops,0,0,0,0,0,0,0,0,0,0,0\n",
+        )
+        .unwrap();
+        let e = read_run_log(&p, "x", None).unwrap_err().to_string();
+        assert!(
+            e.contains("line 4, column des_y_mm") && e.contains("\"oops\""),
+            "{e}"
+        );
+        std::fs::write(&p, "time_s,des_x_mm\n0,0\n0,0,0\n").unwrap();
+        let e = read_run_log(&p, "x", None).unwrap_err().to_string();
+        assert!(e.contains("x.csv: line 3"), "{e}");
+        let _ = std::fs::remove_dir_all(d);
+    }
+
+    #[test]
+    fn a_recording_reads_as_a_trace() {
+        let d = dir("mcap");
+        let p = d.join("run.mcap");
+        let mut cell = crate::synthetic::SyntheticCell::new(0.01, 2, true);
+        let info = cell.session_info();
+        let mut sink =
+            crate::McapSink::new(Vec::new(), "mem", &info, crate::RecordOptions::default())
+                .unwrap();
+        let samples: Vec<CycleSample> = (0..300).map(|_| cell.next_sample()).collect();
+        for s in &samples {
+            sink.write(s).unwrap();
+        }
+        std::fs::write(&p, sink.finish().unwrap().0).unwrap();
+        let t = read_run_log(&p, "rec", None).unwrap();
+        assert!(t.simulated);
+        assert_eq!(t.time_s.len(), 300);
+        let expected = arc_length(samples.iter().map(|s| s.program_position_m()));
+        assert_eq!(t.path_s_m.unwrap(), expected);
+        // A helix of 40 mm radius at 1 rad/s for 3 s: about 120 mm.
+        assert!(
+            (expected[299] - 0.04 * 2.99).abs() < 1e-3,
+            "{}",
+            expected[299]
+        );
+        assert!(t.path_error_m.is_some());
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

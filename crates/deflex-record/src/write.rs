@@ -1,0 +1,490 @@
+//! Writing: [`McapSink`] turns cycle samples into the channels of [`crate::channels`]
+//! ([`crate::McapRecorder`] runs one on its own thread).
+
+use crate::channels as ch;
+use crate::{RecordError, SessionRecord};
+use deflex_control::Flags;
+use deflex_rosmsg::{
+    DiagnosticArray, DiagnosticStatus, Header, JointState, KeyValue, Point, Pose, PoseStamped,
+    Quaternion, RosMessage, Time, Twist, TwistStamped, Vector3, Vector3Stamped, Wrench,
+    WrenchStamped,
+};
+use deflex_telemetry::{CycleSample, LATE_UNKNOWN, SessionInfo};
+use mcap::records::MessageHeader;
+use mcap::write::NoSeek;
+use nalgebra::{Rotation3, UnitQuaternion, Vector3 as V3};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Smallest file size cap [`RecordOptions::max_bytes`] accepts (bytes).
+pub const MIN_MAX_BYTES: u64 = 16 << 20;
+/// Default file size cap (bytes): 8 GiB, about 30 h of a 100 Hz session.
+pub const DEFAULT_MAX_BYTES: u64 = 8 << 30;
+/// Uncompressed chunk size (bytes): the most the writer holds in memory before writing.
+pub const CHUNK_BYTES: u64 = 1 << 20;
+
+/// How a recording is written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordOptions {
+    /// The file is closed (and the rest of the session counted as not recorded) before it would
+    /// grow past this many bytes; at least [`MIN_MAX_BYTES`].
+    pub max_bytes: u64,
+    /// Period of the `/diagnostics` messages between changes of state (s).
+    pub diagnostics_period_s: f64,
+    /// Wall-clock time of session time 0 (ns since the Unix epoch); `None`: now, when the
+    /// recording starts, minus the first sample's session time.
+    pub start_unix_ns: Option<u64>,
+    /// Compress chunks with LZ4 (about 3× smaller; every reader named in the README reads it).
+    pub compress: bool,
+}
+
+impl Default for RecordOptions {
+    fn default() -> Self {
+        RecordOptions {
+            max_bytes: DEFAULT_MAX_BYTES,
+            diagnostics_period_s: 0.1,
+            start_unix_ns: None,
+            compress: true,
+        }
+    }
+}
+
+/// What a recording holds.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RecordStats {
+    /// Cycles recorded.
+    pub recorded: u64,
+    /// Cycles not recorded because the file reached its size cap.
+    pub after_cap: u64,
+    /// MCAP messages written.
+    pub messages: u64,
+    /// Bytes written to the file.
+    pub bytes: u64,
+}
+
+/// Counts the bytes that reach the underlying writer.
+struct Counting<W> {
+    inner: W,
+    bytes: Arc<AtomicU64>,
+}
+
+impl<W: Write> Write for Counting<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.bytes.fetch_add(n as u64, Ordering::Relaxed);
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+struct Channels {
+    joint_states: u16,
+    wrench_raw: u16,
+    wrench_sensor: u16,
+    wrench_tcp: u16,
+    tcp_pose: u16,
+    program_pose: u16,
+    deflection: u16,
+    correction: u16,
+    error: u16,
+    feedforward: u16,
+    path_error: u16,
+    diagnostics: u16,
+}
+
+/// Writes cycle samples as MCAP messages into any writer (synchronously: the twin can call it in
+/// its own loop and lose nothing; the runtime uses [`McapRecorder`]).
+pub struct McapSink<W: Write> {
+    writer: mcap::Writer<NoSeek<Counting<W>>>,
+    channels: Channels,
+    info: SessionInfo,
+    options: RecordOptions,
+    target: String,
+    epoch_ns: Option<u64>,
+    stats: RecordStats,
+    capped: bool,
+    last_diag_time: f64,
+    last_state: Option<(u32, u32, u32)>,
+    recorder_lost: u64,
+    bytes: Arc<AtomicU64>,
+}
+
+fn schema<T: RosMessage>(
+    w: &mut mcap::Writer<impl Write + std::io::Seek>,
+) -> mcap::McapResult<u16> {
+    w.add_schema(T::NAME, "ros2msg", T::DEFINITION.as_bytes())
+}
+
+impl<W: Write> McapSink<W> {
+    /// Starts a recording into `out`; `target` names it in errors (the file path).
+    pub fn new(
+        out: W,
+        target: impl Into<String>,
+        info: &SessionInfo,
+        options: RecordOptions,
+    ) -> Result<McapSink<W>, RecordError> {
+        let target = target.into();
+        let options = RecordOptions {
+            max_bytes: options.max_bytes.max(MIN_MAX_BYTES),
+            ..options
+        };
+        let mcap_err = |e: mcap::McapError| RecordError::from_mcap(&target, 0, e);
+        let bytes = Arc::new(AtomicU64::new(0));
+        let compression = options.compress.then_some(mcap::Compression::Lz4);
+        let mut writer = mcap::WriteOptions::new()
+            .profile("ros2")
+            .library(concat!("deflex-record ", env!("CARGO_PKG_VERSION")))
+            .compression(compression)
+            .chunk_size(Some(CHUNK_BYTES))
+            .disable_seeking(true)
+            .create(NoSeek::new(Counting {
+                inner: out,
+                bytes: bytes.clone(),
+            }))
+            .map_err(mcap_err)?;
+        let empty = BTreeMap::new();
+        let channel = |w: &mut mcap::Writer<_>, schema: u16, topic: &str| {
+            w.add_channel(schema, topic, "cdr", &empty)
+        };
+        let joint = schema::<JointState>(&mut writer).map_err(mcap_err)?;
+        let wrench = schema::<WrenchStamped>(&mut writer).map_err(mcap_err)?;
+        let pose = schema::<PoseStamped>(&mut writer).map_err(mcap_err)?;
+        let twist = schema::<TwistStamped>(&mut writer).map_err(mcap_err)?;
+        let vector = schema::<Vector3Stamped>(&mut writer).map_err(mcap_err)?;
+        let diag = schema::<DiagnosticArray>(&mut writer).map_err(mcap_err)?;
+        let channels = (|| {
+            Ok::<_, mcap::McapError>(Channels {
+                joint_states: channel(&mut writer, joint, ch::JOINT_STATES)?,
+                wrench_raw: channel(&mut writer, wrench, ch::WRENCH_RAW)?,
+                wrench_sensor: channel(&mut writer, wrench, ch::WRENCH_SENSOR)?,
+                wrench_tcp: channel(&mut writer, wrench, ch::WRENCH_TCP)?,
+                tcp_pose: channel(&mut writer, pose, ch::TCP_POSE)?,
+                program_pose: channel(&mut writer, pose, ch::PROGRAM_POSE)?,
+                deflection: channel(&mut writer, twist, ch::DEFLECTION)?,
+                correction: channel(&mut writer, twist, ch::CORRECTION)?,
+                error: channel(&mut writer, twist, ch::ERROR)?,
+                feedforward: channel(&mut writer, twist, ch::FEEDFORWARD)?,
+                path_error: channel(&mut writer, vector, ch::PATH_ERROR)?,
+                diagnostics: channel(&mut writer, diag, ch::DIAGNOSTICS)?,
+            })
+        })()
+        .map_err(mcap_err)?;
+        Ok(McapSink {
+            writer,
+            channels,
+            info: info.clone(),
+            options,
+            target,
+            epoch_ns: None,
+            stats: RecordStats::default(),
+            capped: false,
+            last_diag_time: f64::NEG_INFINITY,
+            last_state: None,
+            recorder_lost: 0,
+            bytes,
+        })
+    }
+
+    /// What was written so far.
+    pub fn stats(&self) -> &RecordStats {
+        &self.stats
+    }
+
+    /// True once the size cap was reached (later samples are counted, not written).
+    pub fn is_capped(&self) -> bool {
+        self.capped
+    }
+
+    /// Tells the sink how many samples its feed lost (reported in `/diagnostics`).
+    pub fn set_lost(&mut self, lost: u64) {
+        self.recorder_lost = lost;
+    }
+
+    /// Bytes written to the output so far.
+    pub fn bytes(&self) -> u64 {
+        self.bytes.load(Ordering::Relaxed)
+    }
+
+    /// Records one cycle. Returns false when it was not written because the file is at its cap.
+    pub fn write(&mut self, s: &CycleSample) -> Result<bool, RecordError> {
+        if self.capped {
+            self.stats.after_cap += 1;
+            return Ok(false);
+        }
+        // Keep room for the chunk being built, its index and the summary (chunk indexes grow
+        // with the file: ≈ 0.1 % of it).
+        let reserve = 2 * CHUNK_BYTES + (4 << 20) + self.bytes() / 1000;
+        if self.bytes() + reserve > self.options.max_bytes {
+            self.capped = true;
+            self.stats.after_cap += 1;
+            return Ok(false);
+        }
+        let epoch = *self.epoch_ns.get_or_insert_with(|| {
+            self.options.start_unix_ns.unwrap_or_else(|| {
+                let now = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_nanos() as u64);
+                now.saturating_sub(seconds_to_ns(s.time_s))
+            })
+        });
+        if self.stats.recorded == 0 {
+            self.write_session(epoch)?;
+        }
+        let t_ns = epoch.saturating_add(seconds_to_ns(s.time_s));
+        let header = MessageHeader {
+            channel_id: 0,
+            sequence: s.cycle as u32,
+            log_time: t_ns,
+            publish_time: t_ns,
+        };
+        let stamp = Time::from_nanos(t_ns);
+        let frame = |name: &str| Header {
+            stamp,
+            frame_id: name.to_string(),
+        };
+        let base = self.info.base_frame.clone();
+        let sensor = self.info.sensor_frame.clone();
+
+        let joints = JointState {
+            header: frame(""),
+            name: self.info.joint_names.clone(),
+            position: s.q().to_vec(),
+            velocity: Vec::new(),
+            effort: Vec::new(),
+        };
+        self.put(self.channels.joint_states, &header, &joints)?;
+        for (id, w, f) in [
+            (self.channels.wrench_raw, &s.wrench_raw, &sensor),
+            (self.channels.wrench_sensor, &s.wrench_sensor, &sensor),
+            (self.channels.wrench_tcp, &s.wrench_tcp, &base),
+        ] {
+            let msg = WrenchStamped {
+                header: frame(f),
+                wrench: Wrench {
+                    force: Vector3::from_slice(&w[..3]),
+                    torque: Vector3::from_slice(&w[3..]),
+                },
+            };
+            self.put(id, &header, &msg)?;
+        }
+        let rotation = s.tcp_rotation();
+        let program_rotation =
+            Rotation3::from_scaled_axis(-V3::from_column_slice(&s.correction[3..])) * rotation;
+        for (id, p, r) in [
+            (self.channels.tcp_pose, s.tcp_position(), rotation),
+            (
+                self.channels.program_pose,
+                s.program_position_m(),
+                program_rotation,
+            ),
+        ] {
+            let msg = PoseStamped {
+                header: frame(&base),
+                pose: pose(p, &r),
+            };
+            self.put(id, &header, &msg)?;
+        }
+        for (id, v) in [
+            (self.channels.deflection, &s.deflection),
+            (self.channels.correction, &s.correction),
+            (self.channels.error, &s.error),
+            (self.channels.feedforward, &s.feedforward),
+        ] {
+            let msg = TwistStamped {
+                header: frame(&base),
+                twist: Twist {
+                    linear: Vector3::from_slice(&v[..3]),
+                    angular: Vector3::from_slice(&v[3..]),
+                },
+            };
+            self.put(id, &header, &msg)?;
+        }
+        if s.truth_error_m.iter().all(|v| v.is_finite()) {
+            let msg = Vector3Stamped {
+                header: frame(&base),
+                vector: Vector3::from_slice(&s.truth_error_m),
+            };
+            self.put(self.channels.path_error, &header, &msg)?;
+        }
+        let state = (s.phase_code, s.flags, s.fault);
+        if self.last_state != Some(state)
+            || s.time_s - self.last_diag_time + 1e-9 >= self.options.diagnostics_period_s
+            || s.time_s < self.last_diag_time
+        {
+            self.last_state = Some(state);
+            self.last_diag_time = s.time_s;
+            let msg = self.diagnostics(s, frame(""));
+            self.put(self.channels.diagnostics, &header, &msg)?;
+        }
+        self.stats.recorded += 1;
+        Ok(true)
+    }
+
+    fn diagnostics(&self, s: &CycleSample, header: Header) -> DiagnosticArray {
+        let flags = s.status_flags();
+        let fault = s.fault_kind();
+        let level = if fault.is_some() {
+            DiagnosticStatus::ERROR
+        } else if flags.0
+            & (Flags::SATURATED_SIZE | Flags::SATURATED_RATE | Flags::RUNAWAY_HOLD | Flags::RAMPING)
+            != 0
+        {
+            DiagnosticStatus::WARN
+        } else {
+            DiagnosticStatus::OK
+        };
+        let finite = |v: f64| {
+            if v.is_finite() {
+                format!("{v}")
+            } else {
+                String::new()
+            }
+        };
+        let kv = |k: &str, v: String| KeyValue {
+            key: k.to_string(),
+            value: v,
+        };
+        let phase = s.phase().name();
+        let status = flags.describe();
+        let message = match fault {
+            Some(kind) => format!("{phase}: fault {}", kind.name()),
+            None if status.is_empty() => phase.to_string(),
+            None => format!("{phase}: {status}"),
+        };
+        DiagnosticArray {
+            header,
+            status: vec![DiagnosticStatus {
+                level,
+                name: ch::STATUS_NAME.to_string(),
+                message,
+                hardware_id: self.info.robot.clone(),
+                values: vec![
+                    kv(ch::diag::PHASE, phase.to_string()),
+                    kv(ch::diag::FLAGS, flags.0.to_string()),
+                    kv(ch::diag::STATUS, status),
+                    kv(
+                        ch::diag::FAULT,
+                        fault.map_or(String::new(), |k| k.name().to_string()),
+                    ),
+                    kv(ch::diag::CYCLE, s.cycle.to_string()),
+                    kv(ch::diag::CYCLE_TIME_S, finite(s.cycle_time_s)),
+                    kv(ch::diag::LATE_ANSWERS, s.late_answers.to_string()),
+                    kv(
+                        ch::diag::ROBOT_LATE,
+                        if s.robot_late == LATE_UNKNOWN {
+                            String::new()
+                        } else {
+                            s.robot_late.to_string()
+                        },
+                    ),
+                    kv(ch::diag::ROBOT_TELEGRAMS, s.robot_telegrams.to_string()),
+                    kv(ch::diag::SENSOR_SAMPLES, s.sensor_samples.to_string()),
+                    kv(ch::diag::PATH_S_M, finite(s.path_s_m)),
+                    kv(ch::diag::LOOP_GAIN, finite(s.loop_gain)),
+                    kv(ch::diag::RECORDER_LOST, self.recorder_lost.to_string()),
+                ],
+            }],
+        }
+    }
+
+    fn write_session(&mut self, epoch: u64) -> Result<(), RecordError> {
+        let record = SessionRecord::new(&self.info, epoch);
+        let json = serde_json::to_vec(&record).map_err(|e| RecordError::Mcap {
+            path: self.target.clone(),
+            message: format!("session description: {e}"),
+        })?;
+        let target = self.target.clone();
+        let bytes = self.bytes();
+        let err = |e| RecordError::from_mcap(&target, bytes, e);
+        let schema = self
+            .writer
+            .add_schema(
+                "deflex.Session",
+                "jsonschema",
+                crate::session::SESSION_JSON_SCHEMA.as_bytes(),
+            )
+            .map_err(err)?;
+        let id = self
+            .writer
+            .add_channel(schema, ch::SESSION, "json", &BTreeMap::new())
+            .map_err(err)?;
+        self.writer
+            .write_to_known_channel(
+                &MessageHeader {
+                    channel_id: id,
+                    sequence: 0,
+                    log_time: epoch,
+                    publish_time: epoch,
+                },
+                &json,
+            )
+            .map_err(err)?;
+        self.writer
+            .write_metadata(&mcap::records::Metadata {
+                name: "deflex".into(),
+                metadata: record.to_map(),
+            })
+            .map_err(err)?;
+        self.stats.messages += 1;
+        Ok(())
+    }
+
+    fn put<T: RosMessage>(
+        &mut self,
+        channel_id: u16,
+        header: &MessageHeader,
+        msg: &T,
+    ) -> Result<(), RecordError> {
+        let data = deflex_rosmsg::encode(msg).map_err(|e| RecordError::Encode {
+            path: self.target.clone(),
+            source: e,
+        })?;
+        let header = MessageHeader {
+            channel_id,
+            ..*header
+        };
+        let result = self.writer.write_to_known_channel(&header, &data);
+        self.stats.bytes = self.bytes();
+        result.map_err(|e| RecordError::from_mcap(&self.target, self.stats.bytes, e))?;
+        self.stats.messages += 1;
+        Ok(())
+    }
+
+    /// Writes the summary and returns the writer and what was recorded.
+    pub fn finish(mut self) -> Result<(W, RecordStats), RecordError> {
+        let result = self.writer.finish();
+        self.stats.bytes = self.bytes();
+        result.map_err(|e| RecordError::from_mcap(&self.target, self.stats.bytes, e))?;
+        let counting = self.writer.into_inner().into_inner();
+        Ok((counting.inner, self.stats))
+    }
+}
+
+fn seconds_to_ns(t: f64) -> u64 {
+    if t.is_finite() && t > 0.0 {
+        (t * 1e9).round().min(u64::MAX as f64) as u64
+    } else {
+        0
+    }
+}
+
+fn pose(p: V3<f64>, r: &Rotation3<f64>) -> Pose {
+    let q = UnitQuaternion::from_rotation_matrix(r);
+    Pose {
+        position: Point {
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        },
+        orientation: Quaternion {
+            x: q.i,
+            y: q.j,
+            z: q.k,
+            w: q.w,
+        },
+    }
+}

@@ -1,0 +1,547 @@
+//! The figures of a run, or of two runs overlaid (`deflex plot`): forces, correction, estimated
+//! deflection, path error when known, controller state and loop timing, against the position
+//! along the desired path (its arc length) when every run knows it — so that an open-loop and a
+//! closed-loop run of the same path line up whatever their timing — else against time. Plain
+//! data in ([`RunTrace`]), PNG files and a self-contained page out ([`write_run_figures`]).
+
+use crate::{
+    FileLink, HtmlReport, Lane, LineStyle, PanelLayout, PlotSpec, ReportError, Series, panels_plot,
+    timeline_plot,
+};
+use std::path::{Path, PathBuf};
+
+/// Three components over the rows of a run (SI units).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Xyz {
+    /// x
+    pub x: Vec<f64>,
+    /// y
+    pub y: Vec<f64>,
+    /// z
+    pub z: Vec<f64>,
+}
+
+impl Xyz {
+    /// Euclidean norm per row.
+    pub fn norm(&self) -> Vec<f64> {
+        self.x
+            .iter()
+            .zip(&self.y)
+            .zip(&self.z)
+            .map(|((x, y), z)| (x * x + y * y + z * z).sqrt())
+            .collect()
+    }
+
+    fn len_ok(&self, n: usize) -> bool {
+        self.x.len() == n && self.y.len() == n && self.z.len() == n
+    }
+}
+
+/// One run's log as columns (one entry per logged row; NaN where a value is unknown).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunTrace {
+    /// Name in legends (e.g. `closed loop`).
+    pub label: String,
+    /// The file it was read from.
+    pub file: String,
+    /// What wrote it (e.g. `deflex sim isf log`).
+    pub kind: String,
+    /// The run is SIMULATED (the twin, or a simulated cell).
+    pub simulated: bool,
+    /// Time (s).
+    pub time_s: Vec<f64>,
+    /// Arc length of the desired path at the row (m), when known.
+    pub path_s_m: Option<Vec<f64>>,
+    /// Force on the tool at the TCP (N).
+    pub force_n: Xyz,
+    /// The axes of [`Self::force_n`] and the positions (e.g. `base axes`, `part frame axes`).
+    pub axes: String,
+    /// Correction ξ, position part (m).
+    pub correction_m: Option<Xyz>,
+    /// Estimated deflection δŝ, position part (m).
+    pub deflection_m: Option<Xyz>,
+    /// True minus desired TCP (m), known on the twin only.
+    pub path_error_m: Option<Xyz>,
+    /// Named on/off states per row (phase, saturation, fault, contact …).
+    pub states: Vec<(String, Vec<bool>)>,
+    /// Computation time of the control cycle (s), NaN where not logged.
+    pub cycle_time_s: Option<Vec<f64>>,
+}
+
+/// What [`write_run_figures`] wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunFigures {
+    /// The figures, in page order.
+    pub figures: Vec<PathBuf>,
+    /// The page.
+    pub page: PathBuf,
+    /// True when the runs are drawn against path position, false against time.
+    pub by_path_position: bool,
+}
+
+/// Most points drawn per series (longer series keep each block's lowest and highest point).
+pub const MAX_POINTS: usize = 20_000;
+
+/// Keeps at most about [`MAX_POINTS`] points: each block of rows is replaced by its lowest and
+/// highest point, in order, so that spikes stay visible.
+fn thin(x: &[f64], y: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len().min(y.len());
+    if n <= MAX_POINTS {
+        return (x[..n].to_vec(), y[..n].to_vec());
+    }
+    let block = n.div_ceil(MAX_POINTS / 2);
+    let (mut xs, mut ys) = (
+        Vec::with_capacity(MAX_POINTS + 2),
+        Vec::with_capacity(MAX_POINTS + 2),
+    );
+    for start in (0..n).step_by(block) {
+        let end = (start + block).min(n);
+        let (mut lo, mut hi) = (None::<usize>, None::<usize>);
+        for i in start..end {
+            if !y[i].is_finite() {
+                continue;
+            }
+            if lo.is_none_or(|l| y[i] < y[l]) {
+                lo = Some(i);
+            }
+            if hi.is_none_or(|h| y[i] > y[h]) {
+                hi = Some(i);
+            }
+        }
+        match (lo, hi) {
+            (Some(a), Some(b)) => {
+                for i in if a <= b { [a, b] } else { [b, a] } {
+                    xs.push(x[i]);
+                    ys.push(y[i]);
+                }
+            }
+            // A block with no finite value breaks the line.
+            _ => {
+                xs.push(x[start]);
+                ys.push(f64::NAN);
+            }
+        }
+    }
+    (xs, ys)
+}
+
+const DASHES: [LineStyle; 2] = [LineStyle::Solid, LineStyle::Dashed];
+const RUN_COLORS: [(u8, u8, u8); 2] = [(31, 119, 180), (214, 39, 40)];
+
+fn check(trace: &RunTrace, path: &Path) -> Result<(), ReportError> {
+    let n = trace.time_s.len();
+    let bad = |what: &str| {
+        ReportError::invalid(
+            path,
+            format!(
+                "run {:?} ({}): {what} does not have one value per row ({n} rows)",
+                trace.label, trace.file
+            ),
+        )
+    };
+    if n == 0 {
+        return Err(ReportError::invalid(
+            path,
+            format!("run {:?} ({}) has no rows", trace.label, trace.file),
+        ));
+    }
+    if trace.path_s_m.as_ref().is_some_and(|s| s.len() != n) {
+        return Err(bad("path position"));
+    }
+    if !trace.force_n.len_ok(n) {
+        return Err(bad("force"));
+    }
+    for (name, v) in [
+        ("correction", &trace.correction_m),
+        ("deflection", &trace.deflection_m),
+        ("path error", &trace.path_error_m),
+    ] {
+        if v.as_ref().is_some_and(|v| !v.len_ok(n)) {
+            return Err(bad(name));
+        }
+    }
+    if trace.cycle_time_s.as_ref().is_some_and(|c| c.len() != n) {
+        return Err(bad("cycle time"));
+    }
+    for (name, on) in &trace.states {
+        if on.len() != n {
+            return Err(bad(&format!("state {name:?}")));
+        }
+    }
+    Ok(())
+}
+
+/// One panel per component, each run one line (first solid, second dashed).
+fn component_panels(
+    traces: &[RunTrace],
+    xs: &[Vec<f64>],
+    x_label: &str,
+    unit: &str,
+    scale: f64,
+    pick: impl Fn(&RunTrace) -> Option<Vec<(String, Vec<f64>)>>,
+) -> Vec<(PlotSpec, Vec<Series>)> {
+    let mut panels: Vec<(PlotSpec, Vec<Series>)> = Vec::new();
+    for (k, trace) in traces.iter().enumerate() {
+        let Some(components) = pick(trace) else {
+            continue;
+        };
+        for (c, (name, values)) in components.into_iter().enumerate() {
+            if panels.len() <= c {
+                panels.push((
+                    PlotSpec::new(name.clone(), x_label, format!("{name} [{unit}]"))
+                        .size(1000, 260),
+                    Vec::new(),
+                ));
+            }
+            let y: Vec<f64> = values.iter().map(|v| v * scale).collect();
+            if !y.iter().any(|v| v.is_finite()) {
+                continue; // nothing known: no line (and no panel if no run has one)
+            }
+            let (x, y) = thin(&xs[k], &y);
+            panels[c].1.push(
+                Series::line(trace.label.clone(), x, y)
+                    .with_line(DASHES[k])
+                    .with_color(RUN_COLORS[k]),
+            );
+        }
+    }
+    panels.retain(|(_, series)| !series.is_empty());
+    panels
+}
+
+fn xyz(v: &Xyz, names: [&str; 3], norm: Option<&str>) -> Vec<(String, Vec<f64>)> {
+    let mut out = vec![
+        (names[0].to_string(), v.x.clone()),
+        (names[1].to_string(), v.y.clone()),
+        (names[2].to_string(), v.z.clone()),
+    ];
+    if let Some(n) = norm {
+        out.push((n.to_string(), v.norm()));
+    }
+    out
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter()
+        .filter(|x| x.is_finite())
+        .fold(0.0, |m, x| m.max(x.abs()))
+}
+
+fn rms(v: &[f64]) -> f64 {
+    let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if finite.is_empty() {
+        return f64::NAN;
+    }
+    (finite.iter().map(|x| x * x).sum::<f64>() / finite.len() as f64).sqrt()
+}
+
+/// Draws the figures of one run, or of two runs overlaid, into `dir` (which must exist), and
+/// a self-contained `index.html` embedding them.
+pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, ReportError> {
+    let page = dir.join("index.html");
+    if traces.is_empty() || traces.len() > 2 {
+        return Err(ReportError::invalid(
+            &page,
+            format!("{} runs given, expected 1 or 2", traces.len()),
+        ));
+    }
+    for t in traces {
+        check(t, &page)?;
+    }
+    let by_path = traces.iter().all(|t| t.path_s_m.is_some());
+    let (x_label, xs): (&str, Vec<Vec<f64>>) = if by_path {
+        (
+            "position along the desired path [mm]",
+            traces
+                .iter()
+                .map(|t| {
+                    t.path_s_m
+                        .as_ref()
+                        .unwrap()
+                        .iter()
+                        .map(|s| s * 1e3)
+                        .collect()
+                })
+                .collect(),
+        )
+    } else {
+        (
+            "time [s]",
+            traces.iter().map(|t| t.time_s.clone()).collect(),
+        )
+    };
+    let names = traces
+        .iter()
+        .map(|t| t.label.as_str())
+        .collect::<Vec<_>>()
+        .join(" vs ");
+    let simulated = traces.iter().any(|t| t.simulated);
+    let sim = if simulated { "SIMULATED: " } else { "" };
+    let mut figures: Vec<(PathBuf, String)> = Vec::new();
+
+    let mut figure = |file: &str,
+                      title: String,
+                      caption: String,
+                      panels: Vec<(PlotSpec, Vec<Series>)>|
+     -> Result<(), ReportError> {
+        if panels.is_empty() {
+            return Ok(());
+        }
+        let path = dir.join(file);
+        panels_plot(&path, &title, PanelLayout::Column, &panels)?;
+        figures.push((path, caption));
+        Ok(())
+    };
+    let axes = &traces[0].axes;
+    figure(
+        "forces.png",
+        format!("{sim}Force on the tool at the TCP, {axes}: {names}"),
+        format!("Force components and norm at the TCP ({axes}), N."),
+        component_panels(traces, &xs, x_label, "N", 1.0, |t| {
+            Some(xyz(&t.force_n, ["Fx", "Fy", "Fz"], Some("|F|")))
+        }),
+    )?;
+    figure(
+        "correction.png",
+        format!("{sim}Correction ξ: {names}"),
+        "Applied correction ξ, position part, mm.".into(),
+        component_panels(traces, &xs, x_label, "mm", 1e3, |t| {
+            t.correction_m
+                .as_ref()
+                .map(|v| xyz(v, ["ξx", "ξy", "ξz"], Some("|ξ|")))
+        }),
+    )?;
+    figure(
+        "deflection.png",
+        format!("{sim}Estimated deflection δŝ: {names}"),
+        "Estimated deflection δŝ (eq. 15), position part, mm.".into(),
+        component_panels(traces, &xs, x_label, "mm", 1e3, |t| {
+            t.deflection_m
+                .as_ref()
+                .map(|v| xyz(v, ["δŝx", "δŝy", "δŝz"], None))
+        }),
+    )?;
+    figure(
+        "path_error.png",
+        format!("{sim}Path error, true − desired TCP: {names}"),
+        "Path error (true minus desired TCP, known on the twin only), mm.".into(),
+        component_panels(traces, &xs, x_label, "mm", 1e3, |t| {
+            t.path_error_m
+                .as_ref()
+                .map(|v| xyz(v, ["error x", "error y", "error z"], Some("error norm")))
+        }),
+    )?;
+    figure(
+        "cycle_time.png",
+        format!("{sim}Control cycle computation time: {names}"),
+        "Computation time of the control cycle, µs.".into(),
+        component_panels(traces, &xs, x_label, "µs", 1e6, |t| {
+            t.cycle_time_s
+                .as_ref()
+                .map(|c| vec![("cycle time".to_string(), c.clone())])
+        }),
+    )?;
+    let mut lanes = Vec::new();
+    for (k, t) in traces.iter().enumerate() {
+        for (name, on) in &t.states {
+            if on.iter().any(|b| *b) {
+                let label = if traces.len() > 1 {
+                    format!("{}: {name}", t.label)
+                } else {
+                    name.clone()
+                };
+                lanes.push(Lane::from_samples(label, &xs[k], on).with_color(RUN_COLORS[k]));
+            }
+        }
+    }
+    if !lanes.is_empty() {
+        let path = dir.join("state.png");
+        let height = 120 + 34 * lanes.len() as u32;
+        let spec = PlotSpec::new(
+            format!("{sim}Controller and process state: {names}"),
+            x_label,
+            "",
+        )
+        .size(1000, height);
+        timeline_plot(&path, &spec, &lanes)?;
+        figures.push((
+            path,
+            "Controller and process states (on where drawn).".into(),
+        ));
+    }
+
+    let mut report = HtmlReport::new(format!("{sim}deflex plot: {names}"));
+    if simulated {
+        report.note("SIMULATED: at least one of these runs is the digital twin or a simulated cell, not a measurement.");
+    }
+    report.paragraph(if by_path {
+        "Every run is drawn against its position along the desired path (the arc length of the \
+         program's TCP path), so that runs of the same path line up whatever their timing."
+            .to_string()
+    } else {
+        "At least one run does not give its position along the desired path, so the runs are \
+         drawn against time."
+            .to_string()
+    });
+    let rows: Vec<Vec<String>> = traces
+        .iter()
+        .map(|t| {
+            let err = t.path_error_m.as_ref().map(|e| e.norm());
+            let len = t
+                .path_s_m
+                .as_ref()
+                .map_or("–".into(), |s| format!("{:.1}", max_abs(s) * 1e3));
+            vec![
+                t.label.clone(),
+                t.kind.clone(),
+                t.time_s.len().to_string(),
+                format!("{:.2}", t.time_s.last().unwrap_or(&0.0) - t.time_s[0]),
+                len,
+                format!("{:.1}", max_abs(&t.force_n.norm())),
+                t.correction_m
+                    .as_ref()
+                    .map_or("–".into(), |c| format!("{:.3}", max_abs(&c.norm()) * 1e3)),
+                err.as_ref()
+                    .map_or("–".into(), |e| format!("{:.3}", max_abs(e) * 1e3)),
+                err.as_ref()
+                    .map_or("–".into(), |e| format!("{:.3}", rms(e) * 1e3)),
+            ]
+        })
+        .collect();
+    report.section("Runs").table(
+        &[
+            "run",
+            "log",
+            "rows",
+            "duration (s)",
+            "path length (mm)",
+            "max |F| (N)",
+            "max |ξ| (mm)",
+            "max error (mm)",
+            "RMS error (mm)",
+        ],
+        &rows,
+    );
+    report.section("Figures");
+    for (path, caption) in &figures {
+        report.image(path, caption.clone());
+    }
+    let links: Vec<FileLink> = traces
+        .iter()
+        .map(|t| FileLink::new(t.file.clone(), format!("{} ({})", t.label, t.kind)))
+        .collect();
+    report.section("Logs").paragraph(
+        links
+            .iter()
+            .map(|l| format!("{}: {}", l.description, l.href))
+            .collect::<Vec<_>>()
+            .join("; "),
+    );
+    report.write(&page)?;
+    Ok(RunFigures {
+        figures: figures.into_iter().map(|(p, _)| p).collect(),
+        page,
+        by_path_position: by_path,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trace(label: &str, n: usize, speed: f64) -> RunTrace {
+        let time_s: Vec<f64> = (0..n).map(|i| i as f64 * 0.02).collect();
+        let s: Vec<f64> = time_s.iter().map(|t| t * speed).collect();
+        let wave = |k: f64| s.iter().map(|s| (s * k).sin()).collect::<Vec<f64>>();
+        RunTrace {
+            label: label.into(),
+            file: format!("{label}.csv"),
+            kind: "test".into(),
+            simulated: true,
+            path_s_m: Some(s.clone()),
+            force_n: Xyz {
+                x: wave(100.0),
+                y: wave(50.0),
+                z: wave(20.0).iter().map(|v| -500.0 + 100.0 * v).collect(),
+            },
+            axes: "base axes".into(),
+            correction_m: Some(Xyz {
+                x: vec![0.0; n],
+                y: vec![0.0; n],
+                z: wave(10.0).iter().map(|v| v * 1e-3).collect(),
+            }),
+            deflection_m: None,
+            path_error_m: Some(Xyz {
+                x: vec![1e-4; n],
+                y: vec![0.0; n],
+                z: vec![f64::NAN; n],
+            }),
+            states: vec![("running".into(), (0..n).map(|i| i > n / 10).collect())],
+            cycle_time_s: None,
+            time_s,
+        }
+    }
+
+    #[test]
+    fn two_runs_overlay_on_path_position_in_one_page() {
+        let dir = std::env::temp_dir().join(format!("deflex-run-figures-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Same path at two speeds: 10 mm/s and 12 mm/s.
+        let out = write_run_figures(
+            &dir,
+            &[
+                trace("open loop", 500, 0.010),
+                trace("closed loop", 400, 0.012),
+            ],
+        )
+        .unwrap();
+        assert!(out.by_path_position);
+        let names: Vec<String> = out
+            .figures
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "forces.png",
+                "correction.png",
+                "path_error.png",
+                "state.png"
+            ]
+        );
+        let html = std::fs::read_to_string(&out.page).unwrap();
+        assert!(html.contains("open loop vs closed loop"));
+        assert!(html.contains("SIMULATED"));
+        assert_eq!(html.matches("data:image/png;base64,").count(), 4);
+        // Without a path position, by time.
+        let mut t = trace("run", 100, 0.01);
+        t.path_s_m = None;
+        assert!(!write_run_figures(&dir, &[t]).unwrap().by_path_position);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn mismatched_columns_and_run_counts_are_errors() {
+        let dir = std::env::temp_dir();
+        let mut t = trace("short", 50, 0.01);
+        t.force_n.z.pop();
+        let e = write_run_figures(&dir, &[t]).unwrap_err().to_string();
+        assert!(e.contains("force") && e.contains("short.csv"), "{e}");
+        let e = write_run_figures(&dir, &[]).unwrap_err().to_string();
+        assert!(e.contains("0 runs"), "{e}");
+    }
+
+    #[test]
+    fn thinning_keeps_spikes() {
+        let n = 200_000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let mut y = vec![0.0; n];
+        y[123_457] = 9.0;
+        y[77_777] = -4.0;
+        let (tx, ty) = thin(&x, &y);
+        assert!(tx.len() <= MAX_POINTS + 2);
+        assert!(ty.contains(&9.0) && ty.contains(&-4.0));
+        assert!(tx.windows(2).all(|w| w[1] >= w[0]));
+    }
+}

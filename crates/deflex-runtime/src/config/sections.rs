@@ -1,0 +1,353 @@
+//! The sections of `CELL.toml`, one struct each, with their keys. Every choice is an enum
+//! (deserialised from its documented kebab-case name, anything else refused with the choices
+//! listed); every key that may be left out has its default in the section's [`Default`] impl;
+//! the keys without a default are in [`REQUIRED_KEYS`]. `docs/cell.example.toml` documents
+//! every key (a test reads this file to check it).
+
+use super::choices::{
+    Axis, CorrectionModeDef, EgmFrameDef, FeedForwardModeDef, JointTagDef, PathIndexDef, RobotKind,
+    RsiAnswerKind, RunawayActionDef, SafeActionDef, SensorKind,
+};
+use deflex_control::{
+    FeedForwardConfig, FeedForwardMode, LimiterConfig, PathIndex, PidGains, RunawayAction,
+    RunawayConfig, SafeAction, SafetyConfig,
+};
+use deflex_io::egm::EgmFrame;
+use deflex_io::rsi::{CorrectionMode, JointTag};
+use serde::Deserialize;
+use std::net::SocketAddr;
+
+/// Keys that have no default, `(section, key)`: a file that leaves one out is refused naming it.
+pub const REQUIRED_KEYS: &[(&str, &str)] = &[
+    ("robot", "kind"),
+    ("robot", "bind"),
+    ("sensor", "kind"),
+    ("sensor", "address"),
+    ("model", "file"),
+    ("feedforward", "table"),
+    ("log", "path"),
+];
+
+/// `[robot]`: the robot link.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RobotSection {
+    /// Protocol (required).
+    pub kind: RobotKind,
+    /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI; required).
+    pub bind: SocketAddr,
+    /// The robot controller's address: the link answers only it (port 0: any port of that
+    /// IP; the simple TCP link compares the IP only). Absent: the link locks to the first host
+    /// that sends a valid telegram, for the whole session.
+    pub peer: Option<SocketAddr>,
+    /// Without `peer`, let the first host on the network that sends a valid message own the
+    /// session (default `false`: a network `bind` without `peer` is refused; a loopback `bind`
+    /// without `peer` accepts the first local sender, with a warning at start).
+    pub allow_any_peer: bool,
+    /// RSI correction interpretation: `absolute` (default) or `relative`.
+    #[serde(with = "CorrectionModeDef")]
+    pub correction_mode: CorrectionMode,
+    /// RSI `<Sen Type>`.
+    pub sen_type: String,
+    /// RSI answers: `cartesian` (`RKorr`, default) or `joint` (`AK`, joint corrections from the
+    /// Cartesian one through the model's Jacobian).
+    pub rsi_answer: RsiAnswerKind,
+    /// Element of joint answers: `AK` (default, the ROS-Industrial set-ups) or `AKorr`.
+    #[serde(with = "JointTagDef")]
+    pub rsi_joint_tag: JointTag,
+    /// ABB EGM: frame of `pathCorr`: `tool` (default: the sensor frame of `EGMActMove`,
+    /// attached to the tool), `work-object` or `base`.
+    #[serde(with = "EgmFrameDef")]
+    pub egm_frame: EgmFrame,
+    /// ABB EGM: orientation of `EGMActMove`'s sensor frame in the tool frame (roll, pitch, yaw,
+    /// rad), for `egm_frame = "tool"`.
+    pub egm_sensor_rpy_rad: [f64; 3],
+    /// ABB EGM: orientation of the work object in the robot base frame (roll, pitch, yaw, rad),
+    /// for `egm_frame = "work-object"`.
+    pub egm_work_object_rpy_rad: [f64; 3],
+    /// Robot interpolation cycle (s), the reply deadline: 0.004 for RSI.
+    pub cycle_s: f64,
+    /// Silence after which the robot link counts as lost (s).
+    pub timeout_s: f64,
+}
+
+impl Default for RobotSection {
+    /// The defaults of the optional keys (`kind` and `bind` are required, [`REQUIRED_KEYS`]).
+    fn default() -> Self {
+        RobotSection {
+            kind: RobotKind::KukaRsi,
+            bind: SocketAddr::from(([0, 0, 0, 0], 59152)),
+            peer: None,
+            allow_any_peer: false,
+            correction_mode: CorrectionMode::Absolute,
+            sen_type: "ImFree".into(),
+            rsi_answer: RsiAnswerKind::Cartesian,
+            rsi_joint_tag: JointTag::Ak,
+            egm_frame: EgmFrame::Tool,
+            egm_sensor_rpy_rad: [0.0; 3],
+            egm_work_object_rpy_rad: [0.0; 3],
+            cycle_s: 0.004,
+            timeout_s: SafetyConfig::default().robot_timeout_s,
+        }
+    }
+}
+
+/// `[sensor]`: the force/torque sensor link.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorSection {
+    /// Protocol (required).
+    pub kind: SensorKind,
+    /// Sensor address (`<ip>:49152`; required).
+    pub address: SocketAddr,
+    /// Local address (default: any port on all interfaces).
+    pub bind: SocketAddr,
+    /// Counts per newton.
+    pub counts_per_force: f64,
+    /// Counts per newton-metre.
+    pub counts_per_torque: f64,
+    /// Silence after which the sensor counts as lost (s).
+    pub timeout_s: f64,
+    /// Range of each channel `[fx, fy, fz, mx, my, mz]` (N, N·m); beyond it a reading is garbage.
+    pub range: [f64; 6],
+}
+
+impl Default for SensorSection {
+    /// The defaults of the optional keys (`kind` and `address` are required).
+    fn default() -> Self {
+        SensorSection {
+            kind: SensorKind::Netft,
+            address: SocketAddr::from(([0, 0, 0, 0], 49152)),
+            bind: SocketAddr::from(([0, 0, 0, 0], 0)),
+            counts_per_force: 1_000_000.0,
+            counts_per_torque: 1_000_000.0,
+            timeout_s: SafetyConfig::default().sensor_timeout_s,
+            range: SafetyConfig::default().sensor_range,
+        }
+    }
+}
+
+/// `[mounting]`: sensor pose on the flange and the tool beyond it.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MountingSection {
+    /// Sensor origin in the flange frame (m).
+    pub sensor_xyz_m: [f64; 3],
+    /// Sensor orientation in the flange frame, roll–pitch–yaw (rad).
+    pub sensor_rpy_rad: [f64; 3],
+    /// Tool mass beyond the sensor (kg).
+    pub tool_mass_kg: f64,
+    /// Tool centre of mass in the sensor frame (m).
+    pub tool_com_m: [f64; 3],
+    /// Gravity in world axes (m/s²).
+    pub gravity_m_s2: [f64; 3],
+    /// Known bias (sensor frame, gravity excluded); when absent a tare is taken at start.
+    pub bias: Option<[f64; 6]>,
+    /// Tare duration at start, out of contact (s).
+    pub tare_s: f64,
+    /// Low-pass cut-off on the wrench (Hz); absent = off.
+    pub lowpass_hz: Option<f64>,
+}
+
+impl Default for MountingSection {
+    /// Sensor at the flange, no tool, standard gravity along −z, a tare of 0.2 s, no low-pass.
+    fn default() -> Self {
+        MountingSection {
+            sensor_xyz_m: [0.0; 3],
+            sensor_rpy_rad: [0.0; 3],
+            tool_mass_kg: 0.0,
+            tool_com_m: [0.0; 3],
+            gravity_m_s2: [0.0, 0.0, -deflex_control::wrench::STANDARD_GRAVITY],
+            bias: None,
+            tare_s: 0.2,
+            lowpass_hz: None,
+        }
+    }
+}
+
+/// `[model]`: the calibrated elasto-geometrical model.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModelSection {
+    /// Model TOML/URDF path (relative to the config file) or a built-in name (required).
+    pub file: String,
+}
+
+/// `[control]`: the law of eq. 17.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControlSection {
+    /// Control rate (Hz).
+    pub rate_hz: f64,
+    /// K_c.
+    pub kc: f64,
+    /// T_i (s).
+    pub ti_s: f64,
+    /// T_d (s).
+    pub td_s: f64,
+    /// Derivative filter ratio N (T_f = T_d/N).
+    pub derivative_filter_n: f64,
+    /// Corrected axes, any of `x y z rx ry rz`.
+    pub axes: Vec<Axis>,
+    /// Try SCHED_FIFO for the loop threads.
+    pub realtime: bool,
+    /// Also lock memory (mlockall).
+    pub lock_memory: bool,
+}
+
+impl Default for ControlSection {
+    /// 100 Hz, the paper's gains ([`PidGains::default`]), every axis, real-time scheduling and
+    /// locked memory tried.
+    fn default() -> Self {
+        let gains = PidGains::default();
+        ControlSection {
+            rate_hz: 100.0,
+            kc: gains.kc,
+            ti_s: gains.ti_s,
+            td_s: gains.td_s,
+            derivative_filter_n: gains.derivative_filter_n,
+            axes: Axis::ALL.to_vec(),
+            realtime: true,
+            lock_memory: true,
+        }
+    }
+}
+
+/// `[limits]`: limiter and safety.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LimitsSection {
+    /// Largest |ξ| per position axis (m).
+    pub max_correction_m: f64,
+    /// Largest |ξ| per rotation axis (rad).
+    pub max_correction_rad: f64,
+    /// Largest rate per position axis (m/s).
+    pub max_rate_m_s: f64,
+    /// Largest rate per rotation axis (rad/s).
+    pub max_rate_rad_s: f64,
+    /// Ramp-in duration (s).
+    pub ramp_in_s: f64,
+    /// Ramp-out duration (s).
+    pub ramp_out_s: f64,
+    /// Force norm limit at the TCP (N).
+    pub max_force_n: f64,
+    /// Torque norm limit at the TCP (N·m).
+    pub max_torque_nm: f64,
+    /// Largest joint change per control cycle (rad).
+    pub max_joint_step_rad: f64,
+    /// `zero` (ramp ξ to 0, default) or `hold`.
+    #[serde(with = "SafeActionDef")]
+    pub safe_action: SafeAction,
+    /// Watch for contact runaway (stiff contact making the correction positive feedback).
+    pub runaway_guard: bool,
+    /// Estimated loop gain through the contact above which the guard acts.
+    pub runaway_gain_limit: f64,
+    /// Estimated loop gain below which the guard releases its hold.
+    pub runaway_release_gain: f64,
+    /// Forgetting time of the guard's estimate (s).
+    pub runaway_window_s: f64,
+    /// Motion along the corrected direction needed to trust the estimate (m).
+    pub runaway_min_travel_m: f64,
+    /// Consecutive control cycles above the limit before the guard acts.
+    pub runaway_confirm_cycles: u32,
+    /// Duration of the guard's withdrawal ramp (s).
+    pub runaway_withdraw_s: f64,
+    /// Rate at which a released hold gives the correction back (m/s).
+    pub runaway_release_rate_m_s: f64,
+    /// `withdraw` (ramp the correction along its direction to zero, warn; default), `hold` (stop
+    /// it growing, warn) or `fault`.
+    #[serde(with = "RunawayActionDef")]
+    pub runaway_action: RunawayAction,
+}
+
+impl Default for LimitsSection {
+    /// The limiter's, the supervision's and the runaway guard's defaults
+    /// ([`LimiterConfig::default`], [`SafetyConfig::default`], [`RunawayConfig::default`]), with
+    /// 0.5 s ramps.
+    fn default() -> Self {
+        let limiter = LimiterConfig::default();
+        let safety = SafetyConfig::default();
+        let runaway = RunawayConfig::default();
+        LimitsSection {
+            max_correction_m: limiter.max_abs[0],
+            max_correction_rad: limiter.max_abs[3],
+            max_rate_m_s: limiter.max_rate[0],
+            max_rate_rad_s: limiter.max_rate[3],
+            ramp_in_s: 0.5,
+            ramp_out_s: 0.5,
+            max_force_n: safety.max_force_n,
+            max_torque_nm: safety.max_torque_nm,
+            max_joint_step_rad: safety.max_joint_step_rad,
+            safe_action: SafeAction::Zero,
+            runaway_guard: runaway.enabled,
+            runaway_gain_limit: runaway.gain_limit,
+            runaway_release_gain: runaway.release_gain,
+            runaway_window_s: runaway.window_s,
+            runaway_min_travel_m: runaway.min_travel_m,
+            runaway_confirm_cycles: runaway.confirm_cycles,
+            runaway_withdraw_s: runaway.withdraw_s,
+            runaway_release_rate_m_s: runaway.release_rate_m_s,
+            runaway_action: runaway.action,
+        }
+    }
+}
+
+/// `[feedforward]`: the online correction on top of an offline compensation
+/// ([`deflex_control::feedforward`]).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FeedForwardSection {
+    /// `compensated_path.csv` of `deflex compensate` (relative to the config file; required).
+    pub table: String,
+    /// `feed-forward` (the robot runs the original program; default) or `precompensated` (the
+    /// robot runs the compensated program).
+    #[serde(with = "FeedForwardModeDef")]
+    pub mode: FeedForwardMode,
+    /// `arc-length` (default) or `time`.
+    #[serde(with = "PathIndexDef")]
+    pub index: PathIndex,
+    /// Feed-forward mode: read the table this much path time ahead (s).
+    pub lead_s: f64,
+    /// Farther than this from the path, the TCP is off the path (m).
+    pub max_offset_m: f64,
+    /// Arc length searched ahead per control cycle (m).
+    pub window_m: f64,
+    /// Time index: the table's time at the controller's start (s).
+    pub time_offset_s: f64,
+}
+
+impl Default for FeedForwardSection {
+    /// The feed-forward's defaults ([`FeedForwardConfig::default`]; `table` is required).
+    fn default() -> Self {
+        let c = FeedForwardConfig::default();
+        FeedForwardSection {
+            table: String::new(),
+            mode: c.mode,
+            index: c.index,
+            lead_s: c.lead_s,
+            max_offset_m: c.max_offset_m,
+            window_m: c.window_m,
+            time_offset_s: c.time_offset_s,
+        }
+    }
+}
+
+/// `[log]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LogSection {
+    /// CSV path (relative to the config file; required).
+    pub path: String,
+    /// Capacity of the telemetry ring the log reads from (control cycles).
+    pub ring_capacity: usize,
+}
+
+impl Default for LogSection {
+    /// 8192 cycles (82 s at 100 Hz) of telemetry held for the log writer (`path` is required).
+    fn default() -> Self {
+        LogSection {
+            path: String::new(),
+            ring_capacity: 8192,
+        }
+    }
+}

@@ -1,0 +1,136 @@
+//! The control thread's whole per-cycle path allocates nothing, measured **in the control
+//! thread of a real session**: the clock that paces it reads that thread's allocation count
+//! (the counting allocator counts per thread) every time the thread sleeps until its next
+//! cycle, so the difference between two wake-ups is everything one cycle did — reading the
+//! joint and wrench messages, the law (eq. 15, 17, limiter, safety, runaway guard), the joint
+//! map of RSI `AK` answers, the correction command, the telemetry sample filled and published
+//! (with the CSV log and a second sink subscribed) and the bookkeeping. The session runs a KUKA
+//! RSI robot and a Net F/T on loopback, first in contact, then with the sensor silent (the fault
+//! and the ramp to the safe value are measured too). The per-answer send shaper is measured in
+//! the test's own thread.
+
+use crate::common;
+use deflex_runtime::log::{Plain, spawn_writer};
+use deflex_runtime::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
+use deflex_runtime::session::{RuntimeOptions, spawn};
+use deflex_runtime::{Clock, WallClock};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Wall time that records, at every `sleep_until` (called by the control thread only, once per
+/// cycle), the allocations its caller made since the previous call.
+#[derive(Clone)]
+struct CountingClock {
+    inner: WallClock,
+    calls: Arc<AtomicU64>,
+    last: Arc<AtomicU64>,
+    /// Allocations in the measured cycles (from the third on: the first two include the
+    /// thread's start).
+    allocations: Arc<AtomicU64>,
+    measured: Arc<AtomicU64>,
+}
+
+impl Clock for CountingClock {
+    fn now(&self) -> f64 {
+        self.inner.now()
+    }
+    fn sleep_until(&self, t_s: f64) {
+        let count = deflex_alloc_count::allocations();
+        let k = self.calls.fetch_add(1, Ordering::Relaxed);
+        if k >= 2 {
+            let previous = self.last.load(Ordering::Relaxed);
+            self.allocations
+                .fetch_add(count - previous, Ordering::Relaxed);
+            self.measured.fetch_add(1, Ordering::Relaxed);
+        }
+        self.last.store(count, Ordering::Relaxed);
+        self.inner.sleep_until(t_s)
+    }
+}
+
+#[test]
+fn control_thread_cycle_and_publish_allocate_nothing() {
+    let _turn = crate::realtime_turn();
+    let mut config = common::config();
+    config.wrench.lowpass_hz = Some(30.0);
+    config.safety.sensor_timeout_s = 0.2;
+    config.limiter.ramp_out_s = 0.2;
+    let ctrl = common::controller(config);
+    let q = common::q0();
+    let raw = common::raw_reading(&config, &q, [300.0, -200.0, 900.0, 1.0, 2.0, -1.0]);
+    let rsi = deflex_io::rsi::RsiConfig {
+        answer: deflex_io::rsi::RsiAnswer::Joint(deflex_io::rsi::JointTag::Ak),
+        ..Default::default()
+    };
+    let (link, client, peers) = common::loopback_cell(rsi, raw, q, 2.5, 1.5);
+    let telemetry = common::telemetry(&ctrl);
+    let log = spawn_writer(telemetry.subscribe(), 6, Box::new(Plain(std::io::sink()))).unwrap();
+    let mut other_sink = telemetry.subscribe();
+    let clock = CountingClock {
+        inner: WallClock::new(),
+        calls: Arc::default(),
+        last: Arc::default(),
+        allocations: Arc::default(),
+        measured: Arc::default(),
+    };
+    let options = RuntimeOptions {
+        realtime: false,
+        startup_timeout_s: 5.0,
+        idle_exit_s: Some(0.3),
+        ..RuntimeOptions::default()
+    };
+    let runtime = spawn(
+        ctrl,
+        Box::new(link),
+        Box::new(client),
+        clock.clone(),
+        telemetry,
+        options,
+    )
+    .unwrap();
+    let summary = common::finish(runtime);
+    peers.join();
+    let report = log.finish(true).unwrap();
+    let received = other_sink.drain(|_| {});
+    let (allocations, measured) = (
+        clock.allocations.load(Ordering::Relaxed),
+        clock.measured.load(Ordering::Relaxed),
+    );
+    eprintln!(
+        "control thread: {allocations} allocations in {measured} measured cycles of {}; log \
+         {} rows; second sink {received} samples; fault {:?}",
+        summary.cycles, report.written, summary.fault
+    );
+    assert_eq!(summary.error, None);
+    // The session did the work: cycles in contact, then the sensor's silence latched and was
+    // ramped out, and every cycle reached both sinks.
+    assert!(measured > 100, "{measured} cycles measured");
+    assert_eq!(
+        summary.fault.map(|f| f.kind),
+        Some(deflex_control::FaultKind::SensorTimeout)
+    );
+    assert!(summary.max_xi_m > 1e-4, "{}", summary.max_xi_m);
+    assert_eq!(report.written + report.dropped, summary.cycles);
+    assert_eq!(received as u64 + other_sink.lost(), summary.cycles);
+    assert_eq!(
+        allocations, 0,
+        "{allocations} allocations in {measured} cycles"
+    );
+}
+
+#[test]
+fn send_shaper_allocates_nothing() {
+    let mut shaper = SendShaper::new(SendShaperConfig::new([0.02; 6], [0.008; 6], 0.004, 0.5));
+    let (_, allocations) = deflex_alloc_count::count(|| {
+        for k in 0..5000 {
+            let target = [(k % 7) as f64 * 1e-3; 6];
+            let directive = [
+                LinkDirective::Follow,
+                LinkDirective::RampOut,
+                LinkDirective::Hold,
+            ][k / 500 % 3];
+            std::hint::black_box(shaper.next(&target, directive));
+        }
+    });
+    assert_eq!(allocations, 0);
+}

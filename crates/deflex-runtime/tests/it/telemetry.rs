@@ -1,0 +1,198 @@
+//! The telemetry stream of a real session (KUKA RSI and Net F/T on loopback): the CSV log is
+//! written from it, one row per control cycle; a sink that joins during the session reads the
+//! same samples; a sink that falls behind loses the oldest samples, counted, without slowing the
+//! session; the session's description is there for any sink; and the log's format is the one
+//! `deflex run` has always written.
+
+use crate::common;
+use deflex_control::{CycleOutput, Flags, Phase};
+use deflex_runtime::WallClock;
+use deflex_runtime::log::{LogRecord, Plain, csv_header, csv_row, spawn_writer};
+use deflex_runtime::session::{RuntimeOptions, spawn};
+use deflex_runtime::telemetry::{Source, Telemetry, session_info};
+use std::io::Write;
+use std::sync::{Arc, Mutex};
+
+#[derive(Clone, Default)]
+struct Buffer(Arc<Mutex<Vec<u8>>>);
+
+impl Write for Buffer {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+fn options() -> RuntimeOptions {
+    RuntimeOptions {
+        realtime: false,
+        startup_timeout_s: 5.0,
+        idle_exit_s: Some(0.3),
+        ..RuntimeOptions::default()
+    }
+}
+
+/// What one session with a telemetry ring of `capacity` samples gave its sinks.
+struct Sinks {
+    summary: deflex_runtime::RunSummary,
+    log: deflex_runtime::log::LogReport,
+    log_text: String,
+    /// Subscribed before the session, read only at its end.
+    idle: deflex_telemetry::Subscriber<deflex_telemetry::CycleSample>,
+    /// Subscribed half a second into the session, read at its end.
+    late: deflex_telemetry::Subscriber<deflex_telemetry::CycleSample>,
+    info: deflex_telemetry::SessionInfo,
+    status: deflex_runtime::LiveStatus,
+}
+
+fn session(capacity: usize) -> Sinks {
+    let config = common::config();
+    let ctrl = common::controller(config);
+    let q = common::q0();
+    let raw = common::raw_reading(&config, &q, [150.0, -80.0, 900.0, 0.0, 0.0, 0.0]);
+    let (link, client, peers) = common::loopback_cell(Default::default(), raw, q, 1.5, 3.0);
+    let info = session_info(&ctrl, Source::Runtime, "kuka-rsi", 0.004);
+    let telemetry = Telemetry::new(info, capacity);
+    let buffer = Buffer::default();
+    let log = spawn_writer(telemetry.subscribe(), 6, Box::new(Plain(buffer.clone()))).unwrap();
+    let idle = telemetry.subscribe();
+    let runtime = spawn(
+        ctrl,
+        Box::new(link),
+        Box::new(client),
+        WallClock::new(),
+        telemetry,
+        options(),
+    )
+    .unwrap();
+    let info = (**runtime.session_info()).clone();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let late = runtime.telemetry().subscribe();
+    let status = runtime.status();
+    let summary = common::finish(runtime);
+    peers.join();
+    let log = log.finish(true).unwrap();
+    let log_text = String::from_utf8(buffer.0.lock().unwrap().clone()).unwrap();
+    Sinks {
+        summary,
+        log,
+        log_text,
+        idle,
+        late,
+        info,
+        status,
+    }
+}
+
+#[test]
+fn the_log_is_written_from_the_stream_and_sinks_join_any_time() {
+    let _turn = crate::realtime_turn();
+    // A ring larger than the whole session: no sink loses anything.
+    let mut s = session(4096);
+    assert_eq!(s.summary.error, None);
+    let cycles = s.summary.cycles;
+    assert!(cycles > 50, "{cycles} cycles");
+    // The description is there for any sink.
+    assert_eq!(s.info.source, Source::Runtime);
+    assert_eq!(s.info.joint_names.len(), 6);
+    assert_eq!(s.info.protocol, "kuka-rsi");
+    assert_eq!(s.info.control_period_s, common::config().period_s);
+    // One row per control cycle.
+    assert_eq!((s.log.written, s.log.dropped), (cycles, 0));
+    let mut lines = s.log_text.lines();
+    assert_eq!(lines.next(), Some(csv_header(6).as_str()));
+    assert_eq!(lines.count() as u64, cycles);
+    // The idle sink has every cycle, in order.
+    let mut n = 0;
+    s.idle.drain(|sample| {
+        n += 1;
+        assert_eq!(sample.cycle, n);
+    });
+    assert_eq!((n, s.idle.lost()), (cycles, 0));
+    // The late sink reads what came after it joined, whole, up to the last cycle.
+    let mut previous = 0;
+    let mut seen = 0u64;
+    s.late.drain(|sample| {
+        assert!(sample.cycle > previous, "{} after {previous}", sample.cycle);
+        assert_eq!(sample.q().len(), 6);
+        assert!(sample.tcp_position().norm() > 0.5 && sample.time_s.is_finite());
+        previous = sample.cycle;
+        seen += 1;
+    });
+    assert!(
+        seen > 0 && previous == cycles,
+        "{seen} samples, last {previous}"
+    );
+    assert!(s.late.is_finished());
+    // The live status came from the stream.
+    assert!(
+        s.status.cycles > 0 && s.status.telegrams > 0 && s.status.phase != Phase::Idle,
+        "{:?}",
+        s.status
+    );
+}
+
+#[test]
+fn a_sink_that_falls_behind_loses_the_oldest_counted_without_slowing_the_session() {
+    let _turn = crate::realtime_turn();
+    let mut s = session(16);
+    assert_eq!(s.summary.error, None);
+    let cycles = s.summary.cycles;
+    assert!(cycles > 50, "{cycles} cycles");
+    // The idle sink keeps the ring's last 16 cycles and counts the rest as lost.
+    let mut kept = Vec::new();
+    s.idle.drain(|sample| kept.push(sample.cycle));
+    assert_eq!(kept, ((cycles - 15)..=cycles).collect::<Vec<_>>());
+    assert_eq!(s.idle.lost(), cycles - 16);
+    // The log, reading as it goes, accounts for every cycle.
+    assert_eq!(s.log.written + s.log.dropped, cycles);
+    assert_eq!(s.log_text.lines().count() as u64, s.log.written + 1);
+}
+
+/// The row format `deflex run` writes, character for character (the columns and precisions of
+/// the log before it became a sink of the stream): seconds with 6 decimals, joints with 9,
+/// wrenches with 4, displacements with 9, the arc length empty when unknown, the loop gain with
+/// 4, the cycle time in µs with 2, the flags as an integer and by name.
+#[test]
+fn the_row_format_is_unchanged() {
+    let mut out = CycleOutput {
+        time_s: 1.5,
+        wrench_sensor: [0.5; 6],
+        wrench_tcp: [-1.25, 0.0, 900.0, 0.0, 0.0, 0.125],
+        delta_s_hat: [1e-4, 0.0, -2.5e-4, 0.0, 0.0, 1e-6],
+        xi: [-1e-4, 0.0, 2.5e-4, 0.0, 0.0, -1e-6],
+        epsilon: [3e-9, 0.0, 0.0, 0.0, 0.0, 0.0],
+        loop_gain: 0.25,
+        path_s_m: f64::NAN,
+        ..CycleOutput::default()
+    };
+    out.flags.set(Flags::ACTIVE | Flags::RAMPING);
+    let row = csv_row(&LogRecord::new(
+        &[0.1, -0.2],
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        &out,
+        12.5,
+    ));
+    let expected = "1.500000,0.100000000,-0.200000000,\
+        1.0000,2.0000,3.0000,4.0000,5.0000,6.0000,\
+        0.5000,0.5000,0.5000,0.5000,0.5000,0.5000,\
+        -1.2500,0.0000,900.0000,0.0000,0.0000,0.1250,\
+        0.000100000,0.000000000,-0.000250000,0.000000000,0.000000000,0.000001000,\
+        -0.000100000,0.000000000,0.000250000,0.000000000,0.000000000,-0.000001000,\
+        0.000000003,0.000000000,0.000000000,0.000000000,0.000000000,0.000000000,\
+        0.000000000,0.000000000,0.000000000,0.000000000,0.000000000,0.000000000,\
+        ,0.2500,12.50,1572864,ramping|active";
+    assert_eq!(row, expected);
+    assert_eq!(
+        csv_header(2),
+        "time_s,q1_rad,q2_rad,raw_fx_n,raw_fy_n,raw_fz_n,raw_mx_nm,raw_my_nm,raw_mz_nm,\
+         ws_fx_n,ws_fy_n,ws_fz_n,ws_mx_nm,ws_my_nm,ws_mz_nm,w_fx_n,w_fy_n,w_fz_n,w_mx_nm,\
+         w_my_nm,w_mz_nm,ds_x_m,ds_y_m,ds_z_m,ds_rx_rad,ds_ry_rad,ds_rz_rad,xi_x_m,xi_y_m,\
+         xi_z_m,xi_rx_rad,xi_ry_rad,xi_rz_rad,eps_x_m,eps_y_m,eps_z_m,eps_rx_rad,eps_ry_rad,\
+         eps_rz_rad,ff_x_m,ff_y_m,ff_z_m,ff_rx_rad,ff_ry_rad,ff_rz_rad,path_s_m,loop_gain,\
+         cycle_us,flags,status"
+    );
+}
