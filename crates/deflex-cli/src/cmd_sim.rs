@@ -220,6 +220,7 @@ pub fn sim(command: SimCommand, json: bool) -> CommandResult {
 fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
     let robot = config.nominal_robot()?;
+    let cell = config.summary()?;
     let text = format!(
         "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
          # cell's tool and base pivot, as a user would describe that cell.\n{}",
@@ -233,6 +234,7 @@ fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
             "robot": robot.name,
             "geometry_fingerprint": robot.geometry_fingerprint(),
             "tool_xyz_m": robot.tool.translation.vector.as_slice(),
+            "cell": cell.to_json(),
             "out": args.out,
         }));
     } else {
@@ -246,6 +248,7 @@ fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
             robot.geometry_fingerprint(),
             args.out.display()
         );
+        println!("{cell}");
     }
     Ok(())
 }

@@ -29,6 +29,8 @@
 //! fixed `flange` and `tool0` rotations multiply to the identity), so the model's flange must be
 //! the last joint frame up to a shift and a turn about z, which is folded into `wrist_3`.
 
+#![warn(missing_docs)]
+
 use deflex_model::spatial::{pose_from_xyz_rpy, rpy_from_rotation};
 use deflex_model::{DhParams, Pose, Robot};
 use nalgebra::{Rotation3, Vector3};

@@ -8,6 +8,8 @@
 //!
 //! Depends on nothing but `std`; every deflex crate that writes files uses it.
 
+#![warn(missing_docs)]
+
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};

@@ -50,6 +50,8 @@
 //! assert!(program.notes.iter().any(|n| n.word == "T1"));
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod arc;
 mod error;
 mod interpreter;

@@ -21,6 +21,8 @@
 //! assert!(ds[2] > 0.0); // pushed up by an upward force
 //! ```
 
+#![warn(missing_docs)]
+
 mod compliance;
 mod description;
 pub mod dh;

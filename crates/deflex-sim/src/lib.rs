@@ -44,6 +44,8 @@
 //! println!("{}", run.summary_json());
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod cell;
 pub mod cell_config;
 pub mod chain;

@@ -19,6 +19,8 @@
 //! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
 //! the controller sees only joint values and raw F/T samples.
 
+#![warn(missing_docs)]
+
 pub mod compensation;
 mod conditions;
 pub mod contact;
