@@ -99,10 +99,23 @@ pub struct CompensationRun {
     pub elapsed_s: f64,
 }
 
-fn cell(options: &Options) -> Result<CellConfig> {
+/// The robot's cell, as the CLI's: the twin file over it, else the cell of the robot (its maker's
+/// cell, from its name); a robot with no cell (not six joints) needs `part_xyz_m` and `seed_q`
+/// and wrenches that are not the process model's.
+fn cell(robot: &Robot, wrench: &WrenchSpec, options: &Options) -> Result<CellConfig> {
     let mut config = match &options.twin_config {
         Some(p) => deflex_twin::load_cell(p, None)?,
-        None => CellConfig::default(),
+        None => match CellConfig::for_robot_description(&robot.name, robot.clone()) {
+            Ok(c) => c,
+            Err(_)
+                if options.part_xyz_m.is_some()
+                    && options.seed_q.is_some()
+                    && !matches!(wrench, WrenchSpec::Process) =>
+            {
+                CellConfig::default()
+            }
+            Err(e) => return Err(e.into()),
+        },
     };
     if let Some(xyz) = options.part_xyz_m {
         if xyz.iter().any(|v| !v.is_finite() || v.abs() > 100.0) {
@@ -285,7 +298,7 @@ pub fn compensate(
     wrench: &WrenchSpec,
     options: &Options,
 ) -> Result<CompensationRun> {
-    let config = cell(options)?;
+    let config = cell(robot, wrench, options)?;
     let seed = seed(robot, options, &config)?;
     let part_frame = config.part_frame();
     let (tool_path, path) = desired_path(robot, path_spec, options, &config, &seed)?;

@@ -4,7 +4,7 @@
 
 use thiserror::Error;
 
-/// Which Python exception an [`Error`] becomes (the classes of `deflex/_errors.py`).
+/// Which Python exception an [`Error`](enum@Error) becomes (the classes of `deflex/_errors.py`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ErrorKind {
     /// A bad argument: shape, NaN, a value out of its range, an unknown choice.

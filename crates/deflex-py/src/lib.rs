@@ -19,6 +19,8 @@
 //!
 //! Without the `python` feature the crate builds and tests with no Python at all.
 
+#![warn(missing_docs)]
+
 pub mod calibration;
 pub mod compensation;
 pub mod error;
