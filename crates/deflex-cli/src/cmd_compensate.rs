@@ -20,7 +20,10 @@ mod setup;
 
 use crate::args::{CliResult, print_json};
 use clap::{Args, ValueEnum};
-use deflex_compensate::log::{ResampleOptions, read_log, resample_on_path};
+use deflex_compensate::LogError;
+use deflex_compensate::log::{
+    MAX_LOG_BYTES, ResampleOptions, WrenchLog, parse_log, resample_on_path,
+};
 use deflex_compensate::table::write_csv_to;
 use deflex_compensate::{
     Compensation, Identification, LoggedProcess, LoggedProcessOptions, Progress, Stage,
@@ -668,6 +671,27 @@ fn summary_text(
         elapsed_s
     );
     t
+}
+
+/// Read a log file for `--wrench log:FILE` (at most [`MAX_LOG_BYTES`], the file named in every
+/// error) and parse it ([`parse_log`]): the file is read here, the maths crate sees its text.
+fn read_log(
+    path: &std::path::Path,
+    robot: &deflex_model::Robot,
+    part_frame: &deflex_model::Pose,
+) -> Result<WrenchLog, LogError> {
+    let file = path.display().to_string();
+    let text = deflex_load::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
+        deflex_load::BoundedReadError::Io(source) => LogError::Io {
+            file: file.clone(),
+            message: source.to_string(),
+        },
+        deflex_load::BoundedReadError::TooLarge(size) => LogError::TooLarge {
+            file: file.clone(),
+            message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
+        },
+    })?;
+    parse_log(&text, &file, robot, part_frame)
 }
 
 #[cfg(test)]

@@ -28,7 +28,6 @@ use crate::error::LogError;
 use deflex_model::{Data, Pose, Robot, Wrench};
 use nalgebra::Vector3;
 use std::collections::HashMap;
-use std::path::Path;
 
 mod resample;
 pub use resample::{ResampleOptions, Resampled, resample_on_path};
@@ -94,28 +93,6 @@ pub struct WrenchLog {
     pub simulated: bool,
     /// Every row carries a measured TCP ([`LogSample::measured_m`]).
     pub measured: bool,
-}
-
-/// Read a log file (see [`parse_log`]); refuses files over [`MAX_LOG_BYTES`].
-pub fn read_log(path: &Path, robot: &Robot, part_frame: &Pose) -> Result<WrenchLog, LogError> {
-    let file = path.display().to_string();
-    let size = std::fs::metadata(path)
-        .map_err(|e| LogError::Io {
-            file: file.clone(),
-            message: e.to_string(),
-        })?
-        .len();
-    if size > MAX_LOG_BYTES {
-        return Err(LogError::TooLarge {
-            file,
-            message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| LogError::Io {
-        file: file.clone(),
-        message: e.to_string(),
-    })?;
-    parse_log(&text, &file, robot, part_frame)
 }
 
 const RUN_WRENCH: [&str; 6] = [

@@ -348,7 +348,7 @@ impl<W: Write> McapSink<W> {
             key: k.to_string(),
             value: v,
         };
-        let phase = s.phase().name();
+        let phase = self.info.source.phase_name(s.phase_code);
         let status = flags.describe();
         let message = match fault {
             Some(kind) => format!("{phase}: fault {}", kind.name()),
