@@ -6,7 +6,7 @@
 //! [`table_csv`], [`programs`], [`write_programs`].
 
 use crate::error::{Error, Result, bounded};
-use deflex_compensate::log::{ResampleOptions, read_log, resample_on_path};
+use deflex_compensate::log::{MAX_LOG_BYTES, ResampleOptions, parse_log, resample_on_path};
 use deflex_compensate::table::write_csv;
 use deflex_compensate::{Compensation, CompensationOptions, TcpPath, WrenchSource};
 use deflex_model::{Pose, Robot, Wrench};
@@ -322,7 +322,9 @@ pub fn compensate(
             run(WrenchSource::Process(&mut process))?
         }
         WrenchSpec::Log(file) => {
-            let log = read_log(file, robot, &part_frame)?;
+            // The file is read here (bounded), the compensation crate parses its text.
+            let text = crate::geometry::read_text(file, MAX_LOG_BYTES)?;
+            let log = parse_log(&text, &file.display().to_string(), robot, &part_frame)?;
             let resampled = resample_on_path(&log, &path, &ResampleOptions::default())?;
             let shown = file.display();
             let simulated = if log.simulated { "SIMULATED " } else { "" };
