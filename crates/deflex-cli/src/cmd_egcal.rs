@@ -1,9 +1,7 @@
 //! `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict`: elasto-geometric
-//! calibration from absolute tracker readings (maths in `deflex-absolute`; the files, the report
-//! and the plots here).
-
-mod plots;
-pub mod report;
+//! calibration from absolute tracker readings (maths in `deflex-absolute`; the report, plots and
+//! prediction tables in `deflex_report::absolute_report`, shared with the Python package; the
+//! files here).
 
 use crate::args::{CliResult, print_json, robot};
 use clap::{Args, Subcommand, ValueEnum};
@@ -17,6 +15,7 @@ use deflex_absolute::predict;
 use deflex_absolute::solve::Loss;
 use deflex_absolute::terms::CalibrationTerms;
 use deflex_absolute::ur10_tracker::{ImportOptions, MAX_SERIES_BYTES, parse_series};
+use deflex_report::absolute_report as report;
 use std::path::{Path, PathBuf};
 
 /// Gap between time stamps that starts a new measuring session (`--cv-by session`).
@@ -459,114 +458,13 @@ pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
     let rows = read_absolute(&args.data, model.robot.joint_count())?;
     let prediction =
         predict::predict_rows(&model, rows, args.fit_setup).map_err(|e| e.to_string())?;
-    deflex_files::write_atomic(&args.out, prediction_csv(&prediction))
+    deflex_files::write_atomic(&args.out, report::prediction::prediction_csv(&prediction))
         .map_err(|e| format!("{}: {e}", args.out.display()))?;
     if json_output {
-        print_json(&prediction_json(&prediction));
+        print_json(&report::prediction::prediction_json(&prediction));
     } else {
-        print!("{}", prediction_text(&prediction));
+        print!("{}", report::prediction::prediction_text(&prediction));
         println!("predictions written to {}", args.out.display());
     }
     Ok(())
-}
-
-fn mm(v: f64) -> String {
-    format!("{:.3}", v * 1e3)
-}
-
-/// `line, setup, target, q…, predicted_x_m…, x_m…, error_m` and, when predicted, the
-/// orientation columns.
-fn prediction_csv(prediction: &predict::Prediction) -> String {
-    let n = prediction.rows.first().map_or(0, |r| r.row.q_rad.len());
-    let with_rotation = prediction
-        .rows
-        .iter()
-        .any(|r| r.predicted_rotation_rad.is_some());
-    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
-    let mut header: Vec<String> = vec!["line".into(), "setup".into(), "target".into()];
-    header.extend((1..=n).map(|i| format!("q{i}_rad")));
-    header.extend(
-        [
-            "predicted_x_m",
-            "predicted_y_m",
-            "predicted_z_m",
-            "x_m",
-            "y_m",
-            "z_m",
-            "error_m",
-        ]
-        .map(String::from),
-    );
-    if with_rotation {
-        header.extend(
-            [
-                "predicted_rx_rad",
-                "predicted_ry_rad",
-                "predicted_rz_rad",
-                "orientation_error_rad",
-            ]
-            .map(String::from),
-        );
-    }
-    let _ = writer.write_record(&header);
-    for r in &prediction.rows {
-        let mut record = vec![
-            r.row.line.to_string(),
-            r.row.setup.clone(),
-            r.row.target.clone(),
-        ];
-        record.extend(r.row.q_rad.iter().map(|v| format!("{v:?}")));
-        record.extend(r.predicted_m.iter().map(|v| format!("{v:?}")));
-        record.extend(r.row.position_m.iter().map(|v| format!("{v:?}")));
-        record.push(format!("{:e}", r.error_m));
-        if with_rotation {
-            match r.predicted_rotation_rad {
-                Some(v) => record.extend(v.iter().map(|x| format!("{x:?}"))),
-                None => record.extend([String::new(), String::new(), String::new()]),
-            }
-            record.push(
-                r.orientation_error_rad
-                    .map_or(String::new(), |e| format!("{e:e}")),
-            );
-        }
-        let _ = writer.write_record(&record);
-    }
-    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
-}
-
-fn prediction_text(prediction: &predict::Prediction) -> String {
-    let s = &prediction.position;
-    let mut text = format!(
-        "{} rows predicted{}; error norm (measured − predicted): RMS {} mm, mean {} mm, p95 {} mm, max {} mm\n",
-        s.count,
-        if prediction.fit_setup {
-            " (set-up registration fitted on these rows)"
-        } else {
-            ""
-        },
-        mm(s.rms),
-        mm(s.mean),
-        mm(s.p95),
-        mm(s.max)
-    );
-    if let Some(o) = &prediction.orientation {
-        text.push_str(&format!(
-            "orientation error: RMS {:.3} mrad, p95 {:.3} mrad, max {:.3} mrad\n",
-            o.rms * 1e3,
-            o.p95 * 1e3,
-            o.max * 1e3
-        ));
-    }
-    text
-}
-
-fn prediction_json(prediction: &predict::Prediction) -> serde_json::Value {
-    let s = &prediction.position;
-    serde_json::json!({
-        "rows": s.count, "fit_setup": prediction.fit_setup,
-        "rms_m": s.rms, "mean_m": s.mean, "p95_m": s.p95, "max_m": s.max,
-        "orientation_rms_rad": prediction.orientation.map(|o| o.rms),
-        "orientation_p95_rad": prediction.orientation.map(|o| o.p95),
-        "setups": prediction.setups.iter().map(|s| serde_json::json!({"name": s.name, "xyz_m": [s.pose.translation.vector.x, s.pose.translation.vector.y, s.pose.translation.vector.z], "rpy_rad": deflex_model::spatial::rpy_from_rotation(&s.pose.rotation)})).collect::<Vec<_>>(),
-    })
 }

@@ -11,6 +11,7 @@
 //! | [`calibration_report`] | the calibration's HTML report with plots (`deflex calibrate --report`) |
 //! | [`plan_tables`] | an experiment plan: expected standard errors, the technician's sheet |
 //! | [`validation_report`] | a validation: tables, plots and page (`deflex validate --out`) |
+//! | [`absolute_report`] | an elasto-geometric calibration: text, JSON, CSV, plots, page (`deflex calibrate-geometry --report`) |
 //! | [`forming_run`] | a forming run of the twin: its folder and plots (`deflex sim isf`) |
 //! | [`study`] | the paper's study on the twin: its folder, figures and page (`deflex demo`) |
 //!
@@ -54,6 +55,7 @@
 
 #![warn(missing_docs)]
 
+pub mod absolute_report;
 mod base64;
 pub mod calibration_report;
 pub mod calibration_tables;

@@ -1,11 +1,9 @@
 //! Residual plots of an elasto-geometric fit: per axis, against each joint, a map over the
 //! measured volume, and the held-out error distribution.
 
+use crate::{PanelLayout, PlotSpec, ReportError, Series, line_plot, panels_plot, scatter_heatmap};
 use deflex_absolute::campaign::{Campaign, ReadingKind};
 use deflex_absolute::fit::{FitResult, Role, RowResidual};
-use deflex_report::{
-    PanelLayout, PlotSpec, ReportError, Series, line_plot, panels_plot, scatter_heatmap,
-};
 use std::path::Path;
 
 /// Draw the plots into `dir`; returns `(file name, caption)` pairs.
@@ -39,7 +37,7 @@ pub fn draw(
                         "residual [mm]",
                     )
                     .size(1100, 300),
-                    vec![Series::indexed("", y, deflex_report::SeriesStyle::Points)],
+                    vec![Series::indexed("", y, crate::SeriesStyle::Points)],
                 )
             })
             .collect();

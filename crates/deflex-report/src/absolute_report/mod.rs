@@ -1,12 +1,16 @@
 //! The report of an elasto-geometric calibration (`deflex calibrate-geometry --report`): text
-//! tables, JSON (SI), CSV files, plots ([`super::plots`]) and an HTML page, rendered from the
-//! `deflex-absolute` fit result.
+//! tables, JSON (SI), CSV files, plots ([`plots`]) and an HTML page, rendered from the
+//! `deflex-absolute` fit result. (Here rather than in the CLI so that every front end, the
+//! Python package too, prints and writes the same report.)
 
-use super::plots;
+pub mod plots;
+pub mod prediction;
+pub mod registration;
+
+use crate::{HtmlReport, PageError, ReportError, html_escape};
 use deflex_absolute::campaign::{Campaign, ReadingKind};
 use deflex_absolute::fit::{ErrorStats, FitResult, StepReport, TestGroup};
 use deflex_absolute::params::Unit;
-use deflex_report::{HtmlReport, html_escape};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -411,8 +415,11 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
     })
 }
 
-fn write_text(path: &Path, text: &str) -> Result<(), String> {
-    deflex_files::write_atomic(path, text).map_err(|e| format!("{}: {e}", path.display()))
+fn write_text(path: &Path, text: &str) -> Result<(), ReportError> {
+    deflex_files::write_atomic(path, text).map_err(|source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
@@ -421,13 +428,19 @@ pub fn write_report(
     result: &FitResult,
     campaign: &Campaign,
     dir: &Path,
-) -> Result<Vec<PathBuf>, String> {
-    let io = |e: std::io::Error| format!("{}: {e}", dir.display());
+) -> Result<Vec<PathBuf>, PageError> {
+    let page = PageError::of("elasto-geometric calibration report");
+    let io = |source: std::io::Error| {
+        page(ReportError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })
+    };
     let staging = deflex_files::AtomicDir::create(dir).map_err(io)?;
     let root = staging.path().to_path_buf();
     let mut files = Vec::new();
-    let mut put = |name: &str, text: &str| -> Result<(), String> {
-        write_text(&root.join(name), text)?;
+    let mut put = |name: &str, text: &str| -> Result<(), PageError> {
+        write_text(&root.join(name), text).map_err(&page)?;
         files.push(dir.join(name));
         Ok(())
     };
@@ -535,7 +548,7 @@ pub fn write_report(
         .map(String::from)
         .collect();
     put("outliers.csv", &csv_text(&outlier_headers, &outlier_rows))?;
-    let images = plots::draw(result, campaign, &root).map_err(|e| e.to_string())?;
+    let images = plots::draw(result, campaign, &root).map_err(&page)?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
     html.section("Summary").preformatted(text_report.clone());
     if let Some(w) = &result.warning {
@@ -556,8 +569,7 @@ pub fn write_report(
         html.image(root.join(file), caption.clone());
         files.push(dir.join(file));
     }
-    html.write(&root.join("index.html"))
-        .map_err(|e| e.to_string())?;
+    html.write(&root.join("index.html")).map_err(&page)?;
     files.push(dir.join("index.html"));
     staging.commit().map_err(io)?;
     Ok(files)

@@ -1,0 +1,387 @@
+//! The robot model from arrays: loading, and pose, Jacobian, compliance (eq. 15's
+//! `C = J K_θ⁻¹ Jᵀ`), deflection `δs = C w` and inverse kinematics over batches of
+//! configurations, spread over the cores with rayon.
+//!
+//! Thin layer over `deflex-model` (the calls the integrator re-points at merge time:
+//! [`load`], [`builtin`], [`from_toml`], [`to_toml`], and the per-row functions below). Arrays
+//! are row-major `f64` slices: `q` is `rows × n`, a wrench `rows × 6` (or one row for all), a
+//! pose a 4×4 homogeneous matrix (16 values, row-major).
+
+use crate::error::{Error, Result};
+use deflex_model::{Data, IkOptions, Pose, Robot, Wrench};
+use nalgebra::{Matrix3, Rotation3, Translation3, Vector3};
+use rayon::prelude::*;
+use std::path::Path;
+
+/// Rows per rayon task: large enough that scheduling costs nothing next to the maths
+/// (a deflection is ≈ 0.3 µs), small enough to balance two to a few dozen cores.
+const ROWS_PER_TASK: usize = 2048;
+
+/// Below this many rows the batch runs on the calling thread (no pool wake-up).
+const SERIAL_ROWS: usize = 256;
+
+/// A robot by built-in name or file path (TOML, possibly naming a URDF): `deflex_load::load_robot`.
+pub fn load(spec: &str) -> Result<Robot> {
+    Ok(deflex_load::load_robot(spec)?)
+}
+
+/// A built-in robot by name.
+pub fn builtin(name: &str) -> Result<Robot> {
+    deflex_model::builtin(name).ok_or_else(|| {
+        Error::invalid(
+            "name",
+            format!(
+                "\"{name}\" is not a built-in robot (built-in: {})",
+                builtin_names().join(", ")
+            ),
+        )
+    })
+}
+
+/// Names of the built-in robots.
+pub fn builtin_names() -> Vec<&'static str> {
+    deflex_model::BUILTIN_ROBOTS
+        .iter()
+        .map(|(n, _)| *n)
+        .collect()
+}
+
+/// A robot from TOML text; `origin` names it in errors, `base_dir` resolves a URDF path.
+pub fn from_toml(text: &str, origin: &str, base_dir: Option<&Path>) -> Result<Robot> {
+    let resolver = deflex_load::FileUrdfResolver {
+        base_dir: base_dir.map(Path::to_path_buf),
+    };
+    Ok(deflex_model::robot_from_toml_str(
+        text,
+        origin,
+        Some(&resolver),
+    )?)
+}
+
+/// The robot as TOML, URDF paths rewritten for a file at `destination` when given.
+pub fn to_toml(robot: &Robot, destination: Option<&Path>) -> String {
+    match destination {
+        Some(path) => deflex_load::robot_to_toml_for(robot, path),
+        None => deflex_model::robot_to_toml(robot),
+    }
+}
+
+/// Write the robot file whole or not at all.
+pub fn save(robot: &Robot, path: &Path) -> Result<()> {
+    deflex_files::write_atomic(path, to_toml(robot, Some(path))).map_err(|source| Error::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Joint limits `[lo, hi]` (rad) per joint, NaN where a joint has none.
+pub fn limits(robot: &Robot) -> Vec<[f64; 2]> {
+    robot
+        .joints
+        .iter()
+        .map(|j| j.limits.unwrap_or([f64::NAN, f64::NAN]))
+        .collect()
+}
+
+/// Refuse NaN and infinities, naming the first one as `name[row, col]` (`name[i]` when `cols`
+/// is `None`, for 1-D arguments).
+pub fn check_finite(name: &'static str, values: &[f64], cols: Option<usize>) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(Error::NonFinite {
+            name,
+            index: match cols {
+                Some(c) if c > 0 => format!("{}, {}", i / c, i % c),
+                _ => i.to_string(),
+            },
+            value: values[i],
+        }),
+    }
+}
+
+/// `f(data, row, out_row)` for every row, `out` holding `out_cols` values per row; in parallel
+/// over chunks of rows with one scratch [`Data`] per task. The first error (lowest chunk) wins.
+fn for_rows(
+    rows: usize,
+    out_cols: usize,
+    out: &mut [f64],
+    f: impl Fn(&mut Data, usize, &mut [f64]) -> Result<()> + Sync,
+) -> Result<()> {
+    debug_assert_eq!(out.len(), rows * out_cols);
+    if out_cols == 0 {
+        return Ok(());
+    }
+    let run_chunk = |chunk_index: usize, chunk: &mut [f64], data: &mut Data| -> Result<()> {
+        let first = chunk_index * ROWS_PER_TASK;
+        for (k, row_out) in chunk.chunks_mut(out_cols).enumerate() {
+            f(data, first + k, row_out)?;
+        }
+        Ok(())
+    };
+    if rows < SERIAL_ROWS {
+        let mut data = Data::new();
+        return run_chunk(0, out, &mut data);
+    }
+    out.par_chunks_mut(ROWS_PER_TASK * out_cols)
+        .enumerate()
+        .try_for_each_init(Data::new, |data, (i, chunk)| run_chunk(i, chunk, data))
+}
+
+/// A row of `q` (`rows × n`).
+#[inline]
+fn row(values: &[f64], cols: usize, i: usize) -> &[f64] {
+    &values[i * cols..(i + 1) * cols]
+}
+
+/// Forward kinematics of one row (its length is checked by the callers).
+#[inline]
+fn fk(robot: &Robot, data: &mut Data, q: &[f64]) -> Result<()> {
+    robot
+        .forward_kinematics(data, q)
+        .map_err(deflex_model::ModelError::from)?;
+    Ok(())
+}
+
+/// Write a pose as a row-major 4×4 homogeneous matrix.
+#[inline]
+pub fn write_pose(pose: &Pose, out: &mut [f64]) {
+    let m = pose.to_homogeneous();
+    for r in 0..4 {
+        for c in 0..4 {
+            out[r * 4 + c] = m[(r, c)];
+        }
+    }
+}
+
+/// TCP poses (eq. 1), `rows × 16` (4×4 row-major).
+pub fn poses(robot: &Robot, q: &[f64], rows: usize) -> Result<Vec<f64>> {
+    let n = robot.joint_count();
+    let mut out = vec![0.0; rows * 16];
+    for_rows(rows, 16, &mut out, |data, i, o| {
+        fk(robot, data, row(q, n, i))?;
+        write_pose(&data.tcp, o);
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// Geometric Jacobians of the motorised joints at the TCP, `rows × 6 × n` (row-major 6×n).
+pub fn jacobians(robot: &Robot, q: &[f64], rows: usize) -> Result<Vec<f64>> {
+    let n = robot.joint_count();
+    let mut out = vec![0.0; rows * 6 * n];
+    for_rows(rows, 6 * n, &mut out, |data, i, o| {
+        fk(robot, data, row(q, n, i))?;
+        let columns = robot.geometric_jacobian_columns(data, &data.tcp_position());
+        for (c, column) in columns.iter().take(n).enumerate() {
+            for r in 0..6 {
+                o[r * n + c] = column[r];
+            }
+        }
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// Cartesian compliances at the TCP, `C = J K_θ⁻¹ Jᵀ` (eq. 15), `rows × 36` (row-major 6×6).
+pub fn compliances(robot: &Robot, q: &[f64], rows: usize) -> Result<Vec<f64>> {
+    let n = robot.joint_count();
+    let mut out = vec![0.0; rows * 36];
+    for_rows(rows, 36, &mut out, |data, i, o| {
+        fk(robot, data, row(q, n, i))?;
+        let c = robot.compliance_matrix(data);
+        for r in 0..6 {
+            for k in 0..6 {
+                o[r * 6 + k] = c[(r, k)];
+            }
+        }
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// TCP deflections `δs = J K_θ⁻¹ Jᵀ w` (eq. 15), `rows × 6`; `wrench` has one row for every
+/// configuration or `rows` rows (world axes, moment about the TCP).
+pub fn deflections(robot: &Robot, q: &[f64], rows: usize, wrench: &[f64]) -> Result<Vec<f64>> {
+    let n = robot.joint_count();
+    let shared = wrench.len() == 6;
+    let mut out = vec![0.0; rows * 6];
+    for_rows(rows, 6, &mut out, |data, i, o| {
+        fk(robot, data, row(q, n, i))?;
+        let w = if shared { wrench } else { row(wrench, 6, i) };
+        let d = robot.tcp_deflection(data, &Wrench::from_row_slice(w));
+        o.copy_from_slice(d.as_slice());
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// A pose from a row-major 4×4 homogeneous matrix: bottom row `[0, 0, 0, 1]` and an
+/// orthonormal, right-handed rotation block (to 1e-9), else an error naming `what`.
+pub fn pose_from_matrix(m: &[f64], what: &str) -> Result<Pose> {
+    let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
+    let deviation = (r.transpose() * r - Matrix3::identity()).amax();
+    if !(deviation < 1e-9 && (r.determinant() - 1.0).abs() < 1e-9) {
+        return Err(Error::invalid(
+            what,
+            format!(
+                "the rotation block is not a rotation (RᵀR − I has an entry of {deviation:.1e}, det R = {:.6})",
+                r.determinant()
+            ),
+        ));
+    }
+    if m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0 {
+        return Err(Error::invalid(
+            what,
+            format!(
+                "the bottom row of a homogeneous matrix is [0, 0, 0, 1], got [{}, {}, {}, {}]",
+                m[12], m[13], m[14], m[15]
+            ),
+        ));
+    }
+    Ok(Pose::from_parts(
+        Translation3::new(m[3], m[7], m[11]),
+        Rotation3::from_matrix_unchecked(r),
+    ))
+}
+
+/// What [`inverse_kinematics`] does with a pose it cannot reach.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnFailure {
+    /// Fail the whole call with the first failure (lowest index).
+    Raise,
+    /// Fill the pose's row with NaN.
+    Nan,
+}
+
+/// Joint values reaching each target TCP pose (`rows × 16`, 4×4 row-major, world frame), from
+/// `seeds` (one row for all, or `rows` rows, rad): the seed first, then the model's 36 spread
+/// seeds (`deflex ik`). Returns `rows × n`.
+pub fn inverse_kinematics(
+    robot: &Robot,
+    targets: &[f64],
+    rows: usize,
+    seeds: &[f64],
+    on_failure: OnFailure,
+) -> Result<Vec<f64>> {
+    let n = robot.joint_count();
+    let shared = seeds.len() == n;
+    let options = IkOptions::default();
+    let mut out = vec![0.0; rows * n];
+    for_rows(rows, n, &mut out, |_, i, o| {
+        let what = if rows == 1 {
+            "pose".to_string()
+        } else {
+            format!("pose[{i}]")
+        };
+        let target = pose_from_matrix(row(targets, 16, i), &what)?;
+        let seed = if shared { seeds } else { row(seeds, n, i) };
+        match robot.inverse_kinematics_search(&target, Some(seed), &options) {
+            Ok(solution) => o.copy_from_slice(&solution.q),
+            Err(e) => match on_failure {
+                OnFailure::Nan => o.fill(f64::NAN),
+                OnFailure::Raise => {
+                    let t = target.translation.vector * 1e3;
+                    return Err(Error::invalid(
+                        what,
+                        format!("{e} (target {:.3}, {:.3}, {:.3} mm)", t.x, t.y, t.z),
+                    ));
+                }
+            },
+        }
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// The default IK seed of the CLI: the paper's forming configuration for 6 joints, else zeros.
+pub fn default_seed(robot: &Robot) -> Vec<f64> {
+    if robot.joint_count() == 6 {
+        deflex_model::TX200_FORMING_Q_DEG
+            .map(f64::to_radians)
+            .to_vec()
+    } else {
+        vec![0.0; robot.joint_count()]
+    }
+}
+
+/// Sag of the TCP under the arm's own weight and payload `[δp; δφ]` (m, rad), when the model
+/// knows its masses (as `deflex pose` prints it), `rows × 6`; `None` without masses.
+pub fn gravity_sags(robot: &Robot, q: &[f64], rows: usize) -> Result<Option<Vec<f64>>> {
+    let has_masses = robot.joints.iter().any(|j| j.inertia.is_some()) || robot.payload.is_some();
+    if !has_masses {
+        return Ok(None);
+    }
+    let n = robot.joint_count();
+    let mut out = vec![0.0; rows * 6];
+    for_rows(rows, 6, &mut out, |data, i, o| {
+        fk(robot, data, row(q, n, i))?;
+        let p: Vector3<f64> = data.tcp_position();
+        let d = robot.gravity_displacement(data, &p, n);
+        o.copy_from_slice(d.as_slice());
+        Ok(())
+    })?;
+    Ok(Some(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn configurations(rows: usize) -> Vec<f64> {
+        // A deterministic spread over the TX200's workspace.
+        (0..rows * 6)
+            .map(|k| ((k as f64 * 0.6180339887).fract() - 0.5) * 2.0)
+            .collect()
+    }
+
+    #[test]
+    fn batches_equal_single_calls_bit_for_bit_across_the_parallel_split() {
+        let robot = builtin("tx200").unwrap();
+        let rows = 3 * ROWS_PER_TASK + 17;
+        let q = configurations(rows);
+        let w = [10.0, -200.0, -1000.0, 3.0, 1.0, -2.0];
+        let batch = deflections(&robot, &q, rows, &w).unwrap();
+        for i in [0, 1, ROWS_PER_TASK - 1, ROWS_PER_TASK, rows - 1] {
+            let single = deflections(&robot, row(&q, 6, i), 1, &w).unwrap();
+            assert_eq!(&batch[i * 6..i * 6 + 6], single.as_slice(), "row {i}");
+        }
+        let c = compliances(&robot, &q, rows).unwrap();
+        let i = rows - 2;
+        let single = compliances(&robot, row(&q, 6, i), 1).unwrap();
+        assert_eq!(&c[i * 36..i * 36 + 36], single.as_slice());
+    }
+
+    #[test]
+    fn ik_reaches_the_pose_of_forward_kinematics_and_reports_failures() {
+        let robot = builtin("tx200").unwrap();
+        let q0 = default_seed(&robot);
+        let mut q = q0.clone();
+        q[0] += 0.2;
+        q[1] -= 0.1;
+        let pose = poses(&robot, &q, 1).unwrap();
+        let solved = inverse_kinematics(&robot, &pose, 1, &q0, OnFailure::Raise).unwrap();
+        let back = poses(&robot, &solved, 1).unwrap();
+        for (a, b) in pose.iter().zip(&back) {
+            assert!((a - b).abs() < 1e-8);
+        }
+        let mut far = pose.clone();
+        far[3] = 50.0;
+        let e = inverse_kinematics(&robot, &far, 1, &q0, OnFailure::Raise).unwrap_err();
+        assert!(e.to_string().contains("out of reach"), "{e}");
+        let nan = inverse_kinematics(&robot, &far, 1, &q0, OnFailure::Nan).unwrap();
+        assert!(nan.iter().all(|v| v.is_nan()));
+        let mut skew = pose;
+        skew[0] = 2.0;
+        let e = inverse_kinematics(&robot, &skew, 1, &q0, OnFailure::Raise).unwrap_err();
+        assert!(e.to_string().contains("not a rotation"), "{e}");
+    }
+
+    #[test]
+    fn non_finite_values_are_named_by_row_and_column() {
+        let e = check_finite("q", &[0.0, 1.0, 2.0, f64::NAN], Some(2)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "q[1, 1] is NaN: every value must be a finite number"
+        );
+    }
+}

@@ -1,0 +1,188 @@
+//! The digital twin (SIMULATED) and deflex's logs: results and entry points.
+
+use super::convert::{json_to_py, make_log, run, to_numpy, to_py};
+use super::robot::{PyRobot, robot_arg};
+use crate::error::Error;
+use crate::twin::{self, FormOptions, TwinRun};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+/// A forming run on the digital twin (SIMULATED): its log, summary and formed profile.
+#[pyclass(module = "deflex", frozen, name = "TwinRun")]
+pub struct PyTwinRun {
+    inner: TwinRun,
+}
+
+#[pymethods]
+impl PyTwinRun {
+    /// The run's log as a ``deflex.Log`` (SI columns: ``time_s``, desired/commanded/true/tracked
+    /// TCP ``des_x_m…`` in the part frame, the error ``err_x_m…``/``err_norm_m``, the wrench on
+    /// the tool ``fx_N…``, the raw sensor sample, the correction ``corr_x_m…``, the plant's
+    /// deflection and the contact state), labelled SIMULATED.
+    #[getter]
+    fn log<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let inner = &self.inner;
+        let columns = run(py, || Ok(twin::log_columns(inner)))?;
+        let rows = self.inner.run.log.rows.len();
+        let table = crate::table::Table {
+            comments: vec![format!(
+                "SIMULATED deflex digital twin forming log (not a measurement). robot: {}; path: {}; seed: {}",
+                self.inner.run.log.robot, self.inner.run.log.path_name, self.inner.run.log.seed
+            )],
+            columns: columns
+                .into_iter()
+                .map(|(n, v)| (n.to_string(), crate::table::Column::Number(v)))
+                .collect(),
+            rows,
+        };
+        make_log(py, table)
+    }
+
+    /// The summary (``summary.json``): max/RMS path error (mm), forces (N), part depth….
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &twin::summary_json(&self.inner))
+    }
+
+    /// The correction controller's status line (closed loop), else ``None``.
+    #[getter]
+    fn controller_status(&self) -> Option<String> {
+        self.inner.controller_status.clone()
+    }
+
+    /// Formed and programmed profile along θ = 0: ``(M, 3)`` rows ``[r_m, depth_m,
+    /// programmed_depth_m]`` (NaN where not programmed).
+    #[getter]
+    fn profile<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let run = &self.inner.run;
+        let values: Vec<f64> = run
+            .profile_mm
+            .iter()
+            .enumerate()
+            .flat_map(|(k, (r, d))| {
+                let p = run
+                    .programmed_profile_mm
+                    .get(k)
+                    .map_or(f64::NAN, |(_, p)| *p);
+                [r * 1e-3, d * 1e-3, p * 1e-3]
+            })
+            .collect();
+        to_numpy(py, values, &[run.profile_mm.len(), 3])
+    }
+
+    /// Write ``log.csv``, ``summary.json``, ``profile.csv`` and the plots into the folder
+    /// ``dir`` (as ``deflex sim isf --out``), replaced whole; returns the files.
+    fn save(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
+        let inner = &self.inner;
+        run(py, || twin::write_outputs(inner, &dir))
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.inner.run.summary;
+        format!(
+            "TwinRun(SIMULATED, {}, '{}', {}, max error {:.3} mm, RMS {:.3} mm, max |F| {:.0} N)",
+            s.robot,
+            s.path,
+            if s.correction {
+                "closed loop"
+            } else {
+                "open loop"
+            },
+            s.max_error_norm_mm,
+            s.rms_error_norm_mm,
+            s.max_force_norm_N
+        )
+    }
+}
+
+/// ``deflex.sim.form``'s engine call.
+#[pyfunction]
+#[pyo3(signature = (path, correction, model, robot, config, seed, length_m, feed_m_s, fixture_stiffness_n_m))]
+#[allow(clippy::too_many_arguments)]
+pub fn _form(
+    py: Python<'_>,
+    path: PathBuf,
+    correction: &str,
+    model: Option<&Bound<'_, PyAny>>,
+    robot: Option<PathBuf>,
+    config: Option<PathBuf>,
+    seed: u64,
+    length_m: Option<f64>,
+    feed_m_s: Option<f64>,
+    fixture_stiffness_n_m: Option<f64>,
+) -> PyResult<PyTwinRun> {
+    let correction_model = match (correction, model) {
+        ("off", None) => None,
+        ("off", Some(_)) => {
+            return Err(to_py(
+                py,
+                Error::invalid("model", "only used with correction=\"on\""),
+            ));
+        }
+        ("on", Some(m)) => Some(robot_arg(py, m, "model")?),
+        ("on", None) => {
+            return Err(to_py(
+                py,
+                Error::invalid(
+                    "model",
+                    "correction=\"on\" needs model= (the identified robot model: a deflex.Robot or a robot file)",
+                ),
+            ));
+        }
+        (other, _) => {
+            return Err(to_py(
+                py,
+                Error::invalid(
+                    "correction",
+                    format!("expected \"on\" or \"off\", got \"{other}\""),
+                ),
+            ));
+        }
+    };
+    let options = FormOptions {
+        robot: robot.map(|r| r.display().to_string()),
+        config,
+        seed,
+        length_m,
+        feed_m_s,
+        fixture_stiffness_n_m,
+        correction_model,
+    };
+    let path = path.display().to_string();
+    let inner = run(py, || twin::form(&path, &options))?;
+    Ok(PyTwinRun { inner })
+}
+
+/// ``deflex.sim.cell_robot``'s engine call.
+#[pyfunction]
+#[pyo3(signature = (robot = None, config = None))]
+pub fn _cell_robot(
+    py: Python<'_>,
+    robot: Option<PathBuf>,
+    config: Option<PathBuf>,
+) -> PyResult<PyRobot> {
+    let robot = robot.map(|r| r.display().to_string());
+    run(py, || {
+        let cell = twin::cell_config(robot.as_deref(), config.as_deref())?;
+        twin::cell_robot(&cell)
+    })
+    .map(PyRobot::new)
+}
+
+/// ``deflex.read_log``'s engine call: a ``deflex.Log`` of the CSV file's columns.
+#[pyfunction]
+pub fn _read_table<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+    let table = run(py, || crate::table::read(&path))?;
+    make_log(py, table)
+}
+
+/// CSV text as a ``deflex.Log``.
+#[pyfunction]
+pub fn _parse_table<'py>(
+    py: Python<'py>,
+    text: String,
+    origin: String,
+) -> PyResult<Bound<'py, PyAny>> {
+    let table = run(py, || crate::table::parse(&text, &origin))?;
+    make_log(py, table)
+}
