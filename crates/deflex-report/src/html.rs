@@ -24,6 +24,36 @@ pub fn html_escape(text: &str) -> String {
     out
 }
 
+/// Text of the page as HTML: escaped ([`html_escape`]), then each pair of backticks around
+/// a span (`` `deflex plot` ``, markdown's inline code) made a `<code>` element. Escaping first
+/// means nothing in `text` can open a tag; an unpaired backtick stays as it is.
+pub fn inline_html(text: &str) -> String {
+    let escaped = html_escape(text);
+    let parts: Vec<&str> = escaped.split('`').collect();
+    // An odd number of parts: every backtick has its pair.
+    let pairs = (parts.len() - 1) / 2;
+    let mut out = String::with_capacity(escaped.len() + pairs * 13);
+    for (i, part) in parts.iter().enumerate() {
+        if i == 0 {
+            out.push_str(part);
+        } else if i > 2 * pairs {
+            // After the last pair: the unpaired backtick, kept.
+            out.push('`');
+            out.push_str(part);
+        } else if i % 2 == 1 {
+            let _ = write!(out, "<code>{part}");
+        } else {
+            let _ = write!(out, "</code>{part}");
+        }
+    }
+    out
+}
+
+/// Text for an attribute (an image's `alt`): escaped, with the backticks of code spans removed.
+fn plain_attribute(text: &str) -> String {
+    html_escape(&text.replace('`', ""))
+}
+
 #[derive(Debug, Clone, PartialEq)]
 enum Block {
     Section(String),
@@ -125,10 +155,15 @@ pub struct HtmlReport {
 
 const CSS: &str = "\
 body{font-family:-apple-system,'Segoe UI',Roboto,'DejaVu Sans',Helvetica,Arial,sans-serif;\
-max-width:1120px;margin:2em auto;padding:0 1.2em;color:#222;line-height:1.5;background:#fff}\
+max-width:1120px;margin:2em auto;padding:0 1.2em;color:#222;line-height:1.5;background:#fff;\
+overflow-wrap:anywhere}\
 h1{font-size:1.8em;border-bottom:2px solid #1f77b4;padding-bottom:.25em}\
 h2{font-size:1.35em;margin-top:1.8em;border-bottom:1px solid #ddd;padding-bottom:.15em}\
-table{border-collapse:collapse;margin:1em 0;font-size:.95em}\
+table{border-collapse:collapse;font-size:.95em}\
+div.table-wrap{overflow-x:auto;max-width:100%;margin:1em 0}\
+div.table-wrap th,div.table-wrap td{overflow-wrap:normal}\
+img{max-width:100%;height:auto}\
+code{overflow-wrap:anywhere}\
 th,td{border:1px solid #ccc;padding:.35em .75em;text-align:left}\
 th{background:#f0f4f8}tr:nth-child(even) td{background:#fafafa}\
 td.num{text-align:right;font-variant-numeric:tabular-nums}\
@@ -224,31 +259,31 @@ impl HtmlReport {
     /// at fault (for a table, the path is empty).
     pub fn render(&self) -> Result<String, ReportError> {
         let mut h = String::new();
-        let title = html_escape(&self.title);
+        let title = plain_attribute(&self.title);
         h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
         h.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
         let _ = writeln!(h, "<title>{title}</title>");
         let _ = writeln!(h, "<style>{CSS}</style>\n</head>\n<body>");
-        let _ = writeln!(h, "<h1>{title}</h1>");
+        let _ = writeln!(h, "<h1>{}</h1>", inline_html(&self.title));
         let ids = section_ids(&self.blocks);
         let mut next_id = ids.iter();
         for block in &self.blocks {
             match block {
                 Block::Section(t) => {
                     let id = next_id.next().map(String::as_str).unwrap_or_default();
-                    let _ = writeln!(h, "<h2 id=\"{id}\">{}</h2>", html_escape(t));
+                    let _ = writeln!(h, "<h2 id=\"{id}\">{}</h2>", inline_html(t));
                 }
                 Block::Subsection(t) => {
                     let id = next_id.next().map(String::as_str).unwrap_or_default();
-                    let _ = writeln!(h, "<h3 id=\"{id}\">{}</h3>", html_escape(t));
+                    let _ = writeln!(h, "<h3 id=\"{id}\">{}</h3>", inline_html(t));
                 }
                 Block::Contents => render_contents(&mut h, &self.blocks, &ids),
                 Block::Files(links) => render_files(&mut h, links)?,
                 Block::Paragraph(t) => {
-                    let _ = writeln!(h, "<p>{}</p>", html_escape(t));
+                    let _ = writeln!(h, "<p>{}</p>", inline_html(t));
                 }
                 Block::Note(t) => {
-                    let _ = writeln!(h, "<div class=\"note\">{}</div>", html_escape(t));
+                    let _ = writeln!(h, "<div class=\"note\">{}</div>", inline_html(t));
                 }
                 Block::Preformatted(t) => {
                     let _ = writeln!(h, "<pre>{}</pre>", html_escape(t));
@@ -291,7 +326,7 @@ fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
                 if any_section {
                     h.push_str("</li>\n");
                 }
-                let _ = write!(h, "<li><a href=\"#{id}\">{}</a>", html_escape(t));
+                let _ = write!(h, "<li><a href=\"#{id}\">{}</a>", inline_html(t));
                 any_section = true;
             }
             Block::Subsection(t) => {
@@ -300,7 +335,7 @@ fn render_contents(h: &mut String, blocks: &[Block], ids: &[String]) {
                     h.push_str("<ul>");
                     open_sub = true;
                 }
-                let _ = write!(h, "<li><a href=\"#{id}\">{}</a></li>", html_escape(t));
+                let _ = write!(h, "<li><a href=\"#{id}\">{}</a></li>", inline_html(t));
             }
             _ => {}
         }
@@ -329,7 +364,7 @@ fn render_files(h: &mut String, links: &[FileLink]) -> Result<(), ReportError> {
         let _ = writeln!(
             h,
             "<li><a href=\"{href}\"><code>{href}</code></a>: {}</li>",
-            html_escape(&link.description)
+            inline_html(&link.description)
         );
     }
     h.push_str("</ul>\n");
@@ -363,11 +398,11 @@ fn render_table(
             });
         }
     }
-    h.push_str("<table>\n");
+    h.push_str("<div class=\"table-wrap\"><table>\n");
     if !headers.is_empty() {
         h.push_str("<thead><tr>");
         for c in headers {
-            let _ = write!(h, "<th>{}</th>", html_escape(c));
+            let _ = write!(h, "<th>{}</th>", inline_html(c));
         }
         h.push_str("</tr></thead>\n");
     }
@@ -380,11 +415,11 @@ fn render_table(
             } else {
                 ""
             };
-            let _ = write!(h, "<td{class}>{}</td>", html_escape(c));
+            let _ = write!(h, "<td{class}>{}</td>", inline_html(c));
         }
         h.push_str("</tr>\n");
     }
-    h.push_str("</tbody>\n</table>\n");
+    h.push_str("</tbody>\n</table></div>\n");
     Ok(())
 }
 
@@ -409,10 +444,10 @@ fn render_image(h: &mut String, path: &Path, caption: &str) -> Result<(), Report
         path: path.to_path_buf(),
         source,
     })?;
-    let cap = html_escape(caption);
+    let (alt, cap) = (plain_attribute(caption), inline_html(caption));
     let _ = writeln!(
         h,
-        "<figure><img src=\"data:{mime};base64,{}\" alt=\"{cap}\"><figcaption>{cap}</figcaption></figure>",
+        "<figure><img src=\"data:{mime};base64,{}\" alt=\"{alt}\"><figcaption>{cap}</figcaption></figure>",
         base64_encode(&bytes)
     );
     Ok(())
@@ -490,5 +525,95 @@ mod tests {
             r.render().unwrap_err(),
             ReportError::UnsupportedFormat { .. }
         ));
+    }
+
+    #[test]
+    fn backticks_become_code_after_escaping() {
+        assert_eq!(
+            inline_html("run `deflex plot <log>` & look"),
+            "run <code>deflex plot &lt;log&gt;</code> &amp; look"
+        );
+        assert_eq!(
+            inline_html("`a` and `b`"),
+            "<code>a</code> and <code>b</code>"
+        );
+        // An unpaired backtick is kept as a character.
+        assert_eq!(inline_html("`a` it`s"), "<code>a</code> it`s");
+        assert_eq!(inline_html("no code"), "no code");
+        // Everywhere the page prints text: no literal backtick is left.
+        let dir = std::env::temp_dir().join(format!("deflex-html-code-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let png = dir.join("f.png");
+        std::fs::write(&png, b"\x89PNG\r\n\x1a\n").unwrap();
+        let mut r = HtmlReport::new("The `x` report");
+        r.contents()
+            .section("About `deflex plot`")
+            .subsection("The `log`")
+            .paragraph("Written by `deflex run`.")
+            .note("SIMULATED by `deflex sim`")
+            .table(&["`col`"], &[vec!["`cell`".into()]])
+            .files(&[FileLink::new("a.csv", "columns `x_m`, `y_m`")])
+            .image(&png, "drawn by `line_plot`");
+        let html = r.render().unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let body = &html[html.find("<body>").unwrap()..];
+        assert!(!body.contains('`'), "{body}");
+        for code in [
+            "x",
+            "deflex plot",
+            "log",
+            "deflex run",
+            "deflex sim",
+            "col",
+            "cell",
+            "x_m",
+        ] {
+            assert!(
+                body.contains(&format!("<code>{code}</code>")),
+                "{code}: {body}"
+            );
+        }
+        assert!(body.contains("alt=\"drawn by line_plot\""), "{body}");
+        assert!(body.contains("<figcaption>drawn by <code>line_plot</code></figcaption>"));
+    }
+
+    /// At 700 px nothing but a table's own wrapper scrolls sideways: every table sits in a
+    /// `div.table-wrap` that scrolls on its own, images shrink to the column, long words wrap.
+    #[test]
+    fn tables_scroll_in_their_own_wrapper_and_images_fit() {
+        let mut r = HtmlReport::new("t");
+        r.table(&["a"], &[vec!["1".into()]])
+            .paragraph("between")
+            .table(&["b", "c"], &[vec!["x".into(), "y".into()]]);
+        let html = r.render().unwrap();
+        let tables = html.matches("<table>").count();
+        assert_eq!(tables, 2);
+        assert_eq!(
+            html.matches("<div class=\"table-wrap\"><table>").count(),
+            tables
+        );
+        assert_eq!(html.matches("</table></div>").count(), tables);
+        let css = &html[html.find("<style>").unwrap()..html.find("</style>").unwrap()];
+        assert!(
+            css.contains("div.table-wrap{overflow-x:auto;max-width:100%"),
+            "{css}"
+        );
+        assert!(css.contains("img{max-width:100%;height:auto}"), "{css}");
+        let body_rule = &css[css.find("body{").unwrap()..];
+        let body_rule = &body_rule[..body_rule.find('}').unwrap()];
+        assert!(body_rule.contains("overflow-wrap:anywhere"), "{body_rule}");
+        // No fixed width wider than 700 px anywhere in the page's style.
+        for (i, _) in css.match_indices("width:") {
+            let value: String = css[i + 6..]
+                .chars()
+                .take_while(|c| c.is_ascii_digit())
+                .collect();
+            if let Ok(px) = value.parse::<u32>() {
+                assert!(
+                    px <= 700 || css[..i].ends_with("max-"),
+                    "fixed width {px} px in {css}"
+                );
+            }
+        }
     }
 }

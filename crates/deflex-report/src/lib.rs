@@ -80,7 +80,7 @@ pub use base64::base64_encode;
 pub use cloud::{Cloud3, Plot3Spec, cloud_3d};
 pub use colormap::{PALETTE, palette_color, viridis};
 pub use heatmap::{heatmap, scatter_heatmap};
-pub use html::{FileLink, HtmlReport, html_escape};
+pub use html::{FileLink, HtmlReport, html_escape, inline_html};
 pub use plot::{PanelLayout, line_plot, panels_plot, parity_plot};
 pub use render::{MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, text_width_px, title_layout};
 pub use run_figures::{MAX_POINTS, RunFigures, RunTrace, Xyz, write_run_figures};

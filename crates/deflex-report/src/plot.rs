@@ -168,6 +168,120 @@ fn legend_corner(
     boxes[best].0.clone()
 }
 
+/// The part of the segment `a`–`b` inside the rectangle `[x0, x1] × [y0, y1]`, as fractions
+/// `(t_in, t_out)` of the way from `a` to `b`, or `None` when no part is inside (Liang–Barsky:
+/// each of the four edges bounds `t` from one side, by `p t ≤ q`).
+fn clip_segment(
+    a: (f64, f64),
+    b: (f64, f64),
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Option<(f64, f64)> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t_in, mut t_out) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-dx, a.0 - x0),
+        (dx, x1 - a.0),
+        (-dy, a.1 - y0),
+        (dy, y1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None; // parallel to this edge and outside it
+            }
+        } else if p < 0.0 {
+            t_in = t_in.max(q / p);
+        } else {
+            t_out = t_out.min(q / p);
+        }
+    }
+    (t_in <= t_out).then_some((t_in, t_out))
+}
+
+/// Shortest segment (px) [`strokable_pieces`] keeps: shorter steps are merged into the next one.
+const MIN_STEP_PX: f64 = 3.0;
+
+/// The polylines that draw `run` on a plotting area of `pw × ph` pixels showing
+/// `[x0, x1] × [y0, y1]`: clipped to that rectangle (nothing is drawn over the axes and tick
+/// labels), with vertices at least [`MIN_STEP_PX`] apart, and cut at every vertex where the line
+/// turns by more than 60° on screen.
+///
+/// Why: plotters strokes a wide line as one polygon whose corners are where the offset edges of
+/// neighbouring segments meet; at a near-reversal (a spike one pixel wide, common in dense logs)
+/// the inner corner lies at `d / cos(φ/2)` from the line for a turn of φ, unbounded as φ → 180°,
+/// and draws long needles through the chart and its labels. Each stroke here ends at a sharp
+/// vertex instead (the two strokes overlap there). The backend rounds pixels its own way, which
+/// can turn a 1 px step anywhere; on steps of 3 px or more that moves a direction by at most
+/// ~50°, so no stroke it draws turns by more than ~110° and no corner lies more than
+/// `d / cos 55° ≈ 1.7 d` from the line.
+pub(crate) fn strokable_pieces(
+    run: &[(f64, f64)],
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+    (pw, ph): (u32, u32),
+) -> Vec<Vec<(f64, f64)>> {
+    let (sx, sy) = (pw as f64 / (x1 - x0), ph as f64 / (y1 - y0));
+    let pixel = |(x, y): (f64, f64)| ((x - x0) * sx, (y1 - y) * sy);
+    let cos_60 = 0.5;
+    let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
+    // The piece being built, and the point merged into its next step (closer than the minimum).
+    let mut current: Vec<(f64, f64)> = Vec::new();
+    let mut pending: Option<(f64, f64)> = None;
+    let mut finish = |current: &mut Vec<(f64, f64)>, pending: &mut Option<(f64, f64)>| {
+        if current.len() == 1
+            && let Some(p) = pending.take()
+        {
+            current.push(p); // a run shorter than the minimum step: drawn as it is
+        }
+        *pending = None;
+        if current.len() > 1 {
+            pieces.push(std::mem::take(current));
+        } else {
+            current.clear();
+        }
+    };
+    for w in run.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let Some((t_in, t_out)) = clip_segment(a, b, (x0, x1), (y0, y1)) else {
+            finish(&mut current, &mut pending);
+            continue;
+        };
+        let at = |t: f64| (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1));
+        let (start, end) = (at(t_in), at(t_out));
+        if t_in > 0.0 || current.is_empty() {
+            // Entering the rectangle (or starting): a new piece.
+            finish(&mut current, &mut pending);
+            current.push(start);
+        }
+        let last = pixel(*current.last().unwrap_or(&start));
+        let p = pixel(end);
+        let step = (p.0 - last.0, p.1 - last.1);
+        if step.0.hypot(step.1) < MIN_STEP_PX {
+            pending = Some(end);
+        } else {
+            if let [.., before, vertex] = current.as_slice() {
+                let o = pixel(*before);
+                let u = (last.0 - o.0, last.1 - o.1);
+                let cos = (u.0 * step.0 + u.1 * step.1) / (u.0.hypot(u.1) * step.0.hypot(step.1));
+                if cos < cos_60 {
+                    // A sharp turn: end this piece at the vertex, start the next there.
+                    let vertex = *vertex;
+                    pending = None;
+                    finish(&mut current, &mut pending);
+                    current.push(vertex);
+                }
+            }
+            current.push(end);
+            pending = None;
+        }
+        if t_out < 1.0 {
+            finish(&mut current, &mut pending);
+        }
+    }
+    finish(&mut current, &mut pending);
+    pieces
+}
+
 /// A polyline in `color`, solid or with the dash pattern of `line`, as a dynamic element.
 fn stroke<DB: DrawingBackend, C: Clone + 'static>(
     points: Vec<C>,
@@ -214,14 +328,17 @@ fn draw_chart<DB: DrawingBackend>(
         let line = p.series.line;
         let with_line = matches!(style, SeriesStyle::Line | SeriesStyle::LineAndPoints);
         let with_points = matches!(style, SeriesStyle::Points | SeriesStyle::LineAndPoints);
+        let inside = |&(x, y): &(f64, f64)| (x0..=x1).contains(&x) && (y0..=y1).contains(&y);
         let mut first = true;
         for run in &p.runs {
             let mut elements: Vec<DynElement<'static, DB, (f64, f64)>> = Vec::new();
             if with_line && run.len() > 1 {
-                elements.push(stroke(run.clone(), line, color.stroke_width(2)));
+                for piece in strokable_pieces(run, (x0, x1), (y0, y1), (pw, ph)) {
+                    elements.push(stroke(piece, line, color.stroke_width(2)));
+                }
             }
             if with_points || run.len() == 1 {
-                for &pt in run {
+                for &pt in run.iter().filter(|pt| inside(pt)) {
                     elements.push(Circle::new(pt, marker_size, color.filled()).into_dyn());
                 }
             }
@@ -388,4 +505,56 @@ pub fn parity_plot(
     render!(path, (spec.width, spec.height), |root| draw_chart(
         root, &spec, &prepared, xr, yr, 4, &colors
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clipping_keeps_the_part_inside_the_rectangle() {
+        let (xr, yr) = ((0.0, 10.0), (0.0, 1.0));
+        // Crosses the bottom edge half-way, and a segment wholly below.
+        assert_eq!(
+            clip_segment((0.0, 1.0), (2.0, -1.0), xr, yr),
+            Some((0.0, 0.5))
+        );
+        assert_eq!(clip_segment((0.0, -1.0), (2.0, -0.5), xr, yr), None);
+        let pieces = strokable_pieces(
+            &[(0.0, 0.5), (1.0, 0.5), (2.0, -1.0), (3.0, 0.5), (4.0, 0.5)],
+            xr,
+            yr,
+            (1000, 100),
+        );
+        assert_eq!(pieces.len(), 2, "{pieces:?}");
+        for p in &pieces {
+            assert!(
+                p.iter()
+                    .all(|&(x, y)| (0.0..=10.0).contains(&x) && (0.0..=1.0).contains(&y))
+            );
+        }
+        assert!((pieces[0].last().unwrap().1).abs() < 1e-12, "{pieces:?}");
+    }
+
+    #[test]
+    fn sharp_turns_end_the_stroke_and_gentle_ones_do_not() {
+        let (xr, yr) = ((0.0, 100.0), (0.0, 100.0));
+        // A spike up and down one pixel apart: cut at its tip; a 45° bend: kept whole.
+        let spike = strokable_pieces(
+            &[(10.0, 0.0), (11.0, 90.0), (12.0, 0.0)],
+            xr,
+            yr,
+            (100, 100),
+        );
+        assert_eq!(
+            spike,
+            vec![
+                vec![(10.0, 0.0), (11.0, 90.0)],
+                vec![(11.0, 90.0), (12.0, 0.0)]
+            ]
+        );
+        let bend = strokable_pieces(&[(0.0, 0.0), (50.0, 0.0), (90.0, 40.0)], xr, yr, (100, 100));
+        assert_eq!(bend.len(), 1);
+        assert_eq!(bend[0].len(), 3);
+    }
 }

@@ -139,6 +139,17 @@ pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf
 fn write_report_into(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut files = Vec::new();
     let mut html = HtmlReport::new(format!("Validation of {}", v.model.name));
+    html.paragraph(format!(
+        "How well {} predicts {} measured displacements{}: error tables, predicted against \
+         measured, and the error over the measured points.",
+        v.model.name,
+        v.measured.len(),
+        v.baseline
+            .as_ref()
+            .map(|b| format!(", beside the baseline {}", b.name))
+            .unwrap_or_default()
+    ));
+    html.contents();
     html.section("Prediction errors (measured − predicted)");
     html.table(&VALIDATION_HEADERS, &validation_rows(v));
     if v.model.rotation.is_some() {

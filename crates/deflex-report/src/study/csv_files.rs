@@ -226,10 +226,22 @@ pub fn part_tag(part: usize) -> &'static str {
     if part == 0 { "cone" } else { "part" }
 }
 
+/// A data file of the study: its name beside the page, one line on what it holds (the page's
+/// list of files), and its text.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataFile {
+    /// Path relative to the page.
+    pub name: String,
+    /// What it holds, in one line.
+    pub description: String,
+    /// Its contents.
+    pub text: String,
+}
+
 /// `compensation.csv` (one row per part and way), each part's process-model table
-/// (`compensation_<tag>_compensated_path.csv`) and the error over time at 10 Hz
-/// (`compensation_<tag>_error.csv`): `(file name, text)`.
-pub fn compensation_files(study: &CompensationStudy, runs: &[PartRuns]) -> Vec<(String, String)> {
+/// (`compensation_<tag>_compensated_path.csv`) and the error along the path of every way
+/// (`compensation_<tag>_error.csv`, one row per way and every fifth logged row).
+pub fn compensation_files(study: &CompensationStudy, runs: &[PartRuns]) -> Vec<DataFile> {
     let mut files = Vec::new();
     let mut csv = String::from(
         "# SIMULATED: the digital twin, every error source on\n\
@@ -258,33 +270,46 @@ pub fn compensation_files(study: &CompensationStudy, runs: &[PartRuns]) -> Vec<(
             );
         }
     }
-    files.push(("compensation.csv".to_string(), csv));
+    files.push(DataFile {
+        name: "compensation.csv".to_string(),
+        description: "offline, online and combined compensation compared: per part and way, \
+                      the largest and RMS path error (all and in contact), the lag at the force \
+                      ramps and the largest force (SIMULATED)"
+            .to_string(),
+        text: csv,
+    });
     for (i, part) in runs.iter().enumerate() {
         let tag = part_tag(i);
-        files.push((
-            format!("compensation_{tag}_compensated_path.csv"),
-            part.table_csv.clone(),
-        ));
-        let mut text = String::from("# SIMULATED: path error norm (mm) of each way, 10 Hz\ntime_s");
-        for (way, _) in &part.runs {
-            let _ = write!(text, ",\"{way}\"");
-        }
-        text.push('\n');
-        let rows = part
+        let name = runs[i]
             .runs
-            .iter()
-            .map(|(_, r)| r.log.rows.len())
-            .min()
-            .unwrap_or(0);
-        for k in (0..rows).step_by(5) {
-            let _ = write!(text, "{:.2}", part.runs[0].1.log.rows[k].time_s);
-            for (_, run) in &part.runs {
-                let t = &run.log.rows[k].truth;
-                let _ = write!(text, ",{:.5}", (t.true_m - t.desired_m).norm() * 1e3);
+            .first()
+            .map_or("", |(_, r)| r.summary.path.as_str());
+        files.push(DataFile {
+            name: format!("compensation_{tag}_compensated_path.csv"),
+            description: format!(
+                "{name}: the offline compensation along the path: desired and compensated pose, \
+                 the shift between them, the force the process model expects and the deflection \
+                 it causes (SI units, SIMULATED)"
+            ),
+            text: part.table_csv.clone(),
+        });
+        let mut text = String::from(
+            "# SIMULATED: path error norm of each way against the position along the desired \
+             path (arc length), every fifth logged row\nway,path_s_m,time_s,error_m\n",
+        );
+        for (way, run) in &part.runs {
+            for (s, t, e) in super::figures::error_along_path(run, 5) {
+                let _ = writeln!(text, "\"{way}\",{s:.6},{t:.2},{e:.4e}");
             }
-            text.push('\n');
         }
-        files.push((format!("compensation_{tag}_error.csv"), text));
+        files.push(DataFile {
+            name: format!("compensation_{tag}_error.csv"),
+            description: format!(
+                "{name}: path error norm (m) of every way against the position along the \
+                 desired path (m) and time (s), one row per way and fifth logged row (SIMULATED)"
+            ),
+            text,
+        });
     }
     files
 }

@@ -575,19 +575,23 @@ const DRAWN: [&str; 5] = [
     deflex_study::compensation::PRECOMPENSATED,
 ];
 
-fn error_series(
-    run: &deflex_sim::FormingRun,
-    from: usize,
-    to: usize,
-    t0: f64,
-) -> (Vec<f64>, Vec<f64>) {
-    run.log.rows[from..to]
+/// A run's path error norm against its position along the desired path: `(arc length of the
+/// desired path (m), time (s), |true − desired| (m))` at every `step`-th logged row. Position,
+/// not time, is what two ways of running the same part share (a corrected run can take longer
+/// or shorter to cover the same path), so their curves line up only against it.
+pub(crate) fn error_along_path(run: &FormingRun, step: usize) -> Vec<(f64, f64, f64)> {
+    let arc = deflex_study::compensation::lag::desired_arc_length(run);
+    run.log
+        .rows
         .iter()
-        .map(|r| (r.time_s - t0, r.truth.path_error_m().norm() * 1e3))
-        .unzip()
+        .zip(arc)
+        .step_by(step.max(1))
+        .map(|(r, s)| (s, r.time_s, r.truth.path_error_m().norm()))
+        .collect()
 }
 
-/// The path error over the run for each part, and one force ramp of the CAM part up close.
+/// The path error along the path for each part, and one force ramp of the CAM part up close:
+/// all against the position along the desired path, so that the ways line up.
 pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>, ReportError> {
     let mut figures = Vec::new();
     for (i, part) in runs.iter().enumerate() {
@@ -597,15 +601,18 @@ pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>
             .iter()
             .filter(|(way, _)| DRAWN.contains(&way.as_str()))
             .map(|(way, run)| {
-                let (t, e) = error_series(run, 0, run.log.rows.len(), 0.0);
-                Series::line(way.clone(), t, e)
+                let (s, e) = error_along_path(run, 1)
+                    .into_iter()
+                    .map(|(s, _, e)| (s, e * 1e3))
+                    .unzip();
+                Series::line(way.clone(), s, e)
             })
             .collect();
         let path = out.join(format!("compensation_{tag}_error.png"));
         let name = &part.runs[0].1.summary.path;
         let spec = PlotSpec::new(
             format!("SIMULATED cell — path error norm, {name}: offline, online and both"),
-            "time [s]",
+            "position along the desired path [m]",
             "|error| [mm]",
         )
         .size(1100, 500);
@@ -614,34 +621,54 @@ pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>
             path,
             format!(
                 "Path error norm along {name} without correction, with the offline compensation \
-                 (process model), the online correction, and both (SIMULATED)"
+                 (process model), the online correction, and both, against the position along \
+                 the desired path (SIMULATED)"
             ),
         ));
     }
-    // A ramp of the CAM part up close: the middle one.
+    // A ramp of the CAM part up close: the middle one, over the stretch of path the first way
+    // covers from 0.5 s before its 50 % point to the settling window after it; every way is
+    // drawn over that same stretch, against the position from that point.
     if let Some(part) = runs.get(1)
         && let Some(&s) = part.ramps.get(part.ramps.len() / 2)
+        && let Some((_, first)) = part.runs.first()
     {
+        let along = error_along_path(first, 1);
+        let t0 = along
+            .get(along.partition_point(|a| a.0 < s))
+            .map_or(0.0, |a| a.1);
+        let position_at = |t: f64| {
+            along
+                .get(
+                    along
+                        .partition_point(|a| a.1 < t)
+                        .min(along.len().saturating_sub(1)),
+                )
+                .map_or(s, |a| a.0)
+        };
+        let (from, to) = (
+            position_at(t0 - 0.5),
+            position_at(t0 + deflex_study::compensation::lag::SETTLE_WINDOW_S),
+        );
         let series: Vec<Series> = part
             .runs
             .iter()
             .filter(|(way, _)| DRAWN.contains(&way.as_str()))
             .map(|(way, run)| {
-                let arc = deflex_study::compensation::lag::desired_arc_length(run);
-                let start = arc.partition_point(|a| *a < s);
-                let t0 = run.log.rows.get(start).map_or(0.0, |r| r.time_s);
-                let from = run.log.rows.partition_point(|r| r.time_s < t0 - 0.5);
-                let to = run.log.rows.partition_point(|r| {
-                    r.time_s <= t0 + deflex_study::compensation::lag::SETTLE_WINDOW_S
-                });
-                let (t, e) = error_series(run, from, to, t0);
-                Series::line(way.clone(), t, e)
+                let (x, e) = error_along_path(run, 1)
+                    .into_iter()
+                    .filter(|(a, _, _)| (from..=to).contains(a))
+                    .map(|(a, _, e)| ((a - s) * 1e3, e * 1e3))
+                    .unzip();
+                Series::line(way.clone(), x, e)
             })
+            // A way that stopped before this stretch has nothing to draw here.
+            .filter(|series| !series.x.is_empty())
             .collect();
         let path = out.join("compensation_ramp.png");
         let spec = PlotSpec::new(
-            "SIMULATED cell — path error at a force ramp of the CAM part (t = 0: the force at 50 % of its step)",
-            "time from the 50 % point [s]",
+            "SIMULATED cell — path error at a force ramp of the CAM part (0: the force at 50 % of its step)",
+            "position along the desired path from the 50 % point [mm]",
             "|error| [mm]",
         )
         .size(1100, 500);

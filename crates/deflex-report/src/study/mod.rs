@@ -65,10 +65,10 @@ fn write_into(study: &Study, out: &Path) -> Result<(), ReportError> {
     write_validation_files(study, out, &mut figures)?;
     write_forming_files(study, out, &mut figures)?;
     write_contact_and_sensitivity(study, out, &mut figures)?;
-    for (name, text) in
-        csv_files::compensation_files(&study.summary.compensation, &study.compensation_runs)
-    {
-        write_text(&out.join(name), &text)?;
+    let compensation_files =
+        csv_files::compensation_files(&study.summary.compensation, &study.compensation_runs);
+    for file in &compensation_files {
+        write_text(&out.join(&file.name), &file.text)?;
     }
     figures.compensation = figures::compensation_figures(out, &study.compensation_runs)?;
     let s = &study.summary;
@@ -91,6 +91,10 @@ fn write_into(study: &Study, out: &Path) -> Result<(), ReportError> {
             grid: &study.grid_params,
             spiral: &study.spiral_params,
             figures: &figures,
+            file_descriptions: compensation_files
+                .into_iter()
+                .map(|f| (f.name, f.description))
+                .collect(),
         },
     )
 }

@@ -18,6 +18,8 @@ pub(crate) struct Page<'a> {
     pub grid: &'a deflex_sim::twin_campaign::GridParams,
     pub spiral: &'a deflex_sim::twin_campaign::SpiralParams,
     pub figures: &'a super::StudyFigures,
+    /// Descriptions of the data files not in [`FILE_DESCRIPTIONS`]: `(name, description)`.
+    pub file_descriptions: Vec<(String, String)>,
 }
 
 /// A stiffness in 10⁶ N·m/rad, or a centre shift in mm (each in its own table: one unit per
@@ -120,8 +122,10 @@ const FILE_DESCRIPTIONS: [(&str, &str); 21] = [
 ];
 
 /// The data files beside the page (`.csv`, `.json`, `.toml`, up to two folders deep), each with
-/// its description: from [`FILE_DESCRIPTIONS`], else the file's first `#` comment line.
-fn data_files(out: &Path) -> Vec<FileLink> {
+/// its description: from [`FILE_DESCRIPTIONS`], else from `more` (files whose names depend on the
+/// run), else a plain "data file" (never the file's own first line: that is a provenance note,
+/// not a description).
+fn data_files(out: &Path, more: &[(String, String)]) -> Vec<FileLink> {
     fn walk(dir: &Path, prefix: &str, depth: usize, found: &mut Vec<String>) {
         let Ok(entries) = std::fs::read_dir(dir) else {
             return;
@@ -157,24 +161,11 @@ fn data_files(out: &Path) -> Vec<FileLink> {
                 .iter()
                 .find(|(n, _)| *n == f)
                 .map(|(_, d)| d.to_string())
-                .or_else(|| first_comment(&out.join(&f)))
+                .or_else(|| more.iter().find(|(n, _)| *n == f).map(|(_, d)| d.clone()))
                 .unwrap_or_else(|| "data file".to_string());
             FileLink::new(f, description)
         })
         .collect()
-}
-
-/// The first `# …` line of a text file (at most 200 characters), if any.
-fn first_comment(path: &Path) -> Option<String> {
-    use std::io::{BufRead as _, Read as _};
-    let file = std::fs::File::open(path).ok()?;
-    let mut line = String::new();
-    std::io::BufReader::new(file)
-        .take(4096)
-        .read_line(&mut line)
-        .ok()?;
-    let text = line.trim().strip_prefix('#')?.trim();
-    (!text.is_empty()).then(|| text.chars().take(200).collect())
 }
 
 /// Write `index.html` into `out`.
@@ -205,7 +196,7 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), ReportError> {
     );
     sensitivity_section(&mut html, s, &f.sensitivity);
     compensation_section(&mut html, &s.compensation, &f.compensation);
-    files_and_run_sections(&mut html, s, out);
+    files_and_run_sections(&mut html, s, out, &page.file_descriptions);
     html.write(&out.join("index.html"))
 }
 
@@ -561,13 +552,18 @@ fn sensitivity_section(html: &mut HtmlReport, s: &DemoSummary, figures: &[Figure
 }
 
 /// The data files beside the page, and the stage timings of the run.
-fn files_and_run_sections(html: &mut HtmlReport, s: &DemoSummary, out: &Path) {
+fn files_and_run_sections(
+    html: &mut HtmlReport,
+    s: &DemoSummary,
+    out: &Path,
+    descriptions: &[(String, String)],
+) {
     html.section("Data files");
     html.paragraph(
         "Beside this page (open the folder the page is in; every file of a SIMULATED run says so \
          in its header):",
     );
-    html.files(&data_files(out));
+    html.files(&data_files(out, descriptions));
 
     html.section("Run");
     let timings: Vec<Vec<String>> = s

@@ -190,6 +190,32 @@ fn quick_demo_numbers_match_its_own_csvs_and_are_deterministic() {
             "{file} is not linked from the page"
         );
     }
+    // Every data file is described by what it holds, not by its own first (provenance) line.
+    let files_list = &html[html.find("<ul class=\"files\">").expect("files list")..];
+    let files_list = &files_list[..files_list.find("</ul>").unwrap()];
+    for item in files_list.split("<li>").skip(1) {
+        let href = &item[item.find("href=\"").unwrap() + 6..];
+        let href = &href[..href.find('"').unwrap()];
+        let description = item[item.find("</a>: ").unwrap() + 6..]
+            .trim_end()
+            .trim_end_matches("</li>");
+        let first = std::fs::read_to_string(dir.join(href))
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap_or_default()
+            .trim_start_matches('#')
+            .trim()
+            .replace('\'', "&#39;");
+        assert!(
+            description.len() > 20 && description != first && description != "data file",
+            "{href}: {description:?}"
+        );
+    }
+    // No literal backtick in the page's text: code spans are <code>.
+    let body = &html[html.find("<body>").unwrap()..];
+    assert!(!body.contains('`'), "a literal backtick in the page");
+    check_compensation_along_path(&dir);
     // One unit per column: every numeric header of the page's tables names its unit.
     for header in html.split("<th>").skip(1) {
         let header = &header[..header.find("</th>").unwrap()];
@@ -381,4 +407,52 @@ fn readme_results_are_the_demos_own() {
         "README.md's results table is not the demo's (seed 1).\n--- README:\n{block}\n--- demo:\n{table}\n\
          If the change is intended: DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_results"
     );
+}
+
+/// The compensation error files give every way's error against its position along the desired
+/// path (what the figures are drawn against): each way from the start of the path, in order, to
+/// its end, whatever time each way took.
+fn check_compensation_along_path(dir: &Path) {
+    for tag in ["cone", "part"] {
+        let path = dir.join(format!("compensation_{tag}_error.csv"));
+        if !path.exists() {
+            continue;
+        }
+        // Way names hold commas (quoted): a real CSV reader.
+        let mut reader = ::csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .from_path(&path)
+            .unwrap();
+        let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+        assert_eq!(header, ["way", "path_s_m", "time_s", "error_m"], "{tag}");
+        let rows: Vec<::csv::StringRecord> = reader.records().map(Result::unwrap).collect();
+        let mut ways: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+        for row in &rows {
+            let (s, t): (f64, f64) = (row[1].parse().unwrap(), row[2].parse().unwrap());
+            match ways.last_mut() {
+                Some((way, points)) if *way == row[0] => points.push((s, t)),
+                _ => ways.push((row[0].to_string(), vec![(s, t)])),
+            }
+        }
+        assert!(ways.len() >= 3, "{tag}: {} ways", ways.len());
+        for (way, points) in &ways {
+            assert_eq!(points[0].0, 0.0, "{tag} {way} starts at the path's start");
+            assert!(
+                points
+                    .windows(2)
+                    .all(|w| w[1].0 >= w[0].0 && w[1].1 > w[0].1),
+                "{tag} {way}: position and time in order"
+            );
+        }
+        // Every way covers the same path: their end positions agree within 1 %.
+        let ends: Vec<f64> = ways.iter().map(|(_, p)| p.last().unwrap().0).collect();
+        let longest = ends.iter().copied().fold(0.0, f64::max);
+        assert!(longest > 0.0);
+        for ((way, _), end) in ways.iter().zip(&ends) {
+            assert!(
+                (end - longest).abs() <= 0.01 * longest,
+                "{tag} {way}: {end} of {longest} m"
+            );
+        }
+    }
 }

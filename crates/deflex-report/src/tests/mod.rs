@@ -519,3 +519,49 @@ fn html_contents_and_file_links() {
         assert!(r.render().is_err(), "{bad:?} accepted");
     }
 }
+
+/// Red pixels outside the plotting area of a chart drawn by `line_plot` with no title (margin
+/// 14 px, y label area 86 px, x label area 58 px; 2 px of slack for the stroke).
+fn red_outside_plot_area(path: &Path) -> usize {
+    let (w, h) = png_dims(path);
+    let pixels = png_pixels(path);
+    let (left, right, top, bottom) = (14 + 86 - 2, w - 14 + 2, 14 - 2, h - 14 - 58 + 2);
+    pixels
+        .iter()
+        .enumerate()
+        .filter(|&(i, &p)| {
+            let (col, row) = (i as u32 % w, i as u32 / w);
+            p == (255, 0, 0) && (col < left || col > right || row < top || row > bottom)
+        })
+        .count()
+}
+
+/// A dense series that reverses sharply at every point (a path error with spikes, 10 ms rows
+/// over a long run) is drawn inside the plotting area: the stroke's joins never reach into the
+/// tick labels (plotters' wide-line joins grow without bound at near-reversals), and data past
+/// a given y range is clipped at the frame.
+#[test]
+fn spiky_series_stay_inside_the_plotting_area() {
+    let dir = temp_dir("spikes");
+    let n = 6000;
+    let x: Vec<f64> = (0..n).map(|i| i as f64 * 0.013).collect();
+    // Small values with a spike every few rows, as |error| of a corrected run.
+    let y: Vec<f64> = (0..n)
+        .map(|i| match i % 7 {
+            3 => 0.5 + 0.4 * ((i as f64) * 0.37).sin().abs(),
+            5 => 0.2 + 0.1 * ((i as f64) * 0.11).cos(),
+            _ => 0.02 + 0.01 * ((i as f64) * 0.5).sin(),
+        })
+        .collect();
+    let series = vec![Series::line("", x, y).with_color((255, 0, 0))];
+    let spec = PlotSpec::new("", "time [s]", "|error| [mm]").size(1100, 500);
+    let auto = dir.join("auto.png");
+    line_plot(&auto, &spec, &series).unwrap();
+    let drawn = count(&png_pixels(&auto), (255, 0, 0));
+    assert!(drawn > 10_000, "the series is drawn ({drawn} red pixels)");
+    assert_eq!(red_outside_plot_area(&auto), 0, "autoscaled y range");
+    let fixed = dir.join("fixed.png");
+    line_plot(&fixed, &spec.clone().y_range(0.0, 0.3), &series).unwrap();
+    assert_eq!(red_outside_plot_area(&fixed), 0, "y range (0, 0.3 mm)");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -44,6 +44,23 @@ fn a_report_that_fails_half_way_leaves_the_folder_as_it_was() {
     let files = write_report(&v, &dir).unwrap();
     assert!(files.iter().all(|f| f.starts_with(&dir) && f.exists()));
     assert!(!dir.join("old.txt").exists());
+    // A contents list like the study's page: after the introduction, before the first section,
+    // linking every section.
+    let html = std::fs::read_to_string(dir.join("validation.html")).unwrap();
+    let nav = html
+        .find("<nav class=\"contents\">")
+        .expect("contents list");
+    assert!(
+        nav < html.find("<h2").unwrap(),
+        "contents before the first section"
+    );
+    for id in [
+        "prediction-errors-measured-predicted",
+        "predicted-vs-measured",
+    ] {
+        assert!(html.contains(&format!("<a href=\"#{id}\">")), "{id}");
+        assert!(html.contains(&format!("<h2 id=\"{id}\">")), "{id}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
