@@ -52,10 +52,10 @@ fn cell_toml(kind: &str, twin: &CellConfig) -> String {
         free_port()
     };
     format!(
-        "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot_port}\"\ntimeout_s = 0.1\n\
+        "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot_port}\"\ntimeout_s = 1.0\n\
          cycle_s = {}\n\
          [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:{}\"\nbind = \"127.0.0.1:0\"\n\
-         timeout_s = 0.1\nrange = {:?}\n\
+         timeout_s = 1.0\nrange = {:?}\n\
          [mounting]\nsensor_xyz_m = {:?}\nsensor_rpy_rad = {:?}\ntool_mass_kg = {}\ntool_com_m = {:?}\n\
          gravity_m_s2 = [0.0, 0.0, {}]\n\
          [model]\nfile = \"model.toml\"\n[control]\nrealtime = false\nlock_memory = false\n\
