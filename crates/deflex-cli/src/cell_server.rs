@@ -7,10 +7,16 @@
 use crate::args::{CliResult, check_flag, print_json};
 use crate::cmd_control::{load_cell_file, stats_json};
 use clap::Args;
+use deflex_record::{McapRecorder, RecordReport};
+use deflex_runtime::CellFile;
 use deflex_sim::{CellConfig, ConeParams, ToolPath};
-use deflex_twin::cell_server::{CellEnd, CellEvent, CellOutcome, ServeOptions, serve_cell};
+use deflex_telemetry::{CycleSample, Source, broadcast};
+use deflex_twin::cell_server::{CellEnd, CellEvent, CellOutcome, ServeOptions, serve_cell_with};
+use deflex_twin::{TwinCellStream, twin_cell_session_info};
+use deflex_view::ViewStats;
 use serde_json::json;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 #[derive(Args, Clone, Debug)]
@@ -55,6 +61,18 @@ pub struct CellArgs {
     /// No progress lines on stderr.
     #[arg(long)]
     pub quiet: bool,
+    /// Serve the twin's own live page (SIMULATED ground truth: true contact force, the arm's
+    /// true deflection, the correction the robot applies, the path error, the program,
+    /// commanded and true TCP paths) on ADDR, 127.0.0.1:8766 when no address is given. The
+    /// controller's own page is `deflex run --view`.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crate::live::CELL_VIEW)]
+    pub view: Option<String>,
+    /// The twin's ground-truth log (CSV, the `deflex sim isf` log.csv columns), with its MCAP
+    /// recording beside it (same name, `.mcap`). Default: beside the CELL.toml's `[log]
+    /// path`, named after it with `.sim-cell` (`deflex-run.csv` → `deflex-run.sim-cell.csv`),
+    /// or `deflex-run.sim-cell.csv` beside the CELL.toml without `[log]`.
+    #[arg(long, value_name = "PATH")]
+    pub log: Option<PathBuf>,
 }
 
 impl CellArgs {
@@ -66,8 +84,38 @@ impl CellArgs {
         }
         check_flag("--wait-s", self.wait_s, 0.0, 3600.0, "s")?;
         check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")?;
+        if let Some(v) = &self.view {
+            crate::live::view_address(v)?;
+        }
         Ok(())
     }
+}
+
+/// The twin's log of a `cell --sim` session: `--log`, else beside the CELL.toml's run log,
+/// named after it (`deflex-run.csv` → `deflex-run.sim-cell.csv`).
+pub fn cell_log_path(args: &CellArgs, file: &CellFile) -> PathBuf {
+    if let Some(p) = &args.log {
+        return p.clone();
+    }
+    let run_log = file
+        .log_path()
+        .unwrap_or_else(|| file.base_dir.join("deflex-run.csv"));
+    let stem = run_log
+        .file_stem()
+        .map_or_else(|| "deflex-run".into(), |s| s.to_string_lossy().into_owned());
+    run_log.with_file_name(format!("{stem}.sim-cell.csv"))
+}
+
+/// What `cell --sim` served and wrote.
+pub struct CellSession {
+    /// The twin's run.
+    pub outcome: CellOutcome,
+    /// The ground-truth log written (rows).
+    pub log: (PathBuf, usize),
+    /// The MCAP recording: where, and what it held (or why it failed).
+    pub recording: (PathBuf, Result<RecordReport, String>),
+    /// What the live view did.
+    pub view: Option<ViewStats>,
 }
 
 pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
@@ -134,12 +182,14 @@ fn print_event(event: CellEvent) {
 }
 
 /// Serves the twin until the path is done (or `stop`). With `progress`, prints a status line
-/// on stderr every two seconds.
+/// on stderr every two seconds. The twin's own stream (ground truth, [`Source::TwinCell`]) is
+/// recorded in MCAP on its own thread and, with `--view`, served live; at the end the twin's
+/// ground-truth log is written, the recording beside it (both only when the session served).
 pub fn cell_session(
     args: &CellArgs,
     stop: &AtomicBool,
     progress: bool,
-) -> Result<CellOutcome, String> {
+) -> Result<CellSession, String> {
     if !args.sim {
         return Err("cell: only the simulated cell exists; pass --sim".into());
     }
@@ -161,12 +211,61 @@ pub fn cell_session(
         wait_s: args.wait_s,
         dwell_s: args.dwell_s,
     };
+    let log_path = cell_log_path(args, &file);
+    let mcap_path = crate::live::mcap_beside(&log_path, "--log")?;
+    let nominal = options.twin.nominal_robot().map_err(|e| e.to_string())?;
+    let info = Arc::new(twin_cell_session_info(&nominal, &options.twin));
+    debug_assert_eq!(info.source, Source::TwinCell);
+    let (publisher, ring) = broadcast::<CycleSample>(1 << 14);
+    let recorder =
+        McapRecorder::spawn(&mcap_path, &ring, info.clone()).map_err(|e| e.to_string())?;
+    let view = match &args.view {
+        Some(addr) => {
+            let addr = crate::live::view_address(addr)?;
+            match crate::live::start_view(addr, ring.clone(), info, None, false) {
+                Ok(v) => Some(v),
+                Err(e) => {
+                    let _ = recorder.finish_with(false);
+                    return Err(e.to_string());
+                }
+            }
+        }
+        None => None,
+    };
+    let mut stream = TwinCellStream::new(nominal).with_publisher(publisher);
     let mut events = |event| {
         if progress {
             print_event(event)
         }
     };
-    serve_cell(&file, &options, stop, &mut events).map_err(|e| e.to_string())
+    let served = serve_cell_with(&file, &options, stop, &mut events, Some(&mut stream))
+        .map_err(|e| e.to_string());
+    drop(stream); // the stream ends
+    let view = view.map(|v| {
+        let stats = v.stats();
+        v.shutdown();
+        stats
+    });
+    let outcome = match served {
+        Ok(o) => o,
+        Err(e) => {
+            let _ = recorder.finish_with(false);
+            return Err(e);
+        }
+    };
+    let rows = outcome.log.rows.len();
+    let written = deflex_files::write_atomic(&log_path, outcome.log.to_csv())
+        .map_err(|e| format!("{}: {e}", log_path.display()));
+    let recording = recorder
+        .finish_with(written.is_ok())
+        .map_err(|e| e.to_string());
+    written?;
+    Ok(CellSession {
+        outcome,
+        log: (log_path, rows),
+        recording: (mcap_path, recording),
+        view,
+    })
 }
 
 pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
@@ -177,8 +276,11 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
              waiting for `deflex run`…"
         );
     }
-    let o = cell_session(&args, stop, !args.quiet)?;
+    let session = cell_session(&args, stop, !args.quiet)?;
+    let o = &session.outcome;
     let s = &o.summary;
+    let (log_path, log_rows) = &session.log;
+    let (mcap_path, recording) = &session.recording;
     let phase = match o.end {
         CellEnd::ProgramFinished => "ended (robot program finished)",
         CellEnd::Stopped => "stopped (signal)",
@@ -192,7 +294,19 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
             "max_error_norm_mm": s.max_error_norm_m * 1e3, "rms_error_norm_mm": s.rms_error_norm_m() * 1e3,
             "max_force_norm_n": s.max_force_norm_n, "max_fz_n": s.max_fz_n,
             "max_correction_mm": s.max_correction_m * 1e3,
+            "log": log_path, "log_rows": log_rows,
         });
+        let mut value = value;
+        let ok = recording.as_ref().ok();
+        value["mcap"] = json!({
+            "path": mcap_path, "committed": ok.is_some(),
+            "cycles": ok.map(|r| r.stats.recorded), "lost": ok.map(|r| r.lost),
+            "error": recording.as_ref().err(),
+        });
+        value["view"] = json!(session.view.as_ref().map(|v| json!({
+            "samples": v.samples_received, "samples_lost": v.samples_lost,
+            "messages_dropped": v.frames_dropped,
+        })));
         print_json(&value);
     } else {
         println!(
@@ -212,6 +326,23 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
             s.max_force_norm_n,
             s.max_correction_m * 1e3
         );
+        println!(
+            "  log: {} ({log_rows} rows, SIMULATED ground truth)",
+            log_path.display()
+        );
+        match recording {
+            Ok(r) => println!(
+                "  recording: {} (MCAP, the twin's stream: {} samples, {} lost, {:.1} MB)",
+                mcap_path.display(),
+                r.stats.recorded,
+                r.lost,
+                r.stats.bytes as f64 / 1e6
+            ),
+            Err(e) => println!("  recording: failed: {e}"),
+        }
+        if let Some(v) = &session.view {
+            println!("  live view: {}", crate::live::view_line(v));
+        }
     }
     Ok(())
 }
@@ -236,6 +367,8 @@ mod tests {
             wait_s: 1.0,
             dwell_s: 0.5,
             quiet: true,
+            view: None,
+            log: None,
         };
         assert_eq!(twin_config(&args(None, None)).unwrap().part.robot, "tx200");
         let ur = twin_config(&args(Some("ur10e"), None)).unwrap();
@@ -283,6 +416,8 @@ mod tests {
             wait_s: 1.0,
             dwell_s: 0.5,
             quiet: true,
+            view: None,
+            log: None,
         };
         let e = cell_session(&args, &AtomicBool::new(false), false)
             .err()

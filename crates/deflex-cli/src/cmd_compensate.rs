@@ -20,15 +20,31 @@ mod setup;
 
 use crate::args::{CliResult, print_json};
 use clap::{Args, ValueEnum};
-use deflex_compensate::log::{ResampleOptions, read_log, resample_on_path};
+use deflex_compensate::LogError;
+use deflex_compensate::log::{
+    MAX_LOG_BYTES, ResampleOptions, WrenchLog, parse_log, resample_on_path,
+};
 use deflex_compensate::table::write_csv_to;
-use deflex_compensate::{Compensation, Progress, Stage, WrenchSource, compensate};
+use deflex_compensate::{
+    Compensation, Identification, LoggedProcess, LoggedProcessOptions, Progress, Stage,
+    WrenchSource, compensate,
+};
 use deflex_sim::FormingProcess;
 use serde_json::json;
 use setup::Setup;
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
+
+/// What a log gives the compensation (`--log-forces`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LogForces {
+    /// The force–depth law identified from the log: the compensated tool, reaching deeper,
+    /// meets the force the log shows at that depth (`deflex_compensate::logged`).
+    Law,
+    /// The logged wrenches as they are (one pass).
+    Fixed,
+}
 
 /// A program format on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -85,6 +101,14 @@ pub struct CompensateArgs {
     /// of this configuration about its axis. Default: the robot cell's seed.
     #[arg(long, allow_hyphen_values = true)]
     pub seed_deg: Option<String>,
+    /// With `--wrench log:FILE`: `law` (the force follows the depth the compensated tool reaches,
+    /// as the log shows it does) or `fixed` (the logged wrenches, one pass).
+    #[arg(long, value_enum, default_value = "law")]
+    pub log_forces: LogForces,
+    /// With `--wrench log:FILE`: do not use the log's measured TCP (a sim log's laser-tracker
+    /// columns) to correct what the robot model misses.
+    #[arg(long)]
+    pub ignore_measured_tcp: bool,
     /// Twin settings (`[cell]` TOML) over the robot's cell: part placement, seed, sheet.
     #[arg(long)]
     pub twin: Option<PathBuf>,
@@ -222,7 +246,7 @@ pub fn run(args: CompensateArgs, json: bool) -> Result<(), CompensateCommandErro
     let mut on_progress = |p: &Progress| {
         let stage = match p.stage {
             Stage::Desired => "IK of the path".to_string(),
-            Stage::Process => format!("iteration {}: process", p.iteration),
+            Stage::Process => "the log's force-depth law".to_string(),
             Stage::Compensation => format!("iteration {}: compensation", p.iteration),
             Stage::Final => "final process pass".to_string(),
         };
@@ -231,6 +255,7 @@ pub fn run(args: CompensateArgs, json: bool) -> Result<(), CompensateCommandErro
     };
     let part = s.part_frame;
     let mut source_lines: Vec<String> = Vec::new();
+    let mut law_json: Option<serde_json::Value> = None;
     let result = match &s.wrench {
         setup::WrenchArg::Log(file) => {
             let log = read_log(file, &s.robot, &part)?;
@@ -252,18 +277,46 @@ pub fn run(args: CompensateArgs, json: bool) -> Result<(), CompensateCommandErro
                 log.kind.name(),
                 file.display()
             );
-            compensate(
-                &s.robot,
-                &s.path,
-                &s.seed,
-                WrenchSource::Fixed {
-                    label,
-                    simulated: log.simulated,
-                    wrenches: &resampled.wrenches,
-                },
-                &s.options,
-                &mut on_progress,
-            )?
+            match args.log_forces {
+                LogForces::Fixed => compensate(
+                    &s.robot,
+                    &s.path,
+                    &s.seed,
+                    WrenchSource::Fixed {
+                        label,
+                        simulated: log.simulated,
+                        wrenches: &resampled.wrenches,
+                    },
+                    &s.options,
+                    &mut on_progress,
+                )?,
+                LogForces::Law => {
+                    let label = format!("{} {}", log.kind.name(), file.display());
+                    let mut process = LoggedProcess::new(
+                        &label,
+                        log.simulated,
+                        resampled,
+                        LoggedProcessOptions {
+                            use_measured: !args.ignore_measured_tcp,
+                            ..LoggedProcessOptions::default()
+                        },
+                    )
+                    .map_err(deflex_compensate::CompensateError::from)?;
+                    let result = compensate(
+                        &s.robot,
+                        &s.path,
+                        &s.seed,
+                        WrenchSource::Process(&mut process),
+                        &s.options,
+                        &mut on_progress,
+                    )?;
+                    if let Some(id) = process.identification() {
+                        source_lines.push(identification_line(id, process.bounded_points()));
+                        law_json = Some(identification_json(id, process.bounded_points()));
+                    }
+                    result
+                }
+            }
         }
         setup::WrenchArg::Process => {
             let mut process = FormingProcess::from_cell(&s.config, &s.tool_path)
@@ -280,7 +333,7 @@ pub fn run(args: CompensateArgs, json: bool) -> Result<(), CompensateCommandErro
     };
     bar.finish_and_clear();
     let elapsed_s = started.elapsed().as_secs_f64();
-    let summary = write_outputs(&args, &s, result, &source_lines, elapsed_s, json)?;
+    let summary = write_outputs(&args, &s, result, &source_lines, law_json, elapsed_s, json)?;
     if json {
         print_json(&summary.json);
     } else {
@@ -378,6 +431,7 @@ fn write_outputs(
     s: &Setup,
     result: Compensation,
     source_lines: &[String],
+    law: Option<serde_json::Value>,
     elapsed_s: f64,
     json: bool,
 ) -> Result<Summary, CompensateCommandError> {
@@ -422,6 +476,7 @@ fn write_outputs(
         "max_compensation_rad": result.max_compensation_rad,
         "failed_points": result.failure_count(),
         "failures": failures,
+        "log_law": law,
     });
     if refusal.is_none() && !s.formats.is_empty() {
         let programs_dir = dir.path().join("programs");
@@ -499,6 +554,49 @@ fn write_outputs(
     })
 }
 
+/// The law identified from a log, for the summary text.
+fn identification_line(id: &Identification, bounded: usize) -> String {
+    if id.sloped_bins == 0 {
+        return format!(
+            "the logged forces do not follow the depth ({} of {} points in contact): used as they are",
+            id.contact_points, id.points
+        );
+    }
+    format!(
+        "force-depth law from the log: {} of {} points in contact over {:.2} mm of actual depth, {:.0} … {:.0} N; {}; {} point(s) at the force-ratio bound",
+        id.contact_points,
+        id.points,
+        (id.depth_range_m[1] - id.depth_range_m[0]) * 1e3,
+        id.force_range_n[0],
+        id.force_range_n[1],
+        if id.measured {
+            format!(
+                "measured TCP used (the model missed up to {:.3} mm)",
+                id.max_unmodelled_m * 1e3
+            )
+        } else {
+            "no measured TCP (depths from the model's deflection)".to_string()
+        },
+        bounded
+    )
+}
+
+fn identification_json(id: &Identification, bounded: usize) -> serde_json::Value {
+    json!({
+        "points": id.points,
+        "contact_points": id.contact_points,
+        "law_bins": id.law_bins,
+        "sloped_bins": id.sloped_bins,
+        "depth_range_m": id.depth_range_m,
+        "force_range_N": id.force_range_n,
+        "relative_slope_range_per_m": id.relative_slope_range_per_m,
+        "max_axial_force_N": id.max_axial_force_n,
+        "measured_tcp": id.measured,
+        "max_unmodelled_deflection_m": id.max_unmodelled_m,
+        "points_at_force_ratio_bound": bounded,
+    })
+}
+
 fn iteration_json(result: &Compensation) -> Vec<serde_json::Value> {
     result
         .iterations
@@ -573,6 +671,27 @@ fn summary_text(
         elapsed_s
     );
     t
+}
+
+/// Read a log file for `--wrench log:FILE` (at most [`MAX_LOG_BYTES`], the file named in every
+/// error) and parse it ([`parse_log`]): the file is read here, the maths crate sees its text.
+fn read_log(
+    path: &std::path::Path,
+    robot: &deflex_model::Robot,
+    part_frame: &deflex_model::Pose,
+) -> Result<WrenchLog, LogError> {
+    let file = path.display().to_string();
+    let text = deflex_load::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
+        deflex_load::BoundedReadError::Io(source) => LogError::Io {
+            file: file.clone(),
+            message: source.to_string(),
+        },
+        deflex_load::BoundedReadError::TooLarge(size) => LogError::TooLarge {
+            file: file.clone(),
+            message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
+        },
+    })?;
+    parse_log(&text, &file, robot, part_frame)
 }
 
 #[cfg(test)]

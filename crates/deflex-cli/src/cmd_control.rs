@@ -12,10 +12,12 @@ use deflex_ros2::{
     BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2Error, Ros2SensorLink, SensorCounts,
     SensorSettings,
 };
+use deflex_record::{McapRecorder, RecordOptions, RecordReport};
 use deflex_runtime::cell_run::FeedForwardInUse;
 use deflex_runtime::config::SensorKind;
 use deflex_runtime::stats::StatsSummary;
 use deflex_runtime::{CellFile, CellRun, CellRunOutcome, LiveStatus};
+use deflex_view::{ViewHandle, ViewStats};
 use serde_json::json;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -38,6 +40,12 @@ pub struct RunArgs {
     /// No live status lines.
     #[arg(long)]
     pub quiet: bool,
+    /// Serve the live view (a page in the browser: forces, δŝ, ξ against its limits, state,
+    /// loop timing, 3-D path; a stop button that ramps the correction out as Ctrl-C does) on
+    /// ADDR, 127.0.0.1:8765 when no address is given. Another address than loopback is
+    /// reachable from the network: a warning is printed.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crate::live::RUN_VIEW)]
+    pub view: Option<String>,
 }
 
 impl RunArgs {
@@ -54,6 +62,9 @@ impl RunArgs {
             3600.0,
             "s",
         )?;
+        if let Some(v) = &self.view {
+            crate::live::view_address(v)?;
+        }
         Ok(())
     }
 }
@@ -73,6 +84,10 @@ pub struct RunOutcome {
     pub bridge: Option<(Vec<String>, BridgeReport)>,
     /// What the ROS 2 sensor link took and refused (`sensor.kind = "ros2"`).
     pub ros2_sensor: Option<(String, SensorCounts)>,
+    /// The MCAP recording beside the log: where, and what it held (or why it failed).
+    pub recording: Option<(PathBuf, Result<RecordReport, String>)>,
+    /// What the live view did.
+    pub view: Option<ViewStats>,
 }
 
 /// The ROS 2 parts of a run: the sensor link of `sensor.kind = "ros2"` (opened before the
@@ -143,10 +158,20 @@ fn print_status(s: &LiveStatus, rate_hz: f64) {
     );
 }
 
-/// The `deflex run` session: links, threads, live status, summary. `stop` ends it early.
-pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunOutcome, String> {
+/// The `deflex run` session: links, threads, live status, summary. `stop` ends it early (the
+/// live view's stop button sets it too). With `[log]`, the session is also recorded in MCAP
+/// beside the CSV log ([`crate::live::mcap_beside`]), on its own thread.
+pub fn run_session(
+    args: &RunArgs,
+    live: bool,
+    stop: &'static AtomicBool,
+) -> Result<RunOutcome, String> {
     args.check()?;
     let cell = load_cell_file(&args.config)?;
+    let mcap_path = match cell.log_path() {
+        Some(log) => Some(crate::live::mcap_beside(&log, "log.path")?),
+        None => None,
+    };
     let started = Instant::now();
     let mut ros2 =
         open_ros2_sensor(&cell).map_err(|e| format!("{}: sensor.topic: {e}", cell.origin))?;
@@ -182,6 +207,17 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
             cell.ros2.as_ref().map_or(0, |r| r.domain_id),
         );
     }
+    // The sinks join right after the threads started, from the oldest sample the ring holds
+    // (nothing can be lost: no robot has answered yet). A sink that cannot start ends the
+    // session before the robot is served.
+    let (recorder, view) = match start_sinks(&run, mcap_path, args, stop) {
+        Ok(sinks) => sinks,
+        Err(message) => {
+            run.runtime.request_stop();
+            let _ = run.finish();
+            return Err(message);
+        }
+    };
     let feedforward = run.feedforward.as_ref().map(describe_feedforward);
     if let Ok(policy) = cell.peer_policy()
         && let Some(warning) = policy.warning()
@@ -217,7 +253,19 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
             print_status(&s, rate);
         }
     }
-    let session = run.finish().map_err(|e| format!("log writer: {e}"))?;
+    let finished = run.finish();
+    let view = view.map(|v| {
+        let stats = v.stats();
+        v.shutdown();
+        stats
+    });
+    // Kept exactly when the CSV log is: a failed run leaves both earlier files whole.
+    let commit = finished.as_ref().is_ok_and(|s| s.summary.error.is_none());
+    let recording = recorder.map(|r| {
+        let path = r.path().to_path_buf();
+        (path, r.finish_with(commit).map_err(|e| e.to_string()))
+    });
+    let session = finished.map_err(|e| format!("log writer: {e}"))?;
     let bridge = match ros2.bridge {
         Some(b) => {
             let topics = b.topics().to_vec();
@@ -231,7 +279,57 @@ pub fn run_session(args: &RunArgs, live: bool, stop: &AtomicBool) -> Result<RunO
         feedforward,
         bridge,
         ros2_sensor: ros2.sensor_counts.map(|(topic, h)| (topic, h.counts())),
+        recording,
+        view,
     })
+}
+
+/// The MCAP recorder (with `[log]`) and the live view (with `--view`) of a started run.
+fn start_sinks(
+    run: &CellRun,
+    mcap_path: Option<PathBuf>,
+    args: &RunArgs,
+    stop: &'static AtomicBool,
+) -> Result<(Option<McapRecorder>, Option<ViewHandle>), String> {
+    let ring = run.runtime.telemetry();
+    let info = run.runtime.session_info();
+    let recorder = match mcap_path {
+        Some(path) => Some(
+            McapRecorder::spawn_with(
+                path,
+                ring.subscribe_from_oldest(),
+                info.clone(),
+                RecordOptions::default(),
+            )
+            .map_err(|e| e.to_string())?,
+        ),
+        None => None,
+    };
+    let view = match &args.view {
+        Some(addr) => {
+            // The page's stop button: the same flag as Ctrl-C, so the same ramp-out.
+            let on_stop: deflex_view::StopCallback =
+                Box::new(move || stop.store(true, Ordering::SeqCst));
+            let view = crate::live::start_view(
+                crate::live::view_address(addr)?,
+                ring.clone(),
+                info.clone(),
+                Some(on_stop),
+                false,
+            );
+            match view {
+                Ok(v) => Some(v),
+                Err(e) => {
+                    if let Some(r) = recorder {
+                        let _ = r.finish_with(false);
+                    }
+                    return Err(e.to_string());
+                }
+            }
+        }
+        None => None,
+    };
+    Ok((recorder, view))
 }
 
 pub(crate) fn stats_json(s: &StatsSummary) -> serde_json::Value {
@@ -274,6 +372,7 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             "max_force_n": s.max_force_n, "max_correction_mm": s.max_xi_m * 1e3,
             "log_rows": o.session.log_rows, "log_committed": o.session.log_committed,
             "log_dropped": s.log_dropped, "warnings": s.warnings,
+
             "error": s.error.as_ref().map(ToString::to_string),
         });
         let mut value = value;
@@ -292,6 +391,14 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
         }
         let link = &s.robot_link;
         for (key, v) in [
+            ("mcap", recording_json(&o)),
+            (
+                "view",
+                json!(o.view.as_ref().map(|v| json!({
+                    "samples": v.samples_received, "samples_lost": v.samples_lost,
+                    "messages_dropped": v.frames_dropped, "stop_requests": v.stop_requests,
+                }))),
+            ),
             ("robot_dropped", json!(s.robot_dropped)),
             ("robot_starved", json!(s.robot_starved)),
             (
@@ -321,6 +428,22 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
         ),
         None => Ok(()),
     }
+}
+
+/// The recording, for `--json`.
+fn recording_json(o: &RunOutcome) -> serde_json::Value {
+    let Some((path, report)) = &o.recording else {
+        return serde_json::Value::Null;
+    };
+    let ok = report.as_ref().ok();
+    json!({
+        "path": path,
+        "committed": o.session.log_committed && ok.is_some(),
+        "cycles": ok.map(|r| r.stats.recorded),
+        "lost": ok.map(|r| r.lost),
+        "bytes": ok.map(|r| r.stats.bytes),
+        "error": report.as_ref().err(),
+    })
 }
 
 fn print_summary(o: &RunOutcome) {
@@ -426,6 +549,25 @@ fn print_summary(o: &RunOutcome) {
                 p.display()
             );
         }
+    }
+    if let Some((path, report)) = &o.recording {
+        match report {
+            Ok(r) if o.session.log_committed => println!(
+                "  recording: {} (MCAP, {} cycles, {} lost, {:.1} MB)",
+                path.display(),
+                r.stats.recorded,
+                r.lost,
+                r.stats.bytes as f64 / 1e6
+            ),
+            Ok(_) => println!(
+                "  recording: not written, the run failed ({} keeps what it held)",
+                path.display()
+            ),
+            Err(e) => println!("  recording: failed: {e}"),
+        }
+    }
+    if let Some(v) = &o.view {
+        println!("  live view: {}", crate::live::view_line(v));
     }
     for w in &s.warnings {
         println!("  warning: {w}");

@@ -102,10 +102,22 @@ pub fn model(command: ModelCommand, json_output: bool) -> CommandResult {
     match command {
         ModelCommand::Show { robot: spec } => {
             let robot = robot(&spec)?;
+            // The twin cell `compensate`, `sim` and `demo` use for this robot; a robot no cell
+            // can be built around (not 6 joints, no reachable part placement) says why.
+            let cell = deflex_twin::cell_for_robot(&spec).and_then(|c| c.summary());
             if json_output {
-                print_json(&describe_json(&robot));
+                let mut value = describe_json(&robot);
+                value["cell"] = match &cell {
+                    Ok(summary) => summary.to_json(),
+                    Err(e) => json!({"error": e.to_string()}),
+                };
+                print_json(&value);
             } else {
                 print!("{}", describe(&robot));
+                match &cell {
+                    Ok(summary) => println!("{summary}"),
+                    Err(e) => println!("twin cell: none ({e})"),
+                }
             }
             Ok(())
         }

@@ -19,19 +19,17 @@
 use crate::args::{bounded, parse_list, print_json};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, Subcommand, ValueEnum};
-use deflex_sim::gcode::read_gcode;
+use deflex_sim::CellConfig;
 use deflex_sim::twin_campaign::{
     GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
-};
-use deflex_sim::{
-    CellConfig, ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath,
-    run_forming_with_progress,
 };
 use serde_json::json;
 use std::path::PathBuf;
 
 mod cmd_sensitivity;
+mod isf;
 use cmd_sensitivity::{SensitivityArgs, sensitivity};
+use isf::{IsfArgs, isf};
 
 #[derive(Subcommand)]
 pub enum SimCommand {
@@ -131,38 +129,6 @@ pub struct CampaignArgs {
     pub twin: TwinArgs,
 }
 
-#[derive(Args)]
-pub struct IsfArgs {
-    /// Tool path: `cone` (the paper's helical cone), `cone-contour`, `pyramid`, `plunge` (1 mm
-    /// into a stiff fixture, then 20 mm along x), or a G-code file.
-    #[arg(long, default_value = "cone", value_parser = parse_path_choice)]
-    pub path: PathChoice,
-    /// Output folder (log.csv, summary.json, plots), swapped in whole at the end.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Random seed (sensor and tracker noise).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    #[command(flatten)]
-    pub twin: TwinArgs,
-    /// Only the first part of the path (mm of travel, within (0, 10⁶]).
-    #[arg(long)]
-    pub length_mm: Option<f64>,
-    /// Feed rate for the built-in paths (mm/s, 0.1–1000).
-    #[arg(long)]
-    pub feed_mm_s: Option<f64>,
-    /// Contact stiffness of the fixture for `--path plunge` (N/m, 10⁴–10⁹; default the twin's
-    /// `[cell.process] fixture_stiffness_n_m`, 10⁷).
-    #[arg(long)]
-    pub fixture_stiffness_n_m: Option<f64>,
-    /// Online correction: `off` (default) or `on` (needs --model).
-    #[arg(long, value_enum, default_value = "off", hide_possible_values = true)]
-    pub correction: Correction,
-    /// Identified model used by the correction controller (robot TOML).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-}
-
 /// `--grid`: which validation grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum GridChoice {
@@ -170,41 +136,6 @@ pub enum GridChoice {
     Cell,
     // The paper's grid.
     Paper,
-}
-
-/// `--correction`: the online correction off or on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Correction {
-    // Open loop.
-    Off,
-    // The correction controller with `--model`.
-    On,
-}
-
-/// `--path`: a built-in tool path or a G-code file.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum PathChoice {
-    /// The paper's helical cone.
-    Cone,
-    /// The cone in contours.
-    ConeContour,
-    /// The pyramid.
-    Pyramid,
-    /// 1 mm into a stiff fixture, then 20 mm along x.
-    Plunge,
-    /// A G-code file.
-    Gcode(PathBuf),
-}
-
-/// `cone`, `cone-contour`, `pyramid`, `plunge`, or a G-code file.
-fn parse_path_choice(text: &str) -> Result<PathChoice, std::convert::Infallible> {
-    Ok(match text {
-        "cone" => PathChoice::Cone,
-        "cone-contour" => PathChoice::ConeContour,
-        "pyramid" => PathChoice::Pyramid,
-        "plunge" => PathChoice::Plunge,
-        file => PathChoice::Gcode(PathBuf::from(file)),
-    })
 }
 
 pub fn sim(command: SimCommand, json: bool) -> CommandResult {
@@ -220,6 +151,7 @@ pub fn sim(command: SimCommand, json: bool) -> CommandResult {
 fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
     let robot = config.nominal_robot()?;
+    let cell = config.summary()?;
     let text = format!(
         "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
          # cell's tool and base pivot, as a user would describe that cell.\n{}",
@@ -233,6 +165,7 @@ fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
             "robot": robot.name,
             "geometry_fingerprint": robot.geometry_fingerprint(),
             "tool_xyz_m": robot.tool.translation.vector.as_slice(),
+            "cell": cell.to_json(),
             "out": args.out,
         }));
     } else {
@@ -246,6 +179,7 @@ fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
             robot.geometry_fingerprint(),
             args.out.display()
         );
+        println!("{cell}");
     }
     Ok(())
 }
@@ -473,167 +407,6 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
             max_disp * 1e3,
             args.out.display()
         );
-    }
-    Ok(())
-}
-
-fn tool_path(args: &IsfArgs) -> Result<ToolPath, CliError> {
-    let feed = match args.feed_mm_s {
-        Some(f) => Some(bounded("--feed-mm-s", f, 0.1, 1000.0, "mm/s")?),
-        None => None,
-    };
-    let path = match &args.path {
-        PathChoice::Cone | PathChoice::ConeContour => {
-            let mut p = ConeParams {
-                helical: args.path == PathChoice::Cone,
-                ..ConeParams::default()
-            };
-            if let Some(f) = feed {
-                p.feed_mm_s = f;
-            }
-            ToolPath::cone(&p)?
-        }
-        PathChoice::Pyramid => {
-            let mut p = PyramidParams::default();
-            if let Some(f) = feed {
-                p.feed_mm_s = f;
-            }
-            ToolPath::pyramid(&p)?
-        }
-        PathChoice::Plunge => {
-            let mut p = PlungeParams::default();
-            if let Some(f) = feed {
-                p.traverse_feed_mm_s = f;
-            }
-            ToolPath::plunge(&p)?
-        }
-        PathChoice::Gcode(file) => {
-            if feed.is_some() {
-                return Err(UsageError::DoesNotApply {
-                    flag: "--feed-mm-s",
-                    applies: "applies to the built-in paths; a G-code file sets its own F",
-                }
-                .into());
-            }
-            read_gcode(file)?
-        }
-    };
-    Ok(match args.length_mm {
-        Some(l) => path.truncated(bounded("--length-mm", l, 1e-3, 1e6, "mm")?),
-        None => path,
-    })
-}
-
-fn isf(args: IsfArgs, json: bool) -> CommandResult {
-    if args.correction == Correction::Off && args.model.is_some() {
-        return Err(UsageError::DoesNotApply {
-            flag: "--model",
-            applies: "only used with --correction on",
-        }
-        .into());
-    }
-    let mut config = load_config(&args.twin)?;
-    if args.path == PathChoice::Plunge {
-        config.process.kind = ProcessKind::Fixture;
-    }
-    if let Some(k) = args.fixture_stiffness_n_m {
-        if args.path != PathChoice::Plunge {
-            return Err(UsageError::DoesNotApply {
-                flag: "--fixture-stiffness-n-m",
-                applies: "applies to --path plunge",
-            }
-            .into());
-        }
-        config.process.fixture_stiffness_n_m =
-            bounded("--fixture-stiffness-n-m", k, 1e4, 1e9, "N/m")?;
-    }
-    let path = tool_path(&args)?;
-    // Closed loop: the deflex correction controller in-process, in simulated time.
-    let mut twin = match args.correction {
-        Correction::On => Some(deflex_twin::twin_controller(
-            &config,
-            args.model.as_deref(),
-        )?),
-        Correction::Off => None,
-    };
-    let name = path.name.clone();
-    let bar = if json {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(1000)
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "SIMULATED forming {bar:40} {percent:>3}% {elapsed}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    let controller = twin
-        .as_mut()
-        .map(|t| t as &mut dyn deflex_sim::CorrectionController);
-    let run = run_forming_with_progress(&config, path, args.seed, controller, &mut |f| {
-        bar.set_position((f * 1000.0) as u64)
-    })?;
-    bar.finish_and_clear();
-    let files = deflex_report::forming_run::write_forming_run(&run, &args.out)?;
-    let s = &run.summary;
-    if json {
-        let mut value: serde_json::Value =
-            serde_json::from_str(&run.summary_json()).unwrap_or_default();
-        if let Some(map) = value.as_object_mut() {
-            map.insert("robot_spec".into(), json!(config.part.robot));
-            map.insert(
-                "files".into(),
-                json!(
-                    files
-                        .iter()
-                        .map(|f| f.display().to_string())
-                        .collect::<Vec<_>>()
-                ),
-            );
-        }
-        print_json(&value);
-    } else {
-        let mode = if twin.is_some() {
-            "closed-loop"
-        } else {
-            "open-loop"
-        };
-        println!(
-            "SIMULATED {mode} run on the twin of the {}: {name} (seed {})",
-            s.robot, args.seed
-        );
-        if let Some(t) = &twin {
-            println!("  {}", t.status_line());
-        }
-        println!(
-            "  {:.1} s simulated in {:.2} s ({} cycles)",
-            s.duration_s, run.wall_time_s, s.cycles
-        );
-        println!(
-            "  TCP error: max {:.3} mm, RMS {:.3} mm (max |x| {:.3}, |y| {:.3}, |z| {:.3} mm)",
-            s.max_error_norm_mm,
-            s.rms_error_norm_mm,
-            s.max_error_abs_mm[0],
-            s.max_error_abs_mm[1],
-            s.max_error_abs_mm[2]
-        );
-        if config.process.kind == ProcessKind::Fixture {
-            println!(
-                "  force: max |F| {:.0} N against a {:.0e} N/m fixture, deepest penetration {:.3} mm",
-                s.max_force_norm_N, config.process.fixture_stiffness_n_m, s.final_part_depth_mm
-            );
-        } else {
-            println!(
-                "  force: max |F| {:.0} N, max Fz {:.0} N, max in-plane {:.0} N (Aerens level {:.0} N)",
-                s.max_force_norm_N, s.max_fz_N, s.max_fxy_N, s.aerens_steady_fz_N
-            );
-            println!(
-                "  part depth {:.2} mm of {:.2} mm programmed",
-                s.final_part_depth_mm, s.target_depth_mm
-            );
-        }
-        println!("  wrote {} files to {}", files.len(), args.out.display());
     }
     Ok(())
 }

@@ -46,6 +46,23 @@ pub enum CliError {
     /// A plot or page could not be written.
     #[error(transparent)]
     Report(#[from] deflex_report::ReportError),
+    /// The live view could not be served.
+    #[error(transparent)]
+    View(#[from] deflex_view::ViewError),
+    /// The MCAP recording could not be written.
+    #[error(transparent)]
+    Record(#[from] deflex_record::RecordError),
+    /// A run log or recording that cannot be plotted.
+    #[error(transparent)]
+    Trace(#[from] deflex_record::trace::TraceError),
+    /// A run stopped before its end (Ctrl-C with a live view): its outputs are not written.
+    #[error("{source}: nothing written ({} keeps what it held)", .out.display())]
+    Stopped {
+        /// The output folder, left as it was.
+        out: PathBuf,
+        /// Where the run stopped.
+        source: deflex_sim::SimError,
+    },
     /// A file or folder could not be written.
     #[error("{}: {source}", .path.display())]
     Write {

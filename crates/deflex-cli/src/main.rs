@@ -14,6 +14,7 @@ mod cmd_plot;
 mod cmd_register;
 mod cmd_sim;
 mod error;
+mod live;
 
 use clap::{Parser, Subcommand};
 use error::CliError;

@@ -15,13 +15,16 @@
 //!
 //! ## Iteration
 //!
-//! 1. **Process pass** at the current commanded path: the wrench source gives `w_i` for every
-//!    point in order (a process model sees the commanded pose and the model's compliance there);
-//!    the deflection `δ_i` at the commanded configuration and the predicted error `|a_i − d_i|`
-//!    of the current command are recorded.
-//! 2. **Compensation pass**, point by point. The residual `r⁰_i = −δ_i − x_i` is the first
+//! Each iteration is one **sweep** along the path, point by point:
+//!
+//! 1. **Wrench**: the wrench source gives `w_i` at the point's current command (a process model
+//!    sees the commanded pose and the model's compliance there, in path order); the deflection
+//!    `δ_i` at the commanded configuration and the predicted error `|a_i − d_i|` of the current
+//!    command are recorded.
+//! 2. **Compensation** of the point. The residual `r⁰_i = −δ_i − x_i` is the first
 //!    fixed-point step (and the predicted error to first order). **Per-point criterion**: a
-//!    point whose residual is within the tolerance is left as it is. The others are solved:
+//!    point whose residual is within *half* the tolerance is left as it is. The others are
+//!    solved:
 //!    `x̂_i` solves `x = −δ(q(d_i ⊕ x), w_i)` by a few fixed-point steps (the compliance changes
 //!    little over a millimetre, so two or three steps reach 1e-9 m), each with a tracking IK
 //!    from the previous joint values; the joint limits, the size of the compensation and the
@@ -34,15 +37,34 @@
 //!    previous solve: a process whose force grows with the commanded depth makes the plain
 //!    iteration alternate with a factor up to `C k / (1 + C k)` (robot compliance × material
 //!    stiffness), and the secant step removes it. A change within ten tolerances takes the
-//!    plain step (the secant of nearly equal residuals extrapolates the process's noise).
+//!    plain step (the secant of nearly equal residuals extrapolates the process's noise), unless
+//!    the point's residual reversed (an oscillation: the secant step then lies between the
+//!    iterates).
 //! 4. After convergence (or the last iteration) a final process pass gives the wrenches and the
-//!    predicted error of the final command (the last process pass itself when no point moved).
+//!    predicted error of the final command (the last sweep itself when no point moved).
+//!
+//! A point's wrench is taken before its compensation changes, and a process model's state
+//! along the path (the formed sheet) is built from the commands it was given: a sweep is the
+//! same iteration as a process pass over the whole path followed by a compensation pass, in one
+//! walk over the points.
 //!
 //! **Why it does not grow with the path.** The criterion is the same for every point and a point
-//! is only touched while its own predicted error exceeds the tolerance, so a longer path does not
-//! draw more secant extrapolations on noise: with a max-over-points criterion and mixing at every
-//! point, a million-point cone stalled at a 1–4 µm noise floor (the largest change fell to 1.4 µm
-//! by iteration 5, then rose to 29 µm) where a 100 000-point one converged in 6 iterations.
+//! is only touched while its own predicted error exceeds half the tolerance, so a longer path
+//! does not draw more secant extrapolations on noise: with a max-over-points criterion and
+//! mixing at every point, a million-point cone stalled at a 1–4 µm noise floor (the largest
+//! change fell to 1.4 µm by iteration 5, then rose to 29 µm) where a 100 000-point one converged
+//! in 6 iterations.
+//!
+//! **Why half the tolerance.** Left alone at residuals up to the full tolerance, points pile up
+//! just below it (every solved point lands at ≈ 0 and stays; every unsolved one is anywhere
+//! below), and in a process with state along the path (the formed sheet) solving one point
+//! changes the next point's wrench by a few hundredths of a tolerance: a point at 0.99 µrad
+//! crossed 1 µrad, was solved, and pushed the next one over, one point per iteration (on the
+//! 100 000-point cone a front crossed 3 points an iteration from iteration 9 to 14). With the
+//! band between half and the whole tolerance, such a push solves a point whose change is within
+//! the tolerance, which does not hold the run up; a point left alone is at most half a
+//! tolerance off, so the converged command's predicted error stays within the tolerance after
+//! the last pass's small pushes (`Compensation::final_max_error_m` reports it).
 //!
 //! With fixed wrenches (a previous run's log) the wrench does not depend on the command, so one
 //! compensation pass is exact and the run stops after it.
@@ -60,13 +82,15 @@
 //! the buffers are allocated once per run (about 380 bytes a point). The multi-seed IK of the first point, and the
 //! fallback IK of a point the tracking IK loses, allocate.
 
-use crate::error::{CompensateError, ProcessError};
-use crate::ik::{IkFailure, TrackingIkOptions, limit_violation, track};
+use crate::error::CompensateError;
+use crate::ik::{IkFailure, TrackingIkOptions};
 use crate::path::TcpPath;
-use crate::process::{ProcessModel, ProcessPoint};
-use deflex_model::spatial::orientation_error;
-use deflex_model::{Data, Displacement, IkOptions, MAX_JOINTS, ModelError, Pose, Robot, Wrench};
+use crate::process::ProcessModel;
+use deflex_model::{Displacement, MAX_JOINTS, ModelError, Pose, Robot, Wrench};
 use nalgebra::{Rotation3, Vector3, Vector6};
+
+mod solver;
+use solver::Solver;
 
 /// Settings of [`compensate`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -271,7 +295,7 @@ pub struct IterationReport {
     /// Points not compensated after this iteration.
     pub failed_points: usize,
     /// Points solved again in this iteration; the others' predicted error was already within
-    /// the tolerance (the per-point criterion), so they were left as they were.
+    /// half the tolerance (the per-point criterion), so they were left as they were.
     pub solved_points: usize,
 }
 
@@ -320,9 +344,10 @@ impl Compensation {
 pub enum Stage {
     /// Inverse kinematics of the desired path.
     Desired,
-    /// Process pass of an iteration.
+    /// A process model's look at the desired path before the first iteration
+    /// ([`ProcessModel::observe_desired`]: a model identified from a log).
     Process,
-    /// Compensation pass of an iteration.
+    /// An iteration: each point's wrench, then its compensation.
     Compensation,
     /// The final process pass.
     Final,
@@ -404,13 +429,19 @@ pub fn compensate(
     };
     let mut solver = Solver::new(robot, path, options, count);
     solver.desired_pass(seed, progress);
+    let fixed = match &mut source {
+        WrenchSource::Process(model) if model.observes_desired_path() => {
+            solver.observation_pass(&mut **model, progress)?;
+            !model.follows_command()
+        }
+        _ => fixed,
+    };
     let mut iterations = Vec::new();
     let mut converged = false;
     let mut final_stats = None;
     for iteration in 1..=options.max_iterations {
-        let stats = solver.process_pass(&mut source, iteration, Stage::Process, progress)?;
         let last = fixed || iteration == options.max_iterations;
-        let pass = solver.compensation_pass(iteration, last, progress);
+        let (stats, pass) = solver.sweep(&mut source, iteration, last, progress)?;
         let failed_points = solver.points.iter().filter(|p| p.failure.is_some()).count();
         iterations.push(IterationReport {
             iteration,
@@ -465,447 +496,4 @@ pub fn compensate(
         max_compensation_m,
         max_compensation_rad,
     })
-}
-
-/// Statistics of a process pass over the compensated points.
-struct PassStats {
-    max_error_m: f64,
-    max_error_rad: f64,
-    max_force_n: f64,
-    max_deflection_m: f64,
-}
-
-/// What a compensation pass did.
-struct CompensationPass {
-    /// Largest change of a solved point's compensation (m, rad).
-    max_change_m: f64,
-    max_change_rad: f64,
-    /// Points whose compensation was solved again (the others were within the tolerance).
-    solved: usize,
-}
-
-/// Report progress every this many points.
-const PROGRESS_EVERY: usize = 4096;
-
-/// The state of a run (allocated once): per point the result being built (compensation, joint
-/// values, wrench, deflection, predicted error, failure) and the previous iterate and change
-/// for the Anderson mixing.
-struct Solver<'a> {
-    robot: &'a Robot,
-    path: &'a TcpPath,
-    options: &'a CompensationOptions,
-    data: Data,
-    points: Vec<CompensatedPoint>,
-    /// `(x, r)` of the point's previous solve, when it was solved in the previous iteration.
-    history: Vec<Option<(Displacement, Displacement)>>,
-}
-
-impl<'a> Solver<'a> {
-    fn new(
-        robot: &'a Robot,
-        path: &'a TcpPath,
-        options: &'a CompensationOptions,
-        count: usize,
-    ) -> Solver<'a> {
-        Solver {
-            robot,
-            path,
-            options,
-            data: Data::new(),
-            points: vec![
-                CompensatedPoint {
-                    compensation: Displacement::zeros(),
-                    q: [0.0; MAX_JOINTS],
-                    wrench: Wrench::zeros(),
-                    deflection: Displacement::zeros(),
-                    predicted_error_m: 0.0,
-                    predicted_error_rad: 0.0,
-                    failure: None,
-                };
-                count
-            ],
-            history: vec![None; count],
-        }
-    }
-
-    fn desired(&self, i: usize) -> &'a Pose {
-        &self.path.points()[i].pose
-    }
-
-    /// Model deflection at the configuration in `self.data` under `w`.
-    fn predicted(&self, w: &Wrench) -> Displacement {
-        let mut d = self.robot.tcp_deflection(&self.data, w);
-        if self.options.include_gravity {
-            d += self.robot.gravity_displacement(
-                &self.data,
-                &self.data.tcp_position(),
-                self.robot.joint_count(),
-            );
-        }
-        d
-    }
-
-    /// The tracking IK, with the allocating multi-seed search as a fallback when it loses the
-    /// pose (a rapid jump, a large first step).
-    fn reach(&mut self, target: &Pose, q: &mut [f64; MAX_JOINTS]) -> Result<(), IkFailure> {
-        let first = track(self.robot, &mut self.data, target, q, &self.options.ik);
-        match first {
-            Ok(_) => Ok(()),
-            Err(IkFailure::JointLimit { .. }) => first.map(|_| ()),
-            Err(failure) => {
-                let n = self.robot.joint_count();
-                let ik = IkOptions {
-                    position_tolerance_m: self.options.ik.position_tolerance_m,
-                    orientation_tolerance_rad: self.options.ik.orientation_tolerance_rad,
-                    ..IkOptions::default()
-                };
-                match self.robot.inverse_kinematics(target, &q[..n], &ik) {
-                    Ok(solution) => {
-                        q[..n].copy_from_slice(&solution.q);
-                        self.robot
-                            .forward_kinematics(&mut self.data, &q[..n])
-                            .expect("joint count checked");
-                        limit_violation(self.robot, &q[..n]).map_or(Ok(()), Err)
-                    }
-                    Err(_) => Err(failure),
-                }
-            }
-        }
-    }
-
-    /// Joint values of the desired path: a multi-seed search for the first point (from `seed`),
-    /// then tracking.
-    fn desired_pass(&mut self, seed: &[f64], progress: &mut dyn FnMut(&Progress)) {
-        let n = self.robot.joint_count();
-        let count = self.path.len();
-        let mut q = [0.0; MAX_JOINTS];
-        q[..n].copy_from_slice(seed);
-        let ik = IkOptions {
-            position_tolerance_m: self.options.ik.position_tolerance_m,
-            orientation_tolerance_rad: self.options.ik.orientation_tolerance_rad,
-            ..IkOptions::default()
-        };
-        let mut first_failure = None;
-        match self
-            .robot
-            .inverse_kinematics_search(self.desired(0), Some(seed), &ik)
-        {
-            Ok(solution) => q[..n].copy_from_slice(&solution.q),
-            Err(ModelError::OutOfReach {
-                distance_m,
-                reach_m,
-            }) => {
-                first_failure = Some(IkFailure::OutOfReach {
-                    distance_m,
-                    reach_m,
-                })
-            }
-            Err(ModelError::NotConverged {
-                position_error_m,
-                orientation_error_rad,
-                ..
-            }) => {
-                first_failure = Some(IkFailure::NotConverged {
-                    position_error_m,
-                    orientation_error_rad,
-                })
-            }
-            Err(_) => {}
-        }
-        for i in 0..count {
-            let mut qi = q;
-            let result = match (i, first_failure) {
-                (0, Some(failure)) => Err(failure),
-                _ => self.reach(self.desired(i), &mut qi),
-            };
-            match result {
-                Ok(()) => {
-                    q = qi;
-                    self.points[i].failure = None;
-                }
-                Err(failure) => self.points[i].failure = Some(PointFailure::Desired(failure)),
-            }
-            // A failed point keeps the previous point's joint values (continuity for seeds).
-            self.points[i].q = q;
-            if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration: 0,
-                    stage: Stage::Desired,
-                    done: i + 1,
-                    total: count,
-                });
-            }
-        }
-    }
-
-    fn desired_failed(&self, i: usize) -> bool {
-        matches!(self.points[i].failure, Some(PointFailure::Desired(_)))
-    }
-
-    /// Wrenches, deflections and predicted errors at the current command.
-    fn process_pass(
-        &mut self,
-        source: &mut WrenchSource,
-        iteration: usize,
-        stage: Stage,
-        progress: &mut dyn FnMut(&Progress),
-    ) -> Result<PassStats, CompensateError> {
-        let n = self.robot.joint_count();
-        let count = self.path.len();
-        let mut stats = PassStats {
-            max_error_m: 0.0,
-            max_error_rad: 0.0,
-            max_force_n: 0.0,
-            max_deflection_m: 0.0,
-        };
-        if let WrenchSource::Process(model) = source {
-            model.begin_pass();
-        }
-        for i in 0..count {
-            let desired = self.desired(i);
-            let commanded = commanded_pose(desired, &self.points[i].compensation);
-            self.robot
-                .forward_kinematics(&mut self.data, &self.points[i].q[..n])
-                .expect("joint count checked");
-            let w = match source {
-                WrenchSource::Process(model) => {
-                    let compliance = self.robot.compliance_matrix(&self.data);
-                    let point = &self.path.points()[i];
-                    let w = model.wrench(&ProcessPoint {
-                        index: i,
-                        arc_length_m: point.arc_length_m,
-                        desired,
-                        commanded: &commanded,
-                        compliance: &compliance,
-                        travel_direction: self.path.travel_direction(i),
-                        rapid: i > 0 && point.feed_m_s.is_none(),
-                    })?;
-                    if !w.iter().all(|v| v.is_finite()) {
-                        return Err(ProcessError {
-                            model: model.name(),
-                            index: i,
-                            message: "the wrench is not finite".into(),
-                        }
-                        .into());
-                    }
-                    w
-                }
-                WrenchSource::Fixed { wrenches, .. } => wrenches[i],
-            };
-            let d = self.predicted(&w);
-            let actual = apply_displacement(&commanded, &d);
-            let error_m = (actual.translation.vector - desired.translation.vector).norm();
-            let error_rad = orientation_error(&desired.rotation, &actual.rotation).norm();
-            let point = &mut self.points[i];
-            point.wrench = w;
-            point.deflection = d;
-            point.predicted_error_m = error_m;
-            point.predicted_error_rad = error_rad;
-            if point.failure.is_none() {
-                stats.max_error_m = stats.max_error_m.max(error_m);
-                stats.max_error_rad = stats.max_error_rad.max(error_rad);
-                stats.max_force_n = stats.max_force_n.max(w.fixed_rows::<3>(0).norm());
-                stats.max_deflection_m = stats.max_deflection_m.max(d.fixed_rows::<3>(0).norm());
-            }
-            if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration,
-                    stage,
-                    done: i + 1,
-                    total: count,
-                });
-            }
-        }
-        Ok(stats)
-    }
-
-    /// The first fixed-point residual of point `i` at the current command: `−δ − x`, the
-    /// deflection of the process pass being the one at the commanded configuration (orientation
-    /// zeroed when position only). It is also the point's predicted error to first order.
-    fn residual(&self, i: usize) -> Displacement {
-        let p = &self.points[i];
-        let mut r = -p.deflection - p.compensation;
-        if !self.options.orientation {
-            r.fixed_rows_mut::<3>(3).fill(0.0);
-        }
-        r
-    }
-
-    /// Solve point `i`'s compensation `x = −δ(q(d ⊕ x), w)` for its current wrench by a few
-    /// fixed-point steps from `x`, `q`; checks the limits, the size and the joint step from
-    /// `previous_q`.
-    fn solve_point(
-        &mut self,
-        i: usize,
-        mut x: Displacement,
-        mut q: [f64; MAX_JOINTS],
-        previous_q: Option<[f64; MAX_JOINTS]>,
-    ) -> Result<(Displacement, [f64; MAX_JOINTS]), PointFailure> {
-        let options = *self.options;
-        let n = self.robot.joint_count();
-        let inner_m = options.tolerance_m * 0.1;
-        let inner_rad = options.tolerance_rad * 0.1;
-        let desired = self.desired(i);
-        let w = self.points[i].wrench;
-        for _ in 0..options.inner_iterations {
-            self.reach(&commanded_pose(desired, &x), &mut q)
-                .map_err(PointFailure::Compensated)?;
-            let mut next = -self.predicted(&w);
-            if !options.orientation {
-                next.fixed_rows_mut::<3>(3).fill(0.0);
-            }
-            let (dm, dr) = norms(&(next - x));
-            x = next;
-            if dm <= inner_m && dr <= inner_rad {
-                break;
-            }
-        }
-        self.reach(&commanded_pose(desired, &x), &mut q)
-            .map_err(PointFailure::Compensated)?;
-        let (m, r) = norms(&x);
-        if m > options.max_compensation_m || r > options.max_compensation_rad {
-            return Err(PointFailure::TooLarge {
-                position_m: m,
-                rotation_rad: r,
-            });
-        }
-        if let Some(before) = previous_q
-            && let Some((joint, step)) = (0..n)
-                .map(|j| (j + 1, (q[j] - before[j]).abs()))
-                .find(|(_, step)| *step > options.max_joint_step_rad)
-        {
-            return Err(PointFailure::JointJump {
-                joint,
-                step_rad: step,
-            });
-        }
-        Ok((x, q))
-    }
-
-    /// The next command of a solved point: `x̂`, or the Anderson(1) mixing of the plain step
-    /// with the point's previous one (`r = x̂ − x`); plain when the change is within ten
-    /// tolerances (the secant of two nearly equal residuals extrapolates noise).
-    fn mixed(&self, i: usize, x: &Displacement, x_hat: &Displacement) -> Displacement {
-        let r = x_hat - x;
-        let Some((x_previous, r_previous)) = self.history[i] else {
-            return *x_hat;
-        };
-        let (rm, rr) = norms(&r);
-        if !self.options.acceleration
-            || (rm <= 10.0 * self.options.tolerance_m && rr <= 10.0 * self.options.tolerance_rad)
-        {
-            return *x_hat;
-        }
-        let weight = self.options.ik.orientation_weight_m;
-        let scaled = |v: &Displacement| {
-            let mut s = *v;
-            s.fixed_rows_mut::<3>(3).scale_mut(weight);
-            s
-        };
-        let dr = r - r_previous;
-        let dx = x - x_previous;
-        let denominator = scaled(&dr).norm_squared();
-        if denominator <= 1e-30 {
-            return *x_hat;
-        }
-        let gamma = scaled(&r).dot(&scaled(&dr)) / denominator;
-        let mixed = x + r - (dx + dr) * gamma;
-        // A wild extrapolation (nearly parallel residuals) falls back to x̂.
-        if scaled(&(mixed - x_hat)).norm() <= 10.0 * scaled(&r).norm() {
-            mixed
-        } else {
-            *x_hat
-        }
-    }
-
-    /// One compensation pass. A point whose residual ([`Solver::residual`]) is within the
-    /// tolerance is left as it is (the per-point criterion: its predicted error is already
-    /// below the tolerance); the others are solved for the pass's wrenches and moved to the
-    /// mixed iterate (or to `x̂` when `last`, or when the change is within the tolerance).
-    fn compensation_pass(
-        &mut self,
-        iteration: usize,
-        last: bool,
-        progress: &mut dyn FnMut(&Progress),
-    ) -> CompensationPass {
-        let count = self.path.len();
-        let options = *self.options;
-        let mut pass = CompensationPass {
-            max_change_m: 0.0,
-            max_change_rad: 0.0,
-            solved: 0,
-        };
-        let mut previous_q: Option<[f64; MAX_JOINTS]> = None;
-        let mut previous_x: Option<Displacement> = None;
-        for i in 0..count {
-            if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration,
-                    stage: Stage::Compensation,
-                    done: i + 1,
-                    total: count,
-                });
-            }
-            if self.desired_failed(i) {
-                self.history[i] = None;
-                continue;
-            }
-            let (rm, rr) = norms(&self.residual(i));
-            if self.points[i].failure.is_none()
-                && rm <= options.tolerance_m
-                && rr <= options.tolerance_rad
-            {
-                self.history[i] = None;
-                previous_q = Some(self.points[i].q);
-                previous_x = Some(self.points[i].compensation);
-                continue;
-            }
-            pass.solved += 1;
-            let x = self.points[i].compensation;
-            let (start_x, start_q) = match (x == Displacement::zeros(), previous_x, previous_q) {
-                // A point without a compensation yet starts from its neighbour's, which differs
-                // little along a path (saves one fixed-point step and most of the IK's).
-                (true, Some(px), Some(pq)) => (px, pq),
-                _ => (x, self.points[i].q),
-            };
-            match self.solve_point(i, start_x, start_q, previous_q) {
-                Err(failure) => {
-                    self.points[i].failure = Some(failure);
-                    self.points[i].compensation = Displacement::zeros();
-                    self.history[i] = None;
-                    let mut q = self.points[i].q;
-                    if self.reach(self.desired(i), &mut q).is_ok() {
-                        self.points[i].q = q;
-                    }
-                }
-                Ok((x_hat, q_hat)) => {
-                    self.points[i].failure = None;
-                    let change = x_hat - x;
-                    let (dm, dr) = norms(&change);
-                    pass.max_change_m = pass.max_change_m.max(dm);
-                    pass.max_change_rad = pass.max_change_rad.max(dr);
-                    previous_q = Some(q_hat);
-                    previous_x = Some(x_hat);
-                    let within = dm <= options.tolerance_m && dr <= options.tolerance_rad;
-                    let mut next = if last || within {
-                        x_hat
-                    } else {
-                        self.mixed(i, &x, &x_hat)
-                    };
-                    let mut q = q_hat;
-                    if next != x_hat {
-                        let target = commanded_pose(self.desired(i), &next);
-                        if self.reach(&target, &mut q).is_err() {
-                            next = x_hat;
-                            q = q_hat;
-                        }
-                    }
-                    self.history[i] = Some((x, change));
-                    self.points[i].compensation = next;
-                    self.points[i].q = q;
-                }
-            }
-        }
-        pass
-    }
 }

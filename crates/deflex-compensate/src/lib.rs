@@ -9,9 +9,10 @@
 //! * [`TcpPath`]: the desired TCP poses (world frame of the robot model) with arc length,
 //!   feeds and times.
 //! * [`WrenchSource`]: a [`ProcessModel`] (documented so others can be added; the twin's forming
-//!   model is adapted in `deflex_sim::process_model`) or fixed wrenches, e.g. a previous run's
-//!   log resampled on arc length ([`log`]).
-//! * [`compensate`]: the iteration against the process model until the commanded path
+//!   model is adapted in `deflex_sim::process_model`), a process law identified from a previous
+//!   run's log ([`LoggedProcess`]: the force follows the depth the tool reaches) or fixed
+//!   wrenches, e.g. that log resampled on arc length ([`log`]).
+//! * [`compensate()`]: the iteration against the process model until the commanded path
 //!   converges, with a report per iteration; points that cannot be compensated are kept and
 //!   flagged with their reason ([`PointFailure`]).
 //! * [`table`]: the compensated path as a CSV text (SI columns) and back, and the
@@ -26,6 +27,7 @@ pub mod compensate;
 pub mod error;
 pub mod ik;
 pub mod log;
+pub mod logged;
 pub mod path;
 pub mod process;
 pub mod table;
@@ -36,5 +38,6 @@ pub use compensate::{
 };
 pub use error::{CompensateError, LogError, PathError, ProcessError};
 pub use ik::{IkFailure, TrackingIkOptions};
+pub use logged::{Identification, LoggedProcess, LoggedProcessOptions};
 pub use path::{MAX_PATH_POINTS, PathPoint, TcpPath};
 pub use process::{DepthProportional, ProcessModel, ProcessPoint};

@@ -15,6 +15,16 @@
 //! the TCP): the wrench of eq. 15 that deflects the robot. The per-point call should not
 //! allocate; it must return a finite wrench or an error naming what went wrong.
 //!
+//! A model learnt from a previous run may need the path before the first pass: with
+//! [`ProcessModel::observes_desired_path`] the compensation calls
+//! [`ProcessModel::observe_desired`] once per point, in order, at the desired path (no
+//! compensation, the desired pose's joint values and compliance), then
+//! [`ProcessModel::finish_observation`]. A model whose wrench turns out not to depend on the
+//! command ([`ProcessModel::follows_command`] false) gets one compensation pass, which is then
+//! exact. A model that knows the deflection the robot model misses at a point (measured in a
+//! previous run) returns it from [`ProcessModel::unmodelled_deflection`]; the compensation adds it
+//! to eq. 15's. [`crate::logged::LoggedProcess`] uses all three.
+//!
 //! [`DepthProportional`] is the smallest useful model (a force growing linearly with the
 //! commanded depth below a surface); its fixed point has a closed form, which the tests use.
 
@@ -52,6 +62,36 @@ pub trait ProcessModel {
     fn begin_pass(&mut self);
     /// The wrench on the tool at this point (world axes, moment about the TCP).
     fn wrench(&mut self, point: &ProcessPoint) -> Result<Wrench, ProcessError>;
+
+    /// Whether the model wants to see the desired path before the first pass (default: no).
+    fn observes_desired_path(&self) -> bool {
+        false
+    }
+
+    /// One point of the desired path (compensation zero, the compliance at the desired pose's
+    /// joint values), in path order, before the first pass; only when
+    /// [`ProcessModel::observes_desired_path`].
+    fn observe_desired(&mut self, _point: &ProcessPoint) -> Result<(), ProcessError> {
+        Ok(())
+    }
+
+    /// The observation of the desired path is complete (identify what needs the whole path).
+    fn finish_observation(&mut self) -> Result<(), ProcessError> {
+        Ok(())
+    }
+
+    /// Whether the wrench depends on the commanded path (after the observation). When it does
+    /// not, one compensation pass is exact and the run stops after it. Default: yes.
+    fn follows_command(&self) -> bool {
+        true
+    }
+
+    /// The TCP deflection the robot model does not predict at point `index` under `wrench` (the
+    /// wrench this model returned there; position, world axes, m), known from a measured run;
+    /// added to eq. 15's. `None` (the default): the model's deflection is all there is.
+    fn unmodelled_deflection(&self, _index: usize, _wrench: &Wrench) -> Option<Vector3<f64>> {
+        None
+    }
 }
 
 /// A force along `direction` (unit, world) proportional to how deep the commanded TCP lies

@@ -37,6 +37,70 @@ pub const MAX_TURNS: u32 = 1000;
 /// Start and end on the same spot of the plane: a full circle (mm).
 const SAME_POINT_MM: f64 = 1e-4;
 
+/// Why an arc's geometry does not close, with the numbers that say so (mm).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum ArcError {
+    /// An `R` arc whose start and end coincide.
+    #[error("an R arc whose start and end are the same point: a full circle needs I, J, K")]
+    RadiusFullCircle,
+    /// An `R` value out of range.
+    #[error("radius {radius_mm} mm is not within (0, {MAX_RADIUS_MM}] mm")]
+    RadiusOutOfRange {
+        /// The signed `R` value (mm).
+        radius_mm: f64,
+    },
+    /// An `R` smaller than half the chord: no arc joins the points.
+    #[error(
+        "radius {radius_mm:.4} mm is smaller than half the chord ({half_chord_mm:.4} mm): no arc joins the points"
+    )]
+    RadiusTooSmall {
+        /// |R| (mm).
+        radius_mm: f64,
+        /// Half the start–end distance (mm).
+        half_chord_mm: f64,
+    },
+    /// The radius at the start or the end is zero or too large.
+    #[error(
+        "radius {start_mm:.4} mm at the start and {end_mm:.4} mm at the end: expected within (0, \
+         {MAX_RADIUS_MM}] mm (is the centre on the start point?)"
+    )]
+    CentreRadius {
+        /// Start–centre distance (mm).
+        start_mm: f64,
+        /// End–centre distance (mm).
+        end_mm: f64,
+    },
+    /// The end is not on the start's circle.
+    #[error(
+        "the end is {end_mm:.4} mm from the centre, the start {start_mm:.4} mm: the radii differ by \
+         {difference_mm:.4} mm (more than {RADIUS_TOLERANCE_MM} mm and {} % of the radius)",
+        RADIUS_TOLERANCE_REL * 100.0
+    )]
+    RadiiDiffer {
+        /// Start–centre distance (mm).
+        start_mm: f64,
+        /// End–centre distance (mm).
+        end_mm: f64,
+        /// |start − end| (mm).
+        difference_mm: f64,
+    },
+    /// A centre coordinate beyond the coordinate bound.
+    #[error(
+        "the centre {centre_mm:.3} mm is beyond ±{} mm",
+        crate::MAX_COORDINATE_MM
+    )]
+    CentreOutOfRange {
+        /// The centre coordinate (mm).
+        centre_mm: f64,
+    },
+    /// A `P` word outside 1 ..= [`MAX_TURNS`].
+    #[error("P{turns}: the number of turns must be 1 ..= {MAX_TURNS}")]
+    Turns {
+        /// The number of turns asked for.
+        turns: u32,
+    },
+}
+
 /// The in-plane coordinates of `p` relative to `c`.
 fn planar(p: &[f64; 3], c: &[f64; 3], plane: Plane) -> (f64, f64) {
     let (a1, a2, _) = plane.axes();
@@ -50,26 +114,23 @@ pub(crate) fn center_from_radius(
     radius: f64,
     plane: Plane,
     ccw: bool,
-) -> Result<[f64; 3], String> {
+) -> Result<[f64; 3], ArcError> {
     let (a1, a2, _) = plane.axes();
     let (dx, dy) = (end[a1] - start[a1], end[a2] - start[a2]);
     let d = dx.hypot(dy);
     if d < SAME_POINT_MM {
-        return Err(
-            "an R arc whose start and end are the same point: a full circle needs I, J, K".into(),
-        );
+        return Err(ArcError::RadiusFullCircle);
     }
     let r = radius.abs();
     if !(r > 0.0 && r <= MAX_RADIUS_MM) {
-        return Err(format!(
-            "radius {radius} mm is not within (0, {MAX_RADIUS_MM}] mm"
-        ));
+        return Err(ArcError::RadiusOutOfRange { radius_mm: radius });
     }
     let half = d / 2.0;
     if r < half - RADIUS_TOLERANCE_MM {
-        return Err(format!(
-            "radius {r:.4} mm is smaller than half the chord ({half:.4} mm): no arc joins the points"
-        ));
+        return Err(ArcError::RadiusTooSmall {
+            radius_mm: r,
+            half_chord_mm: half,
+        });
     }
     let h = (r * r - half * half).max(0.0).sqrt();
     let left = if ccw == (radius > 0.0) { 1.0 } else { -1.0 };
@@ -98,28 +159,26 @@ pub(crate) fn sweep(
     plane: Plane,
     ccw: bool,
     turns: u32,
-) -> Result<Sweep, String> {
+) -> Result<Sweep, ArcError> {
     let (u0, v0) = planar(start, center, plane);
     let (u1, v1) = planar(end, center, plane);
     let (r0, r1) = (u0.hypot(v0), u1.hypot(v1));
     if !(r0 > 1e-6 && r0 <= MAX_RADIUS_MM && r1 > 1e-6 && r1 <= MAX_RADIUS_MM) {
-        return Err(format!(
-            "radius {r0:.4} mm at the start and {r1:.4} mm at the end: expected within (0, \
-             {MAX_RADIUS_MM}] mm (is the centre on the start point?)"
-        ));
+        return Err(ArcError::CentreRadius {
+            start_mm: r0,
+            end_mm: r1,
+        });
     }
     let difference = (r0 - r1).abs();
     if difference > RADIUS_TOLERANCE_MM && difference > RADIUS_TOLERANCE_REL * r0.max(r1) {
-        return Err(format!(
-            "the end is {r1:.4} mm from the centre, the start {r0:.4} mm: the radii differ by \
-             {difference:.4} mm (more than {RADIUS_TOLERANCE_MM} mm and {} % of the radius)",
-            RADIUS_TOLERANCE_REL * 100.0
-        ));
+        return Err(ArcError::RadiiDiffer {
+            start_mm: r0,
+            end_mm: r1,
+            difference_mm: difference,
+        });
     }
     if turns == 0 || turns > MAX_TURNS {
-        return Err(format!(
-            "P{turns}: the number of turns must be 1 ..= {MAX_TURNS}"
-        ));
+        return Err(ArcError::Turns { turns });
     }
     let theta0 = v0.atan2(u0);
     let theta1 = v1.atan2(u1);
@@ -213,7 +272,7 @@ mod tests {
         let s = sweep(&start, &start, &c, Plane::Xy, false, 1).unwrap();
         assert!((s.sweep + std::f64::consts::TAU).abs() < 1e-12);
         let e = sweep(&start, &[0.0, 10.5, 0.0], &c, Plane::Xy, true, 1).unwrap_err();
-        assert!(e.contains("differ by 0.5000 mm"), "{e}");
+        assert!(e.to_string().contains("differ by 0.5000 mm"), "{e}");
         assert!(sweep(&start, &start, &start, Plane::Xy, true, 1).is_err());
         // Steps: sagitta within the tolerance.
         let s = sweep(&start, &start, &c, Plane::Xy, true, 1).unwrap();

@@ -85,11 +85,11 @@ pub enum GcodeErrorKind {
         axis: char,
     },
     /// An arc whose geometry does not close.
-    #[error("{message}")]
-    Arc {
-        /// What is wrong, with the numbers.
-        message: String,
-    },
+    #[error(transparent)]
+    Arc(#[from] crate::arc::ArcError),
+    /// A `P` (turns) word that is not a whole number within bounds.
+    #[error("P (turns) must be a whole number 1 ..= {}", crate::arc::MAX_TURNS)]
+    Turns,
     /// A second work offset in one program.
     #[error(
         "a second work offset ({second}) after {first}: deflex places one part frame per \

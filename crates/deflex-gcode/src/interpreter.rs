@@ -506,7 +506,7 @@ impl State {
         };
         let (s, e) = (known(start)?, known(target)?);
         let (a1, a2, normal) = self.plane.axes();
-        let arc_error = |message: String| first_word.error(line, K::Arc { message });
+        let arc_error = |error: arc::ArcError| first_word.error(line, K::Arc(error));
         if let Some(w) = b.offsets[normal] {
             return Err(w.error(
                 line,
@@ -538,10 +538,9 @@ impl State {
                         s[a] + offset
                     };
                     if c[a].abs() > MAX_COORDINATE_MM {
-                        return Err(arc_error(format!(
-                            "the centre {:.3} mm is beyond ±{MAX_COORDINATE_MM} mm",
-                            c[a]
-                        )));
+                        return Err(arc_error(arc::ArcError::CentreOutOfRange {
+                            centre_mm: c[a],
+                        }));
                     }
                 }
                 c
@@ -572,15 +571,7 @@ impl State {
                 w.value as u32
             }
             Some(w) => {
-                return Err(w.error(
-                    line,
-                    K::Arc {
-                        message: format!(
-                            "P (turns) must be a whole number 1 ..= {}",
-                            arc::MAX_TURNS
-                        ),
-                    },
-                ));
+                return Err(w.error(line, K::Turns));
             }
         };
         let sweep = arc::sweep(&s, &e, &center, self.plane, ccw, turns).map_err(arc_error)?;

@@ -30,12 +30,13 @@ pub(crate) struct Checked {
     pub config: Option<ArmConfiguration>,
 }
 
-/// Check the point count and every value; cap the speeds.
-pub(crate) fn check_points(
+/// Check the point count, the frames and every point (nothing is kept: the exporters convert
+/// each point when they write it, [`checked`]).
+pub(crate) fn check_input(
     format: &'static str,
     input: &ProgramInput,
     settings: &ProgramSettings,
-) -> Result<Vec<Checked>, ProgramError> {
+) -> Result<(), ProgramError> {
     let max = settings.program.max_points;
     if input.points.is_empty() || input.points.len() > max {
         return Err(ProgramError::PointCount {
@@ -56,12 +57,10 @@ pub(crate) fn check_points(
             limit,
         })?;
     }
-    input
-        .points
-        .iter()
-        .enumerate()
-        .map(|(index, point)| check_point(format, index, point, settings))
-        .collect()
+    for (index, point) in input.points.iter().enumerate() {
+        check_point(format, index, point)?;
+    }
+    Ok(())
 }
 
 /// A pose's bad value as `(field, value, bound)`.
@@ -82,12 +81,27 @@ fn check_pose(pose: &crate::Pose) -> Result<(), PoseFault> {
     Ok(())
 }
 
+/// A point as the exporters write it; the point must have passed [`check_input`] (its speed is
+/// then valid).
+pub(crate) fn checked(point: &ProgramPoint, settings: &ProgramSettings) -> Checked {
+    Checked {
+        position_mm: point.pose.translation.vector * 1e3,
+        rotation: point.pose.rotation,
+        speed_mm_s: point
+            .speed_m_s
+            .map_or(settings.program.rapid_speed_mm_s, |v| {
+                (v * 1e3).min(settings.program.max_speed_mm_s)
+            }),
+        rapid: point.speed_m_s.is_none(),
+        config: None,
+    }
+}
+
 fn check_point(
     format: &'static str,
     index: usize,
     point: &ProgramPoint,
-    settings: &ProgramSettings,
-) -> Result<Checked, ProgramError> {
+) -> Result<(), ProgramError> {
     check_pose(&point.pose).map_err(|(field, value, limit)| ProgramError::BadValue {
         format,
         index,
@@ -95,58 +109,50 @@ fn check_point(
         value,
         limit,
     })?;
-    let speed_mm_s = match point.speed_m_s {
-        Some(v) if v.is_finite() && v > 0.0 && v <= 10.0 => {
-            (v * 1e3).min(settings.program.max_speed_mm_s)
-        }
-        Some(v) => {
-            return Err(ProgramError::BadValue {
-                format,
-                index,
-                field: "speed_m_s",
-                value: v,
-                limit: 10.0,
-            });
-        }
-        None => settings.program.rapid_speed_mm_s,
-    };
-    Ok(Checked {
-        position_mm: point.pose.translation.vector * 1e3,
-        rotation: point.pose.rotation,
-        speed_mm_s,
-        rapid: point.speed_m_s.is_none(),
-        config: None,
-    })
+    match point.speed_m_s {
+        Some(v) if !(v.is_finite() && v > 0.0 && v <= 10.0) => Err(ProgramError::BadValue {
+            format,
+            index,
+            field: "speed_m_s",
+            value: v,
+            limit: 10.0,
+        }),
+        _ => Ok(()),
+    }
 }
 
-/// Distinct speeds (mm/s, rounded to 0.01) in order of first use, and each point's index into
-/// them. At most `max` distinct speeds.
+/// A speed as the speed tables hold it (mm/s, rounded to 0.01).
+pub(crate) fn table_speed(speed_mm_s: f64) -> f64 {
+    (speed_mm_s * 100.0).round() / 100.0
+}
+
+/// Distinct speeds (mm/s, rounded to 0.01) of `points` in order of first use, at most `max`.
 pub(crate) fn speed_table(
     format: &'static str,
-    points: &[Checked],
+    points: impl Iterator<Item = Checked>,
     max: usize,
-) -> Result<(Vec<f64>, Vec<usize>), ProgramError> {
+) -> Result<Vec<f64>, ProgramError> {
     let mut speeds: Vec<f64> = Vec::new();
-    let mut index = Vec::with_capacity(points.len());
     for p in points {
-        let v = (p.speed_mm_s * 100.0).round() / 100.0;
-        let k = match speeds.iter().position(|s| *s == v) {
-            Some(k) => k,
-            None => {
-                speeds.push(v);
-                if speeds.len() > max {
-                    return Err(ProgramError::TooManySpeeds {
-                        format,
-                        count: speeds.len(),
-                        max,
-                    });
-                }
-                speeds.len() - 1
+        let v = table_speed(p.speed_mm_s);
+        if !speeds.contains(&v) {
+            speeds.push(v);
+            if speeds.len() > max {
+                return Err(ProgramError::TooManySpeeds {
+                    format,
+                    count: speeds.len(),
+                    max,
+                });
             }
-        };
-        index.push(k);
+        }
     }
-    Ok((speeds, index))
+    Ok(speeds)
+}
+
+/// The index of a point's speed in a table from [`speed_table`] over it.
+pub(crate) fn speed_index(speeds: &[f64], p: &Checked) -> usize {
+    let v = table_speed(p.speed_mm_s);
+    speeds.iter().position(|s| *s == v).unwrap_or(0)
 }
 
 /// `value` with `decimals` decimals, never `-0.000`.
@@ -274,25 +280,25 @@ pub(crate) fn check_lines(format: &'static str, text: &str) -> Result<(), Progra
     Ok(())
 }
 
-/// Blend (approximation) radius at each point (mm): `blend_mm`, at most 45 % of the shorter of
-/// the two segments meeting there (two neighbouring blends must not overlap), 0 at the last
-/// point (the program ends exactly there).
-pub(crate) fn blend_radii(points: &[Checked], blend_mm: f64) -> Vec<f64> {
-    let n = points.len();
-    (0..n)
-        .map(|i| {
-            if i + 1 >= n || blend_mm <= 0.0 {
-                return 0.0;
-            }
-            let next = (points[i + 1].position_mm - points[i].position_mm).norm();
-            let prev = if i > 0 {
-                (points[i].position_mm - points[i - 1].position_mm).norm()
-            } else {
-                next
-            };
-            blend_mm.min(0.45 * prev.min(next))
-        })
-        .collect()
+/// Blend (approximation) radius at point `i` of `n` (mm), `position(k)` the points' positions:
+/// `blend_mm`, at most 45 % of the shorter of the two segments meeting there (two neighbouring
+/// blends must not overlap), 0 at the last point (the program ends exactly there).
+pub(crate) fn blend_radius(
+    i: usize,
+    n: usize,
+    position: impl Fn(usize) -> Vector3<f64>,
+    blend_mm: f64,
+) -> f64 {
+    if i + 1 >= n || blend_mm <= 0.0 {
+        return 0.0;
+    }
+    let next = (position(i + 1) - position(i)).norm();
+    let prev = if i > 0 {
+        (position(i) - position(i - 1)).norm()
+    } else {
+        next
+    };
+    blend_mm.min(0.45 * prev.min(next))
 }
 
 #[cfg(test)]

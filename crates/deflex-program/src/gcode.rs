@@ -24,35 +24,42 @@
 //! Comments are `( … )` without parentheses inside. The program reads back with
 //! `deflex-gcode`, the reader of CAM programs.
 
-use crate::ProgramFile;
 use crate::ProgramInput;
-use crate::common::{Checked, check_lines, comment_text, header_lines, num};
+use crate::common::{Checked, comment_text, header_lines, num};
 use crate::error::ProgramError;
 use crate::names::{GCODE_FILE, sanitize};
 use crate::orientation::rotation_distance;
 use crate::plan::plan;
 use crate::settings::ProgramSettings;
+use crate::sink::{ProgramSink, put};
 use std::fmt::Write as _;
 
 const FORMAT: &str = "G-code";
 
+/// Lines written to the sink at a time.
+const CHUNK_LINES: usize = 4096;
+
+/// Write the program to `sink` (one file, in pieces of [`CHUNK_LINES`] lines).
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
-) -> Result<Vec<ProgramFile>, ProgramError> {
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
     // G-code is not split: CNC controls stream long programs (the line bound is max_points).
     let plan = plan(FORMAT, input, settings, 1)?;
-    let points = &plan.points;
     let name = sanitize(&settings.program.name, &GCODE_FILE);
+    let path = format!("{name}.gcode");
     let d = settings.gcode.decimals;
-    let mut out = String::with_capacity(points.len() * 48 + 1024);
+    sink.begin(&path)?;
+    let mut out = String::with_capacity(CHUNK_LINES * 48 + 1024);
     let _ = writeln!(out, "%");
     for line in header_lines(input) {
         let _ = writeln!(out, "( {} )", comment_text(&line, &['(', ')']));
     }
-    let spread = points
-        .iter()
-        .map(|p| rotation_distance(&points[0].rotation, &p.rotation))
+    let first = plan.point(0);
+    let spread = plan
+        .points_from(0)
+        .map(|p| rotation_distance(&first.rotation, &p.rotation))
         .fold(0.0, f64::max);
     let _ = writeln!(
         out,
@@ -74,11 +81,16 @@ pub(crate) fn export(
     let _ = writeln!(
         out,
         "G1 {} F{} ( approach )",
-        xyz(&points[0]),
+        xyz(&first),
         f(plan.clear[0].speed_mm_s)
     );
     let mut feed: Option<String> = None;
-    for p in &points[1..] {
+    for (k, p) in plan.points_from(1).enumerate() {
+        if k % CHUNK_LINES == CHUNK_LINES - 1 {
+            put(sink, FORMAT, &out)?;
+            out.clear();
+        }
+        let p = &p;
         if p.rapid {
             let _ = writeln!(out, "G0 {}", xyz(p));
             continue;
@@ -98,9 +110,7 @@ pub(crate) fn export(
         f(plan.clear[1].speed_mm_s)
     );
     let _ = writeln!(out, "M30\n%");
-    check_lines(FORMAT, &out)?;
-    Ok(vec![ProgramFile {
-        path: format!("{name}.gcode"),
-        contents: out,
-    }])
+    put(sink, FORMAT, &out)?;
+    sink.end()?;
+    Ok(vec![path])
 }

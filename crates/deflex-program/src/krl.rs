@@ -47,8 +47,7 @@
 //!   long path is split into `NAME_p01.src` … (global subprograms the main `.src` calls in order;
 //!   see [`crate::plan`] for the limits).
 
-use crate::ProgramFile;
-use crate::common::{Checked, check_lines, comment_text, header_lines, num};
+use crate::common::{Checked, comment_text, header_lines, num};
 use crate::config::kuka_status_turn;
 use crate::error::ProgramError;
 use crate::names::{KRL, sanitize};
@@ -56,6 +55,7 @@ use crate::orientation::kuka_abc_deg;
 use crate::plan::{part_name, plan};
 use crate::settings::Coordinates;
 use crate::settings::ProgramSettings;
+use crate::sink::{ProgramSink, emit};
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
 
@@ -94,12 +94,14 @@ fn ptp_literal(p: &Checked, abc: [f64; 3]) -> String {
     }
 }
 
+/// Write the program to `sink`, each part file as soon as it is complete; returns the files,
+/// the main program first.
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
-) -> Result<Vec<ProgramFile>, ProgramError> {
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
     let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
-    let points = &plan.points;
     let name = sanitize(&settings.program.name, &KRL);
     // Part names add `_p01`: keep room for them within KRL's 24 characters.
     let name = if plan.split() && name.len() > 20 {
@@ -109,7 +111,7 @@ pub(crate) fn export(
     };
     let k = &settings.kuka;
     let blend = settings.program.blend_mm;
-    let mut src = String::with_capacity(4096 + if plan.split() { 0 } else { points.len() * 96 });
+    let mut src = String::with_capacity(4096 + if plan.split() { 0 } else { plan.len() * 96 });
     let _ = writeln!(src, "&ACCESS RVP\r\n&REL 1\r\nDEF {name}( )\r");
     for line in header_lines(input) {
         let _ = writeln!(src, "; {}\r", comment_text(&line, &[]));
@@ -182,20 +184,22 @@ pub(crate) fn export(
     previous = previous.or(Some(start_abc));
     // Approach: straight down onto the first point, exact stop.
     write_speed(&mut src, &plan.clear[0], &mut speed);
-    let abc = kuka_abc_deg(&points[0].rotation, previous);
+    let first = plan.point(0);
+    let abc = kuka_abc_deg(&first.rotation, previous);
     previous = Some(abc);
     let _ = writeln!(
         src,
         "LIN {} ; approach\r",
-        frame_literal(points[0].position_mm.into(), abc)
+        frame_literal(first.position_mm.into(), abc)
     );
-    let last = points.len() - 1;
+    let last = plan.len() - 1;
     let mut parts = Vec::new();
+    let mut text = String::new();
     for (part, range) in plan.parts.iter().enumerate() {
+        let part_name = part_name(&name, part);
         let body = if plan.split() {
-            let part_name = part_name(&name, part);
             let _ = writeln!(src, "{part_name}( )\r");
-            let mut text = String::with_capacity(range.len() * 96 + 512);
+            text = String::with_capacity(range.len() * 96 + 512);
             let _ = writeln!(text, "&ACCESS RVP\r\n&REL 1\r\nDEF {part_name}( )\r");
             let _ = writeln!(
                 text,
@@ -207,13 +211,12 @@ pub(crate) fn export(
             );
             // Each part sets its speed (a part must not rely on the previous one's).
             speed = None;
-            parts.push((part_name, text));
-            &mut parts.last_mut().expect("just pushed").1
+            &mut text
         } else {
             &mut src
         };
         for i in range.clone() {
-            let p = &points[i];
+            let p = &plan.point(i);
             let abc = kuka_abc_deg(&p.rotation, previous);
             previous = Some(abc);
             let literal = frame_literal(p.position_mm.into(), abc);
@@ -228,6 +231,10 @@ pub(crate) fn export(
         }
         if plan.split() {
             let _ = writeln!(body, "END\r");
+            // The part is complete: to the sink, and freed.
+            let path = format!("{part_name}.src");
+            emit(sink, FORMAT, &path, &text)?;
+            parts.push(path);
         }
     }
     // Retract: straight up to the clearance point, then HOME.
@@ -259,26 +266,10 @@ pub(crate) fn export(
         num(k.ptp_speed_percent, 3)
     );
     let _ = writeln!(dat, "ENDDAT\r");
-    check_lines(FORMAT, &src)?;
-    check_lines(FORMAT, &dat)?;
-    let mut files = vec![
-        ProgramFile {
-            path: format!("{name}.src"),
-            contents: src,
-        },
-        ProgramFile {
-            path: format!("{name}.dat"),
-            contents: dat,
-        },
-    ];
-    for (part_name, text) in parts {
-        check_lines(FORMAT, &text)?;
-        files.push(ProgramFile {
-            path: format!("{part_name}.src"),
-            contents: text,
-        });
-    }
-    Ok(files)
+    let main = [format!("{name}.src"), format!("{name}.dat")];
+    emit(sink, FORMAT, &main[0], &src)?;
+    emit(sink, FORMAT, &main[1], &dat)?;
+    Ok(main.into_iter().chain(parts).collect())
 }
 
 /// `$VEL.CP = …` (m/s) before a motion whose speed differs from the current one.

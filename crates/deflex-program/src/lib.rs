@@ -53,11 +53,13 @@ mod plan;
 mod rapid;
 pub mod readback;
 pub mod settings;
+pub mod sink;
 mod urscript;
 mod val3;
 
 pub use error::ProgramError;
 pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
+pub use sink::{DirectorySink, MemorySink, ProgramSink};
 
 use nalgebra::IsometryMatrix3;
 use std::path::Path;
@@ -249,19 +251,36 @@ pub struct ProgramFile {
     pub contents: String,
 }
 
-/// Write `input` as a program in `format`.
+/// Write `input` as a program in `format`, in memory (see [`export_to`] for large programs).
 pub fn export(
     format: Format,
     input: &ProgramInput,
     settings: &ProgramSettings,
 ) -> Result<Vec<ProgramFile>, ProgramError> {
+    let mut sink = MemorySink::default();
+    let order = export_to(format, input, settings, &mut sink)?;
+    // In the order the exporter lists them: the main program first.
+    let mut files = sink.files;
+    files.sort_by_key(|f| order.iter().position(|p| *p == f.path));
+    Ok(files)
+}
+
+/// Write `input` as a program in `format` to `sink`, file by file and each part as soon as it
+/// is complete (a [`DirectorySink`] never holds more than a part in memory); returns the
+/// files' paths, the main program first. A failed export may leave the files written so far.
+pub fn export_to(
+    format: Format,
+    input: &ProgramInput,
+    settings: &ProgramSettings,
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
     settings.validate("settings")?;
     match format {
-        Format::Krl => krl::export(input, settings),
-        Format::Rapid => rapid::export(input, settings),
-        Format::Val3 => val3::export(input, settings),
-        Format::UrScript => urscript::export(input, settings),
-        Format::Gcode => gcode::export(input, settings),
+        Format::Krl => krl::export(input, settings, sink),
+        Format::Rapid => rapid::export(input, settings, sink),
+        Format::Val3 => val3::export(input, settings, sink),
+        Format::UrScript => urscript::export(input, settings, sink),
+        Format::Gcode => gcode::export(input, settings, sink),
     }
 }
 

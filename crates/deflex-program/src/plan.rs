@@ -17,17 +17,18 @@
 //! MB slowly or not at all (the issue that asked for this: a 408 kB `.src`, an 838 kB RAPID
 //! module, a 650 kB URScript). Raise them for your controller knowingly.
 
-use crate::common::{Checked, check_points};
+use crate::common::{Checked, check_input, checked};
 use crate::error::ProgramError;
 use crate::settings::{Clearance, ProgramSettings};
 use crate::{Pose, ProgramInput, ToolLoad};
 use nalgebra::Vector3;
 use std::ops::Range;
 
-/// A program ready to write.
-pub(crate) struct Plan {
-    /// The path.
-    pub points: Vec<Checked>,
+/// A program ready to write: the checked input, converted point by point as it is written
+/// ([`Plan::point`]: a million-point path is not copied).
+pub(crate) struct Plan<'a> {
+    input: &'a ProgramInput,
+    settings: &'a ProgramSettings,
     /// The clearance points above the start and the end (speed: the approach speed).
     pub clear: [Checked; 2],
     /// The parts: ranges of `points` after the first (which the approach reaches); one range
@@ -37,10 +38,37 @@ pub(crate) struct Plan {
     pub tool_load: Option<ToolLoad>,
 }
 
-impl Plan {
+impl Plan<'_> {
     /// The path is written in more than one file.
     pub fn split(&self) -> bool {
         self.parts.len() > 1
+    }
+
+    /// Number of path points.
+    pub fn len(&self) -> usize {
+        self.input.points.len()
+    }
+
+    /// Path point `i` as written (with its configuration when the caller gave them).
+    pub fn point(&self, i: usize) -> Checked {
+        let mut p = checked(&self.input.points[i], self.settings);
+        p.config = self.input.configurations.get(i).copied();
+        p
+    }
+
+    /// The path points from `from` on.
+    pub fn points_from(&self, from: usize) -> impl Iterator<Item = Checked> + '_ {
+        (from..self.len()).map(|i| self.point(i))
+    }
+
+    /// The blend radius at point `i` (see [`crate::common::blend_radius`]).
+    pub fn blend_radius(&self, i: usize, blend_mm: f64) -> f64 {
+        crate::common::blend_radius(
+            i,
+            self.len(),
+            |k| self.input.points[k].pose.translation.vector * 1e3,
+            blend_mm,
+        )
     }
 }
 
@@ -93,25 +121,21 @@ fn tool_load(input: &ProgramInput, settings: &ProgramSettings) -> Option<ToolLoa
 
 /// Check and plan a program; `line_bytes` is the longest motion line of the format (sizes the
 /// parts under `max_part_kb`).
-pub(crate) fn plan(
+pub(crate) fn plan<'a>(
     format: &'static str,
-    input: &ProgramInput,
-    settings: &ProgramSettings,
+    input: &'a ProgramInput,
+    settings: &'a ProgramSettings,
     line_bytes: usize,
-) -> Result<Plan, ProgramError> {
-    let mut points = check_points(format, input, settings)?;
-    if !input.configurations.is_empty() {
-        if input.configurations.len() != points.len() {
-            return Err(ProgramError::Mismatch {
-                format,
-                what: "arm configurations",
-                got: input.configurations.len(),
-                expected: points.len(),
-            });
-        }
-        for (p, c) in points.iter_mut().zip(&input.configurations) {
-            p.config = Some(*c);
-        }
+) -> Result<Plan<'a>, ProgramError> {
+    check_input(format, input, settings)?;
+    let count = input.points.len();
+    if !input.configurations.is_empty() && input.configurations.len() != count {
+        return Err(ProgramError::Mismatch {
+            format,
+            what: "arm configurations",
+            got: input.configurations.len(),
+            expected: count,
+        });
     }
     let poses = clearance_poses(input, settings).expect("check_points refuses an empty path");
     let configs = input.clearance_configurations;
@@ -129,7 +153,7 @@ pub(crate) fn plan(
         {
             return Err(ProgramError::BadValue {
                 format,
-                index: k * (points.len() - 1),
+                index: k * (count - 1),
                 field: "clearance point",
                 value: c.position_mm.norm(),
                 limit: 1e5,
@@ -141,24 +165,25 @@ pub(crate) fn plan(
         .max_points_per_part
         .min(settings.program.max_part_kb * 1024 / line_bytes.max(1))
         .max(1);
-    let moves = points.len() - 1;
+    let moves = count - 1;
     let parts: Vec<Range<usize>> = if moves <= per_part {
-        std::iter::once(1..points.len()).collect()
+        std::iter::once(1..count).collect()
     } else {
-        (1..points.len())
+        (1..count)
             .step_by(per_part)
-            .map(|start| start..(start + per_part).min(points.len()))
+            .map(|start| start..(start + per_part).min(count))
             .collect()
     };
     if parts.len() > 999 {
         return Err(ProgramError::PointCount {
             format,
-            points: points.len(),
+            points: count,
             max: 999 * per_part,
         });
     }
     Ok(Plan {
-        points,
+        input,
+        settings,
         clear,
         parts,
         tool_load: tool_load(input, settings),

@@ -42,14 +42,14 @@
 //! * A long path is split into modules `NAME_p01.mod` … each with one `PROC` of the same name,
 //!   called in order from `main` (data declared in the main module are global to the task).
 
-use crate::ProgramFile;
-use crate::common::{Checked, check_lines, comment_text, header_lines, num, speed_table};
+use crate::common::{Checked, comment_text, header_lines, num, speed_index, speed_table};
 use crate::config::abb_robconf;
 use crate::error::ProgramError;
 use crate::names::{RAPID, sanitize};
 use crate::orientation::abb_quaternion;
 use crate::plan::{part_name, plan};
 use crate::settings::ProgramSettings;
+use crate::sink::{ProgramSink, emit};
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
 
@@ -98,13 +98,15 @@ fn robtarget(p: &Checked, q: [f64; 4]) -> String {
     )
 }
 
+/// Write the program to `sink`, each part module as soon as it is complete; returns the files,
+/// the main module first.
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
-) -> Result<Vec<ProgramFile>, ProgramError> {
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
     let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
-    let points = &plan.points;
-    let (speeds, speed_index) = speed_table(FORMAT, &points[1..], MAX_SPEEDS)?;
+    let speeds = speed_table(FORMAT, plan.points_from(1), MAX_SPEEDS)?;
     let name = sanitize(&settings.program.name, &RAPID);
     let name = if plan.split() && name.len() > 28 {
         name[..28].to_string()
@@ -115,8 +117,8 @@ pub(crate) fn export(
     let common = &settings.program;
     let tool = &a.tool_name;
     let wobj = &a.wobj_name;
-    let configured = points.iter().all(|p| p.config.is_some());
-    let mut out = String::with_capacity(8192 + if plan.split() { 0 } else { points.len() * 180 });
+    let configured = input.configurations.len() == plan.len();
+    let mut out = String::with_capacity(8192 + if plan.split() { 0 } else { plan.len() * 180 });
     let _ = writeln!(out, "MODULE {name}\r");
     for line in header_lines(input) {
         let _ = writeln!(out, "  ! {}\r", comment_text(&line, &[]));
@@ -240,20 +242,22 @@ pub(crate) fn export(
         "    MoveJ {}, deflex_vrapid, fine, {tool} \\WObj:={wobj};\r",
         robtarget(&plan.clear[0], q)
     );
-    let q = abb_quaternion(&points[0].rotation, previous);
+    let first = plan.point(0);
+    let q = abb_quaternion(&first.rotation, previous);
     previous = Some(q);
     let _ = writeln!(
         out,
         "    MoveL {}, deflex_vapp, fine, {tool} \\WObj:={wobj};\r",
-        robtarget(&points[0], q)
+        robtarget(&first, q)
     );
-    let last = points.len() - 1;
+    let last = plan.len() - 1;
     let mut parts = Vec::new();
+    let mut text = String::new();
     for (part, range) in plan.parts.iter().enumerate() {
+        let part_name = part_name(&name, part);
         let (body, indent) = if plan.split() {
-            let part_name = part_name(&name, part);
             let _ = writeln!(out, "    {part_name};\r");
-            let mut text = String::with_capacity(range.len() * 180 + 512);
+            text = String::with_capacity(range.len() * 180 + 512);
             let _ = writeln!(text, "MODULE {part_name}\r");
             let _ = writeln!(
                 text,
@@ -264,19 +268,18 @@ pub(crate) fn export(
                 range.end - 1
             );
             let _ = writeln!(text, "  PROC {part_name}()\r");
-            parts.push((part_name, text));
-            (&mut parts.last_mut().expect("just pushed").1, "    ")
+            (&mut text, "    ")
         } else {
             (&mut out, "    ")
         };
         for i in range.clone() {
-            let p = &points[i];
+            let p = &plan.point(i);
             let q = abb_quaternion(&p.rotation, previous);
             previous = Some(q);
             let speed = if p.rapid {
                 "deflex_vrapid".to_string()
             } else {
-                format!("deflex_v{}", speed_index[i - 1] + 1)
+                format!("deflex_v{}", speed_index(&speeds, p) + 1)
             };
             let zone = if i == last || p.rapid { "fine" } else { zone };
             let _ = writeln!(
@@ -287,6 +290,10 @@ pub(crate) fn export(
         }
         if plan.split() {
             let _ = writeln!(body, "  ENDPROC\r\nENDMODULE\r");
+            // The part is complete: to the sink, and freed.
+            let path = format!("{part_name}.mod");
+            emit(sink, FORMAT, &path, &text)?;
+            parts.push(path);
         }
     }
     let q = abb_quaternion(&plan.clear[1].rotation, previous);
@@ -296,17 +303,7 @@ pub(crate) fn export(
         robtarget(&plan.clear[1], q)
     );
     let _ = writeln!(out, "  ENDPROC\r\nENDMODULE\r");
-    check_lines(FORMAT, &out)?;
-    let mut files = vec![ProgramFile {
-        path: format!("{name}.mod"),
-        contents: out,
-    }];
-    for (part_name, text) in parts {
-        check_lines(FORMAT, &text)?;
-        files.push(ProgramFile {
-            path: format!("{part_name}.mod"),
-            contents: text,
-        });
-    }
-    Ok(files)
+    let main = format!("{name}.mod");
+    emit(sink, FORMAT, &main, &out)?;
+    Ok(std::iter::once(main).chain(parts).collect())
 }

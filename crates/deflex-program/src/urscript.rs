@@ -28,13 +28,13 @@
 //!   `NAME_p01.script` … run one after the other (each part continues from where the previous
 //!   one ended; the first holds the start and the approach, the last the retract).
 
-use crate::ProgramFile;
-use crate::common::{Checked, blend_radii, check_lines, comment_text, header_lines, num};
+use crate::common::{Checked, comment_text, header_lines, num};
 use crate::error::ProgramError;
 use crate::names::{URSCRIPT, sanitize};
 use crate::orientation::ur_rotation_vector;
 use crate::plan::{part_name, plan};
 use crate::settings::ProgramSettings;
+use crate::sink::{ProgramSink, emit};
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
 
@@ -60,15 +60,16 @@ fn frame_text(pose: &Pose) -> String {
 /// Longest motion line.
 const LINE_BYTES: usize = 170;
 
+/// Write the scripts to `sink`, each as soon as it is complete; returns them in the order they
+/// run.
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
-) -> Result<Vec<ProgramFile>, ProgramError> {
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
     let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
-    let points = &plan.points;
     let name = sanitize(&settings.program.name, &URSCRIPT);
     let u = &settings.ur;
-    let blends = blend_radii(points, settings.program.blend_mm);
     let a = num(u.acceleration_m_s2, 3);
     let mut files = Vec::new();
     let mut previous: Option<[f64; 3]> = None;
@@ -156,15 +157,20 @@ pub(crate) fn export(
                 movel(&mut out, &plan.clear[0], r, plan.clear[0].speed_mm_s, 0.0);
             }
             let _ = writeln!(out, "  # approach");
-            let r = ur_rotation_vector(&points[0].rotation, previous);
+            let first = plan.point(0);
+            let r = ur_rotation_vector(&first.rotation, previous);
             previous = Some(r);
-            movel(&mut out, &points[0], r, plan.clear[0].speed_mm_s, 0.0);
+            movel(&mut out, &first, r, plan.clear[0].speed_mm_s, 0.0);
         }
         for i in range.clone() {
-            let p = &points[i];
+            let p = &plan.point(i);
             let r = ur_rotation_vector(&p.rotation, previous);
             previous = Some(r);
-            let blend = if p.rapid { 0.0 } else { blends[i] };
+            let blend = if p.rapid {
+                0.0
+            } else {
+                plan.blend_radius(i, settings.program.blend_mm)
+            };
             movel(&mut out, p, r, p.speed_mm_s, blend);
         }
         if last {
@@ -174,11 +180,9 @@ pub(crate) fn export(
         }
         let _ = writeln!(out, "end");
         let _ = writeln!(out, "{function}()");
-        check_lines(FORMAT, &out)?;
-        files.push(ProgramFile {
-            path: format!("{function}.script"),
-            contents: out,
-        });
+        let path = format!("{function}.script");
+        emit(sink, FORMAT, &path, &out)?;
+        files.push(path);
     }
     Ok(files)
 }

@@ -38,14 +38,14 @@
 //!   (`off`/`joint`/`Cartesian`) with `leave` = `reach` = `blend_mm` (mm).
 //! * VAL3 has no tool load in a `tool`; the header prints the one the cell assumes.
 
-use crate::ProgramFile;
-use crate::common::{Checked, check_lines, comment_text, header_lines, num, speed_table};
+use crate::common::{Checked, comment_text, header_lines, num, speed_index, speed_table};
 use crate::config::staubli_config;
 use crate::error::ProgramError;
 use crate::names::{VAL3, sanitize};
 use crate::orientation::staubli_rxryrz_deg;
 use crate::plan::plan;
 use crate::settings::ProgramSettings;
+use crate::sink::{ProgramSink, emit, put};
 use crate::{Pose, ProgramInput};
 use std::fmt::Write as _;
 
@@ -92,13 +92,15 @@ fn config_attributes(p: &Checked) -> String {
 /// Longest `pointRx` line of the data file.
 const LINE_BYTES: usize = 200;
 
+/// Write the application to `sink`: the data file in pieces, one per part, as the parts are
+/// made (it holds every point); returns the files, the project first.
 pub(crate) fn export(
     input: &ProgramInput,
     settings: &ProgramSettings,
-) -> Result<Vec<ProgramFile>, ProgramError> {
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
     let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
-    let points = &plan.points;
-    let (speeds, speed_index) = speed_table(FORMAT, points, MAX_SPEEDS)?;
+    let speeds = speed_table(FORMAT, plan.points_from(0), MAX_SPEEDS)?;
     let name = sanitize(&settings.program.name, &VAL3);
     let s = &settings.staubli;
     let common = &settings.program;
@@ -119,7 +121,9 @@ pub(crate) fn export(
         )
     };
 
-    let mut dtx = String::with_capacity(points.len() * 150 + 4096);
+    let dtx_path = format!("{name}/{name}.dtx");
+    sink.begin(&dtx_path)?;
+    let mut dtx = String::with_capacity(8192);
     let _ = writeln!(dtx, "{XML_HEADER}");
     let _ = writeln!(
         dtx,
@@ -194,25 +198,28 @@ pub(crate) fn export(
         );
     }
     let _ = writeln!(dtx, "    </Data>");
+    put(sink, FORMAT, &dtx)?;
     let mut previous: Option<[f64; 3]> = None;
     let mut programs = Vec::new();
     for (part, range) in plan.parts.iter().enumerate() {
+        // This part's arrays, written to the data file when complete.
         let start = if part == 0 { 0 } else { range.start };
-        let indices: Vec<usize> = (start..range.end).collect();
+        let indices = start..range.end;
+        let mut dtx = String::with_capacity(indices.len() * 200 + 256);
         let array = format!("pPath{}", part + 1);
         let speeds_array = format!("nSpeed{}", part + 1);
         data_open(&mut dtx, &speeds_array, "num", indices.len());
-        for (key, i) in indices.iter().enumerate() {
+        for (key, i) in indices.clone().enumerate() {
             let _ = writeln!(
                 dtx,
                 "      <Value key=\"{key}\" value=\"{}\" />",
-                speed_index[*i]
+                speed_index(&speeds, &plan.point(i))
             );
         }
         let _ = writeln!(dtx, "    </Data>");
         data_open(&mut dtx, &array, "pointRx", indices.len());
-        for (key, i) in indices.iter().enumerate() {
-            let p = &points[*i];
+        for (key, i) in indices.clone().enumerate() {
+            let p = &plan.point(i);
             let r = staubli_rxryrz_deg(&p.rotation, previous);
             previous = Some(r);
             let _ = writeln!(
@@ -223,6 +230,7 @@ pub(crate) fn export(
             );
         }
         let _ = writeln!(dtx, "    </Data>");
+        put(sink, FORMAT, &dtx)?;
         let program = format!("part{}", part + 1);
         let first = if part == 0 { 1 } else { 0 };
         let text = format!(
@@ -240,7 +248,8 @@ pub(crate) fn export(
         );
         programs.push((program, text));
     }
-    let _ = writeln!(dtx, "  </Datas>\n</Database>");
+    put(sink, FORMAT, "  </Datas>\n</Database>\n")?;
+    sink.end()?;
 
     let program_list: String = programs
         .iter()
@@ -273,39 +282,23 @@ pub(crate) fn export(
          {calls}\
          movel(pClear[1], {tool}, mApproach[1])\n  \
          waitEndMove()\nend\n]]></Code>\n  </Program>\n</Programs>\n",
-        points.len()
+        plan.len()
     );
     let stop = format!(
         "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"stop\" access=\"public\">\n    \
          <Code><![CDATA[\nbegin\n  resetMotion()\nend\n]]></Code>\n  </Program>\n</Programs>\n"
     );
-    for text in [&dtx, &pjx, &start, &stop] {
-        check_lines(FORMAT, text)?;
+    let mut files = vec![format!("{name}/{name}.pjx"), dtx_path];
+    emit(sink, FORMAT, &files[0], &pjx)?;
+    for (file, text) in [("start", &start), ("stop", &stop)] {
+        let path = format!("{name}/{file}.pgx");
+        emit(sink, FORMAT, &path, text)?;
+        files.push(path);
     }
-    let mut files = vec![
-        ProgramFile {
-            path: format!("{name}/{name}.pjx"),
-            contents: pjx,
-        },
-        ProgramFile {
-            path: format!("{name}/{name}.dtx"),
-            contents: dtx,
-        },
-        ProgramFile {
-            path: format!("{name}/start.pgx"),
-            contents: start,
-        },
-        ProgramFile {
-            path: format!("{name}/stop.pgx"),
-            contents: stop,
-        },
-    ];
     for (program, text) in programs {
-        check_lines(FORMAT, &text)?;
-        files.push(ProgramFile {
-            path: format!("{name}/{program}.pgx"),
-            contents: text,
-        });
+        let path = format!("{name}/{program}.pgx");
+        emit(sink, FORMAT, &path, &text)?;
+        files.push(path);
     }
     Ok(files)
 }

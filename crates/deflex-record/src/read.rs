@@ -8,7 +8,7 @@ use deflex_rosmsg::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
     WrenchStamped,
 };
-use deflex_telemetry::{CycleSample, LATE_UNKNOWN};
+use deflex_telemetry::{CycleSample, LATE_UNKNOWN, Source};
 use nalgebra::{Quaternion, UnitQuaternion};
 use std::io::Read;
 use std::path::Path;
@@ -276,17 +276,11 @@ fn apply_diagnostics(sample: &mut CycleSample, status: &deflex_rosmsg::Diagnosti
     };
     let count = |key: &str| status.value(key).and_then(|v| v.parse::<u64>().ok());
     if let Some(phase) = status.value(ch::diag::PHASE) {
-        sample.phase_code = (0..6u32)
-            .find(|c| {
-                CycleSample {
-                    phase_code: *c,
-                    ..CycleSample::default()
-                }
-                .phase()
-                .name()
-                    == phase
-            })
-            .unwrap_or(0);
+        // A controller's phase, or the simulated cell's state (`twin-cell` recordings).
+        sample.phase_code = [Source::Runtime, Source::TwinCell]
+            .iter()
+            .find_map(|s| s.phase_names().iter().position(|n| *n == phase))
+            .unwrap_or(0) as u32;
     }
     sample.flags = count(ch::diag::FLAGS).unwrap_or(0) as u32;
     let fault = status.value(ch::diag::FAULT).unwrap_or("");

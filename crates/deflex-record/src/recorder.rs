@@ -43,6 +43,7 @@ const POLL: Duration = Duration::from_millis(20);
 pub struct McapRecorder {
     path: PathBuf,
     stop: Arc<AtomicBool>,
+    commit: Arc<AtomicBool>,
     handle: JoinHandle<Result<RecordReport, RecordError>>,
 }
 
@@ -72,6 +73,8 @@ impl McapRecorder {
         let mut sink = McapSink::new(file, name.clone(), &info, options)?;
         let stop = Arc::new(AtomicBool::new(false));
         let stop_flag = stop.clone();
+        let commit = Arc::new(AtomicBool::new(true));
+        let commit_flag = commit.clone();
         let report_path = path.clone();
         let handle = std::thread::Builder::new()
             .name("deflex-mcap".into())
@@ -92,15 +95,23 @@ impl McapRecorder {
                     if let Some(e) = failed {
                         return Err(e);
                     }
-                    if stopping || subscriber.is_finished() {
+                    if stopping {
                         break;
                     }
-                    std::thread::sleep(POLL);
+                    // Once the stream has ended there is nothing more to read: wait for
+                    // `finish` to say whether the file is kept.
+                    std::thread::sleep(if subscriber.is_finished() {
+                        POLL * 2
+                    } else {
+                        POLL
+                    });
                 }
                 let lost = subscriber.lost();
                 let (file, stats) = sink.finish()?;
-                file.commit()
-                    .map_err(|e| RecordError::from_io(&name, stats.bytes, e))?;
+                if commit_flag.load(Ordering::Acquire) {
+                    file.commit()
+                        .map_err(|e| RecordError::from_io(&name, stats.bytes, e))?;
+                }
                 Ok(RecordReport {
                     path: report_path,
                     stats,
@@ -111,7 +122,12 @@ impl McapRecorder {
                 path: path.display().to_string(),
                 source: e,
             })?;
-        Ok(McapRecorder { path, stop, handle })
+        Ok(McapRecorder {
+            path,
+            stop,
+            commit,
+            handle,
+        })
     }
 
     /// The destination.
@@ -119,7 +135,8 @@ impl McapRecorder {
         &self.path
     }
 
-    /// True when the recorder thread has ended (publisher closed, or an error).
+    /// True when the recorder thread has ended early (a write error); it otherwise runs until
+    /// [`Self::finish`].
     pub fn is_finished(&self) -> bool {
         self.handle.is_finished()
     }
@@ -127,6 +144,13 @@ impl McapRecorder {
     /// Records what was published up to now, closes the file and renames it into place. Call it
     /// once the session has ended (or to stop recording early).
     pub fn finish(self) -> Result<RecordReport, RecordError> {
+        self.finish_with(true)
+    }
+
+    /// [`Self::finish`], renaming the file into place only when `commit` (a failed session
+    /// discards its recording and leaves what was at the path whole, as it does its CSV log).
+    pub fn finish_with(self, commit: bool) -> Result<RecordReport, RecordError> {
+        self.commit.store(commit, Ordering::Release);
         self.stop.store(true, Ordering::Release);
         self.handle.join().map_err(|_| RecordError::Panicked {
             path: self.path.display().to_string(),

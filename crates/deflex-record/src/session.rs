@@ -1,7 +1,7 @@
 //! The session description stored in a recording (`/deflex/session` and the `deflex` metadata
 //! record): what [`deflex_telemetry::SessionInfo`] holds, in JSON.
 
-use deflex_telemetry::{SessionInfo, Source};
+use deflex_telemetry::SessionInfo;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -14,7 +14,7 @@ pub const SESSION_JSON_SCHEMA: &str = r#"{
   "properties": {
     "label": {"type": "string", "description": "SIMULATED for the digital twin or a simulated cell, empty otherwise"},
     "simulated": {"type": "boolean"},
-    "source": {"type": "string", "enum": ["runtime", "twin"]},
+    "source": {"type": "string", "enum": ["runtime", "twin", "twin-cell"], "description": "runtime: deflex run; twin: the controller in-process on the digital twin; twin-cell: the digital twin's own stream (ground truth, no controller)"},
     "robot": {"type": "string"},
     "joint_names": {"type": "array", "items": {"type": "string"}},
     "protocol": {"type": "string"},
@@ -37,7 +37,7 @@ pub struct SessionRecord {
     pub label: String,
     /// The robot or the cell is the digital twin.
     pub simulated: bool,
-    /// `runtime` or `twin`.
+    /// `runtime`, `twin` or `twin-cell` ([`deflex_telemetry::Source::key`]).
     pub source: String,
     /// Robot name.
     pub robot: String,
@@ -75,11 +75,7 @@ impl SessionRecord {
         SessionRecord {
             label: if info.simulated { "SIMULATED" } else { "" }.into(),
             simulated: info.simulated,
-            source: match info.source {
-                Source::Runtime => "runtime",
-                Source::Twin => "twin",
-            }
-            .into(),
+            source: info.source.key().into(),
             robot: info.robot.clone(),
             joint_names: info.joint_names.clone(),
             protocol: info.protocol.clone(),

@@ -377,3 +377,60 @@ fn foreign_and_damaged_files_are_named_errors() {
     assert!(e.to_string().contains("cut.mcap"));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A failed session discards its recording: the earlier file stays whole and nothing is left
+/// beside it, also when the stream ended before `finish_with` was called.
+#[test]
+fn a_discarded_recording_leaves_the_earlier_file_whole() {
+    let dir = temp_dir("discard");
+    let path = dir.join("session.mcap");
+    std::fs::write(&path, b"earlier recording").unwrap();
+    let (mut publisher, ring) = deflex_telemetry::broadcast::<CycleSample>(10_000);
+    let mut cell = SyntheticCell::new(0.01, 5, false);
+    let info = std::sync::Arc::new(cell.session_info());
+    let recorder = McapRecorder::spawn(&path, &ring, info).unwrap();
+    for _ in 0..500 {
+        publisher.publish(&cell.next_sample());
+    }
+    drop(publisher);
+    // The stream has ended; the recorder waits for the verdict.
+    std::thread::sleep(std::time::Duration::from_millis(150));
+    assert!(!recorder.is_finished());
+    assert_eq!(std::fs::read(&path).unwrap(), b"earlier recording");
+    let report = recorder.finish_with(false).unwrap();
+    assert_eq!(report.stats.recorded, 500);
+    assert_eq!(std::fs::read(&path).unwrap(), b"earlier recording");
+    let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert_eq!(names.len(), 1, "a temporary file was left behind");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A twin-cell stream (the twin's own, no controller) names the cell's state in `/diagnostics`
+/// and reads back with it.
+#[test]
+fn twin_cell_states_are_named_and_read_back() {
+    use deflex_telemetry::{CellState, Source};
+    let mut info = SyntheticCell::new(0.02, 1, true).session_info();
+    info.source = Source::TwinCell;
+    let mut sink = McapSink::new(Vec::new(), "memory", &info, RecordOptions::default()).unwrap();
+    let states = [CellState::Waiting, CellState::Forming, CellState::Finished];
+    for (k, state) in states.iter().enumerate() {
+        let s = CycleSample {
+            time_s: k as f64,
+            cycle: k as u64 + 1,
+            phase_code: state.code(),
+            ..CycleSample::default()
+        };
+        sink.write(&s).unwrap();
+    }
+    let (bytes, _) = sink.finish().unwrap();
+    let dir = temp_dir("twincell");
+    let path = dir.join("cell.mcap");
+    std::fs::write(&path, &bytes).unwrap();
+    let mut back = Vec::new();
+    let summary = for_each_cycle(&path, |s| back.push(s.phase_code)).unwrap();
+    assert_eq!(summary.session.unwrap().source, "twin-cell");
+    assert_eq!(back, states.map(CellState::code).to_vec());
+    assert_eq!(Source::TwinCell.phase_name(back[1]), "forming");
+    let _ = std::fs::remove_dir_all(dir);
+}

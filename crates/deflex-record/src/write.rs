@@ -95,7 +95,7 @@ struct Channels {
 }
 
 /// Writes cycle samples as MCAP messages into any writer (synchronously: the twin can call it in
-/// its own loop and lose nothing; the runtime uses [`McapRecorder`]).
+/// its own loop and lose nothing; the runtime uses [`crate::McapRecorder`]).
 pub struct McapSink<W: Write> {
     writer: mcap::Writer<NoSeek<Counting<W>>>,
     channels: Channels,

@@ -204,7 +204,7 @@ pub fn diagnostics(
         key: k.to_string(),
         value: v,
     };
-    let phase = s.phase().name();
+    let phase = info.source.phase_name(s.phase_code);
     let status = flags.describe();
     let message = match fault {
         Some(kind) => format!("{phase}: fault {}", kind.name()),

@@ -14,7 +14,7 @@
 //! geometric error at that pose is absorbed and only its variation along the path remains.
 //!
 //! A correction controller only ever sees [`ControllerInput`]: time, measured joints and raw F/T
-//! samples.
+//! samples (and, for its telemetry only, the ground truth it must not act on).
 
 use crate::cell_config::{CellConfig, MAX_LOG_ROWS, MAX_RUN_S, ProcessKind};
 use crate::controller_emulation::{ControllerCycle, ControllerEmulation};
@@ -33,7 +33,9 @@ use rand_chacha::ChaCha8Rng;
 
 pub use crate::sensor::SensorSample;
 
-/// What an external correction controller sees each cycle: only sensor data, never the plant.
+/// What an external correction controller sees each cycle: only sensor data, never the plant —
+/// except [`ControllerInput::truth`], which is there for the controller's **telemetry** only
+/// (the path error a live view or a recording shows) and must never enter a correction law.
 #[derive(Clone, Copy, Debug)]
 pub struct ControllerInput<'a> {
     /// Simulated time (s).
@@ -43,6 +45,9 @@ pub struct ControllerInput<'a> {
     pub q_measured_rad: &'a [f64],
     /// Raw F/T samples received since the previous controller call, oldest first.
     pub wrench_samples: &'a [SensorSample],
+    /// The ground truth of this cycle (part frame R_p, whose axes are the world's), for
+    /// telemetry only: no hardware gives it, so a correction law must not read it.
+    pub truth: Option<&'a TruthState>,
 }
 
 /// An external correction controller (like a CompactRIO running the paper's loop).
@@ -67,9 +72,13 @@ pub struct CellStep {
     pub sensor_samples: Vec<SensorSample>,
     /// The path is complete (this was the last cycle).
     pub finished: bool,
+    /// This cycle is a row of the run's [`FormingLog`] (every `controller.rate_hz /
+    /// log.rate_hz` cycles, and the last).
+    pub logged: bool,
 }
 
-/// Ground-truth state of the last cycle (evaluation only).
+/// Ground-truth state of the last cycle (evaluation only). Positions are in the part frame R_p
+/// (a translation of the world frame: its axes are the world's), the wrench in R_p axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TruthState {
     /// Desired TCP in R_p (m).
@@ -402,7 +411,8 @@ impl Cell {
             correction: cycle.correction,
         };
         self.stats.add(&truth);
-        if self.cycle.is_multiple_of(self.log_every) || cycle.finished {
+        out.logged = self.cycle.is_multiple_of(self.log_every) || cycle.finished;
+        if out.logged {
             let tracked = self.tracker.measure(&tcp_true.translation.vector) - self.true_origin;
             let raw = out.sensor_samples.last().copied().unwrap_or(SensorSample {
                 time_s: cycle.time_s,

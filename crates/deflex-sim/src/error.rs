@@ -40,6 +40,12 @@ pub enum SimError {
     /// Measurement/plan file problem.
     #[error(transparent)]
     Data(#[from] deflex_measurements::DataError),
+    /// The run was stopped before the end of its path (an observer asked, e.g. on Ctrl-C).
+    #[error("stopped at {time_s:.1} s of simulated time, before the end of the path")]
+    Stopped {
+        /// Simulated time when it stopped (s).
+        time_s: f64,
+    },
     /// A robot spec that is not a built-in robot, given where the twin cannot read the file (it
     /// reads no file: `deflex_twin::cell_for_robot` reads robot files).
     #[error(

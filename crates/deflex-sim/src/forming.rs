@@ -113,7 +113,29 @@ pub fn run_program_with_progress(
     program: ToolPath,
     reference: Option<&ToolPath>,
     seed: u64,
+    controller: Option<&mut dyn CorrectionController>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<FormingRun, SimError> {
+    run_program_observed(config, program, reference, seed, controller, None, progress)
+}
+
+/// Watches a run cycle by cycle, after the controller (if any) was called: a telemetry stream
+/// of the twin's truth, a live view's pacing. It sees the ground truth; it never changes the
+/// run, but it may end it early.
+pub trait CycleObserver {
+    /// Called after every robot cycle with the cell and what the cycle reported. Returning
+    /// `false` stops the run ([`SimError::Stopped`]).
+    fn observe(&mut self, cell: &Cell, step: &CellStep) -> bool;
+}
+
+/// [`run_program_with_progress`] with an `observer` called after every robot cycle.
+pub fn run_program_observed(
+    config: &CellConfig,
+    program: ToolPath,
+    reference: Option<&ToolPath>,
+    seed: u64,
     mut controller: Option<&mut dyn CorrectionController>,
+    mut observer: Option<&mut dyn CycleObserver>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<FormingRun, SimError> {
     let start = std::time::Instant::now();
@@ -153,6 +175,7 @@ pub fn run_program_with_progress(
                     time_s: step.time_s,
                     q_measured_rad: &step.q_measured_rad,
                     wrench_samples: &pending,
+                    truth: cell.truth(),
                 });
                 cell.set_correction(xi);
                 pending.clear();
@@ -160,6 +183,13 @@ pub fn run_program_with_progress(
                     next_call += period;
                 }
             }
+        }
+        if let Some(obs) = observer.as_mut()
+            && !obs.observe(&cell, &step)
+        {
+            return Err(SimError::Stopped {
+                time_s: step.time_s,
+            });
         }
         if step.cycle % per_second == 0 {
             progress((step.time_s / duration).min(1.0));

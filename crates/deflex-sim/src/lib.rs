@@ -69,8 +69,8 @@ pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSamp
 pub use cell_config::{CellConfig, ErrorSources, ProcessKind};
 pub use error::SimError;
 pub use forming::{
-    FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress,
-    run_program_with_progress,
+    CycleObserver, FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress,
+    run_program_observed, run_program_with_progress,
 };
 pub use process_model::{FormingProcess, compensated_tool_path, tcp_path, tool_path_by_name};
 pub use toolpath::{ConeParams, PlungeParams, PyramidParams, ToolPath, Waypoint};

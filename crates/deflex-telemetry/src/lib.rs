@@ -25,7 +25,7 @@ mod seqcell;
 mod words;
 
 pub use broadcast::{Broadcast, Publisher, Subscriber, broadcast};
-pub use sample::{CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, Source};
+pub use sample::{CellState, CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, Source};
 pub use seqcell::SeqCell;
 
 /// Re-exported so that users can derive [`bytemuck::Pod`] for their own messages.

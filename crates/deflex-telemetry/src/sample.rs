@@ -47,7 +47,9 @@ pub struct CycleSample {
     pub tcp_position_m: [f64; 3],
     /// TCP orientation (rows of the rotation matrix, base frame).
     pub tcp_rotation: [[f64; 3]; 3],
-    /// Twin only: true TCP minus desired TCP (m, base axes); NaN on a real cell.
+    /// Twin only: true TCP minus desired TCP (m, base axes); NaN on a real cell. The twin
+    /// knows it in its part frame R_p, whose axes are the world's; it is turned into the robot's
+    /// base axes with the base orientation of the robot model.
     pub truth_error_m: [f64; 3],
     /// Arc length of the robot's place on the feed-forward path (m); NaN without one.
     pub path_s_m: f64,
@@ -225,8 +227,95 @@ impl CycleSample {
 pub enum Source {
     /// `deflex run` against a robot controller and a sensor (real or simulated cell).
     Runtime,
-    /// The digital twin in-process (`deflex sim isf`): SIMULATED, with the truth known.
+    /// The deflex controller in-process on the digital twin (`deflex sim isf --correction on`):
+    /// the controller's own cycle, as `deflex run` publishes it, plus the twin's path error
+    /// ([`CycleSample::truth_error_m`]). SIMULATED.
     Twin,
+    /// The digital twin's own stream, with no controller in it (`deflex cell --sim`, whose
+    /// controller is another process, and `deflex sim isf` open loop): what the robot reports
+    /// and the plant's ground truth. In its samples [`CycleSample::wrench_tcp`] is the **true**
+    /// contact wrench at the TCP, [`CycleSample::deflection`] the arm's **true** deflection
+    /// under it, [`CycleSample::correction`] the correction the robot **applies** (after its
+    /// transport delay, filter and bounds), [`CycleSample::tcp_position_m`] the TCP from the
+    /// joints the robot reports (its controller's kinematics), [`CycleSample::cycle_time_s`]
+    /// the round trip of the controller's answer (`cell --sim`; NaN in-process) and
+    /// [`CycleSample::phase_code`] the cell's state ([`CellState`]); what only a controller
+    /// knows (the processed reading, ε, the feed-forward, flags, faults) is NaN or zero.
+    /// SIMULATED.
+    TwinCell,
+}
+
+impl Source {
+    /// The key of the source in files and messages: `runtime`, `twin`, `twin-cell`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Source::Runtime => "runtime",
+            Source::Twin => "twin",
+            Source::TwinCell => "twin-cell",
+        }
+    }
+
+    /// The names of [`CycleSample::phase_code`]'s values for this source: the controller's
+    /// phases, or for [`Source::TwinCell`] the cell's states ([`CellState::name`]).
+    pub fn phase_names(self) -> [&'static str; 6] {
+        match self {
+            Source::Runtime | Source::Twin => PHASES.map(|p| p.name()),
+            Source::TwinCell => CellState::ALL.map(CellState::name),
+        }
+    }
+
+    /// The name of the phase code `code` of a sample of this source.
+    pub fn phase_name(self, code: u32) -> &'static str {
+        let names = self.phase_names();
+        names[(code as usize).min(names.len() - 1)]
+    }
+}
+
+/// The state of the simulated cell in a [`Source::TwinCell`] sample's
+/// [`CycleSample::phase_code`] (its index in [`CellState::ALL`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellState {
+    /// The robot holds its start pose until a controller answers (`cell --sim`).
+    Waiting,
+    /// A controller answers: the robot dwells at the start pose (the controller tares there).
+    Dwelling,
+    /// The robot program runs.
+    Forming,
+    /// Stopped by a signal before the end of the program.
+    Stopped,
+    /// The program reached the end of its path.
+    Finished,
+    /// Not used (keeps the six codes of the controller's phases).
+    Unused,
+}
+
+impl CellState {
+    /// Every state, in code order.
+    pub const ALL: [CellState; 6] = [
+        CellState::Waiting,
+        CellState::Dwelling,
+        CellState::Forming,
+        CellState::Stopped,
+        CellState::Finished,
+        CellState::Unused,
+    ];
+
+    /// The code in [`CycleSample::phase_code`].
+    pub fn code(self) -> u32 {
+        CellState::ALL.iter().position(|s| *s == self).unwrap_or(0) as u32
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            CellState::Waiting => "waiting",
+            CellState::Dwelling => "dwelling",
+            CellState::Forming => "forming",
+            CellState::Stopped => "stopped",
+            CellState::Finished => "finished",
+            CellState::Unused => "-",
+        }
+    }
 }
 
 /// What does not change during a session: shared once, before the first sample.
@@ -265,7 +354,7 @@ impl SessionInfo {
     pub fn new(source: Source, robot: impl Into<String>, joint_names: Vec<String>) -> Self {
         SessionInfo {
             source,
-            simulated: source == Source::Twin,
+            simulated: matches!(source, Source::Twin | Source::TwinCell),
             robot: robot.into(),
             joint_names,
             protocol: String::new(),

@@ -179,3 +179,31 @@ fn sample_accessors() {
         nalgebra::Vector3::new(0.999, 2.0, 3.002)
     );
 }
+
+#[test]
+fn sources_name_their_phases() {
+    use crate::{CellState, Source};
+    assert_eq!(
+        [Source::Runtime, Source::Twin, Source::TwinCell].map(Source::key),
+        ["runtime", "twin", "twin-cell"]
+    );
+    // A controller's stream names the controller's phases, the twin's own its cell's states,
+    // by the same codes.
+    for source in [Source::Runtime, Source::Twin] {
+        for phase in [
+            deflex_control::Phase::Taring,
+            deflex_control::Phase::Faulted,
+        ] {
+            assert_eq!(
+                source.phase_name(CycleSample::phase_to_code(phase)),
+                phase.name()
+            );
+        }
+    }
+    for state in CellState::ALL {
+        assert_eq!(Source::TwinCell.phase_name(state.code()), state.name());
+    }
+    assert_eq!(Source::TwinCell.phase_name(99), "-");
+    let info = crate::SessionInfo::new(Source::TwinCell, "tx200", vec![]);
+    assert!(info.simulated, "the twin's own stream is SIMULATED");
+}

@@ -8,12 +8,14 @@
 //! plays any robot (`deflex_sim::CellConfig::for_robot`: part position, force level, controller
 //! rate, sensor) and names it in every output.
 
+use crate::twin_stream::TwinCellStream;
 use deflex_io::{LinkError, RobotState};
 use deflex_model::{Data, Robot};
 use deflex_runtime::config::{CellFile, RobotKind};
 use deflex_runtime::links::RobotEndpoint;
 use deflex_runtime::stats::{CycleStats, StatsSummary};
 use deflex_sim::{Cell, CellConfig, ToolPath};
+use deflex_telemetry::CellState;
 use nalgebra::Vector3;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -136,6 +138,9 @@ pub struct CellOutcome {
     pub duration_s: f64,
     /// How it ended.
     pub end: CellEnd,
+    /// The twin's ground-truth log (the `deflex sim isf` `log.csv` format:
+    /// [`deflex_sim::FormingLog::to_csv`]).
+    pub log: deflex_sim::FormingLog,
 }
 
 /// What the served twin reports while it runs.
@@ -285,21 +290,42 @@ struct Serving {
     /// Robot cycles still to hold the start pose once the controller answers and the sensor
     /// streams.
     dwell_cycles: u64,
+    /// The controller answers and the sensor streams, the program has not started yet.
+    dwelling: bool,
 }
 
 impl Serving {
     /// Steps the twin (once serving; before, it holds the start pose) and streams the cycle's
-    /// F/T samples.
-    fn step_twin(&mut self) {
+    /// F/T samples; returns how many it streamed and whether the twin stepped.
+    fn step_twin(&mut self) -> (usize, bool) {
         while let Ok(Some(_)) = self.server.poll_request(Duration::ZERO) {}
         if self.serving {
             self.cell.step_into(&mut self.step);
             for s in &self.step.sensor_samples {
                 let _ = self.server.send_sample(&s.wrench_sensor, 0);
             }
+            (self.step.sensor_samples.len(), true)
         } else if let Some(s) = self.step.sensor_samples.last() {
             // Waiting for the controller, then dwelling: hold the start pose, keep streaming.
             let _ = self.server.send_sample(&s.wrench_sensor, 0);
+            (1, false)
+        } else {
+            (0, false)
+        }
+    }
+
+    /// The cell's state for its telemetry.
+    fn state(&self) -> CellState {
+        if self.serving {
+            if self.step.finished {
+                CellState::Finished
+            } else {
+                CellState::Forming
+            }
+        } else if self.dwelling {
+            CellState::Dwelling
+        } else {
+            CellState::Waiting
         }
     }
 
@@ -322,13 +348,19 @@ impl Serving {
         (sent, kinematics_ok)
     }
 
-    /// Waits until `until` for this cycle's answer and applies it; returns whether it came.
-    fn await_answer(&mut self, until: Instant, sent: Instant, kinematics_ok: bool) -> bool {
+    /// Waits until `until` for this cycle's answer and applies it; returns its round trip when
+    /// it came.
+    fn await_answer(
+        &mut self,
+        until: Instant,
+        sent: Instant,
+        kinematics_ok: bool,
+    ) -> Option<Duration> {
         let echoes_cycle = self.robot.echoes_cycle();
         loop {
             let wait = until.saturating_duration_since(Instant::now());
             if wait.is_zero() {
-                return false;
+                return None;
             }
             match self.robot.receive(wait) {
                 Ok(Some(r)) if r.cycle_id == self.ipoc || !echoes_cycle => {
@@ -337,18 +369,21 @@ impl Serving {
                         Some(_) => [0.0; 6],
                         None => r.correction.to_array(),
                     };
+                    let round_trip = sent.elapsed();
                     if self.serving {
-                        self.round_trip.record(sent.elapsed());
+                        self.round_trip.record(round_trip);
                     }
                     if !self.serving && self.server.streaming() {
                         if self.dwell_cycles == 0 {
                             self.serving = true;
+                            self.dwelling = false;
                         } else {
+                            self.dwelling = true;
                             self.dwell_cycles -= 1;
                         }
                     }
                     self.cell.set_correction(correction);
-                    return true;
+                    return Some(round_trip);
                 }
                 Ok(Some(_)) | Err(_) => continue,
                 Ok(None) => {}
@@ -399,6 +434,19 @@ pub fn serve_cell(
     stop: &AtomicBool,
     events: &mut dyn FnMut(CellEvent),
 ) -> Result<CellOutcome, CellServeError> {
+    serve_cell_with(file, options, stop, events, None)
+}
+
+/// [`serve_cell`] feeding the twin's own stream `stream` ([`crate::twin_stream`]): a sample at
+/// every change of the cell's state before the program starts, then at every row of its log,
+/// with the largest round trip of the controller's answers since the previous sample.
+pub fn serve_cell_with(
+    file: &CellFile,
+    options: &ServeOptions,
+    stop: &AtomicBool,
+    events: &mut dyn FnMut(CellEvent),
+    mut stream: Option<&mut TwinCellStream>,
+) -> Result<CellOutcome, CellServeError> {
     let twin = &options.twin;
     let (model, nominal) = check_cell_file(file, twin)?;
     events(CellEvent::Playing {
@@ -438,7 +486,13 @@ pub fn serve_cell(
         cycles: 0,
         late: 0,
         serving: false,
+        dwelling: false,
     };
+    let mut state = s.state();
+    if let Some(st) = stream.as_deref_mut() {
+        // The start pose, the first row of the twin's log.
+        st.record(&s.cell, &s.step, state);
+    }
     let mut end = CellEnd::ProgramFinished;
     let start = Instant::now();
     let mut last_progress = Instant::now();
@@ -446,13 +500,30 @@ pub fn serve_cell(
     loop {
         if stop.load(Ordering::SeqCst) {
             end = CellEnd::Stopped;
+            if let Some(st) = stream.as_deref_mut() {
+                st.record_state(CellState::Stopped);
+            }
             break;
         }
-        s.step_twin();
+        let (streamed, stepped) = s.step_twin();
         let (sent, kinematics_ok) = s.send_state();
         next += period;
-        let answered = s.await_answer(next, sent, kinematics_ok);
-        s.account(answered);
+        let answer = s.await_answer(next, sent, kinematics_ok);
+        s.account(answer.is_some());
+        if let Some(st) = stream.as_deref_mut() {
+            st.count_sensor_samples(streamed);
+            if let (Some(rt), true) = (answer, s.serving) {
+                st.note_round_trip(rt.as_secs_f64());
+            }
+            let now = s.state();
+            if stepped && s.step.logged {
+                st.set_robot_counts(s.cycles, s.late);
+                st.record(&s.cell, &s.step, now);
+            } else if now != state && !stepped {
+                st.record_state(now);
+            }
+            state = now;
+        }
         if s.serving && s.step.finished {
             break;
         }
@@ -479,5 +550,6 @@ pub fn serve_cell(
         late: s.late,
         duration_s: s.step.time_s,
         end,
+        log: s.cell.log().clone(),
     })
 }

@@ -10,6 +10,7 @@
 //! (a live view, a recorder) follow a twin run.
 
 use crate::TwinError;
+use crate::twin_stream::SampleSink;
 use deflex_control::{
     Controller, ControllerConfig, CycleInput, CycleOutput, Fault, FeedForward, Phase,
 };
@@ -17,6 +18,7 @@ use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::{Robot, Wrench};
 use deflex_runtime::telemetry::{CycleSample, Publisher, SessionInfo, Source, session_info};
 use deflex_sim::{CellConfig, ControllerInput, CorrectionController, FormingRun, ToolPath};
+use nalgebra::Rotation3;
 use std::path::Path;
 
 /// The controller configuration for the twin's cell: the paper's gains and the default limits,
@@ -41,10 +43,14 @@ pub fn controller_config_for(cell: &CellConfig) -> ControllerConfig {
     config
 }
 
-/// The telemetry of an in-process run: the publisher and the sample it reuses.
+/// The telemetry of an in-process run: the publisher, the synchronous sink and the sample they
+/// reuse.
 struct TwinTelemetry {
-    publisher: Publisher<CycleSample>,
+    publisher: Option<Publisher<CycleSample>>,
+    sink: Option<SampleSink>,
     sample: CycleSample,
+    /// World → the model's base axes (the truth is in the twin's part frame, world axes).
+    to_base: Rotation3<f64>,
 }
 
 /// [`Controller`] as the twin's [`CorrectionController`]. Keeps a per-cycle trace when asked.
@@ -79,14 +85,39 @@ impl TwinController {
     }
 
     /// Publish one telemetry sample per control cycle (SIMULATED: [`Source::Twin`]) into
-    /// `publisher`; `None` stops publishing. The twin's truth is not known to the controller:
-    /// [`CycleSample::truth_error_m`] stays NaN in this in-process adapter (deflex-sim hands
-    /// a controller only what hardware would).
+    /// `publisher`; `None` stops publishing (and ends the stream). The samples carry the twin's
+    /// path error ([`CycleSample::truth_error_m`]: true − desired TCP, turned from the twin's
+    /// part frame, whose axes are the world's, into the model's base axes) from
+    /// [`deflex_sim::ControllerInput::truth`]; the law itself never reads the truth.
     pub fn set_telemetry(&mut self, publisher: Option<Publisher<CycleSample>>) {
-        self.telemetry = publisher.map(|publisher| TwinTelemetry {
-            publisher,
-            sample: CycleSample::default(),
-        });
+        let sink = self.telemetry.as_mut().and_then(|t| t.sink.take());
+        self.set_outputs(publisher, sink);
+    }
+
+    /// Hand every telemetry sample to `sink` too, synchronously, losing none (an MCAP writer);
+    /// `None` removes it.
+    pub fn set_sample_sink(&mut self, sink: Option<SampleSink>) {
+        let publisher = self.telemetry.as_mut().and_then(|t| t.publisher.take());
+        self.set_outputs(publisher, sink);
+    }
+
+    fn set_outputs(&mut self, publisher: Option<Publisher<CycleSample>>, sink: Option<SampleSink>) {
+        // The sample keeps its cycle count when the outputs change.
+        let sample = self
+            .telemetry
+            .take()
+            .map_or_else(CycleSample::default, |t| t.sample);
+        let to_base = self.ctrl.robot().base.rotation.inverse();
+        self.telemetry = if publisher.is_some() || sink.is_some() {
+            Some(TwinTelemetry {
+                publisher,
+                sink,
+                sample,
+                to_base,
+            })
+        } else {
+            None
+        };
     }
 
     /// The description of a twin session of this controller, whose robot runs every
@@ -140,7 +171,7 @@ impl CorrectionController for TwinController {
         if let Some(trace) = self.trace.as_mut() {
             trace.push(out);
         }
-        self.publish(input.q_measured_rad, &out);
+        self.publish(input, &out);
         out.xi
     }
 }
@@ -162,15 +193,25 @@ fn period_reading(samples: &[deflex_sim::SensorSample]) -> Wrench {
 }
 
 impl TwinController {
-    /// One telemetry sample of the cycle just run, when publishing (allocation-free).
-    fn publish(&mut self, q: &[f64], out: &CycleOutput) {
+    /// One telemetry sample of the cycle just run, when publishing (allocation-free; a sink
+    /// may allocate).
+    fn publish(&mut self, input: &ControllerInput, out: &CycleOutput) {
         let Some(t) = self.telemetry.as_mut() else {
             return;
         };
-        t.sample.record_cycle(&self.ctrl, q, &self.last_raw, out);
+        t.sample
+            .record_cycle(&self.ctrl, input.q_measured_rad, &self.last_raw, out);
         t.sample.cycle += 1;
         t.sample.sensor_samples = self.samples;
-        t.publisher.publish(&t.sample);
+        t.sample.truth_error_m = input.truth.map_or([f64::NAN; 3], |truth| {
+            (t.to_base * truth.path_error_m()).into()
+        });
+        if let Some(p) = t.publisher.as_mut() {
+            p.publish(&t.sample);
+        }
+        if let Some(sink) = t.sink.as_mut() {
+            sink(&t.sample);
+        }
     }
 }
 
@@ -280,7 +321,7 @@ pub fn run_twin_controller(
         progress,
     )?;
     // The run is over: the stream ends (its sinks see it closed).
-    twin.set_telemetry(None);
+    twin.telemetry = None;
     Ok(ClosedLoopRun {
         forming,
         phase: twin.ctrl.phase(),

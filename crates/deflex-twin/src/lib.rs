@@ -11,7 +11,10 @@
 //!   `robot.kind` and an ATI Net F/T on loopback, built by the runtime's robot-side link factory
 //!   — so `deflex run` can be tried end to end without hardware (`deflex cell --sim`);
 //! * [`sim_time`]: the runtime's own threads (`deflex run`'s code path) against the twin in
-//!   simulated time, through in-memory links and a driven clock.
+//!   simulated time, through in-memory links and a driven clock;
+//! * [`twin_stream`]: the twin's own telemetry stream (what the robot reports and the plant's
+//!   ground truth, no controller in it) for `cell --sim` and open-loop runs, and the watch of an
+//!   in-process run (pace for a live view, stop on Ctrl-C).
 //!
 //! Layering: model → control law → io → runtime → **twin** → front ends (CLI, demo, report).
 //! The twin never hands the plant to the controller: it sees only what hardware would give it.
@@ -22,6 +25,7 @@ pub mod cell_file;
 pub mod cell_server;
 pub mod closed_loop;
 pub mod sim_time;
+pub mod twin_stream;
 
 pub use cell_file::{CellFileError, cell_for_robot, load_cell};
 pub use closed_loop::{
@@ -29,6 +33,7 @@ pub use closed_loop::{
     run_closed_loop, run_twin_controller, twin_controller,
 };
 pub use sim_time::run_runtime_in_sim_time;
+pub use twin_stream::{RunWatch, SampleSink, TwinCellStream, twin_cell_session_info};
 
 use std::path::PathBuf;
 

@@ -52,6 +52,34 @@ const CHARTS = {
     ["cycle_time_p99_s", 1e6, "p99, last cycles", COLORS.b]] },
 };
 
+// The digital twin's own stream (`deflex cell --sim`, `deflex sim isf` open loop) carries the
+// ground truth where a controller's stream carries its estimates: its panels say so.
+const TWIN_CELL = {
+  titles: {
+    "h-force": "True contact force at the TCP, base axes (N)",
+    "h-torque": "True contact torque at the TCP, base axes (N·m)",
+    "h-deflection": "True deflection of the arm at the TCP (mm)",
+    "h-correction": "Correction ξ the robot applies (mm) against its bounds",
+    "h-timing": "Round trip of the controller's answers (µs)",
+    "h-three": "TCP path, base frame: program, commanded by the robot, and true",
+  },
+  labels: {
+    ds_x_m: "δs x", ds_y_m: "δs y", ds_z_m: "δs z",
+    cycle_time_max_s: "round trip (max in bucket)", cycle_time_p99_s: "p99, last samples",
+  },
+};
+let defaultTitles = null;
+
+function applySourceTexts(twinCell) {
+  if (!defaultTitles) {
+    defaultTitles = {};
+    for (const id of Object.keys(TWIN_CELL.titles)) defaultTitles[id] = document.getElementById(id).textContent;
+  }
+  for (const [id, text] of Object.entries(TWIN_CELL.titles)) {
+    setText(id, twinCell ? text : defaultTitles[id]);
+  }
+}
+
 const charts = {};
 const columns = {}; // chart name -> arrays [t, s1, s2, ...]
 const constants = {}; // chart name -> values of its constant (limit) lines
@@ -59,8 +87,10 @@ const constants = {}; // chart name -> values of its constant (limit) lines
 function makeChart(name, spec, extra) {
   const el = document.getElementById(spec.el);
   const series = [{ label: "t (s)" }];
-  for (const [, , label, stroke, dash] of spec.series) {
-    series.push({ label, stroke, width: 1.5, dash, spanGaps: false });
+  const twinCell = view.hello.session.source === "twin-cell";
+  for (const [field, , label, stroke, dash] of spec.series) {
+    const shown = (twinCell && TWIN_CELL.labels[field]) || label;
+    series.push({ label: shown, stroke, width: 1.5, dash, spanGaps: false });
   }
   for (const e of extra) series.push({ label: e.label, stroke: e.stroke, dash: e.dash, width: e.width });
   constants[name] = extra.map((e) => e.value);
@@ -98,9 +128,12 @@ function resetCharts() {
     }
     makeChart(name, spec, extra);
   }
-  const known = view.hello.session.source === "twin";
+  const source = view.hello.session.source;
+  const known = source === "twin" || source === "twin-cell";
   document.getElementById("error-unknown").hidden = known;
   document.getElementById("c-error").hidden = !known;
+  document.getElementById("legend-true").hidden = !known;
+  applySourceTexts(source === "twin-cell");
 }
 
 function appendBucket(values) {
@@ -163,11 +196,12 @@ function init3d() {
   };
   const program = make(0x546e7a);
   const corrected = make(0xef6c00);
+  const truth = make(0x2e7d32);
   const marker = new THREE.Mesh(new THREE.SphereGeometry(1.2, 16, 12), new THREE.MeshBasicMaterial({ color: 0xef6c00 }));
   scene.add(marker);
   scene.add(new THREE.AxesHelper(20));
-  Object.assign(three, { ok: true, renderer, scene, camera, controls, program, corrected, marker, cap,
-    origin: null, prog: [], corr: [], fitted: false });
+  Object.assign(three, { ok: true, renderer, scene, camera, controls, program, corrected, truth, marker, cap,
+    origin: null, prog: [], corr: [], err: [], fitted: false });
   document.getElementById("fit").onclick = () => fit3d();
   document.getElementById("exaggerate").onchange = () => { rebuild3d(); fit3d(); dirty = true; };
   new ResizeObserver(() => {
@@ -187,9 +221,13 @@ function track3d(values) {
   if (!three.origin) three.origin = p.slice();
   three.prog.push(p.map((v, i) => (v - three.origin[i]) * 1e3));
   three.corr.push(c.map((v, i) => (v - p[i]) * 1e3));
+  // The twin's true TCP: the program plus the path error (true − desired), when known.
+  const e = [values[fieldIndex.err_x_m], values[fieldIndex.err_y_m], values[fieldIndex.err_z_m]];
+  three.err.push(e.every(Number.isFinite) ? e.map((v) => v * 1e3) : null);
   if (three.prog.length > three.cap) {
     three.prog.splice(0, 300);
     three.corr.splice(0, 300);
+    three.err.splice(0, 300);
   }
   three.stale = true;
 }
@@ -199,18 +237,26 @@ function rebuild3d() {
   const k = Number(document.getElementById("exaggerate").value);
   const pa = three.program.attributes.position.array;
   const ca = three.corrected.attributes.position.array;
+  const ta = three.truth.attributes.position.array;
   const n = three.prog.length;
+  let nt = 0;
   for (let i = 0; i < n; i++) {
-    const p = three.prog[i], d = three.corr[i];
+    const p = three.prog[i], d = three.corr[i], e = three.err[i];
     for (let j = 0; j < 3; j++) {
       pa[3 * i + j] = p[j];
       ca[3 * i + j] = p[j] + k * d[j];
     }
+    if (e) {
+      for (let j = 0; j < 3; j++) ta[3 * nt + j] = p[j] + k * e[j];
+      nt++;
+    }
   }
   three.program.attributes.position.needsUpdate = true;
   three.corrected.attributes.position.needsUpdate = true;
+  three.truth.attributes.position.needsUpdate = true;
   three.program.setDrawRange(0, n);
   three.corrected.setDrawRange(0, n);
+  three.truth.setDrawRange(0, nt);
   if (n > 0) three.marker.position.set(ca[3 * n - 3], ca[3 * n - 2], ca[3 * n - 1]);
   three.n = n;
   three.stale = false;
@@ -221,7 +267,7 @@ function fit3d() {
   if (!three.ok || three.n === 0) return;
   // Both paths (the corrected one as exaggerated) inside the view.
   const box = new THREE.Box3();
-  for (const g of [three.program, three.corrected]) {
+  for (const g of [three.program, three.corrected, three.truth]) {
     g.computeBoundingBox();
     box.union(g.boundingBox);
   }
@@ -244,7 +290,7 @@ function showState(values) {
   const phase = h.phases[values[fieldIndex.phase]] ?? "?";
   const el = document.getElementById("phase");
   el.className = "badge " + phase;
-  setText("phase", "phase: " + phase);
+  setText("phase", (h.session.source === "twin-cell" ? "cell: " : "phase: ") + phase);
   const faultCode = values[fieldIndex.fault];
   const fault = document.getElementById("fault");
   fault.hidden = !(faultCode > 0);
@@ -276,10 +322,11 @@ function showState(values) {
   if (table.innerHTML !== rows) table.innerHTML = rows;
 
   const fmt = (v, d = 0) => (Number.isFinite(v) ? v.toFixed(d) : "–");
+  const twinCell = h.session.source === "twin-cell";
   const counters = [
-    ["cycle", fmt(values[fieldIndex.cycle])],
+    [twinCell ? "robot cycle" : "cycle", fmt(values[fieldIndex.cycle])],
     ["time (s)", fmt(values[fieldIndex.t_s], 2)],
-    ["cycle time (µs)", fmt(values[fieldIndex.cycle_time_s] * 1e6, 0)],
+    [twinCell ? "round trip (µs)" : "cycle time (µs)", fmt(values[fieldIndex.cycle_time_s] * 1e6, 0)],
     ["p99 (µs)", fmt(values[fieldIndex.cycle_time_p99_s] * 1e6, 0)],
     ["late answers", fmt(values[fieldIndex.late_answers])],
     ["robot's late count", fmt(values[fieldIndex.robot_late])],
@@ -333,7 +380,7 @@ function onHello(h) {
   document.title = (h.label ? h.label + " " : "") + "deflex live view: " + h.session.robot;
   document.getElementById("stop").hidden = !h.stop;
   resetCharts();
-  if (three.ok) { three.prog = []; three.corr = []; three.origin = null; three.fitted = false; three.stale = true; }
+  if (three.ok) { three.prog = []; three.corr = []; three.err = []; three.origin = null; three.fitted = false; three.stale = true; }
 }
 
 function onBinary(buffer) {

@@ -52,7 +52,7 @@ pub use connection::{
 };
 
 use deflex_control::Flags;
-use deflex_telemetry::{Broadcast, CycleSample, SessionInfo, Source};
+use deflex_telemetry::{Broadcast, CycleSample, SessionInfo};
 use std::net::{SocketAddr, TcpListener};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -361,16 +361,8 @@ fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
 /// The first message a page gets: the session, the wire layout, names of the codes.
 fn hello_json(info: &SessionInfo, stop: bool) -> String {
     let finite = |v: f64| v.is_finite().then_some(v);
-    let phases: Vec<&str> = (0..6u32)
-        .map(|c| {
-            CycleSample {
-                phase_code: c,
-                ..CycleSample::default()
-            }
-            .phase()
-            .name()
-        })
-        .collect();
+    // The controller's phases, or the simulated cell's states for the twin's own stream.
+    let phases = info.source.phase_names();
     let faults: Vec<&str> = deflex_control::FaultKind::ALL
         .iter()
         .map(|k| k.name())
@@ -384,7 +376,7 @@ fn hello_json(info: &SessionInfo, stop: bool) -> String {
         "protocol": 1,
         "label": if info.simulated { "SIMULATED" } else { "" },
         "session": {
-            "source": match info.source { Source::Runtime => "runtime", Source::Twin => "twin" },
+            "source": info.source.key(),
             "simulated": info.simulated,
             "robot": info.robot,
             "joint_names": info.joint_names,

@@ -120,4 +120,11 @@ fn the_hello_names_the_layout_and_says_simulated() {
     assert_eq!(hello["stop"], true);
     // Unbounded limits are null, not an invalid JSON number.
     assert!(hello["session"]["force_limit_n"].is_null());
+    // The twin's own stream: its source, SIMULATED, and the cell's states as phase names.
+    let mut info = SyntheticCell::new(0.02, 1, true).session_info();
+    info.source = deflex_telemetry::Source::TwinCell;
+    let hello: serde_json::Value = serde_json::from_str(&crate::hello_json(&info, false)).unwrap();
+    assert_eq!(hello["session"]["source"], "twin-cell");
+    assert_eq!(hello["label"], "SIMULATED");
+    assert_eq!(hello["phases"][2], "forming");
 }

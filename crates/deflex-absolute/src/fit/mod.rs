@@ -16,7 +16,7 @@
 //! eDoFs, sagging under gravity and any loads; the earlier steps are rigid), and opt-in steps
 //! (lumped masses, joint harmonics, gear-periodic terms, backlash, a residual model on the
 //! joint angles). An opt-in step is kept only when the pooled held-out RMS of the registered
-//! groups improves ([`steps`]); without held-out groups every step is kept.
+//! groups improves (the `steps` module); without held-out groups every step is kept.
 //!
 //! **Orientations.** When the campaign carries measured orientations
 //! ([`Campaign::use_orientations`]) they are fitted with the positions, each target gaining its

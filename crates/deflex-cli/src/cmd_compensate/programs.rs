@@ -3,12 +3,14 @@
 //! side from the model's forward kinematics), the clearance points' joint values by inverse
 //! kinematics, written per format and read back: every path point within 1 µm (and 2 µrad for
 //! the formats with an orientation), the first and last motions at the clearance points,
-//! outside the part.
+//! outside the part. Each format is written to disk part by part and read back from disk line
+//! by line, so a million-point program is never held in memory (only the program input is).
 
 use super::setup::Setup;
 use deflex_compensate::Compensation;
 use deflex_model::{Data, IkOptions, Pose, Robot};
-use deflex_program::{ArmConfiguration, Format, ProgramInput, export, readback, write_files};
+use deflex_program::readback::{DirectorySource, ReadPoint, read_program};
+use deflex_program::{ArmConfiguration, DirectorySink, Format, ProgramInput, export_to};
 use serde_json::json;
 use std::path::Path;
 
@@ -204,15 +206,18 @@ pub fn write_programs(
         .fold(f64::MIN, f64::max);
     let mut checks = Vec::new();
     for format in &s.formats {
-        let files = export(*format, &input, &s.settings)?;
-        let read = readback::read_files(*format, &files)?;
-        let check = compare(*format, &input, &read, &clear, top)?;
-        write_files(dir, &files)?;
+        let mut sink = DirectorySink::new(dir);
+        let files = export_to(*format, &input, &s.settings, &mut sink)?;
+        let mut compare = Compare::new(*format, &input, &clear, top);
+        read_program(*format, &DirectorySource::new(dir), &files, &mut |p| {
+            compare.point(&p)
+        })?;
+        let check = compare.finish()?;
         checks.push(ProgramCheck {
             format: *format,
-            bytes: files.iter().map(|f| f.contents.len()).sum(),
-            parts: files.iter().filter(|f| is_part(&f.path)).count().max(1),
-            files: files.iter().map(|f| f.path.clone()).collect(),
+            bytes: sink.bytes as usize,
+            parts: files.iter().filter(|f| is_part(f)).count().max(1),
+            files,
             ..check
         });
     }
@@ -228,47 +233,85 @@ fn is_part(path: &str) -> bool {
         || stem.strip_prefix("part").is_some_and(digits)
 }
 
-/// The program read back against the input: path points, clearance points.
-fn compare(
+/// The program read back against the input, motion by motion as it is read: the clearance
+/// point, the path points, the clearance point.
+struct Compare<'a> {
     format: Format,
-    input: &ProgramInput,
-    read: &[readback::ReadPoint],
-    clear: &[Pose; 2],
+    input: &'a ProgramInput,
+    clear: &'a [Pose; 2],
     top: f64,
-) -> Result<ProgramCheck, ProgramCheckError> {
-    let name = format.name();
-    let error = |what: String| ProgramCheckError::Readback { format: name, what };
-    let n = input.points.len();
-    if read.len() != n + 2 {
-        return Err(error(format!("{} motions, expected {}", read.len(), n + 2)));
-    }
-    let mut position: f64 = 0.0;
-    let mut rotation: f64 = 0.0;
-    for (p, r) in input.points.iter().zip(&read[1..=n]) {
-        position = position.max((p.pose.translation.vector - r.position_m).norm());
-        if let Some(back) = r.rotation {
-            rotation = rotation.max(deflex_program::orientation::rotation_distance(
-                &p.pose.rotation,
-                &back,
-            ));
+    read: usize,
+    position: f64,
+    rotation: f64,
+    heights: [f64; 2],
+}
+
+impl<'a> Compare<'a> {
+    fn new(format: Format, input: &'a ProgramInput, clear: &'a [Pose; 2], top: f64) -> Self {
+        Compare {
+            format,
+            input,
+            clear,
+            top,
+            read: 0,
+            position: 0.0,
+            rotation: 0.0,
+            heights: [0.0; 2],
         }
     }
-    for (k, r) in [(0, &read[0]), (1, &read[n + 1])] {
-        let d = (clear[k].translation.vector - r.position_m).norm();
-        position = position.max(d);
+
+    fn error(&self, what: String) -> ProgramCheckError {
+        ProgramCheckError::Readback {
+            format: self.format.name(),
+            what,
+        }
     }
-    if position > 1e-6 || rotation > 2e-6 {
-        return Err(error(format!(
-            "{position:.3e} m and {rotation:.3e} rad from the path (bound 1 µm, 2 µrad)"
-        )));
+
+    fn point(&mut self, r: &ReadPoint) -> Result<(), deflex_program::ProgramError> {
+        let n = self.input.points.len();
+        let k = self.read;
+        self.read += 1;
+        if k == 0 || k == n + 1 {
+            let c = &self.clear[usize::from(k != 0)];
+            self.position = self
+                .position
+                .max((c.translation.vector - r.position_m).norm());
+            self.heights[usize::from(k != 0)] = r.position_m.z - self.top;
+        } else if let Some(p) = self.input.points.get(k - 1) {
+            self.position = self
+                .position
+                .max((p.pose.translation.vector - r.position_m).norm());
+            if let Some(back) = r.rotation {
+                self.rotation = self
+                    .rotation
+                    .max(deflex_program::orientation::rotation_distance(
+                        &p.pose.rotation,
+                        &back,
+                    ));
+            }
+        }
+        Ok(())
     }
-    Ok(ProgramCheck {
-        format,
-        files: Vec::new(),
-        bytes: 0,
-        parts: 0,
-        max_position_error_m: position,
-        max_rotation_error_rad: rotation,
-        first_last_height_m: [read[0].position_m.z - top, read[n + 1].position_m.z - top],
-    })
+
+    fn finish(self) -> Result<ProgramCheck, ProgramCheckError> {
+        let n = self.input.points.len();
+        if self.read != n + 2 {
+            return Err(self.error(format!("{} motions, expected {}", self.read, n + 2)));
+        }
+        if self.position > 1e-6 || self.rotation > 2e-6 {
+            return Err(self.error(format!(
+                "{:.3e} m and {:.3e} rad from the path (bound 1 µm, 2 µrad)",
+                self.position, self.rotation
+            )));
+        }
+        Ok(ProgramCheck {
+            format: self.format,
+            files: Vec::new(),
+            bytes: 0,
+            parts: 0,
+            max_position_error_m: self.position,
+            max_rotation_error_rad: self.rotation,
+            first_last_height_m: self.heights,
+        })
+    }
 }

@@ -362,3 +362,76 @@ fn bad_options_are_refused_before_any_work() {
     assert!(!out.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_sim_log_gives_the_force_depth_law_and_its_measured_tcp() {
+    // The twin forms three 0.5 mm levels of a 40 mm circle on the TX200 cell without
+    // correction; its log (SIMULATED, with the tracker's columns) is the wrench source.
+    let dir = scratch("simlog");
+    let mut gcode = String::from("G21 G90 G54\nG0 X20 Y0 Z2\nG1 Z0 F300\n");
+    for k in 1..=3 {
+        let z = -0.5 * k as f64;
+        gcode.push_str(&format!(
+            "G1 X{} Z{z} F600\nG3 X{} Y0 I{} J0\n",
+            20.0 + z,
+            20.0 + z,
+            -(20.0 + z)
+        ));
+    }
+    gcode.push_str("G0 Z5\n");
+    let part = dir.join("levels.nc");
+    std::fs::write(&part, &gcode).unwrap();
+    let cell = deflex_sim::CellConfig::for_robot("tx200").unwrap();
+    let tool_path = deflex_sim::gcode::parse_gcode(&gcode, "levels.nc").unwrap();
+    let open = deflex_sim::run_forming(&cell, tool_path, 1, None).unwrap();
+    let log_file = dir.join("log.csv");
+    std::fs::write(&log_file, open.log.to_csv()).unwrap();
+    let out = dir.join("out");
+    let line = |extra: &[&str]| {
+        let mut l = vec![
+            "--robot",
+            "tx200",
+            "--path",
+            part.to_str().unwrap(),
+            "--format",
+            "gcode",
+            "--position-only",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        l.extend_from_slice(extra);
+        l.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let wrench = format!("log:{}", log_file.display());
+    let args = line(&["--wrench", &wrench]);
+    run(
+        parse(&args.iter().map(String::as_str).collect::<Vec<_>>()),
+        true,
+    )
+    .unwrap();
+    let s = summary(&out);
+    let law = &s["compensation"]["log_law"];
+    assert!(law["sloped_bins"].as_u64().unwrap() > 0, "{law}");
+    assert_eq!(law["measured_tcp"], true);
+    let iterations = s["compensation"]["iterations"].as_array().unwrap().len();
+    assert!(
+        iterations >= 2,
+        "the force follows the command: {iterations}"
+    );
+    // The compensated tool reaches deeper than the uncorrected one and meets more force.
+    let logged = law["max_axial_force_N"].as_f64().unwrap();
+    let predicted = s["compensation"]["final_max_force_N"].as_f64().unwrap();
+    assert!(predicted > logged + 20.0, "{predicted} vs {logged}");
+    std::fs::remove_dir_all(&out).unwrap();
+    // The logged wrenches as they are: one pass, no law.
+    let args = line(&["--wrench", &wrench, "--log-forces", "fixed"]);
+    run(
+        parse(&args.iter().map(String::as_str).collect::<Vec<_>>()),
+        true,
+    )
+    .unwrap();
+    let s = summary(&out);
+    assert!(s["compensation"]["log_law"].is_null());
+    assert_eq!(s["compensation"]["iterations"].as_array().unwrap().len(), 1);
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -248,3 +248,92 @@ fn pose_reports_the_sag_under_the_arms_own_weight_when_masses_are_known() {
     let v = json(&["pose", "--robot", "tx200", "--q-deg", "0,0,0,0,0,0"]);
     assert!(v["gravity_sag_m"].is_null());
 }
+
+/// `model show` and `sim robot` print the robot's twin cell (issue 23), the same cell in both,
+/// and the forming pose the summary computes by inverse kinematics puts the cell robot's TCP
+/// (its tool included, `deflex pose` on the file `sim robot` wrote: forward kinematics) on the
+/// part origin the summary prints.
+#[test]
+fn model_show_and_sim_robot_print_the_robots_twin_cell() {
+    let (ok, stdout, stderr) = deflex(&["model", "show", "--robot", "ur10e"]);
+    assert!(ok, "{stderr}");
+    for needle in [
+        "twin cell of ur10e",
+        "part frame origin (mm, R0 axes)",
+        "--part-xyz-mm",
+        "--seed-deg",
+        "tool, flange → TCP (mm)",
+        "sheet:",
+    ] {
+        assert!(stdout.contains(needle), "{needle:?} missing: {stdout}");
+    }
+    let shown = json(&["model", "show", "--robot", "ur10e"]);
+    let cell = &shown["cell"];
+    let dir = std::env::temp_dir().join(format!("deflex-cli-cell-show-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("ur10e_cell.toml");
+    let sim = json(&[
+        "sim",
+        "robot",
+        "--robot",
+        "ur10e",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        &sim["cell"], cell,
+        "sim robot and model show print one cell"
+    );
+    let (ok, stdout, stderr) = deflex(&[
+        "sim",
+        "robot",
+        "--robot",
+        "ur10e",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert!(
+        ok && stdout.contains("twin cell of ur10e"),
+        "{stdout}{stderr}"
+    );
+
+    let origin: Vec<f64> = serde_json::from_value(cell["part_origin_m"].clone()).unwrap();
+    let forming: Vec<f64> = serde_json::from_value(cell["forming_q_rad"].clone()).unwrap();
+    let q: Vec<String> = forming.iter().map(|v| v.to_string()).collect();
+    let v = json(&[
+        "pose",
+        "--robot",
+        file.to_str().unwrap(),
+        "--q-rad",
+        &q.join(","),
+    ]);
+    let tcp: Vec<f64> = serde_json::from_value(v["tcp_m"].clone()).unwrap();
+    for i in 0..3 {
+        assert!((tcp[i] - origin[i]).abs() < 1e-6, "{tcp:?} vs {origin:?}");
+    }
+    // The tool the cell prints is the tool of the robot file it writes.
+    let tool: Vec<f64> = serde_json::from_value(cell["tool_xyz_m"].clone()).unwrap();
+    let written: Vec<f64> = serde_json::from_value(sim["tool_xyz_m"].clone()).unwrap();
+    assert_eq!(tool, written);
+
+    // A robot no cell is built around says so and still shows its model.
+    std::fs::write(
+        dir.join("arm.urdf"),
+        r#"<robot name="a"><link name="b"/><link name="l1"/><link name="l2"/>
+        <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="0" velocity="1"/></joint>
+        <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.25 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="0" velocity="1"/></joint></robot>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("arm.toml"),
+        "name = \"two-joint arm\"\nurdf = \"arm.urdf\"\n[[joint]]\nname = \"j1\"\n[[joint]]\nname = \"j2\"\n",
+    )
+    .unwrap();
+    let arm = dir.join("arm.toml");
+    let (ok, stdout, stderr) = deflex(&["model", "show", "--robot", arm.to_str().unwrap()]);
+    assert!(
+        ok && stdout.contains("twin cell: none ("),
+        "{stdout}{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -287,3 +287,141 @@ fn sigterm_in_a_session_ramps_the_correction_out() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The twin's CELL.toml (docs/cell.example.toml with free loopback ports, no real-time
+/// privileges, the log `run.csv`) and its model beside it, in `dir`.
+pub fn twin_cell_file(dir: &Path) -> PathBuf {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs");
+    let text = std::fs::read_to_string(docs.join("cell.example.toml"))
+        .unwrap()
+        .replace("127.0.0.1:59152", &format!("127.0.0.1:{}", free_udp_port()))
+        .replace("127.0.0.1:49152", &format!("127.0.0.1:{}", free_udp_port()))
+        .replace("realtime = true", "realtime = false")
+        .replace("lock_memory = true", "lock_memory = false")
+        .replace("path = \"deflex-run.csv\"", "path = \"run.csv\"");
+    assert!(text.contains("path = \"run.csv\""));
+    std::fs::copy(docs.join("tx200_cell.toml"), dir.join("tx200_cell.toml")).unwrap();
+    let path = dir.join("cell.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Reads a child's stderr on a thread: the live view's address (from its "open http://…"
+/// line) is sent once, every line is kept.
+pub fn watch_stderr(
+    child: &mut std::process::Child,
+) -> (
+    std::sync::mpsc::Receiver<String>,
+    std::thread::JoinHandle<String>,
+) {
+    let err = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let handle = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in std::io::BufRead::lines(std::io::BufReader::new(err)).map_while(Result::ok) {
+            if let Some(url) = line.split("open ").nth(1)
+                && line.starts_with("live view")
+            {
+                let _ = tx.send(url.trim().to_string());
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    (rx, handle)
+}
+
+/// `GET /` of a live view's page.
+fn get_page(url: &str) -> String {
+    let host = url.trim_start_matches("http://").trim_end_matches('/');
+    let mut s = std::net::TcpStream::connect(host).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    std::io::Write::write_all(
+        &mut s,
+        format!("GET / HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").as_bytes(),
+    )
+    .unwrap();
+    let mut text = String::new();
+    let _ = std::io::Read::read_to_string(&mut s, &mut text);
+    text
+}
+
+/// `deflex cell --sim --view` and `deflex run --view` together from one CELL.toml: both serve
+/// their page on the loopback port asked, and at the end the run's CSV log has its MCAP
+/// recording beside it, the cell its ground-truth log and recording beside the run's log.
+#[test]
+fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
+    let _turn = crate::realtime_turn();
+    let dir = scratch("views");
+    let cell = twin_cell_file(&dir);
+    let cell = cell.to_str().unwrap();
+    let mut twin = deflex()
+        .args(["cell", "--sim", "--config", cell, "--length-mm", "40"])
+        .args(["--view", "127.0.0.1:0", "--quiet"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (twin_url, twin_err) = watch_stderr(&mut twin);
+    let mut run = deflex()
+        .args(["--json", "run", "--config", cell, "--view", "127.0.0.1:0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (run_url, run_err) = watch_stderr(&mut run);
+    for url in [&twin_url, &run_url] {
+        let url = url.recv_timeout(Duration::from_secs(60)).unwrap();
+        assert!(url.starts_with("http://127.0.0.1:"), "{url}");
+        let page = get_page(&url);
+        assert!(
+            page.starts_with("HTTP/1.1 200") && page.contains("deflex live view"),
+            "{page}"
+        );
+    }
+    let twin_out = twin.wait_with_output().unwrap();
+    let run_out = run.wait_with_output().unwrap();
+    let (twin_err, run_err) = (twin_err.join().unwrap(), run_err.join().unwrap());
+    assert!(twin_out.status.success(), "{twin_err}");
+    assert!(run_out.status.success(), "{run_err}");
+    let v: serde_json::Value = serde_json::from_slice(&run_out.stdout).unwrap();
+    assert_eq!(v["mcap"]["committed"], true, "{v}");
+    assert_eq!(v["mcap"]["lost"], 0, "{v}");
+    assert_eq!(v["mcap"]["cycles"], v["log_rows"], "{v}");
+    assert!(v["view"]["samples"].as_u64().unwrap() > 0, "{v}");
+    let twin_text = String::from_utf8_lossy(&twin_out.stdout);
+    assert!(twin_text.contains("run.sim-cell.csv"), "{twin_text}");
+
+    // The run's recording: every cycle of its CSV log.
+    let rows = std::fs::read_to_string(dir.join("run.csv"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .count()
+        - 1;
+    let mut cycles = 0;
+    let summary = deflex_record::for_each_cycle(&dir.join("run.mcap"), |_| cycles += 1).unwrap();
+    assert_eq!(cycles, rows);
+    assert_eq!(summary.session.unwrap().source, "runtime");
+    // The cell's: the twin's own stream, a sample at each row of its ground-truth log (and at
+    // the state changes before the program started).
+    let log = std::fs::read_to_string(dir.join("run.sim-cell.csv")).unwrap();
+    assert!(log.starts_with("# SIMULATED"));
+    let twin_rows = log.lines().filter(|l| !l.starts_with('#')).count() - 1;
+    let mut path_errors = 0;
+    let summary = deflex_record::for_each_cycle(&dir.join("run.sim-cell.mcap"), |s| {
+        path_errors += s.truth_error_m.iter().all(|v| v.is_finite()) as usize;
+    })
+    .unwrap();
+    let session = summary.session.unwrap();
+    assert_eq!(
+        (session.source.as_str(), session.label.as_str()),
+        ("twin-cell", "SIMULATED")
+    );
+    assert!(
+        twin_rows > 100 && path_errors >= twin_rows,
+        "{twin_rows} {path_errors}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -525,3 +525,106 @@ fn a_campaign_from_a_plan_carries_the_plans_robot_lines() {
     );
     assert!(text.starts_with("# SIMULATED"));
 }
+
+/// `sim isf` records its run in MCAP beside its log and writes its `deflex plot` page (unless
+/// `--no-plot`); `deflex plot` on the open- and closed-loop logs overlays them on path position
+/// (issue 21's acceptance), and reads the recordings too.
+#[test]
+fn sim_isf_records_and_plots_and_two_runs_overlay() {
+    let dir = scratch("record");
+    let (open, closed, model) = (dir.join("open"), dir.join("closed"), dir.join("robot.toml"));
+    let (ok, stdout, stderr) = deflex(&[
+        "--json",
+        "sim",
+        "isf",
+        "--length-mm",
+        "150",
+        "--out",
+        open.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["mcap"]["source"], "twin-cell", "{v}");
+    let mcap = std::fs::read(open.join("run.mcap")).unwrap();
+    assert!(mcap.starts_with(b"\x89MCAP0\r\n"));
+    let page = std::fs::read_to_string(open.join("plot/index.html")).unwrap();
+    assert!(page.contains("SIMULATED"));
+    let (ok, _, stderr) = deflex(&["sim", "robot", "--out", model.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let (ok, stdout, stderr) = deflex(&[
+        "sim",
+        "isf",
+        "--length-mm",
+        "150",
+        "--correction",
+        "on",
+        "--model",
+        model.to_str().unwrap(),
+        "--no-plot",
+        "--out",
+        closed.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("recording:") && stdout.contains("path error"),
+        "{stdout}"
+    );
+    assert!(closed.join("run.mcap").is_file() && !closed.join("plot").exists());
+
+    let plots = dir.join("plots");
+    let (ok, stdout, stderr) = deflex(&[
+        "--json",
+        "plot",
+        open.join("log.csv").to_str().unwrap(),
+        closed.join("log.csv").to_str().unwrap(),
+        "--labels",
+        "open loop,closed loop",
+        "--out",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["by_path_position"], true, "{v}");
+    for f in [
+        "forces.png",
+        "correction.png",
+        "path_error.png",
+        "index.html",
+    ] {
+        assert!(plots.join(f).is_file(), "{f}");
+    }
+    let html = std::fs::read_to_string(plots.join("index.html")).unwrap();
+    assert!(html.contains("open loop vs closed loop"), "overlaid page");
+    // The recordings plot as well (the controller's stream and the twin's own).
+    let (ok, _, stderr) = deflex(&[
+        "plot",
+        closed.join("run.mcap").to_str().unwrap(),
+        open.join("run.mcap").to_str().unwrap(),
+        "--out",
+        dir.join("from-mcap").to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(dir.join("from-mcap/path_error.png").is_file());
+
+    // `--speed` is for watching; a bad `--view` address is named.
+    let o = dir.join("never");
+    refused(
+        &["sim", "isf", "--speed", "5", "--out", o.to_str().unwrap()],
+        "--view",
+        &o,
+    );
+    refused(
+        &[
+            "sim",
+            "isf",
+            "--view",
+            "nowhere:x",
+            "--out",
+            o.to_str().unwrap(),
+        ],
+        "--view",
+        &o,
+    );
+    assert!(!o.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,6 +1,11 @@
 //! Integration tests of `deflex-cli`: one test binary (modules below), so a fresh clone links one
 //! executable for this crate instead of one per file.
 
+// Ignored by default: headless Chromium on the live pages of a real SIMULATED session.
+mod browser;
+// The DevTools client of deflex-view's browser test, shared rather than copied.
+#[path = "../../../deflex-view/tests/it/cdp.rs"]
+mod cdp;
 mod cli_calib;
 mod cli_egcal;
 mod cli_model;

@@ -8,5 +8,6 @@ static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::Count
 
 mod compensate;
 mod log;
+mod logged;
 mod no_alloc;
 mod table;

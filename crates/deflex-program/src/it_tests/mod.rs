@@ -4,3 +4,4 @@
 
 mod orientation;
 mod round_trip;
+mod streaming;

@@ -349,3 +349,36 @@ fn check_profiles(dir: &Path) {
         rms[1]
     );
 }
+
+/// The README's headline table is the one `deflex demo --seed 1` measures (`results.md`): the
+/// full study (sensitivity sweep aside, which the table does not use) is run and its table
+/// compared with the block between the README's `demo-results` markers. After a change that
+/// moves a number on purpose: `DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_results`
+/// rewrites the block (and only it).
+#[test]
+fn readme_results_are_the_demos_own() {
+    use super::readme::{current_block, replace_block, results_table};
+    let options = DemoOptions {
+        seed: 1,
+        sensitivity: false,
+        ..DemoOptions::default()
+    };
+    let cell = deflex_sim::CellConfig::for_robot(&options.robot).unwrap();
+    let study = run_study(&options, cell, &mut Silent).expect("the demo's study runs");
+    let table = results_table(&study.summary);
+    let readme_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md");
+    let readme = std::fs::read_to_string(&readme_path).expect("README.md is readable");
+    let block = current_block(&readme).expect("README.md has the demo-results markers");
+    if block == table {
+        return;
+    }
+    if std::env::var_os("DEFLEX_BLESS_README").is_some() {
+        let updated = replace_block(&readme, &table).expect("markers in order");
+        std::fs::write(&readme_path, updated).expect("README.md is writable");
+        return;
+    }
+    panic!(
+        "README.md's results table is not the demo's (seed 1).\n--- README:\n{block}\n--- demo:\n{table}\n\
+         If the change is intended: DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_results"
+    );
+}

@@ -1,30 +1,57 @@
-//! A held-out check of offline compensation on a plant no built-in cell has (issue 23): a
+//! A held-out check of offline compensation on plants no built-in cell has (issue 23): a
 //! KR 210-like arm whose twin has a strong J2/J3 coupling (a non-diagonal compliance no VJM
 //! model represents), a hardening wrist (lost motion taken up over a large torque: the
 //! stiffness rises with the load), a compliant tool holder (J6 bending springs whose centre sits
-//! down the tool), its geometry errors and every other error source on. A 60 mm circle is
-//! formed at about 1 kN without correction; its log, with 200 rows appended at rest at the end
-//! with the force fading (what `deflex run` logs while the robot waits at the end of its
-//! program), is the wrench source (the circles are formed down a 45° wall in 0.5 mm levels so
-//! the force reaches the sheet's ≈ 1.2 kN level); the compensated program runs on the same twin and its max
-//! path error against the circle is compared with the uncorrected run's, in contact.
+//! down the tool), its geometry errors and every other error source on. A part is formed at
+//! about 1 kN without correction; its log, with 200 rows appended at rest at the end with the
+//! force fading (what `deflex run` logs while the robot waits at the end of its program), is the
+//! source of the compensation; the compensated program runs on the same twin.
 //!
-//! **Measured: 1.637 → 0.654 mm (60 %), short of the issue's 85 %.** The standstill rows no
-//! longer matter (the test appends them); what remains is that the compensated tool reaches the
-//! programmed depth and forms a deeper step, so the sheet pushes harder than the uncorrected
-//! run's log says (see the forces printed), which a single pass from a log cannot know.
+//! Three ways to use the log are compared:
+//! * **fixed**: the logged wrenches (one pass). The compensated tool reaches the programmed
+//!   depth and the sheet pushes harder than the log says (846 → 998 N on the first plant).
+//! * **law**: the force–depth law identified from the log ([`LoggedProcess`]), the depths from
+//!   the robot model's deflection (all a `deflex run` log allows).
+//! * **law + measured TCP**: the same, with the laser tracker's positions of the sim log: the
+//!   deflection the robot model misses in the logged run is added, scaled with the force.
 //!
-//! The model is the plant's own linear spring chain (`PlantConfig::linear_robot`: what a
-//! perfect VJM identification finds, without the coupling, the hardening and the large
-//! rotations), so the check measures the compensation and its log reader, not a calibration.
+//! **Measured (max path error in contact on the feed moves):**
+//!
+//! | part, plant | uncorrected | fixed | law | law + measured TCP |
+//! | --- | --- | --- | --- | --- |
+//! | 60 mm circle, 10 × 0.5 mm levels, plant 1 | 1.637 mm | 0.654 (60.0 %) | 0.477 (70.9 %) | 0.189 (88.4 %) |
+//! | 50 mm circle clockwise, 12 × 0.4 mm levels on a 50° wall, plant 2 | 1.500 mm | 0.487 (67.5 %) | 0.317 (78.9 %) | 0.148 (90.1 %) |
+//!
+//! Plant 1: coupling 0.3, 0.4 mrad of wrist lost motion over 600 N·m, tool holder 4e5 N·m/rad
+//! centred 80 mm down the tool. Plant 2: 0.2, 0.3 mrad over 400 N·m, 6e5 N·m/rad at 60 mm.
+//!
+//! **Why the law alone stops near 75 %.** Compensating the first circle from the log of the
+//! *compensated* run (its forces at the programmed depth: what a perfect process law gives) cuts
+//! the error to 0.39 mm (76 %, printed by the first test): the rest is what the robot model
+//! (`PlantConfig::linear_robot`, the plant's own spring chain: a perfect VJM identification)
+//! does not represent — the coupling, the hardening, the large rotations. Only a measurement
+//! of where the tool was sees it.
+//!
+//! **The error measure.** Rows with a contact force of at least 20 N (as the README's "in
+//! contact" numbers) whose desired TCP is on a feed move: the retract at the end is a rapid
+//! that starts in contact, and while it lifts the tool its command blends from the last point's
+//! compensation to none (up to 1 mm from the retract line while the force fades), which is not
+//! part of the formed path. The whole-run numbers, retract included, are printed.
+//!
 //! SIMULATED.
 
-use deflex_compensate::log::{ResampleOptions, parse_log, resample_on_path};
-use deflex_compensate::{CompensationOptions, WrenchSource, commanded_pose, compensate};
+use deflex_compensate::log::{ResampleOptions, Resampled, parse_log, resample_on_path};
+use deflex_compensate::{
+    Compensation, CompensationOptions, LoggedProcess, LoggedProcessOptions, TcpPath, WrenchSource,
+    commanded_pose, compensate,
+};
+use deflex_model::Robot;
 use deflex_sim::gcode::parse_gcode;
 use deflex_sim::{
-    CellConfig, compensated_tool_path, run_forming, run_program_with_progress, tcp_path,
+    CellConfig, FormingRun, ToolPath, compensated_tool_path, run_forming,
+    run_program_with_progress, tcp_path,
 };
+use nalgebra::Vector3;
 
 /// A 60 mm circle formed down a 45° wall in 0.5 mm levels (each a full G3 circle), so the force
 /// rises to the sheet's ≈ 1.2 kN level.
@@ -41,34 +68,55 @@ fn circle_program() -> String {
     text
 }
 
-/// The unseen cell (kept here, out of the built-in cells).
-fn unseen_cell() -> CellConfig {
+/// A 50 mm circle formed clockwise down a 50° wall in 0.4 mm levels, at 8 mm/s.
+fn second_program() -> String {
+    let mut text =
+        String::from("%\nO61 (50 MM CW LEVELS)\nG17 G21 G40 G90 G54\nG0 X25 Y0 Z2\nG1 Z0 F300\n");
+    for k in 1..=12 {
+        let z = -0.4 * k as f64;
+        let r = 25.0 + z / 50f64.to_radians().tan();
+        text.push_str(&format!(
+            "G1 X{r:.4} Z{z:.4} F480\nG2 X{r:.4} Y0 I{:.4} J0\n",
+            -r
+        ));
+    }
+    text.push_str("G0 Z5\nM30\n%\n");
+    text
+}
+
+/// A KR 210-like cell with an unseen plant (kept here, out of the built-in cells).
+fn unseen_cell(
+    coupling: f64,
+    lost_motion_rad: f64,
+    takeup_nm: f64,
+    holder: (f64, f64),
+) -> CellConfig {
     let mut cell = CellConfig::for_robot("kr210-r2700").unwrap();
     let p = &mut cell.plant;
-    p.j2_j3_coupling = 0.3;
-    // Hardening wrist: 0.4 mrad of lost motion taken up over 600 N·m.
-    p.wrist_lost_motion_rad = [0.4e-3; 3];
-    p.wrist_takeup_torque_nm = 600.0;
-    p.wrist_hysteresis_nm = 60.0;
-    // A compliant tool holder: J6 bending about x and y, centred 80 mm down the tool.
-    p.joint_stiffness[5][0] = 4.0e5;
-    p.joint_stiffness[5][1] = 4.0e5;
-    p.center_shift_m[5] = 0.08;
+    p.j2_j3_coupling = coupling;
+    // Hardening wrist: lost motion taken up over a large torque.
+    p.wrist_lost_motion_rad = [lost_motion_rad; 3];
+    p.wrist_takeup_torque_nm = takeup_nm;
+    p.wrist_hysteresis_nm = 0.1 * takeup_nm;
+    // A compliant tool holder: J6 bending about x and y, centred down the tool.
+    p.joint_stiffness[5][0] = holder.0;
+    p.joint_stiffness[5][1] = holder.0;
+    p.center_shift_m[5] = holder.1;
     cell.validate().unwrap();
     cell
 }
 
-#[test]
-fn a_circle_compensated_from_its_own_log_on_an_unseen_plant() {
-    let cell = unseen_cell();
-    let nominal = cell.nominal_robot().unwrap();
-    let model = cell.plant.linear_robot(&nominal).unwrap();
-    let circle = parse_gcode(&circle_program(), "circle.nc").unwrap();
-    let open = run_forming(&cell, circle.clone(), 3, None).unwrap();
-    let before = open.summary.max_error_norm_mm;
-    assert!(open.summary.max_force_norm_N > 700.0, "{:?}", open.summary);
-    // The log, then 200 rows at rest at the end with the force fading out.
-    let mut text = open.log.to_csv();
+fn plant_1() -> CellConfig {
+    unseen_cell(0.3, 0.4e-3, 600.0, (4.0e5, 0.08))
+}
+
+fn plant_2() -> CellConfig {
+    unseen_cell(0.2, 0.3e-3, 400.0, (6.0e5, 0.06))
+}
+
+/// The run's log as CSV with 200 rows at rest at the end, the force fading out.
+fn log_with_standstill(run: &FormingRun) -> String {
+    let mut text = run.log.to_csv();
     let last = text.lines().last().unwrap().to_string();
     let header_line = text
         .lines()
@@ -91,95 +139,218 @@ fn a_circle_compensated_from_its_own_log_on_an_unseen_plant() {
         text.push_str(&row.join(","));
         text.push('\n');
     }
-    let rotation = model.tcp_pose(&cell.seed_q_rad()).unwrap().rotation;
-    let path = tcp_path(
-        &circle,
-        &cell.part_frame(),
-        &rotation,
-        cell.controller.rapid_feed_mm_s,
-    )
-    .unwrap();
-    let log = parse_log(&text, "open/log.csv", &model, &cell.part_frame()).unwrap();
-    let resampled = resample_on_path(&log, &path, &ResampleOptions::default()).unwrap();
-    assert!(
-        resampled.standstill_rows >= 200,
-        "{}",
-        resampled.standstill_rows
-    );
-    let result = compensate(
-        &model,
-        &path,
-        &cell.seed_q_rad(),
-        WrenchSource::Fixed {
-            label: "log".into(),
-            simulated: true,
-            wrenches: &resampled.wrenches,
-        },
-        &CompensationOptions {
-            orientation: false,
-            ..CompensationOptions::default()
-        },
-        &mut |_| {},
-    )
-    .unwrap();
-    assert_eq!(result.failure_count(), 0);
-    let commanded: Vec<_> = path
-        .points()
-        .iter()
-        .zip(&result.points)
-        .map(|(p, c)| commanded_pose(&p.pose, &c.compensation).translation.vector)
-        .collect();
-    let program = compensated_tool_path(&circle, &commanded, &cell.part_frame()).unwrap();
-    let run =
-        run_program_with_progress(&cell, program, Some(&circle), 3, None, &mut |_| {}).unwrap();
-    // The path error while forming: rows with a contact force of at least 20 N (as the README's
-    // "in contact" numbers); the retract through the air at the end carries the last point's
-    // compensation for a moment and is not part of the formed path.
-    let in_contact = |r: &deflex_sim::FormingRun| {
-        r.log
-            .rows
-            .iter()
-            .filter(|row| row.truth.force_norm_n() >= 20.0)
-            .map(|row| row.truth.path_error_m().norm() * 1e3)
-            .fold(0.0, f64::max)
+    text
+}
+
+/// Largest path error (mm) over the rows with at least 20 N of contact force whose desired
+/// TCP is on a feed move of `reference` (not on a rapid: the retract); `None`: every row.
+fn max_error_mm(run: &FormingRun, reference: Option<&ToolPath>) -> f64 {
+    let rapids: Vec<(Vector3<f64>, Vector3<f64>)> = reference.map_or(Vec::new(), |r| {
+        r.waypoints
+            .windows(2)
+            .filter(|w| w[1].feed_mm_s.is_none())
+            .map(|w| {
+                (
+                    Vector3::from(w[0].p_mm) * 1e-3,
+                    Vector3::from(w[1].p_mm) * 1e-3,
+                )
+            })
+            .collect()
+    });
+    let on_rapid = |p: &Vector3<f64>| {
+        rapids.iter().any(|(a, b)| {
+            let ab = b - a;
+            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+            (a + ab * t - p).norm() < 1e-6 && (p - a).norm() > 1e-6
+        })
     };
-    let (before_all, after_all) = (before, run.summary.max_error_norm_mm);
-    let (before, after) = (in_contact(&open), in_contact(&run));
-    if std::env::var("DEFLEX_DEBUG").is_ok() {
-        for (name, r) in [("open", &open), ("comp", &run)] {
-            let worst = r
-                .log
-                .rows
-                .iter()
-                .max_by(|a, b| {
-                    a.truth
-                        .path_error_m()
-                        .norm()
-                        .total_cmp(&b.truth.path_error_m().norm())
-                })
-                .unwrap();
-            println!(
-                "{name}: worst at t {:.2} s, desired {:?} mm, error {:?} mm, force {:.0} N",
-                worst.time_s,
-                (worst.truth.desired_m * 1e3).as_slice(),
-                (worst.truth.path_error_m() * 1e3).as_slice(),
-                worst.truth.force_norm_n()
-            );
+    run.log
+        .rows
+        .iter()
+        .filter(|row| reference.is_none() || row.truth.force_norm_n() >= 20.0)
+        .filter(|row| !on_rapid(&row.truth.desired_m))
+        .map(|row| row.truth.path_error_m().norm() * 1e3)
+        .fold(0.0, f64::max)
+}
+
+/// One part on one plant: the uncorrected run, its log, and the compensated runs.
+struct HeldOut {
+    cell: CellConfig,
+    model: Robot,
+    part: ToolPath,
+    path: TcpPath,
+    open: FormingRun,
+    resampled: Resampled,
+}
+
+impl HeldOut {
+    fn new(cell: CellConfig, program: &str) -> HeldOut {
+        let nominal = cell.nominal_robot().unwrap();
+        // The plant's own linear spring chain: what a perfect VJM identification finds, without
+        // the coupling, the hardening and the large rotations.
+        let model = cell.plant.linear_robot(&nominal).unwrap();
+        let part = parse_gcode(program, "part.nc").unwrap();
+        let open = run_forming(&cell, part.clone(), 3, None).unwrap();
+        assert!(open.summary.max_force_norm_N > 700.0, "{:?}", open.summary);
+        let rotation = model.tcp_pose(&cell.seed_q_rad()).unwrap().rotation;
+        let path = tcp_path(
+            &part,
+            &cell.part_frame(),
+            &rotation,
+            cell.controller.rapid_feed_mm_s,
+        )
+        .unwrap();
+        let text = log_with_standstill(&open);
+        let log = parse_log(&text, "open/log.csv", &model, &cell.part_frame()).unwrap();
+        assert!(log.measured, "the sim log carries the tracker's TCP");
+        let resampled = resample_on_path(&log, &path, &ResampleOptions::default()).unwrap();
+        assert!(
+            resampled.standstill_rows >= 200,
+            "{}",
+            resampled.standstill_rows
+        );
+        HeldOut {
+            cell,
+            model,
+            part,
+            path,
+            open,
+            resampled,
         }
     }
-    let improvement = 1.0 - after / before;
-    println!(
-        "SIMULATED unseen plant: max path error in contact {before:.3} mm uncorrected, {after:.3} mm compensated from the log ({:.1} %); whole run with the retract {before_all:.3} → {after_all:.3} mm; max force {:.0} N uncorrected, {:.0} N compensated",
-        improvement * 100.0,
-        open.summary.max_force_norm_N,
-        run.summary.max_force_norm_N
+
+    fn compensate(&self, source: WrenchSource) -> Compensation {
+        let result = compensate(
+            &self.model,
+            &self.path,
+            &self.cell.seed_q_rad(),
+            source,
+            &CompensationOptions {
+                orientation: false,
+                ..CompensationOptions::default()
+            },
+            &mut |_| {},
+        )
+        .unwrap();
+        assert!(result.converged);
+        assert_eq!(result.failure_count(), 0);
+        result
+    }
+
+    fn fixed(&self, wrenches: &[deflex_model::Wrench]) -> Compensation {
+        self.compensate(WrenchSource::Fixed {
+            label: "log".into(),
+            simulated: true,
+            wrenches,
+        })
+    }
+
+    fn law(&self, measured: bool) -> Compensation {
+        let mut process = LoggedProcess::new(
+            "open/log.csv",
+            true,
+            self.resampled.clone(),
+            LoggedProcessOptions {
+                use_measured: measured,
+                ..LoggedProcessOptions::default()
+            },
+        )
+        .unwrap();
+        let result = self.compensate(WrenchSource::Process(&mut process));
+        let id = process.identification().unwrap();
+        assert!(id.sloped_bins > 0, "{id:?}");
+        assert_eq!(id.measured, measured);
+        result
+    }
+
+    /// The compensated program on the twin.
+    fn run(&self, result: &Compensation) -> FormingRun {
+        let commanded: Vec<_> = self
+            .path
+            .points()
+            .iter()
+            .zip(&result.points)
+            .map(|(p, c)| commanded_pose(&p.pose, &c.compensation).translation.vector)
+            .collect();
+        let program =
+            compensated_tool_path(&self.part, &commanded, &self.cell.part_frame()).unwrap();
+        run_program_with_progress(&self.cell, program, Some(&self.part), 3, None, &mut |_| {})
+            .unwrap()
+    }
+
+    /// Improvement of the compensated run over the uncorrected one, printed.
+    fn improvement(&self, name: &str, run: &FormingRun, predicted_n: f64) -> f64 {
+        let (before, after) = (
+            max_error_mm(&self.open, Some(&self.part)),
+            max_error_mm(run, Some(&self.part)),
+        );
+        let improvement = 1.0 - after / before;
+        println!(
+            "SIMULATED {name}: max path error in contact {before:.3} → {after:.3} mm ({:.1} %); every row, the retract through the air included, {:.3} → {:.3} mm; max force {:.0} N uncorrected, {:.0} N compensated ({predicted_n:.0} N predicted)",
+            improvement * 100.0,
+            max_error_mm(&self.open, None),
+            max_error_mm(run, None),
+            self.open.summary.max_force_norm_N,
+            run.summary.max_force_norm_N,
+        );
+        improvement
+    }
+
+    /// Fixed, law and law + measured TCP: their improvements.
+    fn compare(&self, name: &str) -> [f64; 3] {
+        let fixed = self.fixed(&self.resampled.wrenches);
+        let law = self.law(false);
+        let measured = self.law(true);
+        [
+            ("fixed", &fixed),
+            ("law", &law),
+            ("law + measured TCP", &measured),
+        ]
+        .map(|(way, result)| {
+            self.improvement(
+                &format!("{name}, {way}"),
+                &self.run(result),
+                result.final_max_force_n,
+            )
+        })
+    }
+}
+
+#[test]
+fn a_circle_compensated_from_its_own_log_on_an_unseen_plant() {
+    let case = HeldOut::new(plant_1(), &circle_program());
+    let [fixed, law, measured] = case.compare("60 mm circle, plant 1");
+    // The ceiling of a process law alone: the forces of the compensated run itself.
+    let first = case.run(&case.fixed(&case.resampled.wrenches));
+    let text = first.log.to_csv();
+    let log = parse_log(&text, "fixed/log.csv", &case.model, &case.cell.part_frame()).unwrap();
+    let own = resample_on_path(&log, &case.path, &ResampleOptions::default()).unwrap();
+    let oracle = case.fixed(&own.wrenches);
+    case.improvement(
+        "60 mm circle, plant 1, the compensated run's own forces",
+        &case.run(&oracle),
+        oracle.final_max_force_n,
     );
-    // Measured 60.0 % (issue 23 asks for 85 %; not reached on this forming set-up: the
-    // compensated tool reaches the programmed depth and the sheet pushes harder than the
-    // uncorrected run's log says, which one pass from a log cannot know). A regression guard:
+    // Measured 60.0 %, 70.9 %, 88.4 % (the issue asks for 85 %).
+    assert!(fixed >= 0.58, "fixed: {:.1} %", fixed * 100.0);
+    assert!(law >= 0.68, "law: {:.1} %", law * 100.0);
     assert!(
-        improvement >= 0.55,
-        "{before} → {after} mm: {:.1} %",
-        improvement * 100.0
+        measured >= 0.85,
+        "law + measured TCP: {:.1} %",
+        measured * 100.0
+    );
+}
+
+#[test]
+fn a_second_part_on_a_second_unseen_plant() {
+    let case = HeldOut::new(plant_2(), &second_program());
+    let [fixed, law, measured] = case.compare("50 mm clockwise circle, plant 2");
+    // Measured 67.5 %, 78.9 %, 90.1 %.
+    assert!(fixed >= 0.64, "fixed: {:.1} %", fixed * 100.0);
+    assert!(law >= 0.75, "law: {:.1} %", law * 100.0);
+    assert!(
+        measured >= 0.85,
+        "law + measured TCP: {:.1} %",
+        measured * 100.0
     );
 }

@@ -1,0 +1,115 @@
+//! What `deflex run`, `deflex cell --sim` and `deflex sim isf` share to watch and record a
+//! session: the `--view [ADDR]` flag and its server (`deflex-view`), and the MCAP recording's
+//! file name beside the CSV log (`deflex-record`).
+
+use crate::error::UsageError;
+use deflex_runtime::telemetry::{Broadcast, CycleSample, SessionInfo};
+use deflex_view::{StopCallback, ViewError, ViewHandle, ViewStats};
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Default address of `deflex run --view`.
+pub const RUN_VIEW: &str = "127.0.0.1:8765";
+/// Default address of `deflex cell --sim --view` (another port: both run on one machine).
+pub const CELL_VIEW: &str = "127.0.0.1:8766";
+/// Default address of `deflex sim isf --view`.
+pub const SIM_VIEW: &str = "127.0.0.1:8767";
+
+/// `--view` value: `HOST:PORT` (an IP address or `localhost`) or a bare `PORT` on 127.0.0.1.
+pub fn view_address(text: &str) -> Result<SocketAddr, UsageError> {
+    let text = text.trim();
+    let expected = || {
+        UsageError::invalid(
+            "--view",
+            "an address such as 127.0.0.1:8765 (or a port)",
+            format!("\"{text}\""),
+        )
+    };
+    if let Ok(port) = text.parse::<u16>() {
+        return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
+    }
+    if let Some(port) = text.strip_prefix("localhost:") {
+        let port = port.parse::<u16>().map_err(|_| expected())?;
+        return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
+    }
+    text.parse::<SocketAddr>().map_err(|_| expected())
+}
+
+/// Starts the live view of `ring` on `addr` and prints its address on stderr (and, beyond
+/// loopback, the server's warning). `stop` is the session's safe stop, when it has one.
+pub fn start_view(
+    addr: SocketAddr,
+    ring: Arc<Broadcast<CycleSample>>,
+    info: Arc<SessionInfo>,
+    stop: Option<StopCallback>,
+    quiet: bool,
+) -> Result<ViewHandle, ViewError> {
+    let simulated = info.simulated;
+    let view = deflex_view::serve(addr, ring, info, stop)?;
+    if !quiet {
+        eprintln!(
+            "live view{}: open {}",
+            if simulated { " (SIMULATED)" } else { "" },
+            view.url()
+        );
+    }
+    Ok(view)
+}
+
+/// One line about what the view did.
+pub fn view_line(stats: &ViewStats) -> String {
+    format!(
+        "{} samples shown, {} lost for the view, {} messages dropped for slow pages, {} page(s) \
+         refused",
+        stats.samples_received, stats.samples_lost, stats.frames_dropped, stats.clients_refused
+    )
+}
+
+/// The MCAP recording beside the CSV log `log`: the same name with the extension `.mcap`
+/// (`deflex-run.csv` → `deflex-run.mcap`). A log already named `.mcap` is refused, naming it.
+pub fn mcap_beside(log: &Path, field: &str) -> Result<PathBuf, UsageError> {
+    let mcap = log.with_extension("mcap");
+    if mcap == log {
+        return Err(UsageError::invalid(
+            field,
+            "a log name other than NAME.mcap (the MCAP recording is written beside the CSV log \
+             with the extension .mcap; give the log another extension, .csv)",
+            log.display(),
+        ));
+    }
+    Ok(mcap)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn view_addresses_and_recording_names() {
+        assert_eq!(view_address("8800").unwrap().to_string(), "127.0.0.1:8800");
+        assert_eq!(
+            view_address("localhost:9").unwrap().to_string(),
+            "127.0.0.1:9"
+        );
+        assert_eq!(
+            view_address("0.0.0.0:8765").unwrap().to_string(),
+            "0.0.0.0:8765"
+        );
+        let e = view_address("example.com:80").unwrap_err().to_string();
+        assert!(e.contains("--view") && e.contains("example.com"), "{e}");
+        assert!(view_address("70000").is_err());
+        assert_eq!(
+            mcap_beside(Path::new("dir/deflex-run.csv"), "log.path").unwrap(),
+            Path::new("dir/deflex-run.mcap")
+        );
+        assert_eq!(
+            mcap_beside(Path::new("run"), "log.path").unwrap(),
+            Path::new("run.mcap")
+        );
+        let e = mcap_beside(Path::new("run.mcap"), "log.path")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("log.path") && e.contains("run.mcap"), "{e}");
+    }
+}
