@@ -7,12 +7,12 @@
 use crate::args::{CliResult, check_flag, print_json};
 use clap::Args;
 use deflex_control::Fault;
+use deflex_record::{McapRecorder, RecordOptions, RecordReport};
 use deflex_ros2::sensor::SensorCountsHandle;
 use deflex_ros2::{
     BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2Error, Ros2SensorLink, SensorCounts,
     SensorSettings,
 };
-use deflex_record::{McapRecorder, RecordOptions, RecordReport};
 use deflex_runtime::cell_run::FeedForwardInUse;
 use deflex_runtime::config::SensorKind;
 use deflex_runtime::stats::StatsSummary;
