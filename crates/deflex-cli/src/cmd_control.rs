@@ -80,14 +80,14 @@ pub struct RunOutcome {
     pub wall_s: f64,
     /// The feed-forward in use, described.
     pub feedforward: Option<String>,
-    /// The MCAP recording beside the log: where, and what it held (or why it failed).
-    pub recording: Option<(PathBuf, Result<RecordReport, String>)>,
-    /// What the live view did.
-    pub view: Option<ViewStats>,
     /// What the ROS 2 bridge published (with `[ros2]`).
     pub bridge: Option<(Vec<String>, BridgeReport)>,
     /// What the ROS 2 sensor link took and refused (`sensor.kind = "ros2"`).
     pub ros2_sensor: Option<(String, SensorCounts)>,
+    /// The MCAP recording beside the log: where, and what it held (or why it failed).
+    pub recording: Option<(PathBuf, Result<RecordReport, String>)>,
+    /// What the live view did.
+    pub view: Option<ViewStats>,
 }
 
 /// The ROS 2 parts of a run: the sensor link of `sensor.kind = "ros2"` (opened before the
@@ -199,6 +199,14 @@ pub fn run_session(
         let _ = run.finish();
         return Err(e);
     }
+    if live && let Some(bridge) = &ros2.bridge {
+        eprintln!(
+            "deflex run: ROS 2: publishing {} topics under {} (domain {})",
+            bridge.topics().len(),
+            cell.ros2.as_ref().map_or("/", |r| r.namespace.as_str()),
+            cell.ros2.as_ref().map_or(0, |r| r.domain_id),
+        );
+    }
     // The sinks join right after the threads started, from the oldest sample the ring holds
     // (nothing can be lost: no robot has answered yet). A sink that cannot start ends the
     // session before the robot is served.
@@ -210,14 +218,6 @@ pub fn run_session(
             return Err(message);
         }
     };
-    if live && let Some(bridge) = &ros2.bridge {
-        eprintln!(
-            "deflex run: ROS 2: publishing {} topics under {} (domain {})",
-            bridge.topics().len(),
-            cell.ros2.as_ref().map_or("/", |r| r.namespace.as_str()),
-            cell.ros2.as_ref().map_or(0, |r| r.domain_id),
-        );
-    }
     let feedforward = run.feedforward.as_ref().map(describe_feedforward);
     if let Ok(policy) = cell.peer_policy()
         && let Some(warning) = policy.warning()
@@ -277,10 +277,10 @@ pub fn run_session(
         session,
         wall_s: started.elapsed().as_secs_f64(),
         feedforward,
-        recording,
-        view,
         bridge,
         ros2_sensor: ros2.sensor_counts.map(|(topic, h)| (topic, h.counts())),
+        recording,
+        view,
     })
 }
 

@@ -2,7 +2,7 @@
 //! one mapping shared by the MCAP recorder (`deflex-record`) and the ROS 2 bridge
 //! (`deflex-ros2`), so a recording and the live graph carry the same values in the same frames.
 //!
-//! | [`Stream`] | type | frame ([`SessionInfo`]) | content |
+//! | stream | type | frame ([`SessionInfo`]) | content |
 //! | --- | --- | --- | --- |
 //! | `joint_states` | `sensor_msgs/msg/JointState` | – | joint values the robot reported (rad), named as the model's joints |
 //! | `wrench_raw` | `geometry_msgs/msg/WrenchStamped` | `sensor_frame` | raw F/T reading, cycle mean (N, N·m) |
@@ -204,7 +204,6 @@ pub fn diagnostics(
         key: k.to_string(),
         value: v,
     };
-    // The twin's own stream numbers its phases differently (its `Source` names them).
     let phase = info.source.phase_name(s.phase_code);
     let status = flags.describe();
     let message = match fault {

@@ -120,7 +120,7 @@ impl CellFile {
 
     /// Controller side: binds the sensor client of `[sensor]`. A ROS 2 sensor
     /// (`sensor.kind = "ros2"`) is opened by the `deflex-ros2` bridge, a layer above this one,
-    /// and handed to [`crate::CellRun::start_with_sensor`]; here it is an error.
+    /// and handed to [`crate::CellRun::start_with`]; here it is an error.
     pub fn open_sensor_link(&self) -> Result<Box<dyn ForceSensorLink + Send>, LinkError> {
         Ok(match self.sensor.kind {
             SensorKind::Netft => Box::new(NetFtClient::new(
