@@ -103,21 +103,16 @@ pub struct WrenchLog {
 /// Read a log file (see [`parse_log`]); refuses files over [`MAX_LOG_BYTES`].
 pub fn read_log(path: &Path, robot: &Robot, part_frame: &Pose) -> Result<WrenchLog, LogError> {
     let file = path.display().to_string();
-    let size = std::fs::metadata(path)
-        .map_err(|e| LogError::Io {
+    // A regular file of at most MAX_LOG_BYTES, counted while reading.
+    let text = deflex_files::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e.problem() {
+        Some(deflex_files::InputProblem::TooLarge { read, .. }) => LogError::TooLarge {
             file: file.clone(),
-            message: e.to_string(),
-        })?
-        .len();
-    if size > MAX_LOG_BYTES {
-        return Err(LogError::TooLarge {
-            file,
-            message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| LogError::Io {
-        file: file.clone(),
-        message: e.to_string(),
+            message: format!("more than {MAX_LOG_BYTES} bytes (stopped reading after {read})"),
+        },
+        _ => LogError::Io {
+            file: file.clone(),
+            message: e.into_io().to_string(),
+        },
     })?;
     parse_log(&text, &file, robot, part_frame)
 }

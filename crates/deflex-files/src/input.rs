@@ -75,6 +75,35 @@ impl std::fmt::Display for FileKind {
     }
 }
 
+/// Why an input file was refused (the path is named by the [`InputError`] holding this).
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum InputProblem {
+    /// Not a regular file: refused before reading a byte.
+    #[error(
+        "is {kind}, not a regular file (deflex reads its inputs from regular files only; copy the data to a file first)"
+    )]
+    NotAFile {
+        /// What it is.
+        kind: FileKind,
+    },
+    /// More bytes than allowed (found by reading, not from the metadata).
+    #[error(
+        "larger than the {limit}-byte limit for this kind of file (stopped reading after {read} bytes)"
+    )]
+    TooLarge {
+        /// The limit.
+        limit: u64,
+        /// Bytes read before stopping (limit + 1).
+        read: u64,
+    },
+    /// Text expected, bytes found that are not UTF-8.
+    #[error("not UTF-8 text (invalid byte at offset {offset})")]
+    NotText {
+        /// Offset of the first invalid byte.
+        offset: usize,
+    },
+}
+
 /// Why an input file could not be read.
 #[derive(Debug, Error)]
 pub enum InputError {
@@ -86,57 +115,48 @@ pub enum InputError {
         /// The error.
         source: io::Error,
     },
-    /// Not a regular file: refused before reading a byte.
-    #[error(
-        "{}: is {kind}, not a regular file (deflex reads its inputs from regular files only; copy the data to a file first)",
-        shown_path(.path)
-    )]
-    NotAFile {
+    /// Refused: not a regular file, too large, not text.
+    #[error("{}: {problem}", shown_path(.path))]
+    Refused {
         /// The file.
         path: PathBuf,
-        /// What it is.
-        kind: FileKind,
-    },
-    /// More bytes than allowed (found by reading, not from the metadata).
-    #[error(
-        "{}: larger than the {limit}-byte limit for this kind of file (stopped reading after {read} bytes)",
-        shown_path(.path)
-    )]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// The limit.
-        limit: u64,
-        /// Bytes read before stopping (limit + 1).
-        read: u64,
-    },
-    /// Text expected, bytes found that are not UTF-8.
-    #[error("{}: not UTF-8 text (invalid byte at offset {offset})", shown_path(.path))]
-    NotText {
-        /// The file.
-        path: PathBuf,
-        /// Offset of the first invalid byte.
-        offset: usize,
+        /// Why.
+        problem: InputProblem,
     },
 }
 
 impl InputError {
-    /// The file the error is about.
-    pub fn path(&self) -> &Path {
-        match self {
-            InputError::Io { path, .. }
-            | InputError::NotAFile { path, .. }
-            | InputError::TooLarge { path, .. }
-            | InputError::NotText { path, .. } => path,
+    fn refused(path: &Path, problem: InputProblem) -> InputError {
+        InputError::Refused {
+            path: path.to_path_buf(),
+            problem,
         }
     }
 
-    /// The same error as an `io::Error` (kind `InvalidData` unless the system gave one), for
-    /// callers whose error type wraps `io::Error`; the typed error stays inside.
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            InputError::Io { path, .. } | InputError::Refused { path, .. } => path,
+        }
+    }
+
+    /// Why it was refused, if it was.
+    pub fn problem(&self) -> Option<&InputProblem> {
+        match self {
+            InputError::Refused { problem, .. } => Some(problem),
+            InputError::Io { .. } => None,
+        }
+    }
+
+    /// The same error as an `io::Error` without the path (for callers whose error type names
+    /// the path and wraps an `io::Error`): the system's error, or the [`InputProblem`] inside
+    /// one of kind `InvalidData`.
     pub fn into_io(self) -> io::Error {
         match self {
             InputError::Io { source, .. } => source,
-            other => io::Error::new(io::ErrorKind::InvalidData, other),
+            InputError::Refused { problem, .. } => {
+                io::Error::new(io::ErrorKind::InvalidData, problem)
+            }
         }
     }
 }
@@ -190,7 +210,7 @@ fn remember(path: &Path, metadata: &Metadata) {
 
 /// Open `path` for reading when it is a regular file: opened without blocking (a FIFO cannot
 /// make this wait), its type checked on the open file, anything else refused with
-/// [`InputError::NotAFile`].
+/// [`InputProblem::NotAFile`].
 pub fn open_input(path: &Path) -> Result<File, InputError> {
     let io_error = |source| InputError::Io {
         path: path.to_path_buf(),
@@ -204,10 +224,7 @@ pub fn open_input(path: &Path) -> Result<File, InputError> {
     let metadata = file.metadata().map_err(io_error)?;
     let kind = FileKind::of(&metadata);
     if kind != FileKind::Regular {
-        return Err(InputError::NotAFile {
-            path: path.to_path_buf(),
-            kind,
-        });
+        return Err(InputError::refused(path, InputProblem::NotAFile { kind }));
     }
     remember(path, &metadata);
     Ok(file)
@@ -224,11 +241,11 @@ pub fn read_bounded_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, InputError
             source,
         })?;
     if bytes.len() as u64 > limit {
-        return Err(InputError::TooLarge {
-            path: path.to_path_buf(),
-            limit,
-            read: bytes.len() as u64,
-        });
+        let read = bytes.len() as u64;
+        return Err(InputError::refused(
+            path,
+            InputProblem::TooLarge { limit, read },
+        ));
     }
     Ok(bytes)
 }
@@ -236,9 +253,9 @@ pub fn read_bounded_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, InputError
 /// The UTF-8 text of `path`, a regular file of at most `limit` bytes (counted while reading).
 pub fn read_bounded(path: &Path, limit: u64) -> Result<String, InputError> {
     let bytes = read_bounded_bytes(path, limit)?;
-    String::from_utf8(bytes).map_err(|e| InputError::NotText {
-        path: path.to_path_buf(),
-        offset: e.utf8_error().valid_up_to(),
+    String::from_utf8(bytes).map_err(|e| {
+        let offset = e.utf8_error().valid_up_to();
+        InputError::refused(path, InputProblem::NotText { offset })
     })
 }
 
@@ -256,8 +273,12 @@ mod tests {
             ("/", FileKind::Folder),
         ] {
             match read_bounded(Path::new(path), 10) {
-                Err(InputError::NotAFile { kind: k, .. }) => assert_eq!(k, kind, "{path}"),
-                other => panic!("{path}: {other:?}"),
+                Err(e) => assert_eq!(
+                    e.problem(),
+                    Some(&InputProblem::NotAFile { kind }),
+                    "{path}"
+                ),
+                Ok(text) => panic!("{path}: read {text:?}"),
             }
         }
         let dir = scratch("fifo-in");
@@ -266,14 +287,11 @@ mod tests {
         // SAFETY: mkfifo with a valid NUL-terminated path.
         assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
         let e = read_bounded(&fifo, 10).unwrap_err();
-        assert!(
-            matches!(
-                e,
-                InputError::NotAFile {
-                    kind: FileKind::Fifo,
-                    ..
-                }
-            ),
+        assert_eq!(
+            e.problem(),
+            Some(&InputProblem::NotAFile {
+                kind: FileKind::Fifo
+            }),
             "{e}"
         );
         assert!(e.to_string().contains("robot.urdf"), "{e}");
@@ -286,14 +304,11 @@ mod tests {
         // SAFETY: pipe with a valid two-element array.
         assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
         let e = read_bounded(Path::new(&format!("/proc/self/fd/{}", fds[0])), 10).unwrap_err();
-        assert!(
-            matches!(
-                e,
-                InputError::NotAFile {
-                    kind: FileKind::Fifo,
-                    ..
-                }
-            ),
+        assert_eq!(
+            e.problem(),
+            Some(&InputProblem::NotAFile {
+                kind: FileKind::Fifo
+            }),
             "{e}"
         );
         // SAFETY: closing the two descriptors pipe returned.
@@ -305,17 +320,14 @@ mod tests {
         let path = dir.join("data.csv");
         std::fs::write(&path, "0123456789").unwrap();
         assert_eq!(read_bounded(&path, 10).unwrap(), "0123456789");
-        match read_bounded(&path, 9) {
-            Err(InputError::TooLarge {
-                limit: 9, read: 10, ..
-            }) => {}
-            other => panic!("{other:?}"),
-        }
+        let e = read_bounded(&path, 9).unwrap_err();
+        assert_eq!(
+            e.problem(),
+            Some(&InputProblem::TooLarge { limit: 9, read: 10 })
+        );
         std::fs::write(&path, [0x41, 0xff, 0x42]).unwrap();
-        assert!(matches!(
-            read_bounded(&path, 10),
-            Err(InputError::NotText { offset: 1, .. })
-        ));
+        let e = read_bounded(&path, 10).unwrap_err();
+        assert_eq!(e.problem(), Some(&InputProblem::NotText { offset: 1 }));
         assert!(matches!(
             read_bounded(&dir.join("missing"), 10),
             Err(InputError::Io { .. })

@@ -40,7 +40,9 @@ pub mod output;
 mod shown;
 
 pub use atomic::{AtomicDir, AtomicFile, write_atomic, write_through};
-pub use input::{FileKind, InputError, open_input, read_bounded, read_bounded_bytes, track_inputs};
+pub use input::{
+    FileKind, InputError, InputProblem, open_input, read_bounded, read_bounded_bytes, track_inputs,
+};
 pub use output::{
     MARKER, OutputError, OutputKind, OutputProblem, check_output, check_output_flag, problem_of,
 };

@@ -15,7 +15,9 @@ pub enum DataError {
         source: std::io::Error,
     },
     /// The file is larger than a measurement file may be.
-    #[error("{path}: {bytes} bytes is more than the {limit} bytes a measurement file may have")]
+    #[error(
+        "{path}: more than the {limit} bytes a measurement file may have (stopped reading after {bytes})"
+    )]
     TooLarge {
         /// File.
         path: String,

@@ -167,7 +167,7 @@ fn data_files(out: &Path) -> Vec<FileLink> {
 /// The first `# …` line of a text file (at most 200 characters), if any.
 fn first_comment(path: &Path) -> Option<String> {
     use std::io::{BufRead as _, Read as _};
-    let file = std::fs::File::open(path).ok()?;
+    let file = deflex_files::open_input(path).ok()?;
     let mut line = String::new();
     std::io::BufReader::new(file)
         .take(4096)
