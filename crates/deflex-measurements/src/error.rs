@@ -76,6 +76,15 @@ pub enum HeaderProblem {
         /// The column.
         name: String,
     },
+    /// A column the format does not have (a typo such as `sigma_mm` would otherwise be
+    /// ignored and its values replaced by the default).
+    #[error("unknown column `{name}`{}", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
+    Unknown {
+        /// The column.
+        name: String,
+        /// The closest column of the format.
+        closest: Option<String>,
+    },
     /// No `q1_rad` column.
     #[error("no joint columns: expected q1_rad, q2_rad, …")]
     NoJointColumns,
