@@ -197,9 +197,11 @@ enum BadInput {
     EscapeInName,
     ProcFile,
     Socket,
+    DevFull,
+    StdinAlias,
 }
 
-const BAD_INPUTS: [BadInput; 22] = [
+const BAD_INPUTS: [BadInput; 24] = [
     BadInput::DevZero,
     BadInput::DevUrandom,
     BadInput::DevNull,
@@ -222,6 +224,8 @@ const BAD_INPUTS: [BadInput; 22] = [
     BadInput::EscapeInName,
     BadInput::ProcFile,
     BadInput::Socket,
+    BadInput::DevFull,
+    BadInput::StdinAlias,
 ];
 
 /// Replace every number of `text` (outside comments) by `with`.
@@ -327,6 +331,9 @@ fn make_bad(fx: &Fixture, bad: BadInput, good: &Path, n: usize) -> PathBuf {
             return named;
         }
         BadInput::ProcFile => return PathBuf::from("/proc/self/mem"),
+        BadInput::DevFull => return PathBuf::from("/dev/full"),
+        // The process's standard input (here /dev/null), by its /proc alias.
+        BadInput::StdinAlias => return PathBuf::from("/proc/self/fd/0"),
         BadInput::Socket => {
             let listener = std::os::unix::net::UnixListener::bind(&path).unwrap();
             std::mem::forget(listener);
