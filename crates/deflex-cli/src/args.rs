@@ -104,6 +104,53 @@ pub fn parse_length_mm_default(text: &str, what: &str) -> Result<f64, UsageError
         })
 }
 
+/// Largest joint value accepted on the command line (rad): two turns either way. A revolute
+/// joint beyond it is a typo (`1e300`, `-1e6` degrees), not a configuration.
+pub const MAX_JOINT_RAD: f64 = 4.0 * std::f64::consts::PI;
+
+/// Largest force (N) and moment (N·m) component accepted on the command line: far above any
+/// robot's payload; `1e300` would print an infinite deflection.
+pub const MAX_WRENCH: f64 = 1e7;
+
+/// Every joint value finite and within ±[`MAX_JOINT_RAD`] (`flag` names them; `degrees`: the
+/// values were given in degrees and are shown so).
+pub fn check_joint_values(flag: &str, q_rad: &[f64], degrees: bool) -> Result<(), UsageError> {
+    let (scale, unit) = if degrees {
+        (MAX_JOINT_RAD.to_degrees(), "deg")
+    } else {
+        (MAX_JOINT_RAD, "rad")
+    };
+    for (i, q) in q_rad.iter().enumerate() {
+        let shown = if degrees { q.to_degrees() } else { *q };
+        bounded(
+            &format!("{flag} (joint {})", i + 1),
+            shown,
+            -scale,
+            scale,
+            unit,
+        )?;
+    }
+    Ok(())
+}
+
+/// A wrench `fx,fy,fz,mx,my,mz` (N, N·m) with every component finite and within
+/// ±[`MAX_WRENCH`].
+pub fn parse_wrench(text: &str, flag: &str) -> Result<[f64; 6], UsageError> {
+    let w = parse_fixed::<6>(text, flag)?;
+    for (i, v) in w.iter().enumerate() {
+        let unit = if i < 3 { "N" } else { "N·m" };
+        let name = ["fx", "fy", "fz", "mx", "my", "mz"][i];
+        bounded(
+            &format!("{flag} ({name})"),
+            *v,
+            -MAX_WRENCH,
+            MAX_WRENCH,
+            unit,
+        )?;
+    }
+    Ok(w)
+}
+
 /// Joint values from `--q-deg` or `--q-rad`, checked against the robot's joint count.
 pub fn joint_values(
     robot: &Robot,
@@ -135,6 +182,10 @@ pub fn joint_values(
             joints: robot.joint_count(),
             given: q.len(),
         });
+    }
+    match (q_deg, q_rad) {
+        (Some(_), _) => check_joint_values("--q-deg", &q, true)?,
+        _ => check_joint_values("--q-rad", &q, false)?,
     }
     Ok(q)
 }

@@ -269,7 +269,9 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         args.ignore_fk_check,
     )?;
     let t0 = std::time::Instant::now();
-    let (cal, steps, stop) = identify(&args, &start, &rows, json_output)?;
+    let (cal, steps, stop) = identify(&args, &start, &rows, json_output).map_err(
+        CliError::in_context(format!("--data {}", deflex_files::shown_path(&args.data))),
+    )?;
     let elapsed = t0.elapsed();
     if !cal.edofs.iter().any(|e| e.stiffness.is_some()) {
         return Err(CliError::NothingIdentified {

@@ -352,8 +352,9 @@ struct Summary {
     refusal: Option<CompensateCommandError>,
 }
 
-/// The command fails (after writing the table and summaries) when points are not compensated
-/// or the iteration did not converge.
+/// The command fails when points are not compensated or the iteration did not converge: it
+/// prints its summary and writes its table and summaries (no program) only where no earlier
+/// output folder exists; an earlier one stays whole.
 fn refusal(result: &Compensation, s: &Setup) -> Option<CompensateCommandError> {
     let count = result.failure_count();
     if count > 0 {
@@ -529,16 +530,27 @@ fn write_outputs(
         .filter(|f| !f.starts_with("programs/"))
         .map(String::as_str)
         .collect();
-    let _ = writeln!(
-        text,
-        "  wrote {}{}; none of the programs has been run on a real controller",
-        others.join(", "),
-        if programs > 0 {
-            format!(" and {programs} program file(s) in programs/")
-        } else {
-            String::new()
-        }
-    );
+    // A failed run keeps an earlier result whole (nothing swapped in); where there is none, its
+    // table and summaries are written for diagnosis.
+    let keep_earlier = refusal.is_some() && std::fs::symlink_metadata(&args.out).is_ok();
+    if keep_earlier {
+        let _ = writeln!(
+            text,
+            "  nothing written: {} is kept as it was (a failed run replaces no earlier result)",
+            deflex_files::shown_path(&args.out)
+        );
+    } else {
+        let _ = writeln!(
+            text,
+            "  wrote {}{}; none of the programs has been run on a real controller",
+            others.join(", "),
+            if programs > 0 {
+                format!(" and {programs} program file(s) in programs/")
+            } else {
+                String::new()
+            }
+        );
+    }
     deflex_files::write_atomic(
         dir.path().join("summary.json"),
         serde_json::to_string_pretty(&summary_json).unwrap_or_default(),
@@ -546,7 +558,9 @@ fn write_outputs(
     .map_err(output_error(&args.out))?;
     deflex_files::write_atomic(dir.path().join("summary.txt"), &text)
         .map_err(output_error(&args.out))?;
-    dir.commit().map_err(output_error(&args.out))?;
+    if !keep_earlier {
+        dir.commit().map_err(output_error(&args.out))?;
+    }
     Ok(Summary {
         json: summary_json,
         text,

@@ -4,7 +4,8 @@
 //! live status and summary. Its counterpart without hardware, `deflex cell --sim`, is in
 //! [`crate::cell_server`]; the two together over loopback are tested in deflex-twin.
 
-use crate::args::{CliResult, check_flag, print_json};
+use crate::args::{check_flag, print_json};
+use crate::error::{CliError, RunFailure};
 use clap::Args;
 use deflex_control::Fault;
 use deflex_record::{McapRecorder, RecordOptions, RecordReport};
@@ -168,6 +169,12 @@ pub fn run_session(
 ) -> Result<RunOutcome, String> {
     args.check()?;
     let cell = load_cell_file(&args.config)?;
+    if let Some(log) = cell.log_path() {
+        // Before any link opens: a folder, a device or the configuration itself (read just
+        // above, so known as an input) is refused here, not after the session.
+        deflex_files::check_output_flag("[log] path", &log, deflex_files::OutputKind::File)
+            .map_err(|e| format!("{}: {e}", deflex_files::shown_path(&args.config)))?;
+    }
     let mcap_path = match cell.log_path() {
         Some(log) => Some(crate::live::mcap_beside(&log, "log.path")?),
         None => None,
@@ -239,10 +246,25 @@ pub fn run_session(
     }
     let mut last_cycles = 0u64;
     let mut last_print = Instant::now();
+    let mut log_failure_shown = false;
     while !run.runtime.is_finished() {
         std::thread::sleep(Duration::from_millis(20));
         let elapsed = started.elapsed().as_secs_f64();
         if stop.load(Ordering::SeqCst) || args.duration_s.is_some_and(|d| elapsed >= d) {
+            run.runtime.request_stop();
+        }
+        if !log_failure_shown && let Some(error) = run.log_failure() {
+            // A full disk is reported when it happens; the session stops, ramping the
+            // correction out, rather than running on without its record.
+            log_failure_shown = true;
+            eprintln!(
+                "deflex run: the log {} cannot be written ({error}); stopping the session, the \
+                 correction ramps out",
+                run.log_path
+                    .as_deref()
+                    .map(deflex_files::shown_path)
+                    .unwrap_or_default()
+            );
             run.runtime.request_stop();
         }
         if live && last_print.elapsed() >= Duration::from_secs(1) {
@@ -342,9 +364,9 @@ pub(crate) fn fault_json(f: &Fault) -> serde_json::Value {
            "value": f.value, "limit": f.limit, "unit": f.kind.unit(), "text": f.to_string()})
 }
 
-pub fn run(args: RunArgs, json_out: bool) -> CliResult {
+pub fn run(args: RunArgs, json_out: bool) -> Result<(), CliError> {
     let stop = deflex_runtime::rt::interrupt_flag();
-    let o = run_session(&args, !args.quiet && !json_out, stop)?;
+    let o = run_session(&args, !args.quiet && !json_out, stop).map_err(CliError::command("run"))?;
     let s = &o.session.summary;
     let (kind, step_limit_m) = (o.session.robot_kind, o.session.step_limit_m);
     if json_out {
@@ -367,6 +389,9 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
             "samples": s.samples, "sample_gaps": s.sample_gaps, "sensor_faults": s.sensor_faults,
             "sensor_errors": s.sensor_errors, "sensor_foreign": s.sensor_foreign,
             "fault": s.fault.as_ref().map(fault_json),
+            "final_silence": s.final_silence.as_ref().map(fault_json),
+            "log_error": o.session.log_error,
+            "exit_code": run_failure(&o).map_or(0, |f| f.exit_code()),
             "runaway_events": s.runaway_events,
             "first_runaway": s.first_runaway.as_ref().map(fault_json),
             "max_force_n": s.max_force_n, "max_correction_mm": s.max_xi_m * 1e3,
@@ -418,14 +443,8 @@ pub fn run(args: RunArgs, json_out: bool) -> CliResult {
     } else {
         print_summary(&o);
     }
-    match &s.error {
-        Some(e) => Err(e.to_string()),
-        None if s.robot_starved => Err(
-            "the session ended faulted: another connection held the robot link while the robot \
-             was served no answers (robot_link_starved); the robot may not have received its \
-             corrections"
-                .into(),
-        ),
+    match run_failure(&o) {
+        Some(failure) => Err(CliError::Run(failure)),
         None => Ok(()),
     }
 }
@@ -444,6 +463,28 @@ fn recording_json(o: &RunOutcome) -> serde_json::Value {
         "bytes": ok.map(|r| r.stats.bytes),
         "error": report.as_ref().err(),
     })
+}
+
+/// How the session failed, if it did: its error, a latched fault (the robot starved
+/// included), then the log (see [`RunFailure::exit_code`]).
+fn run_failure(o: &RunOutcome) -> Option<RunFailure> {
+    let s = &o.session.summary;
+    if let Some(e) = &s.error {
+        return Some(RunFailure::Failed(e.to_string()));
+    }
+    if s.robot_starved {
+        return Some(RunFailure::Starved);
+    }
+    if let Some(f) = &s.fault {
+        return Some(RunFailure::Faulted(f.to_string()));
+    }
+    if let Some(message) = &o.session.log_error {
+        return Some(RunFailure::Log {
+            path: o.session.log_path.clone().unwrap_or_default(),
+            message: message.clone(),
+        });
+    }
+    None
 }
 
 fn print_summary(o: &RunOutcome) {
@@ -531,12 +572,23 @@ fn print_summary(o: &RunOutcome) {
             s.runaway_events
         );
     }
-    match &s.fault {
-        Some(f) => println!("  fault: {f} — the correction was ramped to its safe value"),
-        None => println!("  fault: none"),
+    match (&s.fault, &s.final_silence) {
+        (Some(f), _) => println!("  fault: {f} — the correction was ramped to its safe value"),
+        (None, Some(f)) => println!(
+            "  fault: none — the {} latched at t {:.2} s (shown by the live line) was the robot's \
+             final silence: no telegram came after it, the end of its program",
+            f.kind.name(),
+            f.time_s
+        ),
+        (None, None) => println!("  fault: none"),
     }
     if let Some(p) = &o.session.log_path {
-        if o.session.log_committed {
+        if let Some(e) = &o.session.log_error {
+            println!(
+                "  log: NOT written: {e} ({} keeps what it held)",
+                deflex_files::shown_path(p)
+            );
+        } else if o.session.log_committed {
             println!(
                 "  log: {} ({} rows, {} dropped)",
                 p.display(),

@@ -23,18 +23,60 @@ pub const SESSION_GAP_S: f64 = 3600.0;
 /// Largest terms file read (bytes).
 const MAX_TERMS_BYTES: u64 = 64 << 20;
 
-/// Read a text file of at most `limit` bytes, naming it in errors.
+/// Read a text file of at most `limit` bytes (a regular file, counted while reading), naming
+/// it in errors.
 pub fn read_bounded(path: &Path, limit: u64) -> Result<String, String> {
-    let size = std::fs::metadata(path)
-        .map_err(|e| format!("{}: {e}", path.display()))?
-        .len();
-    if size > limit {
-        return Err(format!(
-            "{}: {size} bytes is more than the {limit} bytes read",
-            path.display()
-        ));
+    deflex_files::read_bounded(path, limit).map_err(|e| e.to_string())
+}
+
+/// Readings that differ in set-up, target, configuration or measured position (bit for bit):
+/// a repeated reading is not a new equation.
+fn distinct_readings(rows: &[AbsoluteRow]) -> usize {
+    let mut keys: Vec<(String, String, Vec<u64>)> = rows
+        .iter()
+        .map(|r| {
+            let mut k: Vec<u64> = r.q_rad.iter().map(|v| v.to_bits()).collect();
+            k.extend(r.position_m.iter().map(|v| v.to_bits()));
+            (r.setup.clone(), r.target.clone(), k)
+        })
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.len()
+}
+
+/// Largest RMS of the fitted readings' residuals a calibration may end with (m). A calibrated
+/// arm fits its tracker readings to a fraction of a millimetre; readings of another robot, or
+/// of another tool on an unknown target, leave residuals of centimetres to metres.
+pub const MAX_PLAUSIBLE_RMS_M: f64 = 0.02;
+
+/// Refuse a fit whose readings the calibrated robot still misses by more than
+/// [`MAX_PLAUSIBLE_RMS_M`] RMS (data of another robot given with `--robot`): nothing is written.
+fn check_plausible_fit(
+    result: &deflex_absolute::outcome::FitResult,
+    robot: &str,
+    data: &[PathBuf],
+) -> Result<(), String> {
+    let fitted: Vec<f64> = result
+        .residuals
+        .iter()
+        .filter(|r| r.role == deflex_absolute::outcome::Role::Fit)
+        .map(|r| r.residual.norm_squared())
+        .collect();
+    if fitted.is_empty() {
+        return Ok(());
     }
-    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+    let rms = (fitted.iter().sum::<f64>() / fitted.len() as f64).sqrt();
+    if rms.is_finite() && rms <= MAX_PLAUSIBLE_RMS_M {
+        return Ok(());
+    }
+    let files: Vec<String> = data.iter().map(|p| deflex_files::shown_path(p)).collect();
+    Err(format!(
+        "{}: robot \"{robot}\" leaves the fitted readings {:.1} mm RMS from its prediction after calibration (more than {:.0} mm): these are not this robot's readings (another robot's data? give it with --robot); nothing written",
+        files.join(", "),
+        rms * 1e3,
+        MAX_PLAUSIBLE_RMS_M * 1e3
+    ))
 }
 
 /// Read an absolute measurement file.
@@ -361,7 +403,26 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let test = read_all(&args.test_data, n)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
-        loaded.extend(deflex_load::read_for_robot(path, n, true).map_err(|e| e.to_string())?);
+        // Loaded readings are in the robot's world: checked against its forward kinematics
+        // as `deflex calibrate` checks them (another robot's campaign is refused).
+        let file = deflex_load::read_file(path, Some(n), true).map_err(|e| e.to_string())?;
+        let origin = deflex_files::shown_path(path);
+        let check = deflex_stiffness::consistency::check_geometry(
+            &start_robot,
+            &file.rows,
+            Some(&file.lines),
+            Some(&file.header),
+            deflex_stiffness::consistency::DEFAULT_FK_TOLERANCE_M,
+        )
+        .map_err(|e| format!("{origin}: {e}"))?;
+        deflex_stiffness::consistency::enforce(
+            &check,
+            &origin,
+            false,
+            "Is this the robot the loaded campaign was measured on? Give the robot with --robot.",
+        )
+        .map_err(|e| e.to_string())?;
+        loaded.extend(file.rows);
     }
     let series_of: Vec<usize> = series
         .iter()
@@ -370,6 +431,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
         .collect();
     let fit_count = series_of.len();
     let mut all: Vec<AbsoluteRow> = series.into_iter().flatten().collect();
+    let distinct = distinct_readings(&all);
     // Test readings go after the fitted ones and are held out by index.
     let test_count: usize = test.iter().map(Vec::len).sum();
     all.extend(test.into_iter().flatten());
@@ -415,18 +477,49 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let started = std::time::Instant::now();
     let result = fit(&model, &campaign, &options).map_err(|e| e.to_string())?;
     let elapsed = started.elapsed().as_secs_f64();
+    // As many independent equations as parameters at least (3 per distinct reading): fewer,
+    // and the standard errors and χ² of 0 would claim what the data cannot give.
+    if 3 * distinct <= result.estimates.len() {
+        return Err(format!(
+            "{}: {distinct} distinct reading(s) of {fit_count} give {} equations for {} parameters: the data cannot determine them; measure more configurations (nothing written)",
+            args.data
+                .iter()
+                .map(|p| deflex_files::shown_path(p))
+                .collect::<Vec<_>>()
+                .join(", "),
+            3 * distinct,
+            result.estimates.len()
+        ));
+    }
+    check_plausible_fit(&result, &start_robot.name, &args.data)?;
     let robot_out = result.model.to_robot();
     let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
     let terms = CalibrationTerms::of(&result);
     let terms_file = terms_path(&args.out);
-    deflex_files::write_atomic(&terms_file, terms.to_json())
-        .map_err(|e| format!("{}: {e}", terms_file.display()))?;
-    deflex_files::write_atomic(&args.out, toml)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    // Model, terms and report are one unit: the model and terms are written aside first, the
+    // report folder swapped in, and only then the model and terms renamed in. A report that
+    // fails (a full disk) leaves the earlier model, terms and report as they were.
+    use std::io::Write as _;
+    let staged = |path: &Path, text: String| -> Result<deflex_files::AtomicFile, String> {
+        let shown = |e: std::io::Error| format!("{}: {e}", deflex_files::shown_path(path));
+        let mut file = deflex_files::AtomicFile::create(path).map_err(shown)?;
+        file.write_all(text.as_bytes())
+            .and_then(|()| file.flush())
+            .map_err(shown)?;
+        Ok(file)
+    };
+    let terms_staged = staged(&terms_file, terms.to_json())?;
+    let model_staged = staged(&args.out, toml)?;
     let files = match &args.report {
         Some(dir) => report::write_report(&result, &campaign, dir).map_err(|e| e.to_string())?,
         None => Vec::new(),
     };
+    terms_staged
+        .commit()
+        .map_err(|e| format!("{}: {e}", deflex_files::shown_path(&terms_file)))?;
+    model_staged
+        .commit()
+        .map_err(|e| format!("{}: {e}", deflex_files::shown_path(&args.out)))?;
     if json_output {
         let mut value = report::json(&result, &campaign);
         value["elapsed_s"] = serde_json::json!(elapsed);

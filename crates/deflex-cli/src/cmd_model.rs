@@ -382,7 +382,7 @@ pub fn pose(args: PoseArgs, json_output: bool) -> CommandResult {
 pub fn deflect(args: DeflectArgs, json_output: bool) -> CommandResult {
     let robot = robot(&args.robot)?;
     let q = args.joints.values(&robot)?;
-    let w = parse_fixed::<6>(&args.wrench, "--wrench")?;
+    let w = crate::args::parse_wrench(&args.wrench, "--wrench")?;
     let wrench = Wrench::from_row_slice(&w);
     let mut data = Data::new();
     robot
@@ -442,7 +442,22 @@ pub fn ik(args: IkArgs, json_output: bool) -> CommandResult {
     let xyz = parse_fixed::<3>(&args.xyz_mm, "--xyz-mm")?;
     let rpy = parse_fixed::<3>(&args.rpy_deg, "--rpy-deg")?;
     let seed = match &args.seed_deg {
-        Some(s) => joint_values(&robot, Some(s), None)?,
+        Some(s) => joint_values(&robot, Some(s), None).map_err(|e| match e {
+            crate::error::UsageError::Range {
+                flag,
+                lo,
+                hi,
+                unit,
+                got,
+            } => crate::error::UsageError::Range {
+                flag: flag.replace("--q-deg", "--seed-deg"),
+                lo,
+                hi,
+                unit,
+                got,
+            },
+            other => other,
+        })?,
         None => default_seed(&robot),
     };
     let target = pose_from_xyz_rpy(xyz.map(|v| v * 1e-3), rpy.map(f64::to_radians));
@@ -592,7 +607,7 @@ pub fn map(args: MapArgs, json_output: bool) -> CommandResult {
     ];
     let size_m = parse_length_mm_default(&args.size, "--size")?;
     let step_m = parse_length_mm_default(&args.step, "--step")?;
-    let w = parse_fixed::<6>(&args.wrench, "--wrench")?;
+    let w = crate::args::parse_wrench(&args.wrench, "--wrench")?;
     let wrench = Wrench::from_row_slice(&w);
     let started = std::time::Instant::now();
     let (nodes, unreachable) = deflection_grid(&robot, z_m, center_m, size_m, step_m, &wrench)?;
@@ -600,7 +615,9 @@ pub fn map(args: MapArgs, json_output: bool) -> CommandResult {
     if nodes.is_empty() {
         return Err(CliError::NoReachableNode);
     }
-    std::fs::create_dir_all(&args.out).map_err(CliError::write(&args.out))?;
+    // Built aside and swapped in whole: a failed run leaves the earlier map as it was, and a
+    // second run on the same folder is refused while this one writes.
+    let folder = deflex_files::AtomicDir::create(&args.out).map_err(CliError::write(&args.out))?;
     let n = robot.joint_count();
     let mut csv = String::from("x_m,y_m,z_m,");
     for i in 1..=n {
@@ -624,14 +641,19 @@ pub fn map(args: MapArgs, json_output: bool) -> CommandResult {
         );
     }
     let csv_path = args.out.join("deflection_map.csv");
-    deflex_files::write_atomic(&csv_path, csv).map_err(CliError::write(&csv_path))?;
+    deflex_files::write_atomic(folder.path().join("deflection_map.csv"), csv)
+        .map_err(CliError::write(&csv_path))?;
     let norms: Vec<f64> = nodes
         .iter()
         .map(|n| n.deflection.fixed_rows::<3>(0).norm())
         .collect();
     let max = norms.iter().cloned().fold(0.0, f64::max);
     let mean = norms.iter().sum::<f64>() / norms.len() as f64;
-    let pngs = crate::cmd_model::map_plots(&args.out, &nodes, &robot.name, &w)?;
+    let pngs: Vec<PathBuf> = crate::cmd_model::map_plots(folder.path(), &nodes, &robot.name, &w)?
+        .iter()
+        .filter_map(|p| p.file_name().map(|name| args.out.join(name)))
+        .collect();
+    folder.commit().map_err(CliError::write(&args.out))?;
     if json_output {
         let value = json!({
             "nodes": nodes.len(),

@@ -16,7 +16,7 @@ pub struct PlotArgs {
     log2: Option<PathBuf>,
     /// Output folder (replaced whole when the figures are done).
     #[arg(long)]
-    out: PathBuf,
+    pub out: PathBuf,
     /// Names of the runs in legends, comma-separated (default: the file names).
     #[arg(long, value_delimiter = ',')]
     labels: Vec<String>,

@@ -101,6 +101,12 @@ pub enum CliError {
         /// The measurement file.
         data: PathBuf,
     },
+    /// A `deflex run` session that did not end well.
+    #[error(transparent)]
+    Run(#[from] RunFailure),
+    /// An output path refused, or that could not be written, named with its flag.
+    #[error(transparent)]
+    Output(#[from] deflex_files::OutputError),
     /// A command that still reports its failures as text (the controller, compensation and
     /// elasto-geometric commands, converted by their own tracks).
     #[error("{message}")]
@@ -113,6 +119,17 @@ pub enum CliError {
 }
 
 impl CliError {
+    /// The process's exit status for this error (documented in the README, "Reliability"):
+    /// 1 an error (bad input, refused output, a session that failed), 3 a `run` session that
+    /// ended with a latched fault, 4 a `run` whose log could not be written. (2 is the
+    /// command-line parser's: an unknown flag or a missing value.)
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            CliError::Run(failure) => failure.exit_code(),
+            _ => 1,
+        }
+    }
+
     /// An error about `context` (a file, or a flag with its value), named first.
     pub fn in_context(context: impl Into<String>) -> impl FnOnce(CliError) -> CliError {
         let context = context.into();
@@ -131,6 +148,46 @@ impl CliError {
     pub fn write(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> CliError {
         let path = path.into();
         move |source| CliError::Write { path, source }
+    }
+}
+
+/// How a `deflex run` session failed.
+#[derive(Debug, Error)]
+pub enum RunFailure {
+    /// The session could not run (no data, a joint-count mismatch, a thread that panicked…).
+    #[error("the session failed: {0}")]
+    Failed(String),
+    /// A fault latched during the session (sensor_timeout, joint_jump, robot_link_lost…).
+    #[error(
+        "the session ended with a latched fault: {0}; the correction was ramped to its safe value"
+    )]
+    Faulted(String),
+    /// Another connection held the robot link while the robot was served no answers.
+    #[error(
+        "the session ended faulted: another connection held the robot link while the robot was served no answers (robot_link_starved); the robot may not have received its corrections"
+    )]
+    Starved,
+    /// The log could not be written (a full disk…): the session was stopped when it happened.
+    #[error(
+        "the log {} could not be written: {message}; the session was stopped when it happened and the correction ramped out",
+        .path.display()
+    )]
+    Log {
+        /// The log's path.
+        path: PathBuf,
+        /// The system's error.
+        message: String,
+    },
+}
+
+impl RunFailure {
+    /// 1 failed, 3 faulted (starved included), 4 log not written.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            RunFailure::Failed(_) => 1,
+            RunFailure::Faulted(_) | RunFailure::Starved => 3,
+            RunFailure::Log { .. } => 4,
+        }
     }
 }
 

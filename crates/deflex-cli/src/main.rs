@@ -17,7 +17,9 @@ mod error;
 mod live;
 
 use clap::{Parser, Subcommand};
+use deflex_files::OutputKind;
 use error::CliError;
+use std::path::Path;
 use std::process::ExitCode;
 
 /// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,
@@ -85,9 +87,79 @@ enum Command {
     Plot(cmd_plot::PlotArgs),
 }
 
+impl Command {
+    /// Every output the command writes, with the flag that names it: checked before the
+    /// command runs ([`deflex_files::check_output_flag`]: no device, FIFO, socket, dangling
+    /// link or foreign folder is ever replaced). Outputs named in files (`[log] path`) are
+    /// checked by their command once the file is read.
+    fn outputs(&self) -> Vec<(&'static str, &Path, OutputKind)> {
+        use OutputKind::{File, Folder};
+        let mut outputs = Vec::new();
+        match self {
+            Command::Map(a) => outputs.push(("--out", a.out.as_path(), Folder)),
+            Command::Calibrate(a) => {
+                outputs.push(("--out", a.out.as_path(), File));
+                if let Some(r) = &a.report {
+                    outputs.push(("--report", r.as_path(), Folder));
+                }
+            }
+            Command::CalibrateGeometry(a) => {
+                outputs.push(("--out", a.out.as_path(), File));
+                if let Some(r) = &a.report {
+                    outputs.push(("--report", r.as_path(), Folder));
+                }
+            }
+            Command::Predict(a) => outputs.push(("--out", a.out.as_path(), File)),
+            Command::Register(a) => outputs.push(("--out", a.out.as_path(), File)),
+            Command::Import {
+                command: cmd_egcal::ImportCommand::Ur10Tracker(a),
+            } => outputs.push(("--out", a.out.as_path(), File)),
+            Command::Validate(a) => {
+                if let Some(o) = &a.out {
+                    outputs.push(("--out", o.as_path(), Folder));
+                }
+            }
+            Command::Plan(a) => outputs.push(("--out", a.out.as_path(), File)),
+            Command::Sim { command } => match command {
+                cmd_sim::SimCommand::Campaign(a) => outputs.push(("--out", a.out.as_path(), File)),
+                cmd_sim::SimCommand::Isf(a) => outputs.push(("--out", a.out.as_path(), Folder)),
+                cmd_sim::SimCommand::Sensitivity(a) => {
+                    outputs.push(("--out", a.out.as_path(), Folder))
+                }
+                cmd_sim::SimCommand::Robot(a) => outputs.push(("--out", a.out.as_path(), File)),
+            },
+            Command::Compensate(a) => outputs.push(("--out", a.out.as_path(), Folder)),
+            Command::Export(a) => outputs.push(("--out", a.out.as_path(), File)),
+            Command::Demo(a) => outputs.push(("--out", a.out.as_path(), Folder)),
+            Command::Plot(a) => outputs.push(("--out", a.out.as_path(), Folder)),
+            Command::Model { .. }
+            | Command::Pose(_)
+            | Command::Deflect(_)
+            | Command::Ik(_)
+            | Command::Run(_)
+            | Command::Cell(_) => {}
+        }
+        outputs
+    }
+}
+
+/// Refuse, before the command runs, an output that is not a file or folder deflex may replace.
+fn check_outputs(command: &Command) -> Result<(), CliError> {
+    for (flag, path, kind) in command.outputs() {
+        deflex_files::check_output_flag(flag, path, kind)?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     restore_default_sigpipe();
+    // Every file a command reads is remembered, so that no output replaces one of them.
+    deflex_files::track_inputs();
     let cli = Cli::parse();
+    if let Err(error) = check_outputs(&cli.command) {
+        eprintln!("error: {}", deflex_files::shown_text(&error.to_string()));
+        return ExitCode::from(error.exit_code());
+    }
     let result = match cli.command {
         Command::Model { command } => cmd_model::model(command, cli.json),
         Command::Pose(args) => cmd_model::pose(args, cli.json),
@@ -114,7 +186,7 @@ fn main() -> ExitCode {
         Command::Export(args) => {
             cmd_export::export(args, cli.json).map_err(CliError::command("export"))
         }
-        Command::Run(args) => cmd_control::run(args, cli.json).map_err(CliError::command("run")),
+        Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
         Command::Plot(args) => cmd_plot::plot(args, cli.json).map_err(CliError::command("plot")),
@@ -123,8 +195,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             // The one place a command's error becomes text.
-            eprintln!("error: {error}");
-            ExitCode::FAILURE
+            eprintln!("error: {}", deflex_files::shown_text(&error.to_string()));
+            ExitCode::from(error.exit_code())
         }
     }
 }

@@ -7,7 +7,8 @@
 //!   it ([`load_robot`]), and writing a robot's TOML for another folder
 //!   ([`robot_to_toml_for`]);
 //! * [`measurements`]: measurement, plan and point files ([`read_file`], [`read_points`]);
-//! * [`read_bounded`]: any text file, read only when it is not larger than a limit.
+//! * [`read_bounded`]: any text file, read only when it is a regular file not larger than a
+//!   limit (counted while reading).
 //!
 //! (The twin's cell files are read by `deflex-twin`, above the twin.)
 
@@ -26,19 +27,23 @@ use std::path::Path;
 /// Why a bounded read failed.
 #[derive(Debug)]
 pub enum BoundedReadError {
-    /// The operating system's error.
+    /// The operating system's error, or why the file was refused (not a regular file, not
+    /// text): a [`deflex_files::InputProblem`] inside, without the path.
     Io(std::io::Error),
-    /// The file has this many bytes, more than allowed.
+    /// More bytes than allowed: reading stopped after this many (the limit + 1).
     TooLarge(u64),
 }
 
-/// The text of `path` when it has at most `limit` bytes.
+/// The text of `path` when it is a regular file of at most `limit` bytes, counted while
+/// reading (`/dev/zero`, a FIFO or a pipe is refused without waiting; see
+/// [`deflex_files::read_bounded`]).
 pub fn read_bounded(path: &Path, limit: u64) -> Result<String, BoundedReadError> {
-    let size = std::fs::metadata(path).map_err(BoundedReadError::Io)?.len();
-    if size > limit {
-        return Err(BoundedReadError::TooLarge(size));
-    }
-    std::fs::read_to_string(path).map_err(BoundedReadError::Io)
+    deflex_files::read_bounded(path, limit).map_err(|e| match e.problem() {
+        Some(deflex_files::InputProblem::TooLarge { read, .. }) => {
+            BoundedReadError::TooLarge(*read)
+        }
+        _ => BoundedReadError::Io(e.into_io()),
+    })
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ fn read_robot_text(path: &Path, shown: &str) -> Result<String, ModelError> {
             path: shown.to_string(),
             field: "file".into(),
             message: format!(
-                "{size} bytes is more than the {MAX_ROBOT_FILE_BYTES} bytes a robot description may have"
+                "more than the {MAX_ROBOT_FILE_BYTES} bytes a robot description may have (stopped reading after {size})"
             ),
         },
     })

@@ -15,7 +15,9 @@ pub enum DataError {
         source: std::io::Error,
     },
     /// The file is larger than a measurement file may be.
-    #[error("{path}: {bytes} bytes is more than the {limit} bytes a measurement file may have")]
+    #[error(
+        "{path}: more than the {limit} bytes a measurement file may have (stopped reading after {bytes})"
+    )]
     TooLarge {
         /// File.
         path: String,
@@ -73,6 +75,15 @@ pub enum HeaderProblem {
     Duplicate {
         /// The column.
         name: String,
+    },
+    /// A column the format does not have (a typo such as `sigma_mm` would otherwise be
+    /// ignored and its values replaced by the default).
+    #[error("unknown column `{name}`{}", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
+    Unknown {
+        /// The column.
+        name: String,
+        /// The closest column of the format.
+        closest: Option<String>,
     },
     /// No `q1_rad` column.
     #[error("no joint columns: expected q1_rad, q2_rad, …")]

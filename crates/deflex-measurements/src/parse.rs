@@ -157,6 +157,27 @@ impl Columns {
         if !names.is_empty() {
             return Err(HeaderProblem::Missing { names });
         }
+        let mut known: Vec<String> = required.iter().map(|c| c.to_string()).collect();
+        known.extend((1..=joint_count).map(|i| format!("q{i}_rad")));
+        known.extend(
+            DISPLACEMENT_COLUMNS
+                .iter()
+                .chain(&ROTATION_COLUMNS)
+                .chain(&["sigma_m", "sigma_rad", "purpose"])
+                .map(|c| c.to_string()),
+        );
+        if let Some(name) = headers.iter().find(|h| !known.iter().any(|k| k == h)) {
+            let closest = known
+                .iter()
+                .map(|k| (edit_distance(k, name), k))
+                .filter(|(d, _)| *d <= 3)
+                .min_by_key(|(d, _)| *d)
+                .map(|(_, k)| k.clone());
+            return Err(HeaderProblem::Unknown {
+                name: name.chars().take(80).collect(),
+                closest,
+            });
+        }
         Ok(Columns {
             has_displacement: DISPLACEMENT_COLUMNS.iter().all(|c| index.contains_key(*c)),
             has_rotation: ROTATION_COLUMNS.iter().all(|c| index.contains_key(*c)),
@@ -325,4 +346,19 @@ impl Cells<'_> {
         }
         Ok(Some(value))
     }
+}
+
+/// Levenshtein distance between two column names (short strings: the quadratic table is fine).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().take(200).collect();
+    let mut previous: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().take(200).enumerate() {
+        let mut current = vec![i + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let substitution = previous[j] + usize::from(ca != *cb);
+            current.push(substitution.min(previous[j + 1] + 1).min(current[j] + 1));
+        }
+        previous = current;
+    }
+    previous[b.len()]
 }

@@ -78,7 +78,7 @@ pub enum PointsError {
         source: std::io::Error,
     },
     /// The file is larger than [`MAX_POINTS_FILE_BYTES`].
-    #[error("{path}: {bytes} bytes is too large for a list of points")]
+    #[error("{path}: too large for a list of points (stopped reading after {bytes} bytes)")]
     TooLarge {
         /// File.
         path: String,

@@ -139,7 +139,9 @@ struct JointSection {
     d: Option<f64>,
     beta: Option<f64>,
     theta_offset: Option<f64>,
-    limits: Option<[f64; 2]>,
+    /// Read as a list and checked to hold two values (`[lo, hi]`): a third value is an error,
+    /// not ignored.
+    limits: Option<Vec<f64>>,
     center_shift: Option<f64>,
     stiffness: Option<StiffnessSection>,
     mass: Option<f64>,
@@ -157,6 +159,22 @@ struct StiffnessSection {
 impl StiffnessSection {
     fn to_axes(&self) -> AxisStiffness {
         AxisStiffness([self.x, self.y, self.z])
+    }
+}
+
+/// A joint's `limits = [lo, hi]`, exactly two values.
+fn limits_of(
+    section: &JointSection,
+    index: usize,
+    invalid: &dyn Fn(String, String) -> ModelError,
+) -> Result<Option<[f64; 2]>, ModelError> {
+    match section.limits.as_deref() {
+        None => Ok(None),
+        Some(&[lo, hi]) => Ok(Some([lo, hi])),
+        Some(other) => Err(invalid(
+            format!("joint[{}].limits", index + 1),
+            format!("expected two values [lo, hi] (rad), got {}", other.len()),
+        )),
     }
 }
 
@@ -342,7 +360,7 @@ fn dh_geometry(
                 .unwrap_or_else(|| format!("joint_{}", i + 1)),
             placement,
             theta_offset: section.theta_offset.unwrap_or(0.0),
-            limits: section.limits,
+            limits: limits_of(section, i, invalid)?,
             center_shift: section.center_shift.unwrap_or(0.0),
             stiffness: section
                 .stiffness
@@ -449,7 +467,7 @@ fn urdf_geometry(
             ));
         }
         if section.limits.is_some() {
-            joint.limits = section.limits;
+            joint.limits = limits_of(section, i, invalid)?;
         }
         joint.center_shift = section.center_shift.unwrap_or(0.0);
         joint.stiffness = section

@@ -157,6 +157,7 @@ pub(crate) fn parse_chain(
         .filter(|n| n.has_tag_name("joint"))
         .map(|node| read_joint(node, path))
         .collect::<Result<Vec<_>, _>>()?;
+    check_names(robot, &joints, path)?;
     let tree = JointTree::new(&joints, path)?;
     let root = match base_link {
         Some(b) => b.to_string(),
@@ -181,6 +182,42 @@ pub(crate) fn parse_chain(
         tip_link: tip,
         tip_offset,
     })
+}
+
+/// Link and joint names unique, and every joint's parent and child a declared `<link>`: a
+/// duplicated name or a dangling link is an error, not a chain silently built from the first.
+fn check_names(robot: roxmltree::Node, joints: &[UrdfJoint], path: &str) -> Result<(), ModelError> {
+    let mut links: std::collections::HashSet<&str> = std::collections::HashSet::new();
+    for link in robot.children().filter(|n| n.has_tag_name("link")) {
+        let name = link.attribute("name").unwrap_or("");
+        if !links.insert(name) {
+            return Err(invalid(
+                path,
+                "link",
+                format!("link name \"{name}\" appears twice"),
+            ));
+        }
+    }
+    let mut names: std::collections::HashSet<&str> = std::collections::HashSet::new();
+    for joint in joints {
+        if !names.insert(joint.name.as_str()) {
+            return Err(invalid(
+                path,
+                "joint",
+                format!("joint name \"{}\" appears twice", joint.name),
+            ));
+        }
+        for (role, link) in [("parent", &joint.parent), ("child", &joint.child)] {
+            if !links.contains(link.as_str()) {
+                return Err(invalid(
+                    path,
+                    &format!("joint \"{}\" <{role}>", joint.name),
+                    format!("link \"{link}\" is not declared by a <link>"),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The XML document, its nesting depth bounded before the (recursive) parser sees it, with a

@@ -275,18 +275,13 @@ impl ProgramSettings {
     /// Read a TOML template file.
     pub fn load(path: &std::path::Path) -> Result<ProgramSettings, ProgramError> {
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ProgramError::Settings {
-            source_name: source.clone(),
-            key: "(file)".into(),
-            message: format!("cannot read: {e}"),
-        })?;
-        if text.len() > 1 << 20 {
-            return Err(ProgramError::Settings {
-                source_name: source,
+        // A program template is a few lines: at most 1 MiB, counted while reading.
+        let text =
+            deflex_files::read_bounded(path, 1 << 20).map_err(|e| ProgramError::Settings {
+                source_name: source.clone(),
                 key: "(file)".into(),
-                message: "larger than 1 MiB; a program template is a few lines".into(),
-            });
-        }
+                message: format!("cannot read: {}", e.into_io()),
+            })?;
         Self::from_toml_str(&text, &source)
     }
 

@@ -22,7 +22,7 @@ pub const MAX_RECORD_BYTES: usize = 64 << 20;
 /// True when `path` starts with the MCAP magic bytes.
 pub fn is_mcap(path: &Path) -> std::io::Result<bool> {
     let mut head = [0u8; 8];
-    let mut file = std::fs::File::open(path)?;
+    let mut file = deflex_files::open_input(path).map_err(deflex_files::InputError::into_io)?;
     let mut n = 0;
     while n < 8 {
         match file.read(&mut head[n..])? {
@@ -90,7 +90,11 @@ pub fn for_each_cycle(
     if !is_mcap(path).map_err(io_err)? {
         return Err(ReadError::NotMcap { path: name });
     }
-    let file = std::io::BufReader::new(std::fs::File::open(path).map_err(io_err)?);
+    let file = std::io::BufReader::new(
+        deflex_files::open_input(path)
+            .map_err(deflex_files::InputError::into_io)
+            .map_err(io_err)?,
+    );
     let options =
         mcap::sans_io::LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
     let reader = mcap::io::MessageReader::new_with_options(file, options);

@@ -104,14 +104,15 @@ pub fn read_run_log(
     if is_mcap(path).map_err(io)? {
         return from_recording(path, label);
     }
-    let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > MAX_LOG_BYTES {
-        return Err(TraceError::TooLarge {
-            path: name,
-            message: format!("{size} bytes, more than the {MAX_LOG_BYTES} a log may have"),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(io)?;
+    let text = deflex_files::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e.problem() {
+        Some(deflex_files::InputProblem::TooLarge { read, .. }) => TraceError::TooLarge {
+            path: name.clone(),
+            message: format!(
+                "more than the {MAX_LOG_BYTES} bytes a log may have (stopped reading after {read})"
+            ),
+        },
+        _ => io(e.into_io()),
+    })?;
     let simulated = text
         .lines()
         .take_while(|l| l.starts_with('#'))

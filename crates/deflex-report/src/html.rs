@@ -440,9 +440,10 @@ fn render_image(h: &mut String, path: &Path, caption: &str) -> Result<(), Report
             });
         }
     };
-    let bytes = std::fs::read(path).map_err(|source| ReportError::Io {
+    // A figure is a few hundred kilobytes: at most 64 MiB, counted while reading.
+    let bytes = deflex_files::read_bounded_bytes(path, 64 << 20).map_err(|e| ReportError::Io {
         path: path.to_path_buf(),
-        source,
+        source: e.into_io(),
     })?;
     let (alt, cap) = (plain_attribute(caption), inline_html(caption));
     let _ = writeln!(

@@ -111,6 +111,9 @@ pub struct CellRunOutcome {
     pub log_rows: u64,
     /// The log was committed to its path (a failed run leaves what was there).
     pub log_committed: bool,
+    /// Why the log could not be written or committed (a full disk…), when it could not; the
+    /// session itself ran (its summary is whole).
+    pub log_error: Option<String>,
     /// The robot link's protocol.
     pub robot_kind: RobotKind,
     /// Largest step allowed between two answers (m).
@@ -255,23 +258,31 @@ impl CellRun {
         })
     }
 
+    /// The log's write error as soon as it happened (a full disk), while the session runs.
+    pub fn log_failure(&self) -> Option<&str> {
+        self.log.as_ref().and_then(LogWriter::failure)
+    }
+
     /// Waits for the threads, then commits the log when the run did not fail.
     pub fn finish(self) -> std::io::Result<CellRunOutcome> {
         let mut summary = self.runtime.join();
         let commit = summary.error.is_none();
-        let (log_rows, log_committed) = match self.log {
-            Some(writer) => {
-                let report = writer.finish(commit)?;
-                summary.log_dropped = report.dropped;
-                (report.written, report.committed)
-            }
-            None => (0, false),
+        let (log_rows, log_committed, log_error) = match self.log {
+            Some(writer) => match writer.finish(commit) {
+                Ok(report) => {
+                    summary.log_dropped = report.dropped;
+                    (report.written, report.committed, None)
+                }
+                Err(e) => (0, false, Some(e.to_string())),
+            },
+            None => (0, false, None),
         };
         Ok(CellRunOutcome {
             summary,
             log_path: self.log_path,
             log_rows,
             log_committed,
+            log_error,
             robot_kind: self.robot_kind,
             step_limit_m: self.step_limit_m,
             feedforward: self.feedforward,

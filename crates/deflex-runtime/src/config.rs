@@ -231,13 +231,19 @@ fn missing_required(table: &toml::Table) -> Option<(&'static str, &'static str)>
     })
 }
 
+/// Largest cell configuration read (bytes): a configuration is a few kilobytes.
+pub const MAX_CELL_CONFIG_BYTES: u64 = 4 << 20;
+
 impl CellFile {
     /// Reads and validates a file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-            path: origin.clone(),
-            source,
+        // A regular file of at most MAX_CELL_CONFIG_BYTES, counted while reading.
+        let text = deflex_files::read_bounded(path, MAX_CELL_CONFIG_BYTES).map_err(|e| {
+            ConfigError::Read {
+                path: origin.clone(),
+                source: e.into_io(),
+            }
         })?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Self::parse(&text, &origin, base)

@@ -158,7 +158,8 @@ pub fn load_feedforward(
         source,
     };
     let mut text = String::new();
-    std::fs::File::open(path)
+    deflex_files::open_input(path)
+        .map_err(deflex_files::InputError::into_io)
         .map_err(read_error)?
         .take(MAX_TABLE_BYTES + 1)
         .read_to_string(&mut text)

@@ -19,6 +19,7 @@
 use deflex_control::{CycleOutput, Flags};
 use deflex_telemetry::{CycleSample, Subscriber};
 use std::io::Write;
+use std::sync::{Arc, OnceLock};
 use std::thread::JoinHandle;
 
 /// One row of the log: a telemetry sample as the log writes it.
@@ -75,6 +76,7 @@ type WriterResult = (Box<dyn LogTarget>, std::io::Result<(u64, u64)>);
 /// The writer thread; [`LogWriter::finish`] waits for it once the stream has ended.
 pub struct LogWriter {
     handle: JoinHandle<WriterResult>,
+    failure: Arc<OnceLock<String>>,
 }
 
 /// What the writer did.
@@ -180,17 +182,29 @@ pub fn spawn_writer(
     joint_count: usize,
     out: Box<dyn LogTarget>,
 ) -> Result<LogWriter, std::io::Error> {
+    let failure = Arc::new(OnceLock::new());
+    let failed = Arc::clone(&failure);
     let handle = std::thread::Builder::new()
         .name("deflex-log".into())
         .spawn(move || -> WriterResult {
             let mut out = out;
             let result = write_stream(&mut stream, joint_count, &mut out);
+            if let Err(e) = &result {
+                // Seen at once by whoever polls `failure` (a full disk, a removed folder).
+                let _ = failed.set(e.to_string());
+            }
             (out, result)
         })?;
-    Ok(LogWriter { handle })
+    Ok(LogWriter { handle, failure })
 }
 
 impl LogWriter {
+    /// The write error that stopped the writer, as soon as it happened (`None` while it
+    /// writes): the session's owner polls it to report a full disk during the run, not after.
+    pub fn failure(&self) -> Option<&str> {
+        self.failure.get().map(String::as_str)
+    }
+
     /// Waits for the writer (the stream must end: the session's publisher dropped) and, when
     /// `commit`, makes the file appear at its destination; otherwise the partial file is
     /// discarded (an [`deflex_files::AtomicFile`] leaves whatever was at the destination

@@ -44,17 +44,9 @@ pub fn read_gcode_with(
     path: &std::path::Path,
     options: &ReadOptions,
 ) -> Result<(ToolPath, Program), SimError> {
-    let size = std::fs::metadata(path)
-        .map_err(|e| SimError::Path(format!("{}: {e}", path.display())))?
-        .len();
-    if size > MAX_GCODE_BYTES {
-        return Err(SimError::Path(format!(
-            "{}: {size} bytes; G-code files of at most {MAX_GCODE_BYTES} bytes are read",
-            path.display()
-        )));
-    }
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SimError::Path(format!("{}: {e}", path.display())))?;
+    // A regular file of at most MAX_GCODE_BYTES, counted while reading.
+    let text = deflex_files::read_bounded(path, MAX_GCODE_BYTES)
+        .map_err(|e| SimError::Path(e.to_string()))?;
     // Errors name the whole path; the tool path is named after the file.
     let (mut toolpath, program) = parse_gcode_with(&text, &path.display().to_string(), options)?;
     if let Some(name) = path.file_name() {

@@ -93,6 +93,9 @@ pub struct Design {
     pub rows: usize,
     /// Number of rows with a measured rotation (3 rotation equations each).
     pub rotation_rows: usize,
+    /// Number of distinct readings: rows that differ in configuration, load, point or
+    /// measured value (a repeated row adds no information about the parameters).
+    pub distinct_rows: usize,
     /// Number of joints of the robot.
     pub joint_count: usize,
     /// Observations about the data that do not stop the fit (e.g. unobservable eDoFs).
@@ -239,6 +242,7 @@ impl Design {
             yty,
             rows: rows.len(),
             rotation_rows,
+            distinct_rows: distinct_rows(rows),
             joint_count: n,
             warnings,
         })
@@ -304,6 +308,33 @@ impl Design {
     }
 }
 
+/// Rows that differ in configuration, load, point or measured value (bit for bit).
+pub fn distinct_rows(rows: &[MeasurementRow]) -> usize {
+    let key = |r: &MeasurementRow| -> Vec<u64> {
+        let mut k: Vec<u64> = r.q_rad.iter().map(|v| v.to_bits()).collect();
+        k.extend(r.wrench.iter().map(|v| v.to_bits()));
+        k.push(r.load_link as u64);
+        k.extend(r.load_point_m.iter().map(|v| v.to_bits()));
+        k.push(r.point_link as u64);
+        k.extend(r.point_m.iter().map(|v| v.to_bits()));
+        if let Some(d) = r.displacement_m {
+            k.extend(d.iter().map(|v| v.to_bits()));
+        }
+        if let Some(rot) = r.rotation_rad {
+            k.extend(rot.value_rad.iter().map(|v| v.to_bits()));
+        }
+        k
+    };
+    let mut keys: Vec<Vec<u64>> = rows.iter().map(key).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.len()
+}
+
+/// Smallest and largest measurement standard deviation a fit accepts (m and rad alike): below
+/// a nanometre the weights overflow, above a metre a reading says nothing about a deflection.
+pub const SIGMA_RANGE: (f64, f64) = (1e-9, 1.0);
+
 /// Reject data that cannot be used, with a message a technician can act on.
 fn check_rows(
     robot: &Robot,
@@ -313,6 +344,24 @@ fn check_rows(
     check_row_set(robot, rows, require_displacement)?;
     if rows.iter().all(|r| r.wrench.iter().all(|v| *v == 0.0)) {
         return Err(RowsError::AllLoadsZero);
+    }
+    let (lo, hi) = SIGMA_RANGE;
+    for (i, r) in rows.iter().enumerate() {
+        let sigmas = [
+            ("sigma_m", r.sigma_m),
+            ("sigma_rad", r.rotation_rad.and_then(|rot| rot.sigma_rad)),
+        ];
+        for (column, sigma) in sigmas {
+            if let Some(got) = sigma
+                && !(lo..=hi).contains(&got)
+            {
+                return Err(RowsError::SigmaOutOfRange {
+                    row: RowRef::of(i, r),
+                    column,
+                    got,
+                });
+            }
+        }
     }
     if require_displacement
         && rows.iter().all(|r| {

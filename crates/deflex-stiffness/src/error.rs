@@ -137,6 +137,34 @@ pub enum RowsError {
         "every measured displacement is exactly zero: nothing to identify (were the loaded readings recorded?)"
     )]
     AllDisplacementsZero,
+    /// A measurement standard deviation outside the range a fit can weigh.
+    #[error(
+        "{row}: {column} = {got:e} is outside {:e} to {:e}: a reading's standard deviation below a nanometre overflows its weight, above a metre it says nothing",
+        crate::design::SIGMA_RANGE.0,
+        crate::design::SIGMA_RANGE.1
+    )]
+    SigmaOutOfRange {
+        /// The row.
+        row: RowRef,
+        /// `sigma_m` or `sigma_rad`.
+        column: &'static str,
+        /// The value.
+        got: f64,
+    },
+    /// Fewer independent equations than parameters: the data cannot determine them.
+    #[error(
+        "{distinct} distinct reading(s) of {rows} give {equations} equations for {parameters} parameters: the data cannot determine them (standard errors and χ² would be 0, not a measure of anything); measure more load cases or configurations, or fit fewer eDoFs"
+    )]
+    TooFewReadings {
+        /// Rows in the file.
+        rows: usize,
+        /// Distinct rows.
+        distinct: usize,
+        /// Independent equations (3 per distinct reading, 3 more per distinct measured rotation).
+        equations: usize,
+        /// Parameters to fit (eDoFs and free centre shifts).
+        parameters: usize,
+    },
     /// The least-squares sums are not finite.
     #[error(
         "the data's magnitudes overflow the least-squares problem (check the loads, coordinates and sigma_m)"

@@ -45,6 +45,22 @@ pub fn calibrate_fixed(
 /// Unobservable and collinear eDoFs are reported not identifiable and removed, then the rest is
 /// refitted.
 pub fn fit_in_design(design: &Design, structure: &Structure) -> Result<Calibration, CalibError> {
+    // At least one equation more than parameters (χ²/dof needs dof ≥ 1), counting repeated
+    // rows once: a repeated reading is not a new equation.
+    let parameters = structure.edofs.len() + structure.free_shift_joints().len();
+    let rotation_share = (design.rotation_rows * design.distinct_rows)
+        .checked_div(design.rows)
+        .unwrap_or(0);
+    let equations = 3 * design.distinct_rows + 3 * rotation_share;
+    if equations <= parameters {
+        return Err(crate::RowsError::TooFewReadings {
+            rows: design.rows,
+            distinct: design.distinct_rows,
+            equations,
+            parameters,
+        }
+        .into());
+    }
     let mut active: Vec<EdofId> = structure.edofs.clone();
     let mut dropped: Vec<(EdofId, String)> = Vec::new();
     let mut shifts = structure.shifts_m.clone();

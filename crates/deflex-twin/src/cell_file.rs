@@ -29,7 +29,9 @@ pub enum CellFileError {
         source: std::io::Error,
     },
     /// The file is larger than a cell file may be.
-    #[error("{path}: {bytes} bytes is more than the {limit} bytes a cell file may have")]
+    #[error(
+        "{path}: more than the {limit} bytes a cell file may have (stopped reading after {bytes})"
+    )]
     TooLarge {
         /// The file.
         path: String,

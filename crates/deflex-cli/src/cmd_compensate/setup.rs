@@ -231,10 +231,17 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
     let seed: Vec<f64> = match (&args.seed_deg, &config) {
         (Some(text), _) => {
             placement.push("seed from --seed-deg");
-            parsed("--seed-deg", text)?
+            let seed: Vec<f64> = parsed("--seed-deg", text)?
                 .into_iter()
                 .map(f64::to_radians)
-                .collect()
+                .collect();
+            crate::args::check_joint_values("--seed-deg", &seed, true).map_err(|e| {
+                SetupError::Option {
+                    flag: "--seed-deg",
+                    message: e.to_string(),
+                }
+            })?;
+            seed
         }
         (None, Some(c)) if n == 6 => c.seed_q_rad().to_vec(),
         (None, _) => {
@@ -266,8 +273,14 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
     };
     let (mut tool_path, program) = tool_path(args)?;
     match args.length_mm {
-        Some(l) if l.is_finite() && l > 0.0 => tool_path = tool_path.truncated(l),
-        Some(l) => return Err(option("--length-mm", format!("must be positive, got {l}"))),
+        // From a micrometre to a kilometre (1e-300 mm once made an empty path).
+        Some(l) if (1e-3..=1e6).contains(&l) => tool_path = tool_path.truncated(l),
+        Some(l) => {
+            return Err(option(
+                "--length-mm",
+                format!("expected a length from 0.001 to 1000000 mm, got {l:e}"),
+            ));
+        }
         None => {}
     }
     if let Some(max) = args.max_segment_mm {

@@ -300,6 +300,8 @@ fn a_failed_validate_leaves_the_folder_as_it_was() {
     let val = dir.join("val");
     std::fs::create_dir_all(&val).unwrap();
     std::fs::write(val.join("old.txt"), "from an earlier run").unwrap();
+    // An earlier deflex output folder (a foreign one is refused whole).
+    std::fs::write(val.join(".deflex-output"), "").unwrap();
     // Fails: the TX200 is not the robot of this file.
     let run = deflex(&[
         "validate",
@@ -315,7 +317,12 @@ fn a_failed_validate_leaves_the_folder_as_it_was() {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(names, vec!["old.txt".to_string()]);
+    let mut names = names;
+    names.sort();
+    assert_eq!(
+        names,
+        vec![".deflex-output".to_string(), "old.txt".to_string()]
+    );
     // Succeeds: the folder is replaced whole.
     let run = deflex(&[
         "validate",

@@ -425,3 +425,109 @@ fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The log path is checked before any link opens (issue 18, item 4): a folder, the cell file
+/// itself and a FIFO are refused at once, naming `[log] path`, and nothing is written.
+#[test]
+fn a_bad_log_path_is_refused_before_the_session() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = scratch("logpath");
+    std::fs::create_dir_all(dir.join("logs")).unwrap();
+    let fifo = dir.join("fifo.csv");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo with a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    for (log, what) in [
+        ("logs", "is a folder"),
+        ("cell.toml", "is also an input"),
+        ("fifo.csv", "FIFO"),
+    ] {
+        let (cell, ..) = cell_file(&dir, "kuka-rsi", &format!("[log]\npath = \"{log}\"\n"));
+        let before = std::fs::read_to_string(&cell).unwrap();
+        let out = deflex()
+            .args(["run", "--config", cell.to_str().unwrap(), "--quiet"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{log}: {err}");
+        assert!(
+            err.contains("[log] path") && err.contains(what),
+            "{log}: {err}"
+        );
+        assert!(!err.contains("waiting for the robot"), "{err}");
+        assert_eq!(std::fs::read_to_string(&cell).unwrap(), before);
+        assert!(
+            std::fs::symlink_metadata(&fifo)
+                .unwrap()
+                .file_type()
+                .is_fifo()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A session that latched a fault (the sensor fell silent: sensor_timeout) exits with status 3
+/// and says so in its summary, so that a script can tell it from a good session (issue 18,
+/// item 4). The sensor stops after the robot has had 300 answers; the robot sends 150 more
+/// telegrams (at least 0.6 s, three times the sensor timeout) and falls silent: the session
+/// ends by its idle exit with the fault latched, however loaded the machine.
+#[test]
+fn a_latched_fault_ends_the_run_with_exit_status_3() {
+    let _turn = crate::realtime_turn();
+    let dir = scratch("fault");
+    let (cell, robot_port, sensor_port) = cell_file(&dir, "simple-udp", "");
+    let answered = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let stop = Arc::new(AtomicBool::new(false));
+    let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
+    let sensor = {
+        let (answered, stop) = (answered.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
+                .unwrap();
+            while answered.load(Ordering::Acquire) < 300 && !stop.load(Ordering::Acquire) {
+                let _ = s.poll_request(Duration::from_micros(500));
+                let _ = s.send_sample(&[0.0; 6], 0);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    };
+    let robot = {
+        let (answered, stop) = (answered.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let mut ep =
+                SimpleUdpRobotEndpoint::new("127.0.0.1:0", ([127, 0, 0, 1], robot_port).into())
+                    .unwrap();
+            let mut sent_after = 0;
+            while sent_after < 150 && !stop.load(Ordering::Acquire) {
+                let _ = ep.send_state(&RobotState::with_joints(&q));
+                if let Ok(Some(_)) = ep.receive_correction(Duration::from_millis(20)) {
+                    answered.fetch_add(1, Ordering::AcqRel);
+                }
+                if answered.load(Ordering::Acquire) >= 300 {
+                    sent_after += 1;
+                }
+                std::thread::sleep(Duration::from_millis(4));
+            }
+        })
+    };
+    let out = deflex()
+        .args([
+            "run",
+            "--config",
+            cell.to_str().unwrap(),
+            "--quiet",
+            "--idle-exit-s",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    stop.store(true, Ordering::Release);
+    robot.join().unwrap();
+    sensor.join().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{text}\n{err}");
+    assert!(text.contains("fault: sensor_timeout"), "{text}");
+    assert!(err.contains("latched fault"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -56,6 +56,8 @@ fn every_numeric_option_of_sim_is_checked() {
     let out = dir.join("run");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "old").unwrap();
+    // An earlier deflex output folder (a foreign one is refused whole, before the flags).
+    std::fs::write(out.join(".deflex-output"), "").unwrap();
     let o = out.to_str().unwrap();
     let csv = dir.join("meas.csv");
     std::fs::write(&csv, "old").unwrap();
@@ -370,6 +372,8 @@ fn bad_twin_files_and_gcode_name_the_field_or_line() {
     let out = dir.join("run");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "old").unwrap();
+    // An earlier deflex output folder (a foreign one is refused whole, before the flags).
+    std::fs::write(out.join(".deflex-output"), "").unwrap();
     let o = out.to_str().unwrap();
     let cases = [
         ("[cell.controller]\nrate_hz = 1e300\n", "controller.rate_hz"),
@@ -396,10 +400,21 @@ fn bad_twin_files_and_gcode_name_the_field_or_line() {
         std::fs::write(&twin, text).unwrap();
         let t = twin.to_str().unwrap();
         refused(&["sim", "isf", "--config", t, "--out", o], field, &out);
+        // `sim campaign` writes a file (a folder given for it is refused before the settings).
+        let csv = dir.join("campaign.csv");
+        std::fs::write(&csv, "old").unwrap();
         refused(
-            &["sim", "campaign", "--spiral", "--config", t, "--out", o],
+            &[
+                "sim",
+                "campaign",
+                "--spiral",
+                "--config",
+                t,
+                "--out",
+                csv.to_str().unwrap(),
+            ],
             field,
-            &out,
+            &csv,
         );
     }
     // Issue 12: a feed of 1e-42 (out of memory after 39 s before), in the decimal form G-code has.

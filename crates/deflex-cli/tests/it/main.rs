@@ -11,6 +11,7 @@ mod cli_egcal;
 mod cli_model;
 mod cli_run;
 mod cli_sim;
+mod hostile;
 mod walkthrough;
 
 /// Tests that run the real-time threads against loopback peers take turns: on a busy 2-core

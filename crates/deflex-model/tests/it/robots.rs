@@ -443,7 +443,7 @@ fn urdf_error(xml: &str, toml_extra: &str) -> String {
 fn hostile_urdfs_get_errors_not_hangs() {
     let joint = |name: &str, parent: &str, child: &str, kind: &str| {
         format!(
-            "<joint name=\"{name}\" type=\"{kind}\"><parent link=\"{parent}\"/><child link=\"{child}\"/><axis xyz=\"0 0 1\"/></joint>"
+            "<link name=\"{child}\"/><joint name=\"{name}\" type=\"{kind}\"><parent link=\"{parent}\"/><child link=\"{child}\"/><axis xyz=\"0 0 1\"/></joint>"
         )
     };
     // A link cycle with no root.
@@ -466,7 +466,7 @@ fn hostile_urdfs_get_errors_not_hangs() {
     let e = urdf_error(&deep, "");
     assert!(e.contains("nested"), "{e}");
     // 100 000 fixed joints then one revolute joint: found in linear time.
-    let mut xml = String::from("<robot name=\"r\">");
+    let mut xml = String::from("<robot name=\"r\"><link name=\"l0\"/>");
     for i in 0..100_000 {
         xml += &joint(
             &format!("f{i}"),
@@ -485,6 +485,16 @@ fn hostile_urdfs_get_errors_not_hangs() {
     .unwrap();
     assert_eq!(robot.joint_count(), 1);
     let _ = PI;
+    // Issue 18: a duplicated link name and a joint whose child link is not declared.
+    let two = format!(
+        "<robot name=\"r\"><link name=\"base\"/><link name=\"base\"/>{}</robot>",
+        joint("j1", "base", "tip", "revolute")
+    );
+    let e = urdf_error(&two, "");
+    assert!(e.contains("\"base\" appears twice"), "{e}");
+    let dangling = "<robot name=\"r\"><link name=\"base\"/><joint name=\"j1\" type=\"revolute\"><parent link=\"base\"/><child link=\"ghost\"/><axis xyz=\"0 0 1\"/></joint></robot>";
+    let e = urdf_error(dangling, "");
+    assert!(e.contains("\"ghost\" is not declared"), "{e}");
 }
 
 #[test]

@@ -18,6 +18,8 @@ fn a_report_that_fails_half_way_leaves_the_folder_as_it_was() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("old.txt"), "earlier").unwrap();
+    // An earlier report: deflex's own folder (a foreign one is refused whole).
+    std::fs::write(dir.join(deflex_files::MARKER), "").unwrap();
     // The parity plots can be drawn, the heatmaps over the measured points cannot: the report
     // fails after several files were written (to the folder being built aside).
     for p in &mut v.points {
@@ -25,11 +27,15 @@ fn a_report_that_fails_half_way_leaves_the_folder_as_it_was() {
     }
     let err = write_report(&v, &dir).unwrap_err().to_string();
     assert!(err.contains("report"), "{err}");
-    let names: Vec<String> = std::fs::read_dir(&dir)
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(names, vec!["old.txt".to_string()]);
+    names.sort();
+    assert_eq!(
+        names,
+        vec![deflex_files::MARKER.to_string(), "old.txt".to_string()]
+    );
     let parent: Vec<String> = std::fs::read_dir(dir.parent().unwrap())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

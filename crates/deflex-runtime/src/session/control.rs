@@ -226,28 +226,34 @@ fn run_cycles<C: Clock>(ctrl: &mut Controller, cycles: &mut Cycles, shared: &Sha
     }
 }
 
-/// How the session ended, and the fault to report: a `robot_link_lost` latched by the robot's
-/// final silence (no telegram after it) is the end of its program, not a fault.
+/// How the session ended, the fault to report and the final silence: a `robot_link_lost`
+/// latched by the robot's final silence (no telegram after it) is the end of its program, not
+/// a fault (returned third, so that the summary can name what the live line showed).
 fn session_end(
     ctrl: &Controller,
     shared: &Shared,
     startup: &Startup,
     idle_exit: bool,
-) -> (SessionEnd, Option<deflex_control::Fault>) {
+) -> (
+    SessionEnd,
+    Option<deflex_control::Fault>,
+    Option<deflex_control::Fault>,
+) {
     let fault = ctrl.fault();
     match startup {
-        Startup::Failed(_) => (SessionEnd::Failed, fault),
-        Startup::StoppedBeforeStart => (SessionEnd::StoppedBeforeStart, fault),
+        Startup::Failed(_) => (SessionEnd::Failed, fault, None),
+        Startup::StoppedBeforeStart => (SessionEnd::StoppedBeforeStart, fault, None),
         Startup::Ready if idle_exit => {
             let last = f64::from_bits(shared.last_telegram_s.load(Ordering::Acquire));
             let silence =
                 fault.is_some_and(|f| f.kind == FaultKind::RobotLinkLost && last <= f.time_s);
-            (
-                SessionEnd::RobotFinished,
-                if silence { None } else { fault },
-            )
+            if silence {
+                (SessionEnd::RobotFinished, None, fault)
+            } else {
+                (SessionEnd::RobotFinished, fault, None)
+            }
         }
-        Startup::Ready => (SessionEnd::Stopped, fault),
+        Startup::Ready => (SessionEnd::Stopped, fault, None),
     }
 }
 
@@ -287,12 +293,13 @@ pub(super) fn control_loop<C: Clock>(
     // The stream ends here: sinks see it closed once they have read it.
     cycles.publisher.close();
     warnings.dedup();
-    let (end, fault) = session_end(&ctrl, shared, &startup, cycles.idle_exit);
+    let (end, fault, final_silence) = session_end(&ctrl, shared, &startup, cycles.idle_exit);
     RunSummary {
         control: cycles.stats.summary(),
         cycles: cycles.cycles,
         end,
         fault,
+        final_silence,
         runaway_events: ctrl.runaway_events(),
         first_runaway: ctrl.first_runaway(),
         max_force_n: cycles.max_force,

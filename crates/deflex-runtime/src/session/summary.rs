@@ -253,6 +253,10 @@ pub struct RunSummary {
     /// The latched fault, if any. A loss of the robot link that lasted until the idle exit is
     /// the end of the robot's program, reported by [`RunSummary::end`], not here.
     pub fault: Option<Fault>,
+    /// The `robot_link_lost` latched by the robot's final silence (no telegram after it until
+    /// the idle exit): the end of its program, not a fault, but shown as `faulted` by the live
+    /// line while it lasted; the summary names it so that the two agree.
+    pub final_silence: Option<Fault>,
     /// Times the runaway guard acted, and the first time as a fault record.
     pub runaway_events: u64,
     /// First runaway the guard acted on.
@@ -299,6 +303,7 @@ impl RunSummary {
             phase,
             end: SessionEnd::Failed,
             fault: None,
+            final_silence: None,
             runaway_events: 0,
             first_runaway: None,
             max_force_n: 0.0,
