@@ -190,10 +190,14 @@ fn is_deflex_folder(path: &Path) -> io::Result<bool> {
 }
 
 fn refuse_if_input(metadata: &std::fs::Metadata) -> io::Result<()> {
-    if let Some(input) = read_inputs()
-        .into_iter()
-        .find(|i| i.device == metadata.dev() && i.inode == metadata.ino())
-    {
+    if let Some(input) = read_inputs().into_iter().find(|i| {
+        i.device == metadata.dev()
+                && i.inode == metadata.ino()
+                // Still the file that was read: an input deleted since (its inode free to be
+                // given to a new file, as tmpfs does at once) is no longer one.
+                && std::fs::metadata(&i.path)
+                    .is_ok_and(|m| m.dev() == i.device && m.ino() == i.inode)
+    }) {
         return Err(OutputProblem::IsAnInput {
             input: crate::shown_path(&input.path),
         }
