@@ -326,61 +326,13 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
 }
 
 fn parse_steps(text: &str) -> Result<Vec<Step>, String> {
-    let bad = |other: &str| {
-        format!(
-            "--steps: unknown step \"{other}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, residual)"
-        )
-    };
     text.split(',')
-        .map(|item| match item.trim() {
-            "registration" => Ok(Step::Registration),
-            "geometry" => Ok(Step::Geometry),
-            "compliance" | "gravity" => Ok(Step::Compliance),
-            "masses" => Ok(Step::Masses),
-            "backlash" => Ok(Step::Backlash),
-            "residual" => Ok(Step::ResidualModel),
-            other => {
-                if let Some(n) = other.strip_prefix("harmonics:") {
-                    match n.parse::<u8>() {
-                        Ok(n) if (1..=4).contains(&n) => Ok(Step::Harmonics(n)),
-                        _ => Err(bad(other)),
-                    }
-                } else if let Some(n) = other.strip_prefix("periodic:") {
-                    match n.parse::<u16>() {
-                        Ok(n) if (1..=10_000).contains(&n) => Ok(Step::Periodic(n)),
-                        _ => Err(bad(other)),
-                    }
-                } else {
-                    Err(bad(other))
-                }
-            }
-        })
+        .map(|item| item.parse().map_err(|e| format!("--steps: {e}")))
         .collect()
 }
 
 fn parse_loss(text: &str) -> Result<Loss, String> {
-    let (name, k) = match text.split_once(':') {
-        Some((n, k)) => (
-            n,
-            Some(
-                k.parse::<f64>()
-                    .ok()
-                    .filter(|k| k.is_finite() && (0.1..=100.0).contains(k))
-                    .ok_or_else(|| {
-                        format!("--loss: threshold \"{k}\" must be a number in 0.1…100")
-                    })?,
-            ),
-        ),
-        None => (text, None),
-    };
-    match name {
-        "huber" => Ok(Loss::Huber(k.unwrap_or(3.0))),
-        "cauchy" => Ok(Loss::Cauchy(k.unwrap_or(2.4))),
-        "none" | "squared" => Ok(Loss::Squared),
-        other => Err(format!(
-            "--loss: expected huber, cauchy or none, got \"{other}\""
-        )),
-    }
+    text.parse().map_err(|e| format!("--loss: {e}"))
 }
 
 fn read_all(paths: &[PathBuf], joints: usize) -> Result<Vec<Vec<AbsoluteRow>>, String> {

@@ -13,7 +13,9 @@ use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::{
     AbsoluteDataError, AbsoluteRow, format_absolute, limits, parse_absolute,
 };
-use deflex_absolute::fit::{FitOptions, FitResult, HeldOutProtocol, Step, fit, session_groups};
+use deflex_absolute::fit::{
+    ChoiceError, FitOptions, FitResult, HeldOutProtocol, Step, fit, session_groups,
+};
 use deflex_absolute::params::EgModel;
 use deflex_absolute::register::{RegisterOptions, Registration};
 use deflex_absolute::solve::Loss;
@@ -50,70 +52,19 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String> {
 /// Model steps from their names (`registration`, `geometry`, `compliance`, `masses`,
 /// `harmonics:N`, `periodic:N`, `backlash`, `residual`), as `--steps` takes them.
 pub fn parse_steps(names: &[String]) -> Result<Vec<Step>> {
-    let bad = |other: &str| {
-        Error::invalid(
-            "steps",
-            format!(
-                "unknown step \"{other}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, residual)"
-            ),
-        )
-    };
     names
         .iter()
-        .map(|item| match item.trim() {
-            "registration" => Ok(Step::Registration),
-            "geometry" => Ok(Step::Geometry),
-            "compliance" | "gravity" => Ok(Step::Compliance),
-            "masses" => Ok(Step::Masses),
-            "backlash" => Ok(Step::Backlash),
-            "residual" => Ok(Step::ResidualModel),
-            other => {
-                if let Some(n) = other.strip_prefix("harmonics:") {
-                    match n.parse::<u8>() {
-                        Ok(n) if (1..=4).contains(&n) => Ok(Step::Harmonics(n)),
-                        _ => Err(bad(other)),
-                    }
-                } else if let Some(n) = other.strip_prefix("periodic:") {
-                    match n.parse::<u16>() {
-                        Ok(n) if (1..=10_000).contains(&n) => Ok(Step::Periodic(n)),
-                        _ => Err(bad(other)),
-                    }
-                } else {
-                    Err(bad(other))
-                }
-            }
+        .map(|item| {
+            item.parse()
+                .map_err(|e: ChoiceError| Error::invalid("steps", e.to_string()))
         })
         .collect()
 }
 
 /// A robust loss from its name (`huber`, `cauchy`, `none`, `huber:K`, `cauchy:K`).
 pub fn parse_loss(text: &str) -> Result<Loss> {
-    let (name, k) = match text.split_once(':') {
-        Some((n, k)) => (
-            n,
-            Some(
-                k.parse::<f64>()
-                    .ok()
-                    .filter(|k| k.is_finite() && (0.1..=100.0).contains(k))
-                    .ok_or_else(|| {
-                        Error::invalid(
-                            "loss",
-                            format!("threshold \"{k}\" must be a number in 0.1…100"),
-                        )
-                    })?,
-            ),
-        ),
-        None => (text, None),
-    };
-    match name {
-        "huber" => Ok(Loss::Huber(k.unwrap_or(3.0))),
-        "cauchy" => Ok(Loss::Cauchy(k.unwrap_or(2.4))),
-        "none" | "squared" => Ok(Loss::Squared),
-        other => Err(Error::invalid(
-            "loss",
-            format!("expected huber, cauchy or none, got \"{other}\""),
-        )),
-    }
+    text.parse()
+        .map_err(|e: ChoiceError| Error::invalid("loss", e.to_string()))
 }
 
 /// Absolute readings of one source for a robot of `joints` joints.

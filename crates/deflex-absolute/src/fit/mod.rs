@@ -31,8 +31,8 @@ mod uncertainty;
 
 pub use heldout::pooled_rms;
 pub use options::{
-    ACCEPTANCE_GAIN, FitError, FitOptions, HeldOutProtocol, MAX_BOOTSTRAP, MAX_DRAWS, MAX_FOLDS,
-    OptionError, Step,
+    ACCEPTANCE_GAIN, ChoiceError, FitError, FitOptions, HeldOutProtocol, MAX_BOOTSTRAP, MAX_DRAWS,
+    MAX_FOLDS, OptionError, Step,
 };
 pub use roles::Roles;
 

@@ -27,6 +27,84 @@ pub enum Step {
     ResidualModel,
 }
 
+/// A model step or a loss that its name does not give (`--steps`, `--loss`, their Python
+/// equivalents).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ChoiceError {
+    /// Not one of the step names.
+    #[error(
+        "unknown step \"{0}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, residual)"
+    )]
+    UnknownStep(String),
+    /// A loss threshold that is not a number in 0.1…100.
+    #[error("threshold \"{0}\" must be a number in 0.1…100")]
+    LossThreshold(String),
+    /// Not one of the loss names.
+    #[error("expected huber, cauchy or none, got \"{0}\"")]
+    UnknownLoss(String),
+}
+
+impl std::str::FromStr for Step {
+    type Err = ChoiceError;
+
+    /// `registration`, `geometry`, `compliance` (or `gravity`), `masses`, `harmonics:N`
+    /// (N 1…4), `periodic:N` (N 1…10 000), `backlash`, `residual`; surrounding blanks ignored.
+    fn from_str(text: &str) -> Result<Step, ChoiceError> {
+        let name = text.trim();
+        let bad = || ChoiceError::UnknownStep(name.to_string());
+        match name {
+            "registration" => Ok(Step::Registration),
+            "geometry" => Ok(Step::Geometry),
+            "compliance" | "gravity" => Ok(Step::Compliance),
+            "masses" => Ok(Step::Masses),
+            "backlash" => Ok(Step::Backlash),
+            "residual" => Ok(Step::ResidualModel),
+            other => {
+                if let Some(n) = other.strip_prefix("harmonics:") {
+                    match n.parse::<u8>() {
+                        Ok(n) if (1..=4).contains(&n) => Ok(Step::Harmonics(n)),
+                        _ => Err(bad()),
+                    }
+                } else if let Some(n) = other.strip_prefix("periodic:") {
+                    match n.parse::<u16>() {
+                        Ok(n) if (1..=10_000).contains(&n) => Ok(Step::Periodic(n)),
+                        _ => Err(bad()),
+                    }
+                } else {
+                    Err(bad())
+                }
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for Loss {
+    type Err = ChoiceError;
+
+    /// `huber`, `cauchy`, `none` (or `squared`), `huber:K`, `cauchy:K` with K in 0.1…100
+    /// (defaults 3 and 2.4).
+    fn from_str(text: &str) -> Result<Loss, ChoiceError> {
+        let (name, k) = match text.split_once(':') {
+            Some((n, k)) => (
+                n,
+                Some(
+                    k.parse::<f64>()
+                        .ok()
+                        .filter(|k| k.is_finite() && (0.1..=100.0).contains(k))
+                        .ok_or_else(|| ChoiceError::LossThreshold(k.to_string()))?,
+                ),
+            ),
+            None => (text, None),
+        };
+        match name {
+            "huber" => Ok(Loss::Huber(k.unwrap_or(3.0))),
+            "cauchy" => Ok(Loss::Cauchy(k.unwrap_or(2.4))),
+            "none" | "squared" => Ok(Loss::Squared),
+            other => Err(ChoiceError::UnknownLoss(other.to_string())),
+        }
+    }
+}
+
 impl Step {
     /// Name in tables.
     pub fn name(self) -> String {
