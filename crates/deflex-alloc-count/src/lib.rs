@@ -13,6 +13,7 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 thread_local! {
     static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
@@ -88,5 +89,53 @@ mod tests {
         let (_, n) = super::count(|| tx.send(()).unwrap());
         assert_eq!(worker.join().unwrap(), 1000);
         assert!(n < 10, "{n}"); // the channel hand-over itself, never the worker's 1000
+    }
+}
+
+/// The allocations one thread makes between consecutive calls of [`CycleCounter::cycle`]
+/// (a control thread's clock calls it once per cycle), filed under one of `N` classes (e.g.
+/// "page closed" / "page open"); the first `skip` calls are left out (they include the
+/// thread's start). Shared between the measured thread and the test through an `Arc`.
+#[derive(Debug)]
+pub struct CycleCounter<const N: usize> {
+    skip: u64,
+    calls: AtomicU64,
+    last: AtomicU64,
+    allocations: [AtomicU64; N],
+    cycles: [AtomicU64; N],
+}
+
+impl<const N: usize> CycleCounter<N> {
+    /// A counter that leaves out the first `skip` calls.
+    pub fn new(skip: u64) -> Self {
+        CycleCounter {
+            skip,
+            calls: AtomicU64::new(0),
+            last: AtomicU64::new(0),
+            allocations: [const { AtomicU64::new(0) }; N],
+            cycles: [const { AtomicU64::new(0) }; N],
+        }
+    }
+
+    /// Called by the measured thread once per cycle: files its allocations since the previous
+    /// call under `class` (< `N`).
+    pub fn cycle(&self, class: usize) {
+        let count = allocations();
+        if self.calls.fetch_add(1, Ordering::Relaxed) >= self.skip {
+            let previous = self.last.load(Ordering::Relaxed);
+            self.allocations[class].fetch_add(count - previous, Ordering::Relaxed);
+            self.cycles[class].fetch_add(1, Ordering::Relaxed);
+        }
+        self.last.store(count, Ordering::Relaxed);
+    }
+
+    /// Allocations filed under `class`.
+    pub fn allocations(&self, class: usize) -> u64 {
+        self.allocations[class].load(Ordering::Relaxed)
+    }
+
+    /// Cycles measured under `class`.
+    pub fn cycles(&self, class: usize) -> u64 {
+        self.cycles[class].load(Ordering::Relaxed)
     }
 }

@@ -19,23 +19,19 @@ use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{Source, session_info};
 use deflex_runtime::{Clock, RunSummary, Telemetry, WallClock};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 #[global_allocator]
 static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
 
 /// Wall time that records, at every `sleep_until` (called by the control thread only, once per
-/// cycle), the allocations its caller made since the previous call.
+/// cycle), the allocations its caller made since the previous call (from the third call on: the
+/// first two include the thread's start).
 #[derive(Clone)]
 struct CountingClock {
     inner: WallClock,
-    calls: Arc<AtomicU64>,
-    last: Arc<AtomicU64>,
-    /// Allocations in the measured cycles (from the third on: the first two include the
-    /// thread's start).
-    allocations: Arc<AtomicU64>,
-    measured: Arc<AtomicU64>,
+    counter: Arc<deflex_alloc_count::CycleCounter<1>>,
 }
 
 impl Clock for CountingClock {
@@ -43,15 +39,7 @@ impl Clock for CountingClock {
         self.inner.now()
     }
     fn sleep_until(&self, t_s: f64) {
-        let count = deflex_alloc_count::allocations();
-        let k = self.calls.fetch_add(1, Ordering::Relaxed);
-        if k >= 2 {
-            let previous = self.last.load(Ordering::Relaxed);
-            self.allocations
-                .fetch_add(count - previous, Ordering::Relaxed);
-            self.measured.fetch_add(1, Ordering::Relaxed);
-        }
-        self.last.store(count, Ordering::Relaxed);
+        self.counter.cycle(0);
         self.inner.sleep_until(t_s)
     }
 }
@@ -147,10 +135,7 @@ fn session(d: u16, bridge: bool) -> Measured {
     };
     let clock = CountingClock {
         inner: WallClock::new(),
-        calls: Arc::default(),
-        last: Arc::default(),
-        allocations: Arc::default(),
-        measured: Arc::default(),
+        counter: Arc::new(deflex_alloc_count::CycleCounter::new(2)),
     };
     let options = RuntimeOptions {
         realtime: false,
@@ -180,8 +165,8 @@ fn session(d: u16, bridge: bool) -> Measured {
     drop(listener);
     Measured {
         summary,
-        allocations: clock.allocations.load(Ordering::Relaxed),
-        measured: clock.measured.load(Ordering::Relaxed),
+        allocations: clock.counter.allocations(0),
+        measured: clock.counter.cycles(0),
         bridge,
     }
 }

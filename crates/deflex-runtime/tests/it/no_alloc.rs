@@ -15,19 +15,14 @@ use deflex_runtime::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::{Clock, WallClock};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Wall time that records, at every `sleep_until` (called by the control thread only, once per
-/// cycle), the allocations its caller made since the previous call.
+/// cycle), the allocations its caller made since the previous call (from the third call on: the
+/// first two include the thread's start).
 #[derive(Clone)]
 struct CountingClock {
     inner: WallClock,
-    calls: Arc<AtomicU64>,
-    last: Arc<AtomicU64>,
-    /// Allocations in the measured cycles (from the third on: the first two include the
-    /// thread's start).
-    allocations: Arc<AtomicU64>,
-    measured: Arc<AtomicU64>,
+    counter: Arc<deflex_alloc_count::CycleCounter<1>>,
 }
 
 impl Clock for CountingClock {
@@ -35,15 +30,7 @@ impl Clock for CountingClock {
         self.inner.now()
     }
     fn sleep_until(&self, t_s: f64) {
-        let count = deflex_alloc_count::allocations();
-        let k = self.calls.fetch_add(1, Ordering::Relaxed);
-        if k >= 2 {
-            let previous = self.last.load(Ordering::Relaxed);
-            self.allocations
-                .fetch_add(count - previous, Ordering::Relaxed);
-            self.measured.fetch_add(1, Ordering::Relaxed);
-        }
-        self.last.store(count, Ordering::Relaxed);
+        self.counter.cycle(0);
         self.inner.sleep_until(t_s)
     }
 }
@@ -68,10 +55,7 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
     let mut other_sink = telemetry.subscribe();
     let clock = CountingClock {
         inner: WallClock::new(),
-        calls: Arc::default(),
-        last: Arc::default(),
-        allocations: Arc::default(),
-        measured: Arc::default(),
+        counter: Arc::new(deflex_alloc_count::CycleCounter::new(2)),
     };
     let options = RuntimeOptions {
         realtime: false,
@@ -92,10 +76,7 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
     peers.join();
     let report = log.finish(true).unwrap();
     let received = other_sink.drain(|_| {});
-    let (allocations, measured) = (
-        clock.allocations.load(Ordering::Relaxed),
-        clock.measured.load(Ordering::Relaxed),
-    );
+    let (allocations, measured) = (clock.counter.allocations(0), clock.counter.cycles(0));
     eprintln!(
         "control thread: {allocations} allocations in {measured} measured cycles of {}; log \
          {} rows; second sink {received} samples; fault {:?}",

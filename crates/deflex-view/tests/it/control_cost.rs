@@ -18,22 +18,19 @@ use deflex_twin::cell_server::{ServeOptions, serve_cell};
 use std::net::TcpStream;
 use std::path::Path;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use tungstenite::Message;
 use tungstenite::stream::MaybeTlsStream;
 
 /// Wall time that files, at every `sleep_until` (the control thread's, once per cycle), the
-/// allocations its caller made since the previous call under the page's state then.
+/// allocations its caller made since the previous call under the page's state then (class 0:
+/// page closed, 1: open; the first two calls include the thread's start and are left out).
 #[derive(Clone)]
 struct CountingClock {
     inner: WallClock,
     page_open: Arc<AtomicBool>,
-    calls: Arc<AtomicU64>,
-    last: Arc<AtomicU64>,
-    /// [page closed, page open]: allocations and cycles measured.
-    allocations: Arc<[AtomicU64; 2]>,
-    cycles: Arc<[AtomicU64; 2]>,
+    counter: Arc<deflex_alloc_count::CycleCounter<2>>,
 }
 
 impl Clock for CountingClock {
@@ -41,16 +38,8 @@ impl Clock for CountingClock {
         self.inner.now()
     }
     fn sleep_until(&self, t_s: f64) {
-        let count = deflex_alloc_count::allocations();
-        let k = self.calls.fetch_add(1, Ordering::Relaxed);
-        // The first two calls include the thread's start.
-        if k >= 2 {
-            let open = self.page_open.load(Ordering::Relaxed) as usize;
-            let previous = self.last.load(Ordering::Relaxed);
-            self.allocations[open].fetch_add(count - previous, Ordering::Relaxed);
-            self.cycles[open].fetch_add(1, Ordering::Relaxed);
-        }
-        self.last.store(count, Ordering::Relaxed);
+        self.counter
+            .cycle(self.page_open.load(Ordering::Relaxed) as usize);
         self.inner.sleep_until(t_s)
     }
 }
@@ -158,10 +147,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     let clock = CountingClock {
         inner: WallClock::new(),
         page_open: page_open.clone(),
-        calls: Arc::default(),
-        last: Arc::default(),
-        allocations: Arc::default(),
-        cycles: Arc::default(),
+        counter: Arc::new(deflex_alloc_count::CycleCounter::new(2)),
     };
     let ring = telemetry.ring().clone();
     let view_info = telemetry.info().clone();
@@ -241,8 +227,8 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
             }
         }
     }
-    let allocations = [0, 1].map(|i| clock.allocations[i].load(Ordering::Relaxed));
-    let measured = [0, 1].map(|i| clock.cycles[i].load(Ordering::Relaxed));
+    let allocations = [0, 1].map(|i| clock.counter.allocations(i));
+    let measured = [0, 1].map(|i| clock.counter.cycles(i));
     let (n_closed, n_open) = (times[0].len(), times[1].len());
     eprintln!(
         "control thread, one session (SIMULATED cell on loopback): page closed {} allocations \
