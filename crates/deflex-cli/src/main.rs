@@ -189,7 +189,7 @@ fn main() -> ExitCode {
         Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
-        Command::Plot(args) => cmd_plot::plot(args, cli.json).map_err(CliError::command("plot")),
+        Command::Plot(args) => cmd_plot::plot(args, cli.json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
