@@ -183,9 +183,7 @@ fn main() -> ExitCode {
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
         Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json)
             .map_err(CliError::command("compensate")),
-        Command::Export(args) => {
-            cmd_export::export(args, cli.json).map_err(CliError::command("export"))
-        }
+        Command::Export(args) => cmd_export::export(args, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
         Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
