@@ -184,7 +184,7 @@ fn main() -> ExitCode {
         Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json),
         Command::Export(args) => cmd_export::export(args, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
-        Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
+        Command::Cell(args) => cell_server::cell(args, cli.json),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
         Command::Plot(args) => cmd_plot::plot(args, cli.json),
     };
