@@ -114,7 +114,7 @@ pub struct CellSession {
     /// The ground-truth log written (rows).
     pub log: (PathBuf, usize),
     /// The MCAP recording: where, and what it held (or why it failed).
-    pub recording: (PathBuf, Result<RecordReport, String>),
+    pub recording: (PathBuf, Result<RecordReport, deflex_record::RecordError>),
     /// What the live view did.
     pub view: Option<ViewStats>,
 }
@@ -258,9 +258,7 @@ pub fn cell_session(
     let rows = outcome.log.rows.len();
     let written = deflex_files::write_atomic(&log_path, outcome.log.to_csv())
         .map_err(CliError::write(&log_path));
-    let recording = recorder
-        .finish_with(written.is_ok())
-        .map_err(|e| e.to_string());
+    let recording = recorder.finish_with(written.is_ok());
     written?;
     Ok(CellSession {
         outcome,
@@ -304,7 +302,7 @@ pub fn cell(args: CellArgs, json_out: bool) -> CommandResult {
         value["mcap"] = json!({
             "path": mcap_path, "committed": ok.is_some(),
             "cycles": ok.map(|r| r.stats.recorded), "lost": ok.map(|r| r.lost),
-            "error": recording.as_ref().err(),
+            "error": recording.as_ref().err().map(ToString::to_string),
         });
         value["view"] = json!(session.view.as_ref().map(|v| json!({
             "samples": v.samples_received, "samples_lost": v.samples_lost,

@@ -86,7 +86,7 @@ pub struct RunOutcome {
     /// What the ROS 2 sensor link took and refused (`sensor.kind = "ros2"`).
     pub ros2_sensor: Option<(String, SensorCounts)>,
     /// The MCAP recording beside the log: where, and what it held (or why it failed).
-    pub recording: Option<(PathBuf, Result<RecordReport, String>)>,
+    pub recording: Option<(PathBuf, Result<RecordReport, deflex_record::RecordError>)>,
     /// What the live view did.
     pub view: Option<ViewStats>,
 }
@@ -284,7 +284,7 @@ pub fn run_session(
     let commit = finished.as_ref().is_ok_and(|s| s.summary.error.is_none());
     let recording = recorder.map(|r| {
         let path = r.path().to_path_buf();
-        (path, r.finish_with(commit).map_err(|e| e.to_string()))
+        (path, r.finish_with(commit))
     });
     let session = finished.map_err(CliError::LogWriter)?;
     let bridge = match ros2.bridge {
@@ -457,7 +457,7 @@ fn recording_json(o: &RunOutcome) -> serde_json::Value {
         "cycles": ok.map(|r| r.stats.recorded),
         "lost": ok.map(|r| r.lost),
         "bytes": ok.map(|r| r.stats.bytes),
-        "error": report.as_ref().err(),
+        "error": report.as_ref().err().map(ToString::to_string),
     })
 }
 
