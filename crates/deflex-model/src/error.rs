@@ -31,6 +31,21 @@ pub enum ModelError {
         /// What was expected.
         message: String,
     },
+    /// A DH joint of a robot file does not state one of its required fields (`alpha`, `a`, `d`,
+    /// `theta_offset`): a value left out is not silently taken as 0.
+    #[error(
+        "{path}: {joint}: missing `{field}` ({unit}); every DH [[joint]] states alpha, a, d and theta_offset (write 0.0 for a zero)"
+    )]
+    MissingDhField {
+        /// The file (or `builtin:NAME`).
+        path: String,
+        /// The joint, e.g. `joint[2] (joint_2)`.
+        joint: String,
+        /// The missing key.
+        field: &'static str,
+        /// Its unit.
+        unit: &'static str,
+    },
     /// The number of joint values does not match the robot.
     #[error(transparent)]
     QLength(#[from] QLengthError),
