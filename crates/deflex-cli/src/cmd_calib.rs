@@ -6,7 +6,7 @@ use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
 
 use deflex_files::{AtomicDir, AtomicFile};
-use deflex_load::{read_file, robot_to_toml_for};
+use deflex_load::{read_file_ignoring, robot_to_toml_for};
 use deflex_model::Robot;
 use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
 use deflex_report::calibration_tables::{
@@ -71,6 +71,11 @@ pub struct CalibrateArgs {
     /// (the disagreement is printed as a warning).
     #[arg(long)]
     pub ignore_fk_check: bool,
+    /// A column of the measurement file that deflex does not read, kept knowingly (repeatable).
+    /// Without it an unknown column is an error naming the closest known one (a typo such as
+    /// `sigma_mm` would otherwise drop the σ it meant).
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
     /// Output robot TOML (a drop-in for every other command).
     #[arg(long)]
     pub out: PathBuf,
@@ -116,6 +121,11 @@ pub struct ValidateArgs {
     /// Use the file even when its coordinates disagree with the model's forward kinematics.
     #[arg(long)]
     pub ignore_fk_check: bool,
+    /// A column of the measurement file that deflex does not read, kept knowingly (repeatable).
+    /// Without it an unknown column is an error naming the closest known one (a typo such as
+    /// `sigma_mm` would otherwise drop the σ it meant).
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
     /// Folder for PNG plots and validation.html (replaced whole, or left as it was on error).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -188,6 +198,7 @@ fn read_checked(
     data: &Path,
     tolerance_mm: f64,
     ignore: bool,
+    ignore_columns: &[String],
 ) -> Result<CheckedFile, CliError> {
     if !(tolerance_mm.is_finite()
         && (MIN_FK_TOLERANCE_M * 1e3..=MAX_FK_TOLERANCE_M * 1e3).contains(&tolerance_mm))
@@ -203,7 +214,7 @@ fn read_checked(
         )
         .into());
     }
-    let file = read_file(data, Some(robot.joint_count()), true)?;
+    let file = read_file_ignoring(data, Some(robot.joint_count()), true, ignore_columns)?;
     let check = check_geometry(
         robot,
         &file.rows,
@@ -267,6 +278,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         &args.data,
         args.fk_tolerance_mm,
         args.ignore_fk_check,
+        &args.ignore_column,
     )?;
     let t0 = std::time::Instant::now();
     let (cal, steps, stop) = identify(&args, &start, &rows, json_output).map_err(
@@ -440,6 +452,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
         &args.data,
         args.fk_tolerance_mm,
         args.ignore_fk_check,
+        &args.ignore_column,
     )?;
     let v = run_validation(&model, baseline.as_ref(), &rows)?;
     let files = match &args.out {

@@ -184,6 +184,10 @@ pub struct CalibrateGeometryArgs {
     /// Loaded-displacement measurement CSV (the `deflex calibrate` format) fitted together.
     #[arg(long)]
     pub loaded: Vec<PathBuf>,
+    /// A column of a --loaded measurement file that deflex does not read, kept knowingly
+    /// (repeatable). Without it an unknown column is an error naming the closest known one.
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
     /// Absolute CSV never fitted: set-ups the fit knows are scored as they are; new set-ups get
     /// their registration fitted on half their configurations and are scored on the rest.
     #[arg(long)]
@@ -357,7 +361,8 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     for path in &args.loaded {
         // Loaded readings are in the robot's world: checked against its forward kinematics
         // as `deflex calibrate` checks them (another robot's campaign is refused).
-        let file = deflex_load::read_file(path, Some(n), true).map_err(|e| e.to_string())?;
+        let file = deflex_load::read_file_ignoring(path, Some(n), true, &args.ignore_column)
+            .map_err(|e| e.to_string())?;
         let origin = deflex_files::shown_path(path);
         let check = deflex_stiffness::consistency::check_geometry(
             &start_robot,

@@ -56,6 +56,27 @@ pub enum DataError {
         /// What is wrong, naming the column.
         problem: RowProblem,
     },
+    /// Two rows of one load case hold different joint configurations (rows with the same
+    /// `load_case` share configuration and load: the calibration groups them as one loading).
+    #[error(
+        "{path}: load case `{load_case}` holds two joint configurations: line {first_line} has q{joint}_rad = {first_value}, line {line} has {value}; give each configuration its own load case"
+    )]
+    LoadCaseConfigurations {
+        /// File.
+        path: String,
+        /// The load case.
+        load_case: String,
+        /// Line of the load case's first row.
+        first_line: u64,
+        /// Line of the row that differs.
+        line: u64,
+        /// The first joint (1-based) whose value differs.
+        joint: usize,
+        /// Its value on the first row (rad).
+        first_value: f64,
+        /// Its value on the differing row (rad).
+        value: f64,
+    },
     /// The file has a header but no data row.
     #[error("{path}: no data rows")]
     NoRows {
@@ -78,12 +99,27 @@ pub enum HeaderProblem {
     },
     /// A column the format does not have (a typo such as `sigma_mm` would otherwise be
     /// ignored and its values replaced by the default).
-    #[error("unknown column `{name}`{}", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
+    #[error("unknown column `{name}`{}; a column kept on purpose must be named as ignored (`deflex … --ignore-column {name}`)", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
     Unknown {
         /// The column.
         name: String,
         /// The closest column of the format.
         closest: Option<String>,
+    },
+    /// A column asked to be ignored is one the format reads: ignoring it would change what the
+    /// file means (drop the column from the file instead).
+    #[error(
+        "column `{name}` is read by the format and cannot be ignored (only columns the format does not know can be)"
+    )]
+    IgnoredKnown {
+        /// The column.
+        name: String,
+    },
+    /// A column asked to be ignored is not in the file (a typo in the ignored name).
+    #[error("column `{name}` is to be ignored but the file has no such column")]
+    IgnoredAbsent {
+        /// The column.
+        name: String,
     },
     /// No `q1_rad` column.
     #[error("no joint columns: expected q1_rad, q2_rad, …")]

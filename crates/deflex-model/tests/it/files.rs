@@ -73,7 +73,8 @@ fn error_of(text: &str) -> String {
         .to_string()
 }
 
-const ONE_JOINT: &str = "name = \"r\"\n[[joint]]\na = 0.5\nalpha = 0.0\nd = 0.0\ntheta_offset = 0.0\n";
+const ONE_JOINT: &str =
+    "name = \"r\"\n[[joint]]\na = 0.5\nalpha = 0.0\nd = 0.0\ntheta_offset = 0.0\n";
 
 #[test]
 fn validation_errors_name_file_and_field() {

@@ -426,9 +426,7 @@ fn absurd_values_are_refused_with_the_field_named() {
         );
     }
     let joint = crate::dh_joint("");
-    let e = error_of(&format!(
-        "name = \"r\"\ngravity = [0.0, 0.0, nan]\n{joint}"
-    ));
+    let e = error_of(&format!("name = \"r\"\ngravity = [0.0, 0.0, nan]\n{joint}"));
     assert!(e.contains("gravity.z"), "{e}");
     let e = error_of(&format!(
         "name = \"r\"\n{joint}[tool]\nxyz = [1e300, 0.0, 0.0]\n"
