@@ -10,8 +10,8 @@ use deflex_load::{read_file_ignoring, robot_to_toml_for};
 use deflex_model::Robot;
 use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
 use deflex_report::calibration_tables::{
-    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
-    residual_summary, shift_rows, stiffness_rows,
+    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
+    iteration_rows, residual_summary, shift_rows, stiffness_rows,
 };
 use deflex_report::text_table::render_table;
 use deflex_report::validation_report::{
@@ -164,6 +164,8 @@ fn calibration_json(cal: &Calibration) -> Value {
         "center_shifts": shifts,
         "parameters": cal.parameter_labels,
         "correlation": (0..cal.correlation.nrows()).map(|i| (0..cal.correlation.ncols()).map(|j| cal.correlation[(i, j)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        "correlated_pairs": cal.correlated_pairs().iter().map(|p| json!({"first": p.first, "second": p.second, "rho": p.rho, "text": p.to_string()})).collect::<Vec<_>>(),
+        "correlation_flag_threshold": deflex_stiffness::stiffness_fit::STRONG_CORRELATION,
         "condition_number": cal.condition_number,
         "reduced_chi2": cal.reduced_chi2,
         "bic": cal.bic,
@@ -368,6 +370,10 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
     print!("{}", residual_summary(&cal));
     println!("\nParameter correlation:");
     print!("{}", correlation_table(&cal));
+    let flagged = correlated_pairs_text(&cal);
+    if !flagged.is_empty() {
+        print!("\n{flagged}");
+    }
     println!(
         "\nfile check: {} points and {} load points agree with the forward kinematics within {:.3} mm (largest {:.3} mm)",
         check.checked_points,

@@ -213,3 +213,140 @@ fn one_load_case_holding_two_configurations_is_refused_naming_lines() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A SIMULATED two-axis arm whose two vertical axes stand 30 mm apart with the tool 1 m out:
+/// a horizontal force at the tool twists both joints by nearly the same lever, so the two
+/// z-eDoFs are nearly collinear in every reading.
+const TWO_AXES: &str = "name = \"SIMULATED two-axis arm\"
+[[joint]]
+alpha = 0.0
+a = 0.0
+d = 0.0
+theta_offset = 0.0
+limits = [-3.0, 3.0]
+stiffness = { z = 1.0e5 }
+[[joint]]
+alpha = 0.0
+a = 0.03
+d = 0.0
+theta_offset = 0.0
+limits = [-3.0, 3.0]
+stiffness = { z = 2.0e5 }
+[tool]
+xyz = [1.0, 0.0, 0.0]
+";
+
+/// Its SIMULATED campaign: 8 × 3 configurations, a 100 N horizontal force at the tool along x
+/// then y, the tool measured (`deflex_stiffness::synthetic::measure`, 15 µm noise).
+fn two_axes_campaign(robot: &Robot) -> String {
+    use deflex_stiffness::MeasurementRow;
+    let mut data = deflex_model::Data::new();
+    let mut plan = Vec::new();
+    for i in 0..8 {
+        for q2 in [-0.2, 0.0, 0.2] {
+            let q = vec![-1.4 + 0.4 * f64::from(i), q2];
+            robot.forward_kinematics(&mut data, &q).unwrap();
+            let tcp: [f64; 3] = data.tcp_position().into();
+            for (axis, force) in [(0, [100.0, 0.0]), (1, [0.0, 100.0])] {
+                plan.push(MeasurementRow {
+                    load_case: format!("C{i}_{q2}_{axis}"),
+                    q_rad: q.clone(),
+                    wrench: [force[0], force[1], 0.0, 0.0, 0.0, 0.0],
+                    load_link: 2,
+                    load_point_m: tcp,
+                    point: "TCP".into(),
+                    point_link: 2,
+                    point_m: tcp,
+                    displacement_m: None,
+                    sigma_m: None,
+                    rotation_rad: None,
+                    purpose: None,
+                });
+            }
+        }
+    }
+    let rows = measure(robot, &plan, &SyntheticOptions::default()).unwrap();
+    format_rows_for(robot, &rows, &["SIMULATED nearly collinear campaign"])
+}
+
+#[test]
+fn calibrate_flags_nearly_collinear_estimates_in_text_json_and_html() {
+    let dir = folder("collinear");
+    let robot_file = dir.join("arm.toml");
+    std::fs::write(&robot_file, TWO_AXES).unwrap();
+    let robot = deflex_load::load_robot(s(&robot_file)).unwrap();
+    let data = dir.join("meas.csv");
+    std::fs::write(&data, two_axes_campaign(&robot)).unwrap();
+    let model = dir.join("m.toml");
+    let report = dir.join("report");
+    let args = [
+        "calibrate",
+        "--robot",
+        s(&robot_file),
+        "--data",
+        s(&data),
+        "--structure",
+        "fixed",
+        "--out",
+        s(&model),
+        "--report",
+        s(&report),
+    ];
+    let run = deflex(&args);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let flagged = |text: &str| {
+        text.contains("1 pair(s) of estimates correlated at |ρ| ≥ 0.95")
+            && text.contains("J1.z and J2.z correlated at ρ = -")
+    };
+    assert!(flagged(&run.stdout), "{}", run.stdout);
+    let html = std::fs::read_to_string(report.join("calibration.html")).unwrap();
+    assert!(flagged(&html), "{html}");
+    let mut json_args = vec!["--json"];
+    json_args.extend(args);
+    let run = deflex(&json_args);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let pairs = v["correlated_pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 1, "{v}");
+    assert_eq!(pairs[0]["first"], "J1.z");
+    assert_eq!(pairs[0]["second"], "J2.z");
+    assert!(pairs[0]["rho"].as_f64().unwrap() < -0.95, "{v}");
+    // The same calibration on a campaign that separates them flags nothing: the planner's
+    // campaign of the UR10e for its own eDoFs.
+    let ur = dir.join("ur.csv");
+    std::fs::write(&ur, campaign_text(&builtin("ur10e").unwrap())).unwrap();
+    let run = deflex(&[
+        "--json",
+        "calibrate",
+        "--robot",
+        "ur10e",
+        "--data",
+        s(&ur),
+        "--structure",
+        "fixed",
+        "--out",
+        s(&model),
+    ]);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let correlation = v["correlation"].as_array().unwrap();
+    let strong = correlation
+        .iter()
+        .enumerate()
+        .flat_map(|(i, row)| {
+            row.as_array()
+                .unwrap()
+                .iter()
+                .skip(i + 1)
+                .map(|r| r.as_f64().unwrap().abs())
+                .collect::<Vec<_>>()
+        })
+        .filter(|r| *r >= 0.95)
+        .count();
+    assert_eq!(
+        v["correlated_pairs"].as_array().unwrap().len(),
+        strong,
+        "{v}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
