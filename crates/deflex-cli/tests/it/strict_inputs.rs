@@ -350,3 +350,128 @@ fn calibrate_flags_nearly_collinear_estimates_in_text_json_and_html() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A full disk under `deflex run`'s log, made deterministic: the child runs with
+/// `RLIMIT_FSIZE` = 512 KiB and SIGXFSZ ignored, so the log's write past it (about 900 rows)
+/// fails with EFBIG whatever the machine's load. The session must stop there, ramping the
+/// correction out, print its summary with "log: NOT written", keep the earlier log whole and
+/// exit with status 4. The robot (simple UDP) and the sensor (Net F/T) are in this process;
+/// the sensor pushes 800 N after the robot's 250th answer, once the tare (0.2 s) is done.
+#[test]
+fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
+    use deflex_io::netft::{Calibration, NetFtSensorServer};
+    use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
+    use deflex_io::{RobotSideLink, RobotState};
+    use std::os::unix::process::CommandExt as _;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::time::{Duration, Instant};
+
+    let _turn = crate::realtime_turn();
+    let dir = folder("full-disk");
+    let (cell, robot_port, sensor_port) = crate::cli_run::cell_file(
+        &dir,
+        "simple-udp",
+        "[limits]\nramp_out_s = 0.3\n[log]\npath = \"run.csv\"\n",
+    );
+    let earlier = "# the log of an earlier run\ntime_s\n0.0\n";
+    std::fs::write(dir.join("run.csv"), earlier).unwrap();
+    let done = Arc::new(AtomicBool::new(false));
+    let answered = Arc::new(AtomicUsize::new(0));
+    let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
+    let sensor = {
+        let (done, answered) = (done.clone(), answered.clone());
+        std::thread::spawn(move || {
+            let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
+                .unwrap();
+            while !done.load(Ordering::Acquire) {
+                let _ = s.poll_request(Duration::from_micros(500));
+                let fz = if answered.load(Ordering::Acquire) < 250 {
+                    0.0
+                } else {
+                    -800.0
+                };
+                let _ = s.send_sample(&[0.0, 0.0, fz, 0.0, 0.0, 0.0], 0);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    };
+    let robot = {
+        let (done, answered) = (done.clone(), answered.clone());
+        std::thread::spawn(move || {
+            let mut ep =
+                SimpleUdpRobotEndpoint::new("127.0.0.1:0", ([127, 0, 0, 1], robot_port).into())
+                    .unwrap();
+            let mut answers = Vec::new();
+            while !done.load(Ordering::Acquire) {
+                let _ = ep.send_state(&RobotState::with_joints(&q));
+                if let Ok(Some(c)) = ep.receive_correction(Duration::from_millis(20)) {
+                    answers.push(c.correction.to_array());
+                    answered.store(answers.len(), Ordering::Release);
+                }
+                std::thread::sleep(Duration::from_millis(4));
+            }
+            answers
+        })
+    };
+    let mut command = Command::new(env!("CARGO_BIN_EXE_deflex"));
+    command.args(["run", "--config", s(&cell), "--quiet"]);
+    // SAFETY: between fork and exec only async-signal-safe calls (setrlimit, signal) on the
+    // child's own limits and dispositions; an ignored SIGXFSZ stays ignored across exec.
+    unsafe {
+        command.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 1 << 19,
+                rlim_max: 1 << 19,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let started = Instant::now();
+    let out = command.output().unwrap();
+    done.store(true, Ordering::Release);
+    let answers = robot.join().unwrap();
+    sensor.join().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{text}\n{err}");
+    assert!(
+        err.contains("run.csv cannot be written (File too large") && err.contains("ramps out"),
+        "{err}"
+    );
+    assert!(
+        text.contains("phase: stopped (correction ramped out)")
+            && text.contains("log: NOT written")
+            && text.contains("run.csv keeps what it held"),
+        "{text}"
+    );
+    // The session ran past the force (the log held 512 KiB of rows), the correction was
+    // active, and the robot's last answers brought it back to zero.
+    assert!(answers.len() > 500, "{} answers", answers.len());
+    let peak = answers.iter().map(|c| c[2].abs()).fold(0.0, f64::max);
+    assert!(peak > 1e-4, "the correction was active: {peak}");
+    let last = answers.last().unwrap();
+    assert!(
+        last.iter().all(|v| v.abs() < 1e-9),
+        "not ramped out: {last:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("run.csv")).unwrap(),
+        earlier
+    );
+    // No temporary of the failed log is left beside it.
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        !names.iter().any(|n| n.contains(".tmp-")),
+        "{names:?} ({:.1} s)",
+        started.elapsed().as_secs_f64()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
