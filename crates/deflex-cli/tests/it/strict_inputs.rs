@@ -475,3 +475,95 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every entry of `dir` (recursively) with its size and modification time: what "touching
+/// nothing" is checked against.
+fn snapshot(dir: &Path) -> Vec<(String, u64, std::time::SystemTime)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let entry = entry.unwrap();
+            let meta = std::fs::symlink_metadata(entry.path()).unwrap();
+            if meta.is_dir() {
+                stack.push(entry.path());
+            }
+            out.push((
+                entry.path().display().to_string(),
+                meta.len(),
+                meta.modified().unwrap(),
+            ));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Two processes on one output folder (issue 18, item 2): while this test process holds the
+/// folder's lock (`.map.lock`, `flock`ed as deflex-files does, its process id inside), the real
+/// binary writing `map --out map` is refused with "being written by another deflex run
+/// (process N)" and touches nothing; once the lock is released, the same run succeeds.
+#[test]
+fn a_folder_being_written_by_another_process_is_refused_then_written_once_released() {
+    use std::io::Write as _;
+    use std::os::fd::AsRawFd as _;
+    let dir = folder("lock");
+    let out = dir.join("map");
+    let map = [
+        "map",
+        "--robot",
+        "tx200",
+        "--step",
+        "100mm",
+        "--out",
+        s(&out),
+    ];
+    // An earlier whole result.
+    let run = deflex(&map);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let before = snapshot(&dir);
+    let mut lock = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(dir.join(".map.lock"))
+        .unwrap();
+    writeln!(lock, "{}", std::process::id()).unwrap();
+    // SAFETY: flock on a descriptor this test owns.
+    let locked = unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) };
+    assert_eq!(locked, 0, "{}", std::io::Error::last_os_error());
+    let held = snapshot(&dir);
+    let run = deflex(&map);
+    assert_eq!(run.code, Some(1), "{}{}", run.stdout, run.stderr);
+    assert!(
+        run.stderr.contains(&format!(
+            "is being written by another deflex run (process {}",
+            std::process::id()
+        )) && run.stderr.contains("nothing was written"),
+        "{}",
+        run.stderr
+    );
+    assert_eq!(snapshot(&dir), held, "the refused run touched the folder");
+    // Released (as the system releases it when the holder ends, however it ends): the second
+    // run writes its whole result.
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_UN) }, 0);
+    drop(lock);
+    let run = deflex(&map);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let after = snapshot(&dir);
+    assert_ne!(after, before, "the released run wrote its result");
+    assert_eq!(
+        after.iter().map(|e| &e.0).collect::<Vec<_>>(),
+        before
+            .iter()
+            .chain(held.iter().filter(|e| e.0.ends_with(".map.lock")))
+            .map(|e| &e.0)
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect::<Vec<_>>(),
+        "the same files, no temporary left"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
