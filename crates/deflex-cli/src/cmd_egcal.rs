@@ -268,6 +268,18 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
     if args.every == 0 || args.every > 1_000_000 {
         return Err(format!("--every: expected 1…1000000, got {}", args.every));
     }
+    // Import writes only labels its readers read back the same: a label they would not is
+    // refused, not rewritten (a silently changed set-up name would no longer match the robot
+    // file's [[setup]]).
+    for (flag, label) in [("--setup", &args.setup), ("--target", &args.target)] {
+        deflex_absolute::data::check_label(label).map_err(|problem| {
+            format!(
+                "{flag} \"{}\": {problem}; import refuses it (labels are not rewritten): give a label of 1 to {} bytes without control characters, outer white space or a leading `#`",
+                deflex_files::shown(label),
+                limits::MAX_LABEL_BYTES
+            )
+        })?;
+    }
     let options = ImportOptions {
         setup: args.setup.clone(),
         target: args.target.clone(),

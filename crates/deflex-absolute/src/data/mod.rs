@@ -28,6 +28,59 @@ use std::collections::HashMap;
 mod parse;
 pub use parse::{AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute};
 
+/// Why a set-up, target or configuration label cannot be written to an absolute file and read
+/// back the same by [`parse_absolute`] (which trims cells, takes `#` at a line's start for a
+/// comment and refuses empty and long labels).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LabelProblem {
+    /// Nothing to read back: the reader refuses an empty label.
+    #[error("is empty")]
+    Empty,
+    /// Longer than [`limits::MAX_LABEL_BYTES`].
+    #[error("is {bytes} bytes long; the reader takes at most {max}")]
+    TooLong {
+        /// Its length (UTF-8 bytes).
+        bytes: usize,
+        /// The bound.
+        max: usize,
+    },
+    /// White space at either end: the reader trims it, so another label would come back.
+    #[error("starts or ends with white space, which the reader trims")]
+    Whitespace,
+    /// A leading `#`: the row would be read as a comment and vanish.
+    #[error("starts with `#`, which would make its rows comments")]
+    Comment,
+    /// A control character (a line break, an escape, …): shown escaped, never written.
+    #[error("holds the control character U+{code:04X}")]
+    Control {
+        /// Its code point.
+        code: u32,
+    },
+}
+
+/// Whether `label` reads back from an absolute file exactly as written (see [`LabelProblem`]).
+pub fn check_label(label: &str) -> Result<(), LabelProblem> {
+    if label.is_empty() {
+        return Err(LabelProblem::Empty);
+    }
+    if label.len() > limits::MAX_LABEL_BYTES {
+        return Err(LabelProblem::TooLong {
+            bytes: label.len(),
+            max: limits::MAX_LABEL_BYTES,
+        });
+    }
+    if let Some(c) = label.chars().find(|c| c.is_control()) {
+        return Err(LabelProblem::Control { code: u32::from(c) });
+    }
+    if label.trim() != label {
+        return Err(LabelProblem::Whitespace);
+    }
+    if label.starts_with('#') {
+        return Err(LabelProblem::Comment);
+    }
+    Ok(())
+}
+
 /// Standard deviation of an absolute position component when the file gives none (m): a laser
 /// tracker at 2–4 m (the UR10 data set: 16–23 µm median).
 pub const DEFAULT_ABSOLUTE_SIGMA_M: f64 = 25e-6;

@@ -567,3 +567,79 @@ fn a_folder_being_written_by_another_process_is_refused_then_written_once_releas
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `deflex import` writes only labels its own reader reads back the same (issue 18, item 6):
+/// hostile `--setup`/`--target` labels are refused (not rewritten), naming the flag and why, with
+/// nothing written; every label it accepts, however odd, reads back exactly.
+#[test]
+fn import_writes_only_labels_its_reader_reads_back() {
+    let dir = folder("import-labels");
+    let series = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../deflex-absolute/tests/data/ur10-tracker/Series_A");
+    let out = dir.join("a.csv");
+    let import = |setup: &str, target: &str| {
+        deflex(&[
+            "import",
+            "ur10-tracker",
+            "--series",
+            s(&series),
+            "--every",
+            "50",
+            "--setup",
+            setup,
+            "--target",
+            target,
+            "--out",
+            s(&out),
+        ])
+    };
+    let long = "x".repeat(201);
+    let long_utf8 = "é".repeat(101); // 202 bytes
+    for (setup, target, flag, why) in [
+        ("", "tmac", "--setup", "is empty"),
+        (" A", "tmac", "--setup", "white space"),
+        ("A", "tmac\t", "--target", "U+0009"),
+        ("#1", "tmac", "--setup", "leading `#`"),
+        ("A\nB", "tmac", "--setup", "U+000A"),
+        ("A\u{1b}[2J", "tmac", "--setup", "U+001B"),
+        ("A", long.as_str(), "--target", "201 bytes"),
+        (long_utf8.as_str(), "tmac", "--setup", "202 bytes"),
+    ] {
+        let run = import(setup, target);
+        assert_eq!(run.code, Some(1), "{setup:?}/{target:?}: {}", run.stdout);
+        assert!(
+            run.stderr.contains(flag)
+                && run.stderr.contains(why)
+                && run
+                    .stderr
+                    .contains("import refuses it (labels are not rewritten)"),
+            "{setup:?}/{target:?}: {}",
+            run.stderr
+        );
+        assert!(
+            !run.stderr.contains('\u{1b}'),
+            "raw escape: {:?}",
+            run.stderr
+        );
+        assert!(!out.exists(), "{setup:?}/{target:?} wrote a file");
+    }
+    let edge = "é".repeat(100); // 200 bytes: the longest label the reader takes
+    for (setup, target) in [
+        ("A", "tmac"),
+        ("set-up, east \"wall\"", "T-Mac #2"),
+        (edge.as_str(), "Ωµ° probe"),
+    ] {
+        let run = import(setup, target);
+        assert_eq!(run.code, Some(0), "{setup:?}: {}{}", run.stdout, run.stderr);
+        let text = std::fs::read_to_string(&out).unwrap();
+        let rows = deflex_absolute::data::parse_absolute(&text, "a.csv", 6).unwrap();
+        assert!(rows.len() > 1, "{}", rows.len());
+        assert!(
+            rows.iter().all(|r| r.setup == setup && r.target == target),
+            "{setup:?}/{target:?} read back as {:?}/{:?}",
+            rows[0].setup,
+            rows[0].target
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
