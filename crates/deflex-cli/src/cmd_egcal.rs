@@ -7,7 +7,7 @@ use crate::args::{CliResult, print_json, robot};
 use clap::{Args, Subcommand, ValueEnum};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::{
-    AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute,
+    AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute_ignoring,
 };
 use deflex_absolute::fit::{FitOptions, HeldOutProtocol, Step, fit, session_groups};
 use deflex_absolute::params::EgModel;
@@ -79,10 +79,16 @@ fn check_plausible_fit(
     ))
 }
 
-/// Read an absolute measurement file.
-pub fn read_absolute(path: &Path, joints: usize) -> Result<Vec<AbsoluteRow>, String> {
+/// Read an absolute measurement file, skipping the columns named in `ignored` (unknown to the
+/// format, kept knowingly: `--ignore-column`).
+pub fn read_absolute(
+    path: &Path,
+    joints: usize,
+    ignored: &[String],
+) -> Result<Vec<AbsoluteRow>, String> {
     let text = read_bounded(path, limits::MAX_FILE_BYTES)?;
-    parse_absolute(&text, &path.display().to_string(), joints).map_err(|e| e.to_string())
+    parse_absolute_ignoring(&text, &path.display().to_string(), joints, ignored)
+        .map_err(|e| e.to_string())
 }
 
 /// The single `measurements_*.csv` of a series folder (or the file itself).
@@ -184,8 +190,9 @@ pub struct CalibrateGeometryArgs {
     /// Loaded-displacement measurement CSV (the `deflex calibrate` format) fitted together.
     #[arg(long)]
     pub loaded: Vec<PathBuf>,
-    /// A column of a --loaded measurement file that deflex does not read, kept knowingly
-    /// (repeatable). Without it an unknown column is an error naming the closest known one.
+    /// A column of the --data, --test-data or --loaded files that deflex does not read, kept
+    /// knowingly (repeatable). Without it an unknown column is an error naming the closest known
+    /// one.
     #[arg(long = "ignore-column", value_name = "NAME")]
     pub ignore_column: Vec<String>,
     /// Absolute CSV never fitted: set-ups the fit knows are scored as they are; new set-ups get
@@ -261,6 +268,10 @@ pub struct PredictArgs {
     /// Output CSV: each row with predicted_x_m … and, when measured, the error.
     #[arg(long)]
     pub out: PathBuf,
+    /// A column of the measurement file(s) that deflex does not read, kept knowingly
+    /// (repeatable). Without it an unknown column is an error naming the closest known one.
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
 }
 
 pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
@@ -351,8 +362,15 @@ fn parse_loss(text: &str) -> Result<Loss, String> {
     text.parse().map_err(|e| format!("--loss: {e}"))
 }
 
-fn read_all(paths: &[PathBuf], joints: usize) -> Result<Vec<Vec<AbsoluteRow>>, String> {
-    paths.iter().map(|p| read_absolute(p, joints)).collect()
+fn read_all(
+    paths: &[PathBuf],
+    joints: usize,
+    ignored: &[String],
+) -> Result<Vec<Vec<AbsoluteRow>>, String> {
+    paths
+        .iter()
+        .map(|p| read_absolute(p, joints, ignored))
+        .collect()
 }
 
 pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CliResult {
@@ -367,8 +385,8 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     )?;
     let start_robot = robot(&args.robot)?;
     let n = start_robot.joint_count();
-    let series = read_all(&args.data, n)?;
-    let test = read_all(&args.test_data, n)?;
+    let series = read_all(&args.data, n, &args.ignore_column)?;
+    let test = read_all(&args.test_data, n, &args.ignore_column)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
         // Loaded readings are in the robot's world: checked against its forward kinematics
@@ -517,7 +535,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
 
 pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
     let (model, _) = load_model(&args.robot)?;
-    let rows = read_absolute(&args.data, model.robot.joint_count())?;
+    let rows = read_absolute(&args.data, model.robot.joint_count(), &args.ignore_column)?;
     let prediction =
         predict::predict_rows(&model, rows, args.fit_setup).map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, report::prediction::prediction_csv(&prediction))

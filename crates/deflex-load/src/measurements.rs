@@ -19,8 +19,8 @@ pub fn read_file(
     read_file_ignoring(path, joint_count, require_displacement, &[])
 }
 
-/// [`read_file`], skipping the columns named in `ignored` (each must be in the file and unknown
-/// to the format: `deflex_measurements::parse_file_ignoring`).
+/// [`read_file`], skipping the columns named in `ignored` (columns unknown to the format:
+/// `deflex_measurements::parse_file_ignoring`).
 pub fn read_file_ignoring(
     path: &Path,
     joint_count: Option<usize>,

@@ -115,12 +115,7 @@ pub enum HeaderProblem {
         /// The column.
         name: String,
     },
-    /// A column asked to be ignored is not in the file (a typo in the ignored name).
-    #[error("column `{name}` is to be ignored but the file has no such column")]
-    IgnoredAbsent {
-        /// The column.
-        name: String,
-    },
+
     /// No `q1_rad` column.
     #[error("no joint columns: expected q1_rad, q2_rad, …")]
     NoJointColumns,

@@ -60,7 +60,10 @@ pub use bounds::{
 pub use error::{DataError, HeaderProblem, RowProblem, RowValueError, SigmaColumn};
 pub use format::{format_rows, format_rows_for, format_rows_with_header};
 pub use header::FileHeader;
-pub use parse::{check_joint_columns, parse_file, parse_file_ignoring, parse_rows};
+pub use parse::{
+    check_joint_columns, closest_column, is_joint_column, parse_file, parse_file_ignoring,
+    parse_rows,
+};
 pub use row::{
     DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, MeasuredRotation, MeasurementFile, MeasurementRow,
     load_case_count,

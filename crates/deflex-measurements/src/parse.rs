@@ -57,8 +57,10 @@ pub fn parse_file(
     parse_file_ignoring(text, origin, require_displacement, &[])
 }
 
-/// [`parse_file`], skipping the columns named in `ignored` (each must be in the file and unknown
-/// to the format: a user's own extra column, kept knowingly).
+/// [`parse_file`], skipping the columns named in `ignored` (a user's own extra columns, kept
+/// knowingly; a column the format reads cannot be ignored). A name the file does not have is
+/// not an error: one list serves every file of a command, and a misspelt name leaves the
+/// column it meant unknown, which is one.
 pub fn parse_file_ignoring(
     text: &str,
     origin: &str,
@@ -213,25 +215,14 @@ impl Columns {
                     name: name.chars().take(80).collect(),
                 });
             }
-            if !index.contains_key(name.as_str()) {
-                return Err(HeaderProblem::IgnoredAbsent {
-                    name: name.chars().take(80).collect(),
-                });
-            }
         }
         if let Some(name) = headers
             .iter()
             .find(|h| !known.iter().any(|k| k == h) && !ignored.iter().any(|i| i == h))
         {
-            let closest = known
-                .iter()
-                .map(|k| (edit_distance(k, name), k))
-                .filter(|(d, _)| *d <= 3)
-                .min_by_key(|(d, _)| *d)
-                .map(|(_, k)| k.clone());
             return Err(HeaderProblem::Unknown {
                 name: name.chars().take(80).collect(),
-                closest,
+                closest: closest_column(name, &known),
             });
         }
         Ok(Columns {
@@ -404,8 +395,18 @@ impl Cells<'_> {
     }
 }
 
+/// The column of `known` closest to `name` (a typo's likely meaning), within 3 edits.
+pub fn closest_column(name: &str, known: &[String]) -> Option<String> {
+    known
+        .iter()
+        .map(|k| (edit_distance(k, name), k))
+        .filter(|(d, _)| *d <= 3)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k.clone())
+}
+
 /// `q7_rad` and the like: a joint column (of this robot or another), never an ignorable one.
-fn is_joint_column(name: &str) -> bool {
+pub fn is_joint_column(name: &str) -> bool {
     name.strip_prefix('q')
         .and_then(|rest| rest.strip_suffix("_rad"))
         .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))

@@ -152,10 +152,7 @@ fn an_extra_column_is_an_error_unless_ignored_by_name() {
         let err = parse_file_ignoring(&text, "t.csv", true, &[name.to_string()])
             .unwrap_err()
             .to_string();
-        assert!(
-            err.contains(name) && err.contains(expected),
-            "{name}: {err}"
-        );
+        assert!(err.contains(expected), "{name}: {err}");
     }
 }
 

@@ -26,7 +26,9 @@
 use std::collections::HashMap;
 
 mod parse;
-pub use parse::{AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute};
+pub use parse::{
+    AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute, parse_absolute_ignoring,
+};
 
 /// Why a set-up, target or configuration label cannot be written to an absolute file and read
 /// back the same by [`parse_absolute`] (which trims cells, takes `#` at a line's start for a
@@ -427,7 +429,18 @@ mod tests {
             err.contains("6 joint columns") && err.contains("7 joints"),
             "{err}"
         );
-        let err = parse_absolute(&text.replacen("ry_rad", "ryy", 1), "t.csv", 6)
+        // A renamed column is an unknown one, named with the column it most likely meant;
+        // ignored knowingly, the orientation group it left is incomplete.
+        let renamed = text.replacen("ry_rad", "ry_rod", 1);
+        let err = parse_absolute(&renamed, "t.csv", 6)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("unknown column `ry_rod` (did you mean `ry_rad`?)")
+                && err.contains("--ignore-column ry_rod"),
+            "{err}"
+        );
+        let err = parse_absolute_ignoring(&renamed, "t.csv", 6, &["ry_rod".to_string()])
             .unwrap_err()
             .to_string();
         assert!(err.contains("go together"), "{err}");
@@ -439,6 +452,65 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(err.contains("t.csv:3") && err.contains("setup"), "{err}");
+    }
+
+    #[test]
+    fn an_extra_column_is_an_error_unless_ignored_and_known_ones_cannot_be() {
+        let rows = sample();
+        let text = format_absolute(&rows, &[]);
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        lines[0] += ",operator";
+        for line in &mut lines[1..] {
+            *line += ",ann";
+        }
+        let extra = lines.join("\n") + "\n";
+        let err = parse_absolute(&extra, "t.csv", 6).unwrap_err().to_string();
+        assert!(
+            err.contains("t.csv: header: unknown column `operator`"),
+            "{err}"
+        );
+        let mut back = parse_absolute_ignoring(&extra, "t.csv", 6, &["operator".into()]).unwrap();
+        for r in &mut back {
+            r.line = 0;
+        }
+        assert_eq!(back, rows);
+        for known in ["sigma_m", "q3_rad", "q9_rad", "approach_q1_rad", "time_s"] {
+            let err = parse_absolute_ignoring(&extra, "t.csv", 6, &[known.into()])
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("cannot be ignored"), "{known}: {err}");
+        }
+        let dup = text.replacen("setup,target", "setup,target,target", 1);
+        let err = parse_absolute(&dup, "t.csv", 6).unwrap_err().to_string();
+        assert!(err.contains("column `target` appears twice"), "{err}");
+    }
+
+    #[test]
+    fn labels_that_would_not_read_back_are_named() {
+        assert_eq!(check_label("A"), Ok(()));
+        assert_eq!(check_label("T-Mac #2, \"east\""), Ok(()));
+        assert_eq!(check_label(""), Err(LabelProblem::Empty));
+        assert_eq!(check_label(" A"), Err(LabelProblem::Whitespace));
+        assert_eq!(check_label("#A"), Err(LabelProblem::Comment));
+        assert_eq!(
+            check_label("A\u{1b}"),
+            Err(LabelProblem::Control { code: 0x1b })
+        );
+        assert_eq!(
+            check_label(&"é".repeat(101)),
+            Err(LabelProblem::TooLong {
+                bytes: 202,
+                max: limits::MAX_LABEL_BYTES
+            })
+        );
+        // What it accepts, the reader reads back the same.
+        let mut rows = sample();
+        for label in ["T-Mac #2, \"east\"", &"é".repeat(100), "Ωµ°"] {
+            assert_eq!(check_label(label), Ok(()));
+            rows[0].setup = label.to_string();
+            let back = parse_absolute(&format_absolute(&rows, &[]), "t.csv", 6).unwrap();
+            assert_eq!(back[0].setup, label);
+        }
     }
 
     #[test]

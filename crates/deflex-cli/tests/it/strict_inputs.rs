@@ -643,3 +643,88 @@ fn import_writes_only_labels_its_reader_reads_back() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Absolute files (`calibrate-geometry`, `predict`, `register`) follow the same header rule: an
+/// extra column is refused unless named with `--ignore-column`. And `calibrate-geometry` flags
+/// every pair of estimates correlated at |ρ| ≥ 0.95 in its text, JSON and HTML report: on a
+/// sparse subset of the real UR10 series (every 10th reading) the fit has such pairs.
+#[test]
+fn calibrate_geometry_takes_ignore_column_and_flags_correlated_estimates() {
+    let dir = folder("egcal");
+    let series = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../deflex-absolute/tests/data/ur10-tracker/Series_A");
+    let plain = dir.join("a.csv");
+    let run = deflex(&[
+        "import",
+        "ur10-tracker",
+        "--series",
+        s(&series),
+        "--every",
+        "10",
+        "--setup",
+        "A",
+        "--out",
+        s(&plain),
+    ]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let data = dir.join("b.csv");
+    std::fs::write(
+        &data,
+        with_column(&std::fs::read_to_string(&plain).unwrap(), "operator", "ann"),
+    )
+    .unwrap();
+    let model = dir.join("m.toml");
+    let report = dir.join("report");
+    let args = [
+        "calibrate-geometry",
+        "--robot",
+        "ur10",
+        "--data",
+        s(&data),
+        "--folds",
+        "0",
+        "--out",
+        s(&model),
+        "--report",
+        s(&report),
+    ];
+    let run = deflex(&args);
+    assert_eq!(run.code, Some(1), "{}{}", run.stdout, run.stderr);
+    assert!(
+        run.stderr
+            .contains("b.csv: header: unknown column `operator`"),
+        "{}",
+        run.stderr
+    );
+    assert!(!model.exists() && !report.exists());
+    let mut ignoring = args.to_vec();
+    ignoring.extend(["--ignore-column", "operator"]);
+    let run = deflex(&ignoring);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let text = run.stdout;
+    let mut json_args = vec!["--json"];
+    json_args.extend(&ignoring);
+    let run = deflex(&json_args);
+    assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let pairs = v["correlated_pairs"].as_array().unwrap();
+    assert!(!pairs.is_empty(), "{v}");
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    let heading = format!(
+        "WARNING: {} pair(s) of estimates correlated at |ρ| ≥ 0.95",
+        pairs.len()
+    );
+    assert!(text.contains(&heading), "{text}");
+    assert!(html.contains(&heading), "{html}");
+    for pair in pairs {
+        let rho = pair["rho"].as_f64().unwrap();
+        assert!(rho.abs() >= 0.95, "{pair}");
+        let line = format!(
+            "{} / {}: {rho:+.3}",
+            pair["first"].as_str().unwrap(),
+            pair["second"].as_str().unwrap()
+        );
+        assert!(text.contains(&line), "{line}: {text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
