@@ -58,24 +58,13 @@ pub enum DataError {
     },
     /// Two rows of one load case hold different joint configurations (rows with the same
     /// `load_case` share configuration and load: the calibration groups them as one loading).
-    #[error(
-        "{path}: load case `{load_case}` holds two joint configurations: line {first_line} has q{joint}_rad = {first_value}, line {line} has {value}; give each configuration its own load case"
-    )]
+    #[error("{path}: {conflict}")]
     LoadCaseConfigurations {
         /// File.
         path: String,
-        /// The load case.
-        load_case: String,
-        /// Line of the load case's first row.
-        first_line: u64,
-        /// Line of the row that differs.
-        line: u64,
-        /// The first joint (1-based) whose value differs.
-        joint: usize,
-        /// Its value on the first row (rad).
-        first_value: f64,
-        /// Its value on the differing row (rad).
-        value: f64,
+        /// The load case and the two rows (boxed: every error of the workspace carries this
+        /// type, so its size stays that of its common variants).
+        conflict: Box<LoadCaseConflict>,
     },
     /// The file has a header but no data row.
     #[error("{path}: no data rows")]
@@ -83,6 +72,26 @@ pub enum DataError {
         /// File.
         path: String,
     },
+}
+
+/// Two rows of one load case with different joint values.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error(
+    "load case `{load_case}` holds two joint configurations: line {first_line} has q{joint}_rad = {first_value}, line {line} has {value}; give each configuration its own load case"
+)]
+pub struct LoadCaseConflict {
+    /// The load case.
+    pub load_case: String,
+    /// Line of the load case's first row.
+    pub first_line: u64,
+    /// Line of the row that differs.
+    pub line: u64,
+    /// The first joint (1-based) whose value differs.
+    pub joint: usize,
+    /// Its value on the first row (rad).
+    pub first_value: f64,
+    /// Its value on the differing row (rad).
+    pub value: f64,
 }
 
 /// What is wrong with a file's column names.

@@ -57,7 +57,9 @@ pub use bounds::{
     MAX_LABEL_CHARS, MAX_MOMENT_NM, MAX_ROTATION_RAD, MAX_ROWS, MAX_SIGMA_M, MAX_SIGMA_RAD,
     MIN_SIGMA_M, MIN_SIGMA_RAD, check_row_values,
 };
-pub use error::{DataError, HeaderProblem, RowProblem, RowValueError, SigmaColumn};
+pub use error::{
+    DataError, HeaderProblem, LoadCaseConflict, RowProblem, RowValueError, SigmaColumn,
+};
 pub use format::{format_rows, format_rows_for, format_rows_with_header};
 pub use header::FileHeader;
 pub use parse::{

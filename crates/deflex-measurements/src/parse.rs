@@ -9,8 +9,8 @@ use crate::bounds::{
     column_bound,
 };
 use crate::{
-    DataError, FileHeader, HeaderProblem, MAX_LABEL_CHARS, MAX_ROWS, MeasuredRotation,
-    MeasurementFile, MeasurementRow, RowProblem, SigmaColumn,
+    DataError, FileHeader, HeaderProblem, LoadCaseConflict, MAX_LABEL_CHARS, MAX_ROWS,
+    MeasuredRotation, MeasurementFile, MeasurementRow, RowProblem, SigmaColumn,
 };
 use std::collections::HashMap;
 
@@ -138,12 +138,14 @@ fn check_load_case_configurations(
         if let Some(k) = (0..row.q_rad.len()).find(|&k| row.q_rad[k] != reference.q_rad[k]) {
             return Err(DataError::LoadCaseConfigurations {
                 path: origin.to_string(),
-                load_case: row.load_case.chars().take(80).collect(),
-                first_line: lines[j],
-                line: lines[i],
-                joint: k + 1,
-                first_value: reference.q_rad[k],
-                value: row.q_rad[k],
+                conflict: Box::new(LoadCaseConflict {
+                    load_case: row.load_case.chars().take(80).collect(),
+                    first_line: lines[j],
+                    line: lines[i],
+                    joint: k + 1,
+                    first_value: reference.q_rad[k],
+                    value: row.q_rad[k],
+                }),
             });
         }
     }

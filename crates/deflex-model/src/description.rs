@@ -338,21 +338,20 @@ fn dh_geometry(
         // Strict: a DH row states its four numbers (β, the Hayati tilt, is optional and 0 in
         // every published table). A left-out `alpha` read as 0 turns a perpendicular axis into
         // a parallel one without a word.
-        let required = |value: Option<f64>, field: &'static str, unit: &'static str| {
+        let required = |value: Option<f64>, field: &'static str| {
             value.ok_or_else(|| ModelError::MissingDhField {
                 path: origin.to_string(),
                 joint: joint.clone(),
                 field,
-                unit,
             })
         };
         let row = DhParams {
-            alpha: required(section.alpha, "alpha", "rad")?,
-            a: required(section.a, "a", "m")?,
-            d: required(section.d, "d", "m")?,
+            alpha: required(section.alpha, "alpha")?,
+            a: required(section.a, "a")?,
+            d: required(section.d, "d")?,
             beta: section.beta.unwrap_or(0.0),
         };
-        required(section.theta_offset, "theta_offset", "rad")?;
+        required(section.theta_offset, "theta_offset")?;
         // Bounds before trigonometry: a twist of 1e308 rad has no meaningful sine.
         check_dh_row(&row, &joint, &invalid)?;
         rows.push(row);
