@@ -107,6 +107,12 @@ pub enum CliError {
     /// An output path refused, or that could not be written, named with its flag.
     #[error(transparent)]
     Output(#[from] deflex_files::OutputError),
+    /// An offline compensation that could not be made or written.
+    #[error(transparent)]
+    Compensate(#[from] crate::cmd_compensate::CompensateCommandError),
+    /// A calibrated robot that could not be exported.
+    #[error(transparent)]
+    Export(#[from] crate::cmd_export::ExportCommandError),
     /// A command that still reports its failures as text (the controller, compensation and
     /// elasto-geometric commands, converted by their own tracks).
     #[error("{message}")]
