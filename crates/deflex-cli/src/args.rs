@@ -4,11 +4,6 @@ use crate::error::{CliError, UsageError};
 use deflex_load::load_robot;
 use deflex_model::Robot;
 
-/// Result of the commands that still report text (`run`, `cell`, `compensate`,
-/// `calibrate-geometry`, converted by their own tracks); the others return
-/// [`crate::error::CommandResult`].
-pub type CliResult = Result<(), String>;
-
 /// A numeric flag within `[lo, hi]` (NaN and infinities refused), or an error naming the flag,
 /// the bounds and the value.
 pub fn check_flag(

@@ -3,13 +3,14 @@
 //! prediction tables in `deflex_report::absolute_report`, shared with the Python package; the
 //! files here).
 
-use crate::args::{CliResult, print_json, robot};
+use crate::args::{print_json, robot};
+use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, Subcommand, ValueEnum};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::{
     AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute_ignoring,
 };
-use deflex_absolute::fit::{FitOptions, HeldOutProtocol, Step, fit, session_groups};
+use deflex_absolute::fit::{ChoiceError, FitOptions, HeldOutProtocol, Step, fit, session_groups};
 use deflex_absolute::params::EgModel;
 use deflex_absolute::predict;
 use deflex_absolute::solve::Loss;
@@ -25,8 +26,8 @@ const MAX_TERMS_BYTES: u64 = 64 << 20;
 
 /// Read a text file of at most `limit` bytes (a regular file, counted while reading), naming
 /// it in errors.
-pub fn read_bounded(path: &Path, limit: u64) -> Result<String, String> {
-    deflex_files::read_bounded(path, limit).map_err(|e| e.to_string())
+pub fn read_bounded(path: &Path, limit: u64) -> Result<String, CliError> {
+    Ok(deflex_files::read_bounded(path, limit)?)
 }
 
 /// Readings that differ in set-up, target, configuration or measured position (bit for bit):
@@ -56,7 +57,7 @@ fn check_plausible_fit(
     result: &deflex_absolute::outcome::FitResult,
     robot: &str,
     data: &[PathBuf],
-) -> Result<(), String> {
+) -> Result<(), CliError> {
     let fitted: Vec<f64> = result
         .residuals
         .iter()
@@ -70,13 +71,12 @@ fn check_plausible_fit(
     if rms.is_finite() && rms <= MAX_PLAUSIBLE_RMS_M {
         return Ok(());
     }
-    let files: Vec<String> = data.iter().map(|p| deflex_files::shown_path(p)).collect();
-    Err(format!(
-        "{}: robot \"{robot}\" leaves the fitted readings {:.1} mm RMS from its prediction after calibration (more than {:.0} mm): these are not this robot's readings (another robot's data? give it with --robot); nothing written",
-        files.join(", "),
-        rms * 1e3,
-        MAX_PLAUSIBLE_RMS_M * 1e3
-    ))
+    Err(CliError::ImplausibleFit {
+        files: shown_paths(data),
+        robot: robot.to_string(),
+        rms_mm: rms * 1e3,
+        limit_mm: MAX_PLAUSIBLE_RMS_M * 1e3,
+    })
 }
 
 /// Read an absolute measurement file, skipping the columns named in `ignored` (unknown to the
@@ -85,18 +85,34 @@ pub fn read_absolute(
     path: &Path,
     joints: usize,
     ignored: &[String],
-) -> Result<Vec<AbsoluteRow>, String> {
+) -> Result<Vec<AbsoluteRow>, CliError> {
     let text = read_bounded(path, limits::MAX_FILE_BYTES)?;
-    parse_absolute_ignoring(&text, &path.display().to_string(), joints, ignored)
-        .map_err(|e| e.to_string())
+    Ok(parse_absolute_ignoring(
+        &text,
+        &path.display().to_string(),
+        joints,
+        ignored,
+    )?)
+}
+
+/// Files as the messages show them, comma-separated.
+fn shown_paths(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| deflex_files::shown_path(p))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The single `measurements_*.csv` of a series folder (or the file itself).
-fn series_file(path: &Path) -> Result<PathBuf, String> {
+fn series_file(path: &Path) -> Result<PathBuf, CliError> {
     if path.is_file() {
         return Ok(path.to_path_buf());
     }
-    let entries = std::fs::read_dir(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let entries = std::fs::read_dir(path).map_err(|source| CliError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut found: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
@@ -108,10 +124,10 @@ fn series_file(path: &Path) -> Result<PathBuf, String> {
     found.sort();
     match found.len() {
         1 => Ok(found.remove(0)),
-        n => Err(format!(
-            "{}: expected one measurements_*.csv, found {n}",
-            path.display()
-        )),
+        found => Err(CliError::SeriesFiles {
+            folder: path.to_path_buf(),
+            found,
+        }),
     }
 }
 
@@ -122,7 +138,7 @@ pub fn terms_path(robot_file: &Path) -> PathBuf {
 
 /// A calibrated model: the robot (built-in name or file) and, for a file with a terms file
 /// beside it, the joint terms and residual model it keeps.
-pub fn load_model(spec: &str) -> Result<(EgModel, Option<CalibrationTerms>), String> {
+pub fn load_model(spec: &str) -> Result<(EgModel, Option<CalibrationTerms>), CliError> {
     let robot = robot(spec)?;
     let mut model = EgModel::from_robot(&robot);
     let path = Path::new(spec);
@@ -131,11 +147,11 @@ pub fn load_model(spec: &str) -> Result<(EgModel, Option<CalibrationTerms>), Str
         return Ok((model, None));
     }
     let text = read_bounded(&terms_file, MAX_TERMS_BYTES)?;
-    let terms =
-        CalibrationTerms::from_json(&text).map_err(|e| format!("{}: {e}", terms_file.display()))?;
-    terms
-        .apply(&mut model)
-        .map_err(|e| format!("{}: {e}", terms_file.display()))?;
+    let in_terms = |e: deflex_absolute::terms::TermsError| {
+        CliError::in_context(terms_file.display().to_string())(e.into())
+    };
+    let terms = CalibrationTerms::from_json(&text).map_err(in_terms)?;
+    terms.apply(&mut model).map_err(in_terms)?;
     Ok((model, Some(terms)))
 }
 
@@ -274,21 +290,21 @@ pub struct PredictArgs {
     pub ignore_column: Vec<String>,
 }
 
-pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
+/// Runs `deflex import`.
+pub fn import(command: ImportCommand, json_output: bool) -> CommandResult {
     let ImportCommand::Ur10Tracker(args) = command;
     if args.every == 0 || args.every > 1_000_000 {
-        return Err(format!("--every: expected 1…1000000, got {}", args.every));
+        return Err(UsageError::invalid("--every", "1…1000000", args.every).into());
     }
     // Import writes only labels its readers read back the same: a label they would not is
     // refused, not rewritten (a silently changed set-up name would no longer match the robot
     // file's [[setup]]).
     for (flag, label) in [("--setup", &args.setup), ("--target", &args.target)] {
-        deflex_absolute::data::check_label(label).map_err(|problem| {
-            format!(
-                "{flag} \"{}\": {problem}; import refuses it (labels are not rewritten): give a label of 1 to {} bytes without control characters, outer white space or a leading `#`",
-                deflex_files::shown(label),
-                limits::MAX_LABEL_BYTES
-            )
+        deflex_absolute::data::check_label(label).map_err(|problem| CliError::ImportLabel {
+            flag,
+            label: deflex_files::shown(label).to_string(),
+            problem,
+            max_bytes: limits::MAX_LABEL_BYTES,
         })?;
     }
     let options = ImportOptions {
@@ -298,8 +314,7 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
     };
     let file = series_file(&args.series)?;
     let text = read_bounded(&file, MAX_SERIES_BYTES)?;
-    let (rows, mut summary) =
-        parse_series(&text, &file.display().to_string(), &options).map_err(|e| e.to_string())?;
+    let (rows, mut summary) = parse_series(&text, &file.display().to_string(), &options)?;
     summary.file = file;
     let kept: Vec<AbsoluteRow> = rows.into_iter().step_by(args.every).collect();
     let comments = vec![
@@ -311,8 +326,7 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
         ),
     ];
     let text = format_absolute(&kept, &comments);
-    deflex_files::write_atomic(&args.out, text)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
     if json_output {
         print_json(&serde_json::json!({
             "file": summary.file.display().to_string(),
@@ -352,28 +366,33 @@ pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
     Ok(())
 }
 
-fn parse_steps(text: &str) -> Result<Vec<Step>, String> {
+fn parse_steps(text: &str) -> Result<Vec<Step>, CliError> {
     text.split(',')
-        .map(|item| item.parse().map_err(|e| format!("--steps: {e}")))
+        .map(|item| {
+            item.parse()
+                .map_err(|e: ChoiceError| CliError::in_context("--steps")(e.into()))
+        })
         .collect()
 }
 
-fn parse_loss(text: &str) -> Result<Loss, String> {
-    text.parse().map_err(|e| format!("--loss: {e}"))
+fn parse_loss(text: &str) -> Result<Loss, CliError> {
+    text.parse()
+        .map_err(|e: ChoiceError| CliError::in_context("--loss")(e.into()))
 }
 
 fn read_all(
     paths: &[PathBuf],
     joints: usize,
     ignored: &[String],
-) -> Result<Vec<Vec<AbsoluteRow>>, String> {
+) -> Result<Vec<Vec<AbsoluteRow>>, CliError> {
     paths
         .iter()
         .map(|p| read_absolute(p, joints, ignored))
         .collect()
 }
 
-pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CliResult {
+/// Runs `deflex calibrate-geometry`.
+pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CommandResult {
     let steps = parse_steps(&args.steps)?;
     let loss = parse_loss(&args.loss)?;
     crate::args::check_flag(
@@ -391,8 +410,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     for path in &args.loaded {
         // Loaded readings are in the robot's world: checked against its forward kinematics
         // as `deflex calibrate` checks them (another robot's campaign is refused).
-        let file = deflex_load::read_file_ignoring(path, Some(n), true, &args.ignore_column)
-            .map_err(|e| e.to_string())?;
+        let file = deflex_load::read_file_ignoring(path, Some(n), true, &args.ignore_column)?;
         let origin = deflex_files::shown_path(path);
         let check = deflex_stiffness::consistency::check_geometry(
             &start_robot,
@@ -401,14 +419,13 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
             Some(&file.header),
             deflex_stiffness::consistency::DEFAULT_FK_TOLERANCE_M,
         )
-        .map_err(|e| format!("{origin}: {e}"))?;
+        .map_err(|e| CliError::in_context(origin.clone())(e.into()))?;
         deflex_stiffness::consistency::enforce(
             &check,
             &origin,
             false,
             "Is this the robot the loaded campaign was measured on? Give the robot with --robot.",
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         loaded.extend(file.rows);
     }
     let series_of: Vec<usize> = series
@@ -423,11 +440,15 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     let test_count: usize = test.iter().map(Vec::len).sum();
     all.extend(test.into_iter().flatten());
     let mut model = EgModel::from_robot(&start_robot);
-    let mut campaign = Campaign::new(&mut model, all, loaded).map_err(|e| e.to_string())?;
+    let mut campaign = Campaign::new(&mut model, all, loaded)?;
     if args.orientations {
         campaign.use_orientations(args.sigma_rad);
         if campaign.orientation_rows.is_empty() {
-            return Err("--orientations: no row of the data has rx_rad, ry_rad, rz_rad".into());
+            return Err(UsageError::Missing {
+                what: "--orientations",
+                give: "no row of the data has rx_rad, ry_rad, rz_rad",
+            }
+            .into());
         }
     }
     let groups = args.cv_by.map(|by| {
@@ -462,21 +483,18 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
         ..FitOptions::default()
     };
     let started = std::time::Instant::now();
-    let result = fit(&model, &campaign, &options).map_err(|e| e.to_string())?;
+    let result = fit(&model, &campaign, &options)?;
     let elapsed = started.elapsed().as_secs_f64();
     // As many independent equations as parameters at least (3 per distinct reading): fewer,
     // and the standard errors and χ² of 0 would claim what the data cannot give.
     if 3 * distinct <= result.estimates.len() {
-        return Err(format!(
-            "{}: {distinct} distinct reading(s) of {fit_count} give {} equations for {} parameters: the data cannot determine them; measure more configurations (nothing written)",
-            args.data
-                .iter()
-                .map(|p| deflex_files::shown_path(p))
-                .collect::<Vec<_>>()
-                .join(", "),
-            3 * distinct,
-            result.estimates.len()
-        ));
+        return Err(CliError::TooFewReadings {
+            files: shown_paths(&args.data),
+            distinct,
+            readings: fit_count,
+            equations: 3 * distinct,
+            parameters: result.estimates.len(),
+        });
     }
     check_plausible_fit(&result, &start_robot.name, &args.data)?;
     let robot_out = result.model.to_robot();
@@ -487,26 +505,23 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     // report folder swapped in, and only then the model and terms renamed in. A report that
     // fails (a full disk) leaves the earlier model, terms and report as they were.
     use std::io::Write as _;
-    let staged = |path: &Path, text: String| -> Result<deflex_files::AtomicFile, String> {
-        let shown = |e: std::io::Error| format!("{}: {e}", deflex_files::shown_path(path));
-        let mut file = deflex_files::AtomicFile::create(path).map_err(shown)?;
+    let staged = |path: &Path, text: String| -> Result<deflex_files::AtomicFile, CliError> {
+        let mut file = deflex_files::AtomicFile::create(path).map_err(CliError::write(path))?;
         file.write_all(text.as_bytes())
             .and_then(|()| file.flush())
-            .map_err(shown)?;
+            .map_err(CliError::write(path))?;
         Ok(file)
     };
     let terms_staged = staged(&terms_file, terms.to_json())?;
     let model_staged = staged(&args.out, toml)?;
     let files = match &args.report {
-        Some(dir) => report::write_report(&result, &campaign, dir).map_err(|e| e.to_string())?,
+        Some(dir) => report::write_report(&result, &campaign, dir)?,
         None => Vec::new(),
     };
     terms_staged
         .commit()
-        .map_err(|e| format!("{}: {e}", deflex_files::shown_path(&terms_file)))?;
-    model_staged
-        .commit()
-        .map_err(|e| format!("{}: {e}", deflex_files::shown_path(&args.out)))?;
+        .map_err(CliError::write(&terms_file))?;
+    model_staged.commit().map_err(CliError::write(&args.out))?;
     if json_output {
         let mut value = report::json(&result, &campaign);
         value["elapsed_s"] = serde_json::json!(elapsed);
@@ -533,13 +548,13 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     Ok(())
 }
 
-pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
+/// Runs `deflex predict`.
+pub fn predict(args: PredictArgs, json_output: bool) -> CommandResult {
     let (model, _) = load_model(&args.robot)?;
     let rows = read_absolute(&args.data, model.robot.joint_count(), &args.ignore_column)?;
-    let prediction =
-        predict::predict_rows(&model, rows, args.fit_setup).map_err(|e| e.to_string())?;
+    let prediction = predict::predict_rows(&model, rows, args.fit_setup)?;
     deflex_files::write_atomic(&args.out, report::prediction::prediction_csv(&prediction))
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+        .map_err(CliError::write(&args.out))?;
     if json_output {
         print_json(&report::prediction::prediction_json(&prediction));
     } else {

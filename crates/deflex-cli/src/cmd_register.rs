@@ -2,8 +2,9 @@
 //! target (probe) registered from a handful of readings with the calibrated robot frozen
 //! (maths in `deflex_absolute::register`).
 
-use crate::args::{CliResult, check_flag, print_json};
+use crate::args::{check_flag, print_json};
 use crate::cmd_egcal::{load_model, read_absolute, read_bounded, terms_path};
+use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::{DEFAULT_ORIENTATION_SIGMA_RAD, limits};
@@ -11,6 +12,45 @@ use deflex_absolute::register::{RegisterOptions, register as register_session};
 use deflex_absolute::solve::Loss;
 use deflex_report::absolute_report::registration;
 use std::path::PathBuf;
+
+/// Readings that do not say which set-up or target to register.
+#[derive(Debug, thiserror::Error)]
+pub enum RegisterInputError {
+    /// Several set-ups and no `--setup`.
+    #[error("{}: the data names set-ups {setups}: choose one with --setup", .data.display())]
+    WhichSetup {
+        /// The data file.
+        data: PathBuf,
+        /// The set-ups it names.
+        setups: String,
+    },
+    /// No reading of the set-up asked for.
+    #[error("{}: no reading of set-up `{setup}`", .data.display())]
+    NoSetupReadings {
+        /// The data file.
+        data: PathBuf,
+        /// The set-up.
+        setup: String,
+    },
+    /// A reading of a target the robot file does not know, and not the one to register.
+    #[error("{}:{line}: target `{target}` is not in the robot file: register it with --target {target}", .data.display())]
+    UnknownTarget {
+        /// The data file.
+        data: PathBuf,
+        /// Its line.
+        line: u64,
+        /// The target.
+        target: String,
+    },
+    /// `--target` names a target no reading has.
+    #[error("{}: no reading of target `{target}`", .data.display())]
+    NoTargetReadings {
+        /// The data file.
+        data: PathBuf,
+        /// The target.
+        target: String,
+    },
+}
 
 /// Margin over the calibration's held-out RMS above which a registration residual says the
 /// robot itself has changed.
@@ -52,7 +92,8 @@ pub struct RegisterArgs {
     pub ignore_column: Vec<String>,
 }
 
-pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
+/// Runs `deflex register`.
+pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
     check_flag(
         "--sigma-rad",
         args.sigma_rad,
@@ -74,32 +115,32 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
             match names.as_slice() {
                 [one] => one.to_string(),
                 _ => {
-                    return Err(format!(
-                        "{}: the data names set-ups {}: choose one with --setup",
-                        args.data.display(),
-                        names.join(", ")
-                    ));
+                    return Err(RegisterInputError::WhichSetup {
+                        data: args.data.clone(),
+                        setups: names.join(", "),
+                    }
+                    .into());
                 }
             }
         }
     };
     let rows: Vec<_> = rows.into_iter().filter(|r| r.setup == setup_name).collect();
     if rows.is_empty() {
-        return Err(format!(
-            "{}: no reading of set-up `{setup_name}`",
-            args.data.display()
-        ));
+        return Err(RegisterInputError::NoSetupReadings {
+            data: args.data.clone(),
+            setup: setup_name,
+        }
+        .into());
     }
     for row in &rows {
         let known = model.target_index(&row.target).is_some();
         if !known && args.target.as_deref() != Some(row.target.as_str()) {
-            return Err(format!(
-                "{}:{}: target `{}` is not in the robot file: register it with --target {}",
-                args.data.display(),
-                row.line,
-                row.target,
-                row.target
-            ));
+            return Err(RegisterInputError::UnknownTarget {
+                data: args.data.clone(),
+                line: row.line,
+                target: row.target.clone(),
+            }
+            .into());
         }
     }
     let new_setup = model.setup_index(&setup_name).is_none();
@@ -112,20 +153,31 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
         model.targets[t].position = nalgebra::Vector3::zeros();
         model.targets[t].rotation = None;
     }
-    let mut campaign = Campaign::new(&mut model, rows, Vec::new()).map_err(|e| e.to_string())?;
+    let mut campaign = Campaign::new(&mut model, rows, Vec::new())?;
     if args.orientations {
         campaign.use_orientations(args.sigma_rad);
         if campaign.orientation_rows.is_empty() {
-            return Err("--orientations: no reading has rx_rad, ry_rad, rz_rad".into());
+            return Err(UsageError::Missing {
+                what: "--orientations",
+                give: "no reading has rx_rad, ry_rad, rz_rad",
+            }
+            .into());
         }
     }
-    let setup = model
-        .setup_index(&setup_name)
-        .ok_or_else(|| format!("set-up `{setup_name}` missing"))?;
+    let setup =
+        model
+            .setup_index(&setup_name)
+            .ok_or_else(|| RegisterInputError::NoSetupReadings {
+                data: args.data.clone(),
+                setup: setup_name.clone(),
+            })?;
     let target =
         match &args.target {
             Some(name) => Some(model.target_index(name).ok_or_else(|| {
-                format!("{}: no reading of target `{name}`", args.data.display())
+                RegisterInputError::NoTargetReadings {
+                    data: args.data.clone(),
+                    target: name.clone(),
+                }
             })?),
             None => None,
         };
@@ -142,8 +194,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
         restart_setup: new_setup,
     };
     let all = vec![1.0; campaign.len()];
-    let result =
-        register_session(&mut model, &campaign, &all, &options).map_err(|e| e.to_string())?;
+    let result = register_session(&mut model, &campaign, &all, &options)?;
     // Orientations measured but not fitted: the new target's frame in closed form, so that
     // `predict` can report orientation errors.
     if let Some(t) = target.filter(|&t| model.targets[t].rotation.is_none()) {
@@ -160,10 +211,9 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
         let from = terms_path(std::path::Path::new(&args.robot));
         let text = read_bounded(&from, 64 << 20)?;
         let to = terms_path(&args.out);
-        deflex_files::write_atomic(&to, text).map_err(|e| format!("{}: {e}", to.display()))?;
+        deflex_files::write_atomic(&to, text).map_err(CliError::write(&to))?;
     }
-    deflex_files::write_atomic(&args.out, toml)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    deflex_files::write_atomic(&args.out, toml).map_err(CliError::write(&args.out))?;
     if json_output {
         print_json(&registration::json(
             &result,

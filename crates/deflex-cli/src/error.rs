@@ -110,6 +110,97 @@ pub enum CliError {
     /// An offline compensation that could not be made or written.
     #[error(transparent)]
     Compensate(#[from] crate::cmd_compensate::CompensateCommandError),
+    /// An input file that cannot be read (special file, too large, not UTF-8, …).
+    #[error(transparent)]
+    Input(#[from] deflex_files::InputError),
+    /// A folder that cannot be listed.
+    #[error("{}: {source}", .path.display())]
+    Read {
+        /// The folder.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A series folder without exactly one measurement file.
+    #[error("{}: expected one measurements_*.csv, found {found}", .folder.display())]
+    SeriesFiles {
+        /// The folder.
+        folder: PathBuf,
+        /// Measurement files found.
+        found: usize,
+    },
+    /// An absolute (tracker) measurement file that cannot be used.
+    #[error(transparent)]
+    AbsoluteData(#[from] deflex_absolute::data::AbsoluteDataError),
+    /// A tracker series that cannot be imported.
+    #[error(transparent)]
+    Import(#[from] deflex_absolute::ur10_tracker::ImportError),
+    /// A campaign the elasto-geometric calibration cannot use.
+    #[error(transparent)]
+    Campaign(#[from] deflex_absolute::campaign::CampaignError),
+    /// An elasto-geometric fit that failed.
+    #[error(transparent)]
+    Fit(#[from] deflex_absolute::fit::FitError),
+    /// A prediction that failed.
+    #[error(transparent)]
+    Predict(#[from] deflex_absolute::predict::PredictError),
+    /// Readings that do not say which set-up or target to register.
+    #[error(transparent)]
+    RegisterInput(#[from] crate::cmd_register::RegisterInputError),
+    /// A registration that failed.
+    #[error(transparent)]
+    Register(#[from] deflex_absolute::register::RegisterError),
+    /// A calibration terms file that cannot be used.
+    #[error(transparent)]
+    Terms(#[from] deflex_absolute::terms::TermsError),
+    /// A model step or loss not known (`--steps`, `--loss`).
+    #[error(transparent)]
+    Choice(#[from] deflex_absolute::fit::ChoiceError),
+    /// A fit whose readings the calibrated robot still misses by centimetres: another robot's
+    /// data. Nothing is written.
+    #[error(
+        "{files}: robot \"{robot}\" leaves the fitted readings {rms_mm:.1} mm RMS from its prediction after calibration (more than {limit_mm:.0} mm): these are not this robot's readings (another robot's data? give it with --robot); nothing written"
+    )]
+    ImplausibleFit {
+        /// The data files.
+        files: String,
+        /// The robot given.
+        robot: String,
+        /// RMS of the fitted readings' residuals (mm).
+        rms_mm: f64,
+        /// The limit (mm).
+        limit_mm: f64,
+    },
+    /// Fewer independent equations than parameters: the data cannot determine them.
+    #[error(
+        "{files}: {distinct} distinct reading(s) of {readings} give {equations} equations for {parameters} parameters: the data cannot determine them; measure more configurations (nothing written)"
+    )]
+    TooFewReadings {
+        /// The data files.
+        files: String,
+        /// Distinct readings.
+        distinct: usize,
+        /// Readings fitted.
+        readings: usize,
+        /// Equations they give (3 per distinct reading).
+        equations: usize,
+        /// Parameters to determine.
+        parameters: usize,
+    },
+    /// A label `import` would not read back the same.
+    #[error(
+        "{flag} \"{label}\": {problem}; import refuses it (labels are not rewritten): give a label of 1 to {max_bytes} bytes without control characters, outer white space or a leading `#`"
+    )]
+    ImportLabel {
+        /// `--setup` or `--target`.
+        flag: &'static str,
+        /// The label, shown with its control characters escaped.
+        label: String,
+        /// What is wrong with it.
+        problem: deflex_absolute::data::LabelProblem,
+        /// Longest label accepted (bytes).
+        max_bytes: usize,
+    },
     /// A cell file (`CELL.toml`) that cannot be read or used.
     #[error(transparent)]
     Config(#[from] deflex_runtime::ConfigError),
@@ -138,15 +229,6 @@ pub enum CliError {
     /// A calibrated robot that could not be exported.
     #[error(transparent)]
     Export(#[from] crate::cmd_export::ExportCommandError),
-    /// A command that still reports its failures as text (the controller, compensation and
-    /// elasto-geometric commands, converted by their own tracks).
-    #[error("{message}")]
-    Command {
-        /// The command (`run`, `compensate`, …).
-        command: &'static str,
-        /// Its message.
-        message: String,
-    },
 }
 
 impl CliError {
@@ -168,11 +250,6 @@ impl CliError {
             context,
             source: Box::new(source),
         }
-    }
-
-    /// The failure of a command that reports text (see [`CliError::Command`]).
-    pub fn command(command: &'static str) -> impl FnOnce(String) -> CliError {
-        move |message| CliError::Command { command, message }
     }
 
     /// A write to `path` failed.
@@ -219,21 +296,6 @@ impl RunFailure {
             RunFailure::Faulted(_) | RunFailure::Starved => 3,
             RunFailure::Log { .. } => 4,
         }
-    }
-}
-
-/// Transitional, for the commands that still return text (their helpers in `args` return typed
-/// errors): the error's message.
-impl From<CliError> for String {
-    fn from(error: CliError) -> String {
-        error.to_string()
-    }
-}
-
-/// Transitional, as for [`CliError`]: the usage error's message.
-impl From<UsageError> for String {
-    fn from(error: UsageError) -> String {
-        error.to_string()
     }
 }
 

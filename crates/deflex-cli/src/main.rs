@@ -167,17 +167,10 @@ fn main() -> ExitCode {
         Command::Ik(args) => cmd_model::ik(args, cli.json),
         Command::Map(args) => cmd_model::map(args, cli.json),
         Command::Calibrate(args) => cmd_calib::calibrate(args, cli.json),
-        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json)
-            .map_err(CliError::command("calibrate-geometry")),
-        Command::Predict(args) => {
-            cmd_egcal::predict(args, cli.json).map_err(CliError::command("predict"))
-        }
-        Command::Register(args) => {
-            cmd_register::register(args, cli.json).map_err(CliError::command("register"))
-        }
-        Command::Import { command } => {
-            cmd_egcal::import(command, cli.json).map_err(CliError::command("import"))
-        }
+        Command::CalibrateGeometry(args) => cmd_egcal::calibrate_geometry(args, cli.json),
+        Command::Predict(args) => cmd_egcal::predict(args, cli.json),
+        Command::Register(args) => cmd_register::register(args, cli.json),
+        Command::Import { command } => cmd_egcal::import(command, cli.json),
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
         Command::Plan(args) => cmd_plan::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
