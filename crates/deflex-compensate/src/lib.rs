@@ -38,6 +38,6 @@ pub use compensate::{
 };
 pub use error::{CompensateError, LogError, PathError, ProcessError};
 pub use ik::{IkFailure, TrackingIkOptions};
-pub use logged::{Identification, LoggedProcess, LoggedProcessOptions};
+pub use logged::{Identification, LoggedOptionError, LoggedProcess, LoggedProcessOptions};
 pub use path::{MAX_PATH_POINTS, PathPoint, TcpPath};
 pub use process::{DepthProportional, ProcessModel, ProcessPoint};

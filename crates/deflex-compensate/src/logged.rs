@@ -100,13 +100,32 @@ impl Default for LoggedProcessOptions {
     }
 }
 
+/// An option of [`LoggedProcessOptions`] outside its range.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{name}: expected {lo} ..= {hi}, got {got}")]
+pub struct LoggedOptionError {
+    /// The option.
+    pub name: &'static str,
+    /// Smallest value accepted.
+    pub lo: f64,
+    /// Largest value accepted.
+    pub hi: f64,
+    /// The value given.
+    pub got: f64,
+}
+
 impl LoggedProcessOptions {
-    fn validate(&self) -> Result<(), String> {
-        let check = |name: &str, v: f64, lo: f64, hi: f64| {
+    fn validate(&self) -> Result<(), LoggedOptionError> {
+        let check = |name: &'static str, v: f64, lo: f64, hi: f64| {
             if v.is_finite() && (lo..=hi).contains(&v) {
                 Ok(())
             } else {
-                Err(format!("{name}: expected {lo} ..= {hi}, got {v}"))
+                Err(LoggedOptionError {
+                    name,
+                    lo,
+                    hi,
+                    got: v,
+                })
             }
         };
         check("depth_window_m", self.depth_window_m, 1e-5, 0.1)?;
@@ -228,7 +247,7 @@ impl LoggedProcess {
             index: 0,
             message,
         };
-        options.validate().map_err(error)?;
+        options.validate().map_err(|e| error(e.to_string()))?;
         if resampled.commanded_m.len() != resampled.wrenches.len()
             || resampled
                 .measured_m
