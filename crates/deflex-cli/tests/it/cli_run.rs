@@ -30,7 +30,7 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 /// A cell file on free loopback ports with `extra` appended.
-fn cell_file(dir: &Path, kind: &str, extra: &str) -> (PathBuf, u16, u16) {
+pub fn cell_file(dir: &Path, kind: &str, extra: &str) -> (PathBuf, u16, u16) {
     let (robot, sensor) = (free_udp_port(), free_udp_port());
     let text = format!(
         "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot}\"\ntimeout_s = 0.2\n\
