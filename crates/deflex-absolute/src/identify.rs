@@ -221,6 +221,9 @@ fn reason(model: &EgModel, param: Param, others: &[Param], no_effect: bool) -> S
         ParamGroup::Backlash => {
             "this direction-dependent offset is a combination of constant offsets over the measured approach directions (a joint always approached from the same side)".into()
         }
+        ParamGroup::Torsion => {
+            "over the measured torque range this torsion curve is a combination of the linear compliance and the other terms".into()
+        }
         ParamGroup::Setup | ParamGroup::Target => {
             "a combination of the listed parameters has the same effect on every reading".into()
         }

@@ -17,7 +17,10 @@
 //! Target coordinate k: the flange's axis u_k, plus the change of the sag as the target moves
 //! (`Σ_e c_e [τ_e (v_e × u_k) + j_e ((v_e × u_k)·f)]`). Target rotation k (`R_t ← exp(φ)R_t`,
 //! flange axes): turns the target frame about `R_F e_k`, moves no point. Compliance c_e:
-//! `τ_e j_e(p)`, rotation `τ_e v_e`. Lumped mass and first moment of body b:
+//! `τ_e j_e(p)`, rotation `τ_e v_e`; a torsion term a·g(τ_e): `g(τ_e) j_e(p)`, `g(τ_e) v_e`.
+//! Wherever a torque changes, the turn changes by its slope `s_e = c_e + Σ a g'(τ_e)` and
+//! wherever a screw moves, by the turn `φ_e = c_e τ_e + Σ a g(τ_e)` (below written with the
+//! linear compliance). Lumped mass and first moment of body b:
 //! `Σ_e c_e j_e(p) ∂τ_e/∂(m_b, h_b)`, with `∂τ_e/∂m_b = (v_e × (o_b − O_e))·g` and
 //! `∂τ_e/∂h_b = R_bᵀ (g × v_e)`. Set-up s (`R_s ← R_s exp(φ)`, `t_s ← t_s + R_s δt`): rotation
 //! k: `R_s (e_k × p̂_w)` and `R_s e_k`; translation k: `R_s e_k`. World columns are turned into
@@ -115,6 +118,13 @@ impl EgModel {
                     Vector3::zeros(),
                 ),
             },
+            Param::Torsion { edof, shape } => {
+                let (g, _) = shape.value_slope(ev.torque[edof]);
+                Column {
+                    position: ev.screw_linear[edof] * g,
+                    rotation: Self::rotation_rate(ev, ev.axis_center[edof].0 * g, Vector3::zeros()),
+                }
+            }
             Param::Mass(b) | Param::FirstMoment(b, _) => self.mass_column(ev, param, b),
         }
     }
@@ -129,9 +139,8 @@ impl EgModel {
             let (axis, _) = ev.axis_center[e];
             let d_linear = axis.cross(&u);
             let d_torque = ev.force.map_or(0.0, |f| d_linear.dot(&f));
-            position +=
-                (d_linear * ev.torque[e] + ev.screw_linear[e] * d_torque) * self.compliance[e];
-            d_theta += axis * (self.compliance[e] * d_torque);
+            position += d_linear * ev.turn[e] + ev.screw_linear[e] * (ev.turn_slope[e] * d_torque);
+            d_theta += axis * (ev.turn_slope[e] * d_torque);
         }
         Column {
             position,
@@ -155,8 +164,8 @@ impl EgModel {
                 Param::FirstMoment(_, k) => (frame.rotation.inverse() * g.cross(&axis))[k],
                 _ => 0.0,
             };
-            position += ev.screw_linear[e] * (self.compliance[e] * dtau);
-            d_theta += axis * (self.compliance[e] * dtau);
+            position += ev.screw_linear[e] * (ev.turn_slope[e] * dtau);
+            d_theta += axis * (ev.turn_slope[e] * dtau);
         }
         Column {
             position,
@@ -252,7 +261,7 @@ impl EgModel {
             position: dp,
             rotation: Vector3::zeros(),
         };
-        if self.compliance.iter().all(|c| *c == 0.0) {
+        if !self.is_elastic() {
             column.rotation = twist.axis;
             return column;
         }
@@ -282,8 +291,8 @@ impl EgModel {
         moment[n - 1] += payload_moment;
         let mut d_theta = Vector3::zeros();
         for e in 0..ev.edof_count {
-            let c = self.compliance[e];
-            if c == 0.0 {
+            let (turn, slope) = (ev.turn[e], ev.turn_slope[e]);
+            if turn == 0.0 && slope == 0.0 {
                 continue;
             }
             let (a, center) = ev.axis_center[e];
@@ -307,8 +316,8 @@ impl EgModel {
             if let Some(mu) = ev.moment {
                 d_torque += da.dot(&mu);
             }
-            column.position += (d_linear * ev.torque[e] + ev.screw_linear[e] * d_torque) * c;
-            d_theta += (da * ev.torque[e] + a * d_torque) * c;
+            column.position += d_linear * turn + ev.screw_linear[e] * (slope * d_torque);
+            d_theta += da * turn + a * (slope * d_torque);
         }
         column.rotation = Self::rotation_rate(ev, d_theta, twist.axis);
         column

@@ -9,7 +9,9 @@
 //! `τ_e = Σ_{b ≥ site(e)} (v_e × (m_b (o_b − O_e) + R_b h_b)) · g + (v_e × (p_w − O_e)) · f + v_e · μ`
 //! of gravity on the bodies it carries (mass m_b, first moment h_b = m_b c_b in joint frame b
 //! of origin o_b, rotation R_b; payload folded into the last body) and of an external wrench
-//! (f, μ) at the target. First order in the deflection, like eq. 15 of the paper.
+//! (f, μ) at the target. First order in the deflection, like eq. 15 of the paper. With
+//! nonlinear torsion terms ([`crate::params::TorsionShape`]) the turn `c_e τ_e` becomes
+//! `c_e τ_e + Σ a g(τ_e)` (the loaded readings below keep the linear compliance).
 //!
 //! With a residual model ([`crate::residual_model`]) its correction `R_1(q) Δ(q)` (learnt in
 //! joint 1's frame R_1) is added to `p_w + δp_w`.
@@ -46,6 +48,10 @@ pub struct Evaluation {
     pub sag_rotation: Vector3<f64>,
     /// Torque on each eDoF (N·m), [`deflex_model::Robot::edofs`] order.
     pub torque: [f64; MAX_EDOFS],
+    /// Turn of each eDoF under its torque, `c τ + Σ a g(τ)` (rad).
+    pub turn: [f64; MAX_EDOFS],
+    /// Slope of each eDoF's turn, `c + Σ a g'(τ)` (rad/(N·m)).
+    pub turn_slope: [f64; MAX_EDOFS],
     /// Linear part of each eDoF's screw at the target: `v_e × (p − O_e)`.
     pub screw_linear: [Vector3<f64>; MAX_EDOFS],
     /// Axis and centre of each eDoF.
@@ -114,6 +120,8 @@ impl EgModel {
             correction_world: Vector3::zeros(),
             sag_rotation: Vector3::zeros(),
             torque: [0.0; MAX_EDOFS],
+            turn: [0.0; MAX_EDOFS],
+            turn_slope: [0.0; MAX_EDOFS],
             screw_linear: [Vector3::zeros(); MAX_EDOFS],
             axis_center: [(Vector3::zeros(), Vector3::zeros()); MAX_EDOFS],
             site: [0; MAX_EDOFS],
@@ -144,12 +152,15 @@ impl EgModel {
                 torque += linear.dot(&Vector3::new(w[0], w[1], w[2]))
                     + axis.dot(&Vector3::new(w[3], w[4], w[5]));
             }
+            let (turn, slope) = self.edof_turn(e, torque);
             out.torque[e] = torque;
+            out.turn[e] = turn;
+            out.turn_slope[e] = slope;
             out.screw_linear[e] = linear;
             out.axis_center[e] = (axis, center);
             out.site[e] = site;
-            out.sag_world += linear * (self.compliance[e] * torque);
-            out.sag_rotation += axis * (self.compliance[e] * torque);
+            out.sag_world += linear * turn;
+            out.sag_rotation += axis * turn;
             out.edof_count = e + 1;
         }
         out

@@ -72,6 +72,67 @@ pub enum Param {
     /// Direction-dependent offset of joint `j` (rad): `Δθ_j = b_j · sign(approach_j)`, half the
     /// lost motion (backlash, hysteresis) between approaching from below and from above.
     Backlash(usize),
+    /// Nonlinear torsion of eDoF `edof` (index in [`Robot::edofs`] order): the coefficient
+    /// a (rad/(N·m)) of `a · g(τ)` added to the eDoF's turn `c τ` ([`TorsionShape`]).
+    Torsion {
+        /// eDoF index.
+        edof: usize,
+        /// The shape g.
+        shape: TorsionShape,
+    },
+}
+
+/// Torque scale of the cubic torsion term (N·m): `g(τ) = τ³ / τ_ref²`, so that its coefficient
+/// is the extra compliance at 100 N·m.
+pub const CUBIC_TORQUE_SCALE_NM: f64 = 100.0;
+
+/// The shape g(τ) of a nonlinear torsion term `a · g(τ)` of an eDoF whose linear turn is `c τ`:
+/// a strain-wave gear's torsion curve is not a straight line (stiffer as the torque grows, with
+/// a soft zone around zero torque where the flexspline's teeth come into mesh).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum TorsionShape {
+    /// `g(τ) = τ³ / τ_ref²` ([`CUBIC_TORQUE_SCALE_NM`]): a hardening (a < 0) or softening
+    /// (a > 0) torsion curve; its slope at τ_ref is `c + 3a`.
+    Cubic,
+    /// `g(τ) = T · tanh(τ / T)` with T in N·m: an extra compliance a at small torques that
+    /// fades above T (a soft zone around zero torque; slope `c + a` at 0, `c` far from it).
+    Soft(u16),
+}
+
+impl TorsionShape {
+    /// `g(τ)` and `g'(τ)` (see the variants).
+    pub fn value_slope(self, torque: f64) -> (f64, f64) {
+        match self {
+            TorsionShape::Cubic => {
+                let s2 = CUBIC_TORQUE_SCALE_NM * CUBIC_TORQUE_SCALE_NM;
+                (torque * torque * torque / s2, 3.0 * torque * torque / s2)
+            }
+            TorsionShape::Soft(t) => {
+                let t = f64::from(t.max(1));
+                let h = (torque / t).tanh();
+                (t * h, 1.0 - h * h)
+            }
+        }
+    }
+
+    /// Name (`cubic`, `soft:T`), as `--steps torsion:…` takes it.
+    pub fn name(self) -> String {
+        match self {
+            TorsionShape::Cubic => "cubic".into(),
+            TorsionShape::Soft(t) => format!("soft:{t}"),
+        }
+    }
+}
+
+/// One nonlinear torsion term with its coefficient.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TorsionTerm {
+    /// eDoF index ([`Robot::edofs`] order).
+    pub edof: usize,
+    /// Shape.
+    pub shape: TorsionShape,
+    /// Coefficient a (rad/(N·m)).
+    pub value: f64,
 }
 
 /// Coarse groups, for tables and the identifiability reasons.
@@ -91,6 +152,8 @@ pub enum ParamGroup {
     Harmonic,
     /// Direction-dependent joint offsets (backlash, hysteresis).
     Backlash,
+    /// Nonlinear torsion of the eDoFs.
+    Torsion,
 }
 
 /// Physical unit of a parameter, for display.
@@ -179,6 +242,8 @@ pub struct EgModel {
     pub harmonics: Vec<HarmonicTerm>,
     /// Direction-dependent offset `b_j` of each joint (rad; 0 = none).
     pub backlash: Vec<f64>,
+    /// Nonlinear torsion terms of the eDoFs: eDoF e turns by `c_e τ + Σ a g(τ)`.
+    pub torsion: Vec<TorsionTerm>,
     /// Residual model on the joint angles, added to the predicted positions (world axes).
     pub residual: Option<crate::residual_model::ResidualModel>,
 }
@@ -209,6 +274,7 @@ impl EgModel {
             lumped,
             harmonics: Vec::new(),
             backlash: vec![0.0; robot.joint_count()],
+            torsion: Vec::new(),
             residual: None,
         }
     }
@@ -225,6 +291,23 @@ impl EgModel {
         for (j, b) in self.backlash.iter().enumerate().take(q.len()) {
             out[j] += b * approach_sign(approach.get(j).copied().unwrap_or(0.0));
         }
+    }
+
+    /// Turn of eDoF `e` under torque `torque` and its slope: `(c τ + Σ a g(τ), c + Σ a g'(τ))`.
+    pub fn edof_turn(&self, e: usize, torque: f64) -> (f64, f64) {
+        let c = self.compliance[e];
+        let (mut turn, mut slope) = (c * torque, c);
+        for t in self.torsion.iter().filter(|t| t.edof == e) {
+            let (g, dg) = t.shape.value_slope(torque);
+            turn += t.value * g;
+            slope += t.value * dg;
+        }
+        (turn, slope)
+    }
+
+    /// Whether any eDoF turns under a torque (a compliance or a torsion term is non-zero).
+    pub fn is_elastic(&self) -> bool {
+        self.compliance.iter().any(|c| *c != 0.0) || self.torsion.iter().any(|t| t.value != 0.0)
     }
 
     /// Index of a set-up by name.
@@ -255,6 +338,7 @@ impl EgModel {
                 format!("target[{}].r{}", self.targets[t].name, XYZ[k])
             }
             Param::Backlash(j) => format!("J{}.backlash", j + 1),
+            Param::Torsion { edof, shape } => format!("a[{}].{}", edof_label(edof), shape.name()),
             Param::Dh(j, f) => format!("J{}.{}", j + 1, f.name()),
             Param::Compliance(e) => format!("c[{}]", edof_label(e)),
             Param::Mass(b) => format!("body{}.m", b + 1),
@@ -274,6 +358,7 @@ impl EgModel {
             Param::SetupRotation(..) | Param::SetupTranslation(..) => ParamGroup::Setup,
             Param::Target(..) | Param::TargetRotation(..) => ParamGroup::Target,
             Param::Backlash(_) => ParamGroup::Backlash,
+            Param::Torsion { .. } => ParamGroup::Torsion,
             Param::Dh(..) => ParamGroup::Geometry,
             Param::Compliance(_) => ParamGroup::Compliance,
             Param::Mass(_) | Param::FirstMoment(..) => ParamGroup::Mass,
@@ -290,7 +375,7 @@ impl EgModel {
             | Param::Harmonic { .. }
             | Param::Backlash(_) => Unit::Radian,
             Param::SetupTranslation(..) | Param::Target(..) | Param::Dh(_, _) => Unit::Metre,
-            Param::Compliance(_) => Unit::Compliance,
+            Param::Compliance(_) | Param::Torsion { .. } => Unit::Compliance,
             Param::Mass(_) => Unit::Kilogram,
             Param::FirstMoment(..) => Unit::KilogramMetre,
         }
@@ -318,6 +403,11 @@ impl EgModel {
                 }
             }
             Param::Compliance(e) => self.compliance[e],
+            Param::Torsion { edof, shape } => self
+                .torsion
+                .iter()
+                .find(|t| t.edof == edof && t.shape == shape)
+                .map_or(0.0, |t| t.value),
             Param::Mass(b) => self.lumped[b][0],
             Param::FirstMoment(b, k) => self.lumped[b][1 + k],
             Param::Harmonic { joint, order, sine } => self
@@ -359,6 +449,20 @@ impl EgModel {
                     }
                 }
                 Param::Compliance(e) => self.compliance[e] += d,
+                Param::Torsion { edof, shape } => {
+                    match self
+                        .torsion
+                        .iter_mut()
+                        .find(|t| t.edof == edof && t.shape == shape)
+                    {
+                        Some(t) => t.value += d,
+                        None => self.torsion.push(TorsionTerm {
+                            edof,
+                            shape,
+                            value: d,
+                        }),
+                    }
+                }
                 Param::Mass(b) => self.lumped[b][0] += d,
                 Param::FirstMoment(b, k) => self.lumped[b][1 + k] += d,
                 Param::Harmonic { joint, order, sine } => {

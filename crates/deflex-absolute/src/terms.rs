@@ -1,11 +1,11 @@
 //! What a calibration keeps beyond the robot file: joint-angle terms (harmonics, gear
-//! periodic error, backlash) and the residual model, which a robot description has no place
+//! periodic error, backlash), nonlinear torsion of the eDoFs and the residual model, which a robot description has no place
 //! for, and the calibration's own accuracy (what a later registration compares its residual
 //! with). Serialised as JSON (SI units) beside the robot file; tied to it by the robot's
 //! geometry fingerprint, so a terms file is never applied to another robot's geometry.
 
 use crate::outcome::FitResult;
-use crate::params::{EgModel, HarmonicTerm};
+use crate::params::{EgModel, HarmonicTerm, TorsionShape, TorsionTerm};
 use crate::residual_model::{MAX_INDUCING, ResidualHyper, ResidualModel};
 use deflex_model::MAX_JOINTS;
 use serde::{Deserialize, Serialize};
@@ -26,6 +26,22 @@ pub struct HarmonicRecord {
     pub sine: bool,
     /// Coefficient (rad).
     pub value_rad: f64,
+}
+
+/// Largest number of torsion terms read.
+pub const MAX_TORSION: usize = 64;
+
+/// One nonlinear torsion term as written: the eDoF turns by `c τ + a g(τ)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TorsionRecord {
+    /// eDoF label (`J2.z`).
+    pub edof: String,
+    /// Shape: `cubic` (`g = τ³/(100 N·m)²`) or `soft` (`g = T tanh(τ/T)`).
+    pub shape: String,
+    /// T of the soft zone (N·m); 0 for the cubic shape.
+    pub torque_scale_nm: u16,
+    /// Coefficient a (rad/(N·m)).
+    pub value_rad_per_nm: f64,
 }
 
 /// The residual model as written.
@@ -56,6 +72,9 @@ pub struct CalibrationTerms {
     pub harmonics: Vec<HarmonicRecord>,
     /// Direction-dependent offset per joint (rad).
     pub backlash_rad: Vec<f64>,
+    /// Nonlinear torsion terms (absent in files written before them).
+    #[serde(default)]
+    pub torsion: Vec<TorsionRecord>,
     /// Residual model, if kept.
     pub residual_model: Option<ResidualRecord>,
     /// Position RMS of the fitted readings (m).
@@ -95,6 +114,24 @@ pub enum TermsError {
         value: usize,
         /// Robot joints.
         joints: usize,
+    },
+    /// A torsion term on an eDoF the robot does not have.
+    #[error("torsion.edof: `{label}` is not an eDoF of the robot (its eDoFs: {known})")]
+    Edof {
+        /// Label given.
+        label: String,
+        /// The robot's eDoFs.
+        known: String,
+    },
+    /// A torsion shape that is not `cubic` or `soft` with a torque scale 1…1000 N·m.
+    #[error(
+        "torsion.shape: expected \"cubic\" or \"soft\" with torque_scale_nm 1…1000, got \"{shape}\" with {torque_scale_nm}"
+    )]
+    TorsionShape {
+        /// Shape given.
+        shape: String,
+        /// Torque scale given.
+        torque_scale_nm: u16,
     },
     /// Too many entries, or a non-finite value.
     #[error("{what}: {problem}")]
@@ -157,6 +194,26 @@ impl CalibrationTerms {
                 })
                 .collect(),
             backlash_rad: model.backlash.clone(),
+            torsion: model
+                .torsion
+                .iter()
+                .map(|t| TorsionRecord {
+                    edof: model
+                        .robot
+                        .edofs()
+                        .nth(t.edof)
+                        .map_or_else(String::new, |e| e.label()),
+                    shape: match t.shape {
+                        TorsionShape::Cubic => "cubic".into(),
+                        TorsionShape::Soft(_) => "soft".into(),
+                    },
+                    torque_scale_nm: match t.shape {
+                        TorsionShape::Cubic => 0,
+                        TorsionShape::Soft(scale) => scale,
+                    },
+                    value_rad_per_nm: t.value,
+                })
+                .collect(),
             residual_model: model.residual.as_ref().map(|r| ResidualRecord {
                 length_scale_rad: r.hyper.length_scale_rad,
                 ridge: r.hyper.ridge,
@@ -197,6 +254,7 @@ impl CalibrationTerms {
     pub fn is_empty(&self) -> bool {
         self.harmonics.is_empty()
             && self.backlash_rad.iter().all(|b| *b == 0.0)
+            && self.torsion.iter().all(|t| t.value_rad_per_nm == 0.0)
             && self.residual_model.is_none()
     }
 
@@ -256,15 +314,63 @@ impl CalibrationTerms {
         for b in &self.backlash_rad {
             finite("backlash_rad", *b, 1.0)?;
         }
+        let torsion = torsion_terms(&self.torsion, model, &finite)?;
         let residual = match &self.residual_model {
             Some(r) => Some(residual_model(r, joints, &finite)?),
             None => None,
         };
         model.harmonics = harmonics;
         model.backlash = self.backlash_rad.clone();
+        model.torsion = torsion;
         model.residual = residual;
         Ok(())
     }
+}
+
+fn torsion_terms(
+    records: &[TorsionRecord],
+    model: &EgModel,
+    finite: &dyn Fn(&'static str, f64, f64) -> Result<(), TermsError>,
+) -> Result<Vec<TorsionTerm>, TermsError> {
+    if records.len() > MAX_TORSION {
+        return Err(TermsError::Value {
+            what: "torsion",
+            problem: ValueProblem::TooMany {
+                count: records.len(),
+                limit: MAX_TORSION,
+            },
+        });
+    }
+    let labels: Vec<String> = model.robot.edofs().map(|e| e.label()).collect();
+    records
+        .iter()
+        .map(|r| {
+            let edof =
+                labels
+                    .iter()
+                    .position(|l| *l == r.edof)
+                    .ok_or_else(|| TermsError::Edof {
+                        label: r.edof.clone(),
+                        known: labels.join(", "),
+                    })?;
+            let shape = match (r.shape.as_str(), r.torque_scale_nm) {
+                ("cubic", _) => TorsionShape::Cubic,
+                ("soft", t) if (1..=1000).contains(&t) => TorsionShape::Soft(t),
+                _ => {
+                    return Err(TermsError::TorsionShape {
+                        shape: r.shape.clone(),
+                        torque_scale_nm: r.torque_scale_nm,
+                    });
+                }
+            };
+            finite("torsion.value_rad_per_nm", r.value_rad_per_nm, 1.0)?;
+            Ok(TorsionTerm {
+                edof,
+                shape,
+                value: r.value_rad_per_nm,
+            })
+        })
+        .collect()
 }
 
 fn residual_model(
@@ -335,4 +441,81 @@ fn residual_model(
         inducing: r.inducing_q_rad.clone(),
         weights: r.weights_m.clone(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ur10() -> EgModel {
+        EgModel::from_robot(&deflex_model::builtin("ur10").expect("built-in"))
+    }
+
+    fn terms(model: &EgModel, torsion: Vec<TorsionRecord>) -> CalibrationTerms {
+        CalibrationTerms {
+            format: FORMAT,
+            geometry_fingerprint: model.robot.geometry_fingerprint(),
+            kept_steps: Vec::new(),
+            harmonics: Vec::new(),
+            backlash_rad: vec![0.0; model.robot.joint_count()],
+            torsion,
+            residual_model: None,
+            fit_rms_m: 4e-4,
+            held_out_rms_m: None,
+        }
+    }
+
+    fn record(edof: &str, shape: &str, scale: u16, value: f64) -> TorsionRecord {
+        TorsionRecord {
+            edof: edof.into(),
+            shape: shape.into(),
+            torque_scale_nm: scale,
+            value_rad_per_nm: value,
+        }
+    }
+
+    #[test]
+    fn torsion_terms_round_trip_and_bad_ones_are_refused() {
+        let mut model = ur10();
+        let written = terms(
+            &model,
+            vec![
+                record("J2.z", "soft", 45, 1.5e-5),
+                record("J3.z", "cubic", 0, -3e-6),
+            ],
+        );
+        assert!(!written.is_empty());
+        let read = CalibrationTerms::from_json(&written.to_json()).expect("round trip");
+        read.apply(&mut model).expect("applies");
+        let j2 = model.robot.edofs().position(|e| e.label() == "J2.z");
+        assert_eq!(
+            model.torsion[0],
+            TorsionTerm {
+                edof: j2.expect("J2.z"),
+                shape: TorsionShape::Soft(45),
+                value: 1.5e-5
+            }
+        );
+        assert_eq!(model.torsion[1].shape, TorsionShape::Cubic);
+        // A file written before torsion terms existed still reads.
+        let old = written.to_json().replace("\"torsion\"", "\"unused\"");
+        assert!(
+            CalibrationTerms::from_json(&old)
+                .expect("old")
+                .torsion
+                .is_empty()
+        );
+        for (bad, what) in [
+            (record("J9.z", "cubic", 0, 1e-6), "J9.z"),
+            (record("J2.z", "soft", 0, 1e-6), "soft"),
+            (record("J2.z", "quartic", 0, 1e-6), "quartic"),
+            (record("J2.z", "cubic", 0, f64::NAN), "NaN"),
+        ] {
+            let error = terms(&model, vec![bad])
+                .apply(&mut ur10())
+                .expect_err("refused")
+                .to_string();
+            assert!(error.contains(what), "{error}");
+        }
+    }
 }

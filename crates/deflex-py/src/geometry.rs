@@ -50,7 +50,8 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String> {
 }
 
 /// Model steps from their names (`registration`, `geometry`, `compliance`, `masses`,
-/// `harmonics:N`, `periodic:N`, `backlash`, `residual`), as `--steps` takes them.
+/// `harmonics:N`, `periodic:N`, `backlash`, `torsion:cubic`, `torsion:soft:T`, `residual`), as
+/// `--steps` takes them.
 pub fn parse_steps(names: &[String]) -> Result<Vec<Step>> {
     names
         .iter()

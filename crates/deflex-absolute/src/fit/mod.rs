@@ -14,8 +14,8 @@
 //! identifiable set ([`crate::identify`]) and refits: registration only (set-ups and targets
 //! on the nominal, rigid robot), + geometry (DH rows with Hayati β), + compliance (the robot's
 //! eDoFs, sagging under gravity and any loads; the earlier steps are rigid), and opt-in steps
-//! (lumped masses, joint harmonics, gear-periodic terms, backlash, a residual model on the
-//! joint angles). An opt-in step is kept only when the pooled held-out RMS of the registered
+//! (lumped masses, joint harmonics, gear-periodic terms, backlash, nonlinear torsion, a
+//! residual model on the joint angles). An opt-in step is kept only when the pooled held-out RMS of the registered
 //! groups improves (the `steps` module); without held-out groups every step is kept.
 //!
 //! **Orientations.** When the campaign carries measured orientations

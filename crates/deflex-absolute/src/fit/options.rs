@@ -2,6 +2,7 @@
 //! protocol; and why it may refuse.
 
 use crate::identify;
+use crate::params::TorsionShape;
 use crate::solve::Loss;
 
 /// One step of the model sequence.
@@ -22,6 +23,9 @@ pub enum Step {
     Periodic(u16),
     /// Adds direction-dependent joint offsets `b_j sign(approach_j)` (backlash, hysteresis).
     Backlash,
+    /// Adds a nonlinear torsion term `a·g(τ)` of this shape on each free eDoF (a strain-wave
+    /// gear's torsion curve: hardening, or soft around zero torque).
+    Torsion(TorsionShape),
     /// Adds a residual model on the joint angles ([`crate::residual_model`]), trained on what
     /// the parametric model leaves, hyper-parameters by cross-validation.
     ResidualModel,
@@ -33,7 +37,7 @@ pub enum Step {
 pub enum ChoiceError {
     /// Not one of the step names.
     #[error(
-        "unknown step \"{0}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, residual)"
+        "unknown step \"{0}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, torsion:cubic, torsion:soft:T with T 1…1000 N·m, residual)"
     )]
     UnknownStep(String),
     /// A loss threshold that is not a number in 0.1…100.
@@ -48,7 +52,8 @@ impl std::str::FromStr for Step {
     type Err = ChoiceError;
 
     /// `registration`, `geometry`, `compliance` (or `gravity`), `masses`, `harmonics:N`
-    /// (N 1…4), `periodic:N` (N 1…10 000), `backlash`, `residual`; surrounding blanks ignored.
+    /// (N 1…4), `periodic:N` (N 1…10 000), `backlash`, `torsion:cubic`, `torsion:soft:T` (T
+    /// 1…1000 N·m), `residual`; surrounding blanks ignored.
     fn from_str(text: &str) -> Result<Step, ChoiceError> {
         let name = text.trim();
         let bad = || ChoiceError::UnknownStep(name.to_string());
@@ -59,6 +64,7 @@ impl std::str::FromStr for Step {
             "masses" => Ok(Step::Masses),
             "backlash" => Ok(Step::Backlash),
             "residual" => Ok(Step::ResidualModel),
+            "torsion:cubic" => Ok(Step::Torsion(TorsionShape::Cubic)),
             other => {
                 if let Some(n) = other.strip_prefix("harmonics:") {
                     match n.parse::<u8>() {
@@ -68,6 +74,13 @@ impl std::str::FromStr for Step {
                 } else if let Some(n) = other.strip_prefix("periodic:") {
                     match n.parse::<u16>() {
                         Ok(n) if (1..=10_000).contains(&n) => Ok(Step::Periodic(n)),
+                        _ => Err(bad()),
+                    }
+                } else if let Some(t) = other.strip_prefix("torsion:soft:") {
+                    match t.parse::<u16>() {
+                        Ok(t) if (1..=1000).contains(&t) => {
+                            Ok(Step::Torsion(TorsionShape::Soft(t)))
+                        }
                         _ => Err(bad()),
                     }
                 } else {
@@ -116,6 +129,12 @@ impl Step {
             Step::Harmonics(n) => format!("+ joint harmonics (order ≤ {n})"),
             Step::Periodic(n) => format!("+ gear periodic error ({n} cycles/turn)"),
             Step::Backlash => "+ direction-dependent offsets (backlash)".into(),
+            Step::Torsion(TorsionShape::Cubic) => {
+                "+ hardening torsion (cubic in the torque)".into()
+            }
+            Step::Torsion(TorsionShape::Soft(t)) => {
+                format!("+ soft zone of the torsion (below {t} N·m)")
+            }
             Step::ResidualModel => "+ residual model on joint angles".into(),
         }
     }
@@ -316,5 +335,34 @@ impl FitOptions {
                     })
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn torsion_steps_parse_and_bad_ones_are_named() {
+        assert_eq!(
+            "torsion:cubic".parse::<Step>(),
+            Ok(Step::Torsion(TorsionShape::Cubic))
+        );
+        assert_eq!(
+            " torsion:soft:45 ".parse::<Step>(),
+            Ok(Step::Torsion(TorsionShape::Soft(45)))
+        );
+        for bad in [
+            "torsion",
+            "torsion:soft",
+            "torsion:soft:0",
+            "torsion:soft:1001",
+        ] {
+            assert_eq!(
+                bad.parse::<Step>(),
+                Err(ChoiceError::UnknownStep(bad.to_string()))
+            );
+        }
+        assert!(Step::Torsion(TorsionShape::Cubic).opt_in());
     }
 }

@@ -58,6 +58,9 @@ pub fn candidates(
                 }
             }
             Step::Backlash => out.extend((0..joints).map(Param::Backlash)),
+            Step::Torsion(shape) => {
+                out.extend(elastic.iter().map(|&edof| Param::Torsion { edof, shape }));
+            }
         }
     }
     out

@@ -3,7 +3,7 @@
 //! and the model's gravity sag against deflex-model's own `gravity_displacement`.
 
 use deflex_absolute::model::Conditions;
-use deflex_absolute::params::{EgModel, Param};
+use deflex_absolute::params::{EgModel, Param, TorsionShape, TorsionTerm};
 use deflex_model::spatial::rotation_log;
 use deflex_model::{NamedPoint, NamedPose, builtin, spatial::pose_from_xyz_rpy};
 use nalgebra::Vector3;
@@ -30,6 +30,17 @@ fn model(name: &str, compliance_factor: f64) -> EgModel {
     });
     for c in &mut m.compliance {
         *c *= compliance_factor;
+    }
+    // Nonlinear torsion on every eDoF of an elastic model (the turn's slope then differs from
+    // its compliance, which every column that moves a torque must use).
+    for (e, c) in m.compliance.clone().into_iter().enumerate() {
+        for (shape, factor) in [(TorsionShape::Cubic, -0.3), (TorsionShape::Soft(40), 0.5)] {
+            m.torsion.push(TorsionTerm {
+                edof: e,
+                shape,
+                value: factor * c,
+            });
+        }
     }
     let mut params = m.geometric_params();
     params.push(Param::Harmonic {
@@ -60,6 +71,11 @@ fn all_params(m: &EgModel) -> Vec<Param> {
         }
     }
     params.extend((0..m.robot.joint_count()).map(Param::Backlash));
+    for edof in 0..m.compliance.len() {
+        for shape in [TorsionShape::Cubic, TorsionShape::Soft(40)] {
+            params.push(Param::Torsion { edof, shape });
+        }
+    }
     for j in 0..m.robot.joint_count() {
         for order in [1, 2, 101] {
             for sine in [false, true] {
@@ -143,6 +159,7 @@ fn columns_match_finite_differences_modified_dh() {
 fn sag_matches_the_model_crate() {
     let mut m = model("ur10", 3.0);
     m.harmonics.clear();
+    m.torsion.clear();
     // The model crate's gravity uses the robot's stiffness and inertias: make them match.
     let robot = m.to_robot();
     let m = EgModel {

@@ -5,4 +5,5 @@ mod fuzz;
 mod jacobian;
 mod registration;
 mod simulated;
+mod torsion;
 mod ur10_real;

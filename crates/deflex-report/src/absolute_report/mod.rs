@@ -351,6 +351,7 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
     let model = &result.model;
     if !model.harmonics.is_empty()
         || model.backlash.iter().any(|b| *b != 0.0)
+        || !model.torsion.is_empty()
         || model.residual.is_some()
     {
         let _ = writeln!(
@@ -415,6 +416,9 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "joint": h.joint + 1, "order": h.order, "term": if h.sine {"sin"} else {"cos"}, "value_rad": h.value,
         })).collect::<Vec<_>>(),
         "backlash_rad": result.model.backlash,
+        "torsion": result.model.torsion.iter().map(|t| json!({
+            "edof": t.edof, "shape": t.shape.name(), "value_rad_per_nm": t.value,
+        })).collect::<Vec<_>>(),
         "residual_model": result.model.residual.as_ref().map(|r| json!({"length_scale_rad": r.hyper.length_scale_rad, "ridge": r.hyper.ridge, "joint_mask": r.hyper.joints, "inducing": r.inducing.len()})),
         "kept_steps": result.kept_steps.iter().map(|s| s.name()).collect::<Vec<_>>(),
         "orientations_fitted": !campaign.orientation_rows.is_empty(),
