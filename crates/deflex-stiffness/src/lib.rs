@@ -26,6 +26,7 @@
 pub mod calibration;
 pub mod campaign_cell;
 pub mod consistency;
+pub mod coupling;
 pub mod crossval;
 pub use deflex_measurements as data;
 pub mod design;
@@ -43,6 +44,7 @@ pub use deflex_measurements::{
     DataError, FileHeader, MeasuredRotation, MeasurementFile, MeasurementRow, format_rows,
     format_rows_for,
 };
+pub use coupling::{CouplingFit, EdofPair, fit_couplings};
 pub use design::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, Design, EdofId, edof_label};
 pub use error::{CalibError, DirectionError, PlanError, RowRef, RowsError, StructureError};
 pub use search::{Criterion, SearchOptions, SearchResult, SearchStep, search_structure};
