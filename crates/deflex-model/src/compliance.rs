@@ -138,8 +138,7 @@ impl Robot {
             }
             let (pa, pb) = self.coupling_screws(data, coupling, point);
             let (aa, ab) = self.coupling_screws(data, coupling, load_point);
-            displacement +=
-                (pa * ab.dot(wrench) + pb * aa.dot(wrench)) * coupling.compliance;
+            displacement += (pa * ab.dot(wrench) + pb * aa.dot(wrench)) * coupling.compliance;
         }
         displacement
     }

@@ -4,8 +4,8 @@
 use crate::dh::{dh_placements, standard_dh_link};
 use crate::error::ModelError;
 use crate::robot::{
-    Axis, AxisStiffness, ComplianceCoupling, EdofSite, DhConvention, DhParams, Joint, LinkInertia, NamedPoint, NamedPose, Robot,
-    STANDARD_GRAVITY, UrdfSource, check_dh_row,
+    Axis, AxisStiffness, ComplianceCoupling, DhConvention, DhParams, EdofSite, Joint, LinkInertia,
+    NamedPoint, NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, check_dh_row,
 };
 use crate::spatial::{Pose, pose_from_xyz_rpy, rpy_from_rotation};
 use nalgebra::Vector3;
@@ -332,7 +332,9 @@ fn parse_robot(
                     parse_edof_label(label).ok_or_else(|| {
                         invalid(
                             format!("coupling[{}].{end}", i + 1),
-                            format!("expected an eDoF such as \"J2.z\" or \"base.x\", got {label:?}"),
+                            format!(
+                                "expected an eDoF such as \"J2.z\" or \"base.x\", got {label:?}"
+                            ),
                         )
                     })
                 };

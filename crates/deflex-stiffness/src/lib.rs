@@ -40,11 +40,11 @@ pub mod synthetic;
 mod uncertainty;
 pub mod validation;
 
+pub use coupling::{CouplingFit, EdofPair, fit_couplings};
 pub use deflex_measurements::{
     DataError, FileHeader, MeasuredRotation, MeasurementFile, MeasurementRow, format_rows,
     format_rows_for,
 };
-pub use coupling::{CouplingFit, EdofPair, fit_couplings};
 pub use design::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, Design, EdofId, edof_label};
 pub use error::{CalibError, DirectionError, PlanError, RowRef, RowsError, StructureError};
 pub use search::{Criterion, SearchOptions, SearchResult, SearchStep, search_structure};
