@@ -7,7 +7,11 @@
 //! force fading (what `deflex run` logs while the robot waits at the end of its program), is the
 //! source of the compensation; the compensated program runs on the same twin.
 //!
-//! Three ways to use the log are compared:
+//! The robot model is either the plant's own linear spring chain (`PlantConfig::linear_robot`:
+//! the springs without the coupling, the hardening and the large rotations) or, as a user has
+//! it, a model **identified from a loaded campaign** measured on the plant's twin
+//! ([`campaign_models`]: the structure search, then the J2.z–J3.z off-diagonal compliance). Ways
+//! to use the log:
 //! * **fixed**: the logged wrenches (one pass). The compensated tool reaches the programmed
 //!   depth and the sheet pushes harder than the log says (846 → 998 N on the first plant).
 //! * **law**: the force–depth law identified from the log ([`LoggedProcess`]), the depths from
@@ -17,20 +21,21 @@
 //!
 //! **Measured (max path error in contact on the feed moves):**
 //!
-//! | part, plant | uncorrected | fixed | law | law + measured TCP |
-//! | --- | --- | --- | --- | --- |
-//! | 60 mm circle, 10 × 0.5 mm levels, plant 1 | 1.637 mm | 0.654 (60.0 %) | 0.477 (70.9 %) | 0.189 (88.4 %) |
-//! | 50 mm circle clockwise, 12 × 0.4 mm levels on a 50° wall, plant 2 | 1.500 mm | 0.487 (67.5 %) | 0.317 (78.9 %) | 0.148 (90.1 %) |
+//! | part, plant | uncorrected | fixed | law | law + measured TCP | law, campaign model (diagonal / coupled) |
+//! | --- | --- | --- | --- | --- | --- |
+//! | 60 mm circle, 10 × 0.5 mm levels, plant 1 | 1.637 mm | 0.654 (60.0 %) | 0.477 (70.9 %) | 0.189 (88.4 %) | 0.208 (87.3 %) / 0.184 (88.7 %) |
+//! | 50 mm circle clockwise, 12 × 0.4 mm levels on a 50° wall, plant 2 | 1.500 mm | 0.487 (67.5 %) | 0.317 (78.9 %) | 0.148 (90.1 %) | 0.161 (89.3 %) / 0.147 (90.2 %) |
 //!
 //! Plant 1: coupling 0.3, 0.4 mrad of wrist lost motion over 600 N·m, tool holder 4e5 N·m/rad
 //! centred 80 mm down the tool. Plant 2: 0.2, 0.3 mrad over 400 N·m, 6e5 N·m/rad at 60 mm.
 //!
-//! **Why the law alone stops near 75 %.** Compensating the first circle from the log of the
-//! *compensated* run (its forces at the programmed depth: what a perfect process law gives) cuts
-//! the error to 0.39 mm (76 %, printed by the first test): the rest is what the robot model
-//! (`PlantConfig::linear_robot`, the plant's own spring chain: a perfect VJM identification)
-//! does not represent — the coupling, the hardening, the large rotations. Only a measurement
-//! of where the tool was sees it.
+//! **Why the law with the plant's springs stops near 75 %.** Compensating the first circle from
+//! the log of the *compensated* run (its forces at the programmed depth: what a perfect process
+//! law gives) cuts the error to 0.39 mm (76 %, printed by the first test): the rest is what the
+//! plant's linear spring chain does not represent, and taking the effects out of the plant one
+//! at a time shows it is the J2/J3 coupling ([`the_plain_log_gap_is_the_j2_j3_coupling`]). A
+//! model fitted to a loaded campaign on the plant represents where its tool goes under load,
+//! coupling included, and reaches 88.7 % / 90.2 % from the plain log.
 //!
 //! **The error measure.** Rows with a contact force of at least 20 N (as the README's "in
 //! contact" numbers) whose desired TCP is on a feed move: the retract at the end is a rapid
@@ -404,7 +409,11 @@ fn the_plain_log_gap_is_the_j2_j3_coupling() {
         "plant 1 without the coupling: {:.1} %",
         without_coupling * 100.0
     );
-    assert!(second >= 0.85, "plant 2 without the coupling: {:.1} %", second * 100.0);
+    assert!(
+        second >= 0.85,
+        "plant 2 without the coupling: {:.1} %",
+        second * 100.0
+    );
     assert!(
         without_lost_motion < 0.80,
         "plant 1 without the lost motion: {:.1} % (the hardening wrist was not the gap)",
@@ -436,13 +445,15 @@ fn campaign_models(cell: &CellConfig) -> (Robot, deflex_stiffness::CouplingFit) 
     let mut campaign_cell = cell.clone();
     campaign_cell.tracker.samples_per_reading = 25;
     let rows = run_campaign(&campaign_cell, &plan.rows, 1).unwrap();
-    let search =
-        search_structure(&nominal, &rows, &SearchOptions::default(), &mut |_, _, _| {}).unwrap();
+    let search = search_structure(
+        &nominal,
+        &rows,
+        &SearchOptions::default(),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
     let diagonal = search.calibration.to_robot(&nominal);
-    let pair = (
-        (EdofSite::Joint(2), Axis::Z),
-        (EdofSite::Joint(3), Axis::Z),
-    );
+    let pair = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
     let fit = fit_couplings(&diagonal, &rows, &[pair]).unwrap();
     println!(
         "SIMULATED campaign on the unseen plant: structure {}, RMS residual {:.1} µm (diagonal) → {:.1} µm with J2.z–J3.z, correlation {:.3} (plant {:.3}), χ²/dof {:.1} → {:.1}",
@@ -470,7 +481,11 @@ fn campaign_models(cell: &CellConfig) -> (Robot, deflex_stiffness::CouplingFit) 
 fn a_plain_log_with_a_campaign_identified_model() {
     for (cell, program, name) in [
         (plant_1(), circle_program(), "60 mm circle, plant 1"),
-        (plant_2(), second_program(), "50 mm clockwise circle, plant 2"),
+        (
+            plant_2(),
+            second_program(),
+            "50 mm clockwise circle, plant 2",
+        ),
     ] {
         let (diagonal, fit) = campaign_models(&cell);
         assert!(fit.rms_m < fit.rms_before_m, "{fit:?}");
@@ -480,8 +495,8 @@ fn a_plain_log_with_a_campaign_identified_model() {
             "{:?}",
             fit.correlations
         );
-        let [diagonal, coupled] = [("diagonal", diagonal), ("with J2.z–J3.z", fit.robot)].map(
-            |(model_name, model)| {
+        let [diagonal, coupled] =
+            [("diagonal", diagonal), ("with J2.z–J3.z", fit.robot)].map(|(model_name, model)| {
                 let case = HeldOut::with_model(cell.clone(), &program, model);
                 let law = case.law(false);
                 case.improvement(
@@ -489,8 +504,7 @@ fn a_plain_log_with_a_campaign_identified_model() {
                     &case.run(&law),
                     law.final_max_force_n,
                 )
-            },
-        );
+            });
         // Measured 87.3 / 88.7 % and 89.3 / 90.2 % (the issue asks for 85 %).
         assert!(coupled >= 0.85, "{name}: {:.1} %", coupled * 100.0);
         assert!(
