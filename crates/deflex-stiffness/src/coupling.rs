@@ -229,7 +229,7 @@ pub fn fit_couplings(
     if let Some((k, rho)) = correlations
         .iter()
         .enumerate()
-        .find(|(_, rho)| !(rho.abs() < 1.0))
+        .find(|(_, rho)| rho.is_nan() || rho.abs() >= 1.0)
     {
         return Err(StructureError::Coupling {
             label: fitted.couplings[k].label(),
