@@ -52,7 +52,7 @@ use crate::config::kuka_status_turn;
 use crate::error::ProgramError;
 use crate::names::{KRL, sanitize};
 use crate::orientation::kuka_abc_deg;
-use crate::plan::{part_name, plan};
+use crate::plan::{Plan, part_name, plan};
 use crate::settings::Coordinates;
 use crate::settings::ProgramSettings;
 use crate::sink::{ProgramSink, emit};
@@ -109,70 +109,10 @@ pub(crate) fn export(
     } else {
         name
     };
-    let k = &settings.kuka;
     let blend = settings.program.blend_mm;
     let mut src = String::with_capacity(4096 + if plan.split() { 0 } else { plan.len() * 96 });
     let _ = writeln!(src, "&ACCESS RVP\r\n&REL 1\r\nDEF {name}( )\r");
-    for line in header_lines(input) {
-        let _ = writeln!(src, "; {}\r", comment_text(&line, &[]));
-    }
-    let _ = writeln!(
-        src,
-        "; TOOL_DATA[{}] must hold the model's TCP (mm, deg): {}\r",
-        k.tool,
-        pose_literal(&input.tool_in_flange)
-    );
-    match &plan.tool_load {
-        Some(l) => {
-            let _ = writeln!(
-                src,
-                "; LOAD_DATA[{}] must hold the tool load: M {} kg, CM {{X {}, Y {}, Z {}}} mm\r",
-                k.tool,
-                num(l.mass_kg, 3),
-                num(l.cog_m[0] * 1e3, 1),
-                num(l.cog_m[1] * 1e3, 1),
-                num(l.cog_m[2] * 1e3, 1)
-            );
-        }
-        None => {
-            let _ = writeln!(
-                src,
-                "; LOAD_DATA[{}] must hold the tool load (not known to deflex)\r",
-                k.tool
-            );
-        }
-    }
-    // Positions in the robot base frame: no base, whatever `kuka.base` says.
-    let base = if k.base == 0 || input.coordinates == Coordinates::Robot {
-        "$NULLFRAME".to_string()
-    } else {
-        format!("BASE_DATA[{}]", k.base)
-    };
-    let _ = writeln!(
-        src,
-        "; {base} must hold the program frame{} relative to $WORLD (= $ROBROOT assumed): {}\r",
-        input
-            .frame_name
-            .as_ref()
-            .map_or(String::new(), |n| format!(" ({n})")),
-        pose_literal(&input.frame_in_robot)
-    );
-    let _ = writeln!(src, ";FOLD safe start\r");
-    let _ = writeln!(src, "BAS(#INITMOV, 0)\r");
-    let _ = writeln!(src, "$TOOL = TOOL_DATA[{}]\r", k.tool);
-    let _ = writeln!(src, "$LOAD = LOAD_DATA[{}]\r", k.tool);
-    let _ = writeln!(src, "$BASE = {base}\r");
-    let _ = writeln!(src, "$ADVANCE = {}\r", k.advance);
-    let _ = writeln!(src, "$APO.CDIS = DEFLEX_CDIS\r");
-    let _ = writeln!(src, "$VEL.ORI1 = DEFLEX_ORI_VEL\r");
-    let _ = writeln!(src, "$VEL.ORI2 = DEFLEX_ORI_VEL\r");
-    let _ = writeln!(src, "BAS(#VEL_PTP, DEFLEX_PTP_VEL)\r");
-    let _ = writeln!(
-        src,
-        "; BCO run: the first motion goes to the robot's HOME ($H_POS)\r"
-    );
-    let _ = writeln!(src, "PTP $H_POS\r");
-    let _ = writeln!(src, ";ENDFOLD\r");
+    write_header_and_safe_start(&mut src, input, settings, &plan);
     let mut previous: Option<[f64; 3]> = None;
     let mut speed: Option<f64> = None;
     let start_abc = kuka_abc_deg(&plan.clear[0].rotation, None);
@@ -248,6 +188,88 @@ pub(crate) fn export(
     );
     let _ = writeln!(src, "PTP $H_POS\r");
     let _ = writeln!(src, "END\r");
+    let dat = data_list(&name, settings);
+    let main = [format!("{name}.src"), format!("{name}.dat")];
+    emit(sink, FORMAT, &main[0], &src)?;
+    emit(sink, FORMAT, &main[1], &dat)?;
+    Ok(main.into_iter().chain(parts).collect())
+}
+
+/// The header comments (path, the TCP, load and base the program assumes) and the safe-start
+/// fold (tool, load, base, advance, speeds, the BCO run to HOME).
+fn write_header_and_safe_start(
+    src: &mut String,
+    input: &ProgramInput,
+    settings: &ProgramSettings,
+    plan: &Plan<'_>,
+) {
+    let k = &settings.kuka;
+    for line in header_lines(input) {
+        let _ = writeln!(src, "; {}\r", comment_text(&line, &[]));
+    }
+    let _ = writeln!(
+        src,
+        "; TOOL_DATA[{}] must hold the model's TCP (mm, deg): {}\r",
+        k.tool,
+        pose_literal(&input.tool_in_flange)
+    );
+    match &plan.tool_load {
+        Some(l) => {
+            let _ = writeln!(
+                src,
+                "; LOAD_DATA[{}] must hold the tool load: M {} kg, CM {{X {}, Y {}, Z {}}} mm\r",
+                k.tool,
+                num(l.mass_kg, 3),
+                num(l.cog_m[0] * 1e3, 1),
+                num(l.cog_m[1] * 1e3, 1),
+                num(l.cog_m[2] * 1e3, 1)
+            );
+        }
+        None => {
+            let _ = writeln!(
+                src,
+                "; LOAD_DATA[{}] must hold the tool load (not known to deflex)\r",
+                k.tool
+            );
+        }
+    }
+    // Positions in the robot base frame: no base, whatever `kuka.base` says.
+    let base = if k.base == 0 || input.coordinates == Coordinates::Robot {
+        "$NULLFRAME".to_string()
+    } else {
+        format!("BASE_DATA[{}]", k.base)
+    };
+    let _ = writeln!(
+        src,
+        "; {base} must hold the program frame{} relative to $WORLD (= $ROBROOT assumed): {}\r",
+        input
+            .frame_name
+            .as_ref()
+            .map_or(String::new(), |n| format!(" ({n})")),
+        pose_literal(&input.frame_in_robot)
+    );
+    let _ = writeln!(src, ";FOLD safe start\r");
+    let _ = writeln!(src, "BAS(#INITMOV, 0)\r");
+    let _ = writeln!(src, "$TOOL = TOOL_DATA[{}]\r", k.tool);
+    let _ = writeln!(src, "$LOAD = LOAD_DATA[{}]\r", k.tool);
+    let _ = writeln!(src, "$BASE = {base}\r");
+    let _ = writeln!(src, "$ADVANCE = {}\r", k.advance);
+    let _ = writeln!(src, "$APO.CDIS = DEFLEX_CDIS\r");
+    let _ = writeln!(src, "$VEL.ORI1 = DEFLEX_ORI_VEL\r");
+    let _ = writeln!(src, "$VEL.ORI2 = DEFLEX_ORI_VEL\r");
+    let _ = writeln!(src, "BAS(#VEL_PTP, DEFLEX_PTP_VEL)\r");
+    let _ = writeln!(
+        src,
+        "; BCO run: the first motion goes to the robot's HOME ($H_POS)\r"
+    );
+    let _ = writeln!(src, "PTP $H_POS\r");
+    let _ = writeln!(src, ";ENDFOLD\r");
+}
+
+/// `NAME.dat`: the settings the user may edit on the controller.
+fn data_list(name: &str, settings: &ProgramSettings) -> String {
+    let k = &settings.kuka;
+    let blend = settings.program.blend_mm;
     let mut dat = String::with_capacity(1024);
     let _ = writeln!(dat, "&ACCESS RVP\r\n&REL 1\r\nDEFDAT {name}\r");
     let _ = writeln!(dat, "; Settings of {name}.src (edit here).\r");
@@ -266,10 +288,7 @@ pub(crate) fn export(
         num(k.ptp_speed_percent, 3)
     );
     let _ = writeln!(dat, "ENDDAT\r");
-    let main = [format!("{name}.src"), format!("{name}.dat")];
-    emit(sink, FORMAT, &main[0], &src)?;
-    emit(sink, FORMAT, &main[1], &dat)?;
-    Ok(main.into_iter().chain(parts).collect())
+    dat
 }
 
 /// `$VEL.CP = …` (m/s) before a motion whose speed differs from the current one.

@@ -47,7 +47,7 @@ use crate::config::abb_robconf;
 use crate::error::ProgramError;
 use crate::names::{RAPID, sanitize};
 use crate::orientation::abb_quaternion;
-use crate::plan::{part_name, plan};
+use crate::plan::{Plan, part_name, plan};
 use crate::settings::ProgramSettings;
 use crate::sink::{ProgramSink, emit};
 use crate::{Pose, ProgramInput};
@@ -98,28 +98,20 @@ fn robtarget(p: &Checked, q: [f64; 4]) -> String {
     )
 }
 
-/// Write the program to `sink`, each part module as soon as it is complete; returns the files,
-/// the main module first.
-pub(crate) fn export(
+/// The module's header comments and declarations: the tool and work object (declared, or the
+/// existing ones the program assumes), the start joint target, the speeds and the zone; returns
+/// the zone of the path's motions (`fine` without blending).
+fn write_declarations(
+    out: &mut String,
     input: &ProgramInput,
     settings: &ProgramSettings,
-    sink: &mut dyn ProgramSink,
-) -> Result<Vec<String>, ProgramError> {
-    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
-    let speeds = speed_table(FORMAT, plan.points_from(1), MAX_SPEEDS)?;
-    let name = sanitize(&settings.program.name, &RAPID);
-    let name = if plan.split() && name.len() > 28 {
-        name[..28].to_string()
-    } else {
-        name
-    };
+    plan: &Plan<'_>,
+    speeds: &[f64],
+) -> Result<&'static str, ProgramError> {
     let a = &settings.abb;
     let common = &settings.program;
     let tool = &a.tool_name;
     let wobj = &a.wobj_name;
-    let configured = input.configurations.len() == plan.len();
-    let mut out = String::with_capacity(8192 + if plan.split() { 0 } else { plan.len() * 180 });
-    let _ = writeln!(out, "MODULE {name}\r");
     for line in header_lines(input) {
         let _ = writeln!(out, "  ! {}\r", comment_text(&line, &[]));
     }
@@ -216,6 +208,31 @@ pub(crate) fn export(
     } else {
         "fine"
     };
+    Ok(zone)
+}
+
+/// Write the program to `sink`, each part module as soon as it is complete; returns the files,
+/// the main module first.
+pub(crate) fn export(
+    input: &ProgramInput,
+    settings: &ProgramSettings,
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
+    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
+    let speeds = speed_table(FORMAT, plan.points_from(1), MAX_SPEEDS)?;
+    let name = sanitize(&settings.program.name, &RAPID);
+    let name = if plan.split() && name.len() > 28 {
+        name[..28].to_string()
+    } else {
+        name
+    };
+    let a = &settings.abb;
+    let tool = &a.tool_name;
+    let wobj = &a.wobj_name;
+    let configured = input.configurations.len() == plan.len();
+    let mut out = String::with_capacity(8192 + if plan.split() { 0 } else { plan.len() * 180 });
+    let _ = writeln!(out, "MODULE {name}\r");
+    let zone = write_declarations(&mut out, input, settings, &plan, &speeds)?;
     let _ = writeln!(out, "  PROC main()\r");
     if configured {
         let _ = writeln!(out, "    ConfJ \\On;\r");

@@ -43,7 +43,7 @@ use crate::config::staubli_config;
 use crate::error::ProgramError;
 use crate::names::{VAL3, sanitize};
 use crate::orientation::staubli_rxryrz_deg;
-use crate::plan::plan;
+use crate::plan::{Plan, plan};
 use crate::settings::ProgramSettings;
 use crate::sink::{ProgramSink, emit, put};
 use crate::{Pose, ProgramInput};
@@ -92,16 +92,15 @@ fn config_attributes(p: &Checked) -> String {
 /// Longest `pointRx` line of the data file.
 const LINE_BYTES: usize = 200;
 
-/// Write the application to `sink`: the data file in pieces, one per part, as the parts are
-/// made (it holds every point); returns the files, the project first.
-pub(crate) fn export(
+/// The data file's head: the header comments, the frame, the tool, the motion descriptors
+/// (approach and the path's speeds, with the blend), the start joint position and the
+/// clearance points; the parts' arrays follow it.
+fn data_file_head(
     input: &ProgramInput,
     settings: &ProgramSettings,
-    sink: &mut dyn ProgramSink,
-) -> Result<Vec<String>, ProgramError> {
-    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
-    let speeds = speed_table(FORMAT, plan.points_from(0), MAX_SPEEDS)?;
-    let name = sanitize(&settings.program.name, &VAL3);
+    plan: &Plan<'_>,
+    speeds: &[f64],
+) -> String {
     let s = &settings.staubli;
     let common = &settings.program;
     let (tool, frame) = (&s.tool_name, &s.frame_name);
@@ -121,8 +120,6 @@ pub(crate) fn export(
         )
     };
 
-    let dtx_path = format!("{name}/{name}.dtx");
-    sink.begin(&dtx_path)?;
     let mut dtx = String::with_capacity(8192);
     let _ = writeln!(dtx, "{XML_HEADER}");
     let _ = writeln!(
@@ -198,6 +195,71 @@ pub(crate) fn export(
         );
     }
     let _ = writeln!(dtx, "    </Data>");
+    dtx
+}
+
+/// The project file (`NAME.pjx`): start, stop and the parts' programs, and the data file.
+fn project_file(name: &str, programs: &[(String, String)]) -> String {
+    let program_list: String = programs
+        .iter()
+        .map(|(p, _)| format!("    <Program file=\"{p}.pgx\" />\n"))
+        .collect();
+    let pjx = format!(
+        "{XML_HEADER}\n<Project xmlns=\"http://www.staubli.com/robotics/VAL3/Project/3\">\n  \
+         <Parameters version=\"s7.3.1\" stackSize=\"5000\" millimeterUnit=\"true\" />\n  \
+         <Programs>\n    <Program file=\"start.pgx\" />\n    <Program file=\"stop.pgx\" />\n{program_list}  \
+         </Programs>\n  <Database>\n    <Data file=\"{name}.dtx\" />\n  </Database>\n  \
+         <Libraries>\n  </Libraries>\n</Project>\n"
+    );
+    pjx
+}
+
+/// The `start` program: the start joint move, the approach, the parts in order, the retract.
+fn start_program(
+    plan: &Plan<'_>,
+    name: &str,
+    tool: &str,
+    frame: &str,
+    programs: &[(String, String)],
+) -> String {
+    let start_move = if plan.clear[0].config.is_some() {
+        format!("movej(jStart[0], {tool}, mApproach[0])\n  ")
+    } else {
+        format!("movej(pClear[0], {tool}, mApproach[0])\n  ")
+    };
+    let calls: String = programs
+        .iter()
+        .map(|(p, _)| format!("call {p}()\n  "))
+        .collect();
+    format!(
+        "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"start\" access=\"public\">\n    \
+         <Code><![CDATA[\nbegin\n  \
+         // deflex path: {} points in {frame}, tool {tool}; see {name}.dtx\n  \
+         // start joint move to the clearance point above the start, approach, parts, retract\n  \
+         {start_move}\
+         movel(pClear[0], {tool}, mApproach[1])\n  \
+         movel(pPath1[0], {tool}, mApproach[1])\n  \
+         {calls}\
+         movel(pClear[1], {tool}, mApproach[1])\n  \
+         waitEndMove()\nend\n]]></Code>\n  </Program>\n</Programs>\n",
+        plan.len()
+    )
+}
+
+/// Write the application to `sink`: the data file in pieces, one per part, as the parts are
+/// made (it holds every point); returns the files, the project first.
+pub(crate) fn export(
+    input: &ProgramInput,
+    settings: &ProgramSettings,
+    sink: &mut dyn ProgramSink,
+) -> Result<Vec<String>, ProgramError> {
+    let plan = plan(FORMAT, input, settings, LINE_BYTES)?;
+    let speeds = speed_table(FORMAT, plan.points_from(0), MAX_SPEEDS)?;
+    let name = sanitize(&settings.program.name, &VAL3);
+    let (tool, frame) = (&settings.staubli.tool_name, &settings.staubli.frame_name);
+    let dtx_path = format!("{name}/{name}.dtx");
+    sink.begin(&dtx_path)?;
+    let dtx = data_file_head(input, settings, &plan, &speeds);
     put(sink, FORMAT, &dtx)?;
     let mut previous: Option<[f64; 3]> = None;
     let mut programs = Vec::new();
@@ -251,39 +313,8 @@ pub(crate) fn export(
     put(sink, FORMAT, "  </Datas>\n</Database>\n")?;
     sink.end()?;
 
-    let program_list: String = programs
-        .iter()
-        .map(|(p, _)| format!("    <Program file=\"{p}.pgx\" />\n"))
-        .collect();
-    let pjx = format!(
-        "{XML_HEADER}\n<Project xmlns=\"http://www.staubli.com/robotics/VAL3/Project/3\">\n  \
-         <Parameters version=\"s7.3.1\" stackSize=\"5000\" millimeterUnit=\"true\" />\n  \
-         <Programs>\n    <Program file=\"start.pgx\" />\n    <Program file=\"stop.pgx\" />\n{program_list}  \
-         </Programs>\n  <Database>\n    <Data file=\"{name}.dtx\" />\n  </Database>\n  \
-         <Libraries>\n  </Libraries>\n</Project>\n"
-    );
-    let start_move = if plan.clear[0].config.is_some() {
-        format!("movej(jStart[0], {tool}, mApproach[0])\n  ")
-    } else {
-        format!("movej(pClear[0], {tool}, mApproach[0])\n  ")
-    };
-    let calls: String = programs
-        .iter()
-        .map(|(p, _)| format!("call {p}()\n  "))
-        .collect();
-    let start = format!(
-        "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"start\" access=\"public\">\n    \
-         <Code><![CDATA[\nbegin\n  \
-         // deflex path: {} points in {frame}, tool {tool}; see {name}.dtx\n  \
-         // start joint move to the clearance point above the start, approach, parts, retract\n  \
-         {start_move}\
-         movel(pClear[0], {tool}, mApproach[1])\n  \
-         movel(pPath1[0], {tool}, mApproach[1])\n  \
-         {calls}\
-         movel(pClear[1], {tool}, mApproach[1])\n  \
-         waitEndMove()\nend\n]]></Code>\n  </Program>\n</Programs>\n",
-        plan.len()
-    );
+    let pjx = project_file(&name, &programs);
+    let start = start_program(&plan, &name, tool, frame, &programs);
     let stop = format!(
         "{XML_HEADER}\n{PROGRAMS_OPEN}\n  <Program name=\"stop\" access=\"public\">\n    \
          <Code><![CDATA[\nbegin\n  resetMotion()\nend\n]]></Code>\n  </Program>\n</Programs>\n"

@@ -67,10 +67,3 @@ pub enum TwinError {
     #[error("the twin's state was lost: a runtime thread panicked while holding it")]
     Poisoned,
 }
-
-/// For front ends whose errors are text (the `deflex` binary's commands, the demo's studies).
-impl From<TwinError> for String {
-    fn from(error: TwinError) -> String {
-        error.to_string()
-    }
-}

@@ -77,7 +77,7 @@ fn write_into(study: &Study, out: &Path) -> Result<(), ReportError> {
         reason: e.to_string(),
     })?;
     write_text(&out.join("summary.json"), &json)?;
-    write_text(&out.join("results.md"), &readme::results_table(s))?;
+    write_text(&out.join("results.md"), &readme::results_markdown(s))?;
     write_text(
         &out.join("paper_vs_deflex.csv"),
         &csv_files::paper_vs_deflex_csv(s),

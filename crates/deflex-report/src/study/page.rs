@@ -225,10 +225,10 @@ fn introduction(html: &mut HtmlReport, s: &DemoSummary) {
     html.contents();
 }
 
-/// The headline: the cone with and without correction, and the twin's conditions.
-fn headline_section(html: &mut HtmlReport, s: &DemoSummary) {
-    html.section("Headline: the closed loop with every error source on");
-    html.paragraph(format!(
+/// The headline's first paragraph: the cone with and without correction (also what the README's
+/// screenshot of the page shows; a test compares the two).
+pub fn headline_text(s: &DemoSummary) -> String {
+    format!(
         "Forming the paper's cone, the maximum path error norm goes from {:.2} mm without \
          correction to {:.2} mm with it: {:.1} % better (paper, on the real TX200: 3.84 → 1.13 mm, \
          70 %). The largest contact force norm rises from {:.0} N to {:.0} N as the corrected \
@@ -240,7 +240,13 @@ fn headline_section(html: &mut HtmlReport, s: &DemoSummary) {
         s.improvement_percent,
         s.forming_open.max_force_norm_N,
         s.forming_closed.max_force_norm_N,
-    ));
+    )
+}
+
+/// The headline: the cone with and without correction, and the twin's conditions.
+fn headline_section(html: &mut HtmlReport, s: &DemoSummary) {
+    html.section("Headline: the closed loop with every error source on");
+    html.paragraph(headline_text(s));
     let conditions: Vec<Vec<String>> = s
         .conditions
         .iter()

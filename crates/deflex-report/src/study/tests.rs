@@ -376,37 +376,90 @@ fn check_profiles(dir: &Path) {
     );
 }
 
-/// The README's headline table is the one `deflex demo --seed 1` measures (`results.md`): the
-/// full study (sensitivity sweep aside, which the table does not use) is run and its table
-/// compared with the block between the README's `demo-results` markers. After a change that
-/// moves a number on purpose: `DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_results`
-/// rewrites the block (and only it).
-#[test]
-fn readme_results_are_the_demos_own() {
-    use super::readme::{current_block, replace_block, results_table};
+/// The README's generated blocks are what `deflex demo --seed 1` measures (`results.md`): the
+/// headline table and the details under it, compared with the blocks between the README's
+/// markers; with `with_sensitivity` the sensitivity bullet too (the study then runs its
+/// sensitivity section). `DEFLEX_BLESS_README=1` rewrites the blocks instead.
+fn check_readme_blocks(with_sensitivity: bool) {
+    use super::readme::{
+        Block, current_block, details_list, replace_block, results_table, sensitivity_list,
+    };
     let options = DemoOptions {
         seed: 1,
-        sensitivity: false,
+        sensitivity: with_sensitivity,
         ..DemoOptions::default()
     };
     let cell = deflex_sim::CellConfig::for_robot(&options.robot).unwrap();
     let study = run_study(&options, cell, &mut Silent).expect("the demo's study runs");
-    let table = results_table(&study.summary);
+    let blocks: Vec<(Block, String)> = if with_sensitivity {
+        vec![(Block::Sensitivity, sensitivity_list(&study.summary))]
+    } else {
+        vec![
+            (Block::Results, results_table(&study.summary)),
+            (Block::Details, details_list(&study.summary)),
+        ]
+    };
     let readme_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md");
-    let readme = std::fs::read_to_string(&readme_path).expect("README.md is readable");
-    let block = current_block(&readme).expect("README.md has the demo-results markers");
-    if block == table {
-        return;
+    let mut readme = std::fs::read_to_string(&readme_path).expect("README.md is readable");
+    let bless = std::env::var_os("DEFLEX_BLESS_README").is_some();
+    let mut stale = Vec::new();
+    for (block, text) in blocks {
+        let current = current_block(&readme, block)
+            .unwrap_or_else(|| panic!("README.md has no {:?} block markers", block));
+        if current == text {
+            continue;
+        }
+        if bless {
+            readme = replace_block(&readme, block, &text).expect("markers in order");
+        } else {
+            stale.push(format!(
+                "--- README {block:?}:\n{current}\n--- demo:\n{text}"
+            ));
+        }
     }
-    if std::env::var_os("DEFLEX_BLESS_README").is_some() {
-        let updated = replace_block(&readme, &table).expect("markers in order");
-        std::fs::write(&readme_path, updated).expect("README.md is writable");
-        return;
+    if bless {
+        std::fs::write(&readme_path, readme).expect("README.md is writable");
     }
-    panic!(
-        "README.md's results table is not the demo's (seed 1).\n--- README:\n{block}\n--- demo:\n{table}\n\
-         If the change is intended: DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_results"
+    if !with_sensitivity {
+        // The README's screenshot of the page: scripts/report-screenshot keeps the headline it
+        // shows beside it.
+        let shot = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/report-screenshot.txt");
+        let shown = std::fs::read_to_string(&shot).expect("docs/report-screenshot.txt is readable");
+        let expected = format!(
+            "headline: {}",
+            super::page::headline_text(&study.summary)
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+        if shown.trim_end() != expected {
+            stale.push(format!(
+                "--- docs/report-screenshot.txt (what the screenshot shows):\n{}\n--- demo:\n{expected}\n\
+                 Retake it: scripts/report-screenshot",
+                shown.trim_end()
+            ));
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "README.md's generated results are not the demo's (seed 1).\n{}\n\
+         If the change is intended: DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_ -- --include-ignored",
+        stale.join("\n")
     );
+}
+
+/// The headline table and the details under it (the study without its sensitivity section).
+#[test]
+fn readme_results_are_the_demos_own() {
+    check_readme_blocks(false);
+}
+
+/// The sensitivity bullet (the study with its sensitivity section: slow in a debug build, so run
+/// by `scripts/test` with the ignored tests).
+#[test]
+#[ignore = "runs the seed-1 study with its sensitivity section; scripts/test runs it"]
+fn readme_sensitivity_is_the_demos_own() {
+    check_readme_blocks(true);
 }
 
 /// The compensation error files give every way's error against its position along the desired
