@@ -209,7 +209,7 @@ pub struct FitResult {
     pub residuals: Vec<RowResidual>,
     /// Role multiplicity used: 1 = fit, 0 = held out.
     pub fit_rows: Vec<bool>,
-    /// Largest correlations |ρ| ≥ 0.95 between identified parameters.
+    /// Every pair of identified parameters correlated at |ρ| ≥ 0.95, the strongest first.
     pub correlations: Vec<(String, String, f64)>,
     /// Robust loss used.
     pub loss: Loss,

@@ -4,8 +4,9 @@
 //! name or a robot file; default the twin file's, else the paper's TX200) with that robot's cell
 //! (`deflex_sim::CellConfig::for_robot`), and names it in every output.
 
-use crate::args::{CliResult, check_flag, print_json};
+use crate::args::{check_flag, print_json};
 use crate::cmd_control::{load_cell_file, stats_json};
+use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
 use deflex_record::{McapRecorder, RecordReport};
 use deflex_runtime::CellFile;
@@ -77,7 +78,7 @@ pub struct CellArgs {
 
 impl CellArgs {
     /// Every numeric flag within its documented bounds.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), CliError> {
         check_flag("--speed", self.speed, 1e-3, 100.0, "")?;
         if let Some(l) = self.length_mm {
             check_flag("--length-mm", l, 1e-3, 1e6, "mm")?;
@@ -113,20 +114,23 @@ pub struct CellSession {
     /// The ground-truth log written (rows).
     pub log: (PathBuf, usize),
     /// The MCAP recording: where, and what it held (or why it failed).
-    pub recording: (PathBuf, Result<RecordReport, String>),
+    pub recording: (PathBuf, Result<RecordReport, deflex_record::RecordError>),
     /// What the live view did.
     pub view: Option<ViewStats>,
 }
 
-pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
+pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, CliError> {
     let path = match args.path.as_str() {
         "cone" => ToolPath::paper_cone(),
         "helical" => ToolPath::cone(&ConeParams {
             helical: true,
             ..ConeParams::default()
-        })
-        .map_err(|e| e.to_string())?,
-        other => return Err(format!("--path: expected cone or helical, got \"{other}\"")),
+        })?,
+        other => {
+            return Err(
+                UsageError::invalid("--path", "cone or helical", format!("\"{other}\"")).into(),
+            );
+        }
     };
     Ok(match args.length_mm {
         Some(l) => path.truncated(l),
@@ -136,12 +140,11 @@ pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, String> {
 
 /// The twin's cell: the robot's (`--robot`, else the twin file's, else the TX200's), with the
 /// twin file's settings over it.
-pub fn twin_config(args: &CellArgs) -> Result<CellConfig, String> {
+pub fn twin_config(args: &CellArgs) -> Result<CellConfig, CliError> {
     match (&args.twin, &args.robot) {
-        (Some(p), robot) => deflex_twin::load_cell(p, robot.as_deref()).map_err(|e| e.to_string()),
-        (None, Some(robot)) => {
-            deflex_twin::cell_for_robot(robot).map_err(|e| format!("--robot {robot}: {e}"))
-        }
+        (Some(p), robot) => Ok(deflex_twin::load_cell(p, robot.as_deref())?),
+        (None, Some(robot)) => deflex_twin::cell_for_robot(robot)
+            .map_err(|e| CliError::in_context(format!("--robot {robot}"))(e.into())),
         (None, None) => Ok(CellConfig::default()),
     }
 }
@@ -189,19 +192,20 @@ pub fn cell_session(
     args: &CellArgs,
     stop: &AtomicBool,
     progress: bool,
-) -> Result<CellSession, String> {
+) -> Result<CellSession, CliError> {
     if !args.sim {
-        return Err("cell: only the simulated cell exists; pass --sim".into());
+        return Err(UsageError::Missing {
+            what: "cell",
+            give: "only the simulated cell exists; pass --sim",
+        }
+        .into());
     }
     args.check()?;
     let file = load_cell_file(&args.config)?;
     if file.sensor.kind == deflex_runtime::config::SensorKind::Ros2 {
-        return Err(format!(
-            "{}: sensor.kind = \"ros2\": the simulated cell plays the robot and an ATI Net F/T; \
-             give `deflex cell --sim` a CELL.toml with sensor.kind = \"netft\" and relay its \
-             readings onto the WrenchStamped topic (as crates/deflex-ros2/tests/python does)",
-            file.origin
-        ));
+        return Err(CliError::SimCellNeedsNetFt {
+            origin: file.origin.to_string(),
+        });
     }
     let options = ServeOptions {
         twin: twin_config(args)?,
@@ -213,12 +217,11 @@ pub fn cell_session(
     };
     let log_path = cell_log_path(args, &file);
     let mcap_path = crate::live::mcap_beside(&log_path, "--log")?;
-    let nominal = options.twin.nominal_robot().map_err(|e| e.to_string())?;
+    let nominal = options.twin.nominal_robot()?;
     let info = Arc::new(twin_cell_session_info(&nominal, &options.twin));
     debug_assert_eq!(info.source, Source::TwinCell);
     let (publisher, ring) = broadcast::<CycleSample>(1 << 14);
-    let recorder =
-        McapRecorder::spawn(&mcap_path, &ring, info.clone()).map_err(|e| e.to_string())?;
+    let recorder = McapRecorder::spawn(&mcap_path, &ring, info.clone())?;
     let view = match &args.view {
         Some(addr) => {
             let addr = crate::live::view_address(addr)?;
@@ -226,7 +229,7 @@ pub fn cell_session(
                 Ok(v) => Some(v),
                 Err(e) => {
                     let _ = recorder.finish_with(false);
-                    return Err(e.to_string());
+                    return Err(e.into());
                 }
             }
         }
@@ -238,8 +241,7 @@ pub fn cell_session(
             print_event(event)
         }
     };
-    let served = serve_cell_with(&file, &options, stop, &mut events, Some(&mut stream))
-        .map_err(|e| e.to_string());
+    let served = serve_cell_with(&file, &options, stop, &mut events, Some(&mut stream));
     drop(stream); // the stream ends
     let view = view.map(|v| {
         let stats = v.stats();
@@ -250,15 +252,13 @@ pub fn cell_session(
         Ok(o) => o,
         Err(e) => {
             let _ = recorder.finish_with(false);
-            return Err(e);
+            return Err(e.into());
         }
     };
     let rows = outcome.log.rows.len();
     let written = deflex_files::write_atomic(&log_path, outcome.log.to_csv())
-        .map_err(|e| format!("{}: {e}", log_path.display()));
-    let recording = recorder
-        .finish_with(written.is_ok())
-        .map_err(|e| e.to_string());
+        .map_err(CliError::write(&log_path));
+    let recording = recorder.finish_with(written.is_ok());
     written?;
     Ok(CellSession {
         outcome,
@@ -268,7 +268,8 @@ pub fn cell_session(
     })
 }
 
-pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
+/// Runs `deflex cell`.
+pub fn cell(args: CellArgs, json_out: bool) -> CommandResult {
     let stop = deflex_runtime::rt::interrupt_flag();
     if !json_out && !args.quiet {
         eprintln!(
@@ -301,7 +302,7 @@ pub fn cell(args: CellArgs, json_out: bool) -> CliResult {
         value["mcap"] = json!({
             "path": mcap_path, "committed": ok.is_some(),
             "cycles": ok.map(|r| r.stats.recorded), "lost": ok.map(|r| r.lost),
-            "error": recording.as_ref().err(),
+            "error": recording.as_ref().err().map(ToString::to_string),
         });
         value["view"] = json!(session.view.as_ref().map(|v| json!({
             "samples": v.samples_received, "samples_lost": v.samples_lost,
@@ -386,7 +387,9 @@ mod tests {
         assert_eq!(from_file.part.robot, "ur10e");
         let flag_wins = twin_config(&args(Some("tx200"), Some(file))).unwrap();
         assert_eq!(flag_wins.part.robot, "tx200");
-        let e = twin_config(&args(Some("nosuch-robot"), None)).unwrap_err();
+        let e = twin_config(&args(Some("nosuch-robot"), None))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("nosuch-robot"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
         // (The geometry check of the CELL.toml model: deflex-twin's tests.)
@@ -421,6 +424,7 @@ mod tests {
         };
         let e = cell_session(&args, &AtomicBool::new(false), false)
             .err()
+            .map(|e| e.to_string())
             .unwrap_or_default();
         assert!(e.contains("loopback") && e.contains("robot.bind"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);

@@ -6,12 +6,12 @@ use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
 
 use deflex_files::{AtomicDir, AtomicFile};
-use deflex_load::{read_file, robot_to_toml_for};
+use deflex_load::{read_file_ignoring, robot_to_toml_for};
 use deflex_model::Robot;
 use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
 use deflex_report::calibration_tables::{
-    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
-    residual_summary, shift_rows, stiffness_rows,
+    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
+    iteration_rows, residual_summary, shift_rows, stiffness_rows,
 };
 use deflex_report::text_table::render_table;
 use deflex_report::validation_report::{
@@ -71,6 +71,11 @@ pub struct CalibrateArgs {
     /// (the disagreement is printed as a warning).
     #[arg(long)]
     pub ignore_fk_check: bool,
+    /// A column of the measurement file that deflex does not read, kept knowingly (repeatable).
+    /// Without it an unknown column is an error naming the closest known one (a typo such as
+    /// `sigma_mm` would otherwise drop the σ it meant).
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
     /// Output robot TOML (a drop-in for every other command).
     #[arg(long)]
     pub out: PathBuf,
@@ -116,6 +121,11 @@ pub struct ValidateArgs {
     /// Use the file even when its coordinates disagree with the model's forward kinematics.
     #[arg(long)]
     pub ignore_fk_check: bool,
+    /// A column of the measurement file that deflex does not read, kept knowingly (repeatable).
+    /// Without it an unknown column is an error naming the closest known one (a typo such as
+    /// `sigma_mm` would otherwise drop the σ it meant).
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
     /// Folder for PNG plots and validation.html (replaced whole, or left as it was on error).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -154,6 +164,8 @@ fn calibration_json(cal: &Calibration) -> Value {
         "center_shifts": shifts,
         "parameters": cal.parameter_labels,
         "correlation": (0..cal.correlation.nrows()).map(|i| (0..cal.correlation.ncols()).map(|j| cal.correlation[(i, j)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        "correlated_pairs": cal.correlated_pairs().iter().map(|p| json!({"first": p.first, "second": p.second, "rho": p.rho, "text": p.to_string()})).collect::<Vec<_>>(),
+        "correlation_flag_threshold": deflex_stiffness::stiffness_fit::STRONG_CORRELATION,
         "condition_number": cal.condition_number,
         "reduced_chi2": cal.reduced_chi2,
         "bic": cal.bic,
@@ -188,6 +200,7 @@ fn read_checked(
     data: &Path,
     tolerance_mm: f64,
     ignore: bool,
+    ignore_columns: &[String],
 ) -> Result<CheckedFile, CliError> {
     if !(tolerance_mm.is_finite()
         && (MIN_FK_TOLERANCE_M * 1e3..=MAX_FK_TOLERANCE_M * 1e3).contains(&tolerance_mm))
@@ -203,7 +216,7 @@ fn read_checked(
         )
         .into());
     }
-    let file = read_file(data, Some(robot.joint_count()), true)?;
+    let file = read_file_ignoring(data, Some(robot.joint_count()), true, ignore_columns)?;
     let check = check_geometry(
         robot,
         &file.rows,
@@ -267,6 +280,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         &args.data,
         args.fk_tolerance_mm,
         args.ignore_fk_check,
+        &args.ignore_column,
     )?;
     let t0 = std::time::Instant::now();
     let (cal, steps, stop) = identify(&args, &start, &rows, json_output).map_err(
@@ -356,6 +370,10 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
     print!("{}", residual_summary(&cal));
     println!("\nParameter correlation:");
     print!("{}", correlation_table(&cal));
+    let flagged = correlated_pairs_text(&cal);
+    if !flagged.is_empty() {
+        print!("\n{flagged}");
+    }
     println!(
         "\nfile check: {} points and {} load points agree with the forward kinematics within {:.3} mm (largest {:.3} mm)",
         check.checked_points,
@@ -440,6 +458,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
         &args.data,
         args.fk_tolerance_mm,
         args.ignore_fk_check,
+        &args.ignore_column,
     )?;
     let v = run_validation(&model, baseline.as_ref(), &rows)?;
     let files = match &args.out {

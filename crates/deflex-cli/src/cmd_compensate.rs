@@ -18,7 +18,8 @@
 mod programs;
 mod setup;
 
-use crate::args::{CliResult, print_json};
+use crate::args::print_json;
+use crate::error::CommandResult;
 use clap::{Args, ValueEnum};
 use deflex_compensate::LogError;
 use deflex_compensate::log::{
@@ -228,9 +229,9 @@ fn progress_bar(json: bool, points: usize) -> indicatif::ProgressBar {
     bar
 }
 
-/// `deflex compensate` (the CLI's string error at its boundary).
-pub fn compensate_command(args: CompensateArgs, json: bool) -> CliResult {
-    run(args, json).map_err(|e| e.to_string())
+/// Runs `deflex compensate`.
+pub fn compensate_command(args: CompensateArgs, json: bool) -> CommandResult {
+    Ok(run(args, json)?)
 }
 
 /// The command with its typed error.

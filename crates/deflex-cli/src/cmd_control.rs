@@ -51,7 +51,7 @@ pub struct RunArgs {
 
 impl RunArgs {
     /// Every numeric flag within its documented bounds.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), CliError> {
         if let Some(d) = self.duration_s {
             check_flag("--duration-s", d, 1e-3, 1e7, "s")?;
         }
@@ -70,8 +70,8 @@ impl RunArgs {
     }
 }
 
-pub(crate) fn load_cell_file(path: &std::path::Path) -> Result<CellFile, String> {
-    CellFile::load(path).map_err(|e| e.to_string())
+pub(crate) fn load_cell_file(path: &std::path::Path) -> Result<CellFile, CliError> {
+    Ok(CellFile::load(path)?)
 }
 
 /// Everything `deflex run` did.
@@ -86,7 +86,7 @@ pub struct RunOutcome {
     /// What the ROS 2 sensor link took and refused (`sensor.kind = "ros2"`).
     pub ros2_sensor: Option<(String, SensorCounts)>,
     /// The MCAP recording beside the log: where, and what it held (or why it failed).
-    pub recording: Option<(PathBuf, Result<RecordReport, String>)>,
+    pub recording: Option<(PathBuf, Result<RecordReport, deflex_record::RecordError>)>,
     /// What the live view did.
     pub view: Option<ViewStats>,
 }
@@ -166,22 +166,22 @@ pub fn run_session(
     args: &RunArgs,
     live: bool,
     stop: &'static AtomicBool,
-) -> Result<RunOutcome, String> {
+) -> Result<RunOutcome, CliError> {
     args.check()?;
     let cell = load_cell_file(&args.config)?;
     if let Some(log) = cell.log_path() {
         // Before any link opens: a folder, a device or the configuration itself (read just
         // above, so known as an input) is refused here, not after the session.
         deflex_files::check_output_flag("[log] path", &log, deflex_files::OutputKind::File)
-            .map_err(|e| format!("{}: {e}", deflex_files::shown_path(&args.config)))?;
+            .map_err(|e| CliError::in_context(deflex_files::shown_path(&args.config))(e.into()))?;
     }
     let mcap_path = match cell.log_path() {
         Some(log) => Some(crate::live::mcap_beside(&log, "log.path")?),
         None => None,
     };
     let started = Instant::now();
-    let mut ros2 =
-        open_ros2_sensor(&cell).map_err(|e| format!("{}: sensor.topic: {e}", cell.origin))?;
+    let mut ros2 = open_ros2_sensor(&cell)
+        .map_err(|e| CliError::in_context(format!("{}: sensor.topic", cell.origin))(e.into()))?;
     let mut bridge_error = None;
     let run = CellRun::start_with(
         &cell,
@@ -195,16 +195,15 @@ pub fn run_session(
                 match Ros2Bridge::spawn(&settings, telemetry.subscribe(), telemetry.info().clone())
                 {
                     Ok(bridge) => ros2.bridge = Some(bridge),
-                    Err(e) => bridge_error = Some(e.to_string()),
+                    Err(e) => bridge_error = Some(e),
                 }
             }
         },
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     if let Some(e) = bridge_error {
         run.runtime.request_stop();
         let _ = run.finish();
-        return Err(e);
+        return Err(e.into());
     }
     if live && let Some(bridge) = &ros2.bridge {
         eprintln!(
@@ -219,10 +218,10 @@ pub fn run_session(
     // session before the robot is served.
     let (recorder, view) = match start_sinks(&run, mcap_path, args, stop) {
         Ok(sinks) => sinks,
-        Err(message) => {
+        Err(error) => {
             run.runtime.request_stop();
             let _ = run.finish();
-            return Err(message);
+            return Err(error);
         }
     };
     let feedforward = run.feedforward.as_ref().map(describe_feedforward);
@@ -285,13 +284,13 @@ pub fn run_session(
     let commit = finished.as_ref().is_ok_and(|s| s.summary.error.is_none());
     let recording = recorder.map(|r| {
         let path = r.path().to_path_buf();
-        (path, r.finish_with(commit).map_err(|e| e.to_string()))
+        (path, r.finish_with(commit))
     });
-    let session = finished.map_err(|e| format!("log writer: {e}"))?;
+    let session = finished.map_err(CliError::LogWriter)?;
     let bridge = match ros2.bridge {
         Some(b) => {
             let topics = b.topics().to_vec();
-            Some((topics, b.finish().map_err(|e| e.to_string())?))
+            Some((topics, b.finish()?))
         }
         None => None,
     };
@@ -312,19 +311,16 @@ fn start_sinks(
     mcap_path: Option<PathBuf>,
     args: &RunArgs,
     stop: &'static AtomicBool,
-) -> Result<(Option<McapRecorder>, Option<ViewHandle>), String> {
+) -> Result<(Option<McapRecorder>, Option<ViewHandle>), CliError> {
     let ring = run.runtime.telemetry();
     let info = run.runtime.session_info();
     let recorder = match mcap_path {
-        Some(path) => Some(
-            McapRecorder::spawn_with(
-                path,
-                ring.subscribe_from_oldest(),
-                info.clone(),
-                RecordOptions::default(),
-            )
-            .map_err(|e| e.to_string())?,
-        ),
+        Some(path) => Some(McapRecorder::spawn_with(
+            path,
+            ring.subscribe_from_oldest(),
+            info.clone(),
+            RecordOptions::default(),
+        )?),
         None => None,
     };
     let view = match &args.view {
@@ -345,7 +341,7 @@ fn start_sinks(
                     if let Some(r) = recorder {
                         let _ = r.finish_with(false);
                     }
-                    return Err(e.to_string());
+                    return Err(e.into());
                 }
             }
         }
@@ -366,7 +362,7 @@ pub(crate) fn fault_json(f: &Fault) -> serde_json::Value {
 
 pub fn run(args: RunArgs, json_out: bool) -> Result<(), CliError> {
     let stop = deflex_runtime::rt::interrupt_flag();
-    let o = run_session(&args, !args.quiet && !json_out, stop).map_err(CliError::command("run"))?;
+    let o = run_session(&args, !args.quiet && !json_out, stop)?;
     let s = &o.session.summary;
     let (kind, step_limit_m) = (o.session.robot_kind, o.session.step_limit_m);
     if json_out {
@@ -461,7 +457,7 @@ fn recording_json(o: &RunOutcome) -> serde_json::Value {
         "cycles": ok.map(|r| r.stats.recorded),
         "lost": ok.map(|r| r.lost),
         "bytes": ok.map(|r| r.stats.bytes),
-        "error": report.as_ref().err(),
+        "error": report.as_ref().err().map(ToString::to_string),
     })
 }
 

@@ -7,7 +7,7 @@ use crate::args::{CliResult, print_json, robot};
 use clap::{Args, Subcommand, ValueEnum};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::{
-    AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute,
+    AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute_ignoring,
 };
 use deflex_absolute::fit::{FitOptions, HeldOutProtocol, Step, fit, session_groups};
 use deflex_absolute::params::EgModel;
@@ -79,10 +79,16 @@ fn check_plausible_fit(
     ))
 }
 
-/// Read an absolute measurement file.
-pub fn read_absolute(path: &Path, joints: usize) -> Result<Vec<AbsoluteRow>, String> {
+/// Read an absolute measurement file, skipping the columns named in `ignored` (unknown to the
+/// format, kept knowingly: `--ignore-column`).
+pub fn read_absolute(
+    path: &Path,
+    joints: usize,
+    ignored: &[String],
+) -> Result<Vec<AbsoluteRow>, String> {
     let text = read_bounded(path, limits::MAX_FILE_BYTES)?;
-    parse_absolute(&text, &path.display().to_string(), joints).map_err(|e| e.to_string())
+    parse_absolute_ignoring(&text, &path.display().to_string(), joints, ignored)
+        .map_err(|e| e.to_string())
 }
 
 /// The single `measurements_*.csv` of a series folder (or the file itself).
@@ -184,6 +190,11 @@ pub struct CalibrateGeometryArgs {
     /// Loaded-displacement measurement CSV (the `deflex calibrate` format) fitted together.
     #[arg(long)]
     pub loaded: Vec<PathBuf>,
+    /// A column of the --data, --test-data or --loaded files that deflex does not read, kept
+    /// knowingly (repeatable). Without it an unknown column is an error naming the closest known
+    /// one.
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
     /// Absolute CSV never fitted: set-ups the fit knows are scored as they are; new set-ups get
     /// their registration fitted on half their configurations and are scored on the rest.
     #[arg(long)]
@@ -257,12 +268,28 @@ pub struct PredictArgs {
     /// Output CSV: each row with predicted_x_m … and, when measured, the error.
     #[arg(long)]
     pub out: PathBuf,
+    /// A column of the measurement file(s) that deflex does not read, kept knowingly
+    /// (repeatable). Without it an unknown column is an error naming the closest known one.
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
 }
 
 pub fn import(command: ImportCommand, json_output: bool) -> CliResult {
     let ImportCommand::Ur10Tracker(args) = command;
     if args.every == 0 || args.every > 1_000_000 {
         return Err(format!("--every: expected 1…1000000, got {}", args.every));
+    }
+    // Import writes only labels its readers read back the same: a label they would not is
+    // refused, not rewritten (a silently changed set-up name would no longer match the robot
+    // file's [[setup]]).
+    for (flag, label) in [("--setup", &args.setup), ("--target", &args.target)] {
+        deflex_absolute::data::check_label(label).map_err(|problem| {
+            format!(
+                "{flag} \"{}\": {problem}; import refuses it (labels are not rewritten): give a label of 1 to {} bytes without control characters, outer white space or a leading `#`",
+                deflex_files::shown(label),
+                limits::MAX_LABEL_BYTES
+            )
+        })?;
     }
     let options = ImportOptions {
         setup: args.setup.clone(),
@@ -335,8 +362,15 @@ fn parse_loss(text: &str) -> Result<Loss, String> {
     text.parse().map_err(|e| format!("--loss: {e}"))
 }
 
-fn read_all(paths: &[PathBuf], joints: usize) -> Result<Vec<Vec<AbsoluteRow>>, String> {
-    paths.iter().map(|p| read_absolute(p, joints)).collect()
+fn read_all(
+    paths: &[PathBuf],
+    joints: usize,
+    ignored: &[String],
+) -> Result<Vec<Vec<AbsoluteRow>>, String> {
+    paths
+        .iter()
+        .map(|p| read_absolute(p, joints, ignored))
+        .collect()
 }
 
 pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CliResult {
@@ -351,13 +385,14 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
     )?;
     let start_robot = robot(&args.robot)?;
     let n = start_robot.joint_count();
-    let series = read_all(&args.data, n)?;
-    let test = read_all(&args.test_data, n)?;
+    let series = read_all(&args.data, n, &args.ignore_column)?;
+    let test = read_all(&args.test_data, n, &args.ignore_column)?;
     let mut loaded = Vec::new();
     for path in &args.loaded {
         // Loaded readings are in the robot's world: checked against its forward kinematics
         // as `deflex calibrate` checks them (another robot's campaign is refused).
-        let file = deflex_load::read_file(path, Some(n), true).map_err(|e| e.to_string())?;
+        let file = deflex_load::read_file_ignoring(path, Some(n), true, &args.ignore_column)
+            .map_err(|e| e.to_string())?;
         let origin = deflex_files::shown_path(path);
         let check = deflex_stiffness::consistency::check_geometry(
             &start_robot,
@@ -500,7 +535,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Cli
 
 pub fn predict(args: PredictArgs, json_output: bool) -> CliResult {
     let (model, _) = load_model(&args.robot)?;
-    let rows = read_absolute(&args.data, model.robot.joint_count())?;
+    let rows = read_absolute(&args.data, model.robot.joint_count(), &args.ignore_column)?;
     let prediction =
         predict::predict_rows(&model, rows, args.fit_setup).map_err(|e| e.to_string())?;
     deflex_files::write_atomic(&args.out, report::prediction::prediction_csv(&prediction))

@@ -5,7 +5,8 @@
 //! forward kinematics compared with the model's over 500 configurations within the joint
 //! limits: the command fails (writing nothing) beyond 1 µm.
 
-use crate::args::{CliResult, print_json};
+use crate::args::print_json;
+use crate::error::CommandResult;
 use clap::{Args, ValueEnum};
 use deflex_model::Robot;
 use serde_json::json;
@@ -121,8 +122,9 @@ fn largest_gap(robot: &Robot, other: &dyn Fn(&[f64]) -> Option<nalgebra::Vector3
         .fold(0.0, f64::max)
 }
 
-pub fn export(args: ExportArgs, json: bool) -> CliResult {
-    run(args, json).map_err(|e| e.to_string())
+/// Runs `deflex export`.
+pub fn export(args: ExportArgs, json: bool) -> CommandResult {
+    Ok(run(args, json)?)
 }
 
 pub fn run(args: ExportArgs, json: bool) -> Result<(), ExportCommandError> {

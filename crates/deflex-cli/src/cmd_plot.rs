@@ -3,6 +3,7 @@
 //! a self-contained page. The folder is built aside and swapped in whole.
 
 use crate::args;
+use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -28,14 +29,15 @@ pub struct PlotArgs {
 }
 
 /// Runs `deflex plot`.
-pub fn plot(a: PlotArgs, json: bool) -> Result<(), String> {
+pub fn plot(a: PlotArgs, json: bool) -> CommandResult {
     let logs: Vec<PathBuf> = std::iter::once(a.log).chain(a.log2).collect();
     if !a.labels.is_empty() && a.labels.len() != logs.len() {
-        return Err(format!(
-            "--labels: {} names for {} logs",
-            a.labels.len(),
-            logs.len()
-        ));
+        return Err(UsageError::invalid(
+            "--labels",
+            format!("one name per log ({})", logs.len()),
+            format!("{} names", a.labels.len()),
+        )
+        .into());
     }
     let robot = a.robot.as_deref().map(args::robot).transpose()?;
     let mut traces = Vec::new();
@@ -51,16 +53,12 @@ pub fn plot(a: PlotArgs, json: bool) -> Result<(), String> {
                 _ => name,
             }
         });
-        let trace = deflex_record::trace::read_run_log(log, &label, robot.as_ref())
-            .map_err(|e| e.to_string())?;
+        let trace = deflex_record::trace::read_run_log(log, &label, robot.as_ref())?;
         traces.push(trace);
     }
-    let out =
-        deflex_files::AtomicDir::create(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
-    let figures =
-        deflex_report::write_run_figures(out.path(), &traces).map_err(|e| e.to_string())?;
-    out.commit()
-        .map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let out = deflex_files::AtomicDir::create(&a.out).map_err(CliError::write(&a.out))?;
+    let figures = deflex_report::write_run_figures(out.path(), &traces)?;
+    out.commit().map_err(CliError::write(&a.out))?;
     let names: Vec<String> = figures
         .figures
         .iter()
@@ -167,7 +165,8 @@ mod tests {
             },
             false,
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(
             e.contains("notes.txt") && e.contains("not a deflex log"),
             "{e}"
@@ -186,7 +185,8 @@ mod tests {
             },
             false,
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("--labels"), "{e}");
         let _ = std::fs::remove_dir_all(dir);
     }

@@ -46,6 +46,10 @@ pub struct RegisterArgs {
     /// Updated robot file (the new set-up and target added; everything else as it was).
     #[arg(long)]
     pub out: PathBuf,
+    /// A column of the measurement file(s) that deflex does not read, kept knowingly
+    /// (repeatable). Without it an unknown column is an error naming the closest known one.
+    #[arg(long = "ignore-column", value_name = "NAME")]
+    pub ignore_column: Vec<String>,
 }
 
 pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
@@ -60,7 +64,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CliResult {
         check_flag("--recalibrate-above-mm", mm, 1e-3, 1e3, "mm")?;
     }
     let (mut model, terms) = load_model(&args.robot)?;
-    let rows = read_absolute(&args.data, model.robot.joint_count())?;
+    let rows = read_absolute(&args.data, model.robot.joint_count(), &args.ignore_column)?;
     let setup_name = match &args.setup {
         Some(s) => s.clone(),
         None => {

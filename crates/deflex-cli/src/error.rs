@@ -107,6 +107,37 @@ pub enum CliError {
     /// An output path refused, or that could not be written, named with its flag.
     #[error(transparent)]
     Output(#[from] deflex_files::OutputError),
+    /// An offline compensation that could not be made or written.
+    #[error(transparent)]
+    Compensate(#[from] crate::cmd_compensate::CompensateCommandError),
+    /// A cell file (`CELL.toml`) that cannot be read or used.
+    #[error(transparent)]
+    Config(#[from] deflex_runtime::ConfigError),
+    /// A `deflex run` session that could not start (links, sensor, threads).
+    #[error(transparent)]
+    Start(#[from] deflex_runtime::StartError),
+    /// The ROS 2 sensor link or bridge.
+    #[error(transparent)]
+    Ros2(#[from] deflex_ros2::Ros2Error),
+    /// The simulated cell could not serve its session.
+    #[error(transparent)]
+    CellServe(#[from] deflex_twin::cell_server::CellServeError),
+    /// The run log's writer thread failed.
+    #[error("log writer: {0}")]
+    LogWriter(std::io::Error),
+    /// `cell --sim` given a cell whose sensor is a ROS 2 topic.
+    #[error(
+        "{origin}: sensor.kind = \"ros2\": the simulated cell plays the robot and an ATI Net F/T; \
+         give `deflex cell --sim` a CELL.toml with sensor.kind = \"netft\" and relay its \
+         readings onto the WrenchStamped topic (as crates/deflex-ros2/tests/python does)"
+    )]
+    SimCellNeedsNetFt {
+        /// The cell file.
+        origin: String,
+    },
+    /// A calibrated robot that could not be exported.
+    #[error(transparent)]
+    Export(#[from] crate::cmd_export::ExportCommandError),
     /// A command that still reports its failures as text (the controller, compensation and
     /// elasto-geometric commands, converted by their own tracks).
     #[error("{message}")]

@@ -181,15 +181,12 @@ fn main() -> ExitCode {
         Command::Validate(args) => cmd_calib::validate(args, cli.json),
         Command::Plan(args) => cmd_plan::plan(args, cli.json),
         Command::Sim { command } => cmd_sim::sim(command, cli.json),
-        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json)
-            .map_err(CliError::command("compensate")),
-        Command::Export(args) => {
-            cmd_export::export(args, cli.json).map_err(CliError::command("export"))
-        }
+        Command::Compensate(args) => cmd_compensate::compensate_command(args, cli.json),
+        Command::Export(args) => cmd_export::export(args, cli.json),
         Command::Run(args) => cmd_control::run(args, cli.json),
-        Command::Cell(args) => cell_server::cell(args, cli.json).map_err(CliError::command("cell")),
+        Command::Cell(args) => cell_server::cell(args, cli.json),
         Command::Demo(args) => cmd_demo::demo(args, cli.json),
-        Command::Plot(args) => cmd_plot::plot(args, cli.json).map_err(CliError::command("plot")),
+        Command::Plot(args) => cmd_plot::plot(args, cli.json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

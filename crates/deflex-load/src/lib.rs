@@ -17,7 +17,9 @@
 pub mod measurements;
 pub mod robot_file;
 
-pub use measurements::{read_file, read_for_robot, read_measurements, read_plan, read_points};
+pub use measurements::{
+    read_file, read_file_ignoring, read_for_robot, read_measurements, read_plan, read_points,
+};
 pub use robot_file::{
     FileUrdfResolver, MAX_ROBOT_FILE_BYTES, load_robot, robot_from_toml_file, robot_to_toml_for,
 };

@@ -3,7 +3,8 @@
 use crate::{BoundedReadError, read_bounded};
 use deflex_measurements::points::{MAX_POINTS_FILE_BYTES, PointSpec, PointsError, parse_points};
 use deflex_measurements::{
-    DataError, MAX_FILE_BYTES, MeasurementFile, MeasurementRow, check_joint_columns, parse_file,
+    DataError, MAX_FILE_BYTES, MeasurementFile, MeasurementRow, check_joint_columns,
+    parse_file_ignoring,
 };
 use std::path::Path;
 
@@ -14,6 +15,17 @@ pub fn read_file(
     path: &Path,
     joint_count: Option<usize>,
     require_displacement: bool,
+) -> Result<MeasurementFile, DataError> {
+    read_file_ignoring(path, joint_count, require_displacement, &[])
+}
+
+/// [`read_file`], skipping the columns named in `ignored` (columns unknown to the format:
+/// `deflex_measurements::parse_file_ignoring`).
+pub fn read_file_ignoring(
+    path: &Path,
+    joint_count: Option<usize>,
+    require_displacement: bool,
+    ignored: &[String],
 ) -> Result<MeasurementFile, DataError> {
     let origin = path.display().to_string();
     let text = read_bounded(path, MAX_FILE_BYTES).map_err(|e| match e {
@@ -30,7 +42,7 @@ pub fn read_file(
     if let Some(joint_count) = joint_count {
         check_joint_columns(&text, &origin, joint_count)?;
     }
-    parse_file(&text, &origin, require_displacement)
+    parse_file_ignoring(&text, &origin, require_displacement, ignored)
 }
 
 /// Read a measurement (or plan) file for a robot with `joint_count` joints: like

@@ -56,12 +56,42 @@ pub enum DataError {
         /// What is wrong, naming the column.
         problem: RowProblem,
     },
+    /// Two rows of one load case hold different joint configurations (rows with the same
+    /// `load_case` share configuration and load: the calibration groups them as one loading).
+    #[error("{path}: {conflict}")]
+    LoadCaseConfigurations {
+        /// File.
+        path: String,
+        /// The load case and the two rows (boxed: every error of the workspace carries this
+        /// type, so its size stays that of its common variants).
+        conflict: Box<LoadCaseConflict>,
+    },
     /// The file has a header but no data row.
     #[error("{path}: no data rows")]
     NoRows {
         /// File.
         path: String,
     },
+}
+
+/// Two rows of one load case with different joint values.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error(
+    "load case `{load_case}` holds two joint configurations: line {first_line} has q{joint}_rad = {first_value}, line {line} has {value}; give each configuration its own load case"
+)]
+pub struct LoadCaseConflict {
+    /// The load case.
+    pub load_case: String,
+    /// Line of the load case's first row.
+    pub first_line: u64,
+    /// Line of the row that differs.
+    pub line: u64,
+    /// The first joint (1-based) whose value differs.
+    pub joint: usize,
+    /// Its value on the first row (rad).
+    pub first_value: f64,
+    /// Its value on the differing row (rad).
+    pub value: f64,
 }
 
 /// What is wrong with a file's column names.
@@ -78,13 +108,23 @@ pub enum HeaderProblem {
     },
     /// A column the format does not have (a typo such as `sigma_mm` would otherwise be
     /// ignored and its values replaced by the default).
-    #[error("unknown column `{name}`{}", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
+    #[error("unknown column `{name}`{}; a column kept on purpose must be named as ignored (`deflex … --ignore-column {name}`)", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
     Unknown {
         /// The column.
         name: String,
         /// The closest column of the format.
         closest: Option<String>,
     },
+    /// A column asked to be ignored is one the format reads: ignoring it would change what the
+    /// file means (drop the column from the file instead).
+    #[error(
+        "column `{name}` is read by the format and cannot be ignored (only columns the format does not know can be)"
+    )]
+    IgnoredKnown {
+        /// The column.
+        name: String,
+    },
+
     /// No `q1_rad` column.
     #[error("no joint columns: expected q1_rad, q2_rad, …")]
     NoJointColumns,

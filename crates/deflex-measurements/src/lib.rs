@@ -57,10 +57,15 @@ pub use bounds::{
     MAX_LABEL_CHARS, MAX_MOMENT_NM, MAX_ROTATION_RAD, MAX_ROWS, MAX_SIGMA_M, MAX_SIGMA_RAD,
     MIN_SIGMA_M, MIN_SIGMA_RAD, check_row_values,
 };
-pub use error::{DataError, HeaderProblem, RowProblem, RowValueError, SigmaColumn};
+pub use error::{
+    DataError, HeaderProblem, LoadCaseConflict, RowProblem, RowValueError, SigmaColumn,
+};
 pub use format::{format_rows, format_rows_for, format_rows_with_header};
 pub use header::FileHeader;
-pub use parse::{check_joint_columns, parse_file, parse_rows};
+pub use parse::{
+    check_joint_columns, closest_column, is_joint_column, parse_file, parse_file_ignoring,
+    parse_rows,
+};
 pub use row::{
     DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, MeasuredRotation, MeasurementFile, MeasurementRow,
     load_case_count,

@@ -9,8 +9,8 @@ use crate::bounds::{
     column_bound,
 };
 use crate::{
-    DataError, FileHeader, HeaderProblem, MAX_LABEL_CHARS, MAX_ROWS, MeasuredRotation,
-    MeasurementFile, MeasurementRow, RowProblem, SigmaColumn,
+    DataError, FileHeader, HeaderProblem, LoadCaseConflict, MAX_LABEL_CHARS, MAX_ROWS,
+    MeasuredRotation, MeasurementFile, MeasurementRow, RowProblem, SigmaColumn,
 };
 use std::collections::HashMap;
 
@@ -47,11 +47,25 @@ pub fn parse_rows(
 
 /// Parse measurement or plan CSV text with its header comments and the line of every row.
 /// `origin` names the file in errors; with `require_displacement` (a measurement file) every row
-/// must carry `dx_m, dy_m, dz_m`, without it (a plan) they are read when present.
+/// must carry `dx_m, dy_m, dz_m`, without it (a plan) they are read when present. A column the
+/// format does not know is an error ([`parse_file_ignoring`] names columns to skip).
 pub fn parse_file(
     text: &str,
     origin: &str,
     require_displacement: bool,
+) -> Result<MeasurementFile, DataError> {
+    parse_file_ignoring(text, origin, require_displacement, &[])
+}
+
+/// [`parse_file`], skipping the columns named in `ignored` (a user's own extra columns, kept
+/// knowingly; a column the format reads cannot be ignored). A name the file does not have is
+/// not an error: one list serves every file of a command, and a misspelt name leaves the
+/// column it meant unknown, which is one.
+pub fn parse_file_ignoring(
+    text: &str,
+    origin: &str,
+    require_displacement: bool,
+    ignored: &[String],
 ) -> Result<MeasurementFile, DataError> {
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -66,7 +80,8 @@ pub fn parse_file(
         .headers()
         .map_err(|e| header_error(HeaderProblem::Csv(e)))?
         .clone();
-    let columns = Columns::resolve(&headers, require_displacement).map_err(header_error)?;
+    let columns =
+        Columns::resolve(&headers, require_displacement, ignored).map_err(header_error)?;
     let mut rows = Vec::new();
     let mut lines = Vec::new();
     for record in reader.records() {
@@ -101,11 +116,40 @@ pub fn parse_file(
             path: origin.to_string(),
         });
     }
+    check_load_case_configurations(&rows, &lines, origin)?;
     Ok(MeasurementFile {
         header: FileHeader::parse(text),
         rows,
         lines,
     })
+}
+
+/// Every row of a load case holds the configuration of its first row (exactly: the files deflex
+/// writes carry every digit, and two configurations a rounding apart are one typed twice).
+fn check_load_case_configurations(
+    rows: &[MeasurementRow],
+    lines: &[u64],
+    origin: &str,
+) -> Result<(), DataError> {
+    let mut first: HashMap<&str, usize> = HashMap::new();
+    for (i, row) in rows.iter().enumerate() {
+        let j = *first.entry(row.load_case.as_str()).or_insert(i);
+        let reference = &rows[j];
+        if let Some(k) = (0..row.q_rad.len()).find(|&k| row.q_rad[k] != reference.q_rad[k]) {
+            return Err(DataError::LoadCaseConfigurations {
+                path: origin.to_string(),
+                conflict: Box::new(LoadCaseConflict {
+                    load_case: row.load_case.chars().take(80).collect(),
+                    first_line: lines[j],
+                    line: lines[i],
+                    joint: k + 1,
+                    first_value: reference.q_rad[k],
+                    value: row.q_rad[k],
+                }),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The header of a file resolved to column positions. Every column name the format knows is
@@ -123,6 +167,7 @@ impl Columns {
     fn resolve(
         headers: &csv::StringRecord,
         require_displacement: bool,
+        ignored: &[String],
     ) -> Result<Columns, HeaderProblem> {
         let mut index: HashMap<String, usize> = HashMap::new();
         for (i, name) in headers.iter().enumerate() {
@@ -166,16 +211,20 @@ impl Columns {
                 .chain(&["sigma_m", "sigma_rad", "purpose"])
                 .map(|c| c.to_string()),
         );
-        if let Some(name) = headers.iter().find(|h| !known.iter().any(|k| k == h)) {
-            let closest = known
-                .iter()
-                .map(|k| (edit_distance(k, name), k))
-                .filter(|(d, _)| *d <= 3)
-                .min_by_key(|(d, _)| *d)
-                .map(|(_, k)| k.clone());
+        for name in ignored {
+            if known.iter().any(|k| k == name) || is_joint_column(name) {
+                return Err(HeaderProblem::IgnoredKnown {
+                    name: name.chars().take(80).collect(),
+                });
+            }
+        }
+        if let Some(name) = headers
+            .iter()
+            .find(|h| !known.iter().any(|k| k == h) && !ignored.iter().any(|i| i == h))
+        {
             return Err(HeaderProblem::Unknown {
                 name: name.chars().take(80).collect(),
-                closest,
+                closest: closest_column(name, &known),
             });
         }
         Ok(Columns {
@@ -346,6 +395,23 @@ impl Cells<'_> {
         }
         Ok(Some(value))
     }
+}
+
+/// The column of `known` closest to `name` (a typo's likely meaning), within 3 edits.
+pub fn closest_column(name: &str, known: &[String]) -> Option<String> {
+    known
+        .iter()
+        .map(|k| (edit_distance(k, name), k))
+        .filter(|(d, _)| *d <= 3)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k.clone())
+}
+
+/// `q7_rad` and the like: a joint column (of this robot or another), never an ignorable one.
+pub fn is_joint_column(name: &str) -> bool {
+    name.strip_prefix('q')
+        .and_then(|rest| rest.strip_suffix("_rad"))
+        .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// Levenshtein distance between two column names (short strings: the quadratic table is fine).

@@ -111,3 +111,86 @@ fn rotation_and_sigma_rad_round_trip() {
         "{err}"
     );
 }
+
+/// `text` with one more column `name` holding `value` on every row.
+fn with_column(text: &str, name: &str, value: &str) -> String {
+    let mut lines = text.lines();
+    let mut out = format!("{},{name}\n", lines.next().unwrap());
+    for line in lines {
+        out += &format!("{line},{value}\n");
+    }
+    out
+}
+
+#[test]
+fn an_extra_column_is_an_error_unless_ignored_by_name() {
+    let rows = sample();
+    let text = with_column(&format_rows(&rows), "operator", "ann");
+    let err = parse_rows(&text, "t.csv", true).unwrap_err().to_string();
+    assert!(
+        err.contains("t.csv")
+            && err.contains("unknown column `operator`")
+            && err.contains("--ignore-column operator"),
+        "{err}"
+    );
+    let ignored = ["operator".to_string()];
+    let file = parse_file_ignoring(&text, "t.csv", true, &ignored).unwrap();
+    assert_eq!(file.rows, rows);
+    // A typo still names its closest column, even with another column ignored.
+    let typo = with_column(&text, "sigma_mm", "0.01");
+    let err = parse_file_ignoring(&typo, "t.csv", true, &ignored)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("did you mean `sigma_m`?"), "{err}");
+    // Only unknown columns can be ignored; a misspelt ignored name leaves the column unknown.
+    for (name, expected) in [
+        ("sigma_m", "cannot be ignored"),
+        ("q1_rad", "cannot be ignored"),
+        ("q7_rad", "cannot be ignored"),
+        ("operater", "unknown column `operator`"),
+    ] {
+        let err = parse_file_ignoring(&text, "t.csv", true, &[name.to_string()])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(expected), "{name}: {err}");
+    }
+}
+
+#[test]
+fn a_duplicated_column_is_an_error_even_when_ignored() {
+    let text = format_rows(&sample());
+    let dup = with_column(&text, "fy_N", "0.0");
+    let err = parse_rows(&dup, "t.csv", true).unwrap_err().to_string();
+    assert!(err.contains("column `fy_N` appears twice"), "{err}");
+    let extra = with_column(&with_column(&text, "note", "a"), "note", "b");
+    let err = parse_file_ignoring(&extra, "t.csv", true, &["note".to_string()])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("column `note` appears twice"), "{err}");
+}
+
+#[test]
+fn one_load_case_holding_two_configurations_is_refused() {
+    let mut rows = sample();
+    rows.push(rows[0].clone());
+    rows[1].point = "TCP".into();
+    // Same load case, same configuration: fine.
+    parse_rows(&format_rows(&rows), "t.csv", true).unwrap();
+    rows.push(rows[0].clone());
+    rows[2].point = "M3".into();
+    rows[2].q_rad[2] = 0.25;
+    let err = parse_rows(&format_rows(&rows), "t.csv", true)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("t.csv")
+            && err.contains("load case `L1`")
+            && err.contains("line 2")
+            && err.contains("line 4")
+            && err.contains("q3_rad"),
+        "{err}"
+    );
+    // The same configuration under another label is a separate load case.
+    rows[2].load_case = "L2".into();
+    parse_rows(&format_rows(&rows), "t.csv", true).unwrap();
+}

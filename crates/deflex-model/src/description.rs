@@ -348,7 +348,7 @@ fn parse_robot(
     };
 
     match &file.urdf {
-        None => dh_geometry(&file, &mut robot, flange_offset, &invalid)?,
+        None => dh_geometry(&file, &mut robot, flange_offset, origin, &invalid)?,
         Some(urdf_path) => urdf_geometry(
             &file,
             &mut robot,
@@ -367,6 +367,7 @@ fn dh_geometry(
     file: &RobotFile,
     robot: &mut Robot,
     flange_offset: Pose,
+    origin: &str,
     invalid: &dyn Fn(String, String) -> ModelError,
 ) -> Result<(), ModelError> {
     if file.base_link.is_some() || file.tip_link.is_some() {
@@ -376,23 +377,33 @@ fn dh_geometry(
         ));
     }
     let convention = file.dh.unwrap_or_default();
-    let rows: Vec<DhParams> = file
-        .joints
-        .iter()
-        .map(|s| DhParams {
-            alpha: s.alpha.unwrap_or(0.0),
-            a: s.a.unwrap_or(0.0),
-            d: s.d.unwrap_or(0.0),
-            beta: s.beta.unwrap_or(0.0),
-        })
-        .collect();
-    // Bounds before trigonometry: a twist of 1e308 rad has no meaningful sine.
-    for (i, (row, section)) in rows.iter().zip(&file.joints).enumerate() {
+    let mut rows: Vec<DhParams> = Vec::with_capacity(file.joints.len());
+    for (i, section) in file.joints.iter().enumerate() {
         let name = section
             .name
             .clone()
             .unwrap_or_else(|| format!("joint_{}", i + 1));
-        check_dh_row(row, &format!("joint[{}] ({name})", i + 1), &invalid)?;
+        let joint = format!("joint[{}] ({name})", i + 1);
+        // Strict: a DH row states its four numbers (β, the Hayati tilt, is optional and 0 in
+        // every published table). A left-out `alpha` read as 0 turns a perpendicular axis into
+        // a parallel one without a word.
+        let required = |value: Option<f64>, field: &'static str| {
+            value.ok_or_else(|| ModelError::MissingDhField {
+                path: origin.to_string(),
+                joint: joint.clone(),
+                field,
+            })
+        };
+        let row = DhParams {
+            alpha: required(section.alpha, "alpha")?,
+            a: required(section.a, "a")?,
+            d: required(section.d, "d")?,
+            beta: section.beta.unwrap_or(0.0),
+        };
+        required(section.theta_offset, "theta_offset")?;
+        // Bounds before trigonometry: a twist of 1e308 rad has no meaningful sine.
+        check_dh_row(&row, &joint, &invalid)?;
+        rows.push(row);
     }
     let (placements, flange) = dh_placements(convention, &rows);
     for (i, ((section, row), placement)) in

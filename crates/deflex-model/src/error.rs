@@ -31,6 +31,20 @@ pub enum ModelError {
         /// What was expected.
         message: String,
     },
+    /// A DH joint of a robot file does not state one of its required fields (`alpha`, `a`, `d`,
+    /// `theta_offset`): a value left out is not silently taken as 0.
+    #[error(
+        "{path}: {joint}: missing `{field}` ({}); every DH [[joint]] states alpha, a, d and theta_offset (write 0.0 for a zero)",
+        dh_field_unit(field)
+    )]
+    MissingDhField {
+        /// The file (or `builtin:NAME`).
+        path: String,
+        /// The joint, e.g. `joint[2] (joint_2)`.
+        joint: String,
+        /// The missing key.
+        field: &'static str,
+    },
     /// The number of joint values does not match the robot.
     #[error(transparent)]
     QLength(#[from] QLengthError),
@@ -75,6 +89,14 @@ pub enum ModelError {
         /// Orientation error of that best attempt (rad).
         orientation_error_rad: f64,
     },
+}
+
+/// The unit of a DH key: lengths `a`, `d` in m, angles in rad.
+fn dh_field_unit(field: &str) -> &'static str {
+    match field {
+        "a" | "d" => "m",
+        _ => "rad",
+    }
 }
 
 /// The joint vector does not have one value per motorised joint. Small and `Copy` so the hot

@@ -10,8 +10,8 @@
 //! so a failure leaves no half-written report.
 
 use crate::calibration_tables::{
-    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
-    residual_summary, shift_rows, stiffness_rows,
+    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
+    iteration_rows, residual_summary, shift_rows, stiffness_rows,
 };
 use crate::text_table::table_csv;
 use crate::{
@@ -387,6 +387,10 @@ fn correlation_section(c: &mut PageParts) -> Result<(), ReportError> {
     let html = &mut c.html;
     let files = &mut c.files;
     html.section("Parameter correlation");
+    let flagged = correlated_pairs_text(cal);
+    if !flagged.is_empty() {
+        html.note(flagged);
+    }
     let p = cal.parameter_labels.len();
     if p >= 2 {
         let centers: Vec<f64> = (1..=p).map(|i| i as f64).collect();

@@ -162,6 +162,24 @@ pub fn correlation_table(cal: &Calibration) -> String {
     render_table(&headers, &rows)
 }
 
+/// Every pair of estimates correlated at |ρ| ≥ 0.95, one line each (empty when none): the flag
+/// printed by `deflex calibrate` and shown in its report, beside the full correlation table.
+pub fn correlated_pairs_text(cal: &Calibration) -> String {
+    let pairs = cal.correlated_pairs();
+    if pairs.is_empty() {
+        return String::new();
+    }
+    let mut out = format!(
+        "WARNING: {} pair(s) of estimates correlated at |ρ| ≥ {}:\n",
+        pairs.len(),
+        deflex_stiffness::stiffness_fit::STRONG_CORRELATION
+    );
+    for pair in &pairs {
+        out += &format!("  {pair}\n");
+    }
+    out
+}
+
 /// Residual summary of a calibration.
 pub fn residual_summary(cal: &Calibration) -> String {
     let r = &cal.residuals;

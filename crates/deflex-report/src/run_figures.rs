@@ -341,6 +341,38 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
                 .map(|c| vec![("cycle time".to_string(), c.clone())])
         }),
     )?;
+    if let Some(state) = state_figure(
+        dir,
+        traces,
+        &xs,
+        x_label,
+        &format!("{sim}Controller and process state: {names}"),
+    )? {
+        figures.push(state);
+    }
+    run_page(
+        traces,
+        &figures,
+        simulated,
+        by_path,
+        &format!("{sim}deflex plot: {names}"),
+    )
+    .write(&page)?;
+    Ok(RunFigures {
+        figures: figures.into_iter().map(|(p, _)| p).collect(),
+        page,
+        by_path_position: by_path,
+    })
+}
+
+/// The state lanes of every run (`state.png`), if any state was ever on.
+fn state_figure(
+    dir: &Path,
+    traces: &[RunTrace],
+    xs: &[Vec<f64>],
+    x_label: &str,
+    title: &str,
+) -> Result<Option<(PathBuf, String)>, ReportError> {
     let mut lanes = Vec::new();
     for (k, t) in traces.iter().enumerate() {
         for (name, on) in &t.states {
@@ -354,23 +386,28 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
             }
         }
     }
-    if !lanes.is_empty() {
-        let path = dir.join("state.png");
-        let height = 120 + 34 * lanes.len() as u32;
-        let spec = PlotSpec::new(
-            format!("{sim}Controller and process state: {names}"),
-            x_label,
-            "",
-        )
-        .size(1000, height);
-        timeline_plot(&path, &spec, &lanes)?;
-        figures.push((
-            path,
-            "Controller and process states (on where drawn).".into(),
-        ));
+    if lanes.is_empty() {
+        return Ok(None);
     }
+    let path = dir.join("state.png");
+    let height = 120 + 34 * lanes.len() as u32;
+    let spec = PlotSpec::new(title, x_label, "").size(1000, height);
+    timeline_plot(&path, &spec, &lanes)?;
+    Ok(Some((
+        path,
+        "Controller and process states (on where drawn).".into(),
+    )))
+}
 
-    let mut report = HtmlReport::new(format!("{sim}deflex plot: {names}"));
+/// The page of `deflex plot`: the runs' table, the figures and the logs.
+fn run_page(
+    traces: &[RunTrace],
+    figures: &[(PathBuf, String)],
+    simulated: bool,
+    by_path: bool,
+    title: &str,
+) -> HtmlReport {
+    let mut report = HtmlReport::new(title);
     if simulated {
         report.note("SIMULATED: at least one of these runs is the digital twin or a simulated cell, not a measurement.");
     }
@@ -423,7 +460,7 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
         &rows,
     );
     report.section("Figures");
-    for (path, caption) in &figures {
+    for (path, caption) in figures {
         report.image(path, caption.clone());
     }
     let links: Vec<FileLink> = traces
@@ -437,12 +474,7 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
             .collect::<Vec<_>>()
             .join("; "),
     );
-    report.write(&page)?;
-    Ok(RunFigures {
-        figures: figures.into_iter().map(|(p, _)| p).collect(),
-        page,
-        by_path_position: by_path,
-    })
+    report
 }
 
 #[cfg(test)]

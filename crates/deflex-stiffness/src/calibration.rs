@@ -165,6 +165,31 @@ pub struct ResidualStats {
     pub rotation_rms_rad: Option<f64>,
 }
 
+/// |ρ| from which two estimates are flagged as correlated ([`Calibration::correlated_pairs`]):
+/// the campaign determines little more than their combination.
+pub const STRONG_CORRELATION: f64 = 0.95;
+
+/// Two estimates whose correlation reaches [`STRONG_CORRELATION`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CorrelatedPair {
+    /// The first parameter's label (earlier in [`Calibration::parameter_labels`]).
+    pub first: String,
+    /// The second parameter's label.
+    pub second: String,
+    /// Their correlation, −1 … +1.
+    pub rho: f64,
+}
+
+impl std::fmt::Display for CorrelatedPair {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} and {} correlated at ρ = {:+.2}: this campaign determines their combination, not each (add load cases that load one without the other)",
+            self.first, self.second, self.rho
+        )
+    }
+}
+
 /// A calibrated model structure with its uncertainty.
 #[derive(Clone, Debug)]
 pub struct Calibration {
@@ -229,6 +254,28 @@ impl Calibration {
                 self.reduced_chi2
             )
         })
+    }
+
+    /// Every pair of estimates correlated at |ρ| ≥ [`STRONG_CORRELATION`], the strongest first
+    /// (ρ_ij = C_ij / √(C_ii C_jj) of the parameter covariance C, the matrix
+    /// [`Calibration::correlation`]).
+    pub fn correlated_pairs(&self) -> Vec<CorrelatedPair> {
+        let p = self
+            .parameter_labels
+            .len()
+            .min(self.correlation.nrows())
+            .min(self.correlation.ncols());
+        let mut pairs: Vec<CorrelatedPair> = (0..p)
+            .flat_map(|i| (i + 1..p).map(move |j| (i, j)))
+            .filter(|&(i, j)| self.correlation[(i, j)].abs() >= STRONG_CORRELATION)
+            .map(|(i, j)| CorrelatedPair {
+                first: self.parameter_labels[i].clone(),
+                second: self.parameter_labels[j].clone(),
+                rho: self.correlation[(i, j)],
+            })
+            .collect();
+        pairs.sort_by(|a, b| b.rho.abs().total_cmp(&a.rho.abs()));
+        pairs
     }
 
     /// The estimate of one eDoF.

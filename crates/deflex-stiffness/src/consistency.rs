@@ -236,8 +236,6 @@ pub fn check_geometry(
     let mut disagreements = Vec::new();
     let mut max_distance = 0.0_f64;
     let (mut checked_points, mut checked_loads) = (0, 0);
-    // Consistency groups: key → (row, local coordinates, key of the link frame's joints).
-    type Group = Vec<(usize, Vector3<f64>, Vec<u64>)>;
     let mut point_groups: BTreeMap<(String, usize), Group> = BTreeMap::new();
     let mut load_groups: BTreeMap<usize, Group> = BTreeMap::new();
     let line_of = |i: usize| lines.and_then(|l| l.get(i).copied());
@@ -328,6 +326,59 @@ pub fn check_geometry(
             ));
         }
     }
+    let groups = check_groups(
+        &point_groups,
+        &load_groups,
+        tolerance_m,
+        &mut |row, reference, d| disagree(row, &rows[row].point, reference, d),
+    );
+    checked_points += groups.points;
+    checked_loads += groups.loads;
+    max_distance = max_distance.max(groups.max_distance_m);
+    let unchecked = groups.unchecked;
+    disagreements.sort_by_key(|d| (d.row, matches!(d.reference, Reference::LoadPoint { .. })));
+    Ok(GeometryCheck {
+        robot: robot.name.clone(),
+        geometry: robot.geometry_fingerprint(),
+        tolerance_m,
+        rows: rows.len(),
+        checked_points,
+        checked_loads,
+        disagreements,
+        unchecked,
+        max_distance_m: max_distance,
+        header_mismatch: header.and_then(|h| header_mismatch(robot, h)),
+    })
+}
+
+/// Rows of one point (or the load points of one link) whose coordinates are known only in their
+/// link frame: (row, local coordinates, the joints the link frame depends on, as bit patterns).
+type Group = Vec<(usize, Vector3<f64>, Vec<u64>)>;
+
+/// What the consistency of the groups found.
+struct GroupCheck {
+    /// Measured points checked.
+    points: usize,
+    /// Load points checked.
+    loads: usize,
+    /// Largest distance of a local point from its group's median (m).
+    max_distance_m: f64,
+    /// Groups that could not be checked (one link frame only), said in words.
+    unchecked: Vec<String>,
+}
+
+/// Each group's local coordinates against their median: a point (or load point) fixed on its
+/// link has the same local coordinates in every configuration. A group seen in one link frame
+/// only cannot be checked. `disagree(row, reference, distance)` records a row farther than
+/// `tolerance_m` from its group's median.
+fn check_groups(
+    point_groups: &BTreeMap<(String, usize), Group>,
+    load_groups: &BTreeMap<usize, Group>,
+    tolerance_m: f64,
+    disagree: &mut dyn FnMut(usize, Reference, f64),
+) -> GroupCheck {
+    let mut max_distance = 0.0_f64;
+    let (mut checked_points, mut checked_loads) = (0, 0);
     let mut unchecked = Vec::new();
     let mut consistency = |group: &Group, what: String, reference: &dyn Fn() -> Reference| {
         let mut frames: Vec<&Vec<u64>> = group.iter().map(|g| &g.2).collect();
@@ -342,12 +393,12 @@ pub fn check_geometry(
             let d = (local - median).norm();
             max_distance = max_distance.max(d);
             if d > tolerance_m {
-                disagree(*row, &rows[*row].point, reference(), d);
+                disagree(*row, reference(), d);
             }
         }
         group.len()
     };
-    for ((label, link), group) in &point_groups {
+    for ((label, link), group) in point_groups {
         let link = *link;
         checked_points += consistency(
             group,
@@ -362,7 +413,7 @@ pub fn check_geometry(
             &|| Reference::LinkPoint { link },
         );
     }
-    for (link, group) in &load_groups {
+    for (link, group) in load_groups {
         let link = *link;
         checked_loads += consistency(
             group,
@@ -372,19 +423,12 @@ pub fn check_geometry(
             &|| Reference::LoadPoint { link },
         );
     }
-    disagreements.sort_by_key(|d| (d.row, matches!(d.reference, Reference::LoadPoint { .. })));
-    Ok(GeometryCheck {
-        robot: robot.name.clone(),
-        geometry: robot.geometry_fingerprint(),
-        tolerance_m,
-        rows: rows.len(),
-        checked_points,
-        checked_loads,
-        disagreements,
-        unchecked,
+    GroupCheck {
+        points: checked_points,
+        loads: checked_loads,
         max_distance_m: max_distance,
-        header_mismatch: header.and_then(|h| header_mismatch(robot, h)),
-    })
+        unchecked,
+    }
 }
 
 /// Apply the policy: a file whose rows disagree is refused ([`CalibError::GeometryMismatch`],

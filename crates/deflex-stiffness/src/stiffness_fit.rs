@@ -15,8 +15,8 @@ use deflex_model::Robot;
 use nalgebra::DMatrix;
 
 pub use crate::calibration::{
-    CHI2_WELL_ABOVE_ONE, Calibration, EdofEstimate, MAX_RELATIVE_SE, ResidualStats, ShiftEstimate,
-    Status, Structure, Z95,
+    CHI2_WELL_ABOVE_ONE, Calibration, CorrelatedPair, EdofEstimate, MAX_RELATIVE_SE, ResidualStats,
+    STRONG_CORRELATION, ShiftEstimate, Status, Structure, Z95,
 };
 pub use crate::uncertainty::bic;
 pub(crate) use crate::uncertainty::residual_stats;

@@ -26,7 +26,62 @@
 use std::collections::HashMap;
 
 mod parse;
-pub use parse::{AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute};
+pub use parse::{
+    AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute, parse_absolute_ignoring,
+};
+
+/// Why a set-up, target or configuration label cannot be written to an absolute file and read
+/// back the same by [`parse_absolute`] (which trims cells, takes `#` at a line's start for a
+/// comment and refuses empty and long labels).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LabelProblem {
+    /// Nothing to read back: the reader refuses an empty label.
+    #[error("is empty")]
+    Empty,
+    /// Longer than [`limits::MAX_LABEL_BYTES`].
+    #[error("is {bytes} bytes long; the reader takes at most {max}")]
+    TooLong {
+        /// Its length (UTF-8 bytes).
+        bytes: usize,
+        /// The bound.
+        max: usize,
+    },
+    /// White space at either end: the reader trims it, so another label would come back.
+    #[error("starts or ends with white space, which the reader trims")]
+    Whitespace,
+    /// A leading `#`: the row would be read as a comment and vanish.
+    #[error("starts with `#`, which would make its rows comments")]
+    Comment,
+    /// A control character (a line break, an escape, …): shown escaped, never written.
+    #[error("holds the control character U+{code:04X}")]
+    Control {
+        /// Its code point.
+        code: u32,
+    },
+}
+
+/// Whether `label` reads back from an absolute file exactly as written (see [`LabelProblem`]).
+pub fn check_label(label: &str) -> Result<(), LabelProblem> {
+    if label.is_empty() {
+        return Err(LabelProblem::Empty);
+    }
+    if label.len() > limits::MAX_LABEL_BYTES {
+        return Err(LabelProblem::TooLong {
+            bytes: label.len(),
+            max: limits::MAX_LABEL_BYTES,
+        });
+    }
+    if let Some(c) = label.chars().find(|c| c.is_control()) {
+        return Err(LabelProblem::Control { code: u32::from(c) });
+    }
+    if label.trim() != label {
+        return Err(LabelProblem::Whitespace);
+    }
+    if label.starts_with('#') {
+        return Err(LabelProblem::Comment);
+    }
+    Ok(())
+}
 
 /// Standard deviation of an absolute position component when the file gives none (m): a laser
 /// tracker at 2–4 m (the UR10 data set: 16–23 µm median).
@@ -374,7 +429,18 @@ mod tests {
             err.contains("6 joint columns") && err.contains("7 joints"),
             "{err}"
         );
-        let err = parse_absolute(&text.replacen("ry_rad", "ryy", 1), "t.csv", 6)
+        // A renamed column is an unknown one, named with the column it most likely meant;
+        // ignored knowingly, the orientation group it left is incomplete.
+        let renamed = text.replacen("ry_rad", "ry_rod", 1);
+        let err = parse_absolute(&renamed, "t.csv", 6)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("unknown column `ry_rod` (did you mean `ry_rad`?)")
+                && err.contains("--ignore-column ry_rod"),
+            "{err}"
+        );
+        let err = parse_absolute_ignoring(&renamed, "t.csv", 6, &["ry_rod".to_string()])
             .unwrap_err()
             .to_string();
         assert!(err.contains("go together"), "{err}");
@@ -386,6 +452,65 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(err.contains("t.csv:3") && err.contains("setup"), "{err}");
+    }
+
+    #[test]
+    fn an_extra_column_is_an_error_unless_ignored_and_known_ones_cannot_be() {
+        let rows = sample();
+        let text = format_absolute(&rows, &[]);
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        lines[0] += ",operator";
+        for line in &mut lines[1..] {
+            *line += ",ann";
+        }
+        let extra = lines.join("\n") + "\n";
+        let err = parse_absolute(&extra, "t.csv", 6).unwrap_err().to_string();
+        assert!(
+            err.contains("t.csv: header: unknown column `operator`"),
+            "{err}"
+        );
+        let mut back = parse_absolute_ignoring(&extra, "t.csv", 6, &["operator".into()]).unwrap();
+        for r in &mut back {
+            r.line = 0;
+        }
+        assert_eq!(back, rows);
+        for known in ["sigma_m", "q3_rad", "q9_rad", "approach_q1_rad", "time_s"] {
+            let err = parse_absolute_ignoring(&extra, "t.csv", 6, &[known.into()])
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("cannot be ignored"), "{known}: {err}");
+        }
+        let dup = text.replacen("setup,target", "setup,target,target", 1);
+        let err = parse_absolute(&dup, "t.csv", 6).unwrap_err().to_string();
+        assert!(err.contains("column `target` appears twice"), "{err}");
+    }
+
+    #[test]
+    fn labels_that_would_not_read_back_are_named() {
+        assert_eq!(check_label("A"), Ok(()));
+        assert_eq!(check_label("T-Mac #2, \"east\""), Ok(()));
+        assert_eq!(check_label(""), Err(LabelProblem::Empty));
+        assert_eq!(check_label(" A"), Err(LabelProblem::Whitespace));
+        assert_eq!(check_label("#A"), Err(LabelProblem::Comment));
+        assert_eq!(
+            check_label("A\u{1b}"),
+            Err(LabelProblem::Control { code: 0x1b })
+        );
+        assert_eq!(
+            check_label(&"é".repeat(101)),
+            Err(LabelProblem::TooLong {
+                bytes: 202,
+                max: limits::MAX_LABEL_BYTES
+            })
+        );
+        // What it accepts, the reader reads back the same.
+        let mut rows = sample();
+        for label in ["T-Mac #2, \"east\"", &"é".repeat(100), "Ωµ°"] {
+            assert_eq!(check_label(label), Ok(()));
+            rows[0].setup = label.to_string();
+            let back = parse_absolute(&format_absolute(&rows, &[]), "t.csv", 6).unwrap();
+            assert_eq!(back[0].setup, label);
+        }
     }
 
     #[test]

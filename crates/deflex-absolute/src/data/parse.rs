@@ -68,6 +68,20 @@ pub enum HeaderProblem {
     /// Required columns are missing.
     #[error("missing column(s) {}", .0.iter().map(|c| format!("`{c}`")).collect::<Vec<_>>().join(", "))]
     Missing(Vec<String>),
+    /// A column the format does not have (a typo such as `sigma_mm` would otherwise be ignored
+    /// and its values replaced by the default).
+    #[error("unknown column `{name}`{}; a column kept on purpose must be named as ignored (`deflex … --ignore-column {name}`)", closest.as_ref().map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default())]
+    Unknown {
+        /// The column.
+        name: String,
+        /// The closest column of the format.
+        closest: Option<String>,
+    },
+    /// A column asked to be ignored is one the format reads.
+    #[error(
+        "column `{0}` is read by the format and cannot be ignored (only columns the format does not know can be)"
+    )]
+    IgnoredKnown(String),
     /// Some but not all columns of a group.
     #[error("columns {} go together: give all or none", .0.join(", "))]
     PartialGroup(Vec<String>),
@@ -141,6 +155,7 @@ fn header(
     reader: &mut csv::Reader<&[u8]>,
     origin: &str,
     joint_count: usize,
+    ignored: &[String],
 ) -> Result<Columns, AbsoluteDataError> {
     let error = |problem| AbsoluteDataError::Header {
         path: origin.to_string(),
@@ -187,6 +202,36 @@ fn header(
     let approach: Vec<String> = (1..=joint_count)
         .map(|i| format!("{APPROACH}{i}_rad"))
         .collect();
+    let mut known: Vec<String> = ["setup", "target", "config", "sigma_m", "sigma_rad"]
+        .iter()
+        .chain(&POSITION)
+        .chain(&ORIENTATION)
+        .chain(&PAYLOAD_COM)
+        .chain(&WRENCH)
+        .chain(&["payload_kg", "temperature_C", "time_s"])
+        .map(|c| c.to_string())
+        .collect();
+    known.extend((1..=joint_count).map(|i| format!("q{i}_rad")));
+    known.extend(approach.iter().cloned());
+    for name in ignored {
+        if known.contains(name)
+            || deflex_stiffness::data::is_joint_column(name)
+            || name.starts_with(APPROACH)
+        {
+            return Err(error(HeaderProblem::IgnoredKnown(
+                name.chars().take(80).collect(),
+            )));
+        }
+    }
+    if let Some(name) = headers
+        .iter()
+        .find(|h| !known.iter().any(|k| k == h) && !ignored.iter().any(|i| i == h))
+    {
+        return Err(error(HeaderProblem::Unknown {
+            name: name.chars().take(80).collect(),
+            closest: deflex_stiffness::data::closest_column(name, &known),
+        }));
+    }
     Ok(Columns {
         orientation: all_or_none(&strings(&ORIENTATION))?,
         payload_com: all_or_none(&strings(&PAYLOAD_COM))?,
@@ -406,18 +451,32 @@ impl Record<'_> {
     }
 }
 
-/// Parse absolute measurement CSV text; `origin` names the file in errors.
+/// Parse absolute measurement CSV text; `origin` names the file in errors. A column the format
+/// does not know is an error naming the closest one ([`parse_absolute_ignoring`] skips named
+/// columns).
 pub fn parse_absolute(
     text: &str,
     origin: &str,
     joint_count: usize,
+) -> Result<Vec<AbsoluteRow>, AbsoluteDataError> {
+    parse_absolute_ignoring(text, origin, joint_count, &[])
+}
+
+/// [`parse_absolute`], skipping the columns named in `ignored` (a user's own columns, kept
+/// knowingly; a column the format reads cannot be ignored). A name the file does not have is
+/// not an error here: one list serves every file of a command.
+pub fn parse_absolute_ignoring(
+    text: &str,
+    origin: &str,
+    joint_count: usize,
+    ignored: &[String],
 ) -> Result<Vec<AbsoluteRow>, AbsoluteDataError> {
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .flexible(true)
         .comment(Some(b'#'))
         .from_reader(text.as_bytes());
-    let columns = header(&mut reader, origin, joint_count)?;
+    let columns = header(&mut reader, origin, joint_count, ignored)?;
     let mut rows = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| AbsoluteDataError::Row {

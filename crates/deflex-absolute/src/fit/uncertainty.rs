@@ -11,10 +11,9 @@ use crate::solve::{self, SolveOutcome};
 use nalgebra::DMatrix;
 use rand_chacha::ChaCha8Rng;
 
-/// Largest correlations listed.
-const MAX_CORRELATIONS: usize = 20;
-/// |ρ| from which a correlation is listed.
-const CORRELATION_LISTED: f64 = 0.95;
+/// |ρ| from which a pair of estimates is flagged (every such pair is listed: at most p(p−1)/2
+/// of the identifiable parameters).
+pub const CORRELATION_LISTED: f64 = 0.95;
 /// χ²/dof above which the fit warns that the model leaves a systematic error.
 const CHI2_WARNING: f64 = 4.0;
 
@@ -107,7 +106,6 @@ pub fn uncertainty(
         }
     }
     correlations.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
-    correlations.truncate(MAX_CORRELATIONS);
     let warning = (chi2_per_dof > CHI2_WARNING).then(|| {
         format!(
             "χ²/dof = {chi2_per_dof:.1}: the residuals are {:.1}× the stated measurement noise. The model leaves a systematic error the data resolve; the standard errors are scaled by the residual, but they and the intervals describe noise-like scatter, not that model error.",

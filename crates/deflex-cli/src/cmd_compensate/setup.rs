@@ -189,7 +189,6 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
         spec: args.robot.clone(),
         source,
     })?;
-    let n = robot.joint_count();
     // The cell is only needed for 6-joint arms' defaults and the process model.
     let mut config = match cell(args) {
         Ok(c) => Some(c),
@@ -201,76 +200,11 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
         }
         Err(e) => return Err(e),
     };
-    let mut placement: Vec<&str> = Vec::new();
-    let cell_name = if deflex_model::builtin(&args.robot).is_some() {
-        format!("the {} cell", args.robot)
-    } else {
-        format!("the cell of {}", args.robot)
-    };
-    let mut part_origin_mm = config.as_ref().map_or([0.0; 3], |c| c.part.origin_mm);
-    if let Some(text) = &args.part_xyz_mm {
-        let v = parsed("--part-xyz-mm", text)?;
-        let xyz: [f64; 3] = v.as_slice().try_into().map_err(|_| {
-            option(
-                "--part-xyz-mm",
-                format!("expected 3 values x,y,z, got {}", v.len()),
-            )
-        })?;
-        if xyz.iter().any(|v| v.abs() > 1e5) {
-            return Err(option(
-                "--part-xyz-mm",
-                format!("{xyz:?} is farther than 100 m"),
-            ));
-        }
-        part_origin_mm = xyz;
-        placement.push("part frame from --part-xyz-mm");
-        if let Some(c) = config.as_mut() {
-            c.part.origin_mm = xyz;
-        }
-    }
-    let seed: Vec<f64> = match (&args.seed_deg, &config) {
-        (Some(text), _) => {
-            placement.push("seed from --seed-deg");
-            let seed: Vec<f64> = parsed("--seed-deg", text)?
-                .into_iter()
-                .map(f64::to_radians)
-                .collect();
-            crate::args::check_joint_values("--seed-deg", &seed, true).map_err(|e| {
-                SetupError::Option {
-                    flag: "--seed-deg",
-                    message: e.to_string(),
-                }
-            })?;
-            seed
-        }
-        (None, Some(c)) if n == 6 => c.seed_q_rad().to_vec(),
-        (None, _) => {
-            return Err(option(
-                "--seed-deg",
-                format!(
-                    "robot \"{}\" has {n} joints and no twin cell: give a configuration near the start of the path",
-                    robot.name
-                ),
-            ));
-        }
-    };
-    if seed.len() != n {
-        return Err(option(
-            "--seed-deg",
-            format!(
-                "robot \"{}\" has {n} joints, {} values given",
-                robot.name,
-                seed.len()
-            ),
-        ));
-    }
-    let placement_source = if placement.is_empty() {
-        format!("{cell_name} (change with --part-xyz-mm, --seed-deg)")
-    } else if placement.len() == 1 && config.is_some() {
-        format!("{}, the rest from {cell_name}", placement[0])
-    } else {
-        placement.join(", ")
-    };
+    let Placement {
+        part_origin_mm,
+        seed,
+        source: placement_source,
+    } = placement(args, &robot, config.as_mut())?;
     let (mut tool_path, program) = tool_path(args)?;
     match args.length_mm {
         // From a micrometre to a kilometre (1e-300 mm once made an empty path).
@@ -327,49 +261,7 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
             format!("expected 1 ..= 200, got {}", args.max_iterations),
         ));
     }
-    let settings = match &args.program_config {
-        Some(p) => ProgramSettings::load(p)?,
-        None => ProgramSettings::default(),
-    };
-    let formats: Vec<Format> = if args.format.contains(&FormatArg::None) {
-        Vec::new()
-    } else {
-        let mut out: Vec<Format> = Vec::new();
-        for f in args.format.iter().filter_map(|f| f.format()) {
-            if !out.contains(&f) {
-                out.push(f);
-            }
-        }
-        out
-    };
-    if !formats.is_empty() && path.len() > settings.program.max_points {
-        return Err(option(
-            "--path",
-            format!(
-                "{} points; the programs hold at most {} (program.max_points): shorten the path or raise the limit",
-                path.len(),
-                settings.program.max_points
-            ),
-        ));
-    }
-    let wrench = match args.wrench.strip_prefix("log:") {
-        Some(file) => WrenchArg::Log(PathBuf::from(file)),
-        None if args.wrench == "process" => {
-            if config.is_none() {
-                return Err(option(
-                    "--wrench",
-                    "the process model needs the robot's twin cell",
-                ));
-            }
-            WrenchArg::Process
-        }
-        None => {
-            return Err(option(
-                "--wrench",
-                format!("expected `process` or `log:FILE`, got \"{}\"", args.wrench),
-            ));
-        }
-    };
+    let (settings, formats, wrench) = outputs(args, config.is_some(), path.len())?;
     notes.insert(
         0,
         format!(
@@ -413,6 +305,153 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
         placement_source,
         notes,
     })
+}
+
+/// Where the part sits and the configuration the path starts from.
+struct Placement {
+    /// The part frame's origin in the robot base frame (mm).
+    part_origin_mm: [f64; 3],
+    /// The IK seed (rad).
+    seed: Vec<f64>,
+    /// Where each came from (the cell, or the flags), for the user.
+    source: String,
+}
+
+/// The part frame and the seed: from `--part-xyz-mm` and `--seed-deg`, the rest from the
+/// robot's twin cell (`config`, whose part origin follows `--part-xyz-mm`).
+fn placement(
+    args: &CompensateArgs,
+    robot: &Robot,
+    mut config: Option<&mut CellConfig>,
+) -> Result<Placement, SetupError> {
+    let n = robot.joint_count();
+    let mut placement: Vec<&str> = Vec::new();
+    let cell_name = if deflex_model::builtin(&args.robot).is_some() {
+        format!("the {} cell", args.robot)
+    } else {
+        format!("the cell of {}", args.robot)
+    };
+    let mut part_origin_mm = config.as_deref().map_or([0.0; 3], |c| c.part.origin_mm);
+    if let Some(text) = &args.part_xyz_mm {
+        let v = parsed("--part-xyz-mm", text)?;
+        let xyz: [f64; 3] = v.as_slice().try_into().map_err(|_| {
+            option(
+                "--part-xyz-mm",
+                format!("expected 3 values x,y,z, got {}", v.len()),
+            )
+        })?;
+        if xyz.iter().any(|v| v.abs() > 1e5) {
+            return Err(option(
+                "--part-xyz-mm",
+                format!("{xyz:?} is farther than 100 m"),
+            ));
+        }
+        part_origin_mm = xyz;
+        placement.push("part frame from --part-xyz-mm");
+        if let Some(c) = config.as_mut() {
+            c.part.origin_mm = xyz;
+        }
+    }
+    let seed: Vec<f64> = match (&args.seed_deg, config.as_deref()) {
+        (Some(text), _) => {
+            placement.push("seed from --seed-deg");
+            let seed: Vec<f64> = parsed("--seed-deg", text)?
+                .into_iter()
+                .map(f64::to_radians)
+                .collect();
+            crate::args::check_joint_values("--seed-deg", &seed, true).map_err(|e| {
+                SetupError::Option {
+                    flag: "--seed-deg",
+                    message: e.to_string(),
+                }
+            })?;
+            seed
+        }
+        (None, Some(c)) if n == 6 => c.seed_q_rad().to_vec(),
+        (None, _) => {
+            return Err(option(
+                "--seed-deg",
+                format!(
+                    "robot \"{}\" has {n} joints and no twin cell: give a configuration near the start of the path",
+                    robot.name
+                ),
+            ));
+        }
+    };
+    if seed.len() != n {
+        return Err(option(
+            "--seed-deg",
+            format!(
+                "robot \"{}\" has {n} joints, {} values given",
+                robot.name,
+                seed.len()
+            ),
+        ));
+    }
+    let placement_source = if placement.is_empty() {
+        format!("{cell_name} (change with --part-xyz-mm, --seed-deg)")
+    } else if placement.len() == 1 && config.is_some() {
+        format!("{}, the rest from {cell_name}", placement[0])
+    } else {
+        placement.join(", ")
+    };
+    Ok(Placement {
+        part_origin_mm,
+        seed,
+        source: placement_source,
+    })
+}
+
+/// The program settings, the formats to write (checked against their point limit) and the
+/// wrench source (`process` needs the robot's twin cell).
+fn outputs(
+    args: &CompensateArgs,
+    has_cell: bool,
+    points: usize,
+) -> Result<(ProgramSettings, Vec<Format>, WrenchArg), SetupError> {
+    let settings = match &args.program_config {
+        Some(p) => ProgramSettings::load(p)?,
+        None => ProgramSettings::default(),
+    };
+    let formats: Vec<Format> = if args.format.contains(&FormatArg::None) {
+        Vec::new()
+    } else {
+        let mut out: Vec<Format> = Vec::new();
+        for f in args.format.iter().filter_map(|f| f.format()) {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+        out
+    };
+    if !formats.is_empty() && points > settings.program.max_points {
+        return Err(option(
+            "--path",
+            format!(
+                "{} points; the programs hold at most {} (program.max_points): shorten the path or raise the limit",
+                points, settings.program.max_points
+            ),
+        ));
+    }
+    let wrench = match args.wrench.strip_prefix("log:") {
+        Some(file) => WrenchArg::Log(PathBuf::from(file)),
+        None if args.wrench == "process" => {
+            if !has_cell {
+                return Err(option(
+                    "--wrench",
+                    "the process model needs the robot's twin cell",
+                ));
+            }
+            WrenchArg::Process
+        }
+        None => {
+            return Err(option(
+                "--wrench",
+                format!("expected `process` or `log:FILE`, got \"{}\"", args.wrench),
+            ));
+        }
+    };
+    Ok((settings, formats, wrench))
 }
 
 /// The tool path: a built-in one, or a G-code file read with its notes.

@@ -283,6 +283,46 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
     }
     building.commit().map_err(CliError::write(&args.out))?;
     let files: Vec<PathBuf> = names.iter().map(|n| args.out.join(n)).collect();
+    print_result(&RunResult {
+        args: &args,
+        config: &config,
+        twin: twin.as_ref(),
+        run: &run,
+        name: &name,
+        files: &files,
+        record_stats: &record_stats,
+        view_stats: view_stats.as_ref(),
+        json,
+    });
+    Ok(())
+}
+
+/// What `deflex sim isf` ran and wrote, for its report.
+struct RunResult<'a> {
+    args: &'a IsfArgs,
+    config: &'a deflex_sim::CellConfig,
+    twin: Option<&'a deflex_twin::TwinController>,
+    run: &'a deflex_sim::FormingRun,
+    name: &'a str,
+    files: &'a [PathBuf],
+    record_stats: &'a RecordStats,
+    view_stats: Option<&'a deflex_view::ViewStats>,
+    json: bool,
+}
+
+/// The run's report: its summary as JSON (with the recording and the files), or as text.
+fn print_result(r: &RunResult<'_>) {
+    let RunResult {
+        args,
+        config,
+        twin,
+        run,
+        name,
+        files,
+        record_stats,
+        view_stats,
+        json,
+    } = *r;
     let s = &run.summary;
     if json {
         let mut value: serde_json::Value =
@@ -320,7 +360,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
             "SIMULATED {mode} run on the twin of the {}: {name} (seed {})",
             s.robot, args.seed
         );
-        if let Some(t) = &twin {
+        if let Some(t) = twin {
             println!("  {}", t.status_line());
         }
         println!(
@@ -368,14 +408,13 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
                 args.out.join(PLOT_DIR).join("index.html").display()
             );
         }
-        if let Some(v) = &view_stats {
+        if let Some(v) = view_stats {
             println!(
                 "  live view: {} (the page keeps the run's data after this process ends)",
                 crate::live::view_line(v)
             );
         }
     }
-    Ok(())
 }
 
 /// The key of the recorded stream's source.

@@ -1037,6 +1037,7 @@ fn content_variants(slot: Slot, good: &str) -> Vec<(&'static str, String)> {
             v.push(("a missing", drop_key(good, "a")));
             v.push(("d missing", drop_key(good, "d")));
             v.push(("alpha missing", drop_key(good, "alpha")));
+            v.push(("theta_offset missing", drop_key(good, "theta_offset")));
             v.push(("urdf fifo", format!("urdf = \"/dev/zero\"\n{good}")));
             v.push(("nan", replace_numbers(good, "nan")));
             v.push(("inf", replace_numbers(good, "inf")));

@@ -12,6 +12,7 @@ mod cli_model;
 mod cli_run;
 mod cli_sim;
 mod hostile;
+mod strict_inputs;
 mod walkthrough;
 
 /// Tests that run the real-time threads against loopback peers take turns: on a busy 2-core

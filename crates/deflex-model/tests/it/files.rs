@@ -73,7 +73,8 @@ fn error_of(text: &str) -> String {
         .to_string()
 }
 
-const ONE_JOINT: &str = "name = \"r\"\n[[joint]]\na = 0.5\n";
+const ONE_JOINT: &str =
+    "name = \"r\"\n[[joint]]\na = 0.5\nalpha = 0.0\nd = 0.0\ntheta_offset = 0.0\n";
 
 #[test]
 fn validation_errors_name_file_and_field() {
@@ -93,9 +94,12 @@ fn validation_errors_name_file_and_field() {
         e.contains("unknown field") && e.contains("`w`") && e.contains("line"),
         "{e}"
     );
-    let e = error_of(&format!("{ONE_JOINT}d = \"abc\"\n"));
-    assert!(e.contains("robots/bad.toml") && e.contains("line 4"), "{e}");
-    let e = error_of("name = \"r\"\n[base]\nstiffness = { x = inf }\n[[joint]]\n");
+    let e = error_of(&format!("{ONE_JOINT}center_shift = \"abc\"\n"));
+    assert!(e.contains("robots/bad.toml") && e.contains("line 7"), "{e}");
+    let e = error_of(&format!(
+        "name = \"r\"\n[base]\nstiffness = {{ x = inf }}\n{}",
+        crate::dh_joint("")
+    ));
     assert!(e.contains("base.stiffness.x"), "{e}");
     let e = error_of("name = \"r\"\n");
     assert!(e.contains("1 to 8 motorised joints"), "{e}");
@@ -143,4 +147,35 @@ fn builtins_parse_and_differ_as_documented() {
         [Some(1.45e6), None, Some(2.04e6)]
     );
     assert!(builtin("nope").is_none());
+}
+
+#[test]
+fn a_dh_joint_missing_a_required_field_is_refused_naming_file_joint_and_field() {
+    // Issue 18: a left-out `alpha`, `a`, `d` or `theta_offset` was read as 0.
+    for field in ["alpha", "a", "d", "theta_offset"] {
+        let second: String = crate::dh_joint("a = 0.4\nalpha = 1.5707963267948966\n")
+            .lines()
+            .filter(|l| l.split('=').next().map(str::trim) != Some(field))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let text = format!(
+            "name = \"r\"\n{}{}name = \"elbow\"\n",
+            crate::dh_joint(""),
+            second
+        );
+        let e = error_of(&text);
+        assert!(
+            e.contains("robots/bad.toml")
+                && e.contains("joint[2] (elbow)")
+                && e.contains(&format!("missing `{field}`")),
+            "{field}: {e}"
+        );
+    }
+    // β (the Hayati tilt) stays optional; the four stated, the file reads.
+    robot_from_toml_str(
+        &format!("name = \"r\"\n{}", crate::dh_joint("")),
+        "ok.toml",
+        None,
+    )
+    .unwrap();
 }

@@ -11,3 +11,18 @@ mod fixtures;
 mod fuzz;
 mod no_alloc;
 mod robots;
+
+/// One DH `[[joint]]` stating `extra` and, for each of the four required DH keys (`alpha`, `a`,
+/// `d`, `theta_offset`) `extra` does not state, 0.0.
+pub fn dh_joint(extra: &str) -> String {
+    let mut joint = String::from("[[joint]]\n");
+    for key in ["alpha", "a", "d", "theta_offset"] {
+        let stated = extra
+            .lines()
+            .any(|l| l.split('=').next().map(str::trim) == Some(key));
+        if !stated {
+            joint += &format!("{key} = 0.0\n");
+        }
+    }
+    joint + extra
+}

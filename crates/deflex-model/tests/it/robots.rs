@@ -107,7 +107,7 @@ fn standard_dh_equals_the_same_robot_written_in_modified_dh() {
     let mut previous = (0.0, 0.0); // (alpha, a) of the previous standard row
     for (d, a, alpha) in UR10_DH {
         toml += &format!(
-            "[[joint]]\nalpha = {:?}\na = {:?}\nd = {d:?}\nstiffness = {{ x = 1e6, y = 2e6, z = 3e6 }}\n",
+            "[[joint]]\nalpha = {:?}\na = {:?}\nd = {d:?}\ntheta_offset = 0.0\nstiffness = {{ x = 1e6, y = 2e6, z = 3e6 }}\n",
             previous.0, previous.1
         );
         previous = (alpha, a);
@@ -144,7 +144,9 @@ fn hayati_beta_enters_both_conventions_as_a_rotation_about_y() {
     let mut standard = String::from("name = \"s\"\ndh = \"standard\"\n");
     let mut modified = String::from("name = \"m\"\n");
     for (d, a, alpha, beta) in rows {
-        let row = format!("[[joint]]\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\nbeta = {beta:?}\n");
+        let row = format!(
+            "[[joint]]\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\nbeta = {beta:?}\ntheta_offset = 0.0\n"
+        );
         standard += &row;
         modified += &row;
     }
@@ -321,7 +323,7 @@ fn gravity_sag_of_a_horizontal_one_joint_arm_by_hand() {
     // τ = −m g L, δθ = τ/k, tip dz = 2L·δθ = −2 m g L²/k.
     let (m, l, k) = (12.0, 0.4, 2.0e5);
     let toml = format!(
-        "name = \"arm\"\n[[joint]]\nalpha = {FRAC_PI_2:?}\nstiffness = {{ z = {k:e} }}\nmass = {m}\ncom = [{l}, 0.0, 0.0]\n[tool]\nxyz = [{}, 0.0, 0.0]\n",
+        "name = \"arm\"\n[[joint]]\nalpha = {FRAC_PI_2:?}\na = 0.0\nd = 0.0\ntheta_offset = 0.0\nstiffness = {{ z = {k:e} }}\nmass = {m}\ncom = [{l}, 0.0, 0.0]\n[tool]\nxyz = [{}, 0.0, 0.0]\n",
         2.0 * l
     );
     let robot = robot_from_toml_str(&toml, "arm", None).unwrap();
@@ -396,7 +398,6 @@ fn error_of(text: &str) -> String {
 
 #[test]
 fn absurd_values_are_refused_with_the_field_named() {
-    let one = "name = \"r\"\n[[joint]]\na = 0.5\n";
     for (extra, field) in [
         (
             "stiffness = { z = 5e-324 }\n",
@@ -415,17 +416,25 @@ fn absurd_values_are_refused_with_the_field_named() {
         ("theta_offset = inf\n", "joint[1] (joint_1).theta_offset"),
         ("limits = [-1e9, 1.0]\n", "joint[1] (joint_1).limits"),
     ] {
-        let e = error_of(&format!("{one}{extra}"));
+        let e = error_of(&format!(
+            "name = \"r\"\n{}",
+            crate::dh_joint(&format!("a = 0.5\n{extra}"))
+        ));
         assert!(
             e.contains("robots/bad.toml") && e.contains(field),
             "{extra}: {e}"
         );
     }
-    let e = error_of("name = \"r\"\ngravity = [0.0, 0.0, nan]\n[[joint]]\n");
+    let joint = crate::dh_joint("");
+    let e = error_of(&format!("name = \"r\"\ngravity = [0.0, 0.0, nan]\n{joint}"));
     assert!(e.contains("gravity.z"), "{e}");
-    let e = error_of("name = \"r\"\n[[joint]]\n[tool]\nxyz = [1e300, 0.0, 0.0]\n");
+    let e = error_of(&format!(
+        "name = \"r\"\n{joint}[tool]\nxyz = [1e300, 0.0, 0.0]\n"
+    ));
     assert!(e.contains("tool.xyz"), "{e}");
-    let e = error_of("name = \"r\"\n[[joint]]\n[[setup]]\nname = \"A\"\n[[setup]]\nname = \"A\"\n");
+    let e = error_of(&format!(
+        "name = \"r\"\n{joint}[[setup]]\nname = \"A\"\n[[setup]]\nname = \"A\"\n"
+    ));
     assert!(e.contains("listed twice"), "{e}");
 }
 
@@ -562,7 +571,7 @@ fn the_base_tilts_about_its_pivot() {
     // horizontal force at the TCP: τ = (x × (A − c))·F, δ(P) = x × (P − c)·τ/k, by hand.
     let k = 8.0e6;
     let toml = format!(
-        "name = \"r\"\n[base]\nstiffness = {{ x = {k:e} }}\npivot = [0.0, 0.0, -0.642]\n[[joint]]\nd = 0.0\n[tool]\nxyz = [1.2, 0.0, 0.3]\n"
+        "name = \"r\"\n[base]\nstiffness = {{ x = {k:e} }}\npivot = [0.0, 0.0, -0.642]\n[[joint]]\nalpha = 0.0\na = 0.0\nd = 0.0\ntheta_offset = 0.0\n[tool]\nxyz = [1.2, 0.0, 0.3]\n"
     );
     let robot = robot_from_toml_str(&toml, "r", None).unwrap();
     let again = robot_from_toml_str(&robot_to_toml(&robot), "again", None).unwrap();

@@ -120,7 +120,7 @@ def test_bad_tables_are_refused_naming_the_row_and_column(rng: np.random.Generat
         deflex.calibrate("tx200", missing)
     with pytest.raises(deflex.DataError, match="the robot has 5 joints"):
         five = deflex.Robot.from_toml(
-            'name = "five"\n' + '[[joint]]\nalpha = 0.0\na = 0.1\nd = 0.0\nstiffness = { z = 1e6 }\n' * 5
+            'name = "five"\n' + '[[joint]]\nalpha = 0.0\na = 0.1\nd = 0.0\ntheta_offset = 0.0\nstiffness = { z = 1e6 }\n' * 5
         )
         deflex.calibrate(five, data)
     with pytest.raises(deflex.CalibrationError, match="ignore_fk_check"):

@@ -191,7 +191,7 @@ def test_wrong_shapes_nan_and_types_raise_clear_errors() -> None:
     with pytest.raises(deflex.ModelError, match="cannot read file"):
         deflex.Robot.load("/nonexistent/robot.toml")
     with pytest.raises(deflex.ModelError, match=r"bad\.toml.*stiffness"):
-        deflex.Robot.from_toml('name = "x"\n[[joint]]\nalpha = 0.0\na = 0.0\nd = 0.0\nstiffness = { z = -1.0 }\n', origin="bad.toml")
+        deflex.Robot.from_toml('name = "x"\n[[joint]]\nalpha = 0.0\na = 0.0\nd = 0.0\ntheta_offset = 0.0\nstiffness = { z = -1.0 }\n', origin="bad.toml")
 
 
 def test_the_error_hierarchy() -> None:

@@ -296,8 +296,12 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         );
     }
     if !result.correlations.is_empty() {
-        let _ = writeln!(out, "\nStrong correlations (|ρ| ≥ 0.95):");
-        for (a, b, r) in result.correlations.iter().take(10) {
+        let _ = writeln!(
+            out,
+            "\nWARNING: {} pair(s) of estimates correlated at |ρ| ≥ 0.95 (the data determines their combination, not each):",
+            result.correlations.len()
+        );
+        for (a, b, r) in &result.correlations {
             let _ = writeln!(out, "  {a} / {b}: {r:+.3}");
         }
     }
@@ -398,6 +402,8 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "equivalent_to": d.combination.iter().map(|(p, c)| json!({"name": result.model.param_name(*p), "coefficient": c})).collect::<Vec<_>>(),
             "reason": d.reason,
         })).collect::<Vec<_>>(),
+        "correlated_pairs": result.correlations.iter().map(|(a, b, rho)| json!({"first": a, "second": b, "rho": rho})).collect::<Vec<_>>(),
+        "correlation_flag_threshold": 0.95,
         "condition_number": result.reduction.condition_number,
         "chi2_per_dof": result.chi2_per_dof,
         "warning": result.warning,

@@ -23,114 +23,8 @@ pub fn draw(
     }
     let fit: Vec<&&RowResidual> = absolute.iter().filter(|r| r.role == Role::Fit).collect();
     let held: Vec<&&RowResidual> = absolute.iter().filter(|r| r.role != Role::Fit).collect();
-    // Per axis, fit readings in file order.
     if !fit.is_empty() {
-        let panels: Vec<(PlotSpec, Vec<Series>)> = ["x", "y", "z"]
-            .iter()
-            .enumerate()
-            .map(|(k, axis)| {
-                let y: Vec<f64> = fit.iter().map(|r| r.residual[k] * 1e3).collect();
-                (
-                    PlotSpec::new(
-                        format!("{axis} (tracker frame)"),
-                        "reading",
-                        "residual [mm]",
-                    )
-                    .size(1100, 300),
-                    vec![Series::indexed("", y, crate::SeriesStyle::Points)],
-                )
-            })
-            .collect();
-        let name = "residuals_per_axis.png";
-        panels_plot(
-            &dir.join(name),
-            "Residuals per axis (fitted readings, final model)",
-            PanelLayout::Column,
-            &panels,
-        )?;
-        images.push((
-            name.to_string(),
-            "Residuals (measured − predicted) per tracker axis, fitted readings, final model"
-                .into(),
-        ));
-        // Against each joint.
-        let n = result.model.robot.joint_count();
-        let panels: Vec<(PlotSpec, Vec<Series>)> = (0..n)
-            .map(|j| {
-                let x: Vec<f64> = fit
-                    .iter()
-                    .map(|r| campaign.absolute[r.index].q_rad[j].to_degrees())
-                    .collect();
-                let y: Vec<f64> = fit.iter().map(|r| r.residual.norm() * 1e3).collect();
-                (
-                    PlotSpec::new(
-                        format!("J{}", j + 1),
-                        format!("q{} [deg]", j + 1),
-                        "|residual| [mm]",
-                    )
-                    .size(550, 320),
-                    vec![Series::points("", x, y)],
-                )
-            })
-            .collect();
-        let name = "residuals_vs_joints.png";
-        panels_plot(
-            &dir.join(name),
-            "Residual norm against each joint angle (fitted readings)",
-            PanelLayout::Grid { columns: 2 },
-            &panels,
-        )?;
-        images.push((name.to_string(), "Residual norm against each joint angle: structure here is model error (e.g. gear eccentricity)".into()));
-        // Map over the measured volume (projection on the tracker's x-y plane).
-        let x: Vec<f64> = fit
-            .iter()
-            .map(|r| campaign.absolute[r.index].position_m[0] * 1e3)
-            .collect();
-        let y: Vec<f64> = fit
-            .iter()
-            .map(|r| campaign.absolute[r.index].position_m[1] * 1e3)
-            .collect();
-        let v: Vec<f64> = fit.iter().map(|r| r.residual.norm() * 1e3).collect();
-        let name = "residual_map_xy.png";
-        scatter_heatmap(
-            &dir.join(name),
-            &PlotSpec::new(
-                "Residual norm over the measured volume (tracker x–y projection)",
-                "x [mm]",
-                "y [mm]",
-            )
-            .size(800, 700),
-            &x,
-            &y,
-            &v,
-            "|residual| [mm]",
-        )?;
-        images.push((
-            name.to_string(),
-            "Residual norm at each measured position, seen from above in the tracker frame".into(),
-        ));
-        let z: Vec<f64> = fit
-            .iter()
-            .map(|r| campaign.absolute[r.index].position_m[2] * 1e3)
-            .collect();
-        let name = "residual_map_xz.png";
-        scatter_heatmap(
-            &dir.join(name),
-            &PlotSpec::new(
-                "Residual norm over the measured volume (tracker x–z projection)",
-                "x [mm]",
-                "z [mm]",
-            )
-            .size(800, 700),
-            &x,
-            &z,
-            &v,
-            "|residual| [mm]",
-        )?;
-        images.push((
-            name.to_string(),
-            "Residual norm at each measured position, side view in the tracker frame".into(),
-        ));
+        images.extend(fitted_residual_plots(result, campaign, &fit, dir)?);
     }
     // Held-out error distribution (cumulative), final model.
     let mut series = Vec::new();
@@ -161,5 +55,123 @@ pub fn draw(
             "Cumulative distribution of the error norm: fitted and held-out readings".into(),
         ));
     }
+    Ok(images)
+}
+
+/// The fitted readings' residuals: per tracker axis in file order, against each joint angle,
+/// and as maps over the measured volume (x–y and x–z projections).
+fn fitted_residual_plots(
+    result: &FitResult,
+    campaign: &Campaign,
+    fit: &[&&RowResidual],
+    dir: &Path,
+) -> Result<Vec<(String, String)>, ReportError> {
+    let mut images = Vec::new();
+    // Per axis, fit readings in file order.
+    let panels: Vec<(PlotSpec, Vec<Series>)> = ["x", "y", "z"]
+        .iter()
+        .enumerate()
+        .map(|(k, axis)| {
+            let y: Vec<f64> = fit.iter().map(|r| r.residual[k] * 1e3).collect();
+            (
+                PlotSpec::new(
+                    format!("{axis} (tracker frame)"),
+                    "reading",
+                    "residual [mm]",
+                )
+                .size(1100, 300),
+                vec![Series::indexed("", y, crate::SeriesStyle::Points)],
+            )
+        })
+        .collect();
+    let name = "residuals_per_axis.png";
+    panels_plot(
+        &dir.join(name),
+        "Residuals per axis (fitted readings, final model)",
+        PanelLayout::Column,
+        &panels,
+    )?;
+    images.push((
+        name.to_string(),
+        "Residuals (measured − predicted) per tracker axis, fitted readings, final model".into(),
+    ));
+    // Against each joint.
+    let n = result.model.robot.joint_count();
+    let panels: Vec<(PlotSpec, Vec<Series>)> = (0..n)
+        .map(|j| {
+            let x: Vec<f64> = fit
+                .iter()
+                .map(|r| campaign.absolute[r.index].q_rad[j].to_degrees())
+                .collect();
+            let y: Vec<f64> = fit.iter().map(|r| r.residual.norm() * 1e3).collect();
+            (
+                PlotSpec::new(
+                    format!("J{}", j + 1),
+                    format!("q{} [deg]", j + 1),
+                    "|residual| [mm]",
+                )
+                .size(550, 320),
+                vec![Series::points("", x, y)],
+            )
+        })
+        .collect();
+    let name = "residuals_vs_joints.png";
+    panels_plot(
+        &dir.join(name),
+        "Residual norm against each joint angle (fitted readings)",
+        PanelLayout::Grid { columns: 2 },
+        &panels,
+    )?;
+    images.push((name.to_string(), "Residual norm against each joint angle: structure here is model error (e.g. gear eccentricity)".into()));
+    // Map over the measured volume (projection on the tracker's x-y plane).
+    let x: Vec<f64> = fit
+        .iter()
+        .map(|r| campaign.absolute[r.index].position_m[0] * 1e3)
+        .collect();
+    let y: Vec<f64> = fit
+        .iter()
+        .map(|r| campaign.absolute[r.index].position_m[1] * 1e3)
+        .collect();
+    let v: Vec<f64> = fit.iter().map(|r| r.residual.norm() * 1e3).collect();
+    let name = "residual_map_xy.png";
+    scatter_heatmap(
+        &dir.join(name),
+        &PlotSpec::new(
+            "Residual norm over the measured volume (tracker x–y projection)",
+            "x [mm]",
+            "y [mm]",
+        )
+        .size(800, 700),
+        &x,
+        &y,
+        &v,
+        "|residual| [mm]",
+    )?;
+    images.push((
+        name.to_string(),
+        "Residual norm at each measured position, seen from above in the tracker frame".into(),
+    ));
+    let z: Vec<f64> = fit
+        .iter()
+        .map(|r| campaign.absolute[r.index].position_m[2] * 1e3)
+        .collect();
+    let name = "residual_map_xz.png";
+    scatter_heatmap(
+        &dir.join(name),
+        &PlotSpec::new(
+            "Residual norm over the measured volume (tracker x–z projection)",
+            "x [mm]",
+            "z [mm]",
+        )
+        .size(800, 700),
+        &x,
+        &z,
+        &v,
+        "|residual| [mm]",
+    )?;
+    images.push((
+        name.to_string(),
+        "Residual norm at each measured position, side view in the tracker frame".into(),
+    ));
     Ok(images)
 }

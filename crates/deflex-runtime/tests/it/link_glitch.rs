@@ -180,7 +180,7 @@ fn session(kind: Kind, pause: Duration) -> Session {
             let mut cycle = 0u64;
             let mut resumed_at = 0;
             // 0: warm up until a sizeable, steady correction arrives (ramp-in done); 1: after
-            // the pause, until the correction is back at zero (or 3 s).
+            // the pause, until the correction is back at zero or steady again (or 3 s).
             let mut stage = 0;
             let mut stage_start = Instant::now();
             loop {
@@ -219,7 +219,14 @@ fn session(kind: Kind, pause: Duration) -> Session {
                         stage = 1;
                         stage_start = Instant::now();
                     }
-                    1 if z == 0.0 || stage_start.elapsed() > Duration::from_secs(3) => break,
+                    // Ramped out to zero, or (no fault latched) the correction held steady
+                    // for a second after the pause; 3 s at most.
+                    1 if z == 0.0
+                        || (steady && stage_start.elapsed() > Duration::from_secs(1))
+                        || stage_start.elapsed() > Duration::from_secs(3) =>
+                    {
+                        break;
+                    }
                     _ => {}
                 }
                 std::thread::sleep(Duration::from_secs_f64(CYCLE_S));

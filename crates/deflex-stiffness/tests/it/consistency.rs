@@ -14,10 +14,17 @@ use deflex_stiffness::{CalibError, format_rows_for};
 const PLANAR: &str = r#"
 name = "planar two-link arm"
 [[joint]]
+alpha = 0.0
+a = 0.0
+d = 0.0
+theta_offset = 0.0
 limits = [-3.0, 3.0]
 stiffness = { z = 1.0e5 }
 [[joint]]
 a = 0.5
+alpha = 0.0
+d = 0.0
+theta_offset = 0.0
 limits = [-3.0, 3.0]
 stiffness = { z = 1.0e5 }
 [tool]

@@ -18,6 +18,7 @@ stiffness = { x = 9.0e6 }
 alpha = 0.0
 a = 0.0
 d = 0.0
+theta_offset = 0.0
 limits = [-3.2, 3.2]
 stiffness = { z = 3.5e6 }
 [[joint]]
@@ -31,6 +32,7 @@ stiffness = { z = 2.8e6 }
 alpha = 0.0
 a = 1.15
 d = 0.0
+theta_offset = 0.0
 limits = [-2.0, 2.6]
 center_shift = -0.3
 stiffness = { y = 1.3e6, z = 1.9e6 }
@@ -38,18 +40,21 @@ stiffness = { y = 1.3e6, z = 1.9e6 }
 alpha = -1.5707963267948966
 a = -0.041
 d = 1.0
+theta_offset = 0.0
 limits = [-6.0, 6.0]
 stiffness = { z = 0.25e6 }
 [[joint]]
 alpha = 1.5707963267948966
 a = 0.0
 d = 0.0
+theta_offset = 0.0
 limits = [-2.1, 2.1]
 stiffness = { z = 0.12e6 }
 [[joint]]
 alpha = -1.5707963267948966
 a = 0.0
 d = 0.215
+theta_offset = 0.0
 limits = [-6.0, 6.0]
 [tool]
 xyz = [0.0, 0.0, 0.1]
