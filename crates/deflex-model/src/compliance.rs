@@ -3,7 +3,7 @@
 //! point-to-point form that a laser tracker sees.
 
 use crate::kinematics::Data;
-use crate::robot::{Axis, Edof, EdofSite, Robot};
+use crate::robot::{Axis, ComplianceCoupling, Edof, EdofSite, Robot};
 use crate::spatial::{Displacement, Wrench, edof_screw};
 use crate::{MAX_EDOFS, MAX_JOINTS};
 use nalgebra::{DMatrix, Matrix6, Vector3, Vector6};
@@ -67,7 +67,28 @@ impl Robot {
             let j = edof_screw(axis, center, &tcp);
             compliance += (j * j.transpose()) / edof.stiffness;
         });
+        // Off-diagonal joint compliances: `c (j_a j_bᵀ + j_b j_aᵀ)`.
+        for coupling in &self.couplings {
+            let (ja, jb) = self.coupling_screws(data, coupling, &tcp);
+            compliance += (ja * jb.transpose() + jb * ja.transpose()) * coupling.compliance;
+        }
         compliance
+    }
+
+    /// The screws `(j_a(point), j_b(point))` of a coupling's two eDoFs (eq. 13's columns). The
+    /// coupling moves a point P under a wrench w at A by `c (j_a(P) j_b(A)ᵀ + j_b(P) j_a(A)ᵀ) w`.
+    #[inline]
+    fn coupling_screws(
+        &self,
+        data: &Data,
+        coupling: &ComplianceCoupling,
+        point: &Vector3<f64>,
+    ) -> (Vector6<f64>, Vector6<f64>) {
+        let screw = |(site, axis): (EdofSite, Axis)| {
+            let (v, o) = data.edof_axis_center(self, site, axis);
+            edof_screw(&v, &o, point)
+        };
+        (screw(coupling.a), screw(coupling.b))
     }
 
     /// TCP deflection `δs = J K_θ⁻¹ Jᵀ w` (eq. 15) for a wrench `w` applied at the TCP (world
@@ -80,6 +101,10 @@ impl Robot {
             let j = edof_screw(axis, center, &tcp);
             deflection += j * (j.dot(wrench) / edof.stiffness);
         });
+        for coupling in &self.couplings {
+            let (ja, jb) = self.coupling_screws(data, coupling, &tcp);
+            deflection += (ja * jb.dot(wrench) + jb * ja.dot(wrench)) * coupling.compliance;
+        }
         deflection
     }
 
@@ -106,6 +131,15 @@ impl Robot {
                 displacement += edof_screw(axis, center, point) * (torque / edof.stiffness);
             }
         });
+        // θ_a += c τ_b and θ_b += c τ_a, each only where both eDoFs lie below the two links.
+        for coupling in &self.couplings {
+            if coupling.a.0.link_index() > reach || coupling.b.0.link_index() > reach {
+                continue;
+            }
+            let (pa, pb) = self.coupling_screws(data, coupling, point);
+            let (aa, ab) = self.coupling_screws(data, coupling, load_point);
+            displacement += (pa * ab.dot(wrench) + pb * aa.dot(wrench)) * coupling.compliance;
+        }
         displacement
     }
 

@@ -4,8 +4,8 @@
 use crate::dh::{dh_placements, standard_dh_link};
 use crate::error::ModelError;
 use crate::robot::{
-    Axis, AxisStiffness, DhConvention, DhParams, Joint, LinkInertia, NamedPoint, NamedPose, Robot,
-    STANDARD_GRAVITY, UrdfSource, check_dh_row,
+    Axis, AxisStiffness, ComplianceCoupling, DhConvention, DhParams, EdofSite, Joint, LinkInertia,
+    NamedPoint, NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, check_dh_row,
 };
 use crate::spatial::{Pose, pose_from_xyz_rpy, rpy_from_rotation};
 use nalgebra::Vector3;
@@ -89,6 +89,33 @@ struct RobotFile {
     setups: Vec<NamedPoseSection>,
     #[serde(default, rename = "target")]
     targets: Vec<TargetSection>,
+    #[serde(default, rename = "coupling")]
+    couplings: Vec<CouplingSection>,
+}
+
+/// `[[coupling]] a = "J2.z", b = "J3.z", compliance = 1.2e-8` (rad/(N·m)).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CouplingSection {
+    a: String,
+    b: String,
+    compliance: f64,
+}
+
+/// `J2.z` → (joint 2, z); `base.x` → (base, x).
+fn parse_edof_label(label: &str) -> Option<(EdofSite, Axis)> {
+    let (site, axis) = label.trim().split_once('.')?;
+    let axis = match axis {
+        "x" => Axis::X,
+        "y" => Axis::Y,
+        "z" => Axis::Z,
+        _ => return None,
+    };
+    let site = match site {
+        "base" => EdofSite::Base,
+        joint => EdofSite::Joint(joint.strip_prefix('J')?.parse().ok()?),
+    };
+    Some((site, axis))
 }
 
 #[derive(Deserialize)]
@@ -296,6 +323,28 @@ fn parse_robot(
         }),
         setups,
         targets,
+        couplings: file
+            .couplings
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let edof = |label: &str, end: &str| {
+                    parse_edof_label(label).ok_or_else(|| {
+                        invalid(
+                            format!("coupling[{}].{end}", i + 1),
+                            format!(
+                                "expected an eDoF such as \"J2.z\" or \"base.x\", got {label:?}"
+                            ),
+                        )
+                    })
+                };
+                Ok(ComplianceCoupling {
+                    a: edof(&c.a, "a")?,
+                    b: edof(&c.b, "b")?,
+                    compliance: c.compliance,
+                })
+            })
+            .collect::<Result<Vec<_>, ModelError>>()?,
     };
 
     match &file.urdf {
@@ -702,6 +751,13 @@ pub fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) ->
         if let Some(rotation) = &target.rotation {
             let _ = writeln!(out, "rpy = {}", toml_array(&rpy_from_rotation(rotation)));
         }
+    }
+    for coupling in &robot.couplings {
+        let label = |(site, axis): (EdofSite, Axis)| format!("{site}.{}", axis.letter());
+        let _ = writeln!(out, "\n[[coupling]]");
+        let _ = writeln!(out, "a = {}", toml_string(&label(coupling.a)));
+        let _ = writeln!(out, "b = {}", toml_string(&label(coupling.b)));
+        let _ = writeln!(out, "compliance = {:e}", coupling.compliance);
     }
     out
 }

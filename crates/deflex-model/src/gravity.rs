@@ -95,6 +95,23 @@ impl Robot {
             }
             index += 1;
         });
+        // Off-diagonal compliances: θ_a += c τ_b, θ_b += c τ_a.
+        for coupling in &self.couplings {
+            if coupling.a.0.link_index() > point_link || coupling.b.0.link_index() > point_link {
+                continue;
+            }
+            let index_of = |(site, axis): (crate::EdofSite, crate::Axis)| {
+                self.edofs().position(|e| e.site == site && e.axis == axis)
+            };
+            if let (Some(ia), Some(ib)) = (index_of(coupling.a), index_of(coupling.b)) {
+                let screw = |(site, axis)| {
+                    let (v, o) = data.edof_axis_center(self, site, axis);
+                    edof_screw(&v, &o, point)
+                };
+                displacement += (screw(coupling.a) * torques[ib] + screw(coupling.b) * torques[ia])
+                    * coupling.compliance;
+            }
+        }
         displacement
     }
 }

@@ -44,8 +44,8 @@ pub use error::{ModelError, QLengthError};
 pub use inverse_kinematics::{IkOptions, IkSolution, damped_gram, damped_least_squares_step};
 pub use kinematics::Data;
 pub use robot::{
-    Axis, AxisStiffness, DhConvention, DhParams, Edof, EdofSite, Joint, LinkInertia, NamedPoint,
-    NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, bounds,
+    Axis, AxisStiffness, ComplianceCoupling, DhConvention, DhParams, Edof, EdofSite, Joint,
+    LinkInertia, MAX_COUPLINGS, NamedPoint, NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, bounds,
 };
 pub use spatial::{Displacement, Pose, Wrench, edof_screw};
 

@@ -225,6 +225,46 @@ impl Edof {
     }
 }
 
+/// An off-diagonal joint compliance between two eDoFs (rad/(N·m)): the torque on one turns the
+/// other, `θ_a += c τ_b`, `θ_b += c τ_a`, so `K_θ⁻¹` is no longer diagonal (eq. 11 generalised).
+/// A counterbalance or a shared casting couples a robot's two pitch joints this way; no diagonal
+/// `K_θ` represents it. The joint compliance stays positive definite: `c² < c_a c_b`
+/// ([`Robot::validate`]). The deflection stays linear in `c`, so it is identified by the same
+/// weighted least squares as the eDoF compliances.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ComplianceCoupling {
+    /// The first eDoF (site and axis; the robot must have a stiffness there).
+    pub a: (EdofSite, Axis),
+    /// The second eDoF.
+    pub b: (EdofSite, Axis),
+    /// Off-diagonal compliance `c` (rad/(N·m)), either sign.
+    pub compliance: f64,
+}
+
+impl ComplianceCoupling {
+    /// Label `J2.z–J3.z`.
+    pub fn label(&self) -> String {
+        format!(
+            "{}.{}–{}.{}",
+            self.a.0,
+            self.a.1.letter(),
+            self.b.0,
+            self.b.1.letter()
+        )
+    }
+
+    /// The correlation `c / √(c_a c_b)` with the robot's eDoF compliances (|ρ| < 1), if both
+    /// eDoFs have a stiffness.
+    pub fn correlation(&self, robot: &Robot) -> Option<f64> {
+        let ka = robot.stiffness(self.a.0, self.a.1)?;
+        let kb = robot.stiffness(self.b.0, self.b.1)?;
+        Some(self.compliance * (ka * kb).sqrt())
+    }
+}
+
+/// Most couplings a robot may have.
+pub const MAX_COUPLINGS: usize = 8;
+
 /// A serial robot with its elastic structure. Read-only on the hot path; pair it with a
 /// [`crate::Data`].
 #[derive(Clone, Debug, PartialEq)]
@@ -262,12 +302,75 @@ pub struct Robot {
     pub setups: Vec<NamedPose>,
     /// Targets on the flange known to the model (calibrated probe/reflector offsets), by name.
     pub targets: Vec<NamedPoint>,
+    /// Off-diagonal joint compliances (none in the paper's model).
+    pub couplings: Vec<ComplianceCoupling>,
 }
 
 /// Standard gravity (m/s²) pointing down the world z axis.
 pub const STANDARD_GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -9.80665);
 
 impl Robot {
+    /// The couplings' invariants: at most [`MAX_COUPLINGS`], between two distinct eDoFs the
+    /// robot has, each pair once, `|c| < √(c_a c_b)` (a positive definite joint compliance).
+    fn check_couplings(
+        &self,
+        invalid: &dyn Fn(String, String) -> ModelError,
+    ) -> Result<(), ModelError> {
+        if self.couplings.len() > MAX_COUPLINGS {
+            return Err(invalid(
+                "coupling".into(),
+                format!(
+                    "at most {MAX_COUPLINGS} couplings, found {}",
+                    self.couplings.len()
+                ),
+            ));
+        }
+        let mut pairs = std::collections::BTreeSet::new();
+        for (i, c) in self.couplings.iter().enumerate() {
+            let field = format!("coupling[{}] ({})", i + 1, c.label());
+            for (end, (site, axis)) in [("a", c.a), ("b", c.b)] {
+                if let EdofSite::Joint(j) = site
+                    && (j == 0 || j > self.joints.len())
+                {
+                    return Err(invalid(
+                        format!("{field}.{end}"),
+                        format!("the robot has joints 1 to {}, not {j}", self.joints.len()),
+                    ));
+                }
+                if self.stiffness(site, axis).is_none() {
+                    return Err(invalid(
+                        format!("{field}.{end}"),
+                        format!(
+                            "{site}.{} has no stiffness: a coupling joins two eDoFs of the model",
+                            axis.letter()
+                        ),
+                    ));
+                }
+            }
+            if c.a == c.b {
+                return Err(invalid(
+                    field,
+                    "a coupling joins two different eDoFs".into(),
+                ));
+            }
+            let key = if c.a <= c.b { (c.a, c.b) } else { (c.b, c.a) };
+            if !pairs.insert(key) {
+                return Err(invalid(field, "this pair is coupled twice".into()));
+            }
+            let rho = c.correlation(self).unwrap_or(f64::NAN);
+            if !(c.compliance.is_finite() && rho.abs() < 1.0) {
+                return Err(invalid(
+                    format!("{field}.compliance"),
+                    format!(
+                        "expected |c| < √(c_a c_b) (a positive definite joint compliance), got c = {:e} rad/(N·m), correlation {rho:.3}",
+                        c.compliance
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Number of motorised joints.
     #[inline]
     pub fn joint_count(&self) -> usize {
@@ -400,6 +503,7 @@ impl Robot {
                 check_inertia(inertia, &field(""), &invalid)?;
             }
         }
+        self.check_couplings(&invalid)?;
         let mut names = std::collections::BTreeSet::new();
         for (i, setup) in self.setups.iter().enumerate() {
             check_pose(

@@ -336,7 +336,7 @@ pub fn distinct_rows(rows: &[MeasurementRow]) -> usize {
 pub const SIGMA_RANGE: (f64, f64) = (1e-9, 1.0);
 
 /// Reject data that cannot be used, with a message a technician can act on.
-fn check_rows(
+pub(crate) fn check_rows(
     robot: &Robot,
     rows: &[MeasurementRow],
     require_displacement: bool,

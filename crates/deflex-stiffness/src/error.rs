@@ -230,6 +230,14 @@ pub enum StructureError {
     /// The cross-validation cannot score the start of the search.
     #[error("cross-validation cannot score the start structure")]
     UnscoredStart,
+    /// Off-diagonal compliances that cannot be fitted or do not make a spring.
+    #[error("coupling {label}: {reason}")]
+    Coupling {
+        /// The coupling or eDoF concerned (`J2.z–J3.z`), empty for the whole set.
+        label: String,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 fn reasons(dropped: &[(String, String)]) -> String {

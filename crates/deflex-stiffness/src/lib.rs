@@ -26,6 +26,7 @@
 pub mod calibration;
 pub mod campaign_cell;
 pub mod consistency;
+pub mod coupling;
 pub mod crossval;
 pub use deflex_measurements as data;
 pub mod design;
@@ -39,6 +40,7 @@ pub mod synthetic;
 mod uncertainty;
 pub mod validation;
 
+pub use coupling::{CouplingFit, EdofPair, fit_couplings};
 pub use deflex_measurements::{
     DataError, FileHeader, MeasuredRotation, MeasurementFile, MeasurementRow, format_rows,
     format_rows_for,

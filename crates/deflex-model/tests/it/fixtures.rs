@@ -302,3 +302,88 @@ fn toml_round_trip_preserves_the_model() {
     assert!((robot.compliance_matrix(&a) - back.compliance_matrix(&b)).norm() < 1e-18);
     assert_eq!(robot.edof_count(), back.edof_count());
 }
+
+/// An off-diagonal joint compliance (J2.z–J3.z): the Cartesian compliance, eq. 15's deflection,
+/// the point-to-point transfer and the gravity deflection all equal `J C_θ Jᵀ` with the full
+/// (non-diagonal) joint compliance built as a dense matrix here; the robot file round-trips it;
+/// a coupling that is not a spring is refused.
+#[test]
+fn a_coupled_joint_compliance_is_j_c_theta_j_transposed() {
+    let mut robot = all_edofs_robot();
+    let (k2, k3) = (
+        robot.stiffness(EdofSite::Joint(2), Axis::Z).unwrap(),
+        robot.stiffness(EdofSite::Joint(3), Axis::Z).unwrap(),
+    );
+    let c23 = 0.3 / (k2 * k3).sqrt();
+    robot.couplings = vec![deflex_model::ComplianceCoupling {
+        a: (EdofSite::Joint(2), Axis::Z),
+        b: (EdofSite::Joint(3), Axis::Z),
+        compliance: c23,
+    }];
+    robot.validate("test").unwrap();
+    let mut data = Data::new();
+    robot
+        .forward_kinematics(&mut data, &deg(&[10.0, -30.0, 60.0, 20.0, 40.0, -15.0]))
+        .unwrap();
+    // Dense C_θ: the diagonal 1/k plus c23 at (J2.z, J3.z) and (J3.z, J2.z).
+    let edofs: Vec<_> = robot.edofs().collect();
+    let index = |site, axis| {
+        edofs
+            .iter()
+            .position(|e| e.site == site && e.axis == axis)
+            .unwrap()
+    };
+    let (i2, i3) = (
+        index(EdofSite::Joint(2), Axis::Z),
+        index(EdofSite::Joint(3), Axis::Z),
+    );
+    let mut c_theta = robot.stiffness_matrix().try_inverse().unwrap();
+    c_theta[(i2, i3)] = c23;
+    c_theta[(i3, i2)] = c23;
+    let j = robot.edof_jacobian(&data);
+    let dense = &j * &c_theta * j.transpose();
+    let c = robot.compliance_matrix(&data);
+    for r in 0..6 {
+        for col in 0..6 {
+            assert!(
+                (dense[(r, col)] - c[(r, col)]).abs() < 1e-18,
+                "({r}, {col}): {} vs {}",
+                dense[(r, col)],
+                c[(r, col)]
+            );
+        }
+    }
+    let w = Wrench::new(300.0, -500.0, 1100.0, 8.0, -6.0, 2.0);
+    assert!((c * w - robot.tcp_deflection(&data, &w)).norm() < 1e-15);
+    let tcp = data.tcp_position();
+    let point = robot.point_displacement(&data, &tcp, 6, &tcp, 6, &w);
+    assert!((point - c * w).norm() < 1e-15);
+    // The coupling changes the answer (the test is not blind to it).
+    let mut diagonal = robot.clone();
+    diagonal.couplings.clear();
+    assert!((diagonal.tcp_deflection(&data, &w) - c * w).norm() > 1e-7);
+    // Round trip through the robot file.
+    let text = deflex_model::robot_to_toml(&robot);
+    assert!(text.contains("[[coupling]]"), "{text}");
+    let back = deflex_model::robot_from_toml_str(&text, "roundtrip", None).unwrap();
+    assert_eq!(back.couplings.len(), 1);
+    assert!((back.couplings[0].compliance / c23 - 1.0).abs() < 1e-12);
+    assert_eq!(back.couplings[0].a, (EdofSite::Joint(2), Axis::Z));
+    // Not a spring: |c| ≥ √(c_a c_b).
+    let mut bad = robot.clone();
+    bad.couplings[0].compliance = 1.01 / (k2 * k3).sqrt();
+    let message = bad.validate("bad.toml").unwrap_err().to_string();
+    assert!(
+        message.contains("coupling[1]") && message.contains("positive definite"),
+        "{message}"
+    );
+    // An eDoF the robot does not have.
+    let mut missing = robot.clone();
+    missing.couplings[0].b = (EdofSite::Base, Axis::Z);
+    assert!(missing.validate("bad.toml").is_err());
+    let unknown = text.replace("b = \"J3.z\"", "b = \"J3.w\"");
+    let message = deflex_model::robot_from_toml_str(&unknown, "bad.toml", None)
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("coupling[1].b"), "{message}");
+}

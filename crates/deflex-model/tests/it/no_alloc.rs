@@ -18,6 +18,12 @@ fn hot_path_allocates_nothing() {
     }
     robot.set_stiffness(EdofSite::Base, Axis::X, Some(5.0e7));
     robot.set_stiffness(EdofSite::Base, Axis::Y, Some(5.0e7));
+    // An off-diagonal compliance is part of the hot path too.
+    robot.couplings = vec![deflex_model::ComplianceCoupling {
+        a: (EdofSite::Joint(2), Axis::Z),
+        b: (EdofSite::Joint(3), Axis::Z),
+        compliance: 0.1 / 3.0e6,
+    }];
     let mut data = Data::new();
     let q = [0.1, 0.8, 1.5, 0.05, 0.7, -0.1];
     let wrench = Wrench::new(100.0, -300.0, 1200.0, 1.0, 2.0, 3.0);
@@ -34,6 +40,7 @@ fn hot_path_allocates_nothing() {
         let columns = robot.edof_columns(&data, &data.tcp_position(), 6);
         sink += columns.columns[0][0];
         sink += robot.gravity_edof_torques(&data)[0];
+        sink += robot.gravity_displacement(&data, &data.tcp_position(), 6)[2];
         ur10.forward_kinematics(&mut ur_data, &qk).unwrap();
         sink += ur10.gravity_displacement(&ur_data, &ur_data.tcp_position(), 6)[2];
     }

@@ -7,7 +7,11 @@
 //! force fading (what `deflex run` logs while the robot waits at the end of its program), is the
 //! source of the compensation; the compensated program runs on the same twin.
 //!
-//! Three ways to use the log are compared:
+//! The robot model is either the plant's own linear spring chain (`PlantConfig::linear_robot`:
+//! the springs without the coupling, the hardening and the large rotations) or, as a user has
+//! it, a model **identified from a loaded campaign** measured on the plant's twin
+//! ([`campaign_models`]: the structure search, then the J2.z–J3.z off-diagonal compliance). Ways
+//! to use the log:
 //! * **fixed**: the logged wrenches (one pass). The compensated tool reaches the programmed
 //!   depth and the sheet pushes harder than the log says (846 → 998 N on the first plant).
 //! * **law**: the force–depth law identified from the log ([`LoggedProcess`]), the depths from
@@ -17,20 +21,21 @@
 //!
 //! **Measured (max path error in contact on the feed moves):**
 //!
-//! | part, plant | uncorrected | fixed | law | law + measured TCP |
-//! | --- | --- | --- | --- | --- |
-//! | 60 mm circle, 10 × 0.5 mm levels, plant 1 | 1.637 mm | 0.654 (60.0 %) | 0.477 (70.9 %) | 0.189 (88.4 %) |
-//! | 50 mm circle clockwise, 12 × 0.4 mm levels on a 50° wall, plant 2 | 1.500 mm | 0.487 (67.5 %) | 0.317 (78.9 %) | 0.148 (90.1 %) |
+//! | part, plant | uncorrected | fixed | law | law + measured TCP | law, campaign model (diagonal / coupled) |
+//! | --- | --- | --- | --- | --- | --- |
+//! | 60 mm circle, 10 × 0.5 mm levels, plant 1 | 1.637 mm | 0.654 (60.0 %) | 0.477 (70.9 %) | 0.189 (88.4 %) | 0.208 (87.3 %) / 0.184 (88.7 %) |
+//! | 50 mm circle clockwise, 12 × 0.4 mm levels on a 50° wall, plant 2 | 1.500 mm | 0.487 (67.5 %) | 0.317 (78.9 %) | 0.148 (90.1 %) | 0.161 (89.3 %) / 0.147 (90.2 %) |
 //!
 //! Plant 1: coupling 0.3, 0.4 mrad of wrist lost motion over 600 N·m, tool holder 4e5 N·m/rad
 //! centred 80 mm down the tool. Plant 2: 0.2, 0.3 mrad over 400 N·m, 6e5 N·m/rad at 60 mm.
 //!
-//! **Why the law alone stops near 75 %.** Compensating the first circle from the log of the
-//! *compensated* run (its forces at the programmed depth: what a perfect process law gives) cuts
-//! the error to 0.39 mm (76 %, printed by the first test): the rest is what the robot model
-//! (`PlantConfig::linear_robot`, the plant's own spring chain: a perfect VJM identification)
-//! does not represent — the coupling, the hardening, the large rotations. Only a measurement
-//! of where the tool was sees it.
+//! **Why the law with the plant's springs stops near 75 %.** Compensating the first circle from
+//! the log of the *compensated* run (its forces at the programmed depth: what a perfect process
+//! law gives) cuts the error to 0.39 mm (76 %, printed by the first test): the rest is what the
+//! plant's linear spring chain does not represent, and taking the effects out of the plant one
+//! at a time shows it is the J2/J3 coupling ([`the_plain_log_gap_is_the_j2_j3_coupling`]). A
+//! model fitted to a loaded campaign on the plant represents where its tool goes under load,
+//! coupling included, and reaches 88.7 % / 90.2 % from the plain log.
 //!
 //! **The error measure.** Rows with a contact force of at least 20 N (as the README's "in
 //! contact" numbers) whose desired TCP is on a feed move: the retract at the end is a rapid
@@ -189,6 +194,11 @@ impl HeldOut {
         // The plant's own linear spring chain: what a perfect VJM identification finds, without
         // the coupling, the hardening and the large rotations.
         let model = cell.plant.linear_robot(&nominal).unwrap();
+        HeldOut::with_model(cell, program, model)
+    }
+
+    /// The same with another robot model (e.g. one identified from a campaign).
+    fn with_model(cell: CellConfig, program: &str, model: Robot) -> HeldOut {
         let part = parse_gcode(program, "part.nc").unwrap();
         let open = run_forming(&cell, part.clone(), 3, None).unwrap();
         assert!(open.summary.max_force_norm_N > 700.0, "{:?}", open.summary);
@@ -353,4 +363,155 @@ fn a_second_part_on_a_second_unseen_plant() {
         "law + measured TCP: {:.1} %",
         measured * 100.0
     );
+}
+
+/// Which of the unseen plant's effects the plain-log law misses: the same held-out check with
+/// one effect taken out of the plant at a time (the robot model stays the plant's linear spring
+/// chain). Measured (max error in contact, law from a plain `deflex run`-like log, no measured
+/// TCP): plant 1 70.9 % → **88.5 %** without the J2/J3 coupling, 71.7 % without the wrist lost
+/// motion; plant 2 78.9 % → **90.1 %** without the coupling, 90.2 % without the coupling and
+/// the lost motion, and the same with the large rotations and the floor pivot of the base taken
+/// out too. The gap to 85 % is the coupling (a non-diagonal joint compliance), not the
+/// hardening wrist, the large rotations or the base pivot: a model class with off-diagonal
+/// compliances between adjacent joints, identified from a loaded campaign, is what closes it
+/// (README, "Offline compensation from a log on a plant deflex never saw").
+#[test]
+fn the_plain_log_gap_is_the_j2_j3_coupling() {
+    let law_only = |cell: CellConfig, program: &str, name: &str| {
+        let case = HeldOut::new(cell, program);
+        let result = case.law(false);
+        case.improvement(name, &case.run(&result), result.final_max_force_n)
+    };
+    let mut uncoupled = plant_1();
+    uncoupled.plant.j2_j3_coupling = 0.0;
+    let without_coupling = law_only(
+        uncoupled,
+        &circle_program(),
+        "60 mm circle, plant 1 without the J2/J3 coupling, law (plain log)",
+    );
+    let mut no_lost_motion = plant_1();
+    no_lost_motion.plant.wrist_lost_motion_rad = [0.0; 3];
+    let without_lost_motion = law_only(
+        no_lost_motion,
+        &circle_program(),
+        "60 mm circle, plant 1 without the wrist lost motion, law (plain log)",
+    );
+    let mut plant_2_uncoupled = plant_2();
+    plant_2_uncoupled.plant.j2_j3_coupling = 0.0;
+    let second = law_only(
+        plant_2_uncoupled,
+        &second_program(),
+        "50 mm clockwise circle, plant 2 without the J2/J3 coupling, law (plain log)",
+    );
+    // Measured 88.5 %, 71.7 % (70.9 % with every effect), 90.1 %.
+    assert!(
+        without_coupling >= 0.85,
+        "plant 1 without the coupling: {:.1} %",
+        without_coupling * 100.0
+    );
+    assert!(
+        second >= 0.85,
+        "plant 2 without the coupling: {:.1} %",
+        second * 100.0
+    );
+    assert!(
+        without_lost_motion < 0.80,
+        "plant 1 without the lost motion: {:.1} % (the hardening wrist was not the gap)",
+        without_lost_motion * 100.0
+    );
+}
+
+/// The stiffness identification a user makes once on their robot, SIMULATED: a loaded campaign
+/// planned for the robot's nominal model (40 load cases, every eDoF family), measured on the
+/// unseen plant's twin with the laser tracker (25 samples per reading), the model structure
+/// searched from it (diagonal VJM), then the J2.z–J3.z off-diagonal compliance fitted with the
+/// eDoF compliances by weighted least squares ([`deflex_stiffness::fit_couplings`]). Never from
+/// the plant's parameters. Returns the diagonal and the coupled model.
+fn campaign_models(cell: &CellConfig) -> (Robot, deflex_stiffness::CouplingFit) {
+    use deflex_model::{Axis, EdofSite};
+    use deflex_sim::twin_campaign::run_campaign;
+    use deflex_stiffness::plan::{PlanOptions, plan_experiments};
+    use deflex_stiffness::{SearchOptions, fit_couplings, search_structure};
+    let nominal = cell.nominal_robot().unwrap();
+    let plan = plan_experiments(
+        &nominal,
+        &PlanOptions {
+            load_cases: 40,
+            full_family: true,
+            ..PlanOptions::default()
+        },
+    )
+    .unwrap();
+    let mut campaign_cell = cell.clone();
+    campaign_cell.tracker.samples_per_reading = 25;
+    let rows = run_campaign(&campaign_cell, &plan.rows, 1).unwrap();
+    let search = search_structure(
+        &nominal,
+        &rows,
+        &SearchOptions::default(),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    let diagonal = search.calibration.to_robot(&nominal);
+    let pair = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
+    let fit = fit_couplings(&diagonal, &rows, &[pair]).unwrap();
+    println!(
+        "SIMULATED campaign on the unseen plant: structure {}, RMS residual {:.1} µm (diagonal) → {:.1} µm with J2.z–J3.z, correlation {:.3} (plant {:.3}), χ²/dof {:.1} → {:.1}",
+        search.calibration.structure.label(),
+        fit.rms_before_m * 1e6,
+        fit.rms_m * 1e6,
+        fit.correlations[0],
+        cell.plant.j2_j3_coupling,
+        fit.reduced_chi2_before,
+        fit.reduced_chi2,
+    );
+    (diagonal, fit)
+}
+
+/// The user's workflow, SIMULATED end to end: the robot model identified once from a loaded
+/// campaign on the unseen plant ([`campaign_models`]), then a production run without a tracker
+/// whose plain log (joint values and forces, no measured TCP) is the compensation's only
+/// source. Measured (campaign seeds 1–3 agree within 0.1 %): plant 1 87.3 % with the diagonal
+/// model, **88.7 %** with the J2.z–J3.z coupling (correlation 0.15 found, 0.30 in the plant);
+/// plant 2 89.3 %, **90.2 %** (0.10 found, 0.20 in the plant). The campaign-identified diagonal
+/// model already does much better than the plant's own spring chain (70.9 %, 78.9 %): fitted
+/// to where the plant's tool actually goes under load, its stiffnesses absorb most of the
+/// coupling over the workspace the campaign covers.
+#[test]
+fn a_plain_log_with_a_campaign_identified_model() {
+    for (cell, program, name) in [
+        (plant_1(), circle_program(), "60 mm circle, plant 1"),
+        (
+            plant_2(),
+            second_program(),
+            "50 mm clockwise circle, plant 2",
+        ),
+    ] {
+        let (diagonal, fit) = campaign_models(&cell);
+        assert!(fit.rms_m < fit.rms_before_m, "{fit:?}");
+        // The plant's coupling is positive; the fit finds it so, and a spring (|ρ| < 1).
+        assert!(
+            fit.correlations[0] > 0.05 && fit.correlations[0] < 1.0,
+            "{:?}",
+            fit.correlations
+        );
+        let [diagonal, coupled] =
+            [("diagonal", diagonal), ("with J2.z–J3.z", fit.robot)].map(|(model_name, model)| {
+                let case = HeldOut::with_model(cell.clone(), &program, model);
+                let law = case.law(false);
+                case.improvement(
+                    &format!("{name}, campaign-identified model {model_name}, law (plain log)"),
+                    &case.run(&law),
+                    law.final_max_force_n,
+                )
+            });
+        // Measured 87.3 / 88.7 % and 89.3 / 90.2 % (the issue asks for 85 %).
+        assert!(coupled >= 0.85, "{name}: {:.1} %", coupled * 100.0);
+        assert!(
+            coupled >= diagonal,
+            "{name}: coupled {:.1} %, diagonal {:.1} %",
+            coupled * 100.0,
+            diagonal * 100.0
+        );
+    }
 }
