@@ -41,6 +41,9 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
     let mut config = common::config();
     config.wrench.lowpass_hz = Some(30.0);
     config.safety.sensor_timeout_s = 0.2;
+    // The fault measured is the sensor's silence: a robot held back 50 ms by a loaded machine
+    // must not latch robot_link_lost first (the robot emulator is a thread of this test).
+    config.safety.robot_timeout_s = 1.0;
     config.limiter.ramp_out_s = 0.2;
     let ctrl = common::controller(config);
     let q = common::q0();
