@@ -85,6 +85,58 @@ pub fn fit_couplings(
     rows: &[MeasurementRow],
     pairs: &[EdofPair],
 ) -> Result<CouplingFit, CalibError> {
+    check_pairs(robot, pairs)?;
+    crate::design::check_rows(robot, rows, true)?;
+    let usable: Vec<&MeasurementRow> = rows.iter().filter(|r| r.displacement_m.is_some()).collect();
+    let unknowns = robot.edof_count() + pairs.len();
+    let rotation_rows = usable.iter().filter(|r| r.rotation_rad.is_some()).count();
+    let equations = 3 * usable.len() + 3 * rotation_rows;
+    if equations <= unknowns {
+        return Err(RowsError::TooFewReadings {
+            rows: rows.len(),
+            distinct: crate::design::distinct_rows(rows),
+            equations,
+            parameters: unknowns,
+        }
+        .into());
+    }
+    let (x, y) = design_matrix(robot, &usable, pairs, equations, unknowns)?;
+    let c = scaled_least_squares(&x, &y)?;
+    let dof = (equations - unknowns) as f64;
+    let chi2 = |parameters: &[f64]| {
+        let p = DVector::from_column_slice(parameters);
+        (&x * p - &y).norm_squared()
+    };
+    let rms = |parameters: &[f64]| {
+        let p = DVector::from_column_slice(parameters);
+        let residual = &x * p - &y;
+        let sum: f64 = usable
+            .iter()
+            .enumerate()
+            .map(|(r, row)| {
+                let s = row.sigma_m.unwrap_or(DEFAULT_SIGMA_M);
+                (0..3)
+                    .map(|ax| (residual[3 * r + ax] * s).powi(2))
+                    .sum::<f64>()
+            })
+            .sum();
+        (sum / (3 * usable.len()) as f64).sqrt()
+    };
+    let mut before: Vec<f64> = robot.edofs().map(|e| 1.0 / e.stiffness).collect();
+    before.extend(std::iter::repeat_n(0.0, pairs.len()));
+    let (fitted, correlations) = coupled_robot(robot, pairs, &c)?;
+    Ok(CouplingFit {
+        robot: fitted,
+        reduced_chi2_before: chi2(&before) / dof,
+        reduced_chi2: chi2(&c) / dof,
+        rms_before_m: rms(&before),
+        rms_m: rms(&c),
+        correlations,
+    })
+}
+
+/// The couplings asked for: 1 to [`MAX_COUPLINGS`], each end an eDoF of the robot.
+fn check_pairs(robot: &Robot, pairs: &[EdofPair]) -> Result<(), CalibError> {
     let label = |(a, b): &EdofPair| {
         ComplianceCoupling {
             a: *a,
@@ -114,20 +166,19 @@ pub fn fit_couplings(
             }
         }
     }
-    crate::design::check_rows(robot, rows, true)?;
-    let usable: Vec<&MeasurementRow> = rows.iter().filter(|r| r.displacement_m.is_some()).collect();
-    let unknowns = robot.edof_count() + pairs.len();
-    let rotation_rows = usable.iter().filter(|r| r.rotation_rad.is_some()).count();
-    let equations = 3 * usable.len() + 3 * rotation_rows;
-    if equations <= unknowns {
-        return Err(RowsError::TooFewReadings {
-            rows: rows.len(),
-            distinct: crate::design::distinct_rows(rows),
-            equations,
-            parameters: unknowns,
-        }
-        .into());
-    }
+    Ok(())
+}
+
+/// The weighted design matrix and right-hand side: per usable row, its displacement (and
+/// rotation, when measured) against the columns of every eDoF compliance and coupling, each
+/// equation divided by its σ.
+fn design_matrix(
+    robot: &Robot,
+    usable: &[&MeasurementRow],
+    pairs: &[EdofPair],
+    equations: usize,
+    unknowns: usize,
+) -> Result<(DMatrix<f64>, DVector<f64>), CalibError> {
     let mut x = DMatrix::<f64>::zeros(equations, unknowns);
     let mut y = DVector::<f64>::zeros(equations);
     let mut data = Data::new();
@@ -163,6 +214,13 @@ pub fn fit_couplings(
     if !(x.iter().all(|v| v.is_finite()) && y.iter().all(|v| v.is_finite())) {
         return Err(RowsError::Overflow.into());
     }
+    Ok((x, y))
+}
+
+/// The least-squares solution of `x c = y` with the columns scaled to unit norm (SVD, singular
+/// values below 10⁻¹² of the largest dropped), in the original units.
+fn scaled_least_squares(x: &DMatrix<f64>, y: &DVector<f64>) -> Result<Vec<f64>, CalibError> {
+    let unknowns = x.ncols();
     // Column scaling: compliances span orders of magnitude (base tilt vs wrist).
     let scale: Vec<f64> = (0..unknowns)
         .map(|j| {
@@ -177,34 +235,23 @@ pub fn fit_couplings(
     let svd = xs.svd(true, true);
     let smax = svd.singular_values.max();
     let solution = svd
-        .solve(&y, smax * 1e-12)
+        .solve(y, smax * 1e-12)
         .map_err(|_| RowsError::Overflow)?;
     let c: Vec<f64> = (0..unknowns).map(|j| solution[j] * scale[j]).collect();
-    let dof = (equations - unknowns) as f64;
-    let chi2 = |parameters: &[f64]| {
-        let p = DVector::from_column_slice(parameters);
-        (&x * p - &y).norm_squared()
-    };
-    let rms = |parameters: &[f64]| {
-        let p = DVector::from_column_slice(parameters);
-        let residual = &x * p - &y;
-        let sum: f64 = usable
-            .iter()
-            .enumerate()
-            .map(|(r, row)| {
-                let s = row.sigma_m.unwrap_or(DEFAULT_SIGMA_M);
-                (0..3)
-                    .map(|ax| (residual[3 * r + ax] * s).powi(2))
-                    .sum::<f64>()
-            })
-            .sum();
-        (sum / (3 * usable.len()) as f64).sqrt()
-    };
-    let mut before: Vec<f64> = robot.edofs().map(|e| 1.0 / e.stiffness).collect();
-    before.extend(std::iter::repeat_n(0.0, pairs.len()));
+    Ok(c)
+}
+
+/// The robot with the fitted compliances `c` (eDoFs first, then the couplings) and each
+/// coupling's correlation; refused when a compliance is not a spring or the joint compliance
+/// would not be positive definite.
+fn coupled_robot(
+    robot: &Robot,
+    pairs: &[EdofPair],
+    c: &[f64],
+) -> Result<(Robot, Vec<f64>), CalibError> {
     let mut fitted = robot.clone();
     let edofs: Vec<_> = robot.edofs().collect();
-    for (e, &ce) in edofs.iter().zip(&c) {
+    for (e, &ce) in edofs.iter().zip(c) {
         if !(ce.is_finite() && ce > 0.0) {
             return Err(StructureError::Coupling {
                 label: e.label(),
@@ -245,14 +292,7 @@ pub fn fit_couplings(
             label: String::new(),
             reason: e.to_string(),
         })?;
-    Ok(CouplingFit {
-        robot: fitted,
-        reduced_chi2_before: chi2(&before) / dof,
-        reduced_chi2: chi2(&c) / dof,
-        rms_before_m: rms(&before),
-        rms_m: rms(&c),
-        correlations,
-    })
+    Ok((fitted, correlations))
 }
 
 #[cfg(test)]
