@@ -103,6 +103,108 @@ const ISF_WRENCH: [&str; 6] = ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"
 const ISF_COMMANDED: [&str; 3] = ["cmd_x_mm", "cmd_y_mm", "cmd_z_mm"];
 const ISF_MEASURED: [&str; 3] = ["tracked_x_mm", "tracked_y_mm", "tracked_z_mm"];
 
+/// Where a log's columns are: a `deflex run` log (joints, wrench, flags) or a `sim isf` log
+/// (part-frame positions, wrench, and optionally the commanded and measured TCP).
+enum LogLayout {
+    /// A `deflex run` log.
+    Run {
+        /// `q1_rad …`.
+        joints: Vec<usize>,
+        /// The wrench at the TCP.
+        wrench: Vec<usize>,
+        /// `flags`.
+        flags: usize,
+    },
+    /// A `deflex sim isf` log.
+    Isf {
+        /// The tool's position in the part frame (mm).
+        position: Vec<usize>,
+        /// The wrench in the part frame.
+        wrench: Vec<usize>,
+        /// The commanded TCP (all three columns or none).
+        commanded: Option<Vec<usize>>,
+        /// The measured TCP (all three columns or none).
+        measured: Option<Vec<usize>>,
+    },
+}
+
+impl LogLayout {
+    fn kind(&self) -> LogKind {
+        match self {
+            LogLayout::Run { .. } => LogKind::DeflexRun,
+            LogLayout::Isf { .. } => LogKind::SimIsf,
+        }
+    }
+}
+
+/// The layout of a log from its header: a `deflex run` log when its wrench, flags and joint
+/// columns are there (as many joints as `robot`), else a `sim isf` log; otherwise an error
+/// naming the columns missing from the closer of the two.
+fn log_layout(
+    header: &csv::StringRecord,
+    file: &str,
+    robot: &Robot,
+) -> Result<LogLayout, LogError> {
+    let columns: HashMap<&str, usize> = header.iter().enumerate().map(|(i, h)| (h, i)).collect();
+    let find = |names: &[&str]| -> Result<Vec<usize>, Vec<String>> {
+        let missing: Vec<String> = names
+            .iter()
+            .filter(|n| !columns.contains_key(*n))
+            .map(|n| n.to_string())
+            .collect();
+        if missing.is_empty() {
+            Ok(names.iter().map(|n| columns[n]).collect())
+        } else {
+            Err(missing)
+        }
+    };
+    let joint_columns: Vec<usize> = (1..)
+        .map_while(|i| columns.get(format!("q{i}_rad").as_str()).copied())
+        .collect();
+    let run = find(&RUN_WRENCH).and_then(|w| find(&["flags"]).map(|f| (w, f[0])));
+    let isf = find(&ISF_POSITION).and_then(|p| find(&ISF_WRENCH).map(|w| (p, w)));
+    // Optional sim-log columns: all three or none.
+    let isf_commanded = find(&ISF_COMMANDED).ok();
+    let isf_measured = find(&ISF_MEASURED).ok();
+    match (run, isf) {
+        (Ok((wrench, flags)), _) if !joint_columns.is_empty() => {
+            if joint_columns.len() != robot.joint_count() {
+                return Err(LogError::JointCount {
+                    file: file.to_string(),
+                    log: joint_columns.len(),
+                    robot: robot.joint_count(),
+                });
+            }
+            Ok(LogLayout::Run {
+                joints: joint_columns,
+                wrench,
+                flags,
+            })
+        }
+        (_, Ok((position, wrench))) => Ok(LogLayout::Isf {
+            position,
+            wrench,
+            commanded: isf_commanded,
+            measured: isf_measured,
+        }),
+        (Ok(_), Err(_)) => Err(LogError::UnknownKind {
+            file: file.to_string(),
+            missing: "q1_rad".into(),
+        }),
+        (Err(run_missing), Err(isf_missing)) => {
+            let missing = if run_missing.len() <= isf_missing.len() {
+                run_missing
+            } else {
+                isf_missing
+            };
+            Err(LogError::UnknownKind {
+                file: file.to_string(),
+                missing: missing.join(", "),
+            })
+        }
+    }
+}
+
 /// Parse log text. `robot` gives the forward kinematics of a `deflex run` log's joints and must
 /// have its joint count; `part_frame` (world) places a `sim isf` log's part-frame positions and
 /// wrenches.
@@ -126,59 +228,12 @@ pub fn parse_log(
         message: e.to_string(),
     };
     let header = reader.headers().map_err(csv_error)?.clone();
-    let columns: HashMap<&str, usize> = header.iter().enumerate().map(|(i, h)| (h, i)).collect();
-    let find = |names: &[&str]| -> Result<Vec<usize>, Vec<String>> {
-        let missing: Vec<String> = names
-            .iter()
-            .filter(|n| !columns.contains_key(*n))
-            .map(|n| n.to_string())
-            .collect();
-        if missing.is_empty() {
-            Ok(names.iter().map(|n| columns[n]).collect())
-        } else {
-            Err(missing)
-        }
-    };
-    let joint_columns: Vec<usize> = (1..)
-        .map_while(|i| columns.get(format!("q{i}_rad").as_str()).copied())
-        .collect();
-    let run = find(&RUN_WRENCH).and_then(|w| find(&["flags"]).map(|f| (w, f[0])));
-    let isf = find(&ISF_POSITION).and_then(|p| find(&ISF_WRENCH).map(|w| (p, w)));
-    // Optional sim-log columns: all three or none.
-    let isf_commanded = find(&ISF_COMMANDED).ok();
-    let isf_measured = find(&ISF_MEASURED).ok();
-    let kind = match (&run, &isf) {
-        (Ok(_), _) if !joint_columns.is_empty() => LogKind::DeflexRun,
-        (_, Ok(_)) => LogKind::SimIsf,
-        (Ok(_), Err(_)) => {
-            return Err(LogError::UnknownKind {
-                file: file.to_string(),
-                missing: "q1_rad".into(),
-            });
-        }
-        (Err(run_missing), Err(isf_missing)) => {
-            let missing = if run_missing.len() <= isf_missing.len() {
-                run_missing
-            } else {
-                isf_missing
-            };
-            return Err(LogError::UnknownKind {
-                file: file.to_string(),
-                missing: missing.join(", "),
-            });
-        }
-    };
-    if kind == LogKind::DeflexRun && joint_columns.len() != robot.joint_count() {
-        return Err(LogError::JointCount {
-            file: file.to_string(),
-            log: joint_columns.len(),
-            robot: robot.joint_count(),
-        });
-    }
+    let layout = log_layout(&header, file, robot)?;
+    let kind = layout.kind();
     let mut samples = Vec::new();
     let mut skipped_rows = 0;
     let mut data = Data::new();
-    let mut q = vec![0.0; joint_columns.len()];
+    let mut q = vec![0.0; robot.joint_count()];
     for (row_index, record) in reader.records().enumerate() {
         if row_index >= MAX_LOG_ROWS {
             return Err(LogError::TooLarge {
@@ -200,8 +255,12 @@ pub fn parse_log(
                     value: text.to_string(),
                 })
         };
-        let sample = match (kind, &run, &isf) {
-            (LogKind::DeflexRun, Ok((wrench_columns, flags_column)), _) => {
+        let sample = match &layout {
+            LogLayout::Run {
+                joints: joint_columns,
+                wrench: wrench_columns,
+                flags: flags_column,
+            } => {
                 let flags_text = record.get(*flags_column).unwrap_or("");
                 let flags: u32 = flags_text.parse().map_err(|_| LogError::BadValue {
                     file: file.to_string(),
@@ -213,12 +272,16 @@ pub fn parse_log(
                     skipped_rows += 1;
                     continue;
                 }
-                for (value, column) in q.iter_mut().zip(&joint_columns) {
+                for (value, column) in q.iter_mut().zip(joint_columns) {
                     *value = number(*column)?;
                 }
                 robot
                     .forward_kinematics(&mut data, &q)
-                    .expect("joint count checked");
+                    .map_err(|_| LogError::JointCount {
+                        file: file.to_string(),
+                        log: joint_columns.len(),
+                        robot: robot.joint_count(),
+                    })?;
                 let mut w = Wrench::zeros();
                 for (k, column) in wrench_columns.iter().enumerate() {
                     w[k] = number(*column)?;
@@ -230,7 +293,12 @@ pub fn parse_log(
                     wrench: w,
                 }
             }
-            (LogKind::SimIsf, _, Ok((position_columns, wrench_columns))) => {
+            LogLayout::Isf {
+                position: position_columns,
+                wrench: wrench_columns,
+                commanded: isf_commanded,
+                measured: isf_measured,
+            } => {
                 // A part-frame position in mm from three columns, in the world (m).
                 let point = |columns: &[usize]| -> Result<Vector3<f64>, LogError> {
                     let mut p = Vector3::zeros();
@@ -267,7 +335,6 @@ pub fn parse_log(
                     wrench: Wrench::new(f.x, f.y, f.z, m.x, m.y, m.z),
                 }
             }
-            _ => unreachable!("the kind was chosen from the columns found"),
         };
         samples.push(sample);
     }
