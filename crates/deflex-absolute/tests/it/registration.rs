@@ -5,7 +5,7 @@
 //! set-up and target must lie within their stated intervals, and the warnings must fire where
 //! the readings cannot separate the parameters.
 
-use crate::simulated::{Truth, point, true_value, truth, z_axis};
+use crate::simulated::{Truth, point, random_configuration, true_value, truth, z_axis};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::{AbsoluteRow, RowOrientation};
 use deflex_absolute::params::{EgModel, Param};
@@ -63,14 +63,7 @@ fn readings(
     let angle = Normal::new(0.0, ANGLE_NOISE_RAD).unwrap();
     (0..count)
         .map(|i| {
-            let mut q = [
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-2.8..-0.3),
-                rng.gen_range(-2.6..2.6),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-            ];
+            let mut q = random_configuration(&mut rng);
             if wrist_still {
                 q[3] = -1.2;
                 q[4] = 1.4;

@@ -191,6 +191,19 @@ struct Simulated {
     loaded: Vec<MeasurementRow>,
 }
 
+/// A configuration drawn over the UR10's working range (shoulder above the base, elbow
+/// either way), the same draw for every SIMULATED campaign of these tests.
+pub fn random_configuration(rng: &mut impl Rng) -> [f64; 6] {
+    [
+        rng.gen_range(-3.0..3.0),
+        rng.gen_range(-2.8..-0.3),
+        rng.gen_range(-2.6..2.6),
+        rng.gen_range(-3.0..3.0),
+        rng.gen_range(-3.0..3.0),
+        rng.gen_range(-3.0..3.0),
+    ]
+}
+
 fn simulate(truth: &Truth, seed: u64) -> Simulated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let tracker_noise = Normal::new(0.0, 20e-6).unwrap();
@@ -200,14 +213,7 @@ fn simulate(truth: &Truth, seed: u64) -> Simulated {
     for s in 0..2 {
         let (r, t) = truth.setup(s);
         for _ in 0..260 {
-            let q = [
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-2.8..-0.3),
-                rng.gen_range(-2.6..2.6),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-            ];
+            let q = random_configuration(&mut rng);
             let frames = truth.frames(&q);
             let p = point(&frames[6], truth.target);
             let tau = truth.torques(&frames, None);

@@ -5,14 +5,14 @@
 //! interval, together with the compliances and the planted kinematic errors; on a linear
 //! truth the torsion coefficient is found compatible with zero.
 
-use crate::simulated::{Truth, origin, point, true_value, truth, z_axis};
+use crate::simulated::{Truth, origin, point, random_configuration, true_value, truth, z_axis};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::AbsoluteRow;
 use deflex_absolute::fit::{FitOptions, Step, fit};
 use deflex_absolute::params::{EgModel, Param, TorsionShape};
 use deflex_absolute::solve::Loss;
 use nalgebra::{Rotation3, Vector3};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
@@ -50,14 +50,7 @@ fn readings(truth: &Truth, curves: [Curve; 2], seed: u64) -> Vec<AbsoluteRow> {
     let mut rows = Vec::new();
     for (s, (rotation, translation)) in setups.iter().enumerate() {
         for _ in 0..300 {
-            let q = [
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-2.8..-0.3),
-                rng.gen_range(-2.6..2.6),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-            ];
+            let q = random_configuration(&mut rng);
             let frames = truth.frames(&q);
             let p = point(&frames[6], truth.target);
             let tau = truth.torques(&frames, None);
