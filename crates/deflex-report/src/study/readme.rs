@@ -75,6 +75,12 @@ fn grid(summary: &DemoSummary, model: &str, load: &str, bold: bool) -> String {
     }
 }
 
+/// The kind of a latched fault from its text (`force_over_limit: value … at t = …` →
+/// `force_over_limit`).
+fn fault_name(fault: &str) -> &str {
+    fault.split(':').next().unwrap_or(fault)
+}
+
 /// `1e7` as "10⁷" (other values as they are).
 fn power_of_ten(value: f64) -> String {
     const SUPERSCRIPT: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
@@ -196,7 +202,7 @@ pub fn results_table(summary: &DemoSummary) -> String {
         (Some(fault), _) => format!(
             "{:.0} N (runs away, stopped by the `{}` fault)",
             c.unguarded.max_force_N,
-            fault.split(':').next().unwrap_or(fault)
+            fault_name(fault)
         ),
         (None, _) => format!(
             "{:.0} N ({:.2}×)",
@@ -447,7 +453,7 @@ fn plunge_bullet(t: &mut String, s: &DemoSummary) {
                 Some(fault) => format!(
                     "{:.0} N (fault `{}`)",
                     c.unguarded.max_force_N,
-                    fault.split(':').next().unwrap_or(fault)
+                    fault_name(fault)
                 ),
                 None => format!(
                     "{:.0} N ({:.2}×)",
