@@ -197,6 +197,10 @@ fn robot_session(
     let mut stage = 0;
     let started = Instant::now();
     let mut stage_start = Instant::now();
+    // A state every robot cycle, as a robot's interpolation clock sends them (a late answer
+    // delays the next state; it does not shift the ones after it).
+    let cycle_time = Duration::from_secs_f64(CYCLE_S);
+    let mut next = Instant::now();
     loop {
         cycle += 1;
         let state = RobotState {
@@ -244,6 +248,7 @@ fn robot_session(
                 resumed_at = received.len();
                 stage = 1;
                 stage_start = Instant::now();
+                next = Instant::now();
             }
             // Ramped out to zero; or steady since the resume while the controller has run a
             // cycle after the first answer after the pause without a latched fault (any fault
@@ -263,7 +268,8 @@ fn robot_session(
             }
             _ => {}
         }
-        std::thread::sleep(Duration::from_secs_f64(CYCLE_S));
+        next = (next + cycle_time).max(Instant::now());
+        std::thread::sleep(next.saturating_duration_since(Instant::now()));
     }
     if stage < 2 {
         stopped_at = received.len();
