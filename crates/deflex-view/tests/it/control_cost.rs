@@ -218,9 +218,16 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     done.store(true, Ordering::Release);
     page_open.store(false, Ordering::Release);
     let messages = reader.join().unwrap();
-    stop_cell.store(true, Ordering::Release);
+    // Stopped while the twin still plays: the correction ramps out as the robot hears it and
+    // the link sends its last answer (a robot stopped first would leave the link waiting to
+    // send it); then the twin stops.
     runtime.request_stop();
+    let stopping = Instant::now();
+    while !runtime.is_finished() && stopping.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
     let summary = runtime.join();
+    stop_cell.store(true, Ordering::Release);
     let served = cell.join().unwrap();
     let stats = view.stats();
     view.shutdown();
