@@ -368,8 +368,11 @@ fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
         .spawn()
         .unwrap();
     let (twin_url, twin_err) = watch_stderr(&mut twin);
+    // The run ends 0.5 s after the twin's last telegram (the default idle exit is 2 s), as
+    // the twin crate's loopback tests end theirs.
     let mut run = deflex()
         .args(["--json", "run", "--config", cell, "--view", "127.0.0.1:0"])
+        .args(["--idle-exit-s", "0.5"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
