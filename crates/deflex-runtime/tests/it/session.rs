@@ -155,10 +155,12 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
     let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
     let to = link.local_addr().unwrap();
     let robot = kuka(to, q.iter().map(|v| v.to_degrees()).collect());
+    // Fails 40 cycles (0.4 s) in: the correction is most of the way ramped in (0.5 s), so the
+    // links have one to ramp out.
     let clock = FailingClock {
         inner: WallClock::new(),
         calls: Arc::new(AtomicU64::new(0)),
-        limit: 80,
+        limit: 40,
     };
     let ctrl = common::controller(config);
     let telemetry = common::telemetry(&ctrl);
@@ -200,7 +202,11 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
     // The drain is bounded (the design bound, not a timing assertion on this machine: the
     // robot-link thread stops after at most DRAIN_S plus one receive timeout).
     assert!(drain < Duration::from_secs(5), "{drain:?}");
-    // The last answer the robot heard is the correction ramped to zero.
+    // The correction was active, and the last answer the robot heard is it ramped to zero.
+    assert!(
+        answers.iter().any(|a| !a.contains(r#"Z="0.0000""#)),
+        "the correction was never active"
+    );
     let last = answers.last().unwrap();
     assert!(last.contains(r#"Z="0.0000""#), "{last}");
 }
