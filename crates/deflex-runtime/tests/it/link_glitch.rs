@@ -197,8 +197,8 @@ fn robot_session(
     let mut stage = 0;
     let started = Instant::now();
     let mut stage_start = Instant::now();
-    // A state every robot cycle, as a robot's interpolation clock sends them (a late answer
-    // delays the next state; it does not shift the ones after it).
+    // A state every robot cycle, as a robot's interpolation clock sends them (a sleep that
+    // overshoots does not delay every state after it).
     let cycle_time = Duration::from_secs_f64(CYCLE_S);
     let mut next = Instant::now();
     loop {

@@ -77,7 +77,9 @@ fn options() -> RuntimeOptions {
 }
 
 /// A KUKA emulator (raw socket, hand-written telegrams) sending `q` (degrees) every 4 ms until
-/// stopped, keeping the answers' text.
+/// stopped, keeping the answers' text. The 4 ms are a period, as a robot's interpolation clock
+/// keeps it: a sleep that overshoots does not delay every telegram after it (so a ramp-out
+/// counted in robot cycles ends in its time on a loaded machine too).
 struct Kuka {
     run: Arc<AtomicBool>,
     answers: Arc<Mutex<Vec<String>>>,
@@ -109,6 +111,7 @@ fn kuka(to: SocketAddr, q_deg: Vec<f64>) -> Kuka {
                 .unwrap();
             let mut buf = [0u8; 2048];
             let mut ipoc = 0u64;
+            let mut next = Instant::now();
             while run.load(Ordering::Acquire) {
                 ipoc += 4;
                 let axes: String = q_deg
@@ -124,7 +127,8 @@ fn kuka(to: SocketAddr, q_deg: Vec<f64>) -> Kuka {
                     let answer = String::from_utf8_lossy(&buf[..n]).into_owned();
                     answers.lock().unwrap().push(answer);
                 }
-                std::thread::sleep(Duration::from_millis(4));
+                next = (next + Duration::from_millis(4)).max(Instant::now());
+                std::thread::sleep(next.saturating_duration_since(Instant::now()));
             }
         })
     };
