@@ -40,7 +40,10 @@ fn helical(length_mm: f64) -> ToolPath {
     .truncated(length_mm)
 }
 
-/// The `CELL.toml` of a loopback session with robot link `kind` for the twin `twin`.
+/// The `CELL.toml` of a loopback session with robot link `kind` for the twin `twin`. The twin's
+/// sensor falls silent with its robot at the end of the program; the run ends 0.5 s later by
+/// its idle exit and a 0.5 s ramp-out: the sensor's 2 s timeout leaves that end room on a
+/// loaded machine (with 1 s, the ramp-out delayed past it latched `sensor_timeout`).
 fn cell_toml(kind: &str, twin: &CellConfig) -> String {
     let s = &twin.sensor;
     let robot_port = if kind == "simple-tcp" {
@@ -55,7 +58,7 @@ fn cell_toml(kind: &str, twin: &CellConfig) -> String {
         "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot_port}\"\ntimeout_s = 1.0\n\
          cycle_s = {}\n\
          [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:{}\"\nbind = \"127.0.0.1:0\"\n\
-         timeout_s = 1.0\nrange = {:?}\n\
+         timeout_s = 2.0\nrange = {:?}\n\
          [mounting]\nsensor_xyz_m = {:?}\nsensor_rpy_rad = {:?}\ntool_mass_kg = {}\ntool_com_m = {:?}\n\
          gravity_m_s2 = [0.0, 0.0, {}]\n\
          [model]\nfile = \"model.toml\"\n[control]\nrealtime = false\nlock_memory = false\n\
@@ -240,34 +243,34 @@ fn loopback_cell_and_run_agree_with_in_process() {
 }
 
 /// The simulated cell plays every other robot protocol too (ABB EGM, the Stäubli VAL3
-/// program's protocol, the simple UDP and TCP line links of a UR script), end to end. 20 mm
-/// each (2.1 s, ≈ 650 telegrams with the dwell): 12 N of contact in-process and a corrected
-/// error of 0.0055 mm against 0.019 mm open loop, enough for the comparisons of
-/// `check_loopback`; a longer path adds wall time only.
+/// program's protocol, the simple UDP and TCP line links of a UR script), end to end. 30 mm
+/// each: shorter paths end before the largest error of the process (0.0055 mm in-process at
+/// 20 mm, 0.0104 mm at 30 mm), and then a few late answers on a loaded machine (under the
+/// 10 % that stops the comparison) outweigh it.
 #[test]
 fn loopback_every_other_robot_protocol() {
     let _turn = crate::realtime_turn();
     for kind in ["abb-egm", "staubli", "simple-udp", "simple-tcp"] {
-        let l = loopback(kind, 20.0, 4);
+        let l = loopback(kind, 30.0, 4);
         check_loopback(kind, &l, 300);
     }
 }
 
 /// The twin plays the UR10e cell (500 Hz, its part position and force level) over the simple
 /// TCP line link of a UR script, `deflex run` corrects it with the UR10e's nominal model, and
-/// the cell names the robot it played. 20 mm (2.1 s, ≈ 1300 telegrams with the dwell).
+/// the cell names the robot it played. 30 mm, as the other protocols.
 #[test]
 fn loopback_ur10e_cell_over_simple_tcp() {
     let _turn = crate::realtime_turn();
     let twin = CellConfig::for_robot("ur10e").unwrap();
     let model = twin.nominal_robot().unwrap();
-    let l = loopback_for(Some("ur10e"), model, "simple-tcp", 20.0, 5);
+    let l = loopback_for(Some("ur10e"), model, "simple-tcp", 30.0, 5);
     assert!(l.cell.robot.contains("UR10e"), "{}", l.cell.robot);
     assert_eq!(l.cell.robot_spec, "ur10e");
     assert!(l.cell.model_geometry_matches);
     assert_eq!(l.cell_cycle_s, 0.002);
     check_loopback("simple-tcp (UR10e)", &l, 600);
-    // In contact (the first 20 mm of the cone are shallow: about 1.5 N, in-process the same),
+    // In contact (the first 30 mm of the cone are shallow: about 2 N, in-process the same),
     // and the run saw it through the UR cell's sensor.
     let f = l.cell.summary.max_force_norm_n;
     assert!(f > 0.5 && f < 400.0, "{f} N");
