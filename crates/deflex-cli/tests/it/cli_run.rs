@@ -360,15 +360,19 @@ fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
     let cell = twin_cell_file(&dir);
     let cell = cell.to_str().unwrap();
     let mut twin = deflex()
-        .args(["cell", "--sim", "--config", cell, "--length-mm", "40"])
+        // 30 mm: 3.1 s of forming, ≈ 160 rows of the twin's 50 Hz log (more than 100 checked).
+        .args(["cell", "--sim", "--config", cell, "--length-mm", "30"])
         .args(["--view", "127.0.0.1:0", "--quiet"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     let (twin_url, twin_err) = watch_stderr(&mut twin);
+    // The run ends 0.5 s after the twin's last telegram (the default idle exit is 2 s), as
+    // the twin crate's loopback tests end theirs.
     let mut run = deflex()
         .args(["--json", "run", "--config", cell, "--view", "127.0.0.1:0"])
+        .args(["--idle-exit-s", "0.5"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -471,9 +475,10 @@ fn a_bad_log_path_is_refused_before_the_session() {
 
 /// A session that latched a fault (the sensor fell silent: sensor_timeout) exits with status 3
 /// and says so in its summary, so that a script can tell it from a good session (issue 18,
-/// item 4). The sensor stops after the robot has had 300 answers; the robot sends 150 more
-/// telegrams (at least 0.6 s, three times the sensor timeout) and falls silent: the session
-/// ends by its idle exit with the fault latched, however loaded the machine.
+/// item 4). The sensor stops after the robot has had 150 answers (at least 0.6 s of a running
+/// session); the robot sends 150 more telegrams (at least 0.6 s, three times the sensor
+/// timeout) and falls silent: the session ends by its idle exit (0.5 s, beyond the robot's
+/// 0.2 s timeout) with the fault latched, however loaded the machine.
 #[test]
 fn a_latched_fault_ends_the_run_with_exit_status_3() {
     let _turn = crate::realtime_turn();
@@ -487,7 +492,7 @@ fn a_latched_fault_ends_the_run_with_exit_status_3() {
         std::thread::spawn(move || {
             let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
                 .unwrap();
-            while answered.load(Ordering::Acquire) < 300 && !stop.load(Ordering::Acquire) {
+            while answered.load(Ordering::Acquire) < 150 && !stop.load(Ordering::Acquire) {
                 let _ = s.poll_request(Duration::from_micros(500));
                 let _ = s.send_sample(&[0.0; 6], 0);
                 std::thread::sleep(Duration::from_millis(1));
@@ -506,7 +511,7 @@ fn a_latched_fault_ends_the_run_with_exit_status_3() {
                 if let Ok(Some(_)) = ep.receive_correction(Duration::from_millis(20)) {
                     answered.fetch_add(1, Ordering::AcqRel);
                 }
-                if answered.load(Ordering::Acquire) >= 300 {
+                if answered.load(Ordering::Acquire) >= 150 {
                     sent_after += 1;
                 }
                 std::thread::sleep(Duration::from_millis(4));
@@ -520,7 +525,7 @@ fn a_latched_fault_ends_the_run_with_exit_status_3() {
             cell.to_str().unwrap(),
             "--quiet",
             "--idle-exit-s",
-            "1",
+            "0.5",
         ])
         .output()
         .unwrap();

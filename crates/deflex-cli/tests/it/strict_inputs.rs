@@ -352,7 +352,7 @@ fn calibrate_flags_nearly_collinear_estimates_in_text_json_and_html() {
 }
 
 /// A full disk under `deflex run`'s log, made deterministic: the child runs with
-/// `RLIMIT_FSIZE` = 512 KiB and SIGXFSZ ignored, so the log's write past it (about 900 rows)
+/// `RLIMIT_FSIZE` = 256 KiB and SIGXFSZ ignored, so the log's write past it (about 520 rows)
 /// fails with EFBIG whatever the machine's load. The session must stop there, ramping the
 /// correction out, print its summary with "log: NOT written", keep the earlier log whole and
 /// exit with status 4. The robot (simple UDP) and the sensor (Net F/T) are in this process;
@@ -421,8 +421,8 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
     unsafe {
         command.pre_exec(|| {
             let limit = libc::rlimit {
-                rlim_cur: 1 << 19,
-                rlim_max: 1 << 19,
+                rlim_cur: 1 << 18,
+                rlim_max: 1 << 18,
             };
             if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
                 return Err(std::io::Error::last_os_error());
@@ -449,7 +449,7 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
             && text.contains("run.csv keeps what it held"),
         "{text}"
     );
-    // The session ran past the force (the log held 512 KiB of rows), the correction was
+    // The session ran past the force (the log held 256 KiB of rows), the correction was
     // active, and the robot's last answers brought it back to zero.
     assert!(answers.len() > 500, "{} answers", answers.len());
     let peak = answers.iter().map(|c| c[2].abs()).fold(0.0, f64::max);

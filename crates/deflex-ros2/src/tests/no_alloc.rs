@@ -53,11 +53,11 @@ struct Measured {
     bridge: Option<BridgeReport>,
 }
 
-/// One session on DDS domain `d`: the robot sends joint values every 4 ms for 2 s, a driver
-/// publishes a wrench every 2 ms until the robot stops; with `bridge`, the stream is published
-/// on domain `d + 1` to a subscriber.
+/// One session on DDS domain `d`: the robot sends joint values every 4 ms, a driver publishes a
+/// wrench every 2 ms; after 150 control cycles the session is stopped, the correction ramps out
+/// while both still stream, then they stop. With `bridge`, the stream is published on domain
+/// `d + 1` to a subscriber.
 fn session(d: u16, bridge: bool) -> Measured {
-    let robot_s = 2.0;
     let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
     let config = ControllerConfig {
         bias: Some([0.0; 6]),
@@ -105,10 +105,9 @@ fn session(d: u16, bridge: bool) -> Measured {
         std::thread::spawn(move || {
             let mut ep =
                 RsiRobotEndpoint::new("127.0.0.1:0", link_addr, CorrectionMode::Absolute).unwrap();
-            let start = Instant::now();
             let mut next = Instant::now();
             let mut sent = 0u64;
-            while start.elapsed().as_secs_f64() < robot_s {
+            while driving.load(Ordering::Acquire) {
                 let state = deflex_io::RobotState {
                     cycle_id: sent + 1,
                     ..deflex_io::RobotState::with_joints(&q)
@@ -120,7 +119,6 @@ fn session(d: u16, bridge: bool) -> Measured {
                 let _ = ep.receive_correction(wait.max(Duration::from_micros(100)));
                 std::thread::sleep(next.saturating_duration_since(Instant::now()));
             }
-            driving.store(false, Ordering::Release);
         })
     };
     let publishing = {
@@ -141,6 +139,7 @@ fn session(d: u16, bridge: bool) -> Measured {
         realtime: false,
         lock_memory: false,
         startup_timeout_s: 5.0,
+        // The session ends by a stop request; the backstop.
         idle_exit_s: Some(0.3),
         ..RuntimeOptions::default()
     };
@@ -153,12 +152,17 @@ fn session(d: u16, bridge: bool) -> Measured {
         options,
     )
     .unwrap();
+    wait_until("150 control cycles", || runtime.status().cycles >= 150);
+    // Stopped while the robot and the driver still stream: the correction ramps out and the
+    // link sends its last answer (a robot that fell silent first would latch robot_link_lost
+    // and leave the link waiting to send it).
+    runtime.request_stop();
     let deadline = Instant::now() + Duration::from_secs(30);
     while !runtime.is_finished() && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(20));
     }
-    runtime.request_stop();
     let summary = runtime.join();
+    driving.store(false, Ordering::Release);
     robot.join().unwrap();
     publishing.join().unwrap();
     let bridge = bridge.map(|b| b.finish().unwrap());

@@ -8,11 +8,14 @@
 //! Nothing here depends on timing luck: the step bound holds for any scheduling (it is enforced
 //! per answer); the robot warms up until it has received a sizeable correction, and the checks
 //! on the ramp after the pause apply only when the controller did latch `robot_link_lost`.
+//! A session ends as soon as the outcome of its pause is known (the correction ramped out to
+//! zero after the latched fault, or the controller past the pause without one): the robot asks
+//! the runtime to stop and answers the stop's ramp-out, whose steps are checked too.
 #![allow(clippy::needless_range_loop)] // per-axis loops over several arrays
 
 use crate::common;
 
-use deflex_control::FaultKind;
+use deflex_control::{FaultKind, Flags};
 use deflex_io::egm::{EgmConfig, EgmLink, EgmRobotEndpoint};
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
@@ -21,8 +24,8 @@ use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
 use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
 use deflex_io::{RobotLink, RobotSideLink, RobotState};
 use deflex_model::Data;
-use deflex_runtime::WallClock;
 use deflex_runtime::session::{RuntimeOptions, spawn};
+use deflex_runtime::{Clock, Runtime, WallClock};
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -118,13 +121,167 @@ fn robot_side(kind: Kind, pc: SocketAddr) -> (Box<dyn RobotSideLink + Send>, boo
 }
 
 struct Session {
-    /// Corrections the robot received, one per state it sent, in order.
+    /// Corrections the robot received, one per state it sent, in order (the stop's ramp-out at
+    /// the end included).
     received: Vec<[f64; 6]>,
     /// Index of the first answer after the pause.
     resumed_at: usize,
+    /// Answers received before the robot asked for the stop.
+    stopped_at: usize,
+    /// Controller time (s) when the robot asked for the stop: a fault latched before it is the
+    /// session's (the pause's, or a scheduling gap's); the stop's ramp-out follows it.
+    stop_requested_s: f64,
     /// The controller's ξ_z just before the robot resumed.
     controller_xi_z_at_resume: f64,
+    /// Wall time from the start to the pause (s): the warm-up.
+    warm_up_s: f64,
     summary: deflex_runtime::session::RunSummary,
+}
+
+impl Session {
+    /// The `robot_link_lost` latched while the robot was streaming (before its stop request).
+    fn link_lost(&self) -> bool {
+        self.summary
+            .fault
+            .is_some_and(|f| f.kind == FaultKind::RobotLinkLost && f.time_s < self.stop_requested_s)
+    }
+}
+
+/// What the robot emulator of a session recorded.
+struct RobotRecord {
+    received: Vec<[f64; 6]>,
+    resumed_at: usize,
+    stopped_at: usize,
+    stop_requested_s: f64,
+    warm_up_s: f64,
+}
+
+/// Answers in the window that tells a correction is steady.
+const STEADY_ANSWERS: usize = 25;
+
+/// The last [`STEADY_ANSWERS`] answers (0.1 s) agree within 10 µm, 1 % of the ≈ 1.05 mm
+/// correction: the ramp-in (0.2 s) is over and the law has settled to within 1 % (it approaches
+/// its value with a time constant of about 0.1 s, so a 1 µm window would add 0.25 s to every
+/// session's warm-up and change nothing checked).
+fn steady(received: &[[f64; 6]]) -> bool {
+    received.len() > STEADY_ANSWERS && {
+        let tail = &received[received.len() - STEADY_ANSWERS..];
+        tail.iter().all(|c| (c[2] - tail[0][2]).abs() < 1e-5)
+    }
+}
+
+/// The robot's side of a session: warm up until a sizeable, steady correction arrives (ramp-in
+/// done), fall silent for `pause`, resume until the outcome of the pause is clear (ramped out
+/// to zero after a latched fault, or steady with the controller past the pause without one),
+/// then ask the runtime to stop and keep answering while it ramps the correction out, until it
+/// has ended.
+fn robot_session(
+    kind: Kind,
+    pc: SocketAddr,
+    pause: Duration,
+    runtime: &Runtime,
+    clock: &WallClock,
+    paused: &AtomicBool,
+) -> RobotRecord {
+    let q = common::q0();
+    let (mut ep, echoes) = robot_side(kind, pc);
+    let mut received: Vec<[f64; 6]> = Vec::new();
+    let mut cycle = 0u64;
+    let (mut resumed_at, mut stopped_at) = (0, 0);
+    let (mut warm_up_s, mut stop_requested_s) = (f64::NAN, f64::NAN);
+    // Controller time of the first answer after the pause: that telegram's joints were
+    // published before it was answered, so a control cycle that starts later no longer sees
+    // the silence.
+    let mut first_answer_after_s = f64::INFINITY;
+    // 0: warm-up; 1: after the pause; 2: stopping (answering the stop's ramp-out).
+    let mut stage = 0;
+    let started = Instant::now();
+    let mut stage_start = Instant::now();
+    // A state every robot cycle, as a robot's interpolation clock sends them (a sleep that
+    // overshoots does not delay every state after it).
+    let cycle_time = Duration::from_secs_f64(CYCLE_S);
+    let mut next = Instant::now();
+    loop {
+        cycle += 1;
+        let state = RobotState {
+            cycle_id: cycle,
+            ..RobotState::with_joints(&q)
+        };
+        match ep.send_state(&state) {
+            Ok(()) => {}
+            // The runtime has ended (its link closed).
+            Err(_) if stage == 2 => break,
+            Err(e) => panic!("{kind:?}: {e}"),
+        }
+        // Exactly one answer per state: wait for it. Once the runtime has ended nothing
+        // answers any more.
+        let wait_start = Instant::now();
+        let answer = loop {
+            match ep.receive_correction(Duration::from_millis(20)) {
+                Ok(Some(r)) if !echoes || r.cycle_id == cycle => break Some(r),
+                Ok(Some(_)) => {}
+                _ if stage == 2
+                    && runtime.is_finished()
+                    && wait_start.elapsed() > Duration::from_millis(100) =>
+                {
+                    break None;
+                }
+                _ if wait_start.elapsed() > Duration::from_secs(5) => break None,
+                _ => {}
+            }
+        };
+        let Some(answer) = answer else { break };
+        received.push(answer.correction.to_array());
+        let z = answer.correction.dp_m[2].abs();
+        if stage == 1 && received.len() == resumed_at + 1 {
+            first_answer_after_s = clock.now();
+        }
+        match stage {
+            0 if (z > 3e-4 && steady(&received))
+                || stage_start.elapsed() > Duration::from_secs(10) =>
+            {
+                // Steady: fall silent.
+                warm_up_s = started.elapsed().as_secs_f64();
+                paused.store(true, Ordering::Release);
+                std::thread::sleep(pause);
+                paused.store(false, Ordering::Release);
+                resumed_at = received.len();
+                stage = 1;
+                stage_start = Instant::now();
+                next = Instant::now();
+            }
+            // Ramped out to zero; or steady since the resume while the controller has run a
+            // cycle after the first answer after the pause without a latched fault (any fault
+            // of the pause is latched by then: the outcome is known, no need to wait longer);
+            // 3 s at most.
+            1 if z == 0.0
+                || (received.len() >= resumed_at + STEADY_ANSWERS && steady(&received) && {
+                    let status = runtime.status();
+                    status.time_s > first_answer_after_s && !status.flags.has(Flags::LATCHED)
+                })
+                || stage_start.elapsed() > Duration::from_secs(3) =>
+            {
+                stopped_at = received.len();
+                stop_requested_s = clock.now();
+                runtime.request_stop();
+                stage = 2;
+            }
+            _ => {}
+        }
+        next = (next + cycle_time).max(Instant::now());
+        std::thread::sleep(next.saturating_duration_since(Instant::now()));
+    }
+    if stage < 2 {
+        stopped_at = received.len();
+        stop_requested_s = clock.now();
+    }
+    RobotRecord {
+        received,
+        resumed_at,
+        stopped_at,
+        stop_requested_s,
+        warm_up_s,
+    }
 }
 
 fn session(kind: Kind, pause: Duration) -> Session {
@@ -143,7 +300,7 @@ fn session(kind: Kind, pause: Duration) -> Session {
     )
     .unwrap();
     let done = Arc::new(AtomicBool::new(false));
-    let paused = Arc::new(AtomicBool::new(false));
+    let paused = AtomicBool::new(false);
     let sensor = {
         let done = done.clone();
         std::thread::spawn(move || {
@@ -158,101 +315,37 @@ fn session(kind: Kind, pause: Duration) -> Session {
         robot_cycle_s: CYCLE_S,
         realtime: false,
         startup_timeout_s: 10.0,
+        // The robot ends the session with a stop request; this is the backstop should it fail.
         // Longer than the longest pause: the session must outlive it.
         idle_exit_s: Some(1.5),
         ..RuntimeOptions::default()
     };
     let telemetry = common::telemetry(&ctrl);
-    let runtime = spawn(
-        ctrl,
-        link,
-        Box::new(client),
-        WallClock::new(),
-        telemetry,
-        options,
-    )
-    .unwrap();
-    let robot = {
-        let paused = paused.clone();
-        std::thread::spawn(move || {
-            let (mut ep, echoes) = robot_side(kind, pc);
-            let mut received: Vec<[f64; 6]> = Vec::new();
-            let mut cycle = 0u64;
-            let mut resumed_at = 0;
-            // 0: warm up until a sizeable, steady correction arrives (ramp-in done); 1: after
-            // the pause, until the correction is back at zero or steady again (or 3 s).
-            let mut stage = 0;
-            let mut stage_start = Instant::now();
-            loop {
-                cycle += 1;
-                let state = RobotState {
-                    cycle_id: cycle,
-                    ..RobotState::with_joints(&q)
-                };
-                ep.send_state(&state).unwrap();
-                // Exactly one answer per state: wait for it.
-                let wait_start = Instant::now();
-                let answer = loop {
-                    match ep.receive_correction(Duration::from_millis(500)) {
-                        Ok(Some(r)) if !echoes || r.cycle_id == cycle => break Some(r),
-                        Ok(Some(_)) => {}
-                        _ if wait_start.elapsed() > Duration::from_secs(5) => break None,
-                        _ => {}
-                    }
-                };
-                let Some(answer) = answer else { break };
-                received.push(answer.correction.to_array());
-                let z = answer.correction.dp_m[2].abs();
-                let steady = received.len() > 25 && {
-                    let tail = &received[received.len() - 25..];
-                    tail.iter().all(|c| (c[2] - tail[0][2]).abs() < 1e-6)
-                };
-                match stage {
-                    0 if (z > 3e-4 && steady)
-                        || stage_start.elapsed() > Duration::from_secs(10) =>
-                    {
-                        // Steady: fall silent.
-                        paused.store(true, Ordering::Release);
-                        std::thread::sleep(pause);
-                        paused.store(false, Ordering::Release);
-                        resumed_at = received.len();
-                        stage = 1;
-                        stage_start = Instant::now();
-                    }
-                    // Ramped out to zero, or (no fault latched) the correction held steady
-                    // for a second after the pause; 3 s at most.
-                    1 if z == 0.0
-                        || (steady && stage_start.elapsed() > Duration::from_secs(1))
-                        || stage_start.elapsed() > Duration::from_secs(3) =>
-                    {
-                        break;
-                    }
-                    _ => {}
-                }
-                std::thread::sleep(Duration::from_secs_f64(CYCLE_S));
+    let clock = WallClock::new();
+    let runtime = spawn(ctrl, link, Box::new(client), clock, telemetry, options).unwrap();
+    let (record, xi_at_resume) = std::thread::scope(|scope| {
+        let robot = scope.spawn(|| robot_session(kind, pc, pause, &runtime, &clock, &paused));
+        // Watch the controller's own ξ while the robot is silent.
+        let mut xi_at_resume = f64::NAN;
+        while !robot.is_finished() {
+            if paused.load(Ordering::Acquire) {
+                xi_at_resume = runtime.status().xi_m[2];
             }
-            (received, resumed_at)
-        })
-    };
-    // Watch the controller's own ξ while the robot is silent.
-    let mut xi_at_resume = f64::NAN;
-    while !robot.is_finished() {
-        if paused.load(Ordering::Acquire) {
-            xi_at_resume = runtime.status().xi_m[2];
+            std::thread::sleep(Duration::from_millis(5));
         }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let (received, resumed_at) = robot.join().unwrap();
-    while !runtime.is_finished() {
-        std::thread::sleep(Duration::from_millis(10));
-    }
+        (robot.join().unwrap(), xi_at_resume)
+    });
+    runtime.request_stop();
     let summary = runtime.join();
     done.store(true, Ordering::Release);
     sensor.join().unwrap();
     Session {
-        received,
-        resumed_at,
+        received: record.received,
+        resumed_at: record.resumed_at,
+        stopped_at: record.stopped_at,
+        stop_requested_s: record.stop_requested_s,
         controller_xi_z_at_resume: xi_at_resume,
+        warm_up_s: record.warm_up_s,
         summary,
     }
 }
@@ -304,7 +397,7 @@ fn check_steps(kind: Kind, pause_ms: u64, s: &Session) {
         }
     }
     let step_limit = limits.max_rate[0] * CYCLE_S;
-    let after_pause = s.received[s.resumed_at - 1..]
+    let after_pause = s.received[s.resumed_at - 1..s.stopped_at]
         .windows(2)
         .map(|w| {
             (0..3)
@@ -317,7 +410,8 @@ fn check_steps(kind: Kind, pause_ms: u64, s: &Session) {
         "{kind:?}, pause {pause_ms} ms: largest step received {:.4} mm (from the pause on \
          {:.4} mm; limit {:.4} mm), \
          correction before the pause {:.4} mm, the controller's own ξz when the robot \
-         resumed {:.4} mm, first answer after it {:.4} mm, {} answers, fault {}",
+         resumed {:.4} mm, first answer after it {:.4} mm, {} answers ({} after the pause, \
+         {} while stopping; warm-up {:.2} s), fault {}",
         largest_p * 1e3,
         after_pause * 1e3,
         step_limit * 1e3,
@@ -327,6 +421,9 @@ fn check_steps(kind: Kind, pause_ms: u64, s: &Session) {
             .get(s.resumed_at)
             .map_or(f64::NAN, |c| c[2] * 1e3),
         s.received.len(),
+        s.stopped_at - s.resumed_at,
+        s.received.len() - s.stopped_at,
+        s.warm_up_s,
         s.summary
             .fault
             .map_or("none".to_string(), |f| f.to_string())
@@ -353,10 +450,7 @@ fn check_steps(kind: Kind, pause_ms: u64, s: &Session) {
 fn check_ramp_out(kind: Kind, pause_ms: u64, s: &Session) {
     let step_limit = common::config().limiter.max_rate[0] * CYCLE_S;
     let before = s.received[s.resumed_at - 1];
-    if s.summary
-        .fault
-        .is_some_and(|f| f.kind == FaultKind::RobotLinkLost)
-    {
+    if s.link_lost() {
         // The controller ramped out on its own clock while the robot heard nothing…
         if pause_ms >= 1000 {
             assert!(
@@ -366,7 +460,7 @@ fn check_ramp_out(kind: Kind, pause_ms: u64, s: &Session) {
             );
         }
         // …but the robot sees the ramp, in its own cycles, down to zero.
-        let after = &s.received[s.resumed_at..];
+        let after = &s.received[s.resumed_at..s.stopped_at];
         assert_eq!(after.last().unwrap()[2], 0.0, "{kind:?} {pause_ms} ms");
         assert!(
             after.len() as f64 >= before[2].abs() / step_limit - 1.0,

@@ -13,6 +13,8 @@ use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::{RobotSideLink, RobotState};
 use deflex_runtime::WallClock;
 use deflex_runtime::session::{RuntimeOptions, spawn};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 struct Outcome {
@@ -22,8 +24,24 @@ struct Outcome {
     sent: u64,
 }
 
-/// Robot streams for `robot_s`, the sensor for `sensor_s` (wall time).
-fn run(robot_s: f64, sensor_s: f64) -> Outcome {
+/// How the session's far ends behave.
+#[derive(Clone, Copy, Debug)]
+enum Script {
+    /// The sensor falls silent once the robot has sent 250 telegrams (1 s) and heard an active
+    /// correction (0.5 mm); the robot streams on until it has heard the correction at zero for
+    /// 25 answers in a row (10 s at most).
+    SensorGoesSilent,
+    /// The robot streams for `robot_s` (wall time), then falls silent for good; the sensor
+    /// streams until the session has ended.
+    RobotEnds { robot_s: f64 },
+}
+
+/// All six components of a correction below 1 µm (µrad).
+fn is_zero(c: &[f64; 6]) -> bool {
+    c.iter().all(|v| v.abs() < 1e-6)
+}
+
+fn run(script: Script) -> Outcome {
     let mut config = common::config();
     config.safety.robot_timeout_s = 0.2;
     config.safety.sensor_timeout_s = 0.2;
@@ -39,38 +57,67 @@ fn run(robot_s: f64, sensor_s: f64) -> Outcome {
     let sensor_addr = server.local_addr().unwrap();
     let client = NetFtClient::new("127.0.0.1:0", sensor_addr, Calibration::default()).unwrap();
 
-    let sensor = std::thread::spawn(move || {
-        let start = Instant::now();
-        while start.elapsed().as_secs_f64() < sensor_s {
-            let _ = server.poll_request(Duration::from_micros(500));
-            let _ = server.send_sample(&raw.into(), 0);
-            std::thread::sleep(Duration::from_millis(1));
-        }
-    });
-    let robot = std::thread::spawn(move || {
-        let mut ep =
-            RsiRobotEndpoint::new("127.0.0.1:0", link_addr, CorrectionMode::Absolute).unwrap();
-        let start = Instant::now();
-        let (mut sent, mut answered) = (0u64, 0u64);
-        let mut corrections = Vec::new();
-        let mut next = Instant::now();
-        while start.elapsed().as_secs_f64() < robot_s {
-            let state = RobotState {
-                cycle_id: sent + 1,
-                ..RobotState::with_joints(&q)
-            };
-            ep.send_state(&state).unwrap();
-            sent += 1;
-            next += Duration::from_millis(4);
-            let wait = next.saturating_duration_since(Instant::now());
-            if let Ok(Some(reply)) = ep.receive_correction(wait.max(Duration::from_micros(100))) {
-                answered += 1;
-                corrections.push(reply.correction.to_array());
+    // Set by the robot (its script) or once the session has ended.
+    let silence_sensor = Arc::new(AtomicBool::new(false));
+    let sensor = {
+        let silence = silence_sensor.clone();
+        std::thread::spawn(move || {
+            while !silence.load(Ordering::Acquire) {
+                let _ = server.poll_request(Duration::from_micros(500));
+                let _ = server.send_sample(&raw.into(), 0);
+                std::thread::sleep(Duration::from_millis(1));
             }
-            std::thread::sleep(next.saturating_duration_since(Instant::now()));
-        }
-        (corrections, sent, answered)
-    });
+        })
+    };
+    let robot = {
+        let silence = silence_sensor.clone();
+        std::thread::spawn(move || {
+            let mut ep =
+                RsiRobotEndpoint::new("127.0.0.1:0", link_addr, CorrectionMode::Absolute).unwrap();
+            let start = Instant::now();
+            let (mut sent, mut answered) = (0u64, 0u64);
+            let mut corrections: Vec<[f64; 6]> = Vec::new();
+            let mut next = Instant::now();
+            let mut zeros_after_silence = 0;
+            loop {
+                let elapsed = start.elapsed().as_secs_f64();
+                let go_on = match script {
+                    Script::SensorGoesSilent => zeros_after_silence < 25 && elapsed < 10.0,
+                    Script::RobotEnds { robot_s } => elapsed < robot_s,
+                };
+                if !go_on {
+                    break;
+                }
+                let state = RobotState {
+                    cycle_id: sent + 1,
+                    ..RobotState::with_joints(&q)
+                };
+                ep.send_state(&state).unwrap();
+                sent += 1;
+                next += Duration::from_millis(4);
+                let wait = next.saturating_duration_since(Instant::now());
+                if let Ok(Some(reply)) = ep.receive_correction(wait.max(Duration::from_micros(100)))
+                {
+                    answered += 1;
+                    let c = reply.correction.to_array();
+                    corrections.push(c);
+                    if let Script::SensorGoesSilent = script {
+                        if silence.load(Ordering::Acquire) {
+                            zeros_after_silence = if is_zero(&c) {
+                                zeros_after_silence + 1
+                            } else {
+                                0
+                            };
+                        } else if sent >= 250 && c[2].abs() > 5e-4 {
+                            silence.store(true, Ordering::Release);
+                        }
+                    }
+                }
+                std::thread::sleep(next.saturating_duration_since(Instant::now()));
+            }
+            (corrections, sent, answered)
+        })
+    };
     let options = RuntimeOptions {
         realtime: false,
         startup_timeout_s: 5.0,
@@ -88,11 +135,16 @@ fn run(robot_s: f64, sensor_s: f64) -> Outcome {
     )
     .unwrap();
     let (corrections, sent, answered) = robot.join().unwrap();
-    sensor.join().unwrap();
+    if let Script::SensorGoesSilent = script {
+        // The fault is latched and ramped out: how the session ends is not checked here.
+        runtime.request_stop();
+    }
     let deadline = Instant::now() + Duration::from_secs(10);
     while !runtime.is_finished() && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(20));
     }
+    silence_sensor.store(true, Ordering::Release);
+    sensor.join().unwrap();
     runtime.request_stop();
     Outcome {
         summary: runtime.join(),
@@ -114,7 +166,7 @@ fn check_bounded(corrections: &[[f64; 6]]) {
 #[test]
 fn sensor_goes_silent() {
     let _turn = crate::realtime_turn();
-    let o = run(3.0, 1.5);
+    let o = run(Script::SensorGoesSilent);
     let s = &o.summary;
     assert_eq!(s.error, None);
     assert_eq!(
@@ -139,7 +191,10 @@ fn sensor_goes_silent() {
         o.sent
     );
     assert!(s.reply_latency.count > 0 && s.reply_latency.p50_us > 0.0);
-    eprintln!("reply latency: {}", s.reply_latency);
+    eprintln!(
+        "{} of {} telegrams answered; reply latency: {}",
+        o.answered, o.sent, s.reply_latency
+    );
     eprintln!("control cycle: {}", s.control);
 }
 
@@ -148,7 +203,7 @@ fn sensor_goes_silent() {
 #[test]
 fn robot_program_end_is_an_end_not_a_fault() {
     let _turn = crate::realtime_turn();
-    let o = run(1.5, 3.0);
+    let o = run(Script::RobotEnds { robot_s: 0.6 });
     let s = &o.summary;
     assert_eq!(s.error, None);
     assert_eq!(

@@ -10,6 +10,7 @@
 //! the test's own thread.
 
 use crate::common;
+use deflex_control::Flags;
 use deflex_runtime::log::{Plain, spawn_writer};
 use deflex_runtime::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use deflex_runtime::session::{RuntimeOptions, spawn};
@@ -52,7 +53,9 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
         answer: deflex_io::rsi::RsiAnswer::Joint(deflex_io::rsi::JointTag::Ak),
         ..Default::default()
     };
-    let (link, client, peers) = common::loopback_cell(rsi, raw, q, 2.5, 1.5);
+    // The robot and the sensor stream until told: the sensor falls silent once the session
+    // has run its cycles in contact, the robot streams on until the fault is ramped out.
+    let (link, client, peers) = common::loopback_cell(rsi, raw, q, f64::INFINITY, f64::INFINITY);
     let telemetry = common::telemetry(&ctrl);
     let log = spawn_writer(telemetry.subscribe(), 6, Box::new(Plain(std::io::sink()))).unwrap();
     let mut other_sink = telemetry.subscribe();
@@ -63,6 +66,7 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
     let options = RuntimeOptions {
         realtime: false,
         startup_timeout_s: 5.0,
+        // Ended by a stop request once the fault is ramped out; the backstop.
         idle_exit_s: Some(0.3),
         ..RuntimeOptions::default()
     };
@@ -75,6 +79,13 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
         options,
     )
     .unwrap();
+    // 120 cycles (1.2 s) in contact, then the sensor's silence: latched, then ramped to zero.
+    common::wait_for_status(&runtime, "120 cycles", |s| s.cycles >= 120);
+    peers.silence_sensor();
+    common::wait_for_status(&runtime, "the fault ramped out", |s| {
+        s.flags.has(Flags::LATCHED) && s.xi_m == [0.0; 3] && s.xi_rot_rad == 0.0
+    });
+    runtime.request_stop();
     let summary = common::finish(runtime);
     peers.join();
     let report = log.finish(true).unwrap();

@@ -18,8 +18,8 @@ use deflex_runtime::session::{
 };
 use deflex_runtime::{Clock, WallClock};
 use std::net::{SocketAddr, UdpSocket};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// A wall clock whose `sleep_until` panics after `limit` calls: a control thread that fails.
@@ -76,38 +76,67 @@ fn options() -> RuntimeOptions {
     }
 }
 
-/// A KUKA emulator (raw socket, hand-written telegrams) sending `q` (degrees) every 4 ms while
-/// `run` holds; returns the answers' text.
-fn kuka(
-    to: SocketAddr,
-    q_deg: Vec<f64>,
+/// A KUKA emulator (raw socket, hand-written telegrams) sending `q` (degrees) every 4 ms until
+/// stopped, keeping the answers' text. The 4 ms are a period, as a robot's interpolation clock
+/// keeps it: a sleep that overshoots does not delay every telegram after it (so a ramp-out
+/// counted in robot cycles ends in its time on a loaded machine too).
+struct Kuka {
     run: Arc<AtomicBool>,
-) -> std::thread::JoinHandle<Vec<String>> {
-    std::thread::spawn(move || {
-        let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
-        sock.set_read_timeout(Some(Duration::from_millis(20)))
-            .unwrap();
-        let mut answers = Vec::new();
-        let mut buf = [0u8; 2048];
-        let mut ipoc = 0u64;
-        while run.load(Ordering::Acquire) {
-            ipoc += 4;
-            let axes: String = q_deg
-                .iter()
-                .enumerate()
-                .map(|(i, v)| format!(" A{}=\"{v:.4}\"", i + 1))
-                .collect();
-            let t = format!(
-                "<Rob Type=\"KUKA\"><AIPos{axes}/><Delay D=\"0\"/><IPOC>{ipoc}</IPOC></Rob>"
-            );
-            sock.send_to(t.as_bytes(), to).unwrap();
-            if let Ok(n) = sock.recv(&mut buf) {
-                answers.push(String::from_utf8_lossy(&buf[..n]).into_owned());
+    answers: Arc<Mutex<Vec<String>>>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Kuka {
+    /// The latest answer so far.
+    fn last_answer(&self) -> Option<String> {
+        self.answers.lock().unwrap().last().cloned()
+    }
+
+    /// Stops sending; returns every answer.
+    fn stop(self) -> Vec<String> {
+        self.run.store(false, Ordering::Release);
+        self.thread.join().unwrap();
+        std::mem::take(&mut *self.answers.lock().unwrap())
+    }
+}
+
+fn kuka(to: SocketAddr, q_deg: Vec<f64>) -> Kuka {
+    let run = Arc::new(AtomicBool::new(true));
+    let answers = Arc::new(Mutex::new(Vec::new()));
+    let thread = {
+        let (run, answers) = (run.clone(), answers.clone());
+        std::thread::spawn(move || {
+            let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
+            sock.set_read_timeout(Some(Duration::from_millis(20)))
+                .unwrap();
+            let mut buf = [0u8; 2048];
+            let mut ipoc = 0u64;
+            let mut next = Instant::now();
+            while run.load(Ordering::Acquire) {
+                ipoc += 4;
+                let axes: String = q_deg
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| format!(" A{}=\"{v:.4}\"", i + 1))
+                    .collect();
+                let t = format!(
+                    "<Rob Type=\"KUKA\"><AIPos{axes}/><Delay D=\"0\"/><IPOC>{ipoc}</IPOC></Rob>"
+                );
+                sock.send_to(t.as_bytes(), to).unwrap();
+                if let Ok(n) = sock.recv(&mut buf) {
+                    let answer = String::from_utf8_lossy(&buf[..n]).into_owned();
+                    answers.lock().unwrap().push(answer);
+                }
+                next = (next + Duration::from_millis(4)).max(Instant::now());
+                std::thread::sleep(next.saturating_duration_since(Instant::now()));
             }
-            std::thread::sleep(Duration::from_millis(4));
-        }
-        answers
-    })
+        })
+    };
+    Kuka {
+        run,
+        answers,
+        thread,
+    }
 }
 
 fn wait(runtime: &Runtime, limit: Duration) -> Duration {
@@ -129,12 +158,13 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
     let (client, sensor_done, sensor) = sensor(raw);
     let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
     let to = link.local_addr().unwrap();
-    let run = Arc::new(AtomicBool::new(true));
-    let robot = kuka(to, q.iter().map(|v| v.to_degrees()).collect(), run.clone());
+    let robot = kuka(to, q.iter().map(|v| v.to_degrees()).collect());
+    // Fails 40 cycles (0.4 s) in: the correction is most of the way ramped in (0.5 s), so the
+    // links have one to ramp out.
     let clock = FailingClock {
         inner: WallClock::new(),
         calls: Arc::new(AtomicU64::new(0)),
-        limit: 80,
+        limit: 40,
     };
     let ctrl = common::controller(config);
     let telemetry = common::telemetry(&ctrl);
@@ -153,8 +183,7 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
     let joined = Instant::now();
     let summary = runtime.join();
     let drain = joined.elapsed();
-    run.store(false, Ordering::Release);
-    let answers = robot.join().unwrap();
+    let answers = robot.stop();
     sensor_done.store(true, Ordering::Release);
     sensor.join().unwrap();
     eprintln!(
@@ -177,7 +206,11 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
     // The drain is bounded (the design bound, not a timing assertion on this machine: the
     // robot-link thread stops after at most DRAIN_S plus one receive timeout).
     assert!(drain < Duration::from_secs(5), "{drain:?}");
-    // The last answer the robot heard is the correction ramped to zero.
+    // The correction was active, and the last answer the robot heard is it ramped to zero.
+    assert!(
+        answers.iter().any(|a| !a.contains(r#"Z="0.0000""#)),
+        "the correction was never active"
+    );
     let last = answers.last().unwrap();
     assert!(last.contains(r#"Z="0.0000""#), "{last}");
 }
@@ -209,8 +242,7 @@ fn model_that_does_not_fit_the_robot_is_refused() {
         let (client, done, sensor) = sensor(raw);
         let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
         let to = link.local_addr().unwrap();
-        let run = Arc::new(AtomicBool::new(true));
-        let kuka = kuka(to, q.iter().map(|v| v.to_degrees()).collect(), run.clone());
+        let kuka = kuka(to, q.iter().map(|v| v.to_degrees()).collect());
         let ctrl = Controller::new(robot, config).unwrap();
         let telemetry = common::telemetry(&ctrl);
         let runtime = spawn(
@@ -224,8 +256,7 @@ fn model_that_does_not_fit_the_robot_is_refused() {
         .unwrap();
         wait(&runtime, Duration::from_secs(30));
         let summary = runtime.join();
-        run.store(false, Ordering::Release);
-        let answers = kuka.join().unwrap();
+        let answers = kuka.stop();
         done.store(true, Ordering::Release);
         sensor.join().unwrap();
         let error = summary.error.expect("refused");
@@ -349,7 +380,21 @@ fn egm_tool_down_correction_has_the_right_sign_on_the_wire() {
         }
         std::thread::sleep(Duration::from_millis(4));
     }
+    // Stopped while the robot still streams: the correction ramps out as the robot hears it
+    // and the session ends once a telegram goes unanswered (a robot that fell silent first
+    // would leave the link waiting to send its last answer).
     runtime.request_stop();
+    let stopping = Instant::now();
+    while stopping.elapsed() < Duration::from_secs(10) {
+        seq += 1;
+        deflex_io::egm::fill_robot_msg(&mut m, &RobotState::with_joints(&q), seq, 4 * seq, false);
+        sock.send_to(&prost::Message::encode_to_vec(&m), to)
+            .unwrap();
+        if sock.recv(&mut buf).is_err() && runtime.is_finished() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(4));
+    }
     wait(&runtime, Duration::from_secs(10));
     let _ = runtime.join();
     done.store(true, Ordering::Release);
@@ -380,8 +425,7 @@ fn rsi_joint_answers_move_the_tcp_by_the_correction() {
     let link = RsiLink::bind("127.0.0.1:0", cfg).unwrap();
     assert!(link.answers_in_joint_space());
     let to = link.local_addr().unwrap();
-    let run = Arc::new(AtomicBool::new(true));
-    let robot = kuka(to, q.iter().map(|v| v.to_degrees()).collect(), run.clone());
+    let robot = kuka(to, q.iter().map(|v| v.to_degrees()).collect());
     let ctrl = common::controller(config);
     let telemetry = common::telemetry(&ctrl);
     let runtime = spawn(
@@ -404,14 +448,16 @@ fn rsi_joint_answers_move_the_tcp_by_the_correction() {
         std::thread::sleep(Duration::from_millis(10));
     }
     std::thread::sleep(Duration::from_millis(200));
-    run.store(false, Ordering::Release);
-    let answers = robot.join().unwrap();
+    let last = robot.last_answer().expect("answers");
+    // Stopped while the robot still streams: the correction ramps out as the robot hears it and
+    // the session ends (a silent robot would leave the link draining its last answer).
+    runtime.request_stop();
     wait(&runtime, Duration::from_secs(10));
     let _ = runtime.join();
+    robot.stop();
     done.store(true, Ordering::Release);
     sensor.join().unwrap();
-    // The last answer before the robot fell silent, parsed by hand.
-    let last = answers.last().expect("answers");
+    // The last answer at the steady correction, parsed by hand.
     assert!(last.contains("<AK ") && !last.contains("RKorr"), "{last}");
     let dq: Vec<f64> = (1..=6)
         .map(|i| {

@@ -30,6 +30,7 @@ fn options() -> RuntimeOptions {
     RuntimeOptions {
         realtime: false,
         startup_timeout_s: 5.0,
+        // The sessions end by a stop request; the backstop.
         idle_exit_s: Some(0.3),
         ..RuntimeOptions::default()
     }
@@ -53,7 +54,9 @@ fn session(capacity: usize) -> Sinks {
     let ctrl = common::controller(config);
     let q = common::q0();
     let raw = common::raw_reading(&config, &q, [150.0, -80.0, 900.0, 0.0, 0.0, 0.0]);
-    let (link, client, peers) = common::loopback_cell(Default::default(), raw, q, 1.5, 3.0);
+    // The robot and the sensor stream until the session has ended (by a stop request).
+    let (link, client, peers) =
+        common::loopback_cell(Default::default(), raw, q, f64::INFINITY, f64::INFINITY);
     let info = session_info(&ctrl, Source::Runtime, "kuka-rsi", 0.004);
     let telemetry = Telemetry::new(info, capacity);
     let buffer = Buffer::default();
@@ -72,6 +75,10 @@ fn session(capacity: usize) -> Sinks {
     std::thread::sleep(std::time::Duration::from_millis(500));
     let late = runtime.telemetry().subscribe();
     let status = runtime.status();
+    // The late sink reads 0.3 s of the session live, then the stop ramps the correction out
+    // (0.5 s) while the robot still streams.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    runtime.request_stop();
     let summary = common::finish(runtime);
     peers.join();
     let log = log.finish(true).unwrap();

@@ -107,10 +107,11 @@ fn a_page_gets_the_history_then_live_buckets_of_the_stream() {
 
 #[test]
 fn a_page_that_reads_nothing_costs_only_its_own_dropped_messages() {
-    // 10 minutes of history (5 MB) against a 1 MiB write buffer and a 32-message queue (1.3 s).
+    // 10 minutes of history (5 MB) against a 1 MiB write buffer and an 8-message queue (0.3 s
+    // of live updates: how long the queue is changes only when the drops begin).
     let publisher = Publisher::start(100.0, 60_000);
     let options = ViewOptions {
-        queue_messages: 32,
+        queue_messages: 8,
         write_buffer_bytes: deflex_view::MIN_WRITE_BUFFER_BYTES,
         ..ViewOptions::default()
     };

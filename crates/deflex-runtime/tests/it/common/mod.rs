@@ -78,15 +78,28 @@ pub fn telemetry(ctrl: &Controller) -> deflex_runtime::Telemetry {
 }
 
 /// The far ends of a loopback cell: a KUKA (RSI robot side) sending `q` every 4 ms for
-/// `robot_s` and a Net F/T streaming `raw` for `sensor_s` (wall time), each in its own thread.
+/// `robot_s` and a Net F/T streaming `raw` for `sensor_s` (wall time; `f64::INFINITY`: until
+/// told), each in its own thread.
 pub struct Peers {
     robot: std::thread::JoinHandle<u64>,
     sensor: std::thread::JoinHandle<()>,
+    robot_stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    sensor_stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 impl Peers {
-    /// Waits for both; returns the telegrams the robot sent.
+    /// The sensor falls silent now.
+    pub fn silence_sensor(&self) {
+        self.sensor_stop
+            .store(true, std::sync::atomic::Ordering::Release);
+    }
+
+    /// Stops both (those still running) and waits for them; returns the telegrams the robot
+    /// sent.
     pub fn join(self) -> u64 {
+        use std::sync::atomic::Ordering;
+        self.robot_stop.store(true, Ordering::Release);
+        self.sensor_stop.store(true, Ordering::Release);
         let sent = self.robot.join().unwrap();
         self.sensor.join().unwrap();
         sent
@@ -108,6 +121,8 @@ pub fn loopback_cell(
     use deflex_io::RobotSideLink;
     use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
     use deflex_io::rsi::{CorrectionMode, RsiLink, RsiRobotEndpoint};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
     use std::time::{Duration, Instant};
     let link = RsiLink::bind("127.0.0.1:0", rsi).unwrap();
     let link_addr = link.local_addr().unwrap();
@@ -115,35 +130,74 @@ pub fn loopback_cell(
     let sensor_addr = server.local_addr().unwrap();
     let client = NetFtClient::new("127.0.0.1:0", sensor_addr, Calibration::default()).unwrap();
     let raw: [f64; 6] = raw.into();
-    let sensor = std::thread::spawn(move || {
-        let start = Instant::now();
-        while start.elapsed().as_secs_f64() < sensor_s {
-            let _ = server.poll_request(Duration::from_micros(500));
-            let _ = server.send_sample(&raw, 0);
-            std::thread::sleep(Duration::from_millis(1));
+    let (robot_stop, sensor_stop) = (
+        Arc::new(AtomicBool::new(false)),
+        Arc::new(AtomicBool::new(false)),
+    );
+    let sensor = {
+        let stop = sensor_stop.clone();
+        std::thread::spawn(move || {
+            let start = Instant::now();
+            while start.elapsed().as_secs_f64() < sensor_s && !stop.load(Ordering::Acquire) {
+                let _ = server.poll_request(Duration::from_micros(500));
+                let _ = server.send_sample(&raw, 0);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    };
+    let robot = {
+        let stop = robot_stop.clone();
+        std::thread::spawn(move || {
+            let mut ep =
+                RsiRobotEndpoint::new("127.0.0.1:0", link_addr, CorrectionMode::Absolute).unwrap();
+            let start = Instant::now();
+            let mut sent = 0u64;
+            let mut next = Instant::now();
+            while start.elapsed().as_secs_f64() < robot_s && !stop.load(Ordering::Acquire) {
+                let state = deflex_io::RobotState {
+                    cycle_id: sent + 1,
+                    ..deflex_io::RobotState::with_joints(&q)
+                };
+                ep.send_state(&state).unwrap();
+                sent += 1;
+                next += Duration::from_millis(4);
+                let wait = next.saturating_duration_since(Instant::now());
+                let _ = ep.receive_correction(wait.max(Duration::from_micros(100)));
+                std::thread::sleep(next.saturating_duration_since(Instant::now()));
+            }
+            sent
+        })
+    };
+    (
+        link,
+        client,
+        Peers {
+            robot,
+            sensor,
+            robot_stop,
+            sensor_stop,
+        },
+    )
+}
+
+/// Waits (bounded, 10 s) until `done` holds for the runtime's live status.
+pub fn wait_for_status(
+    runtime: &deflex_runtime::Runtime,
+    what: &str,
+    done: impl Fn(&deflex_runtime::LiveStatus) -> bool,
+) {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    loop {
+        let status = runtime.status();
+        if done(&status) {
+            return;
         }
-    });
-    let robot = std::thread::spawn(move || {
-        let mut ep =
-            RsiRobotEndpoint::new("127.0.0.1:0", link_addr, CorrectionMode::Absolute).unwrap();
-        let start = Instant::now();
-        let mut sent = 0u64;
-        let mut next = Instant::now();
-        while start.elapsed().as_secs_f64() < robot_s {
-            let state = deflex_io::RobotState {
-                cycle_id: sent + 1,
-                ..deflex_io::RobotState::with_joints(&q)
-            };
-            ep.send_state(&state).unwrap();
-            sent += 1;
-            next += Duration::from_millis(4);
-            let wait = next.saturating_duration_since(Instant::now());
-            let _ = ep.receive_correction(wait.max(Duration::from_micros(100)));
-            std::thread::sleep(next.saturating_duration_since(Instant::now()));
-        }
-        sent
-    });
-    (link, client, Peers { robot, sensor })
+        assert!(
+            std::time::Instant::now() < deadline,
+            "{what}: not within 10 s ({status:?})"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
 }
 
 /// Waits (bounded) for the runtime to end by itself, then stops it and gathers the summary.
