@@ -41,8 +41,11 @@ from ros2_types import (DiagnosticArray, Header, JointState, Time, Vector3, Wren
 
 ROOT = Path(__file__).resolve().parents[4]
 MODEL = ROOT / "docs" / "tx200_cell.toml"
-# This process's own DDS domains (other processes on the machine may use DDS).
-DOMAIN = 120 + (os.getpid() % 30) * 3
+# This process's own DDS domains (other processes on the machine may use DDS), all below 100:
+# a domain's RTPS ports (7400 + 250 d + …) then lie under Linux's ephemeral range (32768 on), so
+# no socket this test binds to port 0 (the relay's, the links') can take a DDS port or be sent
+# DDS traffic.
+DOMAIN = 12 + (os.getpid() % 28) * 3
 SENSOR_FRAME = "ati_ft"
 NS = "/deflex_it"
 RATE_HZ = 50.0
@@ -257,7 +260,8 @@ class NetFtRelay:
         topic = Topic(self.dp, "rt/ati/wrench", WrenchStamped)
         self.writer = DataWriter(self.dp, topic, qos=SENSOR_DATA)
         self.bad = bad
-        self.sent = {"good": 0, "nan": 0, "frame": 0, "stale": 0, "future": 0, "flood": 0}
+        self.sent = {"good": 0, "nan": 0, "frame": 0, "stale": 0, "future": 0, "flood": 0,
+                     "foreign": 0}
 
     def publish(self, w, frame=SENSOR_FRAME, shift_ns=0, kind="good"):
         now = time.time_ns() + shift_ns
@@ -281,8 +285,12 @@ class NetFtRelay:
                 sock.sendto(start, ("127.0.0.1", NETFT_PORT))
                 last_request = time.monotonic()
             try:
-                data, _ = sock.recvfrom(1500)
+                data, sender = sock.recvfrom(1500)
             except socket.timeout:
+                continue
+            # Like a real RDT client: only the sensor's own datagrams, whole records.
+            if sender != ("127.0.0.1", NETFT_PORT) or len(data) % 36 != 0:
+                self.sent["foreign"] += 1
                 continue
             streaming = True
             for k in range(len(data) // 36):
