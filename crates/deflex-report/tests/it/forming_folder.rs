@@ -1,6 +1,6 @@
 //! A forming run's folder (moved from deflex-sim's tests when the writing moved here).
 
-use crate::forming_run::write_forming_run;
+use deflex_report::forming_run::write_forming_run;
 use deflex_sim::{CellConfig, ToolPath, run_forming};
 
 #[test]

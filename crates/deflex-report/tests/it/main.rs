@@ -1,14 +1,24 @@
-//! Rendering tests: files are written to a unique temp dir, decoded back and
-//! inspected.
+//! deflex-report's tests, through its public API. Here: rendering, files are written to a
+//! unique temp dir, decoded back and inspected; a module per report and per piece.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::*;
+use deflex_report::*;
 
+mod base64;
 mod calibration;
+mod colormap;
+mod font;
 mod forming_folder;
+mod heatmap;
+mod html;
 mod plan;
+mod plot;
+mod render;
+mod run_figures;
+mod study;
+mod timeline;
 mod validation;
 
 /// A fresh, unique directory under the system temp dir.

@@ -1,6 +1,6 @@
 //! The validation report. Issue 12: a validation report that fails half-way leaves the output folder as it was.
 
-use crate::validation_report::{
+use deflex_report::validation_report::{
     validation_rotation_summary, write_validation_report as write_report,
 };
 use deflex_stiffness::synthetic::{

@@ -1,9 +1,9 @@
 //! The calibration report (moved from deflex-stiffness with it): plots and tables written, one unit per column, and the χ²/dof note
 //! when the residuals are larger than the noise the file claims.
 
-use crate::calibration_report::{CalibrationReport, write_calibration_report};
-use crate::calibration_tables::{SHIFT_HEADERS, residual_summary, shift_rows};
 use deflex_model::Robot;
+use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
+use deflex_report::calibration_tables::{SHIFT_HEADERS, residual_summary, shift_rows};
 use deflex_stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_stiffness::stiffness_fit::{
     CHI2_WELL_ABOVE_ONE, Calibration, Structure, calibrate_fixed,

@@ -1,8 +1,8 @@
 //! The plan's tables: the technician's sheet against the identifiability table (moved from
 //! deflex-stiffness's planner tests when the tables moved here).
 
-use crate::plan_tables::{expected_se_rows, technician_rows};
 use deflex_model::builtin;
+use deflex_report::plan_tables::{expected_se_rows, technician_rows};
 use deflex_stiffness::campaign_cell::default_force_n;
 use deflex_stiffness::plan::{PlanOptions, plan_experiments};
 

@@ -2,7 +2,7 @@
 //! report's numbers against the run's own CSV files (independent re-computation), plus
 //! determinism under a seed.
 
-use super::write_study;
+use deflex_report::study::write_study;
 use deflex_study::{DemoOptions, DemoSummary, Progress, run_study};
 use std::path::{Path, PathBuf};
 
@@ -381,7 +381,7 @@ fn check_profiles(dir: &Path) {
 /// markers; with `with_sensitivity` the sensitivity bullet too (the study then runs its
 /// sensitivity section). `DEFLEX_BLESS_README=1` rewrites the blocks instead.
 fn check_readme_blocks(with_sensitivity: bool) {
-    use super::readme::{
+    use deflex_report::study::readme::{
         Block, current_block, details_list, replace_block, results_table, sensitivity_list,
     };
     let options = DemoOptions {
@@ -427,7 +427,7 @@ fn check_readme_blocks(with_sensitivity: bool) {
         let shown = std::fs::read_to_string(&shot).expect("docs/report-screenshot.txt is readable");
         let expected = format!(
             "headline: {}",
-            super::page::headline_text(&study.summary)
+            deflex_report::study::headline_text(&study.summary)
                 .split_whitespace()
                 .collect::<Vec<_>>()
                 .join(" ")
