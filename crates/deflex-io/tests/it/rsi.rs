@@ -1,8 +1,11 @@
 #![allow(clippy::needless_range_loop)]
 
-use super::*;
+use deflex_io::error::LinkError;
+use deflex_io::link::{Correction, Pose6, RobotLink, RobotSideLink, RobotState};
+use deflex_io::rsi::*;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use std::time::Duration;
 
 const SAMPLE: &[u8] = br#"<Rob Type="KUKA">
 <RIst X="1200.5000" Y="-35.2500" Z="845.1000" A="90.0000" B="-12.5000" C="179.0000"/>

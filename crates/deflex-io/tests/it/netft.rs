@@ -1,8 +1,10 @@
 #![allow(clippy::needless_range_loop)]
 
-use super::*;
+use deflex_io::link::ForceSensorLink;
+use deflex_io::netft::*;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use std::time::Duration;
 
 #[test]
 fn request_known_bytes() {

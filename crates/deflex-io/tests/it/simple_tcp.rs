@@ -1,11 +1,15 @@
-//! Loopback tests of [`super`]: 127.0.0.1 and ephemeral ports only.
+//! Loopback tests of [`deflex_io::simple_tcp`]: 127.0.0.1 and ephemeral ports only.
 
-use super::*;
-use crate::DropReason;
-use crate::simple_udp::parse_joints_line;
+use deflex_io::DropReason;
+use deflex_io::error::LinkError;
+use deflex_io::link::{Correction, RobotLink, RobotSideLink, RobotState};
+use deflex_io::simple_tcp::*;
+use deflex_io::simple_udp::{LINE_BUFFER, format_joints_line, parse_joints_line};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use std::io::{Read, Write};
+use std::io::{ErrorKind, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::time::Duration;
 
 const T: Duration = Duration::from_secs(2);
 const SHORT: Duration = Duration::from_millis(30);

@@ -1,8 +1,12 @@
 #![allow(clippy::needless_range_loop)]
 
-use super::*;
+use deflex_io::egm::*;
+use deflex_io::error::LinkError;
+use deflex_io::link::{Correction, Pose6, RobotLink, RobotSideLink, RobotState};
+use prost::Message;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use std::time::Duration;
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol
@@ -386,7 +390,7 @@ fn work_object_frame_ignores_the_tool() {
     let r = cfg.correction_frame(&[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]);
     assert_eq!(r, wobj);
     // Base x (1, 0, 0) is the work object's −y.
-    let v = crate::link::rotation_transpose_apply(&r, [1.0, 0.0, 0.0]);
+    let v = deflex_io::link::rotation_transpose_apply(&r, [1.0, 0.0, 0.0]);
     assert!(close(v[0], 0.0, 1e-15) && close(v[1], -1.0, 1e-15));
 }
 

@@ -1,8 +1,11 @@
 #![allow(clippy::needless_range_loop)]
 
-use super::*;
+use deflex_io::error::LinkError;
+use deflex_io::link::{Correction, RobotLink, RobotSideLink, RobotState};
+use deflex_io::staubli::*;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use std::time::{Duration, Instant};
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol
