@@ -729,7 +729,3 @@ impl RobotSideLink for EgmRobotEndpoint {
         }))
     }
 }
-
-#[cfg(test)]
-#[path = "egm_tests.rs"]
-mod tests;

@@ -537,7 +537,3 @@ impl NetFtSensorServer {
         self.ft_sequence = self.ft_sequence.wrapping_add(1);
     }
 }
-
-#[cfg(test)]
-#[path = "netft_tests.rs"]
-mod tests;

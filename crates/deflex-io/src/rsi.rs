@@ -830,7 +830,3 @@ impl RobotSideLink for RsiRobotEndpoint {
         }))
     }
 }
-
-#[cfg(test)]
-#[path = "rsi_tests.rs"]
-mod tests;

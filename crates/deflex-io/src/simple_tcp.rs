@@ -546,7 +546,3 @@ impl RobotSideLink for SimpleTcpRobotEndpoint {
         }
     }
 }
-
-#[cfg(test)]
-#[path = "simple_tcp_tests.rs"]
-mod tests;

@@ -499,7 +499,3 @@ impl RobotSideLink for StaubliRobotEndpoint {
         }))
     }
 }
-
-#[cfg(test)]
-#[path = "staubli_tests.rs"]
-mod tests;

@@ -220,16 +220,19 @@ impl core::fmt::Write for SliceWriter<'_> {
     }
 }
 
-/// Parses an ASCII decimal/float number, rejecting non-finite values.
-pub(crate) fn parse_f64(b: &[u8]) -> Option<f64> {
+/// Parses an ASCII decimal/float number between optional ASCII whitespace, rejecting
+/// non-finite values (`inf`, `NaN`) and anything that is not UTF-8: how every number of a text
+/// telegram (RSI, Net F/T, the simple line protocols) is read.
+pub fn parse_f64(b: &[u8]) -> Option<f64> {
     let s = std::str::from_utf8(trim(b)).ok()?;
     // Rust accepts "inf"/"nan"; telegrams never legitimately contain them.
     let v: f64 = s.parse().ok()?;
     v.is_finite().then_some(v)
 }
 
-/// Parses an unsigned decimal integer.
-pub(crate) fn parse_u64(b: &[u8]) -> Option<u64> {
+/// Parses an unsigned decimal integer between optional ASCII whitespace: digits only (no sign),
+/// at most 20 of them, within `u64` (a telegram's counter, such as RSI's `IPOC`).
+pub fn parse_u64(b: &[u8]) -> Option<u64> {
     let b = trim(b);
     if b.is_empty() || b.len() > 20 || !b.iter().all(u8::is_ascii_digit) {
         return None;
@@ -254,47 +257,4 @@ pub(crate) fn trim(mut b: &[u8]) -> &[u8] {
         }
     }
     b
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use core::fmt::Write;
-
-    #[test]
-    fn fixed_buf_overflow() {
-        let mut b = FixedBuf::<4>::new();
-        assert!(write!(b, "abc").is_ok());
-        assert!(write!(b, "de").is_err());
-        assert!(b.overflowed());
-        b.clear();
-        assert!(!b.overflowed());
-        assert_eq!(b.as_bytes(), b"");
-    }
-
-    #[test]
-    fn numbers() {
-        assert_eq!(parse_f64(b" 1.5 "), Some(1.5));
-        assert_eq!(parse_f64(b"-2e3"), Some(-2000.0));
-        assert_eq!(parse_f64(b"inf"), None);
-        assert_eq!(parse_f64(b"NaN"), None);
-        assert_eq!(parse_f64(b""), None);
-        assert_eq!(parse_f64(&[0xff, 0x31]), None);
-        assert_eq!(parse_u64(b"123"), Some(123));
-        assert_eq!(parse_u64(b"+1"), None);
-        assert_eq!(parse_u64(b"99999999999999999999999"), None);
-    }
-
-    #[test]
-    fn zero_timeout_is_a_poll() {
-        let mut e = UdpEndpoint::bind("127.0.0.1:0", Protocol::Rsi).unwrap();
-        let mut buf = [0u8; 16];
-        assert!(e.recv(&mut buf, Duration::ZERO).unwrap().is_none());
-        assert!(
-            e.recv(&mut buf, Duration::from_millis(1))
-                .unwrap()
-                .is_none()
-        );
-        assert!(matches!(e.send(b"x"), Err(LinkError::NoPeer { .. })));
-    }
 }

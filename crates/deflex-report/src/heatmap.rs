@@ -23,8 +23,9 @@ const Y_AREA: u32 = 86;
 const MARGIN: u32 = 14;
 
 /// Cell edges from strictly increasing centres: midpoints between
-/// neighbours, and half a neighbour spacing beyond the ends.
-fn edges(centers: &[f64]) -> Vec<f64> {
+/// neighbours, and half a neighbour spacing beyond the ends (a single centre `c` gets ±5 % of
+/// `|c|`, or ±0.5 at zero). The cells [`heatmap`] draws around its grid's `xs` and `ys`.
+pub fn cell_edges(centers: &[f64]) -> Vec<f64> {
     let n = centers.len();
     if n == 1 {
         let c = centers[0];
@@ -186,7 +187,7 @@ pub fn heatmap(
         ));
     }
     let crange = color_range(path, spec, values)?;
-    let (xe, ye) = (edges(x_centers), edges(y_centers));
+    let (xe, ye) = (cell_edges(x_centers), cell_edges(y_centers));
     let xr = spec.x_range.unwrap_or((xe[0], xe[nx]));
     let yr = spec.y_range.unwrap_or((ye[0], ye[ny]));
     check_range(path, "x", xr)?;
@@ -230,7 +231,11 @@ pub fn heatmap(
                         .into_font()
                         .color(&color)
                         .pos(Pos::new(HPos::Center, VPos::Center));
-                    labels.push(Text::new(fmt_value(v), (x_centers[i], y_centers[j]), style));
+                    labels.push(Text::new(
+                        cell_value_text(v),
+                        (x_centers[i], y_centers[j]),
+                        style,
+                    ));
                 }
             }
             chart.draw_series(labels).map_err(err)?;
@@ -245,8 +250,9 @@ pub fn heatmap(
     })
 }
 
-/// Three significant digits for in-cell value labels.
-fn fmt_value(v: f64) -> String {
+/// A value as [`heatmap`] prints it in its cells: three significant digits, scientific notation
+/// below 0.01 and from 10 000 on.
+pub fn cell_value_text(v: f64) -> String {
     let a = v.abs();
     if a != 0.0 && !(1e-2..1e4).contains(&a) {
         format!("{v:.2e}")
@@ -327,23 +333,4 @@ pub fn scatter_heatmap(
             .map_err(err)?;
         colorbar(&bar, crange, colorbar_label)
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn edges_are_midpoints() {
-        assert_eq!(edges(&[0.0, 1.0, 3.0]), vec![-0.5, 0.5, 2.0, 4.0]);
-        assert_eq!(edges(&[2.0]), vec![1.9, 2.1]);
-    }
-
-    #[test]
-    fn value_labels_have_three_significant_digits() {
-        assert_eq!(fmt_value(0.12345), "0.123");
-        assert_eq!(fmt_value(1.2345), "1.23");
-        assert_eq!(fmt_value(123.45), "123");
-        assert_eq!(fmt_value(0.0), "0.000");
-    }
 }

@@ -79,11 +79,15 @@ use std::path::{Path, PathBuf};
 pub use base64::base64_encode;
 pub use cloud::{Cloud3, Plot3Spec, cloud_3d};
 pub use colormap::{PALETTE, palette_color, viridis};
-pub use heatmap::{heatmap, scatter_heatmap};
+pub use font::DEJAVU_SANS;
+pub use heatmap::{cell_edges, cell_value_text, heatmap, scatter_heatmap};
 pub use html::{FileLink, HtmlReport, html_escape, inline_html};
-pub use plot::{PanelLayout, line_plot, panels_plot, parity_plot};
-pub use render::{MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, text_width_px, title_layout};
-pub use run_figures::{MAX_POINTS, RunFigures, RunTrace, Xyz, write_run_figures};
+pub use plot::{PanelLayout, clip_segment, line_plot, panels_plot, parity_plot, strokable_pieces};
+pub use render::{
+    ImageFormat, MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, finite_extent, padded, text_width_px,
+    tick_formatter, title_layout,
+};
+pub use run_figures::{MAX_POINTS, RunFigures, RunTrace, Xyz, thin_series, write_run_figures};
 pub use timeline::{Lane, timeline_plot};
 
 /// Errors from drawing plots or writing reports. Every variant names the
@@ -334,6 +338,3 @@ impl PlotSpec {
         self
     }
 }
-
-#[cfg(test)]
-mod tests;

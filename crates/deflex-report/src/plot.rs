@@ -170,8 +170,9 @@ fn legend_corner(
 
 /// The part of the segment `a`–`b` inside the rectangle `[x0, x1] × [y0, y1]`, as fractions
 /// `(t_in, t_out)` of the way from `a` to `b`, or `None` when no part is inside (Liang–Barsky:
-/// each of the four edges bounds `t` from one side, by `p t ≤ q`).
-fn clip_segment(
+/// each of the four edges bounds `t` from one side, by `p t ≤ q`). [`strokable_pieces`] clips
+/// with it.
+pub fn clip_segment(
     a: (f64, f64),
     b: (f64, f64),
     (x0, x1): (f64, f64),
@@ -203,8 +204,9 @@ const MIN_STEP_PX: f64 = 3.0;
 
 /// The polylines that draw `run` on a plotting area of `pw × ph` pixels showing
 /// `[x0, x1] × [y0, y1]`: clipped to that rectangle (nothing is drawn over the axes and tick
-/// labels), with vertices at least [`MIN_STEP_PX`] apart, and cut at every vertex where the line
-/// turns by more than 60° on screen.
+/// labels), with vertices at least 3 px apart, and cut at every vertex where the line turns by
+/// more than 60° on screen. Every line series here is drawn this way; a front end stroking its
+/// own wide lines with plotters can use it the same way.
 ///
 /// Why: plotters strokes a wide line as one polygon whose corners are where the offset edges of
 /// neighbouring segments meet; at a near-reversal (a spike one pixel wide, common in dense logs)
@@ -214,7 +216,7 @@ const MIN_STEP_PX: f64 = 3.0;
 /// can turn a 1 px step anywhere; on steps of 3 px or more that moves a direction by at most
 /// ~50°, so no stroke it draws turns by more than ~110° and no corner lies more than
 /// `d / cos 55° ≈ 1.7 d` from the line.
-pub(crate) fn strokable_pieces(
+pub fn strokable_pieces(
     run: &[(f64, f64)],
     (x0, x1): (f64, f64),
     (y0, y1): (f64, f64),
@@ -505,56 +507,4 @@ pub fn parity_plot(
     render!(path, (spec.width, spec.height), |root| draw_chart(
         root, &spec, &prepared, xr, yr, 4, &colors
     ))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn clipping_keeps_the_part_inside_the_rectangle() {
-        let (xr, yr) = ((0.0, 10.0), (0.0, 1.0));
-        // Crosses the bottom edge half-way, and a segment wholly below.
-        assert_eq!(
-            clip_segment((0.0, 1.0), (2.0, -1.0), xr, yr),
-            Some((0.0, 0.5))
-        );
-        assert_eq!(clip_segment((0.0, -1.0), (2.0, -0.5), xr, yr), None);
-        let pieces = strokable_pieces(
-            &[(0.0, 0.5), (1.0, 0.5), (2.0, -1.0), (3.0, 0.5), (4.0, 0.5)],
-            xr,
-            yr,
-            (1000, 100),
-        );
-        assert_eq!(pieces.len(), 2, "{pieces:?}");
-        for p in &pieces {
-            assert!(
-                p.iter()
-                    .all(|&(x, y)| (0.0..=10.0).contains(&x) && (0.0..=1.0).contains(&y))
-            );
-        }
-        assert!((pieces[0].last().unwrap().1).abs() < 1e-12, "{pieces:?}");
-    }
-
-    #[test]
-    fn sharp_turns_end_the_stroke_and_gentle_ones_do_not() {
-        let (xr, yr) = ((0.0, 100.0), (0.0, 100.0));
-        // A spike up and down one pixel apart: cut at its tip; a 45° bend: kept whole.
-        let spike = strokable_pieces(
-            &[(10.0, 0.0), (11.0, 90.0), (12.0, 0.0)],
-            xr,
-            yr,
-            (100, 100),
-        );
-        assert_eq!(
-            spike,
-            vec![
-                vec![(10.0, 0.0), (11.0, 90.0)],
-                vec![(11.0, 90.0), (12.0, 0.0)]
-            ]
-        );
-        let bend = strokable_pieces(&[(0.0, 0.0), (50.0, 0.0), (90.0, 40.0)], xr, yr, (100, 100));
-        assert_eq!(bend.len(), 1);
-        assert_eq!(bend[0].len(), 3);
-    }
 }

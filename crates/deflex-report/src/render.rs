@@ -9,22 +9,27 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::{PlotSpec, ReportError};
 
-/// Output formats.
+/// The image formats the plots are written in, chosen by the output file's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Format {
+pub enum ImageFormat {
+    /// `.png` (any case): a bitmap.
     Png,
+    /// `.svg` (any case): vector graphics.
     Svg,
 }
 
-impl Format {
-    pub(crate) fn from_path(path: &Path) -> Result<Self, ReportError> {
+impl ImageFormat {
+    /// The format of `path` by its extension, case-insensitive (`plot.PNG` is a PNG); any other
+    /// extension, or none, is [`ReportError::UnsupportedFormat`] naming the file. A front end
+    /// can check an output path with it before computing what is to be drawn there.
+    pub fn from_path(path: &Path) -> Result<Self, ReportError> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(|e| e.to_ascii_lowercase());
         match ext.as_deref() {
-            Some("png") => Ok(Format::Png),
-            Some("svg") => Ok(Format::Svg),
+            Some("png") => Ok(ImageFormat::Png),
+            Some("svg") => Ok(ImageFormat::Svg),
             _ => Err(ReportError::UnsupportedFormat {
                 path: path.to_path_buf(),
                 expected: ".png or .svg",
@@ -59,17 +64,17 @@ macro_rules! render {
         };
         $crate::render::check_size(path, size)?;
         $crate::font::ensure_registered();
-        let format = $crate::render::Format::from_path(path)?;
+        let format = $crate::render::ImageFormat::from_path(path)?;
         // Drawn into a temporary sibling and renamed: a failure never leaves half an image.
         ::deflex_files::write_through(
             path,
             |temporary| match format {
-                $crate::render::Format::Png => $crate::render::render!(
+                $crate::render::ImageFormat::Png => $crate::render::render!(
                     @draw ::plotters::prelude::BitMapBackend::new(temporary, size),
                     fail,
                     |$root| $body
                 ),
-                $crate::render::Format::Svg => $crate::render::render!(
+                $crate::render::ImageFormat::Svg => $crate::render::render!(
                     @draw ::plotters::prelude::SVGBackend::new(temporary, size),
                     fail,
                     |$root| $body
@@ -105,8 +110,9 @@ pub(crate) fn check_size(path: &Path, (w, h): (u32, u32)) -> Result<(), ReportEr
     Ok(())
 }
 
-/// Min and max of the finite values, or `None` when there are none.
-pub(crate) fn finite_extent<'a>(values: impl IntoIterator<Item = &'a f64>) -> Option<(f64, f64)> {
+/// Min and max of the finite values, or `None` when there are none (NaN and ±∞ are skipped, as
+/// every plot here skips them): the data extent a plot's axis is fitted to.
+pub fn finite_extent<'a>(values: impl IntoIterator<Item = &'a f64>) -> Option<(f64, f64)> {
     values
         .into_iter()
         .copied()
@@ -118,8 +124,9 @@ pub(crate) fn finite_extent<'a>(values: impl IntoIterator<Item = &'a f64>) -> Op
 }
 
 /// Widens a data extent by `pad` (a fraction of its span) on both sides, and
-/// gives a zero-width extent a sensible non-zero width.
-pub(crate) fn padded((lo, hi): (f64, f64), pad: f64) -> (f64, f64) {
+/// gives a zero-width extent a sensible non-zero width (±1 around zero, ±10 % around any other
+/// value): the axis range a plot shows for a [`finite_extent`] when [`PlotSpec`] fixes none.
+pub fn padded((lo, hi): (f64, f64), pad: f64) -> (f64, f64) {
     let span = hi - lo;
     if span > 0.0 && span.is_finite() {
         (lo - pad * span, hi + pad * span)
@@ -368,8 +375,9 @@ pub(crate) fn legend_style() -> TextStyle<'static> {
 
 /// A tick-label formatter for an axis spanning `(lo, hi)`: values that are
 /// zero up to rounding print as `0`, the number of decimals follows the span,
-/// and very large or small magnitudes use scientific notation.
-pub(crate) fn tick_formatter((lo, hi): (f64, f64)) -> impl Fn(&f64) -> String {
+/// and very large or small magnitudes use scientific notation. Every plot here labels its axes
+/// with it; a front end drawing its own chart of the same data can label it the same way.
+pub fn tick_formatter((lo, hi): (f64, f64)) -> impl Fn(&f64) -> String {
     let span = (hi - lo).abs();
     let mag = lo.abs().max(hi.abs());
     let sci = !(1e-3..1e5).contains(&mag);
@@ -426,44 +434,5 @@ pub(crate) fn fmt_tick(v: f64) -> String {
         } else {
             s.to_string()
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tick_labels_snap_rounding_noise_to_zero() {
-        let f = tick_formatter((-0.45, 0.45));
-        assert_eq!(f(&-5.55e-17), "0");
-        assert_eq!(f(&0.2), "0.2");
-        assert_eq!(f(&-0.4), "-0.4");
-        let g = tick_formatter((400.0, 700.0));
-        assert_eq!(g(&450.0), "450");
-        let h = tick_formatter((0.0, 2e-5));
-        assert_eq!(h(&1.5e-5), "1.5e-5");
-    }
-
-    #[test]
-    fn padding_and_extents() {
-        assert_eq!(
-            finite_extent(&[f64::NAN, 2.0, -1.0, f64::INFINITY]),
-            Some((-1.0, 2.0))
-        );
-        assert_eq!(finite_extent(&[f64::NAN]), None);
-        assert_eq!(padded((0.0, 10.0), 0.1), (-1.0, 11.0));
-        assert_eq!(padded((0.0, 0.0), 0.1), (-1.0, 1.0));
-        assert_eq!(padded((5.0, 5.0), 0.1), (4.5, 5.5));
-    }
-
-    #[test]
-    fn format_by_extension() {
-        assert_eq!(
-            Format::from_path(Path::new("a/b.PNG")).unwrap(),
-            Format::Png
-        );
-        assert_eq!(Format::from_path(Path::new("b.svg")).unwrap(), Format::Svg);
-        assert!(Format::from_path(Path::new("b")).is_err());
     }
 }

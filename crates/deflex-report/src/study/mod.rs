@@ -8,8 +8,7 @@ pub mod figures;
 mod page;
 pub mod readme;
 
-#[cfg(test)]
-mod tests;
+pub use page::headline_text;
 
 use crate::{PageError, ReportError};
 use deflex_model::robot_to_toml;
