@@ -3,6 +3,7 @@
 
 mod fuzz;
 mod jacobian;
+mod joint_maps;
 mod registration;
 mod simulated;
 mod torsion;
