@@ -126,7 +126,12 @@ pub struct JointMap {
 impl JointMap {
     /// The coefficients that are non-zero at `q` (index of the first, four weights; weights of
     /// indices outside the map are to be ignored), `None` outside the knots.
-    pub fn basis(start_rad: f64, spacing_rad: f64, count: usize, q: f64) -> Option<(isize, [f64; 4])> {
+    pub fn basis(
+        start_rad: f64,
+        spacing_rad: f64,
+        count: usize,
+        q: f64,
+    ) -> Option<(isize, [f64; 4])> {
         let u = (q - start_rad) / spacing_rad;
         if !u.is_finite() || u < 0.0 || u >= (count + 3) as f64 {
             return None;
@@ -156,7 +161,8 @@ impl JointMap {
         (0..4)
             .filter_map(|k| {
                 let index = first + k as isize;
-                (index >= 0 && (index as usize) < n).then(|| w[k] * self.coefficients[index as usize])
+                (index >= 0 && (index as usize) < n)
+                    .then(|| w[k] * self.coefficients[index as usize])
             })
             .sum()
     }
@@ -197,7 +203,9 @@ pub enum MapsError {
     #[error("no fitted absolute reading to learn joint maps from")]
     NoReadings,
     /// The grid point asks for nothing, or for a knot spacing below [`MIN_SPACING_RAD`].
-    #[error("joint maps need at least one joint and knots at least {MIN_SPACING_RAD} rad apart (got joints {joints:#b}, {spacing_rad} rad)")]
+    #[error(
+        "joint maps need at least one joint and knots at least {MIN_SPACING_RAD} rad apart (got joints {joints:#b}, {spacing_rad} rad)"
+    )]
     Hyper {
         /// Joint mask.
         joints: u16,
@@ -205,7 +213,9 @@ pub enum MapsError {
         spacing_rad: f64,
     },
     /// A joint's range needs more coefficients than [`MAX_MAP_COEFFICIENTS`].
-    #[error("joint {joint}: {count} map coefficients over its range, at most {MAX_MAP_COEFFICIENTS}")]
+    #[error(
+        "joint {joint}: {count} map coefficients over its range, at most {MAX_MAP_COEFFICIENTS}"
+    )]
     TooManyCoefficients {
         /// Joint (1-based).
         joint: usize,
@@ -213,7 +223,9 @@ pub enum MapsError {
         count: usize,
     },
     /// The penalised normal matrix is not positive definite (non-finite readings).
-    #[error("the joint maps' normal equations could not be solved (non-finite residuals or columns)")]
+    #[error(
+        "the joint maps' normal equations could not be solved (non-finite residuals or columns)"
+    )]
     Singular,
 }
 
@@ -228,7 +240,7 @@ pub fn train_into(
 ) -> Result<(), MapsError> {
     let joint_count = model.robot.joint_count();
     let joints = hyper.mapped_joints(joint_count);
-    if joints.is_empty() || !(hyper.spacing_rad >= MIN_SPACING_RAD) {
+    if joints.is_empty() || hyper.spacing_rad.is_nan() || hyper.spacing_rad < MIN_SPACING_RAD {
         return Err(MapsError::Hyper {
             joints: hyper.joints,
             spacing_rad: hyper.spacing_rad,
@@ -250,7 +262,9 @@ pub fn train_into(
             .iter()
             .filter_map(|&i| campaign.absolute_row(i))
             .map(|r| campaign.absolute[r].q_rad[j])
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
         let start = lo - (MARGIN_KNOTS + 3.0) * h;
         let count = ((hi - lo + 2.0 * MARGIN_KNOTS * h) / h).ceil() as usize + 4;
         if count > MAX_MAP_COEFFICIENTS || !start.is_finite() {
@@ -329,7 +343,10 @@ pub fn train_into(
             }
         }
         let setup_slot = setups.iter().position(|&x| x == s).unwrap_or(0);
-        for (k, &p) in setup_params[6 * setup_slot..6 * setup_slot + 6].iter().enumerate() {
+        for (k, &p) in setup_params[6 * setup_slot..6 * setup_slot + 6]
+            .iter()
+            .enumerate()
+        {
             index.push(map_unknowns + 6 * setup_slot + k);
             column.push(pick(model.tracker_column(&ev, s, p)));
         }
@@ -362,10 +379,7 @@ pub fn train_into(
     for k in map_unknowns..unknowns {
         normal[(k, k)] += 1e-12 * trace.max(1.0);
     }
-    let solution = normal
-        .cholesky()
-        .ok_or(MapsError::Singular)?
-        .solve(&rhs);
+    let solution = normal.cholesky().ok_or(MapsError::Singular)?.solve(&rhs);
     if solution.iter().any(|v| !v.is_finite()) {
         return Err(MapsError::Singular);
     }

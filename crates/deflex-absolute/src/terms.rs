@@ -4,12 +4,18 @@
 //! with). Serialised as JSON (SI units) beside the robot file; tied to it by the robot's
 //! geometry fingerprint, so a terms file is never applied to another robot's geometry.
 
+use crate::joint_maps::{
+    JointMap, JointMaps, JointMapsHyper, MAX_MAP_COEFFICIENTS, MIN_SPACING_RAD,
+};
 use crate::outcome::FitResult;
-use crate::joint_maps::{JointMap, JointMaps, JointMapsHyper, MAX_MAP_COEFFICIENTS, MIN_SPACING_RAD};
 use crate::params::{EgModel, HarmonicTerm, TorsionShape, TorsionTerm};
 use crate::residual_model::{MAX_INDUCING, ResidualHyper, ResidualModel};
 use deflex_model::MAX_JOINTS;
 use serde::{Deserialize, Serialize};
+
+/// Margin over the calibration's held-out RMS above which a registration residual says the
+/// robot itself has changed ([`CalibrationTerms::recalibrate_above_m`]).
+pub const RECALIBRATE_MARGIN: f64 = 1.5;
 
 /// Version of the format written.
 pub const FORMAT: u32 = 1;
@@ -108,7 +114,9 @@ pub struct CalibrationTerms {
     pub joint_maps: Option<JointMapsRecord>,
     /// Position RMS of the fitted readings (m).
     pub fit_rms_m: f64,
-    /// Pooled held-out position RMS of the registered held-out groups (m), when there were any.
+    /// Largest position RMS of a held-out group (held-out configurations, held-out series, left-out
+    /// sessions; m), when there were any: what the healthy robot showed on readings its fit did
+    /// not see, the reference of `register`'s "re-calibrate" warning.
     pub held_out_rms_m: Option<f64>,
 }
 
@@ -200,13 +208,18 @@ impl CalibrationTerms {
     /// The terms of a fit's final model.
     pub fn of(result: &FitResult) -> CalibrationTerms {
         let model = &result.model;
+        // The largest group, not the pooled RMS: left-out sessions that revisit the fitted
+        // configurations (a grid measured again) score far better than new configurations.
         let held_out_rms_m = result.steps.iter().rev().find_map(|s| {
             if s.acceptance.is_some_and(|a| !a.accepted) {
                 return None;
             }
-            let groups: Vec<&crate::outcome::TestGroup> =
-                s.test.iter().chain(&s.cross_groups).collect();
-            crate::fit::pooled_rms(&groups)
+            s.test
+                .iter()
+                .chain(&s.cross_groups)
+                .filter(|g| g.stats.count > 0)
+                .map(|g| g.stats.rms)
+                .reduce(f64::max)
         });
         CalibrationTerms {
             format: FORMAT,
@@ -275,6 +288,12 @@ impl CalibrationTerms {
                 .map_or(0.0, |s| s.fit.rms),
             held_out_rms_m,
         }
+    }
+
+    /// The registration residual (m) above which the robot itself is deemed changed:
+    /// [`RECALIBRATE_MARGIN`] × the held-out RMS the calibration recorded.
+    pub fn recalibrate_above_m(&self) -> Option<f64> {
+        self.held_out_rms_m.map(|r| r * RECALIBRATE_MARGIN)
     }
 
     /// JSON text.
@@ -403,7 +422,12 @@ fn joint_maps(
             })
         }
     };
-    positive("joint_maps.value_sigma_rad", record.value_sigma_rad, 1e-9, 1.0)?;
+    positive(
+        "joint_maps.value_sigma_rad",
+        record.value_sigma_rad,
+        1e-9,
+        1.0,
+    )?;
     positive(
         "joint_maps.curvature_sigma_rad",
         record.curvature_sigma_rad,
@@ -423,7 +447,12 @@ fn joint_maps(
         }
         mask |= 1 << (m.joint - 1);
         finite("joint_maps.maps.start_rad", m.start_rad, 100.0)?;
-        positive("joint_maps.maps.spacing_rad", m.spacing_rad, MIN_SPACING_RAD, 10.0)?;
+        positive(
+            "joint_maps.maps.spacing_rad",
+            m.spacing_rad,
+            MIN_SPACING_RAD,
+            10.0,
+        )?;
         if m.coefficients_rad.len() > MAX_MAP_COEFFICIENTS {
             return Err(TermsError::Value {
                 what: "joint_maps.maps.coefficients_rad",

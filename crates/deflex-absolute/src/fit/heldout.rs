@@ -6,10 +6,10 @@
 use super::options::FitOptions;
 use super::roles::Roles;
 use crate::campaign::Campaign;
+use crate::joint_maps::{self, JointMapsHyper};
 use crate::outcome::{ErrorStats, TestGroup};
 use crate::params::{EgModel, Param};
 use crate::protocol::{row_errors, score_group};
-use crate::joint_maps::{self, JointMapsHyper};
 use crate::residual_model::{ResidualHyper, ResidualModel};
 use crate::solve::{self, SolveOptions};
 use rand::SeedableRng;

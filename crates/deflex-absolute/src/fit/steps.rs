@@ -245,16 +245,16 @@ fn score_step(
     });
     let cv_rms = (options.folds >= 2 && refit_with.residual.is_none() && refit_with.maps.is_none())
         .then(|| {
-        cross_validate(
-            model,
-            campaign,
-            &reduced.kept,
-            &roles.fit_mult,
-            &roles.fold_of,
-            options.folds,
-            &context.solve_options,
-        )
-    });
+            cross_validate(
+                model,
+                campaign,
+                &reduced.kept,
+                &roles.fit_mult,
+                &roles.fold_of,
+                options.folds,
+                &context.solve_options,
+            )
+        });
     let mut test = heldout::test_groups(model, campaign, roles);
     let (series, with_series) = heldout::series_groups(model, campaign, roles, options);
     test.extend(series);

@@ -45,7 +45,9 @@ fn a_map_is_the_cubic_b_spline_of_its_coefficients() {
         joint: 1,
         start_rad: -0.7,
         spacing_rad: 0.05,
-        coefficients: (0..23).map(|k| 1e-4 * ((k * 7 % 11) as f64 - 5.0)).collect(),
+        coefficients: (0..23)
+            .map(|k| 1e-4 * ((k * 7 % 11) as f64 - 5.0))
+            .collect(),
     };
     let knots: Vec<f64> = (0..map.coefficients.len() + 4)
         .map(|k| map.start_rad + k as f64 * map.spacing_rad)
@@ -140,7 +142,9 @@ fn fit_maps(with_maps: bool, seed: u64) -> (FitResult, Campaign) {
     let mut truth = truth();
     truth.compliance = [0.0; 6];
     let rows = readings(&truth, with_maps, seed);
-    let far: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].setup == "far").collect();
+    let far: Vec<usize> = (0..rows.len())
+        .filter(|&i| rows[i].setup == "far")
+        .collect();
     let mut nominal = deflex_model::builtin("ur10").unwrap();
     for joint in &mut nominal.joints {
         joint.inertia = None;
@@ -182,7 +186,11 @@ fn planted_joint_angle_errors_are_recovered_simulated() {
         "the maps step must earn its place: {:?}",
         maps_step.acceptance
     );
-    assert!(before > 80e-6, "the planted error shows: {:.1} µm", before * 1e6);
+    assert!(
+        before > 80e-6,
+        "the planted error shows: {:.1} µm",
+        before * 1e6
+    );
     // The tracker's 20 µm per axis is 35 µm of 3-D norm; the series' own registration (on half
     // its readings) and the maps' bias add a little.
     assert!(after < 50e-6, "held-out series at {:.1} µm", after * 1e6);
@@ -191,7 +199,11 @@ fn planted_joint_angle_errors_are_recovered_simulated() {
     // within a fifth of its own RMS; joints without a planted error stay small.
     for j in 0..6 {
         let Some(map) = maps.maps.iter().find(|m| m.joint == j) else {
-            assert!(planted(j, 0.3) == 0.0, "joint {} planted but not mapped", j + 1);
+            assert!(
+                planted(j, 0.3) == 0.0,
+                "joint {} planted but not mapped",
+                j + 1
+            );
             continue;
         };
         let (lo, hi) = match j {
@@ -199,7 +211,9 @@ fn planted_joint_angle_errors_are_recovered_simulated() {
             2 => (-2.5, 2.5),
             _ => (-2.9, 2.9),
         };
-        let xs: Vec<f64> = (0..400).map(|k| lo + (hi - lo) * f64::from(k) / 399.0).collect();
+        let xs: Vec<f64> = (0..400)
+            .map(|k| lo + (hi - lo) * f64::from(k) / 399.0)
+            .collect();
         let mean = |f: &dyn Fn(f64) -> f64| xs.iter().map(|&x| f(x)).sum::<f64>() / 400.0;
         let (mp, mm) = (mean(&|x| planted(j, x)), mean(&|x| map.value(x)));
         let rms = |f: &dyn Fn(f64) -> f64| (mean(&|x| f(x).powi(2))).sqrt();
@@ -213,9 +227,19 @@ fn planted_joint_angle_errors_are_recovered_simulated() {
             maps.hyper.describe()
         );
         if size > 0.0 {
-            assert!(error < 0.2 * size, "J{}: map error {:.0} µrad", j + 1, error * 1e6);
+            assert!(
+                error < 0.2 * size,
+                "J{}: map error {:.0} µrad",
+                j + 1,
+                error * 1e6
+            );
         } else {
-            assert!(error < 30e-6, "J{}: spurious map {:.0} µrad", j + 1, error * 1e6);
+            assert!(
+                error < 30e-6,
+                "J{}: spurious map {:.0} µrad",
+                j + 1,
+                error * 1e6
+            );
         }
     }
 }
@@ -224,14 +248,16 @@ fn planted_joint_angle_errors_are_recovered_simulated() {
 fn without_an_angle_error_the_maps_stay_small_simulated() {
     let (result, _) = fit_maps(false, 4);
     let step = &result.steps[2];
-    println!(
-        "SIMULATED, no angle error: maps step {:?}",
-        step.acceptance
-    );
+    println!("SIMULATED, no angle error: maps step {:?}", step.acceptance);
     if let Some(maps) = result.model.joint_maps.as_ref() {
         for map in &maps.maps {
             let (rms, _) = map_size(map);
-            assert!(rms < 20e-6, "J{}: map RMS {:.1} µrad", map.joint + 1, rms * 1e6);
+            assert!(
+                rms < 20e-6,
+                "J{}: map RMS {:.1} µrad",
+                map.joint + 1,
+                rms * 1e6
+            );
         }
     }
 }
@@ -265,11 +291,13 @@ fn a_terms_file_carries_the_maps_and_bad_ones_are_refused() {
         bad(&|t| t.joint_maps.as_mut().unwrap().maps[0].joint = 7).contains("joint_maps"),
         "joint out of range"
     );
-    assert!(bad(&|t| {
-        let m = first(t);
-        t.joint_maps.as_mut().unwrap().maps.push(m)
-    })
-    .contains("each joint once"));
+    assert!(
+        bad(&|t| {
+            let m = first(t);
+            t.joint_maps.as_mut().unwrap().maps.push(m)
+        })
+        .contains("each joint once")
+    );
     assert!(
         bad(&|t| t.joint_maps.as_mut().unwrap().maps[0].coefficients_rad[3] = f64::NAN)
             .contains("coefficients_rad")

@@ -466,7 +466,8 @@ fn write_text(path: &Path, text: &str) -> Result<(), ReportError> {
 }
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
-/// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, plots and `index.html`.
+/// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, `joint_maps.csv` (with
+/// joint maps), plots and `index.html`.
 pub fn write_report(
     result: &FitResult,
     campaign: &Campaign,
@@ -591,6 +592,28 @@ pub fn write_report(
         .map(String::from)
         .collect();
     put("outliers.csv", &csv_text(&outlier_headers, &outlier_rows))?;
+    if let Some(maps) = &result.model.joint_maps {
+        // Each map sampled at a tenth of its knot spacing over its range (the terms file holds
+        // its coefficients).
+        let headers: Vec<String> = ["joint", "q_rad", "delta_theta_rad"]
+            .into_iter()
+            .map(String::from)
+            .collect();
+        let mut rows = Vec::new();
+        for map in &maps.maps {
+            let (lo, hi) = map.range_rad();
+            let step = map.spacing_rad / 10.0;
+            for k in 0..=((hi - lo) / step).ceil() as usize {
+                let q = lo + k as f64 * step;
+                rows.push(vec![
+                    (map.joint + 1).to_string(),
+                    format!("{q:e}"),
+                    format!("{:e}", map.value(q)),
+                ]);
+            }
+        }
+        put("joint_maps.csv", &csv_text(&headers, &rows))?;
+    }
     let images = plots::draw(result, campaign, &root).map_err(&page)?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
     html.section("Summary").preformatted(text_report.clone());
