@@ -22,6 +22,8 @@
 //! * [`register`]: a new session or probe registered from a few readings, robot frozen;
 //! * [`protocol`]: the held-out protocol (register from some readings, score the rest);
 //! * [`residual_model`]: a Gaussian-process residual model on the joint angles;
+//! * [`joint_maps`]: joint-angle error maps (each joint's angle error as a smooth function of
+//!   its own angle, learnt from the residuals);
 //! * [`terms`]: what a calibration keeps beyond the robot file;
 //! * [`resample`]: cross-validation and bootstrap by configuration;
 //! * [`predict`]: per-row predictions of a calibrated model.
@@ -33,6 +35,7 @@ pub mod data;
 pub mod fit;
 pub mod identify;
 pub mod jacobian;
+pub mod joint_maps;
 pub mod model;
 pub mod outcome;
 pub mod params;

@@ -132,6 +132,8 @@ pub struct StepReport {
     pub acceptance: Option<Acceptance>,
     /// Hyper-parameters of the residual model, when the step has one.
     pub residual_hyper: Option<crate::residual_model::ResidualHyper>,
+    /// The joint maps' hyper-parameters, when the model has joint maps.
+    pub maps_hyper: Option<crate::joint_maps::JointMapsHyper>,
     /// LM iterations.
     pub iterations: usize,
 }

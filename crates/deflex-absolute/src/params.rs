@@ -246,6 +246,8 @@ pub struct EgModel {
     pub torsion: Vec<TorsionTerm>,
     /// Residual model on the joint angles, added to the predicted positions (world axes).
     pub residual: Option<crate::residual_model::ResidualModel>,
+    /// Joint-angle error maps `Δθ_j(q_j)`, added to the joint values like the harmonics.
+    pub joint_maps: Option<crate::joint_maps::JointMaps>,
 }
 
 impl EgModel {
@@ -276,12 +278,13 @@ impl EgModel {
             backlash: vec![0.0; robot.joint_count()],
             torsion: Vec::new(),
             residual: None,
+            joint_maps: None,
         }
     }
 
-    /// Joint values with the harmonic and direction-dependent offsets added (FK adds
-    /// `θ_offset` to these): `q'_j = q_j + Σ_n (a_n cos(n q_j) + b_n sin(n q_j)) +
-    /// b_j sign(approach_j)`.
+    /// Joint values with the harmonic and direction-dependent offsets and the joint maps added
+    /// (FK adds `θ_offset` to these): `q'_j = q_j + Σ_n (a_n cos(n q_j) + b_n sin(n q_j)) +
+    /// b_j sign(approach_j) + Δθ_j(q_j)`.
     pub fn effective_q(&self, q: &[f64], approach: &[f64], out: &mut [f64]) {
         out[..q.len()].copy_from_slice(q);
         for h in &self.harmonics {
@@ -290,6 +293,9 @@ impl EgModel {
         }
         for (j, b) in self.backlash.iter().enumerate().take(q.len()) {
             out[j] += b * approach_sign(approach.get(j).copied().unwrap_or(0.0));
+        }
+        if let Some(maps) = &self.joint_maps {
+            maps.add_offsets(q, out);
         }
     }
 

@@ -219,7 +219,8 @@ pub struct CalibrateGeometryArgs {
     /// compliance, and opt-in masses, harmonics:N (N ≤ 4), periodic:N (N cycles per joint
     /// turn, a gear's ratio), backlash, torsion:cubic / torsion:soft:T (a strain-wave gear's
     /// nonlinear torsion on the free eDoFs: hardening, or a soft zone below T N·m), residual (a
-    /// residual model on the joint angles). Opt-in steps are kept only when they improve the held-out groups (--test-data,
+    /// residual model on the joint angles), joint-maps (each joint's angle error as a smooth
+    /// function of its angle). Opt-in steps are kept only when they improve the held-out groups (--test-data,
     /// --cv-by).
     #[arg(long, default_value = "registration,geometry,compliance")]
     pub steps: String,

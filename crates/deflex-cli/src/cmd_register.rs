@@ -52,10 +52,6 @@ pub enum RegisterInputError {
     },
 }
 
-/// Margin over the calibration's held-out RMS above which a registration residual says the
-/// robot itself has changed.
-const RECALIBRATE_MARGIN: f64 = 1.5;
-
 #[derive(Args)]
 pub struct RegisterArgs {
     /// Calibrated robot file (from calibrate-geometry; its NAME.terms.json is used when present).
@@ -185,12 +181,10 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
         setup,
         target,
         loss: Loss::HUBER_DEFAULT,
-        recalibrate_above_m: args.recalibrate_above_mm.map(|mm| mm * 1e-3).or_else(|| {
-            terms
-                .as_ref()
-                .and_then(|t| t.held_out_rms_m)
-                .map(|r| r * RECALIBRATE_MARGIN)
-        }),
+        recalibrate_above_m: args
+            .recalibrate_above_mm
+            .map(|mm| mm * 1e-3)
+            .or_else(|| terms.as_ref().and_then(|t| t.recalibrate_above_m())),
         restart_setup: new_setup,
     };
     let all = vec![1.0; campaign.len()];

@@ -30,9 +30,6 @@ use std::path::{Path, PathBuf};
 pub const SESSION_GAP_S: f64 = 3600.0;
 /// Largest terms file read (bytes), as the CLI.
 const MAX_TERMS_BYTES: u64 = 64 << 20;
-/// Margin over the calibration's held-out RMS above which a registration residual says the
-/// robot itself has changed (the CLI's `deflex register`).
-pub const RECALIBRATE_MARGIN: f64 = 1.5;
 
 /// A bounded read of a file the user named, with the error naming it.
 pub fn read_text(path: &Path, limit: u64) -> Result<String> {
@@ -459,12 +456,9 @@ pub fn register(
         setup,
         target,
         loss: Loss::HUBER_DEFAULT,
-        recalibrate_above_m: request.recalibrate_above_m.or_else(|| {
-            terms
-                .as_ref()
-                .and_then(|t| t.held_out_rms_m)
-                .map(|r| r * RECALIBRATE_MARGIN)
-        }),
+        recalibrate_above_m: request
+            .recalibrate_above_m
+            .or_else(|| terms.as_ref().and_then(|t| t.recalibrate_above_m())),
         restart_setup: new_setup,
     };
     let all = vec![1.0; campaign.len()];

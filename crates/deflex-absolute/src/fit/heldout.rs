@@ -6,6 +6,7 @@
 use super::options::FitOptions;
 use super::roles::Roles;
 use crate::campaign::Campaign;
+use crate::joint_maps::{self, JointMapsHyper};
 use crate::outcome::{ErrorStats, TestGroup};
 use crate::params::{EgModel, Param};
 use crate::protocol::{row_errors, score_group};
@@ -15,14 +16,16 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 
-/// How a model is refitted inside a held-out loop: the same free parameters, and the residual
-/// model retrained on the training rows with these hyper-parameters.
+/// How a model is refitted inside a held-out loop: the same free parameters, then the joint maps
+/// and the residual model retrained on the training rows with these hyper-parameters.
 #[derive(Clone, Copy, Debug)]
 pub struct Refit<'a> {
     /// Free parameters.
     pub kept: &'a [Param],
     /// Residual model hyper-parameters (`None`: no residual model).
     pub residual: Option<ResidualHyper>,
+    /// Joint maps' hyper-parameters (`None`: no joint maps).
+    pub maps: Option<JointMapsHyper>,
 }
 
 /// Residuals of the fitted absolute rows in joint 1's frame, with their joint values, for
@@ -50,7 +53,9 @@ pub fn residual_training_set(
     (q, y)
 }
 
-/// Refit `model` on the readings with `mult > 0` as `refit` says (warm start).
+/// Refit `model` on the readings with `mult > 0` as `refit` says (warm start): the parametric
+/// model without maps or residual model, then the maps on its residuals, then the residual
+/// model on what is left.
 pub fn refit(
     model: &EgModel,
     campaign: &Campaign,
@@ -61,7 +66,12 @@ pub fn refit(
 ) -> EgModel {
     let mut trained = model.clone();
     trained.residual = None;
+    trained.joint_maps = None;
     solve::solve(&mut trained, campaign, refit.kept, mult, solve_options);
+    if let Some(hyper) = refit.maps {
+        // A failed training (no readings) leaves the parametric model alone.
+        let _ = joint_maps::train_into(&mut trained, campaign, mult, hyper);
+    }
     if let Some(hyper) = refit.residual {
         let (q, y) = residual_training_set(&trained, campaign, mult);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);

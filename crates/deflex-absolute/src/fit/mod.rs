@@ -128,6 +128,7 @@ pub fn fit(
         reduction: None,
         outcome: None,
         residual: None,
+        maps: None,
         held_out_rms: None,
         with_series: registered.clone(),
     };

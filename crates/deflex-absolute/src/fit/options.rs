@@ -29,6 +29,10 @@ pub enum Step {
     /// Adds a residual model on the joint angles ([`crate::residual_model`]), trained on what
     /// the parametric model leaves, hyper-parameters by cross-validation.
     ResidualModel,
+    /// Adds joint-angle error maps ([`crate::joint_maps`]): each joint's angle error as a
+    /// smooth function of its own angle, trained on what the parametric model leaves,
+    /// hyper-parameters by the held-out protocol.
+    JointMaps,
 }
 
 /// A model step or a loss that its name does not give (`--steps`, `--loss`, their Python
@@ -37,7 +41,7 @@ pub enum Step {
 pub enum ChoiceError {
     /// Not one of the step names.
     #[error(
-        "unknown step \"{0}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, torsion:cubic, torsion:soft:T with T 1…1000 N·m, residual)"
+        "unknown step \"{0}\" (registration, geometry, compliance, masses, harmonics:N with N 1…4, periodic:N with N 1…10000, backlash, torsion:cubic, torsion:soft:T with T 1…1000 N·m, residual, joint-maps)"
     )]
     UnknownStep(String),
     /// A loss threshold that is not a number in 0.1…100.
@@ -53,7 +57,7 @@ impl std::str::FromStr for Step {
 
     /// `registration`, `geometry`, `compliance` (or `gravity`), `masses`, `harmonics:N`
     /// (N 1…4), `periodic:N` (N 1…10 000), `backlash`, `torsion:cubic`, `torsion:soft:T` (T
-    /// 1…1000 N·m), `residual`; surrounding blanks ignored.
+    /// 1…1000 N·m), `residual`, `joint-maps`; surrounding blanks ignored.
     fn from_str(text: &str) -> Result<Step, ChoiceError> {
         let name = text.trim();
         let bad = || ChoiceError::UnknownStep(name.to_string());
@@ -64,6 +68,7 @@ impl std::str::FromStr for Step {
             "masses" => Ok(Step::Masses),
             "backlash" => Ok(Step::Backlash),
             "residual" => Ok(Step::ResidualModel),
+            "joint-maps" => Ok(Step::JointMaps),
             "torsion:cubic" => Ok(Step::Torsion(TorsionShape::Cubic)),
             other => {
                 if let Some(n) = other.strip_prefix("harmonics:") {
@@ -136,6 +141,7 @@ impl Step {
                 format!("+ soft zone of the torsion (below {t} N·m)")
             }
             Step::ResidualModel => "+ residual model on joint angles".into(),
+            Step::JointMaps => "+ joint-angle error maps".into(),
         }
     }
 

@@ -8,6 +8,7 @@ use super::options::{ACCEPTANCE_GAIN, FitOptions, Step};
 use super::roles::Roles;
 use crate::campaign::Campaign;
 use crate::identify::{self, Reduction};
+use crate::joint_maps::{self, JointMapsHyper, MAPS_GRID};
 use crate::outcome::{Acceptance, ErrorStats, StepReport, TestGroup};
 use crate::params::{EgModel, Param};
 use crate::resample::cross_validate;
@@ -36,7 +37,7 @@ pub fn candidates(
     let joints = model.robot.joint_count();
     for step in steps {
         match *step {
-            Step::Registration | Step::ResidualModel => {}
+            Step::Registration | Step::ResidualModel | Step::JointMaps => {}
             Step::Geometry => out.extend(model.geometric_params()),
             Step::Compliance => out.extend(elastic.iter().map(|&e| Param::Compliance(e))),
             Step::Masses => {
@@ -82,6 +83,8 @@ pub struct Accepted {
     pub outcome: Option<SolveOutcome>,
     /// Its residual model hyper-parameters.
     pub residual: Option<ResidualHyper>,
+    /// Its joint maps' hyper-parameters.
+    pub maps: Option<JointMapsHyper>,
     /// Its pooled held-out RMS (m), when there are registered held-out groups.
     pub held_out_rms: Option<f64>,
     /// Model with the held-out series registered (for the written file).
@@ -113,6 +116,10 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
         ..
     } = *context;
     let mut trial = accepted.model.clone();
+    // The parametric model is reduced and solved without the maps and the residual model; both
+    // are then trained on what it leaves (maps first), as every held-out refit does.
+    trial.residual = None;
+    trial.joint_maps = None;
     if step.elastic() && !accepted.steps.iter().any(|s| s.elastic()) {
         // Every eDoF starts at (and, when not freed, keeps) the robot file's compliance.
         trial.compliance = context.nominal_compliance.to_vec();
@@ -127,7 +134,6 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
         &roles.fit_mult,
         options.tolerance,
     );
-    let residual_model = trial.residual.take();
     let solved = solve::solve(
         &mut trial,
         campaign,
@@ -136,10 +142,13 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
         &context.solve_options,
     );
     let mut hyper = accepted.residual;
-    if step == Step::ResidualModel {
-        hyper = choose_hyper(&trial, &reduced.kept, context);
+    let mut maps = accepted.maps;
+    if step == Step::JointMaps {
+        maps = choose_maps(&trial, &reduced.kept, hyper, context);
     }
-    trial.residual = residual_model;
+    if step == Step::ResidualModel {
+        hyper = choose_hyper(&trial, &reduced.kept, maps, context);
+    }
     if campaign.orientation_rows.is_empty() {
         // Orientations not fitted: the target frames in closed form from the fitted readings,
         // so that orientation errors can be scored.
@@ -151,6 +160,9 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
             &roles.fit_mult,
         );
     }
+    if let Some(h) = maps {
+        let _ = joint_maps::train_into(&mut trial, campaign, &roles.fit_mult, h);
+    }
     if let Some(h) = hyper {
         let (q, y) = heldout::residual_training_set(&trial, campaign, &roles.fit_mult);
         let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
@@ -159,6 +171,7 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
     let refit_with = Refit {
         kept: &reduced.kept,
         residual: hyper,
+        maps,
     };
     let report = score_step(
         step,
@@ -190,6 +203,7 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
             reduction: Some(reduced),
             outcome: Some(solved),
             residual: hyper,
+            maps,
             held_out_rms,
             with_series,
         };
@@ -229,17 +243,18 @@ fn score_step(
             .collect();
         (n.iter().map(|e| e * e).sum::<f64>() / n.len() as f64).sqrt()
     });
-    let cv_rms = (options.folds >= 2 && refit_with.residual.is_none()).then(|| {
-        cross_validate(
-            model,
-            campaign,
-            &reduced.kept,
-            &roles.fit_mult,
-            &roles.fold_of,
-            options.folds,
-            &context.solve_options,
-        )
-    });
+    let cv_rms = (options.folds >= 2 && refit_with.residual.is_none() && refit_with.maps.is_none())
+        .then(|| {
+            cross_validate(
+                model,
+                campaign,
+                &reduced.kept,
+                &roles.fit_mult,
+                &roles.fold_of,
+                options.folds,
+                &context.solve_options,
+            )
+        });
     let mut test = heldout::test_groups(model, campaign, roles);
     let (series, with_series) = heldout::series_groups(model, campaign, roles, options);
     test.extend(series);
@@ -264,6 +279,7 @@ fn score_step(
             cross_groups,
             acceptance: None,
             residual_hyper: refit_with.residual,
+            maps_hyper: refit_with.maps,
             iterations: solved.iterations,
         },
         with_series,
@@ -272,19 +288,51 @@ fn score_step(
 
 /// The residual model's hyper-parameters: the grid point with the lowest pooled RMS over the
 /// left-out groups (`options.groups`) or, without groups, over the held-out series.
-fn choose_hyper(model: &EgModel, kept: &[Param], context: &StepContext) -> Option<ResidualHyper> {
+fn choose_hyper(
+    model: &EgModel,
+    kept: &[Param],
+    maps: Option<JointMapsHyper>,
+    context: &StepContext,
+) -> Option<ResidualHyper> {
+    choose_by_held_out(&HYPER_GRID, model, context, |hyper| Refit {
+        kept,
+        residual: Some(hyper),
+        maps,
+    })
+}
+
+/// The joint maps' hyper-parameters, chosen like the residual model's (the residual model, if
+/// one was kept before, retrained on top of each candidate).
+fn choose_maps(
+    model: &EgModel,
+    kept: &[Param],
+    residual: Option<ResidualHyper>,
+    context: &StepContext,
+) -> Option<JointMapsHyper> {
+    choose_by_held_out(&MAPS_GRID, model, context, |maps| Refit {
+        kept,
+        residual,
+        maps: Some(maps),
+    })
+}
+
+/// The candidate whose refit gives the lowest pooled RMS over the left-out groups
+/// (`options.groups`) or, without groups, over the held-out series.
+fn choose_by_held_out<'a, H: Copy>(
+    grid: &[H],
+    model: &EgModel,
+    context: &StepContext,
+    refit: impl Fn(H) -> Refit<'a>,
+) -> Option<H> {
     let StepContext {
         campaign,
         options,
         roles,
         ..
     } = *context;
-    let mut best: Option<(f64, ResidualHyper)> = None;
-    for hyper in HYPER_GRID {
-        let refit_with = Refit {
-            kept,
-            residual: Some(hyper),
-        };
+    let mut best: Option<(f64, H)> = None;
+    for &candidate in grid {
+        let refit_with = refit(candidate);
         let groups = if options.groups.is_some() {
             heldout::cross_groups(
                 model,
@@ -309,7 +357,7 @@ fn choose_hyper(model: &EgModel, kept: &[Param], context: &StepContext) -> Optio
         if let Some(rms) = heldout::pooled_rms(&refs)
             && best.is_none_or(|(b, _)| rms < b)
         {
-            best = Some((rms, hyper));
+            best = Some((rms, candidate));
         }
     }
     best.map(|(_, h)| h)

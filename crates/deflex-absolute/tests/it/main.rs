@@ -6,6 +6,7 @@ mod data;
 mod fit_options;
 mod fuzz;
 mod jacobian;
+mod joint_maps;
 mod registration;
 mod simulated;
 mod terms;

@@ -14,6 +14,7 @@ fn terms(model: &EgModel, torsion: Vec<TorsionRecord>) -> CalibrationTerms {
         backlash_rad: vec![0.0; model.robot.joint_count()],
         torsion,
         residual_model: None,
+        joint_maps: None,
         fit_rms_m: 4e-4,
         held_out_rms_m: None,
     }

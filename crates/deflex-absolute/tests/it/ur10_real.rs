@@ -161,3 +161,89 @@ fn calibrated_robot_file_predicts_like_the_fit() {
         "{predicted_rms} vs {fit_rms}"
     );
 }
+
+/// Joint-angle error maps on the real readings: learnt on Series A's subset, their
+/// hyper-parameters chosen by leaving A's measuring sessions out in turn (B plays no part in the
+/// choice), they must lower the error on Series B, whose configurations A never visited, and
+/// survive the terms file.
+#[test]
+fn joint_maps_learnt_on_a_transfer_to_b() {
+    let mut rows = series("Series_A", "A");
+    let fit_count = rows.len();
+    rows.extend(series("Series_B", "B"));
+    let mut model = EgModel::from_robot(&deflex_model::builtin("ur10").unwrap());
+    let mut campaign = Campaign::new(&mut model, rows, Vec::new()).unwrap();
+    campaign.use_orientations(1e-4);
+    let groups = deflex_absolute::fit::session_groups(&campaign, 3600.0);
+    let options = FitOptions {
+        steps: vec![
+            Step::Registration,
+            Step::Geometry,
+            Step::Compliance,
+            Step::JointMaps,
+        ],
+        elastic_edofs: vec!["J2.z".into(), "J3.z".into()],
+        folds: 0,
+        held_out_readings: (fit_count..campaign.absolute.len()).collect(),
+        groups: Some(groups),
+        ..FitOptions::default()
+    };
+    let result = fit(&model, &campaign, &options).unwrap();
+    let b = |k: usize| {
+        result.steps[k]
+            .test
+            .iter()
+            .find(|g| g.name.starts_with("B"))
+            .unwrap()
+            .stats
+            .rms
+            * 1e3
+    };
+    let maps = &result.steps[3];
+    println!(
+        "real UR10 subset: B {:.3} → {:.3} mm with joint maps ({:?})",
+        b(2),
+        b(3),
+        maps.maps_hyper.map(|h| h.describe())
+    );
+    assert!(
+        maps.acceptance.is_some_and(|a| a.accepted),
+        "kept by A's sessions: {:?}",
+        maps.acceptance
+    );
+    // The full series give 0.44 → 0.28 mm (README); on the 300-reading subset B must still gain
+    // a tenth.
+    assert!(b(3) < 0.9 * b(2), "B {:.3} → {:.3} mm", b(2), b(3));
+    let terms = deflex_absolute::terms::CalibrationTerms::of(&result);
+    let mut read = EgModel::from_robot(&result.model.to_robot());
+    deflex_absolute::terms::CalibrationTerms::from_json(&terms.to_json())
+        .unwrap()
+        .apply(&mut read)
+        .unwrap();
+    let (Some(read_maps), Some(fitted_maps)) = (&read.joint_maps, &result.model.joint_maps) else {
+        panic!("maps lost in the terms file: {}", read.joint_maps.is_some());
+    };
+    assert_eq!(read_maps.hyper, fitted_maps.hyper);
+    assert_eq!(read_maps.maps.len(), fitted_maps.maps.len());
+    for (r, f) in read_maps.maps.iter().zip(&fitted_maps.maps) {
+        assert_eq!(
+            (r.joint, r.coefficients.len()),
+            (f.joint, f.coefficients.len())
+        );
+        assert!(
+            (r.start_rad - f.start_rad).abs() < 1e-12
+                && (r.spacing_rad - f.spacing_rad).abs() < 1e-15
+        );
+        let worst = r
+            .coefficients
+            .iter()
+            .zip(&f.coefficients)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-15,
+            "J{} coefficients differ by {worst:e} rad",
+            f.joint + 1
+        );
+    }
+}

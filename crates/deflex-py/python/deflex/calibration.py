@@ -213,7 +213,9 @@ def calibrate_geometry(
     default all of the robot's), with ``loaded`` displacement tables fitted together.
 
     ``steps`` are added one after the other (``registration``, ``geometry``, ``compliance``,
-    ``masses``, ``harmonics:N``); ``loss`` is ``huber``, ``cauchy`` or ``none`` (``huber:K``
+    and the opt-in ``masses``, ``harmonics:N``, ``periodic:N``, ``backlash``,
+    ``torsion:cubic``, ``torsion:soft:T``, ``residual``, ``joint-maps``, each kept only when
+    it lowers the held-out error); ``loss`` is ``huber``, ``cauchy`` or ``none`` (``huber:K``
     sets the threshold). ``test_fraction`` of the configurations and every ``test_data``
     reading are never fitted; a test set-up the fit has not seen gets only its own registration.
     ``folds``-fold cross-validation by configuration runs inside the fit set, ``bootstrap``
@@ -288,8 +290,8 @@ def register(
     probe: 3 parameters, 6 with ``orientations``), fitted on a few readings (30 recommended,
     spread over the working volume and the wrist orientations) with the calibrated robot
     frozen. Warns (``.warnings``) when the readings are too few or too close together, and when
-    the residual is above ``recalibrate_above_m`` (default 1.5 × the calibration's held-out RMS
-    from its terms): the robot itself has changed. ``.robot`` (or ``.save(path)``) is the
+    the residual is above ``recalibrate_above_m`` (default 1.5 × the largest held-out RMS its
+    calibration recorded in its terms): the robot itself has changed. ``.robot`` (or ``.save(path)``) is the
     updated robot for :func:`predict` and everything else.
 
     ``robot`` as for :func:`predict`."""

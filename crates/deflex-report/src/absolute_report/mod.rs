@@ -349,10 +349,32 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
         );
     }
     let model = &result.model;
+    if let Some(maps) = &model.joint_maps {
+        let sizes: Vec<String> = maps
+            .maps
+            .iter()
+            .map(|map| {
+                let (rms, max) = deflex_absolute::joint_maps::map_size(map);
+                format!(
+                    "J{} RMS {:.0} µrad, max {:.0} µrad",
+                    map.joint + 1,
+                    rms * 1e6,
+                    max * 1e6
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "Joint-angle error maps ({}): {}",
+            maps.hyper.describe(),
+            sizes.join("; ")
+        );
+    }
     if !model.harmonics.is_empty()
         || model.backlash.iter().any(|b| *b != 0.0)
         || !model.torsion.is_empty()
         || model.residual.is_some()
+        || model.joint_maps.is_some()
     {
         let _ = writeln!(
             out,
@@ -391,6 +413,7 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "left_out_rms_m": cross_rms(s),
             "fit_orientation": s.fit_orientation.as_ref().map(stats),
             "residual_hyper": s.residual_hyper.map(|h| json!({"length_scale_rad": h.length_scale_rad, "ridge": h.ridge, "joint_mask": h.joints})),
+            "joint_maps_hyper": s.maps_hyper.map(|h| json!({"joint_mask": h.joints, "spacing_rad": h.spacing_rad, "value_sigma_rad": h.value_sigma_rad, "curvature_sigma_rad": h.curvature_sigma_rad})),
             "acceptance": s.acceptance.map(|a| json!({"before_m": a.before_m, "after_m": a.after_m, "accepted": a.accepted})),
         })).collect::<Vec<_>>(),
         "estimates": result.estimates.iter().map(|e| json!({
@@ -420,6 +443,16 @@ pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
             "edof": t.edof, "shape": t.shape.name(), "value_rad_per_nm": t.value,
         })).collect::<Vec<_>>(),
         "residual_model": result.model.residual.as_ref().map(|r| json!({"length_scale_rad": r.hyper.length_scale_rad, "ridge": r.hyper.ridge, "joint_mask": r.hyper.joints, "inducing": r.inducing.len()})),
+        "joint_maps": result.model.joint_maps.as_ref().map(|m| json!({
+            "spacing_rad": m.hyper.spacing_rad,
+            "value_sigma_rad": m.hyper.value_sigma_rad,
+            "curvature_sigma_rad": m.hyper.curvature_sigma_rad,
+            "maps": m.maps.iter().map(|map| {
+                let (rms, max) = deflex_absolute::joint_maps::map_size(map);
+                let (from, to) = map.range_rad();
+                json!({"joint": map.joint + 1, "coefficients": map.coefficients.len(), "from_rad": from, "to_rad": to, "rms_rad": rms, "max_rad": max})
+            }).collect::<Vec<_>>(),
+        })),
         "kept_steps": result.kept_steps.iter().map(|s| s.name()).collect::<Vec<_>>(),
         "orientations_fitted": !campaign.orientation_rows.is_empty(),
     })
@@ -433,7 +466,8 @@ fn write_text(path: &Path, text: &str) -> Result<(), ReportError> {
 }
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
-/// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, plots and `index.html`.
+/// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, `joint_maps.csv` (with
+/// joint maps), plots and `index.html`.
 pub fn write_report(
     result: &FitResult,
     campaign: &Campaign,
@@ -558,6 +592,28 @@ pub fn write_report(
         .map(String::from)
         .collect();
     put("outliers.csv", &csv_text(&outlier_headers, &outlier_rows))?;
+    if let Some(maps) = &result.model.joint_maps {
+        // Each map sampled at a tenth of its knot spacing over its range (the terms file holds
+        // its coefficients).
+        let headers: Vec<String> = ["joint", "q_rad", "delta_theta_rad"]
+            .into_iter()
+            .map(String::from)
+            .collect();
+        let mut rows = Vec::new();
+        for map in &maps.maps {
+            let (lo, hi) = map.range_rad();
+            let step = map.spacing_rad / 10.0;
+            for k in 0..=((hi - lo) / step).ceil() as usize {
+                let q = lo + k as f64 * step;
+                rows.push(vec![
+                    (map.joint + 1).to_string(),
+                    format!("{q:e}"),
+                    format!("{:e}", map.value(q)),
+                ]);
+            }
+        }
+        put("joint_maps.csv", &csv_text(&headers, &rows))?;
+    }
     let images = plots::draw(result, campaign, &root).map_err(&page)?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
     html.section("Summary").preformatted(text_report.clone());

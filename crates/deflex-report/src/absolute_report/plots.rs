@@ -1,5 +1,5 @@
 //! Residual plots of an elasto-geometric fit: per axis, against each joint, a map over the
-//! measured volume, and the held-out error distribution.
+//! measured volume, the held-out error distribution, and the joint-angle error maps.
 
 use crate::{PanelLayout, PlotSpec, ReportError, Series, line_plot, panels_plot, scatter_heatmap};
 use deflex_absolute::campaign::{Campaign, ReadingKind};
@@ -25,6 +25,9 @@ pub fn draw(
     let held: Vec<&&RowResidual> = absolute.iter().filter(|r| r.role != Role::Fit).collect();
     if !fit.is_empty() {
         images.extend(fitted_residual_plots(result, campaign, &fit, dir)?);
+    }
+    if let Some(maps) = &result.model.joint_maps {
+        images.push(joint_maps_plot(maps, dir)?);
     }
     // Held-out error distribution (cumulative), final model.
     let mut series = Vec::new();
@@ -174,4 +177,50 @@ fn fitted_residual_plots(
         "Residual norm at each measured position, side view in the tracker frame".into(),
     ));
     Ok(images)
+}
+
+/// One panel per mapped joint: its angle error `Δθ_j` against its angle, over the range the map
+/// was trained on (sampled at a tenth of the knot spacing).
+fn joint_maps_plot(
+    maps: &deflex_absolute::joint_maps::JointMaps,
+    dir: &Path,
+) -> Result<(String, String), ReportError> {
+    let panels: Vec<(PlotSpec, Vec<Series>)> = maps
+        .maps
+        .iter()
+        .map(|map| {
+            let (lo, hi) = map.range_rad();
+            let step = map.spacing_rad / 10.0;
+            let samples = ((hi - lo) / step).ceil() as usize + 1;
+            let x: Vec<f64> = (0..samples)
+                .map(|k| (lo + k as f64 * step).to_degrees())
+                .collect();
+            let y: Vec<f64> = (0..samples)
+                .map(|k| map.value(lo + k as f64 * step) * 1e6)
+                .collect();
+            (
+                PlotSpec::new(
+                    format!("J{}", map.joint + 1),
+                    format!("q{} [deg]", map.joint + 1),
+                    "Δθ [µrad]",
+                )
+                .size(550, 320),
+                vec![Series::line("", x, y)],
+            )
+        })
+        .collect();
+    let name = "joint_maps.png";
+    panels_plot(
+        &dir.join(name),
+        "Joint-angle error maps (what each joint's angle is off by)",
+        PanelLayout::Grid { columns: 2 },
+        &panels,
+    )?;
+    Ok((
+        name.to_string(),
+        format!(
+            "Joint-angle error maps Δθ_j(q_j) added to the measured joint angles ({}); zero outside the trained range",
+            maps.hyper.describe()
+        ),
+    ))
 }
