@@ -8,7 +8,9 @@ use clap::{Args, ValueEnum};
 use deflex_files::{AtomicDir, AtomicFile};
 use deflex_load::{read_file_ignoring, robot_to_toml_for};
 use deflex_model::Robot;
-use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
+use deflex_report::calibration_report::{
+    CalibrationReport, CouplingSection, write_calibration_report,
+};
 use deflex_report::calibration_tables::{
     ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
     iteration_rows, residual_summary, shift_rows, stiffness_rows,
@@ -26,6 +28,8 @@ use deflex_stiffness::validation::{predict, validate as run_validation};
 use serde_json::{Value, json};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
+
+mod couplings;
 
 #[derive(Args)]
 pub struct CalibrateArgs {
@@ -76,6 +80,13 @@ pub struct CalibrateArgs {
     /// `sigma_mm` would otherwise drop the σ it meant).
     #[arg(long = "ignore-column", value_name = "NAME")]
     pub ignore_column: Vec<String>,
+    /// Off-diagonal joint compliances to fit once the structure is identified, together with
+    /// the eDoF compliances (weighted least squares, standard errors as the stiffnesses'):
+    /// pairs of eDoFs of the identified structure, e.g. `J2.z:J3.z` (a shared counterbalance or
+    /// casting), separated by commas, at most 8. Written into the output model as
+    /// `[[coupling]]`, with the stiffnesses refitted with them.
+    #[arg(long, value_name = "A:B[,A:B…]")]
+    pub couplings: Option<String>,
     /// Output robot TOML (a drop-in for every other command).
     #[arg(long)]
     pub out: PathBuf,
@@ -269,6 +280,11 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
     if !(2..=100).contains(&args.folds) {
         return Err(UsageError::invalid("--folds", "2 to 100", args.folds).into());
     }
+    let requested = args
+        .couplings
+        .as_deref()
+        .map(couplings::parse)
+        .transpose()?;
     let start = robot(&args.robot)?;
     let CheckedFile {
         rows,
@@ -292,7 +308,14 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
             data: args.data.clone(),
         });
     }
-    let mut model = cal.to_robot(&start);
+    let diagonal = cal.to_robot(&start);
+    let coupling_fit = requested
+        .as_deref()
+        .map(|r| couplings::fit(&diagonal, &cal.structure.label(), &rows, r))
+        .transpose()?;
+    let mut model = coupling_fit
+        .as_ref()
+        .map_or_else(|| diagonal.clone(), |f| f.robot.clone());
     // The geometry is the start model's; the elasticity is new: say so in the name.
     let geometry = model
         .name
@@ -301,9 +324,14 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         .unwrap_or("")
         .to_string();
     model.name = format!(
-        "{geometry} — calibrated from {} ({})",
+        "{geometry} — calibrated from {} ({}{})",
         args.data.display(),
-        cal.structure.label()
+        cal.structure.label(),
+        model
+            .couplings
+            .iter()
+            .map(|c| format!(", coupling {}", c.label()))
+            .collect::<String>()
     );
     // Everything is built aside and appears only when complete: the report folder first,
     // then the model.
@@ -325,6 +353,10 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
             rows: &rows,
             warnings: &warnings,
             data_notes: &data_notes,
+            couplings: coupling_fit.as_ref().map(|fit| CouplingSection {
+                diagonal: &diagonal,
+                fit,
+            }),
         };
         write_calibration_report(folder.path(), &report)?;
         folder.commit().map_err(CliError::write(dir))?;
@@ -345,6 +377,11 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         v["output"] = json!(args.out.display().to_string());
         v["elapsed_s"] = json!(elapsed.as_secs_f64());
         v["geometry_check"] = geometry_json(&check);
+        if let Some(fit) = &coupling_fit {
+            let (list, summary) = couplings::json(fit);
+            v["couplings"] = list;
+            v["coupling_fit"] = summary;
+        }
         v["warnings"] = json!(warnings);
         println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
         return Ok(());
@@ -373,6 +410,9 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
     let flagged = correlated_pairs_text(&cal);
     if !flagged.is_empty() {
         print!("\n{flagged}");
+    }
+    if let Some(fit) = &coupling_fit {
+        print!("{}", couplings::text(&diagonal, fit));
     }
     println!(
         "\nfile check: {} points and {} load points agree with the forward kinematics within {:.3} mm (largest {:.3} mm)",

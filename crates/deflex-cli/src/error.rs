@@ -101,6 +101,19 @@ pub enum CliError {
         /// The measurement file.
         data: PathBuf,
     },
+    /// A coupling asked for (`calibrate --couplings`) with an end the identified structure has
+    /// no eDoF for.
+    #[error(
+        "--couplings {pair}: {edof} is not an eDoF of the identified structure `{structure}` (a coupling joins two eDoFs the calibration identified: choose them from the structure, or make the search keep them with --structure fixed and a start model that has them); nothing written"
+    )]
+    CouplingNotInStructure {
+        /// The pair as given (`J2.z:J3.y`).
+        pair: String,
+        /// The end that is missing (`J3.y`).
+        edof: String,
+        /// The identified structure's label.
+        structure: String,
+    },
     /// A `deflex run` session that did not end well.
     #[error(transparent)]
     Run(#[from] RunFailure),

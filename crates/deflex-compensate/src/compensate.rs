@@ -53,7 +53,14 @@
 //! does not draw more secant extrapolations on noise: with a max-over-points criterion and
 //! mixing at every point, a million-point cone stalled at a 1–4 µm noise floor (the largest
 //! change fell to 1.4 µm by iteration 5, then rose to 29 µm) where a 100 000-point one converged
-//! in 6 iterations.
+//! in 6 iterations. The other half is the process model's: its discretisation must be the same
+//! for every iteration. A model whose state steps where the *command* puts the tool (the twin's
+//! forming model booked its per-sector Aerens level at the predicted tool, and counted its
+//! sub-steps on the commanded segment) moves each step with the last change; a finer path puts
+//! a point within a few µm of every step, and that point's force jumps by a step whenever its
+//! command moves by the last change: the million-point cone took 8 iterations against the
+//! 100 000-point cone's 6, its last unconverged points the sector entries of the last contour.
+//! Booked on the desired path (`deflex_sim::FormingProcess`), both take 6.
 //!
 //! **Why half the tolerance.** Left alone at residuals up to the full tolerance, points pile up
 //! just below it (every solved point lands at ≈ 0 and stays; every unsolved one is anywhere

@@ -111,7 +111,8 @@ impl Robot {
     /// General VJM transfer: small displacement `[δp; δφ]` of a world point `point` on link
     /// `point_link` caused by a wrench applied at world point `load_point` on link `load_link`
     /// (world axes, moment about `load_point`). An eDoF contributes when it lies between the base
-    /// and both links: `δ = Σ_{e: site ≤ min(k, l)} j_e(P) j_e(A)ᵀ w / k_e`. This is what a laser
+    /// and both links: `δ = Σ_{e: site ≤ min(k, l)} j_e(P) j_e(A)ᵀ w / k_e`; a coupling's
+    /// `c j_a(P) j_b(A)ᵀ w` when `a ≤ k` and `b ≤ l` (and the same with a and b swapped). This is what a laser
     /// tracker sees at the paper's points M1..M3; with both points at the TCP on link N it
     /// reduces to eq. 15. Satisfies Maxwell–Betti reciprocity.
     pub fn point_displacement(
@@ -131,14 +132,21 @@ impl Robot {
                 displacement += edof_screw(axis, center, point) * (torque / edof.stiffness);
             }
         });
-        // θ_a += c τ_b and θ_b += c τ_a, each only where both eDoFs lie below the two links.
+        // θ_a += c τ_b and θ_b += c τ_a: the torque on b exists when b lies between the base
+        // and the load's link, and the rotation of a moves the point when a lies between the
+        // base and the point's link (a marker on the upper arm turns with J2 under a torque that
+        // only J3 carries). Each term has its own condition; swapping point and load swaps the
+        // terms (Maxwell–Betti).
         for coupling in &self.couplings {
-            if coupling.a.0.link_index() > reach || coupling.b.0.link_index() > reach {
-                continue;
-            }
+            let (ia, ib) = (coupling.a.0.link_index(), coupling.b.0.link_index());
             let (pa, pb) = self.coupling_screws(data, coupling, point);
             let (aa, ab) = self.coupling_screws(data, coupling, load_point);
-            displacement += (pa * ab.dot(wrench) + pb * aa.dot(wrench)) * coupling.compliance;
+            if ia <= point_link && ib <= load_link {
+                displacement += pa * (ab.dot(wrench) * coupling.compliance);
+            }
+            if ib <= point_link && ia <= load_link {
+                displacement += pb * (aa.dot(wrench) * coupling.compliance);
+            }
         }
         displacement
     }

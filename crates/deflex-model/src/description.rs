@@ -102,8 +102,9 @@ struct CouplingSection {
     compliance: f64,
 }
 
-/// `J2.z` → (joint 2, z); `base.x` → (base, x).
-fn parse_edof_label(label: &str) -> Option<(EdofSite, Axis)> {
+/// An eDoF's label as robot files and reports write it: `J2.z` → (joint 2, z); `base.x` →
+/// (base, x). `None` for anything else.
+pub fn parse_edof_label(label: &str) -> Option<(EdofSite, Axis)> {
     let (site, axis) = label.trim().split_once('.')?;
     let axis = match axis {
         "x" => Axis::X,

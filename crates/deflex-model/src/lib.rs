@@ -37,7 +37,7 @@ pub mod wrench_transport;
 
 pub use compliance::EdofColumns;
 pub use description::{
-    BUILTIN_ROBOTS, ResolvedUrdf, UrdfResolver, builtin, geometry_fingerprint,
+    BUILTIN_ROBOTS, ResolvedUrdf, UrdfResolver, builtin, geometry_fingerprint, parse_edof_label,
     robot_from_toml_and_urdf_str, robot_from_toml_str, robot_to_toml, robot_to_toml_with_urdf_path,
 };
 pub use error::{ModelError, QLengthError};

@@ -420,6 +420,7 @@ pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -
         rows: &cal.rows,
         warnings: &cal.warnings,
         data_notes: &cal.notes,
+        couplings: None,
     };
     write_calibration_report(folder.path(), &report)?;
     folder.commit().map_err(io)?;

@@ -10,8 +10,9 @@
 //! so a failure leaves no half-written report.
 
 use crate::calibration_tables::{
-    ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
-    iteration_rows, residual_summary, shift_rows, stiffness_rows,
+    COUPLING_HEADERS, ITERATION_HEADERS, REFIT_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS,
+    correlated_pairs_text, correlation_table, coupling_rows, coupling_summary, iteration_rows,
+    refit_rows, residual_summary, shift_rows, stiffness_rows,
 };
 use crate::text_table::table_csv;
 use crate::{
@@ -52,6 +53,17 @@ pub struct CalibrationReport<'a> {
     /// The measurement file's header comments (`FileHeader::notes`); a note
     /// containing `SIMULATED` marks the whole report as simulated.
     pub data_notes: &'a [String],
+    /// The couplings fitted after the structure (`deflex calibrate --couplings`), if any.
+    pub couplings: Option<CouplingSection<'a>>,
+}
+
+/// The off-diagonal compliances fitted after the structure, for the report.
+#[derive(Clone, Copy, Debug)]
+pub struct CouplingSection<'a> {
+    /// The diagonal calibration as a robot (its stiffnesses before the refit).
+    pub diagonal: &'a deflex_model::Robot,
+    /// The fit: the written robot, the couplings with their standard errors.
+    pub fit: &'a deflex_stiffness::CouplingFit,
 }
 
 impl CalibrationReport<'_> {
@@ -150,6 +162,14 @@ fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, Re
     let path = dir.join("residuals.csv");
     write_text(&path, &residuals_csv(report, &residual))?;
     files.push(path);
+    if let Some(section) = &report.couplings {
+        let path = dir.join("couplings.csv");
+        write_text(
+            &path,
+            &table_csv(&COUPLING_HEADERS, &coupling_rows(section.fit)),
+        )?;
+        files.push(path);
+    }
     let mut c = PageParts {
         dir,
         report,
@@ -173,12 +193,17 @@ fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, Re
         "Beside this page{}:",
         if sim { " (SIMULATED data)" } else { "" }
     ));
-    html.files(
-        &FILES
-            .iter()
-            .map(|(name, what)| FileLink::new(*name, *what))
-            .collect::<Vec<_>>(),
-    );
+    let mut links: Vec<FileLink> = FILES
+        .iter()
+        .map(|(name, what)| FileLink::new(*name, *what))
+        .collect();
+    if report.couplings.is_some() {
+        links.push(FileLink::new(
+            "couplings.csv",
+            "the fitted off-diagonal compliances with standard errors, 95 % intervals and correlations",
+        ));
+    }
+    html.files(&links);
     let page = dir.join("calibration.html");
     html.write(&page)?;
     files.push(page);
@@ -267,6 +292,19 @@ fn page_head(
     if !sh_rows.is_empty() {
         html.section("Centre shifts");
         html.table(&SHIFT_HEADERS, sh_rows);
+    }
+    if let Some(section) = &report.couplings {
+        html.section("Joint-compliance couplings (written into the output model)");
+        html.paragraph(format!(
+            "Off-diagonal compliances {}",
+            coupling_summary(section.fit).trim_end()
+        ));
+        html.table(&COUPLING_HEADERS, &coupling_rows(section.fit));
+        html.paragraph(
+            "The output model's stiffnesses are the ones refitted with the couplings (the table \
+             of identified stiffnesses above is the diagonal calibration's):",
+        );
+        html.table(&REFIT_HEADERS, &refit_rows(section.diagonal, section.fit));
     }
     html.section("Residuals");
     html.preformatted(residual_summary(cal));

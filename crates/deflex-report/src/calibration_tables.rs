@@ -1,8 +1,11 @@
 //! The calibration as text and CSV tables: the search iteration table (like the paper's Tables
 //! A1/A2), the identified stiffnesses with standard errors and 95 % intervals (like Table 1), the
-//! centre shifts, the correlation matrix and the residual summary.
+//! centre shifts, the correlation matrix and the residual summary; with `--couplings`, the
+//! fitted off-diagonal compliances and the stiffnesses refitted with them.
 
 use crate::text_table::render_table;
+use deflex_model::Robot;
+use deflex_stiffness::CouplingFit;
 use deflex_stiffness::search::SearchStep;
 use deflex_stiffness::stiffness_fit::{Calibration, Status};
 use std::fmt::Write as _;
@@ -213,4 +216,78 @@ pub fn residual_summary(cal: &Calibration) -> String {
         let _ = writeln!(out, "note: {note}");
     }
     out
+}
+
+/// Headers of [`coupling_rows`].
+pub const COUPLING_HEADERS: [&str; 7] = [
+    "coupling",
+    "c [rad/(N·m)]",
+    "SE [rad/(N·m)]",
+    "95% low [rad/(N·m)]",
+    "95% high [rad/(N·m)]",
+    "ρ = c/√(c_a c_b)",
+    "SE ρ",
+];
+
+/// Table rows of the fitted couplings: compliance, standard error, 95 % interval, correlation
+/// and its standard error.
+pub fn coupling_rows(fit: &CouplingFit) -> Vec<Vec<String>> {
+    fit.robot
+        .couplings
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let (lo, hi) = fit.interval95(k);
+            vec![
+                c.label(),
+                k_fmt(c.compliance),
+                k_fmt(fit.coupling_se[k]),
+                k_fmt(lo),
+                k_fmt(hi),
+                format!("{:.3}", fit.correlations[k]),
+                format!("{:.3}", fit.correlation_se[k]),
+            ]
+        })
+        .collect()
+}
+
+/// Headers of [`refit_rows`].
+pub const REFIT_HEADERS: [&str; 4] = [
+    "eDoF",
+    "k diagonal fit [N·m/rad]",
+    "k with the couplings [N·m/rad]",
+    "SE [N·m/rad]",
+];
+
+/// Table rows of the eDoF stiffnesses refitted with the couplings, beside the diagonal
+/// calibration's (`diagonal`): SE of `k = 1/c` by the delta method, `SE_c / c²`.
+pub fn refit_rows(diagonal: &Robot, fit: &CouplingFit) -> Vec<Vec<String>> {
+    fit.robot
+        .edofs()
+        .zip(&fit.compliance_se)
+        .map(|(e, se_c)| {
+            let c = 1.0 / e.stiffness;
+            vec![
+                e.label(),
+                diagonal.stiffness(e.site, e.axis).map_or("-".into(), k_fmt),
+                k_fmt(e.stiffness),
+                k_fmt(se_c / (c * c)),
+            ]
+        })
+        .collect()
+}
+
+/// What the coupling fit changed, one line: χ²/dof and the RMS position residual of the
+/// diagonal model and of the coupled one on the same rows.
+pub fn coupling_summary(fit: &CouplingFit) -> String {
+    format!(
+        "fitted with the eDoF compliances by weighted least squares ({} equations, {} unknowns): \
+         χ²/dof {:.3} → {:.3}, RMS position residual {} → {} µm\n",
+        fit.equations,
+        fit.unknowns,
+        fit.reduced_chi2_before,
+        fit.reduced_chi2,
+        um(fit.rms_before_m),
+        um(fit.rms_m)
+    )
 }

@@ -9,13 +9,13 @@
 //! iterates.
 //!
 //! The path's waypoints can be far apart (5° on the cone, 1.3 mm); the sheet is stored on 1°
-//! rays, so between two points the adapter walks the commanded segment in steps of at most
-//! [`FormingProcess::max_step_m`] and forms the sheet at each step, returning the wrench at the
-//! point itself.
+//! rays, so between two points the adapter walks the commanded segment in sub-steps and forms
+//! the sheet at each, returning the wrench at the point itself. The number of sub-steps is the
+//! *desired* segment's length over [`FormingProcess::max_step_m`] (rounded up).
 //!
 //! **The twin's law, state included.** Each sub-step does what the twin's cell does each robot
 //! cycle (`Workpiece::commit` in [`crate::cell`]): the sheet flows at the tool's predicted
-//! position, and, in contact, the pass is recorded ([`Sheet::observe_pass`]): the sheet's
+//! position, and, in contact, the pass is recorded ([`Sheet::observe_pass_at`]): the sheet's
 //! per-sector memory of the last pass gives the *actual* step-down and wall angle, hence the
 //! Aerens level, which grows with the actual depth ([`Sheet::flow_force`]). A tool predicted to
 //! deflect upwards forms smaller steps at a lower level; a compensated one forms the programmed
@@ -23,6 +23,30 @@
 //! record the level would stay at the programmed step-down and wall angle: the twin's law before
 //! it learnt to push back, which over-predicts the uncompensated force and under-predicts the
 //! compensated depth's growth.)
+//!
+//! **A discretisation the iterations share.** The compensation iterates on the command; the
+//! sheet's discretisation must not move with it. Two parts of it did, and held long paths up:
+//! * the pass record updates the Aerens level once per 1° sector, so along the path the level
+//!   is a staircase (0.4–0.5 N a step in the cone's last contour, where it falls from 1310 to
+//!   1264 N: about 1 µrad of the TX200's orientation compensation, the tolerance). Booked at the
+//!   *predicted* tool's sector, each step sat wherever the current command put the tool: a
+//!   point within a few µm of a sector boundary changed sides when its command moved by the
+//!   last iteration's change, its force jumped by a step and its compensation by a tolerance.
+//!   At 5.2 µm between points (1 M points on the cone) nearly every sector boundary has such a
+//!   point; at 48.5 µm (100 000) few do: the million-point cone needed 8 iterations against 6,
+//!   its unconverged points the sector-entry points of the last contour;
+//! * the number of sub-steps came from the *commanded* segment's length, which crosses a
+//!   multiple of `max_step_m` as the command changes: the sheet was formed once more or once
+//!   less at that point, and the level stepped at another sub-step (on the twin cell's
+//!   nominal robot with its 0.2 m tool one point alternated between 1 and 2 sub-steps for four
+//!   iterations).
+//!
+//! So the sub-steps are counted on the desired segment and the pass is booked in the sector of
+//! the desired path ([`Sheet::observe_pass_at`]), with the predicted tool's radius and depth:
+//! where the level steps is fixed for every iteration, and the force depends on the command
+//! only through the tool's predicted position, continuously. At the converged command the
+//! predicted tool is on the desired path within the tolerance, so the booking differs from the
+//! twin's only for a tool within that distance of a sector boundary.
 //!
 //! With the default [`crate::sheet::SheetConfig`] the process model *is* the twin's forming law:
 //! an optimistic assumption that a real process model (FE, Aerens' formula, a previous run) does
@@ -60,7 +84,8 @@ pub struct FormingProcess {
     feed_ratio: f64,
     /// Longest step between sheet updates along a segment (m).
     pub max_step_m: f64,
-    previous: Option<Vector3<f64>>,
+    /// The previous point's commanded and desired positions (part frame).
+    previous: Option<(Vector3<f64>, Vector3<f64>)>,
     last_force: f64,
 }
 
@@ -228,23 +253,30 @@ impl ProcessModel for FormingProcess {
         } else {
             Vector3::zeros()
         };
-        let start = self.previous.unwrap_or(p_cmd);
-        let length = (p_cmd - start).norm();
+        let p_des = to_part * (point.desired.translation.vector - self.part.translation.vector);
+        let (start, start_des) = self.previous.unwrap_or((p_cmd, p_des));
+        // The sub-steps and the pass record follow the desired path, which every iteration
+        // shares (see the module documentation: a discretisation that followed the command
+        // moved with it and held long paths up).
+        let length = (p_des - start_des).norm();
         let steps = ((length / self.max_step_m).ceil() as usize).clamp(1, MAX_SUBSTEPS);
         let mut wrench = Wrench::zeros();
         for k in 1..=steps {
-            let p = start + (p_cmd - start) * (k as f64 / steps as f64);
+            let f = k as f64 / steps as f64;
+            let p = start + (p_cmd - start) * f;
+            let booked = start_des + (p_des - start_des) * f;
             let (w, p_true, contact) = self.equilibrium(&p, &compliance, &feed_dir);
             // As the twin's cell does each cycle (`Workpiece::commit`): flow, then record the
             // pass, which sets the Aerens level at the actual step-down and wall angle.
             self.sheet.form(&p_true, &contact);
             if contact.force_n > 0.0 {
-                self.sheet.observe_pass(&p_true, contact.depth_m);
+                self.sheet
+                    .observe_pass_at(booked.y.atan2(booked.x), &p_true, contact.depth_m);
             }
             self.last_force = w[2];
             wrench = w;
         }
-        self.previous = Some(p_cmd);
+        self.previous = Some((p_cmd, p_des));
         let f = r * Vector3::new(wrench[0], wrench[1], wrench[2]);
         let m = r * Vector3::new(wrench[3], wrench[4], wrench[5]);
         Ok(Wrench::new(f.x, f.y, f.z, m.x, m.y, m.z))

@@ -350,8 +350,16 @@ impl Sheet {
     /// Record where the tool actually is (R_p, m) in a contact cycle: compare with its last pass
     /// over this sector and update the actual step-down, wall angle and Aerens level.
     pub fn observe_pass(&mut self, p: &Vector3<f64>, depth_m: f64) {
-        let s = ((p.y.atan2(p.x).rem_euclid(2.0 * PI) / (2.0 * PI) * self.sectors as f64).round()
-            as usize)
+        self.observe_pass_at(p.y.atan2(p.x), p, depth_m);
+    }
+
+    /// [`Sheet::observe_pass`] with the pass recorded in the sector at angle `theta` (rad, about
+    /// the part axis) instead of the sector of `p`: the tool at `p` with depth `depth_m`, its
+    /// radius `|p_xy|`, booked where a caller's fixed reference (the desired path) is. The
+    /// offline process model books its passes on the desired path so that where the Aerens
+    /// level steps (once per sector) does not move with the command it is iterating on.
+    pub fn observe_pass_at(&mut self, theta: f64, p: &Vector3<f64>, depth_m: f64) {
+        let s = ((theta.rem_euclid(2.0 * PI) / (2.0 * PI) * self.sectors as f64).round() as usize)
             % self.sectors;
         let r = p.x.hypot(p.y);
         let half_turn = (self.sectors / 2) as u64;

@@ -108,19 +108,30 @@ fn measure_rows(
         let a = Vector3::from(row.load_point_m);
         let w = Wrench::from_row_slice(&row.wrench);
         let mut d = truth.point_displacement(&data, &p, row.point_link, &a, row.load_link, &w);
-        let reach = row.point_link.min(row.load_link);
         for c in &options.coupling {
-            if c.a.0.link_index() > reach || c.b.0.link_index() > reach {
-                continue;
-            }
             let screw = |id: EdofId, x: &Vector3<f64>| -> Vector6<f64> {
                 let (v, o) = data.edof_axis_center(truth, id.0, id.1);
                 deflex_model::edof_screw(&v, &o, x)
             };
-            let (ja_p, jb_p) = (screw(c.a, &p), screw(c.b, &p));
-            let (ja_a, jb_a) = (screw(c.a, &a), screw(c.b, &a));
-            let delta = (ja_p * jb_a.dot(&w) + jb_p * ja_a.dot(&w)) * c.compliance;
-            d += delta;
+            // In joint space: the load puts a torque on each eDoF that lies between the base
+            // and its link; the coupling turns each end by c times the other end's torque; a
+            // turn moves the point when the eDoF lies between the base and the point's link.
+            let torque = |id: EdofId| {
+                if id.0.link_index() <= row.load_link {
+                    screw(id, &a).dot(&w)
+                } else {
+                    0.0
+                }
+            };
+            let turns = [
+                (c.a, c.compliance * torque(c.b)),
+                (c.b, c.compliance * torque(c.a)),
+            ];
+            for (id, theta) in turns {
+                if id.0.link_index() <= row.point_link {
+                    d += screw(id, &p) * theta;
+                }
+            }
         }
         let mut r = row.clone();
         r.displacement_m = Some([

@@ -358,6 +358,35 @@ fn a_coupled_joint_compliance_is_j_c_theta_j_transposed() {
     let tcp = data.tcp_position();
     let point = robot.point_displacement(&data, &tcp, 6, &tcp, 6, &w);
     assert!((point - c * w).norm() < 1e-15);
+    // A marker on the upper arm (link 2) under a load at the TCP, and the other way round, in
+    // joint space: τ = J_Aᵀ w over the eDoFs below the load's link, θ = C_θ τ, δ = J_P θ over
+    // the eDoFs below the point's link. J3 carries a torque that turns J2 through the coupling,
+    // which moves the marker although J3 lies above it.
+    let marker = data.link_frame(2).translation.vector + nalgebra::Vector3::new(0.1, -0.05, 0.2);
+    let screws = |at: &nalgebra::Vector3<f64>, link: usize| {
+        nalgebra::DMatrix::from_fn(6, edofs.len(), |r, k| {
+            let e = &edofs[k];
+            if e.site.link_index() > link {
+                return 0.0;
+            }
+            let (v, o) = data.edof_axis_center(&robot, e.site, e.axis);
+            deflex_model::edof_screw(&v, &o, at)[r]
+        })
+    };
+    let wd = nalgebra::DVector::from_column_slice(w.as_slice());
+    for (p, pl, a, al) in [(marker, 2, tcp, 6), (tcp, 6, marker, 2)] {
+        let theta = &c_theta * (screws(&a, al).transpose() * &wd);
+        let joint_space = screws(&p, pl) * theta;
+        let transfer = robot.point_displacement(&data, &p, pl, &a, al, &w);
+        assert!(
+            (0..6).all(|r| (joint_space[r] - transfer[r]).abs() < 1e-15),
+            "point on link {pl}, load on link {al}: {joint_space} vs {transfer}"
+        );
+    }
+    let mut uncoupled = robot.clone();
+    uncoupled.couplings.clear();
+    let on_marker = |r: &deflex_model::Robot| r.point_displacement(&data, &marker, 2, &tcp, 6, &w);
+    assert!((on_marker(&robot) - on_marker(&uncoupled)).norm() > 1e-7);
     // The coupling changes the answer (the test is not blind to it).
     let mut diagonal = robot.clone();
     diagonal.couplings.clear();

@@ -139,6 +139,7 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
         rows: &rows,
         warnings: &["a file warning".to_string()],
         data_notes: &[],
+        couplings: None,
     };
     let files = write_calibration_report(&dir, &report).unwrap();
     for name in [
@@ -193,13 +194,32 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
          measurement"
             .to_string(),
     ];
+    // … with a J2.z–J3.z coupling fitted after the structure (`calibrate --couplings`): its
+    // table, the refitted stiffnesses and couplings.csv, linked.
+    use deflex_model::{Axis, EdofSite};
+    let pair = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
+    let fit = deflex_stiffness::fit_couplings(&model, &rows, &[pair]).unwrap();
     let simulated = CalibrationReport {
         data_notes: &notes,
+        couplings: Some(crate::calibration_report::CouplingSection {
+            diagonal: &model,
+            fit: &fit,
+        }),
         ..report
     };
     assert!(simulated.simulated_note().is_some());
-    write_calibration_report(&dir, &simulated).unwrap();
+    let files = write_calibration_report(&dir, &simulated).unwrap();
+    assert!(files.contains(&dir.join("couplings.csv")));
     let html = std::fs::read_to_string(dir.join("calibration.html")).unwrap();
+    assert!(
+        html.contains("Joint-compliance couplings")
+            && html.contains("J2.z–J3.z")
+            && html.contains("k with the couplings")
+            && html.contains("<a href=\"couplings.csv\">"),
+        "{html}"
+    );
+    let couplings = std::fs::read_to_string(dir.join("couplings.csv")).unwrap();
+    assert_eq!(couplings.lines().count(), 2, "{couplings}");
     assert!(html.contains("(SIMULATED data)") && html.contains("not a measurement"));
     assert_eq!(html.matches("(SIMULATED)</figcaption>").count(), 5);
     let csv = std::fs::read_to_string(dir.join("residuals.csv")).unwrap();

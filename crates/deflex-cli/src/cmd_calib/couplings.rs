@@ -1,0 +1,189 @@
+//! `deflex calibrate --couplings J2.z:J3.z[,A:B…]`: off-diagonal joint compliances fitted after
+//! the structure is identified, with the eDoF compliances
+//! ([`deflex_stiffness::fit_couplings`]), reported with their standard errors and correlations
+//! and written into the calibrated robot file as `[[coupling]]`.
+
+use crate::error::{CliError, UsageError};
+use deflex_model::{Axis, EdofSite, MAX_COUPLINGS, Robot, parse_edof_label};
+use deflex_report::calibration_tables::{
+    COUPLING_HEADERS, REFIT_HEADERS, coupling_rows, coupling_summary, refit_rows,
+};
+use deflex_report::text_table::render_table;
+use deflex_stiffness::{CouplingFit, EdofPair, MeasurementRow, fit_couplings};
+use serde_json::{Value, json};
+
+const EXPECTED: &str = "pairs of eDoFs such as J2.z:J3.z, separated by commas (at most 8)";
+
+/// One pair as given and as parsed.
+pub struct Requested {
+    /// The text of the pair (`J2.z:J3.z`), for messages.
+    pub text: String,
+    /// The two eDoFs.
+    pub pair: EdofPair,
+}
+
+/// Parse `--couplings`: `A:B[,A:B…]`, each end an eDoF label (`J2.z`, `base.x`), the two ends
+/// different, no pair twice, at most [`MAX_COUPLINGS`].
+pub fn parse(text: &str) -> Result<Vec<Requested>, UsageError> {
+    let invalid = || UsageError::invalid("--couplings", EXPECTED, text);
+    let mut out: Vec<Requested> = Vec::new();
+    for item in text.split(',') {
+        let item = item.trim();
+        let (a, b) = item.split_once(':').ok_or_else(invalid)?;
+        let end = |label: &str| {
+            parse_edof_label(label).ok_or_else(|| {
+                UsageError::invalid(
+                    "--couplings",
+                    format!("an eDoF label such as J2.z or base.x in {item}"),
+                    label.trim(),
+                )
+            })
+        };
+        let pair = (end(a)?, end(b)?);
+        if pair.0 == pair.1 {
+            return Err(UsageError::invalid(
+                "--couplings",
+                "two different eDoFs in a pair",
+                item,
+            ));
+        }
+        if out
+            .iter()
+            .any(|r| r.pair == pair || r.pair == (pair.1, pair.0))
+        {
+            return Err(UsageError::invalid("--couplings", "each pair once", item));
+        }
+        out.push(Requested {
+            text: item.to_string(),
+            pair,
+        });
+    }
+    if out.len() > MAX_COUPLINGS {
+        return Err(invalid());
+    }
+    Ok(out)
+}
+
+fn label((site, axis): (EdofSite, Axis)) -> String {
+    format!("{site}.{}", axis.letter())
+}
+
+/// Fit the requested couplings on the calibrated (diagonal) `model`: each end must be an eDoF of
+/// the identified structure (`structure`, its label), else the error names the pair and the
+/// structure.
+pub fn fit(
+    model: &Robot,
+    structure: &str,
+    rows: &[MeasurementRow],
+    requested: &[Requested],
+) -> Result<CouplingFit, CliError> {
+    for r in requested {
+        for end in [r.pair.0, r.pair.1] {
+            if model.stiffness(end.0, end.1).is_none() {
+                return Err(CliError::CouplingNotInStructure {
+                    pair: r.text.clone(),
+                    edof: label(end),
+                    structure: structure.to_string(),
+                });
+            }
+        }
+    }
+    let pairs: Vec<EdofPair> = requested.iter().map(|r| r.pair).collect();
+    fit_couplings(model, rows, &pairs)
+        .map_err(|e| CliError::in_context("--couplings")(CliError::Calib(e)))
+}
+
+/// The couplings and the refitted stiffnesses, as printed.
+pub fn text(diagonal: &Robot, fit: &CouplingFit) -> String {
+    let mut out = String::from("\nJoint-compliance couplings (written into the output model), ");
+    out.push_str(&coupling_summary(fit));
+    out.push_str(&render_table(&COUPLING_HEADERS, &coupling_rows(fit)));
+    out.push_str("The output model's stiffnesses, refitted with the couplings:\n");
+    out.push_str(&render_table(&REFIT_HEADERS, &refit_rows(diagonal, fit)));
+    out
+}
+
+fn number(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// `couplings` and `coupling_fit` of the JSON output.
+pub fn json(fit: &CouplingFit) -> (Value, Value) {
+    let couplings: Vec<Value> = fit
+        .robot
+        .couplings
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let (lo, hi) = fit.interval95(k);
+            json!({
+                "coupling": c.label(),
+                "a": label(c.a),
+                "b": label(c.b),
+                "compliance_rad_per_Nm": c.compliance,
+                "compliance_se": number(fit.coupling_se[k]),
+                "interval95": [number(lo), number(hi)],
+                "correlation": fit.correlations[k],
+                "correlation_se": number(fit.correlation_se[k]),
+            })
+        })
+        .collect();
+    let edofs: Vec<Value> = fit
+        .robot
+        .edofs()
+        .zip(&fit.compliance_se)
+        .map(|(e, se)| {
+            json!({
+                "edof": e.label(),
+                "stiffness_Nm_per_rad": e.stiffness,
+                "compliance": 1.0 / e.stiffness,
+                "compliance_se": number(*se),
+            })
+        })
+        .collect();
+    let summary = json!({
+        "equations": fit.equations,
+        "unknowns": fit.unknowns,
+        "reduced_chi2_before": fit.reduced_chi2_before,
+        "reduced_chi2": fit.reduced_chi2,
+        "residual_rms_before_m": fit.rms_before_m,
+        "residual_rms_m": fit.rms_m,
+        "edofs": edofs,
+    });
+    (json!(couplings), summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pairs_are_parsed_and_bad_ones_named() {
+        let r = parse("J2.z:J3.z, base.x:J1.x").unwrap();
+        assert_eq!(r.len(), 2);
+        assert_eq!(
+            r[0].pair,
+            ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z))
+        );
+        assert_eq!(r[1].text, "base.x:J1.x");
+        for (bad, says) in [
+            ("J2.z", "pairs of eDoFs"),
+            ("J2.z:J3.w", "J3.w"),
+            ("J2.z:K3.z", "K3.z"),
+            ("J2.z:J2.z", "two different eDoFs"),
+            ("J2.z:J3.z,J3.z:J2.z", "each pair once"),
+            ("", "pairs of eDoFs"),
+        ] {
+            let e = parse(bad).err().unwrap().to_string();
+            assert!(
+                e.starts_with("--couplings") && e.contains(says),
+                "{bad}: {e}"
+            );
+        }
+        let many = (1..=9)
+            .map(|j| format!("J{j}.x:J{j}.y"))
+            .collect::<Vec<_>>()
+            .join(",");
+        assert!(parse(&many).is_err());
+    }
+}
