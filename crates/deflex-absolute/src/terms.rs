@@ -1,14 +1,21 @@
 //! What a calibration keeps beyond the robot file: joint-angle terms (harmonics, gear
-//! periodic error, backlash), nonlinear torsion of the eDoFs and the residual model, which a robot description has no place
-//! for, and the calibration's own accuracy (what a later registration compares its residual
+//! periodic error, backlash, joint-angle error maps), nonlinear torsion of the eDoFs and the
+//! residual model, which a robot description has no place for, and the calibration's own accuracy (what a later registration compares its residual
 //! with). Serialised as JSON (SI units) beside the robot file; tied to it by the robot's
 //! geometry fingerprint, so a terms file is never applied to another robot's geometry.
 
+use crate::joint_maps::{
+    JointMap, JointMaps, JointMapsHyper, MAX_MAP_COEFFICIENTS, MIN_SPACING_RAD,
+};
 use crate::outcome::FitResult;
 use crate::params::{EgModel, HarmonicTerm, TorsionShape, TorsionTerm};
 use crate::residual_model::{MAX_INDUCING, ResidualHyper, ResidualModel};
 use deflex_model::MAX_JOINTS;
 use serde::{Deserialize, Serialize};
+
+/// Margin over the calibration's held-out RMS above which a registration residual says the
+/// robot itself has changed ([`CalibrationTerms::recalibrate_above_m`]).
+pub const RECALIBRATE_MARGIN: f64 = 1.5;
 
 /// Version of the format written.
 pub const FORMAT: u32 = 1;
@@ -59,6 +66,31 @@ pub struct ResidualRecord {
     pub weights_m: Vec<[f64; 3]>,
 }
 
+/// One joint's angle-error map as written: `Δθ(q) = Σ_k c_k B_k((q − start)/spacing)`, B_k
+/// the uniform cubic B-spline on knots `start + k·spacing … start + (k+4)·spacing`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointMapRecord {
+    /// Joint, 1-based.
+    pub joint: usize,
+    /// First knot (rad).
+    pub start_rad: f64,
+    /// Knot spacing (rad).
+    pub spacing_rad: f64,
+    /// Coefficients (rad).
+    pub coefficients_rad: Vec<f64>,
+}
+
+/// The joint-angle error maps as written, with the hyper-parameters they were trained with.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointMapsRecord {
+    /// Prior standard deviation of a coefficient (rad).
+    pub value_sigma_rad: f64,
+    /// Prior standard deviation of a coefficients' second difference (rad).
+    pub curvature_sigma_rad: f64,
+    /// One map per mapped joint.
+    pub maps: Vec<JointMapRecord>,
+}
+
 /// The terms file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CalibrationTerms {
@@ -77,9 +109,14 @@ pub struct CalibrationTerms {
     pub torsion: Vec<TorsionRecord>,
     /// Residual model, if kept.
     pub residual_model: Option<ResidualRecord>,
+    /// Joint-angle error maps, if kept (absent in files written before them).
+    #[serde(default)]
+    pub joint_maps: Option<JointMapsRecord>,
     /// Position RMS of the fitted readings (m).
     pub fit_rms_m: f64,
-    /// Pooled held-out position RMS of the registered held-out groups (m), when there were any.
+    /// Largest position RMS of a held-out group (held-out configurations, held-out series, left-out
+    /// sessions; m), when there were any: what the healthy robot showed on readings its fit did
+    /// not see, the reference of `register`'s "re-calibrate" warning.
     pub held_out_rms_m: Option<f64>,
 }
 
@@ -171,13 +208,18 @@ impl CalibrationTerms {
     /// The terms of a fit's final model.
     pub fn of(result: &FitResult) -> CalibrationTerms {
         let model = &result.model;
+        // The largest group, not the pooled RMS: left-out sessions that revisit the fitted
+        // configurations (a grid measured again) score far better than new configurations.
         let held_out_rms_m = result.steps.iter().rev().find_map(|s| {
             if s.acceptance.is_some_and(|a| !a.accepted) {
                 return None;
             }
-            let groups: Vec<&crate::outcome::TestGroup> =
-                s.test.iter().chain(&s.cross_groups).collect();
-            crate::fit::pooled_rms(&groups)
+            s.test
+                .iter()
+                .chain(&s.cross_groups)
+                .filter(|g| g.stats.count > 0)
+                .map(|g| g.stats.rms)
+                .reduce(f64::max)
         });
         CalibrationTerms {
             format: FORMAT,
@@ -224,6 +266,20 @@ impl CalibrationTerms {
                 inducing_q_rad: r.inducing.clone(),
                 weights_m: r.weights.clone(),
             }),
+            joint_maps: model.joint_maps.as_ref().map(|m| JointMapsRecord {
+                value_sigma_rad: m.hyper.value_sigma_rad,
+                curvature_sigma_rad: m.hyper.curvature_sigma_rad,
+                maps: m
+                    .maps
+                    .iter()
+                    .map(|map| JointMapRecord {
+                        joint: map.joint + 1,
+                        start_rad: map.start_rad,
+                        spacing_rad: map.spacing_rad,
+                        coefficients_rad: map.coefficients.clone(),
+                    })
+                    .collect(),
+            }),
             fit_rms_m: result
                 .steps
                 .iter()
@@ -232,6 +288,12 @@ impl CalibrationTerms {
                 .map_or(0.0, |s| s.fit.rms),
             held_out_rms_m,
         }
+    }
+
+    /// The registration residual (m) above which the robot itself is deemed changed:
+    /// [`RECALIBRATE_MARGIN`] × the held-out RMS the calibration recorded.
+    pub fn recalibrate_above_m(&self) -> Option<f64> {
+        self.held_out_rms_m.map(|r| r * RECALIBRATE_MARGIN)
     }
 
     /// JSON text.
@@ -256,6 +318,7 @@ impl CalibrationTerms {
             && self.backlash_rad.iter().all(|b| *b == 0.0)
             && self.torsion.iter().all(|t| t.value_rad_per_nm == 0.0)
             && self.residual_model.is_none()
+            && self.joint_maps.is_none()
     }
 
     /// Put the terms into a model built from their robot file.
@@ -319,12 +382,106 @@ impl CalibrationTerms {
             Some(r) => Some(residual_model(r, joints, &finite)?),
             None => None,
         };
+        let maps = match &self.joint_maps {
+            Some(m) => Some(joint_maps(m, joints, &finite)?),
+            None => None,
+        };
         model.harmonics = harmonics;
         model.backlash = self.backlash_rad.clone();
         model.torsion = torsion;
         model.residual = residual;
+        model.joint_maps = maps;
         Ok(())
     }
+}
+
+/// Largest number of joint maps read.
+pub const MAX_JOINT_MAPS: usize = MAX_JOINTS;
+
+fn joint_maps(
+    record: &JointMapsRecord,
+    joints: usize,
+    finite: &dyn Fn(&'static str, f64, f64) -> Result<(), TermsError>,
+) -> Result<JointMaps, TermsError> {
+    if record.maps.len() > MAX_JOINT_MAPS {
+        return Err(TermsError::Value {
+            what: "joint_maps.maps",
+            problem: ValueProblem::TooMany {
+                count: record.maps.len(),
+                limit: MAX_JOINT_MAPS,
+            },
+        });
+    }
+    let positive = |what: &'static str, v: f64, low: f64, high: f64| {
+        if v.is_finite() && (low..=high).contains(&v) {
+            Ok(())
+        } else {
+            Err(TermsError::Value {
+                what,
+                problem: ValueProblem::Bad(v),
+            })
+        }
+    };
+    positive(
+        "joint_maps.value_sigma_rad",
+        record.value_sigma_rad,
+        1e-9,
+        1.0,
+    )?;
+    positive(
+        "joint_maps.curvature_sigma_rad",
+        record.curvature_sigma_rad,
+        1e-9,
+        1.0,
+    )?;
+    let mut mask = 0u16;
+    let mut maps = Vec::with_capacity(record.maps.len());
+    let mut spacing = f64::NAN;
+    for m in &record.maps {
+        if m.joint == 0 || m.joint > joints || mask & (1 << (m.joint - 1)) != 0 {
+            return Err(TermsError::Joint {
+                what: "joint_maps.maps.joint (each joint once)",
+                value: m.joint,
+                joints,
+            });
+        }
+        mask |= 1 << (m.joint - 1);
+        finite("joint_maps.maps.start_rad", m.start_rad, 100.0)?;
+        positive(
+            "joint_maps.maps.spacing_rad",
+            m.spacing_rad,
+            MIN_SPACING_RAD,
+            10.0,
+        )?;
+        if m.coefficients_rad.len() > MAX_MAP_COEFFICIENTS {
+            return Err(TermsError::Value {
+                what: "joint_maps.maps.coefficients_rad",
+                problem: ValueProblem::TooMany {
+                    count: m.coefficients_rad.len(),
+                    limit: MAX_MAP_COEFFICIENTS,
+                },
+            });
+        }
+        for c in &m.coefficients_rad {
+            finite("joint_maps.maps.coefficients_rad", *c, 0.1)?;
+        }
+        spacing = m.spacing_rad;
+        maps.push(JointMap {
+            joint: m.joint - 1,
+            start_rad: m.start_rad,
+            spacing_rad: m.spacing_rad,
+            coefficients: m.coefficients_rad.clone(),
+        });
+    }
+    Ok(JointMaps {
+        hyper: JointMapsHyper {
+            joints: mask,
+            spacing_rad: spacing,
+            value_sigma_rad: record.value_sigma_rad,
+            curvature_sigma_rad: record.curvature_sigma_rad,
+        },
+        maps,
+    })
 }
 
 fn torsion_terms(
