@@ -57,7 +57,6 @@ pub mod sink;
 mod urscript;
 mod val3;
 
-pub use common::{COMMENT_WIDTH, wrap_comment};
 pub use error::ProgramError;
 pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
 pub use sink::{DirectorySink, MemorySink, ProgramSink};
@@ -315,3 +314,6 @@ pub fn write_files(dir: &Path, files: &[ProgramFile]) -> Result<(), ProgramError
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod it_tests;

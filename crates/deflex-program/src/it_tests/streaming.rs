@@ -2,9 +2,9 @@
 //! line ([`DirectorySource`]) are the programs [`export`] builds in memory, motion for motion;
 //! the VAL3 data file, read in one pass, refuses arrays out of the exporter's order.
 
-use deflex_program::readback::{DirectorySource, read_files, read_program, read_val3_data};
-use deflex_program::settings::ProgramSettings;
-use deflex_program::{DirectorySink, Format, Pose, ProgramInput, ProgramPoint, export, export_to};
+use crate::readback::{DirectorySource, read_files, read_program, read_val3_data};
+use crate::settings::ProgramSettings;
+use crate::{DirectorySink, Format, Pose, ProgramInput, ProgramPoint, export, export_to};
 use nalgebra::{Rotation3, Translation3, Vector3};
 
 /// A descending spiral of `n` points, tool down, one rapid in the middle.
@@ -27,7 +27,7 @@ fn spiral(n: usize) -> ProgramInput {
         })
         .collect();
     let mut input = ProgramInput::new(points);
-    input.tool_load = Some(deflex_program::ToolLoad {
+    input.tool_load = Some(crate::ToolLoad {
         mass_kg: 2.0,
         cog_m: [0.0, 0.0, 0.1],
         source: "test",
@@ -45,7 +45,7 @@ fn scratch(name: &str) -> std::path::PathBuf {
 #[test]
 fn programs_streamed_to_a_folder_are_the_ones_built_in_memory() {
     let settings = ProgramSettings {
-        program: deflex_program::settings::CommonSettings {
+        program: crate::settings::CommonSettings {
             max_points_per_part: 700,
             ..Default::default()
         },
@@ -95,7 +95,7 @@ fn programs_streamed_to_a_folder_are_the_ones_built_in_memory() {
 #[test]
 fn the_val3_data_file_is_read_in_the_exporters_order() {
     let settings = ProgramSettings {
-        program: deflex_program::settings::CommonSettings {
+        program: crate::settings::CommonSettings {
             max_points_per_part: 40,
             ..Default::default()
         },

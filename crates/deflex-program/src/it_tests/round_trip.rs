@@ -1,14 +1,12 @@
-//! Every exporter's output read back ([`deflex_program::readback`]) agrees with the path:
+//! Every exporter's output read back ([`crate::readback`]) agrees with the path:
 //! positions within 1 µm, orientations within 1e-6 rad (the printed precision), speeds as
 //! programmed (capped by the settings, rapid moves at the rapid speed). Plus the bounds:
 //! point counts, bad values, line lengths and names.
 
-use deflex_program::orientation::{rotation_distance, rotation_from_kuka_abc_deg};
-use deflex_program::readback::read_files;
-use deflex_program::settings::ProgramSettings;
-use deflex_program::{
-    Coordinates, Format, Pose, ProgramError, ProgramInput, ProgramPoint, export, names,
-};
+use crate::orientation::{rotation_distance, rotation_from_kuka_abc_deg};
+use crate::readback::read_files;
+use crate::settings::ProgramSettings;
+use crate::{Coordinates, Format, Pose, ProgramError, ProgramInput, ProgramPoint, export, names};
 use nalgebra::{Rotation3, Translation3, Vector3};
 
 /// A helical cone like the paper's (20 mm radius, 45°, in the part frame), the tool pointing
@@ -46,7 +44,7 @@ fn cone_path(points: usize) -> Vec<ProgramPoint> {
 
 fn input(points: Vec<ProgramPoint>) -> ProgramInput {
     ProgramInput {
-        tool_load: Some(deflex_program::ToolLoad {
+        tool_load: Some(crate::ToolLoad {
             mass_kg: 2.5,
             cog_m: [0.0, 0.0, 0.08],
             source: "test",
@@ -157,7 +155,7 @@ fn orientations_at_and_near_gimbal_lock_round_trip() {
     for (k, offset) in [0.0, 1e-9, 1e-6, 1e-3].iter().enumerate() {
         for sign in [1.0, -1.0] {
             let kuka = rotation_from_kuka_abc_deg([35.0, sign * (90.0 - offset), -20.0]);
-            let staubli = deflex_program::orientation::rotation_from_staubli_rxryrz_deg([
+            let staubli = crate::orientation::rotation_from_staubli_rxryrz_deg([
                 15.0,
                 sign * (90.0 - offset),
                 -65.0,
@@ -174,7 +172,7 @@ fn orientations_at_and_near_gimbal_lock_round_trip() {
         }
     }
     let mut input = ProgramInput::new(points);
-    input.tool_load = Some(deflex_program::ToolLoad {
+    input.tool_load = Some(crate::ToolLoad {
         mass_kg: 1.0,
         cog_m: [0.0; 3],
         source: "test",
@@ -294,7 +292,7 @@ fn blends_shrink_on_short_segments_and_vanish_at_the_end() {
 #[test]
 fn bounds_and_bad_values_are_refused_with_the_point_named() {
     let settings = ProgramSettings {
-        program: deflex_program::settings::CommonSettings {
+        program: crate::settings::CommonSettings {
             max_points: 10,
             ..Default::default()
         },
@@ -339,7 +337,7 @@ fn bounds_and_bad_values_are_refused_with_the_point_named() {
 #[test]
 fn names_are_made_valid_per_language_and_lines_stay_short() {
     let settings = ProgramSettings {
-        program: deflex_program::settings::CommonSettings {
+        program: crate::settings::CommonSettings {
             name: "Cone for the TX200 — compensated, run #7 (seed 1) with a very long name".into(),
             ..Default::default()
         },
@@ -423,8 +421,8 @@ fn the_template_file_documents_the_defaults() {
 
 /// The configuration of a TX200-like arm at joint values (the sides written out for the
 /// test: in front of axis 1, in front of the lower arm, elbow short of stretched).
-fn arm(q: [f64; 6]) -> deflex_program::ArmConfiguration {
-    deflex_program::ArmConfiguration {
+fn arm(q: [f64; 6]) -> crate::ArmConfiguration {
+    crate::ArmConfiguration {
         joints_rad: q,
         wrist_behind_axis_1: false,
         wrist_behind_lower_arm: false,
@@ -435,7 +433,7 @@ fn arm(q: [f64; 6]) -> deflex_program::ArmConfiguration {
 #[test]
 fn long_paths_are_split_into_parts_that_read_back_in_order() {
     let settings = ProgramSettings {
-        program: deflex_program::settings::CommonSettings {
+        program: crate::settings::CommonSettings {
             max_points_per_part: 300,
             ..Default::default()
         },
@@ -511,7 +509,7 @@ fn long_paths_are_split_into_parts_that_read_back_in_order() {
 #[test]
 fn robot_coordinates_write_no_base_and_headers_wrap_at_words() {
     let settings = ProgramSettings {
-        program: deflex_program::settings::CommonSettings {
+        program: crate::settings::CommonSettings {
             coordinates: Coordinates::Robot,
             ..Default::default()
         },
