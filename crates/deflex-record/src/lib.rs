@@ -25,6 +25,9 @@ pub mod synthetic;
 pub mod trace;
 mod write;
 
+#[cfg(test)]
+mod tests;
+
 pub use read::{MAX_RECORD_BYTES, MCAP_MAGIC, RecordingSummary, for_each_cycle, is_mcap};
 pub use recorder::{McapRecorder, RecordReport};
 pub use session::{SESSION_JSON_SCHEMA, SessionRecord};

@@ -1,8 +1,7 @@
-//! deflex-record's tests, through its public API. Here: recording and reading back: values,
-//! schemas, bounds and failures.
+//! Recording and reading back: values, schemas, bounds and failures.
 
-use deflex_record::synthetic::SyntheticCell;
-use deflex_record::*;
+use super::*;
+use crate::synthetic::SyntheticCell;
 use deflex_rosmsg::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
     WrenchStamped,
@@ -10,8 +9,6 @@ use deflex_rosmsg::{
 use deflex_telemetry::CycleSample;
 use std::io::{Cursor, Write};
 use std::path::PathBuf;
-
-mod trace;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("deflex-record-{name}-{}", std::process::id()));
