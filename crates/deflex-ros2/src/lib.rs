@@ -106,10 +106,9 @@ pub(crate) fn lower_priority() {
     let _ = rustix::process::setpriority_process(None, DDS_NICE);
 }
 
-/// A DDS participant on `domain_id` and a node `node` in `namespace` (`/` for none), without
-/// `rosout`. Called from the bridge's and the reader's threads (the bridge's at [`DDS_NICE`]);
-/// a peer of theirs (a test's publisher or subscriber, a tool) joins the same way.
-pub fn join(domain_id: u16, namespace: &str, node: &str) -> Result<Node, Ros2Error> {
+/// A DDS participant on `domain_id` and a node `node` in `namespace` (`/` for none).
+/// Called from the bridge's and the reader's threads (the bridge's after [`lower_priority`]).
+pub(crate) fn join(domain_id: u16, namespace: &str, node: &str) -> Result<Node, Ros2Error> {
     let context =
         Context::with_options(ContextOptions::new().domain_id(domain_id)).map_err(|e| {
             Ros2Error::Participant {
@@ -137,11 +136,13 @@ pub fn topic_name(namespace: &str, topic: &str) -> String {
     }
 }
 
-/// [`Name`] of an absolute topic name (`/deflex/joint_states`, see [`topic_name`]); a name ROS
-/// refuses is [`Ros2Error::Topic`].
-pub fn ros_name(full: &str) -> Result<Name, Ros2Error> {
+/// [`Name`] of an absolute topic name (`/deflex/joint_states`).
+pub(crate) fn ros_name(full: &str) -> Result<Name, Ros2Error> {
     Name::parse(full).map_err(|e| Ros2Error::Topic {
         topic: full.to_string(),
         message: e.to_string(),
     })
 }
+
+#[cfg(test)]
+mod tests;

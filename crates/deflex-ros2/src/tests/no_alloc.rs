@@ -9,10 +9,10 @@
 //! is not a test).
 
 use super::{domain, join, now_ns, publisher, sensor_settings, subscriber, wait_until, wrench};
+use crate::{BridgeReport, BridgeSettings, Ros2Bridge, Ros2SensorLink};
 use deflex_control::{Controller, ControllerConfig};
 use deflex_io::RobotSideLink;
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
-use deflex_ros2::{BridgeReport, BridgeSettings, Ros2Bridge, Ros2SensorLink};
 use deflex_rosmsg::{JointState, WrenchStamped};
 use deflex_runtime::config::{Ros2Qos, Ros2Topic};
 use deflex_runtime::session::{RuntimeOptions, spawn};

@@ -1,12 +1,11 @@
-//! deflex-ros2's tests, through its public API (one test binary; the library has no test build
-//! of its own). The bridge and the sensor link talking to themselves over loopback DDS (RustDDS
-//! on both ends; the independent check of the bytes is the Python cyclonedds test in
-//! tests/python).
+//! The bridge and the sensor link talking to themselves over loopback DDS (RustDDS on both
+//! ends; the independent check of the bytes is the Python cyclonedds test in tests/python).
 //! Deterministic: every wait for discovery is bounded, and the counted messages are sent only
 //! once a first one got through, at reliable QoS with a history deeper than the batch.
 
+use super::*;
+use crate::sensor::Refusal;
 use deflex_io::ForceSensorLink;
-use deflex_ros2::*;
 use deflex_rosmsg::cycle::STATUS_NAME;
 use deflex_rosmsg::{DiagnosticArray, Header, JointState, Vector3, Wrench, WrenchStamped};
 use deflex_runtime::config::{Ros2Qos, Ros2Topic};
@@ -15,7 +14,6 @@ use ros2_client::{Node, Publisher, Subscription};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-mod handover;
 mod no_alloc;
 
 /// A DDS domain of this test process alone (other processes on the machine may use DDS):
