@@ -98,6 +98,17 @@ pub fn text(diagonal: &Robot, fit: &CouplingFit) -> String {
     let mut out = String::from("\nJoint-compliance couplings (written into the output model), ");
     out.push_str(&coupling_summary(fit));
     out.push_str(&render_table(&COUPLING_HEADERS, &coupling_rows(fit)));
+    for (k, c) in fit.robot.couplings.iter().enumerate() {
+        let (lo, hi) = fit.interval95(k);
+        if lo <= 0.0 && hi >= 0.0 {
+            out.push_str(&format!(
+                "note: {}'s 95 % interval contains zero: these readings do not resolve this \
+                 coupling (it is written as fitted; leave it out, or plan load cases that \
+                 load both joints)\n",
+                c.label()
+            ));
+        }
+    }
     out.push_str("The output model's stiffnesses, refitted with the couplings:\n");
     out.push_str(&render_table(&REFIT_HEADERS, &refit_rows(diagonal, fit)));
     out

@@ -697,6 +697,27 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
         let written = deflex_load::load_robot(s(&out)).unwrap();
         assert_eq!(written.couplings.len(), 1);
         assert!((written.couplings[0].compliance / found - 1.0).abs() < 1e-9);
+        // The text output says when the interval holds zero (the ρ = 0 plants), and only then.
+        let text_out = dir.join(format!("calibrated_text_{tag}.toml"));
+        let run = deflex(&[
+            "calibrate",
+            "--robot",
+            s(&robot),
+            "--data",
+            s(&meas),
+            "--couplings",
+            "J2.z:J3.z",
+            "--out",
+            s(&text_out),
+        ]);
+        assert_eq!(run.code, Some(0), "{}", run.stderr);
+        assert_eq!(
+            run.stdout
+                .contains("J2.z–J3.z's 95 % interval contains zero"),
+            lo <= 0.0 && hi >= 0.0,
+            "{name}: {}",
+            run.stdout
+        );
         // A pair that is not in the identified structure: named, with the structure.
         let refused = dir.join(format!("refused_{tag}.toml"));
         let run = deflex(&[
