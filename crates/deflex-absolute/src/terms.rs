@@ -152,6 +152,12 @@ pub enum TermsError {
         /// Robot joints.
         joints: usize,
     },
+    /// A joint given a second map.
+    #[error("joint_maps.maps.joint: joint {joint} has two maps (each joint at most one)")]
+    DuplicateMap {
+        /// The joint (1-based).
+        joint: usize,
+    },
     /// A torsion term on an eDoF the robot does not have.
     #[error("torsion.edof: `{label}` is not an eDoF of the robot (its eDoFs: {known})")]
     Edof {
@@ -438,12 +444,15 @@ fn joint_maps(
     let mut maps = Vec::with_capacity(record.maps.len());
     let mut spacing = f64::NAN;
     for m in &record.maps {
-        if m.joint == 0 || m.joint > joints || mask & (1 << (m.joint - 1)) != 0 {
+        if m.joint == 0 || m.joint > joints {
             return Err(TermsError::Joint {
-                what: "joint_maps.maps.joint (each joint once)",
+                what: "joint_maps.maps.joint",
                 value: m.joint,
                 joints,
             });
+        }
+        if mask & (1 << (m.joint - 1)) != 0 {
+            return Err(TermsError::DuplicateMap { joint: m.joint });
         }
         mask |= 1 << (m.joint - 1);
         finite("joint_maps.maps.start_rad", m.start_rad, 100.0)?;

@@ -288,7 +288,8 @@ fn a_terms_file_carries_the_maps_and_bad_ones_are_refused() {
     };
     let first = |t: &mut CalibrationTerms| t.joint_maps.as_mut().unwrap().maps[0].clone();
     assert!(
-        bad(&|t| t.joint_maps.as_mut().unwrap().maps[0].joint = 7).contains("joint_maps"),
+        bad(&|t| t.joint_maps.as_mut().unwrap().maps[0].joint = 7)
+            .contains("joint_maps.maps.joint: 7 is outside 1…"),
         "joint out of range"
     );
     assert!(
@@ -296,7 +297,7 @@ fn a_terms_file_carries_the_maps_and_bad_ones_are_refused() {
             let m = first(t);
             t.joint_maps.as_mut().unwrap().maps.push(m)
         })
-        .contains("each joint once")
+        .contains("has two maps")
     );
     assert!(
         bad(&|t| t.joint_maps.as_mut().unwrap().maps[0].coefficients_rad[3] = f64::NAN)
