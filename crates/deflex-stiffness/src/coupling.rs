@@ -16,7 +16,7 @@
 //! eDoF compliance stays positive and every coupling keeps the joint compliance positive
 //! definite (`|c_ab| < √(c_a c_b)`).
 //!
-//! **Uncertainty**, as the calibration's ([`crate::uncertainty`]): the covariance
+//! **Uncertainty**, as the calibration's (module `uncertainty`): the covariance
 //! `s² (XᵀX)⁻¹` of the weighted design, `s² = χ²/(n − p)` the fit's reduced chi-square, so that
 //! a model the data do not fit widens the intervals; each coupling's correlation
 //! `ρ = c_ab/√(c_a c_b)` gets its standard error by the delta method (its gradient in `c_ab`,
