@@ -285,14 +285,7 @@ pub fn train_into(
     setups.sort_unstable();
     setups.dedup();
     let unknowns = map_unknowns + 6 * setups.len();
-    let setup_params: Vec<Param> = setups
-        .iter()
-        .flat_map(|&s| {
-            (0..3)
-                .map(move |k| Param::SetupRotation(s, k))
-                .chain((0..3).map(move |k| Param::SetupTranslation(s, k)))
-        })
-        .collect();
+    let setup_params: Vec<Param> = setups.iter().flat_map(|&s| Param::setup_pose(s)).collect();
 
     // Residual scatter per kind (whitening).
     let mut residuals = Vec::with_capacity(readings.len());

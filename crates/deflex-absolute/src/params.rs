@@ -82,6 +82,21 @@ pub enum Param {
     },
 }
 
+impl Param {
+    /// Set-up `s`'s six registration parameters: its rotations about x, y, z, then its
+    /// translations along them.
+    pub fn setup_pose(s: usize) -> [Param; 6] {
+        [
+            Param::SetupRotation(s, 0),
+            Param::SetupRotation(s, 1),
+            Param::SetupRotation(s, 2),
+            Param::SetupTranslation(s, 0),
+            Param::SetupTranslation(s, 1),
+            Param::SetupTranslation(s, 2),
+        ]
+    }
+}
+
 /// Torque scale of the cubic torsion term (N·m): `g(τ) = τ³ / τ_ref²`, so that its coefficient
 /// is the extra compliance at 100 N·m.
 pub const CUBIC_TORQUE_SCALE_NM: f64 = 100.0;
@@ -542,15 +557,7 @@ impl EgModel {
     /// Registration parameters of every set-up and target (target rotations too when
     /// `orientations`: they are seen only by measured orientations).
     pub fn registration_params(&self, orientations: bool) -> Vec<Param> {
-        let mut out = Vec::new();
-        for s in 0..self.setups.len() {
-            for k in 0..3 {
-                out.push(Param::SetupRotation(s, k));
-            }
-            for k in 0..3 {
-                out.push(Param::SetupTranslation(s, k));
-            }
-        }
+        let mut out: Vec<Param> = (0..self.setups.len()).flat_map(Param::setup_pose).collect();
         for t in 0..self.targets.len() {
             for k in 0..3 {
                 out.push(Param::Target(t, k));

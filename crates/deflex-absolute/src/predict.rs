@@ -146,14 +146,7 @@ fn register_all(model: &mut EgModel, campaign: &Campaign) {
         .filter(|&s| model.setups[s].pose == deflex_model::Pose::identity())
         .collect();
     crate::register::start::initialise(model, campaign, &fresh, &[], &all, 1);
-    let params: Vec<Param> = setups
-        .iter()
-        .flat_map(|&s| {
-            (0..3)
-                .map(move |k| Param::SetupRotation(s, k))
-                .chain((0..3).map(move |k| Param::SetupTranslation(s, k)))
-        })
-        .collect();
+    let params: Vec<Param> = setups.iter().flat_map(|&s| Param::setup_pose(s)).collect();
     let options = SolveOptions {
         loss: Loss::HUBER_DEFAULT,
         ..SolveOptions::default()

@@ -201,10 +201,7 @@ pub enum RegisterError {
 /// The registration parameters of `options`, in priority order.
 pub fn registration_params(campaign: &Campaign, options: &RegisterOptions) -> Vec<Param> {
     let s = options.setup;
-    let mut params: Vec<Param> = (0..3)
-        .map(|k| Param::SetupRotation(s, k))
-        .chain((0..3).map(|k| Param::SetupTranslation(s, k)))
-        .collect();
+    let mut params: Vec<Param> = Param::setup_pose(s).to_vec();
     if let Some(t) = options.target {
         params.extend((0..3).map(|k| Param::Target(t, k)));
         if !campaign.orientation_rows.is_empty() {
