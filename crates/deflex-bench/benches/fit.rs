@@ -45,25 +45,17 @@ fn campaign() -> (EgModel, Campaign) {
                 rng.gen_range(-3.0..3.0),
             ];
             let p = truth.predict_tracker(&q, 0, 0, &Conditions::default());
-            AbsoluteRow {
-                line: i as u64 + 2,
-                setup: "A".into(),
-                target: "probe".into(),
-                config: None,
-                q_rad: q,
-                position_m: [
+            AbsoluteRow::position(
+                i as u64 + 2,
+                "A",
+                "probe",
+                q,
+                [
                     p.x + noise.sample(&mut rng),
                     p.y + noise.sample(&mut rng),
                     p.z + noise.sample(&mut rng),
                 ],
-                sigma_m: None,
-                orientation: None,
-                payload: None,
-                wrench: None,
-                temperature_c: None,
-                time_s: None,
-                approach_rad: None,
-            }
+            )
         })
         .collect();
     let mut model = nominal;

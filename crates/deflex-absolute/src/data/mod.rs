@@ -176,6 +176,32 @@ pub struct AbsoluteRow {
 }
 
 impl AbsoluteRow {
+    /// A reading of position alone (no stated σ, orientation, payload, wrench, temperature, time
+    /// or approach motion): set other fields with struct-update syntax.
+    pub fn position(
+        line: u64,
+        setup: &str,
+        target: &str,
+        q_rad: Vec<f64>,
+        position_m: [f64; 3],
+    ) -> AbsoluteRow {
+        AbsoluteRow {
+            line,
+            setup: setup.into(),
+            target: target.into(),
+            config: None,
+            q_rad,
+            position_m,
+            sigma_m: None,
+            orientation: None,
+            payload: None,
+            wrench: None,
+            temperature_c: None,
+            time_s: None,
+            approach_rad: None,
+        }
+    }
+
     /// The standard deviation used for weighting (m).
     pub fn sigma(&self) -> f64 {
         self.sigma_m.unwrap_or(DEFAULT_ABSOLUTE_SIGMA_M)

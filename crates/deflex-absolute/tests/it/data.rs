@@ -23,21 +23,7 @@ fn sample() -> Vec<AbsoluteRow> {
             time_s: Some(1.5e9),
             approach_rad: Some(vec![0.0, 0.5, -0.25, 0.0, 1e-3, -2.0]),
         },
-        AbsoluteRow {
-            line: 0,
-            setup: "B".into(),
-            target: "tmac".into(),
-            config: None,
-            q_rad: vec![0.0; 6],
-            position_m: [1.0, 2.0, 3.0],
-            sigma_m: None,
-            orientation: None,
-            payload: None,
-            wrench: None,
-            temperature_c: None,
-            time_s: None,
-            approach_rad: None,
-        },
+        AbsoluteRow::position(0, "B", "tmac", vec![0.0; 6], [1.0, 2.0, 3.0]),
     ]
 }
 

@@ -91,22 +91,18 @@ fn readings(
                 rotation * p + translation + Vector3::from_fn(|_, _| noise.sample(&mut rng));
             let v = rotation_log(&measured_rotation);
             AbsoluteRow {
-                line: i as u64 + 2,
-                setup: "moved".into(),
-                target: target.into(),
-                config: None,
-                q_rad: q.to_vec(),
-                position_m: [measured.x, measured.y, measured.z],
                 sigma_m: Some(POSITION_NOISE_M),
                 orientation: Some(RowOrientation {
                     rotation_vector_rad: [v.x, v.y, v.z],
                     sigma_rad: Some(ANGLE_NOISE_RAD),
                 }),
-                payload: None,
-                wrench: None,
-                temperature_c: None,
-                time_s: None,
-                approach_rad: None,
+                ..AbsoluteRow::position(
+                    i as u64 + 2,
+                    "moved",
+                    target,
+                    q.to_vec(),
+                    [measured.x, measured.y, measured.z],
+                )
             }
         })
         .collect()

@@ -221,19 +221,15 @@ fn simulate(truth: &Truth, seed: u64) -> Simulated {
             let measured = r * p + t + Vector3::from_fn(|_, _| tracker_noise.sample(&mut rng));
             config += 1;
             absolute.push(AbsoluteRow {
-                line: config,
-                setup: ["near", "far"][s].into(),
-                target: "probe".into(),
                 config: Some(format!("c{config}")),
-                q_rad: q.to_vec(),
-                position_m: [measured.x, measured.y, measured.z],
                 sigma_m: Some(20e-6),
-                orientation: None,
-                payload: None,
-                wrench: None,
-                temperature_c: None,
-                time_s: None,
-                approach_rad: None,
+                ..AbsoluteRow::position(
+                    config,
+                    ["near", "far"][s],
+                    "probe",
+                    q.to_vec(),
+                    [measured.x, measured.y, measured.z],
+                )
             });
         }
     }

@@ -67,19 +67,14 @@ fn readings(truth: &Truth, curves: [Curve; 2], seed: u64) -> Vec<AbsoluteRow> {
                 + translation
                 + Vector3::from_fn(|_, _| noise.sample(&mut rng));
             rows.push(AbsoluteRow {
-                line: rows.len() as u64 + 2,
-                setup: ["near", "far"][s].into(),
-                target: "probe".into(),
-                config: None,
-                q_rad: q.to_vec(),
-                position_m: [measured.x, measured.y, measured.z],
                 sigma_m: Some(NOISE_M),
-                orientation: None,
-                payload: None,
-                wrench: None,
-                temperature_c: None,
-                time_s: None,
-                approach_rad: None,
+                ..AbsoluteRow::position(
+                    rows.len() as u64 + 2,
+                    ["near", "far"][s],
+                    "probe",
+                    q.to_vec(),
+                    [measured.x, measured.y, measured.z],
+                )
             });
         }
     }
