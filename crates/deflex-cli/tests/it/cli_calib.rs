@@ -651,18 +651,25 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
             let run = deflex(&args);
             assert_eq!(run.code, Some(0), "{args:?}: {}", run.stderr);
         }
-        let run = deflex(&[
-            "--json",
-            "calibrate",
-            "--robot",
-            s(&robot),
-            "--data",
-            s(&meas),
-            "--couplings",
-            "J2.z:J3.z",
-            "--out",
-            s(&out),
-        ]);
+        // `deflex [--json] calibrate … --couplings PAIRS --out OUT` on this campaign.
+        let calibrate = |json: bool, pairs: &str, out: &Path| {
+            let mut args = vec![
+                "calibrate",
+                "--robot",
+                s(&robot),
+                "--data",
+                s(&meas),
+                "--couplings",
+                pairs,
+                "--out",
+                s(out),
+            ];
+            if json {
+                args.insert(0, "--json");
+            }
+            deflex(&args)
+        };
+        let run = calibrate(true, "J2.z:J3.z", &out);
         assert_eq!(run.code, Some(0), "{}", run.stderr);
         let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
         let coupling = &v["couplings"][0];
@@ -699,17 +706,7 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
         assert!((written.couplings[0].compliance / found - 1.0).abs() < 1e-9);
         // The text output says when the interval holds zero (the ρ = 0 plants), and only then.
         let text_out = dir.join(format!("calibrated_text_{tag}.toml"));
-        let run = deflex(&[
-            "calibrate",
-            "--robot",
-            s(&robot),
-            "--data",
-            s(&meas),
-            "--couplings",
-            "J2.z:J3.z",
-            "--out",
-            s(&text_out),
-        ]);
+        let run = calibrate(false, "J2.z:J3.z", &text_out);
         assert_eq!(run.code, Some(0), "{}", run.stderr);
         assert_eq!(
             run.stdout
@@ -720,17 +717,7 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
         );
         // A pair that is not in the identified structure: named, with the structure.
         let refused = dir.join(format!("refused_{tag}.toml"));
-        let run = deflex(&[
-            "calibrate",
-            "--robot",
-            s(&robot),
-            "--data",
-            s(&meas),
-            "--couplings",
-            "J2.z:J6.y",
-            "--out",
-            s(&refused),
-        ]);
+        let run = calibrate(false, "J2.z:J6.y", &refused);
         assert_eq!(run.code, Some(1), "{}", run.stderr);
         let structure = v["structure"].as_str().unwrap();
         assert!(
