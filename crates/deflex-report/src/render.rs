@@ -69,11 +69,17 @@ macro_rules! render {
         ::deflex_files::write_through(
             path,
             |temporary| match format {
-                $crate::render::ImageFormat::Png => $crate::render::render!(
-                    @draw ::plotters::prelude::BitMapBackend::new(temporary, size),
-                    fail,
-                    |$root| $body
-                ),
+                $crate::render::ImageFormat::Png => {
+                    // Drawn into memory (RGB, 3 bytes a pixel; `check_size` bounds it) and
+                    // encoded by `png`: plotters' own PNG saving would pull in the `image` crate.
+                    let mut rgb = ::std::vec![0u8; $crate::render::rgb_len(size)];
+                    $crate::render::render!(
+                        @draw ::plotters::prelude::BitMapBackend::with_buffer(&mut rgb, size),
+                        fail,
+                        |$root| $body
+                    )?;
+                    $crate::render::write_png(temporary, &rgb, size).map_err(fail)
+                }
                 $crate::render::ImageFormat::Svg => $crate::render::render!(
                     @draw ::plotters::prelude::SVGBackend::new(temporary, size),
                     fail,
@@ -97,6 +103,29 @@ pub(crate) struct BackendError(pub(crate) String);
 /// Converts any displayable error of the backend into a [`BackendError`].
 pub(crate) fn err<E: std::fmt::Display>(e: E) -> BackendError {
     BackendError(e.to_string())
+}
+
+/// Bytes of an RGB buffer of `size` pixels (3 a pixel).
+pub(crate) fn rgb_len((w, h): (u32, u32)) -> usize {
+    w as usize * h as usize * 3
+}
+
+/// Encodes `rgb`, `size` pixels of 8-bit RGB row by row, as a PNG file at `path`, with the
+/// settings plotters' bitmap encoder (the `image` crate's) used: fast compression, adaptive
+/// filtering. A failure is the encoder's or the file system's message.
+pub(crate) fn write_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let mut out = std::io::BufWriter::new(file);
+    let mut encoder = png::Encoder::new(&mut out, w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::FilterType::Sub);
+    encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(rgb).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    std::io::Write::flush(&mut out).map_err(|e| e.to_string())
 }
 
 /// Rejects degenerate or absurd image sizes.
