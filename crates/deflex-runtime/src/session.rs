@@ -57,7 +57,8 @@ use std::thread::JoinHandle;
 const _: () = assert!(deflex_io::MAX_JOINTS == MAX_JOINTS);
 
 /// Longest time the robot-link thread keeps answering after the control thread ended, to ramp
-/// what it last sent to zero (s).
+/// what it last sent to zero (s). It stops at once when the robot has been silent for longer
+/// than the idle exit ([`RuntimeOptions::idle_exit_s`]): its program has ended, nobody listens.
 pub const DRAIN_S: f64 = 0.8;
 
 /// Options of the runtime.

@@ -150,9 +150,15 @@ pub(super) fn robot_loop<C: Clock>(
     loop {
         if shared.done.load(Ordering::Acquire) {
             // The control thread has ended: keep answering until what was sent is zero
-            // (bounded), ramping it out in robot cycles if the control thread failed.
+            // (bounded), ramping it out in robot cycles if the control thread failed; unless
+            // the robot has been silent past the idle exit (its program ended: nobody would
+            // hear the drain).
             let since = *ended_at.get_or_insert_with(Instant::now);
-            if answering.shaper.is_zero() || since.elapsed().as_secs_f64() > DRAIN_S {
+            let last_telegram_s = f64::from_bits(shared.last_telegram_s.load(Ordering::Acquire));
+            let robot_gone = options
+                .idle_exit_s
+                .is_some_and(|idle_s| clock.now() - last_telegram_s > idle_s);
+            if answering.shaper.is_zero() || robot_gone || since.elapsed().as_secs_f64() > DRAIN_S {
                 break;
             }
         }

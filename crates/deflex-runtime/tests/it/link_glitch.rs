@@ -472,30 +472,25 @@ fn check_ramp_out(kind: Kind, pause_ms: u64, s: &Session) {
 
 #[test]
 fn kuka_rsi_pauses() {
-    let _turn = crate::realtime_turn();
     check(Kind::Rsi);
 }
 
 #[test]
 fn abb_egm_pauses() {
-    let _turn = crate::realtime_turn();
     check(Kind::Egm);
 }
 
 #[test]
 fn staubli_pauses() {
-    let _turn = crate::realtime_turn();
     check(Kind::Staubli);
 }
 
 #[test]
 fn simple_udp_pauses() {
-    let _turn = crate::realtime_turn();
     check(Kind::SimpleUdp);
 }
 
 #[test]
 fn simple_tcp_pauses() {
-    let _turn = crate::realtime_turn();
     check(Kind::SimpleTcp);
 }

@@ -29,7 +29,6 @@ fn every_robot_kind_binds_on_loopback() {
 /// its joints, and the answer arrives back (the simple TCP robot connects first).
 #[test]
 fn both_sides_of_every_protocol_meet() {
-    let _turn = crate::realtime_turn();
     let q = [0.1, -0.2, 0.3, -0.4, 0.5, -0.6];
     for kind in KINDS {
         let port = if kind == "simple-tcp" {

@@ -165,7 +165,6 @@ fn check_bounded(corrections: &[[f64; 6]]) {
 
 #[test]
 fn sensor_goes_silent() {
-    let _turn = crate::realtime_turn();
     let o = run(Script::SensorGoesSilent);
     let s = &o.summary;
     assert_eq!(s.error, None);
@@ -202,7 +201,6 @@ fn sensor_goes_silent() {
 /// `robot_link_lost` fault), and the correction it last heard was bounded.
 #[test]
 fn robot_program_end_is_an_end_not_a_fault() {
-    let _turn = crate::realtime_turn();
     let o = run(Script::RobotEnds { robot_s: 0.6 });
     let s = &o.summary;
     assert_eq!(s.error, None);

@@ -4,6 +4,11 @@
 //! telemetry stream, the feed-forward table read from `compensated_path.csv`, and the
 //! `CELL.toml` fuzz target.
 
+// The real-time sessions against loopback peers sleep most of every cycle: the harness runs two
+// of them at once (its two threads on a 2-core machine) without either missing the links'
+// timeouts, and every check of a session holds whatever the scheduling (a late answer is
+// counted, a fault during a warm-up repeats the session).
+//
 // Counts only the calling thread's allocations (see `deflex-alloc-count`), so the
 // no-allocation tests are undisturbed by the other tests of this binary running in parallel.
 #[global_allocator]
@@ -18,11 +23,3 @@ mod loopback;
 mod no_alloc;
 mod session;
 mod telemetry;
-
-/// Tests that run the real-time threads against loopback peers take turns: on a busy 2-core
-/// machine two such sessions at once would starve each other's millisecond deadlines (a test
-/// binary runs its tests on parallel threads).
-pub fn realtime_turn() -> std::sync::MutexGuard<'static, ()> {
-    static TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    TURN.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}

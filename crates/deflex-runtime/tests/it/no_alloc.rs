@@ -38,7 +38,6 @@ impl Clock for CountingClock {
 
 #[test]
 fn control_thread_cycle_and_publish_allocate_nothing() {
-    let _turn = crate::realtime_turn();
     let mut config = common::config();
     config.wrench.lowpass_hz = Some(30.0);
     config.safety.sensor_timeout_s = 0.2;

@@ -151,7 +151,6 @@ fn wait(runtime: &Runtime, limit: Duration) -> Duration {
 /// ramping the correction out), the summary carries the panic as an error.
 #[test]
 fn panicking_control_thread_ends_the_session_with_an_error() {
-    let _turn = crate::realtime_turn();
     let config = common::config();
     let q = common::q0();
     let raw = common::raw_reading(&config, &q, [0.0, 0.0, 900.0, 0.0, 0.0, 0.0]);
@@ -219,7 +218,6 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
 /// whose joints lie outside the model's limits.
 #[test]
 fn model_that_does_not_fit_the_robot_is_refused() {
-    let _turn = crate::realtime_turn();
     let config = common::config();
     let q = common::q0();
     let raw = common::raw_reading(&config, &q, [0.0; 6]);
@@ -333,7 +331,6 @@ fn egm_pos(b: &[u8]) -> [f64; 3] {
 /// whose z points down, is +z: the bytes the robot receives say so.
 #[test]
 fn egm_tool_down_correction_has_the_right_sign_on_the_wire() {
-    let _turn = crate::realtime_turn();
     let config = common::config();
     let q = common::q0();
     let robot = common::robot();
@@ -408,7 +405,6 @@ fn egm_tool_down_correction_has_the_right_sign_on_the_wire() {
 /// state (the same controller run in-process to convergence).
 #[test]
 fn rsi_joint_answers_move_the_tcp_by_the_correction() {
-    let _turn = crate::realtime_turn();
     let config = common::config();
     let q = common::q0();
     let raw = common::raw_reading(&config, &q, [150.0, -80.0, 900.0, 0.0, 0.0, 0.0]);

@@ -96,7 +96,6 @@ fn session(capacity: usize) -> Sinks {
 
 #[test]
 fn the_log_is_written_from_the_stream_and_sinks_join_any_time() {
-    let _turn = crate::realtime_turn();
     // A ring larger than the whole session: no sink loses anything.
     let mut s = session(4096);
     assert_eq!(s.summary.error, None);
@@ -144,7 +143,6 @@ fn the_log_is_written_from_the_stream_and_sinks_join_any_time() {
 
 #[test]
 fn a_sink_that_falls_behind_loses_the_oldest_counted_without_slowing_the_session() {
-    let _turn = crate::realtime_turn();
     let mut s = session(16);
     assert_eq!(s.summary.error, None);
     let cycles = s.summary.cycles;

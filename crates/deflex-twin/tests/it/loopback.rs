@@ -227,7 +227,7 @@ fn check_loopback(kind: &str, l: &Loopback, min_telegrams: u64) {
 /// against 0.033 mm), so both comparisons below have room; a longer path adds wall time only.
 #[test]
 fn loopback_cell_and_run_agree_with_in_process() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let l = loopback("kuka-rsi", 40.0, 3);
     check_loopback("kuka-rsi", &l, 500);
     // `cell` and `run` count late answers the same way: the simulated KUKA sends its count
@@ -247,13 +247,30 @@ fn loopback_cell_and_run_agree_with_in_process() {
 /// each: shorter paths end before the largest error of the process (0.0055 mm in-process at
 /// 20 mm, 0.0104 mm at 30 mm), and then a few late answers on a loaded machine (under the
 /// 10 % that stops the comparison) outweigh it.
+fn loopback_other_protocol(kind: &str) {
+    let _turn = crate::session_turn();
+    let l = loopback(kind, 30.0, 4);
+    check_loopback(kind, &l, 300);
+}
+
 #[test]
-fn loopback_every_other_robot_protocol() {
-    let _turn = crate::realtime_turn();
-    for kind in ["abb-egm", "staubli", "simple-udp", "simple-tcp"] {
-        let l = loopback(kind, 30.0, 4);
-        check_loopback(kind, &l, 300);
-    }
+fn loopback_abb_egm() {
+    loopback_other_protocol("abb-egm");
+}
+
+#[test]
+fn loopback_staubli() {
+    loopback_other_protocol("staubli");
+}
+
+#[test]
+fn loopback_simple_udp() {
+    loopback_other_protocol("simple-udp");
+}
+
+#[test]
+fn loopback_simple_tcp() {
+    loopback_other_protocol("simple-tcp");
 }
 
 /// The twin plays the UR10e cell (500 Hz, its part position and force level) over the simple
@@ -261,7 +278,7 @@ fn loopback_every_other_robot_protocol() {
 /// the cell names the robot it played. 30 mm, as the other protocols.
 #[test]
 fn loopback_ur10e_cell_over_simple_tcp() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let twin = CellConfig::for_robot("ur10e").unwrap();
     let model = twin.nominal_robot().unwrap();
     let l = loopback_for(Some("ur10e"), model, "simple-tcp", 30.0, 5);

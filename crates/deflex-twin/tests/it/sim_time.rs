@@ -11,7 +11,7 @@ use std::time::Instant;
 /// sensor streams on). The wall time is printed, not asserted: timing belongs in benches.
 #[test]
 fn runtime_threads_in_simulated_time_agree_with_in_process() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::cores_alone();
     let cell = CellConfig::default();
     let model = common::calibrated_model();
     let path = ToolPath::paper_cone().truncated(400.0);
