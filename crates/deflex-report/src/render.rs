@@ -78,7 +78,7 @@ macro_rules! render {
                         fail,
                         |$root| $body
                     )?;
-                    $crate::render::write_png(temporary, &rgb, size).map_err(fail)
+                    $crate::render::write_png(temporary, &rgb, size).map_err(|e| fail(e.0))
                 }
                 $crate::render::ImageFormat::Svg => $crate::render::render!(
                     @draw ::plotters::prelude::SVGBackend::new(temporary, size),
@@ -112,9 +112,9 @@ pub(crate) fn rgb_len((w, h): (u32, u32)) -> usize {
 
 /// Encodes `rgb`, `size` pixels of 8-bit RGB row by row, as a PNG file at `path`, with the
 /// settings plotters' bitmap encoder (the `image` crate's) used: fast compression, adaptive
-/// filtering. A failure is the encoder's or the file system's message.
-pub(crate) fn write_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), String> {
-    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+/// filtering. A failure carries the encoder's or the file system's message.
+pub(crate) fn write_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), BackendError> {
+    let file = std::fs::File::create(path).map_err(err)?;
     let mut out = std::io::BufWriter::new(file);
     let mut encoder = png::Encoder::new(&mut out, w, h);
     encoder.set_color(png::ColorType::Rgb);
@@ -122,10 +122,10 @@ pub(crate) fn write_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(
     encoder.set_compression(png::Compression::Fast);
     encoder.set_filter(png::FilterType::Sub);
     encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(rgb).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
-    std::io::Write::flush(&mut out).map_err(|e| e.to_string())
+    let mut writer = encoder.write_header().map_err(err)?;
+    writer.write_image_data(rgb).map_err(err)?;
+    writer.finish().map_err(err)?;
+    std::io::Write::flush(&mut out).map_err(err)
 }
 
 /// Rejects degenerate or absurd image sizes.
