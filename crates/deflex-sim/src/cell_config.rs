@@ -581,6 +581,3 @@ fn merge(base: &mut toml::Table, overlay: toml::Table) {
 }
 
 mod ranges;
-
-#[cfg(test)]
-mod tests;

@@ -220,6 +220,18 @@ impl Plant {
         self.bent.flange
     }
 
+    /// The plant's true spring chain (geometry errors included when the plant was built with
+    /// them): the kinematics its equilibria are solved on.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// Spring rotations (rad) of the last equilibrium, one per spring of [`Plant::chain`] in
+    /// chain order (the springs of [`PlantConfig::springs`]); zeros before the first load.
+    pub fn spring_rotations(&self) -> &[f64] {
+        &self.theta[..self.springs.count]
+    }
+
     /// Fixed-point iterations of the last equilibrium (diagnostics).
     pub fn last_iterations(&self) -> usize {
         self.last_iterations
@@ -469,6 +481,3 @@ pub fn apply_displacement(pose: &Pose, d: &Displacement) -> Pose {
     let rotation = Rotation3::new(dphi) * pose.rotation;
     Pose::from_parts((pose.translation.vector + dp).into(), rotation)
 }
-
-#[cfg(test)]
-mod tests;

@@ -609,6 +609,3 @@ impl Sheet {
             .collect()
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -535,6 +535,3 @@ pub fn spiral(
     }
     Ok(rows)
 }
-
-#[cfg(test)]
-mod tests;

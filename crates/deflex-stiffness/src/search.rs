@@ -440,33 +440,3 @@ fn robot_scale(robot: &Robot) -> f64 {
     max = max.max((data.tcp_position() - o).norm());
     (0.5 * max).max(0.25)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::design::all_edofs;
-    use crate::synthetic::{SyntheticOptions, measure, random_campaign};
-
-    /// Removing the last x/y eDoF of a joint also clears its (now meaningless) centre shift, so
-    /// no stray δr reaches the written model.
-    #[test]
-    fn removing_the_last_xy_edof_of_a_joint_clears_its_shift() {
-        let truth = deflex_model::builtin("tx200").unwrap();
-        let plan = random_campaign(&truth, 20, (600.0, 1400.0), 3);
-        let rows = measure(&truth, &plan, &SyntheticOptions::default()).unwrap();
-        let design = Design::build(&truth, &rows, &all_edofs(6), true).unwrap();
-        let mut current = Structure::from_robot(&truth);
-        current.free_shift[2] = true;
-        current.shifts_m[2] = 0.37;
-        let (after, _) = evaluate(
-            &design,
-            &current,
-            &Change::Remove((EdofSite::Joint(3), Axis::X)),
-            1.0,
-        )
-        .expect("the reduced structure is valid");
-        assert!(!after.edofs.contains(&(EdofSite::Joint(3), Axis::X)));
-        assert_eq!(after.shifts_m[2], 0.0);
-        assert!(!after.free_shift[2]);
-    }
-}

@@ -190,7 +190,10 @@ impl PlantConfig {
         Ok(robot)
     }
 
-    pub(super) fn springs(&self) -> Vec<(SpringSpec, f64)> {
+    /// The springs of the plant's chain ([`crate::chain::Chain::new`]'s `springs`), in chain
+    /// order (base x, y, z, then joints 1..6, each x, y, z), each with its stiffness (N·m/rad):
+    /// one for every non-zero stiffness of this configuration.
+    pub fn springs(&self) -> Vec<(SpringSpec, f64)> {
         let mut out = Vec::with_capacity(MAX_SPRINGS);
         for (axis, k) in self.base_stiffness.iter().enumerate() {
             if *k > 0.0 {

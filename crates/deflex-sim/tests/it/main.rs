@@ -1,8 +1,19 @@
 //! Integration tests of `deflex-sim`: one test binary (modules below), so a fresh clone links one
 //! executable for this crate instead of one per file.
 
+mod cell_config;
 mod cells;
+mod chain;
+mod controller_emulation;
+mod fixture;
 mod forming;
 mod fuzz;
+mod gcode;
+mod plant;
 mod process_model;
+mod sensor;
+mod sheet;
+mod toolpath;
+mod tracker;
+mod twin_campaign;
 mod unseen_plant;

@@ -5,11 +5,20 @@
 //! Aerens level the sheet ends at, the path error — must be the twin's own run, computed by
 //! different code (the cell's per-cycle equilibrium at 250 Hz with the plant's spring chain,
 //! against the adapter's sub-stepped equilibrium with eq. 15).
+//!
+//! The process model on its own (default cell) is checked at the end: the compensation it
+//! drives converges, its equilibrium holds at the force it returns, paths are placed in the
+//! world and named paths resolve.
 
-use deflex_compensate::{ProcessModel, ProcessPoint};
+use deflex_compensate::{
+    CompensationOptions, ProcessModel, ProcessPoint, TcpPath, WrenchSource, compensate,
+};
 use deflex_model::{IkOptions, Robot};
 use deflex_sim::cell_config::CellConfig;
-use deflex_sim::{ErrorSources, FormingProcess, ToolPath, run_forming, tcp_path};
+use deflex_sim::{
+    ErrorSources, FormingProcess, ToolPath, run_forming, tcp_path, tool_path_by_name,
+};
+use nalgebra::{Rotation3, Vector3};
 
 /// The default cell with every error source off and the plant reduced to its linear VJM part;
 /// the model is that linear part, base tilt about the plant's pivot.
@@ -241,7 +250,6 @@ fn a_program_is_measured_against_its_reference() {
 /// (measured).
 #[test]
 fn iterations_do_not_grow_with_the_number_of_points() {
-    use deflex_compensate::{CompensationOptions, WrenchSource, compensate};
     use deflex_sim::ConeParams;
     let config = CellConfig::default();
     let robot = config.nominal_robot().unwrap();
@@ -289,4 +297,126 @@ fn iterations_do_not_grow_with_the_number_of_points() {
         counts.windows(2).all(|w| w[1] <= w[0]),
         "iterations at 0.2, 0.1 and 0.05 mm: {counts:?}"
     );
+}
+
+// The process model on its own (the default cell): the compensation it drives, its
+// equilibrium, the paths it places and names.
+
+fn seed() -> Vec<f64> {
+    CellConfig::default().seed_q_rad().to_vec()
+}
+
+fn setup(length_mm: f64) -> (deflex_model::Robot, ToolPath, TcpPath, CellConfig) {
+    let config = CellConfig::default();
+    let robot = config.nominal_robot().unwrap();
+    let path = ToolPath::paper_cone().truncated(length_mm);
+    let rotation = robot.tcp_pose(&seed()).unwrap().rotation;
+    let tcp = tcp_path(
+        &path,
+        &config.part_frame(),
+        &rotation,
+        config.controller.rapid_feed_mm_s,
+    )
+    .unwrap();
+    (robot, path, tcp, config)
+}
+
+#[test]
+fn the_compensation_converges_on_the_cone_and_pushes_harder() {
+    let (robot, path, tcp, config) = setup(700.0);
+    let mut process = FormingProcess::from_cell(&config, &path).unwrap();
+    let result = compensate(
+        &robot,
+        &tcp,
+        &seed(),
+        WrenchSource::Process(&mut process),
+        &CompensationOptions::default(),
+        &mut |_| {},
+    )
+    .unwrap();
+    assert!(result.simulated);
+    assert!(result.converged, "{:?}", result.iterations);
+    assert_eq!(result.failure_count(), 0);
+    let first = &result.iterations[0];
+    // Uncompensated, the model predicts a path error of the order of the deflection.
+    assert!(first.max_predicted_error_m > 0.3e-3, "{first:?}");
+    assert!(
+        result.final_max_error_m < 2e-6,
+        "{}",
+        result.final_max_error_m
+    );
+    // The compensated tool reaches the programmed depth: the force rises towards the
+    // flow level, above the uncompensated one (a deeper tool pushes harder).
+    assert!(result.final_max_force_n > first.max_force_n, "{result:?}");
+    assert!(result.final_max_force_n <= process.steady_force_n() * 1.5);
+    // The compensation points into the sheet (down) where the tool is pushed up.
+    let deepest = result
+        .points
+        .iter()
+        .map(|p| p.compensation[2])
+        .fold(0.0, f64::min);
+    assert!(deepest < -0.3e-3, "{deepest}");
+}
+
+#[test]
+fn the_equilibrium_holds_at_the_returned_force() {
+    // Uncompensated command (x = 0): the returned force equals the sheet's contact force at
+    // the tool's predicted position p_cmd + (C w)_p, within the root find's tolerance.
+    let (robot, path, tcp, config) = setup(600.0);
+    let mut process = FormingProcess::from_cell(&config, &path).unwrap();
+    let mut data = deflex_model::Data::new();
+    let q = robot
+        .inverse_kinematics(&tcp.points()[0].pose, &seed(), &Default::default())
+        .unwrap()
+        .q;
+    robot.forward_kinematics(&mut data, &q).unwrap();
+    let compliance = robot.compliance_matrix(&data);
+    process.begin_pass();
+    let mut checked = 0;
+    for (i, point) in tcp.points().iter().enumerate() {
+        let w = process
+            .wrench(&ProcessPoint {
+                index: i,
+                arc_length_m: point.arc_length_m,
+                desired: &point.pose,
+                commanded: &point.pose,
+                compliance: &compliance,
+                travel_direction: tcp.travel_direction(i),
+                rapid: point.feed_m_s.is_none(),
+            })
+            .unwrap();
+        if w[2] > 100.0 {
+            let p = point.pose.translation.vector - config.part_frame().translation.vector
+                + (compliance * w).fixed_rows::<3>(0);
+            // After forming, the surface sits at the tool minus the springback: the elastic
+            // force there is the returned force.
+            let c = process.sheet().contact(&p);
+            assert!(
+                (c.force_n - w[2]).abs() < 0.5,
+                "point {i}: {} vs {}",
+                c.force_n,
+                w[2]
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 50, "{checked}");
+}
+
+#[test]
+fn paths_are_placed_in_the_world_and_named_paths_resolve() {
+    let config = CellConfig::default();
+    let rotation = Rotation3::identity();
+    let path = ToolPath::paper_cone();
+    let tcp = tcp_path(&path, &config.part_frame(), &rotation, 50.0).unwrap();
+    assert_eq!(tcp.len(), path.waypoints.len());
+    let first = tcp.points()[0].pose.translation.vector;
+    assert!((first - Vector3::new(1.52, 0.0, -0.183)).norm() < 1e-12);
+    assert!((tcp.length_m() - path.length_mm() * 1e-3).abs() < 1e-9);
+    assert!((tcp.duration_s() - path.duration_s(50.0)).abs() < 1e-6);
+    for name in ["cone", "cone-contour", "pyramid"] {
+        assert!(tool_path_by_name(name).is_ok(), "{name}");
+    }
+    assert!(tool_path_by_name("/nonexistent.gcode").is_err());
+    assert!(FormingProcess::new(&config.sheet, &path, &config.part_frame(), 0.0).is_err());
 }

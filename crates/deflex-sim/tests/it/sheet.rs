@@ -1,5 +1,8 @@
 //! Sheet tests: the Aerens level, the pass memory, plastic flow.
-use super::*;
+
+use deflex_sim::sheet::{Sheet, SheetConfig, aerens_fz, scallop_height_mm};
+use nalgebra::Vector3;
+use std::f64::consts::PI;
 
 #[test]
 fn aerens_numbers() {
@@ -105,7 +108,7 @@ fn the_programmed_profile_of_a_cone_is_the_swept_sphere_envelope() {
     let config = SheetConfig::default();
     let sheet = Sheet::new(&config, 0.24, 45.0).unwrap();
     let r_tool = config.tool_diameter_mm / 2.0 * 1e-3;
-    let path = crate::toolpath::ToolPath::paper_cone();
+    let path = deflex_sim::toolpath::ToolPath::paper_cone();
     // The path's waypoints (mm) as tool centres (m); 5° apart, interpolated by the method.
     let centres: Vec<Vector3<f64>> = path
         .waypoints

@@ -1,5 +1,6 @@
 //! Twin configuration tests: overrides, bounds named by field, nominal vs true mounting.
-use super::*;
+
+use deflex_sim::cell_config::{CellConfig, ErrorSources, TrackerConfig};
 
 #[test]
 fn toml_cell_sections_override_defaults() {

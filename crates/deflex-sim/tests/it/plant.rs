@@ -2,8 +2,10 @@
 //! springs), and against independent oracles (a closed-form lever, the stationarity of the
 //! potential energy) where they must not.
 
-use super::*;
-use deflex_model::{Data, builtin};
+use deflex_model::{Data, Pose, Robot, Wrench, builtin};
+use deflex_sim::chain::ChainState;
+use deflex_sim::plant::{Plant, PlantConfig};
+use nalgebra::Vector3;
 
 fn paper_q() -> [f64; 6] {
     deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians)
@@ -131,14 +133,15 @@ fn the_equilibrium_is_a_stationary_point_of_the_potential_energy() {
     plant.set_configuration(&paper_q());
     let force = Vector3::new(-450.0, 180.0, 1400.0);
     plant.solve_tcp(&Wrench::new(force.x, force.y, force.z, 0.0, 0.0, 0.0));
-    let theta = plant.theta;
-    let n = plant.springs.count;
+    let theta = plant.spring_rotations();
+    let stiffness: Vec<f64> = config.springs().iter().map(|(_, k)| *k).collect();
+    let n = stiffness.len();
+    assert_eq!(theta.len(), n);
+    let q = paper_q();
     let energy = |t: &[f64]| -> f64 {
         let mut state = ChainState::default();
-        plant.chain.evaluate(&plant.q, t, &mut state);
-        let springs: f64 = (0..n)
-            .map(|s| 0.5 * plant.springs.stiffness[s] * t[s] * t[s])
-            .sum();
+        plant.chain().evaluate(&q, t, &mut state);
+        let springs: f64 = (0..n).map(|s| 0.5 * stiffness[s] * t[s] * t[s]).sum();
         springs - force.dot(&state.tcp.translation.vector)
     };
     for s in 0..n {
@@ -148,7 +151,7 @@ fn the_equilibrium_is_a_stationary_point_of_the_potential_energy() {
         plus[s] += h;
         minus[s] -= h;
         let gradient = (energy(&plus) - energy(&minus)) / (2.0 * h);
-        let scale = plant.springs.stiffness[s] * theta[s].abs();
+        let scale = stiffness[s] * theta[s].abs();
         assert!(
             gradient.abs() < 1e-4 * scale + 1e-3,
             "spring {s}: ∂V/∂θ = {gradient} (k θ = {scale})"

@@ -1,5 +1,10 @@
 //! Campaign tests: the paper's grid, measuring the plant, the spiral.
-use super::*;
+
+use deflex_model::{Pose, Wrench};
+use deflex_sim::cell_config::CellConfig;
+use deflex_sim::plant::Plant;
+use deflex_sim::twin_campaign::{GridParams, SpiralParams, run_campaign, spiral, validation_grid};
+use nalgebra::Vector3;
 
 #[test]
 fn grid_has_200_poses_on_the_paper_plane() {
