@@ -586,16 +586,3 @@ fn axis_alignment(joint: &UrdfJoint, path: &str) -> Result<Pose, ModelError> {
         .unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
     Ok(Pose::from_parts(Translation3::identity(), align))
 }
-
-#[cfg(test)]
-mod tests {
-    use super::nesting_depth;
-
-    #[test]
-    fn nesting_depth_skips_comments_quotes_and_self_closing_tags() {
-        assert_eq!(nesting_depth("<a><b/><c x='>'><!-- <d> --></c></a>", 10), 2);
-        assert_eq!(nesting_depth("<?xml version='1.0'?><robot></robot>", 10), 1);
-        let deep = "<a>".repeat(1000);
-        assert!(nesting_depth(&deep, 64) > 64);
-    }
-}

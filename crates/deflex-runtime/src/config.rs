@@ -327,6 +327,3 @@ impl CellFile {
             })
     }
 }
-
-#[cfg(test)]
-mod tests;

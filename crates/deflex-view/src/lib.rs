@@ -401,6 +401,3 @@ fn hello_json(info: &SessionInfo, stop: bool) -> String {
     })
     .to_string()
 }
-
-#[cfg(test)]
-mod tests;

@@ -10,4 +10,5 @@ mod compensate;
 mod log;
 mod logged;
 mod no_alloc;
+mod path;
 mod table;

@@ -167,16 +167,29 @@ impl FeedForwardTable {
         self.t_s[self.t_s.len() - 1]
     }
 
+    /// Time of each point at the programmed feeds (s), non-decreasing.
+    pub fn times_s(&self) -> &[f64] {
+        &self.t_s
+    }
+
+    /// Predicted deflection at each point, in the robot's base axes [m; rad] (the points'
+    /// world-frame deflections rotated by the inverse of the base rotation).
+    pub fn deflections(&self) -> &[[f64; 6]] {
+        &self.deflection
+    }
+
     /// Linear interpolation of a per-point quantity on segment `k` at fraction `u`.
     pub(super) fn lerp6(values: &[[f64; 6]], k: usize, u: f64) -> [f64; 6] {
         let (a, b) = (&values[k], &values[(k + 1).min(values.len() - 1)]);
         std::array::from_fn(|i| a[i] + u * (b[i] - a[i]))
     }
 
-    /// Segment and fraction at time `t_s` (clamped to the path), searched from segment `hint`:
-    /// galloping forward from it when `t_s` lies ahead (the usual case: a lead, or the next
-    /// cycle's time), so the search touches the table near the robot's place, not all of it.
-    pub(super) fn locate_time(&self, t_s: f64, hint: usize) -> (usize, f64) {
+    /// Segment `k` and fraction `u` ∈ [0, 1] at time `t_s` (clamped to the path; a NaN time
+    /// gives `(0, 0.0)`): `t_s` lies between the times of points `k` and `k + 1`, `u` of the way.
+    /// Searched from segment `hint` (any value; beyond the table it is clamped): galloping
+    /// forward from it when `t_s` lies ahead (the usual case: a lead, or the next cycle's time),
+    /// so the search touches the table near the robot's place, not all of it. Allocation-free.
+    pub fn locate_time(&self, t_s: f64, hint: usize) -> (usize, f64) {
         let last = self.t_s.len() - 1;
         let hint = hint.min(last - 1);
         let (lo, hi) = if self.t_s[hint] <= t_s {

@@ -11,6 +11,7 @@ mod fixtures;
 mod fuzz;
 mod no_alloc;
 mod robots;
+mod wrench_transport;
 
 /// One DH `[[joint]]` stating `extra` and, for each of the four required DH keys (`alpha`, `a`,
 /// `d`, `theta_offset`) `extra` does not state, 0.0.

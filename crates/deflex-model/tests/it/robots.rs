@@ -448,6 +448,36 @@ fn urdf_error(xml: &str, toml_extra: &str) -> String {
     .to_string()
 }
 
+/// The URDF reader bounds the element nesting (`MAX_URDF_DEPTH`, 64) before the recursive XML
+/// parser sees the text, counting elements only: the XML declaration, a self-closing tag,
+/// comments, processing instructions and CDATA holding `<…>`, and quoted attribute values
+/// holding `>` or `/>`, add no level. A document exactly 64 deep with all of them loads; one
+/// level more, or 1000, is refused as nested.
+#[test]
+fn nesting_depth_skips_comments_quotes_and_self_closing_tags() {
+    let document = |depth: usize| {
+        // <robot> is level 1; the chain below it fills the rest, its innermost element holding
+        // every construct that is not a level.
+        let chain = depth - 1;
+        format!(
+            "<?xml version='1.0'?><robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\
+             <joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+             <axis xyz=\"0 0 1\"/></joint>{}<c x='>'><e/><!-- <d> --><?pi <f>?>\
+             <![CDATA[<g>]]></c>{}</robot>",
+            "<x a='/>'>".repeat(chain - 1),
+            "</x>".repeat(chain - 1)
+        )
+    };
+    let toml = "name = \"r\"\nurdf = \"r.urdf\"\n[[joint]]\nname = \"j1\"\n";
+    let robot = robot_from_toml_and_urdf_str(toml, &document(64), "r.toml").unwrap();
+    assert_eq!(robot.joint_count(), 1);
+    let e = urdf_error(&document(65), "");
+    assert!(e.contains("nested more than 64 levels"), "{e}");
+    let deep = format!("<robot name=\"r\">{}</robot>", "<a>".repeat(1000));
+    let e = urdf_error(&deep, "");
+    assert!(e.contains("nested more than 64 levels"), "{e}");
+}
+
 #[test]
 fn hostile_urdfs_get_errors_not_hangs() {
     let joint = |name: &str, parent: &str, child: &str, kind: &str| {

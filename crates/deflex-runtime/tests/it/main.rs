@@ -1,8 +1,9 @@
 //! Integration tests of `deflex-runtime`: one test binary (modules below). The threads against
 //! real protocols on loopback (sessions, link glitches, faults), the control thread's whole
 //! per-cycle path without allocation (telemetry publish included), the CSV log written from the
-//! telemetry stream, the feed-forward table read from `compensated_path.csv`, and the
-//! `CELL.toml` fuzz target.
+//! telemetry stream, the feed-forward table read from `compensated_path.csv`, the `CELL.toml`
+//! fuzz target, and the pieces one by one: `CELL.toml` parsing and bounds, the clocks, the send
+//! shaper, the cycle-time statistics and SCHED_FIFO.
 
 // The real-time sessions against loopback peers sleep most of every cycle: the harness runs two
 // of them at once (its two threads on a 2-core machine) without either missing the links'
@@ -14,12 +15,18 @@
 #[global_allocator]
 static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
 
+mod clock;
 mod common;
+mod config;
 mod feedforward_table;
 mod fuzz;
 mod link_glitch;
 mod links;
+mod log;
 mod loopback;
 mod no_alloc;
+mod rt;
+mod send_shaper;
 mod session;
+mod stats;
 mod telemetry;

@@ -2,6 +2,7 @@
 //! below). The in-process closed loop, the runtime's threads in simulated time, and `deflex
 //! cell --sim` with `deflex run` over loopback for every robot protocol.
 
+mod cell_file;
 mod cell_server;
 mod closed_loop;
 mod common;

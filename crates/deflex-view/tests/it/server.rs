@@ -1,6 +1,7 @@
 //! The server over loopback sockets: what a page receives, and every bound and check.
 
 use crate::support::{Publisher, wait_until};
+use deflex_record::synthetic::SyntheticCell;
 use deflex_view::{ViewOptions, frame};
 use std::io::{Read, Write};
 use std::net::TcpStream;
@@ -326,4 +327,48 @@ fn an_address_beyond_loopback_is_served_with_a_warning() {
         .expect("the port is taken");
     assert!(e.to_string().contains(&taken.to_string()), "{e}");
     view.shutdown();
+}
+
+/// The hello as a page receives it from a server serving `info`, with or without a stop
+/// callback.
+fn hello_of(info: deflex_telemetry::SessionInfo, stop: bool) -> serde_json::Value {
+    let (_publisher, ring) = deflex_telemetry::broadcast::<deflex_telemetry::CycleSample>(16);
+    let stop = stop.then(|| Box::new(|| {}) as deflex_view::StopCallback);
+    let view =
+        deflex_view::serve("127.0.0.1:0".parse().unwrap(), ring, Arc::new(info), stop).unwrap();
+    let mut page = open_page(&view);
+    let h = hello(&mut page);
+    drop(page);
+    view.shutdown();
+    h
+}
+
+/// The first message a page gets: the session, the wire layout and the names of the codes.
+#[test]
+fn the_hello_names_the_layout_and_says_simulated() {
+    let info = SyntheticCell::new(0.01, 1, true).session_info();
+    let hello = hello_of(info, false);
+    assert_eq!(hello["label"], "SIMULATED");
+    assert_eq!(hello["stop"], false);
+    assert_eq!(hello["fields"].as_array().unwrap().len(), frame::NFIELDS);
+    assert_eq!(hello["phases"][2], "running");
+    assert_eq!(hello["faults"][0], "force_over_limit");
+    assert_eq!(hello["session"]["correction_limit"][0], 0.01);
+    let info = deflex_telemetry::SessionInfo::new(
+        deflex_telemetry::Source::Runtime,
+        "tx200",
+        vec!["j1".into()],
+    );
+    let hello = hello_of(info, true);
+    assert_eq!(hello["label"], "");
+    assert_eq!(hello["stop"], true);
+    // Unbounded limits are null, not an invalid JSON number.
+    assert!(hello["session"]["force_limit_n"].is_null());
+    // The twin's own stream: its source, SIMULATED, and the cell's states as phase names.
+    let mut info = SyntheticCell::new(0.02, 1, true).session_info();
+    info.source = deflex_telemetry::Source::TwinCell;
+    let hello = hello_of(info, false);
+    assert_eq!(hello["session"]["source"], "twin-cell");
+    assert_eq!(hello["label"], "SIMULATED");
+    assert_eq!(hello["phases"][2], "forming");
 }

@@ -1,8 +1,9 @@
-//! Decimation, the p99 and the wire format, against separately written computations.
+//! Decimation, the p99 and the wire format ([`deflex_view::frame`]), against separately written
+//! computations.
 
-use crate::frame::{self, BUCKET_S, Decimator, FIELDS, NFIELDS, P99_WINDOW};
 use deflex_record::synthetic::SyntheticCell;
 use deflex_telemetry::CycleSample;
+use deflex_view::frame::{self, BUCKET_S, Decimator, FIELDS, NFIELDS, P99_WINDOW};
 
 fn index(name: &str) -> usize {
     FIELDS.iter().position(|f| *f == name).unwrap()
@@ -98,33 +99,4 @@ fn a_message_is_a_header_and_little_endian_values() {
     assert_eq!(at(&m, NFIELDS + 1), 0.5);
     frame::set_dropped(&mut m, u64::MAX);
     assert_eq!(&m[12..16], &u32::MAX.to_le_bytes());
-}
-
-#[test]
-fn the_hello_names_the_layout_and_says_simulated() {
-    let info = SyntheticCell::new(0.01, 1, true).session_info();
-    let hello: serde_json::Value = serde_json::from_str(&crate::hello_json(&info, false)).unwrap();
-    assert_eq!(hello["label"], "SIMULATED");
-    assert_eq!(hello["stop"], false);
-    assert_eq!(hello["fields"].as_array().unwrap().len(), NFIELDS);
-    assert_eq!(hello["phases"][2], "running");
-    assert_eq!(hello["faults"][0], "force_over_limit");
-    assert_eq!(hello["session"]["correction_limit"][0], 0.01);
-    let info = deflex_telemetry::SessionInfo::new(
-        deflex_telemetry::Source::Runtime,
-        "tx200",
-        vec!["j1".into()],
-    );
-    let hello: serde_json::Value = serde_json::from_str(&crate::hello_json(&info, true)).unwrap();
-    assert_eq!(hello["label"], "");
-    assert_eq!(hello["stop"], true);
-    // Unbounded limits are null, not an invalid JSON number.
-    assert!(hello["session"]["force_limit_n"].is_null());
-    // The twin's own stream: its source, SIMULATED, and the cell's states as phase names.
-    let mut info = SyntheticCell::new(0.02, 1, true).session_info();
-    info.source = deflex_telemetry::Source::TwinCell;
-    let hello: serde_json::Value = serde_json::from_str(&crate::hello_json(&info, false)).unwrap();
-    assert_eq!(hello["session"]["source"], "twin-cell");
-    assert_eq!(hello["label"], "SIMULATED");
-    assert_eq!(hello["phases"][2], "forming");
 }

@@ -1,7 +1,8 @@
-//! Tests of `CELL.toml` parsing and validation.
+//! Tests of `CELL.toml` parsing and validation ([`deflex_runtime::config`]).
 
-use super::*;
 use deflex_control::{FeedForwardMode, PathIndex, PidGains};
+use deflex_runtime::config::*;
+use std::path::PathBuf;
 
 const MINIMAL: &str = r#"
 [robot]
@@ -272,7 +273,7 @@ fn feedforward_section_reads_its_table() {
 /// struct definitions, so a new key without documentation fails here).
 #[test]
 fn the_example_documents_every_key() {
-    let source = include_str!("sections.rs");
+    let source = include_str!("../../src/config/sections.rs");
     let example = include_str!("../../../../docs/cell.example.toml");
     let mut in_section = false;
     let mut checked = 0;
