@@ -113,7 +113,7 @@ fn cycle_times(log: &Path) -> Vec<(f64, f64)> {
 #[test]
 #[ignore = "needs /usr/bin/chromium; run by .ci/run with --ignored"]
 fn the_live_pages_of_a_simulated_cell_and_its_controller() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::cores_alone();
     let dir = std::env::temp_dir().join(format!("deflex-cli-browser-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();

@@ -45,7 +45,7 @@ pub fn cell_file(dir: &Path, kind: &str, extra: &str) -> (PathBuf, u16, u16) {
 
 #[test]
 fn numeric_flags_are_checked() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("flags");
     let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
     let cell = cell.to_str().unwrap();
@@ -101,7 +101,7 @@ fn numeric_flags_are_checked() {
 
 #[test]
 fn absurd_cell_values_are_refused_with_the_field() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("fields");
     for (extra, field) in [
         ("rate_hz = 1e-300\n", "control.rate_hz"),
@@ -125,7 +125,7 @@ fn absurd_cell_values_are_refused_with_the_field() {
 /// A run that fails (nobody answers within the start-up time) leaves the previous log alone.
 #[test]
 fn failed_run_keeps_the_existing_log() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("log");
     let (cell, ..) = cell_file(&dir, "simple-udp", "[log]\npath = \"run.csv\"\n");
     std::fs::write(dir.join("run.csv"), "a previous session\n").unwrap();
@@ -159,7 +159,7 @@ fn sigterm(pid: u32) {
 
 #[test]
 fn sigterm_before_the_start_ends_cleanly() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("term0");
     let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
     let mut child = deflex()
@@ -190,7 +190,7 @@ fn sigterm_before_the_start_ends_cleanly() {
 /// the correction out before the process ends: the robot's last answers come down to zero.
 #[test]
 fn sigterm_in_a_session_ramps_the_correction_out() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("term1");
     let (cell, robot_port, sensor_port) = cell_file(
         &dir,
@@ -355,7 +355,7 @@ fn get_page(url: &str) -> String {
 /// recording beside it, the cell its ground-truth log and recording beside the run's log.
 #[test]
 fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("views");
     let cell = twin_cell_file(&dir);
     let cell = cell.to_str().unwrap();
@@ -481,7 +481,7 @@ fn a_bad_log_path_is_refused_before_the_session() {
 /// 0.2 s timeout) with the fault latched, however loaded the machine.
 #[test]
 fn a_latched_fault_ends_the_run_with_exit_status_3() {
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = scratch("fault");
     let (cell, robot_port, sensor_port) = cell_file(&dir, "simple-udp", "");
     let answered = Arc::new(std::sync::atomic::AtomicUsize::new(0));

@@ -15,10 +15,17 @@ mod hostile;
 mod strict_inputs;
 mod walkthrough;
 
-/// Tests that run the real-time threads against loopback peers take turns: on a busy 2-core
-/// machine two such sessions at once would starve each other's millisecond deadlines (a test
-/// binary runs its tests on parallel threads).
-pub fn realtime_turn() -> std::sync::MutexGuard<'static, ()> {
-    static TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    TURN.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+/// `deflex run` and `deflex cell --sim` processes against each other on loopback sleep most of
+/// every robot cycle: the harness runs two such tests at once (its two threads on a 2-core
+/// machine), each still meeting its links' timeouts, and they share this turn.
+pub fn session_turn() -> std::sync::RwLockReadGuard<'static, ()> {
+    TURN.read().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
+
+/// A test that drives a browser beside its sessions keeps both cores busy: it runs alone.
+pub fn cores_alone() -> std::sync::RwLockWriteGuard<'static, ()> {
+    TURN.write()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+static TURN: std::sync::RwLock<()> = std::sync::RwLock::new(());

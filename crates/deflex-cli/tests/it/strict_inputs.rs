@@ -367,7 +367,7 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::time::{Duration, Instant};
 
-    let _turn = crate::realtime_turn();
+    let _turn = crate::session_turn();
     let dir = folder("full-disk");
     let (cell, robot_port, sensor_port) = crate::cli_run::cell_file(
         &dir,
