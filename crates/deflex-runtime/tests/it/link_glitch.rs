@@ -1,6 +1,7 @@
-//! A robot that falls silent for 50 ms, 300 ms and 1 s in the middle of a loaded session, over
-//! every robot protocol (KUKA RSI, ABB EGM, Stäubli, simple UDP, simple TCP), with the real
-//! runtime threads, links and a Net F/T stream on loopback. The robot emulator answers each of
+//! A robot that falls silent for 50 ms, 300 ms and 1 s in the middle of a loaded session (three
+//! sessions at once, one per pause), over every robot protocol (KUKA RSI, ABB EGM, Stäubli,
+//! simple UDP, simple TCP), with the real runtime threads, links and a Net F/T stream on
+//! loopback. The robot emulator answers each of
 //! its states with exactly one received correction and records them; the largest change between
 //! two consecutive answers it received must not exceed the rate limit × the robot cycle (plus the
 //! protocol's print resolution), whatever the gap.
@@ -353,36 +354,44 @@ fn session(kind: Kind, pause: Duration) -> Session {
 /// Sessions tried per pause until one had a sizeable correction when the robot fell silent.
 const ATTEMPTS: usize = 5;
 
+/// The three pauses of `kind`, each in its own session, the three sessions at once (each sleeps
+/// most of every robot cycle).
 fn check(kind: Kind) {
-    for pause_ms in [50u64, 300, 1000] {
-        // On a loaded machine a scheduling gap longer than the link timeout (50 ms) can latch
-        // `robot_link_lost` during the warm-up, so that the correction is already ramped out
-        // when the robot pauses: such a session still has its step bound checked, and is
-        // repeated to exercise a pause under an active correction.
-        let mut attempt = 1;
-        loop {
-            let s = session(kind, Duration::from_millis(pause_ms));
-            assert!(s.summary.error.is_none(), "{kind:?}: {:?}", s.summary.error);
-            assert!(s.resumed_at > 0, "{kind:?}: never paused");
-            check_steps(kind, pause_ms, &s);
-            let before = s.received[s.resumed_at - 1];
-            if before[2].abs() > 2e-4 {
-                check_ramp_out(kind, pause_ms, &s);
-                break;
-            }
-            assert!(
-                attempt < ATTEMPTS,
-                "{kind:?} {pause_ms} ms: in {ATTEMPTS} sessions the correction was never active \
-                 before the pause (last: {before:?}, fault {:?})",
-                s.summary.fault
-            );
-            eprintln!(
-                "{kind:?} {pause_ms} ms: the correction was not active before the pause (fault \
-                 {:?} on this loaded machine); session repeated",
-                s.summary.fault.map(|f| f.to_string())
-            );
-            attempt += 1;
+    std::thread::scope(|scope| {
+        for pause_ms in [50u64, 300, 1000] {
+            scope.spawn(move || check_pause(kind, pause_ms));
         }
+    });
+}
+
+fn check_pause(kind: Kind, pause_ms: u64) {
+    // On a loaded machine a scheduling gap longer than the link timeout (50 ms) can latch
+    // `robot_link_lost` during the warm-up, so that the correction is already ramped out
+    // when the robot pauses: such a session still has its step bound checked, and is
+    // repeated to exercise a pause under an active correction.
+    let mut attempt = 1;
+    loop {
+        let s = session(kind, Duration::from_millis(pause_ms));
+        assert!(s.summary.error.is_none(), "{kind:?}: {:?}", s.summary.error);
+        assert!(s.resumed_at > 0, "{kind:?}: never paused");
+        check_steps(kind, pause_ms, &s);
+        let before = s.received[s.resumed_at - 1];
+        if before[2].abs() > 2e-4 {
+            check_ramp_out(kind, pause_ms, &s);
+            return;
+        }
+        assert!(
+            attempt < ATTEMPTS,
+            "{kind:?} {pause_ms} ms: in {ATTEMPTS} sessions the correction was never active \
+             before the pause (last: {before:?}, fault {:?})",
+            s.summary.fault
+        );
+        eprintln!(
+            "{kind:?} {pause_ms} ms: the correction was not active before the pause (fault \
+             {:?} on this loaded machine); session repeated",
+            s.summary.fault.map(|f| f.to_string())
+        );
+        attempt += 1;
     }
 }
 

@@ -247,30 +247,18 @@ fn loopback_cell_and_run_agree_with_in_process() {
 /// each: shorter paths end before the largest error of the process (0.0055 mm in-process at
 /// 20 mm, 0.0104 mm at 30 mm), and then a few late answers on a loaded machine (under the
 /// 10 % that stops the comparison) outweigh it.
-fn loopback_other_protocol(kind: &str) {
+/// The four sessions run at once: each sleeps most of every robot cycle.
+#[test]
+fn loopback_every_other_robot_protocol() {
     let _turn = crate::session_turn();
-    let l = loopback(kind, 30.0, 4);
-    check_loopback(kind, &l, 300);
-}
-
-#[test]
-fn loopback_abb_egm() {
-    loopback_other_protocol("abb-egm");
-}
-
-#[test]
-fn loopback_staubli() {
-    loopback_other_protocol("staubli");
-}
-
-#[test]
-fn loopback_simple_udp() {
-    loopback_other_protocol("simple-udp");
-}
-
-#[test]
-fn loopback_simple_tcp() {
-    loopback_other_protocol("simple-tcp");
+    std::thread::scope(|scope| {
+        for kind in ["abb-egm", "staubli", "simple-udp", "simple-tcp"] {
+            scope.spawn(move || {
+                let l = loopback(kind, 30.0, 4);
+                check_loopback(kind, &l, 300);
+            });
+        }
+    });
 }
 
 /// The twin plays the UR10e cell (500 Hz, its part position and force level) over the simple
