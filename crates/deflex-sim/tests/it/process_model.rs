@@ -18,7 +18,22 @@ use deflex_sim::cell_config::CellConfig;
 use deflex_sim::{
     ErrorSources, FormingProcess, ToolPath, run_forming, tcp_path, tool_path_by_name,
 };
-use nalgebra::{Rotation3, Vector3};
+use nalgebra::{Matrix6, Rotation3, Vector3};
+
+/// What the process model sees at point `i` of `tcp` commanded at its desired pose (no
+/// compensation), with the robot's compliance `compliance` there.
+fn uncompensated<'a>(tcp: &'a TcpPath, i: usize, compliance: &'a Matrix6<f64>) -> ProcessPoint<'a> {
+    let point = &tcp.points()[i];
+    ProcessPoint {
+        index: i,
+        arc_length_m: point.arc_length_m,
+        desired: &point.pose,
+        commanded: &point.pose,
+        compliance,
+        travel_direction: tcp.travel_direction(i),
+        rapid: point.feed_m_s.is_none(),
+    }
+}
 
 /// The default cell with every error source off and the plant reduced to its linear VJM part;
 /// the model is that linear part, base tilt about the plant's pivot.
@@ -73,15 +88,7 @@ fn predict(config: &CellConfig, model: &Robot, path: &ToolPath) -> Prediction {
         model.forward_kinematics(&mut data, &q).unwrap();
         let compliance = model.compliance_matrix(&data);
         let w = process
-            .wrench(&ProcessPoint {
-                index: i,
-                arc_length_m: point.arc_length_m,
-                desired: &point.pose,
-                commanded: &point.pose,
-                compliance: &compliance,
-                travel_direction: tcp.travel_direction(i),
-                rapid: point.feed_m_s.is_none(),
-            })
+            .wrench(&uncompensated(&tcp, i, &compliance))
             .unwrap();
         fz.push(w[2]);
         error.push((compliance * w).fixed_rows::<3>(0).norm());
@@ -375,15 +382,7 @@ fn the_equilibrium_holds_at_the_returned_force() {
     let mut checked = 0;
     for (i, point) in tcp.points().iter().enumerate() {
         let w = process
-            .wrench(&ProcessPoint {
-                index: i,
-                arc_length_m: point.arc_length_m,
-                desired: &point.pose,
-                commanded: &point.pose,
-                compliance: &compliance,
-                travel_direction: tcp.travel_direction(i),
-                rapid: point.feed_m_s.is_none(),
-            })
+            .wrench(&uncompensated(&tcp, i, &compliance))
             .unwrap();
         if w[2] > 100.0 {
             let p = point.pose.translation.vector - config.part_frame().translation.vector

@@ -1,10 +1,11 @@
 //! The design (eqs. 13–15) against the model crate's point displacement, through the public
 //! fixed-structure calibration that is built on it.
 
-use deflex_model::{Axis, Data, EdofSite, Wrench, builtin};
+use deflex_model::{Axis, EdofSite, builtin};
 use deflex_stiffness::data::MeasuredRotation;
 use deflex_stiffness::stiffness_fit::{Status, Structure, calibrate_fixed};
 use deflex_stiffness::synthetic::random_campaign;
+use deflex_stiffness::validation::predict_full;
 use nalgebra::Vector3;
 
 /// The design's prediction at the robot's own compliances and centre shifts reproduces
@@ -40,23 +41,14 @@ fn rotation_rows_match_point_displacement() {
     let nrot = rows.iter().filter(|r| r.rotation_rad.is_some()).count();
     // The model's deflection of every row: the measured displacement, and the measured rotation
     // where the row has one.
-    let mut data = Data::new();
+    let deflections = predict_full(&robot, &rows).unwrap();
     let (mut min_position, mut min_rotation) = (f64::INFINITY, f64::INFINITY);
     let mut checked = 0;
-    for row in rows.iter_mut() {
-        robot.forward_kinematics(&mut data, &row.q_rad).unwrap();
-        let d = robot.point_displacement(
-            &data,
-            &Vector3::from(row.point_m),
-            row.point_link,
-            &Vector3::from(row.load_point_m),
-            row.load_link,
-            &Wrench::from_row_slice(&row.wrench),
-        );
+    for (row, d) in rows.iter_mut().zip(&deflections) {
         row.displacement_m = Some([d[0], d[1], d[2]]);
-        min_position = min_position.min(d.fixed_rows::<3>(0).norm());
+        min_position = min_position.min(Vector3::new(d[0], d[1], d[2]).norm());
         if let Some(rotation) = &mut row.rotation_rad {
-            let angular = d.fixed_rows::<3>(3).into_owned();
+            let angular = Vector3::new(d[3], d[4], d[5]);
             assert!(angular.norm() > 0.0);
             rotation.value_rad = [angular[0], angular[1], angular[2]];
             min_rotation = min_rotation.min(angular.norm());
