@@ -15,9 +15,23 @@ address = "127.0.0.1:49152"
 file = "tx200"
 "#;
 
+/// `text` parsed as `cell.toml`.
+fn parse(text: &str) -> Result<CellFile, ConfigError> {
+    CellFile::parse(text, "cell.toml", PathBuf::new())
+}
+
+/// `parsed` (a valid file with `case` added or changed) is refused, naming the file and `field`.
+fn refused_naming<T>(parsed: Result<T, ConfigError>, case: &str, field: &str) {
+    let e = parsed
+        .err()
+        .unwrap_or_else(|| panic!("accepted: {case}"))
+        .to_string();
+    assert!(e.contains("cell.toml") && e.contains(field), "{case} → {e}");
+}
+
 #[test]
 fn minimal_file_gets_paper_defaults() {
-    let cell = CellFile::parse(MINIMAL, "cell.toml", PathBuf::new()).unwrap();
+    let cell = parse(MINIMAL).unwrap();
     let c = cell.controller_config();
     assert_eq!(c.period_s, 0.01);
     assert_eq!(c.gains, PidGains::default());
@@ -35,30 +49,20 @@ fn the_documented_example_parses() {
 #[test]
 fn errors_name_file_and_field() {
     let bad = format!("{MINIMAL}[limits]\nsafe_action = \"explode\"\n");
-    let e = CellFile::parse(&bad, "cell.toml", PathBuf::new())
-        .unwrap_err()
-        .to_string();
+    let e = parse(&bad).unwrap_err().to_string();
     assert!(
         e.contains("cell.toml") && e.contains("limits.safe_action"),
         "{e}"
     );
     let typo = format!("{MINIMAL}[control]\nkp = 1.0\n");
-    let e = CellFile::parse(&typo, "cell.toml", PathBuf::new())
-        .unwrap_err()
-        .to_string();
+    let e = parse(&typo).unwrap_err().to_string();
     assert!(e.contains("cell.toml") && e.contains("kp"), "{e}");
     let axes = format!("{MINIMAL}[control]\naxes = [\"x\", \"w\"]\n");
-    let e = CellFile::parse(&axes, "cell.toml", PathBuf::new())
+    let e = parse(&axes).unwrap_err().to_string();
+    assert!(e.contains("control.axes") && e.contains("\"w\""), "{e}");
+    let e = parse(&MINIMAL.replace("kuka-rsi", "fanuc"))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("control.axes") && e.contains("\"w\""), "{e}");
-    let e = CellFile::parse(
-        &MINIMAL.replace("kuka-rsi", "fanuc"),
-        "cell.toml",
-        PathBuf::new(),
-    )
-    .unwrap_err()
-    .to_string();
     assert!(e.contains("cell.toml") && e.contains("fanuc"), "{e}");
 }
 
@@ -105,15 +109,7 @@ fn every_number_is_bounded_and_named() {
         ),
     ];
     for (extra, field) in cases {
-        let text = format!("{MINIMAL}{extra}");
-        let e = CellFile::parse(&text, "cell.toml", PathBuf::new())
-            .err()
-            .unwrap_or_else(|| panic!("accepted: {extra}"))
-            .to_string();
-        assert!(
-            e.contains("cell.toml") && e.contains(field),
-            "{extra} → {e}"
-        );
+        refused_naming(parse(&format!("{MINIMAL}{extra}")), extra, field);
     }
     for (robot_extra, field) in [
         ("cycle_s = 1e300\n", "robot.cycle_s"),
@@ -129,11 +125,7 @@ fn every_number_is_bounded_and_named() {
             "bind = \"127.0.0.1:59152\"\n",
             &format!("bind = \"127.0.0.1:59152\"\n{robot_extra}"),
         );
-        let e = CellFile::parse(&text, "cell.toml", PathBuf::new())
-            .err()
-            .unwrap_or_else(|| panic!("accepted: {robot_extra}"))
-            .to_string();
-        assert!(e.contains(field), "{robot_extra} → {e}");
+        refused_naming(parse(&text), robot_extra, field);
     }
     // The documented example stays inside every bound it states.
     for (field, lo, hi, _) in BOUNDS {
@@ -148,7 +140,7 @@ fn link_settings_follow_the_file() {
         "bind = \"127.0.0.1:0\"\nrsi_answer = \"joint\"\nrsi_joint_tag = \"AKorr\"\n\
          egm_frame = \"work-object\"\negm_work_object_rpy_rad = [0.0, 0.0, 1.5707963267948966]\n",
     );
-    let cell = CellFile::parse(&text, "cell.toml", PathBuf::new()).unwrap();
+    let cell = parse(&text).unwrap();
     assert_eq!(
         cell.rsi_config().answer,
         deflex_io::rsi::RsiAnswer::Joint(deflex_io::rsi::JointTag::AKorr)
@@ -257,14 +249,7 @@ fn feedforward_section_reads_its_table() {
         ("table = \" \"\n", "feedforward.table"),
         ("mode = \"feed-forward\"\n", "table"),
     ] {
-        let e = with(extra)
-            .err()
-            .unwrap_or_else(|| panic!("accepted: {extra}"))
-            .to_string();
-        assert!(
-            e.contains("cell.toml") && e.contains(field),
-            "{extra} → {e}"
-        );
+        refused_naming(with(extra), extra, field);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -305,9 +290,7 @@ fn the_example_documents_every_key() {
 #[test]
 fn robot_peer_rules_name_the_field() {
     let network = MINIMAL.replace("127.0.0.1:59152", "0.0.0.0:59152");
-    let e = CellFile::parse(&network, "cell.toml", PathBuf::new())
-        .unwrap_err()
-        .to_string();
+    let e = parse(&network).unwrap_err().to_string();
     assert!(
         e.contains("cell.toml") && e.contains("robot.bind") && e.contains("allow_any_peer"),
         "{e}"
@@ -316,23 +299,21 @@ fn robot_peer_rules_name_the_field() {
         "bind = \"0.0.0.0:59152\"",
         "bind = \"0.0.0.0:59152\"\nallow_any_peer = true",
     );
-    let cell = CellFile::parse(&allowed, "cell.toml", PathBuf::new()).unwrap();
+    let cell = parse(&allowed).unwrap();
     assert!(cell.peer_policy().unwrap().warning().is_some());
     let unspecified = network.replace(
         "bind = \"0.0.0.0:59152\"",
         "bind = \"0.0.0.0:59152\"\npeer = \"0.0.0.0:0\"",
     );
-    let e = CellFile::parse(&unspecified, "cell.toml", PathBuf::new())
-        .unwrap_err()
-        .to_string();
+    let e = parse(&unspecified).unwrap_err().to_string();
     assert!(e.contains("robot.peer") && e.contains("unspecified"), "{e}");
     let locked = network.replace(
         "bind = \"0.0.0.0:59152\"",
         "bind = \"0.0.0.0:59152\"\npeer = \"192.168.1.147:0\"",
     );
-    let cell = CellFile::parse(&locked, "cell.toml", PathBuf::new()).unwrap();
+    let cell = parse(&locked).unwrap();
     assert!(cell.peer_policy().unwrap().warning().is_none());
-    let cell = CellFile::parse(MINIMAL, "cell.toml", PathBuf::new()).unwrap();
+    let cell = parse(MINIMAL).unwrap();
     assert!(cell.peer_policy().unwrap().warning().is_some());
 }
 
@@ -342,17 +323,9 @@ fn robot_peer_rules_name_the_field() {
 fn ros2_section_and_sensor() {
     let ros2 = "[robot]\nkind = \"kuka-rsi\"\nbind = \"127.0.0.1:59152\"\n[sensor]\nkind = \"ros2\"\n\
                 topic = \"/ati/wrench\"\n[model]\nfile = \"tx200\"\n";
-    let e = CellFile::parse(ros2, "cell.toml", PathBuf::new())
-        .unwrap_err()
-        .to_string();
+    let e = parse(ros2).unwrap_err().to_string();
     assert!(e.contains("sensor.kind") && e.contains("[ros2]"), "{e}");
-    let with = |extra: &str| {
-        CellFile::parse(
-            &format!("{ros2}[ros2]\n{extra}"),
-            "cell.toml",
-            PathBuf::new(),
-        )
-    };
+    let with = |extra: &str| parse(&format!("{ros2}[ros2]\n{extra}"));
     let cell = with("").unwrap();
     assert_eq!(cell.sensor.kind, SensorKind::Ros2);
     let r = cell.ros2.as_ref().unwrap();
@@ -382,14 +355,7 @@ fn ros2_section_and_sensor() {
         ("base_frame = \"base link\"\n", "ros2.base_frame"),
         ("colour = 1\n", "colour"),
     ] {
-        let e = with(extra)
-            .err()
-            .unwrap_or_else(|| panic!("accepted: {extra}"))
-            .to_string();
-        assert!(
-            e.contains("cell.toml") && e.contains(field),
-            "{extra} → {e}"
-        );
+        refused_naming(with(extra), extra, field);
     }
     for (sensor, field) in [
         ("topic = \"ati/wrench\"", "sensor.topic"),
@@ -400,18 +366,11 @@ fn ros2_section_and_sensor() {
             "{}[ros2]\n",
             ros2.replace("topic = \"/ati/wrench\"", sensor)
         );
-        let e = CellFile::parse(&text, "cell.toml", PathBuf::new())
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains(field), "{sensor} → {e}");
+        refused_naming(parse(&text), sensor, field);
     }
     // A Net F/T still needs its address.
-    let e = CellFile::parse(
-        &MINIMAL.replace("address = \"127.0.0.1:49152\"\n", ""),
-        "cell.toml",
-        PathBuf::new(),
-    )
-    .unwrap_err()
-    .to_string();
+    let e = parse(&MINIMAL.replace("address = \"127.0.0.1:49152\"\n", ""))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("sensor.address"), "{e}");
 }
