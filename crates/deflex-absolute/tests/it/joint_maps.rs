@@ -5,7 +5,7 @@
 //! readings without such an error its maps stay small; and a terms file carries the maps to a
 //! model that predicts the same.
 
-use crate::simulated::{Truth, point, random_configuration, truth};
+use crate::simulated::{Truth, point, probe_reading, random_configuration, truth};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::AbsoluteRow;
 use deflex_absolute::fit::{FitOptions, FitResult, Step, fit};
@@ -116,16 +116,13 @@ fn readings(truth: &Truth, with_maps: bool, seed: u64) -> Vec<AbsoluteRow> {
             let p = point(&truth.frames(&turned)[6], truth.target);
             let measured =
                 rotation * p + translation + Vector3::from_fn(|_, _| noise.sample(&mut rng));
-            rows.push(AbsoluteRow {
-                sigma_m: Some(NOISE_M),
-                ..AbsoluteRow::position(
-                    rows.len() as u64 + 2,
-                    ["near", "far"][s],
-                    "probe",
-                    q.to_vec(),
-                    [measured.x, measured.y, measured.z],
-                )
-            });
+            rows.push(probe_reading(
+                rows.len() as u64 + 2,
+                s,
+                &q,
+                &measured,
+                NOISE_M,
+            ));
         }
     }
     rows

@@ -222,14 +222,7 @@ fn simulate(truth: &Truth, seed: u64) -> Simulated {
             config += 1;
             absolute.push(AbsoluteRow {
                 config: Some(format!("c{config}")),
-                sigma_m: Some(20e-6),
-                ..AbsoluteRow::position(
-                    config,
-                    ["near", "far"][s],
-                    "probe",
-                    q.to_vec(),
-                    [measured.x, measured.y, measured.z],
-                )
+                ..probe_reading(config, s, &q, &measured, 20e-6)
             });
         }
     }
@@ -386,6 +379,26 @@ fn recover(seed: u64) -> (f64, usize, usize) {
     (d2, p, within_95)
 }
 
+/// A tracker reading of the probe at `measured` (world, m; noise already added) in set-up
+/// `setup` (0: "near", 1: "far"), row `id`, with the tracker's standard deviation `sigma_m`.
+pub fn probe_reading(
+    id: u64,
+    setup: usize,
+    q: &[f64],
+    measured: &Vector3<f64>,
+    sigma_m: f64,
+) -> AbsoluteRow {
+    AbsoluteRow {
+        sigma_m: Some(sigma_m),
+        ..AbsoluteRow::position(
+            id,
+            ["near", "far"][setup],
+            "probe",
+            q.to_vec(),
+            [measured.x, measured.y, measured.z],
+        )
+    }
+}
 #[test]
 fn combined_campaign_recovers_planted_parameters_simulated() {
     // Four independent campaigns: each passes `recover`, and together the intervals are honest:

@@ -5,7 +5,9 @@
 //! interval, together with the compliances and the planted kinematic errors; on a linear
 //! truth the torsion coefficient is found compatible with zero.
 
-use crate::simulated::{Truth, origin, point, random_configuration, true_value, truth, z_axis};
+use crate::simulated::{
+    Truth, origin, point, probe_reading, random_configuration, true_value, truth, z_axis,
+};
 use deflex_absolute::campaign::Campaign;
 use deflex_absolute::data::AbsoluteRow;
 use deflex_absolute::fit::{FitOptions, Step, fit};
@@ -66,16 +68,13 @@ fn readings(truth: &Truth, curves: [Curve; 2], seed: u64) -> Vec<AbsoluteRow> {
             let measured = rotation * (p + sag)
                 + translation
                 + Vector3::from_fn(|_, _| noise.sample(&mut rng));
-            rows.push(AbsoluteRow {
-                sigma_m: Some(NOISE_M),
-                ..AbsoluteRow::position(
-                    rows.len() as u64 + 2,
-                    ["near", "far"][s],
-                    "probe",
-                    q.to_vec(),
-                    [measured.x, measured.y, measured.z],
-                )
-            });
+            rows.push(probe_reading(
+                rows.len() as u64 + 2,
+                s,
+                &q,
+                &measured,
+                NOISE_M,
+            ));
         }
     }
     rows
