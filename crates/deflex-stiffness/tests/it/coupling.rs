@@ -1,20 +1,42 @@
 //! Off-diagonal joint compliances fitted with the eDoF compliances (`fit_couplings`): recovery
 //! from noise-free data, and standard errors that match the scatter over noisy campaigns.
 
-use deflex_model::{Axis, EdofSite, builtin};
-use deflex_stiffness::fit_couplings;
+use deflex_model::{Axis, EdofSite, Robot, builtin};
 use deflex_stiffness::synthetic::{Coupling, SyntheticOptions, measure, random_campaign};
 use deflex_stiffness::validation::predict_full;
+use deflex_stiffness::{EdofId, fit_couplings};
 use nalgebra::Vector3;
 
 /// Noise-free measurements of a robot with a J2.z–J3.z coupling (made by the synthetic
 /// module's own coupling code): the fit recovers the coupling and every stiffness from a
 /// start 50 % off, and the fitted model's deflection (deflex-model's coupling code)
 /// reproduces the measurements.
+/// The TX200 and its J2.z and J3.z eDoFs.
+fn tx200_j2_j3() -> (Robot, EdofId, EdofId) {
+    let truth = builtin("tx200").unwrap();
+    (
+        truth,
+        (EdofSite::Joint(2), Axis::Z),
+        (EdofSite::Joint(3), Axis::Z),
+    )
+}
+
+/// The default synthetic measurement with a coupling of compliance `c` (rad/N·m) between the
+/// eDoFs `a` and `b`.
+fn coupled(a: EdofId, b: EdofId, c: f64) -> SyntheticOptions {
+    SyntheticOptions {
+        coupling: vec![Coupling {
+            a,
+            b,
+            compliance: c,
+        }],
+        ..SyntheticOptions::default()
+    }
+}
+
 #[test]
 fn a_coupling_and_the_stiffnesses_are_recovered() {
-    let truth = builtin("tx200").unwrap();
-    let (j2, j3) = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
+    let (truth, j2, j3) = tx200_j2_j3();
     let (k2, k3) = (
         truth.stiffness(j2.0, j2.1).unwrap(),
         truth.stiffness(j3.0, j3.1).unwrap(),
@@ -27,12 +49,7 @@ fn a_coupling_and_the_stiffnesses_are_recovered() {
         &SyntheticOptions {
             noise_sigma_m: 0.0,
             record_sigma: false,
-            coupling: vec![Coupling {
-                a: j2,
-                b: j3,
-                compliance: c23,
-            }],
-            ..SyntheticOptions::default()
+            ..coupled(j2, j3, c23)
         },
     )
     .unwrap();
@@ -77,8 +94,7 @@ fn a_coupling_and_the_stiffnesses_are_recovered() {
 /// robot's estimates are consistent with zero.
 #[test]
 fn the_stated_standard_errors_are_the_scatter() {
-    let truth = builtin("tx200").unwrap();
-    let (j2, j3) = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
+    let (truth, j2, j3) = tx200_j2_j3();
     let (k2, k3) = (
         truth.stiffness(j2.0, j2.1).unwrap(),
         truth.stiffness(j3.0, j3.1).unwrap(),
@@ -94,12 +110,7 @@ fn the_stated_standard_errors_are_the_scatter() {
                 &plan,
                 &SyntheticOptions {
                     seed,
-                    coupling: vec![Coupling {
-                        a: j2,
-                        b: j3,
-                        compliance: c23,
-                    }],
-                    ..SyntheticOptions::default()
+                    ..coupled(j2, j3, c23)
                 },
             )
             .unwrap();
