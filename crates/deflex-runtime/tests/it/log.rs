@@ -3,24 +3,10 @@
 use deflex_control::{CycleOutput, Flags};
 use deflex_runtime::log::{LogRecord, Plain, spawn_writer};
 use deflex_telemetry::CycleSample;
-use std::io::Write;
-use std::sync::{Arc, Mutex};
-
-#[derive(Clone, Default)]
-struct Shared(Arc<Mutex<Vec<u8>>>);
-impl Write for Shared {
-    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-        self.0.lock().unwrap().extend_from_slice(b);
-        Ok(b.len())
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
 
 #[test]
 fn rows_match_header_and_drops_are_counted() {
-    let buf = Shared::default();
+    let buf = crate::common::SharedBuffer::default();
     let (mut publisher, ring) = deflex_telemetry::broadcast::<CycleSample>(16);
     let writer = spawn_writer(ring.subscribe(), 6, Box::new(Plain(buf.clone()))).unwrap();
     let mut out = CycleOutput::default();
@@ -32,7 +18,7 @@ fn rows_match_header_and_drops_are_counted() {
     drop(publisher);
     let report = writer.finish(true).unwrap();
     assert_eq!(report.written + report.dropped, 10_000);
-    let text = String::from_utf8(buf.0.lock().unwrap().clone()).unwrap();
+    let text = buf.text();
     let mut lines = text.lines();
     let header = lines.next().unwrap();
     let n = header.split(',').count();

@@ -10,21 +10,6 @@ use deflex_runtime::WallClock;
 use deflex_runtime::log::{LogRecord, Plain, csv_header, csv_row, spawn_writer};
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{Source, Telemetry, session_info};
-use std::io::Write;
-use std::sync::{Arc, Mutex};
-
-#[derive(Clone, Default)]
-struct Buffer(Arc<Mutex<Vec<u8>>>);
-
-impl Write for Buffer {
-    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-        self.0.lock().unwrap().extend_from_slice(b);
-        Ok(b.len())
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
 
 fn options() -> RuntimeOptions {
     RuntimeOptions {
@@ -59,7 +44,7 @@ fn session(capacity: usize) -> Sinks {
         common::loopback_cell(Default::default(), raw, q, f64::INFINITY, f64::INFINITY);
     let info = session_info(&ctrl, Source::Runtime, "kuka-rsi", 0.004);
     let telemetry = Telemetry::new(info, capacity);
-    let buffer = Buffer::default();
+    let buffer = crate::common::SharedBuffer::default();
     let log = spawn_writer(telemetry.subscribe(), 6, Box::new(Plain(buffer.clone()))).unwrap();
     let idle = telemetry.subscribe();
     let runtime = spawn(
@@ -82,7 +67,7 @@ fn session(capacity: usize) -> Sinks {
     let summary = common::finish(runtime);
     peers.join();
     let log = log.finish(true).unwrap();
-    let log_text = String::from_utf8(buffer.0.lock().unwrap().clone()).unwrap();
+    let log_text = buffer.text();
     Sinks {
         summary,
         log,
