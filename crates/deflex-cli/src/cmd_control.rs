@@ -6,16 +6,11 @@
 
 use crate::args::{check_flag, print_json};
 use crate::error::{CliError, RunFailure};
+use crate::ros2_parts::{Ros2Outcome, Ros2Parts};
 use clap::Args;
 use deflex_control::Fault;
 use deflex_record::{McapRecorder, RecordOptions, RecordReport};
-use deflex_ros2::sensor::SensorCountsHandle;
-use deflex_ros2::{
-    BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2Error, Ros2SensorLink, SensorCounts,
-    SensorSettings,
-};
 use deflex_runtime::cell_run::FeedForwardInUse;
-use deflex_runtime::config::SensorKind;
 use deflex_runtime::stats::StatsSummary;
 use deflex_runtime::{CellFile, CellRun, CellRunOutcome, LiveStatus};
 use deflex_view::{ViewHandle, ViewStats};
@@ -81,40 +76,13 @@ pub struct RunOutcome {
     pub wall_s: f64,
     /// The feed-forward in use, described.
     pub feedforward: Option<String>,
-    /// What the ROS 2 bridge published (with `[ros2]`).
-    pub bridge: Option<(Vec<String>, BridgeReport)>,
-    /// What the ROS 2 sensor link took and refused (`sensor.kind = "ros2"`).
-    pub ros2_sensor: Option<(String, SensorCounts)>,
+    /// What the ROS 2 bridge published (with `[ros2]`) and the ROS 2 sensor link took and
+    /// refused (`sensor.kind = "ros2"`).
+    pub ros2: Ros2Outcome,
     /// The MCAP recording beside the log: where, and what it held (or why it failed).
     pub recording: Option<(PathBuf, Result<RecordReport, deflex_record::RecordError>)>,
     /// What the live view did.
     pub view: Option<ViewStats>,
-}
-
-/// The ROS 2 parts of a run: the sensor link of `sensor.kind = "ros2"` (opened before the
-/// session, handed to it) and the bridge of `[ros2]` (subscribed before the threads start).
-struct Ros2Parts {
-    sensor: Option<Ros2SensorLink>,
-    sensor_counts: Option<(String, SensorCountsHandle)>,
-    bridge: Option<Ros2Bridge>,
-}
-
-/// Opens the ROS 2 sensor link of `sensor.kind = "ros2"` (validation made sure `[ros2]` is
-/// there; without it the runtime's own factory refuses the kind, naming it).
-fn open_ros2_sensor(cell: &CellFile) -> Result<Ros2Parts, Ros2Error> {
-    let mut parts = Ros2Parts {
-        sensor: None,
-        sensor_counts: None,
-        bridge: None,
-    };
-    if cell.sensor.kind == SensorKind::Ros2
-        && let Some(settings) = SensorSettings::from_cell(cell)
-    {
-        let link = Ros2SensorLink::open(&settings)?;
-        parts.sensor_counts = Some((link.topic().to_string(), link.counts_handle()));
-        parts.sensor = Some(link);
-    }
-    Ok(parts)
 }
 
 /// The feed-forward in use, for people.
@@ -180,38 +148,22 @@ pub fn run_session(
         None => None,
     };
     let started = Instant::now();
-    let mut ros2 = open_ros2_sensor(&cell)
-        .map_err(|e| CliError::in_context(format!("{}: sensor.topic", cell.origin))(e.into()))?;
-    let mut bridge_error = None;
+    let mut ros2 = Ros2Parts::open(&cell)?;
+    let sensor = ros2.take_sensor();
     let run = CellRun::start_with(
         &cell,
         args.startup_timeout_s,
         Some(args.idle_exit_s),
-        ros2.sensor.take().map(|link| Box::new(link) as _),
-        &mut |telemetry| {
-            // The bridge is a sink of the telemetry stream, subscribed before the threads
-            // start: it publishes every cycle, never from the control thread.
-            if let Some(settings) = BridgeSettings::from_cell(&cell) {
-                match Ros2Bridge::spawn(&settings, telemetry.subscribe(), telemetry.info().clone())
-                {
-                    Ok(bridge) => ros2.bridge = Some(bridge),
-                    Err(e) => bridge_error = Some(e),
-                }
-            }
-        },
+        sensor,
+        &mut |telemetry| ros2.subscribe_bridge(&cell, telemetry),
     )?;
-    if let Some(e) = bridge_error {
+    if let Some(error) = ros2.start_error() {
         run.runtime.request_stop();
         let _ = run.finish();
-        return Err(e.into());
+        return Err(error);
     }
-    if live && let Some(bridge) = &ros2.bridge {
-        eprintln!(
-            "deflex run: ROS 2: publishing {} topics under {} (domain {})",
-            bridge.topics().len(),
-            cell.ros2.as_ref().map_or("/", |r| r.namespace.as_str()),
-            cell.ros2.as_ref().map_or(0, |r| r.domain_id),
-        );
+    if live {
+        ros2.announce(&cell);
     }
     // The sinks join right after the threads started, from the oldest sample the ring holds
     // (nothing can be lost: no robot has answered yet). A sink that cannot start ends the
@@ -287,19 +239,12 @@ pub fn run_session(
         (path, r.finish_with(commit))
     });
     let session = finished.map_err(CliError::LogWriter)?;
-    let bridge = match ros2.bridge {
-        Some(b) => {
-            let topics = b.topics().to_vec();
-            Some((topics, b.finish()?))
-        }
-        None => None,
-    };
+    let ros2 = ros2.finish()?;
     Ok(RunOutcome {
         session,
         wall_s: started.elapsed().as_secs_f64(),
         feedforward,
-        bridge,
-        ros2_sensor: ros2.sensor_counts.map(|(topic, h)| (topic, h.counts())),
+        ros2,
         recording,
         view,
     })
@@ -397,19 +342,7 @@ pub fn run(args: RunArgs, json_out: bool) -> Result<(), CliError> {
             "error": s.error.as_ref().map(ToString::to_string),
         });
         let mut value = value;
-        if let Some((topics, r)) = &o.bridge {
-            value["ros2_bridge"] = json!({"topics": topics, "cycles_read": r.cycles_read,
-                "cycles_published": r.cycles_published, "diagnostics": r.diagnostics,
-                "messages": r.messages, "write_errors": r.write_errors, "lost": r.lost});
-        }
-        if let Some((topic, c)) = &o.ros2_sensor {
-            let refused: serde_json::Map<String, serde_json::Value> = Refusal::ALL
-                .iter()
-                .map(|r| (r.name().to_string(), json!(c.refused_for(*r))))
-                .collect();
-            value["ros2_sensor"] = json!({"topic": topic, "received": c.received,
-                "accepted": c.accepted, "refused": refused, "overflow": c.overflow});
-        }
+        o.ros2.add_json(&mut value);
         let link = &s.robot_link;
         for (key, v) in [
             ("mcap", recording_json(&o)),
@@ -533,30 +466,7 @@ fn print_summary(o: &RunOutcome) {
         "  sensor: {} samples, {} lost, {} flagged by the status word, {} malformed or failed, {} from other hosts refused",
         s.samples, s.sample_gaps, s.sensor_faults, s.sensor_errors, s.sensor_foreign
     );
-    if let Some((topic, c)) = &o.ros2_sensor {
-        let refused: Vec<String> = Refusal::ALL
-            .iter()
-            .map(|r| format!("{} {}", c.refused_for(*r), r.name()))
-            .collect();
-        println!(
-            "  ROS 2 sensor {topic}: {} messages, {} accepted, refused: {}; {} dropped from the full queue",
-            c.received,
-            c.accepted,
-            refused.join(", "),
-            c.overflow
-        );
-    }
-    if let Some((topics, r)) = &o.bridge {
-        println!(
-            "  ROS 2 bridge: {} cycles published on {} topics ({} messages, {} diagnostics), {} not written, {} lost",
-            r.cycles_published,
-            topics.len(),
-            r.messages,
-            r.diagnostics,
-            r.write_errors,
-            r.lost
-        );
-    }
+    o.ros2.print();
     println!(
         "  max force {:.1} N, max |ξp| {:.3} mm",
         s.max_force_n,

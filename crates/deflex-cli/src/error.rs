@@ -221,8 +221,22 @@ pub enum CliError {
     #[error(transparent)]
     Start(#[from] deflex_runtime::StartError),
     /// The ROS 2 sensor link or bridge.
+    #[cfg(feature = "ros2")]
     #[error(transparent)]
     Ros2(#[from] deflex_ros2::Ros2Error),
+    /// A cell that asks for ROS 2 given to a `deflex` built without it.
+    #[cfg(not(feature = "ros2"))]
+    #[error(
+        "{origin}: {field}: this deflex was built without ROS 2 (the `ros2` cargo feature of \
+         deflex-cli); build it with: cargo install --path crates/deflex-cli --features ros2 (or \
+         run it as cargo run --release -p deflex-cli --features ros2 -- run …)"
+    )]
+    Ros2NotBuilt {
+        /// The cell file.
+        origin: String,
+        /// The field that asks for ROS 2: `[ros2]` or `sensor.kind = "ros2"`.
+        field: &'static str,
+    },
     /// The simulated cell could not serve its session.
     #[error(transparent)]
     CellServe(#[from] deflex_twin::cell_server::CellServeError),

@@ -15,6 +15,7 @@ mod cmd_register;
 mod cmd_sim;
 mod error;
 mod live;
+mod ros2_parts;
 
 use clap::{Parser, Subcommand};
 use deflex_files::OutputKind;
@@ -22,10 +23,20 @@ use error::CliError;
 use std::path::Path;
 use std::process::ExitCode;
 
+/// `deflex --version`: the version and whether this build has the ROS 2 bridge (the `ros2`
+/// cargo feature, see [`ros2_parts`]).
+#[cfg(feature = "ros2")]
+const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (with ROS 2)");
+#[cfg(not(feature = "ros2"))]
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (without ROS 2: cargo install --path crates/deflex-cli --features ros2)"
+);
+
 /// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,
 /// force-feedback correction, digital twin). SI units in files; human output in mm, degrees.
 #[derive(Parser)]
-#[command(name = "deflex", version, about, long_about = None)]
+#[command(name = "deflex", version = VERSION, about, long_about = None)]
 struct Cli {
     /// Machine-readable JSON on stdout instead of human-readable text.
     #[arg(long, global = true)]

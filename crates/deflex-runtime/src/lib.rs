@@ -40,6 +40,9 @@ pub mod telemetry;
 pub use cell_run::{CellRun, CellRunOutcome, StartError};
 pub use clock::{Clock, SimClock, WallClock};
 pub use config::{CellFile, ConfigError};
+/// The force/torque sensor side a session reads ([`CellRun::start_with`] takes one from a
+/// front end, e.g. the ROS 2 sensor link), from `deflex-io`.
+pub use deflex_io::ForceSensorLink;
 pub use session::{
     LiveStatus, RunSummary, Runtime, RuntimeOptions, SessionEnd, SessionError, spawn,
 };

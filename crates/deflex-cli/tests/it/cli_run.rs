@@ -473,6 +473,52 @@ fn a_bad_log_path_is_refused_before_the_session() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A `deflex` built without the `ros2` feature (the default build) refuses a cell that asks for
+/// ROS 2 (`[ros2]`, or a sensor on a ROS 2 topic) before any link opens, naming the cell, the
+/// field and the build that has it; the log of the cell is not touched.
+#[cfg(not(feature = "ros2"))]
+#[test]
+fn a_cell_asking_for_ros2_is_refused_by_a_build_without_it() {
+    let dir = scratch("noros2");
+    let ros2 = "[ros2]\ndomain_id = 7\n";
+    let log = "[log]\npath = \"run.csv\"\n";
+    for (sensor_topic, field) in [(false, "[ros2]"), (true, "sensor.kind = \"ros2\"")] {
+        let (cell, ..) = cell_file(&dir, "kuka-rsi", &format!("{ros2}{log}"));
+        if sensor_topic {
+            let text = std::fs::read_to_string(&cell).unwrap().replace(
+                "kind = \"netft\"",
+                "kind = \"ros2\"\ntopic = \"/ft_sensor/wrench\"",
+            );
+            std::fs::write(&cell, text).unwrap();
+        }
+        std::fs::write(dir.join("run.csv"), "a previous session\n").unwrap();
+        let out = deflex()
+            .args(["run", "--config", cell.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{field}: {err}");
+        assert!(
+            err.contains("cell.toml")
+                && err.contains(field)
+                && err.contains("--features ros2")
+                && !err.contains("waiting for the robot"),
+            "{field}: {err}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("run.csv")).unwrap(),
+            "a previous session\n"
+        );
+    }
+    let version = deflex().arg("--version").output().unwrap();
+    let version = String::from_utf8_lossy(&version.stdout);
+    assert!(
+        version.contains("without ROS 2") && version.contains("--features ros2"),
+        "{version}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A session that latched a fault (the sensor fell silent: sensor_timeout) exits with status 3
 /// and says so in its summary, so that a script can tell it from a good session (issue 18,
 /// item 4). The sensor stops after the robot has had 150 answers (at least 0.6 s of a running

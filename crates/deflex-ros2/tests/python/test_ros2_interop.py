@@ -67,7 +67,8 @@ def deflex():
     """The `deflex` binary: $DEFLEX_BIN when set, otherwise built here with cargo."""
     if os.environ.get("DEFLEX_BIN"):
         return Path(os.environ["DEFLEX_BIN"])
-    subprocess.run(["cargo", "build", "-q", "-p", "deflex-cli"], cwd=ROOT, check=True)
+    subprocess.run(["cargo", "build", "-q", "-p", "deflex-cli", "--features", "ros2"], cwd=ROOT,
+                   check=True)
     target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
     return target / "debug" / "deflex"
 
