@@ -399,6 +399,7 @@ pub fn probe_reading(
         )
     }
 }
+
 #[test]
 fn combined_campaign_recovers_planted_parameters_simulated() {
     // Four independent campaigns: each passes `recover`, and together the intervals are honest:

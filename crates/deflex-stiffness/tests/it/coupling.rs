@@ -7,10 +7,6 @@ use deflex_stiffness::validation::predict_full;
 use deflex_stiffness::{EdofId, fit_couplings};
 use nalgebra::Vector3;
 
-/// Noise-free measurements of a robot with a J2.z–J3.z coupling (made by the synthetic
-/// module's own coupling code): the fit recovers the coupling and every stiffness from a
-/// start 50 % off, and the fitted model's deflection (deflex-model's coupling code)
-/// reproduces the measurements.
 /// The TX200 and its J2.z and J3.z eDoFs.
 fn tx200_j2_j3() -> (Robot, EdofId, EdofId) {
     let truth = builtin("tx200").unwrap();
@@ -34,6 +30,10 @@ fn coupled(a: EdofId, b: EdofId, c: f64) -> SyntheticOptions {
     }
 }
 
+/// Noise-free measurements of a robot with a J2.z–J3.z coupling (made by the synthetic
+/// module's own coupling code): the fit recovers the coupling and every stiffness from a
+/// start 50 % off, and the fitted model's deflection (deflex-model's coupling code)
+/// reproduces the measurements.
 #[test]
 fn a_coupling_and_the_stiffnesses_are_recovered() {
     let (truth, j2, j3) = tx200_j2_j3();
