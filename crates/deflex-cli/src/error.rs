@@ -228,8 +228,9 @@ pub enum CliError {
     #[cfg(not(feature = "ros2"))]
     #[error(
         "{origin}: {field}: this deflex was built without ROS 2 (the `ros2` cargo feature of \
-         deflex-cli); build it with: cargo install --path crates/deflex-cli --features ros2 (or \
-         run it as cargo run --release -p deflex-cli --features ros2 -- run …)"
+         deflex-cli); build it with: {} (or run it as cargo run --release -p deflex-cli \
+         --features ros2 -- run …)",
+        crate::ros2_parts::ros2_build_command!()
     )]
     Ros2NotBuilt {
         /// The cell file.

@@ -30,7 +30,9 @@ const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (with ROS 2)");
 #[cfg(not(feature = "ros2"))]
 const VERSION: &str = concat!(
     env!("CARGO_PKG_VERSION"),
-    " (without ROS 2: cargo install --path crates/deflex-cli --features ros2)"
+    " (without ROS 2: ",
+    ros2_parts::ros2_build_command!(),
+    ")"
 );
 
 /// deflex: make industrial robots accurate under load (elasto-geometrical model, calibration,

@@ -9,8 +9,19 @@
 //! builds a `deflex` with it (`CliError::Ros2NotBuilt`).
 
 use crate::error::CliError;
+
+/// The command that builds a `deflex` with ROS 2, as a literal (for `concat!`): named by the
+/// refusal of a build without it and by that build's `deflex --version`.
+#[cfg(not(feature = "ros2"))]
+macro_rules! ros2_build_command {
+    () => {
+        "cargo install --path crates/deflex-cli --features ros2"
+    };
+}
 use deflex_runtime::config::SensorKind;
 use deflex_runtime::{CellFile, ForceSensorLink, Telemetry};
+#[cfg(not(feature = "ros2"))]
+pub(crate) use ros2_build_command;
 
 #[cfg(feature = "ros2")]
 pub use built::{Ros2Outcome, Ros2Parts};
