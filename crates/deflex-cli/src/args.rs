@@ -1,7 +1,7 @@
 //! Shared argument parsing: joint values, wrenches, lengths, robot loading.
 
 use crate::error::{CliError, UsageError};
-use deflex_load::load_robot;
+use deflex_app::load::load_robot;
 use deflex_model::Robot;
 
 /// A numeric flag within `[lo, hi]` (NaN and infinities refused), or an error naming the flag,

@@ -1,5 +1,5 @@
 //! `deflex cell --sim`: the digital twin served on loopback over the protocols of a real cell
-//! (the work is `deflex_twin::cell_server`, its endpoints from the runtime's link factory). It
+//! (the work is `deflex_sim::twin::cell_server`, its endpoints from the runtime's link factory). It
 //! reads the same `CELL.toml` as `deflex run`. The twin plays any robot (`--robot`: a built-in
 //! name or a robot file; default the twin file's, else the paper's TX200) with that robot's cell
 //! (`deflex_sim::CellConfig::for_robot`), and names it in every output.
@@ -8,12 +8,14 @@ use crate::args::{check_flag, print_json};
 use crate::cmd_control::{load_cell_file, stats_json};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
+use deflex_app::cell::config::CellFile;
 use deflex_record::{McapRecorder, RecordReport};
-use deflex_runtime::CellFile;
+use deflex_sim::twin::cell_server::{
+    CellEnd, CellEvent, CellOutcome, ServeOptions, serve_cell_with,
+};
+use deflex_sim::twin::{TwinCellStream, twin_cell_session_info};
 use deflex_sim::{CellConfig, ConeParams, ToolPath};
 use deflex_telemetry::{CycleSample, Source, broadcast};
-use deflex_twin::cell_server::{CellEnd, CellEvent, CellOutcome, ServeOptions, serve_cell_with};
-use deflex_twin::{TwinCellStream, twin_cell_session_info};
 use deflex_view::ViewStats;
 use serde_json::json;
 use std::path::PathBuf;
@@ -142,8 +144,11 @@ pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, CliError> {
 /// twin file's settings over it.
 pub fn twin_config(args: &CellArgs) -> Result<CellConfig, CliError> {
     match (&args.twin, &args.robot) {
-        (Some(p), robot) => Ok(deflex_twin::load_cell(p, robot.as_deref())?),
-        (None, Some(robot)) => deflex_twin::cell_for_robot(robot)
+        (Some(p), robot) => Ok(deflex_app::cell::twin_cell_file::load_cell(
+            p,
+            robot.as_deref(),
+        )?),
+        (None, Some(robot)) => deflex_app::cell::twin_cell_file::cell_for_robot(robot)
             .map_err(|e| CliError::in_context(format!("--robot {robot}"))(e.into())),
         (None, None) => Ok(CellConfig::default()),
     }
@@ -202,7 +207,7 @@ pub fn cell_session(
     }
     args.check()?;
     let file = load_cell_file(&args.config)?;
-    if file.sensor.kind == deflex_runtime::config::SensorKind::Ros2 {
+    if file.sensor.kind == deflex_app::cell::config::SensorKind::Ros2 {
         return Err(CliError::SimCellNeedsNetFt {
             origin: file.origin.to_string(),
         });
@@ -241,7 +246,13 @@ pub fn cell_session(
             print_event(event)
         }
     };
-    let served = serve_cell_with(&file, &options, stop, &mut events, Some(&mut stream));
+    let served = file
+        .cell_sides(&options.twin)
+        .map_err(CliError::from)
+        .and_then(|sides| {
+            serve_cell_with(&sides, &options, stop, &mut events, Some(&mut stream))
+                .map_err(CliError::from)
+        });
     drop(stream); // the stream ends
     let view = view.map(|v| {
         let stats = v.stats();

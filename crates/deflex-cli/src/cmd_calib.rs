@@ -5,26 +5,26 @@ use crate::args::{check_range, finite_or_null, robot};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
 
-use deflex_files::{AtomicDir, AtomicFile};
-use deflex_load::{read_file_ignoring, robot_to_toml_for};
-use deflex_model::Robot;
-use deflex_report::calibration_report::{
+use deflex_app::load::{read_file_ignoring, robot_to_toml_for};
+use deflex_app::report::calibration_report::{
     CalibrationReport, CouplingSection, write_calibration_report,
 };
-use deflex_report::calibration_tables::{
+use deflex_app::report::calibration_tables::{
     ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
     iteration_rows, residual_summary, shift_rows, stiffness_rows,
 };
-use deflex_report::text_table::render_table;
-use deflex_report::validation_report::{
+use deflex_app::report::validation_report::{
     VALIDATION_HEADERS, validation_rotation_summary, validation_rows, write_validation_report,
 };
-use deflex_stiffness::consistency::{
+use deflex_calibrate::stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
-use deflex_stiffness::search::{Criterion, SearchOptions, SearchStep, search_structure};
-use deflex_stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_stiffness::validation::{predict, validate as run_validation};
+use deflex_calibrate::stiffness::search::{Criterion, SearchOptions, SearchStep, search_structure};
+use deflex_calibrate::stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
+use deflex_calibrate::stiffness::validation::{predict, validate as run_validation};
+use deflex_files::{AtomicDir, AtomicFile};
+use deflex_model::Robot;
+use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -176,7 +176,7 @@ fn calibration_json(cal: &Calibration) -> Value {
         "parameters": cal.parameter_labels,
         "correlation": (0..cal.correlation.nrows()).map(|i| (0..cal.correlation.ncols()).map(|j| cal.correlation[(i, j)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
         "correlated_pairs": cal.correlated_pairs().iter().map(|p| json!({"first": p.first, "second": p.second, "rho": p.rho, "text": p.to_string()})).collect::<Vec<_>>(),
-        "correlation_flag_threshold": deflex_stiffness::stiffness_fit::STRONG_CORRELATION,
+        "correlation_flag_threshold": deflex_calibrate::stiffness::stiffness_fit::STRONG_CORRELATION,
         "condition_number": cal.condition_number,
         "reduced_chi2": cal.reduced_chi2,
         "bic": cal.bic,
@@ -188,7 +188,7 @@ fn calibration_json(cal: &Calibration) -> Value {
         "residual_max_norm_m": r.max_norm_m,
         "rotation_rows": cal.rotation_rows,
         "residual_rotation_rms_rad": r.rotation_rms_rad,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_calibrate::stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "warnings": cal.warnings,
     })
@@ -196,7 +196,7 @@ fn calibration_json(cal: &Calibration) -> Value {
 
 /// A measurement file read and checked against the robot's forward kinematics.
 struct CheckedFile {
-    rows: Vec<deflex_stiffness::MeasurementRow>,
+    rows: Vec<deflex_calibrate::stiffness::MeasurementRow>,
     check: GeometryCheck,
     /// Warnings to print.
     warnings: Vec<String>,
@@ -260,7 +260,7 @@ fn geometry_json(check: &GeometryCheck) -> Value {
         "checked_loads": check.checked_loads,
         "disagreeing_rows": check.disagreeing_rows(),
         "max_distance_m": check.max_distance_m,
-        "first_disagreements": check.disagreements.iter().take(deflex_stiffness::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
+        "first_disagreements": check.disagreements.iter().take(deflex_calibrate::stiffness::consistency::ROWS_NAMED).map(|d| json!({"row": d.row + 1, "line": d.line, "load_case": d.load_case, "point": d.point, "distance_m": d.distance_m, "text": d.to_string()})).collect::<Vec<_>>(),
         "unchecked": check.unchecked,
         "header_mismatch": check.header_mismatch,
     })
@@ -437,7 +437,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
 fn identify(
     args: &CalibrateArgs,
     start: &Robot,
-    rows: &[deflex_stiffness::MeasurementRow],
+    rows: &[deflex_calibrate::stiffness::MeasurementRow],
     json_output: bool,
 ) -> Result<(Calibration, Vec<SearchStep>, Option<String>), CliError> {
     Ok(if args.structure == StructureChoice::Fixed {
@@ -506,7 +506,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
         None => Vec::new(),
     };
     if json_output {
-        let m = |e: &deflex_stiffness::validation::ModelErrors| {
+        let m = |e: &deflex_calibrate::stiffness::validation::ModelErrors| {
             let rotation = e.rotation.as_ref().map(|r| {
                 let s = &r.stats;
                 json!({"rows": s.rows, "rms_rad": s.rms_rad, "max_abs_rad": s.max_abs_rad, "mean_rad": s.mean_rad, "rms_norm_rad": s.rms_norm_rad, "max_norm_rad": s.max_norm_rad})

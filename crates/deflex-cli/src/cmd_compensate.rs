@@ -1,7 +1,7 @@
 //! `deflex compensate`: offline compensation of a tool path and robot programs, for cells
 //! without a real-time option. Parsing, checks, progress and printing only: the compensation is
 //! `deflex_compensate`, the process model `deflex_sim::process_model`, the G-code reader
-//! `deflex_gcode`, the programs `deflex_program`.
+//! `deflex_cam::gcode`, the programs `deflex_cam::program`.
 //!
 //! The robot's twin cell ([`deflex_sim::CellConfig::for_robot`]: part frame, seed
 //! configuration, sheet, tool) places the path unless `--part-xyz-mm` / `--seed-deg` say
@@ -65,8 +65,8 @@ pub enum FormatArg {
 }
 
 impl FormatArg {
-    fn format(self) -> Option<deflex_program::Format> {
-        use deflex_program::Format;
+    fn format(self) -> Option<deflex_cam::program::Format> {
+        use deflex_cam::program::Format;
         match self {
             FormatArg::Krl => Some(Format::Krl),
             FormatArg::Rapid => Some(Format::Rapid),
@@ -696,12 +696,12 @@ fn read_log(
     part_frame: &deflex_model::Pose,
 ) -> Result<WrenchLog, LogError> {
     let file = path.display().to_string();
-    let text = deflex_load::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
-        deflex_load::BoundedReadError::Io(source) => LogError::Io {
+    let text = deflex_app::load::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
+        deflex_app::load::BoundedReadError::Io(source) => LogError::Io {
             file: file.clone(),
             message: source.to_string(),
         },
-        deflex_load::BoundedReadError::TooLarge(size) => LogError::TooLarge {
+        deflex_app::load::BoundedReadError::TooLarge(size) => LogError::TooLarge {
             file: file.clone(),
             message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
         },

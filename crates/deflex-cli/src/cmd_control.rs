@@ -1,6 +1,6 @@
 //! `deflex run` — the real-time correction controller (Johra et al. 2022, Section 4.2: eq. 5–7,
 //! 15, 17) against a robot link and a force/torque sensor described by `CELL.toml`
-//! (docs/cell.example.toml). The session is `deflex_runtime::CellRun`; this module prints its
+//! (docs/cell.example.toml). The session is `deflex_app::cell::cell_run::CellRun`; this module prints its
 //! live status and summary. Its counterpart without hardware, `deflex cell --sim`, is in
 //! [`crate::cell_server`]; the two together over loopback are tested in deflex-twin.
 
@@ -8,11 +8,13 @@ use crate::args::{check_flag, print_json};
 use crate::error::{CliError, RunFailure};
 use crate::ros2_parts::{Ros2Outcome, Ros2Parts};
 use clap::Args;
+use deflex_app::cell::cell_run::FeedForwardInUse;
+use deflex_app::cell::cell_run::{CellRun, CellRunOutcome};
+use deflex_app::cell::config::CellFile;
 use deflex_control::Fault;
 use deflex_record::{McapRecorder, RecordOptions, RecordReport};
-use deflex_runtime::cell_run::FeedForwardInUse;
+use deflex_runtime::LiveStatus;
 use deflex_runtime::stats::StatsSummary;
-use deflex_runtime::{CellFile, CellRun, CellRunOutcome, LiveStatus};
 use deflex_view::{ViewHandle, ViewStats};
 use serde_json::json;
 use std::path::PathBuf;

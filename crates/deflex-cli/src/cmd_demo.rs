@@ -3,7 +3,7 @@
 
 use crate::error::CommandResult;
 use clap::Args;
-use deflex_study::{DemoOptions, Progress, run_study};
+use deflex_app::study::{DemoOptions, Progress, run_study};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
@@ -72,9 +72,9 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
         bar: None,
         quiet: json,
     };
-    let cell = deflex_twin::cell_for_robot(&options.robot)?;
+    let cell = deflex_app::cell::twin_cell_file::cell_for_robot(&options.robot)?;
     let study = run_study(&options, cell, &mut bars)?;
-    deflex_report::study::write_study(&study, &args.out)?;
+    deflex_app::report::study::write_study(&study, &args.out)?;
     let summary = study.summary;
     if json {
         println!(
@@ -92,7 +92,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
     );
     if summary.paper_comparison {
         println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
-        for (quantity, paper, ours, unit) in deflex_study::paper_vs_deflex_rows(&summary) {
+        for (quantity, paper, ours, unit) in deflex_app::study::paper_vs_deflex_rows(&summary) {
             println!(
                 "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
                 quantity, paper, ours
@@ -122,7 +122,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
     );
     let sc = &summary.stiff_contact;
     let outcome =
-        |l: &deflex_study::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
+        |l: &deflex_app::study::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
             (Some(f), _) => format!(" ({f})"),
             (None, 0) => String::new(),
             (None, n) => format!(

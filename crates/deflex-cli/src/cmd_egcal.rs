@@ -1,22 +1,24 @@
 //! `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict`: elasto-geometric
 //! calibration from absolute tracker readings (maths in `deflex-absolute`; the report, plots and
-//! prediction tables in `deflex_report::absolute_report`, shared with the Python package; the
+//! prediction tables in `deflex_app::report::absolute_report`, shared with the Python package; the
 //! files here).
 
 use crate::args::{print_json, robot};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, Subcommand, ValueEnum};
-use deflex_absolute::campaign::Campaign;
-use deflex_absolute::data::{
+use deflex_app::report::absolute_report as report;
+use deflex_calibrate::geometry::campaign::Campaign;
+use deflex_calibrate::geometry::data::{
     AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, format_absolute, limits, parse_absolute_ignoring,
 };
-use deflex_absolute::fit::{ChoiceError, FitOptions, HeldOutProtocol, Step, fit, session_groups};
-use deflex_absolute::params::EgModel;
-use deflex_absolute::predict;
-use deflex_absolute::solve::Loss;
-use deflex_absolute::terms::CalibrationTerms;
-use deflex_absolute::ur10_tracker::{ImportOptions, MAX_SERIES_BYTES, parse_series};
-use deflex_report::absolute_report as report;
+use deflex_calibrate::geometry::fit::{
+    ChoiceError, FitOptions, HeldOutProtocol, Step, fit, session_groups,
+};
+use deflex_calibrate::geometry::params::EgModel;
+use deflex_calibrate::geometry::predict;
+use deflex_calibrate::geometry::solve::Loss;
+use deflex_calibrate::geometry::terms::CalibrationTerms;
+use deflex_calibrate::geometry::ur10_tracker::{ImportOptions, MAX_SERIES_BYTES, parse_series};
 use std::path::{Path, PathBuf};
 
 /// Gap between time stamps that starts a new measuring session (`--cv-by session`).
@@ -54,14 +56,14 @@ pub const MAX_PLAUSIBLE_RMS_M: f64 = 0.02;
 /// Refuse a fit whose readings the calibrated robot still misses by more than
 /// [`MAX_PLAUSIBLE_RMS_M`] RMS (data of another robot given with `--robot`): nothing is written.
 fn check_plausible_fit(
-    result: &deflex_absolute::outcome::FitResult,
+    result: &deflex_calibrate::geometry::outcome::FitResult,
     robot: &str,
     data: &[PathBuf],
 ) -> Result<(), CliError> {
     let fitted: Vec<f64> = result
         .residuals
         .iter()
-        .filter(|r| r.role == deflex_absolute::outcome::Role::Fit)
+        .filter(|r| r.role == deflex_calibrate::geometry::outcome::Role::Fit)
         .map(|r| r.residual.norm_squared())
         .collect();
     if fitted.is_empty() {
@@ -147,7 +149,7 @@ pub fn load_model(spec: &str) -> Result<(EgModel, Option<CalibrationTerms>), Cli
         return Ok((model, None));
     }
     let text = read_bounded(&terms_file, MAX_TERMS_BYTES)?;
-    let in_terms = |e: deflex_absolute::terms::TermsError| {
+    let in_terms = |e: deflex_calibrate::geometry::terms::TermsError| {
         CliError::in_context(terms_file.display().to_string())(e.into())
     };
     let terms = CalibrationTerms::from_json(&text).map_err(in_terms)?;
@@ -302,11 +304,13 @@ pub fn import(command: ImportCommand, json_output: bool) -> CommandResult {
     // refused, not rewritten (a silently changed set-up name would no longer match the robot
     // file's [[setup]]).
     for (flag, label) in [("--setup", &args.setup), ("--target", &args.target)] {
-        deflex_absolute::data::check_label(label).map_err(|problem| CliError::ImportLabel {
-            flag,
-            label: deflex_files::shown(label).to_string(),
-            problem,
-            max_bytes: limits::MAX_LABEL_BYTES,
+        deflex_calibrate::geometry::data::check_label(label).map_err(|problem| {
+            CliError::ImportLabel {
+                flag,
+                label: deflex_files::shown(label).to_string(),
+                problem,
+                max_bytes: limits::MAX_LABEL_BYTES,
+            }
         })?;
     }
     let options = ImportOptions {
@@ -412,17 +416,17 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Com
     for path in &args.loaded {
         // Loaded readings are in the robot's world: checked against its forward kinematics
         // as `deflex calibrate` checks them (another robot's campaign is refused).
-        let file = deflex_load::read_file_ignoring(path, Some(n), true, &args.ignore_column)?;
+        let file = deflex_app::load::read_file_ignoring(path, Some(n), true, &args.ignore_column)?;
         let origin = deflex_files::shown_path(path);
-        let check = deflex_stiffness::consistency::check_geometry(
+        let check = deflex_calibrate::stiffness::consistency::check_geometry(
             &start_robot,
             &file.rows,
             Some(&file.lines),
             Some(&file.header),
-            deflex_stiffness::consistency::DEFAULT_FK_TOLERANCE_M,
+            deflex_calibrate::stiffness::consistency::DEFAULT_FK_TOLERANCE_M,
         )
         .map_err(|e| CliError::in_context(origin.clone())(e.into()))?;
-        deflex_stiffness::consistency::enforce(
+        deflex_calibrate::stiffness::consistency::enforce(
             &check,
             &origin,
             false,
@@ -500,7 +504,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Com
     }
     check_plausible_fit(&result, &start_robot.name, &args.data)?;
     let robot_out = result.model.to_robot();
-    let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
+    let toml = deflex_app::load::robot_to_toml_for(&robot_out, &args.out);
     let terms = CalibrationTerms::of(&result);
     let terms_file = terms_path(&args.out);
     // Model, terms and report are one unit: the model and terms are written aside first, the

@@ -54,7 +54,7 @@ pub enum ExportCommandError {
     },
     /// The format cannot hold the robot, or the file did not read back.
     #[error(transparent)]
-    Export(#[from] deflex_export::ExportError),
+    Export(#[from] deflex_cam::export::ExportError),
     /// The URDF did not load.
     #[error("the written URDF does not read back: {0}")]
     Readback(deflex_model::ModelError),
@@ -82,7 +82,7 @@ pub enum ExportCommandError {
 }
 
 fn load(flag: &'static str, spec: &str) -> Result<Robot, ExportCommandError> {
-    deflex_load::load_robot(spec).map_err(|source| ExportCommandError::Robot {
+    deflex_app::load::load_robot(spec).map_err(|source| ExportCommandError::Robot {
         flag,
         spec: spec.to_string(),
         source,
@@ -142,12 +142,12 @@ pub fn run(args: ExportArgs, json: bool) -> Result<(), ExportCommandError> {
     let mut files: Vec<(PathBuf, String)> = Vec::new();
     let (format, error_m) = match args.format {
         ExportFormat::Urdf => {
-            let xml = deflex_export::urdf(&robot);
+            let xml = deflex_cam::export::urdf(&robot);
             let file_name = args
                 .out
                 .file_name()
                 .map_or("robot.urdf".into(), |n| n.to_string_lossy().into_owned());
-            let toml = deflex_export::urdf_robot_toml(&robot, &file_name);
+            let toml = deflex_cam::export::urdf_robot_toml(&robot, &file_name);
             let back = deflex_model::robot_from_toml_and_urdf_str(&toml, &xml, "export.toml")
                 .map_err(ExportCommandError::Readback)?;
             let gap = largest_gap(&robot, &|q| {
@@ -160,13 +160,13 @@ pub fn run(args: ExportArgs, json: bool) -> Result<(), ExportCommandError> {
         ExportFormat::UrCalibration => {
             let mut flange = robot.clone();
             flange.tool = deflex_model::Pose::identity();
-            let yaml = deflex_export::ur_calibration(&flange)?;
+            let yaml = deflex_cam::export::ur_calibration(&flange)?;
             let segments =
-                deflex_export::read_ur_calibration(&yaml, &args.out.display().to_string())?;
+                deflex_cam::export::read_ur_calibration(&yaml, &args.out.display().to_string())?;
             let gap = largest_gap(&flange, &|q| {
                 let mut t = deflex_model::Pose::identity();
                 for (s, qi) in segments.iter().zip(q) {
-                    t = t * deflex_export::segment_pose(s) * deflex_model::spatial::rot_z(*qi);
+                    t = t * deflex_cam::export::segment_pose(s) * deflex_model::spatial::rot_z(*qi);
                 }
                 Some(t.translation.vector)
             });
@@ -179,8 +179,8 @@ pub fn run(args: ExportArgs, json: bool) -> Result<(), ExportCommandError> {
                 .as_deref()
                 .map(|spec| load("--nominal", spec))
                 .transpose()?;
-            let text = deflex_export::dh_table(&robot, nominal.as_ref())?;
-            let rows = deflex_export::read_dh_table(&text, &args.out.display().to_string())?;
+            let text = deflex_cam::export::dh_table(&robot, nominal.as_ref())?;
+            let rows = deflex_cam::export::read_dh_table(&text, &args.out.display().to_string())?;
             // The table's rows rebuild the robot's placements.
             let mut rebuilt = robot.clone();
             for (joint, row) in rebuilt.joints.iter_mut().zip(&rows) {
@@ -254,7 +254,7 @@ mod tests {
             assert!(out.exists(), "{file}");
         }
         // The URDF's robot file loads from disk with the stiffnesses.
-        let robot = deflex_load::load_robot(dir.join("ur10e.toml").to_str().unwrap()).unwrap();
+        let robot = deflex_app::load::load_robot(dir.join("ur10e.toml").to_str().unwrap()).unwrap();
         let original = deflex_model::builtin("ur10e").unwrap();
         assert_eq!(robot.edof_count(), original.edof_count());
         // A KUKA arm has no UR calibration: refused, nothing written.

@@ -104,7 +104,8 @@ pub fn model(command: ModelCommand, json_output: bool) -> CommandResult {
             let robot = robot(&spec)?;
             // The twin cell `compensate`, `sim` and `demo` use for this robot; a robot no cell
             // can be built around (not 6 joints, no reachable part placement) says why.
-            let cell = deflex_twin::cell_for_robot(&spec).and_then(|c| c.summary());
+            let cell =
+                deflex_app::cell::twin_cell_file::cell_for_robot(&spec).and_then(|c| c.summary());
             if json_output {
                 let mut value = describe_json(&robot);
                 value["cell"] = match &cell {
@@ -688,7 +689,7 @@ pub fn map_plots(
     nodes: &[MapNode],
     robot_name: &str,
     wrench: &[f64; 6],
-) -> Result<Vec<PathBuf>, deflex_report::ReportError> {
+) -> Result<Vec<PathBuf>, deflex_plot::PlotError> {
     let mut xs: Vec<f64> = nodes.iter().map(|n| n.position_m[0] * 1e3).collect();
     let mut ys: Vec<f64> = nodes.iter().map(|n| n.position_m[1] * 1e3).collect();
     for v in [&mut xs, &mut ys] {
@@ -718,13 +719,13 @@ pub fn map_plots(
         ("deflection_norm.png", &norm, "|δp| [mm]"),
     ] {
         let path = out.join(name);
-        let spec = deflex_report::PlotSpec::new(
+        let spec = deflex_plot::PlotSpec::new(
             format!("{robot_name}: predicted {label} at z = {z_mm:.0} mm, {load}"),
             "x [mm]",
             "y [mm]",
         )
         .size(1000, 800);
-        deflex_report::heatmap(&path, &spec, &xs, &ys, values, label)?;
+        deflex_plot::heatmap(&path, &spec, &xs, &ys, values, label)?;
         written.push(path);
     }
     Ok(written)

@@ -5,21 +5,21 @@ use crate::args::robot;
 use crate::args::{check_range, finite_or_null};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
-use deflex_load::read_points;
-use deflex_measurements::format_rows_for;
-use deflex_measurements::points::parse_point_flag;
-use deflex_model::Robot;
-use deflex_report::plan_tables::{
+use deflex_app::load::read_points;
+use deflex_app::report::plan_tables::{
     EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
     expected_shift_rows, technician_rows,
 };
-use deflex_report::text_table::render_table;
-use deflex_stiffness::campaign_cell::{
+use deflex_calibrate::measurements::format_rows_for;
+use deflex_calibrate::measurements::points::parse_point_flag;
+use deflex_calibrate::stiffness::campaign_cell::{
     MAX_PLAN_FORCE_N, MAX_USER_POINTS, default_force_n, parse_directions,
 };
-use deflex_stiffness::plan::{
+use deflex_calibrate::stiffness::plan::{
     BasePoint, Floor, LoadKind, PlanOptions, PointSet, Table, TableOption, plan_experiments,
 };
+use deflex_model::Robot;
+use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -238,8 +238,8 @@ fn load_kind(args: &PlanArgs, nominal: &Robot, max_force_n: f64) -> Result<LoadK
                 Some(text) => crate::args::parse_list(text, "--masses-kg")?,
                 None if g > 0.0 => vec![(max_force_n / g).round().max(1.0)],
                 None => {
-                    return Err(deflex_stiffness::CalibError::from(
-                        deflex_stiffness::PlanError::NoGravity {
+                    return Err(deflex_calibrate::stiffness::CalibError::from(
+                        deflex_calibrate::stiffness::PlanError::NoGravity {
                             robot: nominal.name.clone(),
                         },
                     )
@@ -318,7 +318,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CommandResult {
     let plan = plan_experiments(&nominal, &options)?;
     deflex_files::write_atomic(&args.out, format_rows_for(&nominal, &plan.rows, &[]))
         .map_err(CliError::write(&args.out))?;
-    let cases = deflex_stiffness::data::load_case_count(&plan.rows);
+    let cases = deflex_calibrate::measurements::load_case_count(&plan.rows);
     let setup = &plan.setup;
     let load_text = match &setup.load {
         LoadKind::Cable { directions } => format!(
@@ -353,7 +353,7 @@ pub fn plan(args: PlanArgs, json_output: bool) -> CommandResult {
         let axis: Vec<Value> = plan
             .axis_cases
             .iter()
-            .map(|a| json!({"edof": deflex_stiffness::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
+            .map(|a| json!({"edof": deflex_calibrate::stiffness::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
             .collect();
         let setup_json = json!({
             "force_N": setup.force_n,

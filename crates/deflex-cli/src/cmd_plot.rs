@@ -57,7 +57,7 @@ pub fn plot(a: PlotArgs, json: bool) -> CommandResult {
         traces.push(trace);
     }
     let out = deflex_files::AtomicDir::create(&a.out).map_err(CliError::write(&a.out))?;
-    let figures = deflex_report::write_run_figures(out.path(), &traces)?;
+    let figures = deflex_app::report::write_run_figures(out.path(), &traces)?;
     out.commit().map_err(CliError::write(&a.out))?;
     let names: Vec<String> = figures
         .figures

@@ -1,16 +1,16 @@
 //! `deflex register`: a new measuring session (where the tracker stands) and, optionally, a new
 //! target (probe) registered from a handful of readings with the calibrated robot frozen
-//! (maths in `deflex_absolute::register`).
+//! (maths in `deflex_calibrate::geometry::register`).
 
 use crate::args::{check_flag, print_json};
 use crate::cmd_egcal::{load_model, read_absolute, read_bounded, terms_path};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
-use deflex_absolute::campaign::Campaign;
-use deflex_absolute::data::{DEFAULT_ORIENTATION_SIGMA_RAD, limits};
-use deflex_absolute::register::{RegisterOptions, register as register_session};
-use deflex_absolute::solve::Loss;
-use deflex_report::absolute_report::registration;
+use deflex_app::report::absolute_report::registration;
+use deflex_calibrate::geometry::campaign::Campaign;
+use deflex_calibrate::geometry::data::{DEFAULT_ORIENTATION_SIGMA_RAD, limits};
+use deflex_calibrate::geometry::register::{RegisterOptions, register as register_session};
+use deflex_calibrate::geometry::solve::Loss;
 use std::path::PathBuf;
 
 /// Readings that do not say which set-up or target to register.
@@ -192,7 +192,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
     // Orientations measured but not fitted: the new target's frame in closed form, so that
     // `predict` can report orientation errors.
     if let Some(t) = target.filter(|&t| model.targets[t].rotation.is_none()) {
-        deflex_absolute::register::start::initialise_target_rotations(
+        deflex_calibrate::geometry::register::start::initialise_target_rotations(
             &mut model,
             &campaign,
             &[t],
@@ -200,7 +200,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
         );
     }
     let robot_out = model.to_robot();
-    let toml = deflex_load::robot_to_toml_for(&robot_out, &args.out);
+    let toml = deflex_app::load::robot_to_toml_for(&robot_out, &args.out);
     if terms.is_some() {
         let from = terms_path(std::path::Path::new(&args.robot));
         let text = read_bounded(&from, 64 << 20)?;

@@ -156,7 +156,7 @@ fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
         "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
          # cell's tool and base pivot, as a user would describe that cell.\n{}",
         config.part.robot,
-        deflex_load::robot_to_toml_for(&robot, &args.out)
+        deflex_app::load::robot_to_toml_for(&robot, &args.out)
     );
     deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
     if json {
@@ -188,8 +188,11 @@ fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
 /// settings over it.
 pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, CliError> {
     match (&twin.config, &twin.robot) {
-        (Some(p), robot) => Ok(deflex_twin::load_cell(p, robot.as_deref())?),
-        (None, Some(robot)) => Ok(deflex_twin::cell_for_robot(robot)?),
+        (Some(p), robot) => Ok(deflex_app::cell::twin_cell_file::load_cell(
+            p,
+            robot.as_deref(),
+        )?),
+        (None, Some(robot)) => Ok(deflex_app::cell::twin_cell_file::cell_for_robot(robot)?),
         (None, None) => Ok(CellConfig::default()),
     }
 }
@@ -335,7 +338,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
     let mut plan_header = None;
     let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => {
-            let plan_file = deflex_load::read_file(plan, None, false)?;
+            let plan_file = deflex_app::load::read_file(plan, None, false)?;
             let rows = run_campaign(&config, &plan_file.rows, args.seed)?;
             plan_header = Some(plan_file.header);
             (format!("plan {}", plan.display()), rows)
@@ -379,7 +382,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
     };
     let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())?;
     deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
-    let cases = deflex_stiffness::data::load_case_count(&rows);
+    let cases = deflex_calibrate::measurements::load_case_count(&rows);
     let max_disp = rows
         .iter()
         .filter_map(|r| r.displacement_m)

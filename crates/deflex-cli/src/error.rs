@@ -18,34 +18,40 @@ pub enum CliError {
     Model(#[from] deflex_model::ModelError),
     /// A measurement or plan file that cannot be used.
     #[error(transparent)]
-    Data(#[from] deflex_measurements::DataError),
+    Data(#[from] deflex_calibrate::measurements::DataError),
     /// A points file that cannot be used.
     #[error(transparent)]
-    Points(#[from] deflex_measurements::points::PointsError),
+    Points(#[from] deflex_calibrate::measurements::points::PointsError),
     /// A point given on the command line that cannot be used.
     #[error(transparent)]
-    Point(#[from] deflex_measurements::points::PointProblem),
+    Point(#[from] deflex_calibrate::measurements::points::PointProblem),
     /// Calibration, planning or validation refused the data.
     #[error(transparent)]
-    Calib(#[from] deflex_stiffness::CalibError),
+    Calib(#[from] deflex_calibrate::stiffness::CalibError),
     /// The twin refused its settings or a path.
     #[error(transparent)]
     Sim(#[from] deflex_sim::SimError),
     /// A twin settings file that cannot be read or used.
     #[error(transparent)]
-    CellFile(#[from] deflex_twin::CellFileError),
+    CellFile(#[from] deflex_app::cell::twin_cell_file::CellFileError),
     /// The controller could not drive the twin.
     #[error(transparent)]
-    Twin(#[from] deflex_twin::TwinError),
+    Twin(#[from] deflex_sim::twin::TwinError),
+    /// A twin workflow could not be set up.
+    #[error(transparent)]
+    TwinSetup(#[from] deflex_app::twin::TwinSetupError),
+    /// The ends of the simulated cell could not be made.
+    #[error(transparent)]
+    CellSides(#[from] deflex_app::cell::links::CellSidesError),
     /// The study could not be run.
     #[error(transparent)]
-    Demo(#[from] deflex_study::DemoError),
+    Demo(#[from] deflex_app::study::DemoError),
     /// A report could not be written.
     #[error(transparent)]
-    Page(#[from] deflex_report::PageError),
+    Page(#[from] deflex_app::report::PageError),
     /// A plot or page could not be written.
     #[error(transparent)]
-    Report(#[from] deflex_report::ReportError),
+    Report(#[from] deflex_plot::PlotError),
     /// The live view could not be served.
     #[error(transparent)]
     View(#[from] deflex_view::ViewError),
@@ -144,31 +150,31 @@ pub enum CliError {
     },
     /// An absolute (tracker) measurement file that cannot be used.
     #[error(transparent)]
-    AbsoluteData(#[from] deflex_absolute::data::AbsoluteDataError),
+    AbsoluteData(#[from] deflex_calibrate::geometry::data::AbsoluteDataError),
     /// A tracker series that cannot be imported.
     #[error(transparent)]
-    Import(#[from] deflex_absolute::ur10_tracker::ImportError),
+    Import(#[from] deflex_calibrate::geometry::ur10_tracker::ImportError),
     /// A campaign the elasto-geometric calibration cannot use.
     #[error(transparent)]
-    Campaign(#[from] deflex_absolute::campaign::CampaignError),
+    Campaign(#[from] deflex_calibrate::geometry::campaign::CampaignError),
     /// An elasto-geometric fit that failed.
     #[error(transparent)]
-    Fit(#[from] deflex_absolute::fit::FitError),
+    Fit(#[from] deflex_calibrate::geometry::fit::FitError),
     /// A prediction that failed.
     #[error(transparent)]
-    Predict(#[from] deflex_absolute::predict::PredictError),
+    Predict(#[from] deflex_calibrate::geometry::predict::PredictError),
     /// Readings that do not say which set-up or target to register.
     #[error(transparent)]
     RegisterInput(#[from] crate::cmd_register::RegisterInputError),
     /// A registration that failed.
     #[error(transparent)]
-    Register(#[from] deflex_absolute::register::RegisterError),
+    Register(#[from] deflex_calibrate::geometry::register::RegisterError),
     /// A calibration terms file that cannot be used.
     #[error(transparent)]
-    Terms(#[from] deflex_absolute::terms::TermsError),
+    Terms(#[from] deflex_calibrate::geometry::terms::TermsError),
     /// A model step or loss not known (`--steps`, `--loss`).
     #[error(transparent)]
-    Choice(#[from] deflex_absolute::fit::ChoiceError),
+    Choice(#[from] deflex_calibrate::geometry::fit::ChoiceError),
     /// A fit whose readings the calibrated robot still misses by centimetres: another robot's
     /// data. Nothing is written.
     #[error(
@@ -210,16 +216,16 @@ pub enum CliError {
         /// The label, shown with its control characters escaped.
         label: String,
         /// What is wrong with it.
-        problem: deflex_absolute::data::LabelProblem,
+        problem: deflex_calibrate::geometry::data::LabelProblem,
         /// Longest label accepted (bytes).
         max_bytes: usize,
     },
     /// A cell file (`CELL.toml`) that cannot be read or used.
     #[error(transparent)]
-    Config(#[from] deflex_runtime::ConfigError),
+    Config(#[from] deflex_app::cell::config::ConfigError),
     /// A `deflex run` session that could not start (links, sensor, threads).
     #[error(transparent)]
-    Start(#[from] deflex_runtime::StartError),
+    Start(#[from] deflex_app::cell::cell_run::StartError),
     /// The ROS 2 sensor link or bridge.
     #[cfg(feature = "ros2")]
     #[error(transparent)]
@@ -240,7 +246,7 @@ pub enum CliError {
     },
     /// The simulated cell could not serve its session.
     #[error(transparent)]
-    CellServe(#[from] deflex_twin::cell_server::CellServeError),
+    CellServe(#[from] deflex_sim::twin::cell_server::CellServeError),
     /// The run log's writer thread failed.
     #[error("log writer: {0}")]
     LogWriter(std::io::Error),

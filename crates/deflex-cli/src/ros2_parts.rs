@@ -18,8 +18,10 @@ macro_rules! ros2_build_command {
         "cargo install --path crates/deflex-cli --features ros2"
     };
 }
-use deflex_runtime::config::SensorKind;
-use deflex_runtime::{CellFile, ForceSensorLink, Telemetry};
+use deflex_app::cell::config::CellFile;
+use deflex_app::cell::config::SensorKind;
+use deflex_io::ForceSensorLink;
+use deflex_runtime::Telemetry;
 #[cfg(not(feature = "ros2"))]
 pub(crate) use ros2_build_command;
 

@@ -8,7 +8,7 @@
 //!   wrench `w_fx_n … w_mz_nm` (base axes, eq. 2) and `flags`. The TCP position of a row is the
 //!   robot model's forward kinematics of its joints (the *commanded* TCP: the robot reports motor
 //!   positions, which do not see the deflection). Rows flagged taring, stale wrench, latched or
-//!   with any fault bit (`flags & 0x601F`, the bits of `deflex_control::safety::Flags`) are
+//!   with any fault bit (`flags & 0x601F`, the bits of `deflex_telemetry::Flags`) are
 //!   skipped: their wrench is not a measurement of the process.
 //! * **`deflex sim isf` log**: columns `des_x_mm … des_z_mm` (the desired TCP in the part frame)
 //!   and the contact wrench `fx_N … mz_Nm` (part-frame axes); positions are mapped to the world
@@ -37,7 +37,7 @@ pub const MAX_LOG_BYTES: u64 = 1 << 30;
 /// Largest number of rows read.
 pub const MAX_LOG_ROWS: usize = 20_000_000;
 /// `deflex run` flag bits whose rows are skipped: the eleven fault bits, latched, taring and
-/// stale wrench (`deflex_control::safety::Flags`; a test in deflex-cli checks the bits against
+/// stale wrench (`deflex_telemetry::Flags`; a test in deflex-cli checks the bits against
 /// it, since this crate does not depend on the controller).
 pub const RUN_LOG_SKIP_FLAGS: u32 = 0x7FF | (1 << 16) | (1 << 21) | (1 << 22);
 

@@ -15,9 +15,11 @@ use crate::feedforward::{FeedForward, FeedForwardStep, TrackState};
 use crate::limiter::{Limiter, LimiterConfig, LimiterOutput, RampState};
 use crate::pid::{Pid, PidGains, PidSolution};
 use crate::runaway::{RunawayConfig, RunawayGuard};
-use crate::safety::{FAULT_KINDS, Fault, FaultKind, Flags, SafeAction, Safety, SafetyConfig};
+use crate::safety::{Fault, SafeAction, Safety, SafetyConfig};
 use crate::wrench::{WrenchConfig, WrenchProcessor};
 use deflex_model::{Data, MAX_JOINTS, Robot, Wrench};
+use deflex_telemetry::Phase;
+use deflex_telemetry::{FAULT_KINDS, FaultKind, Flags};
 use nalgebra::SMatrix;
 
 mod checks;
@@ -56,37 +58,6 @@ impl Default for ControllerConfig {
             tare_s: 0.2,
             bias: None,
             runaway: RunawayConfig::default(),
-        }
-    }
-}
-
-/// Life-cycle phase.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Phase {
-    /// Not started: ξ = 0.
-    Idle,
-    /// Averaging out-of-contact readings for the bias: ξ = 0.
-    Taring,
-    /// Ramping in or applying the law.
-    Running,
-    /// Ramping out after [`Controller::stop`].
-    Stopping,
-    /// Stopped: ξ = 0.
-    Stopped,
-    /// A fault is latched: ξ goes to / stays at the safe value.
-    Faulted,
-}
-
-impl Phase {
-    /// Lower-case name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Phase::Idle => "idle",
-            Phase::Taring => "taring",
-            Phase::Running => "running",
-            Phase::Stopping => "stopping",
-            Phase::Stopped => "stopped",
-            Phase::Faulted => "faulted",
         }
     }
 }

@@ -71,7 +71,7 @@
 //!   point at that time.
 //!
 //! **Off the path**: when the TCP is farther than `max_offset_m` from the point found, the prior
-//! is zero (the rate limit smooths the change) and [`crate::safety::Flags::FEEDFORWARD_OFF_PATH`]
+//! is zero (the rate limit smooths the change) and [`deflex_telemetry::Flags::FEEDFORWARD_OFF_PATH`]
 //! is set; in arc-length mode the arc length is kept, so the tracker locks on again when the
 //! TCP comes back within the window. **After the end** the arc length stays at the path's end:
 //! the prior is the last point's while the TCP stays within `max_offset_m` of it, zero beyond.

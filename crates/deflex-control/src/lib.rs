@@ -47,11 +47,12 @@ pub mod limiter;
 pub mod pid;
 pub mod runaway;
 pub mod safety;
+pub mod telemetry;
 pub mod wrench;
 
 pub use controller::{
     ControlError, Controller, ControllerConfig, CycleInput, CycleOutput, JOINT_MAP_DAMPING,
-    JointCorrectionMap, Phase,
+    JointCorrectionMap,
 };
 pub use estimate::{DeflectionEstimate, tcp_deflection_in_base};
 pub use feedforward::{
@@ -61,5 +62,6 @@ pub use feedforward::{
 pub use limiter::{Limiter, LimiterConfig};
 pub use pid::{Pid, PidGains};
 pub use runaway::{RunawayAction, RunawayConfig, RunawayGuard};
-pub use safety::{Channel, Fault, FaultKind, Flags, SafeAction, Safety, SafetyConfig};
+pub use safety::{Channel, Fault, SafeAction, Safety, SafetyConfig};
+pub use telemetry::RecordCycle;
 pub use wrench::{ToolLoad, WrenchConfig, WrenchProcessor};

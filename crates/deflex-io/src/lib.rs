@@ -34,6 +34,7 @@ pub mod guard;
 pub mod link;
 pub mod netft;
 pub mod peer;
+pub mod robot_side;
 pub mod rsi;
 pub mod simple_tcp;
 pub mod simple_udp;
@@ -48,3 +49,4 @@ pub use link::{
     RobotState, WrenchSample,
 };
 pub use peer::{PeerConfigError, PeerPolicy, PeerWarning, validate_peer};
+pub use robot_side::{RobotEndpoint, RobotKind, RobotSide};

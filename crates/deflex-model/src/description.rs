@@ -614,14 +614,14 @@ impl Robot {
 }
 
 /// Write a robot as TOML in the same schema (the calibration result is a drop-in robot file).
-/// A URDF path is written as the robot file had it; use `deflex_load::robot_to_toml_for` when the TOML goes
+/// A URDF path is written as the robot file had it; use `deflex_app::load::robot_to_toml_for` when the TOML goes
 /// to another folder.
 pub fn robot_to_toml(robot: &Robot) -> String {
     robot_to_toml_with_urdf_path(robot, robot.urdf.as_ref().map(|u| u.path.clone()))
 }
 
 /// [`robot_to_toml`] naming the URDF as `urdf_path` (e.g. relative to the folder the TOML will
-/// be written to: `deflex_load::robot_to_toml_for`); `None` leaves the URDF lines out.
+/// be written to: `deflex_app::load::robot_to_toml_for`); `None` leaves the URDF lines out.
 pub fn robot_to_toml_with_urdf_path(robot: &Robot, urdf_path: Option<String>) -> String {
     let mut out = String::new();
     let _ = writeln!(

@@ -5,14 +5,14 @@
 //! [`calibrate`], [`validate`], [`report_text`], [`write_report`].
 
 use crate::error::{Error, Result, bounded};
-use deflex_model::Robot;
-use deflex_stiffness::consistency::{
+use deflex_calibrate::stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
-pub use deflex_stiffness::search::Criterion;
-use deflex_stiffness::search::{SearchOptions, SearchStep, search_structure};
-use deflex_stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_stiffness::{DataError, MeasurementFile, MeasurementRow};
+pub use deflex_calibrate::stiffness::search::Criterion;
+use deflex_calibrate::stiffness::search::{SearchOptions, SearchStep, search_structure};
+use deflex_calibrate::stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
+use deflex_calibrate::stiffness::{DataError, MeasurementFile, MeasurementRow};
+use deflex_model::Robot;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -54,17 +54,23 @@ pub fn table_row_error(origin: &str, line: u64, message: String) -> Error {
 /// Read measurement rows (displacements required when `measured`).
 pub fn read_rows(source: &Source, joint_count: usize, measured: bool) -> Result<MeasurementFile> {
     match source {
-        Source::File(path) => Ok(deflex_load::read_file(path, Some(joint_count), measured)?),
+        Source::File(path) => Ok(deflex_app::load::read_file(
+            path,
+            Some(joint_count),
+            measured,
+        )?),
         Source::Table { text, origin } => {
-            deflex_measurements::check_joint_columns(text, origin, joint_count)?;
-            deflex_measurements::parse_file(text, origin, measured).map_err(|e| match e {
-                DataError::Row {
-                    path,
-                    line,
-                    problem,
-                } => table_row_error(&path, line, problem.to_string()),
-                other => other.into(),
-            })
+            deflex_calibrate::measurements::check_joint_columns(text, origin, joint_count)?;
+            deflex_calibrate::measurements::parse_file(text, origin, measured).map_err(
+                |e| match e {
+                    DataError::Row {
+                        path,
+                        line,
+                        problem,
+                    } => table_row_error(&path, line, problem.to_string()),
+                    other => other.into(),
+                },
+            )
         }
     }
 }
@@ -255,7 +261,7 @@ pub fn calibrate(
         "{geometry} — calibrated from {data_name} ({})",
         calibration.structure.label()
     );
-    let predicted = deflex_stiffness::validation::predict(&model, &checked.rows)?;
+    let predicted = deflex_calibrate::stiffness::validation::predict(&model, &checked.rows)?;
     let residuals = checked
         .rows
         .iter()
@@ -338,7 +344,7 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
         "rows": cal.rows,
         "residual_rms_m": r.rms_m, "residual_max_m": r.max_abs_m, "residual_rms_all_m": r.rms_all_m,
         "residual_rms_norm_m": r.rms_norm_m, "residual_max_norm_m": r.max_norm_m,
-        "chi2_well_above_one": cal.reduced_chi2 > deflex_stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
+        "chi2_well_above_one": cal.reduced_chi2 > deflex_calibrate::stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "iterations": steps,
         "stop_reason": s.stop_reason,
@@ -355,11 +361,11 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
 /// The CLI's text output of `deflex calibrate` (iteration table, estimates, residuals,
 /// correlation, file check, warnings).
 pub fn report_text(cal: &StiffnessCalibration) -> String {
-    use deflex_report::calibration_tables::{
+    use deflex_app::report::calibration_tables::{
         ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
         residual_summary, shift_rows, stiffness_rows,
     };
-    use deflex_report::text_table::render_table;
+    use deflex_plot::text_table::render_table;
     let c = &cal.calibration;
     let mut t = String::new();
     if !cal.steps.is_empty() {
@@ -403,7 +409,7 @@ pub fn report_text(cal: &StiffnessCalibration) -> String {
 /// The calibration's HTML report with plots and CSV tables (`deflex calibrate --report`),
 /// written whole into `dir`; `output_name` is where the model was (or will be) saved.
 pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -> Result<()> {
-    use deflex_report::calibration_report::{CalibrationReport, write_calibration_report};
+    use deflex_app::report::calibration_report::{CalibrationReport, write_calibration_report};
     let io = |source| Error::Io {
         path: dir.display().to_string(),
         source,
@@ -430,7 +436,7 @@ pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -
 /// A validation with its file check.
 pub struct Validation {
     /// Prediction errors of the model (and the baseline).
-    pub validation: deflex_stiffness::validation::Validation,
+    pub validation: deflex_calibrate::stiffness::validation::Validation,
     /// The forward-kinematics check.
     pub check: GeometryCheck,
     /// Warnings.
@@ -446,7 +452,8 @@ pub fn validate(
     ignore_fk_check: bool,
 ) -> Result<Validation> {
     let checked = read_checked(model, source, fk_tolerance_m, ignore_fk_check)?;
-    let validation = deflex_stiffness::validation::validate(model, baseline, &checked.rows)?;
+    let validation =
+        deflex_calibrate::stiffness::validation::validate(model, baseline, &checked.rows)?;
     Ok(Validation {
         validation,
         check: checked.check,
@@ -456,7 +463,7 @@ pub fn validate(
 
 /// The validation as the CLI's `--json` (SI).
 pub fn validation_json(v: &Validation) -> Value {
-    let m = |e: &deflex_stiffness::validation::ModelErrors| {
+    let m = |e: &deflex_calibrate::stiffness::validation::ModelErrors| {
         json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m,
                "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m,
                "max_norm_m": e.stats.max_norm_m})
@@ -469,16 +476,13 @@ pub fn validation_json(v: &Validation) -> Value {
 
 /// The validation's plots and HTML page (`deflex validate --out`).
 pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(deflex_report::validation_report::write_validation_report(
-        &v.validation,
-        dir,
-    )?)
+    Ok(deflex_app::report::validation_report::write_validation_report(&v.validation, dir)?)
 }
 
 /// Predicted displacement `[δp; δφ]` of every row of a measurement or plan table (m, rad).
 pub fn predict_displacements(robot: &Robot, source: &Source) -> Result<Vec<[f64; 6]>> {
     let file = read_rows(source, robot.joint_count(), false)?;
-    Ok(deflex_stiffness::validation::predict_full(
+    Ok(deflex_calibrate::stiffness::validation::predict_full(
         robot, &file.rows,
     )?)
 }

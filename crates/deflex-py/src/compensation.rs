@@ -6,11 +6,11 @@
 //! [`table_csv`], [`programs`], [`write_programs`].
 
 use crate::error::{Error, Result, bounded};
+use deflex_cam::program::{Format, ProgramFile, ProgramInput, ProgramSettings, ToolLoad, export};
 use deflex_compensate::log::{MAX_LOG_BYTES, ResampleOptions, parse_log, resample_on_path};
 use deflex_compensate::table::write_csv;
 use deflex_compensate::{Compensation, CompensationOptions, TcpPath, WrenchSource};
 use deflex_model::{Pose, Robot, Wrench};
-use deflex_program::{Format, ProgramFile, ProgramInput, ProgramSettings, ToolLoad, export};
 use deflex_sim::{CellConfig, FormingProcess, ToolPath, Waypoint, tcp_path, tool_path_by_name};
 use nalgebra::{Rotation3, Translation3, Vector3};
 use std::path::{Path, PathBuf};
@@ -104,7 +104,7 @@ pub struct CompensationRun {
 /// and wrenches that are not the process model's.
 fn cell(robot: &Robot, wrench: &WrenchSpec, options: &Options) -> Result<CellConfig> {
     let mut config = match &options.twin_config {
-        Some(p) => deflex_twin::load_cell(p, None)?,
+        Some(p) => deflex_app::cell::twin_cell_file::load_cell(p, None)?,
         None => match CellConfig::for_robot_description(&robot.name, robot.clone()) {
             Ok(c) => c,
             Err(_)
@@ -559,7 +559,7 @@ pub fn write_programs(dir: &Path, files: &[ProgramFile]) -> Result<Vec<PathBuf>>
         path: dir.display().to_string(),
         source,
     })?;
-    deflex_program::write_files(dir, files)?;
+    deflex_cam::program::write_files(dir, files)?;
     Ok(files.iter().map(|f| dir.join(&f.path)).collect())
 }
 

@@ -73,10 +73,10 @@ pub enum Error {
     Model(#[from] deflex_model::ModelError),
     /// Measurement or plan file.
     #[error(transparent)]
-    Data(#[from] deflex_stiffness::DataError),
+    Data(#[from] deflex_calibrate::stiffness::DataError),
     /// Stiffness identification or validation.
     #[error(transparent)]
-    Calib(#[from] deflex_stiffness::CalibError),
+    Calib(#[from] deflex_calibrate::stiffness::CalibError),
     /// A stiffness calibration that identified nothing (the CLI's refusal).
     #[error(
         "{data}: no eDoF could be identified from this data (every compliance is at its bound or not observable); nothing written"
@@ -87,32 +87,32 @@ pub enum Error {
     },
     /// Absolute measurement file.
     #[error(transparent)]
-    Absolute(#[from] deflex_absolute::data::AbsoluteDataError),
+    Absolute(#[from] deflex_calibrate::geometry::data::AbsoluteDataError),
     /// Elasto-geometric campaign.
     #[error(transparent)]
-    Campaign(#[from] deflex_absolute::campaign::CampaignError),
+    Campaign(#[from] deflex_calibrate::geometry::campaign::CampaignError),
     /// Elasto-geometric fit.
     #[error(transparent)]
-    Fit(#[from] deflex_absolute::fit::FitError),
+    Fit(#[from] deflex_calibrate::geometry::fit::FitError),
     /// Elasto-geometric prediction.
     #[error(transparent)]
-    Predict(#[from] deflex_absolute::predict::PredictError),
+    Predict(#[from] deflex_calibrate::geometry::predict::PredictError),
     /// UR10 tracker data import.
     #[error(transparent)]
-    Import(#[from] deflex_absolute::ur10_tracker::ImportError),
+    Import(#[from] deflex_calibrate::geometry::ur10_tracker::ImportError),
     /// A report (page, plots, tables) that could not be written.
     #[error(transparent)]
-    Report(#[from] deflex_report::PageError),
+    Report(#[from] deflex_app::report::PageError),
     /// A set-up registration.
     #[error(transparent)]
-    Register(#[from] deflex_absolute::register::RegisterError),
+    Register(#[from] deflex_calibrate::geometry::register::RegisterError),
     /// A calibration's terms file that cannot be used.
     #[error("{path}: {source}")]
     Terms {
         /// The terms file.
         path: String,
         /// Why.
-        source: deflex_absolute::terms::TermsError,
+        source: deflex_calibrate::geometry::terms::TermsError,
     },
     /// An input file (or folder) that cannot be read.
     #[error("{path}: {source}")]
@@ -149,16 +149,16 @@ pub enum Error {
     },
     /// Robot programs.
     #[error(transparent)]
-    Program(#[from] deflex_program::ProgramError),
+    Program(#[from] deflex_cam::program::ProgramError),
     /// The digital twin.
     #[error(transparent)]
     Sim(#[from] deflex_sim::SimError),
     /// The twin's cell file.
     #[error(transparent)]
-    Cell(#[from] deflex_twin::CellFileError),
+    Cell(#[from] deflex_app::cell::twin_cell_file::CellFileError),
     /// The twin with the correction controller (closed loop).
     #[error(transparent)]
-    Twin(#[from] deflex_twin::TwinError),
+    Twin(#[from] deflex_sim::twin::TwinError),
     /// A file that could not be read or written.
     #[error("{path}: {source}")]
     Io {

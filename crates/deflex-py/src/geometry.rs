@@ -9,20 +9,22 @@
 
 use crate::calibration::{Source, table_row_error};
 use crate::error::{Error, Result};
-use deflex_absolute::campaign::Campaign;
-use deflex_absolute::data::{
+use deflex_app::report::absolute_report;
+use deflex_calibrate::geometry::campaign::Campaign;
+use deflex_calibrate::geometry::data::{
     AbsoluteDataError, AbsoluteRow, format_absolute, limits, parse_absolute,
 };
-use deflex_absolute::fit::{
+use deflex_calibrate::geometry::fit::{
     ChoiceError, FitOptions, FitResult, HeldOutProtocol, Step, fit, session_groups,
 };
-use deflex_absolute::params::EgModel;
-use deflex_absolute::register::{RegisterOptions, Registration};
-use deflex_absolute::solve::Loss;
-use deflex_absolute::terms::CalibrationTerms;
-use deflex_absolute::ur10_tracker::{ImportOptions, ImportSummary, MAX_SERIES_BYTES, parse_series};
+use deflex_calibrate::geometry::params::EgModel;
+use deflex_calibrate::geometry::register::{RegisterOptions, Registration};
+use deflex_calibrate::geometry::solve::Loss;
+use deflex_calibrate::geometry::terms::CalibrationTerms;
+use deflex_calibrate::geometry::ur10_tracker::{
+    ImportOptions, ImportSummary, MAX_SERIES_BYTES, parse_series,
+};
 use deflex_model::Robot;
-use deflex_report::absolute_report;
 use std::path::{Path, PathBuf};
 
 /// Gap between time stamps that starts a new measuring session (`cv_by="session"`), as the
@@ -33,12 +35,12 @@ const MAX_TERMS_BYTES: u64 = 64 << 20;
 
 /// A bounded read of a file the user named, with the error naming it.
 pub fn read_text(path: &Path, limit: u64) -> Result<String> {
-    deflex_load::read_bounded(path, limit).map_err(|e| match e {
-        deflex_load::BoundedReadError::Io(source) => Error::Read {
+    deflex_app::load::read_bounded(path, limit).map_err(|e| match e {
+        deflex_app::load::BoundedReadError::Io(source) => Error::Read {
             path: path.display().to_string(),
             source,
         },
-        deflex_load::BoundedReadError::TooLarge(bytes) => Error::TooLarge {
+        deflex_app::load::BoundedReadError::TooLarge(bytes) => Error::TooLarge {
             path: path.display().to_string(),
             bytes,
             limit,
@@ -222,7 +224,7 @@ pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
         .estimates
         .iter()
         .map(|e| {
-            let h = deflex_stiffness::calibration::Z95 * e.standard_error;
+            let h = deflex_calibrate::stiffness::calibration::Z95 * e.standard_error;
             [e.value - h, e.value + h]
         })
         .collect()
@@ -330,7 +332,7 @@ pub struct Prediction {
 /// the rows' set-ups is fitted on the rows first.
 pub fn predict(model: &CalibratedModel, source: &Source, fit_setup: bool) -> Result<Prediction> {
     let rows = read_absolute(source, model.model.robot.joint_count())?;
-    let p = deflex_absolute::predict::predict_rows(&model.model, rows, fit_setup)?;
+    let p = deflex_calibrate::geometry::predict::predict_rows(&model.model, rows, fit_setup)?;
     Ok(Prediction {
         csv: absolute_report::prediction::prediction_csv(&p),
         text: absolute_report::prediction::prediction_text(&p),
@@ -462,11 +464,12 @@ pub fn register(
         restart_setup: new_setup,
     };
     let all = vec![1.0; campaign.len()];
-    let registration = deflex_absolute::register::register(&mut model, &campaign, &all, &options)?;
+    let registration =
+        deflex_calibrate::geometry::register::register(&mut model, &campaign, &all, &options)?;
     // Orientations measured but not fitted: the new target's frame in closed form, so that
     // predictions can report orientation errors.
     if let Some(t) = target.filter(|&t| model.targets[t].rotation.is_none()) {
-        deflex_absolute::register::start::initialise_target_rotations(
+        deflex_calibrate::geometry::register::start::initialise_target_rotations(
             &mut model,
             &campaign,
             &[t],

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 /// robot file, else the twin file's, else the TX200's) with the twin file's settings over it.
 pub fn cell_config(robot: Option<&str>, config: Option<&Path>) -> Result<CellConfig> {
     Ok(match (config, robot) {
-        (Some(p), robot) => deflex_twin::load_cell(p, robot)?,
-        (None, Some(robot)) => deflex_twin::cell_for_robot(robot)?,
+        (Some(p), robot) => deflex_app::cell::twin_cell_file::load_cell(p, robot)?,
+        (None, Some(robot)) => deflex_app::cell::twin_cell_file::cell_for_robot(robot)?,
         (None, None) => CellConfig::default(),
     })
 }
@@ -128,12 +128,12 @@ pub fn form(path: &str, options: &FormOptions) -> Result<TwinRun> {
     // nominal mounting and tool of the cell (never the plant's).
     let (run, controller_status) = match &options.correction_model {
         Some(model) => {
-            let closed = deflex_twin::run_closed_loop(
+            let closed = deflex_sim::twin::run_closed_loop(
                 &config,
                 tool_path,
                 options.seed,
                 model.clone(),
-                deflex_twin::controller_config_for(&config),
+                deflex_sim::twin::controller_config_for(&config),
                 false,
                 &mut |_| {},
             )?;
@@ -156,8 +156,8 @@ pub fn summary_json(run: &TwinRun) -> String {
 /// The run's outputs (`log.csv`, `summary.json`, `profile.csv`, plots), written whole into
 /// `dir`.
 pub fn write_outputs(run: &TwinRun, dir: &Path) -> Result<Vec<PathBuf>> {
-    deflex_report::forming_run::write_forming_run(&run.run, dir).map_err(|source| {
-        Error::Report(deflex_report::PageError {
+    deflex_app::report::forming_run::write_forming_run(&run.run, dir).map_err(|source| {
+        Error::Report(deflex_app::report::PageError {
             report: "forming run",
             source,
         })

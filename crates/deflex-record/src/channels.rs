@@ -1,6 +1,6 @@
 //! The channels of a deflex MCAP file: topic names, message types and frames.
 //!
-//! The messages are those of [`deflex_rosmsg::cycle`] (the mapping the ROS 2 bridge shares).
+//! The messages are those of [`deflex_telemetry::ros::cycle`] (the mapping the ROS 2 bridge shares).
 //! Every channel but [`SESSION`] carries ROS 2 messages (schema encoding `ros2msg`, message
 //! encoding `cdr`, profile `ros2`), one message per control cycle unless said otherwise. All
 //! messages of a cycle share its log time (the recording's start epoch plus the cycle's session
@@ -53,12 +53,12 @@ pub const DIAGNOSTICS: &str = "/diagnostics";
 pub const SESSION: &str = "/deflex/session";
 
 /// Name of the diagnostic status.
-pub use deflex_rosmsg::cycle::STATUS_NAME;
+pub use deflex_telemetry::ros::cycle::STATUS_NAME;
 
 /// Keys of the `deflex/controller` diagnostic status (values are decimal text, SI units): those
-/// of [`deflex_rosmsg::cycle::diag`] and the recorder's own count.
+/// of [`deflex_telemetry::ros::cycle::diag`] and the recorder's own count.
 pub mod diag {
-    pub use deflex_rosmsg::cycle::diag::*;
+    pub use deflex_telemetry::ros::cycle::diag::*;
     /// Samples the recorder lost so far (overwritten in the telemetry ring before it read them).
     pub const RECORDER_LOST: &str = "recorder_lost";
 }

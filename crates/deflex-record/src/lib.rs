@@ -2,7 +2,7 @@
 //!
 //! Every deflex session recorded in an [MCAP](https://mcap.dev) file that the robotics tool
 //! chain opens as it is (Foxglove, Lichtblick, PlotJuggler, rerun, `ros2 bag`): ROS 2 message
-//! definitions (schema encoding `ros2msg`, message encoding `cdr`, from [`deflex_rosmsg`]) on the
+//! definitions (schema encoding `ros2msg`, message encoding `cdr`, from [`deflex_telemetry::ros`]) on the
 //! channels listed in [`channels`].
 //!
 //! * [`McapRecorder`]: a thread that drains a telemetry [`deflex_telemetry::Subscriber`] into a
@@ -12,12 +12,13 @@
 //! * [`McapSink`]: the same writing, synchronous, into any writer (the twin's own loop, tests).
 //! * [`for_each_cycle`]: reads a recording back, streaming, into cycle samples.
 //! * [`trace`]: any run log (a recording, a `deflex run` CSV log, a `deflex sim isf` log) as the
-//!   plain columns `deflex plot` draws ([`deflex_report::RunTrace`]).
+//!   plain columns `deflex plot` draws ([`deflex_app::report::RunTrace`]).
 
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod channels;
+pub mod csv_log;
 mod read;
 mod recorder;
 mod session;
@@ -84,7 +85,7 @@ pub enum RecordError {
         path: String,
         /// The cause.
         #[source]
-        source: deflex_rosmsg::CdrError,
+        source: deflex_telemetry::ros::CdrError,
     },
     /// The recorder thread panicked.
     #[error("{path}: the recorder thread panicked")]
@@ -182,6 +183,6 @@ pub enum ReadError {
         index: u64,
         /// The cause.
         #[source]
-        source: deflex_rosmsg::CdrError,
+        source: deflex_telemetry::ros::CdrError,
     },
 }

@@ -3,8 +3,8 @@
 
 use crate::channels as ch;
 use crate::{ReadError, SessionRecord};
-use deflex_control::FaultKind;
-use deflex_rosmsg::{
+use deflex_telemetry::FaultKind;
+use deflex_telemetry::ros::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
     WrenchStamped,
 };
@@ -207,14 +207,14 @@ fn apply(
     sample: &mut CycleSample,
     topic: &str,
     data: &[u8],
-) -> Result<Applied, deflex_rosmsg::CdrError> {
+) -> Result<Applied, deflex_telemetry::ros::CdrError> {
     match topic {
         ch::JOINT_STATES => {
-            let m: JointState = deflex_rosmsg::decode(data)?;
+            let m: JointState = deflex_telemetry::ros::decode(data)?;
             sample.set_q(&m.position);
         }
         ch::WRENCH_RAW | ch::WRENCH_SENSOR | ch::WRENCH_TCP => {
-            let m: WrenchStamped = deflex_rosmsg::decode(data)?;
+            let m: WrenchStamped = deflex_telemetry::ros::decode(data)?;
             let w = &m.wrench;
             let v = [
                 w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z,
@@ -226,7 +226,7 @@ fn apply(
             }
         }
         ch::TCP_POSE => {
-            let m: PoseStamped = deflex_rosmsg::decode(data)?;
+            let m: PoseStamped = deflex_telemetry::ros::decode(data)?;
             let p = m.pose.position;
             sample.tcp_position_m = [p.x, p.y, p.z];
             let o = m.pose.orientation;
@@ -235,10 +235,10 @@ fn apply(
         }
         ch::PROGRAM_POSE => {
             // Derived on reading (corrected TCP − ξ); decoded only to check it.
-            let _: PoseStamped = deflex_rosmsg::decode(data)?;
+            let _: PoseStamped = deflex_telemetry::ros::decode(data)?;
         }
         ch::DEFLECTION | ch::CORRECTION | ch::ERROR | ch::FEEDFORWARD => {
-            let m: TwistStamped = deflex_rosmsg::decode(data)?;
+            let m: TwistStamped = deflex_telemetry::ros::decode(data)?;
             let t = &m.twist;
             let v = [
                 t.linear.x,
@@ -256,12 +256,12 @@ fn apply(
             }
         }
         ch::PATH_ERROR => {
-            let m: Vector3Stamped = deflex_rosmsg::decode(data)?;
+            let m: Vector3Stamped = deflex_telemetry::ros::decode(data)?;
             sample.truth_error_m = m.vector.to_array();
             return Ok(Applied::PathError);
         }
         _ => {
-            let m: DiagnosticArray = deflex_rosmsg::decode(data)?;
+            let m: DiagnosticArray = deflex_telemetry::ros::decode(data)?;
             if let Some(status) = m.status.iter().find(|s| s.name == ch::STATUS_NAME) {
                 apply_diagnostics(sample, status);
                 return Ok(Applied::Diagnostics);
@@ -271,7 +271,7 @@ fn apply(
     Ok(Applied::Other)
 }
 
-fn apply_diagnostics(sample: &mut CycleSample, status: &deflex_rosmsg::DiagnosticStatus) {
+fn apply_diagnostics(sample: &mut CycleSample, status: &deflex_telemetry::ros::DiagnosticStatus) {
     let number = |key: &str| {
         status
             .value(key)

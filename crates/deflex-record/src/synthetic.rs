@@ -6,8 +6,8 @@
 //! size, deterministic for a given seed, so that a page, a recording or a plot has something
 //! realistic to show. Every [`SessionInfo`] it makes says SIMULATED.
 
-use deflex_control::{Flags, Phase};
 use deflex_telemetry::{CycleSample, SessionInfo, Source};
+use deflex_telemetry::{Flags, Phase};
 use nalgebra::{Rotation3, Vector3};
 
 /// The stream's generator; [`SyntheticCell::next_sample`] gives one control cycle.

@@ -2,11 +2,11 @@
 
 use super::*;
 use crate::synthetic::SyntheticCell;
-use deflex_rosmsg::{
+use deflex_telemetry::CycleSample;
+use deflex_telemetry::ros::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
     WrenchStamped,
 };
-use deflex_telemetry::CycleSample;
 use std::io::{Cursor, Write};
 use std::path::PathBuf;
 
@@ -198,12 +198,18 @@ fn channels_have_the_ros2_schemas_and_encodings() {
         let message = message.unwrap();
         let data = &message.data[..];
         let ok = match message.channel.schema.as_ref().map(|s| s.name.as_str()) {
-            Some(JointState::NAME) => deflex_rosmsg::decode::<JointState>(data).is_ok(),
-            Some(WrenchStamped::NAME) => deflex_rosmsg::decode::<WrenchStamped>(data).is_ok(),
-            Some(PoseStamped::NAME) => deflex_rosmsg::decode::<PoseStamped>(data).is_ok(),
-            Some(TwistStamped::NAME) => deflex_rosmsg::decode::<TwistStamped>(data).is_ok(),
-            Some(Vector3Stamped::NAME) => deflex_rosmsg::decode::<Vector3Stamped>(data).is_ok(),
-            Some(DiagnosticArray::NAME) => deflex_rosmsg::decode::<DiagnosticArray>(data).is_ok(),
+            Some(JointState::NAME) => deflex_telemetry::ros::decode::<JointState>(data).is_ok(),
+            Some(WrenchStamped::NAME) => {
+                deflex_telemetry::ros::decode::<WrenchStamped>(data).is_ok()
+            }
+            Some(PoseStamped::NAME) => deflex_telemetry::ros::decode::<PoseStamped>(data).is_ok(),
+            Some(TwistStamped::NAME) => deflex_telemetry::ros::decode::<TwistStamped>(data).is_ok(),
+            Some(Vector3Stamped::NAME) => {
+                deflex_telemetry::ros::decode::<Vector3Stamped>(data).is_ok()
+            }
+            Some(DiagnosticArray::NAME) => {
+                deflex_telemetry::ros::decode::<DiagnosticArray>(data).is_ok()
+            }
             _ => serde_json::from_slice::<SessionRecord>(data).is_ok(),
         };
         assert!(ok, "{}", message.channel.topic);

@@ -1,4 +1,4 @@
-//! Any run log as the plain columns of [`deflex_report::RunTrace`] (what `deflex plot` draws):
+//! Any run log as the plain columns of [`deflex_app::report::RunTrace`] (what `deflex plot` draws):
 //!
 //! * a deflex MCAP recording ([`crate::for_each_cycle`]): forces at the TCP, ξ, δŝ, the path
 //!   error when the twin recorded it, phase and flags, cycle time; the path position is the arc
@@ -14,12 +14,70 @@
 //! name. Errors name the file, and the line and column where a value is wrong.
 
 use crate::{ReadError, for_each_cycle, is_mcap};
-use deflex_control::Flags;
 use deflex_model::{Data, Robot};
-use deflex_report::{RunTrace, Xyz};
 use deflex_telemetry::CycleSample;
+use deflex_telemetry::Flags;
 use nalgebra::Vector3;
 use std::path::Path;
+
+/// Three components over the rows of a run (SI units).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Xyz {
+    /// x
+    pub x: Vec<f64>,
+    /// y
+    pub y: Vec<f64>,
+    /// z
+    pub z: Vec<f64>,
+}
+
+impl Xyz {
+    /// Euclidean norm per row.
+    pub fn norm(&self) -> Vec<f64> {
+        self.x
+            .iter()
+            .zip(&self.y)
+            .zip(&self.z)
+            .map(|((x, y), z)| (x * x + y * y + z * z).sqrt())
+            .collect()
+    }
+
+    /// Whether each component has `n` values.
+    pub fn len_ok(&self, n: usize) -> bool {
+        self.x.len() == n && self.y.len() == n && self.z.len() == n
+    }
+}
+
+/// One run's log as columns (one entry per logged row; NaN where a value is unknown).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunTrace {
+    /// Name in legends (e.g. `closed loop`).
+    pub label: String,
+    /// The file it was read from.
+    pub file: String,
+    /// What wrote it (e.g. `deflex sim isf log`).
+    pub kind: String,
+    /// The run is SIMULATED (the twin, or a simulated cell).
+    pub simulated: bool,
+    /// Time (s).
+    pub time_s: Vec<f64>,
+    /// Arc length of the desired path at the row (m), when known.
+    pub path_s_m: Option<Vec<f64>>,
+    /// Force on the tool at the TCP (N).
+    pub force_n: Xyz,
+    /// The axes of [`Self::force_n`] and the positions (e.g. `base axes`, `part frame axes`).
+    pub axes: String,
+    /// Correction ξ, position part (m).
+    pub correction_m: Option<Xyz>,
+    /// Estimated deflection δŝ, position part (m).
+    pub deflection_m: Option<Xyz>,
+    /// True minus desired TCP (m), known on the twin only.
+    pub path_error_m: Option<Xyz>,
+    /// Named on/off states per row (phase, saturation, fault, contact …).
+    pub states: Vec<(String, Vec<bool>)>,
+    /// Computation time of the control cycle (s), NaN where not logged.
+    pub cycle_time_s: Option<Vec<f64>>,
+}
 
 /// Largest CSV log read (bytes).
 pub const MAX_LOG_BYTES: u64 = 1 << 30;
@@ -411,7 +469,7 @@ fn from_recording(path: &Path, label: &str) -> Result<RunTrace, TraceError> {
         (
             "phase running".into(),
             rows.iter()
-                .map(|s| s.phase() == deflex_control::Phase::Running)
+                .map(|s| s.phase() == deflex_telemetry::Phase::Running)
                 .collect(),
         ),
     );
@@ -479,7 +537,7 @@ mod tests {
     fn a_run_log_uses_its_path_column_or_none() {
         let d = dir("run");
         let p = d.join("run.csv");
-        let mut header = deflex_runtime::log::csv_header(2);
+        let mut header = crate::csv_log::csv_header(2);
         header.push('\n');
         let row = |t: f64, s: &str| {
             let mut cells = vec![format!("{t}"), "0.1".into(), "0.2".into()];
@@ -512,9 +570,9 @@ mod tests {
     fn a_run_log_with_a_robot_gets_the_program_arc_length() {
         let d = dir("fk");
         let p = d.join("run.csv");
-        let robot = deflex_load::load_robot("tx200").unwrap();
+        let robot = deflex_app::load::load_robot("tx200").unwrap();
         let n = robot.joint_count();
-        let mut text = deflex_runtime::log::csv_header(n) + "\n";
+        let mut text = crate::csv_log::csv_header(n) + "\n";
         let mut data = Data::new();
         let mut expected = Vec::new();
         let mut previous: Option<Vector3<f64>> = None;

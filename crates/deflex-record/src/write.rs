@@ -3,8 +3,8 @@
 
 use crate::channels as ch;
 use crate::{RecordError, SessionRecord};
-use deflex_rosmsg::cycle::{self, CycleMessages, DiagnosticsPacer, seconds_to_ns};
-use deflex_rosmsg::{
+use deflex_telemetry::ros::cycle::{self, CycleMessages, DiagnosticsPacer, seconds_to_ns};
+use deflex_telemetry::ros::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, Time, TwistStamped, Vector3Stamped,
     WrenchStamped,
 };
@@ -315,7 +315,7 @@ impl<W: Write> McapSink<W> {
         header: &MessageHeader,
         msg: &T,
     ) -> Result<(), RecordError> {
-        let data = deflex_rosmsg::encode(msg).map_err(|e| RecordError::Encode {
+        let data = deflex_telemetry::ros::encode(msg).map_err(|e| RecordError::Encode {
             path: self.target.clone(),
             source: e,
         })?;

@@ -1,16 +1,16 @@
 //! [`Ros2Bridge`]: the telemetry stream on the ROS 2 graph. A thread of its own drains a
 //! telemetry [`Subscriber`] (it never slows the control thread: a bridge that falls behind
 //! loses samples and counts them) and publishes, for each cycle due at `publish_rate_hz` of
-//! session time, the messages of [`deflex_rosmsg::cycle::CycleMessages`] on the enabled topics,
+//! session time, the messages of [`deflex_telemetry::ros::cycle::CycleMessages`] on the enabled topics,
 //! and the diagnostics at `diagnostics_rate_hz` and on every change of phase, flags or fault.
 
 use crate::{BridgeSettings, Ros2Error, join, message_type, qos_profile, ros_name, topic_name};
-use deflex_rosmsg::cycle::{CycleMessages, DiagnosticsPacer, diagnostics, seconds_to_ns};
-use deflex_rosmsg::{
+use deflex_telemetry::ros::Ros2Topic;
+use deflex_telemetry::ros::cycle::{CycleMessages, DiagnosticsPacer, diagnostics, seconds_to_ns};
+use deflex_telemetry::ros::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, Time, TwistStamped, Vector3Stamped,
     WrenchStamped,
 };
-use deflex_runtime::config::Ros2Topic;
 use deflex_telemetry::{CycleSample, SessionInfo, Subscriber};
 use ros2_client::{Node, Publisher};
 use serde::Serialize;

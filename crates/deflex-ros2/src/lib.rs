@@ -2,12 +2,12 @@
 //!
 //! deflex on the ROS 2 graph with no ROS installation: nodes, topics and QoS of
 //! [`ros2_client`] on RustDDS (a DDS/RTPS implementation in Rust), the messages and their CDR
-//! encoding of [`deflex_rosmsg`] (the same structs the MCAP recorder writes, so a recording and
+//! encoding of [`deflex_telemetry::ros`] (the same structs the MCAP recorder writes, so a recording and
 //! the live graph agree).
 //!
 //! * [`Ros2Bridge`]: a sink thread of the telemetry stream (never the control thread) that
 //!   publishes each cycle, decimated to `ros2.publish_rate_hz`, as the standard messages of
-//!   [`deflex_rosmsg::cycle`] on `<namespace>/<topic>` (DDS topic `rt<namespace>/<topic>`, type
+//!   [`deflex_telemetry::ros::cycle`] on `<namespace>/<topic>` (DDS topic `rt<namespace>/<topic>`, type
 //!   `sensor_msgs::msg::dds_::JointState_` …), and the diagnostics at
 //!   `ros2.diagnostics_rate_hz` and on every change of state.
 //! * [`Ros2SensorLink`]: `[sensor] kind = "ros2"`, a [`deflex_io::ForceSensorLink`] taking
@@ -41,7 +41,7 @@ pub use bridge::{BridgeReport, Ros2Bridge};
 pub use sensor::{Refusal, Ros2SensorLink, SensorCounts};
 pub use settings::{BridgeSettings, SensorSettings, qos_profile};
 
-use deflex_rosmsg::RosMessage;
+use deflex_telemetry::ros::RosMessage;
 use ros2_client::{Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions};
 
 /// Why the bridge or the sensor link could not join the graph.

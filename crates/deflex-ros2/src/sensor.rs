@@ -32,7 +32,7 @@
 use crate::handover::Handover;
 use crate::{Ros2Error, SensorSettings, join, message_type, qos_profile, ros_name};
 use deflex_io::{ForceSensorLink, LinkError, Protocol, WrenchSample};
-use deflex_rosmsg::WrenchStamped;
+use deflex_telemetry::ros::WrenchStamped;
 use ros2_client::Gid;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};

@@ -1,6 +1,7 @@
-//! The bridge's and the sensor link's settings, from `[ros2]` and `[sensor]` of a `CELL.toml`.
+//! The bridge's and the sensor link's settings (a `CELL.toml`'s `[ros2]` and `[sensor]`, read by
+//! `deflex-app`).
 
-use deflex_runtime::config::{CellFile, Ros2Qos, Ros2Section, Ros2Topic};
+use deflex_telemetry::ros::{Ros2Qos, Ros2Topic};
 use ros2_client::qos::{Durability, History, Liveliness, Reliability, WhenFull};
 use ros2_client::ros2::QosProfile;
 use std::time::Duration;
@@ -26,27 +27,6 @@ pub struct BridgeSettings {
     pub topics: Vec<Ros2Topic>,
 }
 
-impl BridgeSettings {
-    /// The settings of `[ros2]`.
-    pub fn from_section(r: &Ros2Section) -> BridgeSettings {
-        BridgeSettings {
-            domain_id: r.domain_id,
-            namespace: r.namespace.clone(),
-            node_name: r.node_name.clone(),
-            qos: r.qos,
-            depth: r.depth,
-            publish_rate_hz: r.publish_rate_hz,
-            diagnostics_rate_hz: r.diagnostics_rate_hz,
-            topics: r.topics.clone(),
-        }
-    }
-
-    /// The settings of a `CELL.toml`'s `[ros2]`, `None` without it.
-    pub fn from_cell(cell: &CellFile) -> Option<BridgeSettings> {
-        cell.ros2.as_ref().map(Self::from_section)
-    }
-}
-
 /// What [`crate::Ros2SensorLink`] takes, and what it refuses.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SensorSettings {
@@ -66,24 +46,6 @@ pub struct SensorSettings {
     pub max_age: Duration,
     /// Depth of the handover queue and of the subscription's history.
     pub queue_depth: usize,
-}
-
-impl SensorSettings {
-    /// The settings of `[sensor]` and `[ros2]` (`None` without `[ros2]`). The link's node is
-    /// `<ros2.node_name>_ft` in `ros2.namespace`.
-    pub fn from_cell(cell: &CellFile) -> Option<SensorSettings> {
-        let r = cell.ros2.as_ref()?;
-        Some(SensorSettings {
-            domain_id: r.domain_id,
-            namespace: r.namespace.clone(),
-            node_name: format!("{}_ft", r.node_name),
-            qos: r.qos,
-            topic: cell.sensor.topic.clone(),
-            frame_id: r.sensor_frame.clone(),
-            max_age: Duration::from_secs_f64(cell.sensor.max_age_s),
-            queue_depth: cell.sensor.queue_depth,
-        })
-    }
 }
 
 /// The ROS 2 QoS of `qos` with history depth `depth`: `SensorDataQoS` (best effort) or the

@@ -5,10 +5,10 @@
 
 use super::*;
 use crate::sensor::Refusal;
+use deflex_app::cell::config::{Ros2Qos, Ros2Topic};
 use deflex_io::ForceSensorLink;
-use deflex_rosmsg::cycle::STATUS_NAME;
-use deflex_rosmsg::{DiagnosticArray, Header, JointState, Vector3, Wrench, WrenchStamped};
-use deflex_runtime::config::{Ros2Qos, Ros2Topic};
+use deflex_telemetry::ros::cycle::STATUS_NAME;
+use deflex_telemetry::ros::{DiagnosticArray, Header, JointState, Vector3, Wrench, WrenchStamped};
 use deflex_telemetry::{CycleSample, SessionInfo, Source, broadcast};
 use ros2_client::{Node, Publisher, Subscription};
 use std::sync::Arc;
@@ -37,7 +37,7 @@ fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
     }
 }
 
-fn subscriber<T: deflex_rosmsg::RosMessage + 'static>(
+fn subscriber<T: deflex_telemetry::ros::RosMessage + 'static>(
     node: &mut Node,
     topic: &str,
     qos: Ros2Qos,
@@ -49,7 +49,7 @@ fn subscriber<T: deflex_rosmsg::RosMessage + 'static>(
     node.create_subscription(&t, Some(q)).unwrap()
 }
 
-fn publisher<T: deflex_rosmsg::RosMessage>(
+fn publisher<T: deflex_telemetry::ros::RosMessage>(
     node: &mut Node,
     topic: &str,
     qos: Ros2Qos,
@@ -194,7 +194,7 @@ fn bridge_publishes_the_stream_over_loopback_dds() {
 fn wrench(frame: &str, stamp_ns: u64, fz: f64) -> WrenchStamped {
     WrenchStamped {
         header: Header {
-            stamp: deflex_rosmsg::Time::from_nanos(stamp_ns),
+            stamp: deflex_telemetry::ros::Time::from_nanos(stamp_ns),
             frame_id: frame.into(),
         },
         wrench: Wrench {

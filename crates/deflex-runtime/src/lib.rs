@@ -24,12 +24,7 @@
 // Six-axis loops index several arrays in lockstep; an index is the clearest form.
 #![allow(clippy::needless_range_loop)]
 
-pub mod cell_run;
 pub mod clock;
-pub mod config;
-pub mod feedforward;
-pub mod links;
-pub mod log;
 pub mod messages;
 pub mod rt;
 pub mod send_shaper;
@@ -37,12 +32,7 @@ pub mod session;
 pub mod stats;
 pub mod telemetry;
 
-pub use cell_run::{CellRun, CellRunOutcome, StartError};
 pub use clock::{Clock, SimClock, WallClock};
-pub use config::{CellFile, ConfigError};
-/// The force/torque sensor side a session reads ([`CellRun::start_with`] takes one from a
-/// front end, e.g. the ROS 2 sensor link), from `deflex-io`.
-pub use deflex_io::ForceSensorLink;
 pub use session::{
     LiveStatus, RunSummary, Runtime, RuntimeOptions, SessionEnd, SessionError, spawn,
 };

@@ -29,7 +29,7 @@
 //! (operator, signal) ramps the correction out, also from a held fault, before the threads end.
 //!
 //! The same threads run against hardware with a [`crate::WallClock`] and against the digital
-//! twin in simulated time with a driven [`crate::SimClock`] (`deflex_twin::sim_time`).
+//! twin in simulated time with a driven [`crate::SimClock`] (`deflex_sim::twin::sim_time`).
 //!
 //! Both loop threads try SCHED_FIFO (and the process mlockall) and carry on with a warning when
 //! not permitted.
@@ -45,10 +45,11 @@ pub use summary::{LiveStatus, RunSummary, SessionEnd, SessionError, SessionThrea
 use crate::clock::Clock;
 use crate::send_shaper::SendShaperConfig;
 use crate::telemetry::Telemetry;
-use deflex_control::{Controller, Flags, Phase};
+use deflex_control::Controller;
 use deflex_io::{ForceSensorLink, RobotLink};
 use deflex_model::MAX_JOINTS;
 use deflex_telemetry::{Broadcast, CycleSample, SessionInfo};
+use deflex_telemetry::{Flags, Phase};
 use shared::Shared;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;

@@ -231,7 +231,7 @@ pub struct PartConfig {
     /// robot file's `[base] pivot`.
     pub base_pivot_m: Option<[f64; 3]>,
     /// The description of `robot` when it names a robot file (not a built-in robot): read by
-    /// the caller, since the twin reads no file (`deflex_twin::cell_for_robot`). Not part of
+    /// the caller, since the twin reads no file (`crate::twin::cell_for_robot`). Not part of
     /// the TOML.
     #[serde(skip)]
     pub description: Option<deflex_model::Robot>,
@@ -415,7 +415,7 @@ impl CellConfig {
     }
 
     /// [`CellConfig::from_toml_str_for`] where a robot spec that is not a built-in name is
-    /// resolved by `robot_file` (the caller reads the robot file: `deflex_twin::load_cell`).
+    /// resolved by `robot_file` (the caller reads the robot file: `crate::twin::load_cell`).
     pub fn from_toml_str_with(
         text: &str,
         robot: Option<&str>,

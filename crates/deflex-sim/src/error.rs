@@ -39,7 +39,7 @@ pub enum SimError {
     Model(#[from] deflex_model::ModelError),
     /// Measurement/plan file problem.
     #[error(transparent)]
-    Data(#[from] deflex_measurements::DataError),
+    Data(#[from] deflex_calibrate::measurements::DataError),
     /// The run was stopped before the end of its path (an observer asked, e.g. on Ctrl-C).
     #[error("stopped at {time_s:.1} s of simulated time, before the end of the path")]
     Stopped {
@@ -47,9 +47,9 @@ pub enum SimError {
         time_s: f64,
     },
     /// A robot spec that is not a built-in robot, given where the twin cannot read the file (it
-    /// reads no file: `deflex_twin::cell_for_robot` reads robot files).
+    /// reads no file: `crate::twin::cell_for_robot` reads robot files).
     #[error(
-        "part.robot: `{spec}` is not a built-in robot ({}); a robot file is read by the caller (deflex_twin::cell_for_robot)",
+        "part.robot: `{spec}` is not a built-in robot ({}); a robot file is read by the caller (crate::twin::cell_for_robot)",
         builtin_names()
     )]
     NotBuiltin {

@@ -1,7 +1,7 @@
 //! The forming run: its summary (`summary.json`) and profiles, and [`run_forming`] which drives a
 //! [`Cell`] with an optional correction controller. The ground-truth log and the running
 //! statistics are [`crate::forming_log`]'s (re-exported here); the run's folder and plots are
-//! `deflex_report::forming_run`'s.
+//! `deflex_app::report::forming_run`'s.
 
 use crate::cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};
 use crate::cell_config::CellConfig;
@@ -268,7 +268,7 @@ impl FormingRun {
 
     /// `profile.csv` text: the formed profile along θ = 0 beside the programmed one (mm), with
     /// a SIMULATED header line. (The run's folder, with its plots, is written by
-    /// `deflex_report::forming`.)
+    /// `deflex_app::report::forming`.)
     pub fn profile_csv(&self) -> String {
         let mut profile = format!(
             "# SIMULATED formed profile along θ = 0 (depth below the undeformed sheet) beside the \

@@ -1,4 +1,4 @@
-//! CAM G-code as a twin tool path: the reader is `deflex_gcode` (the ISO/Fanuc subset CAM
+//! CAM G-code as a twin tool path: the reader is `deflex_cam::gcode` (the ISO/Fanuc subset CAM
 //! systems emit: lines, arcs and helices interpolated to a chord tolerance, planes, units,
 //! work offsets; see that crate for what is read, ignored with a note, and refused), shared
 //! with `deflex compensate`. Coordinates are the TCP (the centre of the ball tip) in the part
@@ -8,22 +8,22 @@
 //! Bounds: a file of at most [`MAX_GCODE_BYTES`], at most [`MAX_WAYPOINTS`] path points,
 //! coordinates within ±[`MAX_COORDINATE_MM`], feeds from [`MIN_FEED_MM_MIN`] to
 //! [`MAX_FEED_MM_MIN`] mm/min. A run of the program is further bounded in time by the cell
-//! (`deflex_sim::cell_config::MAX_RUN_S`).
+//! (`crate::cell_config::MAX_RUN_S`).
 
 use crate::error::SimError;
 use crate::toolpath::{ToolPath, Waypoint};
-pub use deflex_gcode::{Program, ReadOptions};
+pub use deflex_cam::gcode::{Program, ReadOptions};
 
 /// Largest G-code file read (bytes).
 pub const MAX_GCODE_BYTES: u64 = 64 << 20;
 /// Most path points of a program (arcs interpolated).
 pub const MAX_WAYPOINTS: usize = 1_000_000;
 /// Largest |coordinate| of a move (mm, after units).
-pub const MAX_COORDINATE_MM: f64 = deflex_gcode::MAX_COORDINATE_MM;
+pub const MAX_COORDINATE_MM: f64 = deflex_cam::gcode::MAX_COORDINATE_MM;
 /// Slowest feed (mm/min): 0.01 mm/s.
-pub const MIN_FEED_MM_MIN: f64 = deflex_gcode::MIN_FEED_MM_MIN;
+pub const MIN_FEED_MM_MIN: f64 = deflex_cam::gcode::MIN_FEED_MM_MIN;
 /// Fastest feed (mm/min): 1 m/s.
-pub const MAX_FEED_MM_MIN: f64 = deflex_gcode::MAX_FEED_MM_MIN;
+pub const MAX_FEED_MM_MIN: f64 = deflex_cam::gcode::MAX_FEED_MM_MIN;
 
 /// The reader's options for the twin: the default chord tolerance, at most [`MAX_WAYPOINTS`].
 pub fn default_options() -> ReadOptions {
@@ -66,7 +66,7 @@ pub fn parse_gcode_with(
     file: &str,
     options: &ReadOptions,
 ) -> Result<(ToolPath, Program), SimError> {
-    let program = deflex_gcode::read(text, options).map_err(|e| SimError::Gcode {
+    let program = deflex_cam::gcode::read(text, options).map_err(|e| SimError::Gcode {
         file: file.to_string(),
         line: e.line,
         message: if e.line == 0 {

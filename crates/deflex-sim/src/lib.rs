@@ -31,7 +31,7 @@
 //! ## Using the cell from a controller
 //!
 //! ```no_run
-//! use deflex_sim::{CellConfig, ControllerInput, CorrectionController, ToolPath, run_forming};
+//! use crate::{CellConfig, ControllerInput, CorrectionController, ToolPath, run_forming};
 //! struct Hold;
 //! impl CorrectionController for Hold {
 //!     fn period_s(&self) -> f64 { 0.01 }
@@ -63,6 +63,7 @@ pub mod sensor;
 pub mod sheet;
 pub mod toolpath;
 pub mod tracker;
+pub mod twin;
 pub mod twin_campaign;
 
 pub use cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};

@@ -78,7 +78,7 @@ impl Maker {
 impl CellConfig {
     /// The cell of a built-in robot: see the [module](crate::profile) documentation. The cell of
     /// a robot file is [`CellConfig::for_robot_description`] (the twin reads no file:
-    /// `deflex_twin::cell_for_robot` reads it).
+    /// `crate::twin::cell_for_robot` reads it).
     pub fn for_robot(spec: &str) -> Result<CellConfig, SimError> {
         if spec.trim().is_empty() {
             return Err(SimError::config("part.robot", "must name a robot"));

@@ -1,5 +1,5 @@
 //! Calibration and validation campaigns on the twin (SIMULATED), written in the measurement
-//! format of `deflex_measurements`.
+//! format of `deflex_calibrate::measurements`.
 //!
 //! * [`run_campaign`]: a plan (load cases: configuration, load by cable tension or dead weight,
 //!   points to measure, all named in the robot description's coordinates) → for each load case
@@ -22,7 +22,7 @@ use crate::error::SimError;
 use crate::plant::Plant;
 use crate::profile::Maker;
 use crate::tracker::LaserTracker;
-use deflex_measurements::{FileHeader, MeasurementRow, format_rows_with_header};
+use deflex_calibrate::measurements::{FileHeader, MeasurementRow, format_rows_with_header};
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::{IkOptions, Pose, Robot, Wrench};
 use nalgebra::{Point3, Rotation3, Vector3};

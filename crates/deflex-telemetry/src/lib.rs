@@ -20,13 +20,16 @@
 #![forbid(unsafe_code)]
 
 mod broadcast;
+pub mod ros;
 mod sample;
 mod seqcell;
+mod state;
 mod words;
 
 pub use broadcast::{Broadcast, Publisher, Subscriber, broadcast};
 pub use sample::{CellState, CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, Source};
 pub use seqcell::SeqCell;
+pub use state::{FAULT_KINDS, FaultKind, Flags, Phase};
 
 /// Re-exported so that users can derive [`bytemuck::Pod`] for their own messages.
 pub use bytemuck;

@@ -6,9 +6,9 @@
 //! values it reports is the **corrected** TCP ([`CycleSample::tcp_position_m`]) and the program's
 //! **commanded** (desired) TCP is that minus ξ ([`CycleSample::program_position_m`]).
 
+use crate::{FaultKind, Flags, Phase};
 use bytemuck::{Pod, Zeroable};
-use deflex_control::{Controller, CycleOutput, FaultKind, Flags, Phase};
-use deflex_model::{MAX_JOINTS, Wrench};
+use deflex_model::MAX_JOINTS;
 use nalgebra::{Matrix3, Rotation3, Vector3, Vector6};
 
 /// [`CycleSample::fault`] when no fault is latched.
@@ -70,7 +70,7 @@ pub struct CycleSample {
     pub joint_count: u32,
     /// Controller phase (see [`CycleSample::phase`]).
     pub phase_code: u32,
-    /// Status bits ([`deflex_control::Flags`]).
+    /// Status bits ([`crate::Flags`]).
     pub flags: u32,
     /// Latched fault: [`FAULT_NONE`], else 1 + the index in [`FaultKind::ALL`].
     pub fault: u32,
@@ -173,44 +173,6 @@ impl CycleSample {
                 *v = m[(i, j)];
             }
         }
-    }
-
-    /// Records one cycle of `controller`: the joint values `q_rad` it was given, the raw reading
-    /// `wrench_raw` (sensor frame), what it produced (`out`: time, wrenches, δŝ, ξ, ε,
-    /// feed-forward, arc length, loop gain, flags), the TCP from its forward kinematics of
-    /// `q_rad` (base frame), its phase and latched fault. Leaves the counters, the cycle number,
-    /// the cycle time and the truth untouched (the publisher's). Allocation-free.
-    #[inline]
-    pub fn record_cycle(
-        &mut self,
-        controller: &Controller,
-        q_rad: &[f64],
-        wrench_raw: &Wrench,
-        out: &CycleOutput,
-    ) {
-        self.set_q(q_rad);
-        self.wrench_raw = (*wrench_raw).into();
-        self.record_output(out);
-        self.tcp_position_m = controller.tcp_position_in_base().into();
-        self.set_tcp_rotation(&controller.tcp_rotation_in_base());
-        self.phase_code = Self::phase_to_code(controller.phase());
-        self.fault = Self::fault_to_code(controller.fault().map(|f| f.kind));
-    }
-
-    /// Records what a control cycle produced (`out`: time, wrenches, δŝ, ξ, ε, feed-forward,
-    /// arc length, loop gain, flags). Allocation-free.
-    #[inline]
-    pub fn record_output(&mut self, out: &CycleOutput) {
-        self.time_s = out.time_s;
-        self.wrench_sensor = out.wrench_sensor;
-        self.wrench_tcp = out.wrench_tcp;
-        self.deflection = out.delta_s_hat;
-        self.correction = out.xi;
-        self.error = out.epsilon;
-        self.feedforward = out.feedforward;
-        self.path_s_m = out.path_s_m;
-        self.loop_gain = out.loop_gain;
-        self.flags = out.flags.0;
     }
 
     /// Sets the joint values (at most [`MAX_JOINTS`]).

@@ -165,10 +165,10 @@ fn sample_accessors() {
     assert!(s.loop_gain.is_nan() && s.fault_kind().is_none());
     s.set_q(&[0.1, 0.2, 0.3]);
     assert_eq!(s.q(), &[0.1, 0.2, 0.3]);
-    s.fault = CycleSample::fault_to_code(Some(deflex_control::FaultKind::JointJump));
-    assert_eq!(s.fault_kind(), Some(deflex_control::FaultKind::JointJump));
-    s.phase_code = CycleSample::phase_to_code(deflex_control::Phase::Faulted);
-    assert_eq!(s.phase(), deflex_control::Phase::Faulted);
+    s.fault = CycleSample::fault_to_code(Some(crate::FaultKind::JointJump));
+    assert_eq!(s.fault_kind(), Some(crate::FaultKind::JointJump));
+    s.phase_code = CycleSample::phase_to_code(crate::Phase::Faulted);
+    assert_eq!(s.phase(), crate::Phase::Faulted);
     let r = nalgebra::Rotation3::from_euler_angles(0.1, -0.2, 0.3);
     s.set_tcp_rotation(&r);
     assert!((s.tcp_rotation().matrix() - r.matrix()).norm() < 1e-15);
@@ -190,10 +190,7 @@ fn sources_name_their_phases() {
     // A controller's stream names the controller's phases, the twin's own its cell's states,
     // by the same codes.
     for source in [Source::Runtime, Source::Twin] {
-        for phase in [
-            deflex_control::Phase::Taring,
-            deflex_control::Phase::Faulted,
-        ] {
+        for phase in [crate::Phase::Taring, crate::Phase::Faulted] {
             assert_eq!(
                 source.phase_name(CycleSample::phase_to_code(phase)),
                 phase.name()

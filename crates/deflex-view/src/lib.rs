@@ -51,7 +51,7 @@ pub use connection::{
     REQUEST_TIMEOUT, STALL_TIMEOUT,
 };
 
-use deflex_control::Flags;
+use deflex_telemetry::Flags;
 use deflex_telemetry::{Broadcast, CycleSample, SessionInfo};
 use std::net::{SocketAddr, TcpListener};
 use std::sync::Arc;
@@ -363,7 +363,7 @@ fn hello_json(info: &SessionInfo, stop: bool) -> String {
     let finite = |v: f64| v.is_finite().then_some(v);
     // The controller's phases, or the simulated cell's states for the twin's own stream.
     let phases = info.source.phase_names();
-    let faults: Vec<&str> = deflex_control::FaultKind::ALL
+    let faults: Vec<&str> = deflex_telemetry::FaultKind::ALL
         .iter()
         .map(|k| k.name())
         .collect();

@@ -54,17 +54,17 @@
 //!   (SIMULATED).
 #![warn(missing_docs)]
 
-pub use deflex_absolute as absolute;
+pub use deflex_app::load;
+pub use deflex_calibrate::geometry as absolute;
+pub use deflex_calibrate::measurements;
+pub use deflex_calibrate::stiffness;
+pub use deflex_cam::gcode;
+pub use deflex_cam::program;
 pub use deflex_compensate as compensate;
 pub use deflex_control as control;
-pub use deflex_gcode as gcode;
-pub use deflex_load as load;
-pub use deflex_measurements as measurements;
 pub use deflex_model as model;
-pub use deflex_program as program;
 pub use deflex_sim as sim;
-pub use deflex_stiffness as stiffness;
-pub use deflex_twin as twin;
+pub use deflex_sim::twin;
 
 pub use deflex_model::{
     Axis, BUILTIN_ROBOTS, Data, Displacement, EdofSite, ModelError, Pose, Robot, Wrench, builtin,

@@ -1,15 +1,15 @@
 //! `deflex calibrate --couplings J2.z:J3.z[,A:B…]`: off-diagonal joint compliances fitted after
 //! the structure is identified, with the eDoF compliances
-//! ([`deflex_stiffness::fit_couplings`]), reported with their standard errors and correlations
+//! ([`deflex_calibrate::stiffness::fit_couplings`]), reported with their standard errors and correlations
 //! and written into the calibrated robot file as `[[coupling]]`.
 
 use crate::error::{CliError, UsageError};
-use deflex_model::{Axis, EdofSite, MAX_COUPLINGS, Robot, parse_edof_label};
-use deflex_report::calibration_tables::{
+use deflex_app::report::calibration_tables::{
     COUPLING_HEADERS, REFIT_HEADERS, coupling_rows, coupling_summary, refit_rows,
 };
-use deflex_report::text_table::render_table;
-use deflex_stiffness::{CouplingFit, EdofPair, MeasurementRow, fit_couplings};
+use deflex_calibrate::stiffness::{CouplingFit, EdofPair, MeasurementRow, fit_couplings};
+use deflex_model::{Axis, EdofSite, MAX_COUPLINGS, Robot, parse_edof_label};
+use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 
 const EXPECTED: &str = "pairs of eDoFs such as J2.z:J3.z, separated by commas (at most 8)";

@@ -7,10 +7,10 @@
 //! by line, so a million-point program is never held in memory (only the program input is).
 
 use super::setup::Setup;
+use deflex_cam::program::readback::{DirectorySource, ReadPoint, read_program};
+use deflex_cam::program::{ArmConfiguration, DirectorySink, Format, ProgramInput, export_to};
 use deflex_compensate::Compensation;
 use deflex_model::{Data, IkOptions, Pose, Robot};
-use deflex_program::readback::{DirectorySource, ReadPoint, read_program};
-use deflex_program::{ArmConfiguration, DirectorySink, Format, ProgramInput, export_to};
 use serde_json::json;
 use std::path::Path;
 
@@ -19,7 +19,7 @@ use std::path::Path;
 pub enum ProgramCheckError {
     /// Writing failed.
     #[error(transparent)]
-    Program(#[from] deflex_program::ProgramError),
+    Program(#[from] deflex_cam::program::ProgramError),
     /// The clearance point's joint values.
     #[error(
         "the clearance point above the {which} of the path is not reachable ({source}): lower program.clearance_mm in --program-config or move the part with --part-xyz-mm"
@@ -267,7 +267,7 @@ impl<'a> Compare<'a> {
         }
     }
 
-    fn point(&mut self, r: &ReadPoint) -> Result<(), deflex_program::ProgramError> {
+    fn point(&mut self, r: &ReadPoint) -> Result<(), deflex_cam::program::ProgramError> {
         let n = self.input.points.len();
         let k = self.read;
         self.read += 1;
@@ -282,12 +282,12 @@ impl<'a> Compare<'a> {
                 .position
                 .max((p.pose.translation.vector - r.position_m).norm());
             if let Some(back) = r.rotation {
-                self.rotation = self
-                    .rotation
-                    .max(deflex_program::orientation::rotation_distance(
-                        &p.pose.rotation,
-                        &back,
-                    ));
+                self.rotation =
+                    self.rotation
+                        .max(deflex_cam::program::orientation::rotation_distance(
+                            &p.pose.rotation,
+                            &back,
+                        ));
             }
         }
         Ok(())

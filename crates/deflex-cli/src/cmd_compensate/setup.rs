@@ -4,9 +4,9 @@
 
 use super::{CompensateArgs, FormatArg};
 use crate::args::parse_list;
+use deflex_cam::program::{Format, ProgramSettings, ToolLoad};
 use deflex_compensate::{CompensationOptions, TcpPath};
 use deflex_model::{Pose, Robot};
-use deflex_program::{Format, ProgramSettings, ToolLoad};
 use deflex_sim::{CellConfig, ToolPath};
 use nalgebra::{Rotation3, Unit, Vector3};
 use std::path::PathBuf;
@@ -31,7 +31,7 @@ pub enum SetupError {
         /// The robot.
         robot: String,
         /// Why.
-        source: deflex_twin::CellFileError,
+        source: deflex_app::cell::twin_cell_file::CellFileError,
     },
     /// The path.
     #[error("--path {spec}: {source}")]
@@ -51,7 +51,7 @@ pub enum SetupError {
     },
     /// The program template.
     #[error(transparent)]
-    Template(#[from] deflex_program::ProgramError),
+    Template(#[from] deflex_cam::program::ProgramError),
     /// The seed holds the tool off the path's tool axis.
     #[error(
         "the seed configuration ({seed}) deg holds the tool {angle_deg:.1}° off the path's tool axis (−Z of the part frame{frame}): the programs would tilt the tool. Give --seed-deg with the tool pointing along it (within {MAX_TOOL_AXIS_DEG}°); the cell's seed is printed by `deflex sim robot --robot {robot}`"
@@ -166,9 +166,9 @@ fn cell(args: &CompensateArgs) -> Result<CellConfig, SetupError> {
         source,
     };
     match &args.twin {
-        Some(p) => deflex_twin::load_cell(p, Some(&args.robot)).map_err(error),
-        None => deflex_twin::cell_for_robot(&args.robot)
-            .map_err(|e| error(deflex_twin::CellFileError::from(e))),
+        Some(p) => deflex_app::cell::twin_cell_file::load_cell(p, Some(&args.robot)).map_err(error),
+        None => deflex_app::cell::twin_cell_file::cell_for_robot(&args.robot)
+            .map_err(|e| error(deflex_app::cell::twin_cell_file::CellFileError::from(e))),
     }
 }
 
@@ -185,7 +185,7 @@ fn cell_tool_load(config: &CellConfig) -> ToolLoad {
 }
 
 pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
-    let robot = deflex_load::load_robot(&args.robot).map_err(|source| SetupError::Robot {
+    let robot = deflex_app::load::load_robot(&args.robot).map_err(|source| SetupError::Robot {
         spec: args.robot.clone(),
         source,
     })?;

@@ -99,8 +99,12 @@ fn the_command_writes_safe_programs_that_read_back() {
     }
     // The G-code program reads with the CAM reader too: its first point is the clearance point.
     let gcode = std::fs::read_to_string(out.join("programs/deflex_path.gcode")).unwrap();
-    let program = deflex_gcode::read(&gcode, &deflex_gcode::ReadOptions::default()).unwrap();
-    assert_eq!(program.work_offset, Some(deflex_gcode::WorkOffset::G54));
+    let program =
+        deflex_cam::gcode::read(&gcode, &deflex_cam::gcode::ReadOptions::default()).unwrap();
+    assert_eq!(
+        program.work_offset,
+        Some(deflex_cam::gcode::WorkOffset::G54)
+    );
     let top = program
         .points
         .iter()
@@ -242,8 +246,9 @@ fn uncompensable_points_fail_the_command_with_their_indices_and_no_program() {
 
 #[test]
 fn a_deflex_run_log_serves_as_the_wrench_source() {
-    use deflex_control::{CycleOutput, Flags};
-    use deflex_runtime::log::{LogRecord, csv_header, csv_row};
+    use deflex_control::CycleOutput;
+    use deflex_record::csv_log::{LogRecord, csv_header, csv_row};
+    use deflex_telemetry::Flags;
     // The skipped flag bits are deflex-control's.
     assert_eq!(
         deflex_compensate::log::RUN_LOG_SKIP_FLAGS,

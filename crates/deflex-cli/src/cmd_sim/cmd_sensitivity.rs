@@ -1,5 +1,5 @@
 //! `deflex sim sensitivity`: the closed loop across delay, model scale, sensor gain, bias drift
-//! and contact stiffness (the work is `deflex_study::sensitivity`).
+//! and contact stiffness (the work is `deflex_app::study::sensitivity`).
 
 use super::{TwinArgs, load_config, robot_name};
 use crate::args::{parse_list, print_json};
@@ -46,7 +46,7 @@ pub struct SensitivityArgs {
 }
 
 pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
-    use deflex_study::sensitivity::{SensitivityPlan, run_sensitivity};
+    use deflex_app::study::sensitivity::{SensitivityPlan, run_sensitivity};
     let config = load_config(&args.twin)?;
     let list = |text: &str, name: &str, scale: f64| -> Result<Vec<f64>, UsageError> {
         if text.trim().is_empty() {
@@ -66,7 +66,8 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         threads: args.threads,
         length_mm: args.length_mm,
     };
-    plan.validate().map_err(deflex_study::DemoError::from)?;
+    plan.validate()
+        .map_err(deflex_app::study::DemoError::from)?;
     if plan.delays_s.is_empty() || plan.model_scales.is_empty() {
         return Err(UsageError::Missing {
             what: "--delays-ms and --model-scales",
@@ -75,13 +76,13 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         .into());
     }
     let model = match &args.model {
-        Some(path) => deflex_load::load_robot(&path.display().to_string())
+        Some(path) => deflex_app::load::load_robot(&path.display().to_string())
             .map_err(|e| CliError::in_context(format!("--model {}", path.display()))(e.into()))?,
         None => {
             if !json {
                 eprintln!("identifying the controller's model from a campaign on the twin …");
             }
-            deflex_twin::identify_from_twin_campaign(&config, args.seed)?
+            deflex_app::twin::identify_from_twin_campaign(&config, args.seed)?
         }
     };
     let bar = if json {
@@ -108,7 +109,7 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
     };
     write(
         "sensitivity.csv",
-        deflex_report::study::csv_files::sensitivity_csv(&result),
+        deflex_app::report::study::csv_files::sensitivity_csv(&result),
     )?;
     let robot = robot_name(&config);
     let summary = json!({
@@ -124,7 +125,7 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         "summary.json",
         serde_json::to_string_pretty(&summary).unwrap_or_default(),
     )?;
-    deflex_report::study::figures::sensitivity_heatmap(
+    deflex_app::report::study::figures::sensitivity_heatmap(
         &result,
         &dir.join("sensitivity_heatmap.png"),
     )?;

@@ -4,7 +4,7 @@
 //!
 //! The recording is written synchronously in the run's own loop (it loses nothing): in closed
 //! loop the controller's stream (`deflex run`'s channels, with the twin's path error), in open
-//! loop the twin's own stream (`deflex_twin::twin_stream`: ground truth at every log row).
+//! loop the twin's own stream (`deflex_sim::twin::twin_stream`: ground truth at every log row).
 
 use super::{TwinArgs, load_config};
 use crate::args::{bounded, print_json};
@@ -12,9 +12,9 @@ use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
 use deflex_record::{McapSink, RecordError, RecordOptions, RecordStats};
 use deflex_sim::gcode::read_gcode;
+use deflex_sim::twin::{RunWatch, SampleSink, TwinCellStream, twin_cell_session_info};
 use deflex_sim::{ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath};
 use deflex_telemetry::{CycleSample, SessionInfo, broadcast};
-use deflex_twin::{RunWatch, SampleSink, TwinCellStream, twin_cell_session_info};
 use serde_json::json;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -176,7 +176,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
     let path = tool_path(&args)?;
     // Closed loop: the deflex correction controller in-process, in simulated time.
     let mut twin = match args.correction {
-        Correction::On => Some(deflex_twin::twin_controller(
+        Correction::On => Some(deflex_app::twin::twin_controller(
             &config,
             args.model.as_deref(),
         )?),
@@ -301,7 +301,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
 struct RunResult<'a> {
     args: &'a IsfArgs,
     config: &'a deflex_sim::CellConfig,
-    twin: Option<&'a deflex_twin::TwinController>,
+    twin: Option<&'a deflex_sim::twin::TwinController>,
     run: &'a deflex_sim::FormingRun,
     name: &'a str,
     files: &'a [PathBuf],
@@ -427,7 +427,7 @@ fn info_key(closed_loop: bool) -> &'static str {
 }
 
 /// `log.csv`, `summary.json`, `profile.csv` and the run's PNG plots
-/// (`deflex_report::forming_run`) written into the folder being built; returns their names.
+/// (`deflex_app::report::forming_run`) written into the folder being built; returns their names.
 fn run_files(run: &deflex_sim::FormingRun, folder: &Path) -> Result<Vec<String>, CliError> {
     let mut names = Vec::new();
     for (name, text) in [
@@ -439,7 +439,7 @@ fn run_files(run: &deflex_sim::FormingRun, folder: &Path) -> Result<Vec<String>,
         deflex_files::write_atomic(&path, text).map_err(CliError::write(&path))?;
         names.push(name.to_string());
     }
-    for plot in deflex_report::forming_run::forming_plots(run, folder)? {
+    for plot in deflex_app::report::forming_run::forming_plots(run, folder)? {
         if let Some(name) = plot.file_name() {
             names.push(name.to_string_lossy().into_owned());
         }
@@ -453,7 +453,7 @@ fn plot_page(folder: &Path) -> Result<String, CliError> {
     let trace = deflex_record::trace::read_run_log(&folder.join("log.csv"), "this run", None)?;
     let dir = folder.join(PLOT_DIR);
     std::fs::create_dir_all(&dir).map_err(CliError::write(&dir))?;
-    deflex_report::write_run_figures(&dir, &[trace])?;
+    deflex_app::report::write_run_figures(&dir, &[trace])?;
     Ok(format!("{PLOT_DIR}/index.html"))
 }
 

@@ -1,11 +1,11 @@
 //! End-to-end tests of `deflex plan`, `calibrate` and `validate` through the real binary:
 //! files that know their robot, the planner's cell, and every bad input of issue 12.
 
-use deflex_stiffness::plan::{PlanOptions, plan_experiments};
-use deflex_stiffness::synthetic::{SyntheticOptions, measure};
-use deflex_stiffness::{MeasurementRow, format_rows_for};
+use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
+use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
+use deflex_calibrate::stiffness::{MeasurementRow, format_rows_for};
 
-/// Write rows for `robot` as a measurement file (what `deflex_stiffness::write_rows_for` did).
+/// Write rows for `robot` as a measurement file (what `deflex_calibrate::stiffness::write_rows_for` did).
 fn write_rows_for(
     path: &std::path::Path,
     robot: &deflex_model::Robot,
@@ -376,7 +376,7 @@ fn a_calibrated_urdf_robot_written_elsewhere_finds_its_urdf() {
     }
     let robot_file = dir.join("arm.toml");
     std::fs::write(&robot_file, toml).unwrap();
-    let robot = deflex_load::load_robot(s(&robot_file)).unwrap();
+    let robot = deflex_app::load::load_robot(s(&robot_file)).unwrap();
     let data = dir.join("meas.csv");
     campaign(&robot, 150.0, &data);
     std::fs::create_dir_all(dir.join("sub")).unwrap();
@@ -701,7 +701,7 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
         let fit = &v["coupling_fit"];
         assert!(number(&fit["reduced_chi2"]) <= number(&fit["reduced_chi2_before"]));
         // The robot file written carries it, and every other command reads it back.
-        let written = deflex_load::load_robot(s(&out)).unwrap();
+        let written = deflex_app::load::load_robot(s(&out)).unwrap();
         assert_eq!(written.couplings.len(), 1);
         assert!((written.couplings[0].compliance / found - 1.0).abs() < 1e-9);
         // The text output says when the interval holds zero (the ρ = 0 plants), and only then.

@@ -2,10 +2,10 @@
 //! load case holding two configurations, estimate pairs correlated at |ρ| ≥ 0.95, `import`'s
 //! labels, `run`'s log on a full disk and two processes on one output folder.
 
+use deflex_calibrate::stiffness::format_rows_for;
+use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
+use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
 use deflex_model::{Robot, builtin};
-use deflex_stiffness::format_rows_for;
-use deflex_stiffness::plan::{PlanOptions, plan_experiments};
-use deflex_stiffness::synthetic::{SyntheticOptions, measure};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -237,9 +237,9 @@ xyz = [1.0, 0.0, 0.0]
 ";
 
 /// Its SIMULATED campaign: 8 × 3 configurations, a 100 N horizontal force at the tool along x
-/// then y, the tool measured (`deflex_stiffness::synthetic::measure`, 15 µm noise).
+/// then y, the tool measured (`deflex_calibrate::stiffness::synthetic::measure`, 15 µm noise).
 fn two_axes_campaign(robot: &Robot) -> String {
-    use deflex_stiffness::MeasurementRow;
+    use deflex_calibrate::stiffness::MeasurementRow;
     let mut data = deflex_model::Data::new();
     let mut plan = Vec::new();
     for i in 0..8 {
@@ -274,7 +274,7 @@ fn calibrate_flags_nearly_collinear_estimates_in_text_json_and_html() {
     let dir = folder("collinear");
     let robot_file = dir.join("arm.toml");
     std::fs::write(&robot_file, TWO_AXES).unwrap();
-    let robot = deflex_load::load_robot(s(&robot_file)).unwrap();
+    let robot = deflex_app::load::load_robot(s(&robot_file)).unwrap();
     let data = dir.join("meas.csv");
     std::fs::write(&data, two_axes_campaign(&robot)).unwrap();
     let model = dir.join("m.toml");
@@ -632,7 +632,7 @@ fn import_writes_only_labels_its_reader_reads_back() {
         let run = import(setup, target);
         assert_eq!(run.code, Some(0), "{setup:?}: {}{}", run.stdout, run.stderr);
         let text = std::fs::read_to_string(&out).unwrap();
-        let rows = deflex_absolute::data::parse_absolute(&text, "a.csv", 6).unwrap();
+        let rows = deflex_calibrate::geometry::data::parse_absolute(&text, "a.csv", 6).unwrap();
         assert!(rows.len() > 1, "{}", rows.len());
         assert!(
             rows.iter().all(|r| r.setup == setup && r.target == target),

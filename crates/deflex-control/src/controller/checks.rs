@@ -4,11 +4,13 @@
 //! and the frames the robot links need (TCP orientation, the joint-space map of a correction).
 //! All allocation-free.
 
-use super::{Controller, CycleInput, CycleOutput, JointCorrectionMap, Phase};
+use super::{Controller, CycleInput, CycleOutput, JointCorrectionMap};
 use crate::estimate::tcp_deflection_in_base;
 use crate::runaway::RunawayAction;
-use crate::safety::{Channel, Fault, FaultKind, Flags};
+use crate::safety::{Channel, Fault};
 use deflex_model::{MAX_JOINTS, Wrench};
+use deflex_telemetry::Phase;
+use deflex_telemetry::{FaultKind, Flags};
 use nalgebra::{Rotation3, Vector3, Vector6};
 
 /// Damping λ of the least-squares map from a Cartesian correction to joint corrections

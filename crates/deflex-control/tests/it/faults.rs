@@ -5,8 +5,9 @@
 use crate::common;
 
 use deflex_control::controller::{CycleInput, CycleOutput};
-use deflex_control::{Controller, FaultKind, Flags, Phase, SafeAction};
+use deflex_control::{Controller, SafeAction};
 use deflex_model::Wrench;
+use deflex_telemetry::{FaultKind, Flags, Phase};
 use rand::{Rng, SeedableRng};
 
 const LOAD: [f64; 6] = [300.0, -250.0, 1000.0, 0.0, 0.0, 0.0];

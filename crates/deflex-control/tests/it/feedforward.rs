@@ -14,9 +14,10 @@ use crate::common;
 
 use deflex_control::{
     Controller, ControllerConfig, FeedForward, FeedForwardConfig, FeedForwardMode,
-    FeedForwardPoint, FeedForwardTable, Flags,
+    FeedForwardPoint, FeedForwardTable,
 };
 use deflex_model::{Data, Displacement, IkOptions, Pose, Robot, Wrench};
+use deflex_telemetry::Flags;
 use nalgebra::Vector3;
 use std::collections::VecDeque;
 

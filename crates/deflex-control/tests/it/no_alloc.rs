@@ -151,7 +151,8 @@ fn path_and_table() -> (Vec<[f64; 6]>, deflex_control::FeedForwardTable) {
 
 #[test]
 fn control_cycle_with_feedforward_allocates_nothing() {
-    use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode, Flags, PathIndex};
+    use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode, PathIndex};
+    use deflex_telemetry::Flags;
     let (qs, table) = path_and_table();
     let config = common::config();
     let settings = [

@@ -13,8 +13,9 @@
 use crate::common;
 
 use deflex_control::runaway::{HoldPhase, RunawayHold};
-use deflex_control::{Controller, ControllerConfig, FaultKind, Flags, RunawayAction};
+use deflex_control::{Controller, ControllerConfig, RunawayAction};
 use deflex_model::{Data, Robot, Wrench};
+use deflex_telemetry::{FaultKind, Flags};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use std::collections::VecDeque;

@@ -5,7 +5,7 @@ use super::calib::{source_arg, sources};
 use super::convert::{json_to_py, make_log, rows_to_numpy, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
 use crate::geometry::{self, CalibratedModel, CvBy, GeometryOptions, RegisterRequest};
-use deflex_absolute::fit::HeldOutProtocol;
+use deflex_calibrate::geometry::fit::HeldOutProtocol;
 use pyo3::prelude::*;
 use serde_json::json;
 use std::path::PathBuf;

@@ -10,14 +10,14 @@
 
 use super::{domain, join, now_ns, publisher, sensor_settings, subscriber, wait_until, wrench};
 use crate::{BridgeReport, BridgeSettings, Ros2Bridge, Ros2SensorLink};
+use deflex_app::cell::config::{Ros2Qos, Ros2Topic};
 use deflex_control::{Controller, ControllerConfig};
 use deflex_io::RobotSideLink;
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
-use deflex_rosmsg::{JointState, WrenchStamped};
-use deflex_runtime::config::{Ros2Qos, Ros2Topic};
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{Source, session_info};
 use deflex_runtime::{Clock, RunSummary, Telemetry, WallClock};
+use deflex_telemetry::ros::{JointState, WrenchStamped};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};

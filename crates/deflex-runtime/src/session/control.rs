@@ -11,10 +11,10 @@ use crate::rt::try_realtime;
 use crate::send_shaper::LinkDirective;
 use crate::stats::CycleStats;
 use bytemuck::Zeroable;
-use deflex_control::{
-    Controller, CycleInput, CycleOutput, FaultKind, Flags, JointCorrectionMap, Phase, SafeAction,
-};
+use deflex_control::RecordCycle;
+use deflex_control::{Controller, CycleInput, CycleOutput, JointCorrectionMap, SafeAction};
 use deflex_telemetry::{CycleSample, Publisher};
+use deflex_telemetry::{FaultKind, Flags, Phase};
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 

@@ -2,8 +2,9 @@
 //! including how the session ended (the robot's program finished, an operator stop, a failure).
 
 use crate::stats::StatsSummary;
-use deflex_control::{Fault, FaultKind, Flags, Phase};
+use deflex_control::Fault;
 use deflex_io::LinkCounters;
+use deflex_telemetry::{FaultKind, Flags, Phase};
 use std::net::SocketAddr;
 
 /// The thread a failure came from.

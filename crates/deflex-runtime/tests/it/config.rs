@@ -1,7 +1,7 @@
 //! Tests of `CELL.toml` parsing and validation ([`deflex_runtime::config`]).
 
+use deflex_app::cell::config::*;
 use deflex_control::{FeedForwardMode, PathIndex, PidGains};
-use deflex_runtime::config::*;
 use std::path::PathBuf;
 
 const MINIMAL: &str = r#"

@@ -2,9 +2,9 @@
 //! axes, every failure named by the table, its line and its CSV column (the law's checks name
 //! the point and the quantity; the runtime names the file's).
 
+use deflex_app::cell::feedforward::{TableLoadError, table_of};
 use deflex_compensate::table::TableRow;
 use deflex_model::{Displacement, Pose, Wrench};
-use deflex_runtime::feedforward::{TableLoadError, table_of};
 use nalgebra::{Rotation3, Translation3, Vector3};
 
 /// Rows along x every millimetre, deflection −compensation growing with the arc length.

@@ -8,9 +8,9 @@
 //! DEFLEX_FUZZ_COUNT=1000000 cargo test --release -p deflex-runtime --test it fuzz -- --nocapture
 //! ```
 
+use deflex_app::cell::config::{CellFile, bounds_of};
 use deflex_control::Controller;
 use deflex_fuzz::{count_from_env, fuzz};
-use deflex_runtime::config::{CellFile, bounds_of};
 use std::path::PathBuf;
 
 const EXAMPLE: &str = include_str!("../../../../docs/cell.example.toml");

@@ -16,7 +16,6 @@
 
 use crate::common;
 
-use deflex_control::{FaultKind, Flags};
 use deflex_io::egm::{EgmConfig, EgmLink, EgmRobotEndpoint};
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
@@ -27,6 +26,7 @@ use deflex_io::{RobotLink, RobotSideLink, RobotState};
 use deflex_model::Data;
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::{Clock, Runtime, WallClock};
+use deflex_telemetry::{FaultKind, Flags};
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -1,7 +1,7 @@
 //! The link factory, both sides from one `CELL.toml`: every robot protocol binds on loopback on
 //! the controller side, and the robot side of every protocol reaches it.
 
-use deflex_runtime::CellFile;
+use deflex_app::cell::config::CellFile;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;

@@ -1,8 +1,9 @@
 //! The CSV log written from the telemetry stream ([`deflex_runtime::log`]).
 
-use deflex_control::{CycleOutput, Flags};
-use deflex_runtime::log::{LogRecord, Plain, spawn_writer};
+use deflex_control::CycleOutput;
+use deflex_record::csv_log::{LogRecord, Plain, spawn_writer};
 use deflex_telemetry::CycleSample;
+use deflex_telemetry::Flags;
 
 #[test]
 fn rows_match_header_and_drops_are_counted() {

@@ -5,7 +5,6 @@
 
 use crate::common;
 
-use deflex_control::FaultKind;
 #[allow(unused_imports)]
 use deflex_io::RobotLink as _;
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
@@ -13,6 +12,7 @@ use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::{RobotSideLink, RobotState};
 use deflex_runtime::WallClock;
 use deflex_runtime::session::{RuntimeOptions, spawn};
+use deflex_telemetry::FaultKind;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};

@@ -10,11 +10,11 @@
 //! the test's own thread.
 
 use crate::common;
-use deflex_control::Flags;
-use deflex_runtime::log::{Plain, spawn_writer};
+use deflex_record::csv_log::{Plain, spawn_writer};
 use deflex_runtime::send_shaper::{LinkDirective, SendShaper, SendShaperConfig};
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::{Clock, WallClock};
+use deflex_telemetry::Flags;
 use std::sync::Arc;
 
 /// Wall time that records, at every `sleep_until` (called by the control thread only, once per
@@ -101,7 +101,7 @@ fn control_thread_cycle_and_publish_allocate_nothing() {
     assert!(measured > 100, "{measured} cycles measured");
     assert_eq!(
         summary.fault.map(|f| f.kind),
-        Some(deflex_control::FaultKind::SensorTimeout)
+        Some(deflex_telemetry::FaultKind::SensorTimeout)
     );
     assert!(summary.max_xi_m > 1e-4, "{}", summary.max_xi_m);
     assert_eq!(report.written + report.dropped, summary.cycles);

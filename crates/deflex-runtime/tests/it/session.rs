@@ -7,7 +7,6 @@
 use crate::common;
 
 use deflex_control::Controller;
-use deflex_control::FaultKind;
 use deflex_io::egm::{EgmConfig, EgmLink};
 use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{JointTag, RsiAnswer, RsiConfig, RsiLink};
@@ -17,6 +16,7 @@ use deflex_runtime::session::{
     Runtime, RuntimeOptions, SessionEnd, SessionError, SessionThread, spawn,
 };
 use deflex_runtime::{Clock, WallClock};
+use deflex_telemetry::FaultKind;
 use std::net::{SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};

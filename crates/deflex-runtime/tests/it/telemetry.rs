@@ -5,11 +5,12 @@
 //! `deflex run` has always written.
 
 use crate::common;
-use deflex_control::{CycleOutput, Flags, Phase};
+use deflex_control::CycleOutput;
+use deflex_record::csv_log::{LogRecord, Plain, csv_header, csv_row, spawn_writer};
 use deflex_runtime::WallClock;
-use deflex_runtime::log::{LogRecord, Plain, csv_header, csv_row, spawn_writer};
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{Source, Telemetry, session_info};
+use deflex_telemetry::{Flags, Phase};
 
 fn options() -> RuntimeOptions {
     RuntimeOptions {
@@ -24,7 +25,7 @@ fn options() -> RuntimeOptions {
 /// What one session with a telemetry ring of `capacity` samples gave its sinks.
 struct Sinks {
     summary: deflex_runtime::RunSummary,
-    log: deflex_runtime::log::LogReport,
+    log: deflex_record::csv_log::LogReport,
     log_text: String,
     /// Subscribed before the session, read only at its end.
     idle: deflex_telemetry::Subscriber<deflex_telemetry::CycleSample>,

@@ -425,15 +425,15 @@ fn the_plain_log_gap_is_the_j2_j3_coupling() {
 /// planned for the robot's nominal model (40 load cases, every eDoF family), measured on the
 /// unseen plant's twin with the laser tracker (25 samples per reading), the model structure
 /// searched from it (diagonal VJM), then the J2.z–J3.z off-diagonal compliance fitted with the
-/// eDoF compliances by weighted least squares ([`deflex_stiffness::fit_couplings`], what
+/// eDoF compliances by weighted least squares ([`deflex_calibrate::stiffness::fit_couplings`], what
 /// `deflex calibrate --couplings J2.z:J3.z` runs; the CLI's test
 /// `couplings_are_fitted_from_a_simulated_campaign` runs this plant's campaign through the
 /// commands). Never from the plant's parameters. Returns the diagonal and the coupled model.
-fn campaign_models(cell: &CellConfig) -> (Robot, deflex_stiffness::CouplingFit) {
+fn campaign_models(cell: &CellConfig) -> (Robot, deflex_calibrate::stiffness::CouplingFit) {
+    use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
+    use deflex_calibrate::stiffness::{SearchOptions, fit_couplings, search_structure};
     use deflex_model::{Axis, EdofSite};
     use deflex_sim::twin_campaign::run_campaign;
-    use deflex_stiffness::plan::{PlanOptions, plan_experiments};
-    use deflex_stiffness::{SearchOptions, fit_couplings, search_structure};
     let nominal = cell.nominal_robot().unwrap();
     let plan = plan_experiments(
         &nominal,

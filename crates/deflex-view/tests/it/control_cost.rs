@@ -13,8 +13,8 @@
 use deflex_control::Controller;
 use deflex_runtime::telemetry::{Source, Telemetry, session_info};
 use deflex_runtime::{CellFile, Clock, RuntimeOptions, WallClock, spawn};
+use deflex_sim::twin::cell_server::{ServeOptions, serve_cell};
 use deflex_sim::{CellConfig, ToolPath};
-use deflex_twin::cell_server::{ServeOptions, serve_cell};
 use std::net::TcpStream;
 use std::path::Path;
 use std::sync::Arc;
@@ -132,7 +132,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     };
 
     // `deflex run`'s threads from the same file, paced by the counting clock.
-    let robot = deflex_load::load_robot(&file.model_spec()).unwrap();
+    let robot = deflex_app::load::load_robot(&file.model_spec()).unwrap();
     let controller = Controller::new(robot, file.controller_config()).unwrap();
     let joints = controller.robot().joint_count();
     let info = session_info(
@@ -187,7 +187,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     let start = Instant::now();
     while ring
         .latest()
-        .is_none_or(|s| s.phase() != deflex_control::Phase::Running)
+        .is_none_or(|s| s.phase() != deflex_telemetry::Phase::Running)
     {
         assert!(
             start.elapsed() < Duration::from_secs(60),

@@ -1,0 +1,191 @@
+//! The link factory, both sides of a `CELL.toml` in one place:
+//!
+//! * the **controller side** (`deflex run`): the robot link of `robot.kind` bound on
+//!   `robot.bind`, with its peer lock, answer kind (RSI `RKorr` or joint `AK`/`AKorr`) and
+//!   correction frame (EGM), and the Net F/T client of `[sensor]`;
+//! * the **robot side** (`deflex cell --sim`, tests): the robot controller of `robot.kind` as a
+//!   simulated cell plays it, sending its state towards `robot.bind` ([`RobotSide`]), and a
+//!   Net F/T server answering on `sensor.address`.
+//!
+//! Both sides read the same settings (RSI correction mode, EGM frame and seven-axis layout,
+//! Stäubli watchdog = the robot timeout, Net F/T scaling), so a simulated cell and `deflex run`
+//! agree on the protocol by construction.
+
+use crate::cell::config::{CellFile, RobotKind, RsiAnswerKind, SensorKind};
+use deflex_io::egm::{EgmConfig, EgmLink};
+use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::robot_side::RobotSide;
+use deflex_io::rsi::{CorrectionMode, RsiAnswer, RsiConfig, RsiLink};
+use deflex_io::simple_tcp::SimpleTcpLink;
+use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink};
+use deflex_io::staubli::StaubliLink;
+use deflex_io::{ForceSensorLink, LinkError, PeerPolicy, RobotLink};
+use deflex_model::spatial::pose_from_xyz_rpy;
+use deflex_sim::twin::cell_server::CellSides;
+use std::time::Duration;
+
+fn rotation_rows(rpy: [f64; 3]) -> [[f64; 3]; 3] {
+    let m = *pose_from_xyz_rpy([0.0; 3], rpy).rotation.matrix();
+    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+}
+
+/// Why the ends of a simulated cell could not be made from a `CELL.toml`.
+#[derive(Debug, thiserror::Error)]
+pub enum CellSidesError {
+    /// The CELL.toml's model cannot be loaded.
+    #[error("{origin}: model.file: {error}")]
+    Model {
+        /// The CELL.toml.
+        origin: String,
+        /// Why.
+        error: deflex_model::ModelError,
+    },
+    /// The twin refuses its settings.
+    #[error(transparent)]
+    Twin(#[from] deflex_sim::SimError),
+}
+
+impl CellFile {
+    /// The ends of the simulated cell of this `CELL.toml` (`deflex cell --sim`) for the twin
+    /// `twin`: the robot side of `robot.kind` for the robot the twin plays, the Net F/T server
+    /// of `[sensor]` and the controller's model of `model.file`.
+    pub fn cell_sides(&self, twin: &deflex_sim::CellConfig) -> Result<CellSides, CellSidesError> {
+        let model =
+            crate::load::load_robot(&self.model_spec()).map_err(|error| CellSidesError::Model {
+                origin: self.origin.clone(),
+                error,
+            })?;
+        let joints = twin.nominal_robot()?.joint_count();
+        Ok(CellSides {
+            origin: self.origin.clone(),
+            robot: self.robot_side(joints),
+            sensor_address: self.sensor.address,
+            sensor_calibration: self.calibration(),
+            model,
+        })
+    }
+
+    /// The RSI correction mode of `robot.correction_mode`.
+    pub fn rsi_mode(&self) -> CorrectionMode {
+        self.robot.correction_mode
+    }
+
+    /// The RSI link settings of `[robot]`.
+    pub fn rsi_config(&self) -> RsiConfig {
+        let r = &self.robot;
+        RsiConfig {
+            sen_type: r.sen_type.clone(),
+            estr: None,
+            mode: r.correction_mode,
+            answer: match r.rsi_answer {
+                RsiAnswerKind::Cartesian => RsiAnswer::Cartesian,
+                RsiAnswerKind::Joint => RsiAnswer::Joint(r.rsi_joint_tag),
+            },
+        }
+    }
+
+    /// The ABB EGM link settings of `[robot]`, for a model with `joint_count` joints (seven:
+    /// ABB's seven-axis layout). The measurement age is one control period.
+    pub fn egm_config(&self, joint_count: usize) -> EgmConfig {
+        let r = &self.robot;
+        EgmConfig {
+            frame: r.egm_frame,
+            sensor_in_tool: rotation_rows(r.egm_sensor_rpy_rad),
+            work_object_in_base: rotation_rows(r.egm_work_object_rpy_rad),
+            age_ms: (1000.0 / self.control.rate_hz).round().clamp(0.0, 1000.0) as u32,
+            seven_axis: joint_count == 7,
+        }
+    }
+
+    /// The Net F/T count scaling of `[sensor]`.
+    pub fn calibration(&self) -> Calibration {
+        Calibration {
+            counts_per_force: self.sensor.counts_per_force,
+            counts_per_torque: self.sensor.counts_per_torque,
+        }
+    }
+
+    /// Controller side: binds the robot link of `robot.kind` on `robot.bind`, locked to
+    /// `robot.peer` when set (otherwise to the first valid sender), for a model of
+    /// `joint_count` joints.
+    pub fn open_robot_link(
+        &self,
+        joint_count: usize,
+    ) -> Result<Box<dyn RobotLink + Send>, LinkError> {
+        let r = &self.robot;
+        let policy = self.peer_policy()?;
+        Ok(match r.kind {
+            RobotKind::KukaRsi => {
+                let mut link = RsiLink::bind(r.bind, self.rsi_config())?;
+                link.set_peer_policy(policy);
+                Box::new(link)
+            }
+            RobotKind::AbbEgm => {
+                let mut link = EgmLink::bind(r.bind, self.egm_config(joint_count))?;
+                link.set_peer_policy(policy);
+                Box::new(link)
+            }
+            RobotKind::Staubli => {
+                let mut link = StaubliLink::bind(r.bind)?;
+                link.set_peer_policy(policy);
+                Box::new(link)
+            }
+            RobotKind::SimpleUdp => {
+                let mut link = SimpleUdpLink::bind(r.bind, ReplyStyle::default())?;
+                link.set_peer_policy(policy);
+                Box::new(link)
+            }
+            RobotKind::SimpleTcp => {
+                let mut link = SimpleTcpLink::bind(r.bind)?;
+                link.set_peer_policy(policy);
+                Box::new(link)
+            }
+        })
+    }
+
+    /// The robot link's peer policy from `robot.peer`, `robot.bind` and `robot.allow_any_peer`
+    /// ([`deflex_io::validate_peer`]; a loaded file has passed it already). Its
+    /// [`PeerPolicy::warning`] is what a session without a peer prints at start.
+    pub fn peer_policy(&self) -> Result<PeerPolicy, LinkError> {
+        let r = &self.robot;
+        deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer).map_err(LinkError::from)
+    }
+
+    /// Controller side: binds the sensor client of `[sensor]`. A ROS 2 sensor
+    /// (`sensor.kind = "ros2"`) is opened by the `deflex-ros2` bridge, a layer above this one,
+    /// and handed to [`crate::cell::cell_run::CellRun::start_with`]; here it is an error.
+    pub fn open_sensor_link(&self) -> Result<Box<dyn ForceSensorLink + Send>, LinkError> {
+        Ok(match self.sensor.kind {
+            SensorKind::Netft => Box::new(NetFtClient::new(
+                self.sensor.bind,
+                self.sensor.address,
+                self.calibration(),
+            )?),
+            SensorKind::Ros2 => {
+                return Err(LinkError::InvalidValue {
+                    protocol: deflex_io::Protocol::Ros2,
+                    reason: "sensor.kind = \"ros2\" is opened by the ROS 2 bridge (deflex-ros2)",
+                });
+            }
+        })
+    }
+
+    /// Robot side: the settings of the robot controller of `robot.kind` as a simulated cell
+    /// plays it, for a robot of `joint_count` joints, sending its state to `robot.bind`.
+    pub fn robot_side(&self, joint_count: usize) -> RobotSide {
+        RobotSide {
+            kind: self.robot.kind,
+            controller: self.robot.bind,
+            rsi_mode: self.rsi_mode(),
+            egm: self.egm_config(joint_count),
+            // The VAL3 program's watchdog: the robot's own timeout.
+            staubli_watchdog: Duration::from_secs_f64(self.robot.timeout_s.clamp(1e-3, 10.0)),
+        }
+    }
+
+    /// Sensor side: a Net F/T server answering on `sensor.address` with the scaling of
+    /// `[sensor]`.
+    pub fn open_sensor_server(&self) -> Result<NetFtSensorServer, LinkError> {
+        NetFtSensorServer::bind(self.sensor.address, self.calibration())
+    }
+}

@@ -1,0 +1,280 @@
+//! The validation of a model on measurements as tables, PNG plots and one HTML page: the
+//! prediction error statistics (position in mm, rotation in µrad), predicted vs measured per
+//! axis (Figs. 8–10, 12), δz along the measured points (Figs. 10, 12) and error heatmaps over the
+//! measured grid (Figs. 11, 13).
+
+use crate::report::PageError;
+use deflex_calibrate::stiffness::validation::Validation;
+use deflex_plot::{
+    HtmlReport, PlotError, PlotSpec, Series, SeriesStyle, line_plot, parity_plot, scatter_heatmap,
+};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Validation errors as table rows (mm).
+pub fn validation_rows(v: &Validation) -> Vec<Vec<String>> {
+    std::iter::once(&v.model)
+        .chain(v.baseline.as_ref())
+        .map(|m| {
+            let s = &m.stats;
+            let mut row = vec![m.name.clone()];
+            row.extend(stat_cells(
+                s.rms_m,
+                s.rms_norm_m,
+                s.max_abs_m,
+                s.max_norm_m,
+                |x| format!("{:.4}", x * 1e3),
+            ));
+            row
+        })
+        .collect()
+}
+
+/// RMS x, y, z, RMS norm, max x, y, z, max norm, each formatted by `fmt`.
+fn stat_cells(
+    rms: [f64; 3],
+    rms_norm: f64,
+    max_abs: [f64; 3],
+    max_norm: f64,
+    fmt: impl Fn(f64) -> String,
+) -> Vec<String> {
+    rms.iter()
+        .chain(std::iter::once(&rms_norm))
+        .chain(max_abs.iter())
+        .chain(std::iter::once(&max_norm))
+        .map(|&x| fmt(x))
+        .collect()
+}
+
+/// Headers of [`validation_rows`].
+pub const VALIDATION_HEADERS: [&str; 9] = [
+    "model",
+    "RMS x [mm]",
+    "RMS y [mm]",
+    "RMS z [mm]",
+    "RMS norm [mm]",
+    "max x [mm]",
+    "max y [mm]",
+    "max z [mm]",
+    "max norm [mm]",
+];
+
+/// Rotation validation errors as table rows (µrad), one per model; empty when no row has a
+/// measured rotation.
+pub fn validation_rotation_rows(v: &Validation) -> Vec<Vec<String>> {
+    std::iter::once(&v.model)
+        .chain(v.baseline.as_ref())
+        .filter_map(|m| {
+            let s = &m.rotation.as_ref()?.stats;
+            let mut row = vec![m.name.clone(), s.rows.to_string()];
+            row.extend(stat_cells(
+                s.rms_rad,
+                s.rms_norm_rad,
+                s.max_abs_rad,
+                s.max_norm_rad,
+                |x| format!("{:.1}", x * 1e6),
+            ));
+            Some(row)
+        })
+        .collect()
+}
+
+/// Headers of [`validation_rotation_rows`].
+pub const VALIDATION_ROTATION_HEADERS: [&str; 10] = [
+    "model",
+    "rows",
+    "rot RMS x [µrad]",
+    "RMS y [µrad]",
+    "RMS z [µrad]",
+    "RMS norm [µrad]",
+    "max x [µrad]",
+    "max y [µrad]",
+    "max z [µrad]",
+    "max norm [µrad]",
+];
+
+/// One line per model with the rotation prediction errors, `None` when no row has a measured
+/// rotation.
+pub fn validation_rotation_summary(v: &Validation) -> Option<String> {
+    let mut out = String::new();
+    for m in std::iter::once(&v.model).chain(v.baseline.as_ref()) {
+        let s = &m.rotation.as_ref()?.stats;
+        let _ = writeln!(
+            out,
+            "rotation errors {} ({} rows): RMS x/y/z {:.1} / {:.1} / {:.1} µrad (norm {:.1} µrad), max norm {:.1} µrad",
+            m.name,
+            s.rows,
+            s.rms_rad[0] * 1e6,
+            s.rms_rad[1] * 1e6,
+            s.rms_rad[2] * 1e6,
+            s.rms_norm_rad * 1e6,
+            s.max_norm_rad * 1e6
+        );
+    }
+    Some(out)
+}
+
+/// Write PNG plots and `validation.html` into the folder `dir`, whole or not at all: the folder
+/// is built aside and swapped in when complete (`deflex_files::AtomicDir`; an existing folder is
+/// replaced, and kept as it was when anything fails). Returns the files (final paths).
+pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, PageError> {
+    let io = |source: std::io::Error| PlotError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let page = PageError::of("validation report");
+    let folder = deflex_files::AtomicDir::create(dir)
+        .map_err(io)
+        .map_err(&page)?;
+    let files = write_report_into(v, folder.path()).map_err(&page)?;
+    folder.commit().map_err(io).map_err(&page)?;
+    Ok(files
+        .iter()
+        .filter_map(|f| f.file_name())
+        .map(|name| dir.join(name))
+        .collect())
+}
+
+/// [`write_validation_report`]'s files, written into an existing folder.
+fn write_report_into(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    let mut files = Vec::new();
+    let mut html = HtmlReport::new(format!("Validation of {}", v.model.name));
+    html.paragraph(format!(
+        "How well {} predicts {} measured displacements{}: error tables, predicted against \
+         measured, and the error over the measured points.",
+        v.model.name,
+        v.measured.len(),
+        v.baseline
+            .as_ref()
+            .map(|b| format!(", beside the baseline {}", b.name))
+            .unwrap_or_default()
+    ));
+    html.contents();
+    html.section("Prediction errors (measured − predicted)");
+    html.table(&VALIDATION_HEADERS, &validation_rows(v));
+    if v.model.rotation.is_some() {
+        html.section("Rotation errors (measured − predicted)");
+        html.table(&VALIDATION_ROTATION_HEADERS, &validation_rotation_rows(v));
+    }
+    html.paragraph(format!(
+        "{} measured points; RMS of the measured displacement x/y/z: {:.4} / {:.4} / {:.4} mm.",
+        v.measured.len(),
+        v.measured_rms_m[0] * 1e3,
+        v.measured_rms_m[1] * 1e3,
+        v.measured_rms_m[2] * 1e3
+    ));
+
+    // Predicted vs measured (Figs. 8–10, 12).
+    html.section("Predicted vs measured");
+    let axes = ["x", "y", "z"];
+    for (tag, m) in
+        std::iter::once(("model", &v.model)).chain(v.baseline.as_ref().map(|b| ("baseline", b)))
+    {
+        for ax in 0..3 {
+            let path = dir.join(format!("parity_{tag}_{}.png", axes[ax]));
+            let meas: Vec<f64> = v.measured.iter().map(|d| d[ax] * 1e3).collect();
+            let pred: Vec<f64> = m.predicted.iter().map(|d| d[ax] * 1e3).collect();
+            let spec = PlotSpec::new(
+                format!("δp{}: predicted vs measured ({tag})", axes[ax]),
+                format!("measured δp{} [mm]", axes[ax]),
+                format!("predicted δp{} [mm]", axes[ax]),
+            )
+            .size(700, 700);
+            parity_plot(&path, &spec, &pred, &meas, tag)?;
+            html.image(
+                &path,
+                format!("Predicted vs measured δp{} ({tag}: {})", axes[ax], m.name),
+            );
+            files.push(path);
+        }
+    }
+    // δz along the measurement order (Figs. 10, 12).
+    let path = dir.join("dz_along_points.png");
+    let mut series = vec![Series::indexed(
+        "measured",
+        v.measured.iter().map(|d| d[2] * 1e3).collect(),
+        SeriesStyle::LineAndPoints,
+    )];
+    for m in std::iter::once(&v.model).chain(v.baseline.as_ref()) {
+        series.push(Series::indexed(
+            m.name.clone(),
+            m.predicted.iter().map(|d| d[2] * 1e3).collect(),
+            SeriesStyle::Line,
+        ));
+    }
+    let spec = PlotSpec::new("δp_z: measured and predicted", "point #", "δp_z [mm]");
+    line_plot(&path, &spec, &series)?;
+    html.image(
+        &path,
+        "Vertical displacement along the measured points (cf. Figs. 10, 12)",
+    );
+    files.push(path);
+
+    // Heatmaps of the error norm over the measured points (Figs. 11, 13): one per model and per
+    // load level (the paper's 600 N and 1100 N grids share their points), each with its own
+    // colour scale so that a good model's pattern stays visible beside a poor one.
+    html.section("Error over the measured grid");
+    // The TCP grid when the TCP was measured (as in the paper), else every point.
+    let tcp_only = v.labels.iter().any(|l| l == "TCP");
+    let mut levels: Vec<f64> = Vec::new();
+    for &f in &v.load_n {
+        let level = (f / 10.0).round() * 10.0;
+        if !levels.iter().any(|l| (l - level).abs() < 1e-9) {
+            levels.push(level);
+        }
+    }
+    levels.sort_by(f64::total_cmp);
+    let many_levels = levels.len() > 4;
+    for level in if many_levels { vec![f64::NAN] } else { levels } {
+        let keep: Vec<usize> = (0..v.labels.len())
+            .filter(|&i| !tcp_only || v.labels[i] == "TCP")
+            .filter(|&i| {
+                level.is_nan() || ((v.load_n[i] / 10.0).round() * 10.0 - level).abs() < 1e-9
+            })
+            .collect();
+        if keep.is_empty() {
+            continue;
+        }
+        let xs: Vec<f64> = keep.iter().map(|&i| v.points[i][0] * 1e3).collect();
+        let ys: Vec<f64> = keep.iter().map(|&i| v.points[i][1] * 1e3).collect();
+        let load = if level.is_nan() {
+            "all loads".to_string()
+        } else {
+            format!("{level:.0} N")
+        };
+        let file_tag = if level.is_nan() {
+            "all".to_string()
+        } else {
+            format!("{level:.0}N")
+        };
+        for (tag, m) in
+            std::iter::once(("model", &v.model)).chain(v.baseline.as_ref().map(|b| ("baseline", b)))
+        {
+            let norm: Vec<f64> = keep
+                .iter()
+                .map(|&i| {
+                    let e = m.errors[i];
+                    (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() * 1e3
+                })
+                .collect();
+            let top = norm.iter().copied().fold(0.0, f64::max).max(1e-9);
+            let path = dir.join(format!("heatmap_{tag}_{file_tag}.png"));
+            let spec = PlotSpec::new(format!("|error| of the {tag}, {load}"), "x [mm]", "y [mm]")
+                .size(800, 700)
+                .color_range(0.0, top);
+            scatter_heatmap(&path, &spec, &xs, &ys, &norm, "|measured − predicted| [mm]")?;
+            html.image(
+                &path,
+                format!(
+                    "Error norm over the measured points, {load}: {} (cf. Figs. 11, 13)",
+                    m.name
+                ),
+            );
+            files.push(path);
+        }
+    }
+    let page = dir.join("validation.html");
+    html.write(&page)?;
+    files.push(page);
+    Ok(files)
+}

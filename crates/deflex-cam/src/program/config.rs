@@ -1,0 +1,108 @@
+//! Each vendor's configuration data from an [`ArmConfiguration`] (joint values and where the
+//! wrist centre lies), as their manuals define it. The joint values are the model's, which must
+//! be the controller's axis values (zeros and senses): true for the built-in KUKA, ABB and UR
+//! descriptions, to be checked for a user's own file. None of this has been checked on a
+//! controller yet.
+//!
+//! * **KUKA Status** (KSS 8 *Expert programming*, "Status"): bit 0 = 1 when the wrist root point
+//!   (intersection of A4, A5, A6) has a negative x in the A1 coordinate system (the "overhead
+//!   area"); bit 1 = 1 when A3 ≥ φ, φ the A3 angle at which the arm is stretched (the wrist
+//!   root point on the line of A2 and A3; computed from the model's geometry); bit 2 = 1 when
+//!   A5 ≤ 0. **Turn**: bit i = 1 when axis i+1 is negative (A1 … A6). Only a `PTP` to a Cartesian
+//!   point uses them; `LIN` keeps the configuration it starts in.
+//! * **ABB `robconf` [cf1, cf4, cf6, cfx]** (RAPID reference, `confdata`, serial robots): cf1,
+//!   cf4, cf6 the quadrants of axes 1, 4 and 6 (`floor(angle / 90°)`, −1 for −90° … 0°); cfx =
+//!   4 × (wrist centre behind axis 1) + 2 × (wrist centre behind the lower arm) + (axis 5 < 0),
+//!   0 … 7. Written with `ConfJ \On` and `ConfL \On`, so the controller checks the configuration
+//!   at every target instead of taking the nearest one.
+//! * **Stäubli `config`** (VAL3 reference, `config` type for 6-axis arms): `shoulder` `righty`
+//!   when the wrist centre is in front of axis 1, `lefty` behind; `elbow` `epositive` when
+//!   joint 3 ≥ 0, `enegative` otherwise; `wrist` `wpositive` when joint 5 ≥ 0, `wnegative`
+//!   otherwise.
+
+use crate::program::ArmConfiguration;
+
+/// KUKA Status and Turn (see the module documentation).
+pub fn kuka_status_turn(c: &ArmConfiguration) -> (u32, u32) {
+    let status = u32::from(c.wrist_behind_axis_1)
+        | (u32::from(c.elbow_beyond_stretched) << 1)
+        | (u32::from(c.joints_rad[4] <= 0.0) << 2);
+    let turn = c
+        .joints_rad
+        .iter()
+        .enumerate()
+        .fold(0, |t, (i, q)| t | (u32::from(*q < 0.0) << i));
+    (status, turn)
+}
+
+/// The quadrant of an angle: `floor(angle / 90°)`.
+fn quadrant(angle_rad: f64) -> i32 {
+    (angle_rad / std::f64::consts::FRAC_PI_2).floor() as i32
+}
+
+/// ABB `robconf` (see the module documentation).
+pub fn abb_robconf(c: &ArmConfiguration) -> [i32; 4] {
+    let q = &c.joints_rad;
+    let cfx = 4 * i32::from(c.wrist_behind_axis_1)
+        + 2 * i32::from(c.wrist_behind_lower_arm)
+        + i32::from(q[4] < 0.0);
+    [quadrant(q[0]), quadrant(q[3]), quadrant(q[5]), cfx]
+}
+
+/// Stäubli `config`: `(shoulder, elbow, wrist)` (see the module documentation).
+pub fn staubli_config(c: &ArmConfiguration) -> (&'static str, &'static str, &'static str) {
+    (
+        if c.wrist_behind_axis_1 {
+            "lefty"
+        } else {
+            "righty"
+        },
+        if c.joints_rad[2] >= 0.0 {
+            "epositive"
+        } else {
+            "enegative"
+        },
+        if c.joints_rad[4] >= 0.0 {
+            "wpositive"
+        } else {
+            "wnegative"
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arm(q_deg: [f64; 6], behind: bool, lower: bool, stretched: bool) -> ArmConfiguration {
+        ArmConfiguration {
+            joints_rad: q_deg.map(f64::to_radians),
+            wrist_behind_axis_1: behind,
+            wrist_behind_lower_arm: lower,
+            elbow_beyond_stretched: stretched,
+        }
+    }
+
+    #[test]
+    fn status_turn_robconf_and_config_follow_the_definitions() {
+        // KUKA's own example pose: A1..A6 = 0, −90, 90, 0, 45, 0 (basic area, A5 > 0): S 2
+        // when A3 ≥ φ, T 2 (A2 negative).
+        let c = arm([0.0, -90.0, 90.0, 0.0, 45.0, 0.0], false, false, true);
+        assert_eq!(kuka_status_turn(&c), (0b010, 0b000010));
+        let c = arm(
+            [-10.0, -90.0, 90.0, -30.0, -45.0, -170.0],
+            true,
+            false,
+            false,
+        );
+        assert_eq!(kuka_status_turn(&c), (0b101, 0b111011));
+        // ABB: quadrants and cfx.
+        let c = arm([95.0, 0.0, 0.0, -45.0, -10.0, 181.0], true, true, false);
+        assert_eq!(abb_robconf(&c), [1, -1, 2, 7]);
+        let c = arm([-0.5, 0.0, 0.0, 0.0, 30.0, -90.0], false, false, false);
+        assert_eq!(abb_robconf(&c), [-1, 0, -1, 0]);
+        assert_eq!(staubli_config(&c), ("righty", "epositive", "wpositive"));
+        let c = arm([0.0, 0.0, -5.0, 0.0, -1.0, 0.0], true, false, false);
+        assert_eq!(staubli_config(&c), ("lefty", "enegative", "wnegative"));
+    }
+}

@@ -1,0 +1,173 @@
+//! The robot side of every robot protocol: the robot controller as a simulated cell plays it
+//! ([`RobotEndpoint`], opened from [`RobotSide`]), sending its state to the controller and
+//! receiving its corrections, with the same settings as the controller side so that both agree
+//! on the protocol by construction.
+
+use crate::egm::{EgmConfig, EgmRobotEndpoint};
+use crate::rsi::{CorrectionMode, RsiRobotEndpoint};
+use crate::simple_tcp::SimpleTcpRobotEndpoint;
+use crate::simple_udp::SimpleUdpRobotEndpoint;
+use crate::staubli::StaubliRobotEndpoint;
+use crate::{LinkError, ReceivedCorrection, RobotSideLink, RobotState};
+use serde::Deserialize;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// Robot protocol (`robot.kind`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RobotKind {
+    /// KUKA RSI, XML over UDP.
+    KukaRsi,
+    /// ABB EGM path correction.
+    AbbEgm,
+    /// Stäubli VAL3 `alter` program (deflex binary protocol).
+    Staubli,
+    /// Text lines over UDP.
+    SimpleUdp,
+    /// The same text lines over TCP (the controller listens; a UR script connects to it).
+    SimpleTcp,
+}
+
+impl RobotKind {
+    /// The protocol's name for people ("KUKA RSI", "ABB EGM", …).
+    pub fn name(self) -> &'static str {
+        match self {
+            RobotKind::KukaRsi => "KUKA RSI",
+            RobotKind::AbbEgm => "ABB EGM",
+            RobotKind::Staubli => "Stäubli",
+            RobotKind::SimpleUdp => "simple UDP",
+            RobotKind::SimpleTcp => "simple TCP",
+        }
+    }
+
+    /// The name in `CELL.toml` (`kuka-rsi`, …).
+    pub fn key(self) -> &'static str {
+        match self {
+            RobotKind::KukaRsi => "kuka-rsi",
+            RobotKind::AbbEgm => "abb-egm",
+            RobotKind::Staubli => "staubli",
+            RobotKind::SimpleUdp => "simple-udp",
+            RobotKind::SimpleTcp => "simple-tcp",
+        }
+    }
+
+    /// Whether the robot's replies echo its telegram's cycle id (RSI's IPOC, the Stäubli
+    /// acknowledgement), so a late reply is never taken for the current one. The other
+    /// protocols carry no echo: the first reply after a state is its answer.
+    pub fn echoes_cycle(self) -> bool {
+        matches!(self, RobotKind::KukaRsi | RobotKind::Staubli)
+    }
+}
+
+/// How the robot side of a protocol is opened: the protocol, where the controller listens and
+/// the protocol's settings (a `CELL.toml`'s `[robot]`, read by `deflex-app`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotSide {
+    /// The protocol.
+    pub kind: RobotKind,
+    /// Where the controller listens (`robot.bind`).
+    pub controller: SocketAddr,
+    /// The RSI correction mode.
+    pub rsi_mode: CorrectionMode,
+    /// The EGM settings.
+    pub egm: EgmConfig,
+    /// The Stäubli VAL3 program's watchdog.
+    pub staubli_watchdog: Duration,
+}
+
+impl RobotSide {
+    /// The robot controller of [`RobotSide::kind`], bound on an ephemeral loopback port and
+    /// sending its state to [`RobotSide::controller`]. A simple TCP robot (a UR script)
+    /// connects to the controller: it retries for up to `wait` until the controller listens, or
+    /// until `stop` is set.
+    pub fn open(&self, wait: Duration, stop: &AtomicBool) -> Result<RobotEndpoint, LinkError> {
+        let pc = self.controller;
+        let local = "127.0.0.1:0";
+        let link = match self.kind {
+            RobotKind::KukaRsi => {
+                EndpointLink::Other(Box::new(RsiRobotEndpoint::new(local, pc, self.rsi_mode)?))
+            }
+            RobotKind::AbbEgm => {
+                let mut ep = EgmRobotEndpoint::new(local, pc)?;
+                ep.set_seven_axis(self.egm.seven_axis);
+                EndpointLink::Egm(Box::new(ep), self.egm.clone())
+            }
+            RobotKind::Staubli => EndpointLink::Other(Box::new(StaubliRobotEndpoint::new(
+                local,
+                pc,
+                self.staubli_watchdog,
+            )?)),
+            RobotKind::SimpleUdp => {
+                EndpointLink::Other(Box::new(SimpleUdpRobotEndpoint::new(local, pc)?))
+            }
+            RobotKind::SimpleTcp => {
+                let start = Instant::now();
+                loop {
+                    match SimpleTcpRobotEndpoint::connect(pc, Duration::from_millis(200)) {
+                        Ok(ep) => break EndpointLink::Other(Box::new(ep)),
+                        Err(e) if start.elapsed() > wait || stop.load(Ordering::SeqCst) => {
+                            return Err(e);
+                        }
+                        Err(_) => std::thread::sleep(Duration::from_millis(50)),
+                    }
+                }
+            }
+        };
+        Ok(RobotEndpoint {
+            kind: self.kind,
+            link,
+        })
+    }
+}
+
+enum EndpointLink {
+    Egm(Box<EgmRobotEndpoint>, EgmConfig),
+    Other(Box<dyn RobotSideLink + Send>),
+}
+
+/// A robot controller of a protocol as a simulated cell plays it ([`RobotSide::open`]).
+pub struct RobotEndpoint {
+    kind: RobotKind,
+    link: EndpointLink,
+}
+
+impl RobotEndpoint {
+    /// The protocol.
+    pub fn kind(&self) -> RobotKind {
+        self.kind
+    }
+
+    /// The link.
+    pub fn link(&mut self) -> &mut dyn RobotSideLink {
+        match &mut self.link {
+            EndpointLink::Egm(l, _) => l.as_mut(),
+            EndpointLink::Other(l) => l.as_mut(),
+        }
+    }
+
+    /// Whether replies echo the state's cycle id ([`RobotKind::echoes_cycle`]).
+    pub fn echoes_cycle(&self) -> bool {
+        self.kind.echoes_cycle()
+    }
+
+    /// What the robot controller knows of its own tool: the TCP orientation in base axes. An
+    /// ABB controller expresses the corrections it receives in the frame `robot.egm_frame`
+    /// (which follows the tool); the other protocols do not need it.
+    pub fn set_tcp_rotation(&mut self, tcp_in_base: &[[f64; 3]; 3]) {
+        if let EndpointLink::Egm(ep, config) = &mut self.link {
+            ep.set_correction_frame(&config.correction_frame(tcp_in_base));
+        }
+    }
+
+    /// Sends the robot's state.
+    pub fn send_state(&mut self, state: &RobotState) -> Result<(), LinkError> {
+        self.link().send_state(state)
+    }
+
+    /// Waits up to `wait` for a correction.
+    pub fn receive(&mut self, wait: Duration) -> Result<Option<ReceivedCorrection>, LinkError> {
+        self.link().receive_correction(wait)
+    }
+}
