@@ -263,7 +263,7 @@ pub fn cell_session(
         Ok(o) => o,
         Err(e) => {
             let _ = recorder.finish_with(false);
-            return Err(e.into());
+            return Err(e);
         }
     };
     let rows = outcome.log.rows.len();
@@ -357,87 +357,4 @@ pub fn cell(args: CellArgs, json_out: bool) -> CommandResult {
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The twin plays the robot of `--robot`, over a twin file's settings too; an unknown robot
-    /// is refused naming it.
-    #[test]
-    fn the_twin_plays_the_robot_of_the_flag() {
-        let args = |robot: Option<&str>, twin: Option<PathBuf>| CellArgs {
-            sim: true,
-            config: PathBuf::from("cell.toml"),
-            twin,
-            robot: robot.map(str::to_string),
-            path: "cone".into(),
-            length_mm: None,
-            speed: 1.0,
-            seed: 1,
-            wait_s: 1.0,
-            dwell_s: 0.5,
-            quiet: true,
-            view: None,
-            log: None,
-        };
-        assert_eq!(twin_config(&args(None, None)).unwrap().part.robot, "tx200");
-        let ur = twin_config(&args(Some("ur10e"), None)).unwrap();
-        assert_eq!(ur.part.robot, "ur10e");
-        assert_eq!(ur.robot_period_s(), 0.002);
-        let dir = std::env::temp_dir().join(format!("deflex-cell-robot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let file = dir.join("twin.toml");
-        std::fs::write(
-            &file,
-            "[cell.part]\nrobot = \"ur10e\"\n[cell.log]\nrate_hz = 25.0\n",
-        )
-        .unwrap();
-        let from_file = twin_config(&args(None, Some(file.clone()))).unwrap();
-        assert_eq!(from_file.part.robot, "ur10e");
-        let flag_wins = twin_config(&args(Some("tx200"), Some(file))).unwrap();
-        assert_eq!(flag_wins.part.robot, "tx200");
-        let e = twin_config(&args(Some("nosuch-robot"), None))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("nosuch-robot"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
-        // (The geometry check of the CELL.toml model: deflex-twin's tests.)
-    }
-
-    /// `deflex cell --sim` refuses anything but loopback, naming the field.
-    #[test]
-    fn cell_refuses_non_loopback_addresses() {
-        let dir = std::env::temp_dir().join(format!("deflex-nonloop-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let config = dir.join("cell.toml");
-        std::fs::write(
-            &config,
-            "[robot]\nkind = \"kuka-rsi\"\nbind = \"10.0.0.2:59152\"\npeer = \"10.0.0.3:0\"\n\
-             [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n",
-        )
-        .unwrap();
-        let args = CellArgs {
-            sim: true,
-            config,
-            twin: None,
-            robot: None,
-            path: "cone".into(),
-            length_mm: None,
-            speed: 1.0,
-            seed: 1,
-            wait_s: 1.0,
-            dwell_s: 0.5,
-            quiet: true,
-            view: None,
-            log: None,
-        };
-        let e = cell_session(&args, &AtomicBool::new(false), false)
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default();
-        assert!(e.contains("loopback") && e.contains("robot.bind"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
-    }
 }

@@ -709,5 +709,3 @@ fn read_log(
     parse_log(&text, &file, robot, part_frame)
 }
 
-#[cfg(test)]
-mod tests;

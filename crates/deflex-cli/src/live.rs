@@ -80,36 +80,3 @@ pub fn mcap_beside(log: &Path, field: &str) -> Result<PathBuf, UsageError> {
     }
     Ok(mcap)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn view_addresses_and_recording_names() {
-        assert_eq!(view_address("8800").unwrap().to_string(), "127.0.0.1:8800");
-        assert_eq!(
-            view_address("localhost:9").unwrap().to_string(),
-            "127.0.0.1:9"
-        );
-        assert_eq!(
-            view_address("0.0.0.0:8765").unwrap().to_string(),
-            "0.0.0.0:8765"
-        );
-        let e = view_address("example.com:80").unwrap_err().to_string();
-        assert!(e.contains("--view") && e.contains("example.com"), "{e}");
-        assert!(view_address("70000").is_err());
-        assert_eq!(
-            mcap_beside(Path::new("dir/deflex-run.csv"), "log.path").unwrap(),
-            Path::new("dir/deflex-run.mcap")
-        );
-        assert_eq!(
-            mcap_beside(Path::new("run"), "log.path").unwrap(),
-            Path::new("run.mcap")
-        );
-        let e = mcap_beside(Path::new("run.mcap"), "log.path")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("log.path") && e.contains("run.mcap"), "{e}");
-    }
-}

@@ -33,12 +33,49 @@ pub use not_built::{Ros2Outcome, Ros2Parts};
 #[cfg(feature = "ros2")]
 mod built {
     use super::*;
+    use deflex_app::cell::config::Ros2Section;
     use deflex_ros2::sensor::SensorCountsHandle;
     use deflex_ros2::{
         BridgeReport, BridgeSettings, Refusal, Ros2Bridge, Ros2Error, Ros2SensorLink, SensorCounts,
         SensorSettings,
     };
     use serde_json::json;
+    use std::time::Duration;
+
+    /// The bridge's settings of a `[ros2]` section.
+    pub fn bridge_settings_of(r: &Ros2Section) -> BridgeSettings {
+        BridgeSettings {
+            domain_id: r.domain_id,
+            namespace: r.namespace.clone(),
+            node_name: r.node_name.clone(),
+            qos: r.qos,
+            depth: r.depth,
+            publish_rate_hz: r.publish_rate_hz,
+            diagnostics_rate_hz: r.diagnostics_rate_hz,
+            topics: r.topics.clone(),
+        }
+    }
+
+    /// The bridge's settings of a `CELL.toml`'s `[ros2]`, `None` without it.
+    pub fn bridge_settings(cell: &CellFile) -> Option<BridgeSettings> {
+        cell.ros2.as_ref().map(bridge_settings_of)
+    }
+
+    /// The ROS 2 sensor link's settings of a `CELL.toml`'s `[sensor]` and `[ros2]` (`None`
+    /// without `[ros2]`). The link's node is `<ros2.node_name>_ft` in `ros2.namespace`.
+    pub fn sensor_settings(cell: &CellFile) -> Option<SensorSettings> {
+        let r = cell.ros2.as_ref()?;
+        Some(SensorSettings {
+            domain_id: r.domain_id,
+            namespace: r.namespace.clone(),
+            node_name: format!("{}_ft", r.node_name),
+            qos: r.qos,
+            topic: cell.sensor.topic.clone(),
+            frame_id: r.sensor_frame.clone(),
+            max_age: Duration::from_secs_f64(cell.sensor.max_age_s),
+            queue_depth: cell.sensor.queue_depth,
+        })
+    }
 
     /// The open ROS 2 parts of a session.
     pub struct Ros2Parts {
@@ -68,7 +105,7 @@ mod built {
                 bridge_error: None,
             };
             if cell.sensor.kind == SensorKind::Ros2
-                && let Some(settings) = SensorSettings::from_cell(cell)
+                && let Some(settings) = sensor_settings(cell)
             {
                 let link = Ros2SensorLink::open(&settings).map_err(|e| {
                     CliError::in_context(format!("{}: sensor.topic", cell.origin))(e.into())
@@ -88,7 +125,7 @@ mod built {
         /// start): it publishes every cycle, never from the control thread. A bridge that
         /// cannot start is kept for [`Self::start_error`].
         pub fn subscribe_bridge(&mut self, cell: &CellFile, telemetry: &Telemetry) {
-            if let Some(settings) = BridgeSettings::from_cell(cell) {
+            if let Some(settings) = bridge_settings(cell) {
                 match Ros2Bridge::spawn(&settings, telemetry.subscribe(), telemetry.info().clone())
                 {
                     Ok(bridge) => self.bridge = Some(bridge),

@@ -49,6 +49,3 @@ pub use output::{
     MARKER, OutputError, OutputKind, OutputProblem, check_output, check_output_flag, problem_of,
 };
 pub use shown::{shown, shown_path, shown_text};
-
-#[cfg(test)]
-mod tests;

@@ -92,7 +92,7 @@ impl RobotSide {
             RobotKind::AbbEgm => {
                 let mut ep = EgmRobotEndpoint::new(local, pc)?;
                 ep.set_seven_axis(self.egm.seven_axis);
-                EndpointLink::Egm(Box::new(ep), self.egm.clone())
+                EndpointLink::Egm(Box::new(ep), self.egm)
             }
             RobotKind::Staubli => EndpointLink::Other(Box::new(StaubliRobotEndpoint::new(
                 local,

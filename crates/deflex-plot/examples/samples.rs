@@ -1,12 +1,11 @@
 //! Renders one sample of every plot kind, plus an HTML report embedding them,
 //! from synthetic data.
 //!
-//! `cargo run -p deflex-report --example samples [OUT_DIR]`
-//! (default OUT_DIR: `/tmp/deflex-report-samples`).
+//! `cargo run -p deflex-plot --example samples [OUT_DIR]`
+//! (default OUT_DIR: `/tmp/deflex-plot-samples`).
 
 use std::path::PathBuf;
 
-use deflex_app::report::*;
 use deflex_plot::*;
 
 /// Tiny deterministic noise source (xorshift), so samples are reproducible.
@@ -26,7 +25,7 @@ fn main() -> Result<(), PlotError> {
     let out = std::env::args()
         .nth(1)
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/tmp/deflex-report-samples"));
+        .unwrap_or_else(|| PathBuf::from("/tmp/deflex-plot-samples"));
     std::fs::create_dir_all(&out).map_err(|source| PlotError::Io {
         path: out.clone(),
         source,
@@ -263,7 +262,7 @@ fn main() -> Result<(), PlotError> {
     let mut r = HtmlReport::new("deflex sample report");
     r.note("SIMULATED: synthetic data, for checking the report layout only.")
         .section("Summary")
-        .paragraph("Every plot kind of deflex-report, rendered from synthetic data.")
+        .paragraph("Every plot kind of deflex-plot, rendered from synthetic data.")
         .table(
             &["axis", "RMSE before [mm]", "RMSE after [mm]"],
             &[

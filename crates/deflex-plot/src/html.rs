@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::{PlotError, base64_encode};
+use crate::PlotError;
 
 /// Escapes `&`, `<`, `>`, `"` and `'` so `text` can be placed in HTML
 /// element content or a quoted attribute value.
@@ -138,7 +138,7 @@ fn section_ids(blocks: &[Block]) -> Vec<String> {
 /// data URIs, so the file can be moved, mailed or opened offline.
 ///
 /// ```no_run
-/// use crate::HtmlReport;
+/// use deflex_plot::HtmlReport;
 /// let mut r = HtmlReport::new("Calibration report");
 /// r.note("SIMULATED data: no robot was measured.")
 ///     .section("Prediction error")
@@ -445,7 +445,7 @@ fn render_image(h: &mut String, path: &Path, caption: &str) -> Result<(), PlotEr
     let _ = writeln!(
         h,
         "<figure><img src=\"data:{mime};base64,{}\" alt=\"{alt}\"><figcaption>{cap}</figcaption></figure>",
-        base64_encode(&bytes)
+        data_encoding::BASE64.encode(&bytes)
     );
     Ok(())
 }

@@ -45,7 +45,6 @@
 
 #![warn(missing_docs)]
 
-mod base64;
 mod cloud;
 mod colormap;
 mod font;
@@ -58,7 +57,6 @@ mod timeline;
 
 use std::path::{Path, PathBuf};
 
-pub use base64::base64_encode;
 pub use cloud::{Cloud3, Plot3Spec, cloud_3d};
 pub use colormap::{PALETTE, palette_color, viridis};
 pub use font::DEJAVU_SANS;

@@ -14,8 +14,9 @@ use rayon::prelude::*;
 use std::path::Path;
 
 /// Rows per rayon task: large enough that scheduling costs nothing next to the maths
-/// (a deflection is ≈ 0.3 µs), small enough to balance two to a few dozen cores.
-const ROWS_PER_TASK: usize = 2048;
+/// (a deflection is ≈ 0.3 µs), small enough to balance two to a few dozen cores. Public so that
+/// a test can place rows on both sides of a split.
+pub const ROWS_PER_TASK: usize = 2048;
 
 /// Below this many rows the batch runs on the calling thread (no pool wake-up).
 const SERIAL_ROWS: usize = 256;
@@ -127,9 +128,9 @@ fn for_rows(
         .try_for_each_init(Data::new, |data, (i, chunk)| run_chunk(i, chunk, data))
 }
 
-/// A row of `q` (`rows × n`).
+/// Row `i` of `values`, a row-major `rows × cols` array (panics when `i` is not a row of it).
 #[inline]
-fn row(values: &[f64], cols: usize, i: usize) -> &[f64] {
+pub fn row(values: &[f64], cols: usize, i: usize) -> &[f64] {
     &values[i * cols..(i + 1) * cols]
 }
 
@@ -321,67 +322,4 @@ pub fn gravity_sags(robot: &Robot, q: &[f64], rows: usize) -> Result<Option<Vec<
         Ok(())
     })?;
     Ok(Some(out))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn configurations(rows: usize) -> Vec<f64> {
-        // A deterministic spread over the TX200's workspace.
-        (0..rows * 6)
-            .map(|k| ((k as f64 * 0.6180339887).fract() - 0.5) * 2.0)
-            .collect()
-    }
-
-    #[test]
-    fn batches_equal_single_calls_bit_for_bit_across_the_parallel_split() {
-        let robot = builtin("tx200").unwrap();
-        let rows = 3 * ROWS_PER_TASK + 17;
-        let q = configurations(rows);
-        let w = [10.0, -200.0, -1000.0, 3.0, 1.0, -2.0];
-        let batch = deflections(&robot, &q, rows, &w).unwrap();
-        for i in [0, 1, ROWS_PER_TASK - 1, ROWS_PER_TASK, rows - 1] {
-            let single = deflections(&robot, row(&q, 6, i), 1, &w).unwrap();
-            assert_eq!(&batch[i * 6..i * 6 + 6], single.as_slice(), "row {i}");
-        }
-        let c = compliances(&robot, &q, rows).unwrap();
-        let i = rows - 2;
-        let single = compliances(&robot, row(&q, 6, i), 1).unwrap();
-        assert_eq!(&c[i * 36..i * 36 + 36], single.as_slice());
-    }
-
-    #[test]
-    fn ik_reaches_the_pose_of_forward_kinematics_and_reports_failures() {
-        let robot = builtin("tx200").unwrap();
-        let q0 = default_seed(&robot);
-        let mut q = q0.clone();
-        q[0] += 0.2;
-        q[1] -= 0.1;
-        let pose = poses(&robot, &q, 1).unwrap();
-        let solved = inverse_kinematics(&robot, &pose, 1, &q0, OnFailure::Raise).unwrap();
-        let back = poses(&robot, &solved, 1).unwrap();
-        for (a, b) in pose.iter().zip(&back) {
-            assert!((a - b).abs() < 1e-8);
-        }
-        let mut far = pose.clone();
-        far[3] = 50.0;
-        let e = inverse_kinematics(&robot, &far, 1, &q0, OnFailure::Raise).unwrap_err();
-        assert!(e.to_string().contains("out of reach"), "{e}");
-        let nan = inverse_kinematics(&robot, &far, 1, &q0, OnFailure::Nan).unwrap();
-        assert!(nan.iter().all(|v| v.is_nan()));
-        let mut skew = pose;
-        skew[0] = 2.0;
-        let e = inverse_kinematics(&robot, &skew, 1, &q0, OnFailure::Raise).unwrap_err();
-        assert!(e.to_string().contains("not a rotation"), "{e}");
-    }
-
-    #[test]
-    fn non_finite_values_are_named_by_row_and_column() {
-        let e = check_finite("q", &[0.0, 1.0, 2.0, f64::NAN], Some(2)).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "q[1, 1] is NaN: every value must be a finite number"
-        );
-    }
 }

@@ -2,8 +2,8 @@
 //! `cargo run -p deflex-record --example synthetic_recording -- OUT.mcap [SECONDS] [twin|cell]`.
 //! Used by the independent Python reader test (`crates/deflex-record/tests/python`).
 
-use deflex_record::synthetic::SyntheticCell;
 use deflex_record::{McapSink, RecordOptions};
+use deflex_telemetry::synthetic::SyntheticCell;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {

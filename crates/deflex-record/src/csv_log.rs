@@ -1,8 +1,8 @@
-//! The CSV log, a sink of the telemetry stream ([`deflex_runtime::telemetry`]): a writer thread reads the
-//! session's [`CycleSample`]s through its own [`Subscriber`] and writes one row per control
-//! cycle with unit-named columns. The control thread never waits for it, never allocates for it
-//! and never touches the file; if the writer falls more than the ring's capacity behind, the
-//! oldest cycles are lost to it and counted ([`LogReport::dropped`]).
+//! The CSV log, a sink of the telemetry stream (the runtime's `deflex_runtime::telemetry`): a
+//! writer thread reads the session's [`CycleSample`]s through its own [`Subscriber`] and writes
+//! one row per control cycle with unit-named columns. The control thread never waits for it,
+//! never allocates for it and never touches the file; if the writer falls more than the ring's
+//! capacity behind, the oldest cycles are lost to it and counted ([`LogReport::dropped`]).
 //!
 //! Columns: `time_s`, `q1_rad…qN_rad`, the raw reading `raw_fx_n…raw_mz_nm` (sensor frame), the
 //! compensated reading `ws_fx_n…ws_mz_nm` (sensor frame), the TCP wrench `w_fx_n…w_mz_nm` (eq. 2,

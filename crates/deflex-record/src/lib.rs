@@ -12,7 +12,7 @@
 //! * [`McapSink`]: the same writing, synchronous, into any writer (the twin's own loop, tests).
 //! * [`for_each_cycle`]: reads a recording back, streaming, into cycle samples.
 //! * [`trace`]: any run log (a recording, a `deflex run` CSV log, a `deflex sim isf` log) as the
-//!   plain columns `deflex plot` draws ([`deflex_app::report::RunTrace`]).
+//!   plain columns `deflex plot` draws ([`trace::RunTrace`]).
 
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
@@ -22,13 +22,12 @@ pub mod csv_log;
 mod read;
 mod recorder;
 mod session;
-pub mod synthetic;
 pub mod trace;
 mod write;
 
-#[cfg(test)]
-mod tests;
-
+/// The SIMULATED synthetic telemetry stream (defined in [`deflex_telemetry::synthetic`], below
+/// the outlets, so that the live view's tests use it too), kept at its old path.
+pub use deflex_telemetry::synthetic;
 pub use read::{MAX_RECORD_BYTES, MCAP_MAGIC, RecordingSummary, for_each_cycle, is_mcap};
 pub use recorder::{McapRecorder, RecordReport};
 pub use session::{SESSION_JSON_SCHEMA, SessionRecord};

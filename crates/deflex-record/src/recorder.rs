@@ -33,7 +33,7 @@ const POLL: Duration = Duration::from_millis(20);
 /// use deflex_telemetry::{broadcast, CycleSample, SessionInfo, Source};
 /// let (mut publisher, ring) = broadcast::<CycleSample>(4096);
 /// let info = Arc::new(SessionInfo::new(Source::Runtime, "tx200", vec!["j1".into()]));
-/// let recorder = crate::McapRecorder::spawn("run.mcap", &ring, info).unwrap();
+/// let recorder = deflex_record::McapRecorder::spawn("run.mcap", &ring, info).unwrap();
 /// // … the control thread publishes one sample per cycle …
 /// publisher.publish(&CycleSample::default());
 /// drop(publisher); // the session ends

@@ -106,9 +106,11 @@ pub(crate) fn lower_priority() {
     let _ = rustix::process::setpriority_process(None, DDS_NICE);
 }
 
-/// A DDS participant on `domain_id` and a node `node` in `namespace` (`/` for none).
-/// Called from the bridge's and the reader's threads (the bridge's after [`lower_priority`]).
-pub(crate) fn join(domain_id: u16, namespace: &str, node: &str) -> Result<Node, Ros2Error> {
+/// A DDS participant on `domain_id` and a node `node` in `namespace` (`/` for none): how the
+/// bridge's and the reader's threads join the graph (the bridge's after lowering its priority
+/// to [`DDS_NICE`]), and how a test or a tool joins it as another ROS 2 node (a driver
+/// publishing `WrenchStamped`, a listener of the bridge).
+pub fn join(domain_id: u16, namespace: &str, node: &str) -> Result<Node, Ros2Error> {
     let context =
         Context::with_options(ContextOptions::new().domain_id(domain_id)).map_err(|e| {
             Ros2Error::Participant {
@@ -136,13 +138,11 @@ pub fn topic_name(namespace: &str, topic: &str) -> String {
     }
 }
 
-/// [`Name`] of an absolute topic name (`/deflex/joint_states`).
-pub(crate) fn ros_name(full: &str) -> Result<Name, Ros2Error> {
+/// The [`Name`] of an absolute topic name (`/deflex/joint_states`); a name ROS 2 refuses is a
+/// [`Ros2Error::Topic`] naming it.
+pub fn ros_name(full: &str) -> Result<Name, Ros2Error> {
     Name::parse(full).map_err(|e| Ros2Error::Topic {
         topic: full.to_string(),
         message: e.to_string(),
     })
 }
-
-#[cfg(test)]
-mod tests;

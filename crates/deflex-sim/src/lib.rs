@@ -23,7 +23,7 @@
 //! ## Measured numbers (default cell, paper cone, seed 1, no correction)
 //!
 //! `cargo run --release -p deflex-sim --example cone_open_loop -- OUT_DIR` (also checked by
-//! `tests/forming.rs::paper_cone_uncorrected_acceptance`): 494 s of forming at 250 Hz
+//! `tests/it/forming.rs::paper_cone_uncorrected_acceptance`): 494 s of forming at 250 Hz
 //! (123 467 cycles) simulate in ≈ 0.6 s; maximum TCP error 3.90 mm (paper: 3.84 mm), RMS
 //! 2.00 mm, max Fz 1233 N (Aerens level 1260 N at the programmed step-down and wall angle), max
 //! in-plane force 471 N near the end, part formed 12.1 mm deep instead of the programmed 15 mm.
@@ -31,7 +31,7 @@
 //! ## Using the cell from a controller
 //!
 //! ```no_run
-//! use crate::{CellConfig, ControllerInput, CorrectionController, ToolPath, run_forming};
+//! use deflex_sim::{CellConfig, ControllerInput, CorrectionController, ToolPath, run_forming};
 //! struct Hold;
 //! impl CorrectionController for Hold {
 //!     fn period_s(&self) -> f64 { 0.01 }

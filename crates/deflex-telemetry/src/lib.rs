@@ -24,6 +24,7 @@ pub mod ros;
 mod sample;
 mod seqcell;
 mod state;
+pub mod synthetic;
 mod words;
 
 pub use broadcast::{Broadcast, Publisher, Subscriber, broadcast};
@@ -33,13 +34,3 @@ pub use state::{FAULT_KINDS, FaultKind, Flags, Phase};
 
 /// Re-exported so that users can derive [`bytemuck::Pod`] for their own messages.
 pub use bytemuck;
-
-// The tests are unit tests (one test binary for the crate, no integration-test target): the
-// counting allocator counts only the calling thread's allocations (see `deflex-alloc-count`),
-// so the no-allocation test is undisturbed by the other tests running in parallel.
-#[cfg(test)]
-#[global_allocator]
-static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
-
-#[cfg(test)]
-mod tests;

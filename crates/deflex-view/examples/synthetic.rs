@@ -1,5 +1,5 @@
 //! Serves the live view of the SIMULATED synthetic stream (not the twin, not a robot: signals of
-//! the right shape, see `deflex_record::synthetic`) so that the page can be seen:
+//! the right shape, see `deflex_telemetry::synthetic`) so that the page can be seen:
 //!
 //! ```text
 //! cargo run --release -p deflex-view --example synthetic -- [ADDR] [--rate-hz 100] [--stop] [--prefill-s S]
@@ -9,7 +9,7 @@
 //! prints (there is no robot). `--prefill-s` publishes S seconds at once before going live, to
 //! see a full window.
 
-use deflex_record::synthetic::SyntheticCell;
+use deflex_telemetry::synthetic::SyntheticCell;
 use deflex_telemetry::{CycleSample, broadcast};
 use std::process::ExitCode;
 use std::sync::Arc;

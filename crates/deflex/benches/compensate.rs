@@ -1,8 +1,7 @@
 //! Compensation of a 100 000-point path (the paper's TX200, a helix around its forming point)
 //! with one process-model iteration: the desired path's IK, one process pass, one compensation
 //! pass and the final process pass. The process model here is the closed-form
-//! [`DepthProportional`]; the twin's forming model is benched in `deflex-sim`
-//! (`benches/compensate_forming.rs`).
+//! [`DepthProportional`]; the twin's forming model is benched in `compensate_forming.rs`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use deflex_compensate::{

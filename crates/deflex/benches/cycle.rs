@@ -3,8 +3,8 @@
 //! contact-runaway guard. Target: ≤ 1 µs median. The same with a feed-forward table
 //! (`control_cycle_feedforward`, 100 000 points 0.1 mm apart, arc-length tracking and a lead;
 //! `feedforward_update`: the tracking and lookup alone). Also the joint-correction map the
-//! runtime sends with RSI `AK` answers (the per-answer send shaper is benched in
-//! deflex-runtime's `link` bench).
+//! runtime sends with RSI `AK` answers (the per-answer send shaper is benched in the `link`
+//! bench).
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};

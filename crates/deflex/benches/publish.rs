@@ -6,7 +6,7 @@
 //! second, not 100–250), so the active sinks read the very cache lines it is writing: the
 //! worst case of the coherence traffic between them.
 //!
-//! `cargo bench -p deflex-bench --bench publish`
+//! `cargo bench -p deflex --features bench --bench publish`
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use deflex_record::synthetic::SyntheticCell;

@@ -47,6 +47,3 @@ pub fn read_bounded(path: &Path, limit: u64) -> Result<String, BoundedReadError>
         _ => BoundedReadError::Io(e.into_io()),
     })
 }
-
-#[cfg(test)]
-mod tests;

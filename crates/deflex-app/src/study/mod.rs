@@ -39,6 +39,3 @@ pub use study::{DemoOptions, Predictions, Progress, Study, run_study};
 pub use summary::{
     BASELINE, DemoSummary, FormingNumbers, IDENTIFIED, ModelErrorNumbers, StiffnessRow, TABLE1,
 };
-
-#[cfg(test)]
-mod it_tests;

@@ -70,6 +70,3 @@ pub use row::{
     DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, MeasuredRotation, MeasurementFile, MeasurementRow,
     load_case_count,
 };
-
-#[cfg(test)]
-mod tests;

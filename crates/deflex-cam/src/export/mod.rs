@@ -538,6 +538,3 @@ pub fn segment_pose(segment: &[f64; 6]) -> Pose {
         [segment[3], segment[4], segment[5]],
     )
 }
-
-#[cfg(test)]
-mod it_tests;

@@ -108,7 +108,7 @@ fn planar(p: &[f64; 3], c: &[f64; 3], plane: Plane) -> (f64, f64) {
 }
 
 /// The centre of an `R` arc (see the module documentation).
-pub(crate) fn center_from_radius(
+pub fn center_from_radius(
     start: &[f64; 3],
     end: &[f64; 3],
     radius: f64,
@@ -144,15 +144,19 @@ pub(crate) fn center_from_radius(
 /// The checked geometry of an arc: start angle and radius, sweep (rad, signed: positive
 /// counter-clockwise about the normal), end radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Sweep {
+pub struct Sweep {
+    /// Angle of the start about the centre in the plane (rad, from the plane's first axis).
     pub theta0: f64,
+    /// Signed sweep (rad; positive counter-clockwise about the normal), full turns included.
     pub sweep: f64,
+    /// Radius at the start (mm).
     pub r0: f64,
+    /// Radius at the end (mm).
     pub r1: f64,
 }
 
 /// Angles, radii and sweep of an arc; errors when it does not close.
-pub(crate) fn sweep(
+pub fn sweep(
     start: &[f64; 3],
     end: &[f64; 3],
     center: &[f64; 3],
@@ -205,7 +209,7 @@ pub(crate) fn sweep(
 }
 
 /// Steps of an arc for a chord tolerance (see the module documentation).
-pub(crate) fn steps(s: &Sweep, tolerance_mm: f64) -> f64 {
+pub fn steps(s: &Sweep, tolerance_mm: f64) -> f64 {
     let r = s.r0.max(s.r1);
     if r <= tolerance_mm {
         return 1.0;
@@ -215,7 +219,7 @@ pub(crate) fn steps(s: &Sweep, tolerance_mm: f64) -> f64 {
 }
 
 /// Point `k` of `n` of the arc (`k = n` is the end exactly).
-pub(crate) fn point(
+pub fn point(
     s: &Sweep,
     start: &[f64; 3],
     end: &[f64; 3],
@@ -236,50 +240,4 @@ pub(crate) fn point(
     p[a2] = center[a2] + r * theta.sin();
     p[normal] = start[normal] + (end[normal] - start[normal]) * f;
     p
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn r_centres_lie_where_the_convention_says() {
-        // G2 under 180° from (0,0) to (10,0): centre below the chord, arc bulging up (+Y).
-        let c = center_from_radius(&[0.0; 3], &[10.0, 0.0, 0.0], 10.0, Plane::Xy, false).unwrap();
-        assert!((c[0] - 5.0).abs() < 1e-12 && (c[1] + 75f64.sqrt()).abs() < 1e-12);
-        let s = sweep(&[0.0; 3], &[10.0, 0.0, 0.0], &c, Plane::Xy, false, 1).unwrap();
-        assert!(
-            (s.sweep + std::f64::consts::FRAC_PI_3).abs() < 1e-12,
-            "{s:?}"
-        );
-        let mid = point(&s, &[0.0; 3], &[10.0, 0.0, 0.0], &c, Plane::Xy, 1, 2);
-        assert!((mid[1] - (10.0 - 75f64.sqrt())).abs() < 1e-12, "{mid:?}");
-        // Negative R: the long way round, centre above.
-        let c = center_from_radius(&[0.0; 3], &[10.0, 0.0, 0.0], -10.0, Plane::Xy, false).unwrap();
-        assert!(c[1] > 0.0);
-        let s = sweep(&[0.0; 3], &[10.0, 0.0, 0.0], &c, Plane::Xy, false, 1).unwrap();
-        assert!((s.sweep + 5.0 * std::f64::consts::FRAC_PI_3).abs() < 1e-12);
-        assert!(center_from_radius(&[0.0; 3], &[10.0, 0.0, 0.0], 4.0, Plane::Xy, true).is_err());
-        assert!(center_from_radius(&[0.0; 3], &[0.0; 3], 4.0, Plane::Xy, true).is_err());
-    }
-
-    #[test]
-    fn full_circles_turns_and_mismatched_radii() {
-        let start = [10.0, 0.0, 0.0];
-        let c = [0.0; 3];
-        let s = sweep(&start, &start, &c, Plane::Xy, true, 3).unwrap();
-        assert!((s.sweep - 3.0 * std::f64::consts::TAU).abs() < 1e-12);
-        let s = sweep(&start, &start, &c, Plane::Xy, false, 1).unwrap();
-        assert!((s.sweep + std::f64::consts::TAU).abs() < 1e-12);
-        let e = sweep(&start, &[0.0, 10.5, 0.0], &c, Plane::Xy, true, 1).unwrap_err();
-        assert!(e.to_string().contains("differ by 0.5000 mm"), "{e}");
-        assert!(sweep(&start, &start, &start, Plane::Xy, true, 1).is_err());
-        // Steps: sagitta within the tolerance.
-        let s = sweep(&start, &start, &c, Plane::Xy, true, 1).unwrap();
-        let n = steps(&s, 0.01);
-        let step = std::f64::consts::TAU / n;
-        assert!(10.0 * (1.0 - (step / 2.0).cos()) <= 0.01 + 1e-12);
-        let fewer = step * n / (n - 1.0);
-        assert!(10.0 * (1.0 - (fewer / 2.0).cos()) > 0.01);
-    }
 }

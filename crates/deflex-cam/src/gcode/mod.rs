@@ -40,12 +40,12 @@
 //! [`MIN_FEED_MM_MIN`] ..= [`MAX_FEED_MM_MIN`] mm/min.
 //!
 //! ```
-//! let program = crate::gcode::read(
+//! let program = deflex_cam::gcode::read(
 //!     "%\nO1000 (RING)\nG17 G21 G40 G90 G54\nT1 M6\nG0 X10 Y0\nG0 Z2\nG1 Z0 F300\nG3 X10 Y0 I-10 J0\nM30\n%\n",
-//!     &crate::gcode::ReadOptions::default(),
+//!     &deflex_cam::gcode::ReadOptions::default(),
 //! )
 //! .unwrap();
-//! assert_eq!(program.work_offset, Some(crate::gcode::WorkOffset::G54));
+//! assert_eq!(program.work_offset, Some(deflex_cam::gcode::WorkOffset::G54));
 //! assert_eq!(program.points[0].p_mm, [10.0, 0.0, 2.0]);
 //! assert!(program.notes.iter().any(|n| n.word == "T1"));
 //! ```
@@ -55,7 +55,7 @@
 pub mod arc;
 mod error;
 mod interpreter;
-mod words;
+pub mod words;
 
 pub use error::{GcodeError, GcodeErrorKind, Note, NoteKind};
 
@@ -249,6 +249,3 @@ impl Program {
 pub fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
     interpreter::read(text, options)
 }
-
-#[cfg(test)]
-mod it_tests;

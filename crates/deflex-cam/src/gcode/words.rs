@@ -6,7 +6,7 @@ use crate::gcode::error::{GcodeError, GcodeErrorKind};
 
 /// One word of a line.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Word {
+pub struct Word {
     /// Upper-case letter.
     pub letter: char,
     /// The number.
@@ -26,6 +26,7 @@ impl Word {
             .then_some(scaled.round() as u32)
     }
 
+    /// An error of kind `kind` at this word of 1-based line `line` (its column and text).
     pub fn error(&self, line: usize, kind: GcodeErrorKind) -> GcodeError {
         GcodeError {
             line,
@@ -38,7 +39,7 @@ impl Word {
 
 /// A line split into words.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct Line {
+pub struct Line {
     /// The words, in order.
     pub words: Vec<Word>,
     /// The line starts with a block-delete `/`.
@@ -51,8 +52,10 @@ fn excerpt(text: &str) -> String {
     text.chars().take(24).collect()
 }
 
-/// Split `raw` (1-based line `line`) into words.
-pub(crate) fn split(raw: &str, line: usize) -> Result<Line, GcodeError> {
+/// Split `raw` (1-based line `line`) into words; an error names the line, the column and the
+/// word (an unclosed or stray comment parenthesis, a malformed number, a character that is no
+/// word).
+pub fn split(raw: &str, line: usize) -> Result<Line, GcodeError> {
     let chars: Vec<char> = raw.chars().collect();
     let err = |column: usize, word: String, kind| GcodeError {
         line,
@@ -137,38 +140,4 @@ pub(crate) fn split(raw: &str, line: usize) -> Result<Line, GcodeError> {
         });
     }
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn words_comments_and_columns() {
-        let l = split("N10 G01 X-.5 Y1. (cut) Z+2 F 1200 ; end", 3).unwrap();
-        let texts: Vec<&str> = l.words.iter().map(|w| w.text.as_str()).collect();
-        assert_eq!(texts, ["N10", "G01", "X-.5", "Y1.", "Z+2", "F1200"]);
-        assert_eq!(l.words[2].value, -0.5);
-        assert_eq!(l.words[1].column, 5);
-        assert_eq!(l.words[5].column, 28);
-        assert_eq!(l.words[1].code10(), Some(10));
-        let l = split("g90.1 g17", 1).unwrap();
-        assert_eq!(l.words[0].code10(), Some(901));
-        assert!(split("%", 1).unwrap().percent);
-        assert!(split("/G0 X1", 1).unwrap().block_delete);
-    }
-
-    #[test]
-    fn errors_name_line_column_and_word() {
-        let e = split("G0 X1 (open", 7).unwrap_err();
-        assert_eq!((e.line, e.column), (7, 7));
-        assert_eq!(e.kind, GcodeErrorKind::Comment);
-        let e = split("G0 X1 )", 2).unwrap_err();
-        assert_eq!(e.column, 7);
-        let e = split("G0 X1..2", 1).unwrap_err();
-        assert_eq!((e.column, e.word.as_str()), (4, "X1..2"));
-        assert_eq!(e.kind, GcodeErrorKind::BadNumber);
-        let e = split("G0 #1=2", 1).unwrap_err();
-        assert_eq!((e.column, e.kind), (4, GcodeErrorKind::Syntax));
-    }
 }

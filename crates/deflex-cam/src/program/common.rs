@@ -236,8 +236,9 @@ pub(crate) fn header_lines(input: &ProgramInput) -> Vec<String> {
 /// Width of a header comment line (characters, before the comment marker).
 pub const COMMENT_WIDTH: usize = 90;
 
-/// `text` in lines of at most `width` characters, broken at spaces.
-pub(crate) fn wrap(text: &str, width: usize) -> Vec<String> {
+/// `text` in lines of at most `width` characters, broken at spaces (a word longer than `width`
+/// is cut into pieces of `width`); always at least one line, empty for an empty text.
+pub fn wrap(text: &str, width: usize) -> Vec<String> {
     let mut out = Vec::new();
     let mut line = String::new();
     for word in text.split_whitespace() {
@@ -299,19 +300,4 @@ pub(crate) fn blend_radius(
         next
     };
     blend_mm.min(0.45 * prev.min(next))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn comments_wrap_at_words() {
-        let text = "predicted error 2.1548 mm uncompensated, 0.0001 mm compensated; largest compensation 2.2938 mm";
-        let lines = wrap(text, 40);
-        assert!(lines.iter().all(|l| l.chars().count() <= 40), "{lines:?}");
-        assert_eq!(lines.join(" "), text, "no word cut or lost");
-        assert_eq!(wrap("abcdefghij", 4), ["abcd", "efgh", "ij"]);
-        assert_eq!(wrap("", 10), [""]);
-    }
 }

@@ -29,7 +29,7 @@
 //! simulators): they follow the public documentation cited in each module.
 //!
 //! ```
-//! use crate::program::{export, Format, ProgramInput, ProgramPoint, ProgramSettings, Pose};
+//! use deflex_cam::program::{export, Format, ProgramInput, ProgramPoint, ProgramSettings, Pose};
 //! let points = vec![
 //!     ProgramPoint { pose: Pose::identity(), speed_m_s: None },
 //!     ProgramPoint { pose: Pose::translation(0.01, 0.0, 0.0), speed_m_s: Some(0.01) },
@@ -42,7 +42,7 @@
 
 #![warn(missing_docs)]
 
-mod common;
+pub mod common;
 pub mod config;
 pub mod error;
 mod gcode;
@@ -314,6 +314,3 @@ pub fn write_files(dir: &Path, files: &[ProgramFile]) -> Result<(), ProgramError
     }
     Ok(())
 }
-
-#[cfg(test)]
-mod it_tests;

@@ -163,38 +163,3 @@ pub fn json(fit: &CouplingFit) -> (Value, Value) {
     });
     (json!(couplings), summary)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn pairs_are_parsed_and_bad_ones_named() {
-        let r = parse("J2.z:J3.z, base.x:J1.x").unwrap();
-        assert_eq!(r.len(), 2);
-        assert_eq!(
-            r[0].pair,
-            ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z))
-        );
-        assert_eq!(r[1].text, "base.x:J1.x");
-        for (bad, says) in [
-            ("J2.z", "pairs of eDoFs"),
-            ("J2.z:J3.w", "J3.w"),
-            ("J2.z:K3.z", "K3.z"),
-            ("J2.z:J2.z", "two different eDoFs"),
-            ("J2.z:J3.z,J3.z:J2.z", "each pair once"),
-            ("", "pairs of eDoFs"),
-        ] {
-            let e = parse(bad).err().unwrap().to_string();
-            assert!(
-                e.starts_with("--couplings") && e.contains(says),
-                "{bad}: {e}"
-            );
-        }
-        let many = (1..=9)
-            .map(|j| format!("J{j}.x:J{j}.y"))
-            .collect::<Vec<_>>()
-            .join(",");
-        assert!(parse(&many).is_err());
-    }
-}

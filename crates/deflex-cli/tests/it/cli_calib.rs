@@ -731,3 +731,79 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `calibrate --couplings A:B[,A:B…]`: the pairs are split at the commas, each trimmed and read
+/// as two eDoF labels (checked against the identified structure in that order), and every bad
+/// list is refused before any work, naming `--couplings` and what is wrong.
+#[test]
+fn coupling_pairs_are_parsed_and_bad_ones_named() {
+    let dir = folder("coupling-pairs");
+    let tx200 = builtin("tx200").unwrap();
+    let meas = dir.join("meas.csv");
+    campaign(&tx200, 1000.0, &meas);
+    let calibrate = |pairs: &str, out: &Path| {
+        deflex(&[
+            "--json",
+            "calibrate",
+            "--robot",
+            "tx200",
+            "--data",
+            s(&meas),
+            "--couplings",
+            pairs,
+            "--out",
+            s(out),
+        ])
+    };
+    let out = dir.join("calibrated.toml");
+    let run = calibrate("J2.z:J3.z", &out);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(v["couplings"].as_array().unwrap().len(), 1, "{v}");
+    assert_eq!(
+        (&v["couplings"][0]["a"], &v["couplings"][0]["b"]),
+        (&"J2.z".into(), &"J3.z".into())
+    );
+    // Two pairs: the first passes the structure check, the second (J1.x is not identified on
+    // this campaign) is named as given, without the space after the comma.
+    let refused = dir.join("refused.toml");
+    let run = calibrate("J2.z:J3.z, base.x:J1.x", &refused);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(
+        run.stderr.contains("error: --couplings base.x:J1.x: "),
+        "{}",
+        run.stderr
+    );
+    assert!(!refused.exists());
+    let many = (1..=9)
+        .map(|j| format!("J{j}.x:J{j}.y"))
+        .collect::<Vec<_>>()
+        .join(",");
+    for (bad, says) in [
+        ("J2.z", "pairs of eDoFs"),
+        ("J2.z:J3.w", "J3.w"),
+        ("J2.z:K3.z", "K3.z"),
+        ("J2.z:J2.z", "two different eDoFs"),
+        ("J2.z:J3.z,J3.z:J2.z", "each pair once"),
+        ("", "pairs of eDoFs"),
+    ] {
+        let run = calibrate(bad, &refused);
+        assert_eq!(run.code, Some(1), "{bad}: {}", run.stderr);
+        assert!(
+            run.stderr.starts_with("error: --couplings") && run.stderr.contains(says),
+            "{bad}: {}",
+            run.stderr
+        );
+        assert!(!refused.exists());
+    }
+    // More than 8 pairs.
+    let run = calibrate(&many, &refused);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(
+        run.stderr.starts_with("error: --couplings"),
+        "{}",
+        run.stderr
+    );
+    assert!(!refused.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

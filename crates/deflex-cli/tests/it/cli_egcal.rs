@@ -26,7 +26,7 @@ fn json(args: &[&str]) -> serde_json::Value {
 
 fn data(series: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../deflex-absolute/tests/data/ur10-tracker")
+        .join("../deflex-calibrate/tests/data/ur10-tracker")
         .join(series)
 }
 

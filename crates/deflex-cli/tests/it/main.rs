@@ -7,8 +7,13 @@ mod browser;
 #[path = "../../../deflex-view/tests/it/cdp.rs"]
 mod cdp;
 mod cli_calib;
+mod cli_cell;
+mod cli_compensate;
 mod cli_egcal;
+mod cli_export;
+mod cli_live;
 mod cli_model;
+mod cli_plot;
 mod cli_run;
 mod cli_sim;
 mod hostile;

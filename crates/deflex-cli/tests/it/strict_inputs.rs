@@ -575,7 +575,7 @@ fn a_folder_being_written_by_another_process_is_refused_then_written_once_releas
 fn import_writes_only_labels_its_reader_reads_back() {
     let dir = folder("import-labels");
     let series = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../deflex-absolute/tests/data/ur10-tracker/Series_A");
+        .join("../deflex-calibrate/tests/data/ur10-tracker/Series_A");
     let out = dir.join("a.csv");
     let import = |setup: &str, target: &str| {
         deflex(&[
@@ -652,7 +652,7 @@ fn import_writes_only_labels_its_reader_reads_back() {
 fn calibrate_geometry_takes_ignore_column_and_flags_correlated_estimates() {
     let dir = folder("egcal");
     let series = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../deflex-absolute/tests/data/ur10-tracker/Series_A");
+        .join("../deflex-calibrate/tests/data/ur10-tracker/Series_A");
     let plain = dir.join("a.csv");
     let run = deflex(&[
         "import",

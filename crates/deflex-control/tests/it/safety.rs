@@ -1,6 +1,7 @@
 //! Latched faults and the safe value ([`deflex_control::safety`]).
 
 use deflex_control::safety::*;
+use deflex_telemetry::{FaultKind, Flags};
 
 #[test]
 fn fault_texts_name_check_channel_value_and_limit() {

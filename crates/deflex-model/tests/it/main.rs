@@ -1,15 +1,10 @@
 //! Integration tests of `deflex-model`: one test binary (modules below), so a fresh clone links one
-//! executable for this crate instead of one per file.
-
-// Counts only the calling thread's allocations (see `deflex-alloc-count`), so the
-// no-allocation tests are undisturbed by the other tests of this binary running in parallel.
-#[global_allocator]
-static GLOBAL: deflex_alloc_count::CountingAllocator = deflex_alloc_count::CountingAllocator;
+//! executable for this crate instead of one per file. That the hot path allocates nothing and
+//! that the robot readers never panic are checked in the facade's test binary
+//! (`no_alloc::model`, `fuzz::model`).
 
 mod files;
 mod fixtures;
-mod fuzz;
-mod no_alloc;
 mod robots;
 mod wrench_transport;
 

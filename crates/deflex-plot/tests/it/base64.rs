@@ -1,4 +1,27 @@
-use deflex_plot::base64_encode;
+//! Images are embedded in a page ([`deflex_plot::HtmlReport::image`]) as standard base64
+//! (RFC 4648 §4, `+` and `/`, with `=` padding): the file's bytes are checked in the page's data
+//! URI, whole and exactly.
+
+use crate::temp_dir;
+use deflex_plot::HtmlReport;
+
+/// The data URI of an image file holding `bytes`, as the page embeds it: the encoding alone,
+/// between the `base64,` and the closing quote.
+fn embedded(bytes: &[u8]) -> String {
+    let dir = temp_dir("base64");
+    let path = dir.join("fig.png");
+    std::fs::write(&path, bytes).unwrap();
+    let mut r = HtmlReport::new("t");
+    r.image(&path, "c");
+    let html = r.render().unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let start = html
+        .find("src=\"data:image/png;base64,")
+        .expect("a data URI")
+        + 27;
+    let end = start + html[start..].find('"').expect("the closing quote");
+    html[start..end].to_string()
+}
 
 #[test]
 fn rfc4648_test_vectors() {
@@ -13,12 +36,12 @@ fn rfc4648_test_vectors() {
         ("foobar", "Zm9vYmFy"),
     ];
     for (input, expected) in vectors {
-        assert_eq!(base64_encode(input.as_bytes()), expected, "input {input:?}");
+        assert_eq!(embedded(input.as_bytes()), expected, "input {input:?}");
     }
 }
 
 #[test]
 fn high_bytes_use_plus_and_slash() {
-    assert_eq!(base64_encode(&[0xfb, 0xff, 0xbf]), "+/+/");
-    assert_eq!(base64_encode(&[0, 0, 0]), "AAAA");
+    assert_eq!(embedded(&[0xfb, 0xff, 0xbf]), "+/+/");
+    assert_eq!(embedded(&[0, 0, 0]), "AAAA");
 }

@@ -1,4 +1,5 @@
-use deflex_plot::{FileLink, HtmlReport, PlotError, html_escape, inline_html};
+use crate::{sine_series, temp_dir};
+use deflex_plot::{FileLink, HtmlReport, PlotError, PlotSpec, html_escape, inline_html, line_plot};
 
 #[test]
 fn escapes_all_special_characters() {
@@ -157,5 +158,77 @@ fn tables_scroll_in_their_own_wrapper_and_images_fit() {
                 "fixed width {px} px in {css}"
             );
         }
+    }
+}
+
+#[test]
+fn html_report_embeds_png_as_data_uri() {
+    let dir = temp_dir("html");
+    let png = dir.join("fig.png");
+    line_plot(
+        &png,
+        &PlotSpec::new("Fig", "x", "y").size(300, 200),
+        &sine_series(),
+    )
+    .unwrap();
+    let bytes = std::fs::read(&png).unwrap();
+    let mut r = HtmlReport::new("Report & co");
+    r.note("SIMULATED")
+        .section("Plots")
+        .paragraph("See below.")
+        .image(&png, "Figure 1: <sine>");
+    let out = dir.join("report.html");
+    r.write(&out).unwrap();
+    let html = std::fs::read_to_string(&out).unwrap();
+    let uri = format!(
+        "data:image/png;base64,{}",
+        data_encoding::BASE64.encode(&bytes)
+    );
+    assert!(html.contains(&uri), "whole PNG embedded");
+    assert!(
+        html.contains("data:image/png;base64,iVBORw0KGgo"),
+        "PNG magic in base64"
+    );
+    assert!(html.contains("<figcaption>Figure 1: &lt;sine&gt;</figcaption>"));
+    assert!(html.contains("<title>Report &amp; co</title>"));
+    assert!(
+        !html.contains("http://") && !html.contains("https://"),
+        "no network"
+    );
+}
+
+#[test]
+fn html_contents_and_file_links() {
+    let mut r = HtmlReport::new("t");
+    r.contents()
+        .section("1. Plan & campaign")
+        .subsection("Points")
+        .section("Data files")
+        .files(&[
+            FileLink::new("plan.csv", "the plan <rows>"),
+            FileLink::new("forming_open/log.csv", "the log"),
+        ])
+        .section("Data files");
+    let html = r.render().unwrap();
+    assert!(html.contains("<h2 id=\"1-plan-campaign\">1. Plan &amp; campaign</h2>"));
+    assert!(html.contains("<h3 id=\"points\">Points</h3>"));
+    assert!(html.contains("<h2 id=\"data-files-2\">"), "unique ids");
+    assert!(html.contains("<a href=\"#1-plan-campaign\">1. Plan &amp; campaign</a>"));
+    assert!(html.contains("<a href=\"#points\">"));
+    assert!(html.contains("<a href=\"#data-files-2\">"));
+    assert!(html.contains("<a href=\"plan.csv\"><code>plan.csv</code></a>: the plan &lt;rows&gt;"));
+    assert!(html.contains("<a href=\"forming_open/log.csv\">"));
+    for bad in [
+        "/etc/passwd",
+        "../x.csv",
+        "a/../../x.csv",
+        "http://x/y.csv",
+        "javascript:alert(1)",
+        "a b.csv",
+        "",
+    ] {
+        let mut r = HtmlReport::new("t");
+        r.files(&[FileLink::new(bad, "d")]);
+        assert!(r.render().is_err(), "{bad:?} accepted");
     }
 }

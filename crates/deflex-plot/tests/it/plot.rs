@@ -1,4 +1,9 @@
-use deflex_plot::{clip_segment, strokable_pieces};
+use crate::{count, png_dims, png_pixels, sine_series, temp_dir};
+use deflex_plot::{
+    LineStyle, PanelLayout, PlotError, PlotSpec, Series, SeriesStyle, clip_segment, line_plot,
+    palette_color, panels_plot, parity_plot, strokable_pieces,
+};
+use std::path::Path;
 
 #[test]
 fn clipping_keeps_the_part_inside_the_rectangle() {
@@ -45,4 +50,238 @@ fn sharp_turns_end_the_stroke_and_gentle_ones_do_not() {
     let bend = strokable_pieces(&[(0.0, 0.0), (50.0, 0.0), (90.0, 40.0)], xr, yr, (100, 100));
     assert_eq!(bend.len(), 1);
     assert_eq!(bend[0].len(), 3);
+}
+
+/// Red pixels outside the plotting area of a chart drawn by `line_plot` with no title (margin
+/// 14 px, y label area 86 px, x label area 58 px; 2 px of slack for the stroke).
+fn red_outside_plot_area(path: &Path) -> usize {
+    let (w, h) = png_dims(path);
+    let pixels = png_pixels(path);
+    let (left, right, top, bottom) = (14 + 86 - 2, w - 14 + 2, 14 - 2, h - 14 - 58 + 2);
+    pixels
+        .iter()
+        .enumerate()
+        .filter(|&(i, &p)| {
+            let (col, row) = (i as u32 % w, i as u32 / w);
+            p == (255, 0, 0) && (col < left || col > right || row < top || row > bottom)
+        })
+        .count()
+}
+
+#[test]
+fn line_plot_png_decodes_with_requested_size_and_colours() {
+    let dir = temp_dir("line");
+    let path = dir.join("line.png");
+    let spec = PlotSpec::new("Sine", "t [s]", "u [mm]").size(640, 400);
+    line_plot(&path, &spec, &sine_series()).unwrap();
+    assert_eq!(png_dims(&path), (640, 400));
+    let px = png_pixels(&path);
+    assert_eq!(px.len(), 640 * 400);
+    assert!(
+        count(&px, palette_color(0)) > 50,
+        "first series colour drawn"
+    );
+    assert!(
+        count(&px, palette_color(1)) > 50,
+        "second series colour drawn"
+    );
+    assert!(
+        count(&px, (255, 255, 255)) > px.len() / 2,
+        "white background"
+    );
+}
+
+#[test]
+fn svg_contains_title_and_labels() {
+    let dir = temp_dir("svg");
+    let path = dir.join("line.svg");
+    let spec = PlotSpec::new("Deflection along path", "time [s]", "deflection [mm]");
+    line_plot(&path, &spec, &sine_series()).unwrap();
+    let svg = std::fs::read_to_string(&path).unwrap();
+    assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(80)]);
+    for text in [
+        "Deflection along path",
+        "time [s]",
+        "deflection [mm]",
+        "sin",
+        "cos",
+    ] {
+        assert!(svg.contains(text), "SVG lacks {text:?}");
+    }
+}
+
+#[test]
+fn panels_plot_sizes_the_grid() {
+    let dir = temp_dir("panels");
+    let x: Vec<f64> = (0..50).map(f64::from).collect();
+    let panel = |t: &str| {
+        (
+            PlotSpec::new(t, "point", "error [mm]").size(500, 220),
+            vec![Series::line(
+                t,
+                x.clone(),
+                x.iter().map(|v| v * 0.01).collect(),
+            )],
+        )
+    };
+    let panels = vec![panel("x"), panel("y"), panel("z"), panel("norm")];
+    let col = dir.join("col.png");
+    panels_plot(&col, "Errors", PanelLayout::Column, &panels).unwrap();
+    assert_eq!(png_dims(&col), (500, 4 * 220 + 50));
+    let row = dir.join("row.png");
+    panels_plot(&row, "", PanelLayout::Row, &panels[..2]).unwrap();
+    assert_eq!(png_dims(&row), (1000, 220));
+    let grid = dir.join("grid.png");
+    panels_plot(&grid, "G", PanelLayout::Grid { columns: 3 }, &panels).unwrap();
+    assert_eq!(png_dims(&grid), (1500, 2 * 220 + 50));
+    let e = panels_plot(&grid, "G", PanelLayout::Grid { columns: 0 }, &panels).unwrap_err();
+    assert!(matches!(e, PlotError::InvalidInput { .. }));
+    assert!(panels_plot(&grid, "G", PanelLayout::Row, &[]).is_err());
+}
+
+#[test]
+fn parity_plot_renders_and_checks_inputs() {
+    let dir = temp_dir("parity");
+    let path = dir.join("p.png");
+    let measured: Vec<f64> = (0..30).map(|i| i as f64 * 0.02).collect();
+    let predicted: Vec<f64> = measured.iter().map(|m| m * 1.05 + 0.01).collect();
+    let spec = PlotSpec::new("Parity", "measured [mm]", "predicted [mm]").size(500, 500);
+    parity_plot(&path, &spec, &predicted, &measured, "z").unwrap();
+    assert_eq!(png_dims(&path), (500, 500));
+    let svg = dir.join("p.svg");
+    parity_plot(&svg, &spec, &predicted, &measured, "z").unwrap();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        text.contains("y = x") && text.contains("n = 30"),
+        "legend text"
+    );
+    let e = parity_plot(&path, &spec, &predicted[..2], &measured, "z").unwrap_err();
+    assert!(matches!(e, PlotError::InvalidInput { .. }));
+    assert!(parity_plot(&path, &spec, &[f64::NAN], &[1.0], "z").is_err());
+}
+
+#[test]
+fn series_input_errors() {
+    let dir = temp_dir("errs");
+    let path = dir.join("e.png");
+    let spec = PlotSpec::new("t", "x", "y");
+    let e = line_plot(
+        &path,
+        &spec,
+        &[Series::line("a", vec![1.0, 2.0], vec![1.0])],
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("x has 2 values but y has 1"), "{e}");
+    assert_eq!(e.path(), path.as_path());
+    assert!(line_plot(&path, &spec, &[]).is_err());
+    assert!(line_plot(&path, &spec, &[Series::line("a", vec![], vec![])]).is_err());
+    let nan = Series::line("a", vec![f64::NAN, 1.0], vec![1.0, f64::INFINITY]);
+    assert!(line_plot(&path, &spec, &[nan]).is_err());
+    let bad_size = spec.clone().size(0, 100);
+    assert!(line_plot(&path, &bad_size, &sine_series()).is_err());
+    let bad_range = spec.clone().y_range(1.0, 0.0);
+    assert!(line_plot(&path, &bad_range, &sine_series()).is_err());
+    assert!(!path.exists());
+}
+
+#[test]
+fn non_finite_points_are_skipped() {
+    let dir = temp_dir("gaps");
+    let path = dir.join("g.png");
+    let y = vec![0.0, 1.0, f64::NAN, 3.0, 4.0, f64::INFINITY, 6.0];
+    let s = Series::indexed("gappy", y, SeriesStyle::LineAndPoints);
+    line_plot(&path, &PlotSpec::new("Gaps", "i", "y"), &[s]).unwrap();
+    assert_eq!(png_dims(&path), (900, 560));
+}
+
+#[test]
+fn format_and_io_errors_name_the_file() {
+    let dir = temp_dir("fmt");
+    let spec = PlotSpec::new("t", "x", "y");
+    let e = line_plot(&dir.join("plot.jpg"), &spec, &sine_series()).unwrap_err();
+    assert!(matches!(e, PlotError::UnsupportedFormat { .. }), "{e}");
+    assert!(e.to_string().contains("plot.jpg"));
+    let missing = dir.join("no-such-dir").join("plot.png");
+    let e = line_plot(&missing, &spec, &sine_series()).unwrap_err();
+    assert!(matches!(e, PlotError::Draw { .. }), "{e}");
+    assert!(e.to_string().contains("no-such-dir"), "{e}");
+}
+
+#[test]
+fn rendering_is_deterministic() {
+    let dir = temp_dir("det");
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    let spec = PlotSpec::new("Same", "x", "y").size(400, 300);
+    line_plot(&a, &spec, &sine_series()).unwrap();
+    line_plot(&b, &spec, &sine_series()).unwrap();
+    assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+}
+
+/// A dashed series leaves gaps along its line that a solid one does not: the colours are
+/// counted along the horizontal line each draws.
+#[test]
+fn dashed_and_dotted_series_are_drawn_with_gaps() {
+    let dir = temp_dir("dash");
+    let x = vec![0.0, 10.0];
+    let series = [
+        Series::line("solid", x.clone(), vec![1.0, 1.0]),
+        Series::line("dashed", x.clone(), vec![2.0, 2.0]).with_line(LineStyle::Dashed),
+        Series::line("dotted", x.clone(), vec![3.0, 3.0])
+            .with_line(LineStyle::Dotted)
+            .with_color((200, 0, 200)),
+    ];
+    let path = dir.join("d.png");
+    let spec = PlotSpec::new("Dashes", "x", "y")
+        .size(600, 400)
+        .y_range(0.0, 4.0);
+    line_plot(&path, &spec, &series).unwrap();
+    let px = png_pixels(&path);
+    // Runs of a colour along the row where it is densest.
+    let runs = |c: (u8, u8, u8)| -> usize {
+        (0..400)
+            .map(|y| {
+                let row = &px[y * 600..(y + 1) * 600];
+                row.windows(2).filter(|w| w[0] != c && w[1] == c).count()
+            })
+            .max()
+            .unwrap_or(0)
+    };
+    let (solid, dashed, dotted) = (
+        runs(palette_color(0)),
+        runs(palette_color(1)),
+        runs((200, 0, 200)),
+    );
+    assert!(solid <= 3, "solid line is continuous: {solid} runs");
+    assert!(dashed >= 20, "dashed line: {dashed} runs");
+    assert!(dotted > dashed, "dotted {dotted} vs dashed {dashed}");
+}
+
+/// A dense series that reverses sharply at every point (a path error with spikes, 10 ms rows
+/// over a long run) is drawn inside the plotting area: the stroke's joins never reach into the
+/// tick labels (plotters' wide-line joins grow without bound at near-reversals), and data past
+/// a given y range is clipped at the frame.
+#[test]
+fn spiky_series_stay_inside_the_plotting_area() {
+    let dir = temp_dir("spikes");
+    let n = 6000;
+    let x: Vec<f64> = (0..n).map(|i| i as f64 * 0.013).collect();
+    // Small values with a spike every few rows, as |error| of a corrected run.
+    let y: Vec<f64> = (0..n)
+        .map(|i| match i % 7 {
+            3 => 0.5 + 0.4 * ((i as f64) * 0.37).sin().abs(),
+            5 => 0.2 + 0.1 * ((i as f64) * 0.11).cos(),
+            _ => 0.02 + 0.01 * ((i as f64) * 0.5).sin(),
+        })
+        .collect();
+    let series = vec![Series::line("", x, y).with_color((255, 0, 0))];
+    let spec = PlotSpec::new("", "time [s]", "|error| [mm]").size(1100, 500);
+    let auto = dir.join("auto.png");
+    line_plot(&auto, &spec, &series).unwrap();
+    let drawn = count(&png_pixels(&auto), (255, 0, 0));
+    assert!(drawn > 10_000, "the series is drawn ({drawn} red pixels)");
+    assert_eq!(red_outside_plot_area(&auto), 0, "autoscaled y range");
+    let fixed = dir.join("fixed.png");
+    line_plot(&fixed, &spec.clone().y_range(0.0, 0.3), &series).unwrap();
+    assert_eq!(red_outside_plot_area(&fixed), 0, "y range (0, 0.3 mm)");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -8,7 +8,7 @@ laser-tracker data set (Landgraf et al., CASE 2021, MIT licence), as the README'
 
 Usage: ``python ur10_calibration_table.py [DATA_DIR]`` with DATA_DIR holding Series_A and
 Series_B (default: ``$DEFLEX_UR10_DATA``, else the decimated subset shipped in
-crates/deflex-absolute/tests/data/ur10-tracker). On the full series the table is the README's,
+crates/deflex-calibrate/tests/data/ur10-tracker). On the full series the table is the README's,
 digit for digit, and the script checks it (exit status 1 if not); on the subset it prints that
 subset's table.
 """
@@ -22,7 +22,7 @@ from typing import Any, Dict, List
 
 import deflex
 
-SUBSET = Path(__file__).resolve().parents[3] / "deflex-absolute" / "tests" / "data" / "ur10-tracker"
+SUBSET = Path(__file__).resolve().parents[3] / "deflex-calibrate" / "tests" / "data" / "ur10-tracker"
 MODELS = [
     "nominal UR10 + registration only",
     "+ geometric calibration (DH, Hayati β)",

@@ -1,5 +1,5 @@
 """Elasto-geometric calibration, prediction and re-registration on the shipped subset of the
-public UR10 laser-tracker data (crates/deflex-absolute/tests/data/ur10-tracker). The fitted model's
+public UR10 laser-tracker data (crates/deflex-calibrate/tests/data/ur10-tracker). The fitted model's
 readings are recomposed here in numpy — tracker set-up · flange pose · target, from the saved
 robot file — and must give the fit's own error statistics."""
 
@@ -23,7 +23,7 @@ else:  # pragma: no cover
 
 @pytest.fixture
 def series(repo: Path) -> Path:
-    return repo / "crates" / "deflex-absolute" / "tests" / "data" / "ur10-tracker"
+    return repo / "crates" / "deflex-calibrate" / "tests" / "data" / "ur10-tracker"
 
 
 def test_import_fit_and_recomposed_predictions(series: Path, tmp_path: Path) -> None:

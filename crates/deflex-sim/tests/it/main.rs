@@ -1,5 +1,6 @@
 //! Integration tests of `deflex-sim`: one test binary (modules below), so a fresh clone links one
-//! executable for this crate instead of one per file.
+//! executable for this crate instead of one per file. The twin's tests are in [`twin`]; the
+//! fuzzing of the twin's parsers is in the facade's test binary (`fuzz::sim`).
 
 mod cell_config;
 mod cells;
@@ -7,7 +8,6 @@ mod chain;
 mod controller_emulation;
 mod fixture;
 mod forming;
-mod fuzz;
 mod gcode;
 mod plant;
 mod process_model;
@@ -15,5 +15,6 @@ mod sensor;
 mod sheet;
 mod toolpath;
 mod tracker;
+mod twin;
 mod twin_campaign;
 mod unseen_plant;

@@ -16,7 +16,7 @@
 //! messages (topics, frames, diagnostics keys), shared by the recorder and the bridge.
 //!
 //! ```
-//! use crate::ros::{Header, Time, Vector3, Vector3Stamped, decode, encode};
+//! use deflex_telemetry::ros::{Header, Time, Vector3, Vector3Stamped, decode, encode};
 //! let msg = Vector3Stamped {
 //!     header: Header { stamp: Time::from_nanos(1_500_000_000), frame_id: "base".into() },
 //!     vector: Vector3 { x: 1.0, y: 2.0, z: 3.0 },
@@ -112,6 +112,3 @@ pub fn decode<T: RosMessage>(bytes: &[u8]) -> Result<T, CdrError> {
         }
     })
 }
-
-#[cfg(test)]
-mod tests;

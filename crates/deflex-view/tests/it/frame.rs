@@ -1,8 +1,8 @@
 //! Decimation, the p99 and the wire format ([`deflex_view::frame`]), against separately written
 //! computations.
 
-use deflex_record::synthetic::SyntheticCell;
 use deflex_telemetry::CycleSample;
+use deflex_telemetry::synthetic::SyntheticCell;
 use deflex_view::frame::{self, BUCKET_S, Decimator, FIELDS, NFIELDS, P99_WINDOW};
 
 fn index(name: &str) -> usize {

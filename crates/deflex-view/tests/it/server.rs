@@ -1,7 +1,7 @@
 //! The server over loopback sockets: what a page receives, and every bound and check.
 
 use crate::support::{Publisher, wait_until};
-use deflex_record::synthetic::SyntheticCell;
+use deflex_telemetry::synthetic::SyntheticCell;
 use deflex_view::{ViewOptions, frame};
 use std::io::{Read, Write};
 use std::net::TcpStream;

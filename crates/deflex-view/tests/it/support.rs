@@ -1,7 +1,7 @@
-//! A SIMULATED publisher thread: the synthetic stream (`deflex_record::synthetic`) published
+//! A SIMULATED publisher thread: the synthetic stream (`deflex_telemetry::synthetic`) published
 //! in real time, as a control thread would.
 
-use deflex_record::synthetic::SyntheticCell;
+use deflex_telemetry::synthetic::SyntheticCell;
 use deflex_telemetry::{Broadcast, CycleSample, SessionInfo, broadcast};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};

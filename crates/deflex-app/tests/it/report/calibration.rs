@@ -1,7 +1,6 @@
 //! The calibration report (moved from deflex-stiffness with it): plots and tables written, one unit per column, and the χ²/dof note
 //! when the residuals are larger than the noise the file claims.
 
-use deflex_model::Robot;
 use deflex_app::report::calibration_report::{CalibrationReport, write_calibration_report};
 use deflex_app::report::calibration_tables::{SHIFT_HEADERS, residual_summary, shift_rows};
 use deflex_calibrate::stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
@@ -10,6 +9,7 @@ use deflex_calibrate::stiffness::stiffness_fit::{
 };
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
 use deflex_calibrate::stiffness::validation::{predict, residuals};
+use deflex_model::Robot;
 use rand::{Rng, SeedableRng};
 
 /// deflex-stiffness's identification campaign fixture: the planner's full-family plan with load
@@ -57,7 +57,12 @@ fn campaign(
 
 /// Calibrate the TX200 (Table 1 structure, δr3 free) on a campaign whose true noise is
 /// `noise_m` while every row claims 15 µm.
-fn calibrate(noise_m: f64) -> (Calibration, Vec<deflex_calibrate::stiffness::MeasurementRow>) {
+fn calibrate(
+    noise_m: f64,
+) -> (
+    Calibration,
+    Vec<deflex_calibrate::stiffness::MeasurementRow>,
+) {
     let truth = deflex_model::builtin("tx200").unwrap();
     let plan = campaign(&truth, 16, 8, 2);
     let mut rows = measure(
@@ -201,7 +206,7 @@ fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
     let fit = deflex_calibrate::stiffness::fit_couplings(&model, &rows, &[pair]).unwrap();
     let simulated = CalibrationReport {
         data_notes: &notes,
-        couplings: Some(crate::calibration_report::CouplingSection {
+        couplings: Some(deflex_app::report::calibration_report::CouplingSection {
             diagonal: &model,
             fit: &fit,
         }),

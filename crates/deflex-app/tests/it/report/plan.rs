@@ -1,10 +1,10 @@
 //! The plan's tables: the technician's sheet against the identifiability table (moved from
 //! deflex-stiffness's planner tests when the tables moved here).
 
-use deflex_model::builtin;
 use deflex_app::report::plan_tables::{expected_se_rows, technician_rows};
 use deflex_calibrate::stiffness::campaign_cell::default_force_n;
 use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
+use deflex_model::builtin;
 
 #[test]
 fn the_technicians_sheet_agrees_with_the_identifiability_table() {

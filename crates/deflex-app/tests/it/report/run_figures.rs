@@ -1,4 +1,5 @@
-use deflex_app::report::{MAX_POINTS, RunTrace, Xyz, thin_series, write_run_figures};
+use deflex_app::report::{MAX_POINTS, thin_series, write_run_figures};
+use deflex_record::trace::{RunTrace, Xyz};
 
 fn trace(label: &str, n: usize, speed: f64) -> RunTrace {
     let time_s: Vec<f64> = (0..n).map(|i| i as f64 * 0.02).collect();

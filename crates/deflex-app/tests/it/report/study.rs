@@ -443,7 +443,7 @@ fn check_readme_blocks(with_sensitivity: bool) {
     assert!(
         stale.is_empty(),
         "README.md's generated results are not the demo's (seed 1).\n{}\n\
-         If the change is intended: DEFLEX_BLESS_README=1 cargo test -p deflex-report readme_ -- --include-ignored",
+         If the change is intended: DEFLEX_BLESS_README=1 cargo test -p deflex-app readme_ -- --include-ignored",
         stale.join("\n")
     );
 }

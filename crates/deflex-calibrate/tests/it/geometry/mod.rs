@@ -1,10 +1,8 @@
-//! The tests of `deflex-absolute`, through its public API: one test binary (modules below), so a
-//! fresh clone links one executable for this crate instead of one per file, and compiles the
-//! library once (it has no test build of its own).
+//! The tests of `deflex_calibrate::geometry` (the old `deflex-absolute`), through its public
+//! API. Its fuzz tests are in the facade's `tests/it/fuzz/calibrate.rs`.
 
 mod data;
 mod fit_options;
-mod fuzz;
 mod jacobian;
 mod joint_maps;
 mod registration;

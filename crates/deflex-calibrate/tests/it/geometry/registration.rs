@@ -295,7 +295,10 @@ fn warnings_name_what_the_readings_cannot_separate_simulated() {
     // A robot that changed: the same good readings against a robot with J2's offset 2 mrad off.
     let mut changed = frozen(&truth);
     changed.apply(
-        &[Param::Dh(1, deflex_calibrate::geometry::params::DhField::Theta)],
+        &[Param::Dh(
+            1,
+            deflex_calibrate::geometry::params::DhField::Theta,
+        )],
         &[2e-3],
     );
     let rows = readings(

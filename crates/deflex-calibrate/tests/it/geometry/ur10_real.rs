@@ -152,8 +152,12 @@ fn calibrated_robot_file_predicts_like_the_fit() {
     }
     // Written with full precision: agreement to well below a micrometre.
     assert!(worst < 1e-8, "{worst}");
-    let prediction =
-        deflex_calibrate::geometry::predict::predict_rows(&EgModel::from_robot(&robot), rows, false).unwrap();
+    let prediction = deflex_calibrate::geometry::predict::predict_rows(
+        &EgModel::from_robot(&robot),
+        rows,
+        false,
+    )
+    .unwrap();
     let fit_rms = result.steps.last().unwrap().fit.rms;
     let predicted_rms = prediction.position.rms;
     assert!(

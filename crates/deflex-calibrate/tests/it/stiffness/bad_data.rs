@@ -1,10 +1,10 @@
 //! Bad data gets a clear message, never a panic.
 
-use deflex_model::builtin;
 use deflex_calibrate::measurements::parse_rows;
 use deflex_calibrate::stiffness::search::{SearchOptions, search_structure};
 use deflex_calibrate::stiffness::stiffness_fit::{Status, Structure, calibrate_fixed};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
+use deflex_model::builtin;
 
 fn rows() -> Vec<deflex_calibrate::stiffness::MeasurementRow> {
     let robot = builtin("tx200-1edof").unwrap();

@@ -2,10 +2,10 @@
 //! x/y eDoFs of joint 1: both rotate the TCP about axes through the same point, but only the tilt
 //! moves the base casting.
 
-use deflex_model::{Axis, EdofSite, Robot, builtin};
 use deflex_calibrate::stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::search::{SearchOptions, search_structure};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
+use deflex_model::{Axis, EdofSite, Robot, builtin};
 
 fn identify(truth: &Robot, base_point: bool) -> Robot {
     let plan = plan_experiments(

@@ -1,10 +1,12 @@
 //! Off-diagonal joint compliances fitted with the eDoF compliances (`fit_couplings`): recovery
 //! from noise-free data, and standard errors that match the scatter over noisy campaigns.
 
-use deflex_model::{Axis, EdofSite, Robot, builtin};
-use deflex_calibrate::stiffness::synthetic::{Coupling, SyntheticOptions, measure, random_campaign};
+use deflex_calibrate::stiffness::synthetic::{
+    Coupling, SyntheticOptions, measure, random_campaign,
+};
 use deflex_calibrate::stiffness::validation::predict_full;
 use deflex_calibrate::stiffness::{EdofId, fit_couplings};
+use deflex_model::{Axis, EdofSite, Robot, builtin};
 use nalgebra::Vector3;
 
 /// The TX200 and its J2.z and J3.z eDoFs.

@@ -1,8 +1,8 @@
 //! K-fold cross-validation by load case: the fold score against an independent refit and
 //! prediction, a missing eDoF seen out of sample, and folds that never split a load case.
 
-use deflex_calibrate::stiffness::crossval::{CrossValidation, fold_assignment};
 use deflex_calibrate::measurements::MeasurementRow;
+use deflex_calibrate::stiffness::crossval::{CrossValidation, fold_assignment};
 use deflex_calibrate::stiffness::design::all_edofs;
 use deflex_calibrate::stiffness::stiffness_fit::{Structure, calibrate_fixed};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};

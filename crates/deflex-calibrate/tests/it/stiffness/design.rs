@@ -1,11 +1,11 @@
 //! The design (eqs. 13–15) against the model crate's point displacement, through the public
 //! fixed-structure calibration that is built on it.
 
-use deflex_model::{Axis, EdofSite, builtin};
 use deflex_calibrate::measurements::MeasuredRotation;
 use deflex_calibrate::stiffness::stiffness_fit::{Status, Structure, calibrate_fixed};
 use deflex_calibrate::stiffness::synthetic::random_campaign;
 use deflex_calibrate::stiffness::validation::predict_full;
+use deflex_model::{Axis, EdofSite, builtin};
 use nalgebra::Vector3;
 
 /// The design's prediction at the robot's own compliances and centre shifts reproduces

@@ -1,5 +1,5 @@
-//! Integration tests of `deflex-stiffness`: one test binary (modules below), so a fresh clone links one
-//! executable for this crate instead of one per file.
+//! The tests of `deflex_calibrate::stiffness` (the old `deflex-stiffness`), through its public
+//! API. Its fuzz tests are in the facade's `tests/it/fuzz/calibrate.rs`.
 
 mod bad_data;
 mod base_point;
@@ -9,7 +9,6 @@ mod coupling;
 mod crossval;
 mod design;
 mod expected_shift;
-mod fuzz;
 mod nnls;
 mod plan_floor;
 mod planner;
@@ -17,4 +16,4 @@ mod recovery;
 mod rotation;
 mod search;
 // The calibration and validation reports (their files, plots and tables) are tested in
-// deflex-report, which renders them.
+// deflex-app (`deflex_app::report`), which renders them.

@@ -1,7 +1,7 @@
 //! `deflex plan --floor-z-m`: every planned configuration keeps the arm above the floor.
 
-use deflex_model::Data;
 use deflex_calibrate::stiffness::plan::{Floor, PlanOptions, lowest_point_z, plan_experiments};
+use deflex_model::Data;
 
 fn lowest_of_plan(options: &PlanOptions) -> f64 {
     let robot = deflex_model::builtin("tx200").unwrap();

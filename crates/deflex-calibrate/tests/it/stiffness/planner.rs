@@ -3,14 +3,16 @@
 //! off-axis bracket that makes the wrist identifiable (with a Monte Carlo check of its expected
 //! standard error), and a technician's sheet that agrees with the identifiability table.
 
-use deflex_model::{Axis, BUILTIN_ROBOTS, Data, EdofSite, Robot, builtin};
+use deflex_calibrate::measurements::points::parse_points;
 use deflex_calibrate::stiffness::campaign_cell::{
     LoadKind, PointSet, PointSpec, default_floor_z, default_force_n, wrapped,
 };
-use deflex_calibrate::measurements::points::parse_points;
-use deflex_calibrate::stiffness::plan::{BasePoint, Floor, Plan, PlanOptions, TableOption, plan_experiments};
+use deflex_calibrate::stiffness::plan::{
+    BasePoint, Floor, Plan, PlanOptions, TableOption, plan_experiments,
+};
 use deflex_calibrate::stiffness::stiffness_fit::{Structure, calibrate_fixed};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
+use deflex_model::{Axis, BUILTIN_ROBOTS, Data, EdofSite, Robot, builtin};
 use nalgebra::{Point3, Vector3};
 
 /// Independent check of one plan against its cell: limits, wrapping, floor, table, loads.

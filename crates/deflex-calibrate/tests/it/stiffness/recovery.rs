@@ -6,12 +6,14 @@
 use crate::stiffness::common;
 
 use common::{campaign, kr_like, tx200_truth};
-use deflex_model::{Axis, EdofSite, Robot};
 use deflex_calibrate::stiffness::design::edof_label;
 use deflex_calibrate::stiffness::search::{Criterion, SearchOptions, search_structure};
 use deflex_calibrate::stiffness::stiffness_fit::{Status, Structure, calibrate_fixed};
-use deflex_calibrate::stiffness::synthetic::{Coupling, SyntheticOptions, measure, random_campaign};
+use deflex_calibrate::stiffness::synthetic::{
+    Coupling, SyntheticOptions, measure, random_campaign,
+};
 use deflex_calibrate::stiffness::validation::validate;
+use deflex_model::{Axis, EdofSite, Robot};
 
 const SIGMA: f64 = 15e-6;
 

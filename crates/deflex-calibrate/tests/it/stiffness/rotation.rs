@@ -4,13 +4,13 @@
 use crate::stiffness::common;
 
 use common::kr_like;
-use deflex_model::{Axis, Data, EdofSite, Robot};
 use deflex_calibrate::measurements::{MeasurementRow, format_rows, parse_rows};
 use deflex_calibrate::stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
 use deflex_calibrate::stiffness::synthetic::{
     SyntheticOptions, case_rows, measure, measure_with_rotations, random_q,
 };
 use deflex_calibrate::stiffness::validation::validate;
+use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, UnitSphere};

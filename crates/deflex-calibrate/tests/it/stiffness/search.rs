@@ -1,9 +1,9 @@
 //! The structure search's removal step, through its public entry point.
 
-use deflex_model::{Axis, EdofSite};
 use deflex_calibrate::stiffness::search::{SearchOptions, search_structure};
 use deflex_calibrate::stiffness::stiffness_fit::Structure;
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
+use deflex_model::{Axis, EdofSite};
 
 /// Removing the last x/y eDoF of a joint also clears its (now meaningless) centre shift, so
 /// no stray δr reaches the written model.

@@ -180,26 +180,6 @@ pub fn loopback_cell(
     )
 }
 
-/// Waits (bounded, 10 s) until `done` holds for the runtime's live status.
-pub fn wait_for_status(
-    runtime: &deflex_runtime::Runtime,
-    what: &str,
-    done: impl Fn(&deflex_runtime::LiveStatus) -> bool,
-) {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
-    loop {
-        let status = runtime.status();
-        if done(&status) {
-            return;
-        }
-        assert!(
-            std::time::Instant::now() < deadline,
-            "{what}: not within 10 s ({status:?})"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-}
-
 /// Waits (bounded) for the runtime to end by itself, then stops it and gathers the summary.
 pub fn finish(runtime: deflex_runtime::Runtime) -> deflex_runtime::RunSummary {
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);

@@ -1,28 +1,8 @@
-//! Integration tests of `deflex-twin` (everything here is SIMULATED): one test binary (modules
-//! below). The in-process closed loop, the runtime's threads in simulated time, and `deflex
-//! cell --sim` with `deflex run` over loopback for every robot protocol.
+//! The twin (`deflex_sim::twin`, everything here is SIMULATED): the in-process closed loop with
+//! the paper's Table 1 model, the twin's own telemetry stream, the served cell's geometry check.
+//! What needs a model identified from the twin's campaign, a CELL.toml or a session over
+//! loopback is in deflex-app's tests (`tests/it/twin`), which may read them.
 
-mod cell_file;
 mod cell_server;
 mod closed_loop;
-mod common;
-mod loopback;
-mod sim_time;
 mod telemetry;
-
-/// Real-time loopback sessions sleep most of every robot cycle: the harness runs two at once
-/// (its two threads on a 2-core machine) and each still meets its links' timeouts, with every
-/// check holding whatever the scheduling (late answers are counted; the tracking comparison
-/// applies only when at least 90 % arrived in time). They share this turn.
-pub fn session_turn() -> std::sync::RwLockReadGuard<'static, ()> {
-    TURN.read().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-/// The simulated-time runtime's lockstep threads keep both cores busy: it runs alone, so that
-/// it cannot starve a loopback session's 4 ms deadlines.
-pub fn cores_alone() -> std::sync::RwLockWriteGuard<'static, ()> {
-    TURN.write()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-static TURN: std::sync::RwLock<()> = std::sync::RwLock::new(());

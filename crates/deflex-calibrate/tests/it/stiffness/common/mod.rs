@@ -1,10 +1,10 @@
 //! Shared test fixtures: a second 6-axis geometry and campaign helpers.
 #![allow(dead_code)]
 
-use deflex_model::{Robot, robot_from_toml_str};
 use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::synthetic::random_campaign;
+use deflex_model::{Robot, robot_from_toml_str};
 use rand::{Rng, SeedableRng};
 
 /// A KUKA KR210-like arm in modified DH (shoulder offset, long upper arm, forearm offset),

@@ -1,0 +1,12 @@
+//! CELL.toml, the link factory, a session from a CELL.toml, the compensated path's table for the controller.
+//!
+//! * `config`: `CELL.toml` parsing, bounds and the errors that name the file and the field, the
+//!   documented example (it parses, and documents every key), the link settings and the
+//!   `[feedforward]` section;
+//! * `links`: the link factory, both sides of every robot protocol from one `CELL.toml`, on
+//!   loopback;
+//! * `feedforward_table`: the feed-forward table read from `compensated_path.csv` rows.
+
+mod config;
+mod feedforward_table;
+mod links;

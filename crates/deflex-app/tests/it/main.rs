@@ -1,0 +1,7 @@
+//! deflex-app's tests, through its public API: a module per part of the application layer.
+
+mod cell;
+mod load;
+mod report;
+mod study;
+mod twin;

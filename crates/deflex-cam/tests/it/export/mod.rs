@@ -1,0 +1,3 @@
+//! The tests of `deflex_cam::export` (the old `deflex-export`).
+
+mod round_trip;

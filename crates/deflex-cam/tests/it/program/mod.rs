@@ -1,0 +1,8 @@
+//! The tests of `deflex_cam::program` (the old `deflex-program`).
+
+mod common;
+mod config;
+mod names;
+mod orientation;
+mod round_trip;
+mod streaming;

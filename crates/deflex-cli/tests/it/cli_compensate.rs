@@ -1,0 +1,532 @@
+//! `deflex compensate` through the real binary: the argument line, safe programs that read
+//! back, a CAM file on the UR10e cell, refusals before any work, points that cannot be
+//! compensated, and the wrench of a `deflex run` log or of a twin's log.
+
+use deflex_compensate::table::{TableRow, read_csv};
+use deflex_sim::CellConfig;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("deflex-compensate-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `deflex --json compensate LINE…`.
+fn compensate(line: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_deflex"))
+        .args(["--json", "compensate"])
+        .args(line)
+        .output()
+        .unwrap()
+}
+
+/// [`compensate`], which must succeed.
+fn compensated(line: &[&str]) {
+    let out = compensate(line);
+    assert!(
+        out.status.success(),
+        "{line:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// [`compensate`], which must fail: its error.
+fn refused(line: &[&str]) -> String {
+    let out = compensate(line);
+    let e = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(1), "{line:?}: {e}");
+    e
+}
+
+/// The line of the default run: the TX200 cell, the first 400 mm of the paper's cone, then
+/// `extra`.
+fn args<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    args_of("tx200", "400", out, extra)
+}
+
+/// The line of a run of `robot` on the first `length_mm` of the paper's cone, then `extra`.
+fn args_of<'a>(
+    robot: &'a str,
+    length_mm: &'a str,
+    out: &'a Path,
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut line = vec![
+        "--robot",
+        robot,
+        "--length-mm",
+        length_mm,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    line.extend_from_slice(extra);
+    line
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+fn table(out: &Path) -> Vec<TableRow> {
+    read_csv(
+        &std::fs::read_to_string(out.join("compensated_path.csv")).unwrap(),
+        "t",
+    )
+    .unwrap()
+}
+
+/// The seed (rad) and the placed path of a run of the TX200 cell's first `length_mm` of the
+/// cone: the summary's seed and the table's desired poses (the path the command compensated).
+fn placed_path(dir: &Path, length_mm: &str) -> (Vec<f64>, deflex_compensate::TcpPath) {
+    let probe = dir.join("probe");
+    compensated(&[
+        "--robot",
+        "tx200",
+        "--length-mm",
+        length_mm,
+        "--format",
+        "none",
+        "--out",
+        probe.to_str().unwrap(),
+    ]);
+    let seed: Vec<f64> = summary(&probe)["seed_q_rad"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let path = deflex_compensate::TcpPath::new(
+        "probe",
+        table(&probe).iter().map(|r| (r.desired, None)),
+        0.05,
+    )
+    .unwrap();
+    std::fs::remove_dir_all(&probe).unwrap();
+    (seed, path)
+}
+
+/// Values after their flags may start with a minus sign: `--seed-deg -…`, `--part-xyz-mm -…`
+/// (the UR10e cell turned half a turn about joint 1, so that both begin with one) and
+/// `--format a,b` reach the command as given; an unknown format is refused by the argument
+/// parser.
+#[test]
+fn negative_numbers_follow_their_flags() {
+    let dir = scratch("negative");
+    // The argument line of a seed that tilts the tool: read, then refused by the command.
+    let x = dir.join("x");
+    let e = refused(&[
+        "--robot",
+        "ur10e",
+        "--seed-deg",
+        "-1,34.66,-90,0,-45,12",
+        "--part-xyz-mm",
+        "-20,0,5",
+        "--format",
+        "krl,gcode",
+        "--out",
+        x.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("the seed configuration (-1.00, 34.66, -90.00, 0.00, -45.00, 12.00) deg"),
+        "{e}"
+    );
+    let out = dir.join("out");
+    compensated(&[
+        "--robot",
+        "ur10e",
+        "--seed-deg",
+        "-165.97,-124.97,-90.46,125.43,-90,104.03",
+        "--part-xyz-mm",
+        "-718.5,0,84.9",
+        "--format",
+        "krl,gcode",
+        "--length-mm",
+        "5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let s = summary(&out);
+    let seed: Vec<f64> = s["seed_q_rad"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let given = [-165.97, -124.97, -90.46, 125.43, -90.0, 104.03f64];
+    assert_eq!(seed.len(), 6);
+    for (q, deg) in seed.iter().zip(given) {
+        assert!((q - deg.to_radians()).abs() < 1e-12, "{seed:?}");
+    }
+    let origin: Vec<f64> = s["part_origin_m"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(origin, [-718.5e-3, 0.0, 84.9e-3]);
+    let formats: Vec<&str> = s["programs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["format"].as_str().unwrap())
+        .collect();
+    assert_eq!(formats, ["krl", "gcode"]);
+    let fanuc = Command::new(env!("CARGO_BIN_EXE_deflex"))
+        .args(["compensate", "--robot", "r", "--out"])
+        .arg(&x)
+        .args(["--format", "fanuc"])
+        .output()
+        .unwrap();
+    assert_eq!(fanuc.status.code(), Some(2), "an argument error");
+    assert!(String::from_utf8_lossy(&fanuc.stderr).contains("invalid value 'fanuc'"));
+    assert!(!x.exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn the_command_writes_safe_programs_that_read_back() {
+    let dir = scratch("ok");
+    let out = dir.join("out");
+    compensated(&args(&out, &[]));
+    let table = std::fs::read_to_string(out.join("compensated_path.csv")).unwrap();
+    assert!(table.starts_with("# SIMULATED"));
+    let rows = read_csv(&table, "compensated_path.csv").unwrap();
+    assert!(rows.iter().all(|r| r.status == "ok"));
+    // rx, ry, rz are the true orientation: the tool axis along −Z of the part frame.
+    for r in rows.iter().step_by(50) {
+        let axis = r.desired.rotation * nalgebra::Vector3::z();
+        assert!((axis + nalgebra::Vector3::z()).norm() < 1e-9, "{axis:?}");
+    }
+    let s = summary(&out);
+    assert_eq!(s["compensation"]["simulated"], true);
+    assert_eq!(s["compensation"]["converged"], true);
+    assert_eq!(s["run_on_a_real_controller"], false);
+    assert!(s["placement"].as_str().unwrap().contains("the tx200 cell"));
+    assert!(
+        s["compensation"]["final_max_predicted_error_m"]
+            .as_f64()
+            .unwrap()
+            < 1.5e-6
+    );
+    let programs = s["programs"].as_array().unwrap();
+    assert_eq!(programs.len(), 5);
+    for p in programs {
+        // Read back inside the command; the first and last motions are the clearance points,
+        // 20 mm above the path's highest point.
+        let h = p["first_last_motion_height_above_part_m"]
+            .as_array()
+            .unwrap();
+        for v in h {
+            assert!((v.as_f64().unwrap() - 0.020).abs() < 1e-6, "{p}");
+        }
+        assert!(p["readback_max_position_error_m"].as_f64().unwrap() <= 1e-6);
+    }
+    // The G-code program reads with the CAM reader too: its first point is the clearance point.
+    let gcode = std::fs::read_to_string(out.join("programs/deflex_path.gcode")).unwrap();
+    let program =
+        deflex_cam::gcode::read(&gcode, &deflex_cam::gcode::ReadOptions::default()).unwrap();
+    assert_eq!(
+        program.work_offset,
+        Some(deflex_cam::gcode::WorkOffset::G54)
+    );
+    let top = program
+        .points
+        .iter()
+        .map(|p| p.p_mm[2])
+        .fold(f64::MIN, f64::max);
+    assert!((program.points[0].p_mm[2] - top).abs() < 1e-9);
+    assert!((program.points.last().unwrap().p_mm[2] - top).abs() < 1e-9);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_cam_file_on_the_ur10e_cell_needs_no_flag() {
+    // The README walk-through's continuation with the built-in UR10e: the robot's own cell, a
+    // Fanuc-style CAM file with arcs and a header, all five formats.
+    let dir = scratch("ur");
+    let out = dir.join("out");
+    let part = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/parts/cone-contour-arcs.nc"
+    );
+    compensated(&[
+        "--robot",
+        "ur10e",
+        "--path",
+        part,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let s = summary(&out);
+    assert_eq!(s["part_frame"], "G54");
+    assert!(s["placement"].as_str().unwrap().contains("the ur10e cell"));
+    let origin = CellConfig::for_robot("ur10e").unwrap().part.origin_mm;
+    assert!((s["part_origin_m"][2].as_f64().unwrap() - origin[2] * 1e-3).abs() < 1e-12);
+    assert!(
+        s["gcode_notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("T1"))
+    );
+    // ≈ 190 N on the UR's sheet, not the TX200's 1260 N.
+    let force = s["compensation"]["final_max_force_N"].as_f64().unwrap();
+    assert!(force > 50.0 && force < 400.0, "{force}");
+    assert_eq!(s["programs"].as_array().unwrap().len(), 5);
+    for p in s["programs"].as_array().unwrap() {
+        for v in p["first_last_motion_height_above_part_m"]
+            .as_array()
+            .unwrap()
+        {
+            assert!(v.as_f64().unwrap() > 0.019, "{p}");
+        }
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_tilted_seed_is_refused_and_unreachable_points_name_the_flags() {
+    let dir = scratch("refused");
+    let out = dir.join("out");
+    let e = refused(&args(&out, &["--seed-deg", "0,49.7,89.3,0,10,0"]));
+    assert!(
+        e.contains("off the path's tool axis") && e.contains("--seed-deg"),
+        "{e}"
+    );
+    let e = refused(&args(&out, &["--part-xyz-mm", "3500,0,-183"]));
+    assert!(
+        e.contains("beyond the arm's reach") && e.contains("--part-xyz-mm"),
+        "{e}"
+    );
+    assert!(!out.exists(), "refused before any work");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn uncompensable_points_fail_the_command_with_their_indices_and_no_program() {
+    let dir = scratch("limits");
+    // The TX200 with joint 3 stopped just beyond the desired path's values: the compensated
+    // poses need more.
+    let config = CellConfig::default();
+    let mut robot = config.nominal_robot().unwrap();
+    let (seed, path) = placed_path(&dir, "60");
+    let mut q = seed.clone();
+    let mut range = [f64::MAX, f64::MIN];
+    for p in path.points() {
+        q = robot
+            .inverse_kinematics(&p.pose, &q, &Default::default())
+            .unwrap()
+            .q;
+        range = [range[0].min(q[2]), range[1].max(q[2])];
+    }
+    robot.joints[2].limits = Some([range[0] - 1e-6, range[1] + 1e-6]);
+    let robot_file = dir.join("tight.toml");
+    std::fs::write(&robot_file, deflex_model::robot_to_toml(&robot)).unwrap();
+    let out = dir.join("out");
+    let e = refused(&args_of(robot_file.to_str().unwrap(), "60", &out, &[]));
+    assert!(
+        e.contains("cannot be compensated") && e.contains("joint 3"),
+        "{e}"
+    );
+    assert!(
+        e.contains("--part-xyz-mm") && e.contains("--seed-deg"),
+        "{e}"
+    );
+    let rows = table(&out);
+    let failed: Vec<usize> = rows
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.status != "ok")
+        .map(|(i, _)| i)
+        .collect();
+    assert!(!failed.is_empty());
+    for i in &failed {
+        assert_eq!(rows[*i].status, "compensated:joint_limit:J3");
+    }
+    assert!(
+        !out.join("programs").exists(),
+        "no program with failed points"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_deflex_run_log_serves_as_the_wrench_source() {
+    use deflex_control::CycleOutput;
+    use deflex_record::csv_log::{LogRecord, csv_header, csv_row};
+    use deflex_telemetry::Flags;
+    // The skipped flag bits are deflex-control's.
+    assert_eq!(
+        deflex_compensate::log::RUN_LOG_SKIP_FLAGS,
+        Flags::FORCE_OVER_LIMIT
+            | Flags::TORQUE_OVER_LIMIT
+            | Flags::SENSOR_TIMEOUT
+            | Flags::SENSOR_STATUS
+            | Flags::ROBOT_LINK_LOST
+            | Flags::NON_FINITE
+            | Flags::SENSOR_OVER_RANGE
+            | Flags::JOINT_OUT_OF_LIMITS
+            | Flags::JOINT_JUMP
+            | Flags::JOINT_COUNT_MISMATCH
+            | Flags::CONTACT_RUNAWAY
+            | Flags::LATCHED
+            | Flags::TARING
+            | Flags::STALE_WRENCH
+    );
+    let dir = scratch("runlog");
+    let out = dir.join("out");
+    // The robot of `--robot tx200` and the path the command places (its first 40 mm).
+    let robot = deflex_model::builtin("tx200").unwrap();
+    let (seed, tcp) = placed_path(&dir, "40");
+    // A log written by deflex-control's own writer functions: 0.1 mm steps, a constant 900 N
+    // push up, taring rows with nonsense at the start, 100 rows at rest at the end with the
+    // force fading (not used: no advance).
+    let mut text = csv_header(6);
+    text.push('\n');
+    let mut q = seed.clone();
+    let steps = (tcp.length_m() / 1e-4) as usize;
+    for k in 0..=steps + 100 {
+        let s_m = (k as f64 * 1e-4).min(tcp.length_m());
+        let (i, f) = tcp.locate(s_m);
+        let pa = tcp.points()[i].pose;
+        let pb = tcp.points()[i + 1].pose;
+        let p = pa.translation.vector + (pb.translation.vector - pa.translation.vector) * f;
+        let target = deflex_model::Pose::from_parts(p.into(), pa.rotation);
+        q = robot
+            .inverse_kinematics(&target, &q, &Default::default())
+            .unwrap()
+            .q;
+        let taring = k < 5;
+        // The row reaching the end still pushes 900 N; then the tool rests and the force fades.
+        let fz = if k > steps + 1 {
+            900.0 * (1.0 - (k - steps) as f64 / 100.0)
+        } else {
+            900.0
+        };
+        let cycle = CycleOutput {
+            time_s: k as f64 * 0.01,
+            wrench_tcp: if taring {
+                [0.0, 0.0, 1e5, 0.0, 0.0, 0.0]
+            } else {
+                [0.0, 0.0, fz, 0.0, 0.0, 0.0]
+            },
+            flags: Flags(if taring { Flags::TARING } else { Flags::ACTIVE }),
+            ..CycleOutput::default()
+        };
+        text.push_str(&csv_row(&LogRecord::new(&q, &[0.0; 6], &cycle, 10.0)));
+        text.push('\n');
+    }
+    let log_file = dir.join("run.csv");
+    std::fs::write(&log_file, text).unwrap();
+    let wrench = format!("log:{}", log_file.display());
+    compensated(&args_of(
+        "tx200",
+        "40",
+        &out,
+        &["--format", "gcode", "--wrench", &wrench],
+    ));
+    let rows = table(&out);
+    for r in &rows {
+        assert!((r.wrench[2] - 900.0).abs() < 1e-6, "{}", r.wrench[2]);
+    }
+    let s = summary(&out);
+    assert_eq!(
+        s["compensation"]["simulated"], false,
+        "a deflex run log is a measurement"
+    );
+    assert_eq!(s["compensation"]["iterations"].as_array().unwrap().len(), 1);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_options_are_refused_before_any_work() {
+    let dir = scratch("bad");
+    let out = dir.join("out");
+    for (change, expected) in [
+        (["--wrench", "sensor"], "--wrench"),
+        (["--tolerance-um", "0"], "--tolerance-um"),
+        (["--max-iterations", "0"], "--max-iterations"),
+        (["--seed-deg", "0,1,2"], "3 values given"),
+        (["--part-xyz-mm", "1,2"], "--part-xyz-mm"),
+        (
+            ["--path", "/nonexistent/part.gcode"],
+            "/nonexistent/part.gcode",
+        ),
+    ] {
+        let e = refused(&args(&out, &change));
+        assert!(e.contains(expected), "{e}");
+    }
+    // A negative length: the argument parser takes it in the `--flag=value` form.
+    let out_flag = format!("--out={}", out.display());
+    let e = refused(&["--robot", "tx200", "--length-mm=-1", &out_flag]);
+    assert!(e.contains("--length-mm"), "{e}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_sim_log_gives_the_force_depth_law_and_its_measured_tcp() {
+    // The twin forms three 0.5 mm levels of a 40 mm circle on the TX200 cell without
+    // correction; its log (SIMULATED, with the tracker's columns) is the wrench source.
+    let dir = scratch("simlog");
+    let mut gcode = String::from("G21 G90 G54\nG0 X20 Y0 Z2\nG1 Z0 F300\n");
+    for k in 1..=3 {
+        let z = -0.5 * k as f64;
+        gcode.push_str(&format!(
+            "G1 X{} Z{z} F600\nG3 X{} Y0 I{} J0\n",
+            20.0 + z,
+            20.0 + z,
+            -(20.0 + z)
+        ));
+    }
+    gcode.push_str("G0 Z5\n");
+    let part = dir.join("levels.nc");
+    std::fs::write(&part, &gcode).unwrap();
+    let cell = deflex_sim::CellConfig::for_robot("tx200").unwrap();
+    let tool_path = deflex_sim::gcode::parse_gcode(&gcode, "levels.nc").unwrap();
+    let open = deflex_sim::run_forming(&cell, tool_path, 1, None).unwrap();
+    let log_file = dir.join("log.csv");
+    std::fs::write(&log_file, open.log.to_csv()).unwrap();
+    let out = dir.join("out");
+    let wrench = format!("log:{}", log_file.display());
+    let line = |extra: &[&str]| {
+        let mut l = vec![
+            "--robot".to_string(),
+            "tx200".into(),
+            "--path".into(),
+            part.display().to_string(),
+            "--format".into(),
+            "gcode".into(),
+            "--position-only".into(),
+            "--out".into(),
+            out.display().to_string(),
+        ];
+        l.extend(extra.iter().map(|s| s.to_string()));
+        l
+    };
+    let run = |line: Vec<String>| compensated(&line.iter().map(String::as_str).collect::<Vec<_>>());
+    run(line(&["--wrench", &wrench]));
+    let s = summary(&out);
+    let law = &s["compensation"]["log_law"];
+    assert!(law["sloped_bins"].as_u64().unwrap() > 0, "{law}");
+    assert_eq!(law["measured_tcp"], true);
+    let iterations = s["compensation"]["iterations"].as_array().unwrap().len();
+    assert!(
+        iterations >= 2,
+        "the force follows the command: {iterations}"
+    );
+    // The compensated tool reaches deeper than the uncorrected one and meets more force.
+    let logged = law["max_axial_force_N"].as_f64().unwrap();
+    let predicted = s["compensation"]["final_max_force_N"].as_f64().unwrap();
+    assert!(predicted > logged + 20.0, "{predicted} vs {logged}");
+    std::fs::remove_dir_all(&out).unwrap();
+    // The logged wrenches as they are: one pass, no law.
+    run(line(&["--wrench", &wrench, "--log-forces", "fixed"]));
+    let s = summary(&out);
+    assert!(s["compensation"]["log_law"].is_null());
+    assert_eq!(s["compensation"]["iterations"].as_array().unwrap().len(), 1);
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -1,0 +1,263 @@
+//! No allocation on deflex-io's per-cycle path: the controller-side hot path (`receive` /
+//! `send_correction`, and the force sensor's `receive`) does not allocate after construction,
+//! counted on this thread by this binary's counting allocator.
+
+use deflex_io::egm::{EgmConfig, EgmLink, EgmRobotEndpoint};
+use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
+use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
+use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
+use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
+use deflex_io::{Correction, ForceSensorLink, Pose6, RobotLink, RobotSideLink, RobotState};
+use std::time::Duration;
+
+fn allocs() -> u64 {
+    super::allocations()
+}
+
+const T: Duration = Duration::from_secs(2);
+
+fn state(k: u64) -> RobotState {
+    let mut s = RobotState::with_joints(&[0.1, -1.2, 1.3, 0.0, 0.7, k as f64 * 1e-3]);
+    s.tcp_pose = Some(Pose6 {
+        position_m: [1.0, 0.2, 0.5],
+        zyx_rad: [0.1, 0.2, 3.0],
+    });
+    s.cycle_id = k;
+    s.robot_time_s = Some(k as f64 * 0.004);
+    s
+}
+
+/// Runs 50 cycles; counts allocations of the PC side only (after a warm-up).
+fn run(pc: &mut dyn RobotLink, robot: &mut dyn RobotSideLink) -> u64 {
+    let mut total = 0;
+    for k in 0..50u64 {
+        robot.send_state(&state(k)).unwrap();
+        let c = Correction {
+            dp_m: [1e-4 * k as f64, 0.0, 1e-5],
+            dphi_rad: [1e-5, 0.0, 0.0],
+        };
+        let before = allocs();
+        let s = pc.receive(T).unwrap().unwrap();
+        pc.send_correction(&c).unwrap();
+        let after = allocs();
+        if k > 0 {
+            total += after - before;
+        }
+        assert!((s.q_rad[0] - 0.1).abs() < 1e-6);
+        robot.receive_correction(T).unwrap().unwrap();
+    }
+    total
+}
+
+#[test]
+fn robot_links_do_not_allocate_on_the_hot_path() {
+    let mut pc = RsiLink::bind(
+        "127.0.0.1:0",
+        RsiConfig {
+            mode: CorrectionMode::Relative,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut robot = RsiRobotEndpoint::new(
+        "127.0.0.1:0",
+        pc.local_addr().unwrap(),
+        CorrectionMode::Relative,
+    )
+    .unwrap();
+    assert_eq!(run(&mut pc, &mut robot), 0, "RSI");
+
+    let mut pc = EgmLink::bind("127.0.0.1:0", EgmConfig::default()).unwrap();
+    let mut robot = EgmRobotEndpoint::new("127.0.0.1:0", pc.local_addr().unwrap()).unwrap();
+    assert_eq!(run(&mut pc, &mut robot), 0, "EGM");
+
+    let mut pc = StaubliLink::bind("127.0.0.1:0").unwrap();
+    let mut robot = StaubliRobotEndpoint::new("127.0.0.1:0", pc.local_addr().unwrap(), T).unwrap();
+    assert_eq!(run(&mut pc, &mut robot), 0, "Staubli");
+
+    let mut pc = SimpleUdpLink::bind("127.0.0.1:0", ReplyStyle::Keyword).unwrap();
+    let mut robot = SimpleUdpRobotEndpoint::new("127.0.0.1:0", pc.local_addr().unwrap()).unwrap();
+    assert_eq!(run(&mut pc, &mut robot), 0, "simple line");
+
+    let mut pc = SimpleTcpLink::bind("127.0.0.1:0").unwrap();
+    let mut robot = SimpleTcpRobotEndpoint::connect(pc.local_addr().unwrap(), T).unwrap();
+    assert_eq!(run(&mut pc, &mut robot), 0, "simple line over TCP");
+}
+
+#[test]
+fn the_counter_sees_allocations() {
+    let before = allocs();
+    let v = std::hint::black_box(vec![1u8; 16]);
+    assert!(allocs() > before);
+    drop(v);
+}
+
+#[test]
+fn netft_receive_does_not_allocate() {
+    let mut sensor = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
+    let mut client = NetFtClient::new(
+        "127.0.0.1:0",
+        sensor.local_addr().unwrap(),
+        Calibration::default(),
+    )
+    .unwrap();
+    client.start().unwrap();
+    sensor.poll_request(T).unwrap().unwrap();
+    let mut total = 0;
+    for k in 0..50 {
+        sensor
+            .send_sample(&[1.0, 2.0, 3.0, 0.1, 0.2, k as f64], 0)
+            .unwrap();
+        let before = allocs();
+        let s = client.receive(T).unwrap().unwrap();
+        if k > 0 {
+            total += allocs() - before;
+        }
+        assert_eq!(s.wrench[0], 1.0);
+    }
+    assert_eq!(total, 0);
+}
+
+/// The drop paths allocate nothing either: a duplicate of the message just answered (EGM
+/// `seqno`, RSI `IPOC`, Stäubli `seq`, simple UDP `seq=`), a joint count that changed, and,
+/// over TCP, a second connection refused while the robot holds the session.
+#[test]
+fn drop_paths_do_not_allocate() {
+    use deflex_io::LinkError;
+    use std::net::UdpSocket;
+
+    /// Sends message k, then its duplicate, then a message of k with another joint count
+    /// (`None`: the protocol's joint count is fixed); counts the PC side's allocations.
+    fn run_drops(
+        pc: &mut dyn RobotLink,
+        to: std::net::SocketAddr,
+        message: &dyn Fn(u64, usize) -> Option<Vec<u8>>,
+        joints: usize,
+    ) -> (u64, u64) {
+        let robot = UdpSocket::bind("127.0.0.1:0").unwrap();
+        robot.set_read_timeout(Some(T)).unwrap();
+        let mut b = [0u8; 2048];
+        let (mut total, mut dropped) = (0, 0);
+        for k in 1..=30u64 {
+            let mut sends = vec![message(k, joints).unwrap(), message(k, joints).unwrap()];
+            sends.extend(message(k + 1, joints - 1));
+            for (i, bytes) in sends.iter().enumerate() {
+                robot.send_to(bytes, to).unwrap();
+                let before = allocs();
+                let r = pc.receive(T);
+                let ok = matches!(r, Ok(Some(_)));
+                if ok {
+                    pc.send_correction(&Correction::ZERO).unwrap();
+                }
+                let after = allocs();
+                if k > 1 {
+                    total += after - before;
+                }
+                match (i, r) {
+                    (0, Ok(Some(_))) => {
+                        robot.recv(&mut b).unwrap();
+                    }
+                    (_, Err(LinkError::Dropped { .. })) => dropped += 1,
+                    (_, other) => panic!("message {i} of cycle {k}: {other:?}"),
+                }
+            }
+        }
+        (total, dropped)
+    }
+    let mut pc = EgmLink::bind("127.0.0.1:0", EgmConfig::default()).unwrap();
+    let to = pc.local_addr().unwrap();
+    let egm = |k: u64, n: usize| {
+        let mut m = deflex_io::egm::msg::EgmRobot::default();
+        let q = [0.1; 6];
+        deflex_io::egm::fill_robot_msg(
+            &mut m,
+            &RobotState::with_joints(&q[..n]),
+            k as u32,
+            4 * k as u32,
+            false,
+        );
+        Some(prost::Message::encode_to_vec(&m))
+    };
+    assert_eq!(run_drops(&mut pc, to, &egm, 6), (0, 60), "EGM");
+
+    let mut pc = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
+    let to = pc.local_addr().unwrap();
+    let rsi = |k: u64, n: usize| {
+        (n == 6).then(|| {
+            let t = deflex_io::rsi::RobTelegram {
+                q_rad: Some([0.1; 6]),
+                ipoc: 4 * k,
+                ..Default::default()
+            };
+            let mut b = [0u8; 1024];
+            let len = deflex_io::rsi::format_rob(&t, &mut b).unwrap();
+            b[..len].to_vec()
+        })
+    };
+    assert_eq!(run_drops(&mut pc, to, &rsi, 6), (0, 30), "RSI");
+
+    let mut pc = StaubliLink::bind("127.0.0.1:0").unwrap();
+    let to = pc.local_addr().unwrap();
+    let staubli = |k: u64, n: usize| {
+        (n == 6).then(|| {
+            let m = deflex_io::staubli::StateMsg {
+                header: deflex_io::staubli::Header {
+                    seq: k as u32,
+                    timestamp_s: k as f64 * 0.004,
+                    ..Default::default()
+                },
+                q_rad: [0.1; 6],
+                status: 0,
+            };
+            let mut b = [0u8; deflex_io::staubli::STATE_LEN];
+            deflex_io::staubli::encode_state(&m, &mut b).unwrap();
+            b.to_vec()
+        })
+    };
+    assert_eq!(run_drops(&mut pc, to, &staubli, 6), (0, 30), "Staubli");
+
+    let mut pc = SimpleUdpLink::bind("127.0.0.1:0", ReplyStyle::Keyword).unwrap();
+    let to = pc.local_addr().unwrap();
+    let line = |k: u64, n: usize| {
+        let mut b = [0u8; 512];
+        let len =
+            deflex_io::simple_udp::format_state_line(&[0.1; 6][..n], Some(k), &mut b).unwrap();
+        Some(b[..len].to_vec())
+    };
+    assert_eq!(run_drops(&mut pc, to, &line, 6), (0, 60), "simple UDP");
+
+    // TCP: a second connection refused while the robot holds the session.
+    let mut pc = SimpleTcpLink::bind("127.0.0.1:0").unwrap();
+    let mut robot = SimpleTcpRobotEndpoint::connect(pc.local_addr().unwrap(), T).unwrap();
+    let mut total = 0;
+    let mut strangers = Vec::new();
+    for k in 0..30u64 {
+        robot.send_state(&state(k)).unwrap();
+        let before = allocs();
+        assert!(pc.receive(T).unwrap().is_some());
+        pc.send_correction(&Correction::ZERO).unwrap();
+        total += allocs() - before;
+        robot.receive_correction(T).unwrap().unwrap();
+        strangers.push(std::net::TcpStream::connect(pc.local_addr().unwrap()).unwrap());
+        // The refusal comes within a few silent polls (the connection may still be on its way
+        // into the backlog); each poll is counted.
+        let mut refused = false;
+        for _ in 0..1000 {
+            let before = allocs();
+            let r = pc.receive(Duration::from_millis(1));
+            total += allocs() - before;
+            match r {
+                Err(LinkError::SecondConnection { .. }) => {
+                    refused = true;
+                    break;
+                }
+                Ok(None) => {}
+                other => panic!("{other:?}"),
+            }
+        }
+        assert!(refused, "cycle {k}");
+    }
+    assert_eq!(total, 0, "simple TCP with refusals");
+    assert_eq!(pc.counters().refused_busy, 30);
+}
