@@ -72,7 +72,7 @@ pub fn identify_from_twin_campaign(cell: &CellConfig, seed: u64) -> Result<Robot
         &nominal,
         &rows,
         &deflex_calibrate::stiffness::SearchOptions::default(),
-        &mut |_, _, _| {},
+        &mut |_| {},
     )?;
     Ok(result.calibration.to_robot(&nominal))
 }

@@ -1,5 +1,5 @@
 //! Fill a plan CSV with synthetic measurements from a known model (SIMULATED data, for demos):
-//! `cargo run --release -p deflex-stiffness --example synth -- TRUTH PLAN.csv OUT.csv [NOISE_UM] [SEED]`.
+//! `cargo run --release -p deflex-calibrate --example synth -- TRUTH PLAN.csv OUT.csv [NOISE_UM] [SEED]`.
 //! TRUTH is a built-in robot or a robot TOML without URDF; `tx200+base` is the TX200 of Table 1
 //! plus a base tilt about y0 (6e6 N·m/rad).
 use deflex_calibrate::measurements::{format_rows, parse_rows};

@@ -181,11 +181,11 @@ fn calibration_json(cal: &Calibration) -> Value {
         "reduced_chi2": cal.reduced_chi2,
         "bic": cal.bic,
         "rows": cal.rows,
-        "residual_rms_m": r.rms_m,
-        "residual_max_m": r.max_abs_m,
+        "residual_rms_m": r.position.rms,
+        "residual_max_m": r.position.max_abs,
         "residual_rms_all_m": r.rms_all_m,
-        "residual_rms_norm_m": r.rms_norm_m,
-        "residual_max_norm_m": r.max_norm_m,
+        "residual_rms_norm_m": r.position.norm.rms,
+        "residual_max_norm_m": r.position.norm.max,
         "rotation_rows": cal.rotation_rows,
         "residual_rotation_rms_rad": r.rotation_rms_rad,
         "chi2_well_above_one": cal.reduced_chi2 > deflex_calibrate::stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
@@ -196,7 +196,7 @@ fn calibration_json(cal: &Calibration) -> Value {
 
 /// A measurement file read and checked against the robot's forward kinematics.
 struct CheckedFile {
-    rows: Vec<deflex_calibrate::stiffness::MeasurementRow>,
+    rows: Vec<deflex_calibrate::measurements::MeasurementRow>,
     check: GeometryCheck,
     /// Warnings to print.
     warnings: Vec<String>,
@@ -369,7 +369,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
     if json_output {
         let steps_json: Vec<Value> = steps
             .iter()
-            .map(|s| json!({"step": s.iteration, "change": s.change, "structure": s.structure, "parameters": s.parameters, "rms_m": s.residuals.rms_all_m, "rms_axis_m": s.residuals.rms_m, "bic": s.bic, "delta_bic": s.delta_bic, "cv_rms_m": s.cv_rms_m}))
+            .map(|s| json!({"step": s.iteration, "change": s.change, "structure": s.structure, "parameters": s.parameters, "rms_m": s.residuals.rms_all_m, "rms_axis_m": s.residuals.position.rms, "bic": s.bic, "delta_bic": s.delta_bic, "cv_rms_m": s.cv_rms_m}))
             .collect();
         let mut v = calibration_json(&cal);
         v["iterations"] = json!(steps_json);
@@ -437,7 +437,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
 fn identify(
     args: &CalibrateArgs,
     start: &Robot,
-    rows: &[deflex_calibrate::stiffness::MeasurementRow],
+    rows: &[deflex_calibrate::measurements::MeasurementRow],
     json_output: bool,
 ) -> Result<(Calibration, Vec<SearchStep>, Option<String>), CliError> {
     Ok(if args.structure == StructureChoice::Fixed {
@@ -474,10 +474,13 @@ fn identify(
             )
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
-        let mut progress = |iteration: usize, done: usize, total: usize| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-            bar.set_message(format!("step {iteration}"));
+        let mut progress = |p: deflex_telemetry::Progress<'_>| match p {
+            deflex_telemetry::Progress::Stage { name, .. } => bar.set_message(name.to_string()),
+            deflex_telemetry::Progress::Work { done, total } => {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            }
+            deflex_telemetry::Progress::Done { .. } => {}
         };
         let result = search_structure(start, rows, &options, &mut progress)?;
         bar.finish_and_clear();
@@ -509,9 +512,9 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
         let m = |e: &deflex_calibrate::stiffness::validation::ModelErrors| {
             let rotation = e.rotation.as_ref().map(|r| {
                 let s = &r.stats;
-                json!({"rows": s.rows, "rms_rad": s.rms_rad, "max_abs_rad": s.max_abs_rad, "mean_rad": s.mean_rad, "rms_norm_rad": s.rms_norm_rad, "max_norm_rad": s.max_norm_rad})
+                json!({"rows": s.norm.count, "rms_rad": s.rms, "max_abs_rad": s.max_abs, "mean_rad": s.mean, "rms_norm_rad": s.norm.rms, "max_norm_rad": s.norm.max})
             });
-            json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m, "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m, "max_norm_m": e.stats.max_norm_m, "rotation": rotation})
+            json!({"name": e.name, "rms_m": e.stats.rms, "max_abs_m": e.stats.max_abs, "mean_m": e.stats.mean, "rms_norm_m": e.stats.norm.rms, "max_norm_m": e.stats.norm.max, "rotation": rotation})
         };
         let value = json!({
             "rows": v.measured.len(),

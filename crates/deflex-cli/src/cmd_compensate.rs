@@ -21,16 +21,14 @@ mod setup;
 use crate::args::print_json;
 use crate::error::CommandResult;
 use clap::{Args, ValueEnum};
-use deflex_compensate::LogError;
-use deflex_compensate::log::{
-    MAX_LOG_BYTES, ResampleOptions, WrenchLog, parse_log, resample_on_path,
-};
+use deflex_app::load::read_wrench_log;
+use deflex_compensate::log::{ResampleOptions, resample_on_path};
 use deflex_compensate::table::write_csv_to;
 use deflex_compensate::{
-    Compensation, Identification, LoggedProcess, LoggedProcessOptions, Progress, Stage,
-    WrenchSource, compensate,
+    Compensation, Identification, LoggedProcess, LoggedProcessOptions, WrenchSource, compensate,
 };
 use deflex_sim::FormingProcess;
+use deflex_telemetry::Progress;
 use serde_json::json;
 use setup::Setup;
 use std::fmt::Write as _;
@@ -159,7 +157,10 @@ pub enum CompensateCommandError {
     /// A robot file, cell, path, template or option that cannot be used.
     #[error("{0}")]
     Setup(#[from] Box<setup::SetupError>),
-    /// The log cannot serve as the wrench source.
+    /// The log cannot be read as a wrench source.
+    #[error(transparent)]
+    LogRead(#[from] deflex_app::load::WrenchLogError),
+    /// The log cannot serve as the wrench source of this path.
     #[error(transparent)]
     Log(#[from] deflex_compensate::LogError),
     /// The twin's process model cannot be built.
@@ -244,22 +245,17 @@ pub fn run(args: CompensateArgs, json: bool) -> Result<(), CompensateCommandErro
     }
     let started = std::time::Instant::now();
     let bar = progress_bar(json, s.path.len());
-    let mut on_progress = |p: &Progress| {
-        let stage = match p.stage {
-            Stage::Desired => "IK of the path".to_string(),
-            Stage::Process => "the log's force-depth law".to_string(),
-            Stage::Compensation => format!("iteration {}: compensation", p.iteration),
-            Stage::Final => "final process pass".to_string(),
-        };
-        bar.set_message(stage);
-        bar.set_position(p.done as u64);
+    let mut on_progress = |p: Progress<'_>| match p {
+        Progress::Stage { name, .. } => bar.set_message(name.to_string()),
+        Progress::Work { done, .. } => bar.set_position(done as u64),
+        Progress::Done { .. } => {}
     };
     let part = s.part_frame;
     let mut source_lines: Vec<String> = Vec::new();
     let mut law_json: Option<serde_json::Value> = None;
     let result = match &s.wrench {
         setup::WrenchArg::Log(file) => {
-            let log = read_log(file, &s.robot, &part)?;
+            let log = read_wrench_log(file, &s.robot, &part)?;
             let resampled = resample_on_path(&log, &s.path, &ResampleOptions::default())?;
             source_lines.push(format!(
                 "{}{} {}: {} rows used, {} at a standstill (not used), {} skipped (flags), {} off the path (max offset {:.2} mm)",
@@ -687,25 +683,3 @@ fn summary_text(
     );
     t
 }
-
-/// Read a log file for `--wrench log:FILE` (at most [`MAX_LOG_BYTES`], the file named in every
-/// error) and parse it ([`parse_log`]): the file is read here, the maths crate sees its text.
-fn read_log(
-    path: &std::path::Path,
-    robot: &deflex_model::Robot,
-    part_frame: &deflex_model::Pose,
-) -> Result<WrenchLog, LogError> {
-    let file = path.display().to_string();
-    let text = deflex_app::load::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
-        deflex_app::load::BoundedReadError::Io(source) => LogError::Io {
-            file: file.clone(),
-            message: source.to_string(),
-        },
-        deflex_app::load::BoundedReadError::TooLarge(size) => LogError::TooLarge {
-            file: file.clone(),
-            message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
-        },
-    })?;
-    parse_log(&text, &file, robot, part_frame)
-}
-

@@ -3,7 +3,8 @@
 
 use crate::error::CommandResult;
 use clap::Args;
-use deflex_app::study::{DemoOptions, Progress, run_study};
+use deflex_app::study::{DemoOptions, run_study};
+use deflex_telemetry::Progress;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
@@ -32,30 +33,38 @@ struct Bars {
     quiet: bool,
 }
 
-impl Progress for Bars {
-    fn stage(&mut self, index: usize, total: usize, name: &str) {
-        if self.quiet {
-            return;
-        }
-        let bar = ProgressBar::new(1000);
-        bar.set_style(
-            ProgressStyle::with_template("{prefix:>5} {msg:<48} [{bar:30}] {elapsed:>4}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
-        bar.set_prefix(format!("{index}/{total}"));
-        bar.set_message(name.to_string());
-        self.bar = Some(bar);
-    }
-    fn fraction(&mut self, fraction: f64) {
-        if let Some(bar) = &self.bar {
-            bar.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
-        }
-    }
-    fn done(&mut self, note: &str) {
-        if let Some(bar) = self.bar.take() {
-            bar.set_position(1000);
-            bar.finish_with_message(format!("{} — {note}", bar.message()));
+impl Bars {
+    /// Shows one report of the study: a bar per stage, its work in per mille of the bar.
+    fn show(&mut self, progress: Progress<'_>) {
+        match progress {
+            Progress::Stage { index, count, name } => {
+                if self.quiet {
+                    return;
+                }
+                let bar = ProgressBar::new(1000);
+                bar.set_style(
+                    ProgressStyle::with_template("{prefix:>5} {msg:<48} [{bar:30}] {elapsed:>4}")
+                        .unwrap_or_else(|_| ProgressStyle::default_bar())
+                        .progress_chars("=> "),
+                );
+                bar.set_prefix(match count {
+                    Some(count) => format!("{index}/{count}"),
+                    None => index.to_string(),
+                });
+                bar.set_message(name.to_string());
+                self.bar = Some(bar);
+            }
+            Progress::Work { done, total } => {
+                if let (Some(bar), true) = (&self.bar, total > 0) {
+                    bar.set_position((done.min(total) * 1000 / total) as u64);
+                }
+            }
+            Progress::Done { note } => {
+                if let Some(bar) = self.bar.take() {
+                    bar.set_position(1000);
+                    bar.finish_with_message(format!("{} — {note}", bar.message()));
+                }
+            }
         }
     }
 }
@@ -73,7 +82,7 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
         quiet: json,
     };
     let cell = deflex_app::cell::twin_cell_file::cell_for_robot(&options.robot)?;
-    let study = run_study(&options, cell, &mut bars)?;
+    let study = run_study(&options, cell, &mut |p| bars.show(p))?;
     deflex_app::report::study::write_study(&study, &args.out)?;
     let summary = study.summary;
     if json {

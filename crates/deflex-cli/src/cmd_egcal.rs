@@ -56,14 +56,14 @@ pub const MAX_PLAUSIBLE_RMS_M: f64 = 0.02;
 /// Refuse a fit whose readings the calibrated robot still misses by more than
 /// [`MAX_PLAUSIBLE_RMS_M`] RMS (data of another robot given with `--robot`): nothing is written.
 fn check_plausible_fit(
-    result: &deflex_calibrate::geometry::outcome::FitResult,
+    result: &deflex_calibrate::geometry::fit::FitResult,
     robot: &str,
     data: &[PathBuf],
 ) -> Result<(), CliError> {
     let fitted: Vec<f64> = result
         .residuals
         .iter()
-        .filter(|r| r.role == deflex_calibrate::geometry::outcome::Role::Fit)
+        .filter(|r| r.role == deflex_calibrate::geometry::fit::Role::Fit)
         .map(|r| r.residual.norm_squared())
         .collect();
     if fitted.is_empty() {
@@ -405,7 +405,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Com
         "--sigma-rad",
         args.sigma_rad,
         1e-9,
-        limits::MAX_SIGMA_RAD,
+        deflex_calibrate::measurements::MAX_SIGMA_RAD,
         "rad",
     )?;
     let start_robot = robot(&args.robot)?;

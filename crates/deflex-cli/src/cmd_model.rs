@@ -725,7 +725,7 @@ pub fn map_plots(
             "y [mm]",
         )
         .size(1000, 800);
-        deflex_plot::heatmap(&path, &spec, &xs, &ys, values, label)?;
+        deflex_app::report::draw::heatmap(&path, &spec, &xs, &ys, values, label)?;
         written.push(path);
     }
     Ok(written)

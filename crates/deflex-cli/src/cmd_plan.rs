@@ -11,9 +11,9 @@ use deflex_app::report::plan_tables::{
     expected_shift_rows, technician_rows,
 };
 use deflex_calibrate::measurements::format_rows_for;
-use deflex_calibrate::measurements::points::parse_point_flag;
+use deflex_calibrate::measurements::points::{MAX_USER_POINTS, parse_point_flag};
 use deflex_calibrate::stiffness::campaign_cell::{
-    MAX_PLAN_FORCE_N, MAX_USER_POINTS, default_force_n, parse_directions,
+    MAX_PLAN_FORCE_N, default_force_n, parse_directions,
 };
 use deflex_calibrate::stiffness::plan::{
     BasePoint, Floor, LoadKind, PlanOptions, PointSet, Table, TableOption, plan_experiments,

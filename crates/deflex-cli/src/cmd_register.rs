@@ -8,7 +8,7 @@ use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
 use deflex_app::report::absolute_report::registration;
 use deflex_calibrate::geometry::campaign::Campaign;
-use deflex_calibrate::geometry::data::{DEFAULT_ORIENTATION_SIGMA_RAD, limits};
+use deflex_calibrate::geometry::data::DEFAULT_ORIENTATION_SIGMA_RAD;
 use deflex_calibrate::geometry::register::{RegisterOptions, register as register_session};
 use deflex_calibrate::geometry::solve::Loss;
 use std::path::PathBuf;
@@ -94,7 +94,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
         "--sigma-rad",
         args.sigma_rad,
         1e-9,
-        limits::MAX_SIGMA_RAD,
+        deflex_calibrate::measurements::MAX_SIGMA_RAD,
         "rad",
     )?;
     if let Some(mm) = args.recalibrate_above_mm {

@@ -16,7 +16,8 @@ pub enum CliError {
     /// A robot description that cannot be read or used.
     #[error(transparent)]
     Model(#[from] deflex_model::ModelError),
-    /// A measurement or plan file that cannot be used.
+    /// A measurement file that cannot be used: loaded displacements, a plan, absolute
+    /// (tracker) readings.
     #[error(transparent)]
     Data(#[from] deflex_calibrate::measurements::DataError),
     /// A points file that cannot be used.
@@ -33,7 +34,7 @@ pub enum CliError {
     Sim(#[from] deflex_sim::SimError),
     /// A twin settings file that cannot be read or used.
     #[error(transparent)]
-    CellFile(#[from] deflex_app::cell::twin_cell_file::CellFileError),
+    TwinCellFile(#[from] deflex_app::cell::twin_cell_file::TwinCellFileError),
     /// The controller could not drive the twin.
     #[error(transparent)]
     Twin(#[from] deflex_sim::twin::TwinError),
@@ -67,7 +68,7 @@ pub enum CliError {
         /// The output folder, left as it was.
         out: PathBuf,
         /// Where the run stopped.
-        source: deflex_sim::SimError,
+        source: Box<deflex_sim::SimError>,
     },
     /// A file or folder could not be written.
     #[error("{}: {source}", .path.display())]
@@ -148,9 +149,6 @@ pub enum CliError {
         /// Measurement files found.
         found: usize,
     },
-    /// An absolute (tracker) measurement file that cannot be used.
-    #[error(transparent)]
-    AbsoluteData(#[from] deflex_calibrate::geometry::data::AbsoluteDataError),
     /// A tracker series that cannot be imported.
     #[error(transparent)]
     Import(#[from] deflex_calibrate::geometry::ur10_tracker::ImportError),

@@ -94,6 +94,7 @@ use crate::ik::{IkFailure, TrackingIkOptions};
 use crate::path::TcpPath;
 use crate::process::ProcessModel;
 use deflex_model::{Displacement, MAX_JOINTS, ModelError, Pose, Robot, Wrench};
+use deflex_telemetry::{OnProgress, Progress};
 use nalgebra::{Rotation3, Vector3, Vector6};
 
 mod solver;
@@ -346,33 +347,6 @@ impl Compensation {
     }
 }
 
-/// Stage of a running compensation, for progress bars.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// Inverse kinematics of the desired path.
-    Desired,
-    /// A process model's look at the desired path before the first iteration
-    /// ([`ProcessModel::observe_desired`]: a model identified from a log).
-    Process,
-    /// An iteration: each point's wrench, then its compensation.
-    Compensation,
-    /// The final process pass.
-    Final,
-}
-
-/// Progress of a running compensation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Progress {
-    /// Iteration (0 for the desired path).
-    pub iteration: usize,
-    /// Stage.
-    pub stage: Stage,
-    /// Points done in this stage.
-    pub done: usize,
-    /// Points in the path.
-    pub total: usize,
-}
-
 /// `pose ⊕ d = (p + δp, exp(δφ)·R)`: a pose moved by a small displacement.
 pub fn apply_displacement(pose: &Pose, d: &Displacement) -> Pose {
     let rotation = Rotation3::new(Vector3::new(d[3], d[4], d[5])) * pose.rotation;
@@ -394,13 +368,18 @@ fn norms(v: &Vector6<f64>) -> (f64, f64) {
 
 /// Compensate `path` for the deflection `robot` predicts under the wrenches of `source`,
 /// starting the inverse kinematics from `seed` (rad). See the module documentation.
+///
+/// `progress` hears of every pass as a stage (`IK of the path`, `the log's force-depth law`
+/// for a process model that looks at the desired path first, `iteration N: compensation`,
+/// `final process pass`; their number depends on the convergence) and of the path points done
+/// in it ([`Progress::Work`], every few thousand points).
 pub fn compensate(
     robot: &Robot,
     path: &TcpPath,
     seed: &[f64],
     mut source: WrenchSource,
     options: &CompensationOptions,
-    progress: &mut dyn FnMut(&Progress),
+    progress: OnProgress<'_>,
 ) -> Result<Compensation, CompensateError> {
     options.validate()?;
     let n = robot.joint_count();
@@ -435,9 +414,20 @@ pub fn compensate(
         }
     };
     let mut solver = Solver::new(robot, path, options, count);
+    let mut stages = 0;
+    let mut stage = |name: &str, progress: &mut dyn FnMut(Progress<'_>)| {
+        stages += 1;
+        progress(Progress::Stage {
+            index: stages,
+            count: None,
+            name,
+        });
+    };
+    stage("IK of the path", &mut *progress);
     solver.desired_pass(seed, progress);
     let fixed = match &mut source {
         WrenchSource::Process(model) if model.observes_desired_path() => {
+            stage("the log's force-depth law", &mut *progress);
             solver.observation_pass(&mut **model, progress)?;
             !model.follows_command()
         }
@@ -448,7 +438,11 @@ pub fn compensate(
     let mut final_stats = None;
     for iteration in 1..=options.max_iterations {
         let last = fixed || iteration == options.max_iterations;
-        let (stats, pass) = solver.sweep(&mut source, iteration, last, progress)?;
+        stage(
+            &format!("iteration {iteration}: compensation"),
+            &mut *progress,
+        );
+        let (stats, pass) = solver.sweep(&mut source, last, progress)?;
         let failed_points = solver.points.iter().filter(|p| p.failure.is_some()).count();
         iterations.push(IterationReport {
             iteration,
@@ -472,17 +466,16 @@ pub fn compensate(
             break;
         }
     }
+    stage("final process pass", &mut *progress);
     let stats = match final_stats {
         Some(stats) => {
-            progress(&Progress {
-                iteration: 0,
-                stage: Stage::Final,
+            progress(Progress::Work {
                 done: count,
                 total: count,
             });
             stats
         }
-        None => solver.process_pass(&mut source, 0, Stage::Final, progress)?,
+        None => solver.process_pass(&mut source, progress)?,
     };
     let mut max_compensation_m: f64 = 0.0;
     let mut max_compensation_rad: f64 = 0.0;

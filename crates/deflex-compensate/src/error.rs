@@ -104,65 +104,10 @@ pub enum CompensateError {
     },
 }
 
-/// A log file that cannot serve as a wrench source.
+/// A log that cannot serve as the wrench source of a path (reading the log is the caller's:
+/// its errors are the log reader's).
 #[derive(Debug, Error, PartialEq)]
 pub enum LogError {
-    /// Reading the file failed.
-    #[error("{file}: cannot read: {message}")]
-    Io {
-        /// The file.
-        file: String,
-        /// The operating system's message.
-        message: String,
-    },
-    /// Larger than [`crate::log::MAX_LOG_BYTES`] or more than [`crate::log::MAX_LOG_ROWS`] rows.
-    #[error("{file}: {message}")]
-    TooLarge {
-        /// The file.
-        file: String,
-        /// Which bound.
-        message: String,
-    },
-    /// Neither a `deflex run` log nor a `sim isf` log: required columns are missing.
-    #[error("{file}: not a deflex run or sim isf log: missing column(s) {missing}")]
-    UnknownKind {
-        /// The file.
-        file: String,
-        /// The columns that are missing for the closest kind.
-        missing: String,
-    },
-    /// A value that is not a finite number.
-    #[error("{file}:{line}: column `{column}`: expected a number, got \"{value}\"")]
-    BadValue {
-        /// The file.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// The column.
-        column: String,
-        /// The text found.
-        value: String,
-    },
-    /// A `deflex run` log whose joint count does not match the robot model.
-    #[error("{file}: the log has {log} joint columns, the robot has {robot} joints")]
-    JointCount {
-        /// The file.
-        file: String,
-        /// Joint columns in the log.
-        log: usize,
-        /// Joints of the robot.
-        robot: usize,
-    },
-    /// The CSV is malformed.
-    #[error("{file}:{line}: {message}")]
-    Csv {
-        /// The file.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// The parser's message.
-        message: String,
-    },
     /// No usable row lies near the path.
     #[error("{file}: none of the {rows} usable rows lies within {max_offset_mm} mm of the path")]
     NoRowNearPath {

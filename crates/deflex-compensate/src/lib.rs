@@ -15,11 +15,12 @@
 //! * [`compensate()`]: the iteration against the process model until the commanded path
 //!   converges, with a report per iteration; points that cannot be compensated are kept and
 //!   flagged with their reason ([`PointFailure`]).
-//! * [`table`]: the compensated path as a CSV text (SI columns) and back, and the
-//!   [`table::FeedForward`] lookup (predicted deflection and applied compensation by time or
-//!   arc length) for an online controller that runs on top of a compensated program.
+//! * [`table`]: the compensated path as a CSV text (SI columns) and back (an online controller
+//!   that runs on top of a compensated program reads it into the control law's table).
 //!
-//! The maths is free of I/O; [`log`] reads log text (and, for convenience, files).
+//! The maths is free of I/O: a log's rows come typed from the caller, which reads the file
+//! through the recorder's log reader (`deflex_record`). Progress is reported as
+//! [`deflex_telemetry::Progress`].
 
 #![warn(missing_docs)]
 
@@ -33,8 +34,8 @@ pub mod process;
 pub mod table;
 
 pub use compensate::{
-    CompensatedPoint, Compensation, CompensationOptions, IterationReport, PointFailure, Progress,
-    Stage, WrenchSource, apply_displacement, commanded_pose, compensate,
+    CompensatedPoint, Compensation, CompensationOptions, IterationReport, PointFailure,
+    WrenchSource, apply_displacement, commanded_pose, compensate,
 };
 pub use error::{CompensateError, LogError, PathError, ProcessError};
 pub use ik::{IkFailure, TrackingIkOptions};

@@ -1,6 +1,8 @@
 //! The compensated path as a table: CSV text with SI columns (what `deflex compensate` writes
-//! as `compensated_path.csv`), its reader, and [`FeedForward`], the lookup an online controller
-//! uses when it runs on top of a compensated program or takes the prediction as feed-forward.
+//! as `compensated_path.csv`) and its reader. An online controller that runs on top of a
+//! compensated program, or takes the prediction as feed-forward, reads it through this reader
+//! into the control law's table (`deflex_control::FeedForwardTable`, built by the application
+//! layer's `deflex_app::cell::feedforward`).
 //!
 //! ## Columns
 //!
@@ -275,89 +277,4 @@ pub fn read_csv(text: &str, file: &str) -> Result<Vec<TableRow>, TableError> {
         });
     }
     Ok(rows)
-}
-
-/// What the model predicts and what a compensated program applies, at one instant of the path.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FeedForwardSample {
-    /// Predicted deflection of the tool at the commanded configuration `[δp; δφ]` (world): the
-    /// feed-forward an online controller can add so that its feedback only corrects the
-    /// residual.
-    pub deflection: Displacement,
-    /// Compensation already in a compensated program `[dp; dφ]` (world): a controller running
-    /// on top of that program must not apply it a second time.
-    pub compensation: Displacement,
-}
-
-/// Predicted deflection and applied compensation along a path, looked up by time or arc
-/// length with linear interpolation (clamped at the ends). Lookups allocate nothing.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FeedForward {
-    arc_length_m: Vec<f64>,
-    time_s: Vec<f64>,
-    deflection: Vec<Displacement>,
-    compensation: Vec<Displacement>,
-}
-
-impl FeedForward {
-    /// From a compensation of `path`.
-    pub fn from_compensation(path: &TcpPath, compensation: &Compensation) -> FeedForward {
-        FeedForward {
-            arc_length_m: path.points().iter().map(|p| p.arc_length_m).collect(),
-            time_s: path.points().iter().map(|p| p.time_s).collect(),
-            deflection: compensation.points.iter().map(|p| p.deflection).collect(),
-            compensation: compensation.points.iter().map(|p| p.compensation).collect(),
-        }
-    }
-
-    /// From the rows of a compensated-path table ([`read_csv`]). `None` for fewer than two rows
-    /// or arc lengths / times that decrease.
-    pub fn from_rows(rows: &[TableRow]) -> Option<FeedForward> {
-        let monotone = rows
-            .windows(2)
-            .all(|w| w[1].arc_length_m >= w[0].arc_length_m && w[1].time_s >= w[0].time_s);
-        (rows.len() >= 2 && monotone).then(|| FeedForward {
-            arc_length_m: rows.iter().map(|r| r.arc_length_m).collect(),
-            time_s: rows.iter().map(|r| r.time_s).collect(),
-            deflection: rows.iter().map(|r| r.deflection).collect(),
-            compensation: rows.iter().map(|r| r.compensation).collect(),
-        })
-    }
-
-    /// Path duration (s).
-    pub fn duration_s(&self) -> f64 {
-        self.time_s.last().copied().unwrap_or(0.0)
-    }
-
-    /// Path length (m).
-    pub fn length_m(&self) -> f64 {
-        self.arc_length_m.last().copied().unwrap_or(0.0)
-    }
-
-    fn sample(&self, keys: &[f64], key: f64) -> FeedForwardSample {
-        let last = keys.len() - 1;
-        let i = keys.partition_point(|k| *k <= key).clamp(1, last) - 1;
-        let span = keys[i + 1] - keys[i];
-        let f = if span > 0.0 {
-            ((key - keys[i]) / span).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
-        let f = if key.is_nan() { 0.0 } else { f };
-        FeedForwardSample {
-            deflection: self.deflection[i] + (self.deflection[i + 1] - self.deflection[i]) * f,
-            compensation: self.compensation[i]
-                + (self.compensation[i + 1] - self.compensation[i]) * f,
-        }
-    }
-
-    /// At time `t_s` along the path (the path's feeds).
-    pub fn at_time(&self, t_s: f64) -> FeedForwardSample {
-        self.sample(&self.time_s, t_s)
-    }
-
-    /// At arc length `s_m`.
-    pub fn at_arc_length(&self, s_m: f64) -> FeedForwardSample {
-        self.sample(&self.arc_length_m, s_m)
-    }
 }

@@ -64,4 +64,4 @@ pub use pid::{Pid, PidGains};
 pub use runaway::{RunawayAction, RunawayConfig, RunawayGuard};
 pub use safety::{Channel, Fault, SafeAction, Safety, SafetyConfig};
 pub use telemetry::RecordCycle;
-pub use wrench::{ToolLoad, WrenchConfig, WrenchProcessor};
+pub use wrench::{WrenchConfig, WrenchProcessor};

@@ -9,28 +9,21 @@
 //! Everything here is allocation-free.
 
 use deflex_model::wrench_transport::sensor_wrench_at_point;
-use deflex_model::{Data, Pose, Wrench};
+use deflex_model::{Data, Pose, ToolLoad, Wrench};
 use nalgebra::Vector3;
 
 /// Standard gravity (m/s²), pointing along −z of the world frame by default.
 pub const STANDARD_GRAVITY: f64 = 9.806_65;
-
-/// The tool carried by the sensor: its weight is taken out of every reading.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ToolLoad {
-    /// Mass beyond the sensor's measuring plane (kg).
-    pub mass_kg: f64,
-    /// Centre of mass in the sensor frame (m).
-    pub com_in_sensor_m: [f64; 3],
-}
 
 /// Static configuration of the wrench path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WrenchConfig {
     /// Sensor frame in the flange frame (mounting).
     pub sensor_in_flange: Pose,
-    /// Tool load for gravity compensation.
-    pub tool: ToolLoad,
+    /// The tool carried by the sensor, for gravity compensation (its weight is taken out of
+    /// every reading): the mass beyond the sensor's measuring plane, the centre of mass in the
+    /// sensor frame.
+    pub tool_in_sensor: ToolLoad,
     /// Gravity acceleration in world axes (m/s²).
     pub gravity_world: [f64; 3],
     /// Cut-off of the first-order low-pass (Hz); `None` disables it.
@@ -41,10 +34,7 @@ impl Default for WrenchConfig {
     fn default() -> Self {
         WrenchConfig {
             sensor_in_flange: Pose::identity(),
-            tool: ToolLoad {
-                mass_kg: 0.0,
-                com_in_sensor_m: [0.0; 3],
-            },
+            tool_in_sensor: ToolLoad::NONE,
             gravity_world: [0.0, 0.0, -STANDARD_GRAVITY],
             lowpass_hz: None,
         }
@@ -102,9 +92,10 @@ impl WrenchProcessor {
     /// `c × f` about the sensor origin (sensor axes).
     #[inline]
     pub fn gravity_in_sensor(&self, sensor_pose: &Pose) -> Wrench {
-        let g = Vector3::from(self.config.gravity_world) * self.config.tool.mass_kg;
+        let tool = &self.config.tool_in_sensor;
+        let g = Vector3::from(self.config.gravity_world) * tool.mass_kg;
         let f = sensor_pose.rotation.matrix().transpose() * g;
-        let m = Vector3::from(self.config.tool.com_in_sensor_m).cross(&f);
+        let m = tool.centre_of_mass_m.cross(&f);
         Wrench::new(f.x, f.y, f.z, m.x, m.y, m.z)
     }
 

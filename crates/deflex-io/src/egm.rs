@@ -47,10 +47,14 @@
 
 use crate::error::{LinkError, Protocol};
 use crate::guard::{LinkCounters, SessionGuard, Stamp};
-use crate::link::{Correction, Pose6, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
-use crate::link::{MAX_JOINTS, rotation_transpose_apply};
+use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
 use crate::peer::{PeerLock, PeerPolicy};
 use crate::udp::UdpEndpoint;
+use deflex_model::conventions::{
+    abb_quaternion, rotation_from_abb_quaternion, rotation_from_kuka_abc_deg,
+};
+use deflex_model::{MAX_JOINTS, Pose};
+use nalgebra::{Rotation3, Translation3, Vector3};
 use prost::Message;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::{Duration, Instant};
@@ -88,8 +92,10 @@ pub struct RobotFrame {
     pub external_rad: [f64; 6],
     /// Number of external joints present.
     pub n_external: usize,
-    /// Feedback TCP pose.
-    pub tcp_pose: Option<Pose6>,
+    /// Feedback TCP pose (m): the orientation from `euler` (`z, y, x` in degrees, KUKA's
+    /// Z-Y'-X'' angles) when present, else from the quaternion `orient` (ABB's convention),
+    /// else the identity.
+    pub tcp_pose: Option<Pose>,
 }
 
 /// A decoded path correction, in SI units.
@@ -230,7 +236,7 @@ fn joints(b: &[u8], q: &mut [f64; 6], n: &mut usize) -> Result<(), LinkError> {
     Ok(())
 }
 
-fn pose(b: &[u8]) -> Result<Option<Pose6>, LinkError> {
+fn pose(b: &[u8]) -> Result<Option<Pose>, LinkError> {
     let mut r = Reader::new(b);
     let (mut pos, mut quat, mut euler) = (None, None, None);
     while let Some((f, w)) = r.key()? {
@@ -251,18 +257,13 @@ fn pose(b: &[u8]) -> Result<Option<Pose6>, LinkError> {
         }
     }
     let Some(p) = pos else { return Ok(None) };
-    let position_m = p.map(|v| v * 1e-3);
-    Ok(Some(match (euler, quat) {
-        (Some(e), _) => Pose6 {
-            position_m,
-            zyx_rad: [e[2].to_radians(), e[1].to_radians(), e[0].to_radians()],
-        },
-        (None, Some(q)) => Pose6::from_quaternion(position_m, q),
-        (None, None) => Pose6 {
-            position_m,
-            zyx_rad: [0.0; 3],
-        },
-    }))
+    let position_m = Translation3::new(p[0] * 1e-3, p[1] * 1e-3, p[2] * 1e-3);
+    let rotation = match (euler, quat) {
+        (Some(e), _) => rotation_from_kuka_abc_deg([e[2], e[1], e[0]]),
+        (None, Some(q)) => rotation_from_abb_quaternion(q),
+        (None, None) => Rotation3::identity(),
+    };
+    Ok(Some(Pose::from_parts(position_m, rotation)))
 }
 
 /// Decodes the header and `feedBack` of an `EgmRobot` message without
@@ -413,12 +414,13 @@ pub fn fill_robot_msg(
         fb.external_joints = None;
     }
     fb.cartesian = s.tcp_pose.map(|p| {
-        let q = p.quaternion();
+        let q = abb_quaternion(&p.rotation, None);
+        let t = p.translation.vector;
         msg::EgmPose {
             pos: Some(msg::EgmCartesian {
-                x: p.position_m[0] * 1e3,
-                y: p.position_m[1] * 1e3,
-                z: p.position_m[2] * 1e3,
+                x: t.x * 1e3,
+                y: t.y * 1e3,
+                z: t.z * 1e3,
             }),
             orient: Some(msg::EgmQuaternion {
                 u0: q[0],
@@ -449,12 +451,12 @@ pub enum EgmFrame {
 pub struct EgmConfig {
     /// Frame of the correction.
     pub frame: EgmFrame,
-    /// Orientation of `EGMActMove`'s sensor frame relative to the tool
-    /// (row-major rotation), for [`EgmFrame::Tool`].
-    pub sensor_in_tool: [[f64; 3]; 3],
+    /// Orientation of `EGMActMove`'s sensor frame relative to the tool, for
+    /// [`EgmFrame::Tool`].
+    pub sensor_in_tool: Rotation3<f64>,
     /// Orientation of the work object in the robot base frame, for
     /// [`EgmFrame::WorkObject`].
-    pub work_object_in_base: [[f64; 3]; 3],
+    pub work_object_in_base: Rotation3<f64>,
     /// Age (ms) reported in `pathCorr.age`.
     pub age_ms: u32,
     /// The robot is one of ABB's seven-axis arms: axis 3 arrives as the first
@@ -462,32 +464,26 @@ pub struct EgmConfig {
     pub seven_axis: bool,
 }
 
-const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-
 impl Default for EgmConfig {
     fn default() -> Self {
         EgmConfig {
             frame: EgmFrame::Tool,
-            sensor_in_tool: IDENTITY,
-            work_object_in_base: IDENTITY,
+            sensor_in_tool: Rotation3::identity(),
+            work_object_in_base: Rotation3::identity(),
             age_ms: 10,
             seven_axis: false,
         }
     }
 }
 
-fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
-}
-
 impl EgmConfig {
     /// Orientation, in robot base axes, of the frame `pathCorr.pos` is
     /// expressed in, given the TCP orientation in base axes.
-    pub fn correction_frame(&self, tcp_in_base: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    pub fn correction_frame(&self, tcp_in_base: &Rotation3<f64>) -> Rotation3<f64> {
         match self.frame {
-            EgmFrame::Tool => mat_mul(tcp_in_base, &self.sensor_in_tool),
+            EgmFrame::Tool => tcp_in_base * self.sensor_in_tool,
             EgmFrame::WorkObject => self.work_object_in_base,
-            EgmFrame::Base => IDENTITY,
+            EgmFrame::Base => Rotation3::identity(),
         }
     }
 
@@ -525,7 +521,7 @@ pub struct EgmLink {
     seqno: u32,
     epoch: Instant,
     cfg: EgmConfig,
-    tcp_in_base: [[f64; 3]; 3],
+    tcp_in_base: Rotation3<f64>,
     last: Option<RobotFrame>,
     peers: PeerLock,
     guard: SessionGuard,
@@ -543,7 +539,7 @@ impl EgmLink {
             seqno: 0,
             epoch: Instant::now(),
             cfg,
-            tcp_in_base: IDENTITY,
+            tcp_in_base: Rotation3::identity(),
             last: None,
             peers: PeerLock::first_sender(),
             guard: SessionGuard::new(),
@@ -616,7 +612,9 @@ impl RobotLink for EgmLink {
             return Err(LinkError::NoPeer { protocol: P });
         }
         let frame = self.cfg.correction_frame(&self.tcp_in_base);
-        let dp = rotation_transpose_apply(&frame, c.dp_m);
+        let dp: [f64; 3] = frame
+            .inverse_transform_vector(&Vector3::from(c.dp_m))
+            .into();
         let seqno = self.seqno.wrapping_add(1);
         let tm = self.epoch.elapsed().as_millis() as u32;
         let n = encode_path_corr(seqno, tm, dp, self.cfg.age_ms, &mut self.tx[..])?;
@@ -636,8 +634,8 @@ impl RobotLink for EgmLink {
         c
     }
 
-    fn set_tcp_rotation(&mut self, rotation: &[[f64; 3]; 3]) {
-        if rotation.iter().flatten().all(|v| v.is_finite()) {
+    fn set_tcp_rotation(&mut self, rotation: &Rotation3<f64>) {
+        if rotation.matrix().iter().all(|v| v.is_finite()) {
             self.tcp_in_base = *rotation;
         }
     }
@@ -655,7 +653,7 @@ pub struct EgmRobotEndpoint {
     rx: Box<[u8; BUFFER]>,
     tx: Box<[u8; BUFFER]>,
     seven_axis: bool,
-    frame: [[f64; 3]; 3],
+    frame: Rotation3<f64>,
 }
 
 impl EgmRobotEndpoint {
@@ -671,7 +669,7 @@ impl EgmRobotEndpoint {
             rx: Box::new([0; BUFFER]),
             tx: Box::new([0; BUFFER]),
             seven_axis: false,
-            frame: IDENTITY,
+            frame: Rotation3::identity(),
         })
     }
     /// Sends the third of seven joints as the first external joint (ABB's
@@ -682,7 +680,7 @@ impl EgmRobotEndpoint {
     /// Orientation in base axes of the frame the corrections arrive in
     /// ([`EgmConfig::correction_frame`]); received corrections are rotated
     /// back to base axes with it.
-    pub fn set_correction_frame(&mut self, frame: &[[f64; 3]; 3]) {
+    pub fn set_correction_frame(&mut self, frame: &Rotation3<f64>) {
         self.frame = *frame;
     }
     /// Local socket address.
@@ -717,8 +715,7 @@ impl RobotSideLink for EgmRobotEndpoint {
             return Ok(None);
         };
         let f = decode_path_corr(&self.rx[..n])?;
-        let r = &self.frame;
-        let dp_m = std::array::from_fn(|i| (0..3).map(|k| r[i][k] * f.dp_m[k]).sum());
+        let dp_m: [f64; 3] = (self.frame * Vector3::from(f.dp_m)).into();
         Ok(Some(ReceivedCorrection {
             correction: Correction {
                 dp_m,

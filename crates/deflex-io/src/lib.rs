@@ -15,7 +15,9 @@
 //! | [`simple_tcp`] | the same text lines over TCP (port 50161), for UR URScript | m, rad |
 //!
 //! Inside the crate and at its API everything is SI: metres, radians,
-//! newtons, newton-metres ([`link`]). Each protocol module offers pure
+//! newtons, newton-metres, with the model's spatial types (`deflex_model::Pose`,
+//! `deflex_model::Wrench`) and its vendor orientation conventions
+//! (`deflex_model::conventions`) ([`link`]). Each protocol module offers pure
 //! parse/format functions on byte slices (no I/O) plus UDP endpoints (TCP for
 //! [`simple_tcp`], whose robot is a TCP client) for the controller side
 //! ([`RobotLink`], [`ForceSensorLink`]) and the robot/sensor side
@@ -45,8 +47,8 @@ pub mod xml;
 pub use error::{LinkError, Protocol};
 pub use guard::{DropReason, LinkCounters};
 pub use link::{
-    Correction, ForceSensorLink, MAX_JOINTS, Pose6, ReceivedCorrection, RobotLink, RobotSideLink,
-    RobotState, WrenchSample,
+    Correction, ForceSensorLink, ReceivedCorrection, RobotLink, RobotSideLink, RobotState,
+    WrenchSample,
 };
 pub use peer::{PeerConfigError, PeerPolicy, PeerWarning, validate_peer};
 pub use robot_side::{RobotEndpoint, RobotKind, RobotSide};

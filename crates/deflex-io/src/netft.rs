@@ -21,6 +21,7 @@ use crate::error::{LinkError, Protocol};
 use crate::link::{ForceSensorLink, WrenchSample};
 use crate::udp::{UdpEndpoint, parse_f64};
 use crate::xml::{XmlEvent, XmlScanner, name_eq};
+use deflex_model::Wrench;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 
@@ -221,8 +222,8 @@ pub fn torque_unit_to_newton_metre(u: &str) -> Option<f64> {
 
 impl Calibration {
     /// Counts → `[Fx Fy Fz]` N, `[Tx Ty Tz]` N·m.
-    pub fn to_wrench(&self, counts: &[i32; 6]) -> [f64; 6] {
-        let mut w = [0.0; 6];
+    pub fn to_wrench(&self, counts: &[i32; 6]) -> Wrench {
+        let mut w = Wrench::zeros();
         for i in 0..6 {
             let k = if i < 3 {
                 self.counts_per_force
@@ -235,7 +236,7 @@ impl Calibration {
     }
 
     /// SI wrench → counts (rounded); error if a value does not fit in i32.
-    pub fn to_counts(&self, w: &[f64; 6]) -> Result<[i32; 6], LinkError> {
+    pub fn to_counts(&self, w: &Wrench) -> Result<[i32; 6], LinkError> {
         let mut c = [0i32; 6];
         for i in 0..6 {
             let k = if i < 3 {
@@ -457,8 +458,8 @@ pub struct NetFtSensorServer {
     remaining: Option<u32>,
     rdt_sequence: u32,
     ft_sequence: u32,
-    bias: [f64; 6],
-    last_raw: [f64; 6],
+    bias: Wrench,
+    last_raw: Wrench,
 }
 
 impl NetFtSensorServer {
@@ -471,8 +472,8 @@ impl NetFtSensorServer {
             remaining: None,
             rdt_sequence: 0,
             ft_sequence: 0,
-            bias: [0.0; 6],
-            last_raw: [0.0; 6],
+            bias: Wrench::zeros(),
+            last_raw: Wrench::zeros(),
         })
     }
     /// Local socket address.
@@ -507,14 +508,14 @@ impl NetFtSensorServer {
     }
     /// Produces one sample of `raw_wrench` (SI, before bias): it is sent if
     /// streaming; returns whether it was.
-    pub fn send_sample(&mut self, raw_wrench: &[f64; 6], status: u32) -> Result<bool, LinkError> {
+    pub fn send_sample(&mut self, raw_wrench: &Wrench, status: u32) -> Result<bool, LinkError> {
         self.last_raw = *raw_wrench;
         self.ft_sequence = self.ft_sequence.wrapping_add(1);
         if !self.streaming() {
             return Ok(false);
         }
         let mut w = *raw_wrench;
-        for (x, b) in w.iter_mut().zip(self.bias) {
+        for (x, b) in w.iter_mut().zip(self.bias.iter()) {
             *x -= b;
         }
         self.rdt_sequence = self.rdt_sequence.wrapping_add(1);

@@ -155,7 +155,7 @@ impl RobotEndpoint {
     /// What the robot controller knows of its own tool: the TCP orientation in base axes. An
     /// ABB controller expresses the corrections it receives in the frame `robot.egm_frame`
     /// (which follows the tool); the other protocols do not need it.
-    pub fn set_tcp_rotation(&mut self, tcp_in_base: &[[f64; 3]; 3]) {
+    pub fn set_tcp_rotation(&mut self, tcp_in_base: &nalgebra::Rotation3<f64>) {
         if let EndpointLink::Egm(ep, config) = &mut self.link {
             ep.set_correction_frame(&config.correction_frame(tcp_in_base));
         }

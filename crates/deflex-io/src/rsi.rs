@@ -9,7 +9,8 @@
 //! ```
 //!
 //! * `RIst` / `RSol`: actual / set-point TCP pose, X Y Z in **mm**, A B C in
-//!   **degrees**, KUKA ZYX Euler angles (A about z, B about y, C about x);
+//!   **degrees**, KUKA's Z-Y'-X'' angles (A about z, B about y, C about x;
+//!   [`deflex_model::conventions::kuka_abc_deg`]);
 //! * `AIPos`: actual axis positions A1…A6 in **degrees**;
 //! * `Delay D`: number of late answers counted by the robot;
 //! * `IPOC`: cycle time stamp, which the answer must echo.
@@ -62,11 +63,17 @@
 
 use crate::error::{LinkError, Protocol};
 use crate::guard::{LinkCounters, SessionGuard};
-use crate::link::{Correction, Pose6, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
+use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
 use crate::peer::{PeerLock, PeerPolicy};
 use crate::udp::{SliceWriter, UdpEndpoint, parse_f64, parse_u64};
 use crate::xml::{Attributes, XmlEvent, XmlScanner, name_eq};
 use core::fmt::Write;
+use deflex_model::Pose;
+use deflex_model::conventions::{
+    kuka_abc_deg, kuka_abc_rad, rotation_from_kuka_abc_deg, rotation_from_kuka_abc_rad,
+    rotation_from_rotation_vector, rotation_vector,
+};
+use nalgebra::Translation3;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 
@@ -96,9 +103,9 @@ pub enum CorrectionMode {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RobTelegram {
     /// Actual TCP pose (`RIst`).
-    pub actual_pose: Option<Pose6>,
+    pub actual_pose: Option<Pose>,
     /// Set-point TCP pose (`RSol`).
-    pub setpoint_pose: Option<Pose6>,
+    pub setpoint_pose: Option<Pose>,
     /// Actual axis positions (`AIPos`) in radians.
     pub q_rad: Option<[f64; 6]>,
     /// Late-answer counter (`Delay D`), 0 if absent.
@@ -110,7 +117,7 @@ pub struct RobTelegram {
 /// A parsed sensor → robot answer, in SI units.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SenTelegram {
-    /// `RKorr` as `[x, y, z]` in metres then `[a, b, c]` ZYX Euler angles in
+    /// `RKorr` as `[x, y, z]` in metres then `[a, b, c]` KUKA angles in
     /// radians (total or increment depending on the [`CorrectionMode`]), when
     /// the answer is Cartesian.
     pub rkorr: Option<[f64; 6]>,
@@ -175,11 +182,11 @@ fn read6(
     }
 }
 
-fn pose_from_mm_deg(v: [f64; 6]) -> Pose6 {
-    Pose6 {
-        position_m: [v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3],
-        zyx_rad: [v[3].to_radians(), v[4].to_radians(), v[5].to_radians()],
-    }
+fn pose_from_mm_deg(v: [f64; 6]) -> Pose {
+    Pose::from_parts(
+        Translation3::new(v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3),
+        rotation_from_kuka_abc_deg([v[3], v[4], v[5]]),
+    )
 }
 
 /// Walks a telegram whose root must be `root`, calling `on_start` for every
@@ -321,15 +328,10 @@ fn write_six(
     w.push_bytes(b"/>")
 }
 
-fn pose_mm_deg(p: &Pose6) -> [f64; 6] {
-    [
-        p.position_m[0] * 1e3,
-        p.position_m[1] * 1e3,
-        p.position_m[2] * 1e3,
-        p.zyx_rad[0].to_degrees(),
-        p.zyx_rad[1].to_degrees(),
-        p.zyx_rad[2].to_degrees(),
-    ]
+fn pose_mm_deg(p: &Pose) -> [f64; 6] {
+    let t = p.translation.vector;
+    let [a, b, c] = kuka_abc_deg(&p.rotation, None);
+    [t.x * 1e3, t.y * 1e3, t.z * 1e3, a, b, c]
 }
 
 /// Formats a `<Rob Type="KUKA">` telegram into `out`, returning its length.
@@ -464,15 +466,19 @@ fn format_sen_body(
     Ok(w.len())
 }
 
-/// Total correction as RKorr values in SI: `[x, y, z]` m, `[a, b, c]` rad.
+/// Total correction as RKorr values in SI: `[x, y, z]` m, `[a, b, c]` rad (the KUKA angles of
+/// the correction's rotation vector).
 pub fn correction_to_rkorr(c: &Correction) -> [f64; 6] {
-    let abc = c.zyx_rad();
+    let abc = kuka_abc_rad(&rotation_from_rotation_vector(c.dphi_rad), None);
     [c.dp_m[0], c.dp_m[1], c.dp_m[2], abc[0], abc[1], abc[2]]
 }
 
 /// Inverse of [`correction_to_rkorr`].
 pub fn rkorr_to_correction(v: &[f64; 6]) -> Correction {
-    Correction::from_zyx([v[0], v[1], v[2]], [v[3], v[4], v[5]])
+    Correction {
+        dp_m: [v[0], v[1], v[2]],
+        dphi_rad: rotation_vector(&rotation_from_kuka_abc_rad([v[3], v[4], v[5]]), None),
+    }
 }
 
 /// Configuration of the sensor-PC (controller) side.

@@ -34,12 +34,11 @@
 
 use crate::error::{LinkError, Protocol};
 use crate::guard::{LinkCounters, SessionGuard};
-use crate::link::{
-    Correction, MAX_JOINTS, ReceivedCorrection, RobotLink, RobotSideLink, RobotState,
-};
+use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
 use crate::peer::{PeerLock, PeerPolicy};
 use crate::udp::{SliceWriter, UdpEndpoint, parse_f64, parse_u64, trim};
 use core::fmt::Write;
+use deflex_model::MAX_JOINTS;
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 

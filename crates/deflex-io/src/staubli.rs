@@ -33,12 +33,13 @@
 
 use crate::error::{LinkError, Protocol};
 use crate::guard::{LinkCounters, SessionGuard, Stamp};
-use crate::link::{
-    Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState, matrix_to_rotvec,
-    rotvec_to_matrix,
-};
+use crate::link::{Correction, ReceivedCorrection, RobotLink, RobotSideLink, RobotState};
 use crate::peer::{PeerLock, PeerPolicy};
 use crate::udp::UdpEndpoint;
+use deflex_model::conventions::{
+    rotation_from_rotation_vector, rotation_from_staubli_rxryrz_rad, rotation_vector,
+    staubli_rxryrz_rad,
+};
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
@@ -102,7 +103,8 @@ pub struct Header {
 pub struct CorrectionMsg {
     /// Header.
     pub header: Header,
-    /// `[dx, dy, dz]` m, `[rx, ry, rz]` rad, Stäubli XYZ Euler.
+    /// `[dx, dy, dz]` m, `[rx, ry, rz]` rad, Stäubli X-Y'-Z'' angles
+    /// ([`deflex_model::conventions::staubli_rxryrz_rad`]).
     pub values: [f64; 6],
 }
 
@@ -117,31 +119,10 @@ pub struct StateMsg {
     pub status: u32,
 }
 
-/// `Rx(a)·Ry(b)·Rz(c)` → `[a, b, c]`.
-pub fn matrix_to_xyz(r: &[[f64; 3]; 3]) -> [f64; 3] {
-    let b = r[0][2].clamp(-1.0, 1.0).asin();
-    if r[0][2].abs() > 1.0 - 1e-12 {
-        [r[2][1].atan2(r[1][1]), b, 0.0]
-    } else {
-        [(-r[1][2]).atan2(r[2][2]), b, (-r[0][1]).atan2(r[0][0])]
-    }
-}
-
-/// `[a, b, c]` → `Rx(a)·Ry(b)·Rz(c)`.
-pub fn xyz_to_matrix(v: [f64; 3]) -> [[f64; 3]; 3] {
-    let (sa, ca) = v[0].sin_cos();
-    let (sb, cb) = v[1].sin_cos();
-    let (sc, cc) = v[2].sin_cos();
-    [
-        [cb * cc, -cb * sc, sb],
-        [ca * sc + sa * sb * cc, ca * cc - sa * sb * sc, -sa * cb],
-        [sa * sc - ca * sb * cc, sa * cc + ca * sb * sc, ca * cb],
-    ]
-}
-
-/// SI correction → wire values.
+/// SI correction → wire values: the translation, then the Stäubli angles of the correction's
+/// rotation vector.
 pub fn correction_to_wire(c: &Correction) -> [f64; 6] {
-    let e = matrix_to_xyz(&rotvec_to_matrix(c.dphi_rad));
+    let e = staubli_rxryrz_rad(&rotation_from_rotation_vector(c.dphi_rad), None);
     [c.dp_m[0], c.dp_m[1], c.dp_m[2], e[0], e[1], e[2]]
 }
 
@@ -149,7 +130,7 @@ pub fn correction_to_wire(c: &Correction) -> [f64; 6] {
 pub fn wire_to_correction(v: &[f64; 6]) -> Correction {
     Correction {
         dp_m: [v[0], v[1], v[2]],
-        dphi_rad: matrix_to_rotvec(&xyz_to_matrix([v[3], v[4], v[5]])),
+        dphi_rad: rotation_vector(&rotation_from_staubli_rxryrz_rad([v[3], v[4], v[5]]), None),
     }
 }
 

@@ -15,18 +15,12 @@ use std::path::PathBuf;
 
 /// Built-in robots, selectable by name wherever a robot file is accepted: `(name, TOML text)`.
 pub const BUILTIN_ROBOTS: &[(&str, &str)] = &[
-    ("tx200", include_str!("../../../robots/tx200.toml")),
-    (
-        "tx200-1edof",
-        include_str!("../../../robots/tx200-1edof.toml"),
-    ),
-    ("ur10", include_str!("../../../robots/ur10.toml")),
-    ("ur10e", include_str!("../../../robots/ur10e.toml")),
-    (
-        "kr210-r2700",
-        include_str!("../../../robots/kr210-r2700.toml"),
-    ),
-    ("irb4600", include_str!("../../../robots/irb4600.toml")),
+    ("tx200", include_str!("../robots/tx200.toml")),
+    ("tx200-1edof", include_str!("../robots/tx200-1edof.toml")),
+    ("ur10", include_str!("../robots/ur10.toml")),
+    ("ur10e", include_str!("../robots/ur10e.toml")),
+    ("kr210-r2700", include_str!("../robots/kr210-r2700.toml")),
+    ("irb4600", include_str!("../robots/irb4600.toml")),
 ];
 
 /// A built-in robot by name (see [`BUILTIN_ROBOTS`]).
@@ -41,10 +35,11 @@ pub fn builtin(name: &str) -> Option<Robot> {
 }
 
 /// Supplies the text of the URDF a robot TOML names with `urdf = "…"`: the model reads no file,
-/// so whoever gives it a TOML that names a URDF gives it the URDF too (`deflex-load` reads it from
-/// disk next to the TOML; [`robot_from_toml_and_urdf_str`] takes it as text).
+/// so whoever gives it a TOML that names a URDF gives it the URDF too (`deflex_app::load` reads
+/// it from disk next to the TOML; [`robot_from_toml_and_urdf_str`] takes it as text).
 pub trait UrdfResolver {
-    /// The URDF the TOML names as `reference`: where it was found and its XML text.
+    /// The URDF the TOML names as `reference`: where it was found and its XML text. A resolver
+    /// that cannot supply it returns its own error in [`ModelError::TextUnavailable`].
     fn resolve(&self, reference: &str) -> Result<ResolvedUrdf, ModelError>;
 }
 

@@ -2,17 +2,15 @@
 
 use thiserror::Error;
 
-/// Anything that can go wrong when reading or using a robot description.
+/// Anything that can go wrong when parsing or using a robot description.
 #[derive(Debug, Error)]
 pub enum ModelError {
-    /// A robot file (TOML or URDF) could not be read.
-    #[error("{path}: cannot read file: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The operating-system error.
-        source: std::io::Error,
-    },
+    /// The text of a robot description (a TOML, or the URDF it names through a
+    /// [`crate::UrdfResolver`]) could not be obtained by whoever supplies it: the model reads no
+    /// file, so this is the supplier's own error (e.g. `deflex_app::load::RobotFileError` when
+    /// a file cannot be read), shown as it is.
+    #[error(transparent)]
+    TextUnavailable(Box<dyn std::error::Error + Send + Sync>),
     /// The robot file is not valid TOML or does not follow the schema (unknown key, bad number).
     #[error("{path}: {message}")]
     Parse {

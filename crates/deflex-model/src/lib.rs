@@ -10,6 +10,13 @@
 //! space that the hot path fills without allocating. All quantities are SI (m, rad, N, N·m) and
 //! expressed in the world frame unless a name says otherwise.
 //!
+//! The spatial types every other deflex crate uses are written here once: [`Pose`], [`Wrench`],
+//! [`Displacement`], [`ToolLoad`], [`MAX_JOINTS`], and every vendor's orientation convention
+//! (KUKA A-B-C, ABB quaternion, Stäubli X-Y'-Z'', the rotation vector) in [`conventions`], which
+//! the programs (`deflex_cam::program`) and the wire protocols (`deflex_io`) share. The model
+//! reads no file: robot descriptions come as text ([`robot_from_toml_str`]; the built-in ones
+//! are compiled in from this crate's `robots/` folder).
+//!
 //! ```
 //! use deflex_model::{Robot, Data, builtin};
 //! let robot = builtin("tx200").unwrap();
@@ -24,6 +31,7 @@
 #![warn(missing_docs)]
 
 mod compliance;
+pub mod conventions;
 mod description;
 pub mod dh;
 mod error;
@@ -47,7 +55,7 @@ pub use robot::{
     Axis, AxisStiffness, ComplianceCoupling, DhConvention, DhParams, Edof, EdofSite, Joint,
     LinkInertia, MAX_COUPLINGS, NamedPoint, NamedPose, Robot, STANDARD_GRAVITY, UrdfSource, bounds,
 };
-pub use spatial::{Displacement, Pose, Wrench, edof_screw};
+pub use spatial::{Displacement, Pose, ToolLoad, Wrench, edof_screw};
 
 /// The paper's forming configuration of the TX200, in degrees: the TCP at the part origin
 /// (≈ [1499, 0, −183] mm), tool pointing down. A good IK seed near the ISF cell.

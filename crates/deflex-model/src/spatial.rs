@@ -1,4 +1,5 @@
-//! Spatial types and small helpers: poses, wrenches, displacement screws, roll–pitch–yaw.
+//! Spatial types and small helpers: poses, wrenches, displacement screws, tool loads,
+//! roll–pitch–yaw. The vendors' orientation conventions are in [`crate::conventions`].
 
 use nalgebra::{IsometryMatrix3, Rotation3, Translation3, Vector3, Vector6};
 
@@ -12,6 +13,25 @@ pub type Wrench = Vector6<f64>;
 
 /// A small displacement screw `δs = [δp; δφ]` in m and rad (eq. 3), world axes.
 pub type Displacement = Vector6<f64>;
+
+/// The load of a tool: its mass and its centre of mass. The frame the centre of mass is given
+/// in is said by the field that holds the load (`tool_in_sensor` for the controller's gravity
+/// compensation, `tool_load_in_flange` for a program's declared load).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolLoad {
+    /// Mass (kg).
+    pub mass_kg: f64,
+    /// Centre of mass (m), in the frame named by the field holding this load.
+    pub centre_of_mass_m: Vector3<f64>,
+}
+
+impl ToolLoad {
+    /// No load: zero mass at the frame's origin.
+    pub const NONE: ToolLoad = ToolLoad {
+        mass_kg: 0.0,
+        centre_of_mass_m: Vector3::new(0.0, 0.0, 0.0),
+    };
+}
 
 /// Rotation from roll–pitch–yaw in rad: `R = Rz(yaw) · Ry(pitch) · Rx(roll)`.
 pub fn rotation_from_rpy(rpy: [f64; 3]) -> Rotation3<f64> {

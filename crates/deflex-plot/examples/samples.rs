@@ -4,7 +4,7 @@
 //! `cargo run -p deflex-plot --example samples [OUT_DIR]`
 //! (default OUT_DIR: `/tmp/deflex-plot-samples`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use deflex_plot::*;
 
@@ -17,6 +17,15 @@ impl Noise {
         self.0 ^= self.0 << 17;
         (self.0 >> 11) as f64 / (1u64 << 53) as f64 - 0.5
     }
+}
+
+/// Writes an image drawn into memory to its file (a sample: a plain write; deflex's own outputs
+/// are written whole or not at all by `deflex_app::report::draw`).
+fn save(path: &Path, image: Image) -> Result<(), PlotError> {
+    std::fs::write(path, image.bytes).map_err(|source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 // One sample of every plot kind, drawn in sequence: a script of independent steps, kept as one
@@ -37,10 +46,13 @@ fn main() -> Result<(), PlotError> {
     let sx: Vec<f64> = t.iter().map(|t| 600.0 + 8.0 * t * t.cos()).collect();
     let sy: Vec<f64> = t.iter().map(|t| 8.0 * t * t.sin()).collect();
     let spiral = out.join("spiral.png");
-    line_plot(
+    save(
         &spiral,
-        &PlotSpec::new("Spiral trajectory", "x [mm]", "y [mm]").size(700, 640),
-        &[Series::line("commanded path", sx.clone(), sy.clone())],
+        line_plot(
+            &spiral,
+            &PlotSpec::new("Spiral trajectory", "x [mm]", "y [mm]").size(700, 640),
+            &[Series::line("commanded path", sx.clone(), sy.clone())],
+        )?,
     )?;
 
     // Per-axis error and norm along a path (Fig. A1).
@@ -91,11 +103,14 @@ fn main() -> Result<(), PlotError> {
         ],
     ));
     let per_axis = out.join("error_per_axis.png");
-    panels_plot(
+    save(
         &per_axis,
-        "Position error along the path",
-        PanelLayout::Column,
-        &panels,
+        panels_plot(
+            &per_axis,
+            "Position error along the path",
+            PanelLayout::Column,
+            &panels,
+        )?,
     )?;
 
     // Forces along a path, without and with compensation side by side (Fig. 18).
@@ -113,24 +128,27 @@ fn main() -> Result<(), PlotError> {
             .collect()
     };
     let forces = out.join("forces.png");
-    panels_plot(
+    save(
         &forces,
-        "Contact forces along the path",
-        PanelLayout::Row,
-        &[
-            (
-                PlotSpec::new("without compensation", "point", "force [N]")
-                    .size(640, 420)
-                    .y_range(-50.0, 50.0),
-                force(1.0, &mut rng),
-            ),
-            (
-                PlotSpec::new("with compensation", "point", "force [N]")
-                    .size(640, 420)
-                    .y_range(-50.0, 50.0),
-                force(0.6, &mut rng),
-            ),
-        ],
+        panels_plot(
+            &forces,
+            "Contact forces along the path",
+            PanelLayout::Row,
+            &[
+                (
+                    PlotSpec::new("without compensation", "point", "force [N]")
+                        .size(640, 420)
+                        .y_range(-50.0, 50.0),
+                    force(1.0, &mut rng),
+                ),
+                (
+                    PlotSpec::new("with compensation", "point", "force [N]")
+                        .size(640, 420)
+                        .y_range(-50.0, 50.0),
+                    force(0.6, &mut rng),
+                ),
+            ],
+        )?,
     )?;
 
     // Error vs force norm (Fig. 19).
@@ -144,13 +162,16 @@ fn main() -> Result<(), PlotError> {
         .map(|f| 0.001 * f + 0.02 * rng.next())
         .collect();
     let err_force = out.join("error_vs_force.png");
-    line_plot(
+    save(
         &err_force,
-        &PlotSpec::new("Error vs force norm", "|F| [N]", "|e| [mm]"),
-        &[
-            Series::points("uncompensated", fnorm.clone(), err_b),
-            Series::points("compensated", fnorm.clone(), err_a),
-        ],
+        line_plot(
+            &err_force,
+            &PlotSpec::new("Error vs force norm", "|F| [N]", "|e| [mm]"),
+            &[
+                Series::points("uncompensated", fnorm.clone(), err_b),
+                Series::points("compensated", fnorm.clone(), err_a),
+            ],
+        )?,
     )?;
 
     // Prediction error heatmap over a grid (Fig. 11, 13), one NaN cell.
@@ -165,14 +186,20 @@ fn main() -> Result<(), PlotError> {
     vals[9] = f64::NAN;
     let heat = out.join("heatmap.png");
     let heat_spec = PlotSpec::new("Prediction error over the grid", "x [mm]", "y [mm]");
-    heatmap(&heat, &heat_spec, &xs, &ys, &vals, "error norm [mm]")?;
-    heatmap(
+    save(
+        &heat,
+        heatmap(&heat, &heat_spec, &xs, &ys, &vals, "error norm [mm]")?,
+    )?;
+    save(
         &out.join("heatmap.svg"),
-        &heat_spec,
-        &xs,
-        &ys,
-        &vals,
-        "error norm [mm]",
+        heatmap(
+            &out.join("heatmap.svg"),
+            &heat_spec,
+            &xs,
+            &ys,
+            &vals,
+            "error norm [mm]",
+        )?,
     )?;
     // A finer grid (no in-cell numbers).
     let fx: Vec<f64> = (0..40).map(|i| i as f64 * 10.0).collect();
@@ -185,13 +212,16 @@ fn main() -> Result<(), PlotError> {
         })
         .collect();
     let heat_fine = out.join("heatmap_fine.png");
-    heatmap(
+    save(
         &heat_fine,
-        &PlotSpec::new("Fine grid", "x [mm]", "y [mm]"),
-        &fx,
-        &fy,
-        &fine,
-        "|e| [mm]",
+        heatmap(
+            &heat_fine,
+            &PlotSpec::new("Fine grid", "x [mm]", "y [mm]"),
+            &fx,
+            &fy,
+            &fine,
+            "|e| [mm]",
+        )?,
     )?;
 
     // Scattered measurement points coloured by error.
@@ -207,13 +237,16 @@ fn main() -> Result<(), PlotError> {
         .map(|(x, y)| 0.0004 * (x - 400.0) + 0.0003 * y.abs())
         .collect();
     let scatter = out.join("scatter_heatmap.png");
-    scatter_heatmap(
+    save(
         &scatter,
-        &PlotSpec::new("Error at measured points", "x [mm]", "y [mm]"),
-        &px,
-        &py,
-        &pv,
-        "error norm [mm]",
+        scatter_heatmap(
+            &scatter,
+            &PlotSpec::new("Error at measured points", "x [mm]", "y [mm]"),
+            &px,
+            &py,
+            &pv,
+            "error norm [mm]",
+        )?,
     )?;
 
     // Predicted vs measured displacement (Fig. 8–10, 12).
@@ -223,17 +256,20 @@ fn main() -> Result<(), PlotError> {
         .map(|m| 0.97 * m + 0.03 * rng.next())
         .collect();
     let parity = out.join("parity.png");
-    parity_plot(
+    save(
         &parity,
-        &PlotSpec::new(
-            "Predicted vs measured deflection",
-            "measured [mm]",
-            "predicted [mm]",
-        )
-        .size(640, 640),
-        &predicted,
-        &measured,
-        "z displacement",
+        parity_plot(
+            &parity,
+            &PlotSpec::new(
+                "Predicted vs measured deflection",
+                "measured [mm]",
+                "predicted [mm]",
+            )
+            .size(640, 640),
+            &predicted,
+            &measured,
+            "z displacement",
+        )?,
     )?;
 
     // 3D deviation cloud (Fig. 17).
@@ -250,13 +286,16 @@ fn main() -> Result<(), PlotError> {
         .map(|_| [0.08 * rng.next(), 0.08 * rng.next(), 0.1 * rng.next()])
         .collect();
     let cloud = out.join("cloud.png");
-    cloud_3d(
+    save(
         &cloud,
-        &Plot3Spec::new("Deviation cloud", "dx [mm]", "dy [mm]", "dz [mm]"),
-        &[
-            Cloud3::new("uncompensated", before),
-            Cloud3::new("compensated", after),
-        ],
+        cloud_3d(
+            &cloud,
+            &Plot3Spec::new("Deviation cloud", "dx [mm]", "dy [mm]", "dz [mm]"),
+            &[
+                Cloud3::new("uncompensated", before),
+                Cloud3::new("compensated", after),
+            ],
+        )?,
     )?;
 
     let mut r = HtmlReport::new("deflex sample report");
@@ -292,7 +331,9 @@ fn main() -> Result<(), PlotError> {
     ] {
         r.section(heading).image(path, caption);
     }
-    r.write(&out.join("report.html"))?;
+    let page = out.join("report.html");
+    let html = r.render(|image| std::fs::read(image))?;
+    std::fs::write(&page, html).map_err(|source| PlotError::Io { path: page, source })?;
     println!("samples written to {}", out.display());
     Ok(())
 }

@@ -5,12 +5,12 @@ use std::path::Path;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::PlotError;
 use crate::colormap::palette_rgb;
 use crate::render::{
     check_range, draw_legend, err, finite_extent, padded, render, tick_formatter, tick_style,
     titled_area,
 };
+use crate::{Image, PlotError};
 
 /// One named cloud of 3D points.
 #[derive(Debug, Clone, PartialEq)]
@@ -87,12 +87,13 @@ impl Plot3Spec {
     }
 }
 
-/// Draws one or more 3D point clouds as a 3D scatter with labelled axes and
-/// a legend, to a `.png` or `.svg` file. Data z is drawn vertical.
+/// Draws one or more 3D point clouds as a 3D scatter with labelled axes and a legend, as the
+/// bytes of a `.png` or `.svg` file (by `path`'s extension; `path` also names the image in
+/// errors, nothing is written). Data z is drawn vertical.
 ///
 /// Errors if `clouds` is empty, any cloud is empty, or no point is finite;
 /// points with a non-finite coordinate are skipped.
-pub fn cloud_3d(path: &Path, spec: &Plot3Spec, clouds: &[Cloud3]) -> Result<(), PlotError> {
+pub fn cloud_3d(path: &Path, spec: &Plot3Spec, clouds: &[Cloud3]) -> Result<Image, PlotError> {
     if clouds.is_empty() {
         return Err(PlotError::invalid(path, "no clouds given"));
     }

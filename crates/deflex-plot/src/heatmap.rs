@@ -13,7 +13,7 @@ use crate::render::{
     BackendError, axis_desc_style, check_range, draw_axes, err, finite_extent, padded, render,
     tick_formatter, tick_style, titled_area,
 };
-use crate::{PlotError, PlotSpec};
+use crate::{Image, PlotError, PlotSpec};
 
 /// Width in pixels reserved at the right for the colour bar.
 const BAR_AREA: u32 = 140;
@@ -152,8 +152,9 @@ fn colorbar<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Draws a heatmap of `values` over a regular grid, with a viridis colour bar
-/// labelled `colorbar_label`, to a `.png` or `.svg` file.
+/// Draws a heatmap of `values` over a regular grid, with a viridis colour bar labelled
+/// `colorbar_label`, as the bytes of a `.png` or `.svg` file (by `path`'s extension; `path` also
+/// names the image in errors, nothing is written).
 ///
 /// `values` is row-major with y outer: the value of the cell centred at
 /// `(x_centers[i], y_centers[j])` is `values[j * x_centers.len() + i]`.
@@ -169,7 +170,7 @@ pub fn heatmap(
     y_centers: &[f64],
     values: &[f64],
     colorbar_label: &str,
-) -> Result<(), PlotError> {
+) -> Result<Image, PlotError> {
     check_centers(path, "x", x_centers)?;
     check_centers(path, "y", y_centers)?;
     let (nx, ny) = (x_centers.len(), y_centers.len());
@@ -264,9 +265,10 @@ pub fn cell_value_text(v: f64) -> String {
     }
 }
 
-/// Draws scattered points at `(x[k], y[k])` coloured by `value[k]` on the
-/// viridis scale, with a colour bar labelled `colorbar_label`, to a `.png` or
-/// `.svg` file. Use it for measured grids that are not regular.
+/// Draws scattered points at `(x[k], y[k])` coloured by `value[k]` on the viridis scale, with a
+/// colour bar labelled `colorbar_label`, as the bytes of a `.png` or `.svg` file (by `path`'s
+/// extension; `path` also names the image in errors, nothing is written). Use it for measured
+/// grids that are not regular.
 ///
 /// The three slices must have equal, non-zero lengths. Points with a
 /// non-finite coordinate or value are skipped. `spec.color_range` fixes the
@@ -278,7 +280,7 @@ pub fn scatter_heatmap(
     y: &[f64],
     value: &[f64],
     colorbar_label: &str,
-) -> Result<(), PlotError> {
+) -> Result<Image, PlotError> {
     if x.len() != y.len() || x.len() != value.len() {
         return Err(PlotError::invalid(
             path,

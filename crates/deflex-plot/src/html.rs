@@ -1,6 +1,7 @@
 //! A builder for one self-contained HTML page: headings, paragraphs, tables,
 //! call-out notes and images embedded as base64 data URIs, with inline CSS.
-//! The page loads nothing from the network.
+//! The page loads nothing from the network, and this module reads and writes no file: the
+//! images' bytes come from the caller when the page is rendered to text.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -133,11 +134,12 @@ fn section_ids(blocks: &[Block]) -> Vec<String> {
 
 /// Builder of a self-contained HTML report.
 ///
-/// Text is HTML-escaped. Images are read when the page is rendered
-/// ([`HtmlReport::render`] / [`HtmlReport::write`]) and embedded as base64
-/// data URIs, so the file can be moved, mailed or opened offline.
+/// Text is HTML-escaped. Images are named by their paths; when the page is rendered
+/// ([`HtmlReport::render`]) the caller's loader gives each one's bytes, which are embedded as
+/// base64 data URIs, so the page can be moved, mailed or opened offline. Writing the page is
+/// the caller's (deflex's application layer writes it whole or not at all).
 ///
-/// ```no_run
+/// ```
 /// use deflex_plot::HtmlReport;
 /// let mut r = HtmlReport::new("Calibration report");
 /// r.note("SIMULATED data: no robot was measured.")
@@ -145,7 +147,9 @@ fn section_ids(blocks: &[Block]) -> Vec<String> {
 ///     .paragraph("Error over the test grid.")
 ///     .table(&["axis", "RMSE [mm]"], &[vec!["x".into(), "0.12".into()]])
 ///     .image("heatmap.png", "Fig. 1: error norm over the grid");
-/// r.write(std::path::Path::new("report.html")).unwrap();
+/// // The figure's bytes, from wherever the caller keeps them (here: a PNG signature).
+/// let html = r.render(|_path| Ok(b"\x89PNG\r\n\x1a\n".to_vec())).unwrap();
+/// assert!(html.contains("<img src=\"data:image/png;base64,iVBORw0KGgo=\""));
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct HtmlReport {
@@ -245,8 +249,8 @@ impl HtmlReport {
         self
     }
 
-    /// Adds an image (PNG, SVG, JPEG or GIF, by extension) with a caption.
-    /// The file is read and embedded when the page is rendered.
+    /// Adds an image (PNG, SVG, JPEG or GIF, by extension) with a caption. Its bytes are asked
+    /// of the loader passed to [`HtmlReport::render`], by `path`, and embedded.
     pub fn image(&mut self, path: impl AsRef<Path>, caption: impl Into<String>) -> &mut Self {
         self.blocks.push(Block::Image {
             path: path.as_ref().to_path_buf(),
@@ -255,9 +259,14 @@ impl HtmlReport {
         self
     }
 
-    /// Renders the page to a string. Errors name the image or table that is
-    /// at fault (for a table, the path is empty).
-    pub fn render(&self) -> Result<String, PlotError> {
+    /// Renders the page to a string, asking `images` for the bytes of each image by the path it
+    /// was added with ([`HtmlReport::image`]); a page without images never calls it. Errors
+    /// name the image or table that is at fault (for a table, the path is empty); the loader's
+    /// failure is [`PlotError::Io`] naming the image.
+    pub fn render(
+        &self,
+        mut images: impl FnMut(&Path) -> std::io::Result<Vec<u8>>,
+    ) -> Result<String, PlotError> {
         let mut h = String::new();
         let title = plain_attribute(&self.title);
         h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
@@ -289,7 +298,7 @@ impl HtmlReport {
                     let _ = writeln!(h, "<pre>{}</pre>", html_escape(t));
                 }
                 Block::Table { headers, rows } => render_table(&mut h, headers, rows)?,
-                Block::Image { path, caption } => render_image(&mut h, path, caption)?,
+                Block::Image { path, caption } => render_image(&mut h, path, caption, &mut images)?,
             }
         }
         let _ = writeln!(
@@ -298,15 +307,6 @@ impl HtmlReport {
             env!("CARGO_PKG_VERSION")
         );
         Ok(h)
-    }
-
-    /// Renders the page and writes it to `path` (whole or not at all).
-    pub fn write(&self, path: &Path) -> Result<(), PlotError> {
-        let html = self.render()?;
-        deflex_files::write_atomic(path, html).map_err(|source| PlotError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
     }
 }
 
@@ -419,7 +419,12 @@ fn render_table(h: &mut String, headers: &[String], rows: &[Vec<String>]) -> Res
     Ok(())
 }
 
-fn render_image(h: &mut String, path: &Path, caption: &str) -> Result<(), PlotError> {
+fn render_image(
+    h: &mut String,
+    path: &Path,
+    caption: &str,
+    images: &mut impl FnMut(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<(), PlotError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -436,10 +441,9 @@ fn render_image(h: &mut String, path: &Path, caption: &str) -> Result<(), PlotEr
             });
         }
     };
-    // A figure is a few hundred kilobytes: at most 64 MiB, counted while reading.
-    let bytes = deflex_files::read_bounded_bytes(path, 64 << 20).map_err(|e| PlotError::Io {
+    let bytes = images(path).map_err(|source| PlotError::Io {
         path: path.to_path_buf(),
-        source: e.into_io(),
+        source,
     })?;
     let (alt, cap) = (plain_attribute(caption), inline_html(caption));
     let _ = writeln!(

@@ -4,6 +4,12 @@
 //! of `f64` and strings. The toolkit knows no robot: what deflex's computations look like on
 //! disk (the calibration, validation, forming-run and study pages) is `deflex-app`'s.
 //!
+//! It draws into memory and reads and writes no file: a plot function returns the [`Image`]
+//! (the bytes of its `.png` or `.svg` file), a page renders to text ([`HtmlReport::render`],
+//! the bytes of its images given by the caller). Writing them, whole or not at all, is the
+//! caller's: deflex's application layer does it in `deflex_app::report::draw`, with the same
+//! function names and arguments.
+//!
 //! | module | draws |
 //! | --- | --- |
 //! | [`text_table`] | aligned text and CSV tables |
@@ -19,10 +25,10 @@
 //! | [`scatter_heatmap`] | the same over scattered measurement points |
 //! | [`cloud_3d`] | 3D deviation cloud (Fig. 17) |
 //! | [`timeline_plot`] | on/off states over time (a controller's flags) |
-//! | [`write_run_figures`] | one run's log, or two overlaid on path position (`deflex plot`) |
 //! | [`HtmlReport`] | one self-contained page embedding all of them |
 //!
-//! The output format is chosen by the file extension: `.png` or `.svg`.
+//! The image format is chosen by the extension of the path each plot is drawn for (`.png` or
+//! `.svg`); the path also names the image in every error.
 //! Text is drawn with an embedded DejaVu Sans font, so rendering needs no
 //! system fonts. Titles are never drawn below [`MIN_TITLE_PX`]: a long one is
 //! wrapped onto up to [`MAX_TITLE_LINES`] lines ([`title_layout`]), then
@@ -36,11 +42,13 @@
 //! (NaN, ±∞) are skipped (line series break at them, heatmap cells stay
 //! blank); an input with no finite value at all is an error.
 //!
-//! ```no_run
-//! use deflex_plot::{line_plot, PlotSpec, Series};
+//! ```
+//! use deflex_plot::{line_plot, ImageFormat, PlotSpec, Series};
 //! let spec = PlotSpec::new("Deflection along path", "time [s]", "deflection [mm]");
 //! let s = Series::line("z", vec![0.0, 1.0, 2.0], vec![0.0, 0.3, 0.1]);
-//! line_plot(std::path::Path::new("out.png"), &spec, &[s]).unwrap();
+//! let image = line_plot(std::path::Path::new("out.png"), &spec, &[s]).unwrap();
+//! assert_eq!(image.format, ImageFormat::Png);
+//! assert!(image.bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
 //! ```
 
 #![warn(missing_docs)]
@@ -64,20 +72,20 @@ pub use heatmap::{cell_edges, cell_value_text, heatmap, scatter_heatmap};
 pub use html::{FileLink, HtmlReport, html_escape, inline_html};
 pub use plot::{PanelLayout, clip_segment, line_plot, panels_plot, parity_plot, strokable_pieces};
 pub use render::{
-    ImageFormat, MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, finite_extent, padded, text_width_px,
-    tick_formatter, title_layout,
+    Image, ImageFormat, MAX_TITLE_LINES, MIN_TITLE_PX, TitleLayout, finite_extent, padded,
+    text_width_px, tick_formatter, title_layout,
 };
 pub use timeline::{Lane, timeline_plot};
 
-/// Errors from drawing plots or writing reports. Every variant names the
-/// file concerned.
+/// Errors from drawing plots or rendering pages (and from writing them, for the callers that
+/// do). Every variant names the file concerned.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
     /// The data given cannot be plotted (empty, mismatched lengths, no
     /// finite values, bad ranges, ...).
     #[error("{path}: invalid input: {reason}")]
     InvalidInput {
-        /// Output (or input image) file concerned.
+        /// Image (or embedded image) file concerned.
         path: PathBuf,
         /// What is wrong with the input.
         reason: String,
@@ -90,15 +98,17 @@ pub enum PlotError {
         /// The extensions that are supported here.
         expected: &'static str,
     },
-    /// The plotting backend failed (this includes failing to save the file).
+    /// The plotting backend failed; a caller writing the image reports a failure to write
+    /// its bytes this way too (as when this crate saved the files itself).
     #[error("{path}: drawing failed: {reason}")]
     Draw {
-        /// Output file concerned.
+        /// Image file concerned.
         path: PathBuf,
         /// The backend's message.
         reason: String,
     },
-    /// Reading or writing a file failed.
+    /// Reading or writing a file failed: an image's loader failed ([`HtmlReport::render`]), or
+    /// the caller could not write a page or replace an image.
     #[error("{path}: {source}")]
     Io {
         /// File concerned.

@@ -12,7 +12,7 @@ use crate::render::{
     BackendError, check_range, draw_axes, draw_legend, err, finite_extent, fmt_tick, padded,
     render, titled_area,
 };
-use crate::{LineStyle, PlotError, PlotSpec, Series, SeriesStyle};
+use crate::{Image, LineStyle, PlotError, PlotSpec, Series, SeriesStyle};
 
 /// How the panels of [`panels_plot`] are arranged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -368,13 +368,14 @@ fn draw_chart<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Draws a 2D chart of one or more series (lines and/or markers) with
-/// title, axis labels and a legend, to a `.png` or `.svg` file.
+/// Draws a 2D chart of one or more series (lines and/or markers) with title, axis labels and a
+/// legend, as the bytes of a `.png` or `.svg` file (by `path`'s extension; `path` also names
+/// the image in errors, nothing is written).
 ///
 /// Errors if `series` is empty, a series is empty or has `x`/`y` of different
 /// lengths, or no point is finite. Non-finite points are skipped and break
 /// lines.
-pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), PlotError> {
+pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<Image, PlotError> {
     let (prepared, xr, yr) = prepare(path, spec, series)?;
     render!(path, (spec.width, spec.height), |root| draw_chart(
         root,
@@ -390,13 +391,14 @@ pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), 
 /// Draws several charts in one image, under a common `title`, arranged by
 /// `layout`. Each panel uses its own [`PlotSpec`] for title, labels and
 /// ranges; every cell gets the largest panel width and height. Give panels
-/// the same `y_range` to compare them directly.
+/// the same `y_range` to compare them directly. Returns the bytes of the `.png` or `.svg` file
+/// (by `path`'s extension, as [`line_plot`]).
 pub fn panels_plot(
     path: &Path,
     title: &str,
     layout: PanelLayout,
     panels: &[(PlotSpec, Vec<Series>)],
-) -> Result<(), PlotError> {
+) -> Result<Image, PlotError> {
     if panels.is_empty() {
         return Err(PlotError::invalid(path, "no panels given"));
     }
@@ -438,14 +440,15 @@ pub fn panels_plot(
 /// number of points and the RMSE of `predicted - measured`. A square `spec`
 /// size (e.g. `.size(700, 700)`) reads best.
 ///
-/// Pairs where either value is not finite are skipped.
+/// Pairs where either value is not finite are skipped. Returns the bytes of the `.png` or `.svg`
+/// file (by `path`'s extension, as [`line_plot`]).
 pub fn parity_plot(
     path: &Path,
     spec: &PlotSpec,
     predicted: &[f64],
     measured: &[f64],
     label: &str,
-) -> Result<(), PlotError> {
+) -> Result<Image, PlotError> {
     if predicted.len() != measured.len() {
         return Err(PlotError::invalid(
             path,

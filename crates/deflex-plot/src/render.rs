@@ -1,4 +1,4 @@
-//! Shared plumbing: output format by extension, backend dispatch, input
+//! Shared plumbing: image format by extension, backend dispatch (drawing into memory), input
 //! checks, axis ranges and text styles.
 
 use std::path::Path;
@@ -9,7 +9,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::{PlotError, PlotSpec};
 
-/// The image formats the plots are written in, chosen by the output file's extension.
+/// The image formats the plots are drawn in, chosen by the image file's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageFormat {
     /// `.png` (any case): a bitmap.
@@ -38,12 +38,33 @@ impl ImageFormat {
     }
 }
 
+/// An image drawn into memory: the bytes of its `.png` or `.svg` file, exactly as they are to be
+/// written (this crate writes no file: the caller writes them, whole or not at all, or embeds
+/// them in a page).
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[must_use = "an image drawn into memory is lost unless its bytes are written or embedded"]
+pub struct Image {
+    /// Its format (the extension of the path it was drawn for).
+    pub format: ImageFormat,
+    /// The file's bytes: a PNG, or SVG text in UTF-8.
+    pub bytes: Vec<u8>,
+}
+
+impl Image {
+    /// The file's bytes.
+    pub fn into_bytes(self) -> Vec<u8> {
+        self.bytes
+    }
+}
+
 /// Runs `$body` (an expression of type `Result<(), BackendError>` using `$root`, a
-/// `&DrawingArea<_, Shift>`) on a PNG or SVG backend chosen by the path's
-/// extension, then saves the file. Evaluates to `Result<(), PlotError>`.
+/// `&DrawingArea<_, Shift>`) on a PNG or SVG backend drawing into memory, chosen by the path's
+/// extension. Evaluates to `Result<Image, PlotError>`: the bytes of the file the image would be
+/// (nothing is written; `$path` names the image in errors and chooses its format).
 macro_rules! render {
-    // One backend: white background, `$body`, save. Each backend has its own drawing-area
-    // type, so `$body` is expanded once per backend.
+    // One backend: white background, `$body`, present. Each backend has its own drawing-area
+    // type, so `$body` is expanded once per backend. The area (and the buffer it borrows) is
+    // dropped at the end of this block.
     (@draw $backend:expr, $fail:ident, |$root:ident| $body:expr) => {{
         let $root = &::plotters::prelude::IntoDrawingArea::into_drawing_area($backend);
         $root
@@ -65,32 +86,29 @@ macro_rules! render {
         $crate::render::check_size(path, size)?;
         $crate::font::ensure_registered();
         let format = $crate::render::ImageFormat::from_path(path)?;
-        // Drawn into a temporary sibling and renamed: a failure never leaves half an image.
-        ::deflex_files::write_through(
-            path,
-            |temporary| match format {
-                $crate::render::ImageFormat::Png => {
-                    // Drawn into memory (RGB, 3 bytes a pixel; `check_size` bounds it) and
-                    // encoded by `png`: plotters' own PNG saving would pull in the `image` crate.
-                    let mut rgb = ::std::vec![0u8; $crate::render::rgb_len(size)];
-                    $crate::render::render!(
-                        @draw ::plotters::prelude::BitMapBackend::with_buffer(&mut rgb, size),
-                        fail,
-                        |$root| $body
-                    )?;
-                    $crate::render::write_png(temporary, &rgb, size).map_err(|e| fail(e.0))
-                }
-                $crate::render::ImageFormat::Svg => $crate::render::render!(
-                    @draw ::plotters::prelude::SVGBackend::new(temporary, size),
+        let bytes: Vec<u8> = match format {
+            $crate::render::ImageFormat::Png => {
+                // Drawn into memory (RGB, 3 bytes a pixel; `check_size` bounds it) and encoded
+                // by `png`: plotters' own PNG saving would pull in the `image` crate.
+                let mut rgb = ::std::vec![0u8; $crate::render::rgb_len(size)];
+                $crate::render::render!(
+                    @draw ::plotters::prelude::BitMapBackend::with_buffer(&mut rgb, size),
                     fail,
                     |$root| $body
-                ),
-            },
-            |source| $crate::PlotError::Io {
-                path: path.to_path_buf(),
-                source,
-            },
-        )
+                )?;
+                $crate::render::encode_png(&rgb, size).map_err(|e| fail(e.0))?
+            }
+            $crate::render::ImageFormat::Svg => {
+                let mut svg = ::std::string::String::new();
+                $crate::render::render!(
+                    @draw ::plotters::prelude::SVGBackend::with_string(&mut svg, size),
+                    fail,
+                    |$root| $body
+                )?;
+                svg.into_bytes()
+            }
+        };
+        Ok($crate::Image { format, bytes })
     }};
 }
 pub(crate) use render;
@@ -110,12 +128,11 @@ pub(crate) fn rgb_len((w, h): (u32, u32)) -> usize {
     w as usize * h as usize * 3
 }
 
-/// Encodes `rgb`, `size` pixels of 8-bit RGB row by row, as a PNG file at `path`, with the
+/// Encodes `rgb`, `size` pixels of 8-bit RGB row by row, as the bytes of a PNG file, with the
 /// settings plotters' bitmap encoder (the `image` crate's) used: fast compression, adaptive
-/// filtering. A failure carries the encoder's or the file system's message.
-pub(crate) fn write_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), BackendError> {
-    let file = std::fs::File::create(path).map_err(err)?;
-    let mut out = std::io::BufWriter::new(file);
+/// filtering. A failure carries the encoder's message.
+pub(crate) fn encode_png(rgb: &[u8], (w, h): (u32, u32)) -> Result<Vec<u8>, BackendError> {
+    let mut out = Vec::new();
     let mut encoder = png::Encoder::new(&mut out, w, h);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -125,7 +142,7 @@ pub(crate) fn write_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(
     let mut writer = encoder.write_header().map_err(err)?;
     writer.write_image_data(rgb).map_err(err)?;
     writer.finish().map_err(err)?;
-    std::io::Write::flush(&mut out).map_err(err)
+    Ok(out)
 }
 
 /// Rejects degenerate or absurd image sizes.

@@ -11,7 +11,7 @@ use crate::render::{
     axis_desc_style, check_range, err, label_count, padded, render, text_width_px, tick_formatter,
     tick_style, titled_area,
 };
-use crate::{PlotError, PlotSpec};
+use crate::{Image, PlotError, PlotSpec};
 
 /// One lane of a [`timeline_plot`]: a named state and the time intervals during which it held.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,14 +80,15 @@ impl Lane {
 }
 
 /// Draws on/off states over time, one lane per [`Lane`] (top to bottom in the given order), with
-/// the lane names left of the chart and `spec`'s x label below it, to a `.png` or `.svg` file.
+/// the lane names left of the chart and `spec`'s x label below it, as the bytes of a `.png` or
+/// `.svg` file (by `path`'s extension; `path` also names the image in errors, nothing is written).
 /// `spec.y_label` is ignored; `spec.x_range` fixes the time axis (give it when every lane may be
 /// empty). Intervals shorter than a pixel are still drawn one pixel wide, so a single faulted
 /// cycle stays visible.
 ///
 /// Errors if `lanes` is empty, an interval is not finite or has `end < start`, or there is no
 /// interval and no `x_range`.
-pub fn timeline_plot(path: &Path, spec: &PlotSpec, lanes: &[Lane]) -> Result<(), PlotError> {
+pub fn timeline_plot(path: &Path, spec: &PlotSpec, lanes: &[Lane]) -> Result<Image, PlotError> {
     if lanes.is_empty() {
         return Err(PlotError::invalid(path, "no lanes given"));
     }

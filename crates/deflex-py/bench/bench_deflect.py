@@ -41,12 +41,12 @@ def timed(f: Callable[[], Any], repeat: int) -> Tuple[List[float], Any]:
 
 
 def pinocchio_tx200() -> Tuple[Any, Any, int, List[int], np.ndarray]:
-    """The TX200 of robots/tx200.toml in Pinocchio: returns model, data, TCP frame id, the
+    """The TX200 of crates/deflex-model/robots/tx200.toml in Pinocchio: returns model, data, TCP frame id, the
     velocity indices of the eDoFs and their compliances 1/k."""
     import pinocchio as pin  # type: ignore[import-not-found,unused-ignore]
 
     robot = deflex.Robot.builtin("tx200")
-    # The modified DH table of robots/tx200.toml: (alpha, a, d, theta_offset).
+    # The modified DH table of crates/deflex-model/robots/tx200.toml: (alpha, a, d, theta_offset).
     rows = [
         (0.0, 0.0, 0.0, 0.0),
         (-math.pi / 2, 0.250, 0.0, -math.pi / 2),

@@ -5,13 +5,13 @@
 //! [`calibrate`], [`validate`], [`report_text`], [`write_report`].
 
 use crate::error::{Error, Result, bounded};
+use deflex_calibrate::measurements::{DataError, MeasurementFile, MeasurementRow};
 use deflex_calibrate::stiffness::consistency::{
     GeometryCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, check_geometry, enforce,
 };
 pub use deflex_calibrate::stiffness::search::Criterion;
 use deflex_calibrate::stiffness::search::{SearchOptions, SearchStep, search_structure};
 use deflex_calibrate::stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
-use deflex_calibrate::stiffness::{DataError, MeasurementFile, MeasurementRow};
 use deflex_model::Robot;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -41,13 +41,16 @@ impl Source {
     }
 }
 
-/// A `path:line: message` error of a table made in memory, re-told as `origin row i: message`
-/// (the header is line 1, row 0 is line 2).
-pub fn table_row_error(origin: &str, line: u64, message: String) -> Error {
-    Error::TableRow {
-        origin: origin.to_string(),
-        row: line.saturating_sub(2),
-        message,
+/// The error of a table made in memory: a row's `path:line: message` re-told as
+/// `origin row i: message` (the header is line 1, row 0 is line 2), any other as it is.
+pub fn table_error(error: DataError) -> Error {
+    match error {
+        DataError::Row { path, line, error } => Error::TableRow {
+            origin: path,
+            row: line.saturating_sub(2),
+            message: error.to_string(),
+        },
+        other => other.into(),
     }
 }
 
@@ -61,16 +64,7 @@ pub fn read_rows(source: &Source, joint_count: usize, measured: bool) -> Result<
         )?),
         Source::Table { text, origin } => {
             deflex_calibrate::measurements::check_joint_columns(text, origin, joint_count)?;
-            deflex_calibrate::measurements::parse_file(text, origin, measured).map_err(
-                |e| match e {
-                    DataError::Row {
-                        path,
-                        line,
-                        problem,
-                    } => table_row_error(&path, line, problem.to_string()),
-                    other => other.into(),
-                },
-            )
+            deflex_calibrate::measurements::parse_file(text, origin, measured).map_err(table_error)
         }
     }
 }
@@ -241,7 +235,7 @@ pub fn calibrate(
                 allow_base: options.allow_base,
                 ..SearchOptions::default()
             };
-            let result = search_structure(start, &checked.rows, &search, &mut |_, _, _| {})?;
+            let result = search_structure(start, &checked.rows, &search, &mut |_| {})?;
             (result.calibration, result.steps, Some(result.stop_reason))
         }
     };
@@ -328,7 +322,7 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
         .map(|st| {
             json!({"step": st.iteration, "change": st.change, "structure": st.structure,
                    "parameters": st.parameters, "rms_m": st.residuals.rms_all_m,
-                   "rms_axis_m": st.residuals.rms_m, "bic": st.bic,
+                   "rms_axis_m": st.residuals.position.rms, "bic": st.bic,
                    "delta_bic": finite_or_null(st.delta_bic), "cv_rms_m": st.cv_rms_m})
         })
         .collect();
@@ -342,8 +336,8 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
         "reduced_chi2": cal.reduced_chi2,
         "bic": cal.bic,
         "rows": cal.rows,
-        "residual_rms_m": r.rms_m, "residual_max_m": r.max_abs_m, "residual_rms_all_m": r.rms_all_m,
-        "residual_rms_norm_m": r.rms_norm_m, "residual_max_norm_m": r.max_norm_m,
+        "residual_rms_m": r.position.rms, "residual_max_m": r.position.max_abs, "residual_rms_all_m": r.rms_all_m,
+        "residual_rms_norm_m": r.position.norm.rms, "residual_max_norm_m": r.position.norm.max,
         "chi2_well_above_one": cal.reduced_chi2 > deflex_calibrate::stiffness::stiffness_fit::CHI2_WELL_ABOVE_ONE,
         "model_form_note": cal.model_form_note(),
         "iterations": steps,
@@ -464,9 +458,9 @@ pub fn validate(
 /// The validation as the CLI's `--json` (SI).
 pub fn validation_json(v: &Validation) -> Value {
     let m = |e: &deflex_calibrate::stiffness::validation::ModelErrors| {
-        json!({"name": e.name, "rms_m": e.stats.rms_m, "max_abs_m": e.stats.max_abs_m,
-               "mean_m": e.stats.mean_m, "rms_norm_m": e.stats.rms_norm_m,
-               "max_norm_m": e.stats.max_norm_m})
+        json!({"name": e.name, "rms_m": e.stats.rms, "max_abs_m": e.stats.max_abs,
+               "mean_m": e.stats.mean, "rms_norm_m": e.stats.norm.rms,
+               "max_norm_m": e.stats.norm.max})
     };
     let val = &v.validation;
     json!({"rows": val.measured.len(), "model": m(&val.model), "baseline": val.baseline.as_ref().map(m),

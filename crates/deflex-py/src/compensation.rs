@@ -6,12 +6,15 @@
 //! [`table_csv`], [`programs`], [`write_programs`].
 
 use crate::error::{Error, Result, bounded};
-use deflex_cam::program::{Format, ProgramFile, ProgramInput, ProgramSettings, ToolLoad, export};
-use deflex_compensate::log::{MAX_LOG_BYTES, ResampleOptions, parse_log, resample_on_path};
+use deflex_app::load::gcode_file::tool_path_by_name;
+use deflex_app::load::parse_wrench_log;
+use deflex_app::load::wrench_log::MAX_LOG_BYTES;
+use deflex_cam::program::{Format, ProgramFile, ProgramInput, ProgramSettings, export};
+use deflex_compensate::log::{ResampleOptions, resample_on_path};
 use deflex_compensate::table::write_csv;
 use deflex_compensate::{Compensation, CompensationOptions, TcpPath, WrenchSource};
-use deflex_model::{Pose, Robot, Wrench};
-use deflex_sim::{CellConfig, FormingProcess, ToolPath, Waypoint, tcp_path, tool_path_by_name};
+use deflex_model::{Pose, Robot, ToolLoad, Wrench};
+use deflex_sim::{CellConfig, FormingProcess, ToolPath, Waypoint, tcp_path};
 use nalgebra::{Rotation3, Translation3, Vector3};
 use std::path::{Path, PathBuf};
 
@@ -86,9 +89,9 @@ pub struct CompensationRun {
     pub part_frame: Pose,
     /// The desired path.
     pub path: TcpPath,
-    /// The tool's load declared in the programs (RAPID's tooldata): the cell's nominal tool,
-    /// as the CLI's.
-    pub tool_load: ToolLoad,
+    /// The tool's load declared in the programs (RAPID's tooldata), centre of mass in the
+    /// flange frame: the cell's nominal tool, as the CLI's.
+    pub tool_load_in_flange: ToolLoad,
     /// The result.
     pub result: Compensation,
     /// Lines on the wrench source (log rows used, …).
@@ -305,15 +308,14 @@ pub fn compensate(
     let compensation_options = compensation_options(options)?;
     let started = std::time::Instant::now();
     let mut source_lines = Vec::new();
-    let mut progress = |_: &deflex_compensate::Progress| {};
-    let mut run = |source: WrenchSource| {
+    let run = |source: WrenchSource| {
         deflex_compensate::compensate(
             robot,
             &path,
             &seed,
             source,
             &compensation_options,
-            &mut progress,
+            &mut |_| {},
         )
     };
     let result = match wrench {
@@ -322,9 +324,9 @@ pub fn compensate(
             run(WrenchSource::Process(&mut process))?
         }
         WrenchSpec::Log(file) => {
-            // The file is read here (bounded), the compensation crate parses its text.
+            // The file is read here (bounded), the application layer reads its rows.
             let text = crate::geometry::read_text(file, MAX_LOG_BYTES)?;
-            let log = parse_log(&text, &file.display().to_string(), robot, &part_frame)?;
+            let log = parse_wrench_log(&text, &file.display().to_string(), robot, &part_frame)?;
             let resampled = resample_on_path(&log, &path, &ResampleOptions::default())?;
             let shown = file.display();
             let simulated = if log.simulated { "SIMULATED " } else { "" };
@@ -355,7 +357,7 @@ pub fn compensate(
         robot: robot.clone(),
         part_frame,
         path,
-        tool_load: cell_tool_load(&config),
+        tool_load_in_flange: cell_tool_load(&config),
         result,
         source_lines,
         tolerance_m: options.tolerance_m,
@@ -510,6 +512,9 @@ pub fn format(name: &str) -> Result<Format> {
     })
 }
 
+/// Where the programs' tool load comes from, for their headers (as the CLI's).
+const CELL_TOOL_LOAD_SOURCE: &str = "the robot's twin cell";
+
 /// The cell's nominal tool load in the flange frame (the sensor's tool mass and centre of mass,
 /// sensor frame → flange), as the CLI's `deflex compensate` declares it.
 fn cell_tool_load(config: &CellConfig) -> ToolLoad {
@@ -517,8 +522,7 @@ fn cell_tool_load(config: &CellConfig) -> ToolLoad {
         * nalgebra::Point3::from(nalgebra::Vector3::from(config.tool_com_in_sensor_m()));
     ToolLoad {
         mass_kg: config.tool_mass_kg(),
-        cog_m: [com.x, com.y, com.z],
-        source: "the robot's twin cell",
+        centre_of_mass_m: com.coords,
     }
 }
 
@@ -549,7 +553,8 @@ pub fn programs(
         &run.robot.tool,
         description(run),
     );
-    input.tool_load = Some(run.tool_load);
+    input.tool_load_in_flange = Some(run.tool_load_in_flange);
+    input.tool_load_source = CELL_TOOL_LOAD_SOURCE.into();
     Ok(export(format, &input, settings)?)
 }
 

@@ -71,9 +71,9 @@ pub enum Error {
     /// Robot description or kinematics.
     #[error(transparent)]
     Model(#[from] deflex_model::ModelError),
-    /// Measurement or plan file.
+    /// Measurement file: loaded displacements, a plan, absolute readings.
     #[error(transparent)]
-    Data(#[from] deflex_calibrate::stiffness::DataError),
+    Data(#[from] deflex_calibrate::measurements::DataError),
     /// Stiffness identification or validation.
     #[error(transparent)]
     Calib(#[from] deflex_calibrate::stiffness::CalibError),
@@ -85,9 +85,6 @@ pub enum Error {
         /// The data, as named to the user.
         data: String,
     },
-    /// Absolute measurement file.
-    #[error(transparent)]
-    Absolute(#[from] deflex_calibrate::geometry::data::AbsoluteDataError),
     /// Elasto-geometric campaign.
     #[error(transparent)]
     Campaign(#[from] deflex_calibrate::geometry::campaign::CampaignError),
@@ -135,7 +132,10 @@ pub enum Error {
     /// Offline compensation.
     #[error(transparent)]
     Compensate(#[from] deflex_compensate::CompensateError),
-    /// A log used as a wrench source.
+    /// A log used as a wrench source: its rows.
+    #[error(transparent)]
+    WrenchLog(#[from] deflex_app::load::WrenchLogError),
+    /// A log used as a wrench source: its coverage of the path.
     #[error(transparent)]
     Log(#[from] deflex_compensate::LogError),
     /// A tool path.
@@ -155,7 +155,7 @@ pub enum Error {
     Sim(#[from] deflex_sim::SimError),
     /// The twin's cell file.
     #[error(transparent)]
-    Cell(#[from] deflex_app::cell::twin_cell_file::CellFileError),
+    Cell(#[from] deflex_app::cell::twin_cell_file::TwinCellFileError),
     /// The twin with the correction controller (closed loop).
     #[error(transparent)]
     Twin(#[from] deflex_sim::twin::TwinError),
@@ -192,9 +192,9 @@ impl Error {
             Error::Model(_) => ErrorKind::Model,
             Error::Data(_)
             | Error::TableRow { .. }
-            | Error::Absolute(_)
             | Error::Import(_)
             | Error::Log(_)
+            | Error::WrenchLog(_)
             | Error::Table { .. }
             | Error::Read { .. }
             | Error::TooLarge { .. } => ErrorKind::Data,

@@ -7,13 +7,11 @@
 //! [`calibrate_geometry`], [`predict`], [`register`], [`import_ur10_tracker`], [`report_text`],
 //! [`report_json`], [`write_report`].
 
-use crate::calibration::{Source, table_row_error};
+use crate::calibration::{Source, table_error};
 use crate::error::{Error, Result};
 use deflex_app::report::absolute_report;
 use deflex_calibrate::geometry::campaign::Campaign;
-use deflex_calibrate::geometry::data::{
-    AbsoluteDataError, AbsoluteRow, format_absolute, limits, parse_absolute,
-};
+use deflex_calibrate::geometry::data::{AbsoluteRow, format_absolute, limits, parse_absolute};
 use deflex_calibrate::geometry::fit::{
     ChoiceError, FitOptions, FitResult, HeldOutProtocol, Step, fit, session_groups,
 };
@@ -74,17 +72,7 @@ pub fn read_absolute(source: &Source, joints: usize) -> Result<Vec<AbsoluteRow>>
             let text = read_text(path, limits::MAX_FILE_BYTES)?;
             Ok(parse_absolute(&text, &path.display().to_string(), joints)?)
         }
-        Source::Table { text, origin } => {
-            parse_absolute(text, origin, joints).map_err(|e| match e {
-                AbsoluteDataError::Row {
-                    path,
-                    line,
-                    column,
-                    problem,
-                } => table_row_error(&path, line, format!("column `{column}`: {problem}")),
-                other => other.into(),
-            })
-        }
+        Source::Table { text, origin } => parse_absolute(text, origin, joints).map_err(table_error),
     }
 }
 
@@ -151,7 +139,13 @@ pub fn calibrate_geometry(
     options: &GeometryOptions,
 ) -> Result<GeometryCalibration> {
     if let Some(sigma) = options.orientations {
-        crate::error::bounded("sigma_rad", sigma, 1e-9, limits::MAX_SIGMA_RAD, "rad")?;
+        crate::error::bounded(
+            "sigma_rad",
+            sigma,
+            1e-9,
+            deflex_calibrate::measurements::MAX_SIGMA_RAD,
+            "rad",
+        )?;
     }
     let n = start.joint_count();
     let mut absolute = Vec::new();
@@ -224,7 +218,7 @@ pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
         .estimates
         .iter()
         .map(|e| {
-            let h = deflex_calibrate::stiffness::calibration::Z95 * e.standard_error;
+            let h = deflex_calibrate::stiffness::stiffness_fit::Z95 * e.standard_error;
             [e.value - h, e.value + h]
         })
         .collect()
@@ -377,7 +371,13 @@ pub fn register(
     request: &RegisterRequest,
 ) -> Result<SessionRegistration> {
     if let Some(sigma) = request.orientations {
-        crate::error::bounded("sigma_rad", sigma, 1e-9, limits::MAX_SIGMA_RAD, "rad")?;
+        crate::error::bounded(
+            "sigma_rad",
+            sigma,
+            1e-9,
+            deflex_calibrate::measurements::MAX_SIGMA_RAD,
+            "rad",
+        )?;
     }
     if let Some(m) = request.recalibrate_above_m {
         crate::error::bounded("recalibrate_above_m", m, 1e-6, 1.0, "m")?;

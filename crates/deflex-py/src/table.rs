@@ -1,15 +1,17 @@
 //! deflex's CSV outputs as columns: `deflex run` logs, `deflex sim isf` logs, compensated
-//! paths, predictions, measurement files. Header comments (`# …`) are kept; a column whose every
+//! paths, predictions, measurement files, read with the recorder's one log reader
+//! ([`deflex_record::log_reader`]). Header comments (`# …`) are kept; a column whose every
 //! cell is a number (or empty, read as NaN) is numeric, any other is text. Bounded: at most
 //! [`MAX_TABLE_BYTES`], [`MAX_TABLE_ROWS`] rows and [`MAX_TABLE_COLUMNS`] columns.
 
 use crate::error::{Error, Result};
+use deflex_record::log_reader::{LogReadError, LogReader};
 use std::path::Path;
 
-/// Largest table read (bytes), as the compensation's log reader.
-pub const MAX_TABLE_BYTES: u64 = 1 << 30;
-/// Most rows.
-pub const MAX_TABLE_ROWS: usize = 20_000_000;
+/// Largest table read (bytes): the log reader's bound.
+pub const MAX_TABLE_BYTES: u64 = deflex_record::log_reader::MAX_LOG_BYTES;
+/// Most rows: the log reader's bound.
+pub const MAX_TABLE_ROWS: usize = deflex_record::log_reader::MAX_LOG_ROWS;
 /// Most columns.
 pub const MAX_TABLE_COLUMNS: usize = 4096;
 
@@ -80,14 +82,17 @@ pub fn parse(text: &str, origin: &str) -> Result<Table> {
         line,
         message,
     };
-    let mut reader = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let headers = reader
-        .headers()
-        .map_err(|e| error(0, format!("header: {e}")))?
-        .clone();
+    let read_error = |e: LogReadError| match e {
+        LogReadError::Csv { line, message, .. } | LogReadError::TooLarge { line, message, .. } => {
+            error(line as u64, message)
+        }
+        LogReadError::BadValue { line, .. } => error(line as u64, e.to_string()),
+    };
+    let mut log = LogReader::new(text, origin).map_err(|e| match e {
+        LogReadError::Csv { message, .. } => error(0, format!("header: {message}")),
+        other => read_error(other),
+    })?;
+    let headers = log.columns().to_vec();
     if headers.len() > MAX_TABLE_COLUMNS {
         return Err(error(
             0,
@@ -99,17 +104,9 @@ pub fn parse(text: &str, origin: &str) -> Result<Table> {
     }
     let mut cells: Vec<Vec<String>> = vec![Vec::new(); headers.len()];
     let mut rows = 0;
-    for record in reader.records() {
-        let record =
-            record.map_err(|e| error(e.position().map_or(0, |p| p.line()), e.to_string()))?;
-        if rows >= MAX_TABLE_ROWS {
-            return Err(error(
-                record.position().map_or(0, |p| p.line()),
-                format!("more than {MAX_TABLE_ROWS} rows"),
-            ));
-        }
-        for (column, value) in cells.iter_mut().zip(record.iter()) {
-            column.push(value.to_string());
+    while let Some(row) = log.next_row().map_err(read_error)? {
+        for (k, column) in cells.iter_mut().enumerate() {
+            column.push(row.text(k).to_string());
         }
         rows += 1;
     }

@@ -7,8 +7,8 @@
 //! [`tool_path`], [`form`], [`log_columns`], [`cell_robot`].
 
 use crate::error::{Error, Result, bounded};
+use deflex_app::load::gcode_file::read_gcode;
 use deflex_model::Robot;
-use deflex_sim::gcode::read_gcode;
 use deflex_sim::{
     CellConfig, ConeParams, FormingRun, PlungeParams, ProcessKind, PyramidParams, ToolPath,
     run_forming,

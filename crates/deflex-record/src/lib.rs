@@ -11,6 +11,11 @@
 //!   recorder that falls behind loses samples and counts them.
 //! * [`McapSink`]: the same writing, synchronous, into any writer (the twin's own loop, tests).
 //! * [`for_each_cycle`]: reads a recording back, streaming, into cycle samples.
+//! * [`run_log`]: the run log, the controller's state one row per control cycle: its columns
+//!   with their units and its writer, the one definition `deflex run`'s CSV log ([`csv_log`]),
+//!   the study's controller log and every reader use; [`isf_log`]: the columns of the twin's
+//!   `deflex sim isf` log; [`log_reader`]: the one reader of both (bounded, every error naming
+//!   the file, the line and the column).
 //! * [`trace`]: any run log (a recording, a `deflex run` CSV log, a `deflex sim isf` log) as the
 //!   plain columns `deflex plot` draws ([`trace::RunTrace`]).
 
@@ -19,8 +24,11 @@
 
 pub mod channels;
 pub mod csv_log;
+pub mod isf_log;
+pub mod log_reader;
 mod read;
 mod recorder;
+pub mod run_log;
 mod session;
 pub mod trace;
 mod write;

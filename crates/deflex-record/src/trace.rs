@@ -3,17 +3,20 @@
 //! * a deflex MCAP recording ([`crate::for_each_cycle`]): forces at the TCP, ξ, δŝ, the path
 //!   error when the twin recorded it, phase and flags, cycle time; the path position is the arc
 //!   length of the program TCP (corrected TCP − ξ);
-//! * a `deflex run` CSV log (columns in `crates/deflex-control/src/log.rs`): the same, with the
+//! * a `deflex run` CSV log (its columns: [`crate::run_log`]): the same, with the
 //!   path position from its `path_s_m` column when every row has one (a feed-forward table), else
 //!   — given the robot model — the arc length of the program TCP, forward kinematics of the
 //!   logged joints minus ξ; else none (then `deflex plot` draws against time);
-//! * a `deflex sim isf` `log.csv` (SIMULATED): desired TCP (its arc length is the path
+//! * a `deflex sim isf` `log.csv` (SIMULATED; its columns: [`crate::isf_log`]): desired TCP (its arc length is the path
 //!   position), contact force, correction and path error in the part frame, contact state.
 //!
 //! Which one a file is comes from its content (MCAP magic bytes, then the CSV header), not its
-//! name. Errors name the file, and the line and column where a value is wrong.
+//! name. The CSV logs are read with the one log reader ([`crate::log_reader`]). Errors name the
+//! file, and the line and column where a value is wrong.
 
-use crate::{ReadError, for_each_cycle, is_mcap};
+use crate::log_reader::{LogReadError, LogReader};
+use crate::run_log::{Block, RunLogColumn};
+use crate::{ReadError, for_each_cycle, is_mcap, isf_log};
 use deflex_model::{Data, Robot};
 use deflex_telemetry::CycleSample;
 use deflex_telemetry::Flags;
@@ -79,9 +82,10 @@ pub struct RunTrace {
     pub cycle_time_s: Option<Vec<f64>>,
 }
 
-/// Largest CSV log read (bytes).
-pub const MAX_LOG_BYTES: u64 = 1 << 30;
-/// Most rows read from one log.
+/// Largest CSV log read (bytes): the log reader's bound.
+pub const MAX_LOG_BYTES: u64 = crate::log_reader::MAX_LOG_BYTES;
+/// Most rows a trace holds (a log may have more, [`crate::log_reader::MAX_LOG_ROWS`], for the
+/// compensation's logged forces).
 pub const MAX_ROWS: usize = 2_000_000;
 
 /// Why a log could not be read as a run.
@@ -171,27 +175,39 @@ pub fn read_run_log(
         },
         _ => io(e.into_io()),
     })?;
-    let simulated = text
-        .lines()
-        .take_while(|l| l.starts_with('#'))
-        .any(|l| l.contains("SIMULATED"));
-    let table = Table::parse(&text, &name)?;
-    let mut trace = if table.has("des_x_mm") {
-        from_sim_isf(&table)?
-    } else if table.has("w_fx_n") && table.has("xi_x_m") {
-        from_run_log(&table, robot)?
+    let log = LogReader::new(&text, &name).map_err(read_error)?;
+    let simulated = log.simulated();
+    let kind = if log.has(isf_log::DESIRED_MM[0]) {
+        Some(Kind::SimIsf)
+    } else if log.has(&RunLogColumn::Block(Block::TcpWrench, 0).name())
+        && log.has(&RunLogColumn::Block(Block::Correction, 0).name())
+    {
+        Some(Kind::DeflexRun)
     } else {
-        return Err(TraceError::Foreign {
-            path: name,
-            line: table.header_line,
-            found: table
-                .columns
-                .iter()
-                .take(6)
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(","),
-        });
+        None
+    };
+    let wanted = match kind {
+        Some(Kind::SimIsf) => sim_isf_columns(),
+        Some(Kind::DeflexRun) => run_log_columns(robot),
+        None => Vec::new(),
+    };
+    let table = Table::read(log, &wanted)?;
+    let mut trace = match kind {
+        Some(Kind::SimIsf) => from_sim_isf(&table)?,
+        Some(Kind::DeflexRun) => from_run_log(&table, robot)?,
+        None => {
+            return Err(TraceError::Foreign {
+                path: name,
+                line: table.header_line,
+                found: table
+                    .columns
+                    .iter()
+                    .take(6)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(","),
+            });
+        }
     };
     trace.label = label.to_string();
     trace.file = name;
@@ -199,66 +215,133 @@ pub fn read_run_log(
     Ok(trace)
 }
 
-/// A CSV log's cells, by column (empty cells are NaN).
+/// Which CSV log a file is.
+#[derive(Clone, Copy)]
+enum Kind {
+    /// A `deflex run` log.
+    DeflexRun,
+    /// A `deflex sim isf` log.
+    SimIsf,
+}
+
+/// The log reader's error as a trace's.
+fn read_error(e: LogReadError) -> TraceError {
+    match e {
+        LogReadError::Csv {
+            file,
+            line,
+            message,
+        } => TraceError::Cell {
+            path: file,
+            line,
+            column: "-".into(),
+            message,
+        },
+        LogReadError::TooLarge { file, message, .. } => TraceError::TooLarge {
+            path: file,
+            message,
+        },
+        LogReadError::BadValue {
+            file,
+            line,
+            column,
+            value,
+        } => TraceError::Cell {
+            path: file,
+            line,
+            column,
+            message: format!("expected a number, found {value:?}"),
+        },
+    }
+}
+
+/// The columns a trace of a `deflex sim isf` log draws.
+fn sim_isf_columns() -> Vec<String> {
+    let mut names = vec![
+        isf_log::TIME,
+        isf_log::PENETRATION_MM,
+        isf_log::SENSOR_SATURATED,
+    ];
+    names.extend(isf_log::DESIRED_MM);
+    names.extend(&isf_log::WRENCH[..3]);
+    names.extend(isf_log::CORRECTION_MM);
+    names.extend(isf_log::ERROR_MM);
+    names.into_iter().map(String::from).collect()
+}
+
+/// The columns a trace of a `deflex run` log draws (the joints for the program's arc length
+/// when a robot is given).
+fn run_log_columns(robot: Option<&Robot>) -> Vec<String> {
+    let mut columns = vec![
+        RunLogColumn::Time,
+        RunLogColumn::PathPosition,
+        RunLogColumn::Flags,
+        RunLogColumn::CycleTime,
+    ];
+    for block in [Block::TcpWrench, Block::Deflection, Block::Correction] {
+        columns.extend(&block.columns()[..3]);
+    }
+    columns.extend((0..robot.map_or(0, Robot::joint_count)).map(RunLogColumn::Joint));
+    columns.into_iter().map(RunLogColumn::name).collect()
+}
+
+/// A column's values, or the line and text of its first cell that is not a number.
+type Cells = Result<Vec<f64>, (usize, String)>;
+
+/// The columns of a CSV log a trace draws, by name, read in one pass over every row (empty
+/// cells are NaN). A column's first cell that is not a number is kept, and reported when the
+/// trace asks for the column; the log's own errors (malformed CSV, too many rows, no row) come
+/// first.
 struct Table {
     file: String,
     columns: Vec<String>,
     header_line: usize,
-    lines: Vec<usize>,
-    cells: Vec<Vec<String>>,
+    /// Wanted columns the log has: their values, or the line and text of the first bad cell.
+    values: Vec<(String, Cells)>,
 }
 
 impl Table {
-    fn parse(text: &str, file: &str) -> Result<Table, TraceError> {
-        let mut reader = csv::ReaderBuilder::new()
-            .comment(Some(b'#'))
-            .trim(csv::Trim::All)
-            .flexible(false)
-            .from_reader(text.as_bytes());
-        let csv_err = |e: csv::Error| {
-            let line = e.position().map_or(0, |p| p.line() as usize);
-            TraceError::Cell {
-                path: file.to_string(),
-                line,
-                column: "-".into(),
-                message: e.to_string(),
-            }
-        };
-        let columns: Vec<String> = reader
-            .headers()
-            .map_err(csv_err)?
+    fn read(mut log: LogReader<'_>, wanted: &[impl AsRef<str>]) -> Result<Table, TraceError> {
+        let file = log.file().to_string();
+        let columns = log.columns().to_vec();
+        let header_line = log.header_line();
+        let mut values: Vec<(String, usize, Cells)> = wanted
             .iter()
-            .map(String::from)
+            .filter_map(|name| {
+                let name = name.as_ref();
+                log.column(name)
+                    .map(|k| (name.to_string(), k, Ok(Vec::new())))
+            })
             .collect();
-        let header_line = reader.position().line() as usize;
-        let header_line = text
-            .lines()
-            .position(|l| !l.starts_with('#'))
-            .map_or(header_line, |i| i + 1);
-        let mut lines = Vec::new();
-        let mut cells = Vec::new();
-        for record in reader.records() {
-            let record = record.map_err(csv_err)?;
-            if cells.len() == MAX_ROWS {
+        let mut rows = 0;
+        while let Some(row) = log.next_row().map_err(read_error)? {
+            if rows == MAX_ROWS {
                 return Err(TraceError::TooLarge {
-                    path: file.to_string(),
+                    path: file,
                     message: format!("more than {MAX_ROWS} rows"),
                 });
             }
-            lines.push(record.position().map_or(0, |p| p.line() as usize));
-            cells.push(record.iter().map(String::from).collect());
+            rows += 1;
+            for (_, k, column) in &mut values {
+                if let Ok(cells) = column {
+                    match row.number(*k) {
+                        Ok(v) => cells.push(v),
+                        Err(_) => *column = Err((row.line(), row.text(*k).to_string())),
+                    }
+                }
+            }
         }
-        if cells.is_empty() {
-            return Err(TraceError::Empty {
-                path: file.to_string(),
-            });
+        if rows == 0 {
+            return Err(TraceError::Empty { path: file });
         }
         Ok(Table {
-            file: file.to_string(),
+            file,
             columns,
             header_line,
-            lines,
-            cells,
+            values: values
+                .into_iter()
+                .map(|(name, _, column)| (name, column))
+                .collect(),
         })
     }
 
@@ -268,32 +351,21 @@ impl Table {
 
     /// A numeric column; empty cells are NaN, anything else that is not a number is an error.
     fn column(&self, name: &str) -> Result<Vec<f64>, TraceError> {
-        let k = self
-            .columns
-            .iter()
-            .position(|c| c == name)
-            .ok_or_else(|| TraceError::Cell {
+        match self.values.iter().find(|(n, _)| n == name) {
+            Some((_, Ok(values))) => Ok(values.clone()),
+            Some((_, Err((line, cell)))) => Err(TraceError::Cell {
+                path: self.file.clone(),
+                line: *line,
+                column: name.into(),
+                message: format!("expected a number, found {cell:?}"),
+            }),
+            None => Err(TraceError::Cell {
                 path: self.file.clone(),
                 line: self.header_line,
                 column: name.into(),
                 message: "column missing from the header".into(),
-            })?;
-        self.cells
-            .iter()
-            .zip(&self.lines)
-            .map(|(row, line)| {
-                let cell = row[k].as_str();
-                if cell.is_empty() {
-                    return Ok(f64::NAN);
-                }
-                cell.parse::<f64>().map_err(|_| TraceError::Cell {
-                    path: self.file.clone(),
-                    line: *line,
-                    column: name.into(),
-                    message: format!("expected a number, found {cell:?}"),
-                })
-            })
-            .collect()
+            }),
+        }
     }
 
     fn xyz(&self, names: [&str; 3], scale: f64) -> Result<Xyz, TraceError> {
@@ -306,6 +378,12 @@ impl Table {
             y: c(names[1])?,
             z: c(names[2])?,
         })
+    }
+
+    /// The first three columns of a run log's block (`x`, `y`, `z` or `fx`, `fy`, `fz`).
+    fn block_xyz(&self, block: Block) -> Result<Xyz, TraceError> {
+        let [x, y, z, ..] = block.columns().map(RunLogColumn::name);
+        self.xyz([&x, &y, &z], 1.0)
     }
 }
 
@@ -331,17 +409,17 @@ pub fn arc_length(points: impl Iterator<Item = Vector3<f64>>) -> Vec<f64> {
 }
 
 fn from_sim_isf(t: &Table) -> Result<RunTrace, TraceError> {
-    let des = t.xyz(["des_x_mm", "des_y_mm", "des_z_mm"], 1e-3)?;
+    let des = t.xyz(isf_log::DESIRED_MM, 1e-3)?;
     let path_s = arc_length((0..des.x.len()).map(|i| Vector3::new(des.x[i], des.y[i], des.z[i])));
-    let penetration = t.column("penetration_mm")?;
+    let penetration = t.column(isf_log::PENETRATION_MM)?;
     let mut states = vec![(
         "in contact".to_string(),
         penetration.iter().map(|p| *p > 0.0).collect(),
     )];
-    if t.has("sensor_saturated") {
+    if t.has(isf_log::SENSOR_SATURATED) {
         states.push((
             "sensor saturated".into(),
-            t.column("sensor_saturated")?
+            t.column(isf_log::SENSOR_SATURATED)?
                 .iter()
                 .map(|v| *v > 0.5)
                 .collect(),
@@ -350,13 +428,16 @@ fn from_sim_isf(t: &Table) -> Result<RunTrace, TraceError> {
     Ok(RunTrace {
         kind: "deflex sim isf log".into(),
         simulated: true,
-        time_s: t.column("time_s")?,
+        time_s: t.column(isf_log::TIME)?,
         path_s_m: Some(path_s),
-        force_n: t.xyz(["fx_N", "fy_N", "fz_N"], 1.0)?,
+        force_n: t.xyz(
+            [isf_log::WRENCH[0], isf_log::WRENCH[1], isf_log::WRENCH[2]],
+            1.0,
+        )?,
         axes: "part frame axes".into(),
-        correction_m: Some(t.xyz(["corr_x_mm", "corr_y_mm", "corr_z_mm"], 1e-3)?),
+        correction_m: Some(t.xyz(isf_log::CORRECTION_MM, 1e-3)?),
         deflection_m: None,
-        path_error_m: Some(t.xyz(["err_x_mm", "err_y_mm", "err_z_mm"], 1e-3)?),
+        path_error_m: Some(t.xyz(isf_log::ERROR_MM, 1e-3)?),
         states,
         cycle_time_s: None,
         ..RunTrace::default()
@@ -383,14 +464,14 @@ fn flag_states(flags: &[u32], fault: impl Fn(usize) -> bool) -> Vec<(String, Vec
 }
 
 fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError> {
-    let xi = t.xyz(["xi_x_m", "xi_y_m", "xi_z_m"], 1.0)?;
-    let path_s_col = t.column("path_s_m")?;
+    let xi = t.block_xyz(Block::Correction)?;
+    let path_s_col = t.column(&RunLogColumn::PathPosition.name())?;
     let path_s_m = if path_s_col.iter().all(|s| s.is_finite()) {
         Some(path_s_col)
     } else if let Some(robot) = robot {
         let n = robot.joint_count();
-        let joints: Vec<Vec<f64>> = (1..=n)
-            .map(|i| t.column(&format!("q{i}_rad")))
+        let joints: Vec<Vec<f64>> = (0..n)
+            .map(|i| t.column(&RunLogColumn::Joint(i).name()))
             .collect::<Result<_, _>>()
             .map_err(|e| match e {
                 TraceError::Cell { path, column, .. } => TraceError::Robot {
@@ -420,7 +501,7 @@ fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError
         None
     };
     let flags: Vec<u32> = t
-        .column("flags")?
+        .column(&RunLogColumn::Flags.name())?
         .iter()
         .map(|f| if f.is_finite() { *f as u32 } else { 0 })
         .collect();
@@ -428,15 +509,20 @@ fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError
     Ok(RunTrace {
         kind: "deflex run log".into(),
         simulated: false,
-        time_s: t.column("time_s")?,
+        time_s: t.column(&RunLogColumn::Time.name())?,
         path_s_m,
-        force_n: t.xyz(["w_fx_n", "w_fy_n", "w_fz_n"], 1.0)?,
+        force_n: t.block_xyz(Block::TcpWrench)?,
         axes: "base axes".into(),
         correction_m: Some(xi),
-        deflection_m: Some(t.xyz(["ds_x_m", "ds_y_m", "ds_z_m"], 1.0)?),
+        deflection_m: Some(t.block_xyz(Block::Deflection)?),
         path_error_m: None,
         states,
-        cycle_time_s: Some(t.column("cycle_us")?.iter().map(|v| v * 1e-6).collect()),
+        cycle_time_s: Some(
+            t.column(&RunLogColumn::CycleTime.name())?
+                .iter()
+                .map(|v| v * 1e-6)
+                .collect(),
+        ),
         ..RunTrace::default()
     })
 }

@@ -32,6 +32,7 @@
 use crate::handover::Handover;
 use crate::{Ros2Error, SensorSettings, join, message_type, qos_profile, ros_name};
 use deflex_io::{ForceSensorLink, LinkError, Protocol, WrenchSample};
+use deflex_model::Wrench;
 use deflex_telemetry::ros::WrenchStamped;
 use ros2_client::Gid;
 use std::sync::Arc;
@@ -146,7 +147,7 @@ struct Counters {
 /// One accepted reading.
 #[derive(Clone, Copy, Debug)]
 struct Reading {
-    wrench: [f64; 6],
+    wrench: Wrench,
 }
 
 /// The checks of one message against the settings and the last accepted stamp.
@@ -170,9 +171,9 @@ impl Checker {
             return Err(Refusal::OtherWriter);
         }
         let w = &msg.wrench;
-        let wrench = [
+        let wrench = Wrench::new(
             w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z,
-        ];
+        );
         let stamp = msg.header.stamp;
         if !wrench.iter().all(|v| v.is_finite()) || stamp.nanosec >= 1_000_000_000 {
             return Err(Refusal::NonFinite);

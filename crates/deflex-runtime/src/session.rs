@@ -47,15 +47,12 @@ use crate::send_shaper::SendShaperConfig;
 use crate::telemetry::Telemetry;
 use deflex_control::Controller;
 use deflex_io::{ForceSensorLink, RobotLink};
-use deflex_model::MAX_JOINTS;
 use deflex_telemetry::{Broadcast, CycleSample, SessionInfo};
 use deflex_telemetry::{Flags, Phase};
 use shared::Shared;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::thread::JoinHandle;
-
-const _: () = assert!(deflex_io::MAX_JOINTS == MAX_JOINTS);
 
 /// Longest time the robot-link thread keeps answering after the control thread ended, to ramp
 /// what it last sent to zero (s). It stops at once when the robot has been silent for longer

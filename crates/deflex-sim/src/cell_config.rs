@@ -33,11 +33,12 @@ use deflex_model::Pose;
 use deflex_model::spatial::pose_from_xyz_rpy;
 use serde::{Deserialize, Serialize};
 
-/// Robot controller emulation (Stäubli CS8 with Alter, KUKA KRC with RSI, a UR with `servoj`,
-/// an ABB with EGM): interpolation, and the path the external correction takes to the drives.
+/// The emulated robot controller (Stäubli CS8 with Alter, KUKA KRC with RSI, a UR with
+/// `servoj`, an ABB with EGM): interpolation, and the path the external correction takes to the
+/// drives (`[cell.controller]`; not the correction law's `deflex_control::ControllerConfig`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct ControllerConfig {
+pub struct RobotControllerConfig {
     /// Interpolation rate (Hz), 10–10 000. The CS8 runs at 250 Hz (paper, Section 4.2).
     pub rate_hz: f64,
     /// Transport delay between `set_correction` and the start of its effect (s, 0–1). Alter and
@@ -67,10 +68,10 @@ pub struct ControllerConfig {
     pub rapid_feed_mm_s: f64,
 }
 
-impl Default for ControllerConfig {
+impl Default for RobotControllerConfig {
     /// A Stäubli CS8 with Alter (the paper's TX200).
     fn default() -> Self {
-        ControllerConfig {
+        RobotControllerConfig {
             rate_hz: 250.0,
             correction_delay_s: 0.008,
             correction_filter_s: 0.010,
@@ -365,9 +366,11 @@ pub const MAX_RUN_S: f64 = 4.0 * 3600.0;
 /// Most rows a forming log stores (about 0.4 GB of memory at most).
 pub const MAX_LOG_ROWS: f64 = 1.0e6;
 
+/// The twin's cell TOML document: its settings under `[cell]` (typed first pass of
+/// [`CellConfig::from_toml_str_with`]).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CellFile {
+struct TwinCellToml {
     #[serde(default)]
     cell: CellConfig,
 }
@@ -377,7 +380,7 @@ struct CellFile {
 #[serde(default, deny_unknown_fields)]
 pub struct CellConfig {
     /// Robot controller emulation.
-    pub controller: ControllerConfig,
+    pub controller: RobotControllerConfig,
     /// Force/torque sensor.
     pub sensor: SensorConfig,
     /// Laser tracker.
@@ -423,7 +426,7 @@ impl CellConfig {
     ) -> Result<CellConfig, SimError> {
         // First pass on the user's text alone: types, unknown keys and line numbers are the
         // file's own.
-        let typed: CellFile =
+        let typed: TwinCellToml =
             toml::from_str(text).map_err(|e| SimError::config("cell", e.to_string()))?;
         let value: toml::Table =
             toml::from_str(text).map_err(|e| SimError::config("cell", e.to_string()))?;

@@ -13,7 +13,7 @@
 //!   through the Jacobian as a joint offset `δq = J⁻¹ ξ` (small corrections, so no IK per
 //!   cycle): `s_com = s_des + ξ` (eq. 7).
 
-use crate::cell_config::ControllerConfig;
+use crate::cell_config::RobotControllerConfig;
 use crate::error::SimError;
 use crate::toolpath::ToolPath;
 use deflex_model::{Data, IkOptions, Pose, Robot};
@@ -85,7 +85,7 @@ impl CorrectionPipeline {
     /// A pipeline for the controller settings; `servo` switches the servo response and the
     /// look-ahead on (`[cell.errors] servo`). The settings must have been validated (their
     /// bounds keep the buffers small: at most 10⁴ cycles each).
-    pub fn new(config: &ControllerConfig, servo: bool) -> CorrectionPipeline {
+    pub fn new(config: &RobotControllerConfig, servo: bool) -> CorrectionPipeline {
         let period_s = 1.0 / config.rate_hz;
         let delay_cycles = (config.correction_delay_s / period_s).round() as usize;
         let alpha = if config.correction_filter_s > 0.0 {
@@ -232,7 +232,7 @@ impl ControllerEmulation {
     /// configuration → joint values by IK.
     pub fn new(
         robot: &Robot,
-        config: &ControllerConfig,
+        config: &RobotControllerConfig,
         servo: bool,
         path: &ToolPath,
         part_frame: &Pose,
@@ -249,7 +249,7 @@ impl ControllerEmulation {
     /// program is its own reference.
     pub fn with_reference(
         robot: &Robot,
-        config: &ControllerConfig,
+        config: &RobotControllerConfig,
         servo: bool,
         path: &ToolPath,
         reference: Option<&ToolPath>,

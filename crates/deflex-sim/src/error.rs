@@ -39,7 +39,7 @@ pub enum SimError {
     Model(#[from] deflex_model::ModelError),
     /// Measurement/plan file problem.
     #[error(transparent)]
-    Data(#[from] deflex_calibrate::measurements::DataError),
+    Data(Box<deflex_calibrate::measurements::DataError>),
     /// The run was stopped before the end of its path (an observer asked, e.g. on Ctrl-C).
     #[error("stopped at {time_s:.1} s of simulated time, before the end of the path")]
     Stopped {
@@ -49,13 +49,19 @@ pub enum SimError {
     /// A robot spec that is not a built-in robot, given where the twin cannot read the file (it
     /// reads no file: `crate::twin::cell_for_robot` reads robot files).
     #[error(
-        "part.robot: `{spec}` is not a built-in robot ({}); a robot file is read by the caller (crate::twin::cell_for_robot)",
+        "part.robot: `{spec}` is not a built-in robot ({}); a robot file is read by the caller (deflex_app::cell::twin_cell_file::cell_for_robot)",
         builtin_names()
     )]
     NotBuiltin {
         /// The spec given.
         spec: String,
     },
+}
+
+impl From<deflex_calibrate::measurements::DataError> for SimError {
+    fn from(error: deflex_calibrate::measurements::DataError) -> Self {
+        SimError::Data(Box::new(error))
+    }
 }
 
 impl SimError {

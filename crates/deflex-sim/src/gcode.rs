@@ -5,17 +5,18 @@
 //! frame R_p (the program's work offset), z up; the path starts at the program's first move
 //! (no start at R_p's origin).
 //!
-//! Bounds: a file of at most [`MAX_GCODE_BYTES`], at most [`MAX_WAYPOINTS`] path points,
-//! coordinates within ±[`MAX_COORDINATE_MM`], feeds from [`MIN_FEED_MM_MIN`] to
-//! [`MAX_FEED_MM_MIN`] mm/min. A run of the program is further bounded in time by the cell
-//! (`crate::cell_config::MAX_RUN_S`).
+//! The twin reads no file: it takes the program's text ([`parse_gcode`]) or the program as read
+//! ([`tool_path_from_program`]); the application layer reads G-code files
+//! (`deflex_app::load::gcode_file`).
+//!
+//! Bounds: at most [`MAX_WAYPOINTS`] path points, coordinates within ±[`MAX_COORDINATE_MM`],
+//! feeds from [`MIN_FEED_MM_MIN`] to [`MAX_FEED_MM_MIN`] mm/min. A run of the program is further
+//! bounded in time by the cell (`crate::cell_config::MAX_RUN_S`).
 
 use crate::error::SimError;
 use crate::toolpath::{ToolPath, Waypoint};
 pub use deflex_cam::gcode::{Program, ReadOptions};
 
-/// Largest G-code file read (bytes).
-pub const MAX_GCODE_BYTES: u64 = 64 << 20;
 /// Most path points of a program (arcs interpolated).
 pub const MAX_WAYPOINTS: usize = 1_000_000;
 /// Largest |coordinate| of a move (mm, after units).
@@ -31,28 +32,6 @@ pub fn default_options() -> ReadOptions {
         max_points: MAX_WAYPOINTS,
         ..ReadOptions::default()
     }
-}
-
-/// Read a G-code file into a [`ToolPath`] (default options).
-pub fn read_gcode(path: &std::path::Path) -> Result<ToolPath, SimError> {
-    read_gcode_with(path, &default_options()).map(|(toolpath, _)| toolpath)
-}
-
-/// Read a G-code file: the tool path (named after the file) and the program as read (its work
-/// offset, moves and notes).
-pub fn read_gcode_with(
-    path: &std::path::Path,
-    options: &ReadOptions,
-) -> Result<(ToolPath, Program), SimError> {
-    // A regular file of at most MAX_GCODE_BYTES, counted while reading.
-    let text = deflex_files::read_bounded(path, MAX_GCODE_BYTES)
-        .map_err(|e| SimError::Path(e.to_string()))?;
-    // Errors name the whole path; the tool path is named after the file.
-    let (mut toolpath, program) = parse_gcode_with(&text, &path.display().to_string(), options)?;
-    if let Some(name) = path.file_name() {
-        toolpath.name = name.to_string_lossy().into_owned();
-    }
-    Ok((toolpath, program))
 }
 
 /// Parse G-code text; `file` names the source in errors and becomes the path name.

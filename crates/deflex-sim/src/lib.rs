@@ -73,5 +73,5 @@ pub use forming::{
     CycleObserver, FormingLog, FormingRun, FormingSummary, run_forming, run_forming_with_progress,
     run_program_observed, run_program_with_progress,
 };
-pub use process_model::{FormingProcess, compensated_tool_path, tcp_path, tool_path_by_name};
+pub use process_model::{FormingProcess, builtin_tool_path, compensated_tool_path, tcp_path};
 pub use toolpath::{ConeParams, PlungeParams, PyramidParams, ToolPath, Waypoint};

@@ -56,8 +56,8 @@
 //!
 //! Also here: [`tcp_path`] (a [`ToolPath`] in the part frame → a `TcpPath` in the world, tool
 //! orientation fixed), [`compensated_tool_path`] (the way back: a compensation → the robot
-//! program as a [`ToolPath`] the twin can run) and [`tool_path_by_name`] (the built-in paths or
-//! a G-code file).
+//! program as a [`ToolPath`] the twin can run) and [`builtin_tool_path`] (the built-in paths by
+//! name; a G-code file is read by the application layer, `deflex_app::load::gcode_file`).
 
 use crate::cell_config::CellConfig;
 use crate::error::SimError;
@@ -345,16 +345,17 @@ pub fn compensated_tool_path(
     Ok(program)
 }
 
-/// A built-in path by name (`cone`: the paper's helical cone, `cone-contour`, `pyramid`) or a
-/// G-code file.
-pub fn tool_path_by_name(spec: &str) -> Result<ToolPath, SimError> {
-    match spec {
-        "cone" => Ok(ToolPath::paper_cone()),
-        "cone-contour" => ToolPath::cone(&ConeParams {
+/// A built-in path by name (`cone`: the paper's helical cone, `cone-contour`, `pyramid`);
+/// `None` for any other name (a G-code file, read by the application layer:
+/// `deflex_app::load::gcode_file::tool_path_by_name`).
+pub fn builtin_tool_path(name: &str) -> Option<Result<ToolPath, SimError>> {
+    match name {
+        "cone" => Some(Ok(ToolPath::paper_cone())),
+        "cone-contour" => Some(ToolPath::cone(&ConeParams {
             helical: false,
             ..ConeParams::default()
-        }),
-        "pyramid" => ToolPath::pyramid(&PyramidParams::default()),
-        file => crate::gcode::read_gcode(std::path::Path::new(file)),
+        })),
+        "pyramid" => Some(ToolPath::pyramid(&PyramidParams::default())),
+        _ => None,
     }
 }

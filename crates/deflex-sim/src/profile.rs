@@ -24,7 +24,7 @@
 //! The description's stiffnesses of the non-TX200 built-in robots are placeholders; so the
 //! derived plant is a plausible robot, not the maker's.
 
-use crate::cell_config::{CellConfig, ControllerConfig, PartConfig, SensorConfig};
+use crate::cell_config::{CellConfig, PartConfig, RobotControllerConfig, SensorConfig};
 use crate::error::SimError;
 use crate::plant::PlantConfig;
 use crate::sheet::SheetConfig;
@@ -342,7 +342,7 @@ pub fn place_part_among(
 ///   mounting plane).
 pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
     let mut cell = CellConfig {
-        controller: ControllerConfig {
+        controller: RobotControllerConfig {
             rate_hz: 500.0,
             correction_delay_s: 0.004,
             correction_filter_s: 0.0,

@@ -15,11 +15,15 @@
 //!
 //! [`SessionInfo`] is what does not change during a session (robot, joint names, limits, rates,
 //! frame names); it is built once before the threads start and shared by `Arc`.
+//!
+//! [`Progress`] is the message of a long job (a structure search, a compensation, the study):
+//! one display for all of them in each front end ([`progress`]).
 
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod broadcast;
+pub mod progress;
 pub mod ros;
 mod sample;
 mod seqcell;
@@ -28,6 +32,7 @@ pub mod synthetic;
 mod words;
 
 pub use broadcast::{Broadcast, Publisher, Subscriber, broadcast};
+pub use progress::{OnProgress, Progress};
 pub use sample::{CellState, CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, Source};
 pub use seqcell::SeqCell;
 pub use state::{FAULT_KINDS, FaultKind, Flags, Phase};

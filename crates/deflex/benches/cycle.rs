@@ -7,7 +7,8 @@
 //! bench).
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
-use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
+use deflex_control::{Controller, ControllerConfig, WrenchConfig};
+use deflex_model::ToolLoad;
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::{TX200_FORMING_Q_DEG, Wrench, builtin};
 
@@ -17,9 +18,9 @@ fn bench_cycle(c: &mut Criterion) {
         bias: Some([1.0, -2.0, 3.0, 0.1, 0.2, -0.1]),
         wrench: WrenchConfig {
             sensor_in_flange: pose_from_xyz_rpy([0.0, 0.0, 0.05], [0.0, 0.0, 0.2]),
-            tool: ToolLoad {
+            tool_in_sensor: ToolLoad {
                 mass_kg: 6.0,
-                com_in_sensor_m: [0.0, 0.0, 0.1],
+                centre_of_mass_m: nalgebra::Vector3::new(0.0, 0.0, 0.1),
             },
             lowpass_hz: Some(30.0),
             ..WrenchConfig::default()

@@ -51,7 +51,7 @@ fn identify(c: &mut Criterion) {
                 &truth,
                 black_box(small),
                 &SearchOptions::default(),
-                &mut |_, _, _| {},
+                &mut |_| {},
             )
             .unwrap()
         })
@@ -65,7 +65,7 @@ fn identify(c: &mut Criterion) {
                     criterion: deflex_calibrate::stiffness::Criterion::cross_validated(),
                     ..SearchOptions::default()
                 },
-                &mut |_, _, _| {},
+                &mut |_| {},
             )
             .unwrap()
         })

@@ -41,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let rows = rows?;
     println!("{} rows read from {}", rows.len(), path.display());
-    let result = search_structure(&robot, &rows, &SearchOptions::default(), &mut |_, _, _| {})?;
+    let result = search_structure(&robot, &rows, &SearchOptions::default(), &mut |_| {})?;
     let calibration = &result.calibration;
     println!(
         "structure {} after {} steps ({}); χ²/dof {:.2}, RMS residual {:.1} µm",
@@ -49,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         result.steps.len(),
         result.stop_reason,
         calibration.reduced_chi2,
-        calibration.residuals.rms_norm_m * 1e6
+        calibration.residuals.position.norm.rms * 1e6
     );
     for edof in &calibration.edofs {
         let truth = robot.stiffness(edof.id.0, edof.id.1);

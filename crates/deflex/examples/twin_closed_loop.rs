@@ -8,7 +8,8 @@
 //! `cargo run -p deflex --example twin_closed_loop [PATH]` (PATH: `cone-contour` (default),
 //! `cone`, `pyramid` or a G-code file; the full `cone` takes about a minute in a debug build).
 use deflex::builtin;
-use deflex::sim::{CellConfig, run_forming, tool_path_by_name};
+use deflex::load::gcode_file::tool_path_by_name;
+use deflex::sim::{CellConfig, run_forming};
 use deflex::twin::{controller_config_for, run_closed_loop};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

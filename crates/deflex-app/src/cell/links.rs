@@ -20,14 +20,9 @@ use deflex_io::simple_tcp::SimpleTcpLink;
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink};
 use deflex_io::staubli::StaubliLink;
 use deflex_io::{ForceSensorLink, LinkError, PeerPolicy, RobotLink};
-use deflex_model::spatial::pose_from_xyz_rpy;
+use deflex_model::spatial::rotation_from_rpy;
 use deflex_sim::twin::cell_server::CellSides;
 use std::time::Duration;
-
-fn rotation_rows(rpy: [f64; 3]) -> [[f64; 3]; 3] {
-    let m = *pose_from_xyz_rpy([0.0; 3], rpy).rotation.matrix();
-    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
-}
 
 /// Why the ends of a simulated cell could not be made from a `CELL.toml`.
 #[derive(Debug, thiserror::Error)]
@@ -90,8 +85,8 @@ impl CellFile {
         let r = &self.robot;
         EgmConfig {
             frame: r.egm_frame,
-            sensor_in_tool: rotation_rows(r.egm_sensor_rpy_rad),
-            work_object_in_base: rotation_rows(r.egm_work_object_rpy_rad),
+            sensor_in_tool: rotation_from_rpy(r.egm_sensor_rpy_rad),
+            work_object_in_base: rotation_from_rpy(r.egm_work_object_rpy_rad),
             age_ms: (1000.0 / self.control.rate_hz).round().clamp(0.0, 1000.0) as u32,
             seven_axis: joint_count == 7,
         }

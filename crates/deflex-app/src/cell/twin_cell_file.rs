@@ -19,7 +19,7 @@ pub fn cell_for_robot(spec: &str) -> Result<CellConfig, SimError> {
 
 /// Why a cell file could not be used.
 #[derive(Debug, thiserror::Error)]
-pub enum CellFileError {
+pub enum TwinCellFileError {
     /// The file could not be read.
     #[error("{path}: {source}")]
     Read {
@@ -48,14 +48,14 @@ pub enum CellFileError {
 /// Read a `[cell]` TOML file (see `deflex_sim::CellConfig::from_toml_str_with`) for the robot
 /// it names, or for `robot` (`--robot`, which wins), a robot file being read here. A field error
 /// names the file.
-pub fn load_cell(path: &Path, robot: Option<&str>) -> Result<CellConfig, CellFileError> {
+pub fn load_cell(path: &Path, robot: Option<&str>) -> Result<CellConfig, TwinCellFileError> {
     let shown = path.display().to_string();
     let text = read_bounded(path, MAX_CELL_FILE_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(source) => CellFileError::Read {
+        BoundedReadError::Io(source) => TwinCellFileError::Read {
             path: shown.clone(),
             source,
         },
-        BoundedReadError::TooLarge(bytes) => CellFileError::TooLarge {
+        BoundedReadError::TooLarge(bytes) => TwinCellFileError::TooLarge {
             path: shown.clone(),
             bytes,
             limit: MAX_CELL_FILE_BYTES,

@@ -7,6 +7,10 @@
 //!   it ([`load_robot`]), and writing a robot's TOML for another folder
 //!   ([`robot_to_toml_for`]);
 //! * [`measurements`]: measurement, plan and point files ([`read_file`], [`read_points`]);
+//! * [`wrench_log`]: a previous run's log (`deflex run`, `deflex sim isf`) as the compensation's
+//!   wrench source ([`read_wrench_log`]);
+//! * [`gcode_file`]: G-code files as the twin's tool paths ([`gcode_file::read_gcode`]) and the
+//!   built-in paths or a G-code file by name ([`gcode_file::tool_path_by_name`]);
 //! * [`read_bounded`]: any text file, read only when it is a regular file not larger than a
 //!   limit (counted while reading).
 //!
@@ -14,15 +18,19 @@
 
 #![warn(missing_docs)]
 
+pub mod gcode_file;
 pub mod measurements;
 pub mod robot_file;
+pub mod wrench_log;
 
 pub use measurements::{
     read_file, read_file_ignoring, read_for_robot, read_measurements, read_plan, read_points,
 };
 pub use robot_file::{
-    FileUrdfResolver, MAX_ROBOT_FILE_BYTES, load_robot, robot_from_toml_file, robot_to_toml_for,
+    FileUrdfResolver, MAX_ROBOT_FILE_BYTES, RobotFileError, load_robot, robot_from_toml_file,
+    robot_to_toml_for,
 };
+pub use wrench_log::{WrenchLogError, parse_wrench_log, read_wrench_log};
 
 use std::path::Path;
 

@@ -11,13 +11,36 @@ use std::path::{Path, PathBuf};
 /// Largest robot file (TOML or URDF) read (bytes): far above any real description.
 pub const MAX_ROBOT_FILE_BYTES: u64 = 64 << 20;
 
+/// Why a robot file could not be read: the model reads no file, so reading is this module's
+/// job and this its error. It reaches the callers as
+/// [`ModelError::TextUnavailable`] (the message unchanged), beside the model's own errors.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotFileError {
+    /// A robot file (TOML or URDF) could not be read, or a robot spec names neither a built-in
+    /// robot nor an existing file.
+    #[error("{path}: cannot read file: {source}")]
+    Read {
+        /// The file (or the spec, with the built-in names).
+        path: String,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+}
+
+impl From<RobotFileError> for ModelError {
+    fn from(error: RobotFileError) -> Self {
+        ModelError::TextUnavailable(Box::new(error))
+    }
+}
+
 /// Read a robot file (TOML or URDF) of at most [`MAX_ROBOT_FILE_BYTES`]; `shown` names it.
 fn read_robot_text(path: &Path, shown: &str) -> Result<String, ModelError> {
     read_bounded(path, MAX_ROBOT_FILE_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(source) => ModelError::Io {
+        BoundedReadError::Io(source) => RobotFileError::Read {
             path: shown.to_string(),
             source,
-        },
+        }
+        .into(),
         BoundedReadError::TooLarge(size) => ModelError::Invalid {
             path: shown.to_string(),
             field: "file".into(),
@@ -64,10 +87,11 @@ pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
     let path = Path::new(spec);
     if !path.exists() {
         let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
-        return Err(ModelError::Io {
+        return Err(RobotFileError::Read {
             path: format!("{spec} (not a built-in robot: {})", names.join(", ")),
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
-        });
+        }
+        .into());
     }
     let text = read_robot_text(path, spec)?;
     let resolver = FileUrdfResolver {

@@ -15,13 +15,12 @@ use crate::report::calibration_tables::{
     correlated_pairs_text, correlation_table, coupling_rows, coupling_summary, iteration_rows,
     refit_rows, residual_summary, shift_rows, stiffness_rows,
 };
+use crate::report::draw::{heatmap, line_plot, parity_plot, write_page};
 use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::search::SearchStep;
 use deflex_calibrate::stiffness::stiffness_fit::Calibration;
 use deflex_plot::text_table::table_csv;
-use deflex_plot::{
-    FileLink, HtmlReport, PlotError, PlotSpec, Series, SeriesStyle, heatmap, line_plot, parity_plot,
-};
+use deflex_plot::{FileLink, HtmlReport, PlotError, PlotSpec, Series, SeriesStyle};
 use std::path::{Path, PathBuf};
 
 /// Longest plot title (characters), with the `SIMULATED — ` prefix of simulated data: short
@@ -205,7 +204,7 @@ fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, Pl
     }
     html.files(&links);
     let page = dir.join("calibration.html");
-    html.write(&page)?;
+    write_page(&html, &page)?;
     files.push(page);
     Ok(files)
 }

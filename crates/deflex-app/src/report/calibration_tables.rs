@@ -34,9 +34,9 @@ pub fn iteration_rows(steps: &[SearchStep]) -> Vec<Vec<String>> {
                 s.structure.clone(),
                 s.parameters.to_string(),
                 um(s.residuals.rms_all_m),
-                um(s.residuals.rms_m[0]),
-                um(s.residuals.rms_m[1]),
-                um(s.residuals.rms_m[2]),
+                um(s.residuals.position.rms[0]),
+                um(s.residuals.position.rms[1]),
+                um(s.residuals.position.rms[2]),
                 format!("{:.1}", s.bic),
                 if s.iteration == 0 {
                     "".into()
@@ -195,15 +195,15 @@ pub fn residual_summary(cal: &Calibration) -> String {
         cal.reduced_chi2,
         cal.condition_number,
         cal.bic,
-        r.rms_m[0] * 1e6,
-        r.rms_m[1] * 1e6,
-        r.rms_m[2] * 1e6,
+        r.position.rms[0] * 1e6,
+        r.position.rms[1] * 1e6,
+        r.position.rms[2] * 1e6,
         r.rms_all_m * 1e6,
-        r.rms_norm_m * 1e6,
-        r.max_abs_m[0] * 1e6,
-        r.max_abs_m[1] * 1e6,
-        r.max_abs_m[2] * 1e6,
-        r.max_norm_m * 1e6
+        r.position.norm.rms * 1e6,
+        r.position.max_abs[0] * 1e6,
+        r.position.max_abs[1] * 1e6,
+        r.position.max_abs[2] * 1e6,
+        r.position.norm.max * 1e6
     );
     if let Some(rot) = r.rotation_rms_rad {
         let _ = writeln!(

@@ -7,9 +7,9 @@
 //! [`force_panels`] and [`profile_panels`] are shared with the study's page, which compares the
 //! runs without and with correction on the same panels.
 
+use crate::report::draw::{cloud_3d, line_plot, panels_plot};
 use deflex_plot::{
-    Cloud3, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series, cloud_3d,
-    line_plot, panels_plot,
+    Cloud3, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
 };
 use deflex_sim::FormingRun;
 use std::path::{Path, PathBuf};

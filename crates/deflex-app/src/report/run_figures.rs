@@ -4,9 +4,9 @@
 //! closed-loop run of the same path line up whatever their timing — else against time. Plain
 //! data in ([`RunTrace`]), PNG files and a self-contained page out ([`write_run_figures`]).
 
+use crate::report::draw::{panels_plot, timeline_plot, write_page};
 use deflex_plot::{
-    FileLink, HtmlReport, Lane, LineStyle, PanelLayout, PlotError, PlotSpec, Series, panels_plot,
-    timeline_plot,
+    FileLink, HtmlReport, Lane, LineStyle, PanelLayout, PlotError, PlotSpec, Series,
 };
 use deflex_record::trace::{RunTrace, Xyz};
 use std::path::{Path, PathBuf};
@@ -295,14 +295,14 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
     )? {
         figures.push(state);
     }
-    run_page(
+    let html = run_page(
         traces,
         &figures,
         simulated,
         by_path,
         &format!("{sim}deflex plot: {names}"),
-    )
-    .write(&page)?;
+    );
+    write_page(&html, &page)?;
     Ok(RunFigures {
         figures: figures.into_iter().map(|(p, _)| p).collect(),
         page,

@@ -4,10 +4,10 @@
 //! measured grid (Figs. 11, 13).
 
 use crate::report::PageError;
+use crate::report::draw::{line_plot, parity_plot, scatter_heatmap, write_page};
+use deflex_calibrate::stats::ErrorStats;
 use deflex_calibrate::stiffness::validation::Validation;
-use deflex_plot::{
-    HtmlReport, PlotError, PlotSpec, Series, SeriesStyle, line_plot, parity_plot, scatter_heatmap,
-};
+use deflex_plot::{HtmlReport, PlotError, PlotSpec, Series, SeriesStyle};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -16,32 +16,20 @@ pub fn validation_rows(v: &Validation) -> Vec<Vec<String>> {
     std::iter::once(&v.model)
         .chain(v.baseline.as_ref())
         .map(|m| {
-            let s = &m.stats;
             let mut row = vec![m.name.clone()];
-            row.extend(stat_cells(
-                s.rms_m,
-                s.rms_norm_m,
-                s.max_abs_m,
-                s.max_norm_m,
-                |x| format!("{:.4}", x * 1e3),
-            ));
+            row.extend(stat_cells(&m.stats, |x| format!("{:.4}", x * 1e3)));
             row
         })
         .collect()
 }
 
 /// RMS x, y, z, RMS norm, max x, y, z, max norm, each formatted by `fmt`.
-fn stat_cells(
-    rms: [f64; 3],
-    rms_norm: f64,
-    max_abs: [f64; 3],
-    max_norm: f64,
-    fmt: impl Fn(f64) -> String,
-) -> Vec<String> {
-    rms.iter()
-        .chain(std::iter::once(&rms_norm))
-        .chain(max_abs.iter())
-        .chain(std::iter::once(&max_norm))
+fn stat_cells(s: &ErrorStats, fmt: impl Fn(f64) -> String) -> Vec<String> {
+    s.rms
+        .iter()
+        .chain(std::iter::once(&s.norm.rms))
+        .chain(s.max_abs.iter())
+        .chain(std::iter::once(&s.norm.max))
         .map(|&x| fmt(x))
         .collect()
 }
@@ -66,14 +54,8 @@ pub fn validation_rotation_rows(v: &Validation) -> Vec<Vec<String>> {
         .chain(v.baseline.as_ref())
         .filter_map(|m| {
             let s = &m.rotation.as_ref()?.stats;
-            let mut row = vec![m.name.clone(), s.rows.to_string()];
-            row.extend(stat_cells(
-                s.rms_rad,
-                s.rms_norm_rad,
-                s.max_abs_rad,
-                s.max_norm_rad,
-                |x| format!("{:.1}", x * 1e6),
-            ));
+            let mut row = vec![m.name.clone(), s.norm.count.to_string()];
+            row.extend(stat_cells(s, |x| format!("{:.1}", x * 1e6)));
             Some(row)
         })
         .collect()
@@ -103,12 +85,12 @@ pub fn validation_rotation_summary(v: &Validation) -> Option<String> {
             out,
             "rotation errors {} ({} rows): RMS x/y/z {:.1} / {:.1} / {:.1} µrad (norm {:.1} µrad), max norm {:.1} µrad",
             m.name,
-            s.rows,
-            s.rms_rad[0] * 1e6,
-            s.rms_rad[1] * 1e6,
-            s.rms_rad[2] * 1e6,
-            s.rms_norm_rad * 1e6,
-            s.max_norm_rad * 1e6
+            s.norm.count,
+            s.rms[0] * 1e6,
+            s.rms[1] * 1e6,
+            s.rms[2] * 1e6,
+            s.norm.rms * 1e6,
+            s.norm.max * 1e6
         );
     }
     Some(out)
@@ -274,7 +256,7 @@ fn write_report_into(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, PlotErr
         }
     }
     let page = dir.join("validation.html");
-    html.write(&page)?;
+    write_page(&html, &page)?;
     files.push(page);
     Ok(files)
 }

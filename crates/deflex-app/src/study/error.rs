@@ -17,9 +17,12 @@ pub enum DemoError {
     /// An offline compensation failed.
     #[error(transparent)]
     Compensate(#[from] deflex_compensate::CompensateError),
-    /// A forming log could not be read back or resampled.
+    /// A forming log could not be resampled on its path.
     #[error(transparent)]
     Log(#[from] deflex_compensate::LogError),
+    /// A forming log could not be read back.
+    #[error(transparent)]
+    WrenchLog(#[from] crate::load::WrenchLogError),
     /// A compensation table could not be read back.
     #[error(transparent)]
     Table(#[from] deflex_compensate::table::TableError),

@@ -9,7 +9,7 @@
 //! effector (TCP) carries the load, as in the paper.
 
 use crate::study::DemoError;
-use deflex_calibrate::stiffness::MeasurementRow;
+use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::validation::predict;
 use deflex_model::{Data, Robot};
 use deflex_sim::CellConfig;

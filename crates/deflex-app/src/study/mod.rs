@@ -28,14 +28,14 @@ mod error;
 pub mod fig7;
 pub mod numbers;
 pub mod paper;
+mod pipeline;
 pub mod sensitivity;
-mod study;
 mod summary;
 
 pub use conditions::{conditions, one_edof_start};
 pub use error::DemoError;
 pub use numbers::paper_vs_deflex as paper_vs_deflex_rows;
-pub use study::{DemoOptions, Predictions, Progress, Study, run_study};
+pub use pipeline::{DemoOptions, Predictions, STAGES, Study, run_study};
 pub use summary::{
     BASELINE, DemoSummary, FormingNumbers, IDENTIFIED, ModelErrorNumbers, StiffnessRow, TABLE1,
 };

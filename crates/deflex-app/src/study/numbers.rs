@@ -4,7 +4,8 @@
 
 use crate::study::paper;
 use crate::study::summary::{BASELINE, DemoSummary, IDENTIFIED, ModelErrorNumbers, StiffnessRow};
-use deflex_calibrate::stiffness::{MeasurementRow, SearchResult};
+use deflex_calibrate::measurements::MeasurementRow;
+use deflex_calibrate::stiffness::SearchResult;
 use deflex_model::{Axis, EdofSite, Robot};
 
 /// Indices of the validation-grid rows loaded by the `load_n` dead weight (the twin labels them

@@ -2,6 +2,8 @@
 
 mod cell;
 mod load;
+mod load_gcode_file;
 mod report;
 mod study;
 mod twin;
+mod wrench_log;

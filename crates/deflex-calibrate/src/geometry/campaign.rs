@@ -11,16 +11,10 @@
 use crate::geometry::data::{AbsoluteRow, DEFAULT_ORIENTATION_SIGMA_RAD, configuration_index};
 use crate::geometry::model::Conditions;
 use crate::geometry::params::{EgModel, Param};
+use crate::measurements::{DEFAULT_SIGMA_M, MeasurementRow};
 use deflex_model::spatial::rotation_log;
 use deflex_model::{MAX_EDOFS, MAX_JOINTS};
 use nalgebra::{Rotation3, Vector3};
-
-/// A loaded displacement reading: the stiffness campaign's measurement row (its format is
-/// defined with `deflex calibrate`'s files).
-pub use crate::stiffness::MeasurementRow as LoadedRow;
-
-/// Default standard deviation of a loaded displacement component (m), as `deflex calibrate`.
-pub const DEFAULT_LOADED_SIGMA_M: f64 = crate::stiffness::DEFAULT_SIGMA_M;
 
 /// What a reading measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,7 +82,7 @@ pub struct Campaign {
     /// Number of configurations among the absolute readings.
     pub config_count: usize,
     /// Loaded displacement readings (the stiffness campaign's format).
-    pub loaded: Vec<LoadedRow>,
+    pub loaded: Vec<MeasurementRow>,
     /// Configuration index of each loaded reading (its load case), after the absolute ones.
     pub loaded_config_of: Vec<usize>,
     /// Absolute row of each orientation reading (empty unless [`Campaign::use_orientations`]).
@@ -103,7 +97,7 @@ impl Campaign {
     pub fn new(
         model: &mut EgModel,
         absolute: Vec<AbsoluteRow>,
-        loaded: Vec<LoadedRow>,
+        loaded: Vec<MeasurementRow>,
     ) -> Result<Campaign, CampaignError> {
         if absolute.is_empty() && loaded.is_empty() {
             return Err(CampaignError::Empty);
@@ -262,7 +256,7 @@ impl Campaign {
             ReadingKind::Position => self.absolute[i].sigma(),
             ReadingKind::Loaded => self.loaded[i - self.absolute.len()]
                 .sigma_m
-                .unwrap_or(DEFAULT_LOADED_SIGMA_M),
+                .unwrap_or(DEFAULT_SIGMA_M),
             ReadingKind::Orientation => self.absolute[self.absolute_row(i).unwrap_or(0)]
                 .orientation
                 .and_then(|o| o.sigma_rad)

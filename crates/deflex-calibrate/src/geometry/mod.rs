@@ -1,15 +1,15 @@
-//! # deflex-absolute
+//! The elasto-geometric calibration from absolute laser-tracker readings (beyond Johra et al.
+//! 2022, whose Section 3 identifies stiffness alone; validated on the public UR10 data set of
+//! Landgraf et al., CASE 2021): the robot's kinematic errors (DH rows with Hayati β), where each
+//! tracker set-up stands, where each target sits on the flange (and how its frame is turned, from
+//! measured orientations), the arm's sag under its own weight and payload through the VJM eDoFs,
+//! the compliances that loaded-displacement campaigns measure, and opt-in joint terms and a
+//! residual model that must earn their place on held-out data, identified together in one
+//! robust, reduced, uncertainty-quantified least-squares fit. Pure maths on data: no files, no
+//! plots (`deflex_app` and the front ends do those).
 //!
-//! Elasto-geometric calibration from absolute laser-tracker measurements: the robot's kinematic
-//! errors (DH rows with Hayati β), where each tracker set-up stands, where each target sits on
-//! the flange (and how its frame is turned, from measured orientations), the arm's sag under
-//! its own weight and payload through the VJM eDoFs, the compliances that loaded-displacement
-//! campaigns measure, and opt-in joint terms and a residual model that must earn their place on
-//! held-out data, identified together in one robust, reduced, uncertainty-quantified
-//! least-squares fit. Pure maths on data: no files, no plots (the CLI and `deflex-report` do
-//! those).
-//!
-//! * [`data`]: the absolute measurement format (parse and format);
+//! * [`data`]: the absolute measurement format (parse, with the crate's one reader
+//!   [`crate::measurements::reader`], and format);
 //! * [`ur10_tracker`]: importer for the public UR10 laser-tracker data set (Landgraf et al.,
 //!   CASE 2021);
 //! * [`params`]: the error parameters and the model state they correct;
@@ -17,8 +17,8 @@
 //! * [`campaign`]: readings resolved against a model;
 //! * [`identify`]: reduction to the identifiable parameter set;
 //! * [`solve`]: Levenberg–Marquardt with robust (Huber/Cauchy) reweighting;
-//! * [`fit`]: registration, model steps, held-out acceptance, uncertainty; [`outcome`]: what a
-//!   fit produces;
+//! * [`fit`]: registration, model steps, held-out acceptance, uncertainty, and what a fit
+//!   produces ([`fit::FitResult`]; its error statistics are [`crate::stats::ErrorNormStats`]);
 //! * [`register`]: a new session or probe registered from a few readings, robot frozen;
 //! * [`protocol`]: the held-out protocol (register from some readings, score the rest);
 //! * [`residual_model`]: a Gaussian-process residual model on the joint angles;
@@ -28,8 +28,6 @@
 //! * [`resample`]: cross-validation and bootstrap by configuration;
 //! * [`predict`]: per-row predictions of a calibrated model.
 
-#![warn(missing_docs)]
-
 pub mod campaign;
 pub mod data;
 pub mod fit;
@@ -37,7 +35,7 @@ pub mod identify;
 pub mod jacobian;
 pub mod joint_maps;
 pub mod model;
-pub mod outcome;
+mod outcome;
 pub mod params;
 pub mod predict;
 pub mod protocol;

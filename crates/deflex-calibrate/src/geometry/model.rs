@@ -23,8 +23,8 @@
 //! **Loaded reading** (the stiffness campaign's rows): displacement loaded − unloaded of point P
 //! on link k under wrench w at A on link l, `Σ_{e: site ≤ min(k,l)} c_e j_e(P) j_e(A)ᵀ w`.
 
-use crate::geometry::campaign::LoadedRow;
 use crate::geometry::params::EgModel;
+use crate::measurements::MeasurementRow;
 use deflex_model::{Data, MAX_EDOFS, MAX_JOINTS};
 use nalgebra::{Rotation3, Vector3};
 
@@ -238,7 +238,7 @@ impl EgModel {
     /// compliance in `columns` (others zero).
     pub fn loaded_displacement(
         &self,
-        row: &LoadedRow,
+        row: &MeasurementRow,
         columns: &mut [Vector3<f64>; MAX_EDOFS],
     ) -> Vector3<f64> {
         let (q, point, point_link) = (&row.q_rad, Vector3::from(row.point_m), row.point_link);

@@ -1,47 +1,13 @@
 //! What an elasto-geometric fit produces: the iteration table's rows, the estimates, the
-//! outliers, the residuals, and the error statistics used for held-out readings.
+//! outliers, the residuals; their error statistics are [`crate::stats::ErrorNormStats`].
 
 use crate::geometry::fit::Step;
 use crate::geometry::identify::Reduction;
 use crate::geometry::params::{EgModel, Param, Unit};
 use crate::geometry::protocol::GroupScore;
 use crate::geometry::solve::Loss;
+use crate::stats::ErrorNormStats;
 use nalgebra::{DMatrix, Vector3};
-
-/// Error distribution of a set of readings (norm of the 3-D error, m).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ErrorStats {
-    /// Readings.
-    pub count: usize,
-    /// Root mean square.
-    pub rms: f64,
-    /// Mean.
-    pub mean: f64,
-    /// 95th percentile.
-    pub p95: f64,
-    /// Maximum.
-    pub max: f64,
-}
-
-impl ErrorStats {
-    /// Statistics of error norms.
-    pub fn of(norms: &[f64]) -> ErrorStats {
-        if norms.is_empty() {
-            return ErrorStats::default();
-        }
-        let n = norms.len() as f64;
-        let mut sorted = norms.to_vec();
-        sorted.sort_by(f64::total_cmp);
-        let rank = ((0.95 * n).ceil() as usize).clamp(1, sorted.len()) - 1;
-        ErrorStats {
-            count: norms.len(),
-            rms: (norms.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
-            mean: norms.iter().sum::<f64>() / n,
-            p95: sorted[rank],
-            max: sorted[sorted.len() - 1],
-        }
-    }
-}
 
 /// A held-out group scored at each step.
 #[derive(Clone, Debug, PartialEq)]
@@ -49,9 +15,9 @@ pub struct TestGroup {
     /// Description (e.g. `A: held-out configurations`).
     pub name: String,
     /// Position error distribution (m).
-    pub stats: ErrorStats,
+    pub stats: ErrorNormStats,
     /// Orientation error distribution (rad), when measured.
-    pub orientation: Option<ErrorStats>,
+    pub orientation: Option<ErrorNormStats>,
     /// Position RMS of each registration draw (m; one entry for configurations of a fit
     /// set-up, scored with its own registration).
     pub draw_rms: Vec<f64>,
@@ -116,9 +82,9 @@ pub struct StepReport {
     /// Identifiable (fitted) parameters.
     pub identifiable: usize,
     /// Absolute readings in the fit: position error distribution.
-    pub fit: ErrorStats,
+    pub fit: ErrorNormStats,
     /// Orientation error distribution of the fitted readings (rad), when measured.
-    pub fit_orientation: Option<ErrorStats>,
+    pub fit_orientation: Option<ErrorNormStats>,
     /// Loaded readings in the fit: RMS of the displacement error (m), if any.
     pub loaded_rms: Option<f64>,
     /// Cross-validated RMS over absolute readings (m), if folds > 0.

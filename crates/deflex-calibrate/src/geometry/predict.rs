@@ -4,10 +4,10 @@
 
 use crate::geometry::campaign::Campaign;
 use crate::geometry::data::AbsoluteRow;
-use crate::geometry::outcome::ErrorStats;
 use crate::geometry::params::{EgModel, Param};
 use crate::geometry::protocol::row_errors;
 use crate::geometry::solve::{Loss, SolveOptions};
+use crate::stats::ErrorNormStats;
 use deflex_model::NamedPose;
 
 /// One row's prediction.
@@ -32,9 +32,9 @@ pub struct Prediction {
     /// Each row.
     pub rows: Vec<RowPrediction>,
     /// Position error distribution (m).
-    pub position: ErrorStats,
+    pub position: ErrorNormStats,
     /// Orientation error distribution (rad), when measured and predicted.
-    pub orientation: Option<ErrorStats>,
+    pub orientation: Option<ErrorNormStats>,
     /// Whether the set-ups were registered on these rows first.
     pub fit_setup: bool,
     /// The set-ups used.
@@ -119,12 +119,12 @@ pub fn predict_rows(
             orientation_error_rad,
         });
     }
-    let position = ErrorStats::of(&out.iter().map(|r| r.error_m).collect::<Vec<_>>());
+    let position = ErrorNormStats::of(&out.iter().map(|r| r.error_m).collect::<Vec<_>>());
     let orientation: Vec<f64> = out.iter().filter_map(|r| r.orientation_error_rad).collect();
     Ok(Prediction {
         rows: out,
         position,
-        orientation: (!orientation.is_empty()).then(|| ErrorStats::of(&orientation)),
+        orientation: (!orientation.is_empty()).then(|| ErrorNormStats::of(&orientation)),
         fit_setup,
         setups: model.setups.clone(),
     })

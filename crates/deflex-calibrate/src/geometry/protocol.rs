@@ -12,10 +12,10 @@
 
 use crate::geometry::campaign::Campaign;
 use crate::geometry::fit::HeldOutProtocol;
-use crate::geometry::outcome::ErrorStats;
 use crate::geometry::params::EgModel;
 use crate::geometry::register::{self, RegisterOptions, start};
 use crate::geometry::solve::Loss;
+use crate::stats::ErrorNormStats;
 use deflex_model::spatial::rotation_log;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -25,9 +25,9 @@ use std::collections::BTreeSet;
 #[derive(Clone, Debug, PartialEq)]
 pub struct GroupScore {
     /// Position errors of the scored readings, pooled over the draws (m).
-    pub position: ErrorStats,
+    pub position: ErrorNormStats,
     /// Orientation errors (rad), when the readings measure orientations.
-    pub orientation: Option<ErrorStats>,
+    pub orientation: Option<ErrorNormStats>,
     /// Position RMS of each draw (m).
     pub draw_rms: Vec<f64>,
     /// Readings registered per draw.
@@ -108,24 +108,21 @@ pub fn score_group(
         {
             start::initialise_target_rotations(&mut scored, campaign, &[t], &mult);
         }
-        let mut squares = 0.0;
-        let mut count = 0;
+        let scored_from = position.len();
         for &i in rows.iter().filter(|&&i| mult[i] == 0.0) {
             let (p, o) = row_errors(&scored, campaign, i);
             position.push(p);
-            squares += p * p;
-            count += 1;
             orientation.extend(o);
         }
-        draw_rms.push((squares / count.max(1) as f64).sqrt());
+        draw_rms.push(ErrorNormStats::of(&position[scored_from..]).rms);
         if first.is_none() {
             first = Some(scored);
         }
     }
     (
         GroupScore {
-            position: ErrorStats::of(&position),
-            orientation: (!orientation.is_empty()).then(|| ErrorStats::of(&orientation)),
+            position: ErrorNormStats::of(&position),
+            orientation: (!orientation.is_empty()).then(|| ErrorNormStats::of(&orientation)),
             draw_rms,
             registered,
         },

@@ -6,6 +6,7 @@ use crate::geometry::campaign::Campaign;
 use crate::geometry::fit::relative_value;
 use crate::geometry::params::{EgModel, Param};
 use crate::geometry::solve::{self, Loss, SolveOptions};
+use crate::stats::ErrorNormStats;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
@@ -20,8 +21,7 @@ pub fn cross_validate(
     folds: usize,
     options: &SolveOptions,
 ) -> f64 {
-    let mut squares = 0.0;
-    let mut count = 0usize;
+    let mut norms = Vec::new();
     for fold in 0..folds {
         let train: Vec<f64> = (0..campaign.len())
             .map(|i| {
@@ -40,15 +40,12 @@ pub fn cross_validate(
         }
         let mut trained = model.clone();
         solve::solve(&mut trained, campaign, kept, &train, options);
-        for e in held
-            .iter()
-            .map(|&i| campaign.residual(&trained, i, &[], None).norm())
-        {
-            squares += e * e;
-            count += 1;
-        }
+        norms.extend(
+            held.iter()
+                .map(|&i| campaign.residual(&trained, i, &[], None).norm()),
+        );
     }
-    (squares / count.max(1) as f64).sqrt()
+    ErrorNormStats::of(&norms).rms
 }
 
 /// Bootstrap by configuration: resample configurations with replacement, refit with the final

@@ -269,7 +269,7 @@ impl SeriesLine<'_> {
         let q_rad = c
             .joints
             .iter()
-            .map(|&i| self.number(i, crate::geometry::data::limits::MAX_JOINT_RAD))
+            .map(|&i| self.number(i, crate::measurements::MAX_JOINT_RAD))
             .collect::<Result<Vec<_>, _>>()?;
         let mut position_m = [0.0; 3];
         for (v, &i) in position_m.iter_mut().zip(&c.position) {

@@ -1,5 +1,5 @@
 //! The bounds every value of a measurement or plan file must respect (see the module
-//! documentation of the crate), and the column names they apply to.
+//! documentation of [`crate::measurements`]), and the column names they apply to.
 
 use crate::measurements::{MeasurementRow, RowValueError, SigmaColumn};
 

@@ -1,9 +1,11 @@
-//! What can be wrong with a measurement or plan file, with the values that explain it. The
-//! messages name the file, the line and the column.
+//! What can be wrong with a measurement file of any format of this crate (loaded
+//! displacements, plans, absolute tracker readings), with the values that explain it: one error
+//! type, [`DataError`], whose messages name the file, the line and the column.
 
 use thiserror::Error;
 
-/// A bad measurement or plan file. Nothing of a file with an error is used.
+/// A bad measurement file (loaded displacements, a plan, absolute tracker readings). Nothing of a
+/// file with an error is used.
 #[derive(Debug, Error)]
 pub enum DataError {
     /// The file could not be read or written (built by the crates that touch the disk).
@@ -26,7 +28,8 @@ pub enum DataError {
         /// The limit ([`crate::measurements::MAX_FILE_BYTES`]).
         limit: u64,
     },
-    /// The file was written for a robot with another number of joints.
+    /// The file was written for a robot with another number of joints
+    /// ([`crate::measurements::check_joint_columns`], before the file is read).
     #[error(
         "{path}: the data has {found} joint columns (q1_rad…q{found}_rad) but the robot has {expected} joints"
     )]
@@ -38,7 +41,7 @@ pub enum DataError {
         /// Joints of the robot.
         expected: usize,
     },
-    /// A problem with the header (missing or duplicate column).
+    /// A problem with the header (the column names).
     #[error("{path}: header: {problem}")]
     Header {
         /// File.
@@ -47,14 +50,22 @@ pub enum DataError {
         problem: HeaderProblem,
     },
     /// A problem with one row.
-    #[error("{path}:{line}: {problem}")]
+    #[error("{path}:{line}: {error}")]
     Row {
         /// File.
         path: String,
         /// 1-based line number in the file.
         line: u64,
-        /// What is wrong, naming the column.
-        problem: RowProblem,
+        /// What is wrong, and in which column.
+        error: RowError,
+    },
+    /// More rows than the format reads ([`crate::measurements::reader::RowLimit::PerFile`]).
+    #[error("{path}: more than {limit} rows")]
+    TooManyRows {
+        /// File.
+        path: String,
+        /// The bound.
+        limit: usize,
     },
     /// Two rows of one load case hold different joint configurations (rows with the same
     /// `load_case` share configuration and load: the calibration groups them as one loading).
@@ -99,7 +110,7 @@ pub struct LoadCaseConflict {
 pub enum HeaderProblem {
     /// The CSV reader could not read the header line.
     #[error("{0}")]
-    Csv(csv::Error),
+    Csv(#[source] csv::Error),
     /// A column name appears twice.
     #[error("column `{name}` appears twice")]
     Duplicate {
@@ -124,14 +135,27 @@ pub enum HeaderProblem {
         /// The column.
         name: String,
     },
-
     /// No `q1_rad` column.
     #[error("no joint columns: expected q1_rad, q2_rad, …")]
     NoJointColumns,
+    /// The `q1_rad…` columns do not match the robot the file is read for.
+    #[error("the file has {found} joint columns (q1_rad…) but the robot has {expected} joints")]
+    JointColumns {
+        /// `q{i}_rad` columns found (consecutive from 1).
+        found: usize,
+        /// Robot joints.
+        expected: usize,
+    },
     /// Required columns are missing.
     #[error("missing column(s) {}", quoted(names))]
     Missing {
         /// The missing columns, in the order of the format.
+        names: Vec<String>,
+    },
+    /// Some but not all columns of a group that goes together.
+    #[error("columns {} go together: give all or none", .names.join(", "))]
+    PartialGroup {
+        /// The columns of the group.
         names: Vec<String>,
     },
 }
@@ -144,12 +168,33 @@ fn quoted(names: &[String]) -> String {
         .join(", ")
 }
 
-/// What is wrong with one row of a file.
+/// What is wrong with a row, and the column it is in.
+#[derive(Debug, Error)]
+#[error("{}{problem}", column.as_ref().map(|c| format!("column `{c}`: ")).unwrap_or_default())]
+pub struct RowError {
+    /// The column; none (or `-`, for absolute readings) when the problem is the record as a
+    /// whole.
+    pub column: Option<String>,
+    /// What is wrong.
+    pub problem: RowProblem,
+}
+
+impl RowError {
+    /// A problem of the cell in `column`.
+    pub fn in_column(column: &str, problem: RowProblem) -> RowError {
+        RowError {
+            column: Some(column.to_string()),
+            problem,
+        }
+    }
+}
+
+/// What is wrong with one row of a file (the column is named by [`RowError`]).
 #[derive(Debug, Error)]
 pub enum RowProblem {
     /// The CSV reader could not read the line (e.g. an unterminated quote).
     #[error("{0}")]
-    Csv(csv::Error),
+    Csv(#[source] csv::Error),
     /// The row has another number of fields than the header.
     #[error("expected {expected} fields as in the header, found {found}")]
     FieldCount {
@@ -158,33 +203,32 @@ pub enum RowProblem {
         /// Fields of the row.
         found: usize,
     },
-    /// The file has more rows than a calibration may use.
+    /// The file has more rows than a calibration may use
+    /// ([`crate::measurements::reader::RowLimit::PerLine`]).
     #[error("more than {max} data rows: split the campaign")]
     TooManyRows {
         /// The limit ([`crate::measurements::MAX_ROWS`]).
         max: usize,
     },
-    /// A numeric cell is not a number.
-    #[error("column `{column}`: expected a number, got \"{text}\"")]
+    /// A numeric cell is not a number; the unit is named when the format's messages state it
+    /// ([`crate::measurements::reader::Cells::number_in`]).
+    #[error("expected a number{}, got \"{text}\"", unit.map(|u| format!(" in {u}")).unwrap_or_default())]
     NotANumber {
-        /// The column.
-        column: String,
-        /// The cell (at most 40 characters of it).
+        /// The cell (at most 40 characters of it, except where the unit is named).
         text: String,
+        /// The unit expected, when named.
+        unit: Option<&'static str>,
     },
-    /// A numeric cell is NaN or infinite.
-    #[error("column `{column}`: value must be finite, got {text}")]
+    /// A numeric cell is NaN or infinite ([`crate::measurements::reader::Cells::number`]).
+    #[error("value must be finite, got {text}")]
     NotFinite {
-        /// The column.
-        column: String,
         /// The cell (at most 40 characters of it).
         text: String,
     },
-    /// A numeric cell is beyond the physical bound of its column.
-    #[error("column `{column}`: {value:e} {unit} is beyond the ±{limit:e} {unit} a file may hold")]
+    /// A numeric cell is beyond the physical bound of its column
+    /// ([`crate::measurements::reader::Cells::number`]).
+    #[error("{value:e} {unit} is beyond the ±{limit:e} {unit} a file may hold")]
     BeyondBound {
-        /// The column.
-        column: String,
         /// The value.
         value: f64,
         /// The bound on its magnitude.
@@ -192,48 +236,86 @@ pub enum RowProblem {
         /// Its unit.
         unit: &'static str,
     },
+    /// A numeric cell that is NaN, infinite or beyond its bound, told as the range expected
+    /// ([`crate::measurements::reader::Cells::number_in`]).
+    #[error("expected a finite value within ±{limit} {unit}, got {text}")]
+    OutOfRange {
+        /// The cell.
+        text: String,
+        /// The bound.
+        limit: f64,
+        /// Unit.
+        unit: &'static str,
+    },
     /// A link cell is not a link index.
-    #[error("column `{column}`: expected a link index 0..={joint_count}, got \"{text}\"")]
+    #[error("expected a link index 0..={joint_count}, got \"{text}\"")]
     NotALink {
-        /// The column.
-        column: &'static str,
         /// The cell.
         text: String,
         /// Joints of the file (the last link's index).
         joint_count: usize,
     },
     /// A link index beyond the last link.
-    #[error("column `{column}`: link {link} does not exist (0 = base … {joint_count} = last link)")]
+    #[error("link {link} does not exist (0 = base … {joint_count} = last link)")]
     NoSuchLink {
-        /// The column.
-        column: &'static str,
         /// The index given.
         link: usize,
         /// Joints of the file (the last link's index).
         joint_count: usize,
     },
     /// An empty label.
-    #[error("column `{column}`: empty label")]
-    EmptyLabel {
-        /// The column.
-        column: &'static str,
-    },
-    /// A label longer than [`crate::measurements::MAX_LABEL_CHARS`].
-    #[error("column `{column}`: a label of more than {max} characters")]
+    #[error("empty label")]
+    EmptyLabel,
+    /// A label longer than its format allows.
+    #[error("{max}")]
     LabelTooLong {
-        /// The column.
-        column: &'static str,
-        /// The limit.
-        max: usize,
+        /// The limit, in characters or bytes.
+        max: LabelLength,
     },
     /// A standard deviation outside its range.
-    #[error("column `{}`: must be positive, from {:e} to {} {}, got {value}", .sigma.column(), .sigma.min(), .sigma.max(), .sigma.unit())]
+    #[error("must be positive, from {:e} to {} {}, got {value}", .sigma.min(), .sigma.max(), .sigma.unit())]
     Sigma {
         /// Which standard deviation.
         sigma: SigmaColumn,
         /// The value.
         value: f64,
     },
+    /// A standard deviation that is zero or negative.
+    #[error("must be positive, got {0}")]
+    NotPositive(f64),
+    /// A negative payload.
+    #[error("must not be negative, got {0}")]
+    Negative(f64),
+    /// A temperature outside its range
+    /// ([`crate::geometry::data::limits::TEMPERATURE_RANGE_C`]).
+    #[error("expected {}…{} °C, got {value}", .range[0], .range[1])]
+    Temperature {
+        /// Value.
+        value: f64,
+        /// Range accepted.
+        range: [f64; 2],
+    },
+}
+
+/// The longest label a format reads, and how it is measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Error)]
+pub enum LabelLength {
+    /// At most this many characters (measurement and plan files).
+    #[error("a label of more than {0} characters")]
+    Characters(usize),
+    /// At most this many UTF-8 bytes (absolute readings).
+    #[error("label longer than {0} bytes")]
+    Bytes(usize),
+}
+
+impl LabelLength {
+    /// Whether `text` is longer than the limit.
+    pub fn exceeded_by(self, text: &str) -> bool {
+        match self {
+            LabelLength::Characters(max) => text.chars().count() > max,
+            LabelLength::Bytes(max) => text.len() > max,
+        }
+    }
 }
 
 /// The two standard-deviation columns, with their ranges.

@@ -1,12 +1,16 @@
-//! # deflex-measurements
+//! Measurement files: the crate's one reader and one error type ([`reader`], [`DataError`]),
+//! used by every measurement format of the crate, and the loaded-displacement measurement and
+//! plan format of the stiffness calibration (Johra et al. 2022, Section 3.1: one row per measured
+//! point per load case, CSV, SI units) with the list of measured points of a plan ([`points`]).
+//! The absolute tracker readings of the elasto-geometric calibration are read by the same reader
+//! in [`crate::geometry::data`].
 //!
-//! The measurement and plan file formats (CSV, SI units, one row per measured point per load
-//! case) and the list of measured points of a plan ([`points`]): the row types, parsing from text
-//! (validated once, at parse time: every field bounded, links within the arm, so code downstream
-//! never checks a row again) and formatting to text. No file is touched here: reading and writing
-//! files is the job of the I/O crates (`deflex-load`, `deflex-files`).
+//! Here: the row types, parsing from text (validated once, at parse time: every field bounded,
+//! links within the arm, so code downstream never checks a row again) and formatting to text. No
+//! file is touched here: reading and writing files is the job of the I/O layers (`deflex_app`'s
+//! `load`, `deflex-files`).
 //!
-//! Columns, by exact name (order free): `load_case`, `q1_rad` … `qN_rad`,
+//! **The measurement and plan format.** Columns, by exact name (order free): `load_case`, `q1_rad` … `qN_rad`,
 //! `fx_N, fy_N, fz_N, mx_Nm, my_Nm, mz_Nm` (applied wrench, world axes, moment about the load
 //! point), `load_link`, `load_x_m, load_y_m, load_z_m` (load point, world, unloaded pose),
 //! `point`, `point_link`, `x_m, y_m, z_m` (measured point, world, unloaded),
@@ -42,14 +46,13 @@
 //! [`DEFAULT_SIGMA_M`]: crate::measurements::DEFAULT_SIGMA_M
 //! [`DEFAULT_SIGMA_RAD`]: crate::measurements::DEFAULT_SIGMA_RAD
 
-#![warn(missing_docs)]
-
 mod bounds;
 mod error;
 mod format;
 mod header;
 mod parse;
 pub mod points;
+pub mod reader;
 mod row;
 
 pub use bounds::{
@@ -58,14 +61,12 @@ pub use bounds::{
     MIN_SIGMA_M, MIN_SIGMA_RAD, check_row_values,
 };
 pub use error::{
-    DataError, HeaderProblem, LoadCaseConflict, RowProblem, RowValueError, SigmaColumn,
+    DataError, HeaderProblem, LabelLength, LoadCaseConflict, RowError, RowProblem, RowValueError,
+    SigmaColumn,
 };
 pub use format::{format_rows, format_rows_for, format_rows_with_header};
 pub use header::FileHeader;
-pub use parse::{
-    check_joint_columns, closest_column, is_joint_column, parse_file, parse_file_ignoring,
-    parse_rows,
-};
+pub use parse::{check_joint_columns, parse_file, parse_file_ignoring, parse_rows};
 pub use row::{
     DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, MeasuredRotation, MeasurementFile, MeasurementRow,
     load_case_count,

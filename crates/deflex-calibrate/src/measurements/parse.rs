@@ -1,16 +1,16 @@
-//! Reading measurement and plan CSV text: the header is resolved once into [`Columns`] (the one
-//! place that decides which names are accepted), then every row is parsed and validated into a
-//! [`MeasurementRow`] (every number finite and within its column's bound, links within the arm,
-//! labels non-empty and short, standard deviations in range), so code downstream never checks a
-//! row again.
+//! Reading measurement and plan CSV text with the crate's one reader ([`reader`]): the format's
+//! columns are checked once, then every row is parsed and validated into a [`MeasurementRow`]
+//! (every number finite and within its column's bound, links within the arm, labels non-empty
+//! and short, standard deviations in range), so code downstream never checks a row again.
 
 use crate::measurements::bounds::{
     DISPLACEMENT_COLUMNS, LOAD_POINT_COLUMNS, POINT_COLUMNS, ROTATION_COLUMNS, WRENCH_COLUMNS,
     column_bound,
 };
+use crate::measurements::reader::{self, Cells, Columns, Format, RowLimit};
 use crate::measurements::{
-    DataError, FileHeader, HeaderProblem, LoadCaseConflict, MAX_LABEL_CHARS, MAX_ROWS,
-    MeasuredRotation, MeasurementFile, MeasurementRow, RowProblem, SigmaColumn,
+    DataError, HeaderProblem, LabelLength, LoadCaseConflict, MAX_LABEL_CHARS, MAX_ROWS,
+    MeasuredRotation, MeasurementFile, MeasurementRow, RowError, RowProblem, SigmaColumn,
 };
 use std::collections::HashMap;
 
@@ -67,61 +67,13 @@ pub fn parse_file_ignoring(
     require_displacement: bool,
     ignored: &[String],
 ) -> Result<MeasurementFile, DataError> {
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .flexible(true)
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes());
-    let header_error = |problem: HeaderProblem| DataError::Header {
-        path: origin.to_string(),
-        problem,
+    let format = LoadedDisplacements {
+        require_displacement,
+        ignored,
     };
-    let headers = reader
-        .headers()
-        .map_err(|e| header_error(HeaderProblem::Csv(e)))?
-        .clone();
-    let columns =
-        Columns::resolve(&headers, require_displacement, ignored).map_err(header_error)?;
-    let mut rows = Vec::new();
-    let mut lines = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| DataError::Row {
-            path: origin.to_string(),
-            line: e.position().map(|p| p.line()).unwrap_or(0),
-            problem: RowProblem::Csv(e),
-        })?;
-        let line = record.position().map(|p| p.line()).unwrap_or(0);
-        let row_error = |problem: RowProblem| DataError::Row {
-            path: origin.to_string(),
-            line,
-            problem,
-        };
-        if record.len() != columns.width {
-            return Err(row_error(RowProblem::FieldCount {
-                expected: columns.width,
-                found: record.len(),
-            }));
-        }
-        if rows.len() >= MAX_ROWS {
-            return Err(row_error(RowProblem::TooManyRows { max: MAX_ROWS }));
-        }
-        let row = columns
-            .row(&record, require_displacement)
-            .map_err(row_error)?;
-        rows.push(row);
-        lines.push(line);
-    }
-    if rows.is_empty() {
-        return Err(DataError::NoRows {
-            path: origin.to_string(),
-        });
-    }
-    check_load_case_configurations(&rows, &lines, origin)?;
-    Ok(MeasurementFile {
-        header: FileHeader::parse(text),
-        rows,
-        lines,
-    })
+    let file = reader::read(&format, text, origin)?;
+    check_load_case_configurations(&file.rows, &file.lines, origin)?;
+    Ok(file)
 }
 
 /// Every row of a load case holds the configuration of its first row (exactly: the files deflex
@@ -152,35 +104,29 @@ fn check_load_case_configurations(
     Ok(())
 }
 
-/// The header of a file resolved to column positions. Every column name the format knows is
-/// looked up here, once; a stricter header policy (unknown or duplicate names) belongs in
-/// [`Columns::resolve`] alone.
-struct Columns {
-    index: HashMap<String, usize>,
-    width: usize,
+/// The measurement and plan format, as [`reader::read`] reads it: with `require_displacement`
+/// (a measurement file) every row carries a displacement.
+struct LoadedDisplacements<'a> {
+    require_displacement: bool,
+    ignored: &'a [String],
+}
+
+/// What a measurement or plan file's header holds.
+struct Found {
     joint_count: usize,
     has_displacement: bool,
     has_rotation: bool,
+    has_purpose: bool,
 }
 
-impl Columns {
-    fn resolve(
-        headers: &csv::StringRecord,
-        require_displacement: bool,
-        ignored: &[String],
-    ) -> Result<Columns, HeaderProblem> {
-        let mut index: HashMap<String, usize> = HashMap::new();
-        for (i, name) in headers.iter().enumerate() {
-            if index.insert(name.to_string(), i).is_some() {
-                return Err(HeaderProblem::Duplicate {
-                    name: name.to_string(),
-                });
-            }
-        }
-        let mut joint_count = 0;
-        while index.contains_key(format!("q{}_rad", joint_count + 1).as_str()) {
-            joint_count += 1;
-        }
+impl Format for LoadedDisplacements<'_> {
+    type Row = MeasurementRow;
+    type Columns = Found;
+    const ROW_LIMIT: RowLimit = RowLimit::PerLine(MAX_ROWS);
+    const RECORD_COLUMN: Option<&'static str> = None;
+
+    fn columns(&self, columns: &Columns) -> Result<Found, HeaderProblem> {
+        let joint_count = columns.joint_count();
         if joint_count == 0 {
             return Err(HeaderProblem::NoJointColumns);
         }
@@ -191,17 +137,10 @@ impl Columns {
                 .chain(&LOAD_POINT_COLUMNS)
                 .chain(&POINT_COLUMNS),
         );
-        if require_displacement {
+        if self.require_displacement {
             required.extend(DISPLACEMENT_COLUMNS);
         }
-        let names: Vec<String> = required
-            .iter()
-            .filter(|c| !index.contains_key(**c))
-            .map(|c| c.to_string())
-            .collect();
-        if !names.is_empty() {
-            return Err(HeaderProblem::Missing { names });
-        }
+        columns.require(&required)?;
         let mut known: Vec<String> = required.iter().map(|c| c.to_string()).collect();
         known.extend((1..=joint_count).map(|i| format!("q{i}_rad")));
         known.extend(
@@ -211,86 +150,67 @@ impl Columns {
                 .chain(&["sigma_m", "sigma_rad", "purpose"])
                 .map(|c| c.to_string()),
         );
-        for name in ignored {
-            if known.iter().any(|k| k == name) || is_joint_column(name) {
-                return Err(HeaderProblem::IgnoredKnown {
-                    name: name.chars().take(80).collect(),
-                });
-            }
-        }
-        if let Some(name) = headers
-            .iter()
-            .find(|h| !known.iter().any(|k| k == h) && !ignored.iter().any(|i| i == h))
-        {
-            return Err(HeaderProblem::Unknown {
-                name: name.chars().take(80).collect(),
-                closest: closest_column(name, &known),
-            });
-        }
-        Ok(Columns {
-            has_displacement: DISPLACEMENT_COLUMNS.iter().all(|c| index.contains_key(*c)),
-            has_rotation: ROTATION_COLUMNS.iter().all(|c| index.contains_key(*c)),
-            width: headers.len(),
+        columns.check_names(&known, self.ignored, |_| false)?;
+        Ok(Found {
             joint_count,
-            index,
+            has_displacement: DISPLACEMENT_COLUMNS.iter().all(|c| columns.has(c)),
+            has_rotation: ROTATION_COLUMNS.iter().all(|c| columns.has(c)),
+            has_purpose: columns.has("purpose"),
         })
     }
 
-    /// One row (of the header's width), every field checked (see the module documentation).
-    fn row(
-        &self,
-        record: &csv::StringRecord,
-        require_displacement: bool,
-    ) -> Result<MeasurementRow, RowProblem> {
-        let cells = Cells {
-            columns: self,
-            record,
+    /// One row, every field checked (see the module documentation).
+    fn row(&self, found: &Found, cells: &Cells<'_>) -> Result<MeasurementRow, RowError> {
+        let number = |name: &str| {
+            let (limit, unit) = column_bound(name);
+            cells.number(name, limit, unit)
         };
-        let q_rad = (1..=self.joint_count)
-            .map(|i| cells.number(&format!("q{i}_rad")))
+        let triple = |names: &[&str; 3]| -> Result<[f64; 3], RowError> {
+            Ok([number(names[0])?, number(names[1])?, number(names[2])?])
+        };
+        let link = |column: &str| link_index(cells, column, found.joint_count);
+        let label = |column: &str| cells.label(column, LabelLength::Characters(MAX_LABEL_CHARS));
+        let q_rad = (1..=found.joint_count)
+            .map(|i| number(&format!("q{i}_rad")))
             .collect::<Result<Vec<_>, _>>()?;
         let mut wrench = [0.0; 6];
         for (value, name) in wrench.iter_mut().zip(WRENCH_COLUMNS) {
-            *value = cells.number(name)?;
+            *value = number(name)?;
         }
-        let load_case = cells.label("load_case")?;
-        let point = cells.label("point")?;
-        let sigma_m = cells.sigma(SigmaColumn::Position)?;
+        let load_case = label("load_case")?;
+        let point = label("point")?;
+        let sigma_m = sigma(cells, SigmaColumn::Position)?;
         let displacement_m =
-            if self.has_displacement && (require_displacement || !cells.text("dx_m").is_empty()) {
-                Some(cells.triple(&DISPLACEMENT_COLUMNS)?)
+            if found.has_displacement && (self.require_displacement || cells.present("dx_m")) {
+                Some(triple(&DISPLACEMENT_COLUMNS)?)
             } else {
                 None
             };
-        let rotation_rad = if self.has_rotation && !cells.text("drx_rad").is_empty() {
-            let sigma_rad = cells.sigma(SigmaColumn::Rotation)?;
+        let rotation_rad = if found.has_rotation && cells.present("drx_rad") {
+            let sigma_rad = sigma(cells, SigmaColumn::Rotation)?;
             Some(MeasuredRotation {
-                value_rad: cells.triple(&ROTATION_COLUMNS)?,
+                value_rad: triple(&ROTATION_COLUMNS)?,
                 sigma_rad,
             })
         } else {
             None
         };
-        let purpose = self
-            .index
-            .get("purpose")
-            .map(|_| {
-                cells
-                    .text("purpose")
-                    .chars()
-                    .take(MAX_LABEL_CHARS)
-                    .collect::<String>()
-            })
-            .filter(|s| !s.is_empty());
+        let purpose = (found.has_purpose && cells.present("purpose")).then(|| {
+            cells
+                .text("purpose")
+                .chars()
+                .take(MAX_LABEL_CHARS)
+                .collect()
+        });
         Ok(MeasurementRow {
             load_case,
             q_rad,
             wrench,
-            load_link: cells.link("load_link")?,
-            load_point_m: cells.triple(&LOAD_POINT_COLUMNS)?,
+            load_link: link("load_link")?,
+            load_point_m: triple(&LOAD_POINT_COLUMNS)?,
             point,
-            point_link: cells.link("point_link")?,
-            point_m: cells.triple(&POINT_COLUMNS)?,
+            point_link: link("point_link")?,
+            point_m: triple(&POINT_COLUMNS)?,
             displacement_m,
             sigma_m,
             rotation_rad,
@@ -299,132 +219,40 @@ impl Columns {
     }
 }
 
-/// The cells of one record, read by column name.
-struct Cells<'a> {
-    columns: &'a Columns,
-    record: &'a csv::StringRecord,
-}
-
-impl Cells<'_> {
-    /// The cell of a column ("" when the column is absent).
-    fn text(&self, name: &str) -> &str {
-        self.columns
-            .index
-            .get(name)
-            .and_then(|&i| self.record.get(i))
-            .unwrap_or("")
-    }
-
-    /// A finite number within the column's bound.
-    fn number(&self, name: &str) -> Result<f64, RowProblem> {
-        let text = self.text(name);
-        let shown = || text.chars().take(40).collect::<String>();
-        let value: f64 = text.parse().map_err(|_| RowProblem::NotANumber {
-            column: name.to_string(),
-            text: shown(),
-        })?;
-        if !value.is_finite() {
-            return Err(RowProblem::NotFinite {
-                column: name.to_string(),
-                text: shown(),
-            });
-        }
-        let (limit, unit) = column_bound(name);
-        if value.abs() > limit {
-            return Err(RowProblem::BeyondBound {
-                column: name.to_string(),
-                value,
-                limit,
-                unit,
-            });
-        }
-        Ok(value)
-    }
-
-    fn triple(&self, names: &[&str; 3]) -> Result<[f64; 3], RowProblem> {
-        Ok([
-            self.number(names[0])?,
-            self.number(names[1])?,
-            self.number(names[2])?,
-        ])
-    }
-
-    /// A link index 0 (base) … N (last link).
-    fn link(&self, column: &'static str) -> Result<usize, RowProblem> {
-        let text = self.text(column);
-        let joint_count = self.columns.joint_count;
-        let link: usize = text.parse().map_err(|_| RowProblem::NotALink {
+/// A link index 0 (base) … `joint_count` (last link).
+fn link_index(cells: &Cells<'_>, column: &str, joint_count: usize) -> Result<usize, RowError> {
+    let text = cells.text(column);
+    let link: usize = text.parse().map_err(|_| {
+        RowError::in_column(
             column,
-            text: text.to_string(),
-            joint_count,
-        })?;
-        if link > joint_count {
-            return Err(RowProblem::NoSuchLink {
-                column,
-                link,
+            RowProblem::NotALink {
+                text: text.to_string(),
                 joint_count,
-            });
-        }
-        Ok(link)
+            },
+        )
+    })?;
+    if link > joint_count {
+        return Err(RowError::in_column(
+            column,
+            RowProblem::NoSuchLink { link, joint_count },
+        ));
     }
-
-    /// A non-empty label of at most [`MAX_LABEL_CHARS`] characters.
-    fn label(&self, column: &'static str) -> Result<String, RowProblem> {
-        let text = self.text(column);
-        if text.is_empty() {
-            return Err(RowProblem::EmptyLabel { column });
-        }
-        if text.chars().count() > MAX_LABEL_CHARS {
-            return Err(RowProblem::LabelTooLong {
-                column,
-                max: MAX_LABEL_CHARS,
-            });
-        }
-        Ok(text.to_string())
-    }
-
-    /// An optional standard deviation (an empty cell or an absent column: none), in range.
-    fn sigma(&self, sigma: SigmaColumn) -> Result<Option<f64>, RowProblem> {
-        let column = sigma.column();
-        if !self.columns.index.contains_key(column) || self.text(column).is_empty() {
-            return Ok(None);
-        }
-        let value = self.number(column)?;
-        if !sigma.accepts(value) {
-            return Err(RowProblem::Sigma { sigma, value });
-        }
-        Ok(Some(value))
-    }
+    Ok(link)
 }
 
-/// The column of `known` closest to `name` (a typo's likely meaning), within 3 edits.
-pub fn closest_column(name: &str, known: &[String]) -> Option<String> {
-    known
-        .iter()
-        .map(|k| (edit_distance(k, name), k))
-        .filter(|(d, _)| *d <= 3)
-        .min_by_key(|(d, _)| *d)
-        .map(|(_, k)| k.clone())
-}
-
-/// `q7_rad` and the like: a joint column (of this robot or another), never an ignorable one.
-pub fn is_joint_column(name: &str) -> bool {
-    name.strip_prefix('q')
-        .and_then(|rest| rest.strip_suffix("_rad"))
-        .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
-}
-
-/// Levenshtein distance between two column names (short strings: the quadratic table is fine).
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().take(200).collect();
-    let mut previous: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().take(200).enumerate() {
-        let mut current = vec![i + 1];
-        for (j, cb) in b.iter().enumerate() {
-            let substitution = previous[j] + usize::from(ca != *cb);
-            current.push(substitution.min(previous[j + 1] + 1).min(current[j] + 1));
-        }
-        previous = current;
+/// An optional standard deviation (an empty cell or an absent column: none), in range.
+fn sigma(cells: &Cells<'_>, sigma: SigmaColumn) -> Result<Option<f64>, RowError> {
+    let column = sigma.column();
+    if !cells.present(column) {
+        return Ok(None);
     }
-    previous[b.len()]
+    let (limit, unit) = column_bound(column);
+    let value = cells.number(column, limit, unit)?;
+    if !sigma.accepts(value) {
+        return Err(RowError::in_column(
+            column,
+            RowProblem::Sigma { sigma, value },
+        ));
+    }
+    Ok(Some(value))
 }

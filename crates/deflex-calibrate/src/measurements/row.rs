@@ -1,7 +1,5 @@
 //! The rows of a measurement or plan file and the file as read.
 
-use crate::measurements::FileHeader;
-
 /// Default tracker standard deviation when a row has no `sigma_m` (15 µm).
 pub const DEFAULT_SIGMA_M: f64 = 15e-6;
 
@@ -62,16 +60,8 @@ impl MeasuredRotation {
         self.sigma_rad.unwrap_or(DEFAULT_SIGMA_RAD)
     }
 }
-/// A measurement or plan file as read: its header, its rows and the line of each row.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MeasurementFile {
-    /// The header comments.
-    pub header: FileHeader,
-    /// The rows.
-    pub rows: Vec<MeasurementRow>,
-    /// 1-based line number of each row in the file.
-    pub lines: Vec<u64>,
-}
+/// A measurement or plan file as read: its header comments, its rows and the line of each row.
+pub type MeasurementFile = crate::measurements::reader::Table<MeasurementRow>;
 
 /// Number of distinct load cases among `rows`.
 pub fn load_case_count(rows: &[MeasurementRow]) -> usize {

@@ -3,6 +3,7 @@
 //! shifts, the residual statistics and the calibrated robot (`Calibration::to_robot`). The fit
 //! itself is [`crate::stiffness::stiffness_fit`]'s; the uncertainties are computed by `uncertainty`.
 
+use crate::stats::ErrorStats;
 use crate::stiffness::design::{EdofId, edof_order};
 use deflex_model::{Axis, EdofSite, Robot};
 use nalgebra::DMatrix;
@@ -150,15 +151,9 @@ pub struct ShiftEstimate {
 /// rotation residuals when the data has measured rotations.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ResidualStats {
-    /// RMS per axis x, y, z.
-    pub rms_m: [f64; 3],
-    /// Largest absolute residual per axis.
-    pub max_abs_m: [f64; 3],
-    /// RMS of the residual norm per point.
-    pub rms_norm_m: f64,
-    /// Largest residual norm.
-    pub max_norm_m: f64,
-    /// RMS over all position components (the "RMS" of the iteration table).
+    /// The position residual of each row (m): per axis x, y, z and of its norm.
+    pub position: ErrorStats,
+    /// RMS over all position components (the "RMS" of the iteration table, m).
     pub rms_all_m: f64,
     /// RMS over all rotation components (rad) of the rows with a measured rotation; `None`
     /// when no row has one.

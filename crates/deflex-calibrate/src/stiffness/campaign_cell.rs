@@ -38,7 +38,7 @@
 //!
 //! [`PlanOptions::bracket_m`]: crate::stiffness::plan::PlanOptions::bracket_m
 
-pub use crate::measurements::points::{MAX_USER_POINTS, PointSpec};
+use crate::measurements::points::PointSpec;
 use crate::stiffness::{CalibError, DirectionError, PlanError};
 use deflex_model::{Data, Robot};
 use nalgebra::{Point3, Vector3};

@@ -19,7 +19,7 @@
 //! the robot's geometric errors well inside the default tolerance, [`DEFAULT_FK_TOLERANCE_M`]
 //! (1 mm). The file's header (`# robot:`, `# geometry:`) is compared with the robot too.
 
-use crate::stiffness::data::{FileHeader, MeasurementRow};
+use crate::measurements::{FileHeader, MeasurementRow};
 use crate::stiffness::{CalibError, RowsError};
 use deflex_model::{Data, Robot};
 use nalgebra::{Point3, Vector3};

@@ -23,9 +23,9 @@
 //! `c_a`, `c_b` through that covariance). A campaign that does not separate a coupling from the
 //! compliances (a singular design) gives infinite standard errors.
 
+use crate::measurements::DEFAULT_SIGMA_M;
 use crate::measurements::MeasurementRow;
 use crate::stiffness::calibration::Z95;
-use crate::stiffness::design::DEFAULT_SIGMA_M;
 use crate::stiffness::error::{CalibError, RowsError, StructureError};
 use deflex_model::{
     Axis, ComplianceCoupling, Data, EdofSite, MAX_COUPLINGS, Robot, Wrench, edof_screw,

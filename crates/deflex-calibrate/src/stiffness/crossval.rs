@@ -9,7 +9,7 @@
 //! the other folds, and the held-out fold is predicted with the same linear model as the fit
 //! (eq. 13–15 through [`crate::stiffness::design`]).
 
-use crate::stiffness::data::MeasurementRow;
+use crate::measurements::MeasurementRow;
 use crate::stiffness::design::{Design, EdofId};
 use crate::stiffness::shift;
 use crate::stiffness::stiffness_fit::Structure;

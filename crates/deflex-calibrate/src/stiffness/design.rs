@@ -33,15 +33,13 @@
 //! structure, with any centre shifts, then costs O(p²) inner products of precomputed numbers,
 //! independent of the number of rows: this is what makes the structure search fast.
 
-use crate::stiffness::data::MeasurementRow;
+use crate::measurements::{DEFAULT_SIGMA_M, MeasurementRow};
 use crate::stiffness::{CalibError, RowRef, RowsError, StructureError};
 use deflex_model::{Axis, Data, EdofSite, Robot};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One eDoF, by site and axis.
 pub type EdofId = (EdofSite, Axis);
-
-pub use crate::measurements::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD};
 
 /// Label of an eDoF as in the paper's Table 1: `J3.x`, `base.y`.
 pub fn edof_label(id: EdofId) -> String {

@@ -1,34 +1,31 @@
-//! # deflex-stiffness
-//!
-//! Identification of the VJM stiffness model from laser-tracker measurements (Johra et al. 2022,
-//! Section 3): the measurement and plan file formats, calibration, the automatic model-structure
-//! search, experiment planning and validation.
+//! The stiffness calibration: identification of the VJM stiffness model from loaded
+//! displacements measured by a laser tracker (Johra et al. 2022, Section 3: identification in
+//! 3.1, validation in 3.2), with the automatic model-structure search and experiment planning.
+//! The measurement and plan files it reads are [`crate::measurements`]'.
 //!
 //! * [`design`]: the design matrix of eqs. 13–15, linear in the compliances c = 1/k and
 //!   quadratic in each centre shift δr;
 //! * [`nnls`]: Lawson–Hanson non-negative least squares (c ≥ 0);
-//! * [`stiffness_fit`]: fixed-structure calibration (positions and, when measured, link rotations) with
-//!   standard errors, intervals, correlations (`uncertainty`, internal);
+//! * [`stiffness_fit`]: fixed-structure calibration (positions and, when measured, link
+//!   rotations) with standard errors, intervals, correlations (`uncertainty`, internal);
+//! * [`coupling`]: off-diagonal compliances between eDoF pairs;
 //! * [`search`]: the paper's test-model loop (Fig. 6, Tables A1/A2) automated with BIC or
 //!   cross-validated error ([`crossval`], k folds by load case);
-//! * [`plan`]: axis-by-axis and D-optimal experiment design, within the cell of [`campaign_cell`]
-//!   (floor, table, measured points, cable or dead-weight loads, off-axis bracket);
-//! * [`validation`]: prediction errors against measurements (their report is `deflex-report`'s);
+//! * [`plan`]: axis-by-axis and D-optimal experiment design, within the cell of
+//!   [`campaign_cell`] (floor, table, measured points, cable or dead-weight loads, off-axis
+//!   bracket);
+//! * [`validation`]: prediction errors against measurements (Section 3.2; their tables, plots
+//!   and page are `deflex_app::report`'s);
 //! * [`synthetic`]: measurement generation from a known model (tests, benches, demos);
 //! * [`consistency`]: do a file's coordinates agree with the robot's forward kinematics?
 //!
-//! The measurement and plan formats are `deflex-measurements`' (re-exported as [`data`]); the
-//! tables, plots and HTML of a calibration are `deflex-report`'s; reading files is
-//! `deflex-load`'s. This crate takes and returns data.
+//! Pure maths on data: reading files is `deflex_app::load`'s.
 
-#![warn(missing_docs)]
-
-pub mod calibration;
+mod calibration;
 pub mod campaign_cell;
 pub mod consistency;
 pub mod coupling;
 pub mod crossval;
-pub use crate::measurements as data;
 pub mod design;
 mod error;
 pub mod nnls;
@@ -40,12 +37,8 @@ pub mod synthetic;
 mod uncertainty;
 pub mod validation;
 
-pub use crate::measurements::{
-    DataError, FileHeader, MeasuredRotation, MeasurementFile, MeasurementRow, format_rows,
-    format_rows_for,
-};
 pub use coupling::{CouplingFit, EdofPair, fit_couplings};
-pub use design::{DEFAULT_SIGMA_M, DEFAULT_SIGMA_RAD, Design, EdofId, edof_label};
+pub use design::{Design, EdofId, edof_label};
 pub use error::{CalibError, DirectionError, PlanError, RowRef, RowsError, StructureError};
 pub use search::{Criterion, SearchOptions, SearchResult, SearchStep, search_structure};
 pub use shift::MAX_SHIFT_M;

@@ -16,8 +16,8 @@
 //! cross-validated RMS (when the data has at least two load cases), the out-of-sample number an
 //! engineer should trust over the in-sample RMS.
 
+use crate::measurements::MeasurementRow;
 use crate::stiffness::crossval::{CrossValidation, CvScore, DEFAULT_FOLDS};
-use crate::stiffness::data::MeasurementRow;
 use crate::stiffness::design::{Design, EdofId, all_edofs, edof_label};
 use crate::stiffness::shift::{self, Inner, normal_system, scales};
 use crate::stiffness::stiffness_fit::{
@@ -25,6 +25,7 @@ use crate::stiffness::stiffness_fit::{
 };
 use crate::stiffness::{CalibError, StructureError};
 use deflex_model::{Axis, Data, EdofSite, Robot};
+use deflex_telemetry::{OnProgress, Progress};
 use nalgebra::DMatrix;
 
 /// How [`search_structure`] ranks structures.
@@ -124,9 +125,6 @@ pub struct SearchResult {
     pub stop_reason: String,
 }
 
-/// Progress of the search: `(iteration, candidates done, candidates at this iteration)`.
-pub type Progress<'a> = &'a mut dyn FnMut(usize, usize, usize);
-
 #[derive(Clone)]
 enum Change {
     Add(EdofId),
@@ -151,12 +149,14 @@ impl Change {
     }
 }
 
-/// Run the structure search on measurement rows. `progress` is called after every candidate.
+/// Run the structure search on measurement rows. `progress` hears of every step (a
+/// [`Progress::Stage`] named `step N`, its number of steps not known in advance) and, after every
+/// candidate, of the candidates done at this step ([`Progress::Work`]).
 pub fn search_structure(
     robot: &Robot,
     rows: &[MeasurementRow],
     options: &SearchOptions,
-    progress: Progress,
+    progress: OnProgress<'_>,
 ) -> Result<SearchResult, CalibError> {
     let n_joints = robot.joint_count();
     let candidates: Vec<EdofId> = all_edofs(n_joints)
@@ -229,10 +229,18 @@ pub fn search_structure(
         for iteration in 1..=options.max_steps {
             let changes = candidate_changes(&current, &candidates, options);
             let total = changes.len();
+            progress(Progress::Stage {
+                index: iteration,
+                count: None,
+                name: &format!("step {iteration}"),
+            });
             let mut best: Option<(f64, f64, Option<CvScore>, Change, Structure, Inner)> = None;
             for (done, change) in changes.into_iter().enumerate() {
                 let outcome = evaluate(&design, &current, &change, scale);
-                progress(iteration, done + 1, total);
+                progress(Progress::Work {
+                    done: done + 1,
+                    total,
+                });
                 let Some((structure, sol)) = outcome else {
                     continue;
                 };

@@ -1,12 +1,13 @@
 //! Fixed-structure calibration: compliances `c = 1/k` by weighted NNLS (eq. 15 is linear in c),
 //! centre shifts by variable projection, with standard errors, 95 % intervals, correlations,
 //! condition number and residual statistics (computed in the internal `uncertainty` module).
+//! What it produces ([`Calibration`], [`Structure`], [`ResidualStats`], …) is named here.
 //!
 //! The least-squares problem holds the three position equations of every row and, for rows with
 //! a measured rotation, its three rotation equations (weighted by `1/σ_rad`); residual
 //! statistics stay position-only in metres, with the rotation RMS reported separately.
 
-use crate::stiffness::data::MeasurementRow;
+use crate::measurements::MeasurementRow;
 use crate::stiffness::design::{Design, EdofId, edof_label};
 use crate::stiffness::shift::{self, normal_system, scales};
 use crate::stiffness::uncertainty::analyse;

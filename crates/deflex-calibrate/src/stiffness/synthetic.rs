@@ -5,10 +5,9 @@
 //! own noise.
 //! Used by the recovery tests, the benches and demos.
 
+use crate::measurements::{MeasuredRotation, MeasurementRow};
 use crate::stiffness::CalibError;
-pub use crate::stiffness::campaign_cell::random_q;
-use crate::stiffness::campaign_cell::standard_points;
-use crate::stiffness::data::{MeasuredRotation, MeasurementRow};
+use crate::stiffness::campaign_cell::{random_q, standard_points};
 use crate::stiffness::design::EdofId;
 use deflex_model::{Data, Robot, Wrench};
 use nalgebra::{Vector3, Vector6};

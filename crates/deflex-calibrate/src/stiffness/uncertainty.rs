@@ -7,6 +7,7 @@
 //! included. Stiffness `k = 1/c`: SE by the delta method (`SE_k = SE_c / c²`), interval by
 //! mapping the c-interval (upper bound ∞ when `c − 1.96 SE_c ≤ 0`: weakly identified).
 
+use crate::stats::ErrorStats;
 use crate::stiffness::calibration::{
     Calibration, EdofEstimate, MAX_RELATIVE_SE, ResidualStats, ShiftEstimate, Status, Structure,
     Z95,
@@ -326,34 +327,24 @@ pub fn bic(chi2: f64, n: usize, p: usize) -> f64 {
 /// Residual statistics from a weighted prediction: positions in metres (the first `3 · rows`
 /// equations), rotation RMS in radians (the rest).
 pub(crate) fn residual_stats(design: &Design, pred: &DVector<f64>) -> ResidualStats {
-    let mut stats = ResidualStats::default();
-    let mut sum = [0.0; 3];
-    let mut sum_norm = 0.0;
-    for r in 0..design.rows {
-        let mut norm2 = 0.0;
-        for (ax, (acc, max)) in sum.iter_mut().zip(stats.max_abs_m.iter_mut()).enumerate() {
-            let e = 3 * r + ax;
-            let res = (design.y[e] - pred[e]) * design.sigma[e];
-            *acc += res * res;
-            norm2 += res * res;
-            *max = max.max(res.abs());
-        }
-        sum_norm += norm2;
-        stats.max_norm_m = stats.max_norm_m.max(norm2.sqrt());
-    }
-    let rows = design.rows.max(1) as f64;
-    for (rms, s) in stats.rms_m.iter_mut().zip(sum) {
-        *rms = (s / rows).sqrt();
-    }
-    stats.rms_norm_m = (sum_norm / rows).sqrt();
-    stats.rms_all_m = (sum_norm / (3.0 * rows)).sqrt();
+    let residual = |e: usize| (design.y[e] - pred[e]) * design.sigma[e];
+    let positions: Vec<[f64; 3]> = (0..design.rows)
+        .map(|r| [residual(3 * r), residual(3 * r + 1), residual(3 * r + 2)])
+        .collect();
+    let sum_squares = positions.iter().fold(0.0, |sum, e| {
+        sum + (e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+    });
     let first = 3 * design.rows;
     let count = design.equations() - first;
-    if count > 0 {
+    let rotation_rms_rad = (count > 0).then(|| {
         let sum: f64 = (first..design.equations())
-            .map(|e| ((design.y[e] - pred[e]) * design.sigma[e]).powi(2))
+            .map(|e| residual(e).powi(2))
             .sum();
-        stats.rotation_rms_rad = Some((sum / count as f64).sqrt());
+        (sum / count as f64).sqrt()
+    });
+    ResidualStats {
+        position: ErrorStats::of(&positions),
+        rms_all_m: (sum_squares / (3.0 * design.rows.max(1) as f64)).sqrt(),
+        rotation_rms_rad,
     }
-    stats
 }

@@ -1,45 +1,14 @@
 //! Validation: prediction errors of a model (and optionally a baseline) against measurements
-//! (the paper's Section 3.2). When rows carry a measured link rotation, its prediction errors
-//! are reported too. The predicted-vs-measured plots (Figs. 8–10, 12), the error heatmaps over
-//! the measured grid (Figs. 11, 13) and their HTML page are `deflex_app::report::validation`'s.
+//! (the paper's Section 3.2), with their statistics ([`ErrorStats`]). When rows carry a measured
+//! link rotation, its prediction errors are reported too. The predicted-vs-measured plots
+//! (Figs. 8–10, 12), the error heatmaps over the measured grid (Figs. 11, 13) and their HTML page
+//! are `deflex_app::report::validation`'s.
 
-use crate::stiffness::data::MeasurementRow;
+use crate::measurements::MeasurementRow;
+use crate::stats::ErrorStats;
 use crate::stiffness::{CalibError, RowRef, RowsError};
 use deflex_model::{Data, Robot, Wrench};
 use nalgebra::Vector3;
-
-/// Error statistics (measured − predicted), metres.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ErrorStats {
-    /// RMS per axis.
-    pub rms_m: [f64; 3],
-    /// Largest absolute error per axis.
-    pub max_abs_m: [f64; 3],
-    /// Mean (bias) per axis.
-    pub mean_m: [f64; 3],
-    /// RMS of the error norm.
-    pub rms_norm_m: f64,
-    /// Largest error norm.
-    pub max_norm_m: f64,
-}
-
-/// Rotation error statistics (measured − predicted), radians, over the rows with a measured
-/// rotation.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RotationStats {
-    /// Number of rows with a measured rotation.
-    pub rows: usize,
-    /// RMS per axis.
-    pub rms_rad: [f64; 3],
-    /// Largest absolute error per axis.
-    pub max_abs_rad: [f64; 3],
-    /// Mean (bias) per axis.
-    pub mean_rad: [f64; 3],
-    /// RMS of the error norm.
-    pub rms_norm_rad: f64,
-    /// Largest error norm.
-    pub max_norm_rad: f64,
-}
 
 /// Rotation predictions and errors of one model, for the rows with a measured rotation.
 #[derive(Clone, Debug)]
@@ -50,8 +19,8 @@ pub struct RotationErrors {
     pub predicted_rad: Vec<[f64; 3]>,
     /// Measured − predicted per used row (rad).
     pub errors_rad: Vec<[f64; 3]>,
-    /// Statistics.
-    pub stats: RotationStats,
+    /// Statistics (rad; their count is the number of rows used).
+    pub stats: ErrorStats,
 }
 
 /// Predictions and errors of one model.
@@ -63,7 +32,7 @@ pub struct ModelErrors {
     pub predicted: Vec<[f64; 3]>,
     /// Measured − predicted per row (m).
     pub errors: Vec<[f64; 3]>,
-    /// Statistics.
+    /// Statistics (m).
     pub stats: ErrorStats,
     /// Rotation errors, when some rows have a measured rotation.
     pub rotation: Option<RotationErrors>,
@@ -176,18 +145,10 @@ pub fn validate(
                     [m[0] - p[0], m[1] - p[1], m[2] - p[2]]
                 })
                 .collect();
-            let s = stats(&errors_rad);
             RotationErrors {
                 rows: rotation_rows.clone(),
                 predicted_rad,
-                stats: RotationStats {
-                    rows: errors_rad.len(),
-                    rms_rad: s.rms_m,
-                    max_abs_rad: s.max_abs_m,
-                    mean_rad: s.mean_m,
-                    rms_norm_rad: s.rms_norm_m,
-                    max_norm_rad: s.max_norm_m,
-                },
+                stats: ErrorStats::of(&errors_rad),
                 errors_rad,
             }
         });
@@ -199,7 +160,7 @@ pub fn validate(
             .collect();
         Ok(ModelErrors {
             name: robot.name.clone(),
-            stats: stats(&errors),
+            stats: ErrorStats::of(&errors),
             predicted,
             errors,
             rotation,
@@ -207,7 +168,7 @@ pub fn validate(
     };
     let model_errors = errors_of(model)?;
     let baseline = baseline.map(errors_of).transpose()?;
-    let measured_rms_m = stats(&measured).rms_m;
+    let measured_rms_m = ErrorStats::of(&measured).rms;
     Ok(Validation {
         model: model_errors,
         baseline,
@@ -220,30 +181,6 @@ pub fn validate(
         measured,
         measured_rms_m,
     })
-}
-
-/// Statistics of a set of 3D errors (any unit; the fields are named for metres).
-pub fn stats(errors: &[[f64; 3]]) -> ErrorStats {
-    let mut s = ErrorStats::default();
-    let n = errors.len().max(1) as f64;
-    let mut sum2 = [0.0; 3];
-    let mut norm2 = 0.0;
-    for e in errors {
-        let mut n2 = 0.0;
-        for ax in 0..3 {
-            sum2[ax] += e[ax] * e[ax];
-            s.mean_m[ax] += e[ax] / n;
-            s.max_abs_m[ax] = s.max_abs_m[ax].max(e[ax].abs());
-            n2 += e[ax] * e[ax];
-        }
-        norm2 += n2;
-        s.max_norm_m = s.max_norm_m.max(n2.sqrt());
-    }
-    for (rms, s2) in s.rms_m.iter_mut().zip(sum2) {
-        *rms = (s2 / n).sqrt();
-    }
-    s.rms_norm_m = (norm2 / n).sqrt();
-    s
 }
 
 /// Residuals (measured − predicted by `model`) per row, in metres; NaN where a row has no

@@ -84,14 +84,14 @@ pub enum ArcError {
         /// |start − end| (mm).
         difference_mm: f64,
     },
-    /// A centre coordinate beyond the coordinate bound.
-    #[error(
-        "the centre {centre_mm:.3} mm is beyond ±{} mm",
-        crate::gcode::MAX_COORDINATE_MM
-    )]
+    /// A centre coordinate beyond the coordinate bound
+    /// ([`crate::gcode::ReadOptions::max_coordinate_mm`]).
+    #[error("the centre {centre_mm:.3} mm is beyond ±{max_mm} mm")]
     CentreOutOfRange {
         /// The centre coordinate (mm).
         centre_mm: f64,
+        /// The bound (mm).
+        max_mm: f64,
     },
     /// A `P` word outside 1 ..= [`MAX_TURNS`].
     #[error("P{turns}: the number of turns must be 1 ..= {MAX_TURNS}")]

@@ -54,7 +54,8 @@ pub enum GcodeErrorKind {
         /// What is missing.
         message: &'static str,
     },
-    /// A coordinate beyond [`crate::gcode::MAX_COORDINATE_MM`] of the work offset's origin.
+    /// A coordinate beyond [`crate::gcode::ReadOptions::max_coordinate_mm`] (default
+    /// [`crate::gcode::MAX_COORDINATE_MM`]) of the work offset's origin.
     #[error("{value:.3} mm is beyond ±{max} mm of the work offset's origin")]
     Coordinate {
         /// The coordinate (mm).
@@ -62,7 +63,8 @@ pub enum GcodeErrorKind {
         /// The bound (mm).
         max: f64,
     },
-    /// A feed outside [`crate::gcode::MIN_FEED_MM_MIN`] ..= [`crate::gcode::MAX_FEED_MM_MIN`].
+    /// A feed outside [`crate::gcode::MIN_FEED_MM_MIN`] ..=
+    /// [`crate::gcode::ReadOptions::max_feed_mm_min`] (default [`crate::gcode::MAX_FEED_MM_MIN`]).
     #[error("feed {value} mm/min is outside {min} ..= {max} mm/min")]
     Feed {
         /// The feed (mm/min).

@@ -1,11 +1,12 @@
-//! The modal state machine: words of a line → settings, then at most one motion.
+//! The modal state machine: words of a line → settings, then at most one motion. [`crate::gcode::read`]
+//! keeps the path; [`LineReader`] hands each line's move out and keeps nothing but the state.
 
 use crate::gcode::arc;
 use crate::gcode::error::{GcodeError, GcodeErrorKind as K, Note, NoteKind};
 use crate::gcode::words::{Word, split};
 use crate::gcode::{
-    MAX_COORDINATE_MM, MAX_FEED_MM_MIN, MAX_LINE_CHARS, MAX_TEXT_BYTES, MIN_FEED_MM_MIN, Move,
-    MoveKind, PathPoint, Plane, Program, ReadOptions, WorkOffset,
+    MAX_COORDINATE_BOUND_MM, MAX_FEED_BOUND_MM_MIN, MAX_LINE_CHARS, MAX_TEXT_BYTES,
+    MIN_FEED_MM_MIN, Move, MoveKind, PathPoint, Plane, Program, ReadOptions, WorkOffset,
 };
 
 /// Modal motion.
@@ -47,8 +48,14 @@ struct State {
     position: [Option<f64>; 3],
     work_offset: Option<WorkOffset>,
     number: Option<u32>,
+    /// Points of the path so far, kept in `points` or not.
+    point_count: usize,
+    /// Whether the points and moves are kept ([`crate::gcode::read`]) or only counted ([`LineReader`]).
+    keep_path: bool,
     points: Vec<RawPoint>,
     moves: Vec<RawMove>,
+    /// The move of the line being read, with its start and end as known so far.
+    line_move: Option<LineMove>,
     notes: Vec<Note>,
     /// First absolute value of each axis (mm) and its line, for the start.
     first_value: [Option<(f64, usize)>; 3],
@@ -279,12 +286,12 @@ impl State {
                 }
             }
         };
-        if value.abs() > MAX_COORDINATE_MM {
+        if value.abs() > self.options.max_coordinate_mm {
             return Err(w.error(
                 line,
                 K::Coordinate {
                     value,
-                    max: MAX_COORDINATE_MM,
+                    max: self.options.max_coordinate_mm,
                 },
             ));
         }
@@ -298,7 +305,7 @@ impl State {
         line: usize,
         w: &Word,
     ) -> Result<(), GcodeError> {
-        if self.points.len() >= self.options.max_points {
+        if self.point_count >= self.options.max_points {
             return Err(w.error(
                 line,
                 K::TooManyPoints {
@@ -306,7 +313,10 @@ impl State {
                 },
             ));
         }
-        self.points.push(RawPoint { p, feed_mm_s, line });
+        if self.keep_path {
+            self.points.push(RawPoint { p, feed_mm_s, line });
+        }
+        self.point_count += 1;
         Ok(())
     }
 
@@ -327,7 +337,7 @@ impl State {
         }
         if let Some((w, offset)) = b.work_offset {
             match self.work_offset {
-                Some(first) if first != offset && !self.points.is_empty() => {
+                Some(first) if first != offset && self.point_count > 0 => {
                     return Err(w.error(
                         line,
                         K::SecondWorkOffset {
@@ -341,13 +351,13 @@ impl State {
         }
         if let Some(w) = b.feed {
             let per_min = w.value * self.scale;
-            if !(MIN_FEED_MM_MIN..=MAX_FEED_MM_MIN).contains(&per_min) {
+            if !(MIN_FEED_MM_MIN..=self.options.max_feed_mm_min).contains(&per_min) {
                 return Err(w.error(
                     line,
                     K::Feed {
                         value: per_min,
                         min: MIN_FEED_MM_MIN,
-                        max: MAX_FEED_MM_MIN,
+                        max: self.options.max_feed_mm_min,
                     },
                 ));
             }
@@ -443,7 +453,7 @@ impl State {
             ),
         };
         let start = self.position;
-        if self.points.is_empty() {
+        if self.point_count == 0 {
             self.push_point(start, None, line, first_word)?;
         }
         let kind = match motion {
@@ -473,8 +483,17 @@ impl State {
             )?,
         };
         let end: [f64; 3] = std::array::from_fn(|a| target[a].unwrap_or(f64::NAN));
-        let last = self.points.len() - 1;
-        self.moves.push((line, kind, start, end, feed_mm_s, last));
+        let last = self.point_count - 1;
+        if self.keep_path {
+            self.moves.push((line, kind, start, end, feed_mm_s, last));
+        }
+        self.line_move = Some(LineMove {
+            line,
+            kind,
+            start_mm: start,
+            end_mm: target,
+            feed_mm_s,
+        });
         self.position = target;
         Ok(())
     }
@@ -537,9 +556,10 @@ impl State {
                     } else {
                         s[a] + offset
                     };
-                    if c[a].abs() > MAX_COORDINATE_MM {
+                    if c[a].abs() > self.options.max_coordinate_mm {
                         return Err(arc_error(arc::ArcError::CentreOutOfRange {
                             centre_mm: c[a],
+                            max_mm: self.options.max_coordinate_mm,
                         }));
                     }
                 }
@@ -576,7 +596,7 @@ impl State {
         };
         let sweep = arc::sweep(&s, &e, &center, self.plane, ccw, turns).map_err(arc_error)?;
         let steps = arc::steps(&sweep, self.options.chord_tolerance_mm);
-        let room = (self.options.max_points - self.points.len()) as f64;
+        let room = (self.options.max_points - self.point_count) as f64;
         if steps > room {
             return Err(first_word.error(
                 line,
@@ -599,8 +619,150 @@ impl State {
     }
 }
 
-/// See [`crate::gcode::read`].
-pub(crate) fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
+/// A move as [`LineReader`] hands it out: a [`Move`] before the program's start is resolved.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineMove {
+    /// 1-based line.
+    pub line: usize,
+    /// Rapid, linear or arc.
+    pub kind: MoveKind,
+    /// Start (mm); an axis is `None` while the program has given it no value (before its first
+    /// absolute word: [`crate::gcode::read`] fills it in at the end, a line reader cannot).
+    pub start_mm: [Option<f64>; 3],
+    /// End (mm); `None` as for the start.
+    pub end_mm: [Option<f64>; 3],
+    /// Feed (mm/s); `None` for a rapid.
+    pub feed_mm_s: Option<f64>,
+}
+
+/// A program read one line at a time: each line's move is handed out as it is read, and nothing
+/// is kept but the modal state and the notes (at most 1000), so a program of any length reads in
+/// little memory. The same language, checks and errors as [`crate::gcode::read`], line for line;
+/// [`ReadOptions::max_points`] counts the points the path would have. The caller bounds the text
+/// ([`crate::gcode::MAX_TEXT_BYTES`] is [`crate::gcode::read`]'s bound); each line is checked
+/// against [`MAX_LINE_CHARS`].
+///
+/// ```
+/// use deflex_cam::gcode::{LineReader, MoveKind, ReadOptions};
+/// let mut reader = LineReader::new(&ReadOptions::default()).unwrap();
+/// let mut ends = Vec::new();
+/// for line in "%\n( part )\nG21 G90 G54\nG0 X10 Y0 Z5\nG1 Z0 F300\nM30\n%\n".lines() {
+///     if let Some(m) = reader.read_line(line).unwrap() {
+///         ends.push((m.kind, m.end_mm, m.feed_mm_s));
+///     }
+/// }
+/// assert_eq!(ends[1], (MoveKind::Linear, [Some(10.0), Some(0.0), Some(0.0)], Some(5.0)));
+/// assert!(reader.ended());
+/// ```
+pub struct LineReader {
+    state: State,
+    /// 1-based number of the last line read.
+    line: usize,
+    percent_seen: bool,
+    code_seen: bool,
+    ended: bool,
+}
+
+impl LineReader {
+    /// A reader with `options` (checked as [`crate::gcode::read`] checks them).
+    pub fn new(options: &ReadOptions) -> Result<LineReader, GcodeError> {
+        check_options(options)?;
+        Ok(LineReader::start(options, false))
+    }
+
+    fn start(options: &ReadOptions, keep_path: bool) -> LineReader {
+        LineReader {
+            state: State {
+                options: *options,
+                motion: None,
+                plane: Plane::Xy,
+                scale: 1.0,
+                absolute: true,
+                arc_center_absolute: false,
+                feed_mm_min: None,
+                position: [None; 3],
+                work_offset: None,
+                number: None,
+                point_count: 0,
+                keep_path,
+                points: Vec::new(),
+                moves: Vec::new(),
+                line_move: None,
+                notes: Vec::new(),
+                first_value: [None; 3],
+            },
+            line: 0,
+            percent_seen: false,
+            code_seen: false,
+            ended: false,
+        }
+    }
+
+    /// Read the next line (its text without the line break): the move it executes, if any.
+    /// Once the program has ended (`M2`, `M30`, a closing `%`) every further line is ignored.
+    pub fn read_line(&mut self, raw: &str) -> Result<Option<LineMove>, GcodeError> {
+        if self.ended {
+            return Ok(None);
+        }
+        self.line += 1;
+        let line = self.line;
+        let length = raw.chars().count();
+        if length > MAX_LINE_CHARS {
+            return Err(GcodeError {
+                line,
+                column: 0,
+                word: raw.chars().take(24).collect(),
+                kind: K::TooLarge {
+                    what: "the line",
+                    size: length,
+                    max: MAX_LINE_CHARS,
+                },
+            });
+        }
+        let parsed = split(raw, line)?;
+        if parsed.percent {
+            if self.percent_seen || self.code_seen {
+                if self.code_seen {
+                    self.state.notes.push(Note {
+                        line,
+                        word: "%".into(),
+                        kind: NoteKind::ProgramEnd,
+                    });
+                }
+                self.ended = true;
+                return Ok(None);
+            }
+            self.percent_seen = true;
+            return Ok(None);
+        }
+        if parsed.words.is_empty() {
+            return Ok(None);
+        }
+        self.code_seen = true;
+        if parsed.block_delete {
+            self.state
+                .note(line, &parsed.words[0], NoteKind::BlockDeleteExecuted);
+        }
+        self.state.line_move = None;
+        if self.state.line(&parsed.words, line)? {
+            self.ended = true;
+        }
+        Ok(self.state.line_move.take())
+    }
+
+    /// Whether the program has ended (`M2`, `M30`, a closing `%`).
+    pub fn ended(&self) -> bool {
+        self.ended
+    }
+
+    /// What was ignored or assumed so far.
+    pub fn notes(&self) -> &[Note] {
+        &self.state.notes
+    }
+}
+
+/// The options' bounds.
+fn check_options(options: &ReadOptions) -> Result<(), GcodeError> {
     let whole = |kind| GcodeError {
         line: 0,
         column: 0,
@@ -623,73 +785,46 @@ pub(crate) fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeEr
             value: options.max_points as f64,
         }));
     }
-    if text.len() > MAX_TEXT_BYTES {
-        return Err(whole(K::TooLarge {
-            what: "the program",
-            size: text.len(),
-            max: MAX_TEXT_BYTES,
+    if !(1.0..=MAX_COORDINATE_BOUND_MM).contains(&options.max_coordinate_mm) {
+        return Err(whole(K::Option {
+            option: "max_coordinate_mm",
+            expected: "1 ..= 100 000",
+            value: options.max_coordinate_mm,
         }));
     }
-    let mut state = State {
-        options: *options,
-        motion: None,
-        plane: Plane::Xy,
-        scale: 1.0,
-        absolute: true,
-        arc_center_absolute: false,
-        feed_mm_min: None,
-        position: [None; 3],
-        work_offset: None,
-        number: None,
-        points: Vec::new(),
-        moves: Vec::new(),
-        notes: Vec::new(),
-        first_value: [None; 3],
-    };
-    let mut percent_seen = false;
-    let mut code_seen = false;
-    for (index, raw) in text.lines().enumerate() {
-        let line = index + 1;
-        let length = raw.chars().count();
-        if length > MAX_LINE_CHARS {
-            return Err(GcodeError {
-                line,
-                column: 0,
-                word: raw.chars().take(24).collect(),
-                kind: K::TooLarge {
-                    what: "the line",
-                    size: length,
-                    max: MAX_LINE_CHARS,
-                },
-            });
-        }
-        let parsed = split(raw, line)?;
-        if parsed.percent {
-            if percent_seen || code_seen {
-                if code_seen {
-                    state.notes.push(Note {
-                        line,
-                        word: "%".into(),
-                        kind: NoteKind::ProgramEnd,
-                    });
-                }
-                break;
-            }
-            percent_seen = true;
-            continue;
-        }
-        if parsed.words.is_empty() {
-            continue;
-        }
-        code_seen = true;
-        if parsed.block_delete {
-            state.note(line, &parsed.words[0], NoteKind::BlockDeleteExecuted);
-        }
-        if state.line(&parsed.words, line)? {
+    if !(MIN_FEED_MM_MIN..=MAX_FEED_BOUND_MM_MIN).contains(&options.max_feed_mm_min) {
+        return Err(whole(K::Option {
+            option: "max_feed_mm_min",
+            expected: "0.6 ..= 120 000",
+            value: options.max_feed_mm_min,
+        }));
+    }
+    Ok(())
+}
+
+/// See [`crate::gcode::read`].
+pub(crate) fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
+    check_options(options)?;
+    if text.len() > MAX_TEXT_BYTES {
+        return Err(GcodeError {
+            line: 0,
+            column: 0,
+            word: String::new(),
+            kind: K::TooLarge {
+                what: "the program",
+                size: text.len(),
+                max: MAX_TEXT_BYTES,
+            },
+        });
+    }
+    let mut reader = LineReader::start(options, true);
+    for raw in text.lines() {
+        reader.read_line(raw)?;
+        if reader.ended {
             break;
         }
     }
-    finish(state)
+    finish(reader.state)
 }
 
 /// Fill the start's unknown axes and build the program.

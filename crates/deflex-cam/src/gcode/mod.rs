@@ -1,4 +1,4 @@
-//! # deflex-gcode
+//! # G-code in (`deflex_cam::gcode`)
 //!
 //! A reader of the ISO/Fanuc-style G-code subset that CAM systems emit for 3-axis forming and
 //! milling: text in, a typed tool path and diagnostics out. Pure parsing: no file, no I/O.
@@ -36,8 +36,13 @@
 //! The tool axis of a 3-axis program is +Z of the work offset.
 //!
 //! Bounds: [`MAX_TEXT_BYTES`] of text, [`MAX_LINE_CHARS`] per line,
-//! [`ReadOptions::max_points`] points, coordinates within ±[`MAX_COORDINATE_MM`], feeds within
-//! [`MIN_FEED_MM_MIN`] ..= [`MAX_FEED_MM_MIN`] mm/min.
+//! [`ReadOptions::max_points`] points, coordinates within ±[`ReadOptions::max_coordinate_mm`]
+//! (default [`MAX_COORDINATE_MM`]), feeds within [`MIN_FEED_MM_MIN`] ..=
+//! [`ReadOptions::max_feed_mm_min`] (default [`MAX_FEED_MM_MIN`]) mm/min.
+//!
+//! [`read`] reads a whole program into a [`Program`]; [`LineReader`] reads one line at a time
+//! and hands each line's move out as it is read, keeping nothing but the modal state (the
+//! programs deflex writes, read back by [`crate::program::readback`], may be too long to hold).
 //!
 //! ```
 //! let program = deflex_cam::gcode::read(
@@ -58,6 +63,7 @@ mod interpreter;
 pub mod words;
 
 pub use error::{GcodeError, GcodeErrorKind, Note, NoteKind};
+pub use interpreter::{LineMove, LineReader};
 
 /// Largest program read (bytes).
 pub const MAX_TEXT_BYTES: usize = 256 << 20;
@@ -69,6 +75,12 @@ pub const MAX_COORDINATE_MM: f64 = 10_000.0;
 pub const MIN_FEED_MM_MIN: f64 = 0.6;
 /// Fastest feed (mm/min): 1 m/s.
 pub const MAX_FEED_MM_MIN: f64 = 60_000.0;
+/// Widest coordinate bound [`ReadOptions::max_coordinate_mm`] may set (mm): 100 m, the bound of
+/// the programs deflex writes ([`crate::program`]).
+pub const MAX_COORDINATE_BOUND_MM: f64 = 100_000.0;
+/// Highest feed bound [`ReadOptions::max_feed_mm_min`] may set (mm/min): 2 m/s, the fastest
+/// speed of the programs deflex writes ([`crate::program`]).
+pub const MAX_FEED_BOUND_MM_MIN: f64 = 120_000.0;
 
 /// Settings of [`read`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,14 +89,22 @@ pub struct ReadOptions {
     pub chord_tolerance_mm: f64,
     /// Most path points (arcs included), 2 ..= 10 000 000.
     pub max_points: usize,
+    /// Largest |coordinate| of a move or an arc centre (mm, after units), 1 ..=
+    /// [`MAX_COORDINATE_BOUND_MM`].
+    pub max_coordinate_mm: f64,
+    /// Fastest feed (mm/min), [`MIN_FEED_MM_MIN`] ..= [`MAX_FEED_BOUND_MM_MIN`].
+    pub max_feed_mm_min: f64,
 }
 
 impl Default for ReadOptions {
-    /// 5 µm chords (a tenth of a forming tool's scallop), at most a million points.
+    /// 5 µm chords (a tenth of a forming tool's scallop), at most a million points, coordinates
+    /// within ±[`MAX_COORDINATE_MM`], feeds up to [`MAX_FEED_MM_MIN`].
     fn default() -> Self {
         ReadOptions {
             chord_tolerance_mm: 0.005,
             max_points: 1_000_000,
+            max_coordinate_mm: MAX_COORDINATE_MM,
+            max_feed_mm_min: MAX_FEED_MM_MIN,
         }
     }
 }

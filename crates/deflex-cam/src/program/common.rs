@@ -66,7 +66,7 @@ pub(crate) fn check_input(
 /// A pose's bad value as `(field, value, bound)`.
 type PoseFault = (&'static str, f64, f64);
 
-fn check_pose(pose: &crate::program::Pose) -> Result<(), PoseFault> {
+fn check_pose(pose: &deflex_model::Pose) -> Result<(), PoseFault> {
     let t = pose.translation.vector;
     for (field, value) in [("x_m", t.x), ("y_m", t.y), ("z_m", t.z)] {
         if !(value.is_finite() && value.abs() <= MAX_COORDINATE_M) {
@@ -215,14 +215,15 @@ pub(crate) fn header_lines(input: &ProgramInput) -> Vec<String> {
         .take(MAX_COMMENT_LINES)
         .cloned()
         .collect();
-    if let Some(load) = &input.tool_load {
+    if let Some(load) = &input.tool_load_in_flange {
+        let centre = load.centre_of_mass_m;
         lines.push(format!(
             "tool load ({}): {:.3} kg at ({:.1}, {:.1}, {:.1}) mm in the flange frame",
-            load.source,
+            input.tool_load_source,
             load.mass_kg,
-            load.cog_m[0] * 1e3,
-            load.cog_m[1] * 1e3,
-            load.cog_m[2] * 1e3
+            centre[0] * 1e3,
+            centre[1] * 1e3,
+            centre[2] * 1e3
         ));
     }
     lines.push(

@@ -22,16 +22,16 @@
 //! **positions only**: a compensated orientation is lost, and the header says by how much the
 //! orientation varies along the path (a robot running G-code holds its own tool orientation).
 //! Comments are `( … )` without parentheses inside. The program reads back with
-//! `deflex-gcode`, the reader of CAM programs.
+//! [`crate::gcode`], the reader of CAM programs ([`crate::program::readback`]).
 
 use crate::program::ProgramInput;
 use crate::program::common::{Checked, comment_text, header_lines, num};
 use crate::program::error::ProgramError;
 use crate::program::names::{GCODE_FILE, sanitize};
-use crate::program::orientation::rotation_distance;
 use crate::program::plan::plan;
 use crate::program::settings::ProgramSettings;
 use crate::program::sink::{ProgramSink, put};
+use deflex_model::conventions::rotation_distance;
 use std::fmt::Write as _;
 
 const FORMAT: &str = "G-code";

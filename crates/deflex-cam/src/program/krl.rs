@@ -25,7 +25,7 @@
 //!
 //! * Positions in mm in the frame `$BASE` (BASE_DATA\[n\], taught on the controller as the part
 //!   frame; `$NULLFRAME` with `coordinates = "robot"` or `base = 0`); orientation A-B-C in
-//!   degrees (`Rz(A)·Ry(B)·Rx(C)`, see [`crate::program::orientation`]). `$TOOL` is TOOL_DATA\[n\], which
+//!   degrees (`Rz(A)·Ry(B)·Rx(C)`, see [`deflex_model::conventions`]). `$TOOL` is TOOL_DATA\[n\], which
 //!   must hold the model's TCP, and `$LOAD` LOAD_DATA\[n\], which must hold the tool load: the
 //!   header prints the values the program assumes.
 //! * `$VEL.CP` is in **m/s** and is set before a `LIN` whenever the speed changes; `$VEL.ORI1/2`
@@ -40,23 +40,24 @@
 //!   the same rotation. KUKA's `LIN` interpolates the orientation as a rotation, not the three
 //!   angles one by one (the angles are coupled, a point noted by integrators, e.g.
 //!   <https://industrialmonitordirect.com/blogs/knowledgebase/resolving-kuka-lin-rel-unwanted-axis-tilt-during-rotation>);
-//!   at B = ±90° exactly KUKA itself sets A = 0, as [`crate::program::orientation::kuka_abc_deg`] does
+//!   at B = ±90° exactly KUKA itself sets A = 0, as [`deflex_model::conventions::kuka_abc_deg`] does
 //!   without a previous point.
 //! * Positions are written inline in the `.src`, as CAM post-processors do for long paths, rather
 //!   than as one `E6POS` declaration per point in the `.dat`; the `.dat` holds the settings. A
 //!   long path is split into `NAME_p01.src` … (global subprograms the main `.src` calls in order;
 //!   see [`crate::program::plan`] for the limits).
 
+use crate::program::ProgramInput;
 use crate::program::common::{Checked, comment_text, header_lines, num};
 use crate::program::config::kuka_status_turn;
 use crate::program::error::ProgramError;
 use crate::program::names::{KRL, sanitize};
-use crate::program::orientation::kuka_abc_deg;
 use crate::program::plan::{Plan, part_name, plan};
 use crate::program::settings::Coordinates;
 use crate::program::settings::ProgramSettings;
 use crate::program::sink::{ProgramSink, emit};
-use crate::program::{Pose, ProgramInput};
+use deflex_model::Pose;
+use deflex_model::conventions::kuka_abc_deg;
 use std::fmt::Write as _;
 
 const FORMAT: &str = "KRL";
@@ -213,16 +214,16 @@ fn write_header_and_safe_start(
         k.tool,
         pose_literal(&input.tool_in_flange)
     );
-    match &plan.tool_load {
+    match &plan.tool_load_in_flange {
         Some(l) => {
             let _ = writeln!(
                 src,
                 "; LOAD_DATA[{}] must hold the tool load: M {} kg, CM {{X {}, Y {}, Z {}}} mm\r",
                 k.tool,
                 num(l.mass_kg, 3),
-                num(l.cog_m[0] * 1e3, 1),
-                num(l.cog_m[1] * 1e3, 1),
-                num(l.cog_m[2] * 1e3, 1)
+                num(l.centre_of_mass_m[0] * 1e3, 1),
+                num(l.centre_of_mass_m[1] * 1e3, 1),
+                num(l.centre_of_mass_m[2] * 1e3, 1)
             );
         }
         None => {

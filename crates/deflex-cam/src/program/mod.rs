@@ -18,9 +18,9 @@
 //! is split into parts a main program calls in order (the limits and their sources are in
 //! `plan`'s documentation: 5000 moves and 1 MiB per file by default).
 //!
-//! The conventions and their sources are in [`orientation`]; the user's template (frame and
-//! tool names, speeds, zones, clearance, limits, tool load) is [`ProgramSettings`], read from
-//! TOML. Every exporter
+//! The conventions and their sources are in [`deflex_model::conventions`]; the user's template
+//! (frame and tool names, speeds, zones, clearance, limits, tool load) is [`ProgramSettings`],
+//! read from TOML. Every exporter
 //! bounds the number of points and the line length, names things within the language's rules
 //! ([`names`]) and has a reader ([`readback`]) that the round-trip tests use: poses read back
 //! from a program agree with the path to the printed precision (≤ 1 µm, ≤ 1e-6 rad).
@@ -29,7 +29,8 @@
 //! simulators): they follow the public documentation cited in each module.
 //!
 //! ```
-//! use deflex_cam::program::{export, Format, ProgramInput, ProgramPoint, ProgramSettings, Pose};
+//! use deflex_cam::program::{export, Format, ProgramInput, ProgramPoint, ProgramSettings};
+//! use deflex_model::Pose;
 //! let points = vec![
 //!     ProgramPoint { pose: Pose::identity(), speed_m_s: None },
 //!     ProgramPoint { pose: Pose::translation(0.01, 0.0, 0.0), speed_m_s: Some(0.01) },
@@ -48,7 +49,6 @@ pub mod error;
 mod gcode;
 mod krl;
 pub mod names;
-pub mod orientation;
 mod plan;
 mod rapid;
 pub mod readback;
@@ -61,11 +61,8 @@ pub use error::ProgramError;
 pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
 pub use sink::{DirectorySink, MemorySink, ProgramSink};
 
-use nalgebra::IsometryMatrix3;
+use deflex_model::{Pose, ToolLoad};
 use std::path::Path;
-
-/// A rigid placement (rotation matrix + translation, m), the same type as `deflex_model::Pose`.
-pub type Pose = IsometryMatrix3<f64>;
 
 /// One point of a program: the TCP pose in the program frame and the speed of the move that
 /// ends there.
@@ -96,17 +93,6 @@ pub struct ArmConfiguration {
     pub elbow_beyond_stretched: bool,
 }
 
-/// The tool's load for the programs.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ToolLoad {
-    /// Mass (kg).
-    pub mass_kg: f64,
-    /// Centre of gravity in the flange frame (m).
-    pub cog_m: [f64; 3],
-    /// Where the values come from, for the header (`program template`, `twin cell`, …).
-    pub source: &'static str,
-}
-
 /// What an exporter writes: the points plus the frames a program declares or checks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ProgramInput {
@@ -123,8 +109,12 @@ pub struct ProgramInput {
     pub frame_name: Option<String>,
     /// The TCP in the flange frame (the robot model's tool).
     pub tool_in_flange: Pose,
-    /// The tool's load, when known ([`settings::CommonSettings::tool_mass_kg`] overrides it).
-    pub tool_load: Option<ToolLoad>,
+    /// The tool's load, centre of mass in the flange frame, when known
+    /// ([`settings::CommonSettings::tool_mass_kg`] overrides it).
+    pub tool_load_in_flange: Option<ToolLoad>,
+    /// Where [`ProgramInput::tool_load_in_flange`] comes from, for the header (`program
+    /// template`, `the robot's twin cell`, …); unused without a load.
+    pub tool_load_source: String,
     /// The points, in order.
     pub points: Vec<ProgramPoint>,
     /// The configuration at each point (empty: unknown; else one per point).
@@ -144,7 +134,8 @@ impl ProgramInput {
             coordinates: Coordinates::Part,
             frame_name: None,
             tool_in_flange: Pose::identity(),
-            tool_load: None,
+            tool_load_in_flange: None,
+            tool_load_source: String::new(),
             points,
             configurations: Vec::new(),
             clearance_configurations: None,
@@ -173,7 +164,8 @@ impl ProgramInput {
             coordinates,
             frame_name: None,
             tool_in_flange: *tool_in_flange,
-            tool_load: None,
+            tool_load_in_flange: None,
+            tool_load_source: String::new(),
             points: world_points
                 .into_iter()
                 .map(|(pose, speed_m_s)| ProgramPoint {

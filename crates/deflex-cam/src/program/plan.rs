@@ -17,10 +17,11 @@
 //! MB slowly or not at all (the issue that asked for this: a 408 kB `.src`, an 838 kB RAPID
 //! module, a 650 kB URScript). Raise them for your controller knowingly.
 
+use crate::program::ProgramInput;
 use crate::program::common::{Checked, check_input, checked};
 use crate::program::error::ProgramError;
 use crate::program::settings::{Clearance, ProgramSettings};
-use crate::program::{Pose, ProgramInput, ToolLoad};
+use deflex_model::{Pose, ToolLoad};
 use nalgebra::Vector3;
 use std::ops::Range;
 
@@ -34,8 +35,8 @@ pub(crate) struct Plan<'a> {
     /// The parts: ranges of `points` after the first (which the approach reaches); one range
     /// when the path is not split.
     pub parts: Vec<Range<usize>>,
-    /// The tool load, when known.
-    pub tool_load: Option<ToolLoad>,
+    /// The tool load, centre of mass in the flange frame, when known.
+    pub tool_load_in_flange: Option<ToolLoad>,
 }
 
 impl Plan<'_> {
@@ -103,19 +104,20 @@ pub(crate) fn clearance_poses(
     })
 }
 
-/// The tool load: the template's, else the caller's.
-fn tool_load(input: &ProgramInput, settings: &ProgramSettings) -> Option<ToolLoad> {
+/// The tool load (centre of mass in the flange frame): the template's, else the caller's.
+fn tool_load_in_flange(input: &ProgramInput, settings: &ProgramSettings) -> Option<ToolLoad> {
     match settings.program.tool_mass_kg {
         Some(mass_kg) => Some(ToolLoad {
             mass_kg,
-            cog_m: settings
-                .program
-                .tool_cog_mm
-                .unwrap_or([0.0; 3])
-                .map(|v| v * 1e-3),
-            source: "program template",
+            centre_of_mass_m: Vector3::from(
+                settings
+                    .program
+                    .tool_cog_mm
+                    .unwrap_or([0.0; 3])
+                    .map(|v| v * 1e-3),
+            ),
         }),
-        None => input.tool_load,
+        None => input.tool_load_in_flange,
     }
 }
 
@@ -186,7 +188,7 @@ pub(crate) fn plan<'a>(
         settings,
         clear,
         parts,
-        tool_load: tool_load(input, settings),
+        tool_load_in_flange: tool_load_in_flange(input, settings),
     })
 }
 

@@ -22,7 +22,7 @@
 //!
 //! * `robtarget` = `[trans (mm), rot (quaternion q1..q4, q1 = w), robconf, extax]`; positions
 //!   are relative to the work object (`\WObj`), whose `uframe` is the program frame in the
-//!   robot's world. Quaternion sign: continuous along the path (see [`crate::program::orientation`]).
+//!   robot's world. Quaternion sign: continuous along the path (see [`deflex_model::conventions`]).
 //! * `robconf` `[cf1, cf4, cf6, cfx]` is written from the model's joint values at every target
 //!   ([`crate::program::config`]) with `ConfJ \On` and `ConfL \On`: the controller checks that it reaches
 //!   each target in the configuration the compensation was computed for. Without configurations
@@ -42,15 +42,16 @@
 //! * A long path is split into modules `NAME_p01.mod` … each with one `PROC` of the same name,
 //!   called in order from `main` (data declared in the main module are global to the task).
 
+use crate::program::ProgramInput;
 use crate::program::common::{Checked, comment_text, header_lines, num, speed_index, speed_table};
 use crate::program::config::abb_robconf;
 use crate::program::error::ProgramError;
 use crate::program::names::{RAPID, sanitize};
-use crate::program::orientation::abb_quaternion;
 use crate::program::plan::{Plan, part_name, plan};
 use crate::program::settings::ProgramSettings;
 use crate::program::sink::{ProgramSink, emit};
-use crate::program::{Pose, ProgramInput};
+use deflex_model::Pose;
+use deflex_model::conventions::abb_quaternion;
 use std::fmt::Write as _;
 
 const FORMAT: &str = "RAPID";
@@ -116,9 +117,9 @@ fn write_declarations(
         let _ = writeln!(out, "  ! {}\r", comment_text(&line, &[]));
     }
     if a.declare_tool {
-        let load = match (a.tool_mass_kg, &plan.tool_load) {
+        let load = match (a.tool_mass_kg, &plan.tool_load_in_flange) {
             (Some(m), _) => (m, a.tool_cog_mm.unwrap_or([0.0; 3])),
-            (None, Some(l)) => (l.mass_kg, l.cog_m.map(|v| v * 1e3)),
+            (None, Some(l)) => (l.mass_kg, l.centre_of_mass_m.map(|v| v * 1e3).into()),
             (None, None) => {
                 return Err(ProgramError::Settings {
                     source_name: "program template".into(),

@@ -8,12 +8,12 @@
 //! [`crate::program::settings::MAX_POINTS_LIMIT`] motions.
 
 use crate::program::error::ProgramError;
-use crate::program::orientation::{
-    rotation_from_abb_quaternion, rotation_from_kuka_abc_deg, rotation_from_staubli_rxryrz_deg,
-    rotation_from_ur_rotation_vector,
-};
 use crate::program::settings::MAX_POINTS_LIMIT;
 use crate::program::{Format, ProgramFile};
+use deflex_model::conventions::{
+    rotation_from_abb_quaternion, rotation_from_kuka_abc_deg, rotation_from_rotation_vector,
+    rotation_from_staubli_rxryrz_deg,
+};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
 use std::io::{BufRead, Read as _};
@@ -642,7 +642,7 @@ fn read_urscript_lines(
         };
         let point = ReadPoint {
             position_m: Vector3::new(values[0], values[1], values[2]),
-            rotation: Some(rotation_from_ur_rotation_vector([
+            rotation: Some(rotation_from_rotation_vector([
                 values[3], values[4], values[5],
             ])),
             speed_m_s: speed,
@@ -651,8 +651,11 @@ fn read_urscript_lines(
     })
 }
 
-/// G-code: `G0`/`G1` lines with `X Y Z` and modal `F` (mm/min); comments `( … )` (also after
-/// a motion); the safe-start and end lines are not motions.
+/// G-code, read by [`crate::gcode::LineReader`] (the reader of CAM programs, line by line): the
+/// `G0`/`G1` moves with their end and feed (`F` in mm/min, modal) in the order written; the
+/// comments, the safe start and the program end are not motions. The coordinate and feed bounds
+/// are those of the programs deflex writes ([`crate::gcode::MAX_COORDINATE_BOUND_MM`],
+/// [`crate::gcode::MAX_FEED_BOUND_MM_MIN`]); an arc is refused (deflex writes none).
 pub fn read_gcode(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
     collect(|emit| read_gcode_lines(&mut text.as_bytes(), file, emit))
 }
@@ -662,36 +665,39 @@ fn read_gcode_lines(
     file: &str,
     emit: &mut EmitAt,
 ) -> Result<(), ProgramError> {
+    use crate::gcode::{LineReader, MoveKind, ReadOptions};
     let r = Lines { file };
-    let mut feed: Option<f64> = None;
+    let gcode_error = |e: crate::gcode::GcodeError| {
+        r.error(
+            e.line,
+            if e.line == 0 {
+                e.kind.to_string()
+            } else {
+                format!("column {}, `{}`: {}", e.column, e.word, e.kind)
+            },
+        )
+    };
+    let mut gcode = LineReader::new(&ReadOptions {
+        // The start and every motion: the bound on motions below is reached first.
+        max_points: MAX_POINTS_LIMIT + 3,
+        max_coordinate_mm: crate::gcode::MAX_COORDINATE_BOUND_MM,
+        max_feed_mm_min: crate::gcode::MAX_FEED_BOUND_MM_MIN,
+        ..ReadOptions::default()
+    })
+    .map_err(gcode_error)?;
     r.each(reader, |n, line| {
-        let line = line.split('(').next().unwrap_or("").trim();
-        let rapid = if line.starts_with("G0 ") {
-            true
-        } else if line.starts_with("G1 ") {
-            false
-        } else {
+        let Some(motion) = gcode.read_line(line).map_err(gcode_error)? else {
             return Ok(());
         };
-        let mut xyz = [None; 3];
-        for word in line.split_whitespace().skip(1) {
-            let (letter, value) = word.split_at(1);
-            let v = r.number(n, value, letter)?;
-            match letter {
-                "X" => xyz[0] = Some(v),
-                "Y" => xyz[1] = Some(v),
-                "Z" => xyz[2] = Some(v),
-                "F" => feed = Some(v),
-                _ => return Err(r.error(n, format!("unexpected word {word}"))),
-            }
-        }
-        let [Some(x), Some(y), Some(z)] = xyz else {
+        let [Some(x), Some(y), Some(z)] = motion.end_mm else {
             return Err(r.error(n, "a motion without all of X, Y and Z"));
         };
-        let speed = if rapid {
-            None
-        } else {
-            Some(feed.ok_or_else(|| r.error(n, "G1 before any F"))? / 60.0 * 1e-3)
+        let speed = match motion.kind {
+            MoveKind::Rapid => None,
+            MoveKind::Linear => motion.feed_mm_s.map(|v| v * 1e-3),
+            MoveKind::Arc { .. } => {
+                return Err(r.error(n, "an arc (G2/G3): deflex writes straight moves only"));
+            }
         };
         emit(
             ReadPoint {

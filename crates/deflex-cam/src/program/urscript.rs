@@ -28,14 +28,15 @@
 //!   `NAME_p01.script` … run one after the other (each part continues from where the previous
 //!   one ended; the first holds the start and the approach, the last the retract).
 
+use crate::program::ProgramInput;
 use crate::program::common::{Checked, comment_text, header_lines, num};
 use crate::program::error::ProgramError;
 use crate::program::names::{URSCRIPT, sanitize};
-use crate::program::orientation::ur_rotation_vector;
 use crate::program::plan::{part_name, plan};
 use crate::program::settings::ProgramSettings;
 use crate::program::sink::{ProgramSink, emit};
-use crate::program::{Pose, ProgramInput};
+use deflex_model::Pose;
+use deflex_model::conventions::rotation_vector;
 use std::fmt::Write as _;
 
 const FORMAT: &str = "URScript";
@@ -54,7 +55,7 @@ fn pose_text(position_m: [f64; 3], r: [f64; 3]) -> String {
 
 fn frame_text(pose: &Pose) -> String {
     let t = pose.translation.vector;
-    pose_text([t.x, t.y, t.z], ur_rotation_vector(&pose.rotation, None))
+    pose_text([t.x, t.y, t.z], rotation_vector(&pose.rotation, None))
 }
 
 /// Longest motion line.
@@ -97,14 +98,14 @@ pub(crate) fn export(
         }
         let _ = writeln!(out, "def {function}():");
         let _ = writeln!(out, "  set_tcp({})", frame_text(&input.tool_in_flange));
-        if let Some(l) = &plan.tool_load {
+        if let Some(l) = &plan.tool_load_in_flange {
             let _ = writeln!(
                 out,
                 "  set_payload({}, [{}, {}, {}])",
                 num(l.mass_kg, 3),
-                num(l.cog_m[0], 4),
-                num(l.cog_m[1], 4),
-                num(l.cog_m[2], 4)
+                num(l.centre_of_mass_m[0], 4),
+                num(l.centre_of_mass_m[1], 4),
+                num(l.centre_of_mass_m[2], 4)
             );
         }
         let _ = writeln!(
@@ -123,7 +124,7 @@ pub(crate) fn export(
             );
         };
         if first {
-            let r = ur_rotation_vector(&plan.clear[0].rotation, previous);
+            let r = rotation_vector(&plan.clear[0].rotation, previous);
             previous = Some(r);
             match &plan.clear[0].config {
                 Some(c) => {
@@ -158,13 +159,13 @@ pub(crate) fn export(
             }
             let _ = writeln!(out, "  # approach");
             let first = plan.point(0);
-            let r = ur_rotation_vector(&first.rotation, previous);
+            let r = rotation_vector(&first.rotation, previous);
             previous = Some(r);
             movel(&mut out, &first, r, plan.clear[0].speed_mm_s, 0.0);
         }
         for i in range.clone() {
             let p = &plan.point(i);
-            let r = ur_rotation_vector(&p.rotation, previous);
+            let r = rotation_vector(&p.rotation, previous);
             previous = Some(r);
             let blend = if p.rapid {
                 0.0
@@ -175,7 +176,7 @@ pub(crate) fn export(
         }
         if last {
             let _ = writeln!(out, "  # retract");
-            let r = ur_rotation_vector(&plan.clear[1].rotation, previous);
+            let r = rotation_vector(&plan.clear[1].rotation, previous);
             movel(&mut out, &plan.clear[1], r, plan.clear[1].speed_mm_s, 0.0);
         }
         let _ = writeln!(out, "end");

@@ -29,7 +29,7 @@
 //! ```
 //!
 //! * Points: `x, y, z` in mm, `rx, ry, rz` in degrees, `R = Rx(rx)·Ry(ry)·Rz(rz)` (see
-//!   [`crate::program::orientation`]), expressed in the frame `fPart` (the program frame, child of
+//!   [`deflex_model::conventions`]), expressed in the frame `fPart` (the program frame, child of
 //!   `world`); the tool `tTool` (child of `flange`) holds the model's TCP. Each point carries
 //!   its `config` (`shoulder`, `elbow`, `wrist`, [`crate::program::config`]) when known; `movel` keeps
 //!   the configuration it starts in, the start joint move sets it.
@@ -38,15 +38,16 @@
 //!   (`off`/`joint`/`Cartesian`) with `leave` = `reach` = `blend_mm` (mm).
 //! * VAL3 has no tool load in a `tool`; the header prints the one the cell assumes.
 
+use crate::program::ProgramInput;
 use crate::program::common::{Checked, comment_text, header_lines, num, speed_index, speed_table};
 use crate::program::config::staubli_config;
 use crate::program::error::ProgramError;
 use crate::program::names::{VAL3, sanitize};
-use crate::program::orientation::staubli_rxryrz_deg;
 use crate::program::plan::{Plan, plan};
 use crate::program::settings::ProgramSettings;
 use crate::program::sink::{ProgramSink, emit, put};
-use crate::program::{Pose, ProgramInput};
+use deflex_model::Pose;
+use deflex_model::conventions::staubli_rxryrz_deg;
 use std::fmt::Write as _;
 
 const FORMAT: &str = "VAL3";

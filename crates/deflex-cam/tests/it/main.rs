@@ -4,8 +4,9 @@
 //!
 //! * [`gcode`]: the G-code reader against the corpus in `docs/parts/` (and `tests/data/`), what
 //!   it refuses, one line into words, the arc geometry;
-//! * [`program`]: every exporter read back, streaming to files, the orientation conventions,
-//!   the arm configuration words, names, comment wrapping;
+//! * [`program`]: every exporter read back, streaming to files, the arm configuration words,
+//!   names, comment wrapping (the orientation conventions are tested in `deflex-model`, which
+//!   holds them);
 //! * [`export`]: the calibrated robot written as URDF, a UR calibration file or a DH table and
 //!   read back.
 //!

@@ -7,7 +7,8 @@ use crate::error::{CliError, UsageError};
 use deflex_app::report::calibration_tables::{
     COUPLING_HEADERS, REFIT_HEADERS, coupling_rows, coupling_summary, refit_rows,
 };
-use deflex_calibrate::stiffness::{CouplingFit, EdofPair, MeasurementRow, fit_couplings};
+use deflex_calibrate::measurements::MeasurementRow;
+use deflex_calibrate::stiffness::{CouplingFit, EdofPair, fit_couplings};
 use deflex_model::{Axis, EdofSite, MAX_COUPLINGS, Robot, parse_edof_label};
 use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};

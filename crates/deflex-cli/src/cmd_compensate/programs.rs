@@ -164,7 +164,8 @@ pub fn write_programs(
         description,
     );
     input.frame_name = s.frame_name.clone();
-    input.tool_load = s.tool_load;
+    input.tool_load_in_flange = s.tool_load_in_flange;
+    input.tool_load_source = s.tool_load_source.into();
     if six {
         input.configurations = result
             .points
@@ -282,12 +283,12 @@ impl<'a> Compare<'a> {
                 .position
                 .max((p.pose.translation.vector - r.position_m).norm());
             if let Some(back) = r.rotation {
-                self.rotation =
-                    self.rotation
-                        .max(deflex_cam::program::orientation::rotation_distance(
-                            &p.pose.rotation,
-                            &back,
-                        ));
+                self.rotation = self
+                    .rotation
+                    .max(deflex_model::conventions::rotation_distance(
+                        &p.pose.rotation,
+                        &back,
+                    ));
             }
         }
         Ok(())

@@ -4,9 +4,9 @@
 
 use super::{CompensateArgs, FormatArg};
 use crate::args::parse_list;
-use deflex_cam::program::{Format, ProgramSettings, ToolLoad};
+use deflex_cam::program::{Format, ProgramSettings};
 use deflex_compensate::{CompensationOptions, TcpPath};
-use deflex_model::{Pose, Robot};
+use deflex_model::{Pose, Robot, ToolLoad};
 use deflex_sim::{CellConfig, ToolPath};
 use nalgebra::{Rotation3, Unit, Vector3};
 use std::path::PathBuf;
@@ -31,7 +31,7 @@ pub enum SetupError {
         /// The robot.
         robot: String,
         /// Why.
-        source: deflex_app::cell::twin_cell_file::CellFileError,
+        source: deflex_app::cell::twin_cell_file::TwinCellFileError,
     },
     /// The path.
     #[error("--path {spec}: {source}")]
@@ -119,8 +119,10 @@ pub struct Setup {
     pub placement_source: String,
     /// Lines for the user: the placement, the G-code reader's notes.
     pub notes: Vec<String>,
-    /// The tool load of the cell, for the programs.
-    pub tool_load: Option<ToolLoad>,
+    /// The tool load of the cell (centre of mass in the flange frame), for the programs.
+    pub tool_load_in_flange: Option<ToolLoad>,
+    /// Where [`Setup::tool_load_in_flange`] comes from, for the programs' headers.
+    pub tool_load_source: &'static str,
 }
 
 impl Setup {
@@ -168,7 +170,7 @@ fn cell(args: &CompensateArgs) -> Result<CellConfig, SetupError> {
     match &args.twin {
         Some(p) => deflex_app::cell::twin_cell_file::load_cell(p, Some(&args.robot)).map_err(error),
         None => deflex_app::cell::twin_cell_file::cell_for_robot(&args.robot)
-            .map_err(|e| error(deflex_app::cell::twin_cell_file::CellFileError::from(e))),
+            .map_err(|e| error(deflex_app::cell::twin_cell_file::TwinCellFileError::from(e))),
     }
 }
 
@@ -179,8 +181,7 @@ fn cell_tool_load(config: &CellConfig) -> ToolLoad {
         * nalgebra::Point3::from(Vector3::from(config.tool_com_in_sensor_m()));
     ToolLoad {
         mass_kg: config.tool_mass_kg(),
-        cog_m: [com.x, com.y, com.z],
-        source: "the robot's twin cell",
+        centre_of_mass_m: com.coords,
     }
 }
 
@@ -280,10 +281,11 @@ pub fn setup(args: &CompensateArgs) -> Result<Setup, SetupError> {
         ),
     );
     let config = config.unwrap_or_default();
-    let tool_load = Some(cell_tool_load(&config));
+    let tool_load_in_flange = Some(cell_tool_load(&config));
     Ok(Setup {
         robot,
-        tool_load,
+        tool_load_in_flange,
+        tool_load_source: "the robot's twin cell",
         config,
         tool_path,
         path,
@@ -464,7 +466,7 @@ fn tool_path(
     };
     match args.path.as_str() {
         "cone" | "cone-contour" | "pyramid" => Ok((
-            deflex_sim::tool_path_by_name(&args.path).map_err(path_error)?,
+            deflex_app::load::gcode_file::tool_path_by_name(&args.path).map_err(path_error)?,
             None,
         )),
         file => {
@@ -481,7 +483,7 @@ fn tool_path(
                 ..deflex_sim::gcode::default_options()
             };
             let (path, program) =
-                deflex_sim::gcode::read_gcode_with(std::path::Path::new(file), &options)
+                deflex_app::load::gcode_file::read_gcode_with(std::path::Path::new(file), &options)
                     .map_err(path_error)?;
             Ok((path, Some(program)))
         }

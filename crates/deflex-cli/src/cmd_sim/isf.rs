@@ -10,8 +10,8 @@ use super::{TwinArgs, load_config};
 use crate::args::{bounded, print_json};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, ValueEnum};
+use deflex_app::load::gcode_file::read_gcode;
 use deflex_record::{McapSink, RecordError, RecordOptions, RecordStats};
-use deflex_sim::gcode::read_gcode;
 use deflex_sim::twin::{RunWatch, SampleSink, TwinCellStream, twin_cell_session_info};
 use deflex_sim::{ConeParams, PlungeParams, ProcessKind, PyramidParams, ToolPath};
 use deflex_telemetry::{CycleSample, SessionInfo, broadcast};
@@ -271,7 +271,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
     let run = run.map_err(|e| match e {
         e @ deflex_sim::SimError::Stopped { .. } => CliError::Stopped {
             out: args.out.clone(),
-            source: e,
+            source: Box::new(e),
         },
         e => e.into(),
     })?;

@@ -1,9 +1,9 @@
 //! End-to-end tests of `deflex plan`, `calibrate` and `validate` through the real binary:
 //! files that know their robot, the planner's cell, and every bad input of issue 12.
 
+use deflex_calibrate::measurements::{MeasurementRow, format_rows_for};
 use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
-use deflex_calibrate::stiffness::{MeasurementRow, format_rows_for};
 
 /// Write rows for `robot` as a measurement file (what `deflex_calibrate::stiffness::write_rows_for` did).
 fn write_rows_for(
@@ -574,7 +574,7 @@ fn twin_file(path: &Path, cell: &deflex_sim::CellConfig) {
     std::fs::write(path, toml::to_string(&file).unwrap()).unwrap();
 }
 
-/// The KR 210-like unseen plant of deflex-sim's held-out check (`unseen_plant.rs`, plant 1):
+/// The KR 210-like unseen plant of deflex-app's held-out check (`twin/unseen_plant.rs`, plant 1):
 /// a hardening wrist (0.4 mrad of lost motion taken up over 600 N·m), a compliant tool holder
 /// (4e5 N·m/rad, 80 mm down the tool), every error source on, tracker readings of 25 samples;
 /// J2.z–J3.z coupling `rho`.

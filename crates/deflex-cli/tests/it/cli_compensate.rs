@@ -356,11 +356,11 @@ fn uncompensable_points_fail_the_command_with_their_indices_and_no_program() {
 #[test]
 fn a_deflex_run_log_serves_as_the_wrench_source() {
     use deflex_control::CycleOutput;
-    use deflex_record::csv_log::{LogRecord, csv_header, csv_row};
+    use deflex_record::run_log::{RunLogFormat, cycle_sample};
     use deflex_telemetry::Flags;
     // The skipped flag bits are deflex-control's.
     assert_eq!(
-        deflex_compensate::log::RUN_LOG_SKIP_FLAGS,
+        deflex_record::run_log::RUN_LOG_SKIP_FLAGS,
         Flags::FORCE_OVER_LIMIT
             | Flags::TORQUE_OVER_LIMIT
             | Flags::SENSOR_TIMEOUT
@@ -381,10 +381,11 @@ fn a_deflex_run_log_serves_as_the_wrench_source() {
     // The robot of `--robot tx200` and the path the command places (its first 40 mm).
     let robot = deflex_model::builtin("tx200").unwrap();
     let (seed, tcp) = placed_path(&dir, "40");
-    // A log written by deflex-control's own writer functions: 0.1 mm steps, a constant 900 N
-    // push up, taring rows with nonsense at the start, 100 rows at rest at the end with the
-    // force fading (not used: no advance).
-    let mut text = csv_header(6);
+    // A log written by the run log's own writer: 0.1 mm steps, a constant 900 N push up,
+    // taring rows with nonsense at the start, 100 rows at rest at the end with the force
+    // fading (not used: no advance).
+    let format = RunLogFormat::cell(6);
+    let mut text = format.header();
     text.push('\n');
     let mut q = seed.clone();
     let steps = (tcp.length_m() / 1e-4) as usize;
@@ -416,7 +417,7 @@ fn a_deflex_run_log_serves_as_the_wrench_source() {
             flags: Flags(if taring { Flags::TARING } else { Flags::ACTIVE }),
             ..CycleOutput::default()
         };
-        text.push_str(&csv_row(&LogRecord::new(&q, &[0.0; 6], &cycle, 10.0)));
+        text.push_str(&format.row(&cycle_sample(&q, &[0.0; 6], &cycle, 10.0)));
         text.push('\n');
     }
     let log_file = dir.join("run.csv");

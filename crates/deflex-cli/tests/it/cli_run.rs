@@ -217,7 +217,7 @@ fn sigterm_in_a_session_ramps_the_correction_out() {
                 } else {
                     -800.0
                 };
-                let _ = s.send_sample(&[0.0, 0.0, fz, 0.0, 0.0, 0.0], 0);
+                let _ = s.send_sample(&deflex_model::Wrench::new(0.0, 0.0, fz, 0.0, 0.0, 0.0), 0);
                 std::thread::sleep(Duration::from_millis(1));
             }
         })
@@ -540,7 +540,7 @@ fn a_latched_fault_ends_the_run_with_exit_status_3() {
                 .unwrap();
             while answered.load(Ordering::Acquire) < 150 && !stop.load(Ordering::Acquire) {
                 let _ = s.poll_request(Duration::from_micros(500));
-                let _ = s.send_sample(&[0.0; 6], 0);
+                let _ = s.send_sample(&deflex_model::Wrench::zeros(), 0);
                 std::thread::sleep(Duration::from_millis(1));
             }
         })

@@ -72,7 +72,7 @@ impl Fixture {
         let g = |name: &str| dir.join("good").join(name);
         let mut good = BTreeMap::new();
         let robot = g("tx200.toml");
-        std::fs::copy(repo().join("robots/tx200.toml"), &robot).unwrap();
+        std::fs::copy(repo().join("crates/deflex-model/robots/tx200.toml"), &robot).unwrap();
         good.insert("robot", robot);
         let plan = g("plan.csv");
         run_ok(&["plan", "--robot", "tx200", "--out", plan.to_str().unwrap()]);

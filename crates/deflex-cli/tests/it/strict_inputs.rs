@@ -2,7 +2,7 @@
 //! load case holding two configurations, estimate pairs correlated at |ρ| ≥ 0.95, `import`'s
 //! labels, `run`'s log on a full disk and two processes on one output folder.
 
-use deflex_calibrate::stiffness::format_rows_for;
+use deflex_calibrate::measurements::format_rows_for;
 use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
 use deflex_model::{Robot, builtin};
@@ -239,7 +239,7 @@ xyz = [1.0, 0.0, 0.0]
 /// Its SIMULATED campaign: 8 × 3 configurations, a 100 N horizontal force at the tool along x
 /// then y, the tool measured (`deflex_calibrate::stiffness::synthetic::measure`, 15 µm noise).
 fn two_axes_campaign(robot: &Robot) -> String {
-    use deflex_calibrate::stiffness::MeasurementRow;
+    use deflex_calibrate::measurements::MeasurementRow;
     let mut data = deflex_model::Data::new();
     let mut plan = Vec::new();
     for i in 0..8 {
@@ -391,7 +391,7 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
                 } else {
                     -800.0
                 };
-                let _ = s.send_sample(&[0.0, 0.0, fz, 0.0, 0.0, 0.0], 0);
+                let _ = s.send_sample(&deflex_model::Wrench::new(0.0, 0.0, fz, 0.0, 0.0, 0.0), 0);
                 std::thread::sleep(Duration::from_millis(1));
             }
         })

@@ -1,8 +1,8 @@
 //! The state of a compensation run and its passes (see the parent module's documentation).
 
 use super::{
-    CompensatedPoint, CompensationOptions, PointFailure, Progress, Stage, WrenchSource,
-    apply_displacement, commanded_pose, norms,
+    CompensatedPoint, CompensationOptions, PointFailure, WrenchSource, apply_displacement,
+    commanded_pose, norms,
 };
 use crate::error::{CompensateError, ProcessError};
 use crate::ik::{IkFailure, limit_violation, track};
@@ -10,6 +10,7 @@ use crate::path::TcpPath;
 use crate::process::{ProcessModel, ProcessPoint};
 use deflex_model::spatial::orientation_error;
 use deflex_model::{Data, Displacement, IkOptions, MAX_JOINTS, ModelError, Pose, Robot, Wrench};
+use deflex_telemetry::{OnProgress, Progress};
 use nalgebra::Vector3;
 
 /// Statistics of a process pass over the compensated points.
@@ -141,7 +142,7 @@ impl<'a> Solver<'a> {
 
     /// Joint values of the desired path: a multi-seed search for the first point (from `seed`),
     /// then tracking.
-    pub(super) fn desired_pass(&mut self, seed: &[f64], progress: &mut dyn FnMut(&Progress)) {
+    pub(super) fn desired_pass(&mut self, seed: &[f64], progress: OnProgress<'_>) {
         let n = self.robot.joint_count();
         let count = self.path.len();
         let mut q = [0.0; MAX_JOINTS];
@@ -194,9 +195,7 @@ impl<'a> Solver<'a> {
             // A failed point keeps the previous point's joint values (continuity for seeds).
             self.points[i].q = q;
             if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration: 0,
-                    stage: Stage::Desired,
+                progress(Progress::Work {
                     done: i + 1,
                     total: count,
                 });
@@ -209,15 +208,13 @@ impl<'a> Solver<'a> {
     pub(super) fn observation_pass(
         &mut self,
         model: &mut dyn ProcessModel,
-        progress: &mut dyn FnMut(&Progress),
+        progress: OnProgress<'_>,
     ) -> Result<(), CompensateError> {
         let n = self.robot.joint_count();
         let count = self.path.len();
         for i in 0..count {
             if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration: 0,
-                    stage: Stage::Process,
+                progress(Progress::Work {
                     done: i + 1,
                     total: count,
                 });
@@ -250,9 +247,7 @@ impl<'a> Solver<'a> {
     pub(super) fn process_pass(
         &mut self,
         source: &mut WrenchSource,
-        iteration: usize,
-        stage: Stage,
-        progress: &mut dyn FnMut(&Progress),
+        progress: OnProgress<'_>,
     ) -> Result<PassStats, CompensateError> {
         let count = self.path.len();
         let mut stats = PassStats::default();
@@ -262,9 +257,7 @@ impl<'a> Solver<'a> {
         for i in 0..count {
             self.process_point(source, i, &mut stats)?;
             if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration,
-                    stage,
+                progress(Progress::Work {
                     done: i + 1,
                     total: count,
                 });
@@ -279,9 +272,8 @@ impl<'a> Solver<'a> {
     pub(super) fn sweep(
         &mut self,
         source: &mut WrenchSource,
-        iteration: usize,
         last: bool,
-        progress: &mut dyn FnMut(&Progress),
+        progress: OnProgress<'_>,
     ) -> Result<(PassStats, CompensationPass), CompensateError> {
         let count = self.path.len();
         let mut stats = PassStats::default();
@@ -293,9 +285,7 @@ impl<'a> Solver<'a> {
             self.process_point(source, i, &mut stats)?;
             self.compensate_point(i, last, &mut pass);
             if (i + 1) % PROGRESS_EVERY == 0 || i + 1 == count {
-                progress(&Progress {
-                    iteration,
-                    stage: Stage::Compensation,
+                progress(Progress::Work {
                     done: i + 1,
                     total: count,
                 });

@@ -32,7 +32,7 @@ fn circle(robot: &Robot, points: usize, r: f64, dz: f64) -> TcpPath {
     TcpPath::new("circle", poses, 0.05).unwrap()
 }
 
-fn no_progress() -> impl FnMut(&deflex_compensate::Progress) {
+fn no_progress() -> impl FnMut(deflex_telemetry::Progress<'_>) {
     |_| {}
 }
 

@@ -3,7 +3,6 @@
 //! is checked in the facade's test binary (`no_alloc::compensate`).
 
 mod compensate;
-mod log;
 mod logged;
 mod path;
 mod table;

@@ -1,6 +1,7 @@
-//! The compensated-path table round-trips, and the feed-forward lookup interpolates it.
+//! The compensated-path table round-trips (the law's lookups of it, by time and arc length, are
+//! checked in deflex-app's `cell::feedforward_table`).
 
-use deflex_compensate::table::{FeedForward, read_csv, write_csv};
+use deflex_compensate::table::{read_csv, write_csv};
 use deflex_compensate::{CompensationOptions, TcpPath, WrenchSource, compensate};
 use deflex_model::{Pose, TX200_FORMING_Q_DEG, Wrench, builtin};
 use nalgebra::{Translation3, Vector3};
@@ -81,36 +82,4 @@ fn the_table_round_trips_to_its_printed_precision() {
     let broken = text.replace("\n2,", "\n2,x");
     let e = read_csv(&broken, "b.csv").unwrap_err();
     assert!(e.to_string().contains("b.csv:7: column `s_m`"), "{e}");
-}
-
-#[test]
-fn feed_forward_interpolates_by_time_and_arc_length() {
-    let (path, result) = setup();
-    let ff = FeedForward::from_compensation(&path, &result);
-    let p = path.points();
-    // At a point: that point's values; half-way: the mean of the neighbours.
-    let at = ff.at_time(p[5].time_s);
-    assert!((at.deflection - result.points[5].deflection).amax() < 1e-15);
-    let mid_t = 0.5 * (p[5].time_s + p[6].time_s);
-    let mid = ff.at_time(mid_t);
-    let mean = (result.points[5].deflection + result.points[6].deflection) * 0.5;
-    assert!((mid.deflection - mean).amax() < 1e-15);
-    let mid_s = ff.at_arc_length(0.5 * (p[5].arc_length_m + p[6].arc_length_m));
-    assert!((mid_s.compensation - mid.compensation).amax() < 1e-15);
-    // Clamped outside the path, and NaN gives the first point rather than NaN.
-    assert_eq!(ff.at_time(-3.0), ff.at_time(0.0));
-    assert_eq!(ff.at_time(1e9), ff.at_time(ff.duration_s()));
-    assert!(
-        ff.at_time(f64::NAN)
-            .deflection
-            .iter()
-            .all(|v| v.is_finite())
-    );
-    // A compensated program cancels the prediction: deflection + compensation ≈ 0.
-    assert!((mid.deflection + mid.compensation).amax() < 1e-6);
-    // The same lookup from the table text.
-    let rows = read_csv(&write_csv(&path, &result, 6, &[]), "t.csv").unwrap();
-    let from_rows = FeedForward::from_rows(&rows).unwrap();
-    assert!((from_rows.at_time(mid_t).deflection - mid.deflection).amax() < 1e-9);
-    assert!(FeedForward::from_rows(&rows[..1]).is_none());
 }

@@ -1,16 +1,16 @@
 //! The wrench path: bias, tool gravity, low-pass, TCP wrench ([`deflex_control::wrench`]).
 
 use deflex_control::wrench::*;
-use deflex_model::Wrench;
 use deflex_model::spatial::pose_from_xyz_rpy;
+use deflex_model::{ToolLoad, Wrench};
 
 #[test]
 fn gravity_compensation_is_exact_over_many_orientations() {
     let config = WrenchConfig {
         sensor_in_flange: pose_from_xyz_rpy([0.0, 0.0, 0.05], [0.0, 0.0, 0.3]),
-        tool: ToolLoad {
+        tool_in_sensor: ToolLoad {
             mass_kg: 7.5,
-            com_in_sensor_m: [0.01, -0.02, 0.12],
+            centre_of_mass_m: nalgebra::Vector3::new(0.01, -0.02, 0.12),
         },
         ..WrenchConfig::default()
     };

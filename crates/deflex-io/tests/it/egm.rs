@@ -2,7 +2,10 @@
 
 use deflex_io::egm::*;
 use deflex_io::error::LinkError;
-use deflex_io::link::{Correction, Pose6, RobotLink, RobotSideLink, RobotState};
+use deflex_io::link::{Correction, RobotLink, RobotSideLink, RobotState};
+use deflex_model::Pose;
+use deflex_model::conventions::{kuka_abc_rad, rotation_from_kuka_abc_rad};
+use nalgebra::{Matrix3, Rotation3, Translation3, Vector3};
 use prost::Message;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -65,13 +68,16 @@ fn robot_known_bytes_decoded_by_hand_walker() {
 
 fn random_state(rng: &mut StdRng) -> RobotState {
     let mut s = RobotState::with_joints(&[0.0; 6].map(|_: f64| rng.gen_range(-3.0..3.0)));
-    s.tcp_pose = rng.gen_bool(0.8).then(|| Pose6 {
-        position_m: [0.0; 3].map(|_: f64| rng.gen_range(-2.0..2.0)),
-        zyx_rad: [
-            rng.gen_range(-3.0..3.0),
-            rng.gen_range(-1.5..1.5),
-            rng.gen_range(-3.0..3.0),
-        ],
+    s.tcp_pose = rng.gen_bool(0.8).then(|| {
+        let position_m = [0.0; 3].map(|_: f64| rng.gen_range(-2.0..2.0));
+        Pose::from_parts(
+            Translation3::from(position_m),
+            rotation_from_kuka_abc_rad([
+                rng.gen_range(-3.0..3.0),
+                rng.gen_range(-1.5..1.5),
+                rng.gen_range(-3.0..3.0),
+            ]),
+        )
     });
     s.cycle_id = u64::from(rng.r#gen::<u32>());
     s.robot_time_s = Some(f64::from(rng.gen_range(0u32..1_000_000)) * 1e-3);
@@ -109,9 +115,17 @@ fn hand_walker_agrees_with_prost_and_round_trips() {
         match (s.tcp_pose, f.tcp_pose) {
             (None, None) => {}
             (Some(a), Some(b)) => {
+                let (a_zyx, b_zyx) = (
+                    kuka_abc_rad(&a.rotation, None),
+                    kuka_abc_rad(&b.rotation, None),
+                );
                 for i in 0..3 {
-                    assert!(close(a.position_m[i], b.position_m[i], 1e-12));
-                    assert!(close(a.zyx_rad[i], b.zyx_rad[i], 1e-9), "{a:?} {b:?}");
+                    assert!(close(
+                        a.translation.vector[i],
+                        b.translation.vector[i],
+                        1e-12
+                    ));
+                    assert!(close(a_zyx[i], b_zyx[i], 1e-9), "{a:?} {b:?}");
                 }
             }
             other => panic!("{other:?}"),
@@ -146,9 +160,10 @@ fn euler_orientation_is_zyx_degrees() {
     };
     let f = decode_robot(&m.encode_to_vec()).unwrap();
     let p = f.tcp_pose.unwrap();
-    assert!(close(p.zyx_rad[0], 30f64.to_radians(), 1e-15));
-    assert!(close(p.zyx_rad[2], 10f64.to_radians(), 1e-15));
-    assert!(close(p.position_m[2], 0.003, 1e-15));
+    let zyx = kuka_abc_rad(&p.rotation, None);
+    assert!(close(zyx[0], 30f64.to_radians(), 1e-15));
+    assert!(close(zyx[2], 10f64.to_radians(), 1e-15));
+    assert!(close(p.translation.z, 0.003, 1e-15));
 }
 
 #[test]
@@ -332,8 +347,8 @@ fn hand_decode_path_corr_pos(b: &[u8]) -> [f64; 3] {
 /// on the bytes with the hand decoder above.
 #[test]
 fn path_correction_is_sent_in_the_tool_frame_with_the_right_sign() {
-    let tool_down = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-    let rz90 = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    let tool_down = rotation_rows([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]);
+    let rz90 = rotation_rows([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
     for (sensor_in_tool, frame, want) in [
         (
             EgmConfig::default().sensor_in_tool,
@@ -381,17 +396,26 @@ fn path_correction_is_sent_in_the_tool_frame_with_the_right_sign() {
 /// the tool's.
 #[test]
 fn work_object_frame_ignores_the_tool() {
-    let wobj = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    let wobj = rotation_rows([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
     let cfg = EgmConfig {
         frame: EgmFrame::WorkObject,
         work_object_in_base: wobj,
         ..EgmConfig::default()
     };
-    let r = cfg.correction_frame(&[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]);
+    let r = cfg.correction_frame(&rotation_rows([
+        [1.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, -1.0],
+    ]));
     assert_eq!(r, wobj);
     // Base x (1, 0, 0) is the work object's −y.
-    let v = deflex_io::link::rotation_transpose_apply(&r, [1.0, 0.0, 0.0]);
+    let v = r.inverse_transform_vector(&Vector3::new(1.0, 0.0, 0.0));
     assert!(close(v[0], 0.0, 1e-15) && close(v[1], -1.0, 1e-15));
+}
+
+/// A rotation from its rows, as the tests above write them.
+fn rotation_rows(rows: [[f64; 3]; 3]) -> Rotation3<f64> {
+    Rotation3::from_matrix_unchecked(Matrix3::from_fn(|i, j| rows[i][j]))
 }
 
 /// EGM carries as many robot joints as the arm has (a 4-axis palletiser

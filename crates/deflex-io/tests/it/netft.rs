@@ -2,6 +2,7 @@
 
 use deflex_io::link::ForceSensorLink;
 use deflex_io::netft::*;
+use deflex_model::Wrench;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::time::Duration;
@@ -74,8 +75,14 @@ fn record_known_bytes_to_si() {
         counts_per_force: 1e6,
         counts_per_torque: 1e6,
     };
-    assert!(c.to_counts(&[3000.0, 0.0, 0.0, 0.0, 0.0, 0.0]).is_err());
-    assert!(c.to_counts(&[f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]).is_err());
+    assert!(
+        c.to_counts(&Wrench::new(3000.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+            .is_err()
+    );
+    assert!(
+        c.to_counts(&Wrench::new(f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0))
+            .is_err()
+    );
 }
 
 #[test]
@@ -146,14 +153,14 @@ fn loopback_stream_bias_gap_and_fault() {
     let mut client = NetFtClient::new("127.0.0.1:0", sensor.local_addr().unwrap(), cal).unwrap();
     let t = Duration::from_secs(2);
     // Not streaming yet.
-    assert!(!sensor.send_sample(&[1.0; 6], 0).unwrap());
+    assert!(!sensor.send_sample(&Wrench::repeat(1.0), 0).unwrap());
     client.start().unwrap();
     assert_eq!(
         sensor.poll_request(t).unwrap().unwrap().command,
         RdtCommand::StartRealtime
     );
     assert!(sensor.streaming());
-    let w = [10.0, -20.0, 30.5, 1.25, -0.5, 0.0];
+    let w = Wrench::new(10.0, -20.0, 30.5, 1.25, -0.5, 0.0);
     assert!(sensor.send_sample(&w, 0).unwrap());
     let s = client.receive(t).unwrap().unwrap();
     assert_eq!((s.sequence, s.gap, s.is_fault()), (1, 0, false));
@@ -167,7 +174,7 @@ fn loopback_stream_bias_gap_and_fault() {
         RdtCommand::SetSoftwareBias
     );
     sensor
-        .send_sample(&[11.0, -20.0, 30.5, 1.25, -0.5, 0.0], 0)
+        .send_sample(&Wrench::new(11.0, -20.0, 30.5, 1.25, -0.5, 0.0), 0)
         .unwrap();
     let s = client.receive(t).unwrap().unwrap();
     assert!((s.wrench[0] - 1.0).abs() < 1e-6 && s.wrench[1].abs() < 1e-6);

@@ -1,8 +1,11 @@
 #![allow(clippy::needless_range_loop)]
 
 use deflex_io::error::LinkError;
-use deflex_io::link::{Correction, Pose6, RobotLink, RobotSideLink, RobotState};
+use deflex_io::link::{Correction, RobotLink, RobotSideLink, RobotState};
 use deflex_io::rsi::*;
+use deflex_model::Pose;
+use deflex_model::conventions::{kuka_abc_rad, rotation_from_kuka_abc_rad};
+use nalgebra::Translation3;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::time::Duration;
@@ -25,15 +28,16 @@ fn parses_known_telegram_into_si() {
     assert_eq!(t.ipoc, 4208138482);
     assert_eq!(t.delay, 3);
     let p = t.actual_pose.unwrap();
-    assert!(close(p.position_m[0], 1.2005, 1e-12));
-    assert!(close(p.position_m[1], -0.03525, 1e-12));
-    assert!(close(p.zyx_rad[0], std::f64::consts::FRAC_PI_2, 1e-12));
-    assert!(close(p.zyx_rad[2], 179f64.to_radians(), 1e-12));
+    let abc = kuka_abc_rad(&p.rotation, None);
+    assert!(close(p.translation.x, 1.2005, 1e-12));
+    assert!(close(p.translation.y, -0.03525, 1e-12));
+    assert!(close(abc[0], std::f64::consts::FRAC_PI_2, 1e-12));
+    assert!(close(abc[2], 179f64.to_radians(), 1e-12));
     let q = t.q_rad.unwrap();
     assert!(close(q[1], -std::f64::consts::FRAC_PI_2, 1e-12));
     assert!(close(q[5], -std::f64::consts::PI, 1e-12));
     assert!(close(
-        t.setpoint_pose.unwrap().zyx_rad[1],
+        kuka_abc_rad(&t.setpoint_pose.unwrap().rotation, None)[1],
         (-12f64).to_radians(),
         1e-12
     ));
@@ -47,7 +51,7 @@ fn names_are_case_insensitive() {
     let doc = br#"<rob type="KUKA"><rist x="1" y="2" z="3" a="4" b="5" c="6"/><aipos a1="1" A2="2" a3="3" A4="4" a5="5" a6="6"/><ipoc>7</ipoc></rob>"#;
     let t = parse_rob(doc).unwrap();
     assert_eq!(t.ipoc, 7);
-    assert!(close(t.actual_pose.unwrap().position_m[2], 0.003, 1e-15));
+    assert!(close(t.actual_pose.unwrap().translation.z, 0.003, 1e-15));
     assert!(close(t.q_rad.unwrap()[3], 4f64.to_radians(), 1e-15));
 }
 
@@ -87,18 +91,18 @@ fn rob_round_trip_within_printed_precision() {
     let mut buf = [0u8; TX_BUFFER];
     for _ in 0..500 {
         let mut t = RobTelegram {
-            actual_pose: Some(Pose6 {
-                position_m: [
+            actual_pose: Some(Pose::from_parts(
+                Translation3::new(
                     rng.gen_range(-3.0..3.0),
                     rng.gen_range(-3.0..3.0),
                     rng.gen_range(-3.0..3.0),
-                ],
-                zyx_rad: [
+                ),
+                rotation_from_kuka_abc_rad([
                     rng.gen_range(-3.0..3.0),
                     rng.gen_range(-1.5..1.5),
                     rng.gen_range(-3.0..3.0),
-                ],
-            }),
+                ]),
+            )),
             setpoint_pose: None,
             q_rad: Some([0.0; 6].map(|_: f64| rng.gen_range(-6.0..6.0))),
             delay: rng.r#gen(),
@@ -113,9 +117,17 @@ fn rob_round_trip_within_printed_precision() {
         assert_eq!(back.delay, t.delay);
         assert_eq!(back.setpoint_pose.is_some(), t.setpoint_pose.is_some());
         let (a, b) = (t.actual_pose.unwrap(), back.actual_pose.unwrap());
+        let (a_abc, b_abc) = (
+            kuka_abc_rad(&a.rotation, None),
+            kuka_abc_rad(&b.rotation, None),
+        );
         for i in 0..3 {
-            assert!(close(a.position_m[i], b.position_m[i], 0.51e-7));
-            assert!(close(a.zyx_rad[i], b.zyx_rad[i], 0.51e-4f64.to_radians()));
+            assert!(close(
+                a.translation.vector[i],
+                b.translation.vector[i],
+                0.51e-7
+            ));
+            assert!(close(a_abc[i], b_abc[i], 0.51e-4f64.to_radians()));
         }
         for (x, y) in t.q_rad.unwrap().iter().zip(back.q_rad.unwrap()) {
             assert!(close(*x, y, 0.51e-4f64.to_radians()));
@@ -230,10 +242,10 @@ fn loopback_exchange_absolute_and_relative() {
         let mut last = Correction::ZERO;
         for k in 0..20u64 {
             let mut state = RobotState::with_joints(&[0.1 * k as f64, -1.0, 1.2, 0.0, 0.5, -0.3]);
-            state.tcp_pose = Some(Pose6 {
-                position_m: [1.0, 0.0, 0.8],
-                zyx_rad: [0.0, 0.1, 3.0],
-            });
+            state.tcp_pose = Some(Pose::from_parts(
+                Translation3::new(1.0, 0.0, 0.8),
+                rotation_from_kuka_abc_rad([0.0, 0.1, 3.0]),
+            ));
             state.cycle_id = 1000 + k;
             robot.send_state(&state).unwrap();
             let got = pc.receive(timeout).unwrap().unwrap();

@@ -1,5 +1,6 @@
-use deflex_io::link::{Correction, MAX_JOINTS, RobotLink, RobotSideLink, RobotState};
+use deflex_io::link::{Correction, RobotLink, RobotSideLink, RobotState};
 use deflex_io::simple_udp::*;
+use deflex_model::MAX_JOINTS;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::time::Duration;

@@ -105,7 +105,7 @@ fn validation_errors_name_file_and_field() {
     assert!(e.contains("1 to 8 motorised joints"), "{e}");
     let e = error_of(&format!("{ONE_JOINT}limits = [1.0, -1.0]\n"));
     assert!(e.contains("limits"), "{e}");
-    // (A robot file that does not exist is named in the error: deflex-load's tests.)
+    // (A robot file that does not exist is named in the error: the tests of deflex_app::load.)
 }
 
 #[test]

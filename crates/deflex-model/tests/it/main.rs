@@ -3,6 +3,7 @@
 //! that the robot readers never panic are checked in the facade's test binary
 //! (`no_alloc::model`, `fuzz::model`).
 
+mod conventions;
 mod files;
 mod fixtures;
 mod robots;

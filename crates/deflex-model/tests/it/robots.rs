@@ -388,7 +388,7 @@ fn fingerprints_tell_robots_apart_and_survive_a_round_trip() {
     );
 }
 
-// A URDF robot written to another folder still finding its URDF: deflex-load's tests.
+// A URDF robot written to another folder still finding its URDF: the tests of deflex_app::load.
 
 fn error_of(text: &str) -> String {
     robot_from_toml_str(text, "robots/bad.toml", None)

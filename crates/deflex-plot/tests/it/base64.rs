@@ -1,20 +1,21 @@
 //! Images are embedded in a page ([`deflex_plot::HtmlReport::image`]) as standard base64
-//! (RFC 4648 §4, `+` and `/`, with `=` padding): the file's bytes are checked in the page's data
-//! URI, whole and exactly.
+//! (RFC 4648 §4, `+` and `/`, with `=` padding): the image's bytes, as the caller's loader
+//! gives them, are checked in the page's data URI, whole and exactly.
 
-use crate::temp_dir;
 use deflex_plot::HtmlReport;
+use std::path::Path;
 
 /// The data URI of an image file holding `bytes`, as the page embeds it: the encoding alone,
 /// between the `base64,` and the closing quote.
 fn embedded(bytes: &[u8]) -> String {
-    let dir = temp_dir("base64");
-    let path = dir.join("fig.png");
-    std::fs::write(&path, bytes).unwrap();
     let mut r = HtmlReport::new("t");
-    r.image(&path, "c");
-    let html = r.render().unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
+    r.image("fig.png", "c");
+    let html = r
+        .render(|path| {
+            assert_eq!(path, Path::new("fig.png"));
+            Ok(bytes.to_vec())
+        })
+        .unwrap();
     let start = html
         .find("src=\"data:image/png;base64,")
         .expect("a data URI")

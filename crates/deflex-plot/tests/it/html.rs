@@ -1,5 +1,11 @@
-use crate::{sine_series, temp_dir};
+use crate::sine_series;
 use deflex_plot::{FileLink, HtmlReport, PlotError, PlotSpec, html_escape, inline_html, line_plot};
+use std::path::Path;
+
+/// The loader of a page without images: never called.
+fn no_images(path: &Path) -> std::io::Result<Vec<u8>> {
+    panic!("a page without images asked for {}", path.display())
+}
 
 #[test]
 fn escapes_all_special_characters() {
@@ -21,7 +27,7 @@ fn report_text_is_escaped_everywhere() {
         .note("SIMULATED <b>")
         .preformatted("a<b")
         .table(&["<h>"], &[vec!["<c>".to_string()]]);
-    let html = r.render().unwrap();
+    let html = r.render(no_images).unwrap();
     assert!(!html.contains("<script>"));
     assert!(html.contains("<title>T &lt;1&gt;</title>"));
     assert!(html.contains("<h2 id=\"s-s\">S &amp; S</h2>"));
@@ -42,7 +48,7 @@ fn table_cells_and_alignment() {
             vec!["norm".into(), "-1e-3".into()],
         ],
     );
-    let html = r.render().unwrap();
+    let html = r.render(no_images).unwrap();
     assert!(html.contains("<td>x</td><td class=\"num\">0.125</td>"));
     assert!(html.contains("<td class=\"num\">-1e-3</td>"));
 }
@@ -51,22 +57,27 @@ fn table_cells_and_alignment() {
 fn ragged_table_is_an_error() {
     let mut r = HtmlReport::new("t");
     r.table(&["a", "b"], &[vec!["1".into()]]);
-    let e = r.render().unwrap_err();
+    let e = r.render(no_images).unwrap_err();
     assert!(matches!(e, PlotError::InvalidInput { .. }), "{e}");
     assert!(e.to_string().contains("row 0 has 1 cells"), "{e}");
 }
 
+/// The loader's failure is an I/O error naming the image (deflex-app's `report::draw` checks
+/// the same with a file that does not exist); an image of a format the page cannot embed is
+/// refused before its bytes are asked for.
 #[test]
 fn missing_image_error_names_the_file() {
     let mut r = HtmlReport::new("t");
     r.image("/nonexistent/deflex/fig.png", "c");
-    let e = r.render().unwrap_err();
+    let e = r
+        .render(|_| Err(std::io::Error::from(std::io::ErrorKind::NotFound)))
+        .unwrap_err();
     assert!(matches!(e, PlotError::Io { .. }));
     assert!(e.to_string().contains("/nonexistent/deflex/fig.png"), "{e}");
     let mut r = HtmlReport::new("t");
     r.image("fig.bmp", "c");
     assert!(matches!(
-        r.render().unwrap_err(),
+        r.render(no_images).unwrap_err(),
         PlotError::UnsupportedFormat { .. }
     ));
 }
@@ -85,10 +96,7 @@ fn backticks_become_code_after_escaping() {
     assert_eq!(inline_html("`a` it`s"), "<code>a</code> it`s");
     assert_eq!(inline_html("no code"), "no code");
     // Everywhere the page prints text: no literal backtick is left.
-    let dir = std::env::temp_dir().join(format!("deflex-html-code-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let png = dir.join("f.png");
-    std::fs::write(&png, b"\x89PNG\r\n\x1a\n").unwrap();
+    let png = Path::new("f.png");
     let mut r = HtmlReport::new("The `x` report");
     r.contents()
         .section("About `deflex plot`")
@@ -97,9 +105,8 @@ fn backticks_become_code_after_escaping() {
         .note("SIMULATED by `deflex sim`")
         .table(&["`col`"], &[vec!["`cell`".into()]])
         .files(&[FileLink::new("a.csv", "columns `x_m`, `y_m`")])
-        .image(&png, "drawn by `line_plot`");
-    let html = r.render().unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
+        .image(png, "drawn by `line_plot`");
+    let html = r.render(|_| Ok(b"\x89PNG\r\n\x1a\n".to_vec())).unwrap();
     let body = &html[html.find("<body>").unwrap()..];
     assert!(!body.contains('`'), "{body}");
     for code in [
@@ -129,7 +136,7 @@ fn tables_scroll_in_their_own_wrapper_and_images_fit() {
     r.table(&["a"], &[vec!["1".into()]])
         .paragraph("between")
         .table(&["b", "c"], &[vec!["x".into(), "y".into()]]);
-    let html = r.render().unwrap();
+    let html = r.render(no_images).unwrap();
     let tables = html.matches("<table>").count();
     assert_eq!(tables, 2);
     assert_eq!(
@@ -163,23 +170,25 @@ fn tables_scroll_in_their_own_wrapper_and_images_fit() {
 
 #[test]
 fn html_report_embeds_png_as_data_uri() {
-    let dir = temp_dir("html");
-    let png = dir.join("fig.png");
-    line_plot(
-        &png,
+    let png = Path::new("fig.png");
+    let bytes = line_plot(
+        png,
         &PlotSpec::new("Fig", "x", "y").size(300, 200),
         &sine_series(),
     )
-    .unwrap();
-    let bytes = std::fs::read(&png).unwrap();
+    .unwrap()
+    .into_bytes();
     let mut r = HtmlReport::new("Report & co");
     r.note("SIMULATED")
         .section("Plots")
         .paragraph("See below.")
-        .image(&png, "Figure 1: <sine>");
-    let out = dir.join("report.html");
-    r.write(&out).unwrap();
-    let html = std::fs::read_to_string(&out).unwrap();
+        .image(png, "Figure 1: <sine>");
+    let html = r
+        .render(|path| {
+            assert_eq!(path, png);
+            Ok(bytes.clone())
+        })
+        .unwrap();
     let uri = format!(
         "data:image/png;base64,{}",
         data_encoding::BASE64.encode(&bytes)
@@ -209,7 +218,7 @@ fn html_contents_and_file_links() {
             FileLink::new("forming_open/log.csv", "the log"),
         ])
         .section("Data files");
-    let html = r.render().unwrap();
+    let html = r.render(no_images).unwrap();
     assert!(html.contains("<h2 id=\"1-plan-campaign\">1. Plan &amp; campaign</h2>"));
     assert!(html.contains("<h3 id=\"points\">Points</h3>"));
     assert!(html.contains("<h2 id=\"data-files-2\">"), "unique ids");
@@ -229,6 +238,6 @@ fn html_contents_and_file_links() {
     ] {
         let mut r = HtmlReport::new("t");
         r.files(&[FileLink::new(bad, "d")]);
-        assert!(r.render().is_err(), "{bad:?} accepted");
+        assert!(r.render(no_images).is_err(), "{bad:?} accepted");
     }
 }

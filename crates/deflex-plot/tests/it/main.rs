@@ -1,11 +1,10 @@
 //! The tests of `deflex-plot`, through its public API: one test binary (modules below), so the
-//! library is compiled once (`[lib] test = false`). Plots are written to a unique temp dir,
-//! decoded back (PNG) or read (SVG, HTML) and inspected; a module per plot kind and per piece.
+//! library is compiled once (`[lib] test = false`). Plots are drawn into memory, decoded back
+//! (PNG) or read as text (SVG, HTML) and inspected; a module per plot kind and per piece. (That
+//! a plot or page is written whole or not at all is the application layer's, tested in
+//! deflex-app's `report::draw`.)
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-use deflex_plot::Series;
+use deflex_plot::{Image, ImageFormat, Series};
 
 mod base64;
 mod cloud;
@@ -17,26 +16,11 @@ mod plot;
 mod render;
 mod timeline;
 
-/// A fresh, unique directory under the system temp dir.
-pub fn temp_dir(name: &str) -> PathBuf {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.subsec_nanos())
-        .unwrap_or(0);
-    let dir = std::env::temp_dir().join(format!(
-        "deflex-plot-test-{}-{n}-{nanos}-{name}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Checks the PNG signature and returns the IHDR width and height.
-pub fn png_dims(path: &Path) -> (u32, u32) {
-    let b = std::fs::read(path).unwrap();
-    assert!(b.len() > 33, "{} too short", path.display());
+/// Checks that `image` is a PNG (format and signature) and returns its IHDR width and height.
+pub fn png_dims(image: &Image) -> (u32, u32) {
+    assert_eq!(image.format, ImageFormat::Png);
+    let b = &image.bytes;
+    assert!(b.len() > 33, "PNG of {} bytes too short", b.len());
     assert_eq!(&b[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
     assert_eq!(&b[12..16], b"IHDR", "first chunk is IHDR");
     let w = u32::from_be_bytes([b[16], b[17], b[18], b[19]]);
@@ -45,8 +29,9 @@ pub fn png_dims(path: &Path) -> (u32, u32) {
 }
 
 /// Decodes a PNG fully and returns its RGB pixels.
-pub fn png_pixels(path: &Path) -> Vec<(u8, u8, u8)> {
-    let decoder = png::Decoder::new(std::fs::File::open(path).unwrap());
+pub fn png_pixels(image: &Image) -> Vec<(u8, u8, u8)> {
+    assert_eq!(image.format, ImageFormat::Png);
+    let decoder = png::Decoder::new(std::io::Cursor::new(&image.bytes));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
@@ -57,6 +42,12 @@ pub fn png_pixels(path: &Path) -> Vec<(u8, u8, u8)> {
         other => panic!("unexpected colour type {other:?}"),
     };
     bytes.chunks(step).map(|p| (p[0], p[1], p[2])).collect()
+}
+
+/// The text of an SVG image.
+pub fn svg_text(image: Image) -> String {
+    assert_eq!(image.format, ImageFormat::Svg);
+    String::from_utf8(image.bytes).unwrap()
 }
 
 /// How many of `pixels` are exactly the colour `c`.

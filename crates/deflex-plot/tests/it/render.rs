@@ -1,4 +1,4 @@
-use crate::{png_pixels, sine_series, temp_dir};
+use crate::{png_pixels, sine_series};
 use deflex_plot::{
     ImageFormat, MAX_TITLE_LINES, MIN_TITLE_PX, PlotSpec, finite_extent, line_plot, padded,
     text_width_px, tick_formatter, title_layout,
@@ -97,18 +97,16 @@ fn titles_are_never_drawn_below_the_minimum_size() {
 /// above the chart, where a shrunk one-line title would leave one thin band.
 #[test]
 fn a_long_title_is_wrapped_in_the_image() {
-    let dir = temp_dir("wrap");
-    let path = dir.join("w.png");
     let title = "SIMULATED cell — a title far too long to fit on one line of a narrow plot";
     let layout = title_layout(title, 500, 24);
     assert_eq!(layout.lines.len(), 2, "{layout:?}");
-    line_plot(
-        &path,
+    let image = line_plot(
+        Path::new("w.png"),
         &PlotSpec::new(title, "x", "y").size(500, 400),
         &sine_series(),
     )
     .unwrap();
-    let px = png_pixels(&path);
+    let px = png_pixels(&image);
     let dark_rows: Vec<usize> = (0..layout.height_px() as usize)
         .filter(|&y| (0..500).any(|x| px[y * 500 + x].0 < 100))
         .collect();

@@ -1,5 +1,6 @@
-use crate::{count, png_dims, png_pixels, temp_dir};
+use crate::{count, png_dims, png_pixels, svg_text};
 use deflex_plot::{Lane, PlotSpec, palette_color, timeline_plot};
+use std::path::Path;
 
 #[test]
 fn samples_become_merged_intervals() {
@@ -15,8 +16,7 @@ fn samples_become_merged_intervals() {
 
 #[test]
 fn timeline_draws_lanes_and_checks_intervals() {
-    let dir = temp_dir("timeline");
-    let path = dir.join("t.png");
+    let path = Path::new("t.png");
     let t: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
     let on: Vec<bool> = t.iter().map(|v| (2.0..6.0).contains(v)).collect();
     let lanes = [
@@ -25,22 +25,20 @@ fn timeline_draws_lanes_and_checks_intervals() {
         Lane::new("one cycle", vec![(5.0, 5.0)]).with_color((200, 0, 200)),
     ];
     let spec = PlotSpec::new("Controller state", "time [s]", "").size(800, 300);
-    timeline_plot(&path, &spec, &lanes).unwrap();
-    assert_eq!(png_dims(&path), (800, 300));
-    let px = png_pixels(&path);
+    let image = timeline_plot(path, &spec, &lanes).unwrap();
+    assert_eq!(png_dims(&image), (800, 300));
+    let px = png_pixels(&image);
     assert!(count(&px, palette_color(0)) > 1000, "active bar drawn");
     assert!(
         count(&px, (200, 0, 200)) > 10,
         "a zero-length interval stays visible"
     );
-    let svg = dir.join("t.svg");
-    timeline_plot(&svg, &spec, &lanes).unwrap();
-    let text = std::fs::read_to_string(&svg).unwrap();
+    let text = svg_text(timeline_plot(Path::new("t.svg"), &spec, &lanes).unwrap());
     assert!(text.contains("fault (never)") && text.contains("time [s]"));
-    assert!(timeline_plot(&path, &spec, &[]).is_err());
+    assert!(timeline_plot(path, &spec, &[]).is_err());
     let bad = [Lane::new("b", vec![(2.0, 1.0)])];
-    assert!(timeline_plot(&path, &spec, &bad).is_err());
+    assert!(timeline_plot(path, &spec, &bad).is_err());
     let empty = [Lane::new("e", vec![])];
-    assert!(timeline_plot(&path, &spec, &empty).is_err());
-    assert!(timeline_plot(&path, &spec.clone().x_range(0.0, 1.0), &empty).is_ok());
+    assert!(timeline_plot(path, &spec, &empty).is_err());
+    assert!(timeline_plot(path, &spec.clone().x_range(0.0, 1.0), &empty).is_ok());
 }

@@ -23,7 +23,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-ROBOTS = Path(__file__).resolve().parents[4] / "robots"
+ROBOTS = Path(__file__).resolve().parents[3] / "deflex-model" / "robots"
 
 
 def rot(axis: str, angle: float) -> np.ndarray:

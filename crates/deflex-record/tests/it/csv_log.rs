@@ -1,7 +1,8 @@
 //! The CSV log written from the telemetry stream ([`deflex_record::csv_log`]).
 
 use deflex_control::CycleOutput;
-use deflex_record::csv_log::{LogRecord, Plain, spawn_writer};
+use deflex_record::csv_log::{Plain, spawn_writer};
+use deflex_record::run_log::cycle_sample;
 use deflex_telemetry::CycleSample;
 use deflex_telemetry::Flags;
 
@@ -35,7 +36,7 @@ fn rows_match_header_and_drops_are_counted() {
     out.flags.set(Flags::SENSOR_TIMEOUT | Flags::LATCHED);
     for k in 0..10_000 {
         out.time_s = k as f64;
-        publisher.publish(&LogRecord::new(&[0.1; 6], &[1.0; 6], &out, 1.0).0);
+        publisher.publish(&cycle_sample(&[0.1; 6], &[1.0; 6], &out, 1.0));
     }
     drop(publisher);
     let report = writer.finish(true).unwrap();
@@ -62,8 +63,8 @@ fn uncommitted_log_keeps_the_previous_file() {
         let file = deflex_files::AtomicFile::create(&path).unwrap();
         let (mut publisher, ring) = deflex_telemetry::broadcast::<CycleSample>(64);
         let writer = spawn_writer(ring.subscribe(), 6, Box::new(file)).unwrap();
-        let record = LogRecord::new(&[0.0; 6], &[0.0; 6], &CycleOutput::default(), 1.0);
-        publisher.publish(&record.0);
+        let sample = cycle_sample(&[0.0; 6], &[0.0; 6], &CycleOutput::default(), 1.0);
+        publisher.publish(&sample);
         drop(publisher);
         writer.finish(commit).unwrap()
     };

@@ -45,7 +45,7 @@ fn a_sim_isf_log_gives_arc_length_and_millimetres_in_metres() {
 fn a_run_log_uses_its_path_column_or_none() {
     let d = dir("run");
     let p = d.join("run.csv");
-    let mut header = deflex_record::csv_log::csv_header(2);
+    let mut header = deflex_record::run_log::RunLogFormat::cell(2).header();
     header.push('\n');
     let row = |t: f64, s: &str| {
         let mut cells = vec![format!("{t}"), "0.1".into(), "0.2".into()];
@@ -80,7 +80,7 @@ fn a_run_log_with_a_robot_gets_the_program_arc_length() {
     let p = d.join("run.csv");
     let robot = deflex_model::builtin("tx200").unwrap();
     let n = robot.joint_count();
-    let mut text = deflex_record::csv_log::csv_header(n) + "\n";
+    let mut text = deflex_record::run_log::RunLogFormat::cell(n).header() + "\n";
     let mut data = Data::new();
     let mut expected = Vec::new();
     let mut previous: Option<Vector3<f64>> = None;

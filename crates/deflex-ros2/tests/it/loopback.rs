@@ -279,8 +279,8 @@ fn sensor_link_takes_good_wrenches_and_refuses_bad_ones() {
         readings.iter().map(|s| s.wrench[2]).collect::<Vec<_>>(),
         good.to_vec()
     );
-    assert_eq!(readings[0].wrench[..2], [1.0, -2.0]);
-    assert_eq!(readings[0].wrench[3..], [0.1, 0.2, 0.3]);
+    assert_eq!(readings[0].wrench.as_slice()[..2], [1.0, -2.0]);
+    assert_eq!(readings[0].wrench.as_slice()[3..], [0.1, 0.2, 0.3]);
     let c = link.counts();
     for r in [
         Refusal::NonFinite,

@@ -66,8 +66,7 @@ impl Answering {
             let n = joints.q().len().max(1);
             link.send_joint_correction(&dq.as_slice()[..n])
         } else {
-            let r = command.tcp_rotation.matrix();
-            link.set_tcp_rotation(&std::array::from_fn(|i| std::array::from_fn(|j| r[(i, j)])));
+            link.set_tcp_rotation(&command.tcp_rotation);
             link.send_correction(&Correction::from_array(sent))
         };
         match result {

@@ -6,7 +6,6 @@ use crate::clock::Clock;
 use crate::messages::WrenchAccumulation;
 use bytemuck::Zeroable;
 use deflex_io::ForceSensorLink;
-use deflex_model::Wrench;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
@@ -26,7 +25,7 @@ pub(super) fn sensor_loop<C: Clock>(
     while !shared.done.load(Ordering::Acquire) {
         match link.receive(Duration::from_millis(10)) {
             Ok(Some(sample)) => {
-                accumulation.add(&Wrench::from(sample.wrench), sample.status, clock.now());
+                accumulation.add(&sample.wrench, sample.status, clock.now());
                 shared.wrench.write(&accumulation);
                 shared.samples.fetch_add(1, Ordering::Relaxed);
                 shared

@@ -100,10 +100,8 @@ fn robot_side(kind: Kind, pc: SocketAddr) -> (Box<dyn RobotSideLink + Send>, boo
             let robot = common::robot();
             let mut data = Data::new();
             robot.forward_kinematics(&mut data, &common::q0()).unwrap();
-            let m = data.tcp.rotation.matrix();
-            let r: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]));
             let mut ep = EgmRobotEndpoint::new(local, pc).unwrap();
-            ep.set_correction_frame(&EgmConfig::default().correction_frame(&r));
+            ep.set_correction_frame(&EgmConfig::default().correction_frame(&data.tcp.rotation));
             (Box::new(ep), false)
         }
         Kind::Staubli => (
@@ -307,7 +305,7 @@ fn session(kind: Kind, pause: Duration) -> Session {
         std::thread::spawn(move || {
             while !done.load(Ordering::Acquire) {
                 let _ = server.poll_request(Duration::from_micros(500));
-                let _ = server.send_sample(&raw.into(), 0);
+                let _ = server.send_sample(&raw, 0);
                 std::thread::sleep(Duration::from_millis(1));
             }
         })

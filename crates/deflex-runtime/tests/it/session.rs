@@ -59,7 +59,7 @@ fn sensor(
         std::thread::spawn(move || {
             while !done.load(Ordering::Acquire) {
                 let _ = server.poll_request(Duration::from_micros(500));
-                let _ = server.send_sample(&raw.into(), 0);
+                let _ = server.send_sample(&raw, 0);
                 std::thread::sleep(Duration::from_millis(1));
             }
         })

@@ -6,7 +6,8 @@
 
 use crate::common;
 use deflex_control::CycleOutput;
-use deflex_record::csv_log::{LogRecord, Plain, csv_header, csv_row, spawn_writer};
+use deflex_record::csv_log::{Plain, spawn_writer};
+use deflex_record::run_log::{RunLogFormat, cycle_sample};
 use deflex_runtime::WallClock;
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{Source, Telemetry, session_info};
@@ -95,7 +96,7 @@ fn the_log_is_written_from_the_stream_and_sinks_join_any_time() {
     // One row per control cycle.
     assert_eq!((s.log.written, s.log.dropped), (cycles, 0));
     let mut lines = s.log_text.lines();
-    assert_eq!(lines.next(), Some(csv_header(6).as_str()));
+    assert_eq!(lines.next(), Some(RunLogFormat::cell(6).header().as_str()));
     assert_eq!(lines.count() as u64, cycles);
     // The idle sink has every cycle, in order.
     let mut n = 0;
@@ -161,7 +162,7 @@ fn the_row_format_is_unchanged() {
         ..CycleOutput::default()
     };
     out.flags.set(Flags::ACTIVE | Flags::RAMPING);
-    let row = csv_row(&LogRecord::new(
+    let row = RunLogFormat::cell(2).row(&cycle_sample(
         &[0.1, -0.2],
         &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
         &out,
@@ -178,7 +179,7 @@ fn the_row_format_is_unchanged() {
         ,0.2500,12.50,1572864,ramping|active";
     assert_eq!(row, expected);
     assert_eq!(
-        csv_header(2),
+        RunLogFormat::cell(2).header(),
         "time_s,q1_rad,q2_rad,raw_fx_n,raw_fy_n,raw_fz_n,raw_mx_nm,raw_my_nm,raw_mz_nm,\
          ws_fx_n,ws_fy_n,ws_fz_n,ws_mx_nm,ws_my_nm,ws_mz_nm,w_fx_n,w_fy_n,w_fz_n,w_mx_nm,\
          w_my_nm,w_mz_nm,ds_x_m,ds_y_m,ds_z_m,ds_rx_rad,ds_ry_rad,ds_rz_rad,xi_x_m,xi_y_m,\

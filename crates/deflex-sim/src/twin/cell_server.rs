@@ -13,10 +13,10 @@ use crate::twin::twin_stream::TwinCellStream;
 use crate::{Cell, CellConfig, ToolPath};
 use deflex_io::netft::{Calibration, NetFtSensorServer};
 use deflex_io::{LinkError, RobotEndpoint, RobotKind, RobotSide, RobotState};
-use deflex_model::{Data, Robot};
+use deflex_model::{Data, Robot, Wrench};
 use deflex_runtime::stats::{CycleStats, StatsSummary};
 use deflex_telemetry::CellState;
-use nalgebra::Vector3;
+use nalgebra::{Rotation3, Vector3};
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -228,10 +228,8 @@ impl ControllerKinematics {
     }
 
     /// TCP orientation in base axes.
-    fn tcp_rotation(&self) -> [[f64; 3]; 3] {
-        let r = self.robot.base.rotation.inverse() * self.data.tcp.rotation;
-        let m = r.matrix();
-        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+    fn tcp_rotation(&self) -> Rotation3<f64> {
+        self.robot.base.rotation.inverse() * self.data.tcp.rotation
     }
 
     /// J(q) Δq in base axes: the TCP motion of a joint correction.
@@ -306,12 +304,12 @@ impl Serving {
         if self.serving {
             self.cell.step_into(&mut self.step);
             for s in &self.step.sensor_samples {
-                let _ = self.server.send_sample(&s.wrench_sensor, 0);
+                let _ = self.server.send_sample(&Wrench::from(s.wrench_sensor), 0);
             }
             (self.step.sensor_samples.len(), true)
         } else if let Some(s) = self.step.sensor_samples.last() {
             // Waiting for the controller, then dwelling: hold the start pose, keep streaming.
-            let _ = self.server.send_sample(&s.wrench_sensor, 0);
+            let _ = self.server.send_sample(&Wrench::from(s.wrench_sensor), 0);
             (1, false)
         } else {
             (0, false)

@@ -36,8 +36,8 @@ pub fn controller_config_for(cell: &CellConfig) -> ControllerConfig {
     let s = &cell.sensor;
     config.wrench.sensor_in_flange =
         pose_from_xyz_rpy(s.sensor_in_flange_xyz_m, s.sensor_in_flange_rpy);
-    config.wrench.tool.mass_kg = s.tool_mass_kg;
-    config.wrench.tool.com_in_sensor_m = s.tool_com_in_sensor_m;
+    config.wrench.tool_in_sensor.mass_kg = s.tool_mass_kg;
+    config.wrench.tool_in_sensor.centre_of_mass_m = nalgebra::Vector3::from(s.tool_com_in_sensor_m);
     config.wrench.gravity_world = [0.0, 0.0, -s.gravity_m_s2];
     config.safety.sensor_range = s.range;
     config

@@ -9,7 +9,7 @@ use crate::twin::TwinError;
 use crate::{Cell, CellConfig, CellStep, ToolPath};
 use deflex_control::{Controller, ControllerConfig};
 use deflex_io::{Correction, ForceSensorLink, LinkError, RobotLink, RobotState, WrenchSample};
-use deflex_model::Robot;
+use deflex_model::{Robot, Wrench};
 use deflex_runtime::session::{self, RunSummary, RuntimeOptions};
 use deflex_runtime::telemetry::{Source, Telemetry, session_info};
 use deflex_runtime::{Clock, SimClock};
@@ -145,7 +145,7 @@ impl ForceSensorLink for TwinSensorLink {
             if let Ok(mut q) = self.shared.samples.lock() {
                 if let Some(w) = q.0.pop_front() {
                     return Ok(Some(WrenchSample {
-                        wrench: w,
+                        wrench: Wrench::from(w),
                         ..WrenchSample::default()
                     }));
                 }

@@ -1,11 +1,11 @@
 //! The robot controller's emulation: the correction pipeline's delay and first-order response,
 //! interpolation and correction, look-ahead and servo lag, size and speed bounds.
 
-use deflex_sim::cell_config::ControllerConfig;
+use deflex_sim::cell_config::RobotControllerConfig;
 use deflex_sim::controller_emulation::{ControllerEmulation, CorrectionPipeline};
 use deflex_sim::toolpath::ToolPath;
 
-fn step_response(config: &ControllerConfig, cycles: usize) -> Vec<[f64; 6]> {
+fn step_response(config: &RobotControllerConfig, cycles: usize) -> Vec<[f64; 6]> {
     let mut pipe = CorrectionPipeline::new(config, false);
     pipe.set([0.001, 0.0, 0.0, 0.0, 0.0, 0.0]);
     (0..cycles).map(|_| pipe.advance()).collect()
@@ -13,11 +13,11 @@ fn step_response(config: &ControllerConfig, cycles: usize) -> Vec<[f64; 6]> {
 
 #[test]
 fn delay_then_first_order_response() {
-    let config = ControllerConfig {
+    let config = RobotControllerConfig {
         correction_delay_s: 0.008,
         correction_filter_s: 0.02,
         max_correction_speed_m_s: 10.0,
-        ..ControllerConfig::default()
+        ..RobotControllerConfig::default()
     };
     let out = step_response(&config, 200);
     // 8 ms at 250 Hz = 2 cycles of pure delay.
@@ -39,14 +39,14 @@ fn delay_then_first_order_response() {
 #[test]
 fn look_ahead_and_servo_slow_a_step_down() {
     // UR-like: 500 Hz, 4 ms delay, 0.1 s look-ahead, 15 Hz servo.
-    let config = ControllerConfig {
+    let config = RobotControllerConfig {
         rate_hz: 500.0,
         correction_delay_s: 0.004,
         correction_filter_s: 0.0,
         servo_bandwidth_hz: 15.0,
         lookahead_s: 0.1,
         max_correction_speed_m_s: 10.0,
-        ..ControllerConfig::default()
+        ..RobotControllerConfig::default()
     };
     let mut ideal = CorrectionPipeline::new(&config, false);
     let mut real = CorrectionPipeline::new(&config, true);
@@ -71,12 +71,12 @@ fn look_ahead_and_servo_slow_a_step_down() {
 
 #[test]
 fn size_and_speed_bounds() {
-    let config = ControllerConfig {
+    let config = RobotControllerConfig {
         correction_delay_s: 0.0,
         correction_filter_s: 0.0,
         max_correction_m: 0.002,
         max_correction_speed_m_s: 0.025, // 0.1 mm per 4 ms cycle
-        ..ControllerConfig::default()
+        ..RobotControllerConfig::default()
     };
     let mut pipe = CorrectionPipeline::new(&config, false);
     pipe.set([0.003, 0.004, 0.0, 0.0, 0.0, 0.0]); // 5 mm requested
@@ -100,7 +100,7 @@ fn size_and_speed_bounds() {
 fn interpolation_follows_the_path_and_correction_moves_the_tcp() {
     let robot = deflex_model::builtin("tx200").unwrap();
     let path = ToolPath::paper_cone().truncated(30.0);
-    let config = ControllerConfig::default();
+    let config = RobotControllerConfig::default();
     let part = deflex_model::spatial::pose_from_xyz_rpy([1.5, 0.0, -0.183], [0.0; 3]);
     let seed = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
     let mut ctrl = ControllerEmulation::new(&robot, &config, true, &path, &part, &seed).unwrap();

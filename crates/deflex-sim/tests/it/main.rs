@@ -17,4 +17,3 @@ mod toolpath;
 mod tracker;
 mod twin;
 mod twin_campaign;
-mod unseen_plant;

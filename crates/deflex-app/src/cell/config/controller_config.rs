@@ -4,8 +4,9 @@
 use super::CellFile;
 use super::choices::Axis;
 use deflex_control::{
-    ControllerConfig, LimiterConfig, PidGains, RunawayConfig, SafetyConfig, ToolLoad, WrenchConfig,
+    ControllerConfig, LimiterConfig, PidGains, RunawayConfig, SafetyConfig, WrenchConfig,
 };
+use deflex_model::ToolLoad;
 use deflex_model::spatial::pose_from_xyz_rpy;
 
 impl CellFile {
@@ -47,9 +48,9 @@ impl CellFile {
             },
             wrench: WrenchConfig {
                 sensor_in_flange: pose_from_xyz_rpy(m.sensor_xyz_m, m.sensor_rpy_rad),
-                tool: ToolLoad {
+                tool_in_sensor: ToolLoad {
                     mass_kg: m.tool_mass_kg,
-                    com_in_sensor_m: m.tool_com_m,
+                    centre_of_mass_m: nalgebra::Vector3::from(m.tool_com_m),
                 },
                 gravity_world: m.gravity_m_s2,
                 lowpass_hz: m.lowpass_hz,

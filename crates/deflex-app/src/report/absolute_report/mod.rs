@@ -8,9 +8,11 @@ pub mod prediction;
 pub mod registration;
 
 use crate::report::PageError;
+use crate::report::draw::write_page;
 use deflex_calibrate::geometry::campaign::{Campaign, ReadingKind};
-use deflex_calibrate::geometry::fit::{ErrorStats, FitResult, StepReport, TestGroup};
+use deflex_calibrate::geometry::fit::{FitResult, StepReport, TestGroup};
 use deflex_calibrate::geometry::params::Unit;
+use deflex_calibrate::stats::ErrorNormStats;
 use deflex_plot::{HtmlReport, PlotError, html_escape};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -24,11 +26,11 @@ fn mrad(v: f64) -> String {
     format!("{:.3}", v * 1e3)
 }
 
-fn stats_cells(s: &ErrorStats) -> [String; 4] {
+fn stats_cells(s: &ErrorNormStats) -> [String; 4] {
     [mm(s.rms), mm(s.mean), mm(s.p95), mm(s.max)]
 }
 
-fn orientation_cells(s: Option<&ErrorStats>) -> [String; 2] {
+fn orientation_cells(s: Option<&ErrorNormStats>) -> [String; 2] {
     match s {
         Some(s) => [mrad(s.rms), mrad(s.p95)],
         None => ["-".into(), "-".into()],
@@ -387,7 +389,7 @@ pub fn text(result: &FitResult, campaign: &Campaign) -> String {
 
 /// The JSON report (SI).
 pub fn json(result: &FitResult, campaign: &Campaign) -> Value {
-    let stats = |s: &ErrorStats| json!({"count": s.count, "rms_m": s.rms, "mean_m": s.mean, "p95_m": s.p95, "max_m": s.max});
+    let stats = |s: &ErrorNormStats| json!({"count": s.count, "rms_m": s.rms, "mean_m": s.mean, "p95_m": s.p95, "max_m": s.max});
     let group_json = |g: &TestGroup| {
         json!({
             "group": g.name,
@@ -636,7 +638,7 @@ pub fn write_report(
         html.image(root.join(file), caption.clone());
         files.push(dir.join(file));
     }
-    html.write(&root.join("index.html")).map_err(&page)?;
+    write_page(&html, &root.join("index.html")).map_err(&page)?;
     files.push(dir.join("index.html"));
     staging.commit().map_err(io)?;
     Ok(files)

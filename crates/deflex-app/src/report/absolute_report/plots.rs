@@ -1,11 +1,10 @@
 //! Residual plots of an elasto-geometric fit: per axis, against each joint, a map over the
 //! measured volume, the held-out error distribution, and the joint-angle error maps.
 
+use crate::report::draw::{line_plot, panels_plot, scatter_heatmap};
 use deflex_calibrate::geometry::campaign::{Campaign, ReadingKind};
 use deflex_calibrate::geometry::fit::{FitResult, Role, RowResidual};
-use deflex_plot::{
-    PanelLayout, PlotError, PlotSpec, Series, line_plot, panels_plot, scatter_heatmap,
-};
+use deflex_plot::{PanelLayout, PlotError, PlotSpec, Series};
 use std::path::Path;
 
 /// Draw the plots into `dir`; returns `(file name, caption)` pairs.

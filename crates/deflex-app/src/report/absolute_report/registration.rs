@@ -55,7 +55,7 @@ pub fn json(
     target: Option<&str>,
     out: &std::path::Path,
 ) -> serde_json::Value {
-    let stats = |s: &deflex_calibrate::geometry::outcome::ErrorStats| serde_json::json!({"count": s.count, "rms": s.rms, "mean": s.mean, "p95": s.p95, "max": s.max});
+    let stats = |s: &deflex_calibrate::stats::ErrorNormStats| serde_json::json!({"count": s.count, "rms": s.rms, "mean": s.mean, "p95": s.p95, "max": s.max});
     serde_json::json!({
         "setup": setup,
         "target": target,

@@ -6,7 +6,7 @@ use crate::study::compensation::{CompensationStudy, PartRuns};
 use crate::study::fig7::Fig7Point;
 use crate::study::sensitivity::SensitivityResult;
 use crate::study::{BASELINE, DemoSummary, IDENTIFIED, StiffnessRow, paper_vs_deflex_rows};
-use deflex_calibrate::stiffness::MeasurementRow;
+use deflex_calibrate::measurements::MeasurementRow;
 use std::fmt::Write as _;
 
 /// Per-row measured and predicted displacements (m) of every model.
@@ -87,44 +87,28 @@ pub fn paper_vs_deflex_csv(summary: &DemoSummary) -> String {
     s
 }
 
-/// `forming_closed/controller_log.csv`: every control cycle of the corrected run, with the
-/// column names of the `deflex run` log (SI units) for the quantities the twin's controller
-/// has: the TCP wrench, δŝ (eq. 15), ξ (eq. 7), ε (eq. 5), the runaway guard's loop-gain
-/// estimate and the flags (integer and by name). No joint, raw-sensor or cycle-time columns: the
-/// twin's run is in simulated time.
+/// `forming_closed/controller_log.csv`: every control cycle of the corrected run in the run
+/// log's format ([`deflex_record::run_log::RunLogFormat::twin`]: the `deflex run` log's column
+/// names and SI units, for the quantities the twin's controller has: the TCP wrench, δŝ
+/// (eq. 15), ξ (eq. 7), ε (eq. 5), the runaway guard's loop-gain estimate and the flags, integer
+/// and by name). No joint, raw-sensor or cycle-time columns: the twin's run is in simulated
+/// time.
 pub fn controller_log_csv(trace: &[deflex_control::CycleOutput], robot: &str) -> String {
-    const AXES: [&str; 6] = ["x_m", "y_m", "z_m", "rx_rad", "ry_rad", "rz_rad"];
-    const WRENCH: [&str; 6] = ["fx_n", "fy_n", "fz_n", "mx_nm", "my_nm", "mz_nm"];
+    use deflex_control::RecordCycle as _;
+    let format = deflex_record::run_log::RunLogFormat::twin();
     let mut s = String::with_capacity(trace.len() * 300 + 512);
     let _ = writeln!(
         s,
         "# SIMULATED deflex correction controller driving the digital twin (not a measurement); \
          robot: {robot}; one row per control cycle, columns as in the deflex run log"
     );
-    let mut columns = vec!["time_s".to_string()];
-    columns.extend(WRENCH.iter().map(|c| format!("w_{c}")));
-    for prefix in ["ds", "xi", "eps"] {
-        columns.extend(AXES.iter().map(|c| format!("{prefix}_{c}")));
-    }
-    columns.extend(["loop_gain", "flags", "status"].map(String::from));
-    s.push_str(&columns.join(","));
+    s.push_str(&format.header());
     s.push('\n');
+    let mut sample = deflex_telemetry::CycleSample::default();
     for c in trace {
-        let _ = write!(s, "{:.4}", c.time_s);
-        for v in c.wrench_tcp {
-            let _ = write!(s, ",{v:.3}");
-        }
-        for block in [&c.delta_s_hat, &c.xi, &c.epsilon] {
-            for v in block {
-                let _ = write!(s, ",{v:.5e}");
-            }
-        }
-        if c.loop_gain.is_finite() {
-            let _ = write!(s, ",{:.4}", c.loop_gain);
-        } else {
-            s.push(',');
-        }
-        let _ = writeln!(s, ",{},{}", c.flags.0, c.flags.describe());
+        sample.record_output(c);
+        format.write_row(&sample, &mut s);
+        s.push('\n');
     }
     s
 }

@@ -5,17 +5,19 @@
 
 use super::Figure;
 use super::csv_files::column_tag;
+use crate::report::draw::{
+    cloud_3d, heatmap, line_plot, panels_plot, parity_plot, scatter_heatmap, timeline_plot,
+};
 use crate::report::forming_run::{FULL_WIDTH_PX, force_panels, profile_panels};
 use crate::study::compensation::PartRuns;
 use crate::study::contact::StiffContactRuns;
 use crate::study::fig7::Fig7Point;
 use crate::study::sensitivity::SensitivityResult;
 use crate::study::{BASELINE, IDENTIFIED};
-use deflex_calibrate::stiffness::MeasurementRow;
+use deflex_calibrate::measurements::MeasurementRow;
 use deflex_control::CycleOutput;
 use deflex_plot::{
     Cloud3, Lane, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
-    cloud_3d, heatmap, line_plot, panels_plot, parity_plot, scatter_heatmap, timeline_plot,
 };
 use deflex_sim::FormingRun;
 use deflex_sim::twin::ClosedLoopRun;
@@ -512,7 +514,7 @@ pub fn contact_figure(
         (None, Some(_)) => ", contact_runaway reported".to_string(),
         (None, None) => String::new(),
     };
-    deflex_plot::line_plot(
+    crate::report::draw::line_plot(
         path,
         &PlotSpec::new(
             format!(

@@ -12,7 +12,7 @@ pub use page::headline_text;
 
 use crate::report::PageError;
 use crate::study::Study;
-use deflex_calibrate::stiffness::format_rows_for;
+use deflex_calibrate::measurements::format_rows_for;
 use deflex_model::robot_to_toml;
 use deflex_plot::PlotError;
 use deflex_sim::twin_campaign::campaign_text;
@@ -134,7 +134,7 @@ fn write_calibration_files(study: &Study, out: &Path) -> Result<(), PlotError> {
 /// A campaign of the twin in the measurement format (`# SIMULATED …` header).
 fn campaign_file(
     study: &Study,
-    rows: &[deflex_calibrate::stiffness::MeasurementRow],
+    rows: &[deflex_calibrate::measurements::MeasurementRow],
     what: &str,
     seed: u64,
 ) -> Result<String, PlotError> {

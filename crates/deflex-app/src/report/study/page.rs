@@ -2,6 +2,7 @@
 //! labelled, the paper's numbers beside ours. One function per section.
 
 use super::Figure;
+use crate::report::draw::write_page;
 use crate::study::compensation::CompensationStudy;
 use crate::study::contact::StiffContactNumbers;
 use crate::study::{BASELINE, DemoSummary, IDENTIFIED, paper};
@@ -197,7 +198,7 @@ pub(crate) fn write(out: &Path, page: &Page) -> Result<(), PlotError> {
     sensitivity_section(&mut html, s, &f.sensitivity);
     compensation_section(&mut html, &s.compensation, &f.compensation);
     files_and_run_sections(&mut html, s, out, &page.file_descriptions);
-    html.write(&out.join("index.html"))
+    write_page(&html, &out.join("index.html"))
 }
 
 /// The SIMULATED note, how to reproduce the page, and the contents.

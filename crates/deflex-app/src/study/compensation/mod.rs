@@ -25,8 +25,9 @@
 
 pub mod lag;
 
+use crate::load::parse_wrench_log;
 use crate::study::DemoError;
-use deflex_compensate::log::{ResampleOptions, parse_log, resample_on_path};
+use deflex_compensate::log::{ResampleOptions, resample_on_path};
 use deflex_compensate::table::{read_csv, write_csv};
 use deflex_compensate::{
     Compensation, CompensationOptions, TcpPath, WrenchSource, commanded_pose, compensate,
@@ -341,7 +342,7 @@ impl PartSetup<'_> {
     /// The log compensation (forces of the uncorrected run's log, one pass) and its run.
     fn log_compensation(&self, open: &FormingRun) -> Result<LogCompensation, DemoError> {
         let text = open.log.to_csv();
-        let log = parse_log(
+        let log = parse_wrench_log(
             &text,
             "forming_open/log.csv",
             self.model,

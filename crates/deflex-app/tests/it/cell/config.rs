@@ -149,7 +149,7 @@ fn link_settings_follow_the_file() {
     assert!(egm.seven_axis);
     assert_eq!(egm.frame, deflex_io::egm::EgmFrame::WorkObject);
     // Yaw 90°: the work object's x is the base's y.
-    assert!((egm.work_object_in_base[1][0] - 1.0).abs() < 1e-12);
+    assert!((egm.work_object_in_base[(1, 0)] - 1.0).abs() < 1e-12);
     assert!(cell.open_robot_link(6).unwrap().answers_in_joint_space());
 }
 

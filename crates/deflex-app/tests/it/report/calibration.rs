@@ -19,7 +19,7 @@ fn campaign(
     plan_cases: usize,
     random_cases: usize,
     seed: u64,
-) -> Vec<deflex_calibrate::stiffness::MeasurementRow> {
+) -> Vec<deflex_calibrate::measurements::MeasurementRow> {
     let plan = plan_experiments(
         robot,
         &PlanOptions {
@@ -61,7 +61,7 @@ fn calibrate(
     noise_m: f64,
 ) -> (
     Calibration,
-    Vec<deflex_calibrate::stiffness::MeasurementRow>,
+    Vec<deflex_calibrate::measurements::MeasurementRow>,
 ) {
     let truth = deflex_model::builtin("tx200").unwrap();
     let plan = campaign(&truth, 16, 8, 2);

@@ -3,15 +3,8 @@
 //! determinism under a seed.
 
 use deflex_app::report::study::write_study;
-use deflex_app::study::{DemoOptions, DemoSummary, Progress, run_study};
+use deflex_app::study::{DemoOptions, DemoSummary, run_study};
 use std::path::{Path, PathBuf};
-
-struct Silent;
-impl Progress for Silent {
-    fn stage(&mut self, _: usize, _: usize, _: &str) {}
-    fn fraction(&mut self, _: f64) {}
-    fn done(&mut self, _: &str) {}
-}
 
 fn out_dir(tag: &str) -> PathBuf {
     std::env::temp_dir().join(format!("deflex-study-{tag}-{}", std::process::id()))
@@ -26,7 +19,7 @@ fn run(tag: &str, seed: u64) -> (DemoSummary, PathBuf) {
         ..DemoOptions::default()
     };
     let cell = deflex_sim::CellConfig::for_robot(&options.robot).unwrap();
-    let study = run_study(&options, cell, &mut Silent).expect("quick demo runs");
+    let study = run_study(&options, cell, &mut |_| {}).expect("quick demo runs");
     write_study(&study, &dir).expect("quick demo is written");
     (study.summary, dir)
 }
@@ -390,7 +383,7 @@ fn check_readme_blocks(with_sensitivity: bool) {
         ..DemoOptions::default()
     };
     let cell = deflex_sim::CellConfig::for_robot(&options.robot).unwrap();
-    let study = run_study(&options, cell, &mut Silent).expect("the demo's study runs");
+    let study = run_study(&options, cell, &mut |_| {}).expect("the demo's study runs");
     let blocks: Vec<(Block, String)> = if with_sensitivity {
         vec![(Block::Sensitivity, sensitivity_list(&study.summary))]
     } else {

@@ -29,13 +29,7 @@ fn twin_campaign_calibrates_to_the_plant() {
     let mut config = CellConfig::default();
     config.tracker.samples_per_reading = 25;
     let rows = run_campaign(&config, &plan.rows, 1).unwrap();
-    let result = search_structure(
-        &nominal,
-        &rows,
-        &SearchOptions::default(),
-        &mut |_, _, _| {},
-    )
-    .unwrap();
+    let result = search_structure(&nominal, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
     let identified = result.calibration.to_robot(&nominal);
     let plant = config.plant.linear_robot(&nominal).unwrap();
     let main = [

@@ -1,7 +1,8 @@
 //! Workflows on the twin (SIMULATED): a twin cell from a robot or twin file, the correction
 //! controller from an identified model file, the in-process closed loop and its telemetry with a
 //! model identified from the twin's campaign, the runtime's threads in simulated time, and
-//! `deflex cell --sim` with `deflex run` over loopback for every robot protocol.
+//! `deflex cell --sim` with `deflex run` over loopback for every robot protocol, and the offline
+//! compensation from a run's log on plants no built-in cell has.
 
 mod cell_file;
 mod cell_server;
@@ -10,6 +11,7 @@ mod common;
 mod loopback;
 mod sim_time;
 mod telemetry;
+mod unseen_plant;
 
 /// Real-time loopback sessions sleep most of every robot cycle: the harness runs two at once
 /// (its two threads on a 2-core machine) and each still meets its links' timeouts, with every

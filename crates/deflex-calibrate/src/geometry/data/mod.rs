@@ -20,15 +20,15 @@
 //! | `time_s` | s | time stamp (any origin) |
 //! | `approach_q1_rad … approach_qN_rad` | rad | joint motion that brought the robot to this reading (q here − q at the previous reading of the time-ordered sequence; [`approach_from_sequence`]): its sign is each joint's approach direction |
 //!
-//! Lines starting with `#` are comments. A file with one bad row is refused whole, naming the
-//! line and the column. Every value is bounded (see [`limits`]).
+//! Read by the crate's one measurement reader ([`crate::measurements::reader`]): lines starting
+//! with `#` are comments; a file with one bad row is refused whole, with a
+//! [`crate::measurements::DataError`] naming the line and the column. Every value is bounded
+//! (see [`limits`]).
 
 use std::collections::HashMap;
 
 mod parse;
-pub use parse::{
-    AbsoluteDataError, HeaderProblem, RowProblem, parse_absolute, parse_absolute_ignoring,
-};
+pub use parse::{parse_absolute, parse_absolute_ignoring};
 
 /// Why a set-up, target or configuration label cannot be written to an absolute file and read
 /// back the same by [`parse_absolute`] (which trims cells, takes `#` at a line's start for a
@@ -92,30 +92,23 @@ pub const DEFAULT_ABSOLUTE_SIGMA_M: f64 = 25e-6;
 /// 20–70 µrad repeatability; its stated accuracy is about 0.01° ≈ 175 µrad).
 pub const DEFAULT_ORIENTATION_SIGMA_RAD: f64 = 100e-6;
 
-/// Bounds on file values: anything outside is refused with the column named.
+/// Bounds on file values: anything outside is refused with the column named. Joint values,
+/// positions, forces, moments and standard deviations have the bounds of every measurement
+/// file ([`crate::measurements::MAX_JOINT_RAD`], [`crate::measurements::MAX_COORDINATE_M`],
+/// [`crate::measurements::MAX_FORCE_N`], [`crate::measurements::MAX_MOMENT_NM`],
+/// [`crate::measurements::MAX_SIGMA_M`], [`crate::measurements::MAX_SIGMA_RAD`]); these are the
+/// absolute format's own.
 pub mod limits {
     /// Largest file read (bytes).
     pub const MAX_FILE_BYTES: u64 = 512 << 20;
     /// Largest number of rows.
     pub const MAX_ROWS: usize = 2_000_000;
-    /// Largest |position| (m).
-    pub const MAX_POSITION_M: f64 = 100.0;
-    /// Largest |joint value| (rad).
-    pub const MAX_JOINT_RAD: f64 = 100.0;
-    /// Largest standard deviation (m).
-    pub const MAX_SIGMA_M: f64 = 1.0;
-    /// Largest standard deviation (rad).
-    pub const MAX_SIGMA_RAD: f64 = 1.0;
-    /// Largest rotation vector norm (rad).
+    /// Largest rotation vector component (rad).
     pub const MAX_ROTATION_RAD: f64 = 4.0 * std::f64::consts::PI;
     /// Largest payload (kg).
     pub const MAX_PAYLOAD_KG: f64 = 1e4;
     /// Largest payload centre-of-mass offset (m).
     pub const MAX_COM_M: f64 = 10.0;
-    /// Largest force (N).
-    pub const MAX_FORCE_N: f64 = 1e6;
-    /// Largest moment (N·m).
-    pub const MAX_MOMENT_NM: f64 = 1e6;
     /// Temperature range (°C).
     pub const TEMPERATURE_RANGE_C: [f64; 2] = [-60.0, 200.0];
     /// Largest |time| (s).

@@ -7,11 +7,12 @@ use super::options::FitOptions;
 use super::roles::Roles;
 use crate::geometry::campaign::Campaign;
 use crate::geometry::joint_maps::{self, JointMapsHyper};
-use crate::geometry::outcome::{ErrorStats, TestGroup};
+use crate::geometry::outcome::TestGroup;
 use crate::geometry::params::{EgModel, Param};
 use crate::geometry::protocol::{row_errors, score_group};
 use crate::geometry::residual_model::{ResidualHyper, ResidualModel};
 use crate::geometry::solve::{self, SolveOptions};
+use crate::stats::ErrorNormStats;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
@@ -92,11 +93,11 @@ pub fn test_groups(model: &EgModel, campaign: &Campaign, roles: &Roles) -> Vec<T
             let (position, orientation): (Vec<f64>, Vec<Option<f64>>) =
                 rows.iter().map(|&i| row_errors(model, campaign, i)).unzip();
             let orientation: Vec<f64> = orientation.into_iter().flatten().collect();
-            let stats = ErrorStats::of(&position);
+            let stats = ErrorNormStats::of(&position);
             TestGroup {
                 name: format!("{}: held-out configurations", model.setups[s].name),
                 stats,
-                orientation: (!orientation.is_empty()).then(|| ErrorStats::of(&orientation)),
+                orientation: (!orientation.is_empty()).then(|| ErrorNormStats::of(&orientation)),
                 draw_rms: vec![stats.rms],
                 registered: false,
             }

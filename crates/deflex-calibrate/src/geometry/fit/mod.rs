@@ -38,7 +38,7 @@ pub use roles::Roles;
 
 use crate::geometry::campaign::Campaign;
 pub use crate::geometry::outcome::{
-    Acceptance, ErrorStats, Estimate, FitResult, Outlier, Role, RowResidual, StepReport, TestGroup,
+    Acceptance, Estimate, FitResult, Outlier, Role, RowResidual, StepReport, TestGroup,
 };
 use crate::geometry::params::{EgModel, Param};
 use crate::geometry::register::start;

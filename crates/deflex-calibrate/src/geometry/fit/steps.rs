@@ -9,11 +9,12 @@ use super::roles::Roles;
 use crate::geometry::campaign::Campaign;
 use crate::geometry::identify::{self, Reduction};
 use crate::geometry::joint_maps::{self, JointMapsHyper, MAPS_GRID};
-use crate::geometry::outcome::{Acceptance, ErrorStats, StepReport, TestGroup};
+use crate::geometry::outcome::{Acceptance, StepReport, TestGroup};
 use crate::geometry::params::{EgModel, Param};
 use crate::geometry::resample::cross_validate;
 use crate::geometry::residual_model::{HYPER_GRID, ResidualHyper, ResidualModel};
 use crate::geometry::solve::{self, SolveOptions, SolveOutcome};
+use crate::stats::ErrorNormStats;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -233,15 +234,15 @@ fn score_step(
         .iter()
         .map(|&i| crate::geometry::protocol::row_errors(model, campaign, i))
         .collect();
-    let fit = ErrorStats::of(&errors.iter().map(|e| e.0).collect::<Vec<_>>());
+    let fit = ErrorNormStats::of(&errors.iter().map(|e| e.0).collect::<Vec<_>>());
     let orientation: Vec<f64> = errors.iter().filter_map(|e| e.1).collect();
     let loaded_rms = (!roles.fit_loaded.is_empty()).then(|| {
-        let n: Vec<f64> = roles
+        let norms: Vec<f64> = roles
             .fit_loaded
             .iter()
             .map(|&i| campaign.residual(model, i, &[], None).norm())
             .collect();
-        (n.iter().map(|e| e * e).sum::<f64>() / n.len() as f64).sqrt()
+        ErrorNormStats::of(&norms).rms
     });
     let cv_rms = (options.folds >= 2 && refit_with.residual.is_none() && refit_with.maps.is_none())
         .then(|| {
@@ -272,7 +273,7 @@ fn score_step(
             candidates: candidates.len(),
             identifiable: reduced.kept.len(),
             fit,
-            fit_orientation: (!orientation.is_empty()).then(|| ErrorStats::of(&orientation)),
+            fit_orientation: (!orientation.is_empty()).then(|| ErrorNormStats::of(&orientation)),
             loaded_rms,
             cv_rms,
             test,

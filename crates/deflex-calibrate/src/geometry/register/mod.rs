@@ -23,9 +23,9 @@ pub mod start;
 
 use crate::geometry::campaign::{Campaign, ReadingKind};
 use crate::geometry::identify;
-use crate::geometry::outcome::ErrorStats;
 use crate::geometry::params::{EgModel, Param, Unit};
 use crate::geometry::solve::{self, Loss, SolveOptions};
+use crate::stats::ErrorNormStats;
 use nalgebra::{DMatrix, Rotation3, Vector3};
 
 /// Readings below which a registration is flagged (the user protocol asks for 30).
@@ -160,9 +160,9 @@ pub struct Registration {
     /// Readings used (positions).
     pub readings: usize,
     /// Position residuals of those readings (m).
-    pub position: ErrorStats,
+    pub position: ErrorNormStats,
     /// Orientation residuals (rad), when orientations were measured and fitted.
-    pub orientation: Option<ErrorStats>,
+    pub orientation: Option<ErrorNormStats>,
     /// χ²/dof with the stated σ.
     pub chi2_per_dof: f64,
     /// What deserves a second look.
@@ -284,13 +284,14 @@ pub fn register(
             .map(|&i| campaign.residual(model, i, &[], None).norm())
             .collect()
     };
-    let position = ErrorStats::of(&norms(ReadingKind::Position));
+    let position = ErrorNormStats::of(&norms(ReadingKind::Position));
     let orientation_norms = norms(ReadingKind::Orientation);
     let mut result = Registration {
         params: registered,
         readings: positions.len(),
         position,
-        orientation: (!orientation_norms.is_empty()).then(|| ErrorStats::of(&orientation_norms)),
+        orientation: (!orientation_norms.is_empty())
+            .then(|| ErrorNormStats::of(&orientation_norms)),
         chi2_per_dof,
         warnings: Vec::new(),
     };

@@ -3,11 +3,11 @@
 //! information it brings.
 
 use super::options::PlanOptions;
+use crate::measurements::MeasurementRow;
 use crate::stiffness::CalibError;
 use crate::stiffness::campaign_cell::{
     LoadKind, Obstacles, PointSet, point_in_world, standard_points, wrap_into_limits,
 };
-use crate::stiffness::data::MeasurementRow;
 use crate::stiffness::design::{Design, EdofId};
 use deflex_model::{Data, Robot};
 use nalgebra::{DMatrix, Point3, Vector3};

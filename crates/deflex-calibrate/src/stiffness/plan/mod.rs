@@ -23,11 +23,11 @@
 mod candidates;
 mod options;
 
+use crate::measurements::MeasurementRow;
 use crate::stiffness::campaign_cell::require_limits;
 pub use crate::stiffness::campaign_cell::{
-    BasePoint, Floor, LoadKind, PointSet, PointSpec, Table, TableOption, standard_points,
+    BasePoint, Floor, LoadKind, PointSet, Table, TableOption, standard_points,
 };
-use crate::stiffness::data::MeasurementRow;
 use crate::stiffness::design::{Design, EdofId, edof_label};
 use crate::stiffness::uncertainty::unscaled_covariance;
 use crate::stiffness::{CalibError, PlanError};

@@ -158,7 +158,7 @@ fn planted_joint_angle_errors_are_recovered_simulated() {
     let (result, _) = fit_maps(true, 3);
     let geometry = &result.steps[1];
     let maps_step = &result.steps[2];
-    let far_rms = |s: &deflex_calibrate::geometry::outcome::StepReport| {
+    let far_rms = |s: &deflex_calibrate::geometry::fit::StepReport| {
         s.test
             .iter()
             .find(|g| g.name.contains("far"))

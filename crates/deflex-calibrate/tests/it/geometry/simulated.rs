@@ -10,7 +10,7 @@ use deflex_calibrate::geometry::data::AbsoluteRow;
 use deflex_calibrate::geometry::fit::{FitOptions, FitResult, Step, fit};
 use deflex_calibrate::geometry::params::{DhField, EgModel, Param};
 use deflex_calibrate::geometry::solve::Loss;
-use deflex_calibrate::stiffness::MeasurementRow;
+use deflex_calibrate::measurements::MeasurementRow;
 use nalgebra::{Matrix4, Vector3, Vector4};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -6,13 +6,13 @@ use deflex_calibrate::stiffness::stiffness_fit::{Status, Structure, calibrate_fi
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
 use deflex_model::builtin;
 
-fn rows() -> Vec<deflex_calibrate::stiffness::MeasurementRow> {
+fn rows() -> Vec<deflex_calibrate::measurements::MeasurementRow> {
     let robot = builtin("tx200-1edof").unwrap();
     let plan = random_campaign(&robot, 10, (600.0, 1400.0), 4);
     measure(&robot, &plan, &SyntheticOptions::default()).unwrap()
 }
 
-fn fixed_error(rows: &[deflex_calibrate::stiffness::MeasurementRow]) -> String {
+fn fixed_error(rows: &[deflex_calibrate::measurements::MeasurementRow]) -> String {
     let robot = builtin("tx200-1edof").unwrap();
     calibrate_fixed(&robot, rows, &Structure::from_robot(&robot))
         .unwrap_err()
@@ -64,7 +64,7 @@ fn zero_load_everywhere() {
     let err = fixed_error(&r);
     assert_eq!(err, "every load is zero: nothing to identify");
     let robot = builtin("tx200-1edof").unwrap();
-    let err = search_structure(&robot, &r, &SearchOptions::default(), &mut |_, _, _| {})
+    let err = search_structure(&robot, &r, &SearchOptions::default(), &mut |_| {})
         .unwrap_err()
         .to_string();
     assert!(err.contains("every load is zero"), "{err}");
@@ -119,7 +119,7 @@ fn all_displacements_zero_is_an_error() {
         "{err}"
     );
     let robot = builtin("tx200-1edof").unwrap();
-    let err = search_structure(&robot, &r, &SearchOptions::default(), &mut |_, _, _| {})
+    let err = search_structure(&robot, &r, &SearchOptions::default(), &mut |_| {})
         .unwrap_err()
         .to_string();
     assert!(err.contains("exactly zero"), "{err}");
@@ -167,7 +167,7 @@ fn data_that_pins_every_compliance_at_zero_does_not_panic() {
         "{:?}",
         cal.edofs.iter().map(|e| &e.status).collect::<Vec<_>>()
     );
-    let _ = search_structure(&robot, &r, &SearchOptions::default(), &mut |_, _, _| {});
+    let _ = search_structure(&robot, &r, &SearchOptions::default(), &mut |_| {});
 }
 
 /// Issue 12: `plan --max-force-N 1e308` once spun in an SVD on NaN; now refused at once.

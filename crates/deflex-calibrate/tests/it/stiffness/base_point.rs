@@ -31,8 +31,7 @@ fn identify(truth: &Robot, base_point: bool) -> Robot {
     );
     let rows = measure(truth, &plan.rows, &SyntheticOptions::default()).unwrap();
     let start = builtin("tx200-1edof").unwrap();
-    let result =
-        search_structure(&start, &rows, &SearchOptions::default(), &mut |_, _, _| {}).unwrap();
+    let result = search_structure(&start, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
     eprintln!(
         "base point {base_point}: {}",
         result.calibration.structure.label()

@@ -2,11 +2,12 @@
 //! kinematics of a planar two-link arm, and on the acceptance case: a UR10e measurement file
 //! given with the TX200's model is refused, naming the rows and the distances.
 
+use deflex_calibrate::measurements::format_rows_for;
 use deflex_calibrate::measurements::{FileHeader, MeasurementRow, parse_file};
+use deflex_calibrate::stiffness::CalibError;
 use deflex_calibrate::stiffness::consistency::{Reference, check_geometry, enforce};
 use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
-use deflex_calibrate::stiffness::{CalibError, format_rows_for};
 use deflex_model::{builtin, robot_from_toml_str};
 
 /// Two links in a horizontal plane: joint 1 at the origin, joint 2 0.5 m along x1, the TCP

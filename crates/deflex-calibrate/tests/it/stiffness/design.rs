@@ -83,7 +83,7 @@ fn rotation_rows_match_point_displacement() {
     // rotation residual (bounded by the RMS times the square root of their number) within 1e-9
     // of the smallest row's displacement or rotation.
     for ax in 0..3 {
-        let r = cal.residuals.max_abs_m[ax];
+        let r = cal.residuals.position.max_abs[ax];
         assert!(r <= 1e-9 * min_position, "axis {ax}: {r:e} m");
     }
     let rotation_rms = cal.residuals.rotation_rms_rad.unwrap();

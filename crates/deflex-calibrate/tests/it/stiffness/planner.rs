@@ -3,9 +3,9 @@
 //! off-axis bracket that makes the wrist identifiable (with a Monte Carlo check of its expected
 //! standard error), and a technician's sheet that agrees with the identifiability table.
 
-use deflex_calibrate::measurements::points::parse_points;
+use deflex_calibrate::measurements::points::{PointSpec, parse_points};
 use deflex_calibrate::stiffness::campaign_cell::{
-    LoadKind, PointSet, PointSpec, default_floor_z, default_force_n, wrapped,
+    LoadKind, PointSet, default_floor_z, default_force_n, wrapped,
 };
 use deflex_calibrate::stiffness::plan::{
     BasePoint, Floor, Plan, PlanOptions, TableOption, plan_experiments,

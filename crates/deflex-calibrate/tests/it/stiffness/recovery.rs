@@ -33,7 +33,7 @@ fn check_recovery(truth: &Robot, seed: u64, criterion: Criterion) {
         criterion,
         ..SearchOptions::default()
     };
-    let result = search_structure(truth, &rows, &options, &mut |_, _, _| {}).unwrap();
+    let result = search_structure(truth, &rows, &options, &mut |_| {}).unwrap();
     let cal = &result.calibration;
     let steps: Vec<(&str, f64)> = result
         .steps
@@ -111,14 +111,14 @@ fn check_recovery(truth: &Robot, seed: u64, criterion: Criterion) {
     )
     .unwrap();
     let v = validate(&model, None, &vrows).unwrap();
-    let rms_all = (v.model.stats.rms_norm_m.powi(2) / 3.0).sqrt();
+    let rms_all = (v.model.stats.norm.rms.powi(2) / 3.0).sqrt();
     eprintln!("validation RMS per component {:.2} µm", rms_all * 1e6);
     assert!(rms_all <= 1.5 * SIGMA, "validation RMS {rms_all:e}");
     for ax in 0..3 {
         assert!(
-            v.model.stats.rms_m[ax] <= 1.5 * SIGMA,
+            v.model.stats.rms[ax] <= 1.5 * SIGMA,
             "axis {ax}: {:e}",
-            v.model.stats.rms_m[ax]
+            v.model.stats.rms[ax]
         );
     }
 }
@@ -176,8 +176,7 @@ fn unrepresentable_truth_gives_honest_residual() {
         }
     }
     // The search does not fail either and reports its residual honestly.
-    let result =
-        search_structure(&truth, &rows, &SearchOptions::default(), &mut |_, _, _| {}).unwrap();
+    let result = search_structure(&truth, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
     assert!(result.calibration.residuals.rms_all_m > SIGMA);
     assert!(
         result

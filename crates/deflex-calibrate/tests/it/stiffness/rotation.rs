@@ -5,9 +5,10 @@ use crate::stiffness::common;
 
 use common::kr_like;
 use deflex_calibrate::measurements::{MeasurementRow, format_rows, parse_rows};
+use deflex_calibrate::stiffness::campaign_cell::random_q;
 use deflex_calibrate::stiffness::stiffness_fit::{Calibration, Status, Structure, calibrate_fixed};
 use deflex_calibrate::stiffness::synthetic::{
-    SyntheticOptions, case_rows, measure, measure_with_rotations, random_q,
+    SyntheticOptions, case_rows, measure, measure_with_rotations,
 };
 use deflex_calibrate::stiffness::validation::validate;
 use deflex_model::{Axis, Data, EdofSite, Robot};
@@ -172,8 +173,8 @@ fn rotations_recover_truth_and_sharpen_weak_stiffness() {
     // Validation reports rotation errors (truth: at the noise floor), none without rotations.
     let v = validate(&truth, None, &with).unwrap();
     let rot = v.model.rotation.as_ref().unwrap();
-    assert_eq!(rot.stats.rows, with.len());
-    assert!(rot.stats.rms_norm_rad < 1.3 * 3f64.sqrt() * SIGMA_RAD);
+    assert_eq!(rot.stats.norm.count, with.len());
+    assert!(rot.stats.norm.rms < 1.3 * 3f64.sqrt() * SIGMA_RAD);
     // (Its one-line summary: deflex-report's validation_report tests.)
     let v = validate(&truth, None, &without).unwrap();
     assert!(v.model.rotation.is_none());
@@ -194,7 +195,7 @@ fn mixed_rows_and_default_sigma_rad() {
         SIGMA_RAD,
     )
     .unwrap();
-    assert_eq!(SIGMA_RAD, deflex_calibrate::stiffness::DEFAULT_SIGMA_RAD);
+    assert_eq!(SIGMA_RAD, deflex_calibrate::measurements::DEFAULT_SIGMA_RAD);
     for (i, r) in rows.iter_mut().enumerate() {
         assert_eq!(r.rotation_rad.unwrap().sigma_rad, None);
         if i % 2 == 0 {

@@ -29,7 +29,7 @@ fn removing_the_last_xy_edof_of_a_joint_clears_its_shift() {
         start: Some(start),
         ..SearchOptions::default()
     };
-    let result = search_structure(&truth, &rows, &options, &mut |_, _, _| {}).unwrap();
+    let result = search_structure(&truth, &rows, &options, &mut |_| {}).unwrap();
     let steps: Vec<(&str, &str)> = result
         .steps
         .iter()

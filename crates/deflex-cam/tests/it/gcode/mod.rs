@@ -3,5 +3,6 @@
 
 mod arc;
 mod corpus;
+mod line_reader;
 mod refusals;
 mod words;

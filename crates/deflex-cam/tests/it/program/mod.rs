@@ -3,6 +3,5 @@
 mod common;
 mod config;
 mod names;
-mod orientation;
 mod round_trip;
 mod streaming;

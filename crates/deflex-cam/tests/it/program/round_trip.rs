@@ -3,12 +3,13 @@
 //! programmed (capped by the settings, rapid moves at the rapid speed). Plus the bounds:
 //! point counts, bad values, line lengths and names.
 
-use deflex_cam::program::orientation::{rotation_distance, rotation_from_kuka_abc_deg};
 use deflex_cam::program::readback::read_files;
 use deflex_cam::program::settings::ProgramSettings;
 use deflex_cam::program::{
-    Coordinates, Format, Pose, ProgramError, ProgramInput, ProgramPoint, export, names,
+    Coordinates, Format, ProgramError, ProgramInput, ProgramPoint, export, names,
 };
+use deflex_model::Pose;
+use deflex_model::conventions::{rotation_distance, rotation_from_kuka_abc_deg};
 use nalgebra::{Rotation3, Translation3, Vector3};
 
 /// A helical cone like the paper's (20 mm radius, 45°, in the part frame), the tool pointing
@@ -46,11 +47,11 @@ fn cone_path(points: usize) -> Vec<ProgramPoint> {
 
 fn input(points: Vec<ProgramPoint>) -> ProgramInput {
     ProgramInput {
-        tool_load: Some(deflex_cam::program::ToolLoad {
+        tool_load_in_flange: Some(deflex_model::ToolLoad {
             mass_kg: 2.5,
-            cog_m: [0.0, 0.0, 0.08],
-            source: "test",
+            centre_of_mass_m: Vector3::new(0.0, 0.0, 0.08),
         }),
+        tool_load_source: "test".into(),
         coordinates: Coordinates::Part,
         frame_name: None,
         configurations: Vec::new(),
@@ -157,7 +158,7 @@ fn orientations_at_and_near_gimbal_lock_round_trip() {
     for (k, offset) in [0.0, 1e-9, 1e-6, 1e-3].iter().enumerate() {
         for sign in [1.0, -1.0] {
             let kuka = rotation_from_kuka_abc_deg([35.0, sign * (90.0 - offset), -20.0]);
-            let staubli = deflex_cam::program::orientation::rotation_from_staubli_rxryrz_deg([
+            let staubli = deflex_model::conventions::rotation_from_staubli_rxryrz_deg([
                 15.0,
                 sign * (90.0 - offset),
                 -65.0,
@@ -174,11 +175,11 @@ fn orientations_at_and_near_gimbal_lock_round_trip() {
         }
     }
     let mut input = ProgramInput::new(points);
-    input.tool_load = Some(deflex_cam::program::ToolLoad {
+    input.tool_load_in_flange = Some(deflex_model::ToolLoad {
         mass_kg: 1.0,
-        cog_m: [0.0; 3],
-        source: "test",
+        centre_of_mass_m: Vector3::zeros(),
     });
+    input.tool_load_source = "test".into();
     for format in Format::ALL {
         check_round_trip(format, &input, &ProgramSettings::default());
     }
@@ -548,7 +549,7 @@ fn robot_coordinates_write_no_base_and_headers_wrap_at_words() {
         ]
     );
     // RAPID refuses to guess a tool load.
-    input.tool_load = None;
+    input.tool_load_in_flange = None;
     let e = export(Format::Rapid, &input, &settings).unwrap_err();
     assert!(e.to_string().contains("program.tool_mass_kg"), "{e}");
 }

@@ -4,9 +4,8 @@
 
 use deflex_cam::program::readback::{DirectorySource, read_files, read_program, read_val3_data};
 use deflex_cam::program::settings::ProgramSettings;
-use deflex_cam::program::{
-    DirectorySink, Format, Pose, ProgramInput, ProgramPoint, export, export_to,
-};
+use deflex_cam::program::{DirectorySink, Format, ProgramInput, ProgramPoint, export, export_to};
+use deflex_model::Pose;
 use nalgebra::{Rotation3, Translation3, Vector3};
 
 /// A descending spiral of `n` points, tool down, one rapid in the middle.
@@ -29,11 +28,11 @@ fn spiral(n: usize) -> ProgramInput {
         })
         .collect();
     let mut input = ProgramInput::new(points);
-    input.tool_load = Some(deflex_cam::program::ToolLoad {
+    input.tool_load_in_flange = Some(deflex_model::ToolLoad {
         mass_kg: 2.0,
-        cog_m: [0.0, 0.0, 0.1],
-        source: "test",
+        centre_of_mass_m: Vector3::new(0.0, 0.0, 0.1),
     });
+    input.tool_load_source = "test".into();
     input
 }
 

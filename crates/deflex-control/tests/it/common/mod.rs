@@ -2,7 +2,8 @@
 //! a known bias and a tool, and raw sensor readings synthesised for a TCP wrench.
 #![allow(dead_code)]
 
-use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
+use deflex_control::{Controller, ControllerConfig, WrenchConfig};
+use deflex_model::ToolLoad;
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::wrench_transport::world_wrench_in_sensor;
 use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
@@ -18,9 +19,9 @@ pub fn config() -> ControllerConfig {
         bias: Some(BIAS),
         wrench: WrenchConfig {
             sensor_in_flange: pose_from_xyz_rpy([0.0, 0.0, 0.04], [0.0, 0.0, 0.3]),
-            tool: ToolLoad {
+            tool_in_sensor: ToolLoad {
                 mass_kg: 5.0,
-                com_in_sensor_m: [0.0, 0.01, 0.12],
+                centre_of_mass_m: nalgebra::Vector3::new(0.0, 0.01, 0.12),
             },
             ..WrenchConfig::default()
         },
@@ -44,10 +45,10 @@ pub fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) 
     let sensor = data.flange * config.wrench.sensor_in_flange;
     let env = world_wrench_in_sensor(&Wrench::from(w_tcp_world), &data.tcp_position(), &sensor);
     let g = config.wrench.gravity_world;
-    let m = config.wrench.tool.mass_kg;
+    let m = config.wrench.tool_in_sensor.mass_kg;
     let f =
         sensor.rotation.matrix().transpose() * nalgebra::Vector3::new(g[0] * m, g[1] * m, g[2] * m);
-    let c = nalgebra::Vector3::from(config.wrench.tool.com_in_sensor_m);
+    let c = config.wrench.tool_in_sensor.centre_of_mass_m;
     let mg = c.cross(&f);
     let grav = [f.x, f.y, f.z, mg.x, mg.y, mg.z];
     Wrench::from_fn(|i, _| BIAS[i] + grav[i] + env[i])

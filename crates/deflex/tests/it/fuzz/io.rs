@@ -20,7 +20,10 @@ use deflex_io::simple_udp::{
     format_joints_line, format_state_line, parse_correction_line, parse_joints_line,
     parse_state_line,
 };
-use deflex_io::{LinkError, MAX_JOINTS, Pose6, RobotState};
+use deflex_io::{LinkError, RobotState};
+use deflex_model::conventions::rotation_from_kuka_abc_rad;
+use deflex_model::{MAX_JOINTS, Pose};
+use nalgebra::Translation3;
 
 const QUICK: usize = 30_000;
 
@@ -47,10 +50,10 @@ fn run(name: &str, corpus: &[Vec<u8>], max_len: usize, target: impl FnMut(&[u8])
 fn rsi_parsers() {
     let mut rob = [0u8; 1024];
     let t = deflex_io::rsi::RobTelegram {
-        actual_pose: Some(Pose6 {
-            position_m: [1.2, -0.03, 0.8],
-            zyx_rad: [1.5, -0.2, 3.1],
-        }),
+        actual_pose: Some(Pose::from_parts(
+            Translation3::new(1.2, -0.03, 0.8),
+            rotation_from_kuka_abc_rad([1.5, -0.2, 3.1]),
+        )),
         setpoint_pose: None,
         q_rad: Some([0.1, -1.5, 1.6, 0.0, 0.7, -3.0]),
         delay: 3,
@@ -67,7 +70,10 @@ fn rsi_parsers() {
             Ok(t) => {
                 assert!(t.q_rad.is_none_or(|q| finite(&q)));
                 for p in [t.actual_pose, t.setpoint_pose].into_iter().flatten() {
-                    assert!(finite(&p.position_m) && finite(&p.zyx_rad));
+                    assert!(
+                        finite(p.translation.vector.as_slice())
+                            && finite(p.rotation.matrix().as_slice())
+                    );
                 }
                 // Values that parse format again (huge ones may not fit the buffer: an error).
                 let mut out = [0u8; 4096];
@@ -93,10 +99,10 @@ fn egm_decoders() {
     use prost::Message;
     let mut m = deflex_io::egm::msg::EgmRobot::default();
     let mut s = RobotState::with_joints(&[0.1, -0.5, 1.0, 0.0, 0.4, 3.0]);
-    s.tcp_pose = Some(Pose6 {
-        position_m: [1.0, 0.5, 0.3],
-        zyx_rad: [0.3, -0.2, 2.9],
-    });
+    s.tcp_pose = Some(Pose::from_parts(
+        Translation3::new(1.0, 0.5, 0.3),
+        rotation_from_kuka_abc_rad([0.3, -0.2, 2.9]),
+    ));
     fill_robot_msg(&mut m, &s, 7, 1234, false);
     let robot = m.encode_to_vec();
     fill_robot_msg(
@@ -114,7 +120,10 @@ fn egm_decoders() {
             Ok(f) => {
                 assert!(f.n_joints <= 6 && f.n_external <= 6);
                 assert!(finite(&f.q_rad[..f.n_joints]));
-                assert!(f.tcp_pose.is_none_or(|p| finite(&p.position_m)));
+                assert!(
+                    f.tcp_pose
+                        .is_none_or(|p| finite(p.translation.vector.as_slice()))
+                );
                 // The allocation-free walker agrees with prost on the joints.
                 if let Ok(p) = deflex_io::egm::msg::EgmRobot::decode(b)
                     && let Some(j) = p.feed_back.and_then(|fb| fb.joints)
@@ -282,7 +291,7 @@ fn netft_decoders() {
                 Ok(records) => {
                     let cal = Calibration::default();
                     for r in records {
-                        assert!(finite(&cal.to_wrench(&r.counts)));
+                        assert!(finite(cal.to_wrench(&r.counts).as_slice()));
                     }
                 }
                 Err(e) => packet_error(&e),

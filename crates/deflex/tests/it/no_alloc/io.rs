@@ -8,7 +8,10 @@ use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
 use deflex_io::staubli::{StaubliLink, StaubliRobotEndpoint};
-use deflex_io::{Correction, ForceSensorLink, Pose6, RobotLink, RobotSideLink, RobotState};
+use deflex_io::{Correction, ForceSensorLink, RobotLink, RobotSideLink, RobotState};
+use deflex_model::conventions::rotation_from_kuka_abc_rad;
+use deflex_model::{Pose, Wrench};
+use nalgebra::Translation3;
 use std::time::Duration;
 
 fn allocs() -> u64 {
@@ -19,10 +22,10 @@ const T: Duration = Duration::from_secs(2);
 
 fn state(k: u64) -> RobotState {
     let mut s = RobotState::with_joints(&[0.1, -1.2, 1.3, 0.0, 0.7, k as f64 * 1e-3]);
-    s.tcp_pose = Some(Pose6 {
-        position_m: [1.0, 0.2, 0.5],
-        zyx_rad: [0.1, 0.2, 3.0],
-    });
+    s.tcp_pose = Some(Pose::from_parts(
+        Translation3::new(1.0, 0.2, 0.5),
+        rotation_from_kuka_abc_rad([0.1, 0.2, 3.0]),
+    ));
     s.cycle_id = k;
     s.robot_time_s = Some(k as f64 * 0.004);
     s
@@ -107,7 +110,7 @@ fn netft_receive_does_not_allocate() {
     let mut total = 0;
     for k in 0..50 {
         sensor
-            .send_sample(&[1.0, 2.0, 3.0, 0.1, 0.2, k as f64], 0)
+            .send_sample(&Wrench::new(1.0, 2.0, 3.0, 0.1, 0.2, k as f64), 0)
             .unwrap();
         let before = allocs();
         let s = client.receive(T).unwrap().unwrap();

@@ -11,7 +11,8 @@
 
 use super::count;
 use super::cycle_counter::CycleCounter;
-use deflex_control::{Controller, ControllerConfig, ToolLoad, WrenchConfig};
+use deflex_control::{Controller, ControllerConfig, WrenchConfig};
+use deflex_model::ToolLoad;
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::wrench_transport::world_wrench_in_sensor;
 use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
@@ -151,9 +152,9 @@ fn controller_config() -> ControllerConfig {
         bias: Some(BIAS),
         wrench: WrenchConfig {
             sensor_in_flange: pose_from_xyz_rpy([0.0, 0.0, 0.04], [0.0, 0.0, 0.3]),
-            tool: ToolLoad {
+            tool_in_sensor: ToolLoad {
                 mass_kg: 5.0,
-                com_in_sensor_m: [0.0, 0.01, 0.12],
+                centre_of_mass_m: nalgebra::Vector3::new(0.0, 0.01, 0.12),
             },
             ..WrenchConfig::default()
         },
@@ -177,10 +178,10 @@ fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) -> W
     let sensor = data.flange * config.wrench.sensor_in_flange;
     let env = world_wrench_in_sensor(&Wrench::from(w_tcp_world), &data.tcp_position(), &sensor);
     let g = config.wrench.gravity_world;
-    let m = config.wrench.tool.mass_kg;
+    let m = config.wrench.tool_in_sensor.mass_kg;
     let f =
         sensor.rotation.matrix().transpose() * nalgebra::Vector3::new(g[0] * m, g[1] * m, g[2] * m);
-    let c = nalgebra::Vector3::from(config.wrench.tool.com_in_sensor_m);
+    let c = config.wrench.tool_in_sensor.centre_of_mass_m;
     let mg = c.cross(&f);
     let grav = [f.x, f.y, f.z, mg.x, mg.y, mg.z];
     Wrench::from_fn(|i, _| BIAS[i] + grav[i] + env[i])
@@ -249,7 +250,6 @@ fn loopback_cell(
     let mut server = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
     let sensor_addr = server.local_addr().unwrap();
     let client = NetFtClient::new("127.0.0.1:0", sensor_addr, Calibration::default()).unwrap();
-    let raw: [f64; 6] = raw.into();
     let (robot_stop, sensor_stop) = (
         Arc::new(AtomicBool::new(false)),
         Arc::new(AtomicBool::new(false)),

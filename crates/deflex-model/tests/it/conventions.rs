@@ -1,10 +1,12 @@
-//! The vendors' orientation conventions against independent constructions: elementary rotation
-//! matrices written out here element by element, the quaternion → matrix formula written out,
-//! Rodrigues' formula for the rotation vector, and published vendor examples. Includes the
-//! gimbal-lock neighbourhoods of the three-angle conventions and the quaternion / rotation
-//! vector sign choices.
+//! The vendors' orientation conventions ([`deflex_model::conventions`]) against independent
+//! constructions: elementary rotation matrices written out here element by element, the
+//! quaternion → matrix formula written out, Rodrigues' formula for the rotation vector, and
+//! published vendor examples. Includes the gimbal-lock neighbourhoods of the three-angle
+//! conventions and the quaternion / rotation vector sign choices, and the radian forms the wire
+//! protocols use (KUKA RSI, ABB EGM, deflex's Stäubli protocol, the corrections' rotation
+//! vectors).
 
-use deflex_cam::program::orientation::*;
+use deflex_model::conventions::*;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 /// Rotation about x by `deg` degrees, written out.
@@ -208,23 +210,23 @@ fn quaternion_sign_stays_continuous_through_a_half_turn() {
 #[test]
 fn ur_rotation_vector_matches_rodrigues_and_stays_continuous_near_pi() {
     for m in samples() {
-        let r = ur_rotation_vector(&rot(m), None);
+        let r = rotation_vector(&rot(m), None);
         assert!(Vector3::from(r).norm() <= std::f64::consts::PI + 1e-12);
         assert!(distance(&m, &rodrigues(r)) < 1e-12, "{r:?}");
-        let back = rotation_from_ur_rotation_vector(r);
+        let back = rotation_from_rotation_vector(r);
         assert!(distance(back.matrix(), &rodrigues(r)) < 1e-12);
     }
     // Small angles keep their accuracy.
-    let r = ur_rotation_vector(&rot(rx(1e-7)), None);
+    let r = rotation_vector(&rot(rx(1e-7)), None);
     assert!((r[0] - 1e-7f64.to_radians()).abs() < 1e-20, "{r:?}");
     // UR's usual "tool down": 180° about y is [0, π, 0].
-    let r = ur_rotation_vector(&rot(ry(180.0)), None);
+    let r = rotation_vector(&rot(ry(180.0)), None);
     assert!((r[1].abs() - std::f64::consts::PI).abs() < 1e-12 && r[0].abs() < 1e-12);
     // Near π the representative follows the previous point.
     let mut previous: Option<[f64; 3]> = None;
     for k in -5..=5 {
         let m = ry(180.0 + 0.05 * f64::from(k));
-        let r = ur_rotation_vector(&rot(m), previous);
+        let r = rotation_vector(&rot(m), previous);
         assert!(distance(&m, &rodrigues(r)) < 1e-12);
         if let Some(p) = previous {
             assert!(
@@ -249,4 +251,76 @@ fn wrapping_keeps_the_half_open_range() {
     ] {
         assert!((wrap_deg(input) - expected).abs() < 1e-12, "{input}");
     }
+}
+
+// The radian forms the protocols use (formerly `deflex_io::link`'s own Euler, rotation-vector and
+// quaternion maths), with the assertions of those tests.
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol
+}
+
+#[test]
+fn zyx_matrix_round_trip() {
+    for zyx in [
+        [0.1, -0.2, 0.3],
+        [3.0, 1.2, -2.9],
+        [-1.0, -1.5, 0.7],
+        [0.0, 0.0, 0.0],
+    ] {
+        let back = kuka_abc_rad(&rotation_from_kuka_abc_rad(zyx), None);
+        for i in 0..3 {
+            assert!(close(back[i], zyx[i], 1e-12), "{zyx:?} -> {back:?}");
+        }
+    }
+}
+
+#[test]
+fn zyx_single_axes() {
+    // A about z: x axis goes to y for a = 90°.
+    let r = rotation_from_kuka_abc_rad([std::f64::consts::FRAC_PI_2, 0.0, 0.0]);
+    assert!(close(r.matrix()[(1, 0)], 1.0, 1e-15));
+    let r = rotation_from_kuka_abc_rad([0.0, 0.0, std::f64::consts::FRAC_PI_2]);
+    // C about x: y axis goes to z.
+    assert!(close(r.matrix()[(2, 1)], 1.0, 1e-15));
+}
+
+#[test]
+fn rotvec_and_quaternion_round_trip() {
+    for v in [[0.01, -0.02, 0.03], [1.0, 0.5, -2.0], [0.0, 0.0, 0.0]] {
+        let back = rotation_vector(&rotation_from_rotation_vector(v), None);
+        for i in 0..3 {
+            assert!(close(back[i], v[i], 1e-12));
+        }
+        let m = rotation_from_rotation_vector(v);
+        let m2 = rotation_from_abb_quaternion(abb_quaternion(&m, None));
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!(close(m[(i, j)], m2[(i, j)], 1e-12));
+            }
+        }
+    }
+}
+
+#[test]
+fn pose_quaternion_round_trip() {
+    let zyx = [0.4, -0.3, 2.0];
+    let q = abb_quaternion(&rotation_from_kuka_abc_rad(zyx), None);
+    let back = kuka_abc_rad(&rotation_from_abb_quaternion(q), None);
+    for i in 0..3 {
+        assert!(close(zyx[i], back[i], 1e-12));
+    }
+}
+
+#[test]
+fn values_that_name_no_rotation() {
+    // A quaternion of zero or non-finite norm carries no orientation: the identity (an EGM
+    // message may leave it unset).
+    for q in [[0.0; 4], [f64::INFINITY, 0.0, 0.0, 0.0]] {
+        assert_eq!(rotation_from_abb_quaternion(q), Rotation3::identity());
+    }
+    // A non-finite rotation vector is not silently the identity: its rotation is non-finite,
+    // so a protocol's finiteness check refuses it.
+    let r = rotation_from_rotation_vector([f64::NAN, 0.0, 0.0]);
+    assert!(r.matrix().iter().all(|v| v.is_nan()));
 }

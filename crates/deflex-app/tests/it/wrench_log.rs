@@ -1,12 +1,13 @@
-//! Log reading and resampling on arc length against hand-made logs whose forces are known
-//! functions of the arc length.
+//! A previous run's log as the compensation's wrench source: read through the recorder's log
+//! reader ([`deflex_app::load::wrench_log`]) and resampled on arc length by the compensation,
+//! against hand-made logs whose forces are known functions of the arc length.
 
+use deflex_app::load::{WrenchLogError, parse_wrench_log};
 use deflex_compensate::LogError;
 use deflex_compensate::TcpPath;
-use deflex_compensate::log::{
-    LogKind, RUN_LOG_SKIP_FLAGS, ResampleOptions, parse_log, resample_on_path,
-};
+use deflex_compensate::log::{LogKind, ResampleOptions, resample_on_path};
 use deflex_model::{IkOptions, Pose, TX200_FORMING_Q_DEG, builtin};
+use deflex_record::run_log::RUN_LOG_SKIP_FLAGS;
 use nalgebra::{Translation3, Vector3};
 use std::fmt::Write as _;
 
@@ -53,7 +54,7 @@ fn isf_log(rows: usize) -> String {
 #[test]
 fn a_sim_isf_log_resamples_to_the_known_force_profile() {
     let robot = builtin("tx200").unwrap();
-    let log = parse_log(&isf_log(101), "log.csv", &robot, &part()).unwrap();
+    let log = parse_wrench_log(&isf_log(101), "log.csv", &robot, &part()).unwrap();
     assert_eq!(log.kind, LogKind::SimIsf);
     assert!(log.simulated);
     assert_eq!(log.samples.len(), 101);
@@ -119,7 +120,7 @@ fn a_deflex_run_log_uses_forward_kinematics_and_skips_flagged_rows() {
             );
         }
     }
-    let log = parse_log(&text, "run.csv", &robot, &part()).unwrap();
+    let log = parse_wrench_log(&text, "run.csv", &robot, &part()).unwrap();
     assert_eq!(log.kind, LogKind::DeflexRun);
     assert!(!log.simulated);
     assert_eq!(log.skipped_rows, 10);
@@ -204,7 +205,7 @@ fn a_helix_logged_millimetres_off_the_path_keeps_its_turn() {
             shifted.z * 1e3
         );
     }
-    let log = parse_log(&text, "helix.csv", &robot, &part()).unwrap();
+    let log = parse_wrench_log(&text, "helix.csv", &robot, &part()).unwrap();
     let options = ResampleOptions {
         half_width_m: 0.0,
         ..ResampleOptions::default()
@@ -242,8 +243,8 @@ fn a_helix_logged_millimetres_off_the_path_keeps_its_turn() {
 #[test]
 fn bad_logs_are_refused_with_file_line_and_column() {
     let robot = builtin("tx200").unwrap();
-    let e = parse_log("a,b,c\n1,2,3\n", "x.csv", &robot, &part()).unwrap_err();
-    assert!(matches!(e, LogError::UnknownKind { .. }), "{e}");
+    let e = parse_wrench_log("a,b,c\n1,2,3\n", "x.csv", &robot, &part()).unwrap_err();
+    assert!(matches!(e, WrenchLogError::UnknownKind { .. }), "{e}");
     assert!(
         e.to_string()
             .contains("x.csv: not a deflex run or sim isf log"),
@@ -251,12 +252,12 @@ fn bad_logs_are_refused_with_file_line_and_column() {
     );
     let mut text = isf_log(5);
     text.push_str("0.9,1.0,0.0,0.0,0.0,7.0,0.0,nan,0.0,0.5,0.0,1\n");
-    let e = parse_log(&text, "x.csv", &robot, &part()).unwrap_err();
+    let e = parse_wrench_log(&text, "x.csv", &robot, &part()).unwrap_err();
     assert_eq!(
         e.to_string(),
         "x.csv:9: column `fz_N`: expected a number, got \"nan\""
     );
-    let e = parse_log(
+    let e = parse_wrench_log(
         "time_s,q1_rad,q2_rad,w_fx_n,w_fy_n,w_fz_n,w_mx_nm,w_my_nm,w_mz_nm,flags\n",
         "r.csv",
         &robot,
@@ -266,7 +267,7 @@ fn bad_logs_are_refused_with_file_line_and_column() {
     assert!(
         matches!(
             e,
-            LogError::JointCount {
+            WrenchLogError::JointCount {
                 log: 2,
                 robot: 6,
                 ..
@@ -275,7 +276,7 @@ fn bad_logs_are_refused_with_file_line_and_column() {
         "{e}"
     );
     // A log covering only the first half of the path.
-    let log = parse_log(&isf_log(51), "half.csv", &robot, &part()).unwrap();
+    let log = parse_wrench_log(&isf_log(51), "half.csv", &robot, &part()).unwrap();
     let e = resample_on_path(&log, &straight_path(), &ResampleOptions::default()).unwrap_err();
     assert!(
         matches!(
@@ -293,7 +294,7 @@ fn bad_logs_are_refused_with_file_line_and_column() {
         "{e}"
     );
     // A log of another place.
-    let far = parse_log(
+    let far = parse_wrench_log(
         &isf_log(5),
         "far.csv",
         &robot,
@@ -344,7 +345,7 @@ fn a_segment_longer_than_the_window_does_not_hide_the_next_ones() {
         );
     }
     let robot = builtin("tx200").unwrap();
-    let log = parse_log(&text, "log.csv", &robot, &part()).unwrap();
+    let log = parse_wrench_log(&text, "log.csv", &robot, &part()).unwrap();
     let options = ResampleOptions {
         half_width_m: 0.0,
         ..ResampleOptions::default()
@@ -387,7 +388,7 @@ fn standstill_rows_do_not_swamp_the_pass() {
     for k in 0..200 {
         row(10.0, 1000.0 * (1.0 - k as f64 / 200.0), &mut text);
     }
-    let log = parse_log(&text, "dwell.csv", &robot, &part()).unwrap();
+    let log = parse_wrench_log(&text, "dwell.csv", &robot, &part()).unwrap();
     let path = straight_path();
     let r = resample_on_path(&log, &path, &ResampleOptions::default()).unwrap();
     assert_eq!(r.used_rows, 121, "{r:?}");

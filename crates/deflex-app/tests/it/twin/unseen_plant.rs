@@ -45,7 +45,8 @@
 //!
 //! SIMULATED.
 
-use deflex_compensate::log::{ResampleOptions, Resampled, parse_log, resample_on_path};
+use deflex_app::load::parse_wrench_log;
+use deflex_compensate::log::{ResampleOptions, Resampled, resample_on_path};
 use deflex_compensate::{
     Compensation, CompensationOptions, LoggedProcess, LoggedProcessOptions, TcpPath, WrenchSource,
     commanded_pose, compensate,
@@ -211,7 +212,7 @@ impl HeldOut {
         )
         .unwrap();
         let text = log_with_standstill(&open);
-        let log = parse_log(&text, "open/log.csv", &model, &cell.part_frame()).unwrap();
+        let log = parse_wrench_log(&text, "open/log.csv", &model, &cell.part_frame()).unwrap();
         assert!(log.measured, "the sim log carries the tracker's TCP");
         let resampled = resample_on_path(&log, &path, &ResampleOptions::default()).unwrap();
         assert!(
@@ -333,7 +334,8 @@ fn a_circle_compensated_from_its_own_log_on_an_unseen_plant() {
     // The ceiling of a process law alone: the forces of the compensated run itself.
     let first = case.run(&case.fixed(&case.resampled.wrenches));
     let text = first.log.to_csv();
-    let log = parse_log(&text, "fixed/log.csv", &case.model, &case.cell.part_frame()).unwrap();
+    let log =
+        parse_wrench_log(&text, "fixed/log.csv", &case.model, &case.cell.part_frame()).unwrap();
     let own = resample_on_path(&log, &case.path, &ResampleOptions::default()).unwrap();
     let oracle = case.fixed(&own.wrenches);
     case.improvement(
@@ -447,13 +449,7 @@ fn campaign_models(cell: &CellConfig) -> (Robot, deflex_calibrate::stiffness::Co
     let mut campaign_cell = cell.clone();
     campaign_cell.tracker.samples_per_reading = 25;
     let rows = run_campaign(&campaign_cell, &plan.rows, 1).unwrap();
-    let search = search_structure(
-        &nominal,
-        &rows,
-        &SearchOptions::default(),
-        &mut |_, _, _| {},
-    )
-    .unwrap();
+    let search = search_structure(&nominal, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
     let diagonal = search.calibration.to_robot(&nominal);
     let pair = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
     let fit = fit_couplings(&diagonal, &rows, &[pair]).unwrap();

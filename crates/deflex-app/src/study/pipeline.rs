@@ -11,16 +11,18 @@ use crate::study::sensitivity::{SensitivityPlan, run_sensitivity};
 use crate::study::summary::{
     BASELINE, DemoSummary, FormingNumbers, IDENTIFIED, ModelErrorNumbers, TABLE1,
 };
+use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::plan::{Plan, PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::validation::predict;
 use deflex_calibrate::stiffness::{
-    MeasurementRow, SearchOptions, SearchResult, Structure, calibrate_fixed, search_structure,
+    SearchOptions, SearchResult, Structure, calibrate_fixed, search_structure,
 };
 use deflex_model::Robot;
 use deflex_sim::profile::Maker;
 use deflex_sim::twin::{ClosedLoopRun, controller_config_for, run_closed_loop};
 use deflex_sim::twin_campaign::{GridParams, SpiralParams, run_campaign, spiral, validation_grid};
 use deflex_sim::{CellConfig, FormingRun, ToolPath, run_forming_with_progress};
+use deflex_telemetry::{OnProgress, Progress};
 use std::time::Instant;
 
 /// What to run.
@@ -50,17 +52,10 @@ impl Default for DemoOptions {
     }
 }
 
-/// Progress callbacks for a terminal front end.
-pub trait Progress {
-    /// A stage starts (`index` of `total`).
-    fn stage(&mut self, index: usize, total: usize, name: &str);
-    /// Fraction (0..1) of the current stage done.
-    fn fraction(&mut self, fraction: f64);
-    /// The current stage is done; `note` is a one-line result.
-    fn done(&mut self, note: &str);
-}
-
-const STAGES: usize = 10;
+/// The study's stages, each reported as `Progress::Stage { index, count: Some(STAGES), .. }`,
+/// its work in per mille ([`Progress::per_mille`]; the identification's as the structure
+/// search's candidates) and its one-line result (`Progress::Done`).
+pub const STAGES: usize = 10;
 
 /// Predicted displacements (m) of every row, per model: `(model name, one per row)`.
 pub type Predictions = Vec<(&'static str, Vec<[f64; 3]>)>;
@@ -131,11 +126,11 @@ struct Identification {
 }
 
 /// Run the whole study on `cell` (the cell of `options.robot`), in memory; `progress` hears of
-/// every stage. Write it with `crate::report::study::write_study`.
+/// every stage (see [`STAGES`]). Write it with `crate::report::study::write_study`.
 pub fn run_study(
     options: &DemoOptions,
     cell: CellConfig,
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<Study, DemoError> {
     let seed = options.seed;
     let nominal = cell.nominal_robot()?;
@@ -146,9 +141,15 @@ pub fn run_study(
     let plan = timings.time("plan", || plan_stage(options, &cell, &nominal, progress))?;
     let load_cases = deflex_calibrate::measurements::load_case_count(&plan.rows);
     let campaign = timings.time("campaign", || {
-        progress.stage(2, STAGES, "simulate the campaign (tracker noise)");
+        progress(Progress::Stage {
+            index: 2,
+            count: Some(STAGES),
+            name: "simulate the campaign (tracker noise)",
+        });
         let campaign = run_campaign(&cell, &plan.rows, seed)?;
-        progress.done(&format!("{} measured points", campaign.len()));
+        progress(Progress::Done {
+            note: &format!("{} measured points", campaign.len()),
+        });
         Ok::<_, DemoError>(campaign)
     })?;
 
@@ -188,14 +189,20 @@ pub fn run_study(
         ToolPath::paper_cone()
     };
     let open = timings.time("forming without correction", || {
-        progress.stage(6, STAGES, "form the cone without correction");
+        progress(Progress::Stage {
+            index: 6,
+            count: Some(STAGES),
+            name: "form the cone without correction",
+        });
         let open = run_forming_with_progress(&cell, path.clone(), seed, None, &mut |f| {
-            progress.fraction(f)
+            progress(Progress::per_mille(f))
         })?;
-        progress.done(&format!(
-            "max error norm {:.2} mm, max |F| {:.0} N",
-            open.summary.max_error_norm_mm, open.summary.max_force_norm_N
-        ));
+        progress(Progress::Done {
+            note: &format!(
+                "max error norm {:.2} mm, max |F| {:.0} N",
+                open.summary.max_error_norm_mm, open.summary.max_force_norm_N
+            ),
+        });
         Ok::<_, DemoError>(open)
     })?;
     let closed = timings.time("forming with correction", || {
@@ -216,11 +223,11 @@ pub fn run_study(
 
     // 10. Offline, online and both.
     let (compensation, compensation_runs) = timings.time("compensation", || {
-        progress.stage(
-            10,
-            STAGES,
-            "compare offline compensation, online correction and both",
-        );
+        progress(Progress::Stage {
+            index: 10,
+            count: Some(STAGES),
+            name: "compare offline compensation, online correction and both",
+        });
         let (study, runs) = crate::study::compensation::study(
             &cell,
             &id.identified,
@@ -228,7 +235,9 @@ pub fn run_study(
             options.quick,
             (&path, &open, &closed.forming),
         )?;
-        progress.done(&crate::study::compensation::one_line(&study));
+        progress(Progress::Done {
+            note: &crate::study::compensation::one_line(&study),
+        });
         Ok::<_, DemoError>((study, runs))
     })?;
 
@@ -288,9 +297,13 @@ fn plan_stage(
     options: &DemoOptions,
     cell: &CellConfig,
     nominal: &Robot,
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<Plan, DemoError> {
-    progress.stage(1, STAGES, "plan the calibration campaign");
+    progress(Progress::Stage {
+        index: 1,
+        count: Some(STAGES),
+        name: "plan the calibration campaign",
+    });
     let paper_comparison = Maker::of(&options.robot, &nominal.name) == Maker::StaubliTx200;
     let level = cell.forming_force_level_n();
     let plan_options = PlanOptions {
@@ -308,11 +321,13 @@ fn plan_stage(
         ..PlanOptions::for_a_real_cell()
     };
     let plan = plan_experiments(nominal, &plan_options)?;
-    progress.done(&format!(
-        "{} load cases, {} points to measure",
-        deflex_calibrate::measurements::load_case_count(&plan.rows),
-        plan.rows.len()
-    ));
+    progress(Progress::Done {
+        note: &format!(
+            "{} load cases, {} points to measure",
+            deflex_calibrate::measurements::load_case_count(&plan.rows),
+            plan.rows.len()
+        ),
+    });
     Ok(plan)
 }
 
@@ -321,17 +336,22 @@ fn plan_stage(
 fn identify(
     nominal: &Robot,
     campaign: &[MeasurementRow],
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<Identification, DemoError> {
-    progress.stage(3, STAGES, "identify the model structure and stiffnesses");
+    progress(Progress::Stage {
+        index: 3,
+        count: Some(STAGES),
+        name: "identify the model structure and stiffnesses",
+    });
     let start = one_edof_start(nominal);
     let search = search_structure(
         &start,
         campaign,
         &SearchOptions::default(),
-        &mut |_iteration, done, total| {
-            if total > 0 {
-                progress.fraction(done as f64 / total as f64);
+        // The search's work is this stage's; its steps stay inside it.
+        &mut |p| {
+            if let Progress::Work { .. } = p {
+                progress(p)
             }
         },
     )?;
@@ -343,12 +363,14 @@ fn identify(
     let baseline_calibration = calibrate_fixed(&start, campaign, &Structure::from_robot(&start))?;
     let mut baseline = baseline_calibration.to_robot(&start);
     baseline.name = "one eDoF per joint, calibrated on the SIMULATED twin campaign".into();
-    progress.done(&format!(
-        "{} in {} steps, RMS residual {:.1} µm",
-        search.calibration.structure.label(),
-        search.steps.len().saturating_sub(1),
-        search.calibration.residuals.rms_all_m * 1e6
-    ));
+    progress(Progress::Done {
+        note: &format!(
+            "{} in {} steps, RMS residual {:.1} µm",
+            search.calibration.structure.label(),
+            search.steps.len().saturating_sub(1),
+            search.calibration.residuals.rms_all_m * 1e6
+        ),
+    });
     Ok(Identification {
         search,
         identified,
@@ -374,7 +396,7 @@ fn grid_stage(
     cell: &CellConfig,
     seed: u64,
     models: &[(&'static str, &Robot)],
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<
     (
         GridParams,
@@ -384,7 +406,11 @@ fn grid_stage(
     ),
     DemoError,
 > {
-    progress.stage(4, STAGES, "validate on the grid of dead-weight loads");
+    progress(Progress::Stage {
+        index: 4,
+        count: Some(STAGES),
+        name: "validate on the grid of dead-weight loads",
+    });
     let grid_params = GridParams::for_cell(cell)?;
     let grid_plan = validation_grid(cell, &grid_params)?;
     let grid = run_campaign(cell, &grid_plan, seed.wrapping_add(1))?;
@@ -403,15 +429,17 @@ fn grid_stage(
         }
     }
     let last = validation.len().saturating_sub(3);
-    progress.done(&format!(
-        "δz RMS at {:.0}/{:.0} N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
-        grid_params.loads_n[0],
-        grid_params.loads_n[grid_params.loads_n.len() - 1],
-        validation[0].rms_z_mm,
-        validation[last].rms_z_mm,
-        validation[1].rms_z_mm,
-        validation[last + 1].rms_z_mm
-    ));
+    progress(Progress::Done {
+        note: &format!(
+            "δz RMS at {:.0}/{:.0} N: identified {:.3}/{:.3} mm, one-eDoF {:.3}/{:.3} mm",
+            grid_params.loads_n[0],
+            grid_params.loads_n[grid_params.loads_n.len() - 1],
+            validation[0].rms_z_mm,
+            validation[last].rms_z_mm,
+            validation[1].rms_z_mm,
+            validation[last + 1].rms_z_mm
+        ),
+    });
     Ok((grid_params, grid, grid_predictions, validation))
 }
 
@@ -422,9 +450,13 @@ fn spiral_stage(
     cell: &CellConfig,
     models: &[(&'static str, &Robot)],
     validation: &mut Vec<ModelErrorNumbers>,
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<(SpiralParams, Vec<MeasurementRow>, Predictions), DemoError> {
-    progress.stage(5, STAGES, "validate along the spiral");
+    progress(Progress::Stage {
+        index: 5,
+        count: Some(STAGES),
+        name: "validate along the spiral",
+    });
     let mut spiral_params = SpiralParams::for_cell(cell)?;
     if options.quick {
         spiral_params.length_m *= 0.3 / 2.7;
@@ -443,11 +475,13 @@ fn spiral_stage(
         ));
     }
     let spiral_identified = &validation[validation.len() - 3];
-    progress.done(&format!(
-        "{} samples, identified δz RMS {:.3} mm",
-        spiral_rows.len(),
-        spiral_identified.rms_z_mm
-    ));
+    progress(Progress::Done {
+        note: &format!(
+            "{} samples, identified δz RMS {:.3} mm",
+            spiral_rows.len(),
+            spiral_identified.rms_z_mm
+        ),
+    });
     Ok((spiral_params, spiral_rows, spiral_predictions))
 }
 
@@ -458,9 +492,13 @@ fn closed_loop_stage(
     seed: u64,
     identified: &Robot,
     open: &FormingRun,
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<ClosedLoopRun, DemoError> {
-    progress.stage(7, STAGES, "form the cone with online correction");
+    progress(Progress::Stage {
+        index: 7,
+        count: Some(STAGES),
+        name: "form the cone with online correction",
+    });
     let closed = run_closed_loop(
         cell,
         path.clone(),
@@ -468,15 +506,17 @@ fn closed_loop_stage(
         identified.clone(),
         controller_config_for(cell),
         true,
-        &mut |f| progress.fraction(f),
+        &mut |f| progress(Progress::per_mille(f)),
     )
     .map_err(DemoError::from)?;
     let improvement =
         100.0 * (1.0 - closed.forming.summary.max_error_norm_mm / open.summary.max_error_norm_mm);
-    progress.done(&format!(
-        "max error norm {:.2} mm ({improvement:.0} % better), max |F| {:.0} N",
-        closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_force_norm_N
-    ));
+    progress(Progress::Done {
+        note: &format!(
+            "max error norm {:.2} mm ({improvement:.0} % better), max |F| {:.0} N",
+            closed.forming.summary.max_error_norm_mm, closed.forming.summary.max_force_norm_N
+        ),
+    });
     Ok(closed)
 }
 
@@ -486,7 +526,7 @@ fn stiff_contact_stage(
     options: &DemoOptions,
     cell: &CellConfig,
     identified: &Robot,
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<
     (
         crate::study::contact::StiffContactNumbers,
@@ -495,7 +535,11 @@ fn stiff_contact_stage(
     ),
     DemoError,
 > {
-    progress.stage(8, STAGES, "plunge into a stiff fixture (1e7 N/m)");
+    progress(Progress::Stage {
+        index: 8,
+        count: Some(STAGES),
+        name: "plunge into a stiff fixture (1e7 N/m)",
+    });
     let seed = options.seed;
     let (stiff_contact, plunge_runs) =
         crate::study::contact::stiff_contact(cell, identified, 1e7, seed, &|_| {})?;
@@ -515,21 +559,23 @@ fn stiff_contact_stage(
         sweep_numbers.push(numbers);
     }
     let (u, g) = (&stiff_contact.unguarded, &stiff_contact.guarded);
-    progress.done(&format!(
-        "max |F| {:.0} N uncorrected, {:.0} N corrected without guard{}, {:.0} N with guard{}",
-        stiff_contact.open_max_force_N,
-        u.max_force_N,
-        u.fault
-            .as_ref()
-            .map(|f| format!(" ({f})"))
-            .unwrap_or_default(),
-        g.max_force_N,
-        if g.runaway_warnings > 0 {
-            " (contact_runaway)"
-        } else {
-            ""
-        }
-    ));
+    progress(Progress::Done {
+        note: &format!(
+            "max |F| {:.0} N uncorrected, {:.0} N corrected without guard{}, {:.0} N with guard{}",
+            stiff_contact.open_max_force_N,
+            u.max_force_N,
+            u.fault
+                .as_ref()
+                .map(|f| format!(" ({f})"))
+                .unwrap_or_default(),
+            g.max_force_N,
+            if g.runaway_warnings > 0 {
+                " (contact_runaway)"
+            } else {
+                ""
+            }
+        ),
+    });
     Ok((stiff_contact, sweep_numbers, plunge_runs))
 }
 
@@ -538,11 +584,15 @@ fn sensitivity_stage(
     options: &DemoOptions,
     cell: &CellConfig,
     identified: &Robot,
-    progress: &mut dyn Progress,
+    progress: OnProgress<'_>,
 ) -> Result<Option<crate::study::sensitivity::SensitivityResult>, DemoError> {
-    progress.stage(9, STAGES, "sensitivity of the closed loop");
+    progress(Progress::Stage {
+        index: 9,
+        count: Some(STAGES),
+        name: "sensitivity of the closed loop",
+    });
     if !options.sensitivity {
-        progress.done("skipped");
+        progress(Progress::Done { note: "skipped" });
         return Ok(None);
     }
     let plan = if options.quick {
@@ -564,15 +614,14 @@ fn sensitivity_stage(
             *v = f;
         }
     })?;
-    progress.fraction(1.0);
+    progress(Progress::per_mille(1.0));
     let worst = result
         .rows
         .iter()
         .map(|r| r.improvement_percent)
         .fold(f64::INFINITY, f64::min);
-    progress.done(&format!(
-        "{} runs, worst improvement {worst:.0} %",
-        result.runs
-    ));
+    progress(Progress::Done {
+        note: &format!("{} runs, worst improvement {worst:.0} %", result.runs),
+    });
     Ok(Some(result))
 }

@@ -1,0 +1,122 @@
+//! Plots and pages written to their files: each function draws with `deflex-plot` (which draws
+//! into memory and writes nothing) and writes the result whole or not at all, with the file
+//! discipline of `deflex-files`.
+//!
+//! The plot functions have `deflex-plot`'s names and arguments and return `()`: the image's
+//! format is chosen by the extension of `path` (`.png` or `.svg`), the file appears only once it
+//! is complete, through a temporary sibling renamed over it ([`deflex_files::write_through`]),
+//! and an error names the file. A page is rendered with its images read back from their files
+//! ([`read_image`]) and written atomically ([`write_page`]).
+//!
+//! Errors, each naming the file ([`PlotError::path`]): the drawing's own
+//! ([`PlotError::InvalidInput`], [`PlotError::UnsupportedFormat`], [`PlotError::Draw`]); a
+//! failure to write the temporary file is [`PlotError::Draw`] (as when the plotting toolkit
+//! saved the files itself: a missing folder, a full disk); an output that may not be replaced
+//! ([`deflex_files::check_output`]) or a failed rename is [`PlotError::Io`].
+
+use deflex_plot::{
+    Cloud3, HtmlReport, Image, Lane, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
+};
+use std::path::Path;
+
+/// Most bytes of one image embedded in a page: a figure is a few hundred kilobytes; the limit
+/// is counted while reading.
+pub const MAX_IMAGE_BYTES: u64 = 64 << 20;
+
+/// Writes `image` (drawn for `path`) to `path`, whole or not at all: its bytes go to a
+/// temporary sibling with the same extension, renamed over `path` once complete and removed
+/// on failure.
+pub fn write_image(path: &Path, image: Image) -> Result<(), PlotError> {
+    deflex_files::write_through(
+        path,
+        |temporary| {
+            std::fs::write(temporary, &image.bytes).map_err(|e| PlotError::Draw {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })
+        },
+        |source| PlotError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+    )
+}
+
+/// The bytes of the image file `path` for a page ([`write_page`]), read bounded by
+/// [`MAX_IMAGE_BYTES`].
+pub fn read_image(path: &Path) -> std::io::Result<Vec<u8>> {
+    deflex_files::read_bounded_bytes(path, MAX_IMAGE_BYTES).map_err(|e| e.into_io())
+}
+
+/// Renders `page`, its images read from their files ([`read_image`]), and writes it to `path`
+/// whole or not at all. An image that cannot be read is [`PlotError::Io`] naming the image.
+pub fn write_page(page: &HtmlReport, path: &Path) -> Result<(), PlotError> {
+    let html = page.render(read_image)?;
+    deflex_files::write_atomic(path, html).map_err(|source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// [`deflex_plot::line_plot`] written to `path` ([`write_image`]).
+pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), PlotError> {
+    write_image(path, deflex_plot::line_plot(path, spec, series)?)
+}
+
+/// [`deflex_plot::panels_plot`] written to `path` ([`write_image`]).
+pub fn panels_plot(
+    path: &Path,
+    title: &str,
+    layout: PanelLayout,
+    panels: &[(PlotSpec, Vec<Series>)],
+) -> Result<(), PlotError> {
+    write_image(path, deflex_plot::panels_plot(path, title, layout, panels)?)
+}
+
+/// [`deflex_plot::parity_plot`] written to `path` ([`write_image`]).
+pub fn parity_plot(
+    path: &Path,
+    spec: &PlotSpec,
+    predicted: &[f64],
+    measured: &[f64],
+    label: &str,
+) -> Result<(), PlotError> {
+    let image = deflex_plot::parity_plot(path, spec, predicted, measured, label)?;
+    write_image(path, image)
+}
+
+/// [`deflex_plot::heatmap`] written to `path` ([`write_image`]).
+pub fn heatmap(
+    path: &Path,
+    spec: &PlotSpec,
+    x_centers: &[f64],
+    y_centers: &[f64],
+    values: &[f64],
+    colorbar_label: &str,
+) -> Result<(), PlotError> {
+    let image = deflex_plot::heatmap(path, spec, x_centers, y_centers, values, colorbar_label)?;
+    write_image(path, image)
+}
+
+/// [`deflex_plot::scatter_heatmap`] written to `path` ([`write_image`]).
+pub fn scatter_heatmap(
+    path: &Path,
+    spec: &PlotSpec,
+    x: &[f64],
+    y: &[f64],
+    value: &[f64],
+    colorbar_label: &str,
+) -> Result<(), PlotError> {
+    let image = deflex_plot::scatter_heatmap(path, spec, x, y, value, colorbar_label)?;
+    write_image(path, image)
+}
+
+/// [`deflex_plot::cloud_3d`] written to `path` ([`write_image`]).
+pub fn cloud_3d(path: &Path, spec: &Plot3Spec, clouds: &[Cloud3]) -> Result<(), PlotError> {
+    write_image(path, deflex_plot::cloud_3d(path, spec, clouds)?)
+}
+
+/// [`deflex_plot::timeline_plot`] written to `path` ([`write_image`]).
+pub fn timeline_plot(path: &Path, spec: &PlotSpec, lanes: &[Lane]) -> Result<(), PlotError> {
+    write_image(path, deflex_plot::timeline_plot(path, spec, lanes)?)
+}
