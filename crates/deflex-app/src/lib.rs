@@ -4,8 +4,16 @@
 
 #![warn(missing_docs)]
 
+pub mod calibrate;
+pub mod calibrate_geometry;
 pub mod cell;
+pub mod compensate;
+pub mod error;
 pub mod load;
 pub mod report;
+pub mod robot;
 pub mod study;
+pub mod table;
 pub mod twin;
+
+pub use error::{Error, ErrorKind, Result};

@@ -13,6 +13,9 @@ pub enum CliError {
     /// A flag, or a combination of flags, that cannot be used.
     #[error(transparent)]
     Usage(#[from] UsageError),
+    /// A workflow of the application layer failed (its text says what and where).
+    #[error(transparent)]
+    App(#[from] deflex_app::Error),
     /// A robot description that cannot be read or used.
     #[error(transparent)]
     Model(#[from] deflex_model::ModelError),

@@ -21,13 +21,5 @@
 
 #![warn(missing_docs)]
 
-pub mod calibration;
-pub mod compensation;
-pub mod error;
-pub mod geometry;
-pub mod model;
-pub mod table;
-pub mod twin;
-
 #[cfg(feature = "python")]
 mod py;

@@ -3,8 +3,8 @@
 
 use super::convert::{json_to_py, rows_to_numpy, run, to_numpy, to_py, type_error};
 use super::robot::{PyRobot, robot_arg};
-use crate::calibration::{self, CalibrateOptions, Criterion, Source, StructureChoice};
-use crate::error::Error;
+use deflex_app::calibrate::{self, CalibrateOptions, Criterion, Source, StructureChoice};
+use deflex_app::error::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use std::path::PathBuf;
@@ -33,7 +33,7 @@ pub fn sources(py: Python<'_>, list: &[Bound<'_, PyAny>]) -> PyResult<Vec<Source
 /// calibrated robot.
 #[pyclass(module = "deflex", frozen, name = "StiffnessCalibration")]
 pub struct PyStiffnessCalibration {
-    inner: calibration::StiffnessCalibration,
+    inner: calibrate::StiffnessCalibration,
 }
 
 #[pymethods]
@@ -69,7 +69,7 @@ impl PyStiffnessCalibration {
             .calibration
             .edofs
             .iter()
-            .map(|e| calibration::status_name(&e.status))
+            .map(|e| calibrate::status_name(&e.status))
             .collect()
     }
 
@@ -169,16 +169,16 @@ impl PyStiffnessCalibration {
     /// The fit as a dict (the CLI's ``--json``: estimates, shifts, χ²/dof, BIC, residual
     /// statistics, iterations, file check, warnings).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &calibration::summary_json(&self.inner).to_string())
+        json_to_py(py, &calibrate::summary_json(&self.inner).to_string())
     }
 
     /// The CLI's text report (iteration table, estimates, residuals, correlation, file check).
     fn report(&self) -> String {
-        calibration::report_text(&self.inner)
+        calibrate::report_text(&self.inner)
     }
 
     fn __str__(&self) -> String {
-        calibration::report_text(&self.inner)
+        calibrate::report_text(&self.inner)
     }
 
     fn __repr__(&self) -> String {
@@ -198,9 +198,9 @@ impl PyStiffnessCalibration {
         let inner = &self.inner;
         run(py, || {
             if let Some(dir) = &report {
-                calibration::write_report(inner, dir, &path.display().to_string())?;
+                calibrate::write_report(inner, dir, &path.display().to_string())?;
             }
-            crate::model::save(&inner.model, &path)
+            deflex_app::robot::save(&inner.model, &path)
         })
     }
 }
@@ -265,14 +265,14 @@ pub fn _calibrate(
         fk_tolerance_m,
         ignore_fk_check,
     };
-    let inner = run(py, || calibration::calibrate(&start, &source, &options))?;
+    let inner = run(py, || calibrate::calibrate(&start, &source, &options))?;
     Ok(PyStiffnessCalibration { inner })
 }
 
 /// Prediction errors of a model (and a baseline) on measured rows (``deflex.validate``).
 #[pyclass(module = "deflex", frozen, name = "Validation")]
 pub struct PyValidation {
-    inner: calibration::Validation,
+    inner: calibrate::Validation,
 }
 
 #[pymethods]
@@ -308,14 +308,14 @@ impl PyValidation {
 
     /// Error statistics as a dict (the CLI's ``--json``).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &calibration::validation_json(&self.inner).to_string())
+        json_to_py(py, &calibrate::validation_json(&self.inner).to_string())
     }
 
     /// The validation's plots and HTML page (``validation.html``) into the folder ``dir``,
     /// replaced whole; returns the files written.
     fn save(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         let inner = &self.inner;
-        run(py, || calibration::write_validation_report(inner, &dir))
+        run(py, || calibrate::write_validation_report(inner, &dir))
     }
 }
 
@@ -333,7 +333,7 @@ pub fn _validate(
     let baseline = baseline.map(|b| robot_arg(py, b, "baseline")).transpose()?;
     let source = source_arg(py, data)?;
     let inner = run(py, || {
-        calibration::validate(
+        calibrate::validate(
             &model,
             baseline.as_ref(),
             &source,
@@ -353,6 +353,6 @@ pub fn _predict_displacements<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let model = robot_arg(py, robot, "robot")?;
     let source = source_arg(py, data)?;
-    let rows = run(py, || calibration::predict_displacements(&model, &source))?;
+    let rows = run(py, || calibrate::predict_displacements(&model, &source))?;
     rows_to_numpy(py, &rows)
 }

@@ -2,8 +2,8 @@
 
 use super::convert::{float_array, json_to_py, run, shape_error, to_numpy, to_py, type_error};
 use super::robot::robot_arg;
-use crate::compensation::{self, CompensationRun, Frame, Options, PathSpec, WrenchSpec};
-use crate::error::Error;
+use deflex_app::compensate::{self, CompensationRun, Frame, Options, PathSpec, WrenchSpec};
+use deflex_app::error::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 use std::collections::BTreeMap;
@@ -78,7 +78,7 @@ impl PyCompensation {
         let res = &self.inner.result.points;
         let mut out = vec![0.0; pts.len() * 16];
         for (i, o) in out.chunks_mut(16).enumerate() {
-            crate::model::write_pose(&res[i].commanded(&pts[i].pose), o);
+            deflex_app::robot::write_pose(&res[i].commanded(&pts[i].pose), o);
         }
         to_numpy(py, out, &[pts.len(), 4, 4])
     }
@@ -127,19 +127,19 @@ impl PyCompensation {
     /// Per point ``ok`` or the reason it was not compensated (``compensated:joint_limit:J3``…).
     #[getter]
     fn status(&self) -> Vec<String> {
-        compensation::statuses(&self.inner)
+        compensate::statuses(&self.inner)
     }
 
     /// Summary as a dict (the CLI's ``summary.json``): iterations (predicted error, force,
     /// change, failed points), convergence, final predicted error, largest compensation,
     /// failures.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &compensation::summary_json(&self.inner).to_string())
+        json_to_py(py, &compensate::summary_json(&self.inner).to_string())
     }
 
     /// The compensated path as ``compensated_path.csv`` text (the CLI's, SI columns).
     fn to_csv(&self) -> String {
-        compensation::table_csv(&self.inner)
+        compensate::table_csv(&self.inner)
     }
 
     /// Write ``compensated_path.csv`` (the CLI's table, usable as ``deflex run``'s
@@ -147,7 +147,7 @@ impl PyCompensation {
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let inner = &self.inner;
         run(py, || {
-            crate::table::write_text(&path, &compensation::table_csv(inner))
+            deflex_app::table::write_text(&path, &compensate::table_csv(inner))
         })
     }
 
@@ -165,8 +165,8 @@ impl PyCompensation {
         let inner = &self.inner;
         let format = format.to_string();
         let files = run(py, move || {
-            let settings = compensation::settings(settings.as_deref())?;
-            compensation::programs(inner, compensation::format(&format)?, &settings)
+            let settings = compensate::settings(settings.as_deref())?;
+            compensate::programs(inner, compensate::format(&format)?, &settings)
         })?;
         Ok(files.into_iter().map(|f| (f.path, f.contents)).collect())
     }
@@ -183,13 +183,13 @@ impl PyCompensation {
     ) -> PyResult<Vec<PathBuf>> {
         let inner = &self.inner;
         run(py, move || {
-            let settings = compensation::settings(settings.as_deref())?;
+            let settings = compensate::settings(settings.as_deref())?;
             let mut all = Vec::new();
             for name in &formats {
-                let files = compensation::programs(inner, compensation::format(name)?, &settings)?;
+                let files = compensate::programs(inner, compensate::format(name)?, &settings)?;
                 all.extend(files);
             }
-            compensation::write_programs(&dir, &all)
+            compensate::write_programs(&dir, &all)
         })
     }
 
@@ -326,7 +326,7 @@ pub fn _compensate(
         max_iterations,
     };
     let inner = run(py, || {
-        compensation::compensate(&model, &path_spec, &wrench_spec, &options)
+        compensate::compensate(&model, &path_spec, &wrench_spec, &options)
     })?;
     Ok(PyCompensation { inner })
 }

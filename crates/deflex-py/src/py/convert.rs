@@ -2,7 +2,7 @@
 //! results to numpy arrays and Python objects, engine errors to `deflex` exceptions, and the
 //! GIL released (with panics caught) around every engine call.
 
-use crate::error::{Error, ErrorKind, guard};
+use deflex_app::error::{Error, ErrorKind, guard};
 use numpy::ndarray::{ArrayD, IxDyn};
 use numpy::prelude::*;
 use numpy::{PyArrayDyn, PyReadonlyArrayDyn};
@@ -53,7 +53,7 @@ pub fn to_py(py: Python<'_>, error: Error) -> PyErr {
 /// Run engine work with the GIL released and panics caught; errors become `deflex` exceptions.
 pub fn run<T: Send>(
     py: Python<'_>,
-    f: impl FnOnce() -> crate::error::Result<T> + Send,
+    f: impl FnOnce() -> deflex_app::error::Result<T> + Send,
 ) -> PyResult<T> {
     py.detach(|| guard(f)).map_err(|e| to_py(py, e))
 }
@@ -145,7 +145,7 @@ pub fn float_array<'py>(
     } else {
         None
     };
-    crate::model::check_finite(name, array.values(), cols).map_err(|e| to_py(py, e))?;
+    deflex_app::robot::check_finite(name, array.values(), cols).map_err(|e| to_py(py, e))?;
     Ok(array)
 }
 
@@ -223,16 +223,19 @@ pub fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny
 
 /// A `deflex.Log` of named columns (numpy arrays or lists of text), comment lines and the
 /// SIMULATED flag.
-pub fn make_log<'py>(py: Python<'py>, table: crate::table::Table) -> PyResult<Bound<'py, PyAny>> {
+pub fn make_log<'py>(
+    py: Python<'py>,
+    table: deflex_app::table::Table,
+) -> PyResult<Bound<'py, PyAny>> {
     let columns = PyDict::new(py);
     let simulated = table.simulated();
     let rows = table.rows;
     for (name, column) in table.columns {
         match column {
-            crate::table::Column::Number(values) => {
+            deflex_app::table::Column::Number(values) => {
                 columns.set_item(name, to_numpy(py, values, &[rows])?)?
             }
-            crate::table::Column::Text(values) => {
+            deflex_app::table::Column::Text(values) => {
                 columns.set_item(name, PyList::new(py, values)?)?
             }
         }

@@ -4,7 +4,9 @@
 use super::calib::{source_arg, sources};
 use super::convert::{json_to_py, make_log, rows_to_numpy, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
-use crate::geometry::{self, CalibratedModel, CvBy, GeometryOptions, RegisterRequest};
+use deflex_app::calibrate_geometry::{
+    self, CalibratedModel, CvBy, GeometryOptions, RegisterRequest,
+};
 use deflex_calibrate::geometry::fit::HeldOutProtocol;
 use pyo3::prelude::*;
 use serde_json::json;
@@ -15,7 +17,7 @@ use std::path::PathBuf;
 /// standard errors, the residual of every reading and the calibrated robot.
 #[pyclass(module = "deflex", frozen, name = "GeometryCalibration")]
 pub struct PyGeometryCalibration {
-    inner: geometry::GeometryCalibration,
+    inner: calibrate_geometry::GeometryCalibration,
 }
 
 #[pymethods]
@@ -93,7 +95,7 @@ impl PyGeometryCalibration {
     /// 95 % intervals ``estimate ± 1.96 SE``, shape ``(p, 2)``.
     #[getter]
     fn intervals95<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        rows_to_numpy(py, &geometry::intervals95(&self.inner))
+        rows_to_numpy(py, &calibrate_geometry::intervals95(&self.inner))
     }
 
     /// Bootstrap standard errors (NaN without ``bootstrap``).
@@ -161,16 +163,16 @@ impl PyGeometryCalibration {
     /// The CLI's ``--json`` report as a dict: ``steps`` (each with ``fit``, ``cv_rms_m`` and
     /// ``held_out`` groups), ``estimates``, ``not_identifiable``, ``outliers``, χ²/dof….
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &geometry::report_json(&self.inner))
+        json_to_py(py, &calibrate_geometry::report_json(&self.inner))
     }
 
     /// The CLI's text report.
     fn report(&self) -> String {
-        geometry::report_text(&self.inner)
+        calibrate_geometry::report_text(&self.inner)
     }
 
     fn __str__(&self) -> String {
-        geometry::report_text(&self.inner)
+        calibrate_geometry::report_text(&self.inner)
     }
 
     /// Write the calibrated robot file to ``path`` with its terms beside it
@@ -181,9 +183,9 @@ impl PyGeometryCalibration {
     fn save(&self, py: Python<'_>, path: PathBuf, report: Option<PathBuf>) -> PyResult<()> {
         let inner = &self.inner;
         run(py, || {
-            geometry::save(inner, &path)?;
+            calibrate_geometry::save(inner, &path)?;
             if let Some(dir) = &report {
-                geometry::write_report(inner, dir)?;
+                calibrate_geometry::write_report(inner, dir)?;
             }
             Ok(())
         })
@@ -222,7 +224,7 @@ pub fn _calibrate_geometry(
         Some(other) => {
             return Err(to_py(
                 py,
-                crate::error::Error::invalid(
+                deflex_app::error::Error::invalid(
                     "cv_by",
                     format!("expected \"session\", \"setup\" or \"series\", got \"{other}\""),
                 ),
@@ -234,8 +236,8 @@ pub fn _calibrate_geometry(
     let loaded = sources(py, &loaded)?;
     let test = sources(py, &test_data)?;
     let options = GeometryOptions {
-        steps: geometry::parse_steps(&steps).map_err(|e| to_py(py, e))?,
-        loss: geometry::parse_loss(loss).map_err(|e| to_py(py, e))?,
+        steps: calibrate_geometry::parse_steps(&steps).map_err(|e| to_py(py, e))?,
+        loss: calibrate_geometry::parse_loss(loss).map_err(|e| to_py(py, e))?,
         folds,
         bootstrap,
         test_fraction,
@@ -250,7 +252,7 @@ pub fn _calibrate_geometry(
         },
     };
     let inner = run(py, || {
-        geometry::calibrate_geometry(&start, &data, &loaded, &test, &options)
+        calibrate_geometry::calibrate_geometry(&start, &data, &loaded, &test, &options)
     })?;
     Ok(PyGeometryCalibration { inner })
 }
@@ -270,7 +272,7 @@ impl PyPrediction {
     #[getter]
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let csv = self.csv.clone();
-        let table = run(py, move || crate::table::parse(&csv, "prediction"))?;
+        let table = run(py, move || deflex_app::table::parse(&csv, "prediction"))?;
         make_log(py, table)
     }
 
@@ -287,7 +289,7 @@ impl PyPrediction {
     /// Write the prediction CSV (``deflex predict --out``), whole.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let csv = &self.csv;
-        run(py, || crate::table::write_text(&path, csv))
+        run(py, || deflex_app::table::write_text(&path, csv))
     }
 }
 
@@ -301,7 +303,9 @@ pub fn _predict(
 ) -> PyResult<PyPrediction> {
     let model = calibrated_arg(py, robot)?;
     let source = source_arg(py, data)?;
-    let p = run(py, || geometry::predict(&model, &source, fit_setup))?;
+    let p = run(py, || {
+        calibrate_geometry::predict(&model, &source, fit_setup)
+    })?;
     Ok(PyPrediction {
         csv: p.csv,
         text: p.text,
@@ -315,7 +319,7 @@ pub fn _predict(
 fn calibrated_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<CalibratedModel> {
     if let Ok(cal) = obj.cast::<PyGeometryCalibration>() {
         let inner = &cal.get().inner;
-        return run(py, || geometry::calibrated_model_of(inner));
+        return run(py, || calibrate_geometry::calibrated_model_of(inner));
     }
     let robot = robot_arg(py, obj, "robot")?;
     let file = if obj.cast::<PyRobot>().is_ok() {
@@ -324,7 +328,7 @@ fn calibrated_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Calibrated
         obj.extract::<PathBuf>().ok()
     };
     run(py, move || {
-        geometry::calibrated_model(&robot, file.as_deref())
+        calibrate_geometry::calibrated_model(&robot, file.as_deref())
     })
 }
 
@@ -332,7 +336,7 @@ fn calibrated_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Calibrated
 /// calibrated robot frozen (``deflex.register``).
 #[pyclass(module = "deflex", frozen, name = "Registration")]
 pub struct PyRegistration {
-    inner: geometry::SessionRegistration,
+    inner: calibrate_geometry::SessionRegistration,
 }
 
 #[pymethods]
@@ -428,23 +432,23 @@ impl PyRegistration {
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         json_to_py(
             py,
-            &geometry::registration_json(&self.inner, None).to_string(),
+            &calibrate_geometry::registration_json(&self.inner, None).to_string(),
         )
     }
 
     /// The CLI's text output.
     fn report(&self) -> String {
-        geometry::registration_text(&self.inner)
+        calibrate_geometry::registration_text(&self.inner)
     }
 
     fn __str__(&self) -> String {
-        geometry::registration_text(&self.inner)
+        calibrate_geometry::registration_text(&self.inner)
     }
 
     /// Write the updated robot file (with the calibration's terms beside it, unchanged), whole.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let inner = &self.inner;
-        run(py, || geometry::save_registration(inner, &path))
+        run(py, || calibrate_geometry::save_registration(inner, &path))
     }
 }
 
@@ -470,7 +474,9 @@ pub fn _register(
         orientations: orientations.then_some(sigma_rad),
         recalibrate_above_m,
     };
-    let inner = run(py, move || geometry::register(model, &source, &request))?;
+    let inner = run(py, move || {
+        calibrate_geometry::register(model, &source, &request)
+    })?;
     Ok(PyRegistration { inner })
 }
 
@@ -485,7 +491,7 @@ pub fn _import_ur10_tracker<'py>(
     every: usize,
 ) -> PyResult<(String, Bound<'py, PyAny>)> {
     let (text, summary, kept) = run(py, || {
-        geometry::import_ur10_tracker(&series, &setup, &target, tracker_sigma, every)
+        calibrate_geometry::import_ur10_tracker(&series, &setup, &target, tracker_sigma, every)
     })?;
     let value = json!({
         "file": summary.file.display().to_string(),

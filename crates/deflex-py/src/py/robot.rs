@@ -1,8 +1,8 @@
 //! `deflex.Robot`: the elasto-geometrical model, batched over configurations.
 
 use super::convert::{FloatArray, float_array, rows_of, run, shape_error, to_numpy, to_py};
-use crate::error::Error;
-use crate::model::{self, OnFailure};
+use deflex_app::error::Error;
+use deflex_app::robot::{self, OnFailure};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -55,20 +55,20 @@ impl PyRobot {
     #[staticmethod]
     fn builtin(py: Python<'_>, name: &str) -> PyResult<PyRobot> {
         let name = name.to_string();
-        run(py, move || model::builtin(&name)).map(PyRobot::new)
+        run(py, move || robot::builtin(&name)).map(PyRobot::new)
     }
 
     /// Names of the built-in robots.
     #[staticmethod]
     fn builtins() -> Vec<&'static str> {
-        model::builtin_names()
+        robot::builtin_names()
     }
 
     /// A robot from a robot file (TOML, possibly naming a URDF, resolved beside the file) or a
     /// built-in name, as every CLI command takes ``--robot``.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<PyRobot> {
-        run(py, move || model::load(&path.display().to_string())).map(PyRobot::new)
+        run(py, move || robot::load(&path.display().to_string())).map(PyRobot::new)
     }
 
     /// A robot from robot-file TOML text; ``origin`` names it in errors and ``base_dir``
@@ -83,7 +83,7 @@ impl PyRobot {
     ) -> PyResult<PyRobot> {
         let (text, origin) = (text.to_string(), origin.to_string());
         run(py, move || {
-            model::from_toml(&text, &origin, base_dir.as_deref())
+            robot::from_toml(&text, &origin, base_dir.as_deref())
         })
         .map(PyRobot::new)
     }
@@ -109,7 +109,7 @@ impl PyRobot {
     /// Joint limits, shape ``(n, 2)`` (rad): ``[min, max]`` per joint, NaN where a joint has none.
     #[getter]
     fn limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let l = model::limits(&self.robot);
+        let l = robot::limits(&self.robot);
         to_numpy(py, l.iter().flatten().copied().collect(), &[l.len(), 2])
     }
 
@@ -137,7 +137,7 @@ impl PyRobot {
     #[getter]
     fn tool<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut out = vec![0.0; 16];
-        model::write_pose(&self.robot.tool, &mut out);
+        robot::write_pose(&self.robot.tool, &mut out);
         to_numpy(py, out, &[4, 4])
     }
 
@@ -145,7 +145,7 @@ impl PyRobot {
     #[getter]
     fn base<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut out = vec![0.0; 16];
-        model::write_pose(&self.robot.base, &mut out);
+        robot::write_pose(&self.robot.base, &mut out);
         to_numpy(py, out, &[4, 4])
     }
 
@@ -155,7 +155,7 @@ impl PyRobot {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
         let qv = q.values();
-        let out = run(py, || model::poses(robot, qv, rows))?;
+        let out = run(py, || robot::poses(robot, qv, rows))?;
         to_numpy(py, out, &shape(batched, rows, &[4, 4]))
     }
 
@@ -166,7 +166,7 @@ impl PyRobot {
         let robot = &self.robot;
         let n = robot.joint_count();
         let qv = q.values();
-        let out = run(py, || model::jacobians(robot, qv, rows))?;
+        let out = run(py, || robot::jacobians(robot, qv, rows))?;
         to_numpy(py, out, &shape(batched, rows, &[6, n]))
     }
 
@@ -180,7 +180,7 @@ impl PyRobot {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
         let qv = q.values();
-        let out = run(py, || model::compliances(robot, qv, rows))?;
+        let out = run(py, || robot::compliances(robot, qv, rows))?;
         to_numpy(py, out, &shape(batched, rows, &[6, 6]))
     }
 
@@ -211,7 +211,7 @@ impl PyRobot {
         }
         let robot = &self.robot;
         let (qv, wv) = (q.values(), w.values());
-        let out = run(py, || model::deflections(robot, qv, rows, wv))?;
+        let out = run(py, || robot::deflections(robot, qv, rows, wv))?;
         to_numpy(py, out, &shape(batched, rows, &[6]))
     }
 
@@ -225,7 +225,7 @@ impl PyRobot {
         let (q, rows, batched) = self.joints(py, q)?;
         let robot = &self.robot;
         let qv = q.values();
-        match run(py, || model::gravity_sags(robot, qv, rows))? {
+        match run(py, || robot::gravity_sags(robot, qv, rows))? {
             Some(out) => Ok(Some(to_numpy(py, out, &shape(batched, rows, &[6]))?)),
             None => Ok(None),
         }
@@ -273,7 +273,7 @@ impl PyRobot {
             }
         };
         let seeds = match seed {
-            None => model::default_seed(robot),
+            None => robot::default_seed(robot),
             Some(s) => {
                 let s = float_array(py, s, "seed", &format!("({n},) or (N, {n})"))?;
                 let (s_rows, s_batched) =
@@ -291,21 +291,21 @@ impl PyRobot {
         };
         let pv = p.values();
         let out = run(py, || {
-            model::inverse_kinematics(robot, pv, rows, &seeds, on_failure)
+            robot::inverse_kinematics(robot, pv, rows, &seeds, on_failure)
         })?;
         to_numpy(py, out, &shape(batched, rows, &[n]))
     }
 
     /// The robot file (TOML) text.
     fn to_toml(&self) -> String {
-        model::to_toml(&self.robot, None)
+        robot::to_toml(&self.robot, None)
     }
 
     /// Write the robot file (TOML) to ``path``, whole or not at all; a URDF path it names is
     /// rewritten relative to the new file's folder.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let robot = &self.robot;
-        run(py, || model::save(robot, &path))
+        run(py, || robot::save(robot, &path))
     }
 
     fn __repr__(&self) -> String {
@@ -334,7 +334,7 @@ pub fn robot_arg(
     }
     if let Ok(path) = obj.extract::<PathBuf>() {
         let spec = path.display().to_string();
-        return run(py, move || model::load(&spec));
+        return run(py, move || robot::load(&spec));
     }
     Err(super::convert::type_error(
         py,

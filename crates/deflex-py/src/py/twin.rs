@@ -2,8 +2,8 @@
 
 use super::convert::{json_to_py, make_log, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
-use crate::error::Error;
-use crate::twin::{self, FormOptions, TwinRun};
+use deflex_app::error::Error;
+use deflex_app::twin::{self, FormOptions, TwinRun};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -24,14 +24,14 @@ impl PyTwinRun {
         let inner = &self.inner;
         let columns = run(py, || Ok(twin::log_columns(inner)))?;
         let rows = self.inner.run.log.rows.len();
-        let table = crate::table::Table {
+        let table = deflex_app::table::Table {
             comments: vec![format!(
                 "SIMULATED deflex digital twin forming log (not a measurement). robot: {}; path: {}; seed: {}",
                 self.inner.run.log.robot, self.inner.run.log.path_name, self.inner.run.log.seed
             )],
             columns: columns
                 .into_iter()
-                .map(|(n, v)| (n.to_string(), crate::table::Column::Number(v)))
+                .map(|(n, v)| (n.to_string(), deflex_app::table::Column::Number(v)))
                 .collect(),
             rows,
         };
@@ -172,7 +172,7 @@ pub fn _cell_robot(
 /// ``deflex.read_log``'s engine call: a ``deflex.Log`` of the CSV file's columns.
 #[pyfunction]
 pub fn _read_table<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
-    let table = run(py, || crate::table::read(&path))?;
+    let table = run(py, || deflex_app::table::read(&path))?;
     make_log(py, table)
 }
 
@@ -183,6 +183,6 @@ pub fn _parse_table<'py>(
     text: String,
     origin: String,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let table = run(py, || crate::table::parse(&text, &origin))?;
+    let table = run(py, || deflex_app::table::parse(&text, &origin))?;
     make_log(py, table)
 }

@@ -1,8 +1,8 @@
-//! The compensation engine ([`deflex_py::compensation`]): a path given as an array, compensated and
+//! The compensation engine ([`deflex_app::compensate`]): a path given as an array, compensated and
 //! written as a program.
 
+use deflex_app::compensate::*;
 use deflex_cam::program::{Format, ProgramSettings};
-use deflex_py::compensation::*;
 
 fn options() -> Options {
     Options {
@@ -20,7 +20,7 @@ fn options() -> Options {
 
 #[test]
 fn a_constant_wrench_on_an_array_path_is_compensated_to_the_tolerance() {
-    let robot = deflex_py::model::builtin("tx200").unwrap();
+    let robot = deflex_app::robot::builtin("tx200").unwrap();
     // 20 mm along x in the part frame, 1 mm steps.
     let values: Vec<f64> = (0..=20).flat_map(|i| [i as f64 * 1e-3, 0.0, 0.0]).collect();
     let spec = PathSpec::Array {

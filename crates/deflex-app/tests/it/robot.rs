@@ -1,7 +1,7 @@
-//! The model engine ([`deflex_py::model`]): batches against single calls, inverse kinematics, non-
+//! The model engine ([`deflex_app::robot`]): batches against single calls, inverse kinematics, non-
 //! finite input.
 
-use deflex_py::model::*;
+use deflex_app::robot::*;
 
 fn configurations(rows: usize) -> Vec<f64> {
     // A deterministic spread over the TX200's workspace.

@@ -6,9 +6,9 @@
 //! [`table_csv`], [`programs`], [`write_programs`].
 
 use crate::error::{Error, Result, bounded};
-use deflex_app::load::gcode_file::tool_path_by_name;
-use deflex_app::load::parse_wrench_log;
-use deflex_app::load::wrench_log::MAX_LOG_BYTES;
+use crate::load::gcode_file::tool_path_by_name;
+use crate::load::parse_wrench_log;
+use crate::load::wrench_log::MAX_LOG_BYTES;
 use deflex_cam::program::{Format, ProgramFile, ProgramInput, ProgramSettings, export};
 use deflex_compensate::log::{ResampleOptions, resample_on_path};
 use deflex_compensate::table::write_csv;
@@ -107,7 +107,7 @@ pub struct CompensationRun {
 /// and wrenches that are not the process model's.
 fn cell(robot: &Robot, wrench: &WrenchSpec, options: &Options) -> Result<CellConfig> {
     let mut config = match &options.twin_config {
-        Some(p) => deflex_app::cell::twin_cell_file::load_cell(p, None)?,
+        Some(p) => crate::cell::twin_cell_file::load_cell(p, None)?,
         None => match CellConfig::for_robot_description(&robot.name, robot.clone()) {
             Ok(c) => c,
             Err(_)
@@ -325,7 +325,7 @@ pub fn compensate(
         }
         WrenchSpec::Log(file) => {
             // The file is read here (bounded), the application layer reads its rows.
-            let text = crate::geometry::read_text(file, MAX_LOG_BYTES)?;
+            let text = crate::calibrate_geometry::read_text(file, MAX_LOG_BYTES)?;
             let log = parse_wrench_log(&text, &file.display().to_string(), robot, &part_frame)?;
             let resampled = resample_on_path(&log, &path, &ResampleOptions::default())?;
             let shown = file.display();

@@ -1,6 +1,6 @@
-//! The engine's errors ([`deflex_py::error`]): panics caught, bounds named.
+//! The engine's errors ([`deflex_app::error`]): panics caught, bounds named.
 
-use deflex_py::error::*;
+use deflex_app::error::*;
 
 #[test]
 fn a_panic_becomes_an_internal_error_with_its_message() {

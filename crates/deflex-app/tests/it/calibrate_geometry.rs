@@ -1,9 +1,9 @@
-//! The elasto-geometric calibration engine ([`deflex_py::geometry`]): steps and losses parsed with
+//! The elasto-geometric calibration engine ([`deflex_app::calibrate_geometry`]): steps and losses parsed with
 //! the CLI's messages.
 
+use deflex_app::calibrate_geometry::*;
 use deflex_calibrate::geometry::fit::Step;
 use deflex_calibrate::geometry::solve::Loss;
-use deflex_py::geometry::*;
 
 #[test]
 fn steps_and_losses_are_parsed_with_the_cli_messages() {

@@ -1,6 +1,6 @@
-//! The table reader ([`deflex_py::table`]): numbers, text, empty cells, comments, ragged rows.
+//! The table reader ([`deflex_app::table`]): numbers, text, empty cells, comments, ragged rows.
 
-use deflex_py::table::*;
+use deflex_app::table::*;
 
 #[test]
 fn numbers_text_empty_cells_and_comments() {

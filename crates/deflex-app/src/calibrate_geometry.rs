@@ -7,9 +7,9 @@
 //! [`calibrate_geometry`], [`predict`], [`register`], [`import_ur10_tracker`], [`report_text`],
 //! [`report_json`], [`write_report`].
 
-use crate::calibration::{Source, table_error};
+use crate::calibrate::{Source, table_error};
 use crate::error::{Error, Result};
-use deflex_app::report::absolute_report;
+use crate::report::absolute_report;
 use deflex_calibrate::geometry::campaign::Campaign;
 use deflex_calibrate::geometry::data::{AbsoluteRow, format_absolute, limits, parse_absolute};
 use deflex_calibrate::geometry::fit::{
@@ -33,12 +33,12 @@ const MAX_TERMS_BYTES: u64 = 64 << 20;
 
 /// A bounded read of a file the user named, with the error naming it.
 pub fn read_text(path: &Path, limit: u64) -> Result<String> {
-    deflex_app::load::read_bounded(path, limit).map_err(|e| match e {
-        deflex_app::load::BoundedReadError::Io(source) => Error::Read {
+    crate::load::read_bounded(path, limit).map_err(|e| match e {
+        crate::load::BoundedReadError::Io(source) => Error::Read {
             path: path.display().to_string(),
             source,
         },
-        deflex_app::load::BoundedReadError::TooLarge(bytes) => Error::TooLarge {
+        crate::load::BoundedReadError::TooLarge(bytes) => Error::TooLarge {
             path: path.display().to_string(),
             bytes,
             limit,
@@ -161,7 +161,7 @@ pub fn calibrate_geometry(
     }
     let mut loaded_rows = Vec::new();
     for source in loaded {
-        loaded_rows.extend(crate::calibration::read_rows(source, n, true)?.rows);
+        loaded_rows.extend(crate::calibrate::read_rows(source, n, true)?.rows);
     }
     let mut model = EgModel::from_robot(start);
     let mut campaign = Campaign::new(&mut model, absolute, loaded_rows)?;
@@ -265,7 +265,7 @@ fn write_model(robot: &Robot, terms: Option<&CalibrationTerms>, path: &Path) -> 
         let file = terms_path(path);
         deflex_files::write_atomic(&file, terms.to_json()).map_err(io(&file))?;
     }
-    deflex_files::write_atomic(path, crate::model::to_toml(robot, Some(path))).map_err(io(path))
+    deflex_files::write_atomic(path, crate::robot::to_toml(robot, Some(path))).map_err(io(path))
 }
 
 /// A calibrated model for prediction and registration: the robot and, when it was read from a

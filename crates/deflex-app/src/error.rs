@@ -99,7 +99,7 @@ pub enum Error {
     Import(#[from] deflex_calibrate::geometry::ur10_tracker::ImportError),
     /// A report (page, plots, tables) that could not be written.
     #[error(transparent)]
-    Report(#[from] deflex_app::report::PageError),
+    Report(#[from] crate::report::PageError),
     /// A set-up registration.
     #[error(transparent)]
     Register(#[from] deflex_calibrate::geometry::register::RegisterError),
@@ -134,7 +134,7 @@ pub enum Error {
     Compensate(#[from] deflex_compensate::CompensateError),
     /// A log used as a wrench source: its rows.
     #[error(transparent)]
-    WrenchLog(#[from] deflex_app::load::WrenchLogError),
+    WrenchLog(#[from] crate::load::WrenchLogError),
     /// A log used as a wrench source: its coverage of the path.
     #[error(transparent)]
     Log(#[from] deflex_compensate::LogError),
@@ -155,7 +155,7 @@ pub enum Error {
     Sim(#[from] deflex_sim::SimError),
     /// The twin's cell file.
     #[error(transparent)]
-    Cell(#[from] deflex_app::cell::twin_cell_file::TwinCellFileError),
+    Cell(#[from] crate::cell::twin_cell_file::TwinCellFileError),
     /// The twin with the correction controller (closed loop).
     #[error(transparent)]
     Twin(#[from] deflex_sim::twin::TwinError),

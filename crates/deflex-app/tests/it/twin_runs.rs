@@ -1,6 +1,6 @@
-//! The twin engine ([`deflex_py::twin`]): a short open-loop run's log columns.
+//! The twin engine ([`deflex_app::twin`]): a short open-loop run's log columns.
 
-use deflex_py::twin::*;
+use deflex_app::twin::*;
 
 #[test]
 fn a_short_open_loop_run_logs_si_columns_of_equal_length() {

@@ -21,9 +21,9 @@ pub const ROWS_PER_TASK: usize = 2048;
 /// Below this many rows the batch runs on the calling thread (no pool wake-up).
 const SERIAL_ROWS: usize = 256;
 
-/// A robot by built-in name or file path (TOML, possibly naming a URDF): `deflex_app::load::load_robot`.
+/// A robot by built-in name or file path (TOML, possibly naming a URDF): `crate::load::load_robot`.
 pub fn load(spec: &str) -> Result<Robot> {
-    Ok(deflex_app::load::load_robot(spec)?)
+    Ok(crate::load::load_robot(spec)?)
 }
 
 /// A built-in robot by name.
@@ -49,7 +49,7 @@ pub fn builtin_names() -> Vec<&'static str> {
 
 /// A robot from TOML text; `origin` names it in errors, `base_dir` resolves a URDF path.
 pub fn from_toml(text: &str, origin: &str, base_dir: Option<&Path>) -> Result<Robot> {
-    let resolver = deflex_app::load::FileUrdfResolver {
+    let resolver = crate::load::FileUrdfResolver {
         base_dir: base_dir.map(Path::to_path_buf),
     };
     Ok(deflex_model::robot_from_toml_str(
@@ -62,7 +62,7 @@ pub fn from_toml(text: &str, origin: &str, base_dir: Option<&Path>) -> Result<Ro
 /// The robot as TOML, URDF paths rewritten for a file at `destination` when given.
 pub fn to_toml(robot: &Robot, destination: Option<&Path>) -> String {
     match destination {
-        Some(path) => deflex_app::load::robot_to_toml_for(robot, path),
+        Some(path) => crate::load::robot_to_toml_for(robot, path),
         None => deflex_model::robot_to_toml(robot),
     }
 }

@@ -57,11 +57,7 @@ pub fn table_error(error: DataError) -> Error {
 /// Read measurement rows (displacements required when `measured`).
 pub fn read_rows(source: &Source, joint_count: usize, measured: bool) -> Result<MeasurementFile> {
     match source {
-        Source::File(path) => Ok(deflex_app::load::read_file(
-            path,
-            Some(joint_count),
-            measured,
-        )?),
+        Source::File(path) => Ok(crate::load::read_file(path, Some(joint_count), measured)?),
         Source::Table { text, origin } => {
             deflex_calibrate::measurements::check_joint_columns(text, origin, joint_count)?;
             deflex_calibrate::measurements::parse_file(text, origin, measured).map_err(table_error)
@@ -355,7 +351,7 @@ pub fn summary_json(s: &StiffnessCalibration) -> Value {
 /// The CLI's text output of `deflex calibrate` (iteration table, estimates, residuals,
 /// correlation, file check, warnings).
 pub fn report_text(cal: &StiffnessCalibration) -> String {
-    use deflex_app::report::calibration_tables::{
+    use crate::report::calibration_tables::{
         ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlation_table, iteration_rows,
         residual_summary, shift_rows, stiffness_rows,
     };
@@ -403,7 +399,7 @@ pub fn report_text(cal: &StiffnessCalibration) -> String {
 /// The calibration's HTML report with plots and CSV tables (`deflex calibrate --report`),
 /// written whole into `dir`; `output_name` is where the model was (or will be) saved.
 pub fn write_report(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -> Result<()> {
-    use deflex_app::report::calibration_report::{CalibrationReport, write_calibration_report};
+    use crate::report::calibration_report::{CalibrationReport, write_calibration_report};
     let io = |source| Error::Io {
         path: dir.display().to_string(),
         source,
@@ -470,7 +466,10 @@ pub fn validation_json(v: &Validation) -> Value {
 
 /// The validation's plots and HTML page (`deflex validate --out`).
 pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(deflex_app::report::validation_report::write_validation_report(&v.validation, dir)?)
+    Ok(crate::report::validation_report::write_validation_report(
+        &v.validation,
+        dir,
+    )?)
 }
 
 /// Predicted displacement `[δp; δφ]` of every row of a measurement or plan table (m, rad).
