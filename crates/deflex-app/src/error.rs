@@ -85,6 +85,31 @@ pub enum Error {
         /// The data, as named to the user.
         data: String,
     },
+    /// A coupling asked for (`calibrate --couplings`) with an end the identified structure has
+    /// no eDoF for.
+    #[error(
+        "--couplings {pair}: {edof} is not an eDoF of the identified structure `{structure}` (a coupling joins two eDoFs the calibration identified: choose them from the structure, or make the search keep them with --structure fixed and a start model that has them); nothing written"
+    )]
+    CouplingNotInStructure {
+        /// The pair as given (`J2.z:J3.y`).
+        pair: String,
+        /// The end that is missing (`J3.y`).
+        edof: String,
+        /// The identified structure's label.
+        structure: String,
+    },
+    /// A points file (the points a measurement plan measures) that cannot be used.
+    #[error(transparent)]
+    Points(#[from] deflex_calibrate::measurements::points::PointsError),
+    /// An error about a given input (a file, or a front end's option and its value), named
+    /// first.
+    #[error("{context}: {source}")]
+    In {
+        /// The input (`--data m.csv`, `--points`).
+        context: String,
+        /// What went wrong with it.
+        source: Box<Error>,
+    },
     /// Elasto-geometric campaign.
     #[error(transparent)]
     Campaign(#[from] deflex_calibrate::geometry::campaign::CampaignError),
@@ -103,6 +128,83 @@ pub enum Error {
     /// A set-up registration.
     #[error(transparent)]
     Register(#[from] deflex_calibrate::geometry::register::RegisterError),
+    /// Readings that do not say which set-up or target to register.
+    #[error(transparent)]
+    RegisterInput(#[from] crate::calibrate_geometry::RegisterInputError),
+    /// A model step or loss not known (`--steps`, `--loss`; `steps=`, `loss=`).
+    #[error("{option}: {source}")]
+    Choice {
+        /// The option, as the front end names it.
+        option: String,
+        /// What is wrong with its value.
+        source: deflex_calibrate::geometry::fit::ChoiceError,
+    },
+    /// A fit whose readings the calibrated robot still misses by centimetres: another robot's
+    /// data. Nothing is written.
+    #[error(
+        "{files}: robot \"{robot}\" leaves the fitted readings {rms_mm:.1} mm RMS from its prediction after calibration (more than {limit_mm:.0} mm): these are not this robot's readings (another robot's data? give it with {robot_option}); nothing written"
+    )]
+    ImplausibleFit {
+        /// The data files.
+        files: String,
+        /// The robot given.
+        robot: String,
+        /// RMS of the fitted readings' residuals (mm).
+        rms_mm: f64,
+        /// The limit (mm).
+        limit_mm: f64,
+        /// How to give the robot (`--robot`, `robot=`).
+        robot_option: String,
+    },
+    /// Fewer independent equations than parameters: the data cannot determine them.
+    #[error(
+        "{files}: {distinct} distinct reading(s) of {readings} give {equations} equations for {parameters} parameters: the data cannot determine them; measure more configurations (nothing written)"
+    )]
+    TooFewReadings {
+        /// The data files.
+        files: String,
+        /// Distinct readings.
+        distinct: usize,
+        /// Readings fitted.
+        readings: usize,
+        /// Equations they give (3 per distinct reading).
+        equations: usize,
+        /// Parameters to determine.
+        parameters: usize,
+    },
+    /// A label the tracker import would not read back the same.
+    #[error(
+        "{option} \"{label}\": {problem}; import refuses it (labels are not rewritten): give a label of 1 to {max_bytes} bytes without control characters, outer white space or a leading `#`"
+    )]
+    ImportLabel {
+        /// The option (`--setup` or `--target`; `setup`, `target`).
+        option: String,
+        /// The label, shown with its control characters escaped.
+        label: String,
+        /// What is wrong with it.
+        problem: deflex_calibrate::geometry::data::LabelProblem,
+        /// Longest label accepted (bytes).
+        max_bytes: usize,
+    },
+    /// A tracker series folder without exactly one measurement file.
+    #[error("{folder}: expected one measurements_*.csv, found {found}")]
+    SeriesFiles {
+        /// The folder.
+        folder: String,
+        /// Measurement files found.
+        found: usize,
+    },
+    /// An input file that cannot be read (special file, too large, not UTF-8, …).
+    #[error(transparent)]
+    Input(#[from] deflex_files::InputError),
+    /// An output that could not be put into its format (a table or JSON text).
+    #[error("{what} could not be written: {reason}")]
+    Serialise {
+        /// The output (`the prediction CSV`).
+        what: &'static str,
+        /// Why.
+        reason: String,
+    },
     /// A calibration's terms file that cannot be used.
     #[error("{path}: {source}")]
     Terms {
@@ -141,11 +243,145 @@ pub enum Error {
     /// A tool path.
     #[error(transparent)]
     Path(#[from] deflex_compensate::PathError),
-    /// Points not compensated or an iteration that did not converge (the CLI's refusal).
-    #[error("{message}")]
-    NotCompensated {
-        /// The CLI's text (points and reasons).
-        message: String,
+    /// A robot (built-in name or file) named by a front end's option that cannot be read.
+    #[error("{flag} {spec}: {source}")]
+    RobotSpec {
+        /// The option (`--robot`, `--nominal`).
+        flag: &'static str,
+        /// As given.
+        spec: String,
+        /// Why.
+        source: deflex_model::ModelError,
+    },
+    /// The robot's twin cell (or the twin file over it) for a compensation.
+    #[error("the twin cell of {robot}: {source}")]
+    TwinCellOf {
+        /// The robot, as given.
+        robot: String,
+        /// Why.
+        source: Box<crate::cell::twin_cell_file::TwinCellFileError>,
+    },
+    /// A tool path (built-in or G-code file) that cannot be read or placed.
+    #[error("{flag} {spec}: {source}")]
+    PathSpec {
+        /// The option (`--path`, `path`).
+        flag: &'static str,
+        /// As given.
+        spec: String,
+        /// Why.
+        source: Box<deflex_sim::SimError>,
+    },
+    /// The seed configuration holds the tool off the path's tool axis.
+    #[error(
+        "the seed configuration ({seed}) deg holds the tool {angle_deg:.1}° off the path's tool axis (−Z of the part frame{frame}): the programs would tilt the tool. Give {seed_flag} with the tool pointing along it (within {}°); the cell's seed is printed by `deflex sim robot --robot {robot}`",
+        crate::compensate::MAX_TOOL_AXIS_DEG
+    )]
+    ToolAxis {
+        /// The seed (deg, comma-separated).
+        seed: String,
+        /// The angle (deg).
+        angle_deg: f64,
+        /// ` G54` when named.
+        frame: String,
+        /// The seed's option (`--seed-deg`, `seed_q`).
+        seed_flag: &'static str,
+        /// The robot, as given.
+        robot: String,
+    },
+    /// Path points beyond the arm's reach.
+    #[error(
+        "{count} of {points} path points lie beyond the arm's reach ({reach_mm:.0} mm from joint 1), the first point {first} at {distance_mm:.1} mm, with the part frame at ({x:.1}, {y:.1}, {z:.1}) mm: move the part with {part_flag} x,y,z (deflex sim robot --robot R prints the robot's cell)"
+    )]
+    OutOfReach {
+        /// Points out of reach.
+        count: usize,
+        /// Path points.
+        points: usize,
+        /// The first.
+        first: usize,
+        /// Its distance (mm).
+        distance_mm: f64,
+        /// The reach (mm).
+        reach_mm: f64,
+        /// Part origin (mm).
+        x: f64,
+        /// Part origin (mm).
+        y: f64,
+        /// Part origin (mm).
+        z: f64,
+        /// The part origin's option (`--part-xyz-mm`, `part_xyz_m`).
+        part_flag: &'static str,
+    },
+    /// The twin's process model cannot be built.
+    #[error("the twin's process model: {0}")]
+    ProcessModel(deflex_sim::SimError),
+    /// Points could not be compensated: no program (the CLI still writes the table and the
+    /// summaries).
+    #[error(
+        "{count} of {points} points cannot be compensated (status column of compensated_path.csv); no robot program written:\n{list}\n{hint}"
+    )]
+    PointsNotCompensated {
+        /// How many.
+        count: usize,
+        /// Path points.
+        points: usize,
+        /// The first ones, one per line.
+        list: String,
+        /// What to try.
+        hint: String,
+    },
+    /// The compensation did not converge: no program (the CLI still writes the table and the
+    /// summaries).
+    #[error(
+        "the compensation did not converge in {iterations} iterations (last change {change_mm:.4} mm, {change_mrad:.4} mrad, tolerance {tolerance_mm:.4} mm); no robot program written"
+    )]
+    NotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// Last change (mm).
+        change_mm: f64,
+        /// Last change (mrad).
+        change_mrad: f64,
+        /// The tolerance (mm).
+        tolerance_mm: f64,
+    },
+    /// A program's clearance point that the arm does not reach.
+    #[error(
+        "the clearance point above the {which} of the path is not reachable ({source}): lower program.clearance_mm in {program_config_flag} or move the part with {part_flag}"
+    )]
+    Clearance {
+        /// `start` or `end`.
+        which: &'static str,
+        /// The template's option (`--program-config`, `settings`).
+        program_config_flag: &'static str,
+        /// The part origin's option (`--part-xyz-mm`, `part_xyz_m`).
+        part_flag: &'static str,
+        /// Why.
+        source: deflex_model::ModelError,
+    },
+    /// A program read back differs from the path (a bug: nothing is written then).
+    #[error("{format}: read back {what}")]
+    Readback {
+        /// The format.
+        format: &'static str,
+        /// What differs.
+        what: String,
+    },
+    /// A calibrated robot that a format cannot hold, or whose file did not read back.
+    #[error(transparent)]
+    Export(#[from] deflex_cam::export::ExportError),
+    /// An exported URDF that does not load.
+    #[error("the written URDF does not read back: {0}")]
+    UrdfReadback(deflex_model::ModelError),
+    /// An exported file whose kinematics differ from the model's.
+    #[error(
+        "{format}: the file read back is {error_m:.3e} m from the model (bound 1e-6 m); nothing written"
+    )]
+    ExportMismatch {
+        /// The format.
+        format: &'static str,
+        /// Largest TCP position difference (m).
+        error_m: f64,
     },
     /// Robot programs.
     #[error(transparent)]
@@ -156,9 +392,65 @@ pub enum Error {
     /// The twin's cell file.
     #[error(transparent)]
     Cell(#[from] crate::cell::twin_cell_file::TwinCellFileError),
+    /// A cell file (`CELL.toml`) that cannot be read or used.
+    #[error(transparent)]
+    CellFile(Box<crate::cell::config::ConfigError>),
+    /// An output a `CELL.toml` names (`[log] path`) that deflex may not replace, named with the
+    /// file.
+    #[error("{origin}: {source}")]
+    CellOutput {
+        /// The `CELL.toml`, as shown.
+        origin: String,
+        /// Why the output is refused.
+        source: deflex_files::OutputError,
+    },
+    /// A `deflex run` session that could not start (model, feed-forward, links, log, threads).
+    #[error(transparent)]
+    CellStart(Box<crate::cell::cell_run::StartError>),
+    /// The run log's writer thread failed.
+    #[error("log writer: {0}")]
+    LogWriter(std::io::Error),
+    /// The MCAP recording of a session could not be started.
+    #[error(transparent)]
+    Record(#[from] deflex_record::RecordError),
+    /// The ends of the simulated cell could not be made from a `CELL.toml`.
+    #[error(transparent)]
+    CellSides(#[from] crate::cell::links::CellSidesError),
+    /// The simulated cell could not serve its session.
+    #[error(transparent)]
+    CellServe(Box<deflex_sim::twin::cell_server::CellServeError>),
+    /// `cell --sim` given a cell whose sensor is a ROS 2 topic.
+    #[error(
+        "{origin}: sensor.kind = \"ros2\": the simulated cell plays the robot and an ATI Net F/T; \
+         give `deflex cell --sim` a CELL.toml with sensor.kind = \"netft\" and relay its \
+         readings onto the WrenchStamped topic (as crates/deflex-ros2/tests/python does)"
+    )]
+    SimCellNeedsNetFt {
+        /// The cell file.
+        origin: String,
+    },
     /// The twin with the correction controller (closed loop).
     #[error(transparent)]
     Twin(#[from] deflex_sim::twin::TwinError),
+    /// A twin workflow that could not be set up (the correction's model, the identification
+    /// from the twin's campaign).
+    #[error(transparent)]
+    TwinSetup(#[from] crate::twin::TwinSetupError),
+    /// Options of a forming run on the twin that do not go together.
+    #[error(transparent)]
+    FormConflict(#[from] crate::twin::FormConflict),
+    /// The paper's study on the twin (`deflex demo`), or a part of it.
+    #[error(transparent)]
+    Demo(#[from] crate::study::DemoError),
+    /// A deflection map none of whose nodes the arm reaches: nothing written.
+    #[error("no grid node is reachable; check --plane, --center and --size")]
+    NoReachableNode,
+    /// A run log or recording that cannot be read for its plots.
+    #[error(transparent)]
+    Trace(#[from] deflex_record::trace::TraceError),
+    /// A plot or page that could not be drawn or written (the file named first).
+    #[error(transparent)]
+    Plot(#[from] deflex_plot::PlotError),
     /// A file that could not be read or written.
     #[error("{path}: {source}")]
     Io {
@@ -197,22 +489,64 @@ impl Error {
             | Error::WrenchLog(_)
             | Error::Table { .. }
             | Error::Read { .. }
-            | Error::TooLarge { .. } => ErrorKind::Data,
+            | Error::TooLarge { .. }
+            | Error::Points(_)
+            | Error::SeriesFiles { .. }
+            | Error::Input(_) => ErrorKind::Data,
+            Error::RegisterInput(_) | Error::Choice { .. } | Error::ImportLabel { .. } => {
+                ErrorKind::Input
+            }
             Error::Calib(_)
             | Error::NothingIdentified { .. }
+            | Error::CouplingNotInStructure { .. }
             | Error::Campaign(_)
             | Error::Fit(_)
             | Error::Predict(_)
             | Error::Register(_)
+            | Error::ImplausibleFit { .. }
+            | Error::TooFewReadings { .. }
             | Error::Terms { .. } => ErrorKind::Calibration,
-            Error::Compensate(_) | Error::Path(_) | Error::NotCompensated { .. } => {
-                ErrorKind::Compensation
-            }
+            Error::Compensate(_) | Error::Path(_) => ErrorKind::Compensation,
+            Error::RobotSpec { .. }
+            | Error::Export(_)
+            | Error::UrdfReadback(_)
+            | Error::ExportMismatch { .. } => ErrorKind::Model,
+            Error::TwinCellOf { .. } => ErrorKind::Data,
+            Error::PathSpec { .. } | Error::ProcessModel(_) => ErrorKind::Simulation,
+            Error::ToolAxis { .. } => ErrorKind::Input,
+            Error::OutOfReach { .. }
+            | Error::PointsNotCompensated { .. }
+            | Error::NotConverged { .. } => ErrorKind::Compensation,
+            Error::Clearance { .. } | Error::Readback { .. } => ErrorKind::Program,
             Error::Program(_) => ErrorKind::Program,
-            Error::Sim(_) | Error::Twin(_) => ErrorKind::Simulation,
+            Error::Sim(_) | Error::Twin(_) | Error::TwinSetup(_) | Error::Demo(_) => {
+                ErrorKind::Simulation
+            }
+            Error::NoReachableNode => ErrorKind::Model,
+            Error::FormConflict(_) => ErrorKind::Input,
+            Error::Trace(_) => ErrorKind::Data,
+            Error::Plot(_) => ErrorKind::Io,
             Error::Cell(_) => ErrorKind::Data,
-            Error::Io { .. } | Error::Report(_) => ErrorKind::Io,
+            Error::CellFile(_) => ErrorKind::Data,
+            Error::CellOutput { .. }
+            | Error::CellStart(_)
+            | Error::LogWriter(_)
+            | Error::Record(_) => ErrorKind::Io,
+            Error::CellSides(_) | Error::CellServe(_) | Error::SimCellNeedsNetFt { .. } => {
+                ErrorKind::Simulation
+            }
+            Error::Io { .. } | Error::Report(_) | Error::Serialise { .. } => ErrorKind::Io,
             Error::Panic(_) => ErrorKind::Internal,
+            Error::In { source, .. } => source.kind(),
+        }
+    }
+
+    /// An error about `context` (a file, or an option and its value), named first.
+    pub fn in_context(context: impl Into<String>) -> impl FnOnce(Error) -> Error {
+        let context = context.into();
+        move |source| Error::In {
+            context,
+            source: Box::new(source),
         }
     }
 
@@ -222,6 +556,24 @@ impl Error {
             name: name.into(),
             message: message.into(),
         }
+    }
+}
+
+impl From<crate::cell::config::ConfigError> for Error {
+    fn from(error: crate::cell::config::ConfigError) -> Self {
+        Error::CellFile(Box::new(error))
+    }
+}
+
+impl From<crate::cell::cell_run::StartError> for Error {
+    fn from(error: crate::cell::cell_run::StartError) -> Self {
+        Error::CellStart(Box::new(error))
+    }
+}
+
+impl From<deflex_sim::twin::cell_server::CellServeError> for Error {
+    fn from(error: deflex_sim::twin::cell_server::CellServeError) -> Self {
+        Error::CellServe(Box::new(error))
     }
 }
 

@@ -42,15 +42,6 @@ pub fn check_range(flag: &str, value: f64, lo: f64, hi: f64) -> Result<(), Usage
     check_flag(flag, value, lo, hi, "")
 }
 
-/// A number, or JSON null when it is infinite or NaN (not identifiable).
-pub fn finite_or_null(x: f64) -> serde_json::Value {
-    if x.is_finite() {
-        serde_json::json!(x)
-    } else {
-        serde_json::Value::Null
-    }
-}
-
 /// Parse a comma-separated list of finite numbers; `what` names the option in errors.
 pub fn parse_list(text: &str, what: &str) -> Result<Vec<f64>, UsageError> {
     text.split(',')
@@ -190,15 +181,22 @@ pub fn robot(spec: &str) -> Result<Robot, CliError> {
     Ok(load_robot(spec)?)
 }
 
-/// Print a JSON value, pretty, to stdout (the `--json` output of every command).
+/// Print a JSON value, pretty, to stdout (the `--json` output of every command): a `Value`'s
+/// alternate form, the text of `serde_json::to_string_pretty`, which cannot fail for a `Value`.
 pub fn print_json(value: &serde_json::Value) {
-    println!(
-        "{}",
-        serde_json::to_string_pretty(value).unwrap_or_default()
-    );
+    println!("{value:#}");
 }
 
-/// Format a float with a fixed number of decimals for tables.
-pub fn fixed(value: f64, decimals: usize) -> String {
-    format!("{value:.decimals$}")
+/// Print `text()`, or `value()` as JSON with `--json` (`json`): the two forms of a command's
+/// report.
+pub fn print_report(
+    json: bool,
+    text: impl FnOnce() -> String,
+    value: impl FnOnce() -> serde_json::Value,
+) {
+    if json {
+        print_json(&value());
+    } else {
+        print!("{}", text());
+    }
 }

@@ -1,25 +1,19 @@
-//! `deflex cell --sim`: the digital twin served on loopback over the protocols of a real cell
-//! (the work is `deflex_sim::twin::cell_server`, its endpoints from the runtime's link factory). It
-//! reads the same `CELL.toml` as `deflex run`. The twin plays any robot (`--robot`: a built-in
-//! name or a robot file; default the twin file's, else the paper's TX200) with that robot's cell
-//! (`deflex_sim::CellConfig::for_robot`), and names it in every output.
+//! `deflex cell --sim`: the digital twin served on loopback over the protocols of a real cell,
+//! from the same `CELL.toml` as `deflex run` (the session is `deflex_app::cell::sim_cell`). The
+//! twin plays any robot (`--robot`: a built-in name or a robot file; default the twin file's,
+//! else the paper's TX200) with that robot's cell (`deflex_sim::CellConfig::for_robot`), and
+//! names it in every output. This module holds the flags, the twin they pick, the signal
+//! handling, the twin's live view, the progress lines and the printing.
 
 use crate::args::{check_flag, print_json};
-use crate::cmd_control::{load_cell_file, stats_json};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
-use deflex_app::cell::config::CellFile;
-use deflex_record::{McapRecorder, RecordReport};
-use deflex_sim::twin::cell_server::{
-    CellEnd, CellEvent, CellOutcome, ServeOptions, serve_cell_with,
-};
-use deflex_sim::twin::{TwinCellStream, twin_cell_session_info};
-use deflex_sim::{CellConfig, ConeParams, ToolPath};
-use deflex_telemetry::{CycleSample, Source, broadcast};
+use deflex_app::cell::sim_cell::{SimCellPath, SimCellPlan, SimCellReport};
+use deflex_sim::CellConfig;
+use deflex_sim::twin::cell_server::{CellEvent, ServeOptions};
 use deflex_view::ViewStats;
 use serde_json::json;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 #[derive(Args, Clone, Debug)]
@@ -94,50 +88,20 @@ impl CellArgs {
     }
 }
 
-/// The twin's log of a `cell --sim` session: `--log`, else beside the CELL.toml's run log,
-/// named after it (`deflex-run.csv` → `deflex-run.sim-cell.csv`).
-pub fn cell_log_path(args: &CellArgs, file: &CellFile) -> PathBuf {
-    if let Some(p) = &args.log {
-        return p.clone();
-    }
-    let run_log = file
-        .log_path()
-        .unwrap_or_else(|| file.base_dir.join("deflex-run.csv"));
-    let stem = run_log
-        .file_stem()
-        .map_or_else(|| "deflex-run".into(), |s| s.to_string_lossy().into_owned());
-    run_log.with_file_name(format!("{stem}.sim-cell.csv"))
-}
-
-/// What `cell --sim` served and wrote.
+/// What `cell --sim` served and wrote, and what its live view did.
 pub struct CellSession {
-    /// The twin's run.
-    pub outcome: CellOutcome,
-    /// The ground-truth log written (rows).
-    pub log: (PathBuf, usize),
-    /// The MCAP recording: where, and what it held (or why it failed).
-    pub recording: (PathBuf, Result<RecordReport, deflex_record::RecordError>),
+    /// The twin's run, its log and recording.
+    pub report: SimCellReport,
     /// What the live view did.
     pub view: Option<ViewStats>,
 }
 
-pub(crate) fn twin_path(args: &CellArgs) -> Result<ToolPath, CliError> {
-    let path = match args.path.as_str() {
-        "cone" => ToolPath::paper_cone(),
-        "helical" => ToolPath::cone(&ConeParams {
-            helical: true,
-            ..ConeParams::default()
-        })?,
-        other => {
-            return Err(
-                UsageError::invalid("--path", "cone or helical", format!("\"{other}\"")).into(),
-            );
-        }
-    };
-    Ok(match args.length_mm {
-        Some(l) => path.truncated(l),
-        None => path,
-    })
+/// The twin's tool path of `--path` and `--length-mm`.
+fn twin_path(args: &CellArgs) -> Result<deflex_sim::ToolPath, CliError> {
+    let path = SimCellPath::from_name(&args.path).ok_or_else(|| {
+        UsageError::invalid("--path", "cone or helical", format!("\"{}\"", args.path))
+    })?;
+    Ok(path.tool_path(args.length_mm)?)
 }
 
 /// The twin's cell: the robot's (`--robot`, else the twin file's, else the TX200's), with the
@@ -190,9 +154,9 @@ fn print_event(event: CellEvent) {
 }
 
 /// Serves the twin until the path is done (or `stop`). With `progress`, prints a status line
-/// on stderr every two seconds. The twin's own stream (ground truth, [`Source::TwinCell`]) is
-/// recorded in MCAP on its own thread and, with `--view`, served live; at the end the twin's
-/// ground-truth log is written, the recording beside it (both only when the session served).
+/// on stderr every two seconds. The twin's own stream (ground truth) is recorded in MCAP and,
+/// with `--view`, served live; at the end the twin's ground-truth log is written, the recording
+/// beside it (both only when the session served).
 pub fn cell_session(
     args: &CellArgs,
     stop: &AtomicBool,
@@ -206,12 +170,7 @@ pub fn cell_session(
         .into());
     }
     args.check()?;
-    let file = load_cell_file(&args.config)?;
-    if file.sensor.kind == deflex_app::cell::config::SensorKind::Ros2 {
-        return Err(CliError::SimCellNeedsNetFt {
-            origin: file.origin.to_string(),
-        });
-    }
+    let plan = SimCellPlan::load(&args.config)?;
     let options = ServeOptions {
         twin: twin_config(args)?,
         path: twin_path(args)?,
@@ -220,61 +179,43 @@ pub fn cell_session(
         wait_s: args.wait_s,
         dwell_s: args.dwell_s,
     };
-    let log_path = cell_log_path(args, &file);
-    let mcap_path = crate::live::mcap_beside(&log_path, "--log")?;
-    let nominal = options.twin.nominal_robot()?;
-    let info = Arc::new(twin_cell_session_info(&nominal, &options.twin));
-    debug_assert_eq!(info.source, Source::TwinCell);
-    let (publisher, ring) = broadcast::<CycleSample>(1 << 14);
-    let recorder = McapRecorder::spawn(&mcap_path, &ring, info.clone())?;
+    let session = plan.start(options, args.log.as_deref())?;
     let view = match &args.view {
         Some(addr) => {
-            let addr = crate::live::view_address(addr)?;
-            match crate::live::start_view(addr, ring.clone(), info, None, false) {
+            let started = crate::live::view_address(addr)
+                .map_err(CliError::from)
+                .and_then(|addr| {
+                    crate::live::start_view(
+                        addr,
+                        session.ring().clone(),
+                        session.info().clone(),
+                        None,
+                        false,
+                    )
+                    .map_err(CliError::from)
+                });
+            match started {
                 Ok(v) => Some(v),
                 Err(e) => {
-                    let _ = recorder.finish_with(false);
-                    return Err(e.into());
+                    session.abort();
+                    return Err(e);
                 }
             }
         }
         None => None,
     };
-    let mut stream = TwinCellStream::new(nominal).with_publisher(publisher);
-    let mut events = |event| {
+    let served = session.serve(stop, &mut |event| {
         if progress {
             print_event(event)
         }
-    };
-    let served = file
-        .cell_sides(&options.twin)
-        .map_err(CliError::from)
-        .and_then(|sides| {
-            serve_cell_with(&sides, &options, stop, &mut events, Some(&mut stream))
-                .map_err(CliError::from)
-        });
-    drop(stream); // the stream ends
+    });
     let view = view.map(|v| {
         let stats = v.stats();
         v.shutdown();
         stats
     });
-    let outcome = match served {
-        Ok(o) => o,
-        Err(e) => {
-            let _ = recorder.finish_with(false);
-            return Err(e);
-        }
-    };
-    let rows = outcome.log.rows.len();
-    let written = deflex_files::write_atomic(&log_path, outcome.log.to_csv())
-        .map_err(CliError::write(&log_path));
-    let recording = recorder.finish_with(written.is_ok());
-    written?;
     Ok(CellSession {
-        outcome,
-        log: (log_path, rows),
-        recording: (mcap_path, recording),
+        report: served?,
         view,
     })
 }
@@ -289,69 +230,15 @@ pub fn cell(args: CellArgs, json_out: bool) -> CommandResult {
         );
     }
     let session = cell_session(&args, stop, !args.quiet)?;
-    let o = &session.outcome;
-    let s = &o.summary;
-    let (log_path, log_rows) = &session.log;
-    let (mcap_path, recording) = &session.recording;
-    let phase = match o.end {
-        CellEnd::ProgramFinished => "ended (robot program finished)",
-        CellEnd::Stopped => "stopped (signal)",
-    };
     if json_out {
-        let value = json!({
-            "simulated": true, "robot": o.robot, "robot_spec": o.robot_spec,
-            "model_geometry_matches": o.model_geometry_matches, "phase": match o.end { CellEnd::ProgramFinished => "ended", CellEnd::Stopped => "stopped" },
-            "phase_text": phase, "cycles": o.cycles, "late_replies": o.late, "duration_s": o.duration_s,
-            "round_trip": stats_json(&o.round_trip),
-            "max_error_norm_mm": s.max_error_norm_m * 1e3, "rms_error_norm_mm": s.rms_error_norm_m() * 1e3,
-            "max_force_norm_n": s.max_force_norm_n, "max_fz_n": s.max_fz_n,
-            "max_correction_mm": s.max_correction_m * 1e3,
-            "log": log_path, "log_rows": log_rows,
-        });
-        let mut value = value;
-        let ok = recording.as_ref().ok();
-        value["mcap"] = json!({
-            "path": mcap_path, "committed": ok.is_some(),
-            "cycles": ok.map(|r| r.stats.recorded), "lost": ok.map(|r| r.lost),
-            "error": recording.as_ref().err().map(ToString::to_string),
-        });
+        let mut value = session.report.summary_json();
         value["view"] = json!(session.view.as_ref().map(|v| json!({
             "samples": v.samples_received, "samples_lost": v.samples_lost,
             "messages_dropped": v.frames_dropped,
         })));
         print_json(&value);
     } else {
-        println!(
-            "deflex cell (SIMULATED {} cell, `{}`): {:.1} s simulated, {} robot cycles, phase: {phase}",
-            o.robot, o.robot_spec, o.duration_s, o.cycles
-        );
-        println!(
-            "  late answers: {} (the robot's count: no answer before its next cycle; `deflex run` \
-             over KUKA RSI reports the same number from the telegrams' Delay)",
-            o.late
-        );
-        println!("  robot-side round trip: {}", o.round_trip);
-        println!(
-            "  max TCP error norm {:.3} mm (rms {:.3} mm), max force {:.0} N, max correction {:.3} mm",
-            s.max_error_norm_m * 1e3,
-            s.rms_error_norm_m() * 1e3,
-            s.max_force_norm_n,
-            s.max_correction_m * 1e3
-        );
-        println!(
-            "  log: {} ({log_rows} rows, SIMULATED ground truth)",
-            log_path.display()
-        );
-        match recording {
-            Ok(r) => println!(
-                "  recording: {} (MCAP, the twin's stream: {} samples, {} lost, {:.1} MB)",
-                mcap_path.display(),
-                r.stats.recorded,
-                r.lost,
-                r.stats.bytes as f64 / 1e6
-            ),
-            Err(e) => println!("  recording: failed: {e}"),
-        }
+        print!("{}", session.report.summary_text());
         if let Some(v) = &session.view {
             println!("  live view: {}", crate::live::view_line(v));
         }

@@ -1,9 +1,10 @@
 //! `deflex demo`: the paper's whole study on the SIMULATED cell of the TX200 or another robot
-//! (`--robot`), with progress bars and a summary table; the work is done by `deflex-study`.
+//! (`--robot`), with progress bars and a summary table; the work is done by
+//! `deflex_app::study::demo`.
 
 use crate::error::CommandResult;
 use clap::Args;
-use deflex_app::study::{DemoOptions, run_study};
+use deflex_app::study::{DemoOptions, summary_json, summary_text};
 use deflex_telemetry::Progress;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -81,91 +82,14 @@ pub fn demo(args: DemoArgs, json: bool) -> CommandResult {
         bar: None,
         quiet: json,
     };
-    let cell = deflex_app::cell::twin_cell_file::cell_for_robot(&options.robot)?;
-    let study = run_study(&options, cell, &mut |p| bars.show(p))?;
-    deflex_app::report::study::write_study(&study, &args.out)?;
-    let summary = study.summary;
+    let summary = deflex_app::study::demo(&options, &args.out, &mut |p| bars.show(p))?;
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&summary).unwrap_or_default()
-        );
-        return Ok(());
-    }
-    println!();
-    println!(
-        "deflex demo — SIMULATED cell of the {} (seed {}){}",
-        summary.robot,
-        summary.seed,
-        if summary.quick { ", quick" } else { "" }
-    );
-    if summary.paper_comparison {
-        println!("{:<52} {:>10} {:>12}", "quantity", "paper", "deflex (sim)");
-        for (quantity, paper, ours, unit) in deflex_app::study::paper_vs_deflex_rows(&summary) {
-            println!(
-                "{:<52} {:>7.3} {unit:<2} {:>9.3} {unit}",
-                quantity, paper, ours
-            );
-        }
+        println!("{}", summary_json(&summary)?);
     } else {
-        for v in &summary.validation {
-            if v.model.starts_with("identified") {
-                println!(
-                    "identified model, {}: RMS / max δz error {:.3} / {:.3} mm",
-                    v.data, v.rms_z_mm, v.max_z_mm
-                );
-            }
-        }
+        print!(
+            "{}",
+            summary_text(&summary, &args.out, started.elapsed().as_secs_f64())
+        );
     }
-    let (o, c) = (&summary.forming_open, &summary.forming_closed);
-    println!(
-        "cone, every error source on: max |error| {:.3} → {:.3} mm ({:.1} % better), RMS {:.3} → {:.3} mm, \
-         max |F| {:.0} → {:.0} N",
-        o.max_error_norm_mm,
-        c.max_error_norm_mm,
-        summary.improvement_percent,
-        o.rms_error_norm_mm,
-        c.rms_error_norm_mm,
-        o.max_force_norm_N,
-        c.max_force_norm_N
-    );
-    let sc = &summary.stiff_contact;
-    let outcome =
-        |l: &deflex_app::study::contact::ContactLoopNumbers| match (&l.fault, l.runaway_warnings) {
-            (Some(f), _) => format!(" ({f})"),
-            (None, 0) => String::new(),
-            (None, n) => format!(
-                " ({n} contact_runaway warning{})",
-                if n == 1 { "" } else { "s" }
-            ),
-        };
-    println!(
-        "plunge into a {:.0e} N/m fixture: max |F| {:.0} N without correction, {:.0} N with \
-         correction and no runaway guard{}, {:.0} N with the guard{}",
-        sc.stiffness_n_m,
-        sc.open_max_force_N,
-        sc.unguarded.max_force_N,
-        outcome(&sc.unguarded),
-        sc.guarded.max_force_N,
-        outcome(&sc.guarded)
-    );
-    if let Some(s) = &summary.sensitivity {
-        let worst = s
-            .rows
-            .iter()
-            .min_by(|a, b| a.improvement_percent.total_cmp(&b.improvement_percent));
-        if let Some(w) = worst {
-            println!(
-                "sensitivity: {} runs, worst improvement {:.1} % ({}: {})",
-                s.runs, w.improvement_percent, w.factor, w.condition
-            );
-        }
-    }
-    println!("identified structure: {}", summary.identified_structure);
-    println!(
-        "report: {} ({:.1} s)",
-        args.out.join("index.html").display(),
-        started.elapsed().as_secs_f64()
-    );
     Ok(())
 }

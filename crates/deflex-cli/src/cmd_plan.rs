@@ -1,26 +1,17 @@
 //! `deflex plan`: the measurement campaign for a real cell (floor, table, cable or dead-weight
 //! loads, bracket, measured points), with expected standard errors and the technician's sheet.
+//! The workflow is `deflex_app::calibrate::plan`'s; here the flags are checked, converted into
+//! its options and the result printed.
 
-use crate::args::robot;
-use crate::args::{check_range, finite_or_null};
+use crate::args::{check_range, print_json, robot};
 use crate::error::{CliError, CommandResult, UsageError};
-use clap::{Args, ValueEnum};
-use deflex_app::load::read_points;
-use deflex_app::report::plan_tables::{
-    EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
-    expected_shift_rows, technician_rows,
+use clap::Args;
+use deflex_app::calibrate::plan::{
+    self, BasePoint, Floor, LoadKind, MAX_PLAN_FORCE_N, MAX_USER_POINTS, PlanOptions, PointSet,
+    Table, TableOption, parse_directions, parse_point_flag,
 };
-use deflex_calibrate::measurements::format_rows_for;
-use deflex_calibrate::measurements::points::{MAX_USER_POINTS, parse_point_flag};
-use deflex_calibrate::stiffness::campaign_cell::{
-    MAX_PLAN_FORCE_N, default_force_n, parse_directions,
-};
-use deflex_calibrate::stiffness::plan::{
-    BasePoint, Floor, LoadKind, PlanOptions, PointSet, Table, TableOption, plan_experiments,
-};
+use deflex_app::calibrate::{LoadChoice, PointsChoice};
 use deflex_model::Robot;
-use deflex_plot::text_table::render_table;
-use serde_json::{Value, json};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -104,33 +95,9 @@ pub struct PlanArgs {
     pub out: PathBuf,
 }
 
-/// `--load`: how loads are applied.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum LoadChoice {
-    // A cable (plain comments: a doc comment would become the value's help in `--help`).
-    Cable,
-    // Dead weights.
-    DeadWeight,
-}
-
-/// `--points`: the points measured besides the TCP.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum PointsChoice {
-    /// Two mid-arm points.
-    Standard,
-    /// None.
-    None,
-    /// The points of a CSV file.
-    File(PathBuf),
-}
-
-/// `standard`, `none`, or a file name.
+/// `--points`: `standard`, `none`, or a file name.
 fn parse_points_choice(text: &str) -> Result<PointsChoice, std::convert::Infallible> {
-    Ok(match text {
-        "standard" => PointsChoice::Standard,
-        "none" => PointsChoice::None,
-        file => PointsChoice::File(PathBuf::from(file)),
-    })
+    text.parse()
 }
 
 /// Comma-separated numbers of a flag, exactly `N` of them.
@@ -146,7 +113,7 @@ fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, CliErro
             check_range("--max-force-N", f, 1e-3, MAX_PLAN_FORCE_N)?;
             f
         }
-        None => default_force_n(nominal)?,
+        None => plan::default_force_n(nominal)?,
     };
     check_range("--noise-um", args.noise_um, 1e-3, 1e4)?;
     check_range("--clearance-m", args.clearance_m, 0.0, 1.0)?;
@@ -233,18 +200,9 @@ fn load_kind(args: &PlanArgs, nominal: &Robot, max_force_n: f64) -> Result<LoadK
                 }
                 .into());
             }
-            let g = nominal.gravity.norm();
             let masses_kg = match &args.masses_kg {
                 Some(text) => crate::args::parse_list(text, "--masses-kg")?,
-                None if g > 0.0 => vec![(max_force_n / g).round().max(1.0)],
-                None => {
-                    return Err(deflex_calibrate::stiffness::CalibError::from(
-                        deflex_calibrate::stiffness::PlanError::NoGravity {
-                            robot: nominal.name.clone(),
-                        },
-                    )
-                    .into());
-                }
+                None => plan::default_masses_kg(nominal, max_force_n)?,
             };
             LoadKind::DeadWeight { masses_kg }
         }
@@ -274,13 +232,8 @@ fn load_kind(args: &PlanArgs, nominal: &Robot, max_force_n: f64) -> Result<LoadK
 
 /// The measured points from `--points` and `--point`, for a robot with `n` joints.
 fn point_set(args: &PlanArgs, n: usize) -> Result<PointSet, CliError> {
-    let mut points = match &args.points {
-        PointsChoice::Standard => PointSet::Standard,
-        PointsChoice::None => PointSet::Custom(Vec::new()),
-        PointsChoice::File(file) => PointSet::Custom(
-            read_points(file, n).map_err(|e| CliError::in_context("--points")(e.into()))?,
-        ),
-    };
+    let mut points = plan::read_point_set(&args.points, n)
+        .map_err(|e| CliError::in_context("--points")(e.into()))?;
     if !args.point.is_empty() {
         let mut list = match points {
             PointSet::Standard => Vec::new(),
@@ -315,143 +268,11 @@ fn point_set(args: &PlanArgs, n: usize) -> Result<PointSet, CliError> {
 pub fn plan(args: PlanArgs, json_output: bool) -> CommandResult {
     let nominal = robot(&args.robot)?;
     let options = plan_options(&args, &nominal)?;
-    let plan = plan_experiments(&nominal, &options)?;
-    deflex_files::write_atomic(&args.out, format_rows_for(&nominal, &plan.rows, &[]))
-        .map_err(CliError::write(&args.out))?;
-    let cases = deflex_calibrate::measurements::load_case_count(&plan.rows);
-    let setup = &plan.setup;
-    let load_text = match &setup.load {
-        LoadKind::Cable { directions } => format!(
-            "cable, {:.0} N along {}",
-            setup.force_n,
-            directions
-                .iter()
-                .map(|d| direction_name(*d))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-        LoadKind::DeadWeight { masses_kg } => format!(
-            "dead weights {} kg",
-            masses_kg
-                .iter()
-                .map(|m| format!("{m}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
+    let planned = plan::plan(&nominal, &options, &args.out)?;
     if json_output {
-        let expected: Vec<Value> = plan
-            .expected
-            .iter()
-            .map(|e| json!({"edof": e.label, "nominal_k": e.nominal_k, "expected_se_k": finite_or_null(e.se_k), "relative": finite_or_null(e.relative), "identifiable": e.identifiable()}))
-            .collect();
-        let shifts: Vec<Value> = plan
-            .expected_shifts
-            .iter()
-            .map(|e| json!({"joint": e.joint, "nominal_m": e.nominal_m, "expected_se_m": finite_or_null(e.se_m)}))
-            .collect();
-        let axis: Vec<Value> = plan
-            .axis_cases
-            .iter()
-            .map(|a| json!({"edof": deflex_calibrate::stiffness::edof_label(a.id), "load_case": a.load_case, "share": a.share, "snr": a.snr}))
-            .collect();
-        let setup_json = json!({
-            "force_N": setup.force_n,
-            "load": load_text,
-            "bracket_m": setup.bracket_m,
-            "floor_z_m": setup.floor_z_m,
-            "table": setup.table.map(|t| json!({"x_m": t.x_m, "y_m": t.y_m, "top_z_m": t.top_z_m})),
-            "base_point_r0_m": setup.base_point_r0_m,
-            "configurations_drawn": setup.configurations_drawn,
-            "configurations_kept": setup.configurations_kept,
-        });
-        let sheet: Vec<Value> = technician_rows(&plan)
-            .into_iter()
-            .map(|r| json!({"case": r[0], "q_deg": r[1], "load": r[2], "force_N": r[3], "measure": r[4], "why": r[5]}))
-            .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&json!({"robot": nominal.name, "geometry": nominal.geometry_fingerprint(), "load_cases": cases, "rows": plan.rows.len(), "output": args.out.display().to_string(), "setup": setup_json, "expected": expected, "expected_shifts": shifts, "axis_by_axis": axis, "technician_sheet": sheet, "log_det": plan.log_det}))
-                .unwrap_or_default()
-        );
-        return Ok(());
+        print_json(&plan::plan_json(&planned));
+    } else {
+        print!("{}", plan::plan_text(&planned, args.noise_um));
     }
-    println!(
-        "Plan for {}: {} load cases ({} axis-by-axis + D-optimal), {} points to measure; {load_text}{}",
-        nominal.name,
-        cases,
-        plan.axis_cases
-            .iter()
-            .map(|a| a.load_case.as_str())
-            .collect::<std::collections::BTreeSet<_>>()
-            .len(),
-        plan.rows.len(),
-        setup
-            .bracket_m
-            .map(|b| format!(
-                ", at the TCP and at the bracket ({:.3}, {:.3}, {:.3}) m in the TCP frame",
-                b[0], b[1], b[2]
-            ))
-            .unwrap_or_else(|| " at the TCP".into())
-    );
-    println!(
-        "Cell: floor {}; table {}; base reflector M0 {}; {} of {} configurations drawn were clear",
-        setup
-            .floor_z_m
-            .map_or("not checked".to_string(), |z| format!("at z = {z:.3} m")),
-        setup.table.map_or("not checked".to_string(), |t| format!(
-            "top z = {:.3} m over x {:.3}…{:.3} m, y {:.3}…{:.3} m",
-            t.top_z_m, t.x_m[0], t.x_m[1], t.y_m[0], t.y_m[1]
-        )),
-        setup
-            .base_point_r0_m
-            .map_or("not measured".to_string(), |p| format!(
-                "at ({:.3}, {:.3}, {:.3}) m in R0",
-                p[0], p[1], p[2]
-            )),
-        setup.configurations_kept,
-        setup.configurations_drawn
-    );
-    println!(
-        "Expected standard errors with {:.1} µm tracker noise:",
-        args.noise_um
-    );
-    print!(
-        "{}",
-        render_table(&EXPECTED_SE_HEADERS, &expected_se_rows(&plan))
-    );
-    if !plan.expected_shifts.is_empty() {
-        print!(
-            "{}",
-            render_table(&EXPECTED_SHIFT_HEADERS, &expected_shift_rows(&plan))
-        );
-    }
-    if args.load_cases < cases {
-        println!(
-            "note: {cases} load cases instead of the {} asked for: every eDoF gets its own axis-by-axis case",
-            args.load_cases
-        );
-    }
-    println!(
-        "\nLoad cases for the technician (joint values in degrees within the joint limits; force in world axes):"
-    );
-    print!(
-        "{}",
-        render_table(&TECHNICIAN_HEADERS, &technician_rows(&plan))
-    );
-    println!("wrote {}", args.out.display());
     Ok(())
-}
-
-/// `+x`, `-z`, … for a world axis direction, else the vector.
-fn direction_name(d: [f64; 3]) -> String {
-    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
-        if d[axis] == 1.0 {
-            return format!("+{name}");
-        }
-        if d[axis] == -1.0 {
-            return format!("-{name}");
-        }
-    }
-    format!("({:.2}, {:.2}, {:.2})", d[0], d[1], d[2])
 }

@@ -16,14 +16,12 @@
 //! Every output names the robot the twin played. Every numeric option is checked (finite, within
 //! its documented range); the error names the option.
 
-use crate::args::{bounded, parse_list, print_json};
+use crate::args::{bounded, parse_list, print_report};
 use crate::error::{CliError, CommandResult, UsageError};
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
+use deflex_app::twin::campaign::{CampaignKind, GridChoice, grid_params, measure};
 use deflex_sim::CellConfig;
-use deflex_sim::twin_campaign::{
-    GridParams, SpiralParams, campaign_text, run_campaign, spiral, validation_grid,
-};
-use serde_json::json;
+use deflex_sim::twin_campaign::{GridParams, SpiralParams};
 use std::path::PathBuf;
 
 mod cmd_sensitivity;
@@ -129,15 +127,6 @@ pub struct CampaignArgs {
     pub twin: TwinArgs,
 }
 
-/// `--grid`: which validation grid.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum GridChoice {
-    // The robot cell's grid (plain comments: doc comments would change `--help`).
-    Cell,
-    // The paper's grid.
-    Paper,
-}
-
 pub fn sim(command: SimCommand, json: bool) -> CommandResult {
     match command {
         SimCommand::Campaign(args) => campaign(args, json),
@@ -150,66 +139,23 @@ pub fn sim(command: SimCommand, json: bool) -> CommandResult {
 /// `deflex sim robot`: the nominal robot of the simulated cell as a robot file.
 fn cell_robot(args: RobotArgs, json: bool) -> CommandResult {
     let config = load_config(&args.twin)?;
-    let robot = config.nominal_robot()?;
-    let cell = config.summary()?;
-    let text = format!(
-        "# The robot description of the SIMULATED deflex cell of `{}`: the robot file with the\n\
-         # cell's tool and base pivot, as a user would describe that cell.\n{}",
-        config.part.robot,
-        deflex_app::load::robot_to_toml_for(&robot, &args.out)
-    );
-    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
-    if json {
-        crate::args::print_json(&serde_json::json!({
-            "simulated": true,
-            "robot": robot.name,
-            "geometry_fingerprint": robot.geometry_fingerprint(),
-            "tool_xyz_m": robot.tool.translation.vector.as_slice(),
-            "cell": cell.to_json(),
-            "out": args.out,
-        }));
-    } else {
-        let t = robot.tool.translation.vector * 1e3;
-        println!(
-            "SIMULATED cell robot {} (tool {:.1} {:.1} {:.1} mm, geometry {}) → {}",
-            robot.name,
-            t.x,
-            t.y,
-            t.z,
-            robot.geometry_fingerprint(),
-            args.out.display()
-        );
-        println!("{cell}");
-    }
+    let written = deflex_app::twin::write_cell_robot(&config, &args.out)?;
+    print_report(json, || written.text(), || written.to_json());
     Ok(())
 }
 
 /// The cell: the robot's (`--robot`, else the file's, else the TX200's), with the twin file's
 /// settings over it.
 pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, CliError> {
-    match (&twin.config, &twin.robot) {
-        (Some(p), robot) => Ok(deflex_app::cell::twin_cell_file::load_cell(
-            p,
-            robot.as_deref(),
-        )?),
-        (None, Some(robot)) => Ok(deflex_app::cell::twin_cell_file::cell_for_robot(robot)?),
-        (None, None) => Ok(CellConfig::default()),
-    }
+    Ok(deflex_app::twin::cell_config(
+        twin.robot.as_deref(),
+        twin.config.as_deref(),
+    )?)
 }
 
-/// `robot` (spec) for outputs.
-pub(super) fn robot_name(config: &CellConfig) -> String {
-    config
-        .nominal_robot()
-        .map(|r| r.name)
-        .unwrap_or_else(|_| config.part.robot.clone())
-}
-
-fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, CliError> {
-    let mut params = match args.grid {
-        Some(GridChoice::Paper) => GridParams::paper(),
-        Some(GridChoice::Cell) | None => GridParams::for_cell(config)?,
-    };
+/// The grid of `--grid` with the `--grid-*` options over it.
+fn grid_params_of(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, CliError> {
+    let mut params = grid_params(args.grid.unwrap_or_default(), config)?;
     if let Some(text) = &args.grid_center_m {
         let v = crate::args::parse_fixed::<2>(text, "--grid-center-m")?;
         for x in v {
@@ -241,19 +187,20 @@ fn grid_params(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, C
     if let Some(step) = args.grid_step_m {
         let step = bounded("--grid-step-m", step, 1e-4, 5.0, "m")?;
         for (i, size) in params.size_xy_m.into_iter().enumerate() {
-            params.points_xy[i] = GridParams::points_for_step(size, step)
-                .map_err(|e| CliError::in_context("--grid-step-m")(e.into()))?;
+            params.points_xy[i] = GridParams::points_for_step(size, step).map_err(|e| {
+                CliError::in_context("--grid-step-m")(deflex_app::Error::from(e).into())
+            })?;
         }
     }
     if let Some(text) = &args.grid_loads_n {
         params.loads_n = parse_list(text, "--grid-loads-n")?;
     }
-    params.validate()?;
     Ok(params)
 }
 
+/// The cell's spiral with the `--spiral-*` options over it.
 fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParams, CliError> {
-    let mut p = SpiralParams::for_cell(config)?;
+    let mut p = deflex_app::twin::campaign::spiral_params(config)?;
     if let Some(text) = &args.spiral_center_m {
         p.center_m = crate::args::parse_fixed::<3>(text, "--spiral-center-m")?;
     }
@@ -304,7 +251,6 @@ fn spiral_params(args: &CampaignArgs, config: &CellConfig) -> Result<SpiralParam
         1e5,
         "N",
     )?;
-    p.validate()?;
     Ok(p)
 }
 
@@ -335,43 +281,10 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
         }
         .into());
     }
-    let mut plan_header = None;
-    let (kind, rows) = match (&args.plan, &args.grid, args.spiral) {
-        (Some(plan), None, false) => {
-            let plan_file = deflex_app::load::read_file(plan, None, false)?;
-            let rows = run_campaign(&config, &plan_file.rows, args.seed)?;
-            plan_header = Some(plan_file.header);
-            (format!("plan {}", plan.display()), rows)
-        }
-        (None, Some(_), false) => {
-            let params = grid_params(&args, &config)?;
-            let plan = validation_grid(&config, &params)?;
-            let rows = run_campaign(&config, &plan, args.seed)?;
-            let loads: Vec<String> = params.loads_n.iter().map(|l| format!("{l:.0} N")).collect();
-            (
-                format!(
-                    "validation grid {} × {} over {:.3} × {:.3} m at z = {:.3} m, {}",
-                    params.points_xy[0],
-                    params.points_xy[1],
-                    params.size_xy_m[0],
-                    params.size_xy_m[1],
-                    params.height_m,
-                    loads.join(" and ")
-                ),
-                rows,
-            )
-        }
-        (None, None, true) => {
-            let params = spiral_params(&args, &config)?;
-            let rows = spiral(&config, &params, args.seed)?;
-            (
-                format!(
-                    "spiral (Fig. 14) {:.3} m long at z = {:.3} m, {:.0} N",
-                    params.length_m, params.center_m[2], params.load_n
-                ),
-                rows,
-            )
-        }
+    let what = match (&args.plan, &args.grid, args.spiral) {
+        (Some(plan), None, false) => CampaignKind::Plan(plan.clone()),
+        (None, Some(_), false) => CampaignKind::Grid(grid_params_of(&args, &config)?),
+        (None, None, true) => CampaignKind::Spiral(spiral_params(&args, &config)?),
         _ => {
             return Err(UsageError::Missing {
                 what: "what to measure",
@@ -380,36 +293,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
             .into());
         }
     };
-    let text = campaign_text(&config, &rows, &kind, args.seed, plan_header.as_ref())?;
-    deflex_files::write_atomic(&args.out, text).map_err(CliError::write(&args.out))?;
-    let cases = deflex_calibrate::measurements::load_case_count(&rows);
-    let max_disp = rows
-        .iter()
-        .filter_map(|r| r.displacement_m)
-        .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
-        .fold(0.0, f64::max);
-    let robot = robot_name(&config);
-    if json {
-        print_json(&json!({
-            "simulated": true,
-            "robot": robot,
-            "robot_spec": config.part.robot,
-            "campaign": kind,
-            "seed": args.seed,
-            "rows": rows.len(),
-            "load_cases": cases,
-            "max_displacement_m": max_disp,
-            "out": args.out.display().to_string(),
-        }));
-    } else {
-        println!("SIMULATED campaign on the twin of the {robot}: {kind}");
-        println!(
-            "  {} rows in {} load cases, largest displacement {:.3} mm → {}",
-            rows.len(),
-            cases,
-            max_disp * 1e3,
-            args.out.display()
-        );
-    }
+    let written = measure(&config, &what, args.seed, &args.out)?;
+    print_report(json, || written.text(), || written.to_json());
     Ok(())
 }

@@ -23,9 +23,6 @@ pub enum CliError {
     /// (tracker) readings.
     #[error(transparent)]
     Data(#[from] deflex_calibrate::measurements::DataError),
-    /// A points file that cannot be used.
-    #[error(transparent)]
-    Points(#[from] deflex_calibrate::measurements::points::PointsError),
     /// A point given on the command line that cannot be used.
     #[error(transparent)]
     Point(#[from] deflex_calibrate::measurements::points::PointProblem),
@@ -38,33 +35,12 @@ pub enum CliError {
     /// A twin settings file that cannot be read or used.
     #[error(transparent)]
     TwinCellFile(#[from] deflex_app::cell::twin_cell_file::TwinCellFileError),
-    /// The controller could not drive the twin.
-    #[error(transparent)]
-    Twin(#[from] deflex_sim::twin::TwinError),
-    /// A twin workflow could not be set up.
-    #[error(transparent)]
-    TwinSetup(#[from] deflex_app::twin::TwinSetupError),
-    /// The ends of the simulated cell could not be made.
-    #[error(transparent)]
-    CellSides(#[from] deflex_app::cell::links::CellSidesError),
-    /// The study could not be run.
-    #[error(transparent)]
-    Demo(#[from] deflex_app::study::DemoError),
-    /// A report could not be written.
-    #[error(transparent)]
-    Page(#[from] deflex_app::report::PageError),
-    /// A plot or page could not be written.
-    #[error(transparent)]
-    Report(#[from] deflex_plot::PlotError),
     /// The live view could not be served.
     #[error(transparent)]
     View(#[from] deflex_view::ViewError),
     /// The MCAP recording could not be written.
     #[error(transparent)]
     Record(#[from] deflex_record::RecordError),
-    /// A run log or recording that cannot be plotted.
-    #[error(transparent)]
-    Trace(#[from] deflex_record::trace::TraceError),
     /// A run stopped before its end (Ctrl-C with a live view): its outputs are not written.
     #[error("{source}: nothing written ({} keeps what it held)", .out.display())]
     Stopped {
@@ -99,134 +75,15 @@ pub enum CliError {
         /// Why it was not reached.
         source: deflex_model::ModelError,
     },
-    /// A deflection map none of whose nodes the arm reaches.
-    #[error("no grid node is reachable; check --plane, --center and --size")]
-    NoReachableNode,
-    /// A calibration that identified nothing.
-    #[error(
-        "{}: no eDoF could be identified from this data (every compliance is at its bound or not observable); nothing written",
-        .data.display()
-    )]
-    NothingIdentified {
-        /// The measurement file.
-        data: PathBuf,
-    },
-    /// A coupling asked for (`calibrate --couplings`) with an end the identified structure has
-    /// no eDoF for.
-    #[error(
-        "--couplings {pair}: {edof} is not an eDoF of the identified structure `{structure}` (a coupling joins two eDoFs the calibration identified: choose them from the structure, or make the search keep them with --structure fixed and a start model that has them); nothing written"
-    )]
-    CouplingNotInStructure {
-        /// The pair as given (`J2.z:J3.y`).
-        pair: String,
-        /// The end that is missing (`J3.y`).
-        edof: String,
-        /// The identified structure's label.
-        structure: String,
-    },
     /// A `deflex run` session that did not end well.
     #[error(transparent)]
     Run(#[from] RunFailure),
     /// An output path refused, or that could not be written, named with its flag.
     #[error(transparent)]
     Output(#[from] deflex_files::OutputError),
-    /// An offline compensation that could not be made or written.
-    #[error(transparent)]
-    Compensate(#[from] crate::cmd_compensate::CompensateCommandError),
     /// An input file that cannot be read (special file, too large, not UTF-8, …).
     #[error(transparent)]
     Input(#[from] deflex_files::InputError),
-    /// A folder that cannot be listed.
-    #[error("{}: {source}", .path.display())]
-    Read {
-        /// The folder.
-        path: PathBuf,
-        /// The operating system's error.
-        source: std::io::Error,
-    },
-    /// A series folder without exactly one measurement file.
-    #[error("{}: expected one measurements_*.csv, found {found}", .folder.display())]
-    SeriesFiles {
-        /// The folder.
-        folder: PathBuf,
-        /// Measurement files found.
-        found: usize,
-    },
-    /// A tracker series that cannot be imported.
-    #[error(transparent)]
-    Import(#[from] deflex_calibrate::geometry::ur10_tracker::ImportError),
-    /// A campaign the elasto-geometric calibration cannot use.
-    #[error(transparent)]
-    Campaign(#[from] deflex_calibrate::geometry::campaign::CampaignError),
-    /// An elasto-geometric fit that failed.
-    #[error(transparent)]
-    Fit(#[from] deflex_calibrate::geometry::fit::FitError),
-    /// A prediction that failed.
-    #[error(transparent)]
-    Predict(#[from] deflex_calibrate::geometry::predict::PredictError),
-    /// Readings that do not say which set-up or target to register.
-    #[error(transparent)]
-    RegisterInput(#[from] crate::cmd_register::RegisterInputError),
-    /// A registration that failed.
-    #[error(transparent)]
-    Register(#[from] deflex_calibrate::geometry::register::RegisterError),
-    /// A calibration terms file that cannot be used.
-    #[error(transparent)]
-    Terms(#[from] deflex_calibrate::geometry::terms::TermsError),
-    /// A model step or loss not known (`--steps`, `--loss`).
-    #[error(transparent)]
-    Choice(#[from] deflex_calibrate::geometry::fit::ChoiceError),
-    /// A fit whose readings the calibrated robot still misses by centimetres: another robot's
-    /// data. Nothing is written.
-    #[error(
-        "{files}: robot \"{robot}\" leaves the fitted readings {rms_mm:.1} mm RMS from its prediction after calibration (more than {limit_mm:.0} mm): these are not this robot's readings (another robot's data? give it with --robot); nothing written"
-    )]
-    ImplausibleFit {
-        /// The data files.
-        files: String,
-        /// The robot given.
-        robot: String,
-        /// RMS of the fitted readings' residuals (mm).
-        rms_mm: f64,
-        /// The limit (mm).
-        limit_mm: f64,
-    },
-    /// Fewer independent equations than parameters: the data cannot determine them.
-    #[error(
-        "{files}: {distinct} distinct reading(s) of {readings} give {equations} equations for {parameters} parameters: the data cannot determine them; measure more configurations (nothing written)"
-    )]
-    TooFewReadings {
-        /// The data files.
-        files: String,
-        /// Distinct readings.
-        distinct: usize,
-        /// Readings fitted.
-        readings: usize,
-        /// Equations they give (3 per distinct reading).
-        equations: usize,
-        /// Parameters to determine.
-        parameters: usize,
-    },
-    /// A label `import` would not read back the same.
-    #[error(
-        "{flag} \"{label}\": {problem}; import refuses it (labels are not rewritten): give a label of 1 to {max_bytes} bytes without control characters, outer white space or a leading `#`"
-    )]
-    ImportLabel {
-        /// `--setup` or `--target`.
-        flag: &'static str,
-        /// The label, shown with its control characters escaped.
-        label: String,
-        /// What is wrong with it.
-        problem: deflex_calibrate::geometry::data::LabelProblem,
-        /// Longest label accepted (bytes).
-        max_bytes: usize,
-    },
-    /// A cell file (`CELL.toml`) that cannot be read or used.
-    #[error(transparent)]
-    Config(#[from] deflex_app::cell::config::ConfigError),
-    /// A `deflex run` session that could not start (links, sensor, threads).
-    #[error(transparent)]
-    Start(#[from] deflex_app::cell::cell_run::StartError),
     /// The ROS 2 sensor link or bridge.
     #[cfg(feature = "ros2")]
     #[error(transparent)]
@@ -245,25 +102,6 @@ pub enum CliError {
         /// The field that asks for ROS 2: `[ros2]` or `sensor.kind = "ros2"`.
         field: &'static str,
     },
-    /// The simulated cell could not serve its session.
-    #[error(transparent)]
-    CellServe(#[from] deflex_sim::twin::cell_server::CellServeError),
-    /// The run log's writer thread failed.
-    #[error("log writer: {0}")]
-    LogWriter(std::io::Error),
-    /// `cell --sim` given a cell whose sensor is a ROS 2 topic.
-    #[error(
-        "{origin}: sensor.kind = \"ros2\": the simulated cell plays the robot and an ATI Net F/T; \
-         give `deflex cell --sim` a CELL.toml with sensor.kind = \"netft\" and relay its \
-         readings onto the WrenchStamped topic (as crates/deflex-ros2/tests/python does)"
-    )]
-    SimCellNeedsNetFt {
-        /// The cell file.
-        origin: String,
-    },
-    /// A calibrated robot that could not be exported.
-    #[error(transparent)]
-    Export(#[from] crate::cmd_export::ExportCommandError),
 }
 
 impl CliError {
@@ -390,6 +228,22 @@ pub enum UsageError {
         what: &'static str,
         /// How to give it.
         give: &'static str,
+    },
+    /// A position farther than 100 m (mm values).
+    #[error("{flag}: {xyz:?} is farther than 100 m")]
+    TooFar {
+        /// The flag.
+        flag: &'static str,
+        /// The position given (mm).
+        xyz: [f64; 3],
+    },
+    /// A flag given with a setting it does not apply to.
+    #[error("{flag} is only used with {with}")]
+    OnlyWith {
+        /// The flag.
+        flag: &'static str,
+        /// The setting it applies to (`--format dh-table`).
+        with: &'static str,
     },
     /// Joint values that do not match the robot.
     #[error("robot \"{robot}\" has {joints} joints, but {given} joint values were given")]

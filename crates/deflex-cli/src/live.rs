@@ -1,12 +1,11 @@
-//! What `deflex run`, `deflex cell --sim` and `deflex sim isf` share to watch and record a
-//! session: the `--view [ADDR]` flag and its server (`deflex-view`), and the MCAP recording's
-//! file name beside the CSV log (`deflex-record`).
+//! What `deflex run`, `deflex cell --sim` and `deflex sim isf` share to watch a session: the
+//! `--view [ADDR]` flag and its server (`deflex-view`). The MCAP recording's file name beside
+//! the CSV log is the application's (`deflex_app::cell::run_session::mcap_beside`).
 
 use crate::error::UsageError;
 use deflex_runtime::telemetry::{Broadcast, CycleSample, SessionInfo};
 use deflex_view::{StopCallback, ViewError, ViewHandle, ViewStats};
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Default address of `deflex run --view`.
@@ -64,19 +63,4 @@ pub fn view_line(stats: &ViewStats) -> String {
          refused",
         stats.samples_received, stats.samples_lost, stats.frames_dropped, stats.clients_refused
     )
-}
-
-/// The MCAP recording beside the CSV log `log`: the same name with the extension `.mcap`
-/// (`deflex-run.csv` → `deflex-run.mcap`). A log already named `.mcap` is refused, naming it.
-pub fn mcap_beside(log: &Path, field: &str) -> Result<PathBuf, UsageError> {
-    let mcap = log.with_extension("mcap");
-    if mcap == log {
-        return Err(UsageError::invalid(
-            field,
-            "a log name other than NAME.mcap (the MCAP recording is written beside the CSV log \
-             with the extension .mcap; give the log another extension, .csv)",
-            log.display(),
-        ));
-    }
-    Ok(mcap)
 }

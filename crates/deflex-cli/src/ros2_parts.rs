@@ -1,6 +1,7 @@
 //! The ROS 2 parts of `deflex run`: the sensor link of `sensor.kind = "ros2"` (opened before the
-//! session, handed to it), the bridge of `[ros2]` (a sink of the telemetry stream, subscribed
-//! before the threads start) and what both report at the end.
+//! session, handed to the application's session: `deflex_app::cell::run_session::RunPlan::start`),
+//! the bridge of `[ros2]` (a sink of the telemetry stream, subscribed before the threads start)
+//! and what both report at the end.
 //!
 //! They are built with the CLI's `ros2` cargo feature (`cargo install --path crates/deflex-cli
 //! --features ros2`): the pure-Rust DDS stack they stand on (RustDDS, ros2-client) is the largest
@@ -185,23 +186,24 @@ mod built {
             }
         }
 
-        /// The ROS 2 lines of the run summary.
-        pub fn print(&self) {
+        /// The ROS 2 lines of the run summary (after the sensor's line).
+        pub fn lines(&self) -> Vec<String> {
+            let mut lines = Vec::new();
             if let Some((topic, c)) = &self.sensor {
                 let refused: Vec<String> = Refusal::ALL
                     .iter()
                     .map(|r| format!("{} {}", c.refused_for(*r), r.name()))
                     .collect();
-                println!(
+                lines.push(format!(
                     "  ROS 2 sensor {topic}: {} messages, {} accepted, refused: {}; {} dropped from the full queue",
                     c.received,
                     c.accepted,
                     refused.join(", "),
                     c.overflow
-                );
+                ));
             }
             if let Some((topics, r)) = &self.bridge {
-                println!(
+                lines.push(format!(
                     "  ROS 2 bridge: {} cycles published on {} topics ({} messages, {} diagnostics), {} not written, {} lost",
                     r.cycles_published,
                     topics.len(),
@@ -209,8 +211,9 @@ mod built {
                     r.diagnostics,
                     r.write_errors,
                     r.lost
-                );
+                ));
             }
+            lines
         }
     }
 }
@@ -278,6 +281,8 @@ mod not_built {
         pub fn add_json(&self, _value: &mut serde_json::Value) {}
 
         /// No ROS 2 lines in the summary.
-        pub fn print(&self) {}
+        pub fn lines(&self) -> Vec<String> {
+            Vec::new()
+        }
     }
 }

@@ -6,18 +6,13 @@
 //! robot program formats; the digital twin's forming runs and deflex's logs — numpy in, numpy
 //! out, the GIL released and the batches spread over the cores (rayon).
 //!
-//! Two layers:
-//!
-//! * the **engine** ([`model`], [`calibration`], [`geometry`], [`compensation`], [`twin`],
-//!   [`table`]): plain Rust on slices and deflex types, one module per domain, the only code that
-//!   calls the other deflex crates (so a restructuring re-points these modules and nothing
-//!   else), with typed errors ([`error::Error`]) carrying the CLI's text, and panics caught
-//!   ([`error::guard`]);
-//! * the **bindings** (`py`, behind the `python` feature that maturin turns on): argument
-//!   conversion and checks (shapes, NaN, types), the GIL released around every engine call,
-//!   numpy arrays out, errors raised as `deflex.InputError`, `deflex.ModelError`, ….
-//!
-//! Without the `python` feature the crate builds and tests with no Python at all.
+//! The crate is the Python front end only: argument checks naming the Python keywords, numpy
+//! conversion (shapes, NaN, types), the GIL released around every call, numpy arrays and
+//! dictionaries out, errors raised as `deflex.InputError`, `deflex.ModelError`, … (from
+//! `deflex_app::ErrorKind`). Every workflow — reading files, calibrating, compensating, running
+//! the twin, writing outputs — is `deflex-app`'s, the same code the `deflex` command runs. The
+//! bindings are behind the `python` feature that maturin turns on; without it the crate is
+//! empty and builds with no Python at all.
 
 #![warn(missing_docs)]
 

@@ -7,18 +7,20 @@
 //!   typed messages ([`messages`]: joint samples, wrench accumulations, the correction command
 //!   with its rotation and joint map, in sequence cells), the summary and how a session ends;
 //! * [`clock`]: injectable time, wall ([`WallClock`]) or simulated ([`SimClock`]);
-//! * [`rt`]: SCHED_FIFO and mlockall, best-effort;
-//! * [`config`]: `CELL.toml` (serde enums for every choice, bounds and errors naming the field);
-//! * [`links`]: the link factory for both sides of a cell (controller and simulated robot);
+//! * [`rt`]: SCHED_FIFO and mlockall, best-effort, and the interrupt flag of SIGINT/SIGTERM;
 //! * [`send_shaper`]: the last limiter before the wire, per robot answer;
 //! * [`telemetry`]: the stream of one [`deflex_telemetry::CycleSample`] per control cycle,
-//!   published without blocking or allocating, read by any number of sinks, the first of which
-//!   is the CSV [`log`];
-//! * [`feedforward`]: the offline compensation's table read from `compensated_path.csv`;
-//! * [`cell_run`]: all of it from a `CELL.toml` ([`CellRun`]);
+//!   published without blocking or allocating, read by any number of sinks (the CSV log and the
+//!   MCAP recording of `deflex-record`, the live view, the ROS 2 bridge);
 //! * [`stats`]: cycle-time histograms.
 //!
-//! Layering: model → control law → io (protocols) → **runtime** → twin → front ends.
+//! The runtime takes links that are built and configuration that is parsed, and opens no file:
+//! `CELL.toml`, its link factory, the feed-forward table and a whole session from a `CELL.toml`
+//! (`CellRun`, the CSV log and the recording subscribed to its telemetry) are the application
+//! layer's (`deflex_app::cell`).
+//!
+//! Layering: model → telemetry → control law → io (protocols) → outlets (record, view, ROS 2)
+//! → **runtime** → simulation (twin) → application → front ends.
 
 #![warn(missing_docs)]
 // Six-axis loops index several arrays in lockstep; an index is the clearest form.

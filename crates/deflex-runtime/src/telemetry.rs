@@ -1,7 +1,7 @@
 //! The telemetry stream of a session ([`deflex_telemetry`]): the control thread publishes one
 //! [`CycleSample`] per cycle into a lossy broadcast ring, without waiting or allocating; any
-//! number of sinks subscribe before or during the session (the CSV log of [`crate::log`], a live
-//! view, a recorder, a bridge) and read at their own pace, each counting what it lost.
+//! number of sinks subscribe before or during the session (the CSV log of
+//! `deflex_record::csv_log`, a live view, a recorder, a bridge) and read at their own pace, each counting what it lost.
 //!
 //! A [`Telemetry`] is made before the threads start, so a sink that subscribes to it then sees
 //! every sample; [`crate::session::spawn`] hands its publisher to the control thread and the

@@ -5,12 +5,12 @@
 //! `cargo run -p deflex --example calibrate_csv [MEASUREMENTS.csv]`
 //!
 //! The CSV is deflex's measurement format (columns `load_case`, `q1_rad`…, `fx_N`…, `dx_m`…; see
-//! `deflex::measurements`), for the TX200. Without a file, a SIMULATED campaign of 40 random
+//! `deflex::calibrate::measurements`), for the TX200. Without a file, a SIMULATED campaign of 40 random
 //! load cases on the paper's TX200 (Table 1) with 15 µm tracker noise is written to a temporary
 //! CSV first and read back, so the search has a known truth to find.
 use deflex::builtin;
-use deflex::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
-use deflex::stiffness::{SearchOptions, search_structure};
+use deflex::calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
+use deflex::calibrate::stiffness::{SearchOptions, search_structure};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "deflex-example-measurements-{}.csv",
                 std::process::id()
             ));
-            let text = deflex::measurements::format_rows_for(
+            let text = deflex::calibrate::measurements::format_rows_for(
                 &robot,
                 &rows,
                 &["SIMULATED: the TX200 of Table 1, 15 µm tracker noise"],
@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             path
         }
     };
-    let rows = deflex::load::read_measurements(&path);
+    let rows = deflex::app::load::read_measurements(&path);
     if std::env::args_os().nth(1).is_none() {
         // Our own temporary file: gone once read.
         let _ = std::fs::remove_file(&path);

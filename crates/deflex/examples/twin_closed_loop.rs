@@ -7,10 +7,10 @@
 //!
 //! `cargo run -p deflex --example twin_closed_loop [PATH]` (PATH: `cone-contour` (default),
 //! `cone`, `pyramid` or a G-code file; the full `cone` takes about a minute in a debug build).
+use deflex::app::load::gcode_file::tool_path_by_name;
 use deflex::builtin;
-use deflex::load::gcode_file::tool_path_by_name;
+use deflex::sim::twin::{controller_config_for, run_closed_loop};
 use deflex::sim::{CellConfig, run_forming};
-use deflex::twin::{controller_config_for, run_closed_loop};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let spec = std::env::args()

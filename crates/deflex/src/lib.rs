@@ -6,25 +6,30 @@
 //! identifies it from measurements, compensates tool paths offline and corrects them online from
 //! a force/torque sensor.
 //!
-//! This crate is the library API: it re-exports the crates a program embeds, one module per
-//! concern, and the handful of types almost every program uses at the top level. Everything is
-//! SI (m, rad, N, N·m), world frame unless a name says otherwise. The command-line tool
-//! (`deflex-cli`), the runtime's threads and links (`deflex-runtime`), the reports and the live
-//! view are front ends built on the same crates and are not part of this API.
+//! This crate is the library API: one module per library package, each re-exported whole under
+//! the name of its role, and at the top level the handful of types almost every program uses.
+//! Everything is SI (m, rad, N, N·m), world frame unless a name says otherwise. It includes
+//! **every library layer** of the workspace (docs/src/architecture.md), and nothing else:
 //!
-//! | module | crate | what it holds |
+//! | module | package (layer) | what it holds |
 //! |---|---|---|
-//! | [`model`] | `deflex-model` | the read-only [`Robot`] and its scratch [`Data`]: forward kinematics, Jacobians, the Cartesian compliance and deflection of eq. 15 (δs = J K⁻¹ Jᵀ w), inverse kinematics, URDF/TOML robots |
-//! | [`measurements`] | `deflex-measurements` | the measurement and plan CSV formats (parse/format, validated at parse time) |
-//! | [`load`] | `deflex-load` | reading robots and measurement files from disk, every read bounded |
-//! | [`stiffness`] | `deflex-stiffness` | stiffness identification (Section 3): fixed-structure fits with uncertainties, the automatic structure search, experiment planning, validation, synthetic campaigns |
-//! | [`absolute`] | `deflex-absolute` | elasto-geometric calibration from absolute tracker readings: geometry, registration, gravity sag, compliances, re-registration |
-//! | [`compensate`] | `deflex-compensate` | offline compensation of a tool path (commanded = desired − predicted deflection), process models, log-derived wrenches |
-//! | [`gcode`] | `deflex-gcode` | the CAM G-code reader (arcs, planes, work offsets) |
-//! | [`program`] | `deflex-program` | robot programs in five controller languages, written and read back |
-//! | [`control`] | `deflex-control` | the force-feedback correction law (Sections 2.1, 4.2): wrench processing, eq. 15 estimate, PID of eq. 17, limiter, safety, runaway guard, feed-forward |
-//! | [`sim`] | `deflex-sim` | the digital twin's cell (SIMULATED): its own plant, sensor, tracker, sheet and controller emulation |
-//! | [`twin`] | `deflex-twin` | the correction law run against the twin in-process, and the twin served over a real cell's protocols |
+//! | [`model`] | `deflex-model` (0, foundation) | the read-only [`Robot`] and its scratch [`Data`]: forward kinematics, Jacobians, the Cartesian compliance and deflection of eq. 15 (δs = J K⁻¹ Jᵀ w), inverse kinematics, gravity, `Pose`/`Wrench`/`ToolLoad`, every vendor's orientation convention, robots from TOML/URDF text |
+//! | [`files`] | `deflex-files` (0) | whole-or-nothing outputs and bounded inputs |
+//! | [`plot`] | `deflex-plot` (0) | plots and self-contained HTML pages from plain data, drawn into memory |
+//! | [`telemetry`] | `deflex-telemetry` (1, messages) | the per-cycle sample, session info, phases, flags, faults, a long job's progress, the wait-free ring, their ROS 2 forms |
+//! | [`calibrate`] | `deflex-calibrate` (2, science) | stiffness identification (Section 3), elasto-geometric calibration from absolute readings, their measurement formats |
+//! | [`compensate`] | `deflex-compensate` (2) | offline compensation of a tool path (commanded = desired − predicted deflection) |
+//! | [`control`] | `deflex-control` (2) | the force-feedback correction law (Sections 2.1, 4.2): wrench processing, eq. 15 estimate, PID of eq. 17, limiter, safety, runaway guard, feed-forward |
+//! | [`cam`] | `deflex-cam` (2) | G-code in; robot programs in five languages written and read back; calibrated geometry out (URDF, UR calibration, DH table) |
+//! | [`io`] | `deflex-io` (3, links) | the robot and sensor protocols, both sides |
+//! | [`record`] | `deflex-record` (4, outlets) | the run log (CSV), MCAP recordings, run traces |
+//! | [`view`] | `deflex-view` (4) | the live browser view of a session |
+//! | [`runtime`] | `deflex-runtime` (5, runtime) | the real-time session: threads, clock, typed messages, send shaper |
+//! | [`sim`] | `deflex-sim` (6, simulation) | the digital twin (SIMULATED): its own plant, sensor, tracker, sheet and robot controller; the twin in closed loop, served over the protocols, in simulated time |
+//! | [`app`] | `deflex-app` (7, application) | the workflows of the `deflex` command and the Python package: CELL.toml and sessions, calibrations, compensation and programs, the twin's runs, the study, report pages, the user's files |
+//!
+//! Not included: the ROS 2 bridge (`deflex-ros2`, an outlet with a large DDS dependency: depend on
+//! it directly), and the front ends (the `deflex` command line, the Python package).
 //!
 //! ## Deflection of a pose (eq. 15)
 //!
@@ -54,17 +59,20 @@
 //!   (SIMULATED).
 #![warn(missing_docs)]
 
-pub use deflex_app::load;
-pub use deflex_calibrate::geometry as absolute;
-pub use deflex_calibrate::measurements;
-pub use deflex_calibrate::stiffness;
-pub use deflex_cam::gcode;
-pub use deflex_cam::program;
+pub use deflex_app as app;
+pub use deflex_calibrate as calibrate;
+pub use deflex_cam as cam;
 pub use deflex_compensate as compensate;
 pub use deflex_control as control;
+pub use deflex_files as files;
+pub use deflex_io as io;
 pub use deflex_model as model;
+pub use deflex_plot as plot;
+pub use deflex_record as record;
+pub use deflex_runtime as runtime;
 pub use deflex_sim as sim;
-pub use deflex_sim::twin;
+pub use deflex_telemetry as telemetry;
+pub use deflex_view as view;
 
 pub use deflex_model::{
     Axis, BUILTIN_ROBOTS, Data, Displacement, EdofSite, ModelError, Pose, Robot, Wrench, builtin,

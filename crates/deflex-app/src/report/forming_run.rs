@@ -327,6 +327,44 @@ pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, PlotE
     Ok(files)
 }
 
+/// `summary.json` of `run`: its summary with the wall time, pretty-printed (the text of
+/// `FormingRun::summary_json`, with a serialisation failure reported).
+pub fn summary_json(run: &FormingRun) -> Result<String, serde_json::Error> {
+    let mut value = serde_json::to_value(&run.summary)?;
+    if let Some(map) = value.as_object_mut() {
+        map.insert("wall_time_s".into(), serde_json::json!(run.wall_time_s));
+    }
+    serde_json::to_string_pretty(&value)
+}
+
+/// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots of `run` into the existing
+/// folder `dir`; returns their names, in that order.
+pub fn write_run_files(run: &FormingRun, dir: &Path) -> Result<Vec<String>, PlotError> {
+    let summary = summary_json(run).map_err(|e| PlotError::InvalidInput {
+        path: dir.join("summary.json"),
+        reason: e.to_string(),
+    })?;
+    let mut names = Vec::new();
+    for (name, text) in [
+        ("log.csv", run.log.to_csv()),
+        ("summary.json", summary),
+        ("profile.csv", run.profile_csv()),
+    ] {
+        let path = dir.join(name);
+        deflex_files::write_atomic(&path, text).map_err(|source| PlotError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        names.push(name.to_string());
+    }
+    for plot in forming_plots(run, dir)? {
+        if let Some(name) = plot.file_name() {
+            names.push(name.to_string_lossy().into_owned());
+        }
+    }
+    Ok(names)
+}
+
 /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots of `run` into the folder
 /// `dir`, whole or not at all: the folder is built aside and swapped in at the end (an existing
 /// `dir` is replaced only then). Returns the files written.
@@ -336,22 +374,7 @@ pub fn write_forming_run(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, P
         move |source| PlotError::Io { path, source }
     };
     let building = deflex_files::AtomicDir::create(dir).map_err(io(dir))?;
-    let temporary = building.path().to_path_buf();
-    let mut names = Vec::new();
-    for (name, text) in [
-        ("log.csv", run.log.to_csv()),
-        ("summary.json", run.summary_json()),
-        ("profile.csv", run.profile_csv()),
-    ] {
-        let path = temporary.join(name);
-        deflex_files::write_atomic(&path, text).map_err(io(&path))?;
-        names.push(name.to_string());
-    }
-    for plot in forming_plots(run, &temporary)? {
-        if let Some(name) = plot.file_name() {
-            names.push(name.to_string_lossy().into_owned());
-        }
-    }
+    let names = write_run_files(run, building.path())?;
     building.commit().map_err(io(dir))?;
     Ok(names.into_iter().map(|n| dir.join(n)).collect())
 }

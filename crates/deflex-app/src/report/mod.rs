@@ -14,7 +14,7 @@
 //! | [`absolute_report`] | an elasto-geometric calibration: text, JSON, CSV, plots, page (`deflex calibrate-geometry --report`) |
 //! | [`forming_run`] | a forming run of the twin: its folder and plots (`deflex sim isf`) |
 //! | [`study`] | the paper's study on the twin: its folder, figures and page (`deflex demo`) |
-//! | [`write_run_figures`] | one run's log, or two overlaid on path position (`deflex plot`) |
+//! | [`write_run_figures`] | one run's log, or two overlaid on path position; [`plot_logs`] reads the logs and writes the folder (`deflex plot`) |
 //!
 //! The maths crates (`deflex-calibrate`, `deflex-sim`, …) take and return data; `deflex-plot`
 //! draws into memory and renders pages to text (its plot kinds, matching the figures of Johra
@@ -41,7 +41,7 @@ pub mod validation_report;
 
 use deflex_plot::PlotError;
 
-pub use run_figures::{MAX_POINTS, RunFigures, thin_series, write_run_figures};
+pub use run_figures::{LogPlot, MAX_POINTS, RunFigures, plot_logs, thin_series, write_run_figures};
 
 /// A report (a page with its plots and tables) that could not be written: which report, and
 /// the file that failed.

@@ -1,4 +1,4 @@
-//! # deflex-study
+//! # The paper's study on the twin (`deflex demo`)
 //!
 //! The paper's whole study in one call, on the **SIMULATED** cell of the built-in TX200 or of any
 //! other 6-joint robot (the digital twin of `deflex-sim`, with every error source of a real cell
@@ -13,7 +13,8 @@
 //!
 //! [`run_study`] computes it all in memory and returns it as a [`Study`]; the CSV data behind
 //! every number, the PNG figures and the self-contained `index.html` are written by
-//! `crate::report::study::write_study` (`deflex demo` does both).
+//! `crate::report::study::write_study`; [`demo`] does both for `deflex demo`, and
+//! [`summary_text`] and [`summary_json`] are what it shows.
 //!
 //! The twin's plant is read only to *label* ground truth in the report (e.g. the plant's
 //! stiffnesses beside the identified ones); the calibration sees only campaign measurements and
@@ -24,6 +25,7 @@
 pub mod compensation;
 mod conditions;
 pub mod contact;
+mod demo;
 mod error;
 pub mod fig7;
 pub mod numbers;
@@ -33,6 +35,7 @@ pub mod sensitivity;
 mod summary;
 
 pub use conditions::{conditions, one_edof_start};
+pub use demo::{demo, summary_json, summary_text};
 pub use error::DemoError;
 pub use numbers::paper_vs_deflex as paper_vs_deflex_rows;
 pub use pipeline::{DemoOptions, Predictions, STAGES, Study, run_study};

@@ -467,10 +467,7 @@ pub fn run_sensitivity(
     }
     let cells = plan.delays_s.len() * plan.model_scales.len();
     Ok(SensitivityResult {
-        robot: cell
-            .nominal_robot()
-            .map(|r| r.name)
-            .unwrap_or_else(|_| cell.part.robot.clone()),
+        robot: crate::twin::robot_name(cell),
         heatmap_improvement_percent: rows[..cells]
             .iter()
             .map(|r| r.improvement_percent)

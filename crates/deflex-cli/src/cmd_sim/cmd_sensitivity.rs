@@ -1,11 +1,13 @@
 //! `deflex sim sensitivity`: the closed loop across delay, model scale, sensor gain, bias drift
-//! and contact stiffness (the work is `deflex_app::study::sensitivity`).
+//! and contact stiffness (the work is `deflex_app::twin::sensitivity`): the flags in their units
+//! (ms, %), the progress bar and the printing.
 
-use super::{TwinArgs, load_config, robot_name};
+use super::{TwinArgs, load_config};
 use crate::args::{parse_list, print_json};
-use crate::error::{CliError, CommandResult, UsageError};
+use crate::error::{CommandResult, UsageError};
 use clap::Args;
-use serde_json::json;
+use deflex_app::study::sensitivity::SensitivityPlan;
+use deflex_app::twin::sensitivity::{sweep, sweep_model};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -46,7 +48,6 @@ pub struct SensitivityArgs {
 }
 
 pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
-    use deflex_app::study::sensitivity::{SensitivityPlan, run_sensitivity};
     let config = load_config(&args.twin)?;
     let list = |text: &str, name: &str, scale: f64| -> Result<Vec<f64>, UsageError> {
         if text.trim().is_empty() {
@@ -67,7 +68,7 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         length_mm: args.length_mm,
     };
     plan.validate()
-        .map_err(deflex_app::study::DemoError::from)?;
+        .map_err(|e| deflex_app::Error::from(deflex_app::study::DemoError::from(e)))?;
     if plan.delays_s.is_empty() || plan.model_scales.is_empty() {
         return Err(UsageError::Missing {
             what: "--delays-ms and --model-scales",
@@ -75,16 +76,10 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         }
         .into());
     }
-    let model = match &args.model {
-        Some(path) => deflex_app::load::load_robot(&path.display().to_string())
-            .map_err(|e| CliError::in_context(format!("--model {}", path.display()))(e.into()))?,
-        None => {
-            if !json {
-                eprintln!("identifying the controller's model from a campaign on the twin …");
-            }
-            deflex_app::twin::identify_from_twin_campaign(&config, args.seed)?
-        }
-    };
+    if args.model.is_none() && !json {
+        eprintln!("identifying the controller's model from a campaign on the twin …");
+    }
+    let model = sweep_model(&config, args.model.as_deref(), args.seed)?;
     let bar = if json {
         indicatif::ProgressBar::hidden()
     } else {
@@ -96,67 +91,15 @@ pub(super) fn sensitivity(args: SensitivityArgs, json: bool) -> CommandResult {
         )
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let result = run_sensitivity(&config, &model, &plan, args.seed, &|f| {
+    let done = sweep(&config, &model, &plan, args.seed, &|f| {
         bar.set_position((f * 1000.0) as u64)
     })?;
     bar.finish_and_clear();
-    let building =
-        deflex_files::AtomicDir::create(&args.out).map_err(CliError::write(&args.out))?;
-    let dir = building.path();
-    let write = |name: &str, text: String| {
-        deflex_files::write_atomic(dir.join(name), text)
-            .map_err(CliError::write(args.out.join(name)))
-    };
-    write(
-        "sensitivity.csv",
-        deflex_app::report::study::csv_files::sensitivity_csv(&result),
-    )?;
-    let robot = robot_name(&config);
-    let summary = json!({
-        "simulated": true,
-        "robot": robot,
-        "robot_spec": config.part.robot,
-        "model": model.name,
-        "seed": args.seed,
-        "plan": plan,
-        "result": result,
-    });
-    write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary).unwrap_or_default(),
-    )?;
-    deflex_app::report::study::figures::sensitivity_heatmap(
-        &result,
-        &dir.join("sensitivity_heatmap.png"),
-    )?;
-    building.commit().map_err(CliError::write(&args.out))?;
+    done.write(&args.out)?;
     if json {
-        print_json(&summary);
-        return Ok(());
+        print_json(&done.summary_value()?);
+    } else {
+        print!("{}", done.text(&args.out));
     }
-    println!(
-        "SIMULATED closed-loop sensitivity on the twin of the {robot} ({} runs, sensitivity cone, every error source on)",
-        result.runs
-    );
-    println!(
-        "{:<22} {:<34} {:>9} {:>9} {:>8} {:>8}  fault",
-        "factor", "condition", "open mm", "closed mm", "improv %", "max |F| N"
-    );
-    for r in &result.rows {
-        println!(
-            "{:<22} {:<34} {:>9.3} {:>9.3} {:>8.1} {:>8.0}  {}",
-            r.factor,
-            r.condition,
-            r.open_max_mm,
-            r.closed_max_mm,
-            r.improvement_percent,
-            r.closed_max_force_N,
-            r.fault.as_deref().unwrap_or("–")
-        );
-    }
-    println!(
-        "wrote sensitivity.csv, sensitivity_heatmap.png, summary.json to {}",
-        args.out.display()
-    );
     Ok(())
 }

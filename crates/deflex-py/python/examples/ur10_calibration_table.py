@@ -1,5 +1,5 @@
-"""The README's real-UR10 table from Python: elasto-geometric calibration of the public UR10
-laser-tracker data set (Landgraf et al., CASE 2021, MIT licence), as the README's CLI commands:
+"""The book's real-UR10 table (docs/src/calibration.md) from Python: elasto-geometric calibration of the public UR10
+laser-tracker data set (Landgraf et al., CASE 2021, MIT licence), as the book's CLI commands:
 
     deflex import ur10-tracker --series .../Series_A --setup A --out A.csv
     deflex import ur10-tracker --series .../Series_B --setup B --out B.csv
@@ -8,7 +8,7 @@ laser-tracker data set (Landgraf et al., CASE 2021, MIT licence), as the README'
 
 Usage: ``python ur10_calibration_table.py [DATA_DIR]`` with DATA_DIR holding Series_A and
 Series_B (default: ``$DEFLEX_UR10_DATA``, else the decimated subset shipped in
-crates/deflex-calibrate/tests/data/ur10-tracker). On the full series the table is the README's,
+crates/deflex-calibrate/tests/data/ur10-tracker). On the full series the table is the book's,
 digit for digit, and the script checks it (exit status 1 if not); on the subset it prints that
 subset's table.
 """
@@ -28,7 +28,7 @@ MODELS = [
     "+ geometric calibration (DH, Hayati β)",
     "**+ gravity (J2, J3 compliance)**",
 ]
-# The README's table (mm), for the full series: fit, CV, A held out RMS/mean/p95/max, B the same.
+# The book's table (mm), for the full series: fit, CV, A held out RMS/mean/p95/max, B the same.
 README = [
     "| nominal UR10 + registration only | 9 | 0.835 | 0.835 | 0.844 / 0.754 / 1.419 / 2.665 | 1.427 / 1.344 / 2.047 / 2.512 |",
     "| + geometric calibration (DH, Hayati β) | 25 | 0.441 | 0.442 | 0.435 / 0.393 / 0.746 / 1.121 | 0.496 / 0.441 / 0.856 / 2.079 |",

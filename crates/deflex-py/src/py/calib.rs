@@ -3,7 +3,9 @@
 
 use super::convert::{json_to_py, rows_to_numpy, run, to_numpy, to_py, type_error};
 use super::robot::{PyRobot, robot_arg};
-use deflex_app::calibrate::{self, CalibrateOptions, Criterion, Source, StructureChoice};
+use deflex_app::calibrate::{
+    self, CalibrateOptions, CriterionChoice, DataCheck, Source, StructureChoice, Wording,
+};
 use deflex_app::error::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -166,13 +168,16 @@ impl PyStiffnessCalibration {
         to_numpy(py, v, &[r, k])
     }
 
-    /// The fit as a dict (the CLI's ``--json``: estimates, shifts, χ²/dof, BIC, residual
-    /// statistics, iterations, file check, warnings).
+    /// The fit as a dict (the CLI's ``--json``: estimates, shifts, correlations, χ²/dof, BIC,
+    /// residual statistics, iterations, file check, warnings; and ``simulated_data``).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &calibrate::summary_json(&self.inner).to_string())
+        let mut dict = calibrate::summary_json(&self.inner, None);
+        dict["simulated_data"] = self.inner.simulated_data().into();
+        json_to_py(py, &dict.to_string())
     }
 
-    /// The CLI's text report (iteration table, estimates, residuals, correlation, file check).
+    /// The CLI's text report (iteration table, estimates, residuals, correlation, file check,
+    /// warnings).
     fn report(&self) -> String {
         calibrate::report_text(&self.inner)
     }
@@ -196,12 +201,27 @@ impl PyStiffnessCalibration {
     #[pyo3(signature = (path, report = None))]
     fn save(&self, py: Python<'_>, path: PathBuf, report: Option<PathBuf>) -> PyResult<()> {
         let inner = &self.inner;
-        run(py, || {
-            if let Some(dir) = &report {
-                calibrate::write_report(inner, dir, &path.display().to_string())?;
-            }
-            deflex_app::robot::save(&inner.model, &path)
-        })
+        run(py, || calibrate::save(inner, &path, report.as_deref()))
+    }
+}
+
+/// The check of the data against the forward kinematics (no column is ignored: a table's columns
+/// are the caller's own).
+fn data_check(fk_tolerance_m: f64, ignore_fk_check: bool) -> DataCheck {
+    DataCheck {
+        fk_tolerance_m,
+        ignore_fk_check,
+        ignore_columns: Vec::new(),
+    }
+}
+
+/// How Python names its options in messages: its keywords, and no context before an error (the
+/// call is in the traceback).
+fn wording() -> Wording {
+    Wording {
+        check_context: None,
+        fit_context: None,
+        fk_advice: "Is this the robot the data was measured on? Widen fk_tolerance_m, or use the data anyway with ignore_fk_check=True.".into(),
     }
 }
 
@@ -226,46 +246,26 @@ pub fn _calibrate(
 ) -> PyResult<PyStiffnessCalibration> {
     let start = robot_arg(py, robot, "robot")?;
     let source = source_arg(py, data)?;
-    let structure = match structure {
-        "auto" => StructureChoice::Auto,
-        "fixed" => StructureChoice::Fixed { fit_shifts },
-        other => {
-            return Err(to_py(
-                py,
-                Error::invalid(
-                    "structure",
-                    format!("expected \"auto\" or \"fixed\", got \"{other}\""),
-                ),
-            ));
-        }
+    let choice = |keyword: &str, e: calibrate::UnknownChoice| {
+        to_py(py, Error::invalid(keyword, e.to_string()))
     };
-    let criterion = match criterion {
-        "bic" => Criterion::Bic,
-        "cv" => Criterion::CrossValidated {
-            folds,
-            min_relative_gain: min_cv_gain,
-        },
-        other => {
-            return Err(to_py(
-                py,
-                Error::invalid(
-                    "criterion",
-                    format!("expected \"bic\" or \"cv\", got \"{other}\""),
-                ),
-            ));
-        }
-    };
+    let structure: StructureChoice = structure.parse().map_err(|e| choice("structure", e))?;
+    let criterion: CriterionChoice = criterion.parse().map_err(|e| choice("criterion", e))?;
     let options = CalibrateOptions {
         structure,
+        fit_shifts,
         criterion,
         folds,
+        min_cv_gain,
         target_rms_m,
         min_bic_gain,
         allow_base,
-        fk_tolerance_m,
-        ignore_fk_check,
+        check: data_check(fk_tolerance_m, ignore_fk_check),
+        couplings: Vec::new(),
     };
-    let inner = run(py, || calibrate::calibrate(&start, &source, &options))?;
+    let inner = run(py, || {
+        calibrate::calibrate(&start, &source, &options, &wording(), &mut |_| {})
+    })?;
     Ok(PyStiffnessCalibration { inner })
 }
 
@@ -306,9 +306,12 @@ impl PyValidation {
             .transpose()
     }
 
-    /// Error statistics as a dict (the CLI's ``--json``).
+    /// Error statistics as a dict (the CLI's ``--json``, without the files of ``save``; and
+    /// ``measured_rms_m``).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &calibrate::validation_json(&self.inner).to_string())
+        let mut dict = calibrate::validation_json(&self.inner, None);
+        dict["measured_rms_m"] = self.inner.validation.measured_rms_m.to_vec().into();
+        json_to_py(py, &dict.to_string())
     }
 
     /// The validation's plots and HTML page (``validation.html``) into the folder ``dir``,
@@ -337,8 +340,8 @@ pub fn _validate(
             &model,
             baseline.as_ref(),
             &source,
-            fk_tolerance_m,
-            ignore_fk_check,
+            &data_check(fk_tolerance_m, ignore_fk_check),
+            &wording(),
         )
     })?;
     Ok(PyValidation { inner })

@@ -2,8 +2,12 @@
 
 use super::convert::{float_array, json_to_py, run, shape_error, to_numpy, to_py, type_error};
 use super::robot::robot_arg;
-use deflex_app::compensate::{self, CompensationRun, Frame, Options, PathSpec, WrenchSpec};
-use deflex_app::error::Error;
+use deflex_app::compensate::{
+    self, CompensationRun, Frame, LogForces, Options, PathSpec, ProgramPlan, RobotChoice,
+    WrenchSpec,
+};
+use deflex_app::error::{Error, bounded};
+use deflex_app::option_names::OptionNames;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 use std::collections::BTreeMap;
@@ -26,6 +30,34 @@ impl PyCompensation {
         let n = self.inner.result.points.len();
         let values: Vec<f64> = (0..n).flat_map(&f).collect();
         to_numpy(py, values, &[n, N])
+    }
+
+    /// The programs of every format in `formats` with the template `settings`, each read back
+    /// (refused like the CLI's when points are not compensated or the iteration did not
+    /// converge).
+    fn programs_of(
+        &self,
+        formats: &[String],
+        settings: Option<&std::path::Path>,
+    ) -> Result<Vec<deflex_cam::program::ProgramFile>, Error> {
+        let run = &self.inner;
+        compensate::refusal(run)?;
+        let settings = compensate::settings(settings)?;
+        let formats = formats
+            .iter()
+            .map(|name| compensate::format(name))
+            .collect::<Result<Vec<_>, _>>()?;
+        let plan = ProgramPlan::new(
+            &run.setup,
+            &run.result,
+            compensate::description(run),
+            &settings,
+        )?;
+        let mut files = Vec::new();
+        for format in formats {
+            files.extend(plan.export_checked(format, &settings)?);
+        }
+        Ok(files)
     }
 }
 
@@ -57,14 +89,14 @@ impl PyCompensation {
     /// Desired TCP positions (world, m), ``(N, 3)``.
     #[getter]
     fn desired<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let pts = self.inner.path.points();
+        let pts = self.inner.setup.path.points();
         self.per_point(py, |i| pts[i].pose.translation.vector.into())
     }
 
     /// Commanded TCP positions (world, m): desired ⊕ compensation, ``(N, 3)``.
     #[getter]
     fn commanded<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let pts = self.inner.path.points();
+        let pts = self.inner.setup.path.points();
         let res = &self.inner.result.points;
         self.per_point(py, |i| {
             res[i].commanded(&pts[i].pose).translation.vector.into()
@@ -74,7 +106,7 @@ impl PyCompensation {
     /// Commanded TCP poses (world), ``(N, 4, 4)``.
     #[getter]
     fn commanded_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let pts = self.inner.path.points();
+        let pts = self.inner.setup.path.points();
         let res = &self.inner.result.points;
         let mut out = vec![0.0; pts.len() * 16];
         for (i, o) in out.chunks_mut(16).enumerate() {
@@ -107,7 +139,7 @@ impl PyCompensation {
     /// Joint values reaching the commanded pose (rad), ``(N, n)``.
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.inner.robot.joint_count();
+        let n = self.inner.setup.robot.joint_count();
         let res = &self.inner.result.points;
         let values: Vec<f64> = res.iter().flat_map(|p| p.q[..n].to_vec()).collect();
         to_numpy(py, values, &[res.len(), n])
@@ -130,11 +162,11 @@ impl PyCompensation {
         compensate::statuses(&self.inner)
     }
 
-    /// Summary as a dict (the CLI's ``summary.json``): iterations (predicted error, force,
-    /// change, failed points), convergence, final predicted error, largest compensation,
-    /// failures.
+    /// Summary as a dict (the CLI's ``summary.json``, its ``compensation`` at the top):
+    /// robot, path and placement, iterations (predicted error, force, change, failed points),
+    /// convergence, final predicted error, largest compensation, failures.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &compensate::summary_json(&self.inner).to_string())
+        json_to_py(py, &compensate::summary_dict(&self.inner).to_string())
     }
 
     /// The compensated path as ``compensated_path.csv`` text (the CLI's, SI columns).
@@ -162,17 +194,13 @@ impl PyCompensation {
         format: &str,
         settings: Option<PathBuf>,
     ) -> PyResult<BTreeMap<String, String>> {
-        let inner = &self.inner;
-        let format = format.to_string();
-        let files = run(py, move || {
-            let settings = compensate::settings(settings.as_deref())?;
-            compensate::programs(inner, compensate::format(&format)?, &settings)
-        })?;
+        let formats = [format.to_string()];
+        let files = run(py, || self.programs_of(&formats, settings.as_deref()))?;
         Ok(files.into_iter().map(|f| (f.path, f.contents)).collect())
     }
 
-    /// Write the programs of every format in ``formats`` under the folder ``dir``; returns the
-    /// files written. Refused like ``program``.
+    /// Write the programs of every format in ``formats`` under the folder ``dir``, each read
+    /// back first; returns the files written. Refused like ``program``.
     #[pyo3(signature = (dir, formats = vec!["krl".to_string(), "rapid".into(), "val3".into(), "urscript".into(), "gcode".into()], settings = None))]
     fn write_programs(
         &self,
@@ -181,15 +209,9 @@ impl PyCompensation {
         formats: Vec<String>,
         settings: Option<PathBuf>,
     ) -> PyResult<Vec<PathBuf>> {
-        let inner = &self.inner;
-        run(py, move || {
-            let settings = compensate::settings(settings.as_deref())?;
-            let mut all = Vec::new();
-            for name in &formats {
-                let files = compensate::programs(inner, compensate::format(name)?, &settings)?;
-                all.extend(files);
-            }
-            compensate::write_programs(&dir, &all)
+        run(py, || {
+            let files = self.programs_of(&formats, settings.as_deref())?;
+            compensate::write_program_files(&dir, &files)
         })
     }
 
@@ -197,7 +219,7 @@ impl PyCompensation {
         let r = &self.inner.result;
         format!(
             "Compensation('{}', {} points, {}, predicted error {:.4} → {:.5} mm, {} failed)",
-            self.inner.path.name(),
+            self.inner.setup.path.name(),
             r.points.len(),
             if r.converged {
                 "converged"
@@ -246,21 +268,9 @@ pub fn _compensate(
     max_iterations: usize,
 ) -> PyResult<PyCompensation> {
     let model = robot_arg(py, robot, "robot")?;
-    let frame = match frame {
-        "part" => Frame::Part,
-        "world" => Frame::World,
-        other => {
-            return Err(to_py(
-                py,
-                Error::invalid(
-                    "frame",
-                    format!("expected \"part\" or \"world\", got \"{other}\""),
-                ),
-            ));
-        }
-    };
+    let frame: Frame = frame.parse().map_err(|e| to_py(py, e))?;
     let path_spec = match array_or_name(py, path, "path")? {
-        None => PathSpec::Named(path.extract::<PathBuf>()?.display().to_string()),
+        None => PathSpec::named(&path.extract::<PathBuf>()?.display().to_string()),
         Some(a) => match a.shape.clone().as_slice() {
             [r, c @ (3 | 6)] if *r >= 2 => PathSpec::Array {
                 values: a.into_vec(),
@@ -279,12 +289,8 @@ pub fn _compensate(
         },
     };
     let wrench_spec = if let Ok(text) = wrench.extract::<String>() {
-        if text == "process" {
-            WrenchSpec::Process
-        } else if let Some(file) = text.strip_prefix("log:") {
-            WrenchSpec::Log(PathBuf::from(file))
-        } else {
-            return Err(to_py(
+        WrenchSpec::parse(&text).ok_or_else(|| {
+            to_py(
                 py,
                 Error::invalid(
                     "wrench",
@@ -292,8 +298,8 @@ pub fn _compensate(
                         "expected \"process\", \"log:FILE\", a log path or an array of wrenches, got \"{text}\""
                     ),
                 ),
-            ));
-        }
+            )
+        })?
     } else if let Ok(p) = wrench.extract::<PathBuf>() {
         WrenchSpec::Log(p)
     } else {
@@ -314,7 +320,7 @@ pub fn _compensate(
             other => return Err(shape_error(py, "wrench", "(6,) or (N, 6)".into(), other)),
         }
     };
-    let options = Options {
+    let options = options(
         twin_config,
         part_xyz_m,
         seed_q,
@@ -324,9 +330,68 @@ pub fn _compensate(
         include_gravity,
         tolerance_m,
         max_iterations,
-    };
-    let inner = run(py, || {
-        compensate::compensate(&model, &path_spec, &wrench_spec, &options)
+    )
+    .map_err(|e| to_py(py, e))?;
+    let robot = RobotChoice { model, spec: None };
+    let inner = run(py, move || {
+        let setup = compensate::setup(
+            robot,
+            &path_spec,
+            wrench_spec,
+            &options,
+            OptionNames::Python,
+        )?;
+        compensate::compensate(setup, &mut |_| {})
     })?;
     Ok(PyCompensation { inner })
+}
+
+/// The workflow's options from the keywords, checked in SI (Python's messages name the
+/// keyword); a log gives its wrenches as they are.
+#[allow(clippy::too_many_arguments)]
+fn options(
+    twin_config: Option<PathBuf>,
+    part_xyz_m: Option<[f64; 3]>,
+    seed_q: Option<Vec<f64>>,
+    length_m: Option<f64>,
+    max_segment_m: Option<f64>,
+    position_only: bool,
+    include_gravity: bool,
+    tolerance_m: f64,
+    max_iterations: usize,
+) -> Result<Options, Error> {
+    if let Some(xyz) = part_xyz_m
+        && xyz.iter().any(|v| !v.is_finite() || v.abs() > 100.0)
+    {
+        return Err(Error::invalid(
+            "part_xyz_m",
+            format!("{xyz:?} is farther than 100 m"),
+        ));
+    }
+    let length_mm = length_m
+        .map(|l| bounded("length_m", l, 1e-6, 1e3, "m").map(|l| l * 1e3))
+        .transpose()?;
+    let max_segment_mm = max_segment_m
+        .map(|m| bounded("max_segment_m", m, 1e-6, 10.0, "m").map(|m| m * 1e3))
+        .transpose()?;
+    bounded("tolerance_m", tolerance_m, 1e-9, 1e-3, "m")?;
+    if !(1..=200).contains(&max_iterations) {
+        return Err(Error::invalid(
+            "max_iterations",
+            format!("expected 1 ..= 200, got {max_iterations}"),
+        ));
+    }
+    Ok(Options {
+        twin_config,
+        part_xyz_mm: part_xyz_m.map(|xyz| xyz.map(|v| v * 1e3)),
+        seed_q,
+        length_mm,
+        max_segment_mm,
+        position_only,
+        include_gravity,
+        tolerance_m,
+        max_iterations,
+        log_forces: LogForces::Fixed,
+        ..Options::default()
+    })
 }

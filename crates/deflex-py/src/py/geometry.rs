@@ -5,11 +5,10 @@ use super::calib::{source_arg, sources};
 use super::convert::{json_to_py, make_log, rows_to_numpy, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
 use deflex_app::calibrate_geometry::{
-    self, CalibratedModel, CvBy, GeometryOptions, RegisterRequest,
+    self, CalibratedModel, CvBy, GeometryOptions, HeldOutProtocol, ImportRequest, OptionNames,
+    RegisterRequest,
 };
-use deflex_calibrate::geometry::fit::HeldOutProtocol;
 use pyo3::prelude::*;
-use serde_json::json;
 use std::path::PathBuf;
 
 /// The result of an elasto-geometric calibration (``deflex.calibrate_geometry``): the iteration
@@ -178,16 +177,12 @@ impl PyGeometryCalibration {
     /// Write the calibrated robot file to ``path`` with its terms beside it
     /// (``NAME.terms.json``: joint terms, residual model, the held-out accuracy that
     /// ``deflex.register`` compares against), and with ``report`` the report folder (text,
-    /// JSON, CSV, plots, HTML), each whole.
+    /// JSON, CSV, plots, HTML), as one unit: whole or not at all.
     #[pyo3(signature = (path, report = None))]
     fn save(&self, py: Python<'_>, path: PathBuf, report: Option<PathBuf>) -> PyResult<()> {
         let inner = &self.inner;
         run(py, || {
-            calibrate_geometry::save(inner, &path)?;
-            if let Some(dir) = &report {
-                calibrate_geometry::write_report(inner, dir)?;
-            }
-            Ok(())
+            calibrate_geometry::save(inner, &path, report.as_deref()).map(|_| ())
         })
     }
 }
@@ -216,28 +211,19 @@ pub fn _calibrate_geometry(
     register_draws: usize,
     register_target: bool,
 ) -> PyResult<PyGeometryCalibration> {
-    let cv_by = match cv_by.as_deref() {
-        None => None,
-        Some("session") => Some(CvBy::Session),
-        Some("setup") => Some(CvBy::Setup),
-        Some("series") => Some(CvBy::Series),
-        Some(other) => {
-            return Err(to_py(
-                py,
-                deflex_app::error::Error::invalid(
-                    "cv_by",
-                    format!("expected \"session\", \"setup\" or \"series\", got \"{other}\""),
-                ),
-            ));
-        }
-    };
+    let cv_by = cv_by
+        .map(|name| name.parse::<CvBy>())
+        .transpose()
+        .map_err(|e| to_py(py, deflex_app::Error::invalid("cv_by", e.to_string())))?;
     let start = robot_arg(py, robot, "robot")?;
     let data = sources(py, &data)?;
     let loaded = sources(py, &loaded)?;
     let test = sources(py, &test_data)?;
     let options = GeometryOptions {
-        steps: calibrate_geometry::parse_steps(&steps).map_err(|e| to_py(py, e))?,
-        loss: calibrate_geometry::parse_loss(loss).map_err(|e| to_py(py, e))?,
+        steps: calibrate_geometry::parse_steps(&steps, OptionNames::Python)
+            .map_err(|e| to_py(py, e))?,
+        loss: calibrate_geometry::parse_loss(loss, OptionNames::Python)
+            .map_err(|e| to_py(py, e))?,
         folds,
         bootstrap,
         test_fraction,
@@ -250,6 +236,8 @@ pub fn _calibrate_geometry(
             draws: register_draws,
             register_target,
         },
+        ignored_columns: Vec::new(),
+        names: OptionNames::Python,
     };
     let inner = run(py, || {
         calibrate_geometry::calibrate_geometry(&start, &data, &loaded, &test, &options)
@@ -260,9 +248,7 @@ pub fn _calibrate_geometry(
 /// Per-row predictions of a calibrated robot (``deflex.predict``).
 #[pyclass(module = "deflex", frozen, name = "Prediction")]
 pub struct PyPrediction {
-    csv: String,
-    text: String,
-    json: String,
+    inner: calibrate_geometry::Prediction,
 }
 
 #[pymethods]
@@ -271,25 +257,25 @@ impl PyPrediction {
     /// ``q1_rad…``, ``predicted_x_m…``, ``x_m…`` and ``error_m`` (NaN where not measured).
     #[getter]
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let csv = self.csv.clone();
+        let csv = self.inner.csv.clone();
         let table = run(py, move || deflex_app::table::parse(&csv, "prediction"))?;
         make_log(py, table)
     }
 
     /// Summary: error statistics and the registered set-ups (``xyz_m``, ``rpy_rad``).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &self.json)
+        json_to_py(py, &self.inner.json.to_string())
     }
 
     /// The CLI's summary line.
     fn report(&self) -> String {
-        self.text.clone()
+        self.inner.text.clone()
     }
 
     /// Write the prediction CSV (``deflex predict --out``), whole.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let csv = &self.csv;
-        run(py, || deflex_app::table::write_text(&path, csv))
+        let inner = &self.inner;
+        run(py, || inner.save(&path))
     }
 }
 
@@ -303,14 +289,10 @@ pub fn _predict(
 ) -> PyResult<PyPrediction> {
     let model = calibrated_arg(py, robot)?;
     let source = source_arg(py, data)?;
-    let p = run(py, || {
-        calibrate_geometry::predict(&model, &source, fit_setup)
+    let inner = run(py, || {
+        calibrate_geometry::predict(&model, &source, fit_setup, &[])
     })?;
-    Ok(PyPrediction {
-        csv: p.csv,
-        text: p.text,
-        json: p.json.to_string(),
-    })
+    Ok(PyPrediction { inner })
 }
 
 /// A calibrated model from a ``GeometryCalibration`` (with its terms), a robot file path (with
@@ -473,6 +455,8 @@ pub fn _register(
         target,
         orientations: orientations.then_some(sigma_rad),
         recalibrate_above_m,
+        ignored_columns: Vec::new(),
+        names: OptionNames::Python,
     };
     let inner = run(py, move || {
         calibrate_geometry::register(model, &source, &request)
@@ -490,16 +474,16 @@ pub fn _import_ur10_tracker<'py>(
     tracker_sigma: bool,
     every: usize,
 ) -> PyResult<(String, Bound<'py, PyAny>)> {
-    let (text, summary, kept) = run(py, || {
-        calibrate_geometry::import_ur10_tracker(&series, &setup, &target, tracker_sigma, every)
+    let request = ImportRequest {
+        setup,
+        target,
+        tracker_sigma,
+        every,
+        names: OptionNames::Python,
+    };
+    let imported = run(py, || {
+        calibrate_geometry::import_ur10_tracker(&series, &request)
     })?;
-    let value = json!({
-        "file": summary.file.display().to_string(),
-        "rows_read": summary.rows,
-        "rows_written": kept,
-        "rows_without_time": summary.rows_without_time,
-        "median_tracker_std_m": summary.median_tracker_std_m,
-        "temperature_range_C": summary.temperature_range_c,
-    });
-    Ok((text, json_to_py(py, &value.to_string())?))
+    let summary = imported.summary_json(None).to_string();
+    Ok((imported.text, json_to_py(py, &summary)?))
 }

@@ -1,10 +1,10 @@
 //! `deflex.Robot`: the elasto-geometrical model, batched over configurations.
 
 use super::convert::{FloatArray, float_array, rows_of, run, shape_error, to_numpy, to_py};
-use deflex_app::error::Error;
 use deflex_app::robot::{self, OnFailure};
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::str::FromStr;
 
 /// A serial robot with its elastic structure (modified/standard DH or URDF geometry plus the
 /// torsional eDoF springs of the Virtual Joint Method). Immutable; SI units throughout (m, rad,
@@ -246,19 +246,7 @@ impl PyRobot {
     ) -> PyResult<Bound<'py, PyAny>> {
         let robot = &self.robot;
         let n = robot.joint_count();
-        let on_failure = match on_failure {
-            "raise" => OnFailure::Raise,
-            "nan" => OnFailure::Nan,
-            other => {
-                return Err(to_py(
-                    py,
-                    Error::invalid(
-                        "on_failure",
-                        format!("expected \"raise\" or \"nan\", got \"{other}\""),
-                    ),
-                ));
-            }
-        };
+        let on_failure = OnFailure::from_str(on_failure).map_err(|e| to_py(py, e))?;
         let p = float_array(py, pose, "pose", "(4, 4) or (N, 4, 4)")?;
         let (rows, batched) = match p.shape.as_slice() {
             [4, 4] => (1, false),

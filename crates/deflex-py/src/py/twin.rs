@@ -2,10 +2,12 @@
 
 use super::convert::{json_to_py, make_log, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
-use deflex_app::error::Error;
-use deflex_app::twin::{self, FormOptions, TwinRun};
+use deflex_app::error::{Error, bounded};
+use deflex_app::twin::form::{CorrectionModel, FIXTURE_STIFFNESS_RANGE_N_M};
+use deflex_app::twin::{self, Correction, FormOptions, PathChoice, TwinRun};
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::str::FromStr;
 
 /// A forming run on the digital twin (SIMULATED): its log, summary and formed profile.
 #[pyclass(module = "deflex", frozen, name = "TwinRun")]
@@ -41,7 +43,9 @@ impl PyTwinRun {
     /// The summary (``summary.json``): max/RMS path error (mm), forces (N), part depth….
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        json_to_py(py, &twin::summary_json(&self.inner))
+        let inner = &self.inner;
+        let text = run(py, || twin::summary_json(inner))?;
+        json_to_py(py, &text)
     }
 
     /// The correction controller's status line (closed loop), else ``None``.
@@ -111,16 +115,11 @@ pub fn _form(
     feed_m_s: Option<f64>,
     fixture_stiffness_n_m: Option<f64>,
 ) -> PyResult<PyTwinRun> {
-    let correction_model = match (correction, model) {
-        ("off", None) => None,
-        ("off", Some(_)) => {
-            return Err(to_py(
-                py,
-                Error::invalid("model", "only used with correction=\"on\""),
-            ));
-        }
-        ("on", Some(m)) => Some(robot_arg(py, m, "model")?),
-        ("on", None) => {
+    let correction = Correction::from_str(correction).map_err(|e| to_py(py, e))?;
+    let Ok(path) = PathChoice::from_str(&path.display().to_string());
+    twin::check_correction(correction, model.is_some()).map_err(|e| to_py(py, e.into()))?;
+    let model = match (correction, model) {
+        (Correction::On, None) => {
             return Err(to_py(
                 py,
                 Error::invalid(
@@ -129,27 +128,38 @@ pub fn _form(
                 ),
             ));
         }
-        (other, _) => {
-            return Err(to_py(
-                py,
-                Error::invalid(
-                    "correction",
-                    format!("expected \"on\" or \"off\", got \"{other}\""),
-                ),
-            ));
-        }
+        (_, Some(m)) => Some(CorrectionModel::Robot(Box::new(robot_arg(py, m, "model")?))),
+        (_, None) => None,
     };
+    // The keywords in their units (m, m/s), then in the tool-path generator's (mm, mm/s).
+    let checked = |name: &str, value: Option<f64>, lo: f64, hi: f64, unit: &str| {
+        value
+            .map(|v| bounded(name, v, lo, hi, unit))
+            .transpose()
+            .map_err(|e| to_py(py, e))
+    };
+    let (k_lo, k_hi) = FIXTURE_STIFFNESS_RANGE_N_M;
+    let fixture_stiffness_n_m = checked(
+        "fixture_stiffness_n_m",
+        fixture_stiffness_n_m,
+        k_lo,
+        k_hi,
+        "N/m",
+    )?;
+    let feed_m_s = checked("feed_m_s", feed_m_s, 1e-4, 1.0, "m/s")?;
+    let length_m = checked("length_m", length_m, 1e-6, 1e3, "m")?;
     let options = FormOptions {
         robot: robot.map(|r| r.display().to_string()),
         config,
+        path,
         seed,
-        length_m,
-        feed_m_s,
+        length_mm: length_m.map(|l| l * 1e3),
+        feed_mm_s: feed_m_s.map(|f| f * 1e3),
         fixture_stiffness_n_m,
-        correction_model,
+        correction,
+        model,
     };
-    let path = path.display().to_string();
-    let inner = run(py, || twin::form(&path, &options))?;
+    let inner = run(py, || twin::form(&options))?;
     Ok(PyTwinRun { inner })
 }
 

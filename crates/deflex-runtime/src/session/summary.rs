@@ -269,7 +269,7 @@ pub struct RunSummary {
     /// Largest change between two consecutive answers per axis, as sent (m, rad).
     pub max_step_sent: [f64; 6],
     /// Control cycles the CSV log lost (its reader fell more than the telemetry ring behind);
-    /// set by the caller that ran the log sink ([`crate::log::LogReport::dropped`]).
+    /// set by the caller that ran the log sink (`deflex_record::csv_log::LogReport::dropped`).
     pub log_dropped: u64,
     /// Real-time warnings.
     pub warnings: Vec<String>,

@@ -6,10 +6,11 @@
 pub mod plots;
 pub mod prediction;
 pub mod registration;
+pub mod tables;
 
 use crate::report::PageError;
 use crate::report::draw::write_page;
-use deflex_calibrate::geometry::campaign::{Campaign, ReadingKind};
+use deflex_calibrate::geometry::campaign::Campaign;
 use deflex_calibrate::geometry::fit::{FitResult, StepReport, TestGroup};
 use deflex_calibrate::geometry::params::Unit;
 use deflex_calibrate::stats::ErrorNormStats;
@@ -486,6 +487,11 @@ pub fn write_report(
     let staging = deflex_files::AtomicDir::create(dir).map_err(io)?;
     let root = staging.path().to_path_buf();
     let mut files = Vec::new();
+    // A table or JSON text that cannot be made is reported as the file it was for.
+    let unwritable = |name: &str| {
+        let (path, page) = (root.join(name), &page);
+        move |source: std::io::Error| page(PlotError::Io { path, source })
+    };
     let mut put = |name: &str, text: &str| -> Result<(), PageError> {
         write_text(&root.join(name), text).map_err(&page)?;
         files.push(dir.join(name));
@@ -493,129 +499,12 @@ pub fn write_report(
     };
     let text_report = text(result, campaign);
     put("report.txt", &text_report)?;
-    put(
-        "report.json",
-        &serde_json::to_string_pretty(&json(result, campaign)).unwrap_or_default(),
-    )?;
-    let (headers, rows) = iteration_rows(result);
-    put("iterations.csv", &csv_text(&headers, &rows))?;
-    let estimate_headers: Vec<String> = vec![
-        "parameter",
-        "unit",
-        "nominal",
-        "estimate",
-        "standard_error",
-        "bootstrap_se",
-    ]
-    .into_iter()
-    .map(String::from)
-    .collect();
-    let estimate_csv_rows: Vec<Vec<String>> = result
-        .estimates
-        .iter()
-        .map(|e| {
-            vec![
-                e.name.clone(),
-                e.unit.si().to_string(),
-                format!("{:e}", e.start),
-                format!("{:e}", e.value),
-                format!("{:e}", e.standard_error),
-                e.bootstrap_se.map_or(String::new(), |b| format!("{b:e}")),
-            ]
-        })
-        .collect();
-    put(
-        "estimates.csv",
-        &csv_text(&estimate_headers, &estimate_csv_rows),
-    )?;
-    let mut residual_rows = Vec::new();
-    for r in &result.residuals {
-        let (label, line, q) = match campaign.absolute_row(r.index) {
-            Some(i) => {
-                let row = &campaign.absolute[i];
-                (row.setup.clone(), row.line, row.q_rad.clone())
-            }
-            None => {
-                let row = &campaign.loaded[r.index - campaign.absolute.len()];
-                (row.load_case.clone(), 0, row.q_rad.clone())
-            }
-        };
-        let kind = match campaign.kind(r.index) {
-            ReadingKind::Position => "position_m",
-            ReadingKind::Loaded => "displacement_m",
-            ReadingKind::Orientation => "orientation_rad",
-        };
-        let mut cells = vec![
-            r.index.to_string(),
-            line.to_string(),
-            label,
-            r.role.name().to_string(),
-            kind.to_string(),
-            format!("{:e}", r.residual.x),
-            format!("{:e}", r.residual.y),
-            format!("{:e}", r.residual.z),
-        ];
-        cells.extend(q.iter().map(|v| format!("{v:?}")));
-        residual_rows.push(cells);
-    }
-    let n = result.model.robot.joint_count();
-    let mut residual_headers: Vec<String> = [
-        "reading",
-        "line",
-        "setup_or_case",
-        "role",
-        "kind",
-        "ex",
-        "ey",
-        "ez",
-    ]
-    .into_iter()
-    .map(String::from)
-    .collect();
-    residual_headers.extend((1..=n).map(|i| format!("q{i}_rad")));
-    put(
-        "residuals.csv",
-        &csv_text(&residual_headers, &residual_rows),
-    )?;
-    let outlier_rows: Vec<Vec<String>> = result
-        .outliers
-        .iter()
-        .map(|o| {
-            vec![
-                o.index.to_string(),
-                o.line.to_string(),
-                o.label.clone(),
-                format!("{:e}", o.residual),
-                format!("{:.4}", o.weight),
-            ]
-        })
-        .collect();
-    let outlier_headers: Vec<String> = ["reading", "line", "setup_or_case", "residual_m", "weight"]
-        .into_iter()
-        .map(String::from)
-        .collect();
-    put("outliers.csv", &csv_text(&outlier_headers, &outlier_rows))?;
-    if let Some(maps) = &result.model.joint_maps {
-        // Each map sampled at a tenth of its knot spacing over its range (the terms file holds
-        // its coefficients).
-        let headers: Vec<String> = ["joint", "q_rad", "delta_theta_rad"]
-            .into_iter()
-            .map(String::from)
-            .collect();
-        let mut rows = Vec::new();
-        for map in &maps.maps {
-            let (lo, hi) = map.range_rad();
-            let step = map.spacing_rad / 10.0;
-            for k in 0..=((hi - lo) / step).ceil() as usize {
-                let q = lo + k as f64 * step;
-                rows.push(vec![
-                    (map.joint + 1).to_string(),
-                    format!("{q:e}"),
-                    format!("{:e}", map.value(q)),
-                ]);
-            }
-        }
-        put("joint_maps.csv", &csv_text(&headers, &rows))?;
+    let json_text = serde_json::to_string_pretty(&json(result, campaign))
+        .map_err(|e| unwritable("report.json")(e.into()))?;
+    put("report.json", &json_text)?;
+    for table in tables::csv_tables(result, campaign) {
+        let text = tables::csv_text(&table.headers, &table.rows).map_err(unwritable(table.file))?;
+        put(table.file, &text)?;
     }
     let images = plots::draw(result, campaign, &root).map_err(&page)?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
@@ -642,13 +531,4 @@ pub fn write_report(
     files.push(dir.join("index.html"));
     staging.commit().map_err(io)?;
     Ok(files)
-}
-
-fn csv_text(headers: &[String], rows: &[Vec<String>]) -> String {
-    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
-    let _ = writer.write_record(headers);
-    for row in rows {
-        let _ = writer.write_record(row);
-    }
-    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
 }

@@ -8,14 +8,13 @@ fn mm(v: f64) -> String {
 }
 
 /// The prediction CSV: `line, setup, target, q…, predicted_x_m…, x_m…, error_m` and, when predicted, the
-/// orientation columns.
-pub fn prediction_csv(prediction: &Prediction) -> String {
+/// orientation columns. (An error only if a row had another number of fields than the header.)
+pub fn prediction_csv(prediction: &Prediction) -> std::io::Result<String> {
     let n = prediction.rows.first().map_or(0, |r| r.row.q_rad.len());
     let with_rotation = prediction
         .rows
         .iter()
         .any(|r| r.predicted_rotation_rad.is_some());
-    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
     let mut header: Vec<String> = vec!["line".into(), "setup".into(), "target".into()];
     header.extend((1..=n).map(|i| format!("q{i}_rad")));
     header.extend(
@@ -41,7 +40,7 @@ pub fn prediction_csv(prediction: &Prediction) -> String {
             .map(String::from),
         );
     }
-    let _ = writer.write_record(&header);
+    let mut records = vec![header];
     for r in &prediction.rows {
         let mut record = vec![
             r.row.line.to_string(),
@@ -62,9 +61,9 @@ pub fn prediction_csv(prediction: &Prediction) -> String {
                     .map_or(String::new(), |e| format!("{e:e}")),
             );
         }
-        let _ = writer.write_record(&record);
+        records.push(record);
     }
-    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
+    super::tables::csv_records(records.iter().map(Vec::as_slice))
 }
 
 /// The summary: error statistics of the rows (and orientations), mm and mrad.

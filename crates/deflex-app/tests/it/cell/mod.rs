@@ -5,8 +5,11 @@
 //!   `[feedforward]` section;
 //! * `links`: the link factory, both sides of every robot protocol from one `CELL.toml`, on
 //!   loopback;
-//! * `feedforward_table`: the feed-forward table read from `compensated_path.csv` rows.
+//! * `feedforward_table`: the feed-forward table read from `compensated_path.csv` rows;
+//! * `sessions`: `deflex run` and `deflex cell --sim` as the front ends drive them, their
+//!   refusals before any link opens, their file names, and both together over loopback.
 
 mod config;
 mod feedforward_table;
 mod links;
+mod sessions;

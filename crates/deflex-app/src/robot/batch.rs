@@ -1,17 +1,13 @@
-//! The robot model from arrays: loading, and pose, Jacobian, compliance (eq. 15's
-//! `C = J K_θ⁻¹ Jᵀ`), deflection `δs = C w` and inverse kinematics over batches of
-//! configurations, spread over the cores with rayon.
-//!
-//! Thin layer over `deflex-model` (the calls the integrator re-points at merge time:
-//! [`load`], [`builtin`], [`from_toml`], [`to_toml`], and the per-row functions below). Arrays
-//! are row-major `f64` slices: `q` is `rows × n`, a wrench `rows × 6` (or one row for all), a
-//! pose a 4×4 homogeneous matrix (16 values, row-major).
+//! The model over batches of configurations: pose, Jacobian, compliance (eq. 15's
+//! `C = J K_θ⁻¹ Jᵀ`), deflection `δs = C w`, gravity sag and inverse kinematics, spread over the
+//! cores with rayon (Python's `deflex.Robot`). Arrays are row-major `f64` slices: `q` is
+//! `rows × n`, a wrench `rows × 6` (or one row for all), a pose a 4×4 homogeneous matrix (16
+//! values, row-major).
 
 use crate::error::{Error, Result};
 use deflex_model::{Data, IkOptions, Pose, Robot, Wrench};
 use nalgebra::{Matrix3, Rotation3, Translation3, Vector3};
 use rayon::prelude::*;
-use std::path::Path;
 
 /// Rows per rayon task: large enough that scheduling costs nothing next to the maths
 /// (a deflection is ≈ 0.3 µs), small enough to balance two to a few dozen cores. Public so that
@@ -20,69 +16,6 @@ pub const ROWS_PER_TASK: usize = 2048;
 
 /// Below this many rows the batch runs on the calling thread (no pool wake-up).
 const SERIAL_ROWS: usize = 256;
-
-/// A robot by built-in name or file path (TOML, possibly naming a URDF): `crate::load::load_robot`.
-pub fn load(spec: &str) -> Result<Robot> {
-    Ok(crate::load::load_robot(spec)?)
-}
-
-/// A built-in robot by name.
-pub fn builtin(name: &str) -> Result<Robot> {
-    deflex_model::builtin(name).ok_or_else(|| {
-        Error::invalid(
-            "name",
-            format!(
-                "\"{name}\" is not a built-in robot (built-in: {})",
-                builtin_names().join(", ")
-            ),
-        )
-    })
-}
-
-/// Names of the built-in robots.
-pub fn builtin_names() -> Vec<&'static str> {
-    deflex_model::BUILTIN_ROBOTS
-        .iter()
-        .map(|(n, _)| *n)
-        .collect()
-}
-
-/// A robot from TOML text; `origin` names it in errors, `base_dir` resolves a URDF path.
-pub fn from_toml(text: &str, origin: &str, base_dir: Option<&Path>) -> Result<Robot> {
-    let resolver = crate::load::FileUrdfResolver {
-        base_dir: base_dir.map(Path::to_path_buf),
-    };
-    Ok(deflex_model::robot_from_toml_str(
-        text,
-        origin,
-        Some(&resolver),
-    )?)
-}
-
-/// The robot as TOML, URDF paths rewritten for a file at `destination` when given.
-pub fn to_toml(robot: &Robot, destination: Option<&Path>) -> String {
-    match destination {
-        Some(path) => crate::load::robot_to_toml_for(robot, path),
-        None => deflex_model::robot_to_toml(robot),
-    }
-}
-
-/// Write the robot file whole or not at all.
-pub fn save(robot: &Robot, path: &Path) -> Result<()> {
-    deflex_files::write_atomic(path, to_toml(robot, Some(path))).map_err(|source| Error::Io {
-        path: path.display().to_string(),
-        source,
-    })
-}
-
-/// Joint limits `[lo, hi]` (rad) per joint, NaN where a joint has none.
-pub fn limits(robot: &Robot) -> Vec<[f64; 2]> {
-    robot
-        .joints
-        .iter()
-        .map(|j| j.limits.unwrap_or([f64::NAN, f64::NAN]))
-        .collect()
-}
 
 /// Refuse NaN and infinities, naming the first one as `name[row, col]` (`name[i]` when `cols`
 /// is `None`, for 1-D arguments).
@@ -254,6 +187,22 @@ pub enum OnFailure {
     Nan,
 }
 
+impl std::str::FromStr for OnFailure {
+    type Err = Error;
+
+    /// `raise` or `nan` (Python's `on_failure=`).
+    fn from_str(text: &str) -> Result<OnFailure> {
+        match text {
+            "raise" => Ok(OnFailure::Raise),
+            "nan" => Ok(OnFailure::Nan),
+            other => Err(Error::invalid(
+                "on_failure",
+                format!("expected \"raise\" or \"nan\", got \"{other}\""),
+            )),
+        }
+    }
+}
+
 /// Joint values reaching each target TCP pose (`rows × 16`, 4×4 row-major, world frame), from
 /// `seeds` (one row for all, or `rows` rows, rad): the seed first, then the model's 36 spread
 /// seeds (`deflex ik`). Returns `rows × n`.
@@ -294,22 +243,10 @@ pub fn inverse_kinematics(
     Ok(out)
 }
 
-/// The default IK seed of the CLI: the paper's forming configuration for 6 joints, else zeros.
-pub fn default_seed(robot: &Robot) -> Vec<f64> {
-    if robot.joint_count() == 6 {
-        deflex_model::TX200_FORMING_Q_DEG
-            .map(f64::to_radians)
-            .to_vec()
-    } else {
-        vec![0.0; robot.joint_count()]
-    }
-}
-
 /// Sag of the TCP under the arm's own weight and payload `[δp; δφ]` (m, rad), when the model
 /// knows its masses (as `deflex pose` prints it), `rows × 6`; `None` without masses.
 pub fn gravity_sags(robot: &Robot, q: &[f64], rows: usize) -> Result<Option<Vec<f64>>> {
-    let has_masses = robot.joints.iter().any(|j| j.inertia.is_some()) || robot.payload.is_some();
-    if !has_masses {
+    if !super::knows_masses(robot) {
         return Ok(None);
     }
     let n = robot.joint_count();

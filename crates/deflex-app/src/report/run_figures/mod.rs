@@ -11,6 +11,9 @@ use deflex_plot::{
 use deflex_record::trace::{RunTrace, Xyz};
 use std::path::{Path, PathBuf};
 
+mod plot_logs;
+pub use plot_logs::{LogPlot, plot_logs};
+
 /// What [`write_run_figures`] wrote.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunFigures {
@@ -199,14 +202,7 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
             "position along the desired path [mm]",
             traces
                 .iter()
-                .map(|t| {
-                    t.path_s_m
-                        .as_ref()
-                        .unwrap()
-                        .iter()
-                        .map(|s| s * 1e3)
-                        .collect()
-                })
+                .map(|t| t.path_s_m.iter().flatten().map(|s| s * 1e3).collect())
                 .collect(),
         )
     } else {

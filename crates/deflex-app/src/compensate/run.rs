@@ -1,0 +1,193 @@
+//! The compensation of a set-up against its wrench source: the twin's process model, a log (its
+//! force–depth law or its wrenches as they are) or given wrenches.
+
+use super::{LogForces, Setup, WrenchSpec};
+use crate::error::{Error, Result};
+use crate::load::read_wrench_log;
+use deflex_compensate::log::{ResampleOptions, resample_on_path};
+use deflex_compensate::{
+    Compensation, CompensationOptions, Identification, LoggedProcess, LoggedProcessOptions,
+    TcpPath, WrenchSource,
+};
+use deflex_model::{Robot, Wrench};
+use deflex_sim::FormingProcess;
+use deflex_telemetry::Progress;
+use serde_json::json;
+
+/// A finished compensation with its set-up: what the table, the summaries and the programs need.
+pub struct CompensationRun {
+    /// The set-up.
+    pub setup: Setup,
+    /// The result.
+    pub result: Compensation,
+    /// Lines on the wrench source (log rows used, the law identified from a log, …).
+    pub source_lines: Vec<String>,
+    /// The force–depth law identified from a log (`summary.json`'s `log_law`), if any.
+    pub log_law: Option<serde_json::Value>,
+    /// Wall time of the compensation (s).
+    pub elapsed_s: f64,
+}
+
+/// Compensate the set-up's path against its wrench source, reporting progress (a stage per
+/// iteration, the points done) to `on_progress`.
+pub fn compensate(
+    setup: Setup,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<CompensationRun> {
+    let started = std::time::Instant::now();
+    let mut source_lines = Vec::new();
+    let mut log_law = None;
+    let s = &setup;
+    let run = |source: WrenchSource, on_progress: &mut dyn FnMut(Progress<'_>)| {
+        iterate(&s.robot, &s.path, &s.seed, source, &s.options, on_progress)
+    };
+    let result = match &s.wrench {
+        WrenchSpec::Process => {
+            let mut process =
+                FormingProcess::from_cell(&s.config, &s.tool_path).map_err(Error::ProcessModel)?;
+            run(WrenchSource::Process(&mut process), on_progress)?
+        }
+        WrenchSpec::Log(file) => {
+            let log = read_wrench_log(file, &s.robot, &s.part_frame)?;
+            let resampled = resample_on_path(&log, &s.path, &ResampleOptions::default())?;
+            let simulated = if log.simulated { "SIMULATED " } else { "" };
+            source_lines.push(format!(
+                "{simulated}{} {}: {} rows used, {} at a standstill (not used), {} skipped (flags), {} off the path (max offset {:.2} mm)",
+                log.kind.name(),
+                file.display(),
+                resampled.used_rows,
+                resampled.standstill_rows,
+                log.skipped_rows,
+                resampled.off_path_rows,
+                resampled.max_offset_m * 1e3
+            ));
+            match s.log_forces {
+                LogForces::Fixed => run(
+                    WrenchSource::Fixed {
+                        label: format!("{simulated}{} {}", log.kind.name(), file.display()),
+                        simulated: log.simulated,
+                        wrenches: &resampled.wrenches,
+                    },
+                    on_progress,
+                )?,
+                LogForces::Law => {
+                    let label = format!("{} {}", log.kind.name(), file.display());
+                    let mut process = LoggedProcess::new(
+                        &label,
+                        log.simulated,
+                        resampled,
+                        LoggedProcessOptions {
+                            use_measured: s.use_measured_tcp,
+                            ..LoggedProcessOptions::default()
+                        },
+                    )
+                    .map_err(deflex_compensate::CompensateError::from)?;
+                    let result = run(WrenchSource::Process(&mut process), on_progress)?;
+                    if let Some(id) = process.identification() {
+                        source_lines.push(identification_line(id, process.bounded_points()));
+                        log_law = Some(identification_json(id, process.bounded_points()));
+                    }
+                    result
+                }
+            }
+        }
+        WrenchSpec::Array(values) => {
+            let wrenches = given_wrenches(values, s.path.len())?;
+            run(
+                WrenchSource::Fixed {
+                    label: "wrenches given from Python".into(),
+                    simulated: false,
+                    wrenches: &wrenches,
+                },
+                on_progress,
+            )?
+        }
+    };
+    Ok(CompensationRun {
+        setup,
+        result,
+        source_lines,
+        log_law,
+        elapsed_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// One call of the iteration.
+fn iterate(
+    robot: &Robot,
+    path: &TcpPath,
+    seed: &[f64],
+    source: WrenchSource,
+    options: &CompensationOptions,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<Compensation> {
+    Ok(deflex_compensate::compensate(
+        robot,
+        path,
+        seed,
+        source,
+        options,
+        on_progress,
+    )?)
+}
+
+/// One wrench for every point (6 values) or one per point.
+fn given_wrenches(values: &[f64], points: usize) -> Result<Vec<Wrench>> {
+    if values.len() == 6 {
+        Ok(vec![Wrench::from_row_slice(values); points])
+    } else if values.len() == 6 * points {
+        Ok(values.chunks(6).map(Wrench::from_row_slice).collect())
+    } else {
+        Err(Error::invalid(
+            "wrench",
+            format!(
+                "{} wrenches for the {points} points of the path: give one (shape (6,)) or one per point (shape ({points}, 6))",
+                values.len() / 6,
+            ),
+        ))
+    }
+}
+
+/// The law identified from a log, for the summary text.
+fn identification_line(id: &Identification, bounded: usize) -> String {
+    if id.sloped_bins == 0 {
+        return format!(
+            "the logged forces do not follow the depth ({} of {} points in contact): used as they are",
+            id.contact_points, id.points
+        );
+    }
+    format!(
+        "force-depth law from the log: {} of {} points in contact over {:.2} mm of actual depth, {:.0} … {:.0} N; {}; {} point(s) at the force-ratio bound",
+        id.contact_points,
+        id.points,
+        (id.depth_range_m[1] - id.depth_range_m[0]) * 1e3,
+        id.force_range_n[0],
+        id.force_range_n[1],
+        if id.measured {
+            format!(
+                "measured TCP used (the model missed up to {:.3} mm)",
+                id.max_unmodelled_m * 1e3
+            )
+        } else {
+            "no measured TCP (depths from the model's deflection)".to_string()
+        },
+        bounded
+    )
+}
+
+/// The law identified from a log, for `summary.json`.
+fn identification_json(id: &Identification, bounded: usize) -> serde_json::Value {
+    json!({
+        "points": id.points,
+        "contact_points": id.contact_points,
+        "law_bins": id.law_bins,
+        "sloped_bins": id.sloped_bins,
+        "depth_range_m": id.depth_range_m,
+        "force_range_N": id.force_range_n,
+        "relative_slope_range_per_m": id.relative_slope_range_per_m,
+        "max_axial_force_N": id.max_axial_force_n,
+        "measured_tcp": id.measured,
+        "max_unmodelled_deflection_m": id.max_unmodelled_m,
+        "points_at_force_ratio_bound": bounded,
+    })
+}
