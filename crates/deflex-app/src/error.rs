@@ -123,6 +123,7 @@ pub enum Error {
     #[error(transparent)]
     Import(#[from] deflex_calibrate::geometry::ur10_tracker::ImportError),
     /// A report (page, plots, tables) that could not be written.
+    #[cfg(feature = "report")]
     #[error(transparent)]
     Report(#[from] crate::report::PageError),
     /// A set-up registration.
@@ -449,8 +450,18 @@ pub enum Error {
     #[error(transparent)]
     Trace(#[from] deflex_record::trace::TraceError),
     /// A plot or page that could not be drawn or written (the file named first).
+    #[cfg(feature = "report")]
     #[error(transparent)]
     Plot(#[from] deflex_plot::PlotError),
+    /// A report or figure asked of a build without them (deflex-app's `report` feature, off):
+    /// refused before anything is computed or written ([`crate::report::require`]).
+    #[error(
+        "{what} needs deflex built with reports (the `report` feature of deflex-app, on in the command line and in the Python package as pip builds it); nothing written"
+    )]
+    ReportsNotBuilt {
+        /// What was asked for, as the front ends name it.
+        what: &'static str,
+    },
     /// A file that could not be read or written.
     #[error("{path}: {source}")]
     Io {
@@ -525,7 +536,9 @@ impl Error {
             Error::NoReachableNode => ErrorKind::Model,
             Error::FormConflict(_) => ErrorKind::Input,
             Error::Trace(_) => ErrorKind::Data,
+            #[cfg(feature = "report")]
             Error::Plot(_) => ErrorKind::Io,
+            Error::ReportsNotBuilt { .. } => ErrorKind::Input,
             Error::Cell(_) => ErrorKind::Data,
             Error::CellFile(_) => ErrorKind::Data,
             Error::CellOutput { .. }
@@ -535,7 +548,9 @@ impl Error {
             Error::CellSides(_) | Error::CellServe(_) | Error::SimCellNeedsNetFt { .. } => {
                 ErrorKind::Simulation
             }
-            Error::Io { .. } | Error::Report(_) | Error::Serialise { .. } => ErrorKind::Io,
+            Error::Io { .. } | Error::Serialise { .. } => ErrorKind::Io,
+            #[cfg(feature = "report")]
+            Error::Report(_) => ErrorKind::Io,
             Error::Panic(_) => ErrorKind::Internal,
             Error::In { source, .. } => source.kind(),
         }

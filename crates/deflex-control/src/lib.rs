@@ -5,7 +5,7 @@
 //! calibrated elasto-geometrical model, without any external pose measurement. Pure maths on
 //! the model of `deflex-model`: no threads, clock, files, sockets or configuration format, so
 //! any runtime (`deflex-runtime`'s real-time threads, the in-process digital twin of
-//! `deflex-twin`, a Python binding) drives the same law.
+//! `deflex_sim::twin`, a Python binding) drives the same law.
 //!
 //! One control cycle ([`Controller::cycle`]) does, allocation-free:
 //!
@@ -32,7 +32,7 @@
 //!
 //! What moved out (issue 19): the threads, clock, real-time scheduling, `CELL.toml`, the link
 //! factory, the send shaper, the CSV log and the telemetry stream are `deflex-runtime`'s; the
-//! controller↔twin glue is `deflex-twin`'s.
+//! controller↔twin glue is `deflex_sim::twin`'s.
 //!
 //! Sign conventions: SI units; ξ = [δp (m); δφ (rad)] in robot base axes; s_com = s_des + ξ.
 

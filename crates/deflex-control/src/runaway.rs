@@ -118,7 +118,7 @@
 //! most `P₀ + k_eff ξ_trip`, with ξ_trip the correction along u at the trip (what grew during
 //! detection: `confirm_cycles` plus the estimator's settling, times the correction's growth per
 //! cycle). `tests/runaway.rs` checks it against the real controller for contacts from 10⁵ to
-//! 10⁸ N/m and ρ = 1, 1.3 with a 20 ms delay, and the twin's plunge (deflex-study
+//! 10⁸ N/m and ρ = 1, 1.3 with a 20 ms delay, and the twin's plunge (deflex_app::study
 //! `tests/stiff_contact.rs`) at 10⁶–10⁸ N/m with a model identified from its own campaign.
 //!
 //! Limitations: position axes only (a rotational runaway is not watched); the guard acts along a

@@ -1,14 +1,15 @@
 //! The wrench path of the controller (Section 4.2): raw sensor reading → bias (tare taken out of
 //! contact) → tool-gravity compensation for the current orientation → optional first-order
 //! low-pass → the environment wrench `w` of eq. 2 at the TCP, in world (base) axes, which is what
-//! eq. 15 needs.
+//! eq. 15 needs. [`WrenchProcessor::raw_reading`] goes the other way: the reading for a known
+//! environment wrench.
 //!
 //! Conventions: the sensor reports, in its own axes and about its own origin, the wrench that
 //! acts on the part of the tool beyond it (the environment's push plus the tool's weight). The
 //! sensor pose is `flange × sensor_in_flange`, with the flange from forward kinematics (eq. 1).
 //! Everything here is allocation-free.
 
-use deflex_model::wrench_transport::sensor_wrench_at_point;
+use deflex_model::wrench_transport::{sensor_wrench_at_point, world_wrench_in_sensor};
 use deflex_model::{Data, Pose, ToolLoad, Wrench};
 use nalgebra::Vector3;
 
@@ -176,6 +177,26 @@ impl WrenchProcessor {
     /// Forgets the filter state (the next sample primes it).
     pub fn reset_filter(&mut self) {
         self.filter_primed = false;
+    }
+
+    /// The raw reading that this path turns into the environment wrench `tcp_world` (eq. 2:
+    /// world axes, moment about the TCP), with `data` filled by forward kinematics: the inverse
+    /// of [`Self::process`] once the low-pass has settled,
+    ///
+    /// `raw = b + g_S + [Rᵀ f ; Rᵀ (m + (p_tcp − p_S) × f)]`,
+    ///
+    /// with `b` the bias ([`Self::bias`]), `g_S` the tool's weight as the sensor sees it
+    /// ([`Self::gravity_in_sensor`]), `R` and `p_S` the sensor frame's world rotation and origin
+    /// (`flange × sensor_in_flange`, [`Self::sensor_pose`]), `f` and `m` the force and the moment
+    /// of `tcp_world`, `p_tcp` the TCP position. It is what the sensor must read for a given
+    /// contact under this mounting, tool and bias: readings synthesised for a known contact (a
+    /// test, a bench, a what-if), or the expected reading to compare a real one with.
+    #[inline]
+    pub fn raw_reading(&self, tcp_world: &Wrench, data: &Data) -> Wrench {
+        let sensor_pose = self.sensor_pose(data);
+        let gravity = self.gravity_in_sensor(&sensor_pose);
+        let contact = world_wrench_in_sensor(tcp_world, &data.tcp_position(), &sensor_pose);
+        Wrench::from_fn(|i, _| self.bias[i] + gravity[i] + contact[i])
     }
 
     /// The full path for one reading with `data` filled by forward kinematics at the robot's

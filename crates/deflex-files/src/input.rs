@@ -12,6 +12,7 @@
 //! remembered by device and inode, so that an output naming one of them is refused
 //! ([`crate::output`]).
 
+use crate::errors::{FileIoError, FileTooLarge};
 use crate::shown::shown_path;
 use std::fs::{File, Metadata};
 use std::io::{self, Read};
@@ -87,8 +88,10 @@ pub enum InputProblem {
         kind: FileKind,
     },
     /// More bytes than allowed (found by reading, not from the metadata).
+    /// The message words it as [`FileTooLarge`] does (a reader that knows what it reads names
+    /// it there: [`InputError::reported_as`]).
     #[error(
-        "larger than the {limit}-byte limit for this kind of file (stopped reading after {read} bytes)"
+        "more than the {limit} bytes this kind of file may have (stopped reading after {read})"
     )]
     TooLarge {
         /// The limit.
@@ -108,13 +111,8 @@ pub enum InputProblem {
 #[derive(Debug, Error)]
 pub enum InputError {
     /// The operating system's error (missing file, no permission, …).
-    #[error("{}: {source}", shown_path(.path))]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The error.
-        source: io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] FileIoError),
     /// Refused: not a regular file, too large, not text.
     #[error("{}: {problem}", shown_path(.path))]
     Refused {
@@ -136,7 +134,8 @@ impl InputError {
     /// The file the error is about.
     pub fn path(&self) -> &Path {
         match self {
-            InputError::Io { path, .. } | InputError::Refused { path, .. } => path,
+            InputError::Io(error) => &error.path,
+            InputError::Refused { path, .. } => path,
         }
     }
 
@@ -144,7 +143,7 @@ impl InputError {
     pub fn problem(&self) -> Option<&InputProblem> {
         match self {
             InputError::Refused { problem, .. } => Some(problem),
-            InputError::Io { .. } => None,
+            InputError::Io(_) => None,
         }
     }
 
@@ -153,10 +152,61 @@ impl InputError {
     /// one of kind `InvalidData`.
     pub fn into_io(self) -> io::Error {
         match self {
-            InputError::Io { source, .. } => source,
+            InputError::Io(error) => error.source,
             InputError::Refused { problem, .. } => {
                 io::Error::new(io::ErrorKind::InvalidData, problem)
             }
+        }
+    }
+
+    /// The same error as a [`FileIoError`] naming the file: the system's error, or the
+    /// [`InputProblem`] inside an `io::Error` of kind `InvalidData` ([`InputError::into_io`]).
+    pub fn into_file_io(self) -> FileIoError {
+        match self {
+            InputError::Io(error) => error,
+            InputError::Refused { path, problem } => {
+                FileIoError::new(path, io::Error::new(io::ErrorKind::InvalidData, problem))
+            }
+        }
+    }
+
+    /// This error as a reader of one kind of file reports it, `what` saying which (with its
+    /// article: `a measurement file`): a file over the limit as [`FileTooLarge`], any other
+    /// failure (the system's error, a refusal) as [`FileIoError`]
+    /// ([`InputError::into_file_io`]). `E` is the reader's error type, which holds both:
+    ///
+    /// ```
+    /// # use deflex_files::{FileIoError, FileTooLarge, read_bounded};
+    /// #[derive(Debug, thiserror::Error)]
+    /// enum NotesError {
+    ///     #[error(transparent)]
+    ///     Io(#[from] FileIoError),
+    ///     #[error(transparent)]
+    ///     TooLarge(#[from] FileTooLarge),
+    /// }
+    /// let dir = std::env::temp_dir().join(format!("deflex-notes-{}", std::process::id()));
+    /// std::fs::create_dir_all(&dir).unwrap();
+    /// let path = dir.join("notes.txt");
+    /// std::fs::write(&path, "0123456789").unwrap();
+    /// let e = read_bounded(&path, 4)
+    ///     .map_err(|e| e.reported_as::<NotesError>("a notes file"))
+    ///     .unwrap_err();
+    /// assert!(e.to_string().ends_with(
+    ///     "notes.txt: more than the 4 bytes a notes file may have (stopped reading after 5)"
+    /// ));
+    /// assert!(matches!(
+    ///     read_bounded(&dir.join("missing"), 4).map_err(|e| e.reported_as::<NotesError>("a notes file")),
+    ///     Err(NotesError::Io(_))
+    /// ));
+    /// # std::fs::remove_dir_all(dir).unwrap();
+    /// ```
+    pub fn reported_as<E: From<FileIoError> + From<FileTooLarge>>(self, what: &'static str) -> E {
+        match self {
+            InputError::Refused {
+                path,
+                problem: InputProblem::TooLarge { limit, read },
+            } => FileTooLarge::new(path, what, limit, read).into(),
+            other => other.into_file_io().into(),
         }
     }
 }
@@ -212,10 +262,7 @@ fn remember(path: &Path, metadata: &Metadata) {
 /// make this wait), its type checked on the open file, anything else refused with
 /// [`InputProblem::NotAFile`].
 pub fn open_input(path: &Path) -> Result<File, InputError> {
-    let io_error = |source| InputError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io_error = |source| InputError::Io(FileIoError::new(path, source));
     let file = std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
@@ -236,10 +283,7 @@ pub fn read_bounded_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, InputError
     let mut bytes = Vec::new();
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(|source| InputError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        .map_err(|source| FileIoError::new(path, source))?;
     if bytes.len() as u64 > limit {
         let read = bytes.len() as u64;
         return Err(InputError::refused(

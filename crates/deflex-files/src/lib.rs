@@ -32,16 +32,26 @@
 //! blocking so that a FIFO cannot make deflex wait ([`read_bounded`]). A command-line tool calls
 //! [`track_inputs`] so that an output naming a file it read is refused.
 //!
+//! **Errors** shared by every reader and writer of files ([`errors`]): an I/O failure on a named
+//! file ([`FileIoError`]) and a file larger than its reader accepts ([`FileTooLarge`]), defined
+//! here once and held by the crates' error enums as a variant's payload.
+//!
 //! **Messages** that show user text (labels, paths) escape control characters ([`shown`]).
+//!
+//! **CSV text** built in memory by the formats' writers ([`csv_text`]).
 
 #![warn(missing_docs)]
 
 pub mod atomic;
+mod csv_text;
+pub mod errors;
 pub mod input;
 pub mod output;
 mod shown;
 
 pub use atomic::{AtomicDir, AtomicFile, write_atomic, write_through};
+pub use csv_text::csv_text;
+pub use errors::{FileIoError, FileTooLarge};
 pub use input::{
     FileKind, InputError, InputProblem, open_input, read_bounded, read_bounded_bytes, track_inputs,
 };

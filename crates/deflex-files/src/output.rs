@@ -7,6 +7,7 @@
 //! refused, and so is an output that is one of the files this process read
 //! ([`crate::track_inputs`]) or a folder output holding one.
 
+use crate::errors::FileIoError;
 use crate::input::{FileKind, read_inputs};
 use std::io;
 use std::os::unix::fs::MetadataExt;
@@ -92,16 +93,15 @@ impl OutputProblem {
     }
 }
 
-/// An output path refused, with the flag that named it.
+/// An output path refused, with the flag that named it: `FLAG PATH: WHY`.
 #[derive(Debug, Error)]
-#[error("{flag} {}: {source}", crate::shown_path(.path))]
+#[error("{flag} {error}")]
 pub struct OutputError {
     /// The flag (`--out`, `[log] path`).
     pub flag: String,
-    /// The path.
-    pub path: PathBuf,
-    /// Why: an [`OutputProblem`] inside an `io::Error`, or the system's error.
-    pub source: io::Error,
+    /// The path, and why: an [`OutputProblem`] inside the `io::Error`, or the system's error.
+    #[source]
+    pub error: FileIoError,
 }
 
 /// The typed problem inside an `io::Error` made by this crate, if it is one.
@@ -150,8 +150,7 @@ pub fn check_output_flag(
 ) -> Result<PathBuf, OutputError> {
     check_output(path, kind).map_err(|source| OutputError {
         flag: flag.to_string(),
-        path: path.to_path_buf(),
-        source,
+        error: FileIoError::new(path, source),
     })
 }
 

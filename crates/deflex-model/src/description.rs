@@ -454,7 +454,7 @@ fn urdf_geometry(
         return Err(invalid(
             "urdf".into(),
             format!(
-                "names the URDF `{urdf_path}`, but no URDF was supplied with the text (read robot files with deflex-load)"
+                "names the URDF `{urdf_path}`, but no URDF was supplied with the text (read robot files with deflex_app::load::load_robot)"
             ),
         ));
     };

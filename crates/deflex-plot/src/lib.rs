@@ -8,11 +8,9 @@
 //! (the bytes of its `.png` or `.svg` file), a page renders to text ([`HtmlReport::render`],
 //! the bytes of its images given by the caller). Writing them, whole or not at all, is the
 //! caller's: deflex's application layer does it in `deflex_app::report::draw`, with the same
-//! function names and arguments.
-//!
-//! | module | draws |
-//! | --- | --- |
-//! | [`text_table`] | aligned text and CSV tables |
+//! function names and arguments. Text tables (aligned text, CSV) draw nothing and are not here:
+//! they are `deflex_app::report::text_table`, in every build of the application layer, where
+//! this crate is behind its `report` feature.
 //!
 //! Plot kinds, matching the figures of Johra et al. (Robotics 2022, 11, 48):
 //!
@@ -60,7 +58,6 @@ mod heatmap;
 mod html;
 mod plot;
 mod render;
-pub mod text_table;
 mod timeline;
 
 use std::path::{Path, PathBuf};

@@ -43,18 +43,15 @@ pub use write::{
     CHUNK_BYTES, DEFAULT_MAX_BYTES, MIN_MAX_BYTES, McapSink, RecordOptions, RecordStats,
 };
 
+use deflex_files::FileIoError;
+
 /// Why a recording failed. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
-    /// The file (its temporary sibling) could not be created, or the thread not started.
-    #[error("{path}: cannot start the recording: {source}")]
-    Create {
-        /// The destination.
-        path: String,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
-    },
+    /// The file (its temporary sibling) could not be created, or the thread not started: the
+    /// destination with the context `cannot start the recording`.
+    #[error(transparent)]
+    Create(FileIoError),
     /// The disk (or the user's quota) is full: the recording is discarded, an earlier file at
     /// the destination is left whole.
     #[error(
@@ -135,14 +132,8 @@ impl RecordError {
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
     /// The file could not be opened or read.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] FileIoError),
     /// The file does not start with the MCAP magic bytes.
     #[error(
         "{path}: not an MCAP file (it does not start with the MCAP magic bytes 89 4D 43 41 50 30 0D 0A)"

@@ -3,6 +3,7 @@
 
 use crate::channels as ch;
 use crate::{ReadError, SessionRecord};
+use deflex_files::FileIoError;
 use deflex_telemetry::FaultKind;
 use deflex_telemetry::ros::{
     DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
@@ -83,17 +84,11 @@ pub fn for_each_cycle(
     mut f: impl FnMut(&CycleSample),
 ) -> Result<RecordingSummary, ReadError> {
     let name = path.display().to_string();
-    let io_err = |e: std::io::Error| ReadError::Io {
-        path: name.clone(),
-        source: e,
-    };
-    if !is_mcap(path).map_err(io_err)? {
+    if !is_mcap(path).map_err(|e| FileIoError::new(path, e))? {
         return Err(ReadError::NotMcap { path: name });
     }
     let file = std::io::BufReader::new(
-        deflex_files::open_input(path)
-            .map_err(deflex_files::InputError::into_io)
-            .map_err(io_err)?,
+        deflex_files::open_input(path).map_err(deflex_files::InputError::into_file_io)?,
     );
     let options =
         mcap::sans_io::LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);

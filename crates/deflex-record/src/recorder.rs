@@ -2,6 +2,7 @@
 //! a file written aside and renamed at the end.
 
 use crate::{McapSink, RecordError, RecordOptions, RecordStats};
+use deflex_files::FileIoError;
 use deflex_telemetry::{Broadcast, CycleSample, SessionInfo, Subscriber};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -66,10 +67,10 @@ impl McapRecorder {
     ) -> Result<McapRecorder, RecordError> {
         let path = path.as_ref().to_path_buf();
         let name = path.display().to_string();
-        let file = deflex_files::AtomicFile::create(&path).map_err(|e| RecordError::Create {
-            path: name.clone(),
-            source: e,
-        })?;
+        let cannot_start = |e| {
+            RecordError::Create(FileIoError::new(&path, e).context("cannot start the recording"))
+        };
+        let file = deflex_files::AtomicFile::create(&path).map_err(cannot_start)?;
         let mut sink = McapSink::new(file, name.clone(), &info, options)?;
         let stop = Arc::new(AtomicBool::new(false));
         let stop_flag = stop.clone();
@@ -118,10 +119,7 @@ impl McapRecorder {
                     lost,
                 })
             })
-            .map_err(|e| RecordError::Create {
-                path: path.display().to_string(),
-                source: e,
-            })?;
+            .map_err(cannot_start)?;
         Ok(McapRecorder {
             path,
             stop,

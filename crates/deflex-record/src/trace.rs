@@ -17,6 +17,7 @@
 use crate::log_reader::{LogReadError, LogReader};
 use crate::run_log::{Block, RunLogColumn};
 use crate::{ReadError, for_each_cycle, is_mcap, isf_log};
+use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::{Data, Robot};
 use deflex_telemetry::CycleSample;
 use deflex_telemetry::Flags;
@@ -92,14 +93,11 @@ pub const MAX_ROWS: usize = 2_000_000;
 #[derive(Debug, thiserror::Error)]
 pub enum TraceError {
     /// Reading the file failed.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] FileIoError),
+    /// The file is larger than a log may be ([`MAX_LOG_BYTES`]; the reader names it `a log`).
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// An MCAP file that is not a readable deflex recording.
     #[error(transparent)]
     Recording(#[from] ReadError),
@@ -127,9 +125,9 @@ pub enum TraceError {
         /// What is wrong.
         message: String,
     },
-    /// The file is too large or has too many rows.
+    /// The log or recording has more rows (cycles) than a trace holds.
     #[error("{path}: {message}")]
-    TooLarge {
+    TooManyRows {
         /// The file.
         path: String,
         /// The bound passed.
@@ -159,22 +157,11 @@ pub fn read_run_log(
     robot: Option<&Robot>,
 ) -> Result<RunTrace, TraceError> {
     let name = path.display().to_string();
-    let io = |e| TraceError::Io {
-        path: name.clone(),
-        source: e,
-    };
-    if is_mcap(path).map_err(io)? {
+    if is_mcap(path).map_err(|e| FileIoError::new(path, e))? {
         return from_recording(path, label);
     }
-    let text = deflex_files::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e.problem() {
-        Some(deflex_files::InputProblem::TooLarge { read, .. }) => TraceError::TooLarge {
-            path: name.clone(),
-            message: format!(
-                "more than the {MAX_LOG_BYTES} bytes a log may have (stopped reading after {read})"
-            ),
-        },
-        _ => io(e.into_io()),
-    })?;
+    let text = deflex_files::read_bounded(path, MAX_LOG_BYTES)
+        .map_err(|e| e.reported_as::<TraceError>("a log"))?;
     let log = LogReader::new(&text, &name).map_err(read_error)?;
     let simulated = log.simulated();
     let kind = if log.has(isf_log::DESIRED_MM[0]) {
@@ -237,7 +224,7 @@ fn read_error(e: LogReadError) -> TraceError {
             column: "-".into(),
             message,
         },
-        LogReadError::TooLarge { file, message, .. } => TraceError::TooLarge {
+        LogReadError::TooLarge { file, message, .. } => TraceError::TooManyRows {
             path: file,
             message,
         },
@@ -316,7 +303,7 @@ impl Table {
         let mut rows = 0;
         while let Some(row) = log.next_row().map_err(read_error)? {
             if rows == MAX_ROWS {
-                return Err(TraceError::TooLarge {
+                return Err(TraceError::TooManyRows {
                     path: file,
                     message: format!("more than {MAX_ROWS} rows"),
                 });
@@ -539,7 +526,7 @@ fn from_recording(path: &Path, label: &str) -> Result<RunTrace, TraceError> {
     })?;
     let name = path.display().to_string();
     if too_many {
-        return Err(TraceError::TooLarge {
+        return Err(TraceError::TooManyRows {
             path: name,
             message: format!("more than {MAX_ROWS} cycles"),
         });

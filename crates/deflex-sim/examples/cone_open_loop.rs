@@ -6,7 +6,8 @@ use deflex_sim::{CellConfig, ToolPath, run_forming};
 fn main() {
     let config = CellConfig::default();
     let run = run_forming(&config, ToolPath::paper_cone(), 1, None).expect("run");
-    println!("{}", run.summary_json());
+    let summary = run.summary_json().expect("summary.json");
+    println!("{summary}");
     let s = &run.summary;
     println!(
         "max error {:.3} mm (paper 3.84, band 2.88–4.80), RMS {:.3} mm, max Fz {:.0} N, max Fxy {:.0} N, \
@@ -25,7 +26,7 @@ fn main() {
         std::fs::create_dir_all(dir).expect("output folder");
         for (name, text) in [
             ("log.csv", run.log.to_csv()),
-            ("summary.json", run.summary_json()),
+            ("summary.json", summary),
             ("profile.csv", run.profile_csv()),
         ] {
             std::fs::write(dir.join(name), text).expect("output file");

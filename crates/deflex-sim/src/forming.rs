@@ -257,13 +257,14 @@ pub fn run_program_observed(
 }
 
 impl FormingRun {
-    /// `summary.json` text (with `"simulated": true` and the wall time).
-    pub fn summary_json(&self) -> String {
-        let mut value = serde_json::to_value(&self.summary).unwrap_or_default();
+    /// `summary.json` text (with `"simulated": true` and the wall time), pretty-printed. A
+    /// serialisation failure is returned, never written as an empty file.
+    pub fn summary_json(&self) -> Result<String, serde_json::Error> {
+        let mut value = serde_json::to_value(&self.summary)?;
         if let Some(map) = value.as_object_mut() {
             map.insert("wall_time_s".into(), serde_json::json!(self.wall_time_s));
         }
-        serde_json::to_string_pretty(&value).unwrap_or_default()
+        serde_json::to_string_pretty(&value)
     }
 
     /// `profile.csv` text: the formed profile along θ = 0 beside the programmed one (mm), with

@@ -41,7 +41,7 @@
 //!     }
 //! }
 //! let run = run_forming(&CellConfig::default(), ToolPath::paper_cone(), 1, Some(&mut Hold)).unwrap();
-//! println!("{}", run.summary_json());
+//! println!("{}", run.summary_json().unwrap());
 //! ```
 
 #![warn(missing_docs)]

@@ -158,7 +158,7 @@ pub fn run_campaign(
 
 /// A campaign file's text: the `# SIMULATED` header naming what was measured and the robot the
 /// twin played, then the rows in the measurement format. The robot lines (`# robot:`,
-/// `# geometry:`, which deflex-stiffness reads and checks) are those of `plan_header` when the
+/// `# geometry:`, which `deflex_calibrate::stiffness` reads and checks) are those of `plan_header` when the
 /// campaign measured a plan that names its robot (the point coordinates are the plan's), else
 /// those of the twin's nominal robot (its cell's tool included).
 pub fn campaign_text(

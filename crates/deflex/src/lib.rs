@@ -26,7 +26,7 @@
 //! | [`view`] | `deflex-view` (4) | the live browser view of a session |
 //! | [`runtime`] | `deflex-runtime` (5, runtime) | the real-time session: threads, clock, typed messages, send shaper |
 //! | [`sim`] | `deflex-sim` (6, simulation) | the digital twin (SIMULATED): its own plant, sensor, tracker, sheet and robot controller; the twin in closed loop, served over the protocols, in simulated time |
-//! | [`app`] | `deflex-app` (7, application) | the workflows of the `deflex` command and the Python package: CELL.toml and sessions, calibrations, compensation and programs, the twin's runs, the study, report pages, the user's files |
+//! | [`app`] | `deflex-app` (7, application) | the workflows of the `deflex` command and the Python package: CELL.toml and sessions, calibrations, compensation and programs, the twin's runs, the study, report pages (its `report` feature, on here), the user's files |
 //!
 //! Not included: the ROS 2 bridge (`deflex-ros2`, an outlet with a large DDS dependency: depend on
 //! it directly), and the front ends (the `deflex` command line, the Python package).

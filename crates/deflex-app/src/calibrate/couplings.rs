@@ -9,12 +9,12 @@ use crate::error::{Error, Result};
 use crate::report::calibration_tables::{
     COUPLING_HEADERS, REFIT_HEADERS, coupling_rows, coupling_summary, refit_rows,
 };
+use crate::report::text_table::render_table;
 use deflex_calibrate::measurements::MeasurementRow;
 pub use deflex_calibrate::stiffness::EdofPair;
 use deflex_calibrate::stiffness::{CouplingFit, fit_couplings};
 use deflex_model::{Axis, EdofSite, Robot};
 pub use deflex_model::{MAX_COUPLINGS, parse_edof_label};
-use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 
 /// One coupling asked for: the pair as the user wrote it and as parsed.

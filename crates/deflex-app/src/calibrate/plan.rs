@@ -13,6 +13,7 @@ use crate::report::plan_tables::{
     EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
     expected_shift_rows, technician_rows,
 };
+use crate::report::text_table::render_table;
 pub use deflex_calibrate::measurements::points::{
     MAX_USER_POINTS, PointProblem, PointSpec, parse_point_flag,
 };
@@ -23,7 +24,6 @@ pub use deflex_calibrate::stiffness::plan::{
 };
 use deflex_calibrate::stiffness::{CalibError, PlanError, plan::plan_experiments};
 use deflex_model::Robot;
-use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 

@@ -232,10 +232,18 @@ pub fn calibrated_name(model: &Robot, data_name: &str, structure: &str) -> Strin
     )
 }
 
+/// What `save` asks for with `report`, in the words of [`Error::ReportsNotBuilt`].
+const CALIBRATION_REPORT: &str = "the calibration report (`deflex calibrate --report`; Python: `StiffnessCalibration.save(report=…)`)";
+
 /// Write the calibrated robot file to `out` and, with `report`, the HTML report with plots and
 /// CSV tables into that folder: each whole or not at all, the report folder first, then the
-/// model (so a model never appears without the report asked for).
+/// model (so a model never appears without the report asked for). The report needs the
+/// `report` feature: without it a `report` is refused before anything is written.
 pub fn save(cal: &StiffnessCalibration, out: &Path, report: Option<&Path>) -> Result<()> {
+    let report = match report {
+        Some(dir) => Some((dir, crate::report::require(CALIBRATION_REPORT)?)),
+        None => None,
+    };
     let io = |path: &Path| {
         let path = path.display().to_string();
         move |source| Error::Io { path, source }
@@ -244,36 +252,11 @@ pub fn save(cal: &StiffnessCalibration, out: &Path, report: Option<&Path>) -> Re
     model_file
         .write_all(crate::load::robot_to_toml_for(&cal.model, out).as_bytes())
         .map_err(io(out))?;
-    if let Some(dir) = report {
+    if let Some((dir, drawing)) = report {
         let folder = deflex_files::AtomicDir::create(dir).map_err(io(dir))?;
-        write_report_into(cal, folder.path(), &out.display().to_string())?;
+        drawing.calibration_report(cal, folder.path(), &out.display().to_string())?;
         folder.commit().map_err(io(dir))?;
     }
     model_file.commit().map_err(io(out))?;
-    Ok(())
-}
-
-/// The report's files, written into the existing folder `dir`.
-fn write_report_into(cal: &StiffnessCalibration, dir: &Path, output_name: &str) -> Result<()> {
-    use crate::report::calibration_report::{
-        CalibrationReport, CouplingSection, write_calibration_report,
-    };
-    let report = CalibrationReport {
-        start_name: &cal.start.name,
-        data_name: &cal.data_name,
-        output_name,
-        calibration: &cal.calibration,
-        predicted: &cal.predicted,
-        steps: &cal.steps,
-        stop_reason: cal.stop_reason.as_deref(),
-        rows: &cal.rows,
-        warnings: &cal.data_warnings,
-        data_notes: &cal.notes,
-        couplings: cal.couplings.as_ref().map(|fit| CouplingSection {
-            diagonal: &cal.diagonal,
-            fit,
-        }),
-    };
-    write_calibration_report(dir, &report)?;
     Ok(())
 }

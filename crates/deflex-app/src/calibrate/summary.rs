@@ -8,10 +8,10 @@ use crate::report::calibration_tables::{
     ITERATION_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS, correlated_pairs_text, correlation_table,
     iteration_rows, residual_summary, shift_rows, stiffness_rows,
 };
+use crate::report::text_table::render_table;
 use deflex_calibrate::stiffness::stiffness_fit::{
     CHI2_WELL_ABOVE_ONE, Calibration, STRONG_CORRELATION, Status,
 };
-use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 use std::path::Path;
 

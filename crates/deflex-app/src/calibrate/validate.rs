@@ -4,13 +4,13 @@
 
 use super::data::{DataCheck, Source, Wording, geometry_json, read_checked, read_rows};
 use crate::error::Result;
-use crate::report::validation_report::{
+use crate::report::text_table::render_table;
+use crate::report::validation_tables::{
     VALIDATION_HEADERS, validation_rotation_summary, validation_rows,
 };
 use deflex_calibrate::stiffness::consistency::GeometryCheck;
 use deflex_calibrate::stiffness::validation::ModelErrors;
 use deflex_model::Robot;
-use deflex_plot::text_table::render_table;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -43,13 +43,15 @@ pub fn validate(
     })
 }
 
+/// What [`write_validation_report`] writes, in the words of [`crate::Error::ReportsNotBuilt`].
+const VALIDATION_REPORT: &str =
+    "the validation report (`deflex validate --out`; Python: `Validation.save`)";
+
 /// The validation's plots and HTML page (`validation.html`) into the folder `dir`, replaced
-/// whole (or left as it was on error). Returns the files written.
+/// whole (or left as it was on error). Returns the files written. Needs the `report` feature:
+/// refused without it, nothing written.
 pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(crate::report::validation_report::write_validation_report(
-        &v.validation,
-        dir,
-    )?)
+    crate::report::require(VALIDATION_REPORT)?.validation_report(&v.validation, dir)
 }
 
 /// The validation as JSON (SI; `deflex validate --json`): the errors of the model and the

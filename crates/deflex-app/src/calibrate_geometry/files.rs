@@ -156,7 +156,10 @@ pub fn calibrated_model_of(cal: &super::GeometryCalibration) -> Result<Calibrate
     Ok(CalibratedModel {
         model,
         terms: Some(cal.terms.clone()),
-        terms_text: Some(cal.terms.to_json()),
+        terms_text: Some(cal.terms.to_json().map_err(|e| Error::Serialise {
+            what: "the terms file",
+            reason: e.to_string(),
+        })?),
     })
 }
 

@@ -332,13 +332,13 @@ pub fn report_json(cal: &GeometryCalibration) -> String {
     absolute_report::json(&cal.result, &cal.campaign).to_string()
 }
 
-/// The report folder (text, JSON, CSV, plots, HTML), written whole or not at all.
+/// What the report folder is, in the words of [`Error::ReportsNotBuilt`].
+const GEOMETRY_REPORT: &str = "the elasto-geometric calibration report (`deflex calibrate-geometry --report`; Python: `GeometryCalibration.save(report=…)`)";
+
+/// The report folder (text, JSON, CSV, plots, HTML), written whole or not at all. Needs the
+/// `report` feature: refused without it, nothing written.
 pub fn write_report(cal: &GeometryCalibration, dir: &Path) -> Result<Vec<PathBuf>> {
-    Ok(absolute_report::write_report(
-        &cal.result,
-        &cal.campaign,
-        dir,
-    )?)
+    crate::report::require(GEOMETRY_REPORT)?.geometry_report(&cal.result, &cal.campaign, dir)
 }
 
 /// What [`save`] wrote.
@@ -356,14 +356,25 @@ pub struct SavedCalibration {
 
 /// Write the calibrated robot file, its terms file beside it and, with `report`, the report
 /// folder, as one unit (whole or not at all: a report that fails leaves the earlier robot,
-/// terms and report as they were).
+/// terms and report as they were). The report needs the `report` feature: without it a
+/// `report` is refused before anything is written.
 pub fn save(
     cal: &GeometryCalibration,
     path: &Path,
     report: Option<&Path>,
 ) -> Result<SavedCalibration> {
-    let report_files = write_unit(&cal.robot, Some(&cal.terms.to_json()), path, || {
-        report.map_or(Ok(Vec::new()), |dir| write_report(cal, dir))
+    let report_to = match report {
+        Some(dir) => Some((dir, crate::report::require(GEOMETRY_REPORT)?)),
+        None => None,
+    };
+    let terms = cal.terms.to_json().map_err(|e| Error::Serialise {
+        what: "the terms file",
+        reason: e.to_string(),
+    })?;
+    let report_files = write_unit(&cal.robot, Some(&terms), path, || {
+        report_to.map_or(Ok(Vec::new()), |(dir, drawing)| {
+            drawing.geometry_report(&cal.result, &cal.campaign, dir)
+        })
     })?;
     Ok(SavedCalibration {
         robot: path.to_path_buf(),

@@ -1,6 +1,5 @@
-//! Measurement, plan and point files from disk (the formats are `deflex-measurements`').
+//! Measurement, plan and point files from disk (the formats are `deflex_calibrate::measurements`').
 
-use crate::load::{BoundedReadError, read_bounded};
 use deflex_calibrate::measurements::points::{
     MAX_POINTS_FILE_BYTES, PointSpec, PointsError, parse_points,
 };
@@ -30,17 +29,8 @@ pub fn read_file_ignoring(
     ignored: &[String],
 ) -> Result<MeasurementFile, DataError> {
     let origin = path.display().to_string();
-    let text = read_bounded(path, MAX_FILE_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(source) => DataError::Io {
-            path: origin.clone(),
-            source,
-        },
-        BoundedReadError::TooLarge(bytes) => DataError::TooLarge {
-            path: origin.clone(),
-            bytes,
-            limit: MAX_FILE_BYTES,
-        },
-    })?;
+    let text = deflex_files::read_bounded(path, MAX_FILE_BYTES)
+        .map_err(|e| e.reported_as::<DataError>("a measurement file"))?;
     if let Some(joint_count) = joint_count {
         check_joint_columns(&text, &origin, joint_count)?;
     }
@@ -73,15 +63,7 @@ pub fn read_plan(path: &Path) -> Result<Vec<MeasurementRow>, DataError> {
 /// the link's frame; `#` comments) for a robot with `joint_count` joints.
 pub fn read_points(path: &Path, joint_count: usize) -> Result<Vec<PointSpec>, PointsError> {
     let origin = path.display().to_string();
-    let text = read_bounded(path, MAX_POINTS_FILE_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(source) => PointsError::Io {
-            path: origin.clone(),
-            source,
-        },
-        BoundedReadError::TooLarge(bytes) => PointsError::TooLarge {
-            path: origin.clone(),
-            bytes,
-        },
-    })?;
+    let text = deflex_files::read_bounded(path, MAX_POINTS_FILE_BYTES)
+        .map_err(|e| e.reported_as::<PointsError>("a list of points"))?;
     parse_points(&text, &origin, joint_count)
 }

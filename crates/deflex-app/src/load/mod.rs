@@ -1,6 +1,6 @@
-//! # deflex-load
+//! # The user's files
 //!
-//! The maths crates read no file: they parse text and return typed values. This crate opens the
+//! The layers below read no file: they parse text and return typed values. This module opens the
 //! files a user names and hands their text to those parsers, every read bounded in size:
 //!
 //! * [`robot_file`]: a robot by built-in name or TOML path, with the URDF it names resolved next to
@@ -14,7 +14,7 @@
 //! * [`read_bounded`]: any text file, read only when it is a regular file not larger than a
 //!   limit (counted while reading).
 //!
-//! (The twin's cell files are read by `deflex-twin`, above the twin.)
+//! (The twin's cell files are read by [`crate::cell::twin_cell_file`].)
 
 #![warn(missing_docs)]
 

@@ -16,16 +16,16 @@ use crate::report::calibration_tables::{
     refit_rows, residual_summary, shift_rows, stiffness_rows,
 };
 use crate::report::draw::{heatmap, line_plot, parity_plot, write_page};
+use crate::report::text_table::table_csv;
 use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::search::SearchStep;
 use deflex_calibrate::stiffness::stiffness_fit::Calibration;
-use deflex_plot::text_table::table_csv;
 use deflex_plot::{FileLink, HtmlReport, PlotError, PlotSpec, Series, SeriesStyle};
 use std::path::{Path, PathBuf};
 
 /// Longest plot title (characters), with the `SIMULATED — ` prefix of simulated data: short
 /// enough to be drawn on one line at the full title size on the report's 600–900 px images
-/// (deflex-report would wrap a longer one, never shrink it below its minimum).
+/// (deflex-plot would wrap a longer one, never shrink it below its minimum).
 pub const MAX_TITLE_CHARS: usize = 40;
 
 /// What the report shows.
@@ -77,6 +77,14 @@ impl CalibrationReport<'_> {
 
 fn write_text(path: &Path, text: &str) -> Result<(), PlotError> {
     deflex_files::write_atomic(path, text).map_err(|source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The CSV text of a table for the file `path`, or why it could not be made, naming the file.
+fn csv_of(path: &Path, text: std::io::Result<String>) -> Result<String, PlotError> {
+    text.map_err(|source| PlotError::Io {
         path: path.to_path_buf(),
         source,
     })
@@ -145,7 +153,7 @@ fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, Pl
         ("shifts.csv", table_csv(&SHIFT_HEADERS, &sh_rows)),
     ] {
         let path = dir.join(name);
-        write_text(&path, &text)?;
+        write_text(&path, &csv_of(&path, text)?)?;
         files.push(path);
     }
     let predicted = report.predicted;
@@ -163,10 +171,8 @@ fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, Pl
     files.push(path);
     if let Some(section) = &report.couplings {
         let path = dir.join("couplings.csv");
-        write_text(
-            &path,
-            &table_csv(&COUPLING_HEADERS, &coupling_rows(section.fit)),
-        )?;
+        let text = table_csv(&COUPLING_HEADERS, &coupling_rows(section.fit));
+        write_text(&path, &csv_of(&path, text)?)?;
         files.push(path);
     }
     let mut c = PageParts {

@@ -3,11 +3,11 @@
 //! centre shifts, the correlation matrix and the residual summary; with `--couplings`, the
 //! fitted off-diagonal compliances and the stiffnesses refitted with them.
 
+use crate::report::text_table::render_table;
 use deflex_calibrate::stiffness::CouplingFit;
 use deflex_calibrate::stiffness::search::SearchStep;
 use deflex_calibrate::stiffness::stiffness_fit::{Calibration, Status};
 use deflex_model::Robot;
-use deflex_plot::text_table::render_table;
 use std::fmt::Write as _;
 
 fn um(x: f64) -> String {

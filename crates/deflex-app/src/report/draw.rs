@@ -13,6 +13,14 @@
 //! failure to write the temporary file is [`PlotError::Draw`] (as when the plotting toolkit
 //! saved the files itself: a missing folder, a full disk); an output that may not be replaced
 //! ([`deflex_files::check_output`]) or a failed rename is [`PlotError::Io`].
+//!
+//! ```no_run
+//! use deflex_app::report::draw::line_plot;
+//! use deflex_plot::{PlotSpec, Series};
+//! let spec = PlotSpec::new("Deflection along path", "time [s]", "deflection [mm]");
+//! let s = Series::line("z", vec![0.0, 1.0, 2.0], vec![0.0, 0.3, 0.1]);
+//! line_plot(std::path::Path::new("out.png"), &spec, &[s]).unwrap();
+//! ```
 
 use deflex_plot::{
     Cloud3, HtmlReport, Image, Lane, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,

@@ -8,6 +8,7 @@
 //! runs without and with correction on the same panels.
 
 use crate::report::draw::{cloud_3d, line_plot, panels_plot};
+use crate::twin::form::forming_summary_json;
 use deflex_plot::{
     Cloud3, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
 };
@@ -327,20 +328,10 @@ pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, PlotE
     Ok(files)
 }
 
-/// `summary.json` of `run`: its summary with the wall time, pretty-printed (the text of
-/// `FormingRun::summary_json`, with a serialisation failure reported).
-pub fn summary_json(run: &FormingRun) -> Result<String, serde_json::Error> {
-    let mut value = serde_json::to_value(&run.summary)?;
-    if let Some(map) = value.as_object_mut() {
-        map.insert("wall_time_s".into(), serde_json::json!(run.wall_time_s));
-    }
-    serde_json::to_string_pretty(&value)
-}
-
 /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots of `run` into the existing
 /// folder `dir`; returns their names, in that order.
 pub fn write_run_files(run: &FormingRun, dir: &Path) -> Result<Vec<String>, PlotError> {
-    let summary = summary_json(run).map_err(|e| PlotError::InvalidInput {
+    let summary = forming_summary_json(run).map_err(|e| PlotError::InvalidInput {
         path: dir.join("summary.json"),
         reason: e.to_string(),
     })?;

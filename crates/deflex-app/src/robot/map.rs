@@ -134,8 +134,10 @@ pub struct DeflectionMap {
 /// Compute the map of `grid` for `robot` and write it into the folder `out` (built aside and
 /// swapped in whole: a failed run leaves the earlier map as it was, and a second run on the
 /// same folder is refused while this one writes). A grid none of whose nodes the arm reaches
-/// writes nothing.
+/// writes nothing. The folder holds two heatmaps: without the `report` feature the map is
+/// refused before it is computed ([`deflection_grid`] computes it in every build).
 pub fn write_map(robot: &Robot, grid: &MapGrid, out: &Path) -> Result<DeflectionMap> {
+    let drawing = crate::report::require("the deflection map with its heatmaps (`deflex map`)")?;
     let started = Instant::now();
     let (nodes, unreachable) = deflection_grid(robot, grid)?;
     let elapsed_s = started.elapsed().as_secs_f64();
@@ -153,7 +155,8 @@ pub fn write_map(robot: &Robot, grid: &MapGrid, out: &Path) -> Result<Deflection
         map_csv(&nodes, robot.joint_count()),
     )
     .map_err(io(&csv))?;
-    let png = map_plots(folder.path(), &nodes, &robot.name, &grid.wrench)?
+    let png = drawing
+        .map_plots(folder.path(), &nodes, &robot.name, &grid.wrench)?
         .iter()
         .filter_map(|p| p.file_name().map(|name| out.join(name)))
         .collect();
@@ -242,6 +245,8 @@ impl DeflectionMap {
 }
 
 /// Heatmaps of δz and |δp| over the grid (mm), one cell per node, into `out`; returns the files.
+/// With the `report` feature.
+#[cfg(feature = "report")]
 pub fn map_plots(
     out: &Path,
     nodes: &[MapNode],

@@ -10,11 +10,14 @@ use std::path::Path;
 
 /// Run the study of `options` on the twin cell of `options.robot` and write it into the folder
 /// `out` (built aside and swapped in whole: `crate::report::study::write_study`); `progress`
-/// hears of every stage. Returns the study's numbers.
+/// hears of every stage. Returns the study's numbers. The folder holds the study's figures and
+/// page: without the `report` feature the demo is refused before the study runs
+/// ([`run_study`] computes the study in every build).
 pub fn demo(options: &DemoOptions, out: &Path, progress: OnProgress<'_>) -> Result<DemoSummary> {
+    let drawing = crate::report::require("the study's report folder (`deflex demo`)")?;
     let cell = crate::cell::twin_cell_file::cell_for_robot(&options.robot)?;
     let study = run_study(options, cell, progress)?;
-    crate::report::study::write_study(&study, out)?;
+    drawing.study(&study, out)?;
     Ok(study.summary)
 }
 

@@ -312,10 +312,20 @@ pub struct TwinRun {
 
 /// The run's summary as `summary.json`'s text.
 pub fn summary_json(run: &TwinRun) -> Result<String> {
-    crate::report::forming_run::summary_json(&run.run).map_err(|e| Error::Serialise {
+    forming_summary_json(&run.run).map_err(|e| Error::Serialise {
         what: "the run's summary.json",
         reason: e.to_string(),
     })
+}
+
+/// `summary.json` of a forming run: its summary with the wall time, pretty-printed (the text of
+/// `FormingRun::summary_json`, with a serialisation failure reported).
+pub fn forming_summary_json(run: &FormingRun) -> serde_json::Result<String> {
+    let mut value = serde_json::to_value(&run.summary)?;
+    if let Some(map) = value.as_object_mut() {
+        map.insert("wall_time_s".into(), serde_json::json!(run.wall_time_s));
+    }
+    serde_json::to_string_pretty(&value)
 }
 
 impl TwinRun {

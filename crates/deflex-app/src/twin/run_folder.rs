@@ -2,9 +2,11 @@
 //! aside and swapped in whole at the end, so that a failed or stopped run leaves the folder as it
 //! was. It holds `log.csv`, `summary.json`, `profile.csv` and the run's plots
 //! (`crate::report::forming_run`), the files the front end's outlets wrote into it while the run
-//! went (a recording), and the `deflex plot` page of the run (`plot/`).
+//! went (a recording), and the `deflex plot` page of the run (`plot/`). It holds plots: a build
+//! without the `report` feature refuses it ([`crate::Error::ReportsNotBuilt`]), before the run.
 
 use crate::error::{Error, Result};
+use crate::report::Drawing;
 use crate::twin::TwinRun;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -12,10 +14,15 @@ use std::path::{Path, PathBuf};
 /// The `deflex plot` page's folder in the output folder.
 pub const PLOT_DIR: &str = "plot";
 
+/// What a run's folder is, in the words of [`crate::Error::ReportsNotBuilt`].
+const RUN_FOLDER: &str =
+    "a forming run's folder with its plots (`deflex sim isf --out`; Python: `TwinRun.save`)";
+
 /// A run's output folder while it is being built.
 pub struct RunFolder {
     building: deflex_files::AtomicDir,
     out: PathBuf,
+    drawing: Drawing,
 }
 
 /// A run's output folder once written.
@@ -37,12 +44,15 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error {
 
 impl RunFolder {
     /// Start building the folder `out` aside (an existing `out` is replaced only by
-    /// [`RunFolder::finish`]).
+    /// [`RunFolder::finish`]). Needs the `report` feature (the folder holds the run's plots):
+    /// refused without it, before the run.
     pub fn create(out: &Path) -> Result<RunFolder> {
+        let drawing = crate::report::require(RUN_FOLDER)?;
         let building = deflex_files::AtomicDir::create(out).map_err(io(out))?;
         Ok(RunFolder {
             building,
             out: out.to_path_buf(),
+            drawing,
         })
     }
 
@@ -55,10 +65,10 @@ impl RunFolder {
     /// swap it in; `attached` names the files the outlets wrote into it, listed after the run's.
     pub fn finish(self, run: &TwinRun, attached: &[&str], plot_page: bool) -> Result<WrittenRun> {
         let folder = self.building.path();
-        let mut names = crate::report::forming_run::write_run_files(&run.run, folder)?;
+        let mut names = self.drawing.forming_run_files(&run.run, folder)?;
         names.extend(attached.iter().map(|n| n.to_string()));
         if plot_page {
-            names.push(write_plot_page(folder)?);
+            names.push(write_plot_page(self.drawing, folder)?);
         }
         self.building.commit().map_err(io(&self.out))?;
         Ok(WrittenRun {
@@ -82,21 +92,18 @@ impl WrittenRun {
 
 /// The `deflex plot` page of the run, from its `log.csv`, into `plot/` of the folder being
 /// built; returns the page's name in the folder.
-fn write_plot_page(folder: &Path) -> Result<String> {
+fn write_plot_page(drawing: Drawing, folder: &Path) -> Result<String> {
     let trace = deflex_record::trace::read_run_log(&folder.join("log.csv"), "this run", None)?;
     let dir = folder.join(PLOT_DIR);
     std::fs::create_dir_all(&dir).map_err(io(&dir))?;
-    crate::report::write_run_figures(&dir, &[trace])?;
+    drawing.run_figures(&dir, &[trace])?;
     Ok(format!("{PLOT_DIR}/index.html"))
 }
 
 /// The run's outputs (`log.csv`, `summary.json`, `profile.csv`, plots), written whole into
-/// `dir` (Python's `TwinRun.save`).
+/// `dir` (Python's `TwinRun.save`). Needs the `report` feature: refused without it, nothing
+/// written (the run's log, summary and profile are [`TwinRun::run`]'s, and
+/// [`crate::twin::summary_json`]).
 pub fn write_outputs(run: &TwinRun, dir: &Path) -> Result<Vec<PathBuf>> {
-    crate::report::forming_run::write_forming_run(&run.run, dir).map_err(|source| {
-        Error::Report(crate::report::PageError {
-            report: "forming run",
-            source,
-        })
-    })
+    crate::report::require(RUN_FOLDER)?.forming_run_folder(&run.run, dir)
 }

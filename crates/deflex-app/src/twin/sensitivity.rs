@@ -79,8 +79,13 @@ impl SensitivitySweep {
     }
 
     /// Write `sensitivity.csv`, `summary.json` and `sensitivity_heatmap.png` into the folder
-    /// `out`, built aside and swapped in whole.
+    /// `out`, built aside and swapped in whole. Needs the `report` feature (the heatmap):
+    /// refused without it, nothing written ([`SensitivitySweep::summary_value`] and
+    /// `crate::report::study::csv_files::sensitivity_csv` give the text in every build).
     pub fn write(&self, out: &Path) -> Result<()> {
+        let drawing = crate::report::require(
+            "the sensitivity sweep's folder with its heatmap (`deflex sim sensitivity --out`)",
+        )?;
         let io = |path: &Path| {
             let path = path.display().to_string();
             move |source| Error::Io { path, source }
@@ -101,10 +106,7 @@ impl SensitivitySweep {
         ] {
             deflex_files::write_atomic(dir.join(name), text).map_err(io(&out.join(name)))?;
         }
-        crate::report::study::figures::sensitivity_heatmap(
-            &self.result,
-            &dir.join("sensitivity_heatmap.png"),
-        )?;
+        drawing.sensitivity_heatmap(&self.result, &dir.join("sensitivity_heatmap.png"))?;
         building.commit().map_err(io(out))
     }
 

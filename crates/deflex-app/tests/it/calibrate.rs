@@ -125,6 +125,7 @@ fn the_choices_are_parsed_by_the_names_both_front_ends_use() {
 
 /// A fixed structure with a coupling: the model named after its data, structure and coupling;
 /// the robot file and the report written; the text and JSON showing the couplings.
+#[cfg(feature = "report")]
 #[test]
 fn a_calibration_with_a_coupling_is_named_saved_and_reported() {
     let dir = folder("coupling");
@@ -278,6 +279,7 @@ fn the_identification_error_is_named_as_the_front_end_asks() {
     );
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn a_validation_lists_its_files_only_when_they_were_written() {
     let dir = folder("validate");

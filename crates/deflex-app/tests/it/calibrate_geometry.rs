@@ -59,6 +59,18 @@ fn options(steps: &[Step]) -> GeometryOptions {
     }
 }
 
+/// The registration and geometry steps of `calibrate_geometry` on the UR10 with `a`.
+fn registration_and_geometry(a: &TrackerImport) -> GeometryCalibration {
+    calibrate_geometry(
+        &ur10(),
+        &[table(a.text.clone())],
+        &[],
+        &[],
+        &options(&[Step::Registration, Step::Geometry]),
+    )
+    .unwrap()
+}
+
 fn ur10() -> deflex_model::Robot {
     deflex_app::load::load_robot("ur10").unwrap()
 }
@@ -194,17 +206,11 @@ fn import_refuses_what_it_would_not_read_back_and_names_the_option() {
     let _ = std::fs::remove_dir_all(&empty);
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn a_calibration_is_saved_whole_with_its_terms_and_report_or_not_at_all() {
     let a = import("Series_A", "A", 5);
-    let cal = calibrate_geometry(
-        &ur10(),
-        &[table(a.text.clone())],
-        &[],
-        &[],
-        &options(&[Step::Registration, Step::Geometry]),
-    )
-    .unwrap();
+    let cal = registration_and_geometry(&a);
     let dir = scratch("save");
     let out = dir.join("ur10-cal.toml");
     // A report folder that cannot be made: neither the robot nor its terms are written.
@@ -309,14 +315,7 @@ fn too_few_readings_and_another_robots_readings_are_refused() {
 fn register_names_the_set_up_and_target_to_choose_in_each_front_ends_words() {
     let a = import("Series_A", "A", 10);
     let b = import("Series_B", "B", 10);
-    let cal = calibrate_geometry(
-        &ur10(),
-        &[table(a.text.clone())],
-        &[],
-        &[],
-        &options(&[Step::Registration, Step::Geometry]),
-    )
-    .unwrap();
+    let cal = registration_and_geometry(&a);
     let mut rows = parse_absolute(&a.text, "a.csv", 6).unwrap();
     rows.truncate(15);
     rows.extend(
@@ -387,7 +386,7 @@ fn register_names_the_set_up_and_target_to_choose_in_each_front_ends_words() {
     save_registration(&registered, &out).unwrap();
     assert_eq!(
         std::fs::read_to_string(terms_path(&out)).unwrap(),
-        cal.terms.to_json()
+        cal.terms.to_json().unwrap()
     );
     assert!(saved_registration_text(&registered, &out).starts_with("Registered set-up `B`"));
     assert_eq!(

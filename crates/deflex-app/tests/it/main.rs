@@ -5,6 +5,7 @@ mod calibrate_geometry;
 mod cell;
 mod compensate;
 mod error;
+mod example_cell;
 mod export;
 mod load;
 mod load_gcode_file;

@@ -140,6 +140,7 @@ fn model_show_describes_the_robot_and_its_twin_cell() {
     assert!(e.to_string().contains("no-such-robot"), "{e}");
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn a_deflection_map_is_written_whole_and_its_grid_checked() {
     use deflex_app::robot::map::{MapGrid, deflection_grid, write_map};

@@ -302,9 +302,10 @@ impl CalibrationTerms {
         self.held_out_rms_m.map(|r| r * RECALIBRATE_MARGIN)
     }
 
-    /// JSON text.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_default()
+    /// The terms file's JSON text (pretty-printed). A serialisation failure is returned, never
+    /// written as an empty file.
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(self)
     }
 
     /// Parse JSON text (the caller bounds its size) and check every value.

@@ -2,6 +2,7 @@
 //! displacements, plans, absolute tracker readings), with the values that explain it: one error
 //! type, [`DataError`], whose messages name the file, the line and the column.
 
+use deflex_files::{FileIoError, FileTooLarge};
 use thiserror::Error;
 
 /// A bad measurement file (loaded displacements, a plan, absolute tracker readings). Nothing of a
@@ -9,25 +10,12 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum DataError {
     /// The file could not be read or written (built by the crates that touch the disk).
-    #[error("{path}: {source}")]
-    Io {
-        /// File.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// The file is larger than a measurement file may be.
-    #[error(
-        "{path}: more than the {limit} bytes a measurement file may have (stopped reading after {bytes})"
-    )]
-    TooLarge {
-        /// File.
-        path: String,
-        /// Its size (bytes).
-        bytes: u64,
-        /// The limit ([`crate::measurements::MAX_FILE_BYTES`]).
-        limit: u64,
-    },
+    #[error(transparent)]
+    Io(#[from] FileIoError),
+    /// The file is larger than a measurement file may be
+    /// ([`crate::measurements::MAX_FILE_BYTES`]; the reader names it `a measurement file`).
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// The file was written for a robot with another number of joints
     /// ([`crate::measurements::check_joint_columns`], before the file is read).
     #[error(

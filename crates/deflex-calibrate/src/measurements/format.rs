@@ -39,10 +39,8 @@ pub fn format_rows(rows: &[MeasurementRow]) -> String {
     if with_purpose {
         header.push("purpose".into());
     }
-    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
-    let _ = writer.write_record(&header);
     let num = |v: f64| format!("{v:e}");
-    for row in rows {
+    let record_of = |row: &MeasurementRow| {
         let mut record: Vec<String> = vec![row.load_case.clone()];
         record.extend(row.q_rad.iter().map(|v| format!("{v:?}")));
         record.extend(row.wrench.iter().map(|v| format!("{v:?}")));
@@ -77,9 +75,9 @@ pub fn format_rows(rows: &[MeasurementRow]) -> String {
         if with_purpose {
             record.push(row.purpose.clone().unwrap_or_default());
         }
-        let _ = writer.write_record(&record);
-    }
-    String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default()
+        record
+    };
+    deflex_files::csv_text(std::iter::once(header).chain(rows.iter().map(record_of)))
 }
 
 /// [`format_rows`] after a header naming the robot the rows were made for (`# robot: …`,

@@ -2,6 +2,7 @@
 //! each a label, the link carrying it and its position in that link's frame. CSV columns
 //! `name, link, x_m, y_m, z_m` (`#` comments), at most [`MAX_USER_POINTS`] rows.
 
+use deflex_files::{FileIoError, FileTooLarge};
 use thiserror::Error;
 
 /// Most measured points per load case given by the user.
@@ -70,21 +71,12 @@ pub enum PointProblem {
 #[derive(Debug, Error)]
 pub enum PointsError {
     /// The file could not be read (built by the crates that touch the disk).
-    #[error("{path}: {source}")]
-    Io {
-        /// File.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// The file is larger than [`MAX_POINTS_FILE_BYTES`].
-    #[error("{path}: too large for a list of points (stopped reading after {bytes} bytes)")]
-    TooLarge {
-        /// File.
-        path: String,
-        /// Its size.
-        bytes: u64,
-    },
+    #[error(transparent)]
+    Io(#[from] FileIoError),
+    /// The file is larger than [`MAX_POINTS_FILE_BYTES`] (the reader names it
+    /// `a list of points`).
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// The header line could not be read.
     #[error("{path}: header: {source}")]
     HeaderCsv {

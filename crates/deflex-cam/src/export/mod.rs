@@ -1,4 +1,4 @@
-//! # deflex-export
+//! # Calibrated geometry out (`deflex_cam::export`)
 //!
 //! A calibrated robot where controllers and ROS stacks read it (`deflex export`), as text in
 //! memory (the caller writes the files):

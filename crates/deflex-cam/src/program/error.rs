@@ -1,5 +1,6 @@
 //! Errors of the program exporters and readers.
 
+use deflex_files::{FileIoError, FileTooLarge};
 use thiserror::Error;
 
 /// What can go wrong when exporting or reading a robot program.
@@ -99,12 +100,12 @@ pub enum ProgramError {
         /// What was expected.
         message: String,
     },
-    /// Writing the files failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file or folder.
-        path: String,
-        /// The operating system's message.
-        message: String,
-    },
+    /// Reading or writing a file failed (or a file path was refused before any I/O: not a plain
+    /// relative path, a sink used out of order).
+    #[error(transparent)]
+    Io(#[from] FileIoError),
+    /// A file read is larger than its reader accepts: a program template (1 MiB) or a program
+    /// file being read back ([`crate::program::readback::MAX_READ_BYTES`]).
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
 }

@@ -1,4 +1,4 @@
-//! # deflex-program
+//! # Robot programs out (`deflex_cam::program`)
 //!
 //! Robot programs from a tool path (a sequence of TCP poses with speeds), in the languages that
 //! controllers load without any real-time option:
@@ -61,6 +61,7 @@ pub use error::ProgramError;
 pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
 pub use sink::{DirectorySink, MemorySink, ProgramSink};
 
+use deflex_files::FileIoError;
 use deflex_model::{Pose, ToolLoad};
 use std::path::Path;
 
@@ -285,24 +286,19 @@ pub fn write_files(dir: &Path, files: &[ProgramFile]) -> Result<(), ProgramError
             .split('/')
             .any(|part| part.is_empty() || part == "..")
         {
-            return Err(ProgramError::Io {
-                path: file.path.clone(),
-                message: "not a plain relative path".into(),
-            });
+            return Err(FileIoError::other(
+                &file.path,
+                std::io::ErrorKind::InvalidInput,
+                "not a plain relative path",
+            )
+            .into());
         }
         let path = dir.join(&file.path);
         if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| ProgramError::Io {
-                path: parent.display().to_string(),
-                message: e.to_string(),
-            })?;
+            std::fs::create_dir_all(parent).map_err(|e| FileIoError::new(parent, e))?;
         }
-        deflex_files::write_atomic(&path, file.contents.as_bytes()).map_err(|e| {
-            ProgramError::Io {
-                path: path.display().to_string(),
-                message: e.to_string(),
-            }
-        })?;
+        deflex_files::write_atomic(&path, file.contents.as_bytes())
+            .map_err(|e| FileIoError::new(&path, e))?;
     }
     Ok(())
 }

@@ -10,6 +10,7 @@
 use crate::program::error::ProgramError;
 use crate::program::settings::MAX_POINTS_LIMIT;
 use crate::program::{Format, ProgramFile};
+use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::conventions::{
     rotation_from_abb_quaternion, rotation_from_kuka_abc_deg, rotation_from_rotation_vector,
     rotation_from_staubli_rxryrz_deg,
@@ -84,11 +85,7 @@ impl ProgramSource for DirectorySource {
             });
         }
         let full = self.dir.join(path);
-        let file = std::fs::File::open(&full).map_err(|e| ProgramError::Read {
-            file: full.display().to_string(),
-            line: 0,
-            message: e.to_string(),
-        })?;
+        let file = std::fs::File::open(&full).map_err(|e| FileIoError::new(&full, e))?;
         Ok(Box::new(std::io::BufReader::new(file)))
     }
 }
@@ -233,7 +230,8 @@ impl Lines<'_> {
             }
             total += read;
             if total > MAX_READ_BYTES {
-                return Err(self.error(n, format!("larger than {MAX_READ_BYTES} bytes")));
+                let (limit, read) = (MAX_READ_BYTES as u64, total as u64);
+                return Err(FileTooLarge::new(self.file, "a program file", limit, read).into());
             }
             let text = std::str::from_utf8(&buffer)
                 .map_err(|_| self.error(n, "not UTF-8 text"))?

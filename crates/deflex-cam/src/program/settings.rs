@@ -276,12 +276,8 @@ impl ProgramSettings {
     pub fn load(path: &std::path::Path) -> Result<ProgramSettings, ProgramError> {
         let source = path.display().to_string();
         // A program template is a few lines: at most 1 MiB, counted while reading.
-        let text =
-            deflex_files::read_bounded(path, 1 << 20).map_err(|e| ProgramError::Settings {
-                source_name: source.clone(),
-                key: "(file)".into(),
-                message: format!("cannot read: {}", e.into_io()),
-            })?;
+        let text = deflex_files::read_bounded(path, 1 << 20)
+            .map_err(|e| e.reported_as::<ProgramError>("a program template"))?;
         Self::from_toml_str(&text, &source)
     }
 

@@ -6,7 +6,8 @@
 use crate::program::ProgramFile;
 use crate::program::common::check_lines;
 use crate::program::error::ProgramError;
-use std::io::Write as _;
+use deflex_files::FileIoError;
+use std::io::{ErrorKind, Write as _};
 use std::path::{Path, PathBuf};
 
 /// Receives the files of a program, one at a time: [`ProgramSink::begin`], any number of
@@ -45,13 +46,16 @@ pub(crate) fn emit(
 /// A relative path with neither empty parts nor `..`.
 fn plain(path: &str) -> Result<(), ProgramError> {
     if path.split('/').any(|part| part.is_empty() || part == "..") {
-        Err(ProgramError::Io {
-            path: path.to_string(),
-            message: "not a plain relative path".into(),
-        })
+        Err(FileIoError::other(path, ErrorKind::InvalidInput, "not a plain relative path").into())
     } else {
         Ok(())
     }
+}
+
+/// A sink's `write` or `end` called with no file open (a bug of the exporter, reported rather
+/// than written somewhere): `PATH: write without an open file`.
+fn without_open_file(path: impl Into<PathBuf>, message: &'static str) -> ProgramError {
+    FileIoError::other(path, ErrorKind::Other, message).into()
 }
 
 /// Collects the files in memory.
@@ -78,10 +82,7 @@ impl ProgramSink for MemorySink {
                 file.contents.push_str(text);
                 Ok(())
             }
-            None => Err(ProgramError::Io {
-                path: "(memory)".into(),
-                message: "write without an open file".into(),
-            }),
+            None => Err(without_open_file("(memory)", "write without an open file")),
         }
     }
 
@@ -91,10 +92,7 @@ impl ProgramSink for MemorySink {
                 self.files.push(file);
                 Ok(())
             }
-            None => Err(ProgramError::Io {
-                path: "(memory)".into(),
-                message: "end without an open file".into(),
-            }),
+            None => Err(without_open_file("(memory)", "end without an open file")),
         }
     }
 }
@@ -123,13 +121,11 @@ impl DirectorySink {
     }
 
     fn io(&self, error: std::io::Error) -> ProgramError {
-        ProgramError::Io {
-            path: self.open.as_ref().map_or_else(
-                || self.dir.display().to_string(),
-                |f| f.destination().display().to_string(),
-            ),
-            message: error.to_string(),
-        }
+        let path = self
+            .open
+            .as_ref()
+            .map_or(self.dir.as_path(), |f| f.destination());
+        FileIoError::new(path, error).into()
     }
 }
 
@@ -138,15 +134,10 @@ impl ProgramSink for DirectorySink {
         plain(path)?;
         let full = self.dir.join(path);
         if let Some(parent) = full.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| ProgramError::Io {
-                path: parent.display().to_string(),
-                message: e.to_string(),
-            })?;
+            std::fs::create_dir_all(parent).map_err(|e| FileIoError::new(parent, e))?;
         }
-        let file = deflex_files::AtomicFile::create(&full).map_err(|e| ProgramError::Io {
-            path: full.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let file =
+            deflex_files::AtomicFile::create(&full).map_err(|e| FileIoError::new(&full, e))?;
         self.open = Some(file);
         self.files.push(path.to_string());
         Ok(())
@@ -155,12 +146,7 @@ impl ProgramSink for DirectorySink {
     fn write(&mut self, text: &str) -> Result<(), ProgramError> {
         let result = match &mut self.open {
             Some(file) => file.write_all(text.as_bytes()),
-            None => {
-                return Err(ProgramError::Io {
-                    path: self.dir.display().to_string(),
-                    message: "write without an open file".into(),
-                });
-            }
+            None => return Err(without_open_file(&self.dir, "write without an open file")),
         };
         result.map_err(|e| self.io(e))?;
         self.bytes += text.len() as u64;
@@ -170,16 +156,10 @@ impl ProgramSink for DirectorySink {
     fn end(&mut self) -> Result<(), ProgramError> {
         match self.open.take() {
             Some(file) => {
-                let path = file.destination().display().to_string();
-                file.commit().map_err(|e| ProgramError::Io {
-                    path,
-                    message: e.to_string(),
-                })
+                let path = file.destination().to_path_buf();
+                file.commit().map_err(|e| FileIoError::new(path, e).into())
             }
-            None => Err(ProgramError::Io {
-                path: self.dir.display().to_string(),
-                message: "end without an open file".into(),
-            }),
+            None => Err(without_open_file(&self.dir, "end without an open file")),
         }
     }
 }

@@ -10,27 +10,14 @@
 //! `cargo test -p deflex-cli -- --ignored`. With `DEFLEX_VIEW_SCREENSHOT=PATH` it saves the
 //! twin's page there (the README's `docs/live-view.png`).
 
-use crate::cdp::Browser;
-use crate::cli_run::{twin_cell_file, watch_stderr};
+use crate::cdp::{Browser, CHARTS, MIN_LIVE_UPDATE_HZ, number};
+use crate::cli_run::watch_stderr;
+use crate::example_cell::example_cell_file;
+use crate::support::free_tcp_port;
 use serde_json::{Value, json};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-/// Fewest page updates a second that count as a live stream (the page's own count over its last
-/// two seconds, best window): half the ≥ 20 a second the page keeps on an idle machine.
-const MIN_LIVE_UPDATE_HZ: f64 = 10.0;
-
-fn number(v: &Value) -> f64 {
-    v.as_f64().unwrap_or(f64::NAN)
-}
-
-fn free_tcp_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
 
 const STATE: &str = "(() => { const v = window.deflexView; if (!v || !v.hello) return null; \
     const f = v.hello.fields; const at = (n) => v.last ? v.last[f.indexOf(n)] : null; \
@@ -49,40 +36,6 @@ fn wait_for_data(browser: &mut Browser, buckets: f64, limit: Duration) -> Value 
         assert!(Instant::now() < deadline, "no data on the page: {state}");
         browser.idle(Duration::from_millis(250));
     }
-}
-
-/// Asserts that the events so far hold no console error or exception and no request beyond
-/// `origins`; returns the requests seen; forgets the events.
-fn check_events(browser: &mut Browser, origins: &[String]) -> usize {
-    let mut requests = 0;
-    for (method, params) in &browser.events {
-        match method.as_str() {
-            "Runtime.exceptionThrown" => panic!("exception in the page: {params}"),
-            "Runtime.consoleAPICalled" if params["type"] == "error" => {
-                panic!("console error: {params}")
-            }
-            "Log.entryAdded" if params["entry"]["level"] == "error" => {
-                panic!("console error: {params}")
-            }
-            "Network.requestWillBeSent" | "Network.webSocketCreated" => {
-                let url = params["request"]["url"]
-                    .as_str()
-                    .or(params["url"].as_str())
-                    .unwrap_or("");
-                let local = origins.iter().any(|o| {
-                    url.starts_with(&format!("http://{o}/"))
-                        || url.starts_with(&format!("ws://{o}/"))
-                }) || url.starts_with("data:")
-                    || url.starts_with("blob:")
-                    || url == "about:blank";
-                assert!(local, "request beyond the servers: {url}");
-                requests += 1;
-            }
-            _ => {}
-        }
-    }
-    browser.events.clear();
-    requests
 }
 
 /// p99 (nearest rank) and count of `values`.
@@ -117,8 +70,8 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
     let dir = std::env::temp_dir().join(format!("deflex-cli-browser-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let cell = twin_cell_file(&dir);
-    // The links' silence limits are 0.5 s in this cell (twin_cell_file widens the example's
+    let cell = example_cell_file(&dir);
+    // The links' silence limits are 0.5 s in this cell (example_cell_file widens the example's
     // 50 ms): the test measures the page's cost to a running loop, and on a shared 2-core box
     // Chromium's start-up alone can stall either process for more than 50 ms, which would latch
     // a link fault (the controller then ramps out and the cycle times measured are those of a
@@ -171,17 +124,8 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
     assert_eq!(first["label"], "SIMULATED", "{first}");
     assert_eq!(first["source"], "twin-cell");
     assert_eq!(first["stop"], false, "the twin's page has no stop button");
-    let mut best_hz: f64 = 0.0;
-    let mut later = first.clone();
-    let until = Instant::now() + Duration::from_secs(25);
-    while Instant::now() < until {
-        browser.idle(Duration::from_millis(500));
-        later = browser.eval(STATE);
-        best_hz = best_hz.max(number(&later["hz"]));
-        if best_hz >= 20.0 && number(&later["t"]) > number(&first["t"]) + 8.0 {
-            break;
-        }
-    }
+    let (later, best_hz) =
+        browser.watch_live(STATE, number(&first["t"]), 8.0, Duration::from_secs(25));
     eprintln!(
         "twin's page: {} buckets, best update rate {best_hz:.1}/s, {}",
         later["buckets"], later["phase"]
@@ -195,14 +139,7 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
         number(&later["err"]) > 0.0,
         "the path error is shown: {later}"
     );
-    for chart in [
-        "force",
-        "torque",
-        "deflection",
-        "correction",
-        "error",
-        "timing",
-    ] {
+    for chart in CHARTS {
         assert!(number(&later["lengths"][chart]) > 50.0, "{chart}: {later}");
     }
     // The page streams live (a stalled or polling page draws a few frames a second at most);
@@ -214,7 +151,7 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
         Value::Bool(false),
         "SIMULATED is visible"
     );
-    let twin_requests = check_events(&mut browser, &origins);
+    let twin_requests = browser.check_events(&origins);
 
     // The controller's page open for a while, then closed for as long: the session times it
     // saw split the run's own log into cycles with the page open and off.
@@ -228,7 +165,7 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
         number(&open_end["t"]) > number(&open["t"]) + 5.0,
         "{open} {open_end}"
     );
-    let run_requests = check_events(&mut browser, &origins);
+    let run_requests = browser.check_events(&origins);
     browser.page("Page.navigate", json!({"url": "about:blank"}));
     let closed_from = Instant::now();
     browser.idle(Duration::from_secs(12));
@@ -237,14 +174,7 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
     wait_for_data(&mut browser, 500.0, Duration::from_secs(30));
     // Its update rate over the last 2 s shown as it runs.
     browser.idle(Duration::from_secs(3));
-    if let Ok(path) = std::env::var("DEFLEX_VIEW_SCREENSHOT") {
-        let shot = browser.page("Page.captureScreenshot", json!({"format": "png"}));
-        let png = data_encoding::BASE64
-            .decode(shot["data"].as_str().unwrap().as_bytes())
-            .unwrap();
-        std::fs::write(&path, png).unwrap();
-        eprintln!("screenshot: {path}");
-    }
+    browser.screenshot_if_asked();
     browser.page("Page.navigate", json!({"url": run_url}));
     let back = wait_for_data(&mut browser, 20.0, Duration::from_secs(30));
     eprintln!(
@@ -254,16 +184,8 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
     );
 
     // The stop button: a confirmation, then the same ramp-out as Ctrl-C.
-    let click = browser.page_nowait(
-        "Runtime.evaluate",
-        json!({"expression": "document.getElementById('stop').click()"}),
-    );
-    let dialog = browser
-        .wait_event("Page.javascriptDialogOpening", Duration::from_secs(10))
-        .expect("a confirmation dialog");
-    assert_eq!(dialog["type"], "confirm");
-    browser.page("Page.handleJavaScriptDialog", json!({"accept": true}));
-    assert!(browser.result(click, Duration::from_secs(10)).is_some());
+    let (click, _) = browser.click_stop();
+    browser.accept_dialog(click);
     // Leave the page before its server ends (a page left open would retry, and Chromium logs
     // a refused connection as an error).
     browser.page("Page.navigate", json!({"url": "about:blank"}));
@@ -278,7 +200,7 @@ fn the_live_pages_of_a_simulated_cell_and_its_controller() {
     assert_eq!(v["phase"], "stopped", "{v}");
     assert_eq!(v["view"]["stop_requests"], 1, "{v}");
     assert_eq!(v["mcap"]["committed"], true, "{v}");
-    check_events(&mut browser, &origins);
+    browser.check_events(&origins);
     drop(browser);
     // SAFETY: a signal to the child this test spawned.
     unsafe {

@@ -14,39 +14,9 @@ fn write_rows_for(
 ) -> std::io::Result<()> {
     std::fs::write(path, format_rows_for(robot, rows, notes))
 }
+use crate::support::{deflex, s, scratch, with_data};
 use deflex_model::{Robot, builtin};
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn deflex(args: &[&str]) -> Run {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args(args)
-        .output()
-        .expect("run deflex");
-    Run {
-        code: output.status.code(),
-        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
-    }
-}
-
-/// A fresh folder for one test.
-fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-calib-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::path::Path;
 
 /// A SIMULATED campaign of `robot` (planned for it, measured on it), written with its header.
 fn campaign(robot: &Robot, force: f64, path: &Path) -> Vec<MeasurementRow> {
@@ -69,19 +39,16 @@ fn campaign(robot: &Robot, force: f64, path: &Path) -> Vec<MeasurementRow> {
 /// by `calibrate` and by `validate`, naming rows and distances; nothing is written.
 #[test]
 fn a_ur10e_measurement_given_with_the_tx200_is_refused() {
-    let dir = folder("ur-vs-tx");
+    let dir = scratch("calib-ur-vs-tx");
     let data = dir.join("meas_ur.csv");
     campaign(&builtin("ur10e").unwrap(), 150.0, &data);
     let model = dir.join("m.toml");
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "calibrate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&data),
-        "--out",
-        s(&model),
-    ]);
+        &data,
+        &["--out", s(&model)],
+    ));
     assert_eq!(run.code, Some(1), "{}", run.stderr);
     for wanted in [
         "meas_ur.csv: ",
@@ -99,27 +66,17 @@ fn a_ur10e_measurement_given_with_the_tx200_is_refused() {
     }
     assert!(!model.exists());
     let val = dir.join("val");
-    let run = deflex(&[
-        "validate",
-        "--robot",
-        "tx200",
-        "--data",
-        s(&data),
-        "--out",
-        s(&val),
-    ]);
+    let run = deflex(&with_data("validate", "tx200", &data, &["--out", s(&val)]));
     assert_eq!(run.code, Some(1), "{}", run.stderr);
     assert!(run.stderr.contains("mm from the TCP"), "{}", run.stderr);
     assert!(!val.exists());
     // Overridden, it goes on with a warning.
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "validate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&data),
-        "--ignore-fk-check",
-    ]);
+        &data,
+        &["--ignore-fk-check"],
+    ));
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     assert!(run.stdout.contains("warning: ") && run.stdout.contains("going on as asked"));
     // Its own robot takes it, and says how well the coordinates agree.
@@ -145,7 +102,7 @@ fn a_ur10e_measurement_given_with_the_tx200_is_refused() {
 /// error, not a panic (exit 101).
 #[test]
 fn degenerate_calibration_data_is_a_clear_error() {
-    let dir = folder("degenerate");
+    let dir = scratch("calib-degenerate");
     let data = dir.join("meas.csv");
     let robot = builtin("tx200").unwrap();
     let mut rows = campaign(&robot, 1400.0, &data);
@@ -155,15 +112,12 @@ fn degenerate_calibration_data_is_a_clear_error() {
     let zero = dir.join("zero.csv");
     write_rows_for(&zero, &robot, &rows, &[]).unwrap();
     let model = dir.join("m.toml");
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "calibrate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&zero),
-        "--out",
-        s(&model),
-    ]);
+        &zero,
+        &["--out", s(&model)],
+    ));
     assert_eq!(run.code, Some(1), "{}", run.stderr);
     assert!(
         run.stderr
@@ -180,15 +134,12 @@ fn degenerate_calibration_data_is_a_clear_error() {
     fields[column] = "1e308";
     let big = dir.join("big.csv");
     std::fs::write(&big, text.replacen(first, &fields.join(","), 1)).unwrap();
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "calibrate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&big),
-        "--out",
-        s(&model),
-    ]);
+        &big,
+        &["--out", s(&model)],
+    ));
     assert_eq!(run.code, Some(1), "{}", run.stderr);
     assert!(
         run.stderr.contains("big.csv:5") && run.stderr.contains("fx_N"),
@@ -203,7 +154,7 @@ fn degenerate_calibration_data_is_a_clear_error() {
 /// `--max-force-N 1e308` (once an endless SVD on NaN) is refused at once.
 #[test]
 fn every_numeric_flag_is_checked() {
-    let dir = folder("flags");
+    let dir = scratch("calib-flags");
     let data = dir.join("meas.csv");
     campaign(&builtin("tx200").unwrap(), 1400.0, &data);
     let out = dir.join("x");
@@ -276,15 +227,12 @@ fn every_numeric_flag_is_checked() {
         assert_eq!(run.code, Some(1), "{extra:?}: {}", run.stderr);
         assert!(run.stderr.contains(flag), "{extra:?}: {}", run.stderr);
     }
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "validate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&data),
-        "--fk-tolerance-mm",
-        "inf",
-    ]);
+        &data,
+        &["--fk-tolerance-mm", "inf"],
+    ));
     assert_eq!(run.code, Some(1));
     assert!(run.stderr.contains("--fk-tolerance-mm"), "{}", run.stderr);
     assert!(!out.exists());
@@ -294,7 +242,7 @@ fn every_numeric_flag_is_checked() {
 /// Issue 12: a failed validate leaves an existing output folder as it was (and creates none).
 #[test]
 fn a_failed_validate_leaves_the_folder_as_it_was() {
-    let dir = folder("validate-atomic");
+    let dir = scratch("calib-validate-atomic");
     let data = dir.join("meas.csv");
     campaign(&builtin("ur10e").unwrap(), 150.0, &data);
     let val = dir.join("val");
@@ -303,15 +251,7 @@ fn a_failed_validate_leaves_the_folder_as_it_was() {
     // An earlier deflex output folder (a foreign one is refused whole).
     std::fs::write(val.join(".deflex-output"), "").unwrap();
     // Fails: the TX200 is not the robot of this file.
-    let run = deflex(&[
-        "validate",
-        "--robot",
-        "tx200",
-        "--data",
-        s(&data),
-        "--out",
-        s(&val),
-    ]);
+    let run = deflex(&with_data("validate", "tx200", &data, &["--out", s(&val)]));
     assert_eq!(run.code, Some(1));
     let names: Vec<String> = std::fs::read_dir(&val)
         .unwrap()
@@ -324,15 +264,7 @@ fn a_failed_validate_leaves_the_folder_as_it_was() {
         vec![".deflex-output".to_string(), "old.txt".to_string()]
     );
     // Succeeds: the folder is replaced whole.
-    let run = deflex(&[
-        "validate",
-        "--robot",
-        "ur10e",
-        "--data",
-        s(&data),
-        "--out",
-        s(&val),
-    ]);
+    let run = deflex(&with_data("validate", "ur10e", &data, &["--out", s(&val)]));
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     assert!(val.join("validation.html").exists() && !val.join("old.txt").exists());
     // No temporary sibling is left behind.
@@ -362,7 +294,7 @@ const URDF: &str = r#"<?xml version="1.0"?>
 /// finds its URDF.
 #[test]
 fn a_calibrated_urdf_robot_written_elsewhere_finds_its_urdf() {
-    let dir = folder("urdf");
+    let dir = scratch("calib-urdf");
     std::fs::write(dir.join("arm.urdf"), URDF).unwrap();
     let mut toml = String::from("name = \"URDF test arm\"\nurdf = \"arm.urdf\"\n");
     for (i, k) in [1.6e5, 1.3e5, 8.0e4, 2.0e4, 2.0e4, 1.5e4]
@@ -381,17 +313,12 @@ fn a_calibrated_urdf_robot_written_elsewhere_finds_its_urdf() {
     campaign(&robot, 150.0, &data);
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     let model = dir.join("sub").join("m.toml");
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "calibrate",
-        "--robot",
         s(&robot_file),
-        "--data",
-        s(&data),
-        "--out",
-        s(&model),
-        "--structure",
-        "fixed",
-    ]);
+        &data,
+        &["--out", s(&model), "--structure", "fixed"],
+    ));
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     let written = std::fs::read_to_string(&model).unwrap();
     assert!(written.contains("urdf = \"../arm.urdf\""), "{written}");
@@ -404,7 +331,7 @@ fn a_calibrated_urdf_robot_written_elsewhere_finds_its_urdf() {
 /// within ±180° where the limits allow, a technician's sheet; a bracket loads the wrist.
 #[test]
 fn plan_for_every_builtin_robot() {
-    let dir = folder("plans");
+    let dir = scratch("calib-plans");
     for (name, _) in deflex_model::BUILTIN_ROBOTS {
         let out = dir.join(format!("{name}.csv"));
         let run = deflex(&[
@@ -469,7 +396,7 @@ fn plan_for_every_builtin_robot() {
 /// The calibration report holds the plots; JSON says when χ²/dof is well above 1.
 #[test]
 fn calibrate_writes_a_report_with_plots_and_flags_a_high_chi2() {
-    let dir = folder("report");
+    let dir = scratch("calib-report");
     let data = dir.join("meas.csv");
     let robot = builtin("tx200").unwrap();
     let mut rows = campaign(&robot, 1400.0, &data);
@@ -510,15 +437,12 @@ fn calibrate_writes_a_report_with_plots_and_flags_a_high_chi2() {
     ] {
         assert!(report.join(name).exists(), "{name}");
     }
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "calibrate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&data),
-        "--out",
-        s(&model),
-    ]);
+        &data,
+        &["--out", s(&model)],
+    ));
     assert!(run.stdout.contains("well above 1"), "{}", run.stdout);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -527,7 +451,7 @@ fn calibrate_writes_a_report_with_plots_and_flags_a_high_chi2() {
 /// keeps the UR10e's coordinates, so the TX200's model refuses the file.
 #[test]
 fn simulated_campaigns_carry_their_robot() {
-    let dir = folder("sim");
+    let dir = scratch("calib-sim");
     let plan = dir.join("plan_ur.csv");
     let run = deflex(&[
         "plan",
@@ -549,15 +473,12 @@ fn simulated_campaigns_carry_their_robot() {
     assert!(lines.next().unwrap().starts_with("# SIMULATED"));
     assert!(lines.next().unwrap().starts_with("# robot: "));
     assert!(lines.next().unwrap().starts_with("# geometry: "));
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "calibrate",
-        "--robot",
         "tx200",
-        "--data",
-        s(&meas),
-        "--out",
-        s(&dir.join("m.toml")),
-    ]);
+        &meas,
+        &["--out", s(&dir.join("m.toml"))],
+    ));
     assert_eq!(run.code, Some(1), "{}", run.stderr);
     assert!(
         run.stderr.contains("mm from the TCP its joint values give"),
@@ -601,7 +522,7 @@ fn unseen_plant(rho: f64) -> deflex_sim::CellConfig {
 /// the structure, and writes nothing.
 #[test]
 fn couplings_are_fitted_from_a_simulated_campaign() {
-    let dir = folder("couplings");
+    let dir = scratch("calib-couplings");
     let tx200 = |rho: f64| {
         let mut cell = deflex_sim::CellConfig::for_robot("tx200").unwrap();
         cell.plant.j2_j3_coupling = rho;
@@ -737,7 +658,7 @@ fn couplings_are_fitted_from_a_simulated_campaign() {
 /// list is refused before any work, naming `--couplings` and what is wrong.
 #[test]
 fn coupling_pairs_are_parsed_and_bad_ones_named() {
-    let dir = folder("coupling-pairs");
+    let dir = scratch("calib-coupling-pairs");
     let tx200 = builtin("tx200").unwrap();
     let meas = dir.join("meas.csv");
     campaign(&tx200, 1000.0, &meas);

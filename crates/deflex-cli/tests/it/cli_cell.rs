@@ -3,18 +3,12 @@
 //! (The sessions against `deflex run` are in `cli_run`.)
 
 use crate::cli_run::cell_file;
-use std::path::{Path, PathBuf};
+use crate::support::{cell_sim, free_tcp_port, scratch};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 use tungstenite::Message;
 use tungstenite::stream::MaybeTlsStream;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-cell-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// `deflex cell --sim --config CONFIG --wait-s 0 EXTRA…`: no controller answers, so the twin
 /// says what it plays and gives up at once.
@@ -36,25 +30,11 @@ fn playing(out: &Output) -> String {
         .to_string()
 }
 
-fn free_tcp_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
-
 /// The session of the twin's live page (its first message, the hello) while `deflex cell
 /// --sim EXTRA… --view PORT` waits for a controller; the process is ended afterwards.
 fn served_session(config: &Path, extra: &[&str]) -> serde_json::Value {
     let port = free_tcp_port().to_string();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args([
-            "cell",
-            "--sim",
-            "--quiet",
-            "--config",
-            config.to_str().unwrap(),
-        ])
+    let mut child = cell_sim(config)
         .args(["--wait-s", "60", "--view", &port])
         .args(extra)
         .stdout(Stdio::null())
@@ -91,7 +71,7 @@ fn served_session(config: &Path, extra: &[&str]) -> serde_json::Value {
 /// is refused naming it.
 #[test]
 fn the_twin_plays_the_robot_of_the_flag() {
-    let dir = scratch("robot");
+    let dir = scratch("cell-robot");
     let (config, ..) = cell_file(&dir, "kuka-rsi", "");
     let line = playing(&cell(&config, &[]));
     assert!(line.contains("(`tx200`)"), "{line}");
@@ -127,7 +107,7 @@ fn the_twin_plays_the_robot_of_the_flag() {
 /// `deflex cell --sim` refuses anything but loopback, naming the field.
 #[test]
 fn cell_refuses_non_loopback_addresses() {
-    let dir = scratch("nonloop");
+    let dir = scratch("cell-nonloop");
     let config = dir.join("cell.toml");
     std::fs::write(
         &config,
@@ -135,17 +115,7 @@ fn cell_refuses_non_loopback_addresses() {
          [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"tx200\"\n",
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args([
-            "cell",
-            "--sim",
-            "--quiet",
-            "--config",
-            config.to_str().unwrap(),
-        ])
-        .args(["--wait-s", "1"])
-        .output()
-        .unwrap();
+    let out = cell_sim(&config).args(["--wait-s", "1"]).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(e.contains("loopback") && e.contains("robot.bind"), "{e}");

@@ -2,17 +2,11 @@
 //! back, a CAM file on the UR10e cell, refusals before any work, points that cannot be
 //! compensated, and the wrench of a `deflex run` log or of a twin's log.
 
+use crate::support::scratch;
 use deflex_compensate::table::{TableRow, read_csv};
 use deflex_sim::CellConfig;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-compensate-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// `deflex --json compensate LINE…`.
 fn compensate(line: &[&str]) -> Output {
@@ -114,7 +108,7 @@ fn placed_path(dir: &Path, length_mm: &str) -> (Vec<f64>, deflex_compensate::Tcp
 /// parser.
 #[test]
 fn negative_numbers_follow_their_flags() {
-    let dir = scratch("negative");
+    let dir = scratch("compensate-negative");
     // The argument line of a seed that tilts the tool: read, then refused by the command.
     let x = dir.join("x");
     let e = refused(&[
@@ -188,7 +182,7 @@ fn negative_numbers_follow_their_flags() {
 
 #[test]
 fn the_command_writes_safe_programs_that_read_back() {
-    let dir = scratch("ok");
+    let dir = scratch("compensate-ok");
     let out = dir.join("out");
     compensated(&args(&out, &[]));
     let table = std::fs::read_to_string(out.join("compensated_path.csv")).unwrap();
@@ -246,7 +240,7 @@ fn the_command_writes_safe_programs_that_read_back() {
 fn a_cam_file_on_the_ur10e_cell_needs_no_flag() {
     // The README walk-through's continuation with the built-in UR10e: the robot's own cell, a
     // Fanuc-style CAM file with arcs and a header, all five formats.
-    let dir = scratch("ur");
+    let dir = scratch("compensate-ur");
     let out = dir.join("out");
     let part = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -289,7 +283,7 @@ fn a_cam_file_on_the_ur10e_cell_needs_no_flag() {
 
 #[test]
 fn a_tilted_seed_is_refused_and_unreachable_points_name_the_flags() {
-    let dir = scratch("refused");
+    let dir = scratch("compensate-refused");
     let out = dir.join("out");
     let e = refused(&args(&out, &["--seed-deg", "0,49.7,89.3,0,10,0"]));
     assert!(
@@ -307,7 +301,7 @@ fn a_tilted_seed_is_refused_and_unreachable_points_name_the_flags() {
 
 #[test]
 fn uncompensable_points_fail_the_command_with_their_indices_and_no_program() {
-    let dir = scratch("limits");
+    let dir = scratch("compensate-limits");
     // The TX200 with joint 3 stopped just beyond the desired path's values: the compensated
     // poses need more.
     let config = CellConfig::default();
@@ -376,7 +370,7 @@ fn a_deflex_run_log_serves_as_the_wrench_source() {
             | Flags::TARING
             | Flags::STALE_WRENCH
     );
-    let dir = scratch("runlog");
+    let dir = scratch("compensate-runlog");
     let out = dir.join("out");
     // The robot of `--robot tx200` and the path the command places (its first 40 mm).
     let robot = deflex_model::builtin("tx200").unwrap();
@@ -444,7 +438,7 @@ fn a_deflex_run_log_serves_as_the_wrench_source() {
 
 #[test]
 fn bad_options_are_refused_before_any_work() {
-    let dir = scratch("bad");
+    let dir = scratch("compensate-bad");
     let out = dir.join("out");
     for (change, expected) in [
         (["--wrench", "sensor"], "--wrench"),
@@ -472,7 +466,7 @@ fn bad_options_are_refused_before_any_work() {
 fn a_sim_log_gives_the_force_depth_law_and_its_measured_tcp() {
     // The twin forms three 0.5 mm levels of a 40 mm circle on the TX200 cell without
     // correction; its log (SIMULATED, with the tracker's columns) is the wrench source.
-    let dir = scratch("simlog");
+    let dir = scratch("compensate-simlog");
     let mut gcode = String::from("G21 G90 G54\nG0 X20 Y0 Z2\nG1 Z0 F300\n");
     for k in 1..=3 {
         let z = -0.5 * k as f64;

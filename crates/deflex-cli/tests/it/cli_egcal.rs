@@ -1,28 +1,8 @@
 //! End-to-end: `deflex import ur10-tracker`, `deflex calibrate-geometry`, `deflex predict` and
 //! `deflex pose` on the vendored real UR10 subset, through the real binary.
 
+use crate::support::{Run, deflex, json, s, scratch, with_data};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn deflex(args: &[&str]) -> (bool, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args(args)
-        .output()
-        .expect("run deflex");
-    (
-        output.status.success(),
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
-    )
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let mut all = vec!["--json"];
-    all.extend_from_slice(args);
-    let (ok, stdout, stderr) = deflex(&all);
-    assert!(ok, "deflex {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
-}
 
 fn data(series: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -30,59 +10,51 @@ fn data(series: &str) -> PathBuf {
         .join(series)
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-egcal-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn import_calibrate_predict_pose() {
-    let dir = scratch("flow");
+    let dir = scratch("egcal-flow");
     let a = dir.join("A.csv");
     let b = dir.join("B.csv");
-    let s = |p: &Path| p.display().to_string();
     let v = json(&[
         "import",
         "ur10-tracker",
         "--series",
-        &s(&data("Series_A")),
+        s(&data("Series_A")),
         "--setup",
         "A",
         "--out",
-        &s(&a),
+        s(&a),
     ]);
     assert_eq!(v["rows_written"], 298);
     json(&[
         "import",
         "ur10-tracker",
         "--series",
-        &s(&data("Series_B")),
+        s(&data("Series_B")),
         "--setup",
         "B",
         "--out",
-        &s(&b),
+        s(&b),
     ]);
     let model = dir.join("ur10-calibrated.toml");
     let report = dir.join("report");
-    let v = json(&[
+    let v = json(&with_data(
         "calibrate-geometry",
-        "--robot",
         "ur10",
-        "--data",
-        &s(&a),
-        "--test-data",
-        &s(&b),
-        "--elastic",
-        "J2.z,J3.z",
-        "--folds",
-        "3",
-        "--out",
-        &s(&model),
-        "--report",
-        &s(&report),
-    ]);
+        &a,
+        &[
+            "--test-data",
+            s(&b),
+            "--elastic",
+            "J2.z,J3.z",
+            "--folds",
+            "3",
+            "--out",
+            s(&model),
+            "--report",
+            s(&report),
+        ],
+    ));
     let steps = v["steps"].as_array().unwrap();
     assert_eq!(steps.len(), 3);
     let held = |k: usize| steps[k]["held_out"][0]["stats"]["rms_m"].as_f64().unwrap();
@@ -103,15 +75,12 @@ fn import_calibrate_predict_pose() {
     }
     // The calibrated file knows set-up A and B (B registered on half of its configurations):
     // `predict` scores A's readings with it.
-    let p = json(&[
+    let p = json(&with_data(
         "predict",
-        "--robot",
-        &s(&model),
-        "--data",
-        &s(&a),
-        "--out",
-        &s(&dir.join("pred.csv")),
-    ]);
+        s(&model),
+        &a,
+        &["--out", s(&dir.join("pred.csv"))],
+    ));
     let rms = p["rms_m"].as_f64().unwrap();
     let fit_rms = steps[2]["fit"]["rms_m"].as_f64().unwrap();
     assert!((rms - fit_rms).abs() < 1e-9, "{rms} vs {fit_rms}");
@@ -119,7 +88,7 @@ fn import_calibrate_predict_pose() {
     assert!(csv.lines().next().unwrap().contains("predicted_x_m"));
     assert_eq!(csv.lines().count(), 299);
     // `pose` of the calibrated file reports the calibrated flange plus the fitted sag.
-    let pose = json(&["pose", "--robot", &s(&model), "--q-deg", "0,-90,0,-90,0,0"]);
+    let pose = json(&["pose", "--robot", s(&model), "--q-deg", "0,-90,0,-90,0,0"]);
     assert!(pose["gravity_sag_m"].is_array());
     // A set-up the model does not know is refused with its name, unless --fit-setup.
     let renamed = dir.join("C.csv");
@@ -128,72 +97,54 @@ fn import_calibrate_predict_pose() {
         std::fs::read_to_string(&a).unwrap().replace("\nA,", "\nC,"),
     )
     .unwrap();
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&with_data(
         "predict",
-        "--robot",
-        &s(&model),
-        "--data",
-        &s(&renamed),
-        "--out",
-        &s(&dir.join("c.csv")),
-    ]);
+        s(&model),
+        &renamed,
+        &["--out", s(&dir.join("c.csv"))],
+    ));
     assert!(
         !ok && stderr.contains("`C`") && stderr.contains("--fit-setup"),
         "{stderr}"
     );
-    let p = json(&[
+    let p = json(&with_data(
         "predict",
-        "--robot",
-        &s(&model),
-        "--data",
-        &s(&renamed),
-        "--fit-setup",
-        "--out",
-        &s(&dir.join("c.csv")),
-    ]);
+        s(&model),
+        &renamed,
+        &["--fit-setup", "--out", s(&dir.join("c.csv"))],
+    ));
     assert!(p["rms_m"].as_f64().unwrap() < 0.6e-3);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bad_inputs_are_named() {
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&with_data(
         "calibrate-geometry",
-        "--robot",
         "ur10",
-        "--data",
-        "/nonexistent.csv",
-        "--out",
-        "/tmp/x.toml",
-    ]);
+        Path::new("/nonexistent.csv"),
+        &["--out", "/tmp/x.toml"],
+    ));
     assert!(!ok && stderr.contains("/nonexistent.csv"), "{stderr}");
-    let dir = scratch("bad");
+    let dir = scratch("egcal-bad");
     let bad = dir.join("bad.csv");
     std::fs::write(&bad, "setup,target,q1_rad,q2_rad,q3_rad,q4_rad,q5_rad,q6_rad,x_m,y_m,z_m\nA,t,0,0,0,0,0,0,1,2,nan\n").unwrap();
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&with_data(
         "calibrate-geometry",
-        "--robot",
         "ur10",
-        "--data",
-        &bad.display().to_string(),
-        "--out",
-        "/tmp/x.toml",
-    ]);
+        &bad,
+        &["--out", "/tmp/x.toml"],
+    ));
     assert!(
         !ok && stderr.contains("bad.csv:2") && stderr.contains("z_m"),
         "{stderr}"
     );
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&with_data(
         "calibrate-geometry",
-        "--robot",
         "ur10",
-        "--data",
-        &bad.display().to_string(),
-        "--steps",
-        "registration,wobble",
-        "--out",
-        "/tmp/x.toml",
-    ]);
+        &bad,
+        &["--steps", "registration,wobble", "--out", "/tmp/x.toml"],
+    ));
     assert!(!ok && stderr.contains("wobble"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -204,8 +155,7 @@ fn bad_inputs_are_named() {
 /// `deflex predict` on B's other readings, positions and orientations.
 #[test]
 fn register_a_new_session_and_a_new_probe() {
-    let dir = scratch("register");
-    let s = |p: &Path| p.display().to_string();
+    let dir = scratch("egcal-register");
     let a = dir.join("A.csv");
     let b = dir.join("B.csv");
     for (series, setup, out) in [("Series_A", "A", &a), ("Series_B", "B", &b)] {
@@ -213,28 +163,28 @@ fn register_a_new_session_and_a_new_probe() {
             "import",
             "ur10-tracker",
             "--series",
-            &s(&data(series)),
+            s(&data(series)),
             "--setup",
             setup,
             "--out",
-            &s(out),
+            s(out),
         ]);
     }
     let model = dir.join("ur10.toml");
-    json(&[
+    json(&with_data(
         "calibrate-geometry",
-        "--robot",
         "ur10",
-        "--data",
-        &s(&a),
-        "--elastic",
-        "J2.z,J3.z",
-        "--orientations",
-        "--folds",
-        "0",
-        "--out",
-        &s(&model),
-    ]);
+        &a,
+        &[
+            "--elastic",
+            "J2.z,J3.z",
+            "--orientations",
+            "--folds",
+            "0",
+            "--out",
+            s(&model),
+        ],
+    ));
     assert!(dir.join("ur10.terms.json").exists());
     // Split B: the first 30 configurations register, the rest are scored.
     let text = std::fs::read_to_string(&b).unwrap();
@@ -250,29 +200,22 @@ fn register_a_new_session_and_a_new_probe() {
     std::fs::write(&few, lines[..31].join("\n") + "\n").unwrap();
     std::fs::write(&rest, format!("{header}\n{}\n", lines[31..].join("\n"))).unwrap();
     let updated = dir.join("session.toml");
-    let r = json(&[
+    let r = json(&with_data(
         "register",
-        "--robot",
-        &s(&model),
-        "--data",
-        &s(&few),
-        "--orientations",
-        "--out",
-        &s(&updated),
-    ]);
+        s(&model),
+        &few,
+        &["--orientations", "--out", s(&updated)],
+    ));
     assert_eq!(r["readings"], 30);
     assert_eq!(r["params"].as_array().unwrap().len(), 6);
     assert!(r["position_m"]["rms"].as_f64().unwrap() < 0.8e-3, "{r}");
     assert!(dir.join("session.terms.json").exists());
-    let p = json(&[
+    let p = json(&with_data(
         "predict",
-        "--robot",
-        &s(&updated),
-        "--data",
-        &s(&rest),
-        "--out",
-        &s(&dir.join("p1.csv")),
-    ]);
+        s(&updated),
+        &rest,
+        &["--out", s(&dir.join("p1.csv"))],
+    ));
     let rms = p["rms_m"].as_f64().unwrap();
     assert!(rms < 0.7e-3, "new session, held-out RMS {rms}");
     assert!(p["orientation_rms_rad"].as_f64().unwrap() < 3e-3, "{p}");
@@ -282,52 +225,43 @@ fn register_a_new_session_and_a_new_probe() {
     let rest2 = dir.join("rest2.csv");
     std::fs::write(&few2, probe(&lines[1..31])).unwrap();
     std::fs::write(&rest2, probe(&lines[31..])).unwrap();
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&with_data(
         "predict",
-        "--robot",
-        &s(&updated),
-        "--data",
-        &s(&rest2),
-        "--out",
-        &s(&dir.join("x.csv")),
-    ]);
+        s(&updated),
+        &rest2,
+        &["--out", s(&dir.join("x.csv"))],
+    ));
     assert!(
         !ok && stderr.contains("tmac2") && stderr.contains("register"),
         "{stderr}"
     );
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&with_data(
         "register",
-        "--robot",
-        &s(&model),
-        "--data",
-        &s(&few2),
-        "--out",
-        &s(&dir.join("x.toml")),
-    ]);
+        s(&model),
+        &few2,
+        &["--out", s(&dir.join("x.toml"))],
+    ));
     assert!(!ok && stderr.contains("--target tmac2"), "{stderr}");
     let probe_model = dir.join("probe.toml");
-    let r = json(&[
+    let r = json(&with_data(
         "register",
-        "--robot",
-        &s(&model),
-        "--data",
-        &s(&few2),
-        "--target",
-        "tmac2",
-        "--orientations",
-        "--out",
-        &s(&probe_model),
-    ]);
+        s(&model),
+        &few2,
+        &[
+            "--target",
+            "tmac2",
+            "--orientations",
+            "--out",
+            s(&probe_model),
+        ],
+    ));
     assert_eq!(r["params"].as_array().unwrap().len(), 12);
-    let p = json(&[
+    let p = json(&with_data(
         "predict",
-        "--robot",
-        &s(&probe_model),
-        "--data",
-        &s(&rest2),
-        "--out",
-        &s(&dir.join("p2.csv")),
-    ]);
+        s(&probe_model),
+        &rest2,
+        &["--out", s(&dir.join("p2.csv"))],
+    ));
     let rms = p["rms_m"].as_f64().unwrap();
     assert!(rms < 0.7e-3, "new probe, held-out RMS {rms}");
     let written = std::fs::read_to_string(&probe_model).unwrap();

@@ -3,26 +3,13 @@
 //! beside the CSV log.
 
 use crate::cli_run::cell_file;
-use std::path::{Path, PathBuf};
+use crate::support::{cell_sim, scratch};
+use std::path::Path;
 use std::process::{Command, Output};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-live-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// `deflex cell --sim --config CONFIG --quiet --wait-s 0 EXTRA…`, expected to fail: its stderr.
 fn cell_error(config: &Path, extra: &[&str]) -> String {
-    let out: Output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args([
-            "cell",
-            "--sim",
-            "--quiet",
-            "--config",
-            config.to_str().unwrap(),
-        ])
+    let out: Output = cell_sim(config)
         .args(["--wait-s", "0"])
         .args(extra)
         .output()
@@ -38,7 +25,7 @@ fn cell_error(config: &Path, extra: &[&str]) -> String {
 /// tries to listen on: the port is held here, so the error names it and no page is served.
 #[test]
 fn view_addresses_and_recording_names() {
-    let dir = scratch("names");
+    let dir = scratch("live-names");
     let (config, ..) = cell_file(&dir, "kuka-rsi", "");
     let held = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let port = held.local_addr().unwrap().port();

@@ -1,25 +1,24 @@
 //! End-to-end tests of the model commands through the real `deflex` binary.
 
-use std::process::Command;
+use crate::support::{Run, deflex, json, s, scratch};
+use std::path::{Path, PathBuf};
 
-fn deflex(args: &[&str]) -> (bool, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args(args)
-        .output()
-        .expect("run deflex");
-    (
-        output.status.success(),
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
+/// A two-joint URDF arm (`arm.urdf`) and its robot file (`arm.toml`, returned) in `dir`.
+fn two_joint_arm(dir: &Path) -> PathBuf {
+    std::fs::write(
+        dir.join("arm.urdf"),
+        r#"<robot name="a"><link name="b"/><link name="l1"/><link name="l2"/>
+        <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="0" velocity="1"/></joint>
+        <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.25 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="0" velocity="1"/></joint></robot>"#,
     )
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let mut all = vec!["--json"];
-    all.extend_from_slice(args);
-    let (ok, stdout, stderr) = deflex(&all);
-    assert!(ok, "deflex {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
+    .unwrap();
+    let arm = dir.join("arm.toml");
+    std::fs::write(
+        &arm,
+        "name = \"two-joint arm\"\nurdf = \"arm.urdf\"\n[[joint]]\nname = \"j1\"\n[[joint]]\nname = \"j2\"\n",
+    )
+    .unwrap();
+    arm
 }
 
 #[test]
@@ -80,7 +79,7 @@ fn ik_round_trips_and_reports_unreachable() {
             && (tcp[1] - 0.08).abs() < 1e-8
             && (tcp[2] + 0.15).abs() < 1e-8
     );
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "ik",
         "--robot",
         "tx200",
@@ -138,12 +137,12 @@ fn map_writes_csv_and_heatmaps_for_the_paper_grid() {
 
 #[test]
 fn user_errors_are_clear() {
-    let (ok, _, stderr) = deflex(&["pose", "--robot", "tx200", "--q-deg", "0,1"]);
+    let Run { ok, stderr, .. } = deflex(&["pose", "--robot", "tx200", "--q-deg", "0,1"]);
     assert!(
         !ok && stderr.contains("6 joints") && stderr.contains("2 joint values"),
         "{stderr}"
     );
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "pose",
         "--robot",
         "no/such/robot.toml",
@@ -151,7 +150,7 @@ fn user_errors_are_clear() {
         "0,0,0,0,0,0",
     ]);
     assert!(!ok && stderr.contains("no/such/robot.toml"), "{stderr}");
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "deflect",
         "--robot",
         "tx200",
@@ -164,7 +163,7 @@ fn user_errors_are_clear() {
         !ok && stderr.contains("--wrench") && stderr.contains("\"x\""),
         "{stderr}"
     );
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "deflect",
         "--robot",
         "tx200",
@@ -178,7 +177,9 @@ fn user_errors_are_clear() {
 
 #[test]
 fn model_show_prints_standard_dh_masses_and_urdf_geometry() {
-    let (ok, stdout, stderr) = deflex(&["model", "show", "--robot", "ur10"]);
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&["model", "show", "--robot", "ur10"]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("standard DH") && stdout.contains("shoulder_pan_joint"),
@@ -189,26 +190,11 @@ fn model_show_prints_standard_dh_masses_and_urdf_geometry() {
     assert_eq!(v["geometry"], "modified DH");
     assert_eq!(v["geometry_fingerprint"].as_str().unwrap().len(), 16);
     // A URDF robot shows its placements.
-    let dir = std::env::temp_dir().join(format!("deflex-cli-urdf-show-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("arm.urdf"),
-        r#"<robot name="a"><link name="b"/><link name="l1"/><link name="l2"/>
-        <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="0" velocity="1"/></joint>
-        <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.25 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="0" velocity="1"/></joint></robot>"#,
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("arm.toml"),
-        "name = \"two-joint arm\"\nurdf = \"arm.urdf\"\n[[joint]]\nname = \"j1\"\n[[joint]]\nname = \"j2\"\n",
-    )
-    .unwrap();
-    let (ok, stdout, stderr) = deflex(&[
-        "model",
-        "show",
-        "--robot",
-        dir.join("arm.toml").to_str().unwrap(),
-    ]);
+    let dir = scratch("model-urdf-show");
+    let arm = two_joint_arm(&dir);
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&["model", "show", "--robot", s(&arm)]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("URDF") && stdout.contains("xyz 250.0 0.0 0.0 mm"),
@@ -219,7 +205,7 @@ fn model_show_prints_standard_dh_masses_and_urdf_geometry() {
 #[test]
 fn map_refuses_a_grid_too_fine_to_hold() {
     let out = std::env::temp_dir().join(format!("deflex-cli-map-fine-{}", std::process::id()));
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "map",
         "--robot",
         "tx200",
@@ -255,7 +241,9 @@ fn pose_reports_the_sag_under_the_arms_own_weight_when_masses_are_known() {
 /// part origin the summary prints.
 #[test]
 fn model_show_and_sim_robot_print_the_robots_twin_cell() {
-    let (ok, stdout, stderr) = deflex(&["model", "show", "--robot", "ur10e"]);
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&["model", "show", "--robot", "ur10e"]);
     assert!(ok, "{stderr}");
     for needle in [
         "twin cell of ur10e",
@@ -269,8 +257,7 @@ fn model_show_and_sim_robot_print_the_robots_twin_cell() {
     }
     let shown = json(&["model", "show", "--robot", "ur10e"]);
     let cell = &shown["cell"];
-    let dir = std::env::temp_dir().join(format!("deflex-cli-cell-show-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("model-cell-show");
     let file = dir.join("ur10e_cell.toml");
     let sim = json(&[
         "sim",
@@ -284,7 +271,9 @@ fn model_show_and_sim_robot_print_the_robots_twin_cell() {
         &sim["cell"], cell,
         "sim robot and model show print one cell"
     );
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "sim",
         "robot",
         "--robot",
@@ -317,20 +306,10 @@ fn model_show_and_sim_robot_print_the_robots_twin_cell() {
     assert_eq!(tool, written);
 
     // A robot no cell is built around says so and still shows its model.
-    std::fs::write(
-        dir.join("arm.urdf"),
-        r#"<robot name="a"><link name="b"/><link name="l1"/><link name="l2"/>
-        <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="0" velocity="1"/></joint>
-        <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.25 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="0" velocity="1"/></joint></robot>"#,
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("arm.toml"),
-        "name = \"two-joint arm\"\nurdf = \"arm.urdf\"\n[[joint]]\nname = \"j1\"\n[[joint]]\nname = \"j2\"\n",
-    )
-    .unwrap();
-    let arm = dir.join("arm.toml");
-    let (ok, stdout, stderr) = deflex(&["model", "show", "--robot", arm.to_str().unwrap()]);
+    let arm = two_joint_arm(&dir);
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&["model", "show", "--robot", arm.to_str().unwrap()]);
     assert!(
         ok && stdout.contains("twin cell: none ("),
         "{stdout}{stderr}"

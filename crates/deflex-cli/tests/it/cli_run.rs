@@ -3,9 +3,9 @@
 //! SIGTERM ends the process cleanly (before the start, and in a session, ramping the correction
 //! out first).
 
-use deflex_io::netft::{Calibration, NetFtSensorServer};
-use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
-use deflex_io::{RobotSideLink, RobotState};
+use crate::example_cell::{example_cell_file, free_udp_port};
+use crate::support::{RunPeers, scratch};
+use deflex_model::Wrench;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Arc;
@@ -14,19 +14,6 @@ use std::time::{Duration, Instant};
 
 fn deflex() -> Command {
     Command::new(env!("CARGO_BIN_EXE_deflex"))
-}
-
-fn free_udp_port() -> u16 {
-    std::net::UdpSocket::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-run-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// A cell file on free loopback ports with `extra` appended.
@@ -46,7 +33,7 @@ pub fn cell_file(dir: &Path, kind: &str, extra: &str) -> (PathBuf, u16, u16) {
 #[test]
 fn numeric_flags_are_checked() {
     let _turn = crate::session_turn();
-    let dir = scratch("flags");
+    let dir = scratch("run-flags");
     let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
     let cell = cell.to_str().unwrap();
     for (args, flag) in [
@@ -102,7 +89,7 @@ fn numeric_flags_are_checked() {
 #[test]
 fn absurd_cell_values_are_refused_with_the_field() {
     let _turn = crate::session_turn();
-    let dir = scratch("fields");
+    let dir = scratch("run-fields");
     for (extra, field) in [
         ("rate_hz = 1e-300\n", "control.rate_hz"),
         ("rate_hz = 0.001\n", "control.rate_hz"),
@@ -126,7 +113,7 @@ fn absurd_cell_values_are_refused_with_the_field() {
 #[test]
 fn failed_run_keeps_the_existing_log() {
     let _turn = crate::session_turn();
-    let dir = scratch("log");
+    let dir = scratch("run-log");
     let (cell, ..) = cell_file(&dir, "simple-udp", "[log]\npath = \"run.csv\"\n");
     std::fs::write(dir.join("run.csv"), "a previous session\n").unwrap();
     let out = deflex()
@@ -160,7 +147,7 @@ fn sigterm(pid: u32) {
 #[test]
 fn sigterm_before_the_start_ends_cleanly() {
     let _turn = crate::session_turn();
-    let dir = scratch("term0");
+    let dir = scratch("run-term0");
     let (cell, ..) = cell_file(&dir, "kuka-rsi", "");
     let mut child = deflex()
         .args(["run", "--config", cell.to_str().unwrap()])
@@ -191,58 +178,33 @@ fn sigterm_before_the_start_ends_cleanly() {
 #[test]
 fn sigterm_in_a_session_ramps_the_correction_out() {
     let _turn = crate::session_turn();
-    let dir = scratch("term1");
+    let dir = scratch("run-term1");
     let (cell, robot_port, sensor_port) = cell_file(
         &dir,
         "simple-udp",
         "[limits]\nramp_out_s = 0.3\n[log]\npath = \"run.csv\"\n",
     );
-    let run = Arc::new(AtomicBool::new(true));
-    // Answers the robot has received: the session is running (the sensor's contact waits for it,
-    // whatever the load on the machine delays the process's start by).
-    let answered = Arc::new(std::sync::atomic::AtomicUsize::new(0));
-    let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
-    let sensor = {
-        let (run, answered) = (run.clone(), answered.clone());
-        std::thread::spawn(move || {
-            let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
-                .unwrap();
-            while run.load(Ordering::Acquire) {
-                let _ = s.poll_request(Duration::from_micros(500));
-                // Out of contact for the tare (0.2 s from the session's start; 250 answers are
-                // at least 1 s of robot cycles), then 800 N pushing up on the tool: −z of the
-                // sensor at this tool-down pose (sensor at the flange).
-                let fz = if answered.load(Ordering::Acquire) < 250 {
-                    0.0
-                } else {
-                    -800.0
-                };
-                let _ = s.send_sample(&deflex_model::Wrench::new(0.0, 0.0, fz, 0.0, 0.0, 0.0), 0);
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        })
-    };
+    // The contact waits for the session to run (the robot's answers count it), whatever the
+    // load on the machine delays the process's start by: out of contact for the tare (0.2 s
+    // from the session's start; 250 answers are at least 1 s of robot cycles), then 800 N
+    // pushing up on the tool: −z of the sensor at this tool-down pose (sensor at the flange).
     let active = Arc::new(AtomicBool::new(false));
-    let robot = {
-        let (run, active, answered) = (run.clone(), active.clone(), answered.clone());
-        std::thread::spawn(move || {
-            let mut ep =
-                SimpleUdpRobotEndpoint::new("127.0.0.1:0", ([127, 0, 0, 1], robot_port).into())
-                    .unwrap();
-            let mut answers = Vec::new();
-            while run.load(Ordering::Acquire) {
-                let _ = ep.send_state(&RobotState::with_joints(&q));
-                if let Ok(Some(c)) = ep.receive_correction(Duration::from_millis(20)) {
-                    answers.push(c.correction.to_array());
-                    answered.store(answers.len(), Ordering::Release);
-                    if c.correction.dp_m[2].abs() > 1e-4 {
-                        active.store(true, Ordering::Release);
-                    }
+    let peers = {
+        let active = active.clone();
+        RunPeers::start(
+            robot_port,
+            sensor_port,
+            move |answers| {
+                if answers.last().is_some_and(|c| c[2].abs() > 1e-4) {
+                    active.store(true, Ordering::Release);
                 }
-                std::thread::sleep(Duration::from_millis(4));
-            }
-            answers
-        })
+                true
+            },
+            |answered| {
+                let fz = if answered < 250 { 0.0 } else { -800.0 };
+                Some(Wrench::new(0.0, 0.0, fz, 0.0, 0.0, 0.0))
+            },
+        )
     };
     let child = deflex()
         .args(["run", "--config", cell.to_str().unwrap(), "--quiet"])
@@ -257,9 +219,7 @@ fn sigterm_in_a_session_ramps_the_correction_out() {
     }
     sigterm(child.id());
     let out = child.wait_with_output().unwrap();
-    run.store(false, Ordering::Release);
-    let answers = robot.join().unwrap();
-    sensor.join().unwrap();
+    let answers = peers.join();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -286,27 +246,6 @@ fn sigterm_in_a_session_ramps_the_correction_out() {
             > 10
     );
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// The twin's CELL.toml (docs/cell.example.toml with free loopback ports, no real-time
-/// privileges, the log `run.csv`) and its model beside it, in `dir`.
-pub fn twin_cell_file(dir: &Path) -> PathBuf {
-    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs");
-    let text = std::fs::read_to_string(docs.join("cell.example.toml"))
-        .unwrap()
-        .replace("127.0.0.1:59152", &format!("127.0.0.1:{}", free_udp_port()))
-        .replace("127.0.0.1:49152", &format!("127.0.0.1:{}", free_udp_port()))
-        .replace("realtime = true", "realtime = false")
-        .replace("lock_memory = true", "lock_memory = false")
-        .replace("path = \"deflex-run.csv\"", "path = \"run.csv\"")
-        // The link and sensor timeouts of a real cell (50 ms) latch a fault when a loaded test
-        // machine holds a process back that long; these sessions check pages and recordings.
-        .replace("timeout_s = 0.05", "timeout_s = 0.5");
-    assert!(text.contains("path = \"run.csv\"") && !text.contains("timeout_s = 0.05"));
-    std::fs::copy(docs.join("tx200_cell.toml"), dir.join("tx200_cell.toml")).unwrap();
-    let path = dir.join("cell.toml");
-    std::fs::write(&path, text).unwrap();
-    path
 }
 
 /// Reads a child's stderr on a thread: the live view's address (from its "open http://…"
@@ -356,8 +295,8 @@ fn get_page(url: &str) -> String {
 #[test]
 fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
     let _turn = crate::session_turn();
-    let dir = scratch("views");
-    let cell = twin_cell_file(&dir);
+    let dir = scratch("run-views");
+    let cell = example_cell_file(&dir);
     let cell = cell.to_str().unwrap();
     let mut twin = deflex()
         // 30 mm: 3.1 s of forming, ≈ 160 rows of the twin's 50 Hz log (more than 100 checked).
@@ -438,7 +377,7 @@ fn cell_and_run_serve_their_pages_and_record_beside_their_logs() {
 #[test]
 fn a_bad_log_path_is_refused_before_the_session() {
     use std::os::unix::fs::FileTypeExt;
-    let dir = scratch("logpath");
+    let dir = scratch("run-logpath");
     std::fs::create_dir_all(dir.join("logs")).unwrap();
     let fifo = dir.join("fifo.csv");
     let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
@@ -479,7 +418,7 @@ fn a_bad_log_path_is_refused_before_the_session() {
 #[cfg(not(feature = "ros2"))]
 #[test]
 fn a_cell_asking_for_ros2_is_refused_by_a_build_without_it() {
-    let dir = scratch("noros2");
+    let dir = scratch("run-noros2");
     let ros2 = "[ros2]\ndomain_id = 7\n";
     let log = "[log]\npath = \"run.csv\"\n";
     for (sensor_topic, field) in [(false, "[ros2]"), (true, "sensor.kind = \"ros2\"")] {
@@ -528,42 +467,22 @@ fn a_cell_asking_for_ros2_is_refused_by_a_build_without_it() {
 #[test]
 fn a_latched_fault_ends_the_run_with_exit_status_3() {
     let _turn = crate::session_turn();
-    let dir = scratch("fault");
+    let dir = scratch("run-fault");
     let (cell, robot_port, sensor_port) = cell_file(&dir, "simple-udp", "");
-    let answered = Arc::new(std::sync::atomic::AtomicUsize::new(0));
-    let stop = Arc::new(AtomicBool::new(false));
-    let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
-    let sensor = {
-        let (answered, stop) = (answered.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
-                .unwrap();
-            while answered.load(Ordering::Acquire) < 150 && !stop.load(Ordering::Acquire) {
-                let _ = s.poll_request(Duration::from_micros(500));
-                let _ = s.send_sample(&deflex_model::Wrench::zeros(), 0);
-                std::thread::sleep(Duration::from_millis(1));
+    // The sensor streams until the robot has had 150 answers; the robot sends 150 telegrams
+    // more.
+    let mut after = 0;
+    let peers = RunPeers::start(
+        robot_port,
+        sensor_port,
+        move |answers| {
+            if answers.len() >= 150 {
+                after += 1;
             }
-        })
-    };
-    let robot = {
-        let (answered, stop) = (answered.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let mut ep =
-                SimpleUdpRobotEndpoint::new("127.0.0.1:0", ([127, 0, 0, 1], robot_port).into())
-                    .unwrap();
-            let mut sent_after = 0;
-            while sent_after < 150 && !stop.load(Ordering::Acquire) {
-                let _ = ep.send_state(&RobotState::with_joints(&q));
-                if let Ok(Some(_)) = ep.receive_correction(Duration::from_millis(20)) {
-                    answered.fetch_add(1, Ordering::AcqRel);
-                }
-                if answered.load(Ordering::Acquire) >= 150 {
-                    sent_after += 1;
-                }
-                std::thread::sleep(Duration::from_millis(4));
-            }
-        })
-    };
+            after < 150
+        },
+        |answered| (answered < 150).then(Wrench::zeros),
+    );
     let out = deflex()
         .args([
             "run",
@@ -575,9 +494,7 @@ fn a_latched_fault_ends_the_run_with_exit_status_3() {
         ])
         .output()
         .unwrap();
-    stop.store(true, Ordering::Release);
-    robot.join().unwrap();
-    sensor.join().unwrap();
+    peers.join();
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{text}\n{err}");

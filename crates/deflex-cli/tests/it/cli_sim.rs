@@ -2,31 +2,14 @@
 //! the robot it is given and says so in every output, and bad input (issue 12) gets a clear error
 //! naming the option or field, with nothing written or overwritten.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn deflex(args: &[&str]) -> (bool, String, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args(args)
-        .output()
-        .expect("run deflex");
-    (
-        output.status.success(),
-        String::from_utf8_lossy(&output.stdout).into_owned(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
-    )
-}
-
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-sim-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use crate::support::{Run, deflex, scratch};
+use std::path::Path;
 
 /// `args` fail with an error that mentions `needle`, and the output `out` keeps its old content.
 fn refused(args: &[&str], needle: &str, out: &Path) {
-    let (ok, stdout, stderr) = deflex(args);
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(args);
     assert!(!ok, "deflex {args:?} should fail; stdout: {stdout}");
     assert!(
         stderr.contains(needle),
@@ -50,325 +33,110 @@ fn refused(args: &[&str], needle: &str, out: &Path) {
     }
 }
 
+/// Flags a command refuses, and what its error must name.
+type Refusal<'a> = (&'a [&'a str], &'a str);
+
 #[test]
 fn every_numeric_option_of_sim_is_checked() {
-    let dir = scratch("flags");
+    let dir = scratch("sim-flags");
     let out = dir.join("run");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "old").unwrap();
     // An earlier deflex output folder (a foreign one is refused whole, before the flags).
     std::fs::write(out.join(".deflex-output"), "").unwrap();
-    let o = out.to_str().unwrap();
     let csv = dir.join("meas.csv");
     std::fs::write(&csv, "old").unwrap();
-    let c = csv.to_str().unwrap();
-    let cases: Vec<(Vec<&str>, &str, &Path)> = vec![
-        // Issue 12: a 180 TB allocation before.
+    // Each command with the output it must not touch, and its flags with what the error must
+    // name.
+    let commands: [(&[&str], &Path, &[Refusal]); 4] = [
         (
-            vec!["sim", "isf", "--feed-mm-s", "1e-9", "--out", o],
-            "--feed-mm-s",
+            &["sim", "isf"],
             &out,
-        ),
-        (
-            vec!["sim", "isf", "--feed-mm-s", "nan", "--out", o],
-            "--feed-mm-s",
-            &out,
-        ),
-        (
-            vec!["sim", "isf", "--feed-mm-s", "1e300", "--out", o],
-            "--feed-mm-s",
-            &out,
-        ),
-        (
-            vec!["sim", "isf", "--length-mm", "nan", "--out", o],
-            "--length-mm",
-            &out,
-        ),
-        (
-            vec!["sim", "isf", "--length-mm=-5", "--out", o],
-            "--length-mm",
-            &out,
-        ),
-        (
-            vec!["sim", "isf", "--length-mm", "inf", "--out", o],
-            "--length-mm",
-            &out,
-        ),
-        (
-            vec![
-                "sim",
-                "isf",
-                "--path",
-                "plunge",
-                "--fixture-stiffness-n-m",
-                "1e20",
-                "--out",
-                o,
+            &[
+                // Issue 12: a 180 TB allocation before.
+                (&["--feed-mm-s", "1e-9"], "--feed-mm-s"),
+                (&["--feed-mm-s", "nan"], "--feed-mm-s"),
+                (&["--feed-mm-s", "1e300"], "--feed-mm-s"),
+                (&["--length-mm", "nan"], "--length-mm"),
+                (&["--length-mm=-5"], "--length-mm"),
+                (&["--length-mm", "inf"], "--length-mm"),
+                (
+                    &["--path", "plunge", "--fixture-stiffness-n-m", "1e20"],
+                    "--fixture-stiffness-n-m",
+                ),
+                (
+                    &["--path", "plunge", "--fixture-stiffness-n-m", "nan"],
+                    "--fixture-stiffness-n-m",
+                ),
+                (&["--robot", "no-such-robot"], "no-such-robot"),
             ],
-            "--fixture-stiffness-n-m",
-            &out,
         ),
         (
-            vec![
-                "sim",
-                "isf",
-                "--path",
-                "plunge",
-                "--fixture-stiffness-n-m",
-                "nan",
-                "--out",
-                o,
-            ],
-            "--fixture-stiffness-n-m",
-            &out,
-        ),
-        (
-            vec!["sim", "isf", "--robot", "no-such-robot", "--out", o],
-            "no-such-robot",
-            &out,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-step-m",
-                "1e-9",
-                "--out",
-                c,
-            ],
-            "--grid-step-m",
+            &["sim", "campaign"],
             &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-step-m",
-                "nan",
-                "--out",
-                c,
+            &[
+                (&["--grid", "--grid-step-m", "1e-9"], "--grid-step-m"),
+                (&["--grid", "--grid-step-m", "nan"], "--grid-step-m"),
+                (&["--grid", "--grid-loads-n", "nan"], "--grid-loads-n"),
+                (&["--grid", "--grid-loads-n", "1e9"], "grid loads"),
+                (&["--grid", "--grid-size-m", "0"], "--grid-size-m"),
+                (&["--grid", "--grid-height-m", "inf"], "--grid-height-m"),
+                (&["--grid", "--grid-center-m", "1,nan"], "--grid-center-m"),
+                (
+                    &["--spiral", "--spiral-length-m", "1e9"],
+                    "--spiral-length-m",
+                ),
+                (
+                    &["--spiral", "--spiral-speed-m-s", "0"],
+                    "--spiral-speed-m-s",
+                ),
+                (
+                    &["--spiral", "--spiral-radius-m", "nan"],
+                    "--spiral-radius-m",
+                ),
+                (&["--spiral", "--spiral-load-n=-1"], "--spiral-load-n"),
+                (&["--spiral", "--spiral-pitch-m", "1e9"], "--spiral-pitch-m"),
+                (
+                    &["--spiral", "--spiral-center-m", "1,2"],
+                    "--spiral-center-m",
+                ),
+                (&["--grid-step-m", "0.1"], "need --grid"),
             ],
-            "--grid-step-m",
-            &csv,
         ),
         (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-loads-n",
-                "nan",
-                "--out",
-                c,
-            ],
-            "--grid-loads-n",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-loads-n",
-                "1e9",
-                "--out",
-                c,
-            ],
-            "grid loads",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-size-m",
-                "0",
-                "--out",
-                c,
-            ],
-            "--grid-size-m",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-height-m",
-                "inf",
-                "--out",
-                c,
-            ],
-            "--grid-height-m",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--grid",
-                "--grid-center-m",
-                "1,nan",
-                "--out",
-                c,
-            ],
-            "--grid-center-m",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--spiral",
-                "--spiral-length-m",
-                "1e9",
-                "--out",
-                c,
-            ],
-            "--spiral-length-m",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--spiral",
-                "--spiral-speed-m-s",
-                "0",
-                "--out",
-                c,
-            ],
-            "--spiral-speed-m-s",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--spiral",
-                "--spiral-radius-m",
-                "nan",
-                "--out",
-                c,
-            ],
-            "--spiral-radius-m",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--spiral",
-                "--spiral-load-n=-1",
-                "--out",
-                c,
-            ],
-            "--spiral-load-n",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--spiral",
-                "--spiral-pitch-m",
-                "1e9",
-                "--out",
-                c,
-            ],
-            "--spiral-pitch-m",
-            &csv,
-        ),
-        (
-            vec![
-                "sim",
-                "campaign",
-                "--spiral",
-                "--spiral-center-m",
-                "1,2",
-                "--out",
-                c,
-            ],
-            "--spiral-center-m",
-            &csv,
-        ),
-        (
-            vec!["sim", "campaign", "--grid-step-m", "0.1", "--out", c],
-            "need --grid",
-            &csv,
-        ),
-        (
-            vec!["sim", "sensitivity", "--delays-ms", "nan", "--out", o],
-            "--delays-ms",
+            &["sim", "sensitivity"],
             &out,
-        ),
-        (
-            vec!["sim", "sensitivity", "--delays-ms", "8,1e9", "--out", o],
-            "--delays-ms",
-            &out,
-        ),
-        (
-            vec!["sim", "sensitivity", "--model-scales", "0", "--out", o],
-            "--model-scales",
-            &out,
-        ),
-        (
-            vec![
-                "sim",
-                "sensitivity",
-                "--gain-errors-percent",
-                "500",
-                "--out",
-                o,
+            &[
+                (&["--delays-ms", "nan"], "--delays-ms"),
+                (&["--delays-ms", "8,1e9"], "--delays-ms"),
+                (&["--model-scales", "0"], "--model-scales"),
+                (&["--gain-errors-percent", "500"], "--gain-errors"),
+                (&["--drift-factors=-1"], "--drift-factors"),
+                (&["--contact-stiffness-n-m", "1"], "--contact-stiffness-n-m"),
+                (&["--threads", "0"], "--threads"),
+                (&["--length-mm", "nan"], "--length-mm"),
             ],
-            "--gain-errors",
-            &out,
         ),
         (
-            vec!["sim", "sensitivity", "--drift-factors=-1", "--out", o],
-            "--drift-factors",
+            &["demo"],
             &out,
-        ),
-        (
-            vec![
-                "sim",
-                "sensitivity",
-                "--contact-stiffness-n-m",
-                "1",
-                "--out",
-                o,
-            ],
-            "--contact-stiffness-n-m",
-            &out,
-        ),
-        (
-            vec!["sim", "sensitivity", "--threads", "0", "--out", o],
-            "--threads",
-            &out,
-        ),
-        (
-            vec!["sim", "sensitivity", "--length-mm", "nan", "--out", o],
-            "--length-mm",
-            &out,
-        ),
-        (
-            vec!["demo", "--robot", "no-such-robot", "--out", o],
-            "no-such-robot",
-            &out,
+            &[(&["--robot", "no-such-robot"], "no-such-robot")],
         ),
     ];
-    for (args, needle, target) in cases {
-        refused(&args, needle, target);
+    for (command, target, cases) in commands {
+        for (flags, needle) in cases {
+            let mut args = command.to_vec();
+            args.extend_from_slice(flags);
+            args.extend_from_slice(&["--out", target.to_str().unwrap()]);
+            refused(&args, needle, target);
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bad_twin_files_and_gcode_name_the_field_or_line() {
-    let dir = scratch("files");
+    let dir = scratch("sim-files");
     let out = dir.join("run");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "old").unwrap();
@@ -436,9 +204,11 @@ fn bad_twin_files_and_gcode_name_the_field_or_line() {
 
 #[test]
 fn the_twin_plays_the_robot_it_is_given_and_names_it() {
-    let dir = scratch("robot");
+    let dir = scratch("sim-robot");
     let csv = dir.join("grid.csv");
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "sim",
         "campaign",
         "--robot",
@@ -467,7 +237,9 @@ fn the_twin_plays_the_robot_it_is_given_and_names_it() {
     // The UR cell's grid: loads sized to its forming force (≈ 0.5 and 0.9 × 170 N), not 600 N.
     assert!(!text.contains("grid600N"), "the TX200's loads on a UR10e");
     let out = dir.join("run");
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "--json",
         "sim",
         "isf",
@@ -486,7 +258,9 @@ fn the_twin_plays_the_robot_it_is_given_and_names_it() {
     let log = std::fs::read_to_string(out.join("log.csv")).unwrap();
     assert!(log.lines().next().unwrap().contains("UR10e"));
     // The plunge into a fixture, open loop.
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "sim",
         "isf",
         "--path",
@@ -505,10 +279,10 @@ fn the_twin_plays_the_robot_it_is_given_and_names_it() {
 /// the plan's), so `calibrate --robot` with that robot sees no fingerprint mismatch.
 #[test]
 fn a_campaign_from_a_plan_carries_the_plans_robot_lines() {
-    let dir = scratch("plan-header");
+    let dir = scratch("sim-plan-header");
     let plan = dir.join("plan.csv");
     let meas = dir.join("meas.csv");
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "plan",
         "--robot",
         "ur10e",
@@ -518,7 +292,7 @@ fn a_campaign_from_a_plan_carries_the_plans_robot_lines() {
         plan.to_str().unwrap(),
     ]);
     assert!(ok, "{stderr}");
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "sim",
         "campaign",
         "--robot",
@@ -546,9 +320,11 @@ fn a_campaign_from_a_plan_carries_the_plans_robot_lines() {
 /// (issue 21's acceptance), and reads the recordings too.
 #[test]
 fn sim_isf_records_and_plots_and_two_runs_overlay() {
-    let dir = scratch("record");
+    let dir = scratch("sim-record");
     let (open, closed, model) = (dir.join("open"), dir.join("closed"), dir.join("robot.toml"));
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "--json",
         "sim",
         "isf",
@@ -564,9 +340,11 @@ fn sim_isf_records_and_plots_and_two_runs_overlay() {
     assert!(mcap.starts_with(b"\x89MCAP0\r\n"));
     let page = std::fs::read_to_string(open.join("plot/index.html")).unwrap();
     assert!(page.contains("SIMULATED"));
-    let (ok, _, stderr) = deflex(&["sim", "robot", "--out", model.to_str().unwrap()]);
+    let Run { ok, stderr, .. } = deflex(&["sim", "robot", "--out", model.to_str().unwrap()]);
     assert!(ok, "{stderr}");
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "sim",
         "isf",
         "--length-mm",
@@ -587,7 +365,9 @@ fn sim_isf_records_and_plots_and_two_runs_overlay() {
     assert!(closed.join("run.mcap").is_file() && !closed.join("plot").exists());
 
     let plots = dir.join("plots");
-    let (ok, stdout, stderr) = deflex(&[
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
         "--json",
         "plot",
         open.join("log.csv").to_str().unwrap(),
@@ -611,7 +391,7 @@ fn sim_isf_records_and_plots_and_two_runs_overlay() {
     let html = std::fs::read_to_string(plots.join("index.html")).unwrap();
     assert!(html.contains("open loop vs closed loop"), "overlaid page");
     // The recordings plot as well (the controller's stream and the twin's own).
-    let (ok, _, stderr) = deflex(&[
+    let Run { ok, stderr, .. } = deflex(&[
         "plot",
         closed.join("run.mcap").to_str().unwrap(),
         open.join("run.mcap").to_str().unwrap(),

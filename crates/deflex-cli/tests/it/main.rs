@@ -3,7 +3,8 @@
 
 // Ignored by default: headless Chromium on the live pages of a real SIMULATED session.
 mod browser;
-// The DevTools client of deflex-view's browser test, shared rather than copied.
+// The DevTools client and the live-page checks of deflex-view's browser test, compiled here
+// rather than copied (both packages check a live page with one client).
 #[path = "../../../deflex-view/tests/it/cdp.rs"]
 mod cdp;
 mod cli_calib;
@@ -16,8 +17,13 @@ mod cli_model;
 mod cli_plot;
 mod cli_run;
 mod cli_sim;
+// The documented CELL.toml as a test session runs it, deflex-app's test fixture, compiled here
+// rather than copied.
+#[path = "../../../deflex-app/tests/it/example_cell.rs"]
+mod example_cell;
 mod hostile;
 mod strict_inputs;
+mod support;
 mod walkthrough;
 
 /// `deflex run` and `deflex cell --sim` processes against each other on loopback sleep most of

@@ -2,42 +2,13 @@
 //! load case holding two configurations, estimate pairs correlated at |ρ| ≥ 0.95, `import`'s
 //! labels, `run`'s log on a full disk and two processes on one output folder.
 
+use crate::support::{deflex, s, scratch, with_data};
 use deflex_calibrate::measurements::format_rows_for;
 use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
 use deflex_model::{Robot, builtin};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
-
-pub struct Run {
-    pub code: Option<i32>,
-    pub stdout: String,
-    pub stderr: String,
-}
-
-pub fn deflex(args: &[&str]) -> Run {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args(args)
-        .output()
-        .expect("run deflex");
-    Run {
-        code: output.status.code(),
-        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
-    }
-}
-
-/// A fresh folder for one test.
-pub fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-cli-strict-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-pub fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// A SIMULATED campaign of `robot` (planned for it, measured on it) as file text.
 fn campaign_text(robot: &Robot) -> String {
@@ -76,7 +47,7 @@ fn with_column(text: &str, name: &str, value: &str) -> String {
 
 #[test]
 fn an_extra_measurement_column_is_refused_unless_ignored_by_name() {
-    let dir = folder("ignore-column");
+    let dir = scratch("strict-ignore-column");
     let robot = builtin("ur10e").unwrap();
     let data = dir.join("meas.csv");
     let text = with_column(&campaign_text(&robot), "operator", "ann");
@@ -109,28 +80,22 @@ fn an_extra_measurement_column_is_refused_unless_ignored_by_name() {
     let run = deflex(&ignoring);
     assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
     assert!(model.exists());
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "validate",
-        "--robot",
         s(&model),
-        "--data",
-        s(&data),
-        "--ignore-column",
-        "operator",
-    ]);
+        &data,
+        &["--ignore-column", "operator"],
+    ));
     assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
     // A typo of a known column is not something to ignore: it names the column it meant.
     let typo = dir.join("typo.csv");
     std::fs::write(&typo, with_column(&text, "sigma_mm", "0.01")).unwrap();
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "validate",
-        "--robot",
         "ur10e",
-        "--data",
-        s(&typo),
-        "--ignore-column",
-        "operator",
-    ]);
+        &typo,
+        &["--ignore-column", "operator"],
+    ));
     assert!(
         run.code == Some(1) && run.stderr.contains("did you mean `sigma_m`?"),
         "{}",
@@ -147,17 +112,12 @@ fn an_extra_measurement_column_is_refused_unless_ignored_by_name() {
         "{}",
         run.stderr
     );
-    let run = deflex(&[
+    let run = deflex(&with_data(
         "validate",
-        "--robot",
         "ur10e",
-        "--data",
-        s(&data),
-        "--ignore-column",
-        "operator",
-        "--ignore-column",
-        "sigma_m",
-    ]);
+        &data,
+        &["--ignore-column", "operator", "--ignore-column", "sigma_m"],
+    ));
     assert!(
         run.code == Some(1) && run.stderr.contains("`sigma_m` is read by the format"),
         "{}",
@@ -168,7 +128,7 @@ fn an_extra_measurement_column_is_refused_unless_ignored_by_name() {
 
 #[test]
 fn one_load_case_holding_two_configurations_is_refused_naming_lines() {
-    let dir = folder("load-case");
+    let dir = scratch("strict-load-case");
     let robot = builtin("ur10e").unwrap();
     let text = campaign_text(&robot);
     // Give the second load case's rows the first one's label: same label, other configuration.
@@ -271,7 +231,7 @@ fn two_axes_campaign(robot: &Robot) -> String {
 
 #[test]
 fn calibrate_flags_nearly_collinear_estimates_in_text_json_and_html() {
-    let dir = folder("collinear");
+    let dir = scratch("strict-collinear");
     let robot_file = dir.join("arm.toml");
     std::fs::write(&robot_file, TWO_AXES).unwrap();
     let robot = deflex_app::load::load_robot(s(&robot_file)).unwrap();
@@ -359,16 +319,13 @@ fn calibrate_flags_nearly_collinear_estimates_in_text_json_and_html() {
 /// the sensor pushes 800 N after the robot's 250th answer, once the tare (0.2 s) is done.
 #[test]
 fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
-    use deflex_io::netft::{Calibration, NetFtSensorServer};
-    use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
-    use deflex_io::{RobotSideLink, RobotState};
+    use crate::support::RunPeers;
+    use deflex_model::Wrench;
     use std::os::unix::process::CommandExt as _;
-    use std::sync::Arc;
-    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-    use std::time::{Duration, Instant};
+    use std::time::Instant;
 
     let _turn = crate::session_turn();
-    let dir = folder("full-disk");
+    let dir = scratch("strict-full-disk");
     let (cell, robot_port, sensor_port) = crate::cli_run::cell_file(
         &dir,
         "simple-udp",
@@ -376,44 +333,15 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
     );
     let earlier = "# the log of an earlier run\ntime_s\n0.0\n";
     std::fs::write(dir.join("run.csv"), earlier).unwrap();
-    let done = Arc::new(AtomicBool::new(false));
-    let answered = Arc::new(AtomicUsize::new(0));
-    let q = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
-    let sensor = {
-        let (done, answered) = (done.clone(), answered.clone());
-        std::thread::spawn(move || {
-            let mut s = NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
-                .unwrap();
-            while !done.load(Ordering::Acquire) {
-                let _ = s.poll_request(Duration::from_micros(500));
-                let fz = if answered.load(Ordering::Acquire) < 250 {
-                    0.0
-                } else {
-                    -800.0
-                };
-                let _ = s.send_sample(&deflex_model::Wrench::new(0.0, 0.0, fz, 0.0, 0.0, 0.0), 0);
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        })
-    };
-    let robot = {
-        let (done, answered) = (done.clone(), answered.clone());
-        std::thread::spawn(move || {
-            let mut ep =
-                SimpleUdpRobotEndpoint::new("127.0.0.1:0", ([127, 0, 0, 1], robot_port).into())
-                    .unwrap();
-            let mut answers = Vec::new();
-            while !done.load(Ordering::Acquire) {
-                let _ = ep.send_state(&RobotState::with_joints(&q));
-                if let Ok(Some(c)) = ep.receive_correction(Duration::from_millis(20)) {
-                    answers.push(c.correction.to_array());
-                    answered.store(answers.len(), Ordering::Release);
-                }
-                std::thread::sleep(Duration::from_millis(4));
-            }
-            answers
-        })
-    };
+    let peers = RunPeers::start(
+        robot_port,
+        sensor_port,
+        |_| true,
+        |answered| {
+            let fz = if answered < 250 { 0.0 } else { -800.0 };
+            Some(Wrench::new(0.0, 0.0, fz, 0.0, 0.0, 0.0))
+        },
+    );
     let mut command = Command::new(env!("CARGO_BIN_EXE_deflex"));
     command.args(["run", "--config", s(&cell), "--quiet"]);
     // SAFETY: between fork and exec only async-signal-safe calls (setrlimit, signal) on the
@@ -433,9 +361,7 @@ fn a_full_disk_under_the_run_log_stops_the_session_with_exit_status_4() {
     }
     let started = Instant::now();
     let out = command.output().unwrap();
-    done.store(true, Ordering::Release);
-    let answers = robot.join().unwrap();
-    sensor.join().unwrap();
+    let answers = peers.join();
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(4), "{text}\n{err}");
@@ -507,7 +433,7 @@ fn snapshot(dir: &Path) -> Vec<(String, u64, std::time::SystemTime)> {
 fn a_folder_being_written_by_another_process_is_refused_then_written_once_released() {
     use std::io::Write as _;
     use std::os::fd::AsRawFd as _;
-    let dir = folder("lock");
+    let dir = scratch("strict-lock");
     let out = dir.join("map");
     let map = [
         "map",
@@ -573,7 +499,7 @@ fn a_folder_being_written_by_another_process_is_refused_then_written_once_releas
 /// nothing written; every label it accepts, however odd, reads back exactly.
 #[test]
 fn import_writes_only_labels_its_reader_reads_back() {
-    let dir = folder("import-labels");
+    let dir = scratch("strict-import-labels");
     let series = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../deflex-calibrate/tests/data/ur10-tracker/Series_A");
     let out = dir.join("a.csv");
@@ -650,7 +576,7 @@ fn import_writes_only_labels_its_reader_reads_back() {
 /// sparse subset of the real UR10 series (every 10th reading) the fit has such pairs.
 #[test]
 fn calibrate_geometry_takes_ignore_column_and_flags_correlated_estimates() {
-    let dir = folder("egcal");
+    let dir = scratch("strict-egcal");
     let series = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../deflex-calibrate/tests/data/ur10-tracker/Series_A");
     let plain = dir.join("a.csv");

@@ -4,45 +4,19 @@
 //! measurements and closed-loop forming. The twin's plant is written independently of the
 //! model (deflex-sim), so the identified model is checked against a separate implementation.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn deflex(args: &[&str]) -> String {
-    let output = Command::new(env!("CARGO_BIN_EXE_deflex"))
-        .args(args)
-        .output()
-        .expect("run deflex");
-    assert!(
-        output.status.success(),
-        "deflex {args:?} failed: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let mut all = vec!["--json"];
-    all.extend_from_slice(args);
-    serde_json::from_str(&deflex(&all)).expect("JSON")
-}
+use crate::support::{json, scratch, succeeds};
+use std::path::Path;
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_str().unwrap().to_string()
 }
 
-fn scratch() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("deflex-walkthrough-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn a_ur10e_goes_from_its_description_to_a_validated_model_and_a_corrected_part() {
-    let dir = scratch();
+    let dir = scratch("walkthrough");
     let robot = path(&dir, "ur10e_cell.toml");
-    deflex(&["sim", "robot", "--robot", "ur10e", "--out", &robot]);
-    deflex(&[
+    succeeds(&["sim", "robot", "--robot", "ur10e", "--out", &robot]);
+    succeeds(&[
         "plan",
         "--robot",
         &robot,
@@ -52,7 +26,7 @@ fn a_ur10e_goes_from_its_description_to_a_validated_model_and_a_corrected_part()
         "--out",
         &path(&dir, "plan.csv"),
     ]);
-    deflex(&[
+    succeeds(&[
         "sim",
         "campaign",
         "--robot",
@@ -73,7 +47,7 @@ fn a_ur10e_goes_from_its_description_to_a_validated_model_and_a_corrected_part()
     ]);
     eprintln!("calibration: {}", calibration["structure"]);
     // Held out: the UR10e cell's validation grid, another seed, never seen by the fit.
-    deflex(&[
+    succeeds(&[
         "sim",
         "campaign",
         "--robot",

@@ -3,6 +3,7 @@
 //! is checked in the facade's test binary (`no_alloc::compensate`).
 
 mod compensate;
+mod compensated_line;
 mod logged;
 mod path;
 mod table;

@@ -1,54 +1,12 @@
 //! The compensated-path table round-trips (the law's lookups of it, by time and arc length, are
 //! checked in deflex-app's `cell::feedforward_table`).
 
+use crate::compensated_line::compensated_line;
 use deflex_compensate::table::{read_csv, write_csv};
-use deflex_compensate::{CompensationOptions, TcpPath, WrenchSource, compensate};
-use deflex_model::{Pose, TX200_FORMING_Q_DEG, Wrench, builtin};
-use nalgebra::{Translation3, Vector3};
-
-fn setup() -> (TcpPath, deflex_compensate::Compensation) {
-    let robot = builtin("tx200").unwrap();
-    let seed = TX200_FORMING_Q_DEG.map(f64::to_radians);
-    let start = robot.tcp_pose(&seed).unwrap();
-    let poses = (0..20).map(|i| {
-        let p = start.translation.vector + Vector3::new(0.001 * i as f64, 0.0005 * i as f64, 0.0);
-        (
-            Pose::from_parts(Translation3::from(p), start.rotation),
-            Some(0.01),
-        )
-    });
-    let path = TcpPath::new("line", poses, 0.05).unwrap();
-    let wrenches: Vec<Wrench> = (0..20)
-        .map(|i| {
-            Wrench::new(
-                10.0 * i as f64,
-                -50.0,
-                900.0 + 20.0 * i as f64,
-                0.0,
-                1.0,
-                0.0,
-            )
-        })
-        .collect();
-    let result = compensate(
-        &robot,
-        &path,
-        &seed,
-        WrenchSource::Fixed {
-            label: "t".into(),
-            simulated: true,
-            wrenches: &wrenches,
-        },
-        &CompensationOptions::default(),
-        &mut |_| {},
-    )
-    .unwrap();
-    (path, result)
-}
 
 #[test]
 fn the_table_round_trips_to_its_printed_precision() {
-    let (path, result) = setup();
+    let (_, path, result) = compensated_line();
     let text = write_csv(
         &path,
         &result,

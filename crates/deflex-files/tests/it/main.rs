@@ -1,10 +1,12 @@
 //! The tests of `deflex-files`, through its public API: one test binary (modules below), so the
 //! library is compiled once (`[lib] test = false`). A module per part: outputs written whole or
-//! not at all, bounded inputs, escaped messages.
+//! not at all, bounded inputs, escaped messages, the shared file errors, CSV text in memory.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+mod csv_text;
+mod errors;
 mod input;
 mod output;
 mod shown;

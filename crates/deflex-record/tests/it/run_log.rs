@@ -190,3 +190,39 @@ fn reader_errors_name_the_file_line_and_column() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The row format `deflex run` writes, character for character (the columns and precisions of
+/// the log before it became a sink of the stream): seconds with 6 decimals, joints with 9,
+/// wrenches with 4, displacements with 9, the arc length empty when unknown, the loop gain with
+/// 4, the cycle time in µs with 2, the flags as an integer and by name.
+#[test]
+fn the_row_format_is_unchanged() {
+    // The arc length unknown: its column empty.
+    let mut out = output();
+    out.path_s_m = f64::NAN;
+    let row = RunLogFormat::cell(2).row(&cycle_sample(
+        &[0.1, -0.2],
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        &out,
+        12.5,
+    ));
+    let expected = "1.500000,0.100000000,-0.200000000,\
+        1.0000,2.0000,3.0000,4.0000,5.0000,6.0000,\
+        0.5000,0.5000,0.5000,0.5000,0.5000,0.5000,\
+        -1.2500,0.0000,900.0000,0.0000,0.0000,0.1250,\
+        0.000100000,0.000000000,-0.000250000,0.000000000,0.000000000,0.000001000,\
+        -0.000100000,0.000000000,0.000250000,0.000000000,0.000000000,-0.000001000,\
+        0.000000003,0.000000000,0.000000000,0.000000000,0.000000000,0.000000000,\
+        0.000000000,0.000000000,0.000000000,0.000000000,0.000000000,0.000000000,\
+        ,0.2500,12.50,1572864,ramping|active";
+    assert_eq!(row, expected);
+    assert_eq!(
+        RunLogFormat::cell(2).header(),
+        "time_s,q1_rad,q2_rad,raw_fx_n,raw_fy_n,raw_fz_n,raw_mx_nm,raw_my_nm,raw_mz_nm,\
+         ws_fx_n,ws_fy_n,ws_fz_n,ws_mx_nm,ws_my_nm,ws_mz_nm,w_fx_n,w_fy_n,w_fz_n,w_mx_nm,\
+         w_my_nm,w_mz_nm,ds_x_m,ds_y_m,ds_z_m,ds_rx_rad,ds_ry_rad,ds_rz_rad,xi_x_m,xi_y_m,\
+         xi_z_m,xi_rx_rad,xi_ry_rad,xi_rz_rad,eps_x_m,eps_y_m,eps_z_m,eps_rx_rad,eps_ry_rad,\
+         eps_rz_rad,ff_x_m,ff_y_m,ff_z_m,ff_rx_rad,ff_ry_rad,ff_rz_rad,path_s_m,loop_gain,\
+         cycle_us,flags,status"
+    );
+}

@@ -3,64 +3,16 @@
 //! Deterministic: every wait for discovery is bounded, and the counted messages are sent only
 //! once a first one got through, at reliable QoS with a history deeper than the batch.
 
+use crate::dds::{domain, now_ns, publisher, sensor_settings, subscriber, wait_until, wrench};
 use deflex_io::ForceSensorLink;
 use deflex_ros2::{
-    BridgeSettings, Refusal, Ros2Bridge, Ros2SensorLink, SensorSettings, bridge, join,
-    message_type, qos_profile, ros_name, topic_name,
+    BridgeSettings, Refusal, Ros2Bridge, Ros2SensorLink, bridge, join, message_type, topic_name,
 };
 use deflex_telemetry::ros::cycle::STATUS_NAME;
-use deflex_telemetry::ros::{
-    DiagnosticArray, Header, JointState, Ros2Qos, Ros2Topic, Vector3, Wrench, WrenchStamped,
-};
+use deflex_telemetry::ros::{DiagnosticArray, JointState, Ros2Qos, Ros2Topic, WrenchStamped};
 use deflex_telemetry::{CycleSample, SessionInfo, Source, broadcast};
-use ros2_client::{Node, Publisher, Subscription};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-/// A DDS domain of this test process alone (other processes on the machine may use DDS):
-/// 100–227 from the process id, plus `offset` (0–7) per test.
-/// This process's own DDS domains, all below 100: their RTPS ports (7400 + 250 d + …) then lie
-/// under Linux's ephemeral range (32768 on), where the other tests' port-0 sockets live.
-fn domain(offset: u16) -> u16 {
-    20 + (std::process::id() % 10) as u16 * 8 + offset
-}
-
-const DISCOVERY: Duration = Duration::from_secs(20);
-
-fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
-    let start = Instant::now();
-    while !done() {
-        assert!(
-            start.elapsed() < DISCOVERY,
-            "{what}: not within {DISCOVERY:?}"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-fn subscriber<T: deflex_telemetry::ros::RosMessage + 'static>(
-    node: &mut Node,
-    topic: &str,
-    qos: Ros2Qos,
-) -> Subscription<T> {
-    let q = qos_profile(qos, 200);
-    let t = node
-        .create_topic(&ros_name(topic).unwrap(), message_type::<T>(), &q)
-        .unwrap();
-    node.create_subscription(&t, Some(q)).unwrap()
-}
-
-fn publisher<T: deflex_telemetry::ros::RosMessage>(
-    node: &mut Node,
-    topic: &str,
-    qos: Ros2Qos,
-) -> Publisher<T> {
-    let q = qos_profile(qos, 200);
-    let t = node
-        .create_topic(&ros_name(topic).unwrap(), message_type::<T>(), &q)
-        .unwrap();
-    node.create_publisher(&t, Some(q)).unwrap()
-}
 
 fn sample(cycle: u64) -> CycleSample {
     let mut s = CycleSample {
@@ -189,47 +141,6 @@ fn bridge_publishes_the_stream_over_loopback_dds() {
         assert_eq!(last.status[0].name, STATUS_NAME);
         assert_eq!(last.status[0].value("phase"), Some("running"));
         assert_eq!(last.status[0].value(bridge::BRIDGE_LOST), Some("0"));
-    }
-}
-
-fn wrench(frame: &str, stamp_ns: u64, fz: f64) -> WrenchStamped {
-    WrenchStamped {
-        header: Header {
-            stamp: deflex_telemetry::ros::Time::from_nanos(stamp_ns),
-            frame_id: frame.into(),
-        },
-        wrench: Wrench {
-            force: Vector3 {
-                x: 1.0,
-                y: -2.0,
-                z: fz,
-            },
-            torque: Vector3 {
-                x: 0.1,
-                y: 0.2,
-                z: 0.3,
-            },
-        },
-    }
-}
-
-fn now_ns() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap()
-        .as_nanos() as u64
-}
-
-fn sensor_settings(d: u16, depth: usize, qos: Ros2Qos) -> SensorSettings {
-    SensorSettings {
-        domain_id: d,
-        namespace: "/deflex_test".into(),
-        node_name: "ft".into(),
-        qos,
-        topic: "/ati/wrench".into(),
-        frame_id: "ati_ft".into(),
-        max_age: Duration::from_millis(500),
-        queue_depth: depth,
     }
 }
 

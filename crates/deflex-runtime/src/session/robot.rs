@@ -10,6 +10,7 @@ use crate::stats::CycleStats;
 use deflex_io::{Correction, LinkCounters, LinkError, RobotLink, RobotState};
 use deflex_model::MAX_JOINTS;
 use nalgebra::Vector6;
+use std::sync::PoisonError;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
@@ -103,8 +104,11 @@ fn count_failed_receive(result: Result<(), LinkError>, shared: &Shared) {
             if e.is_starving() {
                 shared.robot_starved.store(true, Ordering::Relaxed);
             }
-            if let (Some(from), Ok(mut last)) = (e.foreign_source(), shared.last_foreign.lock()) {
-                *last = Some(from);
+            if let Some(from) = e.foreign_source() {
+                *shared
+                    .last_foreign
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner) = Some(from);
             }
         }
         Err(e) if e.is_dropped() => {

@@ -5,8 +5,8 @@ use super::summary::RunSummary;
 use crate::messages::{CorrectionCommand, JointSample, WrenchAccumulation};
 use deflex_telemetry::SeqCell;
 use std::net::SocketAddr;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Mutex, PoisonError};
 
 const NO_LATE: u64 = u64::MAX;
 
@@ -98,7 +98,11 @@ impl Shared {
         summary.robot_foreign = self.robot_foreign.load(Ordering::Relaxed);
         summary.robot_dropped = self.robot_dropped.load(Ordering::Relaxed);
         summary.robot_starved = self.robot_starved.load(Ordering::Relaxed);
-        summary.last_foreign = self.last_foreign.lock().ok().and_then(|g| *g);
+        // A poisoned lock still holds the last address (a plain value): it is read, not dropped.
+        summary.last_foreign = *self
+            .last_foreign
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
         summary.robot_late = self.robot_late();
         summary.samples = self.samples.load(Ordering::Relaxed);
         summary.sample_gaps = self.sample_gaps.load(Ordering::Relaxed);

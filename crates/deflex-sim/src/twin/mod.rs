@@ -1,4 +1,4 @@
-//! # deflex-twin
+//! # The twin and the controller (`deflex_sim::twin`)
 //!
 //! The one home of the glue between deflex's controller and its digital twin (`deflex-sim`),
 //! every result of which is SIMULATED:

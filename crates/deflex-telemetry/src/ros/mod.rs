@@ -1,4 +1,4 @@
-//! # deflex-rosmsg
+//! # The ROS 2 forms of the messages (`deflex_telemetry::ros`)
 //!
 //! The ROS 2 messages deflex writes (to MCAP files and on the ROS 2 graph): plain serde
 //! structs whose field names, types and order are exactly those of the `.msg` definitions in

@@ -7,37 +7,19 @@
 //! `cargo test -p deflex-view -- --ignored`. With `DEFLEX_VIEW_SCREENSHOT=PATH` it also saves
 //! the page's screenshot there (the README's `docs/live-view.png`).
 
-use crate::cdp::Browser;
-use crate::support::Publisher;
+use crate::cdp::{Browser, CHARTS, MIN_LIVE_UPDATE_HZ, number};
+use crate::support::{Publisher, counting_stop};
 use serde_json::{Value, json};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
-
-/// Fewest page updates a second that count as a live stream (the page's own count over its last
-/// two seconds, best window): half the ≥ 20 a second the page keeps on an idle machine.
-const MIN_LIVE_UPDATE_HZ: f64 = 10.0;
-
-fn number(v: &Value) -> f64 {
-    v.as_f64().unwrap_or(f64::NAN)
-}
 
 #[test]
 #[ignore = "needs /usr/bin/chromium; run by .ci/run with --ignored"]
 fn the_live_page_shows_moving_data_without_errors_or_outside_requests() {
     // 20 s already published: the page starts with a history, then goes live.
     let publisher = Publisher::start(100.0, 2000);
-    let stops = Arc::new(AtomicU64::new(0));
-    let counter = stops.clone();
-    let view = deflex_view::serve(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        Some(Box::new(move || {
-            counter.fetch_add(1, Ordering::SeqCst);
-        })),
-    )
-    .unwrap();
+    let (stops, stop) = counting_stop();
+    let view = publisher.serve("127.0.0.1:0", stop);
     let url = view.url();
     let mut browser = Browser::launch();
     browser.page("Page.navigate", json!({"url": url}));
@@ -61,14 +43,7 @@ fn the_live_page_shows_moving_data_without_errors_or_outside_requests() {
                  label: v.hello.label}; })()";
     let first = browser.eval(state);
     assert_eq!(first["label"], "SIMULATED");
-    for chart in [
-        "force",
-        "torque",
-        "deflection",
-        "correction",
-        "error",
-        "timing",
-    ] {
+    for chart in CHARTS {
         assert!(
             number(&first["lengths"][chart]) > 100.0,
             "{chart}: {}",
@@ -78,17 +53,8 @@ fn the_live_page_shows_moving_data_without_errors_or_outside_requests() {
 
     // The values move, and the page keeps ≥ 20 updates a second (its own count of redraws
     // over the last 2 s; the best 2-second window of 20 s, the machine being shared).
-    let mut best_hz: f64 = 0.0;
-    let mut later = first.clone();
-    let until = Instant::now() + Duration::from_secs(20);
-    while Instant::now() < until {
-        browser.idle(Duration::from_millis(500));
-        later = browser.eval(state);
-        best_hz = best_hz.max(number(&later["hz"]));
-        if best_hz >= 20.0 && number(&later["t"]) > number(&first["t"]) + 3.0 {
-            break;
-        }
-    }
+    let (later, best_hz) =
+        browser.watch_live(state, number(&first["t"]), 3.0, Duration::from_secs(20));
     eprintln!(
         "page: {} buckets, {} redraws, best update rate {best_hz:.1}/s, WebGL {}",
         later["buckets"], later["draws"], later["webgl"]
@@ -108,28 +74,14 @@ fn the_live_page_shows_moving_data_without_errors_or_outside_requests() {
     // not asserted: a loaded machine starves the browser of the CPU it draws with.
     assert!(best_hz >= MIN_LIVE_UPDATE_HZ, "update rate {best_hz:.1}/s");
 
-    if let Ok(path) = std::env::var("DEFLEX_VIEW_SCREENSHOT") {
-        let shot = browser.page("Page.captureScreenshot", json!({"format": "png"}));
-        let png = data_encoding::BASE64
-            .decode(shot["data"].as_str().unwrap().as_bytes())
-            .unwrap();
-        std::fs::write(&path, png).unwrap();
-        eprintln!("screenshot: {path}");
-    }
+    browser.screenshot_if_asked();
 
     // The stop button: a confirmation, then the caller's callback.
     assert_eq!(
         browser.eval("!document.getElementById('stop').hidden"),
         Value::Bool(true)
     );
-    let click = browser.page_nowait(
-        "Runtime.evaluate",
-        json!({"expression": "document.getElementById('stop').click()"}),
-    );
-    let dialog = browser
-        .wait_event("Page.javascriptDialogOpening", Duration::from_secs(10))
-        .expect("a confirmation dialog");
-    assert_eq!(dialog["type"], "confirm");
+    let (click, dialog) = browser.click_stop();
     assert!(
         dialog["message"]
             .as_str()
@@ -138,8 +90,7 @@ fn the_live_page_shows_moving_data_without_errors_or_outside_requests() {
         "{dialog}"
     );
     assert_eq!(stops.load(Ordering::SeqCst), 0, "stopped before confirming");
-    browser.page("Page.handleJavaScriptDialog", json!({"accept": true}));
-    assert!(browser.result(click, Duration::from_secs(10)).is_some());
+    browser.accept_dialog(click);
     let mut stopped = false;
     for _ in 0..50 {
         browser.idle(Duration::from_millis(100));
@@ -152,33 +103,7 @@ fn the_live_page_shows_moving_data_without_errors_or_outside_requests() {
 
     // No console error, no exception, nothing requested beyond this server.
     browser.idle(Duration::from_millis(300));
-    let origin = format!("127.0.0.1:{}", view.local_addr().port());
-    let mut requests = 0;
-    for (method, params) in &browser.events {
-        match method.as_str() {
-            "Runtime.exceptionThrown" => panic!("exception in the page: {params}"),
-            "Runtime.consoleAPICalled" if params["type"] == "error" => {
-                panic!("console error: {params}")
-            }
-            "Log.entryAdded" if params["entry"]["level"] == "error" => {
-                panic!("console error: {params}")
-            }
-            "Network.requestWillBeSent" | "Network.webSocketCreated" => {
-                let url = params["request"]["url"]
-                    .as_str()
-                    .or(params["url"].as_str())
-                    .unwrap_or("");
-                let local = url.starts_with(&format!("http://{origin}/"))
-                    || url.starts_with(&format!("ws://{origin}/"))
-                    || url.starts_with("data:")
-                    || url.starts_with("blob:")
-                    || url == "about:blank";
-                assert!(local, "request beyond the server: {url}");
-                requests += 1;
-            }
-            _ => {}
-        }
-    }
+    let requests = browser.check_events(&[format!("127.0.0.1:{}", view.local_addr().port())]);
     // The page, its script and style, the two libraries (three in two files + controls), the
     // WebSocket.
     assert!(requests >= 8, "{requests} requests seen");

@@ -1,5 +1,10 @@
 //! A minimal Chrome DevTools Protocol client over `tungstenite`: launches Debian's headless
-//! Chromium on a fresh profile, attaches to one page and sends commands, keeping every event.
+//! Chromium on a fresh profile, attaches to one page and sends commands, keeping every event;
+//! and the checks every live-page test makes with it (the page moves, logs no error, requests
+//! nothing beyond its servers, its stop button asks first; the screenshot for the README).
+//!
+//! deflex-cli's browser test compiles this file too, by `#[path]`: the live page of a
+//! `deflex run` is checked as this package's is, with one client.
 
 use serde_json::{Value, json};
 use std::io::{BufRead, BufReader};
@@ -11,6 +16,25 @@ use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};
 
 pub const CHROMIUM: &str = "/usr/bin/chromium";
+
+/// Fewest page updates a second that count as a live stream (the page's own count over its last
+/// two seconds, best window): half the ≥ 20 a second the page keeps on an idle machine.
+pub const MIN_LIVE_UPDATE_HZ: f64 = 10.0;
+
+/// The page's charts (`window.deflexView.chartLengths()` names them).
+pub const CHARTS: [&str; 6] = [
+    "force",
+    "torque",
+    "deflection",
+    "correction",
+    "error",
+    "timing",
+];
+
+/// A JSON number of the page's state (NaN when absent).
+pub fn number(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
 
 pub struct Browser {
     child: Child,
@@ -213,5 +237,100 @@ impl Browser {
             }
             self.pump(None, Duration::from_millis(100));
         }
+    }
+}
+
+/// The checks of a live page.
+impl Browser {
+    /// Evaluates `state` (an expression giving the page's state, with `t` its session time and
+    /// `hz` its update rate) every 0.5 s for up to `limit`, until the page has kept 20 updates a
+    /// second and its time has passed `t_from + advance_s`. Returns the last state and the best
+    /// update rate seen.
+    pub fn watch_live(
+        &mut self,
+        state: &str,
+        t_from: f64,
+        advance_s: f64,
+        limit: Duration,
+    ) -> (Value, f64) {
+        let mut best_hz: f64 = 0.0;
+        let mut later = Value::Null;
+        let until = Instant::now() + limit;
+        while Instant::now() < until {
+            self.idle(Duration::from_millis(500));
+            later = self.eval(state);
+            best_hz = best_hz.max(number(&later["hz"]));
+            if best_hz >= 20.0 && number(&later["t"]) > t_from + advance_s {
+                break;
+            }
+        }
+        (later, best_hz)
+    }
+
+    /// Asserts that the events so far hold no console error or exception and no request beyond
+    /// `origins` (`host:port` of the servers); returns the requests seen; forgets the events.
+    pub fn check_events(&mut self, origins: &[String]) -> usize {
+        let mut requests = 0;
+        for (method, params) in &self.events {
+            match method.as_str() {
+                "Runtime.exceptionThrown" => panic!("exception in the page: {params}"),
+                "Runtime.consoleAPICalled" if params["type"] == "error" => {
+                    panic!("console error: {params}")
+                }
+                "Log.entryAdded" if params["entry"]["level"] == "error" => {
+                    panic!("console error: {params}")
+                }
+                "Network.requestWillBeSent" | "Network.webSocketCreated" => {
+                    let url = params["request"]["url"]
+                        .as_str()
+                        .or(params["url"].as_str())
+                        .unwrap_or("");
+                    let local = origins.iter().any(|o| {
+                        url.starts_with(&format!("http://{o}/"))
+                            || url.starts_with(&format!("ws://{o}/"))
+                    }) || url.starts_with("data:")
+                        || url.starts_with("blob:")
+                        || url == "about:blank";
+                    assert!(local, "request beyond the servers: {url}");
+                    requests += 1;
+                }
+                _ => {}
+            }
+        }
+        self.events.clear();
+        requests
+    }
+
+    /// With `DEFLEX_VIEW_SCREENSHOT=PATH` set, saves the page's screenshot there (the README's
+    /// `docs/live-view.png`).
+    pub fn screenshot_if_asked(&mut self) {
+        if let Ok(path) = std::env::var("DEFLEX_VIEW_SCREENSHOT") {
+            let shot = self.page("Page.captureScreenshot", json!({"format": "png"}));
+            let png = data_encoding::BASE64
+                .decode(shot["data"].as_str().unwrap().as_bytes())
+                .unwrap();
+            std::fs::write(&path, png).unwrap();
+            eprintln!("screenshot: {path}");
+        }
+    }
+
+    /// Clicks the page's stop button; returns the click's command id and the dialog it opened
+    /// (a confirmation, still open: [`Browser::accept_dialog`]).
+    pub fn click_stop(&mut self) -> (u64, Value) {
+        let click = self.page_nowait(
+            "Runtime.evaluate",
+            json!({"expression": "document.getElementById('stop').click()"}),
+        );
+        let dialog = self
+            .wait_event("Page.javascriptDialogOpening", Duration::from_secs(10))
+            .expect("a confirmation dialog");
+        assert_eq!(dialog["type"], "confirm");
+        (click, dialog)
+    }
+
+    /// Accepts the open dialog; waits for the command `click` that opened it to complete.
+    pub fn accept_dialog(&mut self, click: u64) {
+        self.page("Page.handleJavaScriptDialog", json!({"accept": true}));
+        assert!(self.result(click, Duration::from_secs(10)).is_some());
     }
 }

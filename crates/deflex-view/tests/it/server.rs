@@ -1,12 +1,12 @@
 //! The server over loopback sockets: what a page receives, and every bound and check.
 
-use crate::support::{Publisher, wait_until};
+use crate::support::{Publisher, counting_stop, wait_until};
 use deflex_telemetry::synthetic::SyntheticCell;
 use deflex_view::{ViewOptions, frame};
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Duration;
 use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};
@@ -62,13 +62,7 @@ fn raw_status(view: &deflex_view::ViewHandle, request: &[u8]) -> String {
 #[test]
 fn a_page_gets_the_history_then_live_buckets_of_the_stream() {
     let publisher = Publisher::start(100.0, 500);
-    let view = deflex_view::serve(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-    )
-    .unwrap();
+    let view = publisher.serve("127.0.0.1:0", None);
     // Let the pump read the prefill so that it is history when the page connects.
     assert!(wait_until(Duration::from_secs(20), || view.stats().buckets > 100));
     let mut page = open_page(&view);
@@ -116,14 +110,7 @@ fn a_page_that_reads_nothing_costs_only_its_own_dropped_messages() {
         write_buffer_bytes: deflex_view::MIN_WRITE_BUFFER_BYTES,
         ..ViewOptions::default()
     };
-    let view = deflex_view::serve_with(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-        options,
-    )
-    .unwrap();
+    let view = publisher.serve_with("127.0.0.1:0", None, options);
     assert!(wait_until(Duration::from_secs(30), || view.stats().buckets > 10_000));
     // The stalled page: handshake, then never read.
     let mut stalled = TcpStream::connect(view.local_addr()).unwrap();
@@ -178,14 +165,7 @@ fn pages_beyond_the_limit_are_refused() {
         max_clients: 2,
         ..ViewOptions::default()
     };
-    let view = deflex_view::serve_with(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-        options,
-    )
-    .unwrap();
+    let view = publisher.serve_with("127.0.0.1:0", None, options);
     let mut a = open_page(&view);
     let mut b = open_page(&view);
     hello(&mut a);
@@ -207,13 +187,7 @@ fn pages_beyond_the_limit_are_refused() {
 #[test]
 fn requests_are_bounded_and_checked() {
     let publisher = Publisher::start(100.0, 0);
-    let view = deflex_view::serve(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-    )
-    .unwrap();
+    let view = publisher.serve("127.0.0.1:0", None);
     let host = view.local_addr().to_string();
     let get = |path: &str, extra: &str| {
         format!("GET {path} HTTP/1.1\r\nHost: {host}\r\n{extra}\r\n").into_bytes()
@@ -253,17 +227,8 @@ fn requests_are_bounded_and_checked() {
 #[test]
 fn stop_reaches_the_callback_only_when_one_was_given() {
     let publisher = Publisher::start(100.0, 0);
-    let calls = Arc::new(AtomicU64::new(0));
-    let counter = calls.clone();
-    let view = deflex_view::serve(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        Some(Box::new(move || {
-            counter.fetch_add(1, Ordering::SeqCst);
-        })),
-    )
-    .unwrap();
+    let (calls, stop) = counting_stop();
+    let view = publisher.serve("127.0.0.1:0", stop);
     let mut page = open_page(&view);
     assert_eq!(hello(&mut page)["stop"], true);
     page.send(Message::text(r#"{"cmd":"stop"}"#)).unwrap();
@@ -280,13 +245,7 @@ fn stop_reaches_the_callback_only_when_one_was_given() {
     ));
     view.shutdown();
 
-    let view = deflex_view::serve(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-    )
-    .unwrap();
+    let view = publisher.serve("127.0.0.1:0", None);
     let mut page = open_page(&view);
     assert_eq!(hello(&mut page)["stop"], false);
     page.send(Message::text(r#"{"cmd":"stop"}"#)).unwrap();
@@ -303,23 +262,11 @@ fn stop_reaches_the_callback_only_when_one_was_given() {
 #[test]
 fn an_address_beyond_loopback_is_served_with_a_warning() {
     let publisher = Publisher::start(100.0, 0);
-    let view = deflex_view::serve(
-        "0.0.0.0:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-    )
-    .unwrap();
+    let view = publisher.serve("0.0.0.0:0", None);
     let warning = view.remote_warning().expect("a warning");
     assert!(warning.contains("beyond this machine"), "{warning}");
     view.shutdown();
-    let view = deflex_view::serve(
-        "127.0.0.1:0".parse().unwrap(),
-        publisher.ring.clone(),
-        publisher.info.clone(),
-        None,
-    )
-    .unwrap();
+    let view = publisher.serve("127.0.0.1:0", None);
     assert!(view.remote_warning().is_none());
     let taken = view.local_addr();
     let e = deflex_view::serve(taken, publisher.ring.clone(), publisher.info.clone(), None)

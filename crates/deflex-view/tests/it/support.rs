@@ -52,6 +52,44 @@ impl Publisher {
     }
 }
 
+impl Publisher {
+    /// The live view of this stream on `addr` with `options`, and `stop` for its stop button.
+    pub fn serve_with(
+        &self,
+        addr: &str,
+        stop: Option<deflex_view::StopCallback>,
+        options: deflex_view::ViewOptions,
+    ) -> deflex_view::ViewHandle {
+        deflex_view::serve_with(
+            addr.parse().unwrap(),
+            self.ring.clone(),
+            self.info.clone(),
+            stop,
+            options,
+        )
+        .unwrap()
+    }
+
+    /// The live view of this stream on `addr` with the default options.
+    pub fn serve(
+        &self,
+        addr: &str,
+        stop: Option<deflex_view::StopCallback>,
+    ) -> deflex_view::ViewHandle {
+        self.serve_with(addr, stop, deflex_view::ViewOptions::default())
+    }
+}
+
+/// A stop callback that counts its calls, and the count.
+pub fn counting_stop() -> (Arc<AtomicU64>, Option<deflex_view::StopCallback>) {
+    let calls = Arc::new(AtomicU64::new(0));
+    let counter = calls.clone();
+    let stop: deflex_view::StopCallback = Box::new(move || {
+        counter.fetch_add(1, Ordering::SeqCst);
+    });
+    (calls, Some(stop))
+}
+
 impl Drop for Publisher {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Release);

@@ -7,6 +7,7 @@ use crate::study::fig7::Fig7Point;
 use crate::study::sensitivity::SensitivityResult;
 use crate::study::{BASELINE, DemoSummary, IDENTIFIED, StiffnessRow, paper_vs_deflex_rows};
 use deflex_calibrate::measurements::MeasurementRow;
+use deflex_sim::FormingRun;
 use std::fmt::Write as _;
 
 /// Per-row measured and predicted displacements (m) of every model.
@@ -282,7 +283,7 @@ pub fn compensation_files(study: &CompensationStudy, runs: &[PartRuns]) -> Vec<D
              path (arc length), every fifth logged row\nway,path_s_m,time_s,error_m\n",
         );
         for (way, run) in &part.runs {
-            for (s, t, e) in super::figures::error_along_path(run, 5) {
+            for (s, t, e) in error_along_path(run, 5) {
                 let _ = writeln!(text, "\"{way}\",{s:.6},{t:.2},{e:.4e}");
             }
         }
@@ -296,4 +297,19 @@ pub fn compensation_files(study: &CompensationStudy, runs: &[PartRuns]) -> Vec<D
         });
     }
     files
+}
+
+/// A run's path error norm against its position along the desired path: `(arc length of the
+/// desired path (m), time (s), |true − desired| (m))` at every `step`-th logged row. Position,
+/// not time, is what two ways of running the same part share (a corrected run can take longer
+/// or shorter to cover the same path), so their curves line up only against it.
+pub(crate) fn error_along_path(run: &FormingRun, step: usize) -> Vec<(f64, f64, f64)> {
+    let arc = crate::study::compensation::lag::desired_arc_length(run);
+    run.log
+        .rows
+        .iter()
+        .zip(arc)
+        .step_by(step.max(1))
+        .map(|(r, s)| (s, r.time_s, r.truth.path_error_m().norm()))
+        .collect()
 }

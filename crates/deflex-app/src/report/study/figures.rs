@@ -578,21 +578,6 @@ const DRAWN: [&str; 5] = [
     crate::study::compensation::PRECOMPENSATED,
 ];
 
-/// A run's path error norm against its position along the desired path: `(arc length of the
-/// desired path (m), time (s), |true − desired| (m))` at every `step`-th logged row. Position,
-/// not time, is what two ways of running the same part share (a corrected run can take longer
-/// or shorter to cover the same path), so their curves line up only against it.
-pub(crate) fn error_along_path(run: &FormingRun, step: usize) -> Vec<(f64, f64, f64)> {
-    let arc = crate::study::compensation::lag::desired_arc_length(run);
-    run.log
-        .rows
-        .iter()
-        .zip(arc)
-        .step_by(step.max(1))
-        .map(|(r, s)| (s, r.time_s, r.truth.path_error_m().norm()))
-        .collect()
-}
-
 /// The path error along the path for each part, and one force ramp of the CAM part up close:
 /// all against the position along the desired path, so that the ways line up.
 pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>, PlotError> {
@@ -604,7 +589,7 @@ pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>
             .iter()
             .filter(|(way, _)| DRAWN.contains(&way.as_str()))
             .map(|(way, run)| {
-                let (s, e) = error_along_path(run, 1)
+                let (s, e) = super::csv_files::error_along_path(run, 1)
                     .into_iter()
                     .map(|(s, _, e)| (s, e * 1e3))
                     .unzip();
@@ -636,7 +621,7 @@ pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>
         && let Some(&s) = part.ramps.get(part.ramps.len() / 2)
         && let Some((_, first)) = part.runs.first()
     {
-        let along = error_along_path(first, 1);
+        let along = super::csv_files::error_along_path(first, 1);
         let t0 = along
             .get(along.partition_point(|a| a.0 < s))
             .map_or(0.0, |a| a.1);
@@ -658,7 +643,7 @@ pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>
             .iter()
             .filter(|(way, _)| DRAWN.contains(&way.as_str()))
             .map(|(way, run)| {
-                let (x, e) = error_along_path(run, 1)
+                let (x, e) = super::csv_files::error_along_path(run, 1)
                     .into_iter()
                     .filter(|(a, _, _)| (from..=to).contains(a))
                     .map(|(a, _, e)| ((a - s) * 1e3, e * 1e3))

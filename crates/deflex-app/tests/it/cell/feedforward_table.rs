@@ -83,51 +83,10 @@ fn table_errors_name_the_file_line_and_column() {
     }
 }
 
-/// A 20-point line compensated under growing wrenches (an offline compensation's own points).
-fn compensated_line() -> (
-    deflex_model::Robot,
-    deflex_compensate::TcpPath,
-    deflex_compensate::Compensation,
-) {
-    use deflex_compensate::{CompensationOptions, TcpPath, WrenchSource, compensate};
-    let robot = deflex_model::builtin("tx200").unwrap();
-    let seed = deflex_model::TX200_FORMING_Q_DEG.map(f64::to_radians);
-    let start = robot.tcp_pose(&seed).unwrap();
-    let poses = (0..20).map(|i| {
-        let p = start.translation.vector + Vector3::new(0.001 * i as f64, 0.0005 * i as f64, 0.0);
-        (
-            Pose::from_parts(Translation3::from(p), start.rotation),
-            Some(0.01),
-        )
-    });
-    let path = TcpPath::new("line", poses, 0.05).unwrap();
-    let wrenches: Vec<Wrench> = (0..20)
-        .map(|i| {
-            Wrench::new(
-                10.0 * i as f64,
-                -50.0,
-                900.0 + 20.0 * i as f64,
-                0.0,
-                1.0,
-                0.0,
-            )
-        })
-        .collect();
-    let result = compensate(
-        &robot,
-        &path,
-        &seed,
-        WrenchSource::Fixed {
-            label: "t".into(),
-            simulated: true,
-            wrenches: &wrenches,
-        },
-        &CompensationOptions::default(),
-        &mut |_| {},
-    )
-    .unwrap();
-    (robot, path, result)
-}
+/// A 20-point line compensated under growing wrenches: deflex-compensate's test fixture,
+/// compiled here rather than copied.
+#[path = "../../../../deflex-compensate/tests/it/compensated_line.rs"]
+mod compensated_line;
 
 /// The compensation's points as the rows of its table, unrounded.
 fn rows_of(
@@ -160,7 +119,7 @@ fn rows_of(
 #[test]
 fn the_law_s_table_interpolates_a_compensation_by_time_and_arc_length() {
     use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode, PathIndex};
-    let (robot, path, result) = compensated_line();
+    let (robot, path, result) = compensated_line::compensated_line();
     let table = table_of(&rows_of(&path, &result), &robot, "t.csv").unwrap();
     let to_base = robot.base.rotation.inverse();
     // A world-frame quantity in the robot's base axes, as the table holds it.

@@ -3,6 +3,7 @@
 //! (`deflex_app::cell::sim_cell`) — what they refuse before any link opens, the file names they
 //! derive, and both together over loopback with their logs, recordings and summaries.
 
+use crate::example_cell::{example_cell_file, free_udp_port};
 use deflex_app::cell::run_session::{RunEvent, RunOptions, RunPlan, mcap_beside};
 use deflex_app::cell::run_summary::OutletLines;
 use deflex_app::cell::sim_cell::{SimCellPath, SimCellPlan, sim_cell_log_path};
@@ -11,39 +12,12 @@ use deflex_sim::{CellConfig, ConeParams, ToolPath};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-fn free_udp_port() -> u16 {
-    std::net::UdpSocket::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
-
 fn scratch(name: &str) -> PathBuf {
     let dir =
         std::env::temp_dir().join(format!("deflex-app-sessions-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-/// The documented `CELL.toml` (docs/cell.example.toml) with free loopback ports, no real-time
-/// privileges, the log `run.csv` and link timeouts a loaded test machine meets, with its model
-/// beside it, in `dir`.
-fn example_cell_file(dir: &Path) -> PathBuf {
-    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs");
-    let text = std::fs::read_to_string(docs.join("cell.example.toml"))
-        .unwrap()
-        .replace("127.0.0.1:59152", &format!("127.0.0.1:{}", free_udp_port()))
-        .replace("127.0.0.1:49152", &format!("127.0.0.1:{}", free_udp_port()))
-        .replace("realtime = true", "realtime = false")
-        .replace("lock_memory = true", "lock_memory = false")
-        .replace("path = \"deflex-run.csv\"", "path = \"run.csv\"")
-        .replace("timeout_s = 0.05", "timeout_s = 0.5");
-    assert!(text.contains("path = \"run.csv\"") && !text.contains("timeout_s = 0.05"));
-    std::fs::copy(docs.join("tx200_cell.toml"), dir.join("tx200_cell.toml")).unwrap();
-    let path = dir.join("cell.toml");
-    std::fs::write(&path, text).unwrap();
-    path
 }
 
 /// A minimal `CELL.toml` in `dir` with `extra` sections.

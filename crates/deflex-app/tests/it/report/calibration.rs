@@ -1,13 +1,17 @@
 //! The calibration report (moved from deflex-stiffness with it): plots and tables written, one unit per column, and the χ²/dof note
 //! when the residuals are larger than the noise the file claims.
 
+#[cfg(feature = "report")]
 use deflex_app::report::calibration_report::{CalibrationReport, write_calibration_report};
-use deflex_app::report::calibration_tables::{SHIFT_HEADERS, residual_summary, shift_rows};
+use deflex_app::report::calibration_tables::residual_summary;
+#[cfg(feature = "report")]
+use deflex_app::report::calibration_tables::{SHIFT_HEADERS, shift_rows};
 use deflex_calibrate::stiffness::plan::{BasePoint, PlanOptions, plan_experiments};
 use deflex_calibrate::stiffness::stiffness_fit::{
     CHI2_WELL_ABOVE_ONE, Calibration, Structure, calibrate_fixed,
 };
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure, random_campaign};
+#[cfg(feature = "report")]
 use deflex_calibrate::stiffness::validation::{predict, residuals};
 use deflex_model::Robot;
 use rand::{Rng, SeedableRng};
@@ -111,6 +115,7 @@ fn chi2_well_above_one_is_said() {
     assert!(!residual_summary(&honest).contains("well above 1"));
 }
 
+#[cfg(feature = "report")]
 #[test]
 fn report_has_plots_tables_in_one_unit_per_column_and_the_note() {
     let (cal, rows) = calibrate(60e-6);

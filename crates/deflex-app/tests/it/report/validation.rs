@@ -1,13 +1,14 @@
 //! The validation report. Issue 12: a validation report that fails half-way leaves the output folder as it was.
 
-use deflex_app::report::validation_report::{
-    validation_rotation_summary, write_validation_report as write_report,
-};
+#[cfg(feature = "report")]
+use deflex_app::report::validation_report::write_validation_report as write_report;
+use deflex_app::report::validation_tables::validation_rotation_summary;
 use deflex_calibrate::stiffness::synthetic::{
     SyntheticOptions, measure, measure_with_rotations, random_campaign,
 };
 use deflex_calibrate::stiffness::validation::validate;
 
+#[cfg(feature = "report")]
 #[test]
 fn a_report_that_fails_half_way_leaves_the_folder_as_it_was() {
     let robot = deflex_model::builtin("tx200").unwrap();

@@ -6,30 +6,15 @@
 //! same campaign fits to ≈ 23 µm. J1.z −12 %, J2.z −7 %, J3.x −14 %, J3.z −16 % (the J2/J3
 //! coupling), J4.z −27 % (the lost motion), J5.z −4 %.
 
-use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
-use deflex_calibrate::stiffness::search::{SearchOptions, search_structure};
 use deflex_model::{Axis, EdofSite, builtin};
 use deflex_sim::CellConfig;
-use deflex_sim::twin_campaign::run_campaign;
 
 #[test]
 fn twin_campaign_calibrates_to_the_plant() {
     let nominal = builtin("tx200").unwrap();
-    let plan = plan_experiments(
-        &nominal,
-        &PlanOptions {
-            load_cases: 40,
-            full_family: true,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
-    // A careful static campaign: every tracker reading averages 25 samples (0.5 s at 50 Hz), so
-    // the white part of the tracker noise drops below the unmodelled effects we want to see.
-    let mut config = CellConfig::default();
-    config.tracker.samples_per_reading = 25;
-    let rows = run_campaign(&config, &plan.rows, 1).unwrap();
-    let result = search_structure(&nominal, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
+    // A careful static campaign on the default cell's twin (see `careful_campaign`).
+    let config = CellConfig::default();
+    let (_, result) = crate::twin::common::careful_campaign(&nominal, &config);
     let identified = result.calibration.to_robot(&nominal);
     let plant = config.plant.linear_robot(&nominal).unwrap();
     let main = [

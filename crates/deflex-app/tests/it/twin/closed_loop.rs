@@ -1,6 +1,6 @@
 //! The correction law in-process against the twin (SIMULATED): the paper's cone closed loop
-//! with a model identified from the twin's campaign, a model read from a file (the paper's
-//! Table 1 model is in deflex-sim's tests).
+//! with a model identified from the twin's campaign, with the paper's Table 1 model, and with a
+//! model read from a file; each against the open loop of the same path and seed.
 
 use crate::twin::common;
 use deflex_app::twin::{TwinSetupError, twin_controller};
@@ -109,6 +109,16 @@ fn paper_cone_closed_loop_with_calibrated_model() {
     // The uncorrected cone reproduces the paper's levels: 3.84 mm ± 25 %, Fz 1.2–1.3 kN.
     assert!((2.88..=4.80).contains(&o.max_error_norm_mm));
     assert!((1150.0..=1350.0).contains(&o.max_fz_N));
+}
+
+/// With the paper's Table 1 model (stiffer than the twin's robot) the loop still helps.
+#[test]
+fn table1_model_still_improves_a_short_run() {
+    let model = deflex_model::builtin("tx200").unwrap();
+    let c = compare(ToolPath::paper_cone().truncated(600.0), model, 2);
+    let (o, k) = (&c.open.summary, &c.closed.forming.summary);
+    assert!(k.max_error_norm_mm < 0.9 * o.max_error_norm_mm);
+    assert!(c.closed.fault.is_none());
 }
 
 /// The `deflex sim isf --correction on --model MODEL.toml` path: the model is read from a

@@ -7,7 +7,7 @@
 mod cell_file;
 mod cell_server;
 mod closed_loop;
-mod common;
+pub mod common;
 mod loopback;
 mod sim_time;
 mod telemetry;

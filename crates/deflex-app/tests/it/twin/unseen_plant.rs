@@ -432,24 +432,10 @@ fn the_plain_log_gap_is_the_j2_j3_coupling() {
 /// `couplings_are_fitted_from_a_simulated_campaign` runs this plant's campaign through the
 /// commands). Never from the plant's parameters. Returns the diagonal and the coupled model.
 fn campaign_models(cell: &CellConfig) -> (Robot, deflex_calibrate::stiffness::CouplingFit) {
-    use deflex_calibrate::stiffness::plan::{PlanOptions, plan_experiments};
-    use deflex_calibrate::stiffness::{SearchOptions, fit_couplings, search_structure};
+    use deflex_calibrate::stiffness::fit_couplings;
     use deflex_model::{Axis, EdofSite};
-    use deflex_sim::twin_campaign::run_campaign;
     let nominal = cell.nominal_robot().unwrap();
-    let plan = plan_experiments(
-        &nominal,
-        &PlanOptions {
-            load_cases: 40,
-            full_family: true,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
-    let mut campaign_cell = cell.clone();
-    campaign_cell.tracker.samples_per_reading = 25;
-    let rows = run_campaign(&campaign_cell, &plan.rows, 1).unwrap();
-    let search = search_structure(&nominal, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
+    let (rows, search) = super::common::careful_campaign(&nominal, cell);
     let diagonal = search.calibration.to_robot(&nominal);
     let pair = ((EdofSite::Joint(2), Axis::Z), (EdofSite::Joint(3), Axis::Z));
     let fit = fit_couplings(&diagonal, &rows, &[pair]).unwrap();

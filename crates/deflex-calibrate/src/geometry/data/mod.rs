@@ -288,11 +288,9 @@ pub fn format_absolute(rows: &[AbsoluteRow], comments: &[String]) -> String {
             out.push('\n');
         }
     }
-    let mut writer = csv::WriterBuilder::new().from_writer(Vec::new());
-    let _ = writer.write_record(&header);
     let num = |v: f64| format!("{v:?}");
     let opt = |v: Option<f64>| v.map(num).unwrap_or_default();
-    for row in rows {
+    let record_of = |row: &AbsoluteRow| {
         let mut record: Vec<String> = vec![row.setup.clone(), row.target.clone()];
         if with_config {
             record.push(row.config.clone().unwrap_or_default());
@@ -338,9 +336,11 @@ pub fn format_absolute(rows: &[AbsoluteRow], comments: &[String]) -> String {
                 _ => record.extend(std::iter::repeat_n(String::new(), joint_count)),
             }
         }
-        let _ = writer.write_record(&record);
-    }
-    out.push_str(&String::from_utf8(writer.into_inner().unwrap_or_default()).unwrap_or_default());
+        record
+    };
+    out.push_str(&deflex_files::csv_text(
+        std::iter::once(header).chain(rows.iter().map(record_of)),
+    ));
     out
 }
 

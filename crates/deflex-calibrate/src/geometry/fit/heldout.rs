@@ -76,6 +76,8 @@ pub fn refit(
     if let Some(hyper) = refit.residual {
         let (q, y) = residual_training_set(&trained, campaign, mult);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        // A failed training (fewer than 10 readings, a singular system) leaves the model without
+        // a residual model, scored as it is (as a failed map training leaves the maps out).
         trained.residual = ResidualModel::train(&q, &y, hyper, &mut rng).ok();
     }
     trained

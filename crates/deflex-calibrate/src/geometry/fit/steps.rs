@@ -167,6 +167,8 @@ pub fn run_step(step: Step, accepted: &mut Accepted, context: &StepContext) -> S
     if let Some(h) = hyper {
         let (q, y) = heldout::residual_training_set(&trial, campaign, &roles.fit_mult);
         let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+        // A failed training (fewer than 10 readings, a singular system) leaves the model without
+        // a residual model, scored as it is (as a failed map training leaves the maps out).
         trial.residual = ResidualModel::train(&q, &y, h, &mut rng).ok();
     }
     let refit_with = Refit {

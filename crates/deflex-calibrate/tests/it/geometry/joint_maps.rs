@@ -259,7 +259,7 @@ fn a_terms_file_carries_the_maps_and_bad_ones_are_refused() {
     let (result, campaign) = fit_maps(true, 5);
     let terms = CalibrationTerms::of(&result);
     assert!(terms.joint_maps.is_some());
-    let json = terms.to_json();
+    let json = terms.to_json().expect("the terms serialise");
     let mut model = EgModel::from_robot(&result.model.to_robot());
     CalibrationTerms::from_json(&json)
         .unwrap()

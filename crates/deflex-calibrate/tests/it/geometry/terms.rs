@@ -40,7 +40,8 @@ fn torsion_terms_round_trip_and_bad_ones_are_refused() {
         ],
     );
     assert!(!written.is_empty());
-    let read = CalibrationTerms::from_json(&written.to_json()).expect("round trip");
+    let read =
+        CalibrationTerms::from_json(&written.to_json().expect("serialises")).expect("round trip");
     read.apply(&mut model).expect("applies");
     let j2 = model.robot.edofs().position(|e| e.label() == "J2.z");
     assert_eq!(
@@ -53,7 +54,10 @@ fn torsion_terms_round_trip_and_bad_ones_are_refused() {
     );
     assert_eq!(model.torsion[1].shape, TorsionShape::Cubic);
     // A file written before torsion terms existed still reads.
-    let old = written.to_json().replace("\"torsion\"", "\"unused\"");
+    let old = written
+        .to_json()
+        .expect("serialises")
+        .replace("\"torsion\"", "\"unused\"");
     assert!(
         CalibrationTerms::from_json(&old)
             .expect("old")

@@ -222,10 +222,12 @@ fn joint_maps_learnt_on_a_transfer_to_b() {
     assert!(b(3) < 0.9 * b(2), "B {:.3} → {:.3} mm", b(2), b(3));
     let terms = deflex_calibrate::geometry::terms::CalibrationTerms::of(&result);
     let mut read = EgModel::from_robot(&result.model.to_robot());
-    deflex_calibrate::geometry::terms::CalibrationTerms::from_json(&terms.to_json())
-        .unwrap()
-        .apply(&mut read)
-        .unwrap();
+    deflex_calibrate::geometry::terms::CalibrationTerms::from_json(
+        &terms.to_json().expect("the terms serialise"),
+    )
+    .unwrap()
+    .apply(&mut read)
+    .unwrap();
     let (Some(read_maps), Some(fitted_maps)) = (&read.joint_maps, &result.model.joint_maps) else {
         panic!("maps lost in the terms file: {}", read.joint_maps.is_some());
     };

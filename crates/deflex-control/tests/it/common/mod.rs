@@ -1,19 +1,27 @@
-//! Shared set-up: the built-in TX200 at the paper's cone centre configuration, a controller with
-//! a known bias and a tool, and raw sensor readings synthesised for a TCP wrench.
+//! The control law's test set-up: the built-in TX200 at the paper's cone centre configuration, a
+//! controller with a known bias and a tool, and the raw sensor readings for a TCP wrench.
+//!
+//! One definition for every test binary that runs this controller: deflex-runtime's sessions
+//! (its `common` module) and the facade's no-allocation tests compile this file by `#[path]`,
+//! so it uses nothing but deflex-control, deflex-model and nalgebra, which they all have.
 #![allow(dead_code)]
 
+use deflex_control::wrench::WrenchProcessor;
 use deflex_control::{Controller, ControllerConfig, WrenchConfig};
 use deflex_model::ToolLoad;
 use deflex_model::spatial::pose_from_xyz_rpy;
-use deflex_model::wrench_transport::world_wrench_in_sensor;
 use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
 
+/// The sensor bias of [`config`] (N, N·m), in every reading of [`raw_reading`].
 pub const BIAS: [f64; 6] = [4.0, -3.0, 7.0, 0.2, -0.1, 0.05];
 
+/// The paper's forming configuration of the TX200 (rad).
 pub fn q0() -> [f64; 6] {
     TX200_FORMING_Q_DEG.map(f64::to_radians)
 }
 
+/// A controller configuration with the known bias [`BIAS`], a sensor 4 cm off the flange
+/// (turned 0.3 rad about z) and a 5 kg tool.
 pub fn config() -> ControllerConfig {
     ControllerConfig {
         bias: Some(BIAS),
@@ -29,29 +37,25 @@ pub fn config() -> ControllerConfig {
     }
 }
 
+/// The built-in TX200.
 pub fn robot() -> Robot {
     builtin("tx200").expect("built-in tx200")
 }
 
+/// A controller of [`robot`] with `config`.
 pub fn controller(config: ControllerConfig) -> Controller {
     Controller::new(robot(), config).expect("controller")
 }
 
-/// What the sensor reads (bias + tool weight + environment wrench `w_tcp_world` at the TCP).
+/// What the sensor reads at joint values `q` for the environment wrench `w_tcp_world` at the
+/// TCP (world axes): [`BIAS`] + the tool's weight + that wrench, under the mounting and tool of
+/// `config` (its own `bias` aside: a controller that tares finds [`BIAS`]).
 pub fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) -> Wrench {
-    let robot = robot();
     let mut data = Data::new();
-    robot.forward_kinematics(&mut data, q).unwrap();
-    let sensor = data.flange * config.wrench.sensor_in_flange;
-    let env = world_wrench_in_sensor(&Wrench::from(w_tcp_world), &data.tcp_position(), &sensor);
-    let g = config.wrench.gravity_world;
-    let m = config.wrench.tool_in_sensor.mass_kg;
-    let f =
-        sensor.rotation.matrix().transpose() * nalgebra::Vector3::new(g[0] * m, g[1] * m, g[2] * m);
-    let c = config.wrench.tool_in_sensor.centre_of_mass_m;
-    let mg = c.cross(&f);
-    let grav = [f.x, f.y, f.z, mg.x, mg.y, mg.z];
-    Wrench::from_fn(|i, _| BIAS[i] + grav[i] + env[i])
+    robot().forward_kinematics(&mut data, q).unwrap();
+    let mut path = WrenchProcessor::new(config.wrench);
+    path.set_bias(Wrench::from(BIAS));
+    path.raw_reading(&Wrench::from(w_tcp_world), &data)
 }
 
 /// Runs `seconds` of the law against a rigid-environment-free plant (constant wrench), returns

@@ -5,66 +5,8 @@
 //! whole control-thread path (messages, telemetry publish, send shaper) is proven in
 //! `no_alloc::runtime`.
 
-use deflex_control::{Controller, ControllerConfig, WrenchConfig};
-use deflex_model::ToolLoad;
-use deflex_model::spatial::pose_from_xyz_rpy;
-use deflex_model::wrench_transport::world_wrench_in_sensor;
-use deflex_model::{Data, Robot, TX200_FORMING_Q_DEG, Wrench, builtin};
-
-// The set-up of deflex-control's own tests (their `common` module): the built-in TX200 at the
-// paper's cone centre configuration, a controller with a known bias and a tool, and raw sensor
-// readings synthesised for a TCP wrench.
-
-/// The sensor bias of [`config`] (N, N·m).
-const BIAS: [f64; 6] = [4.0, -3.0, 7.0, 0.2, -0.1, 0.05];
-
-/// The paper's forming configuration of the TX200 (rad).
-fn q0() -> [f64; 6] {
-    TX200_FORMING_Q_DEG.map(f64::to_radians)
-}
-
-/// A controller configuration with a known bias, a sensor 4 cm off the flange and a 5 kg tool.
-fn config() -> ControllerConfig {
-    ControllerConfig {
-        bias: Some(BIAS),
-        wrench: WrenchConfig {
-            sensor_in_flange: pose_from_xyz_rpy([0.0, 0.0, 0.04], [0.0, 0.0, 0.3]),
-            tool_in_sensor: ToolLoad {
-                mass_kg: 5.0,
-                centre_of_mass_m: nalgebra::Vector3::new(0.0, 0.01, 0.12),
-            },
-            ..WrenchConfig::default()
-        },
-        ..ControllerConfig::default()
-    }
-}
-
-/// The built-in TX200.
-fn robot() -> Robot {
-    builtin("tx200").expect("built-in tx200")
-}
-
-/// A controller of [`robot`] with `config`.
-fn controller(config: ControllerConfig) -> Controller {
-    Controller::new(robot(), config).expect("controller")
-}
-
-/// What the sensor reads (bias + tool weight + environment wrench `w_tcp_world` at the TCP).
-fn raw_reading(config: &ControllerConfig, q: &[f64], w_tcp_world: [f64; 6]) -> Wrench {
-    let robot = robot();
-    let mut data = Data::new();
-    robot.forward_kinematics(&mut data, q).unwrap();
-    let sensor = data.flange * config.wrench.sensor_in_flange;
-    let env = world_wrench_in_sensor(&Wrench::from(w_tcp_world), &data.tcp_position(), &sensor);
-    let g = config.wrench.gravity_world;
-    let m = config.wrench.tool_in_sensor.mass_kg;
-    let f =
-        sensor.rotation.matrix().transpose() * nalgebra::Vector3::new(g[0] * m, g[1] * m, g[2] * m);
-    let c = config.wrench.tool_in_sensor.centre_of_mass_m;
-    let mg = c.cross(&f);
-    let grav = [f.x, f.y, f.z, mg.x, mg.y, mg.z];
-    Wrench::from_fn(|i, _| BIAS[i] + grav[i] + env[i])
-}
+use super::setup::{config, controller, q0, raw_reading, robot};
+use deflex_model::{Data, Wrench};
 
 #[test]
 fn control_cycle_allocates_nothing() {

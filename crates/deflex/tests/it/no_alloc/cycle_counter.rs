@@ -2,6 +2,8 @@
 //! runtime's, the live view's and the ROS 2 bridge's no-allocation sessions.
 
 use super::allocations;
+use deflex_runtime::{Clock, WallClock};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The allocations one thread makes between consecutive calls of [`CycleCounter::cycle`]
@@ -49,5 +51,35 @@ impl<const N: usize> CycleCounter<N> {
     /// Cycles measured under `class`.
     pub fn cycles(&self, class: usize) -> u64 {
         self.cycles[class].load(Ordering::Relaxed)
+    }
+}
+
+/// Wall time that records, at every `sleep_until` (called by the control thread only, once per
+/// cycle), the allocations its caller made since the previous call (from the third call on: the
+/// first two include the thread's start).
+#[derive(Clone)]
+pub struct CountingClock {
+    inner: WallClock,
+    /// The allocations and cycles measured (one class).
+    pub counter: Arc<CycleCounter<1>>,
+}
+
+impl CountingClock {
+    /// Wall time from now, nothing counted yet.
+    pub fn new() -> Self {
+        CountingClock {
+            inner: WallClock::new(),
+            counter: Arc::new(CycleCounter::new(2)),
+        }
+    }
+}
+
+impl Clock for CountingClock {
+    fn now(&self) -> f64 {
+        self.inner.now()
+    }
+    fn sleep_until(&self, t_s: f64) {
+        self.counter.cycle(0);
+        self.inner.sleep_until(t_s)
     }
 }

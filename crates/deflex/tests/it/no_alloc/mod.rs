@@ -1,4 +1,11 @@
 //! No per-cycle path allocates: one module per layer's hot path.
+//!
+//! [`setup`] is deflex-runtime's test set-up, with deflex-control's in it (the TX200 controller
+//! with a known bias and a tool, the raw sensor reading for a TCP wrench, a KUKA and a Net F/T
+//! on loopback, a session's telemetry): compiled here from those packages' tests by `#[path]`,
+//! not copied, so that the control cycles and the sessions measured here are the ones their
+//! own tests run (the no-allocation tests need this binary's counting allocator, so they cannot
+//! live in those packages' test binaries).
 
 mod compensate;
 mod control;
@@ -7,6 +14,8 @@ mod io;
 mod model;
 mod ros2;
 mod runtime;
+#[path = "../../../../deflex-runtime/tests/it/common/mod.rs"]
+mod setup;
 mod telemetry;
 mod view;
 

@@ -8,43 +8,25 @@
 //! the bridge off and on are printed (`--nocapture`), not asserted (timing on a shared machine
 //! is not a test).
 
-use super::cycle_counter::CycleCounter;
+use super::cycle_counter::CountingClock;
+use super::setup::kuka_robot;
+use dds::{domain, now_ns, publisher, sensor_settings, subscriber, wait_until, wrench};
 use deflex_control::{Controller, ControllerConfig};
-use deflex_io::RobotSideLink;
-use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
-use deflex_ros2::{
-    BridgeReport, BridgeSettings, Ros2Bridge, Ros2SensorLink, SensorSettings, join, message_type,
-    qos_profile, ros_name,
-};
+use deflex_io::rsi::{RsiConfig, RsiLink};
+use deflex_ros2::{BridgeReport, BridgeSettings, Ros2Bridge, Ros2SensorLink, join};
 use deflex_runtime::session::{RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{Source, session_info};
-use deflex_runtime::{Clock, RunSummary, Telemetry, WallClock};
-use deflex_telemetry::ros::{
-    Header, JointState, Ros2Qos, Ros2Topic, Vector3, Wrench, WrenchStamped,
-};
-use ros2_client::{Node, Publisher, Subscription};
+use deflex_runtime::{RunSummary, Telemetry};
+use deflex_telemetry::ros::{JointState, Ros2Qos, Ros2Topic, WrenchStamped};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-/// Wall time that records, at every `sleep_until` (called by the control thread only, once per
-/// cycle), the allocations its caller made since the previous call (from the third call on: the
-/// first two include the thread's start).
-#[derive(Clone)]
-struct CountingClock {
-    inner: WallClock,
-    counter: Arc<CycleCounter<1>>,
-}
-
-impl Clock for CountingClock {
-    fn now(&self) -> f64 {
-        self.inner.now()
-    }
-    fn sleep_until(&self, t_s: f64) {
-        self.counter.cycle(0);
-        self.inner.sleep_until(t_s)
-    }
-}
+/// deflex-ros2's DDS test helpers (its tests' `dds` module), compiled here by `#[path]`, not
+/// copied: the domains of this process (offsets 4–7 here, 0–3 there), the bounded wait for
+/// discovery, publishers and subscribers at deflex's QoS, a driver's `WrenchStamped`.
+#[path = "../../../../deflex-ros2/tests/it/dds.rs"]
+mod dds;
 
 /// What one session gave: its summary, the control thread's allocations in the measured
 /// cycles, the number of those cycles, and the bridge's report.
@@ -100,29 +82,8 @@ fn session(d: u16, bridge: bool) -> Measured {
         b
     });
     let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
-    let link_addr = link.local_addr().unwrap();
+    let robot = kuka_robot(link.local_addr().unwrap(), q, f64::INFINITY);
     let driving = Arc::new(AtomicBool::new(true));
-    let robot = {
-        let driving = driving.clone();
-        std::thread::spawn(move || {
-            let mut ep =
-                RsiRobotEndpoint::new("127.0.0.1:0", link_addr, CorrectionMode::Absolute).unwrap();
-            let mut next = Instant::now();
-            let mut sent = 0u64;
-            while driving.load(Ordering::Acquire) {
-                let state = deflex_io::RobotState {
-                    cycle_id: sent + 1,
-                    ..deflex_io::RobotState::with_joints(&q)
-                };
-                ep.send_state(&state).unwrap();
-                sent += 1;
-                next += Duration::from_millis(4);
-                let wait = next.saturating_duration_since(Instant::now());
-                let _ = ep.receive_correction(wait.max(Duration::from_micros(100)));
-                std::thread::sleep(next.saturating_duration_since(Instant::now()));
-            }
-        })
-    };
     let publishing = {
         let driving = driving.clone();
         std::thread::spawn(move || {
@@ -133,10 +94,7 @@ fn session(d: u16, bridge: bool) -> Measured {
             drop(driver_node);
         })
     };
-    let clock = CountingClock {
-        inner: WallClock::new(),
-        counter: Arc::new(CycleCounter::new(2)),
-    };
+    let clock = CountingClock::new();
     let options = RuntimeOptions {
         realtime: false,
         lock_memory: false,
@@ -165,7 +123,7 @@ fn session(d: u16, bridge: bool) -> Measured {
     }
     let summary = runtime.join();
     driving.store(false, Ordering::Release);
-    robot.join().unwrap();
+    robot.join();
     publishing.join().unwrap();
     let bridge = bridge.map(|b| b.finish().unwrap());
     drop(listener);
@@ -207,93 +165,5 @@ fn control_thread_allocates_nothing_with_the_ros2_sensor_and_the_bridge() {
             "bridge {bridge}: {} allocations in {} cycles",
             m.allocations, m.measured
         );
-    }
-}
-
-// The DDS helpers of deflex-ros2's own loopback tests.
-
-/// A DDS domain of this test process alone (other processes on the machine may use DDS), below
-/// 100: their RTPS ports (7400 + 250 d + …) then lie under Linux's ephemeral range (32768 on),
-/// where the other tests' port-0 sockets live. `offset` (0–7) per session; deflex-ros2's own
-/// tests use the offsets 0–3 of their process.
-fn domain(offset: u16) -> u16 {
-    20 + (std::process::id() % 10) as u16 * 8 + offset
-}
-
-const DISCOVERY: Duration = Duration::from_secs(20);
-
-fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
-    let start = Instant::now();
-    while !done() {
-        assert!(
-            start.elapsed() < DISCOVERY,
-            "{what}: not within {DISCOVERY:?}"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-fn subscriber<T: deflex_telemetry::ros::RosMessage + 'static>(
-    node: &mut Node,
-    topic: &str,
-    qos: Ros2Qos,
-) -> Subscription<T> {
-    let q = qos_profile(qos, 200);
-    let t = node
-        .create_topic(&ros_name(topic).unwrap(), message_type::<T>(), &q)
-        .unwrap();
-    node.create_subscription(&t, Some(q)).unwrap()
-}
-
-fn publisher<T: deflex_telemetry::ros::RosMessage>(
-    node: &mut Node,
-    topic: &str,
-    qos: Ros2Qos,
-) -> Publisher<T> {
-    let q = qos_profile(qos, 200);
-    let t = node
-        .create_topic(&ros_name(topic).unwrap(), message_type::<T>(), &q)
-        .unwrap();
-    node.create_publisher(&t, Some(q)).unwrap()
-}
-
-fn wrench(frame: &str, stamp_ns: u64, fz: f64) -> WrenchStamped {
-    WrenchStamped {
-        header: Header {
-            stamp: deflex_telemetry::ros::Time::from_nanos(stamp_ns),
-            frame_id: frame.into(),
-        },
-        wrench: Wrench {
-            force: Vector3 {
-                x: 1.0,
-                y: -2.0,
-                z: fz,
-            },
-            torque: Vector3 {
-                x: 0.1,
-                y: 0.2,
-                z: 0.3,
-            },
-        },
-    }
-}
-
-fn now_ns() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap()
-        .as_nanos() as u64
-}
-
-fn sensor_settings(d: u16, depth: usize, qos: Ros2Qos) -> SensorSettings {
-    SensorSettings {
-        domain_id: d,
-        namespace: "/deflex_test".into(),
-        node_name: "ft".into(),
-        qos,
-        topic: "/ati/wrench".into(),
-        frame_id: "ati_ft".into(),
-        max_age: Duration::from_millis(500),
-        queue_depth: depth,
     }
 }

@@ -19,7 +19,6 @@ use deflex_runtime::{Clock, RuntimeOptions, WallClock, spawn};
 use deflex_sim::twin::cell_server::{ServeOptions, serve_cell};
 use deflex_sim::{CellConfig, ToolPath};
 use std::net::TcpStream;
-use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -47,28 +46,10 @@ impl Clock for CountingClock {
     }
 }
 
-fn free_udp_port() -> u16 {
-    std::net::UdpSocket::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
-
-/// docs/cell.example.toml (the twin's TX200 cell) on free loopback ports, without real-time
-/// privileges, in `dir`.
-fn cell_file(dir: &Path) -> CellFile {
-    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs");
-    let text = std::fs::read_to_string(docs.join("cell.example.toml"))
-        .unwrap()
-        .replace("127.0.0.1:59152", &format!("127.0.0.1:{}", free_udp_port()))
-        .replace("127.0.0.1:49152", &format!("127.0.0.1:{}", free_udp_port()))
-        .replace("realtime = true", "realtime = false")
-        .replace("lock_memory = true", "lock_memory = false");
-    std::fs::copy(docs.join("tx200_cell.toml"), dir.join("tx200_cell.toml")).unwrap();
-    let path = dir.join("cell.toml");
-    std::fs::write(&path, text).unwrap();
-    CellFile::load(&path).unwrap()
-}
+/// The documented `CELL.toml` as a test session runs it (deflex-app's test fixture, compiled here
+/// rather than copied).
+#[path = "../../../../deflex-app/tests/it/example_cell.rs"]
+mod example_cell;
 
 /// A page: reads every message while `open`, closes its socket while not; counts messages.
 fn page(addr: std::net::SocketAddr, open: Arc<AtomicBool>, done: Arc<AtomicBool>) -> u64 {
@@ -115,7 +96,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     let dir = std::env::temp_dir().join(format!("deflex-view-cost-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let file = cell_file(&dir);
+    let file = CellFile::load(&example_cell::example_cell_file(&dir)).unwrap();
 
     // The twin, served as `deflex cell --sim` serves it: the first 300 mm of the cone (≈ 30 s).
     let stop_cell = Arc::new(AtomicBool::new(false));

@@ -1,4 +1,6 @@
-//! Tables as aligned text (for terminals) and as CSV (RFC 4180 quoting).
+//! Tables as aligned text (for terminals) and as CSV (RFC 4180 quoting): no drawing, so in every
+//! build (the `report` feature or not), for the tables the front ends print and the CSV files
+//! the workflows write.
 
 use std::fmt::Write as _;
 
@@ -29,12 +31,14 @@ pub fn render_table(headers: &[&str], rows: &[Vec<String>]) -> String {
     out
 }
 
-/// CSV of a table (RFC 4180 quoting).
-pub fn table_csv(headers: &[&str], rows: &[Vec<String>]) -> String {
+/// CSV of a table (RFC 4180 quoting). A row of another length than the header is an error, not
+/// a silently shorter table.
+pub fn table_csv(headers: &[&str], rows: &[Vec<String>]) -> std::io::Result<String> {
     let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
-    let _ = w.write_record(headers);
+    w.write_record(headers)?;
     for r in rows {
-        let _ = w.write_record(r);
+        w.write_record(r)?;
     }
-    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+    let bytes = w.into_inner().map_err(|e| e.into_error())?;
+    String::from_utf8(bytes).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
 }

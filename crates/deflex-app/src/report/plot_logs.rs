@@ -1,14 +1,29 @@
 //! `deflex plot LOG [LOG2] --out DIR`: the figures of a run's log (a `deflex run` CSV log, a
 //! `deflex sim isf` `log.csv` or an MCAP recording), or of two logs overlaid on path position,
-//! and a self-contained page, in a folder built aside and swapped in whole.
+//! and a self-contained page, in a folder built aside and swapped in whole. It draws: a build
+//! without the `report` feature refuses it ([`crate::Error::ReportsNotBuilt`]) before reading
+//! a log.
 
-use super::{RunFigures, write_run_figures};
 use crate::error::{Error, Result};
 use deflex_model::Robot;
 use deflex_record::trace::{RunTrace, read_run_log};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// What the figures of a run or two (`crate::report::write_run_figures`) wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunFigures {
+    /// The figures, in page order.
+    pub figures: Vec<PathBuf>,
+    /// The page.
+    pub page: PathBuf,
+    /// True when the runs are drawn against path position, false against time.
+    pub by_path_position: bool,
+}
+
+/// What `deflex plot` asks for, in the words of [`crate::Error::ReportsNotBuilt`].
+const LOG_FIGURES: &str = "the figures of a run log (`deflex plot`)";
 
 /// The plot of one or two logs, written.
 #[derive(Clone, Debug)]
@@ -42,13 +57,14 @@ fn label(logs: &[PathBuf], labels: &[String], index: usize) -> String {
 /// Read `logs` (one or two) and write their figures and page into the folder `out`. `labels`
 /// names the runs in legends (none: the file names); `robot` places a `deflex run` log that has
 /// no path position on its path (forward kinematics of its joints), without it such a log is
-/// drawn against time.
+/// drawn against time. Needs the `report` feature (refused without it, before a log is read).
 pub fn plot_logs(
     logs: &[PathBuf],
     labels: &[String],
     robot: Option<&Robot>,
     out: &Path,
 ) -> Result<LogPlot> {
+    let drawing = super::require(LOG_FIGURES)?;
     if !labels.is_empty() && labels.len() != logs.len() {
         return Err(Error::invalid(
             "labels",
@@ -68,7 +84,7 @@ pub fn plot_logs(
         source,
     };
     let folder = deflex_files::AtomicDir::create(out).map_err(io)?;
-    let figures = write_run_figures(folder.path(), &traces)?;
+    let figures = drawing.run_figures(folder.path(), &traces)?;
     folder.commit().map_err(io)?;
     Ok(LogPlot {
         traces,

@@ -4,26 +4,13 @@
 //! closed-loop run of the same path line up whatever their timing — else against time. Plain
 //! data in ([`RunTrace`]), PNG files and a self-contained page out ([`write_run_figures`]).
 
+use crate::report::RunFigures;
 use crate::report::draw::{panels_plot, timeline_plot, write_page};
 use deflex_plot::{
     FileLink, HtmlReport, Lane, LineStyle, PanelLayout, PlotError, PlotSpec, Series,
 };
 use deflex_record::trace::{RunTrace, Xyz};
 use std::path::{Path, PathBuf};
-
-mod plot_logs;
-pub use plot_logs::{LogPlot, plot_logs};
-
-/// What [`write_run_figures`] wrote.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RunFigures {
-    /// The figures, in page order.
-    pub figures: Vec<PathBuf>,
-    /// The page.
-    pub page: PathBuf,
-    /// True when the runs are drawn against path position, false against time.
-    pub by_path_position: bool,
-}
 
 /// Most points drawn per series (longer series keep each block's lowest and highest point).
 pub const MAX_POINTS: usize = 20_000;
