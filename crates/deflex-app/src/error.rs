@@ -214,24 +214,10 @@ pub enum Error {
         /// Why.
         source: deflex_calibrate::geometry::terms::TermsError,
     },
-    /// An input file (or folder) that cannot be read.
-    #[error("{path}: {source}")]
-    Read {
-        /// The file.
-        path: String,
-        /// The cause.
-        source: std::io::Error,
-    },
-    /// A file larger than deflex reads.
-    #[error("{path}: {bytes} bytes is more than the {limit} bytes read")]
-    TooLarge {
-        /// The file.
-        path: String,
-        /// Its size.
-        bytes: u64,
-        /// The limit.
-        limit: u64,
-    },
+    /// A file larger than its reader accepts (`PATH: more than the N bytes a table may have
+    /// …`).
+    #[error(transparent)]
+    TooLarge(#[from] deflex_files::FileTooLarge),
     /// Offline compensation.
     #[error(transparent)]
     Compensate(#[from] deflex_compensate::CompensateError),
@@ -266,7 +252,7 @@ pub enum Error {
     #[error("{flag} {spec}: {source}")]
     PathSpec {
         /// The option (`--path`, `path`).
-        flag: &'static str,
+        flag: String,
         /// As given.
         spec: String,
         /// Why.
@@ -285,7 +271,7 @@ pub enum Error {
         /// ` G54` when named.
         frame: String,
         /// The seed's option (`--seed-deg`, `seed_q`).
-        seed_flag: &'static str,
+        seed_flag: String,
         /// The robot, as given.
         robot: String,
     },
@@ -311,7 +297,7 @@ pub enum Error {
         /// Part origin (mm).
         z: f64,
         /// The part origin's option (`--part-xyz-mm`, `part_xyz_m`).
-        part_flag: &'static str,
+        part_flag: String,
     },
     /// The twin's process model cannot be built.
     #[error("the twin's process model: {0}")]
@@ -348,15 +334,16 @@ pub enum Error {
     },
     /// A program's clearance point that the arm does not reach.
     #[error(
-        "the clearance point above the {which} of the path is not reachable ({source}): lower program.clearance_mm in {program_config_flag} or move the part with {part_flag}"
+        "the clearance point above the {which} of the path is not reachable ({source}): lower program.clearance_mm in {} or move the part with {}",
+        .names.name("settings"),
+        .names.name("part_xyz_m")
     )]
     Clearance {
         /// `start` or `end`.
         which: &'static str,
-        /// The template's option (`--program-config`, `settings`).
-        program_config_flag: &'static str,
-        /// The part origin's option (`--part-xyz-mm`, `part_xyz_m`).
-        part_flag: &'static str,
+        /// The front end's words for the template's option (`--program-config`, `settings`)
+        /// and the part origin's (`--part-xyz-mm`, `part_xyz_m`).
+        names: crate::OptionNames,
         /// Why.
         source: deflex_model::ModelError,
     },
@@ -437,9 +424,15 @@ pub enum Error {
     /// from the twin's campaign).
     #[error(transparent)]
     TwinSetup(#[from] crate::twin::TwinSetupError),
-    /// Options of a forming run on the twin that do not go together.
-    #[error(transparent)]
-    FormConflict(#[from] crate::twin::FormConflict),
+    /// Options of a forming run on the twin that do not go together, named in the words of the
+    /// front end.
+    #[error("{}", .conflict.describe(*.names))]
+    FormConflict {
+        /// Which options.
+        conflict: crate::twin::FormConflict,
+        /// The front end's words.
+        names: crate::OptionNames,
+    },
     /// The paper's study on the twin (`deflex demo`), or a part of it.
     #[error(transparent)]
     Demo(#[from] crate::study::DemoError),
@@ -452,7 +445,7 @@ pub enum Error {
     /// A plot or page that could not be drawn or written (the file named first).
     #[cfg(feature = "report")]
     #[error(transparent)]
-    Plot(#[from] deflex_plot::PlotError),
+    Plot(#[from] crate::report::DrawError),
     /// A report or figure asked of a build without them (deflex-app's `report` feature, off):
     /// refused before anything is computed or written ([`crate::report::require`]).
     #[error(
@@ -462,14 +455,10 @@ pub enum Error {
         /// What was asked for, as the front ends name it.
         what: &'static str,
     },
-    /// A file that could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The cause.
-        source: std::io::Error,
-    },
+    /// A file (or folder) that could not be written, or read where no input error says more
+    /// (`PATH: ERROR`).
+    #[error(transparent)]
+    Io(#[from] deflex_files::FileIoError),
     /// A CSV table (log) that cannot be read.
     #[error("{origin}:{line}: {message}")]
     Table {
@@ -499,8 +488,7 @@ impl Error {
             | Error::Log(_)
             | Error::WrenchLog(_)
             | Error::Table { .. }
-            | Error::Read { .. }
-            | Error::TooLarge { .. }
+            | Error::TooLarge(_)
             | Error::Points(_)
             | Error::SeriesFiles { .. }
             | Error::Input(_) => ErrorKind::Data,
@@ -534,7 +522,7 @@ impl Error {
                 ErrorKind::Simulation
             }
             Error::NoReachableNode => ErrorKind::Model,
-            Error::FormConflict(_) => ErrorKind::Input,
+            Error::FormConflict { .. } => ErrorKind::Input,
             Error::Trace(_) => ErrorKind::Data,
             #[cfg(feature = "report")]
             Error::Plot(_) => ErrorKind::Io,
@@ -548,7 +536,7 @@ impl Error {
             Error::CellSides(_) | Error::CellServe(_) | Error::SimCellNeedsNetFt { .. } => {
                 ErrorKind::Simulation
             }
-            Error::Io { .. } | Error::Serialise { .. } => ErrorKind::Io,
+            Error::Io(_) | Error::Serialise { .. } => ErrorKind::Io,
             #[cfg(feature = "report")]
             Error::Report(_) => ErrorKind::Io,
             Error::Panic(_) => ErrorKind::Internal,
@@ -563,6 +551,12 @@ impl Error {
             context,
             source: Box::new(source),
         }
+    }
+
+    /// An I/O failure on `path` (writing it, or reading where no input error says more), as a
+    /// `map_err` argument: `.map_err(Error::io_on(path))`.
+    pub fn io_on(path: &std::path::Path) -> impl Fn(std::io::Error) -> Error + Copy + '_ {
+        move |source| Error::Io(deflex_files::FileIoError::new(path, source))
     }
 
     /// An invalid option value.
@@ -616,21 +610,25 @@ pub fn bounded(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<f
     if value >= lo && value <= hi {
         Ok(value)
     } else {
-        let unit = if unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {unit}")
-        };
-        Err(Error::invalid(
-            name,
-            format!(
-                "expected a number from {} to {}{unit}, got {}",
-                compact(lo),
-                compact(hi),
-                compact(value)
-            ),
-        ))
+        Err(Error::invalid(name, out_of_range(value, lo, hi, unit)))
     }
+}
+
+/// What a number outside `[lo, hi]` is told, after the option's name: `expected a number from
+/// LO to HI UNIT, got VALUE` (the numbers [`compact`]; no unit when `unit` is empty). The CLI's
+/// range errors say the same.
+pub fn out_of_range(value: f64, lo: f64, hi: f64, unit: &str) -> String {
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    format!(
+        "expected a number from {} to {}{unit}, got {}",
+        compact(lo),
+        compact(hi),
+        compact(value)
+    )
 }
 
 /// A number for a message: plain when readable, in exponent form when very large or small.

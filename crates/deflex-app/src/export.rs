@@ -149,10 +149,7 @@ pub fn export(
         });
     }
     for (path, text) in &files {
-        deflex_files::write_atomic(path, text).map_err(|source| Error::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
+        crate::table::write_text(path, text)?;
     }
     Ok(Exported {
         robot: robot.name.clone(),

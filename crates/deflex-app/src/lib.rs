@@ -17,6 +17,12 @@
 //!   The command line and the facade turn it on; the Python package through its own `report`
 //!   feature, on in the wheel maturin builds.
 //! - `clap`: the choice enums derive `clap::ValueEnum` for the command line.
+//!
+//! ## Front ends' words
+//!
+//! A workflow that names an option in a message (which set-up to choose, the seed that tilts the
+//! tool, the tolerance to widen) takes an [`OptionNames`] and names the option in the words of
+//! the front end that called it: `--seed-deg` on the command line, `seed_q` in Python.
 
 #![warn(missing_docs)]
 
@@ -35,3 +41,4 @@ pub mod table;
 pub mod twin;
 
 pub use error::{Error, ErrorKind, Result};
+pub use option_names::OptionNames;

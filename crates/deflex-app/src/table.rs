@@ -44,29 +44,15 @@ impl Table {
 
 /// Write `text` to `path`, whole or not at all.
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    deflex_files::write_atomic(path, text).map_err(|source| Error::Io {
-        path: path.display().to_string(),
-        source,
-    })
+    deflex_files::write_atomic(path, text).map_err(Error::io_on(path))
 }
 
-/// Read a table file (bounded).
+/// Read a table file: a regular file of at most [`MAX_TABLE_BYTES`], counted while reading
+/// ([`deflex_files::read_bounded`]).
 pub fn read(path: &Path) -> Result<Table> {
-    let origin = path.display().to_string();
-    let io = |source| Error::Io {
-        path: origin.clone(),
-        source,
-    };
-    let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > MAX_TABLE_BYTES {
-        return Err(Error::Table {
-            origin,
-            line: 0,
-            message: format!("{size} bytes, more than the {MAX_TABLE_BYTES} bytes read"),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(io)?;
-    parse(&text, &origin)
+    let text = deflex_files::read_bounded(path, MAX_TABLE_BYTES)
+        .map_err(|e| e.reported_as::<Error>("a table"))?;
+    parse(&text, &path.display().to_string())
 }
 
 /// Parse CSV text; `origin` names it in errors.

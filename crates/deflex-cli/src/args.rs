@@ -1,7 +1,6 @@
 //! Shared argument parsing: joint values, wrenches, lengths, robot loading.
 
 use crate::error::{CliError, UsageError};
-use deflex_app::load::load_robot;
 use deflex_model::Robot;
 
 /// A numeric flag within `[lo, hi]` (NaN and infinities refused), or an error naming the flag,
@@ -178,7 +177,7 @@ pub fn joint_values(
 
 /// Load a robot by built-in name or file path.
 pub fn robot(spec: &str) -> Result<Robot, CliError> {
-    Ok(load_robot(spec)?)
+    Ok(deflex_app::robot::load(spec)?)
 }
 
 /// Print a JSON value, pretty, to stdout (the `--json` output of every command): a `Value`'s

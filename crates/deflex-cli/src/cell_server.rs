@@ -104,17 +104,16 @@ fn twin_path(args: &CellArgs) -> Result<deflex_sim::ToolPath, CliError> {
     Ok(path.tool_path(args.length_mm)?)
 }
 
-/// The twin's cell: the robot's (`--robot`, else the twin file's, else the TX200's), with the
-/// twin file's settings over it.
+/// The twin's cell (`deflex_app::twin::cell_config`): the robot's (`--robot`, else the twin
+/// file's, else the TX200's), with the twin file's settings over it; a robot without a twin
+/// file is named with its flag.
 pub fn twin_config(args: &CellArgs) -> Result<CellConfig, CliError> {
+    let cell = deflex_app::twin::cell_config(args.robot.as_deref(), args.twin.as_deref());
     match (&args.twin, &args.robot) {
-        (Some(p), robot) => Ok(deflex_app::cell::twin_cell_file::load_cell(
-            p,
-            robot.as_deref(),
-        )?),
-        (None, Some(robot)) => deflex_app::cell::twin_cell_file::cell_for_robot(robot)
-            .map_err(|e| CliError::in_context(format!("--robot {robot}"))(e.into())),
-        (None, None) => Ok(CellConfig::default()),
+        (None, Some(robot)) => {
+            cell.map_err(|e| CliError::in_context(format!("--robot {robot}"))(e.into()))
+        }
+        _ => Ok(cell?),
     }
 }
 

@@ -6,11 +6,12 @@
 use crate::args::{check_range, print_json, robot};
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
+use deflex_app::OptionNames;
 use deflex_app::calibrate::{
     self, CalibrateOptions, CriterionChoice, DataCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M,
-    Source, StructureChoice, Wording,
+    Source, StructureChoice,
 };
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 mod couplings;
 
@@ -106,13 +107,12 @@ pub struct ValidateArgs {
     pub out: Option<PathBuf>,
 }
 /// The data check from `--fk-tolerance-mm` (checked in mm, named), `--ignore-fk-check` and
-/// `--ignore-column`, and how the CLI names the data `file` in messages.
+/// `--ignore-column`.
 fn data_check(
-    data: &Path,
     tolerance_mm: f64,
     ignore_fk_check: bool,
     ignore_columns: &[String],
-) -> Result<(DataCheck, Wording), CliError> {
+) -> Result<DataCheck, CliError> {
     if !(tolerance_mm.is_finite()
         && (MIN_FK_TOLERANCE_M * 1e3..=MAX_FK_TOLERANCE_M * 1e3).contains(&tolerance_mm))
     {
@@ -127,17 +127,11 @@ fn data_check(
         )
         .into());
     }
-    let check = DataCheck {
+    Ok(DataCheck {
         fk_tolerance_m: tolerance_mm * 1e-3,
         ignore_fk_check,
         ignore_columns: ignore_columns.to_vec(),
-    };
-    let wording = Wording {
-        check_context: Some(data.display().to_string()),
-        fit_context: Some(format!("--data {}", deflex_files::shown_path(data))),
-        fk_advice: "Is this the robot the file was measured on? Widen the tolerance with --fk-tolerance-mm, or use the file anyway with --ignore-fk-check.".into(),
-    };
-    Ok((check, wording))
+    })
 }
 
 pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
@@ -161,8 +155,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         .transpose()?
         .unwrap_or_default();
     let start = robot(&args.robot)?;
-    let (check, wording) = data_check(
-        &args.data,
+    let check = data_check(
         args.fk_tolerance_mm,
         args.ignore_fk_check,
         &args.ignore_column,
@@ -194,7 +187,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
         }
     };
     let source = Source::File(args.data.clone());
-    let result = calibrate::calibrate(&start, &source, &options, &wording, &mut progress);
+    let result = calibrate::calibrate(&start, &source, &options, OptionNames::Cli, &mut progress);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
@@ -231,14 +224,13 @@ fn search_bar(json_output: bool) -> indicatif::ProgressBar {
 pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
     let model = robot(&args.robot)?;
     let baseline = args.baseline.as_deref().map(robot).transpose()?;
-    let (check, wording) = data_check(
-        &args.data,
+    let check = data_check(
         args.fk_tolerance_mm,
         args.ignore_fk_check,
         &args.ignore_column,
     )?;
     let source = Source::File(args.data.clone());
-    let v = calibrate::validate(&model, baseline.as_ref(), &source, &check, &wording)?;
+    let v = calibrate::validate(&model, baseline.as_ref(), &source, &check, OptionNames::Cli)?;
     let files = match &args.out {
         Some(dir) => calibrate::write_validation_report(&v, dir)?,
         None => Vec::new(),

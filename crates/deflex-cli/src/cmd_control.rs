@@ -168,7 +168,7 @@ fn run_session(
         RunEvent::LogFailed { path, error } => eprintln!(
             "deflex run: the log {} cannot be written ({error}); stopping the session, the \
              correction ramps out",
-            path.map(deflex_files::shown_path).unwrap_or_default()
+            deflex_files::shown_path(path)
         ),
     });
     let view = view.map(|v| {
@@ -244,7 +244,7 @@ fn run_failure(report: &RunReport) -> Option<RunFailure> {
     }
     if let Some(message) = &o.log_error {
         return Some(RunFailure::Log {
-            path: o.log_path.clone().unwrap_or_default(),
+            path: o.log_path.clone(),
             message: message.clone(),
         });
     }

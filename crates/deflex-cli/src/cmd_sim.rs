@@ -153,9 +153,13 @@ pub(super) fn load_config(twin: &TwinArgs) -> Result<CellConfig, CliError> {
     )?)
 }
 
-/// The grid of `--grid` with the `--grid-*` options over it.
-fn grid_params_of(args: &CampaignArgs, config: &CellConfig) -> Result<GridParams, CliError> {
-    let mut params = grid_params(args.grid.unwrap_or_default(), config)?;
+/// The grid `grid` (`--grid`) with the `--grid-*` options over it.
+fn grid_params_of(
+    args: &CampaignArgs,
+    grid: GridChoice,
+    config: &CellConfig,
+) -> Result<GridParams, CliError> {
+    let mut params = grid_params(grid, config)?;
     if let Some(text) = &args.grid_center_m {
         let v = crate::args::parse_fixed::<2>(text, "--grid-center-m")?;
         for x in v {
@@ -283,7 +287,7 @@ fn campaign(args: CampaignArgs, json: bool) -> CommandResult {
     }
     let what = match (&args.plan, &args.grid, args.spiral) {
         (Some(plan), None, false) => CampaignKind::Plan(plan.clone()),
-        (None, Some(_), false) => CampaignKind::Grid(grid_params_of(&args, &config)?),
+        (None, Some(grid), false) => CampaignKind::Grid(grid_params_of(&args, *grid, &config)?),
         (None, None, true) => CampaignKind::Spiral(spiral_params(&args, &config)?),
         _ => {
             return Err(UsageError::Missing {

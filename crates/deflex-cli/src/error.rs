@@ -1,5 +1,8 @@
-//! What a command can fail with: the libraries' typed errors, and the usage errors of the command
-//! line (naming the flag, what it takes and what it was given). Only `main` turns them into text.
+//! What a command can fail with: the application's error (every workflow's failure), the errors
+//! of what the command line attaches itself (the live view, ROS 2, a run stopped by Ctrl-C) and
+//! checks itself (an output path, a point flag), the usage errors of the command line (naming
+//! the flag, what it takes and what it was given), and how a `deflex run` session ended. Only
+//! `main` turns them into text.
 
 use std::path::PathBuf;
 use thiserror::Error;
@@ -16,31 +19,12 @@ pub enum CliError {
     /// A workflow of the application layer failed (its text says what and where).
     #[error(transparent)]
     App(#[from] deflex_app::Error),
-    /// A robot description that cannot be read or used.
+    /// A point given on the command line (`--point`) that cannot be used.
     #[error(transparent)]
-    Model(#[from] deflex_model::ModelError),
-    /// A measurement file that cannot be used: loaded displacements, a plan, absolute
-    /// (tracker) readings.
-    #[error(transparent)]
-    Data(#[from] deflex_calibrate::measurements::DataError),
-    /// A point given on the command line that cannot be used.
-    #[error(transparent)]
-    Point(#[from] deflex_calibrate::measurements::points::PointProblem),
-    /// Calibration, planning or validation refused the data.
-    #[error(transparent)]
-    Calib(#[from] deflex_calibrate::stiffness::CalibError),
-    /// The twin refused its settings or a path.
-    #[error(transparent)]
-    Sim(#[from] deflex_sim::SimError),
-    /// A twin settings file that cannot be read or used.
-    #[error(transparent)]
-    TwinCellFile(#[from] deflex_app::cell::twin_cell_file::TwinCellFileError),
+    Point(#[from] deflex_app::calibrate::plan::PointProblem),
     /// The live view could not be served.
     #[error(transparent)]
     View(#[from] deflex_view::ViewError),
-    /// The MCAP recording could not be written.
-    #[error(transparent)]
-    Record(#[from] deflex_record::RecordError),
     /// A run stopped before its end (Ctrl-C with a live view): its outputs are not written.
     #[error("{source}: nothing written ({} keeps what it held)", .out.display())]
     Stopped {
@@ -48,14 +32,6 @@ pub enum CliError {
         out: PathBuf,
         /// Where the run stopped.
         source: Box<deflex_sim::SimError>,
-    },
-    /// A file or folder could not be written.
-    #[error("{}: {source}", .path.display())]
-    Write {
-        /// The file or folder.
-        path: PathBuf,
-        /// The operating system's error.
-        source: std::io::Error,
     },
     /// An error about a given file or flag value, named first.
     #[error("{context}: {source}")]
@@ -81,9 +57,6 @@ pub enum CliError {
     /// An output path refused, or that could not be written, named with its flag.
     #[error(transparent)]
     Output(#[from] deflex_files::OutputError),
-    /// An input file that cannot be read (special file, too large, not UTF-8, …).
-    #[error(transparent)]
-    Input(#[from] deflex_files::InputError),
     /// The ROS 2 sensor link or bridge.
     #[cfg(feature = "ros2")]
     #[error(transparent)]
@@ -124,12 +97,6 @@ impl CliError {
             source: Box::new(source),
         }
     }
-
-    /// A write to `path` failed.
-    pub fn write(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> CliError {
-        let path = path.into();
-        move |source| CliError::Write { path, source }
-    }
 }
 
 /// How a `deflex run` session failed.
@@ -150,12 +117,12 @@ pub enum RunFailure {
     Starved,
     /// The log could not be written (a full disk…): the session was stopped when it happened.
     #[error(
-        "the log {} could not be written: {message}; the session was stopped when it happened and the correction ramped out",
-        .path.display()
+        "the log{} could not be written: {message}; the session was stopped when it happened and the correction ramped out",
+        .path.as_ref().map(|p| format!(" {}", p.display())).unwrap_or_default()
     )]
     Log {
-        /// The log's path.
-        path: PathBuf,
+        /// The log's path (a session has a log error only when it has a log).
+        path: Option<PathBuf>,
         /// The system's error.
         message: String,
     },
@@ -177,11 +144,8 @@ impl RunFailure {
 pub enum UsageError {
     /// A number outside its range (NaN and infinities included).
     #[error(
-        "{flag}: expected a number from {} to {}{}, got {}",
-        compact(*.lo),
-        compact(*.hi),
-        unit_suffix(.unit),
-        compact(*.got)
+        "{flag}: {}",
+        deflex_app::error::out_of_range(*.got, *.lo, *.hi, .unit)
     )]
     Range {
         /// The flag.
@@ -269,24 +233,5 @@ impl UsageError {
             expected: expected.into(),
             got: got.to_string(),
         }
-    }
-}
-
-/// A number for a message: plain when readable, in exponent form when very large or small
-/// (`1e308`, not three hundred digits).
-pub fn compact(value: f64) -> String {
-    let magnitude = value.abs();
-    if value.is_finite() && value != 0.0 && !(1e-3..1e6).contains(&magnitude) {
-        format!("{value:e}")
-    } else {
-        format!("{value}")
-    }
-}
-
-fn unit_suffix(unit: &str) -> String {
-    if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
     }
 }

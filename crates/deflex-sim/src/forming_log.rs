@@ -50,14 +50,19 @@ impl FormingLog {
         self.rows.push(row);
     }
 
+    /// What the log is, as its first header comment says (without the `# `): simulated, the
+    /// robot, the path and the seed.
+    pub fn title(&self) -> String {
+        format!(
+            "SIMULATED deflex digital twin forming log (not a measurement). robot: {}; path: {}; seed: {}",
+            self.robot, self.path_name, self.seed
+        )
+    }
+
     /// The log as CSV text (mm, N, N·m, mrad), with a `# SIMULATED` header comment.
     pub fn to_csv(&self) -> String {
         let mut s = String::with_capacity(self.rows.len() * 400 + 512);
-        let _ = writeln!(
-            s,
-            "# SIMULATED deflex digital twin forming log (not a measurement). robot: {}; path: {}; seed: {}",
-            self.robot, self.path_name, self.seed
-        );
+        let _ = writeln!(s, "# {}", self.title());
         let _ = writeln!(
             s,
             "# positions in the part frame R_p (mm); wrench on the tool at the TCP, R_p axes (N, N·m); \

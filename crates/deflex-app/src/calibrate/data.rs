@@ -2,6 +2,7 @@
 //! file or an in-memory table), and the check of every row against the robot's forward
 //! kinematics that refuses another robot's data.
 
+use crate::OptionNames;
 use crate::error::{Error, Result};
 use deflex_calibrate::measurements::{DataError, MeasurementFile, MeasurementRow};
 use deflex_calibrate::stiffness::consistency::{
@@ -32,6 +33,15 @@ impl Source {
     pub fn name(&self) -> String {
         match self {
             Source::File(p) => p.display().to_string(),
+            Source::Table { origin, .. } => origin.clone(),
+        }
+    }
+
+    /// The data as messages show it: a file's path (control characters escaped), a table's
+    /// origin.
+    pub fn shown(&self) -> String {
+        match self {
+            Source::File(path) => deflex_files::shown_path(path),
             Source::Table { origin, .. } => origin.clone(),
         }
     }
@@ -90,19 +100,30 @@ pub struct DataCheck {
     pub ignore_columns: Vec<String>,
 }
 
-/// How a front end names the data and its options in a workflow's messages: the CLI its file
-/// and flags, Python nothing but the error itself (and its keywords in the advice).
-#[derive(Clone, Debug, Default)]
-pub struct Wording {
-    /// Named before an error of the forward-kinematics check (the CLI: the file); `None`: the
-    /// error alone.
-    pub check_context: Option<String>,
-    /// Named before an error of the identification (the CLI: `--data FILE`); `None`: the error
-    /// alone.
-    pub fit_context: Option<String>,
-    /// Said when the data disagrees with the forward kinematics: how to widen the tolerance or
-    /// use the data anyway, in the front end's option names.
-    pub fk_advice: String,
+/// Named before an error of the forward-kinematics check: the file on the command line (its
+/// messages name the file first), nothing in Python (the call is in the traceback).
+fn check_context(source: &Source, names: OptionNames) -> Option<String> {
+    (names == OptionNames::Cli).then(|| source.name())
+}
+
+/// Named before an error of the identification: `--data FILE` on the command line, nothing in
+/// Python.
+pub(crate) fn fit_context(source: &Source, names: OptionNames) -> Option<String> {
+    names.context("data", &source.shown())
+}
+
+/// Said when the data disagrees with the forward kinematics: how to widen the tolerance or use
+/// the data anyway, in the front end's option names.
+fn fk_advice(source: &Source, names: OptionNames) -> String {
+    let data = match source {
+        Source::File(_) => "file",
+        Source::Table { .. } => "data",
+    };
+    format!(
+        "Is this the robot the {data} was measured on? Widen the tolerance with {}, or use the {data} anyway with {}.",
+        names.name("fk_tolerance_m"),
+        names.switch("ignore_fk_check")
+    )
 }
 
 /// `result` with its error named after `context`, when there is one.
@@ -127,12 +148,12 @@ pub struct CheckedRows {
 
 /// The data read (displacements required) and every point checked where the robot's forward
 /// kinematics puts it: data that disagrees is refused naming its rows (or used with a warning
-/// with `ignore_fk_check`).
+/// with `ignore_fk_check`), the advice in the words of the front end `names`.
 pub fn read_checked(
     robot: &Robot,
     source: &Source,
     check: &DataCheck,
-    wording: &Wording,
+    names: OptionNames,
 ) -> Result<CheckedRows> {
     let tolerance_m = check.fk_tolerance_m;
     if !(tolerance_m.is_finite()
@@ -146,7 +167,7 @@ pub fn read_checked(
     let file = read_rows_ignoring(source, robot.joint_count(), true, &check.ignore_columns)?;
     let name = source.name();
     let geometry = named(
-        wording.check_context.as_deref(),
+        check_context(source, names).as_deref(),
         check_geometry(
             robot,
             &file.rows,
@@ -156,7 +177,12 @@ pub fn read_checked(
         )
         .map_err(Error::from),
     )?;
-    let warnings = enforce(&geometry, &name, check.ignore_fk_check, &wording.fk_advice)?;
+    let warnings = enforce(
+        &geometry,
+        &name,
+        check.ignore_fk_check,
+        &fk_advice(source, names),
+    )?;
     Ok(CheckedRows {
         rows: file.rows,
         check: geometry,

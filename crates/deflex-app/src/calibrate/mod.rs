@@ -15,7 +15,7 @@
 //!
 //! The front ends convert their arguments (the CLI its flags in mm and %, checked and named in
 //! its units; Python its keywords) into these options and print or return what comes back; the
-//! [`Wording`] says how each names the data and its options in messages.
+//! [`crate::OptionNames`] says how each names the data and its options in messages.
 
 pub mod choice;
 pub mod couplings;
@@ -28,7 +28,7 @@ pub mod validate;
 pub use choice::{CriterionChoice, LoadChoice, PointsChoice, StructureChoice, UnknownChoice};
 pub use couplings::CouplingRequest;
 pub use data::{
-    CheckedRows, DataCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, Source, Wording, geometry_json,
+    CheckedRows, DataCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, Source, geometry_json,
     read_checked, read_rows, read_rows_ignoring, table_error,
 };
 pub use stiffness::{CalibrateOptions, StiffnessCalibration, calibrate, calibrated_name, save};

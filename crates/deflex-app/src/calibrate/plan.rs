@@ -8,7 +8,7 @@
 
 use super::choice::PointsChoice;
 use super::summary::finite_or_null;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::report::plan_tables::{
     EXPECTED_SE_HEADERS, EXPECTED_SHIFT_HEADERS, TECHNICIAN_HEADERS, expected_se_rows,
     expected_shift_rows, technician_rows,
@@ -76,12 +76,7 @@ pub struct CampaignPlan {
 /// displacements, with `# robot:` and `# geometry:` header lines), whole or not at all.
 pub fn plan(nominal: &Robot, options: &PlanOptions, out: &Path) -> Result<CampaignPlan> {
     let plan = plan_experiments(nominal, options)?;
-    deflex_files::write_atomic(out, format_rows_for(nominal, &plan.rows, &[])).map_err(
-        |source| Error::Io {
-            path: out.display().to_string(),
-            source,
-        },
-    )?;
+    crate::table::write_text(out, &format_rows_for(nominal, &plan.rows, &[]))?;
     Ok(CampaignPlan {
         robot: nominal.clone(),
         plan,

@@ -4,7 +4,8 @@
 
 use super::choice::{CriterionChoice, StructureChoice};
 use super::couplings::{self, CouplingRequest};
-use super::data::{DataCheck, Source, Wording, named, read_checked};
+use super::data::{DataCheck, Source, fit_context, named, read_checked};
+use crate::OptionNames;
 use crate::error::{Error, Result, bounded};
 use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::CouplingFit;
@@ -121,14 +122,14 @@ pub fn calibrate(
     start: &Robot,
     source: &Source,
     options: &CalibrateOptions,
-    wording: &Wording,
+    names: OptionNames,
     progress: OnProgress<'_>,
 ) -> Result<StiffnessCalibration> {
     check_options(options)?;
-    let checked = read_checked(start, source, &options.check, wording)?;
+    let checked = read_checked(start, source, &options.check, names)?;
     let t0 = std::time::Instant::now();
     let (calibration, steps, stop_reason) = named(
-        wording.fit_context.as_deref(),
+        fit_context(source, names).as_deref(),
         identify(start, &checked.rows, options, progress),
     )?;
     let elapsed_s = t0.elapsed().as_secs_f64();
@@ -244,19 +245,15 @@ pub fn save(cal: &StiffnessCalibration, out: &Path, report: Option<&Path>) -> Re
         Some(dir) => Some((dir, crate::report::require(CALIBRATION_REPORT)?)),
         None => None,
     };
-    let io = |path: &Path| {
-        let path = path.display().to_string();
-        move |source| Error::Io { path, source }
-    };
-    let mut model_file = deflex_files::AtomicFile::create(out).map_err(io(out))?;
+    let mut model_file = deflex_files::AtomicFile::create(out).map_err(Error::io_on(out))?;
     model_file
         .write_all(crate::load::robot_to_toml_for(&cal.model, out).as_bytes())
-        .map_err(io(out))?;
+        .map_err(Error::io_on(out))?;
     if let Some((dir, drawing)) = report {
-        let folder = deflex_files::AtomicDir::create(dir).map_err(io(dir))?;
+        let folder = deflex_files::AtomicDir::create(dir).map_err(Error::io_on(dir))?;
         drawing.calibration_report(cal, folder.path(), &out.display().to_string())?;
-        folder.commit().map_err(io(dir))?;
+        folder.commit().map_err(Error::io_on(dir))?;
     }
-    model_file.commit().map_err(io(out))?;
+    model_file.commit().map_err(Error::io_on(out))?;
     Ok(())
 }

@@ -2,7 +2,8 @@
 //! `deflex.validate`): prediction errors beside a baseline, their plots and page, and the
 //! per-row prediction of a measurement or plan table.
 
-use super::data::{DataCheck, Source, Wording, geometry_json, read_checked, read_rows};
+use super::data::{DataCheck, Source, geometry_json, read_checked, read_rows};
+use crate::OptionNames;
 use crate::error::Result;
 use crate::report::text_table::render_table;
 use crate::report::validation_tables::{
@@ -31,9 +32,9 @@ pub fn validate(
     baseline: Option<&Robot>,
     source: &Source,
     check: &DataCheck,
-    wording: &Wording,
+    names: OptionNames,
 ) -> Result<Validation> {
-    let checked = read_checked(model, source, check, wording)?;
+    let checked = read_checked(model, source, check, names)?;
     let validation =
         deflex_calibrate::stiffness::validation::validate(model, baseline, &checked.rows)?;
     Ok(Validation {

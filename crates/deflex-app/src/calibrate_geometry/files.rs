@@ -17,23 +17,13 @@ use std::path::{Path, PathBuf};
 /// Largest terms file read (bytes).
 pub const MAX_TERMS_BYTES: u64 = 64 << 20;
 
-/// The data as messages show it: a file's path (control characters escaped), a table's origin.
-pub(super) fn shown(source: &Source) -> String {
-    match source {
-        Source::File(path) => deflex_files::shown_path(path),
-        Source::Table { origin, .. } => origin.clone(),
-    }
-}
-
 /// Several data as messages show them, comma-separated.
 pub(super) fn shown_all(sources: &[Source]) -> String {
-    sources.iter().map(shown).collect::<Vec<_>>().join(", ")
-}
-
-/// An I/O error on `path`, naming it.
-pub(super) fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> Error {
-    let path = path.display().to_string();
-    move |source| Error::Io { path, source }
+    sources
+        .iter()
+        .map(Source::shown)
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Absolute readings of one source for a robot of `joints` joints, skipping the columns named in
@@ -76,7 +66,7 @@ pub fn read_loaded(
             parse_file_ignoring(text, origin, true, ignored).map_err(table_error)?
         }
     };
-    let origin = shown(source);
+    let origin = source.shown();
     let check = check_geometry(
         robot,
         &file.rows,
@@ -165,10 +155,10 @@ pub fn calibrated_model_of(cal: &super::GeometryCalibration) -> Result<Calibrate
 
 /// A file written aside, renamed in by its commit.
 fn staged(path: &Path, text: &str) -> Result<deflex_files::AtomicFile> {
-    let mut file = deflex_files::AtomicFile::create(path).map_err(io_error(path))?;
+    let mut file = deflex_files::AtomicFile::create(path).map_err(Error::io_on(path))?;
     file.write_all(text.as_bytes())
         .and_then(|()| file.flush())
-        .map_err(io_error(path))?;
+        .map_err(Error::io_on(path))?;
     Ok(file)
 }
 
@@ -188,8 +178,8 @@ pub(super) fn write_unit(
     let robot_staged = staged(path, &crate::robot::to_toml(robot, Some(path)))?;
     let report_files = write_report()?;
     if let Some(file) = terms_staged {
-        file.commit().map_err(io_error(&terms_file))?;
+        file.commit().map_err(Error::io_on(&terms_file))?;
     }
-    robot_staged.commit().map_err(io_error(path))?;
+    robot_staged.commit().map_err(Error::io_on(path))?;
     Ok(report_files)
 }

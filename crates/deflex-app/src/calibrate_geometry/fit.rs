@@ -2,7 +2,7 @@
 //! JSON shown.
 
 use super::OptionNames;
-use super::files::{io_error, read_absolute, read_loaded, shown_all, terms_path, write_unit};
+use super::files::{read_absolute, read_loaded, shown_all, terms_path, write_unit};
 use crate::calibrate::{Source, UnknownChoice};
 use crate::error::{Error, Result};
 use crate::report::absolute_report;
@@ -415,9 +415,4 @@ pub fn saved_json(cal: &GeometryCalibration, saved: &SavedCalibration) -> serde_
             .collect::<Vec<_>>()
     );
     value
-}
-
-/// Write a text file whole or not at all.
-pub(super) fn write_text(path: &Path, text: &str) -> Result<()> {
-    deflex_files::write_atomic(path, text).map_err(io_error(path))
 }

@@ -2,8 +2,8 @@
 //! CASE 2021) in the absolute measurement format.
 
 use super::OptionNames;
-use super::fit::write_text;
 use crate::error::{Error, Result};
+use crate::table::write_text;
 use deflex_calibrate::geometry::data::{AbsoluteRow, check_label, format_absolute, limits};
 use deflex_calibrate::geometry::ur10_tracker::{
     ImportOptions, ImportSummary, MAX_SERIES_BYTES, parse_series,
@@ -149,10 +149,8 @@ fn series_file(path: &Path) -> Result<PathBuf> {
     if path.is_file() {
         return Ok(path.to_path_buf());
     }
-    let entries = std::fs::read_dir(path).map_err(|source| Error::Read {
-        path: path.display().to_string(),
-        source,
-    })?;
+    let entries = std::fs::read_dir(path)
+        .map_err(|source| Error::Input(deflex_files::FileIoError::new(path, source).into()))?;
     let mut found: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {

@@ -2,10 +2,10 @@
 //! error where measured.
 
 use super::files::{CalibratedModel, read_absolute};
-use super::fit::write_text;
 use crate::calibrate::Source;
 use crate::error::{Error, Result};
 use crate::report::absolute_report::prediction;
+use crate::table::write_text;
 use std::path::Path;
 
 /// A prediction with its renderings.

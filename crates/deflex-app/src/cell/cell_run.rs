@@ -16,7 +16,7 @@ use deflex_runtime::clock::WallClock;
 use deflex_runtime::session::{RunSummary, Runtime, RuntimeOptions, spawn};
 use deflex_runtime::telemetry::{DEFAULT_CAPACITY, Source, Telemetry, session_info};
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Why `deflex run` could not start.
 #[derive(Debug, thiserror::Error)]
@@ -51,14 +51,9 @@ pub enum StartError {
         /// Why.
         error: LinkError,
     },
-    /// The log file cannot be created.
-    #[error("log.path {}: {error}", path.display())]
-    Log {
-        /// The log's path.
-        path: PathBuf,
-        /// Why.
-        error: std::io::Error,
-    },
+    /// The log file cannot be created (`log.path PATH: ERROR`).
+    #[error("log.path {0}")]
+    Log(deflex_files::FileIoError),
     /// A thread cannot be started.
     #[error("{what}: {error}")]
     Thread {
@@ -129,17 +124,21 @@ fn controller_of(cell: &CellFile) -> Result<(Controller, Option<FeedForwardInUse
         error,
     })?;
     let feedforward = cell.feedforward(&model)?;
-    let in_use = feedforward.as_ref().map(|ff| {
-        let c = ff.config();
-        FeedForwardInUse {
-            mode: c.mode,
-            index: c.index,
-            lead_s: c.lead_s,
-            table: cell.feedforward_table_path().unwrap_or_default(),
-            points: ff.table().len(),
-            length_m: ff.table().length_m(),
-        }
-    });
+    // A feed-forward comes from `[feedforward]`, which names its table.
+    let in_use = feedforward
+        .as_ref()
+        .zip(cell.feedforward_table_path())
+        .map(|(ff, table)| {
+            let c = ff.config();
+            FeedForwardInUse {
+                mode: c.mode,
+                index: c.index,
+                lead_s: c.lead_s,
+                table,
+                points: ff.table().len(),
+                length_m: ff.table().length_m(),
+            }
+        });
     let mut controller = Controller::new(model, cell.controller_config())?;
     controller.set_feedforward(feedforward);
     Ok((controller, in_use))
@@ -204,11 +203,9 @@ impl CellRun {
         let log = match &log_path {
             Some(path) => {
                 // Written aside and renamed at the end: a failed run keeps an existing log.
-                let file =
-                    deflex_files::AtomicFile::create(path).map_err(|error| StartError::Log {
-                        path: path.clone(),
-                        error,
-                    })?;
+                let file = deflex_files::AtomicFile::create(path).map_err(|error| {
+                    StartError::Log(deflex_files::FileIoError::new(path, error))
+                })?;
                 Some(
                     spawn_writer(telemetry.subscribe(), joints, Box::new(file)).map_err(
                         |error| StartError::Thread {
@@ -258,9 +255,11 @@ impl CellRun {
         })
     }
 
-    /// The log's write error as soon as it happened (a full disk), while the session runs.
-    pub fn log_failure(&self) -> Option<&str> {
-        self.log.as_ref().and_then(LogWriter::failure)
+    /// The log's path and its write error as soon as it happened (a full disk), while the
+    /// session runs.
+    pub fn log_failure(&self) -> Option<(&Path, &str)> {
+        let error = self.log.as_ref().and_then(LogWriter::failure)?;
+        Some((self.log_path.as_deref()?, error))
     }
 
     /// Waits for the threads, then commits the log when the run did not fail.

@@ -21,20 +21,20 @@ pub use sections::{
 pub use validate::{BOUNDS, bounds_of, valid_ros2_name};
 
 use crate::cell::feedforward::TableLoadError;
+use deflex_files::{FileIoError, FileTooLarge};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// A configuration problem, naming the file and the field.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
-    Read {
-        /// File.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
+    /// The file could not be read: `PATH: cannot read: ERROR` (a [`FileIoError`] becomes this
+    /// with that context).
+    #[error(transparent)]
+    Read(FileIoError),
+    /// The file is larger than [`MAX_CELL_CONFIG_BYTES`].
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// TOML syntax, a type or an unknown key or choice (the parser's message names the line, the
     /// key and the choices).
     #[error("{path}: {}{message}", field.as_ref().map(|f| format!("field `{f}`: ")).unwrap_or_default())]
@@ -93,6 +93,12 @@ pub enum ConfigError {
         /// What is wrong with the table (names the table, its line and column).
         error: TableLoadError,
     },
+}
+
+impl From<FileIoError> for ConfigError {
+    fn from(error: FileIoError) -> Self {
+        ConfigError::Read(error.context("cannot read"))
+    }
 }
 
 /// Why a value of `CELL.toml` cannot be used (besides bounds and unknown choices).
@@ -239,12 +245,8 @@ impl CellFile {
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let origin = path.display().to_string();
         // A regular file of at most MAX_CELL_CONFIG_BYTES, counted while reading.
-        let text = deflex_files::read_bounded(path, MAX_CELL_CONFIG_BYTES).map_err(|e| {
-            ConfigError::Read {
-                path: origin.clone(),
-                source: e.into_io(),
-            }
-        })?;
+        let text = deflex_files::read_bounded(path, MAX_CELL_CONFIG_BYTES)
+            .map_err(|e| e.reported_as::<ConfigError>("a cell configuration"))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Self::parse(&text, &origin, base)
     }

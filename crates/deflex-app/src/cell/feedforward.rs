@@ -8,8 +8,8 @@ use deflex_control::{
     FeedForward, FeedForwardConfig, FeedForwardError, FeedForwardPoint, FeedForwardTable,
     TableColumn,
 };
+use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::Robot;
-use std::io::Read;
 use std::path::Path;
 
 /// Largest feed-forward table read (bytes): a million rows of `deflex compensate` output.
@@ -19,21 +19,11 @@ pub const MAX_TABLE_BYTES: u64 = 512 << 20;
 #[derive(Debug, thiserror::Error)]
 pub enum TableLoadError {
     /// The file cannot be opened or read.
-    #[error("{file}: {source}")]
-    Read {
-        /// The table.
-        file: String,
-        /// Cause.
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Read(#[from] FileIoError),
     /// The file is larger than [`MAX_TABLE_BYTES`].
-    #[error("{file}: larger than {limit_bytes} bytes")]
-    TooLarge {
-        /// The table.
-        file: String,
-        /// The limit.
-        limit_bytes: u64,
-    },
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// Not a compensated-path table (deflex-compensate's reader).
     #[error(transparent)]
     Csv(#[from] TableError),
@@ -153,23 +143,8 @@ pub fn load_feedforward(
     config: FeedForwardConfig,
 ) -> Result<FeedForward, TableLoadError> {
     let file = path.display().to_string();
-    let read_error = |source| TableLoadError::Read {
-        file: file.clone(),
-        source,
-    };
-    let mut text = String::new();
-    deflex_files::open_input(path)
-        .map_err(deflex_files::InputError::into_io)
-        .map_err(read_error)?
-        .take(MAX_TABLE_BYTES + 1)
-        .read_to_string(&mut text)
-        .map_err(read_error)?;
-    if text.len() as u64 > MAX_TABLE_BYTES {
-        return Err(TableLoadError::TooLarge {
-            file,
-            limit_bytes: MAX_TABLE_BYTES,
-        });
-    }
+    let text = deflex_files::read_bounded(path, MAX_TABLE_BYTES)
+        .map_err(|e| e.reported_as::<TableLoadError>("a feed-forward table"))?;
     let rows = deflex_compensate::table::read_csv(&text, &file)?;
     let table = table_of(&rows, robot, &file)?;
     FeedForward::new(table, config).map_err(|error| TableLoadError::Points {

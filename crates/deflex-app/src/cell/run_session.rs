@@ -143,7 +143,7 @@ pub enum RunEvent<'a> {
     /// stops, ramping the correction out, rather than running on without its record.
     LogFailed {
         /// The log's path.
-        path: Option<&'a Path>,
+        path: &'a Path,
         /// The writer's error.
         error: &'a str,
     },
@@ -222,12 +222,9 @@ impl RunSession {
             if stop.load(Ordering::SeqCst) || self.duration_s.is_some_and(|d| elapsed >= d) {
                 runtime.request_stop();
             }
-            if !log_failure_reported && let Some(error) = self.run.log_failure() {
+            if !log_failure_reported && let Some((path, error)) = self.run.log_failure() {
                 log_failure_reported = true;
-                on_event(RunEvent::LogFailed {
-                    path: self.run.log_path.as_deref(),
-                    error,
-                });
+                on_event(RunEvent::LogFailed { path, error });
                 runtime.request_stop();
             }
             if last_status.elapsed() >= Duration::from_secs(1) {

@@ -191,13 +191,8 @@ impl SimCellSession {
         };
         let log_rows = outcome.log.rows.len();
         let mcap_path = recorder.path().to_path_buf();
-        let written =
-            deflex_files::write_atomic(&log_path, outcome.log.to_csv()).map_err(|source| {
-                Error::Io {
-                    path: log_path.display().to_string(),
-                    source,
-                }
-            });
+        let written = deflex_files::write_atomic(&log_path, outcome.log.to_csv())
+            .map_err(Error::io_on(&log_path));
         let recording = recorder.finish_with(written.is_ok());
         written?;
         Ok(SimCellReport {

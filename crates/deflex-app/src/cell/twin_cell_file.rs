@@ -1,7 +1,8 @@
 //! The twin's cell for a robot spec (built-in name or robot file) or from a `[cell]` TOML file:
 //! the files are read here, the cell is built by `deflex-sim` from their text.
 
-use crate::load::{BoundedReadError, load_robot, read_bounded};
+use crate::load::load_robot;
+use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::builtin;
 use deflex_sim::{CellConfig, SimError};
 use std::path::Path;
@@ -21,25 +22,11 @@ pub fn cell_for_robot(spec: &str) -> Result<CellConfig, SimError> {
 #[derive(Debug, thiserror::Error)]
 pub enum TwinCellFileError {
     /// The file could not be read.
-    #[error("{path}: {source}")]
-    Read {
-        /// The file.
-        path: String,
-        /// The operating system's error.
-        source: std::io::Error,
-    },
-    /// The file is larger than a cell file may be.
-    #[error(
-        "{path}: more than the {limit} bytes a cell file may have (stopped reading after {bytes})"
-    )]
-    TooLarge {
-        /// The file.
-        path: String,
-        /// Its size.
-        bytes: u64,
-        /// [`MAX_CELL_FILE_BYTES`].
-        limit: u64,
-    },
+    #[error(transparent)]
+    Read(#[from] FileIoError),
+    /// The file is larger than a cell file may be ([`MAX_CELL_FILE_BYTES`]).
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// The file's settings (a field error names the file).
     #[error(transparent)]
     Cell(#[from] SimError),
@@ -50,17 +37,8 @@ pub enum TwinCellFileError {
 /// names the file.
 pub fn load_cell(path: &Path, robot: Option<&str>) -> Result<CellConfig, TwinCellFileError> {
     let shown = path.display().to_string();
-    let text = read_bounded(path, MAX_CELL_FILE_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(source) => TwinCellFileError::Read {
-            path: shown.clone(),
-            source,
-        },
-        BoundedReadError::TooLarge(bytes) => TwinCellFileError::TooLarge {
-            path: shown.clone(),
-            bytes,
-            limit: MAX_CELL_FILE_BYTES,
-        },
-    })?;
+    let text = deflex_files::read_bounded(path, MAX_CELL_FILE_BYTES)
+        .map_err(|e| e.reported_as::<TwinCellFileError>("a cell file"))?;
     let config = CellConfig::from_toml_str_with(&text, robot, &|spec| Ok(load_robot(spec)?))
         .map_err(|e| match e {
             SimError::Config { field, message } => SimError::Config {

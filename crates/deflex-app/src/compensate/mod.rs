@@ -23,7 +23,7 @@
 //! millimetres (its cut, its splitting, its arcs' chords, the part origin of the cell), SI
 //! otherwise. Range checks of the options name the option as the front end spells it and are the
 //! front end's; the checks that need the robot, the cell or the path are here and name the option
-//! through [`OptionNames`] (the front end's spelling).
+//! through [`crate::OptionNames`] (the front end's spelling).
 
 mod output;
 mod path;
@@ -43,7 +43,6 @@ pub use summary::{
 };
 
 use crate::error::{Error, Result};
-use crate::option_names::OptionNames;
 use deflex_cam::program::{Format, ProgramFile, ProgramSettings};
 use std::path::{Path, PathBuf};
 
@@ -212,53 +211,6 @@ impl WrenchSpec {
     }
 }
 
-/// How a front end spells this workflow's options in the messages of the set-up and the
-/// refusals (the CLI's `--seed-deg`, Python's `seed_q`): not derived from one another, as the
-/// CLI's flags carry their units.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Names {
-    /// The tool path.
-    pub path: &'static str,
-    /// The wrench source.
-    pub wrench: &'static str,
-    /// The part origin.
-    pub part_xyz: &'static str,
-    /// The seed configuration.
-    pub seed: &'static str,
-    /// The cut of the path.
-    pub length: &'static str,
-    /// The splitting of its moves.
-    pub max_segment: &'static str,
-    /// The program template.
-    pub program_config: &'static str,
-}
-
-impl Names {
-    /// The names of the front end `front`.
-    pub(crate) fn of(front: OptionNames) -> Names {
-        match front {
-            OptionNames::Cli => Names {
-                path: "--path",
-                wrench: "--wrench",
-                part_xyz: "--part-xyz-mm",
-                seed: "--seed-deg",
-                length: "--length-mm",
-                max_segment: "--max-segment-mm",
-                program_config: "--program-config",
-            },
-            OptionNames::Python => Names {
-                path: "path",
-                wrench: "wrench",
-                part_xyz: "part_xyz_m",
-                seed: "seed_q",
-                length: "length_m",
-                max_segment: "max_segment_m",
-                program_config: "settings",
-            },
-        }
-    }
-}
-
 /// The compensation's options: what the front ends' flags and keywords set (see the module
 /// documentation for the units).
 #[derive(Clone, Debug)]
@@ -325,12 +277,34 @@ pub fn settings(path: Option<&Path>) -> Result<ProgramSettings> {
     })
 }
 
+/// The robot programs of `run` in each of `formats` (by name: `krl`, `rapid`, `val3`,
+/// `urscript`, `gcode`, [`format()`]) with the template `settings` (a program TOML file, or the
+/// defaults), each read back and compared with the path ([`ProgramPlan::export_checked`]).
+/// Refused as the command line refuses them when points are not compensated or the iteration
+/// did not converge ([`refusal`]), before the template and the names are read (Python's
+/// `Compensation.program` and `write_programs`).
+pub fn program_files(
+    run: &CompensationRun,
+    formats: &[String],
+    settings: Option<&Path>,
+) -> Result<Vec<ProgramFile>> {
+    refusal(run)?;
+    let settings = self::settings(settings)?;
+    let formats = formats
+        .iter()
+        .map(|name| format(name))
+        .collect::<Result<Vec<_>>>()?;
+    let plan = ProgramPlan::new(&run.setup, &run.result, description(run), &settings)?;
+    let mut files = Vec::new();
+    for format in formats {
+        files.extend(plan.export_checked(format, &settings)?);
+    }
+    Ok(files)
+}
+
 /// Write program files under `dir` (created), each whole; returns their paths.
 pub fn write_program_files(dir: &Path, files: &[ProgramFile]) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.display().to_string(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(Error::io_on(dir))?;
     deflex_cam::program::write_files(dir, files)?;
     Ok(files.iter().map(|f| dir.join(&f.path)).collect())
 }

@@ -21,23 +21,17 @@ pub struct FolderSummary {
     pub refusal: Option<Error>,
 }
 
-fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.display().to_string(),
-        source,
-    }
-}
-
 /// Write the output folder `out` of a run whole: `compensated_path.csv`, `summary.json`,
 /// `summary.txt` and, when the run is not refused, `programs/` with one program per format,
 /// each read back. A refused run replaces no earlier folder: its table and summaries are
 /// written only where `out` does not exist yet. The compensation is freed once the programs'
 /// input is made.
 pub fn write_output_folder(run: CompensationRun, out: &Path) -> Result<FolderSummary> {
-    let dir = deflex_files::AtomicDir::create(out).map_err(io_error(out))?;
+    let dir = deflex_files::AtomicDir::create(out).map_err(Error::io_on(out))?;
     let mut written = Vec::new();
     let table_path = dir.path().join("compensated_path.csv");
-    let mut table = deflex_files::AtomicFile::create(&table_path).map_err(io_error(&table_path))?;
+    let mut table =
+        deflex_files::AtomicFile::create(&table_path).map_err(Error::io_on(&table_path))?;
     write_csv_to(
         &mut table,
         &run.setup.path,
@@ -46,8 +40,8 @@ pub fn write_output_folder(run: CompensationRun, out: &Path) -> Result<FolderSum
         &table_comments(&run),
     )
     .and_then(|()| table.flush())
-    .map_err(io_error(&table_path))?;
-    table.commit().map_err(io_error(&table_path))?;
+    .map_err(Error::io_on(&table_path))?;
+    table.commit().map_err(Error::io_on(&table_path))?;
     written.push("compensated_path.csv".to_string());
     let refusal = refusal(&run).err();
     let mut text = summary_text(&run);
@@ -57,7 +51,7 @@ pub fn write_output_folder(run: CompensationRun, out: &Path) -> Result<FolderSum
     let CompensationRun { setup, result, .. } = run;
     if refusal.is_none() && !setup.formats.is_empty() {
         let programs_dir = dir.path().join("programs");
-        std::fs::create_dir_all(&programs_dir).map_err(io_error(&programs_dir))?;
+        std::fs::create_dir_all(&programs_dir).map_err(Error::io_on(&programs_dir))?;
         let plan = ProgramPlan::new(&setup, &result, program_description, &setup.settings)?;
         // The programs need the plan only; the rest of the result is in the table and the
         // summaries: free it.
@@ -112,10 +106,10 @@ pub fn write_output_folder(run: CompensationRun, out: &Path) -> Result<FolderSum
         reason: e.to_string(),
     })?;
     deflex_files::write_atomic(dir.path().join("summary.json"), json_text)
-        .map_err(io_error(out))?;
-    deflex_files::write_atomic(dir.path().join("summary.txt"), &text).map_err(io_error(out))?;
+        .map_err(Error::io_on(out))?;
+    deflex_files::write_atomic(dir.path().join("summary.txt"), &text).map_err(Error::io_on(out))?;
     if !keep_earlier {
-        dir.commit().map_err(io_error(out))?;
+        dir.commit().map_err(Error::io_on(out))?;
     }
     Ok(FolderSummary {
         json: summary,

@@ -3,8 +3,9 @@
 //! part frame for a 3-axis program), and every point within the arm's reach.
 
 use super::setup::degrees;
-use super::{Frame, Names, Options, PathSpec};
+use super::{Frame, Options, PathSpec};
 use crate::error::{Error, Result};
+use crate::option_names::OptionNames;
 use deflex_compensate::TcpPath;
 use deflex_model::{Pose, Robot};
 use deflex_sim::{ToolPath, Waypoint};
@@ -38,7 +39,7 @@ pub(super) fn placed_path(
     seed: &[f64],
     part_frame: &Pose,
     rapid_feed_mm_s: f64,
-    names: &Names,
+    names: OptionNames,
 ) -> Result<PlacedPath> {
     let (mut tool_path, program) = tool_path(spec, options, part_frame, names)?;
     if let Some(l) = options.length_mm {
@@ -47,7 +48,7 @@ pub(super) fn placed_path(
     if let Some(max) = options.max_segment_mm {
         tool_path = tool_path
             .subdivided(max)
-            .map_err(|e| Error::invalid(names.max_segment, e.to_string()))?;
+            .map_err(|e| Error::invalid(names.name("max_segment_m"), e.to_string()))?;
     }
     let frame_name = program
         .as_ref()
@@ -63,7 +64,7 @@ pub(super) fn placed_path(
         PathSpec::Array { .. } => {
             let held = robot
                 .tcp_pose(seed)
-                .map_err(|e| Error::invalid(names.seed, e.to_string()))?
+                .map_err(|e| Error::invalid(names.name("seed_q"), e.to_string()))?
                 .rotation;
             array_tcp_path(spec, &tool_path, part_frame, &held, rapid_feed_mm_s)?
         }
@@ -78,7 +79,7 @@ pub(super) fn placed_path(
             )?;
             deflex_sim::tcp_path(&tool_path, part_frame, &rotation, rapid_feed_mm_s).map_err(
                 |source| Error::PathSpec {
-                    flag: names.path,
+                    flag: names.name("path"),
                     spec: spec.shown(),
                     source: Box::new(source),
                 },
@@ -101,10 +102,10 @@ fn tool_path(
     spec: &PathSpec,
     options: &Options,
     part_frame: &Pose,
-    names: &Names,
+    names: OptionNames,
 ) -> Result<(ToolPath, Option<deflex_sim::gcode::Program>)> {
     let path_error = |source| Error::PathSpec {
-        flag: names.path,
+        flag: names.name("path"),
         spec: spec.shown(),
         source: Box::new(source),
     };
@@ -130,10 +131,11 @@ fn tool_path(
         } => {
             if *cols == 6 && (options.length_mm.is_some() || options.max_segment_mm.is_some()) {
                 return Err(Error::invalid(
-                    names.length,
+                    names.name("length_m"),
                     format!(
                         "{} and {} apply to paths of positions; an (N, 6) path of poses is compensated as given",
-                        names.length, names.max_segment
+                        names.name("length_m"),
+                        names.name("max_segment_m")
                     ),
                 ));
             }
@@ -213,11 +215,11 @@ fn tool_rotation(
     part: &Pose,
     frame_name: Option<&str>,
     robot_shown: &str,
-    names: &Names,
+    names: OptionNames,
 ) -> Result<Rotation3<f64>> {
     let held = robot
         .tcp_pose(seed)
-        .map_err(|e| Error::invalid(names.seed, e.to_string()))?
+        .map_err(|e| Error::invalid(names.name("seed_q"), e.to_string()))?
         .rotation;
     let axis = held * Vector3::z();
     let want = part.rotation * -Vector3::z();
@@ -227,7 +229,7 @@ fn tool_rotation(
             seed: degrees(seed),
             angle_deg: angle.to_degrees(),
             frame: frame_name.map_or(String::new(), |n| format!(" {n}")),
-            seed_flag: names.seed,
+            seed_flag: names.name("seed_q"),
             robot: robot_shown.to_string(),
         });
     }
@@ -246,7 +248,7 @@ pub(super) fn check_reach(
     robot: &Robot,
     path: &TcpPath,
     part_origin_mm: &[f64; 3],
-    names: &Names,
+    names: OptionNames,
 ) -> Result<()> {
     let shoulder = (robot.base * robot.joints[0].placement).translation.vector;
     let reach = robot.reach_bound();
@@ -270,7 +272,7 @@ pub(super) fn check_reach(
             x: part_origin_mm[0],
             y: part_origin_mm[1],
             z: part_origin_mm[2],
-            part_flag: names.part_xyz,
+            part_flag: names.name("part_xyz_m"),
         }),
     }
 }

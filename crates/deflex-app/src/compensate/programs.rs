@@ -7,8 +7,8 @@
 //! back from disk line by line, so a million-point program is never held in memory (only the
 //! program input is); Python's are made and read back in memory.
 
+use super::Setup;
 use super::setup::check_program_points;
-use super::{Names, Setup};
 use crate::error::{Error, Result};
 use deflex_cam::program::readback::{
     DirectorySource, MemorySource, ProgramSource, ReadPoint, read_program,
@@ -95,13 +95,13 @@ impl ProgramPlan {
         description: Vec<String>,
         settings: &ProgramSettings,
     ) -> Result<ProgramPlan> {
-        let names = Names::of(setup.front);
-        check_program_points(setup.path.len(), settings, &names)?;
+        let names = setup.front;
+        check_program_points(setup.path.len(), settings, names)?;
         let robot = &setup.robot;
         let n = robot.joint_count();
         let (first, last) = match (result.points.first(), result.points.last()) {
             (Some(first), Some(last)) => (first.q, last.q),
-            _ => return Err(Error::invalid(names.path, "the path has no point")),
+            _ => return Err(Error::invalid(names.name("path"), "the path has no point")),
         };
         let mut data = Data::new();
         let six = n == 6;
@@ -136,7 +136,7 @@ impl ProgramPlan {
         // The clearance points in the world, their joint values from the path's ends.
         let clear = input
             .clearance_poses(settings)
-            .ok_or_else(|| Error::invalid(names.path, "the path has no point"))?;
+            .ok_or_else(|| Error::invalid(names.name("path"), "the path has no point"))?;
         let frame_in_world = robot.base * input.frame_in_robot;
         if six {
             let mut configs = Vec::with_capacity(2);
@@ -151,8 +151,7 @@ impl ProgramPlan {
                     .inverse_kinematics(&world, &q[..n], &options)
                     .map_err(|source| Error::Clearance {
                         which: if k == 0 { "start" } else { "end" },
-                        program_config_flag: names.program_config,
-                        part_flag: names.part_xyz,
+                        names,
                         source,
                     })?;
                 configs.push(arm_configuration(robot, &solution.q, phi, &mut data));

@@ -43,8 +43,15 @@ pub fn compensate(
     };
     let result = match &s.wrench {
         WrenchSpec::Process => {
+            // `setup` refuses the process model for a robot without a cell.
+            let config = s.config.as_ref().ok_or_else(|| {
+                Error::invalid(
+                    s.front.name("wrench"),
+                    "the process model needs the robot's twin cell",
+                )
+            })?;
             let mut process =
-                FormingProcess::from_cell(&s.config, &s.tool_path).map_err(Error::ProcessModel)?;
+                FormingProcess::from_cell(config, &s.tool_path).map_err(Error::ProcessModel)?;
             run(WrenchSource::Process(&mut process), on_progress)?
         }
         WrenchSpec::Log(file) => {

@@ -3,7 +3,7 @@
 //! wrench source, the formats and the template, and every limit (reach, points per program).
 
 use super::path::{PlacedPath, check_reach, placed_path};
-use super::{Names, Options, PathSpec, WrenchSpec};
+use super::{Options, PathSpec, WrenchSpec};
 use crate::error::{Error, Result};
 use crate::option_names::OptionNames;
 use deflex_cam::program::{Format, ProgramSettings};
@@ -51,9 +51,9 @@ pub fn robot_from_spec(flag: &'static str, spec: &str) -> Result<Robot> {
 pub struct Setup {
     /// The robot model.
     pub robot: Robot,
-    /// The robot's twin cell (the default cell when the robot has none and the placement is
-    /// given).
-    pub config: CellConfig,
+    /// The robot's twin cell; `None` when the robot has none and the placement is given (then
+    /// no process model and no tool load in the programs).
+    pub config: Option<CellConfig>,
     /// The tool path without its waypoints (the process model reads its step-down and wall
     /// angle); the points are in `path`.
     pub tool_path: ToolPath,
@@ -162,7 +162,7 @@ pub fn setup(
     options: &Options,
     front: OptionNames,
 ) -> Result<Setup> {
-    let names = Names::of(front);
+    let names = front;
     // The cell is only needed for 6-joint arms' defaults and the process model.
     let mut config = match cell(&robot, options) {
         Ok(c) => Some(c),
@@ -174,7 +174,7 @@ pub fn setup(
         }
         Err(e) => return Err(e),
     };
-    let placement = placement(&robot, options, config.as_mut(), &names)?;
+    let placement = placement(&robot, options, config.as_mut(), names)?;
     let RobotChoice { model: robot, spec } = robot;
     let robot_shown = spec.unwrap_or_else(|| robot.name.clone());
     let part_origin_mm = placement.part_origin_mm;
@@ -200,16 +200,16 @@ pub fn setup(
         &seed,
         &part_frame,
         rapid_feed,
-        &names,
+        names,
     )?;
-    check_reach(&robot, &path, &part_origin_mm, &names)?;
+    check_reach(&robot, &path, &part_origin_mm, names)?;
     let settings = super::settings(options.program_config.as_deref())?;
     if !options.formats.is_empty() {
-        check_program_points(path.len(), &settings, &names)?;
+        check_program_points(path.len(), &settings, names)?;
     }
     if matches!(wrench, WrenchSpec::Process) && config.is_none() {
         return Err(Error::invalid(
-            names.wrench,
+            names.name("wrench"),
             "the process model needs the robot's twin cell",
         ));
     }
@@ -228,8 +228,8 @@ pub fn setup(
             placement.source
         ),
     );
-    let config = config.unwrap_or_default();
-    let tool_load_in_flange = Some(cell_tool_load(&config));
+    // A robot without a cell has no tool load of its cell to state in the programs.
+    let tool_load_in_flange = config.as_ref().map(cell_tool_load);
     Ok(Setup {
         robot,
         tool_load_in_flange,
@@ -264,11 +264,11 @@ pub fn setup(
 pub(super) fn check_program_points(
     points: usize,
     settings: &ProgramSettings,
-    names: &Names,
+    names: OptionNames,
 ) -> Result<()> {
     if points > settings.program.max_points {
         return Err(Error::invalid(
-            names.path,
+            names.name("path"),
             format!(
                 "{} points; the programs hold at most {} (program.max_points): shorten the path or raise the limit",
                 points, settings.program.max_points
@@ -294,7 +294,7 @@ fn placement(
     robot: &RobotChoice,
     options: &Options,
     mut config: Option<&mut CellConfig>,
-    names: &Names,
+    names: OptionNames,
 ) -> Result<Placement> {
     let n = robot.model.joint_count();
     let shown = robot.shown();
@@ -307,20 +307,20 @@ fn placement(
     let mut part_origin_mm = config.as_deref().map_or([0.0; 3], |c| c.part.origin_mm);
     if let Some(xyz) = options.part_xyz_mm {
         part_origin_mm = xyz;
-        placement.push(format!("part frame from {}", names.part_xyz));
+        placement.push(format!("part frame from {}", names.name("part_xyz_m")));
         if let Some(c) = config.as_mut() {
             c.part.origin_mm = xyz;
         }
     }
     let seed: Vec<f64> = match (&options.seed_q, config.as_deref()) {
         (Some(seed), _) => {
-            placement.push(format!("seed from {}", names.seed));
+            placement.push(format!("seed from {}", names.name("seed_q")));
             seed.clone()
         }
         (None, Some(c)) if n == 6 => c.seed_q_rad().to_vec(),
         (None, _) => {
             return Err(Error::invalid(
-                names.seed,
+                names.name("seed_q"),
                 format!(
                     "robot \"{}\" has {n} joints and no twin cell: give a configuration near the start of the path",
                     robot.model.name
@@ -330,7 +330,7 @@ fn placement(
     };
     if seed.len() != n {
         return Err(Error::invalid(
-            names.seed,
+            names.name("seed_q"),
             format!(
                 "robot \"{}\" has {n} joints, {} values given",
                 robot.model.name,
@@ -341,7 +341,8 @@ fn placement(
     let source = if placement.is_empty() {
         format!(
             "{cell_name} (change with {}, {})",
-            names.part_xyz, names.seed
+            names.name("part_xyz_m"),
+            names.name("seed_q")
         )
     } else if placement.len() == 1 && config.is_some() {
         format!("{}, the rest from {cell_name}", placement[0])

@@ -2,8 +2,8 @@
 //! (`compensated_path.csv`), the summaries (text and JSON) and the refusal when points are not
 //! compensated or the iteration did not converge.
 
+use super::CompensationRun;
 use super::setup::degrees;
-use super::{CompensationRun, Names};
 use crate::error::{Error, Result};
 use deflex_compensate::table::write_csv;
 use serde_json::{Value, json};
@@ -82,7 +82,7 @@ pub fn refusal(run: &CompensationRun) -> Result<()> {
     let result = &run.result;
     let count = result.failure_count();
     if count > 0 {
-        let names = Names::of(s.front);
+        let names = s.front;
         let mut list: Vec<String> = result
             .failures()
             .take(LISTED_FAILURES)
@@ -102,8 +102,8 @@ pub fn refusal(run: &CompensationRun) -> Result<()> {
                 s.part_origin_mm[2],
                 degrees(&s.seed),
                 s.placement_source,
-                names.part_xyz,
-                names.seed,
+                names.name("part_xyz_m"),
+                names.name("seed_q"),
             ),
         });
     }

@@ -11,10 +11,12 @@
 //!   wrench source ([`read_wrench_log`]);
 //! * [`gcode_file`]: G-code files as the twin's tool paths ([`gcode_file::read_gcode`]) and the
 //!   built-in paths or a G-code file by name ([`gcode_file::tool_path_by_name`]);
-//! * [`read_bounded`]: any text file, read only when it is a regular file not larger than a
-//!   limit (counted while reading).
 //!
-//! (The twin's cell files are read by [`crate::cell::twin_cell_file`].)
+//! Every read is [`deflex_files::read_bounded`] (only a regular file, its size counted while
+//! reading); a reader's error holds the shared [`deflex_files::FileIoError`] and
+//! [`deflex_files::FileTooLarge`], the latter naming what the file is
+//! ([`deflex_files::InputError::reported_as`]). (The twin's cell files are read by
+//! [`crate::cell::twin_cell_file`].)
 
 #![warn(missing_docs)]
 
@@ -31,27 +33,3 @@ pub use robot_file::{
     robot_to_toml_for,
 };
 pub use wrench_log::{WrenchLogError, parse_wrench_log, read_wrench_log};
-
-use std::path::Path;
-
-/// Why a bounded read failed.
-#[derive(Debug)]
-pub enum BoundedReadError {
-    /// The operating system's error, or why the file was refused (not a regular file, not
-    /// text): a [`deflex_files::InputProblem`] inside, without the path.
-    Io(std::io::Error),
-    /// More bytes than allowed: reading stopped after this many (the limit + 1).
-    TooLarge(u64),
-}
-
-/// The text of `path` when it is a regular file of at most `limit` bytes, counted while
-/// reading (`/dev/zero`, a FIFO or a pipe is refused without waiting; see
-/// [`deflex_files::read_bounded`]).
-pub fn read_bounded(path: &Path, limit: u64) -> Result<String, BoundedReadError> {
-    deflex_files::read_bounded(path, limit).map_err(|e| match e.problem() {
-        Some(deflex_files::InputProblem::TooLarge { read, .. }) => {
-            BoundedReadError::TooLarge(*read)
-        }
-        _ => BoundedReadError::Io(e.into_io()),
-    })
-}

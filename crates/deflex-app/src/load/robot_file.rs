@@ -1,7 +1,7 @@
 //! Robot descriptions from disk: a built-in name or a TOML file, the URDF it names read from
 //! beside it, and a robot's TOML written for another folder with its URDF path rewritten.
 
-use crate::load::{BoundedReadError, read_bounded};
+use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::{
     BUILTIN_ROBOTS, ModelError, ResolvedUrdf, Robot, UrdfResolver, builtin, robot_from_toml_str,
     robot_to_toml_with_urdf_path,
@@ -16,15 +16,27 @@ pub const MAX_ROBOT_FILE_BYTES: u64 = 64 << 20;
 /// [`ModelError::TextUnavailable`] (the message unchanged), beside the model's own errors.
 #[derive(Debug, thiserror::Error)]
 pub enum RobotFileError {
-    /// A robot file (TOML or URDF) could not be read, or a robot spec names neither a built-in
-    /// robot nor an existing file.
-    #[error("{path}: cannot read file: {source}")]
-    Read {
-        /// The file (or the spec, with the built-in names).
-        path: String,
-        /// The operating-system error.
-        source: std::io::Error,
+    /// A robot file (TOML or URDF) could not be read: `PATH: cannot read file: ERROR` (a
+    /// [`FileIoError`] becomes this with that context).
+    #[error(transparent)]
+    Read(FileIoError),
+    /// A robot file larger than [`MAX_ROBOT_FILE_BYTES`].
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
+    /// A robot spec that names neither a built-in robot nor an existing file.
+    #[error("{spec} (not a built-in robot: {}): cannot read file: {}", .builtins.join(", "), std::io::Error::from(std::io::ErrorKind::NotFound))]
+    Unknown {
+        /// The spec, as given.
+        spec: String,
+        /// The built-in robots' names.
+        builtins: Vec<&'static str>,
     },
+}
+
+impl From<FileIoError> for RobotFileError {
+    fn from(error: FileIoError) -> Self {
+        RobotFileError::Read(error.context("cannot read file"))
+    }
 }
 
 impl From<RobotFileError> for ModelError {
@@ -33,21 +45,11 @@ impl From<RobotFileError> for ModelError {
     }
 }
 
-/// Read a robot file (TOML or URDF) of at most [`MAX_ROBOT_FILE_BYTES`]; `shown` names it.
-fn read_robot_text(path: &Path, shown: &str) -> Result<String, ModelError> {
-    read_bounded(path, MAX_ROBOT_FILE_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(source) => RobotFileError::Read {
-            path: shown.to_string(),
-            source,
-        }
-        .into(),
-        BoundedReadError::TooLarge(size) => ModelError::Invalid {
-            path: shown.to_string(),
-            field: "file".into(),
-            message: format!(
-                "more than the {MAX_ROBOT_FILE_BYTES} bytes a robot description may have (stopped reading after {size})"
-            ),
-        },
+/// Read a robot file (TOML or URDF) of at most [`MAX_ROBOT_FILE_BYTES`].
+fn read_robot_text(path: &Path) -> Result<String, ModelError> {
+    deflex_files::read_bounded(path, MAX_ROBOT_FILE_BYTES).map_err(|e| {
+        e.reported_as::<RobotFileError>("a robot description")
+            .into()
     })
 }
 
@@ -63,7 +65,7 @@ impl UrdfResolver for FileUrdfResolver {
             Some(dir) if Path::new(reference).is_relative() => dir.join(reference),
             _ => PathBuf::from(reference),
         };
-        let xml = read_robot_text(&path, &path.display().to_string())?;
+        let xml = read_robot_text(&path)?;
         Ok(ResolvedUrdf { path, xml })
     }
 }
@@ -71,7 +73,7 @@ impl UrdfResolver for FileUrdfResolver {
 /// Read a robot TOML file (and the URDF it names, relative to the file's folder).
 pub fn robot_from_toml_file(path: &Path) -> Result<Robot, ModelError> {
     let shown = path.display().to_string();
-    let text = read_robot_text(path, &shown)?;
+    let text = read_robot_text(path)?;
     let resolver = FileUrdfResolver {
         base_dir: path.parent().map(Path::to_path_buf),
     };
@@ -86,14 +88,13 @@ pub fn load_robot(spec: &str) -> Result<Robot, ModelError> {
     }
     let path = Path::new(spec);
     if !path.exists() {
-        let names: Vec<&str> = BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect();
-        return Err(RobotFileError::Read {
-            path: format!("{spec} (not a built-in robot: {})", names.join(", ")),
-            source: std::io::Error::from(std::io::ErrorKind::NotFound),
+        return Err(RobotFileError::Unknown {
+            spec: spec.to_string(),
+            builtins: BUILTIN_ROBOTS.iter().map(|(n, _)| *n).collect(),
         }
         .into());
     }
-    let text = read_robot_text(path, spec)?;
+    let text = read_robot_text(path)?;
     let resolver = FileUrdfResolver {
         base_dir: path.parent().map(Path::to_path_buf),
     };

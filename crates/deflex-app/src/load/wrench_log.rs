@@ -20,6 +20,7 @@
 //! The numbers a row uses must be finite; errors name the file, the line and the column.
 
 use deflex_compensate::log::{LogKind, LogSample, WrenchLog};
+use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::{Data, Pose, Robot, Wrench};
 use deflex_record::isf_log;
 use deflex_record::log_reader::{LogReadError, LogReader, LogRow};
@@ -30,24 +31,15 @@ use std::path::Path;
 pub use deflex_record::log_reader::{MAX_LOG_BYTES, MAX_LOG_ROWS};
 
 /// A log file that cannot serve as a wrench source.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Debug, thiserror::Error)]
 pub enum WrenchLogError {
-    /// Reading the file failed.
-    #[error("{file}: cannot read: {message}")]
-    Io {
-        /// The file.
-        file: String,
-        /// The operating system's message.
-        message: String,
-    },
+    /// Reading the file failed: `PATH: cannot read: ERROR` (a [`FileIoError`] becomes this with
+    /// that context).
+    #[error(transparent)]
+    Io(FileIoError),
     /// Larger than [`MAX_LOG_BYTES`].
-    #[error("{file}: {message}")]
-    TooLarge {
-        /// The file.
-        file: String,
-        /// Which bound.
-        message: String,
-    },
+    #[error(transparent)]
+    TooLarge(#[from] FileTooLarge),
     /// Neither a `deflex run` log nor a `sim isf` log: required columns are missing.
     #[error("{file}: not a deflex run or sim isf log: missing column(s) {missing}")]
     UnknownKind {
@@ -69,6 +61,12 @@ pub enum WrenchLogError {
     /// The log's text (malformed CSV, too many rows, a value that is not a finite number).
     #[error(transparent)]
     Read(#[from] LogReadError),
+}
+
+impl From<FileIoError> for WrenchLogError {
+    fn from(error: FileIoError) -> Self {
+        WrenchLogError::Io(error.context("cannot read"))
+    }
 }
 
 /// Where a log's columns are.
@@ -232,16 +230,7 @@ pub fn read_wrench_log(
     robot: &Robot,
     part_frame: &Pose,
 ) -> Result<WrenchLog, WrenchLogError> {
-    let file = path.display().to_string();
-    let text = super::read_bounded(path, MAX_LOG_BYTES).map_err(|e| match e {
-        super::BoundedReadError::Io(source) => WrenchLogError::Io {
-            file: file.clone(),
-            message: source.to_string(),
-        },
-        super::BoundedReadError::TooLarge(size) => WrenchLogError::TooLarge {
-            file: file.clone(),
-            message: format!("{size} bytes, more than {MAX_LOG_BYTES}"),
-        },
-    })?;
-    parse_wrench_log(&text, &file, robot, part_frame)
+    let text = deflex_files::read_bounded(path, MAX_LOG_BYTES)
+        .map_err(|e| e.reported_as::<WrenchLogError>("a log"))?;
+    parse_wrench_log(&text, &path.display().to_string(), robot, part_frame)
 }

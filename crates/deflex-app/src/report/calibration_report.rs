@@ -9,18 +9,19 @@
 //! The caller gives the folder; `deflex calibrate` builds it aside (`deflex_files::AtomicDir`)
 //! so a failure leaves no half-written report.
 
+use crate::report::DrawError;
 use crate::report::PageError;
 use crate::report::calibration_tables::{
     COUPLING_HEADERS, ITERATION_HEADERS, REFIT_HEADERS, SHIFT_HEADERS, STIFFNESS_HEADERS,
     correlated_pairs_text, correlation_table, coupling_rows, coupling_summary, iteration_rows,
     refit_rows, residual_summary, shift_rows, stiffness_rows,
 };
-use crate::report::draw::{heatmap, line_plot, parity_plot, write_page};
+use crate::report::draw::{heatmap, line_plot, parity_plot, write_page, write_text};
 use crate::report::text_table::table_csv;
 use deflex_calibrate::measurements::MeasurementRow;
 use deflex_calibrate::stiffness::search::SearchStep;
 use deflex_calibrate::stiffness::stiffness_fit::Calibration;
-use deflex_plot::{FileLink, HtmlReport, PlotError, PlotSpec, Series, SeriesStyle};
+use deflex_plot::{FileLink, HtmlReport, PlotSpec, Series, SeriesStyle};
 use std::path::{Path, PathBuf};
 
 /// Longest plot title (characters), with the `SIMULATED — ` prefix of simulated data: short
@@ -75,19 +76,9 @@ impl CalibrationReport<'_> {
     }
 }
 
-fn write_text(path: &Path, text: &str) -> Result<(), PlotError> {
-    deflex_files::write_atomic(path, text).map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
 /// The CSV text of a table for the file `path`, or why it could not be made, naming the file.
-fn csv_of(path: &Path, text: std::io::Result<String>) -> Result<String, PlotError> {
-    text.map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+fn csv_of(path: &Path, text: std::io::Result<String>) -> Result<String, DrawError> {
+    text.map_err(DrawError::content_of(path))
 }
 
 /// A plot's spec, its title prefixed with `SIMULATED — ` for simulated data.
@@ -140,7 +131,7 @@ struct PageParts<'a> {
     files: Vec<PathBuf>,
 }
 
-fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, PlotError> {
+fn write_into(dir: &Path, report: &CalibrationReport) -> Result<Vec<PathBuf>, DrawError> {
     let cal = report.calibration;
     let simulated = report.simulated_note();
     let mut files = Vec::new();
@@ -318,7 +309,7 @@ fn page_head(
 }
 
 /// The residual norm per load case, one series per measured point.
-fn residual_plot(c: &mut PageParts) -> Result<(), PlotError> {
+fn residual_plot(c: &mut PageParts) -> Result<(), DrawError> {
     let (dir, report, sim) = (c.dir, c.report, c.sim);
     let residual = &c.residual;
     let html = &mut c.html;
@@ -382,7 +373,7 @@ fn residual_plot(c: &mut PageParts) -> Result<(), PlotError> {
 }
 
 /// Predicted vs measured displacement, one plot per world axis.
-fn parity_plots(c: &mut PageParts) -> Result<(), PlotError> {
+fn parity_plots(c: &mut PageParts) -> Result<(), DrawError> {
     let (dir, report, sim) = (c.dir, c.report, c.sim);
     let predicted = c.predicted;
     let html = &mut c.html;
@@ -424,7 +415,7 @@ fn parity_plots(c: &mut PageParts) -> Result<(), PlotError> {
 
 /// The correlation of the fitted parameters as a heatmap and a table, and the calibration's
 /// warnings.
-fn correlation_section(c: &mut PageParts) -> Result<(), PlotError> {
+fn correlation_section(c: &mut PageParts) -> Result<(), DrawError> {
     let (dir, report, sim) = (c.dir, c.report, c.sim);
     let cal = report.calibration;
     let html = &mut c.html;

@@ -8,11 +8,13 @@
 //! and an error names the file. A page is rendered with its images read back from their files
 //! ([`read_image`]) and written atomically ([`write_page`]).
 //!
-//! Errors, each naming the file ([`PlotError::path`]): the drawing's own
-//! ([`PlotError::InvalidInput`], [`PlotError::UnsupportedFormat`], [`PlotError::Draw`]); a
-//! failure to write the temporary file is [`PlotError::Draw`] (as when the plotting toolkit
-//! saved the files itself: a missing folder, a full disk); an output that may not be replaced
-//! ([`deflex_files::check_output`]) or a failed rename is [`PlotError::Io`].
+//! Errors ([`DrawError`]), each naming the file: the drawing's own ([`DrawError::Plot`]:
+//! [`PlotError::InvalidInput`], [`PlotError::UnsupportedFormat`], [`PlotError::Draw`]; an
+//! image a page embeds that cannot be read is the toolkit's [`PlotError::Io`]); a failure to
+//! write the temporary file is [`PlotError::Draw`] (as when the plotting toolkit saved the files
+//! itself: a missing folder, a full disk); an output that may not be replaced
+//! ([`deflex_files::check_output`]), a failed rename or a page that cannot be written is
+//! [`DrawError::Io`] (the shared [`deflex_files::FileIoError`]).
 //!
 //! ```no_run
 //! use deflex_app::report::draw::line_plot;
@@ -22,6 +24,7 @@
 //! line_plot(std::path::Path::new("out.png"), &spec, &[s]).unwrap();
 //! ```
 
+use crate::report::DrawError;
 use deflex_plot::{
     Cloud3, HtmlReport, Image, Lane, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
 };
@@ -34,19 +37,18 @@ pub const MAX_IMAGE_BYTES: u64 = 64 << 20;
 /// Writes `image` (drawn for `path`) to `path`, whole or not at all: its bytes go to a
 /// temporary sibling with the same extension, renamed over `path` once complete and removed
 /// on failure.
-pub fn write_image(path: &Path, image: Image) -> Result<(), PlotError> {
+pub fn write_image(path: &Path, image: Image) -> Result<(), DrawError> {
     deflex_files::write_through(
         path,
         |temporary| {
-            std::fs::write(temporary, &image.bytes).map_err(|e| PlotError::Draw {
-                path: path.to_path_buf(),
-                reason: e.to_string(),
+            std::fs::write(temporary, &image.bytes).map_err(|e| {
+                DrawError::Plot(PlotError::Draw {
+                    path: path.to_path_buf(),
+                    reason: e.to_string(),
+                })
             })
         },
-        |source| PlotError::Io {
-            path: path.to_path_buf(),
-            source,
-        },
+        DrawError::io_on(path),
     )
 }
 
@@ -57,17 +59,20 @@ pub fn read_image(path: &Path) -> std::io::Result<Vec<u8>> {
 }
 
 /// Renders `page`, its images read from their files ([`read_image`]), and writes it to `path`
-/// whole or not at all. An image that cannot be read is [`PlotError::Io`] naming the image.
-pub fn write_page(page: &HtmlReport, path: &Path) -> Result<(), PlotError> {
+/// whole or not at all. An image that cannot be read is the toolkit's [`PlotError::Io`] naming
+/// the image.
+pub fn write_page(page: &HtmlReport, path: &Path) -> Result<(), DrawError> {
     let html = page.render(read_image)?;
-    deflex_files::write_atomic(path, html).map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    deflex_files::write_atomic(path, html).map_err(DrawError::io_on(path))
+}
+
+/// Writes the text file `path` of a report (a table, JSON, Markdown) whole or not at all.
+pub fn write_text(path: &Path, text: &str) -> Result<(), DrawError> {
+    deflex_files::write_atomic(path, text).map_err(DrawError::io_on(path))
 }
 
 /// [`deflex_plot::line_plot`] written to `path` ([`write_image`]).
-pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), PlotError> {
+pub fn line_plot(path: &Path, spec: &PlotSpec, series: &[Series]) -> Result<(), DrawError> {
     write_image(path, deflex_plot::line_plot(path, spec, series)?)
 }
 
@@ -77,7 +82,7 @@ pub fn panels_plot(
     title: &str,
     layout: PanelLayout,
     panels: &[(PlotSpec, Vec<Series>)],
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     write_image(path, deflex_plot::panels_plot(path, title, layout, panels)?)
 }
 
@@ -88,7 +93,7 @@ pub fn parity_plot(
     predicted: &[f64],
     measured: &[f64],
     label: &str,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     let image = deflex_plot::parity_plot(path, spec, predicted, measured, label)?;
     write_image(path, image)
 }
@@ -101,7 +106,7 @@ pub fn heatmap(
     y_centers: &[f64],
     values: &[f64],
     colorbar_label: &str,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     let image = deflex_plot::heatmap(path, spec, x_centers, y_centers, values, colorbar_label)?;
     write_image(path, image)
 }
@@ -114,17 +119,17 @@ pub fn scatter_heatmap(
     y: &[f64],
     value: &[f64],
     colorbar_label: &str,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     let image = deflex_plot::scatter_heatmap(path, spec, x, y, value, colorbar_label)?;
     write_image(path, image)
 }
 
 /// [`deflex_plot::cloud_3d`] written to `path` ([`write_image`]).
-pub fn cloud_3d(path: &Path, spec: &Plot3Spec, clouds: &[Cloud3]) -> Result<(), PlotError> {
+pub fn cloud_3d(path: &Path, spec: &Plot3Spec, clouds: &[Cloud3]) -> Result<(), DrawError> {
     write_image(path, deflex_plot::cloud_3d(path, spec, clouds)?)
 }
 
 /// [`deflex_plot::timeline_plot`] written to `path` ([`write_image`]).
-pub fn timeline_plot(path: &Path, spec: &PlotSpec, lanes: &[Lane]) -> Result<(), PlotError> {
+pub fn timeline_plot(path: &Path, spec: &PlotSpec, lanes: &[Lane]) -> Result<(), DrawError> {
     write_image(path, deflex_plot::timeline_plot(path, spec, lanes)?)
 }

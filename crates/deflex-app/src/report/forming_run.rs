@@ -7,11 +7,9 @@
 //! [`force_panels`] and [`profile_panels`] are shared with the study's page, which compares the
 //! runs without and with correction on the same panels.
 
-use crate::report::draw::{cloud_3d, line_plot, panels_plot};
-use crate::twin::form::forming_summary_json;
-use deflex_plot::{
-    Cloud3, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
-};
+use crate::report::DrawError;
+use crate::report::draw::{cloud_3d, line_plot, panels_plot, write_text};
+use deflex_plot::{Cloud3, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotSpec, Series};
 use deflex_sim::FormingRun;
 use std::path::{Path, PathBuf};
 
@@ -228,7 +226,7 @@ pub fn profile_panels(runs: &[(&str, &FormingRun)]) -> Vec<(PlotSpec, Vec<Series
 }
 
 /// Draw every plot of a run into `dir`; returns the files.
-pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, DrawError> {
     let log = &run.log;
     let mut files = Vec::new();
     if log.rows.len() < 2 {
@@ -330,22 +328,17 @@ pub fn forming_plots(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, PlotE
 
 /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots of `run` into the existing
 /// folder `dir`; returns their names, in that order.
-pub fn write_run_files(run: &FormingRun, dir: &Path) -> Result<Vec<String>, PlotError> {
-    let summary = forming_summary_json(run).map_err(|e| PlotError::InvalidInput {
-        path: dir.join("summary.json"),
-        reason: e.to_string(),
-    })?;
+pub fn write_run_files(run: &FormingRun, dir: &Path) -> Result<Vec<String>, DrawError> {
+    let summary = run
+        .summary_json()
+        .map_err(DrawError::content_of(&dir.join("summary.json")))?;
     let mut names = Vec::new();
     for (name, text) in [
         ("log.csv", run.log.to_csv()),
         ("summary.json", summary),
         ("profile.csv", run.profile_csv()),
     ] {
-        let path = dir.join(name);
-        deflex_files::write_atomic(&path, text).map_err(|source| PlotError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        write_text(&dir.join(name), &text)?;
         names.push(name.to_string());
     }
     for plot in forming_plots(run, dir)? {
@@ -359,13 +352,9 @@ pub fn write_run_files(run: &FormingRun, dir: &Path) -> Result<Vec<String>, Plot
 /// Write `log.csv`, `summary.json`, `profile.csv` and the PNG plots of `run` into the folder
 /// `dir`, whole or not at all: the folder is built aside and swapped in at the end (an existing
 /// `dir` is replaced only then). Returns the files written.
-pub fn write_forming_run(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| PlotError::Io { path, source }
-    };
-    let building = deflex_files::AtomicDir::create(dir).map_err(io(dir))?;
+pub fn write_forming_run(run: &FormingRun, dir: &Path) -> Result<Vec<PathBuf>, DrawError> {
+    let building = deflex_files::AtomicDir::create(dir).map_err(DrawError::io_on(dir))?;
     let names = write_run_files(run, building.path())?;
-    building.commit().map_err(io(dir))?;
+    building.commit().map_err(DrawError::io_on(dir))?;
     Ok(names.into_iter().map(|n| dir.join(n)).collect())
 }

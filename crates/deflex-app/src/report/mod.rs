@@ -60,6 +60,58 @@ pub use plot_logs::{LogPlot, RunFigures, plot_logs};
 #[cfg(feature = "report")]
 pub use run_figures::{MAX_POINTS, thin_series, write_run_figures};
 
+/// A figure, page or file of a report that could not be drawn or written, naming the file: the
+/// drawing's own failure (`deflex-plot`, which writes nothing) or the writing's (the shared
+/// I/O error of `deflex-files`).
+#[cfg(feature = "report")]
+#[derive(Debug, thiserror::Error)]
+pub enum DrawError {
+    /// The drawing: data that cannot be plotted, a format that cannot be written, the
+    /// backend's failure (also a failure to write a figure's temporary file, as when the
+    /// plotting toolkit saved its files itself), an image a page embeds that cannot be read.
+    #[error(transparent)]
+    Plot(#[from] deflex_plot::PlotError),
+    /// A file or folder of the report could not be written or replaced (or is one deflex may
+    /// not replace).
+    #[error(transparent)]
+    Io(#[from] deflex_files::FileIoError),
+    /// A text file of the report (JSON, CSV) whose content could not be made.
+    #[error("{}: could not be written: {reason}", deflex_files::shown_path(.path))]
+    Content {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        reason: String,
+    },
+}
+
+#[cfg(feature = "report")]
+impl DrawError {
+    /// The file the error is about.
+    pub fn path(&self) -> &std::path::Path {
+        match self {
+            DrawError::Plot(error) => error.path(),
+            DrawError::Io(error) => error.path(),
+            DrawError::Content { path, .. } => path,
+        }
+    }
+
+    /// A write of `path` that failed, as a `map_err` argument: `.map_err(DrawError::io_on(path))`.
+    pub fn io_on(path: &std::path::Path) -> impl Fn(std::io::Error) -> DrawError + Copy + '_ {
+        move |source| DrawError::Io(deflex_files::FileIoError::new(path, source))
+    }
+
+    /// The content of `path` that could not be made (`reason`), as a `map_err` argument.
+    pub fn content_of<E: std::fmt::Display>(
+        path: &std::path::Path,
+    ) -> impl Fn(E) -> DrawError + '_ {
+        move |reason| DrawError::Content {
+            path: path.to_path_buf(),
+            reason: reason.to_string(),
+        }
+    }
+}
+
 /// A report (a page with its plots and tables) that could not be written: which report, and
 /// the file that failed.
 #[cfg(feature = "report")]
@@ -70,13 +122,13 @@ pub struct PageError {
     pub report: &'static str,
     /// The file that failed, and why.
     #[source]
-    pub source: deflex_plot::PlotError,
+    pub source: DrawError,
 }
 
 #[cfg(feature = "report")]
 impl PageError {
-    /// A function turning a [`deflex_plot::PlotError`] into a `PageError` of `report`.
-    pub fn of(report: &'static str) -> impl Fn(deflex_plot::PlotError) -> PageError {
+    /// A function turning a [`DrawError`] into a `PageError` of `report`.
+    pub fn of(report: &'static str) -> impl Fn(DrawError) -> PageError {
         move |source| PageError { report, source }
     }
 }

@@ -79,10 +79,7 @@ pub fn plot_logs(
     for (i, log) in logs.iter().enumerate() {
         traces.push(read_run_log(log, &label(logs, labels, i), robot)?);
     }
-    let io = |source| Error::Io {
-        path: out.display().to_string(),
-        source,
-    };
+    let io = Error::io_on(out);
     let folder = deflex_files::AtomicDir::create(out).map_err(io)?;
     let figures = drawing.run_figures(folder.path(), &traces)?;
     folder.commit().map_err(io)?;

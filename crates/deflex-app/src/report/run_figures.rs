@@ -4,6 +4,7 @@
 //! closed-loop run of the same path line up whatever their timing — else against time. Plain
 //! data in ([`RunTrace`]), PNG files and a self-contained page out ([`write_run_figures`]).
 
+use crate::report::DrawError;
 use crate::report::RunFigures;
 use crate::report::draw::{panels_plot, timeline_plot, write_page};
 use deflex_plot::{
@@ -172,13 +173,14 @@ fn rms(v: &[f64]) -> f64 {
 
 /// Draws the figures of one run, or of two runs overlaid, into `dir` (which must exist), and
 /// a self-contained `index.html` embedding them.
-pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, PlotError> {
+pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, DrawError> {
     let page = dir.join("index.html");
     if traces.is_empty() || traces.len() > 2 {
         return Err(PlotError::invalid(
             &page,
             format!("{} runs given, expected 1 or 2", traces.len()),
-        ));
+        )
+        .into());
     }
     for t in traces {
         check(t, &page)?;
@@ -211,7 +213,7 @@ pub fn write_run_figures(dir: &Path, traces: &[RunTrace]) -> Result<RunFigures, 
                       title: String,
                       caption: String,
                       panels: Vec<(PlotSpec, Vec<Series>)>|
-     -> Result<(), PlotError> {
+     -> Result<(), DrawError> {
         if panels.is_empty() {
             return Ok(());
         }
@@ -300,7 +302,7 @@ fn state_figure(
     xs: &[Vec<f64>],
     x_label: &str,
     title: &str,
-) -> Result<Option<(PathBuf, String)>, PlotError> {
+) -> Result<Option<(PathBuf, String)>, DrawError> {
     let mut lanes = Vec::new();
     for (k, t) in traces.iter().enumerate() {
         for (name, on) in &t.states {

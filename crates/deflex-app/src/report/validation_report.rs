@@ -3,23 +3,21 @@
 //! (Figs. 8–10, 12), δz along the measured points (Figs. 10, 12) and error heatmaps over the
 //! measured grid (Figs. 11, 13).
 
+use crate::report::DrawError;
 use crate::report::PageError;
 use crate::report::draw::{line_plot, parity_plot, scatter_heatmap, write_page};
 use crate::report::validation_tables::{
     VALIDATION_HEADERS, VALIDATION_ROTATION_HEADERS, validation_rotation_rows, validation_rows,
 };
 use deflex_calibrate::stiffness::validation::Validation;
-use deflex_plot::{HtmlReport, PlotError, PlotSpec, Series, SeriesStyle};
+use deflex_plot::{HtmlReport, PlotSpec, Series, SeriesStyle};
 use std::path::{Path, PathBuf};
 
 /// Write PNG plots and `validation.html` into the folder `dir`, whole or not at all: the folder
 /// is built aside and swapped in when complete (`deflex_files::AtomicDir`; an existing folder is
 /// replaced, and kept as it was when anything fails). Returns the files (final paths).
 pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, PageError> {
-    let io = |source: std::io::Error| PlotError::Io {
-        path: dir.to_path_buf(),
-        source,
-    };
+    let io = DrawError::io_on(dir);
     let page = PageError::of("validation report");
     let folder = deflex_files::AtomicDir::create(dir)
         .map_err(io)
@@ -34,7 +32,7 @@ pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf
 }
 
 /// [`write_validation_report`]'s files, written into an existing folder.
-fn write_report_into(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+fn write_report_into(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>, DrawError> {
     let mut files = Vec::new();
     let mut html = HtmlReport::new(format!("Validation of {}", v.model.name));
     html.paragraph(format!(

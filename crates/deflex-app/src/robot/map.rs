@@ -144,23 +144,19 @@ pub fn write_map(robot: &Robot, grid: &MapGrid, out: &Path) -> Result<Deflection
     if nodes.is_empty() {
         return Err(Error::NoReachableNode);
     }
-    let io = |path: &Path| {
-        let path = path.display().to_string();
-        move |source| Error::Io { path, source }
-    };
-    let folder = deflex_files::AtomicDir::create(out).map_err(io(out))?;
+    let folder = deflex_files::AtomicDir::create(out).map_err(Error::io_on(out))?;
     let csv = out.join("deflection_map.csv");
     deflex_files::write_atomic(
         folder.path().join("deflection_map.csv"),
         map_csv(&nodes, robot.joint_count()),
     )
-    .map_err(io(&csv))?;
+    .map_err(Error::io_on(&csv))?;
     let png = drawing
         .map_plots(folder.path(), &nodes, &robot.name, &grid.wrench)?
         .iter()
         .filter_map(|p| p.file_name().map(|name| out.join(name)))
         .collect();
-    folder.commit().map_err(io(out))?;
+    folder.commit().map_err(Error::io_on(out))?;
     Ok(DeflectionMap {
         nodes,
         unreachable,
@@ -252,7 +248,7 @@ pub fn map_plots(
     nodes: &[MapNode],
     robot_name: &str,
     wrench: &[f64; 6],
-) -> std::result::Result<Vec<PathBuf>, deflex_plot::PlotError> {
+) -> std::result::Result<Vec<PathBuf>, crate::report::DrawError> {
     let mut xs: Vec<f64> = nodes.iter().map(|n| n.position_m[0] * 1e3).collect();
     let mut ys: Vec<f64> = nodes.iter().map(|n| n.position_m[1] * 1e3).collect();
     for v in [&mut xs, &mut ys] {

@@ -65,10 +65,7 @@ pub fn to_toml(robot: &Robot, destination: Option<&Path>) -> String {
 
 /// Write the robot file whole or not at all.
 pub fn save(robot: &Robot, path: &Path) -> Result<()> {
-    deflex_files::write_atomic(path, to_toml(robot, Some(path))).map_err(|source| Error::Io {
-        path: path.display().to_string(),
-        source,
-    })
+    crate::table::write_text(path, &to_toml(robot, Some(path)))
 }
 
 /// Joint limits `[lo, hi]` (rad) per joint, NaN where a joint has none.

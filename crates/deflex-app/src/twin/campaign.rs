@@ -2,7 +2,7 @@
 //! validation grid of dead-weight loads or the spiral of Fig. 14, measured on the twin's true
 //! robot with the simulated laser tracker and load cell, written in the measurement format.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use deflex_calibrate::measurements::{MeasurementRow, load_case_count};
 use deflex_sim::CellConfig;
 use deflex_sim::twin_campaign::{
@@ -127,10 +127,7 @@ pub fn measure(
         }
     };
     let text = campaign_text(config, &rows, &campaign, seed, plan_header.as_ref())?;
-    deflex_files::write_atomic(out, text).map_err(|source| Error::Io {
-        path: out.display().to_string(),
-        source,
-    })?;
+    crate::table::write_text(out, &text)?;
     Ok(CampaignFile {
         campaign,
         rows,

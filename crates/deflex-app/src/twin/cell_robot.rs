@@ -2,7 +2,7 @@
 //! the robot with the cell's tool and base pivot, the description a user would write for that
 //! cell (the start of a calibration on the twin, or a correction model).
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use deflex_model::Robot;
 use deflex_sim::CellConfig;
 use deflex_sim::profile::CellSummary;
@@ -37,10 +37,7 @@ pub fn write_cell_robot(config: &CellConfig, out: &Path) -> Result<CellRobotFile
         config.part.robot,
         crate::load::robot_to_toml_for(&robot, out)
     );
-    deflex_files::write_atomic(out, text).map_err(|source| Error::Io {
-        path: out.display().to_string(),
-        source,
-    })?;
+    crate::table::write_text(out, &text)?;
     Ok(CellRobotFile {
         robot,
         cell,

@@ -3,6 +3,7 @@
 //! correction controller; [`FormingSetup::run`] runs it with the outlets a front end attaches
 //! (a recording's sink, a live view's stream, real-time pacing, a stop flag, a progress bar).
 
+use crate::OptionNames;
 use crate::error::{Error, Result, bounded};
 use crate::twin::path::{PathChoice, tool_path};
 use crate::twin::{TwinSetupError, cell_config, load_model};
@@ -58,26 +59,55 @@ impl std::str::FromStr for Correction {
     }
 }
 
-/// Options of a forming run that do not go together. The texts name Python's keywords; the
-/// command line words them with its flags.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+/// Options of a forming run that do not go together. A message names the options in the words
+/// of the front end ([`FormConflict::describe`]); the application's error holds both
+/// ([`FormConflict::named`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FormConflict {
     /// A correction model given with the correction off.
-    #[error("model: only used with correction=\"on\"")]
     ModelWithoutCorrection,
     /// A fixture stiffness for a path that does not plunge into the fixture.
-    #[error("fixture_stiffness_n_m: applies to the path \"plunge\"")]
     FixtureStiffnessWithoutPlunge,
     /// A feed for a G-code file, which sets its own.
-    #[error("feed_m_s: applies to the built-in paths; a G-code file sets its own F")]
     FeedWithGcode,
 }
 
+impl FormConflict {
+    /// The conflict in the words of `names`: `--model: only used with --correction on`,
+    /// `model: only used with correction="on"`.
+    pub fn describe(self, names: OptionNames) -> String {
+        match self {
+            FormConflict::ModelWithoutCorrection => format!(
+                "{}: only used with {}",
+                names.name("model"),
+                names.give_text("correction", Correction::On.name())
+            ),
+            FormConflict::FixtureStiffnessWithoutPlunge => format!(
+                "{}: applies to {}",
+                names.name("fixture_stiffness_n_m"),
+                names.give_text("path", "plunge")
+            ),
+            FormConflict::FeedWithGcode => format!(
+                "{}: applies to the built-in paths; a G-code file sets its own F",
+                names.name("feed_m_s")
+            ),
+        }
+    }
+
+    /// The conflict as the application's error, named in the words of `names`.
+    pub fn named(self, names: OptionNames) -> Error {
+        Error::FormConflict {
+            conflict: self,
+            names,
+        }
+    }
+}
+
 /// Refuse a correction model given with the correction off (the front ends ask first, before
-/// reading anything).
-pub fn check_correction(correction: Correction, has_model: bool) -> Result<(), FormConflict> {
+/// reading anything), naming the options in the words of `names`.
+pub fn check_correction(correction: Correction, has_model: bool, names: OptionNames) -> Result<()> {
     if correction == Correction::Off && has_model {
-        Err(FormConflict::ModelWithoutCorrection)
+        Err(FormConflict::ModelWithoutCorrection.named(names))
     } else {
         Ok(())
     }
@@ -97,7 +127,7 @@ pub const FIXTURE_STIFFNESS_RANGE_N_M: (f64, f64) = (1e4, 1e9);
 
 /// Options of a forming run. The path's feed and length are in mm, the unit of the tool-path
 /// generator ([`tool_path`]).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct FormOptions {
     /// The robot the twin plays (built-in name or robot file); default the twin file's, else
     /// the TX200.
@@ -118,6 +148,27 @@ pub struct FormOptions {
     pub correction: Correction,
     /// The identified model of the correction (needed with [`Correction::On`]).
     pub model: Option<CorrectionModel>,
+    /// The front end that asks, for the option names in its refusals.
+    pub names: OptionNames,
+}
+
+impl Default for FormOptions {
+    /// The open-loop run of the paper's cone on the TX200's cell, seed 0, refusals in the
+    /// command line's words.
+    fn default() -> FormOptions {
+        FormOptions {
+            robot: None,
+            config: None,
+            path: PathChoice::default(),
+            seed: 0,
+            length_mm: None,
+            feed_mm_s: None,
+            fixture_stiffness_n_m: None,
+            correction: Correction::default(),
+            model: None,
+            names: OptionNames::Cli,
+        }
+    }
 }
 
 /// What a front end attaches to a run: every one optional.
@@ -151,7 +202,7 @@ impl FormingSetup {
     /// Read the cell, build the tool path and, with the correction on, the controller (its
     /// model read from a file when given so).
     pub fn prepare(options: &FormOptions) -> Result<FormingSetup> {
-        check_correction(options.correction, options.model.is_some())?;
+        check_correction(options.correction, options.model.is_some(), options.names)?;
         let mut config = cell_config(options.robot.as_deref(), options.config.as_deref())?;
         let plunge = options.path == PathChoice::Plunge;
         if plunge {
@@ -159,13 +210,18 @@ impl FormingSetup {
         }
         if let Some(k) = options.fixture_stiffness_n_m {
             if !plunge {
-                return Err(FormConflict::FixtureStiffnessWithoutPlunge.into());
+                return Err(FormConflict::FixtureStiffnessWithoutPlunge.named(options.names));
             }
             let (lo, hi) = FIXTURE_STIFFNESS_RANGE_N_M;
             config.process.fixture_stiffness_n_m =
                 bounded("fixture_stiffness_n_m", k, lo, hi, "N/m")?;
         }
-        let path = tool_path(&options.path, options.feed_mm_s, options.length_mm)?;
+        let path = tool_path(
+            &options.path,
+            options.feed_mm_s,
+            options.length_mm,
+            options.names,
+        )?;
         // Closed loop: the deflex correction controller in-process, in simulated time, with the
         // nominal mounting and tool of the cell (never the plant's).
         let controller = match options.correction {
@@ -312,20 +368,10 @@ pub struct TwinRun {
 
 /// The run's summary as `summary.json`'s text.
 pub fn summary_json(run: &TwinRun) -> Result<String> {
-    forming_summary_json(&run.run).map_err(|e| Error::Serialise {
+    run.run.summary_json().map_err(|e| Error::Serialise {
         what: "the run's summary.json",
         reason: e.to_string(),
     })
-}
-
-/// `summary.json` of a forming run: its summary with the wall time, pretty-printed (the text of
-/// `FormingRun::summary_json`, with a serialisation failure reported).
-pub fn forming_summary_json(run: &FormingRun) -> serde_json::Result<String> {
-    let mut value = serde_json::to_value(&run.summary)?;
-    if let Some(map) = value.as_object_mut() {
-        map.insert("wall_time_s".into(), serde_json::json!(run.wall_time_s));
-    }
-    serde_json::to_string_pretty(&value)
 }
 
 impl TwinRun {
@@ -416,84 +462,84 @@ impl TwinRun {
     }
 }
 
+/// The log as a table of SI columns ([`log_columns`]) under its title comment (SIMULATED, the
+/// robot, the path, the seed): Python's `TwinRun.log`.
+pub fn log_table(run: &TwinRun) -> crate::table::Table {
+    let columns = log_columns(run);
+    crate::table::Table {
+        comments: vec![run.run.log.title()],
+        rows: run.run.log.rows.len(),
+        columns: columns
+            .into_iter()
+            .map(|(name, values)| (name.to_string(), crate::table::Column::Number(values)))
+            .collect(),
+    }
+}
+
 /// The log as SI columns (part frame R_p; the wrench on the tool at the TCP; the correction
 /// applied; the contact state). One row per logged cycle.
 pub fn log_columns(run: &TwinRun) -> Vec<(&'static str, Vec<f64>)> {
+    type Row = deflex_sim::forming::LogRow;
     let rows = &run.run.log.rows;
-    let col = |f: &dyn Fn(&deflex_sim::forming::LogRow) -> f64| rows.iter().map(f).collect();
-    let mut out: Vec<(&'static str, Vec<f64>)> = vec![("time_s", col(&|r| r.time_s))];
-    type Pick = fn(&deflex_sim::forming::LogRow) -> nalgebra::Vector3<f64>;
-    let vectors: [(&str, Pick); 5] = [
-        ("des", |r| r.truth.desired_m),
-        ("cmd", |r| r.truth.commanded_m),
-        ("true", |r| r.truth.true_m),
-        ("tracked", |r| r.tracked_m),
-        ("err", |r| r.truth.path_error_m()),
-    ];
-    const NAMES: [[&str; 3]; 5] = [
-        ["des_x_m", "des_y_m", "des_z_m"],
-        ["cmd_x_m", "cmd_y_m", "cmd_z_m"],
-        ["true_x_m", "true_y_m", "true_z_m"],
-        ["tracked_x_m", "tracked_y_m", "tracked_z_m"],
-        ["err_x_m", "err_y_m", "err_z_m"],
-    ];
-    for ((_, pick), names) in vectors.iter().zip(NAMES) {
+    let mut out: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    // Columns `names`, the k-th one's value `value(row, k)`.
+    let mut push = |names: &[&'static str], value: &dyn Fn(&Row, usize) -> f64| {
         for (k, name) in names.iter().enumerate() {
-            out.push((name, col(&|r| pick(r)[k])));
+            out.push((name, rows.iter().map(|r| value(r, k)).collect()));
         }
-    }
-    out.push(("err_norm_m", col(&|r| r.truth.path_error_m().norm())));
-    for (k, name) in ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"]
-        .iter()
-        .enumerate()
-    {
-        out.push((name, col(&|r| r.truth.wrench[k])));
-    }
-    for (k, name) in [
-        "sensor_fx_N",
-        "sensor_fy_N",
-        "sensor_fz_N",
-        "sensor_tx_Nm",
-        "sensor_ty_Nm",
-        "sensor_tz_Nm",
-    ]
-    .iter()
-    .enumerate()
-    {
-        out.push((name, col(&|r| r.sensor.wrench_sensor[k])));
-    }
-    out.push((
-        "sensor_saturated",
-        col(&|r| if r.sensor.saturated { 1.0 } else { 0.0 }),
-    ));
-    for (k, name) in [
-        "corr_x_m",
-        "corr_y_m",
-        "corr_z_m",
-        "corr_rx_rad",
-        "corr_ry_rad",
-        "corr_rz_rad",
-    ]
-    .iter()
-    .enumerate()
-    {
-        out.push((name, col(&|r| r.truth.correction[k])));
-    }
-    for (k, name) in [
-        "defl_x_m",
-        "defl_y_m",
-        "defl_z_m",
-        "defl_rx_rad",
-        "defl_ry_rad",
-        "defl_rz_rad",
-    ]
-    .iter()
-    .enumerate()
-    {
-        out.push((name, col(&|r| r.truth.deflection[k])));
-    }
-    out.push(("penetration_m", col(&|r| r.truth.contact.penetration_m)));
-    out.push(("flow_level_N", col(&|r| r.truth.contact.flow_n)));
-    out.push(("tool_depth_m", col(&|r| r.truth.contact.depth_m)));
+    };
+    push(&["time_s"], &|r, _| r.time_s);
+    push(&["des_x_m", "des_y_m", "des_z_m"], &|r, k| {
+        r.truth.desired_m[k]
+    });
+    push(&["cmd_x_m", "cmd_y_m", "cmd_z_m"], &|r, k| {
+        r.truth.commanded_m[k]
+    });
+    push(&["true_x_m", "true_y_m", "true_z_m"], &|r, k| {
+        r.truth.true_m[k]
+    });
+    push(&["tracked_x_m", "tracked_y_m", "tracked_z_m"], &|r, k| {
+        r.tracked_m[k]
+    });
+    push(&["err_x_m", "err_y_m", "err_z_m"], &|r, k| {
+        r.truth.path_error_m()[k]
+    });
+    push(&["err_norm_m"], &|r, _| r.truth.path_error_m().norm());
+    push(
+        &["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"],
+        &|r, k| r.truth.wrench[k],
+    );
+    push(
+        &[
+            "sensor_fx_N",
+            "sensor_fy_N",
+            "sensor_fz_N",
+            "sensor_tx_Nm",
+            "sensor_ty_Nm",
+            "sensor_tz_Nm",
+        ],
+        &|r, k| r.sensor.wrench_sensor[k],
+    );
+    push(&["sensor_saturated"], &|r, _| {
+        if r.sensor.saturated { 1.0 } else { 0.0 }
+    });
+    push(
+        &[
+            "corr_x_m",
+            "corr_y_m",
+            "corr_z_m",
+            "corr_rx_rad",
+            "corr_ry_rad",
+            "corr_rz_rad",
+        ],
+        &|r, k| r.truth.correction[k],
+    );
+    // The deflection's columns are named as the compensation's table names them.
+    push(&deflex_compensate::table::DEFLECTION, &|r, k| {
+        r.truth.deflection[k]
+    });
+    push(&["penetration_m"], &|r, _| r.truth.contact.penetration_m);
+    push(&["flow_level_N"], &|r, _| r.truth.contact.flow_n);
+    push(&["tool_depth_m"], &|r, _| r.truth.contact.depth_m);
     out
 }

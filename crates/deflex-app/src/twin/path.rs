@@ -2,6 +2,7 @@
 //! `deflex.sim.form(path)`): a built-in path or a G-code file, with the feed and the length the
 //! user asked for.
 
+use crate::OptionNames;
 use crate::error::{Result, bounded};
 use crate::load::gcode_file::read_gcode;
 use crate::twin::FormConflict;
@@ -47,11 +48,13 @@ pub const LENGTH_RANGE_MM: (f64, f64) = (1e-3, 1e6);
 /// The tool path `choice`, with the feed of the built-in paths (`feed_mm_s`; a G-code file sets
 /// its own F) and only its first `length_mm` of travel. The tool-path generator works in mm
 /// (`deflex_sim::ConeParams`, `ToolPath::truncated`), so these two are in mm: a front end
-/// converting from its unit would round them.
+/// converting from its unit would round them. A feed given for a G-code file is refused naming
+/// the options in the words of `names`.
 pub fn tool_path(
     choice: &PathChoice,
     feed_mm_s: Option<f64>,
     length_mm: Option<f64>,
+    names: OptionNames,
 ) -> Result<ToolPath> {
     let feed = match feed_mm_s {
         Some(f) => Some(bounded(
@@ -90,7 +93,7 @@ pub fn tool_path(
         }
         PathChoice::Gcode(file) => {
             if feed.is_some() {
-                return Err(FormConflict::FeedWithGcode.into());
+                return Err(FormConflict::FeedWithGcode.named(names));
             }
             read_gcode(file)?
         }

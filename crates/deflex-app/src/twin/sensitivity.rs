@@ -86,16 +86,12 @@ impl SensitivitySweep {
         let drawing = crate::report::require(
             "the sensitivity sweep's folder with its heatmap (`deflex sim sensitivity --out`)",
         )?;
-        let io = |path: &Path| {
-            let path = path.display().to_string();
-            move |source| Error::Io { path, source }
-        };
         let summary = self.summary_value()?;
         let summary = serde_json::to_string_pretty(&summary).map_err(|e| Error::Serialise {
             what: "summary.json",
             reason: e.to_string(),
         })?;
-        let building = deflex_files::AtomicDir::create(out).map_err(io(out))?;
+        let building = deflex_files::AtomicDir::create(out).map_err(Error::io_on(out))?;
         let dir = building.path();
         for (name, text) in [
             (
@@ -104,10 +100,11 @@ impl SensitivitySweep {
             ),
             ("summary.json", summary),
         ] {
-            deflex_files::write_atomic(dir.join(name), text).map_err(io(&out.join(name)))?;
+            deflex_files::write_atomic(dir.join(name), text)
+                .map_err(Error::io_on(&out.join(name)))?;
         }
         drawing.sensitivity_heatmap(&self.result, &dir.join("sensitivity_heatmap.png"))?;
-        building.commit().map_err(io(out))
+        building.commit().map_err(Error::io_on(out))
     }
 
     /// The table of every condition (mm, %, N), and the folder written.

@@ -3,9 +3,9 @@
 //! names, the calibrated model named, saved and reported, the messages in each front end's
 //! words, the validation's outputs and the plan's points and outputs.
 
-use deflex_app::ErrorKind;
 use deflex_app::calibrate::plan::{self, PlanOptions, PointSet};
 use deflex_app::calibrate::*;
+use deflex_app::{ErrorKind, OptionNames};
 use deflex_calibrate::measurements::{MeasurementRow, format_rows_for};
 use deflex_calibrate::stiffness::synthetic::{SyntheticOptions, measure};
 use deflex_model::Robot;
@@ -91,14 +91,12 @@ fn options(structure: StructureChoice, couplings: &str) -> CalibrateOptions {
     }
 }
 
-/// The CLI's words: the file before a check's error, `--data FILE` before a fit's.
-fn cli_wording(data: &Path) -> Wording {
-    Wording {
-        check_context: Some(data.display().to_string()),
-        fit_context: Some(format!("--data {}", data.display())),
-        fk_advice: "Widen the tolerance with --fk-tolerance-mm.".into(),
-    }
-}
+/// The CLI's words: the file before a check's error, `--data FILE` before a fit's, its flags
+/// in the advice.
+const CLI: OptionNames = OptionNames::Cli;
+/// Python's words: no context before an error (the call is in the traceback), its keywords in
+/// the advice.
+const PYTHON: OptionNames = OptionNames::Python;
 
 #[test]
 fn the_choices_are_parsed_by_the_names_both_front_ends_use() {
@@ -136,7 +134,7 @@ fn a_calibration_with_a_coupling_is_named_saved_and_reported() {
         &robot,
         &source,
         &options(StructureChoice::Fixed, "J2.z:J3.z"),
-        &cli_wording(&data),
+        CLI,
         &mut |_| {},
     )
     .unwrap();
@@ -191,7 +189,7 @@ fn a_coupling_outside_the_identified_structure_is_refused_naming_it() {
         &robot,
         &Source::File(data.clone()),
         &options(StructureChoice::Fixed, "J2.z:J6.y"),
-        &cli_wording(&data),
+        CLI,
         &mut |_| {},
     )
     .err()
@@ -217,21 +215,22 @@ fn another_robots_data_is_refused_in_the_front_ends_words() {
     let data = campaign(&tx200, &dir);
     let source = Source::File(data.clone());
     let mut fixed = options(StructureChoice::Fixed, "");
-    let e = calibrate(&ur10, &source, &fixed, &cli_wording(&data), &mut |_| {})
+    let e = calibrate(&ur10, &source, &fixed, CLI, &mut |_| {})
         .err()
         .unwrap();
     assert!(
-        e.to_string()
-            .contains("Widen the tolerance with --fk-tolerance-mm."),
+        e.to_string().contains(
+            "Widen the tolerance with --fk-tolerance-mm, or use the file anyway with --ignore-fk-check."
+        ),
         "{e}"
     );
     assert_eq!(e.kind(), ErrorKind::Calibration);
-    let e = validate(&ur10, None, &source, &fixed.check, &cli_wording(&data))
+    let e = validate(&ur10, None, &source, &fixed.check, CLI)
         .err()
         .unwrap();
     assert!(e.to_string().contains("rows disagree"), "{e}");
     fixed.check.ignore_fk_check = true;
-    let v = validate(&ur10, None, &source, &fixed.check, &Wording::default()).unwrap();
+    let v = validate(&ur10, None, &source, &fixed.check, PYTHON).unwrap();
     assert_eq!(v.warnings.len(), 1);
     assert!(
         v.warnings[0].ends_with("(going on as asked)"),
@@ -260,7 +259,7 @@ fn the_identification_error_is_named_as_the_front_end_asks() {
     std::fs::write(&zero, format_rows_for(&robot, &rows, &[])).unwrap();
     let source = Source::File(zero.clone());
     let fixed = options(StructureChoice::Fixed, "");
-    let e = calibrate(&robot, &source, &fixed, &cli_wording(&zero), &mut |_| {})
+    let e = calibrate(&robot, &source, &fixed, CLI, &mut |_| {})
         .err()
         .unwrap();
     let prefix = format!(
@@ -269,7 +268,7 @@ fn the_identification_error_is_named_as_the_front_end_asks() {
     );
     assert!(e.to_string().starts_with(&prefix), "{e}");
     assert_eq!(e.kind(), ErrorKind::Calibration);
-    let e = calibrate(&robot, &source, &fixed, &Wording::default(), &mut |_| {})
+    let e = calibrate(&robot, &source, &fixed, PYTHON, &mut |_| {})
         .err()
         .unwrap();
     assert!(
@@ -287,14 +286,7 @@ fn a_validation_lists_its_files_only_when_they_were_written() {
     let data = campaign(&robot, &dir);
     let check = options(StructureChoice::Fixed, "").check;
     let baseline = deflex_app::robot::builtin("tx200-1edof").unwrap();
-    let v = validate(
-        &robot,
-        Some(&baseline),
-        &Source::File(data),
-        &check,
-        &Wording::default(),
-    )
-    .unwrap();
+    let v = validate(&robot, Some(&baseline), &Source::File(data), &check, PYTHON).unwrap();
     assert!(validation_json(&v, None).get("files").is_none());
     let out = dir.join("val");
     let files = write_validation_report(&v, &out).unwrap();

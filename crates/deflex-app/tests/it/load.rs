@@ -125,3 +125,36 @@ fn measurement_and_point_files_are_read_through_their_formats() {
     assert!(e.contains("none.csv"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The readers of the user's files report through the shared file errors: a file over its
+/// reader's limit names what it is, any other failure names the file.
+#[test]
+fn an_oversized_or_unreadable_file_is_reported_through_the_shared_errors() {
+    use deflex_app::cell::twin_cell_file::{MAX_CELL_FILE_BYTES, TwinCellFileError, load_cell};
+    let dir = temp_dir("shared-errors");
+    let big = dir.join("cell.toml");
+    std::fs::write(&big, vec![b'#'; MAX_CELL_FILE_BYTES as usize + 10]).unwrap();
+    let e = load_cell(&big, None).unwrap_err();
+    assert!(matches!(e, TwinCellFileError::TooLarge(_)), "{e}");
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{}: more than the {MAX_CELL_FILE_BYTES} bytes a cell file may have (stopped reading after {})",
+            big.display(),
+            MAX_CELL_FILE_BYTES + 1
+        )
+    );
+    let e = load_cell(&dir, None).unwrap_err();
+    assert!(matches!(e, TwinCellFileError::Read(_)), "{e}");
+    assert!(
+        e.to_string().contains("is a folder, not a regular file"),
+        "{e}"
+    );
+    let e = deflex_app::table::read(&dir.join("missing.csv")).unwrap_err();
+    assert_eq!(e.kind(), deflex_app::ErrorKind::Io, "{e}");
+    assert!(
+        e.to_string()
+            .starts_with(&format!("{}: ", dir.join("missing.csv").display()))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

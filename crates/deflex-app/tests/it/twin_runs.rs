@@ -46,16 +46,29 @@ fn the_choices_parse_their_names_and_conflicts_are_refused() {
     assert_eq!(choice, PathChoice::ConeContour);
     let Ok(choice) = PathChoice::from_str("part.gcode");
     assert_eq!(choice, PathChoice::Gcode("part.gcode".into()));
-    assert_eq!(
-        check_correction(Correction::Off, true).unwrap_err(),
-        FormConflict::ModelWithoutCorrection
-    );
-    assert!(check_correction(Correction::On, true).is_ok());
-    let e = tool_path(&PathChoice::Gcode("part.gcode".into()), Some(5.0), None).unwrap_err();
+    use deflex_app::OptionNames::{Cli, Python};
+    assert!(matches!(
+        check_correction(Correction::Off, true, Python).unwrap_err(),
+        deflex_app::Error::FormConflict {
+            conflict: FormConflict::ModelWithoutCorrection,
+            ..
+        }
+    ));
+    assert!(check_correction(Correction::On, true, Python).is_ok());
+    let e = tool_path(
+        &PathChoice::Gcode("part.gcode".into()),
+        Some(5.0),
+        None,
+        Cli,
+    )
+    .unwrap_err();
     assert!(
         matches!(
             e,
-            deflex_app::Error::FormConflict(FormConflict::FeedWithGcode)
+            deflex_app::Error::FormConflict {
+                conflict: FormConflict::FeedWithGcode,
+                ..
+            }
         ),
         "{e}"
     );

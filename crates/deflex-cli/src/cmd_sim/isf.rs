@@ -2,30 +2,29 @@
 //! (SIMULATED), with its outputs, its MCAP recording (`run.mcap`), the `deflex plot` page of the
 //! run (`plot/`) and, with `--view`, a live page paced at real time.
 //!
-//! The recording is written synchronously in the run's own loop (it loses nothing): in closed
-//! loop the controller's stream (`deflex run`'s channels, with the twin's path error), in open
-//! loop the twin's own stream (`deflex_sim::twin::twin_stream`: ground truth at every log row).
+//! The recording (`deflex_app::twin::RunFolder::record`) is written synchronously in the run's
+//! own loop (it loses nothing): in closed loop the controller's stream (`deflex run`'s channels,
+//! with the twin's path error), in open loop the twin's own stream (ground truth at every log
+//! row).
 
 use super::TwinArgs;
 use crate::args::{bounded, print_json};
-use crate::error::{CliError, CommandResult, UsageError};
+use crate::error::{CliError, CommandResult};
 use clap::Args;
+use deflex_app::OptionNames;
 use deflex_app::twin::form::{
-    CorrectionModel, FIXTURE_STIFFNESS_RANGE_N_M, FormConflict, FormOptions, FormingSetup, Outlets,
+    CorrectionModel, FIXTURE_STIFFNESS_RANGE_N_M, FormOptions, FormingSetup, Outlets,
 };
 use deflex_app::twin::path::{FEED_RANGE_MM_S, LENGTH_RANGE_MM};
-use deflex_app::twin::{Correction, PathChoice, RunFolder, TwinRun, WrittenRun, check_correction};
-use deflex_record::{McapSink, RecordError, RecordOptions, RecordStats};
-use deflex_sim::twin::SampleSink;
-use deflex_telemetry::{CycleSample, SessionInfo, broadcast};
+use deflex_app::twin::{
+    Correction, PathChoice, RECORDING, RunFolder, TwinRun, WrittenRun, check_correction,
+};
+use deflex_record::RecordStats;
+use deflex_telemetry::{CycleSample, broadcast};
 use serde_json::json;
-use std::io::BufWriter;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::str::FromStr;
-use std::sync::{Arc, Mutex};
-
-/// The recording's file in the output folder.
-pub const RECORDING: &str = "run.mcap";
+use std::sync::Arc;
 
 #[derive(Args)]
 pub struct IsfArgs {
@@ -70,29 +69,6 @@ pub struct IsfArgs {
     pub speed: Option<f64>,
 }
 
-/// A conflict of options in the command line's words.
-fn conflict(c: FormConflict) -> CliError {
-    let (flag, applies) = match c {
-        FormConflict::ModelWithoutCorrection => ("--model", "only used with --correction on"),
-        FormConflict::FixtureStiffnessWithoutPlunge => {
-            ("--fixture-stiffness-n-m", "applies to --path plunge")
-        }
-        FormConflict::FeedWithGcode => (
-            "--feed-mm-s",
-            "applies to the built-in paths; a G-code file sets its own F",
-        ),
-    };
-    UsageError::DoesNotApply { flag, applies }.into()
-}
-
-/// An error of the application, its conflicts of options in the command line's words.
-fn worded(e: deflex_app::Error) -> CliError {
-    match e {
-        deflex_app::Error::FormConflict(c) => conflict(c),
-        e => e.into(),
-    }
-}
-
 /// The run's options, every numeric flag checked in its unit.
 fn form_options(args: &IsfArgs) -> Result<FormOptions, CliError> {
     let fixture_stiffness_n_m = match args.fixture_stiffness_n_m {
@@ -132,13 +108,14 @@ fn form_options(args: &IsfArgs) -> Result<FormOptions, CliError> {
         fixture_stiffness_n_m,
         correction: args.correction,
         model: args.model.clone().map(CorrectionModel::File),
+        names: OptionNames::Cli,
     })
 }
 
 pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
-    check_correction(args.correction, args.model.is_some()).map_err(conflict)?;
+    check_correction(args.correction, args.model.is_some(), OptionNames::Cli)?;
     let options = form_options(&args)?;
-    let mut setup = FormingSetup::prepare(&options).map_err(worded)?;
+    let mut setup = FormingSetup::prepare(&options)?;
     let bar = if json {
         indicatif::ProgressBar::hidden()
     } else {
@@ -163,11 +140,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
     // Built aside, swapped in whole at the end: a failed or stopped run leaves `--out` whole.
     let folder = RunFolder::create(&args.out)?;
     let info = setup.session_info()?;
-    let recorder = Recording::create(
-        &folder.path().join(RECORDING),
-        &args.out.join(RECORDING),
-        &info,
-    )?;
+    let recording = folder.record(&info)?;
     let (publisher, ring) = broadcast::<CycleSample>(1 << 14);
     let view = match view_addr {
         Some(addr) => Some(crate::live::start_view(
@@ -181,7 +154,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
     };
     let closed_loop = setup.closed_loop();
     let run = setup.run(Outlets {
-        sample_sink: Some(recorder.sink()),
+        sample_sink: Some(recording.sink()),
         publisher: view.is_some().then_some(publisher),
         speed,
         stop: view.is_some().then(deflex_runtime::rt::interrupt_flag),
@@ -200,7 +173,7 @@ pub fn isf(args: IsfArgs, json: bool) -> CommandResult {
         },
         e => e.into(),
     })?;
-    let record_stats = recorder.finish(&args.out.join(RECORDING))?;
+    let record_stats = recording.finish()?;
     let written = folder.finish(&run, &[RECORDING], !args.no_plot)?;
     let report = RunReport {
         args: &args,
@@ -279,67 +252,5 @@ fn info_key(closed_loop: bool) -> &'static str {
         deflex_telemetry::Source::Twin.key()
     } else {
         deflex_telemetry::Source::TwinCell.key()
-    }
-}
-
-type SinkState = (
-    Option<McapSink<BufWriter<std::fs::File>>>,
-    Option<RecordError>,
-);
-
-/// The run's MCAP recording, written synchronously by the run's loop through a sink closure;
-/// the first write error stops it and is reported at the end.
-struct Recording {
-    state: Arc<Mutex<SinkState>>,
-}
-
-impl Recording {
-    /// A recording into `path` (in the folder being built), named `shown` in errors.
-    fn create(path: &Path, shown: &Path, info: &SessionInfo) -> Result<Recording, CliError> {
-        let file = std::fs::File::create(path).map_err(CliError::write(shown))?;
-        let sink = McapSink::new(
-            BufWriter::new(file),
-            shown.display().to_string(),
-            info,
-            RecordOptions::default(),
-        )?;
-        Ok(Recording {
-            state: Arc::new(Mutex::new((Some(sink), None))),
-        })
-    }
-
-    /// The closure the run calls with every sample.
-    fn sink(&self) -> SampleSink {
-        let state = self.state.clone();
-        Box::new(move |s| {
-            let mut guard = state.lock().unwrap_or_else(|p| p.into_inner());
-            let (sink, failed) = &mut *guard;
-            if failed.is_none()
-                && let Some(sink) = sink.as_mut()
-                && let Err(e) = sink.write(s)
-            {
-                *failed = Some(e);
-            }
-        })
-    }
-
-    /// Closes the file; the first error of the run, if any.
-    fn finish(self, shown: &Path) -> Result<RecordStats, CliError> {
-        let mut guard = self.state.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(e) = guard.1.take() {
-            return Err(e.into());
-        }
-        // `finish` takes the recording: the sink is there unless a write panicked with it.
-        let Some(sink) = guard.0.take() else {
-            return Err(CliError::write(shown)(std::io::Error::other(
-                "the recording was lost",
-            )));
-        };
-        let (writer, stats) = sink.finish()?;
-        let file = writer
-            .into_inner()
-            .map_err(|e| CliError::write(shown)(e.into_error()))?;
-        file.sync_all().map_err(CliError::write(shown))?;
-        Ok(stats)
     }
 }

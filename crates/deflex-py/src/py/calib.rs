@@ -3,8 +3,9 @@
 
 use super::convert::{json_to_py, rows_to_numpy, run, to_numpy, to_py, type_error};
 use super::robot::{PyRobot, robot_arg};
+use deflex_app::OptionNames;
 use deflex_app::calibrate::{
-    self, CalibrateOptions, CriterionChoice, DataCheck, Source, StructureChoice, Wording,
+    self, CalibrateOptions, CriterionChoice, DataCheck, Source, StructureChoice,
 };
 use deflex_app::error::Error;
 use pyo3::prelude::*;
@@ -215,16 +216,6 @@ fn data_check(fk_tolerance_m: f64, ignore_fk_check: bool) -> DataCheck {
     }
 }
 
-/// How Python names its options in messages: its keywords, and no context before an error (the
-/// call is in the traceback).
-fn wording() -> Wording {
-    Wording {
-        check_context: None,
-        fit_context: None,
-        fk_advice: "Is this the robot the data was measured on? Widen fk_tolerance_m, or use the data anyway with ignore_fk_check=True.".into(),
-    }
-}
-
 /// ``deflex.calibrate``'s engine call (see the Python wrapper for the documentation).
 #[pyfunction]
 #[pyo3(signature = (robot, data, structure, fit_shifts, criterion, folds, min_cv_gain, target_rms_m, min_bic_gain, allow_base, fk_tolerance_m, ignore_fk_check))]
@@ -264,7 +255,7 @@ pub fn _calibrate(
         couplings: Vec::new(),
     };
     let inner = run(py, || {
-        calibrate::calibrate(&start, &source, &options, &wording(), &mut |_| {})
+        calibrate::calibrate(&start, &source, &options, OptionNames::Python, &mut |_| {})
     })?;
     Ok(PyStiffnessCalibration { inner })
 }
@@ -341,7 +332,7 @@ pub fn _validate(
             baseline.as_ref(),
             &source,
             &data_check(fk_tolerance_m, ignore_fk_check),
-            &wording(),
+            OptionNames::Python,
         )
     })?;
     Ok(PyValidation { inner })

@@ -3,8 +3,7 @@
 use super::convert::{float_array, json_to_py, run, shape_error, to_numpy, to_py, type_error};
 use super::robot::robot_arg;
 use deflex_app::compensate::{
-    self, CompensationRun, Frame, LogForces, Options, PathSpec, ProgramPlan, RobotChoice,
-    WrenchSpec,
+    self, CompensationRun, Frame, LogForces, Options, PathSpec, RobotChoice, WrenchSpec,
 };
 use deflex_app::error::{Error, bounded};
 use deflex_app::option_names::OptionNames;
@@ -30,34 +29,6 @@ impl PyCompensation {
         let n = self.inner.result.points.len();
         let values: Vec<f64> = (0..n).flat_map(&f).collect();
         to_numpy(py, values, &[n, N])
-    }
-
-    /// The programs of every format in `formats` with the template `settings`, each read back
-    /// (refused like the CLI's when points are not compensated or the iteration did not
-    /// converge).
-    fn programs_of(
-        &self,
-        formats: &[String],
-        settings: Option<&std::path::Path>,
-    ) -> Result<Vec<deflex_cam::program::ProgramFile>, Error> {
-        let run = &self.inner;
-        compensate::refusal(run)?;
-        let settings = compensate::settings(settings)?;
-        let formats = formats
-            .iter()
-            .map(|name| compensate::format(name))
-            .collect::<Result<Vec<_>, _>>()?;
-        let plan = ProgramPlan::new(
-            &run.setup,
-            &run.result,
-            compensate::description(run),
-            &settings,
-        )?;
-        let mut files = Vec::new();
-        for format in formats {
-            files.extend(plan.export_checked(format, &settings)?);
-        }
-        Ok(files)
     }
 }
 
@@ -195,7 +166,9 @@ impl PyCompensation {
         settings: Option<PathBuf>,
     ) -> PyResult<BTreeMap<String, String>> {
         let formats = [format.to_string()];
-        let files = run(py, || self.programs_of(&formats, settings.as_deref()))?;
+        let files = run(py, || {
+            compensate::program_files(&self.inner, &formats, settings.as_deref())
+        })?;
         Ok(files.into_iter().map(|f| (f.path, f.contents)).collect())
     }
 
@@ -210,7 +183,7 @@ impl PyCompensation {
         settings: Option<PathBuf>,
     ) -> PyResult<Vec<PathBuf>> {
         run(py, || {
-            let files = self.programs_of(&formats, settings.as_deref())?;
+            let files = compensate::program_files(&self.inner, &formats, settings.as_deref())?;
             compensate::write_program_files(&dir, &files)
         })
     }
@@ -246,7 +219,73 @@ fn array_or_name<'py>(
     float_array(py, obj, name, "(N, 3) or (N, 6)").map(Some)
 }
 
-/// ``deflex.compensate``'s engine call.
+/// The `path` argument: a built-in path's name or a G-code file, or an array of positions or
+/// poses in the part frame (`frame`) at `feed_m_s`.
+fn path_arg(
+    py: Python<'_>,
+    path: &Bound<'_, PyAny>,
+    frame: Frame,
+    feed_m_s: Option<f64>,
+) -> PyResult<PathSpec> {
+    Ok(match array_or_name(py, path, "path")? {
+        None => PathSpec::named(&path.extract::<PathBuf>()?.display().to_string()),
+        Some(a) => match a.shape.clone().as_slice() {
+            [r, c @ (3 | 6)] if *r >= 2 => PathSpec::Array {
+                values: a.into_vec(),
+                cols: *c,
+                frame,
+                feed_m_s,
+            },
+            other => {
+                return Err(shape_error(
+                    py,
+                    "path",
+                    "(N, 3) positions or (N, 6) poses [x, y, z, rx, ry, rz] with N ≥ 2".into(),
+                    other,
+                ));
+            }
+        },
+    })
+}
+
+/// The `wrench` argument: `"process"`, `"log:FILE"`, a log path or an array of wrenches.
+fn wrench_arg(py: Python<'_>, wrench: &Bound<'_, PyAny>) -> PyResult<WrenchSpec> {
+    if let Ok(text) = wrench.extract::<String>() {
+        return WrenchSpec::parse(&text).ok_or_else(|| {
+            to_py(
+                py,
+                Error::invalid(
+                    "wrench",
+                    format!(
+                        "expected \"process\", \"log:FILE\", a log path or an array of wrenches, got \"{text}\""
+                    ),
+                ),
+            )
+        });
+    }
+    if let Ok(p) = wrench.extract::<PathBuf>() {
+        return Ok(WrenchSpec::Log(p));
+    }
+    let w = float_array(py, wrench, "wrench", "(6,) or (N, 6)").map_err(|e| {
+        if e.is_instance_of::<pyo3::exceptions::PyTypeError>(py) {
+            type_error(
+                py,
+                "wrench",
+                "\"process\", \"log:FILE\", a log path or an array of wrenches",
+                wrench,
+            )
+        } else {
+            e
+        }
+    })?;
+    match w.shape.as_slice() {
+        [6] | [_, 6] => Ok(WrenchSpec::Array(w.into_vec())),
+        other => Err(shape_error(py, "wrench", "(6,) or (N, 6)".into(), other)),
+    }
+}
+
+/// ``deflex.compensate``'s engine call: the keywords checked in SI (the messages name the
+/// keyword), converted to the workflow's options (a log gives its wrenches as they are).
 #[pyfunction]
 #[pyo3(signature = (robot, path, wrench, frame, feed_m_s, twin_config, part_xyz_m, seed_q, length_m, max_segment_m, position_only, include_gravity, tolerance_m, max_iterations))]
 #[allow(clippy::too_many_arguments)]
@@ -269,69 +308,45 @@ pub fn _compensate(
 ) -> PyResult<PyCompensation> {
     let model = robot_arg(py, robot, "robot")?;
     let frame: Frame = frame.parse().map_err(|e| to_py(py, e))?;
-    let path_spec = match array_or_name(py, path, "path")? {
-        None => PathSpec::named(&path.extract::<PathBuf>()?.display().to_string()),
-        Some(a) => match a.shape.clone().as_slice() {
-            [r, c @ (3 | 6)] if *r >= 2 => PathSpec::Array {
-                values: a.into_vec(),
-                cols: *c,
-                frame,
-                feed_m_s,
-            },
-            other => {
-                return Err(shape_error(
-                    py,
-                    "path",
-                    "(N, 3) positions or (N, 6) poses [x, y, z, rx, ry, rz] with N ≥ 2".into(),
-                    other,
-                ));
-            }
-        },
-    };
-    let wrench_spec = if let Ok(text) = wrench.extract::<String>() {
-        WrenchSpec::parse(&text).ok_or_else(|| {
-            to_py(
-                py,
-                Error::invalid(
-                    "wrench",
-                    format!(
-                        "expected \"process\", \"log:FILE\", a log path or an array of wrenches, got \"{text}\""
-                    ),
-                ),
-            )
-        })?
-    } else if let Ok(p) = wrench.extract::<PathBuf>() {
-        WrenchSpec::Log(p)
-    } else {
-        let w = float_array(py, wrench, "wrench", "(6,) or (N, 6)").map_err(|e| {
-            if e.is_instance_of::<pyo3::exceptions::PyTypeError>(py) {
-                type_error(
-                    py,
-                    "wrench",
-                    "\"process\", \"log:FILE\", a log path or an array of wrenches",
-                    wrench,
-                )
-            } else {
-                e
-            }
-        })?;
-        match w.shape.as_slice() {
-            [6] | [_, 6] => WrenchSpec::Array(w.into_vec()),
-            other => return Err(shape_error(py, "wrench", "(6,) or (N, 6)".into(), other)),
+    let path_spec = path_arg(py, path, frame, feed_m_s)?;
+    let wrench_spec = wrench_arg(py, wrench)?;
+    let checked = || -> Result<Options, Error> {
+        if let Some(xyz) = part_xyz_m
+            && xyz.iter().any(|v| !v.is_finite() || v.abs() > 100.0)
+        {
+            return Err(Error::invalid(
+                "part_xyz_m",
+                format!("{xyz:?} is farther than 100 m"),
+            ));
         }
+        let length_mm = length_m
+            .map(|l| bounded("length_m", l, 1e-6, 1e3, "m").map(|l| l * 1e3))
+            .transpose()?;
+        let max_segment_mm = max_segment_m
+            .map(|m| bounded("max_segment_m", m, 1e-6, 10.0, "m").map(|m| m * 1e3))
+            .transpose()?;
+        bounded("tolerance_m", tolerance_m, 1e-9, 1e-3, "m")?;
+        if !(1..=200).contains(&max_iterations) {
+            return Err(Error::invalid(
+                "max_iterations",
+                format!("expected 1 ..= 200, got {max_iterations}"),
+            ));
+        }
+        Ok(Options {
+            twin_config,
+            part_xyz_mm: part_xyz_m.map(|xyz| xyz.map(|v| v * 1e3)),
+            seed_q,
+            length_mm,
+            max_segment_mm,
+            position_only,
+            include_gravity,
+            tolerance_m,
+            max_iterations,
+            log_forces: LogForces::Fixed,
+            ..Options::default()
+        })
     };
-    let options = options(
-        twin_config,
-        part_xyz_m,
-        seed_q,
-        length_m,
-        max_segment_m,
-        position_only,
-        include_gravity,
-        tolerance_m,
-        max_iterations,
-    )
-    .map_err(|e| to_py(py, e))?;
+    let options = checked().map_err(|e| to_py(py, e))?;
     let robot = RobotChoice { model, spec: None };
     let inner = run(py, move || {
         let setup = compensate::setup(
@@ -344,54 +359,4 @@ pub fn _compensate(
         compensate::compensate(setup, &mut |_| {})
     })?;
     Ok(PyCompensation { inner })
-}
-
-/// The workflow's options from the keywords, checked in SI (Python's messages name the
-/// keyword); a log gives its wrenches as they are.
-#[allow(clippy::too_many_arguments)]
-fn options(
-    twin_config: Option<PathBuf>,
-    part_xyz_m: Option<[f64; 3]>,
-    seed_q: Option<Vec<f64>>,
-    length_m: Option<f64>,
-    max_segment_m: Option<f64>,
-    position_only: bool,
-    include_gravity: bool,
-    tolerance_m: f64,
-    max_iterations: usize,
-) -> Result<Options, Error> {
-    if let Some(xyz) = part_xyz_m
-        && xyz.iter().any(|v| !v.is_finite() || v.abs() > 100.0)
-    {
-        return Err(Error::invalid(
-            "part_xyz_m",
-            format!("{xyz:?} is farther than 100 m"),
-        ));
-    }
-    let length_mm = length_m
-        .map(|l| bounded("length_m", l, 1e-6, 1e3, "m").map(|l| l * 1e3))
-        .transpose()?;
-    let max_segment_mm = max_segment_m
-        .map(|m| bounded("max_segment_m", m, 1e-6, 10.0, "m").map(|m| m * 1e3))
-        .transpose()?;
-    bounded("tolerance_m", tolerance_m, 1e-9, 1e-3, "m")?;
-    if !(1..=200).contains(&max_iterations) {
-        return Err(Error::invalid(
-            "max_iterations",
-            format!("expected 1 ..= 200, got {max_iterations}"),
-        ));
-    }
-    Ok(Options {
-        twin_config,
-        part_xyz_mm: part_xyz_m.map(|xyz| xyz.map(|v| v * 1e3)),
-        seed_q,
-        length_mm,
-        max_segment_mm,
-        position_only,
-        include_gravity,
-        tolerance_m,
-        max_iterations,
-        log_forces: LogForces::Fixed,
-        ..Options::default()
-    })
 }

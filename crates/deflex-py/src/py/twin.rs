@@ -2,6 +2,7 @@
 
 use super::convert::{json_to_py, make_log, run, to_numpy, to_py};
 use super::robot::{PyRobot, robot_arg};
+use deflex_app::OptionNames;
 use deflex_app::error::{Error, bounded};
 use deflex_app::twin::form::{CorrectionModel, FIXTURE_STIFFNESS_RANGE_N_M};
 use deflex_app::twin::{self, Correction, FormOptions, PathChoice, TwinRun};
@@ -24,19 +25,7 @@ impl PyTwinRun {
     #[getter]
     fn log<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let inner = &self.inner;
-        let columns = run(py, || Ok(twin::log_columns(inner)))?;
-        let rows = self.inner.run.log.rows.len();
-        let table = deflex_app::table::Table {
-            comments: vec![format!(
-                "SIMULATED deflex digital twin forming log (not a measurement). robot: {}; path: {}; seed: {}",
-                self.inner.run.log.robot, self.inner.run.log.path_name, self.inner.run.log.seed
-            )],
-            columns: columns
-                .into_iter()
-                .map(|(n, v)| (n.to_string(), deflex_app::table::Column::Number(v)))
-                .collect(),
-            rows,
-        };
+        let table = run(py, || Ok(twin::log_table(inner)))?;
         make_log(py, table)
     }
 
@@ -117,7 +106,8 @@ pub fn _form(
 ) -> PyResult<PyTwinRun> {
     let correction = Correction::from_str(correction).map_err(|e| to_py(py, e))?;
     let Ok(path) = PathChoice::from_str(&path.display().to_string());
-    twin::check_correction(correction, model.is_some()).map_err(|e| to_py(py, e.into()))?;
+    twin::check_correction(correction, model.is_some(), OptionNames::Python)
+        .map_err(|e| to_py(py, e))?;
     let model = match (correction, model) {
         (Correction::On, None) => {
             return Err(to_py(
@@ -158,6 +148,7 @@ pub fn _form(
         fixture_stiffness_n_m,
         correction,
         model,
+        names: OptionNames::Python,
     };
     let inner = run(py, || twin::form(&options))?;
     Ok(PyTwinRun { inner })

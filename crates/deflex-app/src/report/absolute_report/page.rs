@@ -5,19 +5,12 @@ use super::{
     ESTIMATE_HEADERS, HELDOUT_HEADERS, estimate_rows, heldout_rows, iteration_rows, json, plots,
     tables, text,
 };
-use crate::report::PageError;
-use crate::report::draw::write_page;
+use crate::report::draw::{write_page, write_text};
+use crate::report::{DrawError, PageError};
 use deflex_calibrate::geometry::campaign::Campaign;
 use deflex_calibrate::geometry::fit::FitResult;
-use deflex_plot::{HtmlReport, PlotError, html_escape};
+use deflex_plot::{HtmlReport, html_escape};
 use std::path::{Path, PathBuf};
-
-fn write_text(path: &Path, text: &str) -> Result<(), PlotError> {
-    deflex_files::write_atomic(path, text).map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
 /// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, `joint_maps.csv` (with
@@ -28,19 +21,14 @@ pub fn write_report(
     dir: &Path,
 ) -> Result<Vec<PathBuf>, PageError> {
     let page = PageError::of("elasto-geometric calibration report");
-    let io = |source: std::io::Error| {
-        page(PlotError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })
-    };
+    let io = |source| page(DrawError::io_on(dir)(source));
     let staging = deflex_files::AtomicDir::create(dir).map_err(io)?;
     let root = staging.path().to_path_buf();
     let mut files = Vec::new();
     // A table or JSON text that cannot be made is reported as the file it was for.
     let unwritable = |name: &str| {
         let (path, page) = (root.join(name), &page);
-        move |source: std::io::Error| page(PlotError::Io { path, source })
+        move |source: std::io::Error| page(DrawError::content_of(&path)(source))
     };
     let mut put = |name: &str, text: &str| -> Result<(), PageError> {
         write_text(&root.join(name), text).map_err(&page)?;

@@ -1,10 +1,11 @@
 //! Residual plots of an elasto-geometric fit: per axis, against each joint, a map over the
 //! measured volume, the held-out error distribution, and the joint-angle error maps.
 
+use crate::report::DrawError;
 use crate::report::draw::{line_plot, panels_plot, scatter_heatmap};
 use deflex_calibrate::geometry::campaign::{Campaign, ReadingKind};
 use deflex_calibrate::geometry::fit::{FitResult, Role, RowResidual};
-use deflex_plot::{PanelLayout, PlotError, PlotSpec, Series};
+use deflex_plot::{PanelLayout, PlotSpec, Series};
 use std::path::Path;
 
 /// Draw the plots into `dir`; returns `(file name, caption)` pairs.
@@ -12,7 +13,7 @@ pub fn draw(
     result: &FitResult,
     campaign: &Campaign,
     dir: &Path,
-) -> Result<Vec<(String, String)>, PlotError> {
+) -> Result<Vec<(String, String)>, DrawError> {
     let mut images = Vec::new();
     let absolute: Vec<&RowResidual> = result
         .residuals
@@ -69,7 +70,7 @@ fn fitted_residual_plots(
     campaign: &Campaign,
     fit: &[&&RowResidual],
     dir: &Path,
-) -> Result<Vec<(String, String)>, PlotError> {
+) -> Result<Vec<(String, String)>, DrawError> {
     let mut images = Vec::new();
     // Per axis, fit readings in file order.
     let panels: Vec<(PlotSpec, Vec<Series>)> = ["x", "y", "z"]
@@ -185,7 +186,7 @@ fn fitted_residual_plots(
 fn joint_maps_plot(
     maps: &deflex_calibrate::geometry::joint_maps::JointMaps,
     dir: &Path,
-) -> Result<(String, String), PlotError> {
+) -> Result<(String, String), DrawError> {
     let panels: Vec<(PlotSpec, Vec<Series>)> = maps
         .maps
         .iter()

@@ -5,6 +5,7 @@
 
 use super::Figure;
 use super::csv_files::column_tag;
+use crate::report::DrawError;
 use crate::report::draw::{
     cloud_3d, heatmap, line_plot, panels_plot, parity_plot, scatter_heatmap, timeline_plot,
 };
@@ -16,9 +17,7 @@ use crate::study::sensitivity::SensitivityResult;
 use crate::study::{BASELINE, IDENTIFIED};
 use deflex_calibrate::measurements::MeasurementRow;
 use deflex_control::CycleOutput;
-use deflex_plot::{
-    Cloud3, Lane, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotError, PlotSpec, Series,
-};
+use deflex_plot::{Cloud3, Lane, LineStyle, PALETTE, PanelLayout, Plot3Spec, PlotSpec, Series};
 use deflex_sim::FormingRun;
 use deflex_sim::twin::ClosedLoopRun;
 use deflex_telemetry::{FaultKind, Flags};
@@ -39,7 +38,7 @@ pub fn grid_figures(
     grid: &[MeasurementRow],
     loads_n: &[f64],
     predictions: &[(&'static str, Vec<[f64; 3]>)],
-) -> Result<Vec<Figure>, PlotError> {
+) -> Result<Vec<Figure>, DrawError> {
     let mut figures = Vec::new();
     for (index, &load) in loads_n.iter().enumerate() {
         let selected = crate::study::numbers::grid_rows(grid, load);
@@ -127,7 +126,7 @@ pub fn spiral_figures(
     rows: &[MeasurementRow],
     params: &deflex_sim::twin_campaign::SpiralParams,
     predictions: &[(&'static str, Vec<[f64; 3]>)],
-) -> Result<Vec<Figure>, PlotError> {
+) -> Result<Vec<Figure>, DrawError> {
     let mut figures = Vec::new();
     let x: Vec<f64> = rows.iter().map(|r| r.point_m[0] * 1e3).collect();
     let y: Vec<f64> = rows.iter().map(|r| r.point_m[1] * 1e3).collect();
@@ -192,7 +191,7 @@ pub fn forming_figures(
     out: &Path,
     open: &FormingRun,
     closed: &FormingRun,
-) -> Result<Vec<Figure>, PlotError> {
+) -> Result<Vec<Figure>, DrawError> {
     let mut figures = Vec::new();
     let runs = [("without correction", open), ("with correction", closed)];
     let cloud: Vec<Cloud3> = runs
@@ -340,7 +339,7 @@ const STATE_LANES: [(u32, &str); 8] = [
 /// The correction ξ the controller sent (position in mm, rotation in mrad when any rotation
 /// axis is used) and its state flags over time, for the corrected run, from its per-cycle log
 /// (`trace`, the rows of `controller_log.csv`).
-pub fn controller_figures(out: &Path, trace: &[CycleOutput]) -> Result<Vec<Figure>, PlotError> {
+pub fn controller_figures(out: &Path, trace: &[CycleOutput]) -> Result<Vec<Figure>, DrawError> {
     let mut figures = Vec::new();
     if trace.len() < 2 {
         return Ok(figures);
@@ -453,7 +452,7 @@ pub fn controller_figures(out: &Path, trace: &[CycleOutput]) -> Result<Vec<Figur
 /// Figs. 8 and 9 in one image: δp_x and δp_y against the points' position along x0, the
 /// SIMULATED measurement as markers, each model as a line with markers (identified solid,
 /// one-eDoF dashed, the robot file's model dotted).
-pub fn fig7_figure(path: &Path, points: &[Fig7Point]) -> Result<(), PlotError> {
+pub fn fig7_figure(path: &Path, points: &[Fig7Point]) -> Result<(), DrawError> {
     let x: Vec<f64> = points.iter().map(|p| p.x_mm).collect();
     let styles = [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted];
     let panel = |axis: usize, name: &str, figure: u32| {
@@ -501,7 +500,7 @@ pub fn contact_figure(
     path: &std::path::Path,
     runs: &StiffContactRuns,
     stiffness_n_m: f64,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     let series = |run: &FormingRun, label: &str| {
         deflex_plot::Series::line(
             label,
@@ -545,7 +544,7 @@ pub fn contact_figure(
 }
 
 /// The delay × model-scale heatmap of the improvement (PNG).
-pub fn sensitivity_heatmap(result: &SensitivityResult, path: &Path) -> Result<(), PlotError> {
+pub fn sensitivity_heatmap(result: &SensitivityResult, path: &Path) -> Result<(), DrawError> {
     if result.heatmap_delays_s.len() < 2 || result.heatmap_scales.len() < 2 {
         return Ok(());
     }
@@ -580,7 +579,7 @@ const DRAWN: [&str; 5] = [
 
 /// The path error along the path for each part, and one force ramp of the CAM part up close:
 /// all against the position along the desired path, so that the ways line up.
-pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>, PlotError> {
+pub fn compensation_figures(out: &Path, runs: &[PartRuns]) -> Result<Vec<Figure>, DrawError> {
     let mut figures = Vec::new();
     for (i, part) in runs.iter().enumerate() {
         let tag = super::csv_files::part_tag(i);

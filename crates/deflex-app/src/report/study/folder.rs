@@ -2,24 +2,22 @@
 //! figures ([`super::figures`]), `results.md` ([`super::readme`]) and the page (`index.html`).
 
 use super::{StudyFigures, csv_files, figures, page, readme};
+use crate::report::DrawError;
 use crate::report::PageError;
+use crate::report::draw::write_text;
 use crate::report::text_table::table_csv;
 use crate::study::Study;
 use deflex_calibrate::measurements::format_rows_for;
 use deflex_model::robot_to_toml;
-use deflex_plot::PlotError;
 use deflex_sim::twin_campaign::campaign_text;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Write the study into the folder `out_dir`, whole or not at all: the folder is built aside and
 /// swapped in when complete (an existing folder is replaced only then, and kept as it was when
 /// anything fails).
 pub fn write_study(study: &Study, out_dir: &Path) -> Result<(), PageError> {
     let page_error = PageError::of("study report");
-    let io = |source| PlotError::Io {
-        path: out_dir.to_path_buf(),
-        source,
-    };
+    let io = DrawError::io_on(out_dir);
     let building = deflex_files::AtomicDir::create(out_dir)
         .map_err(io)
         .map_err(&page_error)?;
@@ -27,16 +25,8 @@ pub fn write_study(study: &Study, out_dir: &Path) -> Result<(), PageError> {
     building.commit().map_err(io).map_err(&page_error)
 }
 
-/// Write a text file whole or not at all.
-fn write_text(path: &Path, text: &str) -> Result<(), PlotError> {
-    deflex_files::write_atomic(path, text).map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
 /// Every file of the study, into the existing folder `out`.
-fn write_into(study: &Study, out: &Path) -> Result<(), PlotError> {
+fn write_into(study: &Study, out: &Path) -> Result<(), DrawError> {
     let mut figures = StudyFigures::default();
     write_calibration_files(study, out)?;
     write_validation_files(study, out, &mut figures)?;
@@ -49,10 +39,8 @@ fn write_into(study: &Study, out: &Path) -> Result<(), PlotError> {
     }
     figures.compensation = figures::compensation_figures(out, &study.compensation_runs)?;
     let s = &study.summary;
-    let json = serde_json::to_string_pretty(s).map_err(|e| PlotError::InvalidInput {
-        path: out.join("summary.json"),
-        reason: e.to_string(),
-    })?;
+    let json = serde_json::to_string_pretty(s)
+        .map_err(DrawError::content_of(&out.join("summary.json")))?;
     write_text(&out.join("summary.json"), &json)?;
     write_text(&out.join("results.md"), &readme::results_markdown(s))?;
     write_text(
@@ -77,15 +65,18 @@ fn write_into(study: &Study, out: &Path) -> Result<(), PlotError> {
 }
 
 /// The plan, the campaign, the two models, the search and the stiffnesses.
-fn write_calibration_files(study: &Study, out: &Path) -> Result<(), PlotError> {
+fn write_calibration_files(study: &Study, out: &Path) -> Result<(), DrawError> {
     let seed = study.summary.seed;
     write_text(
         &out.join("plan.csv"),
         &format_rows_for(&study.nominal, &study.plan.rows, &[]),
     )?;
-    write_text(
+    write_campaign(
+        study,
         &out.join("campaign.csv"),
-        &campaign_file(study, &study.campaign, "calibration campaign", seed)?,
+        &study.campaign,
+        "calibration campaign",
+        seed,
     )?;
     write_text(
         &out.join("identified.toml"),
@@ -101,10 +92,7 @@ fn write_calibration_files(study: &Study, out: &Path) -> Result<(), PlotError> {
             &crate::report::calibration_tables::ITERATION_HEADERS,
             &crate::report::calibration_tables::iteration_rows(&study.search.steps),
         )
-        .map_err(|source| PlotError::Io {
-            path: out.join("search_iterations.csv"),
-            source,
-        })?,
+        .map_err(DrawError::content_of(&out.join("search_iterations.csv")))?,
     )?;
     write_text(
         &out.join("stiffness.csv"),
@@ -112,17 +100,18 @@ fn write_calibration_files(study: &Study, out: &Path) -> Result<(), PlotError> {
     )
 }
 
-/// A campaign of the twin in the measurement format (`# SIMULATED …` header).
-fn campaign_file(
+/// A campaign of the twin written to `path` in the measurement format (`# SIMULATED …`
+/// header).
+fn write_campaign(
     study: &Study,
+    path: &Path,
     rows: &[deflex_calibrate::measurements::MeasurementRow],
     what: &str,
     seed: u64,
-) -> Result<String, PlotError> {
-    campaign_text(&study.cell, rows, what, seed, None).map_err(|e| PlotError::InvalidInput {
-        path: PathBuf::from(what),
-        reason: e.to_string(),
-    })
+) -> Result<(), DrawError> {
+    let text =
+        campaign_text(&study.cell, rows, what, seed, None).map_err(DrawError::content_of(path))?;
+    write_text(path, &text)
 }
 
 /// Figs. 7–9, the grid and the spiral: measurements, predictions and figures.
@@ -130,7 +119,7 @@ fn write_validation_files(
     study: &Study,
     out: &Path,
     figures: &mut StudyFigures,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     let seed = study.summary.seed;
     if !study.summary.fig7.is_empty() {
         write_text(
@@ -147,9 +136,12 @@ fn write_validation_files(
                 .to_string(),
         ));
     }
-    write_text(
+    write_campaign(
+        study,
         &out.join("grid.csv"),
-        &campaign_file(study, &study.grid, "validation grid", seed.wrapping_add(1))?,
+        &study.grid,
+        "validation grid",
+        seed.wrapping_add(1),
     )?;
     write_text(
         &out.join("grid_predictions.csv"),
@@ -161,9 +153,12 @@ fn write_validation_files(
         &study.grid_params.loads_n,
         &study.grid_predictions,
     )?;
-    write_text(
+    write_campaign(
+        study,
         &out.join("spiral.csv"),
-        &campaign_file(study, &study.spiral, "spiral", seed.wrapping_add(2))?,
+        &study.spiral,
+        "spiral",
+        seed.wrapping_add(2),
     )?;
     write_text(
         &out.join("spiral_predictions.csv"),
@@ -183,7 +178,7 @@ fn write_forming_files(
     study: &Study,
     out: &Path,
     figures: &mut StudyFigures,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     crate::report::forming_run::write_forming_run(&study.open, &out.join("forming_open"))?;
     crate::report::forming_run::write_forming_run(
         &study.closed.forming,
@@ -203,7 +198,7 @@ fn write_contact_and_sensitivity(
     study: &Study,
     out: &Path,
     figures: &mut StudyFigures,
-) -> Result<(), PlotError> {
+) -> Result<(), DrawError> {
     let figure = out.join("stiff_contact_force.png");
     figures::contact_figure(&figure, &study.plunge, 1e7)?;
     figures.contact.push((

@@ -2,13 +2,14 @@
 //! labelled, the paper's numbers beside ours. One function per section.
 
 use super::Figure;
+use crate::report::DrawError;
 use crate::report::draw::write_page;
 use crate::study::compensation::CompensationStudy;
 use crate::study::contact::StiffContactNumbers;
 use crate::study::{BASELINE, DemoSummary, IDENTIFIED, paper};
 use deflex_calibrate::stiffness::SearchResult;
 use deflex_calibrate::stiffness::plan::Plan;
-use deflex_plot::{FileLink, HtmlReport, PlotError};
+use deflex_plot::{FileLink, HtmlReport};
 use std::path::Path;
 
 /// What the page shows.
@@ -170,7 +171,7 @@ fn data_files(out: &Path, more: &[(String, String)]) -> Vec<FileLink> {
 }
 
 /// Write `index.html` into `out`.
-pub(crate) fn write(out: &Path, page: &Page) -> Result<(), PlotError> {
+pub(crate) fn write(out: &Path, page: &Page) -> Result<(), DrawError> {
     let s = page.summary;
     let f = page.figures;
     let mut html = HtmlReport::new(format!(

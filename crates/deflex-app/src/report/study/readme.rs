@@ -108,27 +108,30 @@ pub fn results_table(summary: &DemoSummary) -> String {
         "deflex (SIMULATED cell)".into(),
     );
     row("---", "---", "---".into());
-    for (i, load) in ["600", "1100"].iter().enumerate() {
-        row(
-            &format!("grid, one eDoF per joint: max / RMS δz error, {load} N"),
-            &format!(
-                "{:.2} / {:.2} mm",
-                paper::ONE_EDOF_MAX_MM[i],
-                paper::ONE_EDOF_RMS_MM[i]
-            ),
-            grid(summary, BASELINE, load, false),
-        );
-    }
-    for (i, load) in ["600", "1100"].iter().enumerate() {
-        row(
-            &format!("grid, identified model: max / RMS δz error, {load} N"),
-            &format!(
-                "{:.2} / {:.2} mm",
-                paper::MODEL_MAX_MM[i],
-                paper::MODEL_RMS_MM[i]
-            ),
-            grid(summary, IDENTIFIED, load, true),
-        );
+    let models = [
+        (
+            BASELINE,
+            "one eDoF per joint",
+            paper::ONE_EDOF_MAX_MM,
+            paper::ONE_EDOF_RMS_MM,
+            false,
+        ),
+        (
+            IDENTIFIED,
+            "identified model",
+            paper::MODEL_MAX_MM,
+            paper::MODEL_RMS_MM,
+            true,
+        ),
+    ];
+    for (model, label, max_mm, rms_mm, identified) in models {
+        for (i, load) in ["600", "1100"].iter().enumerate() {
+            row(
+                &format!("grid, {label}: max / RMS δz error, {load} N"),
+                &format!("{:.2} / {:.2} mm", max_mm[i], rms_mm[i]),
+                grid(summary, model, load, identified),
+            );
+        }
     }
     let (o, k) = (&summary.forming_open, &summary.forming_closed);
     row(

@@ -257,17 +257,12 @@ fn offline(
         ..CompensationOptions::default()
     };
     let c = compensate(model, tcp, seed_q, source, &options, &mut |_| {})?;
-    if c.failure_count() > 0 {
-        let (i, f) = c
-            .failures()
-            .next()
-            .map(|(i, f)| (i, f.code()))
-            .unwrap_or_default();
+    if let Some((first, failure)) = c.failures().next() {
         return Err(DemoError::Uncompensated {
             path: tcp.name().to_string(),
             count: c.failure_count(),
-            first: i,
-            code: f,
+            first,
+            code: failure.code(),
         });
     }
     Ok((c, clock.elapsed().as_secs_f64()))

@@ -2,6 +2,7 @@
 //! `deflex-plot`, written whole or not at all, every error naming the file. (The drawing itself
 //! is tested in deflex-plot's tests.)
 
+use deflex_app::report::DrawError;
 use deflex_app::report::draw::{heatmap, line_plot, write_page};
 use deflex_plot::{HtmlReport, PlotError, PlotSpec, Series};
 use std::path::{Path, PathBuf};
@@ -115,17 +116,20 @@ fn format_and_io_errors_name_the_file() {
     let dir = temp_dir("fmt");
     let spec = PlotSpec::new("t", "x", "y");
     let e = line_plot(&dir.join("plot.jpg"), &spec, &sine_series()).unwrap_err();
-    assert!(matches!(e, PlotError::UnsupportedFormat { .. }), "{e}");
+    assert!(
+        matches!(e, DrawError::Plot(PlotError::UnsupportedFormat { .. })),
+        "{e}"
+    );
     assert!(e.to_string().contains("plot.jpg"));
     let missing = dir.join("no-such-dir").join("plot.png");
     let e = line_plot(&missing, &spec, &sine_series()).unwrap_err();
-    assert!(matches!(e, PlotError::Draw { .. }), "{e}");
+    assert!(matches!(e, DrawError::Plot(PlotError::Draw { .. })), "{e}");
     assert!(e.to_string().contains("no-such-dir"), "{e}");
     // An output that is not a file deflex may replace is refused before anything is written.
     let folder = dir.join("folder.png");
     std::fs::create_dir(&folder).unwrap();
     let e = line_plot(&folder, &spec, &sine_series()).unwrap_err();
-    assert!(matches!(e, PlotError::Io { .. }), "{e}");
+    assert!(matches!(e, DrawError::Io(_)), "{e}");
     assert!(e.to_string().contains("folder.png"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -171,7 +175,7 @@ fn missing_image_error_names_the_file() {
     r.image("/nonexistent/deflex/fig.png", "c");
     let out = dir.join("index.html");
     let e = write_page(&r, &out).unwrap_err();
-    assert!(matches!(e, PlotError::Io { .. }), "{e}");
+    assert!(matches!(e, DrawError::Plot(PlotError::Io { .. })), "{e}");
     assert!(e.to_string().contains("/nonexistent/deflex/fig.png"), "{e}");
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
