@@ -17,7 +17,7 @@ pub const MAX_TABLE_COLUMNS: usize = 4096;
 
 /// One column.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Column {
+pub enum TableColumn {
     /// Every cell a number (empty cells NaN).
     Number(Vec<f64>),
     /// Text.
@@ -26,16 +26,16 @@ pub enum Column {
 
 /// A table read from CSV.
 #[derive(Clone, Debug, PartialEq, Default)]
-pub struct Table {
+pub struct CsvTable {
     /// Header comment lines, without the leading `#` and space.
     pub comments: Vec<String>,
     /// Column names and values, in file order.
-    pub columns: Vec<(String, Column)>,
+    pub columns: Vec<(String, TableColumn)>,
     /// Number of rows.
     pub rows: usize,
 }
 
-impl Table {
+impl CsvTable {
     /// Whether a header comment says the data is SIMULATED.
     pub fn simulated(&self) -> bool {
         self.comments.iter().any(|c| c.contains("SIMULATED"))
@@ -49,14 +49,14 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Read a table file: a regular file of at most [`MAX_TABLE_BYTES`], counted while reading
 /// ([`deflex_files::read_bounded`]).
-pub fn read(path: &Path) -> Result<Table> {
+pub fn read(path: &Path) -> Result<CsvTable> {
     let text = deflex_files::read_bounded(path, MAX_TABLE_BYTES)
         .map_err(|e| e.reported_as::<Error>("a table"))?;
     parse(&text, &path.display().to_string())
 }
 
 /// Parse CSV text; `origin` names it in errors.
-pub fn parse(text: &str, origin: &str) -> Result<Table> {
+pub fn parse(text: &str, origin: &str) -> Result<CsvTable> {
     let comments: Vec<String> = text
         .lines()
         .take_while(|l| l.trim_start().starts_with('#') || l.trim().is_empty())
@@ -111,13 +111,13 @@ pub fn parse(text: &str, origin: &str) -> Result<Table> {
                 })
                 .collect();
             let column = match numbers {
-                Some(n) => Column::Number(n),
-                None => Column::Text(values),
+                Some(n) => TableColumn::Number(n),
+                None => TableColumn::Text(values),
             };
             (name.to_string(), column)
         })
         .collect();
-    Ok(Table {
+    Ok(CsvTable {
         comments,
         columns,
         rows,

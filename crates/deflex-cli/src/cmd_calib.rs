@@ -9,7 +9,7 @@ use clap::Args;
 use deflex_app::OptionNames;
 use deflex_app::calibrate::{
     self, CalibrateOptions, CriterionChoice, DataCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M,
-    Source, StructureChoice,
+    MeasurementSource, StructureChoice,
 };
 use std::path::PathBuf;
 
@@ -186,7 +186,7 @@ pub fn calibrate(args: CalibrateArgs, json_output: bool) -> CommandResult {
             }
         }
     };
-    let source = Source::File(args.data.clone());
+    let source = MeasurementSource::File(args.data.clone());
     let result = calibrate::calibrate(&start, &source, &options, OptionNames::Cli, &mut progress);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
@@ -229,7 +229,7 @@ pub fn validate(args: ValidateArgs, json_output: bool) -> CommandResult {
         args.ignore_fk_check,
         &args.ignore_column,
     )?;
-    let source = Source::File(args.data.clone());
+    let source = MeasurementSource::File(args.data.clone());
     let v = calibrate::validate(&model, baseline.as_ref(), &source, &check, OptionNames::Cli)?;
     let files = match &args.out {
         Some(dir) => calibrate::write_validation_report(&v, dir)?,

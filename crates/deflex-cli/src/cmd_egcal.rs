@@ -6,7 +6,7 @@
 use crate::args::{check_flag, print_json};
 use crate::error::{CommandResult, UsageError};
 use clap::{Args, Subcommand};
-use deflex_app::calibrate::Source;
+use deflex_app::calibrate::MeasurementSource;
 use deflex_app::calibrate_geometry::{
     self as app, CvBy, DEFAULT_ORIENTATION_SIGMA_RAD, GeometryOptions, HeldOutProtocol,
     ImportRequest, OptionNames,
@@ -163,8 +163,8 @@ pub fn import(command: ImportCommand, json_output: bool) -> CommandResult {
 }
 
 /// The files of a repeatable flag as the workflow takes them.
-fn files(paths: Vec<PathBuf>) -> Vec<Source> {
-    paths.into_iter().map(Source::File).collect()
+fn files(paths: Vec<PathBuf>) -> Vec<MeasurementSource> {
+    paths.into_iter().map(MeasurementSource::File).collect()
 }
 
 /// Runs `deflex calibrate-geometry`.
@@ -223,7 +223,7 @@ pub fn predict(args: PredictArgs, json_output: bool) -> CommandResult {
     let model = app::load_calibrated(&args.robot)?;
     let prediction = app::predict(
         &model,
-        &Source::File(args.data),
+        &MeasurementSource::File(args.data),
         args.fit_setup,
         &args.ignore_column,
     )?;

@@ -8,7 +8,7 @@ use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
 use deflex_app::calibrate::plan::{
     self, BasePoint, Floor, LoadKind, MAX_PLAN_FORCE_N, MAX_USER_POINTS, PlanOptions, PointSet,
-    Table, TableOption, parse_directions, parse_point_flag,
+    TableOption, WorkTable, parse_directions, parse_point_flag,
 };
 use deflex_app::calibrate::{LoadChoice, PointsChoice};
 use deflex_model::Robot;
@@ -157,7 +157,7 @@ fn plan_options(args: &PlanArgs, nominal: &Robot) -> Result<PlanOptions, CliErro
         }
         (Some(text), false) => {
             let [x0, x1, y0, y1, top] = fixed::<5>("--table", text)?;
-            TableOption::At(Table {
+            TableOption::At(WorkTable {
                 x_m: [x0, x1],
                 y_m: [y0, y1],
                 top_z_m: top,

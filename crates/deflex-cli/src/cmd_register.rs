@@ -6,7 +6,7 @@
 use crate::args::{check_flag, print_json};
 use crate::error::CommandResult;
 use clap::Args;
-use deflex_app::calibrate::Source;
+use deflex_app::calibrate::MeasurementSource;
 use deflex_app::calibrate_geometry::{
     self as app, DEFAULT_ORIENTATION_SIGMA_RAD, OptionNames, RegisterRequest,
 };
@@ -69,7 +69,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
         ignored_columns: args.ignore_column,
         names: OptionNames::Cli,
     };
-    let registration = app::register(model, &Source::File(args.data), &request)?;
+    let registration = app::register(model, &MeasurementSource::File(args.data), &request)?;
     app::save_registration(&registration, &args.out)?;
     if json_output {
         print_json(&app::registration_json(&registration, Some(&args.out)));

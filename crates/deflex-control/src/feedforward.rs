@@ -169,7 +169,7 @@ impl Default for FeedForwardConfig {
 
 /// A quantity of a feed-forward table, named in errors (the runtime names the file's column).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TableColumn {
+pub enum FeedForwardColumn {
     /// Arc length along the desired path (m).
     ArcLength,
     /// Time at the programmed feeds (s).
@@ -184,15 +184,15 @@ pub enum TableColumn {
 
 const AXIS_NAMES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
-impl std::fmt::Display for TableColumn {
+impl std::fmt::Display for FeedForwardColumn {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let axis = |i: &usize| AXIS_NAMES.get(*i).copied().unwrap_or("?");
         match self {
-            TableColumn::ArcLength => f.write_str("arc length"),
-            TableColumn::Time => f.write_str("time"),
-            TableColumn::CommandedPosition(i) => write!(f, "commanded position {}", axis(i)),
-            TableColumn::Deflection(i) => write!(f, "deflection {}", axis(i)),
-            TableColumn::Compensation(i) => write!(f, "compensation {}", axis(i)),
+            FeedForwardColumn::ArcLength => f.write_str("arc length"),
+            FeedForwardColumn::Time => f.write_str("time"),
+            FeedForwardColumn::CommandedPosition(i) => write!(f, "commanded position {}", axis(i)),
+            FeedForwardColumn::Deflection(i) => write!(f, "deflection {}", axis(i)),
+            FeedForwardColumn::Compensation(i) => write!(f, "compensation {}", axis(i)),
         }
     }
 }
@@ -213,7 +213,7 @@ pub enum FeedForwardError {
         /// The point.
         point: usize,
         /// Arc length or time.
-        column: TableColumn,
+        column: FeedForwardColumn,
         /// Its value.
         value: f64,
         /// The previous point's value.
@@ -225,7 +225,7 @@ pub enum FeedForwardError {
         /// The point.
         point: usize,
         /// The quantity.
-        column: TableColumn,
+        column: FeedForwardColumn,
         /// Its value.
         value: f64,
         /// The bound on its magnitude.

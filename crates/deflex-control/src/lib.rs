@@ -56,8 +56,8 @@ pub use controller::{
 };
 pub use estimate::{DeflectionEstimate, tcp_deflection_in_base};
 pub use feedforward::{
-    FeedForward, FeedForwardConfig, FeedForwardError, FeedForwardMode, FeedForwardPoint,
-    FeedForwardTable, PathIndex, TableColumn,
+    FeedForward, FeedForwardColumn, FeedForwardConfig, FeedForwardError, FeedForwardMode,
+    FeedForwardPoint, FeedForwardTable, PathIndex,
 };
 pub use limiter::{Limiter, LimiterConfig};
 pub use pid::{Pid, PidGains};

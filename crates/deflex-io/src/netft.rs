@@ -10,10 +10,10 @@
 //!   i32 **counts**. Buffered mode packs several records in one datagram.
 //!
 //! Counts are converted with the calibration's counts per force and counts
-//! per torque ([`Calibration`], default 1 000 000 counts per N and per N·m,
+//! per torque ([`NetFtCalibration`], default 1 000 000 counts per N and per N·m,
 //! the Net F/T factory setting), which can be read from the sensor's
 //! `/netftapi2.xml` page (`cfgcpf`, `cfgcpt`, with units `scfgfu`,
-//! `scfgtu`) by [`Calibration::from_netftapi2_xml`] — a pure parser, the
+//! `scfgtu`) by [`NetFtCalibration::from_netftapi2_xml`] — a pure parser, the
 //! HTTP fetch is the caller's business. The client tracks `rdt_sequence`
 //! gaps ([`SequenceTracker`]) and status faults ([`NetFtStats`]).
 
@@ -176,16 +176,16 @@ pub fn decode_records(b: &[u8]) -> Result<impl Iterator<Item = RdtRecord> + '_, 
 
 /// Conversion between counts and SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Calibration {
+pub struct NetFtCalibration {
     /// Counts per newton.
     pub counts_per_force: f64,
     /// Counts per newton-metre.
     pub counts_per_torque: f64,
 }
 
-impl Default for Calibration {
+impl Default for NetFtCalibration {
     fn default() -> Self {
-        Calibration {
+        NetFtCalibration {
             counts_per_force: DEFAULT_COUNTS,
             counts_per_torque: DEFAULT_COUNTS,
         }
@@ -220,7 +220,7 @@ pub fn torque_unit_to_newton_metre(u: &str) -> Option<f64> {
     })
 }
 
-impl Calibration {
+impl NetFtCalibration {
     /// Counts → `[Fx Fy Fz]` N, `[Tx Ty Tz]` N·m.
     pub fn to_wrench(&self, counts: &[i32; 6]) -> Wrench {
         let mut w = Wrench::zeros();
@@ -287,7 +287,7 @@ impl Calibration {
         if !(cpf > 0.0 && cpt > 0.0) {
             return Err(bad("counts per unit must be positive"));
         }
-        Ok(Calibration {
+        Ok(NetFtCalibration {
             counts_per_force: cpf / fu,
             counts_per_torque: cpt / tu,
         })
@@ -349,7 +349,7 @@ pub struct NetFtStats {
 pub struct NetFtClient {
     ep: UdpEndpoint,
     sensor: SocketAddr,
-    calibration: Calibration,
+    calibration: NetFtCalibration,
     rx: [u8; 1500],
     stats: NetFtStats,
     buffered: bool,
@@ -360,7 +360,7 @@ impl NetFtClient {
     pub fn new(
         local: impl ToSocketAddrs,
         sensor: SocketAddr,
-        calibration: Calibration,
+        calibration: NetFtCalibration,
     ) -> Result<Self, LinkError> {
         let mut ep = UdpEndpoint::bind(local, P)?;
         ep.set_peer(sensor);
@@ -382,7 +382,7 @@ impl NetFtClient {
         self.stats
     }
     /// Calibration in use.
-    pub fn calibration(&self) -> Calibration {
+    pub fn calibration(&self) -> NetFtCalibration {
         self.calibration
     }
     /// Use buffered mode (`0x0003`) instead of real-time on `start`.
@@ -453,7 +453,7 @@ impl ForceSensorLink for NetFtClient {
 #[derive(Debug)]
 pub struct NetFtSensorServer {
     ep: UdpEndpoint,
-    calibration: Calibration,
+    calibration: NetFtCalibration,
     client: Option<SocketAddr>,
     remaining: Option<u32>,
     rdt_sequence: u32,
@@ -464,7 +464,10 @@ pub struct NetFtSensorServer {
 
 impl NetFtSensorServer {
     /// Binds to `local` (port 49152 on a real sensor; `127.0.0.1:0` in tests).
-    pub fn bind(local: impl ToSocketAddrs, calibration: Calibration) -> Result<Self, LinkError> {
+    pub fn bind(
+        local: impl ToSocketAddrs,
+        calibration: NetFtCalibration,
+    ) -> Result<Self, LinkError> {
         Ok(NetFtSensorServer {
             ep: UdpEndpoint::bind(local, P)?,
             calibration,

@@ -87,7 +87,7 @@ pub fn fletcher16(data: &[u8]) -> u16 {
 
 /// Common header fields.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Header {
+pub struct StaubliHeader {
     /// Flags.
     pub flags: u16,
     /// Sender sequence number.
@@ -102,7 +102,7 @@ pub struct Header {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct CorrectionMsg {
     /// Header.
-    pub header: Header,
+    pub header: StaubliHeader,
     /// `[dx, dy, dz]` m, `[rx, ry, rz]` rad, Stäubli X-Y'-Z'' angles
     /// ([`deflex_model::conventions::staubli_rxryrz_rad`]).
     pub values: [f64; 6],
@@ -112,7 +112,7 @@ pub struct CorrectionMsg {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StateMsg {
     /// Header.
-    pub header: Header,
+    pub header: StaubliHeader,
     /// Joint positions (rad).
     pub q_rad: [f64; 6],
     /// Status word.
@@ -134,7 +134,7 @@ pub fn wire_to_correction(v: &[f64; 6]) -> Correction {
     }
 }
 
-fn put_header(out: &mut [u8], ty: u8, h: &Header) {
+fn put_header(out: &mut [u8], ty: u8, h: &StaubliHeader) {
     out[0..4].copy_from_slice(&MAGIC);
     out[4] = VERSION;
     out[5] = ty;
@@ -206,7 +206,7 @@ fn f64_at(b: &[u8], i: usize) -> f64 {
     f64::from_le_bytes(a)
 }
 
-fn check(buf: &[u8], ty: u8, len: usize) -> Result<Header, LinkError> {
+fn check(buf: &[u8], ty: u8, len: usize) -> Result<StaubliHeader, LinkError> {
     if buf.len() < len {
         return Err(LinkError::Truncated {
             protocol: P,
@@ -235,7 +235,7 @@ fn check(buf: &[u8], ty: u8, len: usize) -> Result<Header, LinkError> {
             computed: computed.into(),
         });
     }
-    let h = Header {
+    let h = StaubliHeader {
         flags: u16::from_le_bytes([buf[6], buf[7]]),
         seq: u32_at(buf, 8),
         ack: u32_at(buf, 12),
@@ -333,7 +333,7 @@ impl StaubliLink {
         }
         let seq = self.seq.wrapping_add(1);
         let m = CorrectionMsg {
-            header: Header {
+            header: StaubliHeader {
                 flags,
                 seq,
                 ack: self.last_state_seq,
@@ -445,7 +445,7 @@ impl RobotSideLink for StaubliRobotEndpoint {
         let n = s.joint_count.min(6);
         q_rad[..n].copy_from_slice(&s.q_rad[..n]);
         let m = StateMsg {
-            header: Header {
+            header: StaubliHeader {
                 flags: 0,
                 seq: s.cycle_id as u32,
                 ack: self.last_corr_seq,

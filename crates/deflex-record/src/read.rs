@@ -6,10 +6,10 @@ use crate::{ReadError, SessionRecord};
 use deflex_files::FileIoError;
 use deflex_telemetry::FaultKind;
 use deflex_telemetry::ros::{
-    DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
-    WrenchStamped,
+    DiagnosticArrayMsg, JointStateMsg, PoseStampedMsg, RosMessage, TwistStampedMsg,
+    Vector3StampedMsg, WrenchStampedMsg,
 };
-use deflex_telemetry::{CycleSample, LATE_UNKNOWN, Source};
+use deflex_telemetry::{CycleSample, LATE_UNKNOWN, StreamSource};
 use nalgebra::{Quaternion, UnitQuaternion};
 use std::io::Read;
 use std::path::Path;
@@ -49,18 +49,18 @@ pub struct RecordingSummary {
 
 /// The channels the reader decodes, by the index used below.
 const KNOWN: [(&str, &str); 12] = [
-    (ch::JOINT_STATES, JointState::NAME),
-    (ch::WRENCH_RAW, WrenchStamped::NAME),
-    (ch::WRENCH_SENSOR, WrenchStamped::NAME),
-    (ch::WRENCH_TCP, WrenchStamped::NAME),
-    (ch::TCP_POSE, PoseStamped::NAME),
-    (ch::PROGRAM_POSE, PoseStamped::NAME),
-    (ch::DEFLECTION, TwistStamped::NAME),
-    (ch::CORRECTION, TwistStamped::NAME),
-    (ch::ERROR, TwistStamped::NAME),
-    (ch::FEEDFORWARD, TwistStamped::NAME),
-    (ch::PATH_ERROR, Vector3Stamped::NAME),
-    (ch::DIAGNOSTICS, DiagnosticArray::NAME),
+    (ch::JOINT_STATES, JointStateMsg::NAME),
+    (ch::WRENCH_RAW, WrenchStampedMsg::NAME),
+    (ch::WRENCH_SENSOR, WrenchStampedMsg::NAME),
+    (ch::WRENCH_TCP, WrenchStampedMsg::NAME),
+    (ch::TCP_POSE, PoseStampedMsg::NAME),
+    (ch::PROGRAM_POSE, PoseStampedMsg::NAME),
+    (ch::DEFLECTION, TwistStampedMsg::NAME),
+    (ch::CORRECTION, TwistStampedMsg::NAME),
+    (ch::ERROR, TwistStampedMsg::NAME),
+    (ch::FEEDFORWARD, TwistStampedMsg::NAME),
+    (ch::PATH_ERROR, Vector3StampedMsg::NAME),
+    (ch::DIAGNOSTICS, DiagnosticArrayMsg::NAME),
 ];
 
 /// The state carried from one `/diagnostics` message to the following cycles.
@@ -205,11 +205,11 @@ fn apply(
 ) -> Result<Applied, deflex_telemetry::ros::CdrError> {
     match topic {
         ch::JOINT_STATES => {
-            let m: JointState = deflex_telemetry::ros::decode(data)?;
+            let m: JointStateMsg = deflex_telemetry::ros::decode(data)?;
             sample.set_q(&m.position);
         }
         ch::WRENCH_RAW | ch::WRENCH_SENSOR | ch::WRENCH_TCP => {
-            let m: WrenchStamped = deflex_telemetry::ros::decode(data)?;
+            let m: WrenchStampedMsg = deflex_telemetry::ros::decode(data)?;
             let w = &m.wrench;
             let v = [
                 w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z,
@@ -221,7 +221,7 @@ fn apply(
             }
         }
         ch::TCP_POSE => {
-            let m: PoseStamped = deflex_telemetry::ros::decode(data)?;
+            let m: PoseStampedMsg = deflex_telemetry::ros::decode(data)?;
             let p = m.pose.position;
             sample.tcp_position_m = [p.x, p.y, p.z];
             let o = m.pose.orientation;
@@ -230,10 +230,10 @@ fn apply(
         }
         ch::PROGRAM_POSE => {
             // Derived on reading (corrected TCP − ξ); decoded only to check it.
-            let _: PoseStamped = deflex_telemetry::ros::decode(data)?;
+            let _: PoseStampedMsg = deflex_telemetry::ros::decode(data)?;
         }
         ch::DEFLECTION | ch::CORRECTION | ch::ERROR | ch::FEEDFORWARD => {
-            let m: TwistStamped = deflex_telemetry::ros::decode(data)?;
+            let m: TwistStampedMsg = deflex_telemetry::ros::decode(data)?;
             let t = &m.twist;
             let v = [
                 t.linear.x,
@@ -251,12 +251,12 @@ fn apply(
             }
         }
         ch::PATH_ERROR => {
-            let m: Vector3Stamped = deflex_telemetry::ros::decode(data)?;
+            let m: Vector3StampedMsg = deflex_telemetry::ros::decode(data)?;
             sample.truth_error_m = m.vector.to_array();
             return Ok(Applied::PathError);
         }
         _ => {
-            let m: DiagnosticArray = deflex_telemetry::ros::decode(data)?;
+            let m: DiagnosticArrayMsg = deflex_telemetry::ros::decode(data)?;
             if let Some(status) = m.status.iter().find(|s| s.name == ch::STATUS_NAME) {
                 apply_diagnostics(sample, status);
                 return Ok(Applied::Diagnostics);
@@ -266,7 +266,10 @@ fn apply(
     Ok(Applied::Other)
 }
 
-fn apply_diagnostics(sample: &mut CycleSample, status: &deflex_telemetry::ros::DiagnosticStatus) {
+fn apply_diagnostics(
+    sample: &mut CycleSample,
+    status: &deflex_telemetry::ros::DiagnosticStatusMsg,
+) {
     let number = |key: &str| {
         status
             .value(key)
@@ -276,7 +279,7 @@ fn apply_diagnostics(sample: &mut CycleSample, status: &deflex_telemetry::ros::D
     let count = |key: &str| status.value(key).and_then(|v| v.parse::<u64>().ok());
     if let Some(phase) = status.value(ch::diag::PHASE) {
         // A controller's phase, or the simulated cell's state (`twin-cell` recordings).
-        sample.phase_code = [Source::Runtime, Source::TwinCell]
+        sample.phase_code = [StreamSource::Runtime, StreamSource::TwinCell]
             .iter()
             .find_map(|s| s.phase_names().iter().position(|n| *n == phase))
             .unwrap_or(0) as u32;

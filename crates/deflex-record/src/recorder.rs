@@ -31,9 +31,9 @@ const POLL: Duration = Duration::from_millis(20);
 ///
 /// ```no_run
 /// # use std::sync::Arc;
-/// use deflex_telemetry::{broadcast, CycleSample, SessionInfo, Source};
+/// use deflex_telemetry::{broadcast, CycleSample, SessionInfo, StreamSource};
 /// let (mut publisher, ring) = broadcast::<CycleSample>(4096);
-/// let info = Arc::new(SessionInfo::new(Source::Runtime, "tx200", vec!["j1".into()]));
+/// let info = Arc::new(SessionInfo::new(StreamSource::Runtime, "tx200", vec!["j1".into()]));
 /// let recorder = deflex_record::McapRecorder::spawn("run.mcap", &ring, info).unwrap();
 /// // … the control thread publishes one sample per cycle …
 /// publisher.publish(&CycleSample::default());

@@ -54,7 +54,7 @@ pub const RUN_LOG_SKIP_FLAGS: u32 = Flags::FORCE_OVER_LIMIT
 
 /// A six-component quantity of the log: a wrench `[f; m]` or a small displacement `[δp; δφ]`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Block {
+pub enum RunLogBlock {
     /// The sensor's raw reading, sensor frame (`raw_*`).
     RawWrench,
     /// The compensated reading, sensor frame (`ws_*`).
@@ -76,17 +76,17 @@ const WRENCH_SUFFIXES: [&str; 6] = ["fx_n", "fy_n", "fz_n", "mx_nm", "my_nm", "m
 /// Column suffixes of a displacement's components.
 const DISPLACEMENT_SUFFIXES: [&str; 6] = ["x_m", "y_m", "z_m", "rx_rad", "ry_rad", "rz_rad"];
 
-impl Block {
+impl RunLogBlock {
     /// The column prefix (`raw`, `ws`, `w`, `ds`, `xi`, `eps`, `ff`).
     pub fn prefix(self) -> &'static str {
         match self {
-            Block::RawWrench => "raw",
-            Block::SensorWrench => "ws",
-            Block::TcpWrench => "w",
-            Block::Deflection => "ds",
-            Block::Correction => "xi",
-            Block::Error => "eps",
-            Block::FeedForward => "ff",
+            RunLogBlock::RawWrench => "raw",
+            RunLogBlock::SensorWrench => "ws",
+            RunLogBlock::TcpWrench => "w",
+            RunLogBlock::Deflection => "ds",
+            RunLogBlock::Correction => "xi",
+            RunLogBlock::Error => "eps",
+            RunLogBlock::FeedForward => "ff",
         }
     }
 
@@ -94,20 +94,20 @@ impl Block {
     pub fn is_wrench(self) -> bool {
         matches!(
             self,
-            Block::RawWrench | Block::SensorWrench | Block::TcpWrench
+            RunLogBlock::RawWrench | RunLogBlock::SensorWrench | RunLogBlock::TcpWrench
         )
     }
 
     /// The block's values in a sample.
     pub fn of(self, sample: &CycleSample) -> &[f64; 6] {
         match self {
-            Block::RawWrench => &sample.wrench_raw,
-            Block::SensorWrench => &sample.wrench_sensor,
-            Block::TcpWrench => &sample.wrench_tcp,
-            Block::Deflection => &sample.deflection,
-            Block::Correction => &sample.correction,
-            Block::Error => &sample.error,
-            Block::FeedForward => &sample.feedforward,
+            RunLogBlock::RawWrench => &sample.wrench_raw,
+            RunLogBlock::SensorWrench => &sample.wrench_sensor,
+            RunLogBlock::TcpWrench => &sample.wrench_tcp,
+            RunLogBlock::Deflection => &sample.deflection,
+            RunLogBlock::Correction => &sample.correction,
+            RunLogBlock::Error => &sample.error,
+            RunLogBlock::FeedForward => &sample.feedforward,
         }
     }
 
@@ -125,7 +125,7 @@ pub enum RunLogColumn {
     /// `q{i+1}_rad`: joint `i` (0-based).
     Joint(usize),
     /// Component `k` (0 … 5) of a six-component quantity.
-    Block(Block, usize),
+    Block(RunLogBlock, usize),
     /// `path_s_m`.
     PathPosition,
     /// `loop_gain`.
@@ -227,13 +227,13 @@ impl RunLogFormat {
         let mut columns = vec![RunLogColumn::Time];
         columns.extend((0..joint_count).map(RunLogColumn::Joint));
         for block in [
-            Block::RawWrench,
-            Block::SensorWrench,
-            Block::TcpWrench,
-            Block::Deflection,
-            Block::Correction,
-            Block::Error,
-            Block::FeedForward,
+            RunLogBlock::RawWrench,
+            RunLogBlock::SensorWrench,
+            RunLogBlock::TcpWrench,
+            RunLogBlock::Deflection,
+            RunLogBlock::Correction,
+            RunLogBlock::Error,
+            RunLogBlock::FeedForward,
         ] {
             columns.extend(block.columns());
         }
@@ -256,10 +256,10 @@ impl RunLogFormat {
     pub fn twin() -> RunLogFormat {
         let mut columns = vec![RunLogColumn::Time];
         for block in [
-            Block::TcpWrench,
-            Block::Deflection,
-            Block::Correction,
-            Block::Error,
+            RunLogBlock::TcpWrench,
+            RunLogBlock::Deflection,
+            RunLogBlock::Correction,
+            RunLogBlock::Error,
         ] {
             columns.extend(block.columns());
         }

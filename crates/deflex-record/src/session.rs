@@ -37,7 +37,7 @@ pub struct SessionRecord {
     pub label: String,
     /// The robot or the cell is the digital twin.
     pub simulated: bool,
-    /// `runtime`, `twin` or `twin-cell` ([`deflex_telemetry::Source::key`]).
+    /// `runtime`, `twin` or `twin-cell` ([`deflex_telemetry::StreamSource::key`]).
     pub source: String,
     /// Robot name.
     pub robot: String,

@@ -15,7 +15,7 @@
 //! file, and the line and column where a value is wrong.
 
 use crate::log_reader::{LogReadError, LogReader};
-use crate::run_log::{Block, RunLogColumn};
+use crate::run_log::{RunLogBlock, RunLogColumn};
 use crate::{ReadError, for_each_cycle, is_mcap, isf_log};
 use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::{Data, Robot};
@@ -166,8 +166,8 @@ pub fn read_run_log(
     let simulated = log.simulated();
     let kind = if log.has(isf_log::DESIRED_MM[0]) {
         Some(Kind::SimIsf)
-    } else if log.has(&RunLogColumn::Block(Block::TcpWrench, 0).name())
-        && log.has(&RunLogColumn::Block(Block::Correction, 0).name())
+    } else if log.has(&RunLogColumn::Block(RunLogBlock::TcpWrench, 0).name())
+        && log.has(&RunLogColumn::Block(RunLogBlock::Correction, 0).name())
     {
         Some(Kind::DeflexRun)
     } else {
@@ -265,7 +265,11 @@ fn run_log_columns(robot: Option<&Robot>) -> Vec<String> {
         RunLogColumn::Flags,
         RunLogColumn::CycleTime,
     ];
-    for block in [Block::TcpWrench, Block::Deflection, Block::Correction] {
+    for block in [
+        RunLogBlock::TcpWrench,
+        RunLogBlock::Deflection,
+        RunLogBlock::Correction,
+    ] {
         columns.extend(&block.columns()[..3]);
     }
     columns.extend((0..robot.map_or(0, Robot::joint_count)).map(RunLogColumn::Joint));
@@ -368,7 +372,7 @@ impl Table {
     }
 
     /// The first three columns of a run log's block (`x`, `y`, `z` or `fx`, `fy`, `fz`).
-    fn block_xyz(&self, block: Block) -> Result<Xyz, TraceError> {
+    fn block_xyz(&self, block: RunLogBlock) -> Result<Xyz, TraceError> {
         let [x, y, z, ..] = block.columns().map(RunLogColumn::name);
         self.xyz([&x, &y, &z], 1.0)
     }
@@ -451,7 +455,7 @@ fn flag_states(flags: &[u32], fault: impl Fn(usize) -> bool) -> Vec<(String, Vec
 }
 
 fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError> {
-    let xi = t.block_xyz(Block::Correction)?;
+    let xi = t.block_xyz(RunLogBlock::Correction)?;
     let path_s_col = t.column(&RunLogColumn::PathPosition.name())?;
     let path_s_m = if path_s_col.iter().all(|s| s.is_finite()) {
         Some(path_s_col)
@@ -498,10 +502,10 @@ fn from_run_log(t: &Table, robot: Option<&Robot>) -> Result<RunTrace, TraceError
         simulated: false,
         time_s: t.column(&RunLogColumn::Time.name())?,
         path_s_m,
-        force_n: t.block_xyz(Block::TcpWrench)?,
+        force_n: t.block_xyz(RunLogBlock::TcpWrench)?,
         axes: "base axes".into(),
         correction_m: Some(xi),
-        deflection_m: Some(t.block_xyz(Block::Deflection)?),
+        deflection_m: Some(t.block_xyz(RunLogBlock::Deflection)?),
         path_error_m: None,
         states,
         cycle_time_s: Some(

@@ -5,8 +5,8 @@ use crate::channels as ch;
 use crate::{RecordError, SessionRecord};
 use deflex_telemetry::ros::cycle::{self, CycleMessages, DiagnosticsPacer, seconds_to_ns};
 use deflex_telemetry::ros::{
-    DiagnosticArray, JointState, PoseStamped, RosMessage, Time, TwistStamped, Vector3Stamped,
-    WrenchStamped,
+    DiagnosticArrayMsg, JointStateMsg, PoseStampedMsg, RosMessage, TimeMsg, TwistStampedMsg,
+    Vector3StampedMsg, WrenchStampedMsg,
 };
 use deflex_telemetry::{CycleSample, SessionInfo};
 use mcap::records::MessageHeader;
@@ -147,12 +147,12 @@ impl<W: Write> McapSink<W> {
         let channel = |w: &mut mcap::Writer<_>, schema: u16, topic: &str| {
             w.add_channel(schema, topic, "cdr", &empty)
         };
-        let joint = schema::<JointState>(&mut writer).map_err(mcap_err)?;
-        let wrench = schema::<WrenchStamped>(&mut writer).map_err(mcap_err)?;
-        let pose = schema::<PoseStamped>(&mut writer).map_err(mcap_err)?;
-        let twist = schema::<TwistStamped>(&mut writer).map_err(mcap_err)?;
-        let vector = schema::<Vector3Stamped>(&mut writer).map_err(mcap_err)?;
-        let diag = schema::<DiagnosticArray>(&mut writer).map_err(mcap_err)?;
+        let joint = schema::<JointStateMsg>(&mut writer).map_err(mcap_err)?;
+        let wrench = schema::<WrenchStampedMsg>(&mut writer).map_err(mcap_err)?;
+        let pose = schema::<PoseStampedMsg>(&mut writer).map_err(mcap_err)?;
+        let twist = schema::<TwistStampedMsg>(&mut writer).map_err(mcap_err)?;
+        let vector = schema::<Vector3StampedMsg>(&mut writer).map_err(mcap_err)?;
+        let diag = schema::<DiagnosticArrayMsg>(&mut writer).map_err(mcap_err)?;
         let channels = (|| {
             Ok::<_, mcap::McapError>(Channels {
                 joint_states: channel(&mut writer, joint, ch::JOINT_STATES)?,
@@ -237,7 +237,7 @@ impl<W: Write> McapSink<W> {
             log_time: t_ns,
             publish_time: t_ns,
         };
-        let stamp = Time::from_nanos(t_ns);
+        let stamp = TimeMsg::from_nanos(t_ns);
         let m = CycleMessages::new(&self.info, s, stamp);
         let c = &self.channels;
         let ids = (c.joint_states, c.wrench_raw, c.wrench_sensor, c.wrench_tcp);

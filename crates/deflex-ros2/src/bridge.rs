@@ -8,8 +8,8 @@ use crate::{BridgeSettings, Ros2Error, join, message_type, qos_profile, ros_name
 use deflex_telemetry::ros::Ros2Topic;
 use deflex_telemetry::ros::cycle::{CycleMessages, DiagnosticsPacer, diagnostics, seconds_to_ns};
 use deflex_telemetry::ros::{
-    DiagnosticArray, JointState, PoseStamped, RosMessage, Time, TwistStamped, Vector3Stamped,
-    WrenchStamped,
+    DiagnosticArrayMsg, JointStateMsg, PoseStampedMsg, RosMessage, TimeMsg, TwistStampedMsg,
+    Vector3StampedMsg, WrenchStampedMsg,
 };
 use deflex_telemetry::{CycleSample, SessionInfo, Subscriber};
 use ros2_client::{Node, Publisher};
@@ -78,18 +78,18 @@ pub struct Ros2Bridge {
 
 /// One publisher per enabled topic.
 struct Publishers {
-    joint_states: Option<Publisher<JointState>>,
-    wrench_raw: Option<Publisher<WrenchStamped>>,
-    wrench_sensor: Option<Publisher<WrenchStamped>>,
-    wrench_tcp: Option<Publisher<WrenchStamped>>,
-    tcp_pose: Option<Publisher<PoseStamped>>,
-    program_pose: Option<Publisher<PoseStamped>>,
-    deflection: Option<Publisher<TwistStamped>>,
-    correction: Option<Publisher<TwistStamped>>,
-    error: Option<Publisher<TwistStamped>>,
-    feedforward: Option<Publisher<TwistStamped>>,
-    path_error: Option<Publisher<Vector3Stamped>>,
-    diagnostics: Option<Publisher<DiagnosticArray>>,
+    joint_states: Option<Publisher<JointStateMsg>>,
+    wrench_raw: Option<Publisher<WrenchStampedMsg>>,
+    wrench_sensor: Option<Publisher<WrenchStampedMsg>>,
+    wrench_tcp: Option<Publisher<WrenchStampedMsg>>,
+    tcp_pose: Option<Publisher<PoseStampedMsg>>,
+    program_pose: Option<Publisher<PoseStampedMsg>>,
+    deflection: Option<Publisher<TwistStampedMsg>>,
+    correction: Option<Publisher<TwistStampedMsg>>,
+    error: Option<Publisher<TwistStampedMsg>>,
+    feedforward: Option<Publisher<TwistStampedMsg>>,
+    path_error: Option<Publisher<Vector3StampedMsg>>,
+    diagnostics: Option<Publisher<DiagnosticArrayMsg>>,
 }
 
 fn publisher<T: RosMessage>(
@@ -167,11 +167,11 @@ fn unix_now_ns() -> u64 {
 impl Publishing {
     /// The ROS time of session time `t_s`: the epoch of session time 0 (fixed at the first
     /// sample) plus `t_s`.
-    fn stamp(&mut self, t_s: f64) -> Time {
+    fn stamp(&mut self, t_s: f64) -> TimeMsg {
         let epoch = *self
             .epoch_ns
             .get_or_insert_with(|| unix_now_ns().saturating_sub(seconds_to_ns(t_s)));
-        Time::from_nanos(epoch.saturating_add(seconds_to_ns(t_s)))
+        TimeMsg::from_nanos(epoch.saturating_add(seconds_to_ns(t_s)))
     }
 
     fn cycle(&mut self, s: &CycleSample, lost: u64) {

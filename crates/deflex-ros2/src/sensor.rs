@@ -33,7 +33,7 @@ use crate::handover::Handover;
 use crate::{Ros2Error, SensorSettings, join, message_type, qos_profile, ros_name};
 use deflex_io::{ForceSensorLink, LinkError, Protocol, WrenchSample};
 use deflex_model::Wrench;
-use deflex_telemetry::ros::WrenchStamped;
+use deflex_telemetry::ros::WrenchStampedMsg;
 use ros2_client::Gid;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -163,7 +163,7 @@ struct Checker {
 impl Checker {
     fn check(
         &mut self,
-        msg: &WrenchStamped,
+        msg: &WrenchStampedMsg,
         writer: Gid,
         now_ns: i128,
     ) -> Result<Reading, Refusal> {
@@ -263,12 +263,12 @@ impl Ros2SensorLink {
                         let topic = node
                             .create_topic(
                                 &ros_name(&s.topic)?,
-                                message_type::<WrenchStamped>(),
+                                message_type::<WrenchStampedMsg>(),
                                 &qos,
                             )
                             .map_err(|e| error(format!("{e:?}")))?;
                         let sub = node
-                            .create_subscription::<WrenchStamped>(&topic, Some(qos))
+                            .create_subscription::<WrenchStampedMsg>(&topic, Some(qos))
                             .map_err(|e| error(format!("{e:?}")))?;
                         Ok((node, sub))
                     });

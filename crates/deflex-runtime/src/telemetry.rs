@@ -8,7 +8,7 @@
 //! ring and the [`SessionInfo`] stay reachable through [`crate::session::Runtime`].
 
 pub use deflex_telemetry::{
-    Broadcast, CycleSample, Publisher, SessionInfo, Source, Subscriber, broadcast,
+    Broadcast, CycleSample, Publisher, SessionInfo, StreamSource, Subscriber, broadcast,
 };
 
 use deflex_control::Controller;
@@ -68,7 +68,7 @@ impl Telemetry {
 /// `protocol` with an interpolation cycle of `robot_cycle_s`.
 pub fn session_info(
     controller: &Controller,
-    source: Source,
+    source: StreamSource,
     protocol: &str,
     robot_cycle_s: f64,
 ) -> SessionInfo {

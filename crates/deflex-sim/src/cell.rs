@@ -20,7 +20,7 @@ use crate::cell_config::{CellConfig, MAX_LOG_ROWS, MAX_RUN_S, ProcessKind};
 use crate::controller_emulation::{ControllerCycle, ControllerEmulation};
 use crate::error::SimError;
 use crate::fixture::Fixture;
-use crate::forming_log::{FormingLog, LogRow, RunningStats};
+use crate::forming_log::{FormingLog, FormingLogRow, RunningStats};
 use crate::plant::{Plant, displacement};
 use crate::sensor::ForceSensor;
 use crate::sheet::{ContactState, Sheet};
@@ -419,7 +419,7 @@ impl Cell {
                 wrench_sensor: [0.0; 6],
                 saturated: false,
             });
-            self.log.push(LogRow {
+            self.log.push(FormingLogRow {
                 time_s: cycle.time_s,
                 truth,
                 tracked_m: tracked,

@@ -6,7 +6,7 @@
 use crate::cell::{Cell, CellStep, ControllerInput, CorrectionController, SensorSample};
 use crate::cell_config::CellConfig;
 use crate::error::SimError;
-pub use crate::forming_log::{FormingLog, LogRow, RunningStats};
+pub use crate::forming_log::{FormingLog, FormingLogRow, RunningStats};
 use crate::toolpath::ToolPath;
 use nalgebra::Vector3;
 use serde::Serialize;

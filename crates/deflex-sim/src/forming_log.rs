@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 /// One logged row (ground truth plus what the sensors reported).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LogRow {
+pub struct FormingLogRow {
     /// Simulated time (s).
     pub time_s: f64,
     /// Ground truth of the cycle.
@@ -28,7 +28,7 @@ pub struct FormingLog {
     /// Seed of the run.
     pub seed: u64,
     /// Rows, in time order.
-    pub rows: Vec<LogRow>,
+    pub rows: Vec<FormingLogRow>,
 }
 
 impl FormingLog {
@@ -46,7 +46,7 @@ impl FormingLog {
         }
     }
 
-    pub(crate) fn push(&mut self, row: LogRow) {
+    pub(crate) fn push(&mut self, row: FormingLogRow) {
         self.rows.push(row);
     }
 
@@ -106,7 +106,7 @@ impl FormingLog {
     }
 
     /// Column of a per-row quantity.
-    pub fn column(&self, f: impl Fn(&LogRow) -> f64) -> Vec<f64> {
+    pub fn column(&self, f: impl Fn(&FormingLogRow) -> f64) -> Vec<f64> {
         self.rows.iter().map(f).collect()
     }
 }

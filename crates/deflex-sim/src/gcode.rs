@@ -15,7 +15,7 @@
 
 use crate::error::SimError;
 use crate::toolpath::{ToolPath, Waypoint};
-pub use deflex_cam::gcode::{Program, ReadOptions};
+pub use deflex_cam::gcode::{GcodeProgram, ReadOptions};
 
 /// Most path points of a program (arcs interpolated).
 pub const MAX_WAYPOINTS: usize = 1_000_000;
@@ -44,7 +44,7 @@ pub fn parse_gcode_with(
     text: &str,
     file: &str,
     options: &ReadOptions,
-) -> Result<(ToolPath, Program), SimError> {
+) -> Result<(ToolPath, GcodeProgram), SimError> {
     let program = deflex_cam::gcode::read(text, options).map_err(|e| SimError::Gcode {
         file: file.to_string(),
         line: e.line,
@@ -59,7 +59,7 @@ pub fn parse_gcode_with(
 
 /// The path of a program as a [`ToolPath`] (no nominal step-down or wall angle: the twin's
 /// sheet uses its defaults).
-pub fn tool_path_from_program(program: &Program, name: &str) -> ToolPath {
+pub fn tool_path_from_program(program: &GcodeProgram, name: &str) -> ToolPath {
     ToolPath {
         name: name.to_string(),
         waypoints: program

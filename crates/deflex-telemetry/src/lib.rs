@@ -33,7 +33,7 @@ mod words;
 
 pub use broadcast::{Broadcast, Publisher, Subscriber, broadcast};
 pub use progress::{OnProgress, Progress};
-pub use sample::{CellState, CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, Source};
+pub use sample::{CellState, CycleSample, FAULT_NONE, LATE_UNKNOWN, SessionInfo, StreamSource};
 pub use seqcell::SeqCell;
 pub use state::{FAULT_KINDS, FaultKind, Flags, Phase};
 

@@ -186,7 +186,7 @@ impl CycleSample {
 
 /// Who produced a stream.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Source {
+pub enum StreamSource {
     /// `deflex run` against a robot controller and a sensor (real or simulated cell).
     Runtime,
     /// The deflex controller in-process on the digital twin (`deflex sim isf --correction on`):
@@ -207,22 +207,22 @@ pub enum Source {
     TwinCell,
 }
 
-impl Source {
+impl StreamSource {
     /// The key of the source in files and messages: `runtime`, `twin`, `twin-cell`.
     pub fn key(self) -> &'static str {
         match self {
-            Source::Runtime => "runtime",
-            Source::Twin => "twin",
-            Source::TwinCell => "twin-cell",
+            StreamSource::Runtime => "runtime",
+            StreamSource::Twin => "twin",
+            StreamSource::TwinCell => "twin-cell",
         }
     }
 
     /// The names of [`CycleSample::phase_code`]'s values for this source: the controller's
-    /// phases, or for [`Source::TwinCell`] the cell's states ([`CellState::name`]).
+    /// phases, or for [`StreamSource::TwinCell`] the cell's states ([`CellState::name`]).
     pub fn phase_names(self) -> [&'static str; 6] {
         match self {
-            Source::Runtime | Source::Twin => PHASES.map(|p| p.name()),
-            Source::TwinCell => CellState::ALL.map(CellState::name),
+            StreamSource::Runtime | StreamSource::Twin => PHASES.map(|p| p.name()),
+            StreamSource::TwinCell => CellState::ALL.map(CellState::name),
         }
     }
 
@@ -233,7 +233,7 @@ impl Source {
     }
 }
 
-/// The state of the simulated cell in a [`Source::TwinCell`] sample's
+/// The state of the simulated cell in a [`StreamSource::TwinCell`] sample's
 /// [`CycleSample::phase_code`] (its index in [`CellState::ALL`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CellState {
@@ -284,7 +284,7 @@ impl CellState {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SessionInfo {
     /// Who publishes.
-    pub source: Source,
+    pub source: StreamSource,
     /// True when the robot or the cell is the digital twin (labelled SIMULATED).
     pub simulated: bool,
     /// Robot name (the model's).
@@ -313,10 +313,10 @@ pub struct SessionInfo {
 
 impl SessionInfo {
     /// A session description with the default frame names `base`, `ft_sensor` and `tcp`.
-    pub fn new(source: Source, robot: impl Into<String>, joint_names: Vec<String>) -> Self {
+    pub fn new(source: StreamSource, robot: impl Into<String>, joint_names: Vec<String>) -> Self {
         SessionInfo {
             source,
-            simulated: matches!(source, Source::Twin | Source::TwinCell),
+            simulated: matches!(source, StreamSource::Twin | StreamSource::TwinCell),
             robot: robot.into(),
             joint_names,
             protocol: String::new(),

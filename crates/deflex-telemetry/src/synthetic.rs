@@ -6,7 +6,7 @@
 //! size, deterministic for a given seed, so that a page, a recording or a plot has something
 //! realistic to show. Every [`SessionInfo`] it makes says SIMULATED.
 
-use crate::{CycleSample, SessionInfo, Source};
+use crate::{CycleSample, SessionInfo, StreamSource};
 use crate::{Flags, Phase};
 use nalgebra::{Rotation3, Vector3};
 
@@ -42,9 +42,9 @@ impl SyntheticCell {
     /// The session description of this stream (labelled SIMULATED).
     pub fn session_info(&self) -> SessionInfo {
         let source = if self.twin {
-            Source::Twin
+            StreamSource::Twin
         } else {
-            Source::Runtime
+            StreamSource::Runtime
         };
         let mut info = SessionInfo::new(
             source,

@@ -21,9 +21,9 @@
 //!
 //! ```no_run
 //! use std::sync::Arc;
-//! use deflex_telemetry::{broadcast, CycleSample, SessionInfo, Source};
+//! use deflex_telemetry::{broadcast, CycleSample, SessionInfo, StreamSource};
 //! let (mut publisher, ring) = broadcast::<CycleSample>(4096);
-//! let info = Arc::new(SessionInfo::new(Source::Runtime, "tx200", vec!["j1".into()]));
+//! let info = Arc::new(SessionInfo::new(StreamSource::Runtime, "tx200", vec!["j1".into()]));
 //! let stop_requested = Arc::new(std::sync::atomic::AtomicBool::new(false));
 //! let flag = stop_requested.clone();
 //! let view = deflex_view::serve(

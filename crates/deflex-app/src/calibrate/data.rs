@@ -15,7 +15,7 @@ use std::path::PathBuf;
 
 /// Where measurement rows come from.
 #[derive(Clone, Debug)]
-pub enum Source {
+pub enum MeasurementSource {
     /// A CSV file.
     File(PathBuf),
     /// CSV text made from an in-memory table (a DataFrame or a mapping of columns): its rows
@@ -28,12 +28,12 @@ pub enum Source {
     },
 }
 
-impl Source {
+impl MeasurementSource {
     /// The data as named to the user.
     pub fn name(&self) -> String {
         match self {
-            Source::File(p) => p.display().to_string(),
-            Source::Table { origin, .. } => origin.clone(),
+            MeasurementSource::File(p) => p.display().to_string(),
+            MeasurementSource::Table { origin, .. } => origin.clone(),
         }
     }
 
@@ -41,8 +41,8 @@ impl Source {
     /// origin.
     pub fn shown(&self) -> String {
         match self {
-            Source::File(path) => deflex_files::shown_path(path),
-            Source::Table { origin, .. } => origin.clone(),
+            MeasurementSource::File(path) => deflex_files::shown_path(path),
+            MeasurementSource::Table { origin, .. } => origin.clone(),
         }
     }
 }
@@ -61,26 +61,30 @@ pub fn table_error(error: DataError) -> Error {
 }
 
 /// Read measurement rows (displacements required when `measured`).
-pub fn read_rows(source: &Source, joint_count: usize, measured: bool) -> Result<MeasurementFile> {
+pub fn read_rows(
+    source: &MeasurementSource,
+    joint_count: usize,
+    measured: bool,
+) -> Result<MeasurementFile> {
     read_rows_ignoring(source, joint_count, measured, &[])
 }
 
 /// [`read_rows`], skipping the columns named in `ignored` (columns the format does not read,
 /// kept knowingly; any other unknown column is refused naming the closest known one).
 pub fn read_rows_ignoring(
-    source: &Source,
+    source: &MeasurementSource,
     joint_count: usize,
     measured: bool,
     ignored: &[String],
 ) -> Result<MeasurementFile> {
     match source {
-        Source::File(path) => Ok(crate::load::read_file_ignoring(
+        MeasurementSource::File(path) => Ok(crate::load::read_file_ignoring(
             path,
             Some(joint_count),
             measured,
             ignored,
         )?),
-        Source::Table { text, origin } => {
+        MeasurementSource::Table { text, origin } => {
             deflex_calibrate::measurements::check_joint_columns(text, origin, joint_count)?;
             deflex_calibrate::measurements::parse_file_ignoring(text, origin, measured, ignored)
                 .map_err(table_error)
@@ -102,22 +106,22 @@ pub struct DataCheck {
 
 /// Named before an error of the forward-kinematics check: the file on the command line (its
 /// messages name the file first), nothing in Python (the call is in the traceback).
-fn check_context(source: &Source, names: OptionNames) -> Option<String> {
+fn check_context(source: &MeasurementSource, names: OptionNames) -> Option<String> {
     (names == OptionNames::Cli).then(|| source.name())
 }
 
 /// Named before an error of the identification: `--data FILE` on the command line, nothing in
 /// Python.
-pub(crate) fn fit_context(source: &Source, names: OptionNames) -> Option<String> {
+pub(crate) fn fit_context(source: &MeasurementSource, names: OptionNames) -> Option<String> {
     names.context("data", &source.shown())
 }
 
 /// Said when the data disagrees with the forward kinematics: how to widen the tolerance or use
 /// the data anyway, in the front end's option names.
-fn fk_advice(source: &Source, names: OptionNames) -> String {
+fn fk_advice(source: &MeasurementSource, names: OptionNames) -> String {
     let data = match source {
-        Source::File(_) => "file",
-        Source::Table { .. } => "data",
+        MeasurementSource::File(_) => "file",
+        MeasurementSource::Table { .. } => "data",
     };
     format!(
         "Is this the robot the {data} was measured on? Widen the tolerance with {}, or use the {data} anyway with {}.",
@@ -151,7 +155,7 @@ pub struct CheckedRows {
 /// with `ignore_fk_check`), the advice in the words of the front end `names`.
 pub fn read_checked(
     robot: &Robot,
-    source: &Source,
+    source: &MeasurementSource,
     check: &DataCheck,
     names: OptionNames,
 ) -> Result<CheckedRows> {

@@ -1,8 +1,8 @@
 //! Stiffness calibration, the one implementation under `deflex calibrate`, `validate` and `plan`
 //! and Python's `deflex.calibrate`, `validate` and `predict_displacements`:
 //!
-//! * [`data`]: where the rows come from ([`Source`]: a file or an in-memory table) and their
-//!   check against the robot's forward kinematics ([`read_checked`]);
+//! * [`data`]: where the rows come from ([`MeasurementSource`]: a file or an in-memory table)
+//!   and their check against the robot's forward kinematics ([`read_checked`]);
 //! * [`choice`]: the options' choices, one type each for both front ends ([`StructureChoice`],
 //!   [`CriterionChoice`], [`LoadChoice`], [`PointsChoice`]);
 //! * [`stiffness`]: the identification ([`calibrate`]: the structure search or the fixed fit,
@@ -28,12 +28,12 @@ pub mod validate;
 pub use choice::{CriterionChoice, LoadChoice, PointsChoice, StructureChoice, UnknownChoice};
 pub use couplings::CouplingRequest;
 pub use data::{
-    CheckedRows, DataCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, Source, geometry_json,
-    read_checked, read_rows, read_rows_ignoring, table_error,
+    CheckedRows, DataCheck, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M, MeasurementSource,
+    geometry_json, read_checked, read_rows, read_rows_ignoring, table_error,
 };
 pub use stiffness::{CalibrateOptions, StiffnessCalibration, calibrate, calibrated_name, save};
 pub use summary::{report_text, status_name, summary_json, written_text};
 pub use validate::{
-    Validation, predict_displacements, validate, validation_json, validation_text,
+    ValidationRun, predict_displacements, validate, validation_json, validation_text,
     validation_written_text, write_validation_report,
 };

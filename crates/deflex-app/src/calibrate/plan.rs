@@ -20,7 +20,7 @@ pub use deflex_calibrate::measurements::points::{
 use deflex_calibrate::measurements::{format_rows_for, load_case_count};
 pub use deflex_calibrate::stiffness::campaign_cell::{MAX_PLAN_FORCE_N, parse_directions};
 pub use deflex_calibrate::stiffness::plan::{
-    BasePoint, Floor, LoadKind, Plan, PlanOptions, PointSet, Table, TableOption,
+    BasePoint, Floor, LoadKind, Plan, PlanOptions, PointSet, TableOption, WorkTable,
 };
 use deflex_calibrate::stiffness::{CalibError, PlanError, plan::plan_experiments};
 use deflex_model::Robot;

@@ -4,7 +4,7 @@
 
 use super::choice::{CriterionChoice, StructureChoice};
 use super::couplings::{self, CouplingRequest};
-use super::data::{DataCheck, Source, fit_context, named, read_checked};
+use super::data::{DataCheck, MeasurementSource, fit_context, named, read_checked};
 use crate::OptionNames;
 use crate::error::{Error, Result, bounded};
 use deflex_calibrate::measurements::MeasurementRow;
@@ -120,7 +120,7 @@ fn check_options(options: &CalibrateOptions) -> Result<()> {
 /// every row. Nothing is written ([`save`] writes).
 pub fn calibrate(
     start: &Robot,
-    source: &Source,
+    source: &MeasurementSource,
     options: &CalibrateOptions,
     names: OptionNames,
     progress: OnProgress<'_>,

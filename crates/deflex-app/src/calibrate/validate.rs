@@ -2,7 +2,7 @@
 //! `deflex.validate`): prediction errors beside a baseline, their plots and page, and the
 //! per-row prediction of a measurement or plan table.
 
-use super::data::{DataCheck, Source, geometry_json, read_checked, read_rows};
+use super::data::{DataCheck, MeasurementSource, geometry_json, read_checked, read_rows};
 use crate::OptionNames;
 use crate::error::Result;
 use crate::report::text_table::render_table;
@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// A validation with its file check.
-pub struct Validation {
+pub struct ValidationRun {
     /// Prediction errors of the model (and the baseline).
     pub validation: deflex_calibrate::stiffness::validation::Validation,
     /// The forward-kinematics check.
@@ -30,14 +30,14 @@ pub struct Validation {
 pub fn validate(
     model: &Robot,
     baseline: Option<&Robot>,
-    source: &Source,
+    source: &MeasurementSource,
     check: &DataCheck,
     names: OptionNames,
-) -> Result<Validation> {
+) -> Result<ValidationRun> {
     let checked = read_checked(model, source, check, names)?;
     let validation =
         deflex_calibrate::stiffness::validation::validate(model, baseline, &checked.rows)?;
-    Ok(Validation {
+    Ok(ValidationRun {
         validation,
         check: checked.check,
         warnings: checked.warnings,
@@ -51,13 +51,13 @@ const VALIDATION_REPORT: &str =
 /// The validation's plots and HTML page (`validation.html`) into the folder `dir`, replaced
 /// whole (or left as it was on error). Returns the files written. Needs the `report` feature:
 /// refused without it, nothing written.
-pub fn write_validation_report(v: &Validation, dir: &Path) -> Result<Vec<PathBuf>> {
+pub fn write_validation_report(v: &ValidationRun, dir: &Path) -> Result<Vec<PathBuf>> {
     crate::report::require(VALIDATION_REPORT)?.validation_report(&v.validation, dir)
 }
 
 /// The validation as JSON (SI; `deflex validate --json`): the errors of the model and the
 /// baseline, the file check, the warnings, and with `files` the files written.
-pub fn validation_json(v: &Validation, files: Option<&[PathBuf]>) -> Value {
+pub fn validation_json(v: &ValidationRun, files: Option<&[PathBuf]>) -> Value {
     let m = |e: &ModelErrors| {
         let rotation = e.rotation.as_ref().map(|r| {
             let s = &r.stats;
@@ -86,7 +86,7 @@ pub fn validation_json(v: &Validation, files: Option<&[PathBuf]>) -> Value {
 
 /// The validation as text (`deflex validate`): the measured displacement's size, the error
 /// table, the rotation errors when measured, the warnings.
-pub fn validation_text(v: &Validation) -> String {
+pub fn validation_text(v: &ValidationRun) -> String {
     let val = &v.validation;
     let mut t = format!(
         "Prediction errors (measured − predicted), {} points; measured RMS x/y/z {:.4} / {:.4} / {:.4} mm\n",
@@ -115,7 +115,7 @@ pub fn validation_written_text(files: &[PathBuf], dir: &Path) -> String {
 }
 
 /// Predicted displacement `[δp; δφ]` of every row of a measurement or plan table (m, rad).
-pub fn predict_displacements(robot: &Robot, source: &Source) -> Result<Vec<[f64; 6]>> {
+pub fn predict_displacements(robot: &Robot, source: &MeasurementSource) -> Result<Vec<[f64; 6]>> {
     let file = read_rows(source, robot.joint_count(), false)?;
     Ok(deflex_calibrate::stiffness::validation::predict_full(
         robot, &file.rows,

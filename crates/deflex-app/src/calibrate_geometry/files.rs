@@ -3,7 +3,7 @@
 //! report as one unit).
 
 use super::OptionNames;
-use crate::calibrate::{Source, table_error};
+use crate::calibrate::{MeasurementSource, table_error};
 use crate::error::{Error, Result};
 use deflex_calibrate::geometry::data::{AbsoluteRow, limits, parse_absolute_ignoring};
 use deflex_calibrate::geometry::params::EgModel;
@@ -18,10 +18,10 @@ use std::path::{Path, PathBuf};
 pub const MAX_TERMS_BYTES: u64 = 64 << 20;
 
 /// Several data as messages show them, comma-separated.
-pub(super) fn shown_all(sources: &[Source]) -> String {
+pub(super) fn shown_all(sources: &[MeasurementSource]) -> String {
     sources
         .iter()
-        .map(Source::shown)
+        .map(MeasurementSource::shown)
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -29,12 +29,12 @@ pub(super) fn shown_all(sources: &[Source]) -> String {
 /// Absolute readings of one source for a robot of `joints` joints, skipping the columns named in
 /// `ignored` (unknown to the format, kept knowingly: `--ignore-column`).
 pub fn read_absolute(
-    source: &Source,
+    source: &MeasurementSource,
     joints: usize,
     ignored: &[String],
 ) -> Result<Vec<AbsoluteRow>> {
     match source {
-        Source::File(path) => {
+        MeasurementSource::File(path) => {
             let text = deflex_files::read_bounded(path, limits::MAX_FILE_BYTES)?;
             Ok(parse_absolute_ignoring(
                 &text,
@@ -43,7 +43,7 @@ pub fn read_absolute(
                 ignored,
             )?)
         }
-        Source::Table { text, origin } => {
+        MeasurementSource::Table { text, origin } => {
             parse_absolute_ignoring(text, origin, joints, ignored).map_err(table_error)
         }
     }
@@ -54,14 +54,16 @@ pub fn read_absolute(
 /// checks them: another robot's campaign is refused.
 pub fn read_loaded(
     robot: &Robot,
-    source: &Source,
+    source: &MeasurementSource,
     ignored: &[String],
     names: OptionNames,
 ) -> Result<Vec<MeasurementRow>> {
     let n = robot.joint_count();
     let file = match source {
-        Source::File(path) => crate::load::read_file_ignoring(path, Some(n), true, ignored)?,
-        Source::Table { text, origin } => {
+        MeasurementSource::File(path) => {
+            crate::load::read_file_ignoring(path, Some(n), true, ignored)?
+        }
+        MeasurementSource::Table { text, origin } => {
             check_joint_columns(text, origin, n)?;
             parse_file_ignoring(text, origin, true, ignored).map_err(table_error)?
         }

@@ -3,7 +3,7 @@
 
 use super::OptionNames;
 use super::files::{read_absolute, read_loaded, shown_all, terms_path, write_unit};
-use crate::calibrate::{Source, UnknownChoice};
+use crate::calibrate::{MeasurementSource, UnknownChoice};
 use crate::error::{Error, Result};
 use crate::report::absolute_report;
 use deflex_calibrate::geometry::campaign::Campaign;
@@ -146,9 +146,9 @@ struct Readings {
 
 fn read_readings(
     start: &Robot,
-    data: &[Source],
-    loaded: &[Source],
-    test: &[Source],
+    data: &[MeasurementSource],
+    loaded: &[MeasurementSource],
+    test: &[MeasurementSource],
     options: &GeometryOptions,
 ) -> Result<Readings> {
     let n = start.joint_count();
@@ -185,9 +185,9 @@ fn read_readings(
 /// (another robot's data).
 pub fn calibrate_geometry(
     start: &Robot,
-    data: &[Source],
-    loaded: &[Source],
-    test: &[Source],
+    data: &[MeasurementSource],
+    loaded: &[MeasurementSource],
+    test: &[MeasurementSource],
     options: &GeometryOptions,
 ) -> Result<GeometryCalibration> {
     if let Some(sigma) = options.orientations {
@@ -285,7 +285,7 @@ fn distinct_readings(rows: &[AbsoluteRow]) -> usize {
 fn check_plausible_fit(
     result: &FitResult,
     robot: &str,
-    data: &[Source],
+    data: &[MeasurementSource],
     names: OptionNames,
 ) -> Result<()> {
     let fitted: Vec<f64> = result

@@ -15,7 +15,7 @@
 //! * [`calibrate_geometry`] with [`GeometryOptions`] → [`GeometryCalibration`]; [`save`] writes
 //!   it ([`SavedCalibration`], [`saved_text`], [`saved_json`]).
 //! * [`predict`] with a [`CalibratedModel`] ([`load_calibrated`], [`calibrated_model`]) →
-//!   [`Prediction`].
+//!   [`PredictionRun`].
 //! * [`register`] with a [`RegisterRequest`] → [`SessionRegistration`];
 //!   [`save_registration`] writes it.
 //! * [`import_ur10_tracker`] with an [`ImportRequest`] → [`TrackerImport`].
@@ -44,7 +44,7 @@ pub use fit::{
     report_text, save, saved_json, saved_text, write_report,
 };
 pub use import::{ImportRequest, TrackerImport, import_ur10_tracker};
-pub use predict::{Prediction, predict};
+pub use predict::{PredictionRun, predict};
 pub use register::{
     RegisterInputError, RegisterRequest, SessionRegistration, register, registration_json,
     registration_text, save_registration, saved_registration_text,

@@ -2,14 +2,14 @@
 //! error where measured.
 
 use super::files::{CalibratedModel, read_absolute};
-use crate::calibrate::Source;
+use crate::calibrate::MeasurementSource;
 use crate::error::{Error, Result};
 use crate::report::absolute_report::prediction;
 use crate::table::write_text;
 use std::path::Path;
 
 /// A prediction with its renderings.
-pub struct Prediction {
+pub struct PredictionRun {
     /// The prediction CSV (`deflex predict --out`).
     pub csv: String,
     /// The summary text.
@@ -24,24 +24,24 @@ pub struct Prediction {
 /// not read, kept knowingly.
 pub fn predict(
     model: &CalibratedModel,
-    source: &Source,
+    source: &MeasurementSource,
     fit_setup: bool,
     ignored: &[String],
-) -> Result<Prediction> {
+) -> Result<PredictionRun> {
     let rows = read_absolute(source, model.model.robot.joint_count(), ignored)?;
     let p = deflex_calibrate::geometry::predict::predict_rows(&model.model, rows, fit_setup)?;
     let csv = prediction::prediction_csv(&p).map_err(|e| Error::Serialise {
         what: "the prediction CSV",
         reason: e.to_string(),
     })?;
-    Ok(Prediction {
+    Ok(PredictionRun {
         csv,
         text: prediction::prediction_text(&p),
         json: prediction::prediction_json(&p),
     })
 }
 
-impl Prediction {
+impl PredictionRun {
     /// Write the prediction CSV, whole or not at all.
     pub fn save(&self, path: &Path) -> Result<()> {
         write_text(path, &self.csv)

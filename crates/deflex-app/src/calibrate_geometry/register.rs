@@ -3,7 +3,7 @@
 
 use super::OptionNames;
 use super::files::{CalibratedModel, read_absolute, write_unit};
-use crate::calibrate::Source;
+use crate::calibrate::MeasurementSource;
 use crate::error::{Error, Result};
 use crate::report::absolute_report;
 use deflex_calibrate::geometry::campaign::Campaign;
@@ -154,7 +154,7 @@ fn setup_readings(
 /// data's only one, every target known or registered, orientations present when asked).
 pub fn register(
     calibrated: CalibratedModel,
-    source: &Source,
+    source: &MeasurementSource,
     request: &RegisterRequest,
 ) -> Result<SessionRegistration> {
     let names = request.names;

@@ -14,7 +14,7 @@ use deflex_io::{ForceSensorLink, LinkError};
 use deflex_record::csv_log::{LogWriter, spawn_writer};
 use deflex_runtime::clock::WallClock;
 use deflex_runtime::session::{RunSummary, Runtime, RuntimeOptions, spawn};
-use deflex_runtime::telemetry::{DEFAULT_CAPACITY, Source, Telemetry, session_info};
+use deflex_runtime::telemetry::{DEFAULT_CAPACITY, StreamSource, Telemetry, session_info};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
@@ -185,7 +185,7 @@ impl CellRun {
         };
         let mut info = session_info(
             &controller,
-            Source::Runtime,
+            StreamSource::Runtime,
             cell.robot.kind.key(),
             cell.robot.cycle_s,
         );

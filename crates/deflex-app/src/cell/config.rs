@@ -13,7 +13,7 @@ mod controller_config;
 pub mod sections;
 mod validate;
 
-pub use choices::{Axis, RobotKind, Ros2Qos, Ros2Topic, RsiAnswerKind, SensorKind};
+pub use choices::{CorrectionAxis, RobotKind, Ros2Qos, Ros2Topic, RsiAnswerKind, SensorKind};
 pub use sections::{
     ControlSection, FeedForwardSection, LimitsSection, LogSection, ModelSection, MountingSection,
     REQUIRED_KEYS, RobotSection, Ros2Section, SensorSection,

@@ -5,8 +5,8 @@
 
 use deflex_compensate::table::{COMPENSATION, DEFLECTION, TableError, TableRow};
 use deflex_control::{
-    FeedForward, FeedForwardConfig, FeedForwardError, FeedForwardPoint, FeedForwardTable,
-    TableColumn,
+    FeedForward, FeedForwardColumn, FeedForwardConfig, FeedForwardError, FeedForwardPoint,
+    FeedForwardTable,
 };
 use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::Robot;
@@ -54,14 +54,14 @@ pub enum TableLoadError {
 }
 
 /// The column of `compensated_path.csv` that holds a table quantity.
-pub fn column_name(column: TableColumn) -> &'static str {
+pub fn column_name(column: FeedForwardColumn) -> &'static str {
     const POSITION: [&str; 3] = ["x_m", "y_m", "z_m"];
     match column {
-        TableColumn::ArcLength => "s_m",
-        TableColumn::Time => "t_s",
-        TableColumn::CommandedPosition(i) => POSITION.get(i).copied().unwrap_or("?"),
-        TableColumn::Deflection(i) => DEFLECTION.get(i).copied().unwrap_or("?"),
-        TableColumn::Compensation(i) => COMPENSATION.get(i).copied().unwrap_or("?"),
+        FeedForwardColumn::ArcLength => "s_m",
+        FeedForwardColumn::Time => "t_s",
+        FeedForwardColumn::CommandedPosition(i) => POSITION.get(i).copied().unwrap_or("?"),
+        FeedForwardColumn::Deflection(i) => DEFLECTION.get(i).copied().unwrap_or("?"),
+        FeedForwardColumn::Compensation(i) => COMPENSATION.get(i).copied().unwrap_or("?"),
     }
 }
 

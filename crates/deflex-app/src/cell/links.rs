@@ -13,7 +13,7 @@
 
 use crate::cell::config::{CellFile, RobotKind, RsiAnswerKind, SensorKind};
 use deflex_io::egm::{EgmConfig, EgmLink};
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::robot_side::RobotSide;
 use deflex_io::rsi::{CorrectionMode, RsiAnswer, RsiConfig, RsiLink};
 use deflex_io::simple_tcp::SimpleTcpLink;
@@ -93,8 +93,8 @@ impl CellFile {
     }
 
     /// The Net F/T count scaling of `[sensor]`.
-    pub fn calibration(&self) -> Calibration {
-        Calibration {
+    pub fn calibration(&self) -> NetFtCalibration {
+        NetFtCalibration {
             counts_per_force: self.sensor.counts_per_force,
             counts_per_torque: self.sensor.counts_per_torque,
         }

@@ -5,7 +5,7 @@
 //! 1. [`SimCellPlan::load`] reads the file and refuses a ROS 2 sensor (the twin plays a Net F/T);
 //! 2. [`SimCellPlan::start`] names the twin's ground-truth log ([`sim_cell_log_path`]) and its
 //!    MCAP recording beside it, and starts the recording of the twin's own stream
-//!    ([`Source::TwinCell`]) on its own thread;
+//!    ([`StreamSource::TwinCell`]) on its own thread;
 //! 3. [`SimCellSession::serve`] serves the twin until its path is done (or the stop flag), then
 //!    writes the log and commits the recording (both only when the session served), and tells
 //!    what it did ([`SimCellReport`], with its text and JSON).
@@ -23,7 +23,7 @@ use deflex_sim::twin::cell_server::{
 };
 use deflex_sim::twin::{TwinCellStream, twin_cell_session_info};
 use deflex_sim::{ConeParams, ToolPath};
-use deflex_telemetry::{Broadcast, CycleSample, SessionInfo, Source, broadcast};
+use deflex_telemetry::{Broadcast, CycleSample, SessionInfo, StreamSource, broadcast};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -114,7 +114,7 @@ impl SimCellPlan {
         let mcap_path = mcap_beside(&log_path, "--log")?;
         let nominal = options.twin.nominal_robot()?;
         let info = Arc::new(twin_cell_session_info(&nominal, &options.twin));
-        debug_assert_eq!(info.source, Source::TwinCell);
+        debug_assert_eq!(info.source, StreamSource::TwinCell);
         let (publisher, ring) = broadcast::<CycleSample>(1 << 14);
         let recorder = McapRecorder::spawn(&mcap_path, &ring, info.clone())?;
         let stream = TwinCellStream::new(nominal).with_publisher(publisher);

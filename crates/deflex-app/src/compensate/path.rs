@@ -103,7 +103,7 @@ fn tool_path(
     options: &Options,
     part_frame: &Pose,
     names: OptionNames,
-) -> Result<(ToolPath, Option<deflex_sim::gcode::Program>)> {
+) -> Result<(ToolPath, Option<deflex_sim::gcode::GcodeProgram>)> {
     let path_error = |source| Error::PathSpec {
         flag: names.name("path"),
         spec: spec.shown(),

@@ -2,7 +2,7 @@
 //! most [`MAX_GCODE_BYTES`], counted while reading), its text is read by `deflex_sim::gcode`
 //! (the CAM reader `deflex_cam::gcode` behind it). The errors are the twin's ([`SimError`]).
 
-use deflex_sim::gcode::{Program, ReadOptions, default_options, parse_gcode_with};
+use deflex_sim::gcode::{GcodeProgram, ReadOptions, default_options, parse_gcode_with};
 use deflex_sim::{SimError, ToolPath, builtin_tool_path};
 use std::path::Path;
 
@@ -20,7 +20,7 @@ pub fn read_gcode(path: &Path) -> Result<ToolPath, SimError> {
 pub fn read_gcode_with(
     path: &Path,
     options: &ReadOptions,
-) -> Result<(ToolPath, Program), SimError> {
+) -> Result<(ToolPath, GcodeProgram), SimError> {
     // A regular file of at most MAX_GCODE_BYTES, counted while reading.
     let text = deflex_files::read_bounded(path, MAX_GCODE_BYTES)
         .map_err(|e| SimError::Path(e.to_string()))?;

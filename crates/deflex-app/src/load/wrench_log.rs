@@ -24,7 +24,7 @@ use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::{Data, Pose, Robot, Wrench};
 use deflex_record::isf_log;
 use deflex_record::log_reader::{LogReadError, LogReader, LogRow};
-use deflex_record::run_log::{Block, RUN_LOG_SKIP_FLAGS, RunLogColumn, joint_columns};
+use deflex_record::run_log::{RUN_LOG_SKIP_FLAGS, RunLogBlock, RunLogColumn, joint_columns};
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -97,7 +97,7 @@ enum Layout {
 fn layout(log: &LogReader<'_>, robot: &Robot) -> Result<Layout, WrenchLogError> {
     let file = log.file();
     let joints = joint_columns(log);
-    let run = RunLogColumn::find_all(&Block::TcpWrench.columns(), log)
+    let run = RunLogColumn::find_all(&RunLogBlock::TcpWrench.columns(), log)
         .and_then(|w| RunLogColumn::find_all(&[RunLogColumn::Flags], log).map(|f| (w, f[0])));
     let isf = log
         .columns_of(&isf_log::DESIRED_MM)

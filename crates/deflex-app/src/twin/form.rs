@@ -25,7 +25,7 @@ use std::sync::atomic::AtomicBool;
 #[allow(missing_docs)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
-pub enum Correction {
+pub enum FormCorrection {
     // Open loop.
     #[default]
     Off,
@@ -33,24 +33,24 @@ pub enum Correction {
     On,
 }
 
-impl Correction {
+impl FormCorrection {
     /// The name the CLI and Python use.
     pub fn name(self) -> &'static str {
         match self {
-            Correction::Off => "off",
-            Correction::On => "on",
+            FormCorrection::Off => "off",
+            FormCorrection::On => "on",
         }
     }
 }
 
-impl std::str::FromStr for Correction {
+impl std::str::FromStr for FormCorrection {
     type Err = Error;
 
     /// `off` or `on` (Python's `correction=`).
-    fn from_str(text: &str) -> Result<Correction> {
+    fn from_str(text: &str) -> Result<FormCorrection> {
         match text {
-            "off" => Ok(Correction::Off),
-            "on" => Ok(Correction::On),
+            "off" => Ok(FormCorrection::Off),
+            "on" => Ok(FormCorrection::On),
             other => Err(Error::invalid(
                 "correction",
                 format!("expected \"on\" or \"off\", got \"{other}\""),
@@ -80,7 +80,7 @@ impl FormConflict {
             FormConflict::ModelWithoutCorrection => format!(
                 "{}: only used with {}",
                 names.name("model"),
-                names.give_text("correction", Correction::On.name())
+                names.give_text("correction", FormCorrection::On.name())
             ),
             FormConflict::FixtureStiffnessWithoutPlunge => format!(
                 "{}: applies to {}",
@@ -105,8 +105,12 @@ impl FormConflict {
 
 /// Refuse a correction model given with the correction off (the front ends ask first, before
 /// reading anything), naming the options in the words of `names`.
-pub fn check_correction(correction: Correction, has_model: bool, names: OptionNames) -> Result<()> {
-    if correction == Correction::Off && has_model {
+pub fn check_correction(
+    correction: FormCorrection,
+    has_model: bool,
+    names: OptionNames,
+) -> Result<()> {
+    if correction == FormCorrection::Off && has_model {
         Err(FormConflict::ModelWithoutCorrection.named(names))
     } else {
         Ok(())
@@ -145,8 +149,8 @@ pub struct FormOptions {
     /// Contact stiffness of the fixture for [`PathChoice::Plunge`] (N/m); default the cell's.
     pub fixture_stiffness_n_m: Option<f64>,
     /// The online correction.
-    pub correction: Correction,
-    /// The identified model of the correction (needed with [`Correction::On`]).
+    pub correction: FormCorrection,
+    /// The identified model of the correction (needed with [`FormCorrection::On`]).
     pub model: Option<CorrectionModel>,
     /// The front end that asks, for the option names in its refusals.
     pub names: OptionNames,
@@ -164,7 +168,7 @@ impl Default for FormOptions {
             length_mm: None,
             feed_mm_s: None,
             fixture_stiffness_n_m: None,
-            correction: Correction::default(),
+            correction: FormCorrection::default(),
             model: None,
             names: OptionNames::Cli,
         }
@@ -225,8 +229,8 @@ impl FormingSetup {
         // Closed loop: the deflex correction controller in-process, in simulated time, with the
         // nominal mounting and tool of the cell (never the plant's).
         let controller = match options.correction {
-            Correction::Off => None,
-            Correction::On => {
+            FormCorrection::Off => None,
+            FormCorrection::On => {
                 let model = match &options.model {
                     None => return Err(TwinSetupError::ModelRequired.into()),
                     Some(CorrectionModel::File(file)) => load_model(file)?,
@@ -464,14 +468,14 @@ impl TwinRun {
 
 /// The log as a table of SI columns ([`log_columns`]) under its title comment (SIMULATED, the
 /// robot, the path, the seed): Python's `TwinRun.log`.
-pub fn log_table(run: &TwinRun) -> crate::table::Table {
+pub fn log_table(run: &TwinRun) -> crate::table::CsvTable {
     let columns = log_columns(run);
-    crate::table::Table {
+    crate::table::CsvTable {
         comments: vec![run.run.log.title()],
         rows: run.run.log.rows.len(),
         columns: columns
             .into_iter()
-            .map(|(name, values)| (name.to_string(), crate::table::Column::Number(values)))
+            .map(|(name, values)| (name.to_string(), crate::table::TableColumn::Number(values)))
             .collect(),
     }
 }
@@ -479,7 +483,7 @@ pub fn log_table(run: &TwinRun) -> crate::table::Table {
 /// The log as SI columns (part frame R_p; the wrench on the tool at the TCP; the correction
 /// applied; the contact state). One row per logged cycle.
 pub fn log_columns(run: &TwinRun) -> Vec<(&'static str, Vec<f64>)> {
-    type Row = deflex_sim::forming::LogRow;
+    type Row = deflex_sim::forming::FormingLogRow;
     let rows = &run.run.log.rows;
     let mut out: Vec<(&'static str, Vec<f64>)> = Vec::new();
     // Columns `names`, the k-th one's value `value(row, k)`.

@@ -21,8 +21,8 @@ pub mod sensitivity;
 
 pub use cell_robot::{CellRobotFile, cell_robot, write_cell_robot};
 pub use form::{
-    Correction, FormConflict, FormOptions, FormingSetup, Outlets, TwinRun, check_correction, form,
-    log_columns, log_table, summary_json,
+    FormConflict, FormCorrection, FormOptions, FormingSetup, Outlets, TwinRun, check_correction,
+    form, log_columns, log_table, summary_json,
 };
 pub use path::{PathChoice, tool_path};
 pub use run_folder::{PLOT_DIR, RECORDING, RunFolder, RunRecording, WrittenRun, write_outputs};

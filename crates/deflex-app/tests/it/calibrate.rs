@@ -17,7 +17,7 @@ fn a_bad_row_of_an_in_memory_table_is_named_by_its_index() {
     let text = "load_case,q1_rad,q2_rad,q3_rad,q4_rad,q5_rad,q6_rad,fx_N,fy_N,fz_N,mx_Nm,my_Nm,mz_Nm,load_link,load_x_m,load_y_m,load_z_m,point,point_link,x_m,y_m,z_m,dx_m,dy_m,dz_m\n\
         a,0,0.5,1,0,0.5,0,0,0,-100,0,0,0,6,1,0,0,TCP,6,1,0,0,0,0,1e-4\n\
         a,0,0.5,1,0,0.5,0,0,0,-100,0,0,0,6,1,0,0,TCP,6,1,0,0,0,0,x\n";
-    let source = Source::Table {
+    let source = MeasurementSource::Table {
         text: text.into(),
         origin: "DataFrame".into(),
     };
@@ -129,7 +129,7 @@ fn a_calibration_with_a_coupling_is_named_saved_and_reported() {
     let dir = folder("coupling");
     let robot = deflex_app::robot::builtin("tx200").unwrap();
     let data = campaign(&robot, &dir);
-    let source = Source::File(data.clone());
+    let source = MeasurementSource::File(data.clone());
     let cal = calibrate(
         &robot,
         &source,
@@ -187,7 +187,7 @@ fn a_coupling_outside_the_identified_structure_is_refused_naming_it() {
     let data = campaign(&robot, &dir);
     let e = calibrate(
         &robot,
-        &Source::File(data.clone()),
+        &MeasurementSource::File(data.clone()),
         &options(StructureChoice::Fixed, "J2.z:J6.y"),
         CLI,
         &mut |_| {},
@@ -213,7 +213,7 @@ fn another_robots_data_is_refused_in_the_front_ends_words() {
     let tx200 = deflex_app::robot::builtin("tx200").unwrap();
     let ur10 = deflex_app::robot::builtin("ur10").unwrap();
     let data = campaign(&tx200, &dir);
-    let source = Source::File(data.clone());
+    let source = MeasurementSource::File(data.clone());
     let mut fixed = options(StructureChoice::Fixed, "");
     let e = calibrate(&ur10, &source, &fixed, CLI, &mut |_| {})
         .err()
@@ -246,7 +246,7 @@ fn the_identification_error_is_named_as_the_front_end_asks() {
     let dir = folder("zero");
     let robot = deflex_app::robot::builtin("tx200").unwrap();
     let data = campaign(&robot, &dir);
-    let rows: Vec<MeasurementRow> = read_rows(&Source::File(data.clone()), 6, true)
+    let rows: Vec<MeasurementRow> = read_rows(&MeasurementSource::File(data.clone()), 6, true)
         .unwrap()
         .rows
         .into_iter()
@@ -257,7 +257,7 @@ fn the_identification_error_is_named_as_the_front_end_asks() {
         .collect();
     let zero = dir.join("zero.csv");
     std::fs::write(&zero, format_rows_for(&robot, &rows, &[])).unwrap();
-    let source = Source::File(zero.clone());
+    let source = MeasurementSource::File(zero.clone());
     let fixed = options(StructureChoice::Fixed, "");
     let e = calibrate(&robot, &source, &fixed, CLI, &mut |_| {})
         .err()
@@ -286,7 +286,14 @@ fn a_validation_lists_its_files_only_when_they_were_written() {
     let data = campaign(&robot, &dir);
     let check = options(StructureChoice::Fixed, "").check;
     let baseline = deflex_app::robot::builtin("tx200-1edof").unwrap();
-    let v = validate(&robot, Some(&baseline), &Source::File(data), &check, PYTHON).unwrap();
+    let v = validate(
+        &robot,
+        Some(&baseline),
+        &MeasurementSource::File(data),
+        &check,
+        PYTHON,
+    )
+    .unwrap();
     assert!(validation_json(&v, None).get("files").is_none());
     let out = dir.join("val");
     let files = write_validation_report(&v, &out).unwrap();

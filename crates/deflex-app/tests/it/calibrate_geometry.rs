@@ -3,7 +3,7 @@
 //! (too few readings, another robot's readings, which set-up or target to register), and the
 //! robot, terms and report written as one unit — on the vendored real UR10 subset.
 
-use deflex_app::calibrate::Source;
+use deflex_app::calibrate::MeasurementSource;
 use deflex_app::calibrate_geometry::*;
 use deflex_app::{Error, ErrorKind};
 use deflex_calibrate::geometry::data::{format_absolute, parse_absolute};
@@ -35,8 +35,8 @@ fn import(name: &str, setup: &str, every: usize) -> TrackerImport {
     import_ur10_tracker(&series(name), &request).unwrap()
 }
 
-fn table(text: String) -> Source {
-    Source::Table {
+fn table(text: String) -> MeasurementSource {
+    MeasurementSource::Table {
         text,
         origin: "table".into(),
     }

@@ -12,13 +12,13 @@ fn numbers_text_empty_cells_and_comments() {
     assert!(t.simulated());
     assert_eq!(t.comments, ["SIMULATED run", "second"]);
     assert_eq!(t.rows, 2);
-    assert_eq!(t.columns[0].1, Column::Number(vec![0.0, 0.01]));
+    assert_eq!(t.columns[0].1, TableColumn::Number(vec![0.0, 0.01]));
     assert_eq!(
         t.columns[1].1,
-        Column::Text(vec!["ok".into(), "fault".into()])
+        TableColumn::Text(vec!["ok".into(), "fault".into()])
     );
     match &t.columns[2].1 {
-        Column::Number(v) => assert!(v[0] == 1.5 && v[1].is_nan()),
+        TableColumn::Number(v) => assert!(v[0] == 1.5 && v[1].is_nan()),
         other => panic!("{other:?}"),
     }
 }

@@ -36,10 +36,10 @@ fn scratch(name: &str) -> std::path::PathBuf {
 #[test]
 fn the_choices_parse_their_names_and_conflicts_are_refused() {
     use std::str::FromStr;
-    assert_eq!(Correction::from_str("on").unwrap(), Correction::On);
-    assert_eq!(Correction::Off.name(), "off");
+    assert_eq!(FormCorrection::from_str("on").unwrap(), FormCorrection::On);
+    assert_eq!(FormCorrection::Off.name(), "off");
     assert_eq!(
-        Correction::from_str("yes").unwrap_err().to_string(),
+        FormCorrection::from_str("yes").unwrap_err().to_string(),
         "correction: expected \"on\" or \"off\", got \"yes\""
     );
     let Ok(choice) = PathChoice::from_str("cone-contour");
@@ -48,13 +48,13 @@ fn the_choices_parse_their_names_and_conflicts_are_refused() {
     assert_eq!(choice, PathChoice::Gcode("part.gcode".into()));
     use deflex_app::OptionNames::{Cli, Python};
     assert!(matches!(
-        check_correction(Correction::Off, true, Python).unwrap_err(),
+        check_correction(FormCorrection::Off, true, Python).unwrap_err(),
         deflex_app::Error::FormConflict {
             conflict: FormConflict::ModelWithoutCorrection,
             ..
         }
     ));
-    assert!(check_correction(Correction::On, true, Python).is_ok());
+    assert!(check_correction(FormCorrection::On, true, Python).is_ok());
     let e = tool_path(
         &PathChoice::Gcode("part.gcode".into()),
         Some(5.0),
@@ -74,7 +74,7 @@ fn the_choices_parse_their_names_and_conflicts_are_refused() {
     );
     // The correction on needs its model, named by the option that gives it.
     let e = form(&FormOptions {
-        correction: Correction::On,
+        correction: FormCorrection::On,
         ..FormOptions::default()
     })
     .err()
@@ -82,7 +82,7 @@ fn the_choices_parse_their_names_and_conflicts_are_refused() {
     assert!(e.to_string().contains("--model MODEL.toml"), "{e}");
     let missing = scratch("no-model").join("model.toml");
     let e = form(&FormOptions {
-        correction: Correction::On,
+        correction: FormCorrection::On,
         model: Some(form::CorrectionModel::File(missing.clone())),
         ..FormOptions::default()
     })

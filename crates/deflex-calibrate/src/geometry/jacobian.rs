@@ -1,5 +1,5 @@
-//! Analytic Jacobians of the predictions of [`crate::geometry::model`]: one [`Column`] (position and
-//! orientation of the target) per parameter and reading.
+//! Analytic Jacobians of the predictions of [`crate::geometry::model`]: one [`ParameterColumn`]
+//! (position and orientation of the target) per parameter and reading.
 //!
 //! Every kinematic parameter is a screw at a known frame of the chain: a rotation δ about unit
 //! axis u through point o moves p by `u × (p − o) δ` and turns every frame distal to it by
@@ -32,9 +32,9 @@
 //! `J_l(θ) = I + (1 − cos t)/t² [θ]× + (t − sin t)/t³ [θ]×²`, `t = |θ|`.
 //!
 //! Each kinematic column also carries the change of the sag: the parameter's small rigid
-//! motion ([`Twist`]) moves the eDoF axes and centres, the bodies, the payload and the target
-//! distal to it, which changes both the screws and the gravity torques. The integration tests
-//! check every column, position and orientation, against central finite differences of the
+//! motion ([`ParameterTwist`]) moves the eDoF axes and centres, the bodies, the payload and the
+//! target distal to it, which changes both the screws and the gravity torques. The integration
+//! tests check every column, position and orientation, against central finite differences of the
 //! full prediction.
 
 use crate::geometry::model::Evaluation;
@@ -44,7 +44,7 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 
 /// The change of a reading's prediction per unit change of one parameter.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Column {
+pub struct ParameterColumn {
     /// Change of the target's position (m per unit).
     pub position: Vector3<f64>,
     /// Rate of the target frame's rotation, `dR·Rᵀ = [ω]×` (rad per unit).
@@ -56,7 +56,7 @@ pub struct Column {
 /// joint frames with index ≥ `first_frame` (0-based), their bodies and eDoFs, the flange, the
 /// target and the payload move.
 #[derive(Clone, Copy, Debug)]
-pub struct Twist {
+pub struct ParameterTwist {
     /// Rotation axis × rate (zero for a translation).
     pub axis: Vector3<f64>,
     /// A point on the rotation axis.
@@ -67,7 +67,7 @@ pub struct Twist {
     pub first_frame: usize,
 }
 
-impl Twist {
+impl ParameterTwist {
     fn point_rate(&self, x: &Vector3<f64>) -> Vector3<f64> {
         self.axis.cross(&(x - self.point)) + self.linear
     }
@@ -93,13 +93,13 @@ impl EgModel {
 
     /// World-frame column of one kinematic, target, compliance, mass, harmonic or backlash
     /// parameter at an evaluation (set-up parameters: see [`EgModel::tracker_column`]).
-    pub fn world_column(&self, ev: &Evaluation, param: Param) -> Column {
+    pub fn world_column(&self, ev: &Evaluation, param: Param) -> ParameterColumn {
         match param {
-            Param::SetupRotation(..) | Param::SetupTranslation(..) => Column::default(),
+            Param::SetupRotation(..) | Param::SetupTranslation(..) => ParameterColumn::default(),
             Param::Target(_, k) => self.target_column(ev, k),
             Param::TargetRotation(_, k) => {
                 let axis = ev.data.flange.rotation.matrix().column(k).into_owned();
-                Column {
+                ParameterColumn {
                     position: Vector3::zeros(),
                     rotation: Self::rotation_rate(ev, Vector3::zeros(), axis),
                 }
@@ -110,7 +110,7 @@ impl EgModel {
                     .expect("a DH, harmonic or backlash parameter has a twist");
                 self.kinematic_column(ev, &twist)
             }
-            Param::Compliance(e) => Column {
+            Param::Compliance(e) => ParameterColumn {
                 position: ev.screw_linear[e] * ev.torque[e],
                 rotation: Self::rotation_rate(
                     ev,
@@ -120,7 +120,7 @@ impl EgModel {
             },
             Param::Torsion { edof, shape } => {
                 let (g, _) = shape.value_slope(ev.torque[edof]);
-                Column {
+                ParameterColumn {
                     position: ev.screw_linear[edof] * g,
                     rotation: Self::rotation_rate(ev, ev.axis_center[edof].0 * g, Vector3::zeros()),
                 }
@@ -131,7 +131,7 @@ impl EgModel {
 
     /// Target coordinate k: the rigid point moves along the flange axis u; the sag's screws
     /// and the external wrench's torques move with it.
-    fn target_column(&self, ev: &Evaluation, k: usize) -> Column {
+    fn target_column(&self, ev: &Evaluation, k: usize) -> ParameterColumn {
         let u = ev.data.flange.rotation.matrix().column(k).into_owned();
         let mut position = u;
         let mut d_theta = Vector3::zeros();
@@ -142,14 +142,14 @@ impl EgModel {
             position += d_linear * ev.turn[e] + ev.screw_linear[e] * (ev.turn_slope[e] * d_torque);
             d_theta += axis * (ev.turn_slope[e] * d_torque);
         }
-        Column {
+        ParameterColumn {
             position,
             rotation: Self::rotation_rate(ev, d_theta, Vector3::zeros()),
         }
     }
 
     /// Lumped mass or first moment of body b: only the gravity torques change.
-    fn mass_column(&self, ev: &Evaluation, param: Param, b: usize) -> Column {
+    fn mass_column(&self, ev: &Evaluation, param: Param, b: usize) -> ParameterColumn {
         let g = self.robot.gravity;
         let frame = &ev.data.joint_frames[b];
         let mut position = Vector3::zeros();
@@ -167,7 +167,7 @@ impl EgModel {
             position += ev.screw_linear[e] * (ev.turn_slope[e] * dtau);
             d_theta += axis * (ev.turn_slope[e] * dtau);
         }
-        Column {
+        ParameterColumn {
             position,
             rotation: Self::rotation_rate(ev, d_theta, Vector3::zeros()),
         }
@@ -175,18 +175,19 @@ impl EgModel {
 
     /// The small rigid motion a kinematic parameter (DH field, harmonic or backlash) applies (module
     /// documentation); `None` for other parameters.
-    pub fn kinematic_twist(&self, ev: &Evaluation, param: Param) -> Option<Twist> {
+    pub fn kinematic_twist(&self, ev: &Evaluation, param: Param) -> Option<ParameterTwist> {
         let frames = &ev.data.joint_frames;
         let axis = |rotation: &Rotation3<f64>, k: usize| -> Vector3<f64> {
             rotation.matrix().column(k).into_owned()
         };
-        let rotation = |axis: Vector3<f64>, point: Vector3<f64>, first_frame: usize| Twist {
-            axis,
-            point,
-            linear: Vector3::zeros(),
-            first_frame,
-        };
-        let translation = |linear: Vector3<f64>, first_frame: usize| Twist {
+        let rotation =
+            |axis: Vector3<f64>, point: Vector3<f64>, first_frame: usize| ParameterTwist {
+                axis,
+                point,
+                linear: Vector3::zeros(),
+                first_frame,
+            };
+        let translation = |linear: Vector3<f64>, first_frame: usize| ParameterTwist {
             axis: Vector3::zeros(),
             point: Vector3::zeros(),
             linear,
@@ -245,7 +246,7 @@ impl EgModel {
                 }
             }
         };
-        Some(Twist {
+        Some(ParameterTwist {
             axis: twist.axis * factor,
             linear: twist.linear * factor,
             ..twist
@@ -254,10 +255,10 @@ impl EgModel {
 
     /// Column of a kinematic parameter: the target's rigid motion plus the change of the sag
     /// (eDoF axes and centres, bodies, payload and target all move with the twist).
-    pub fn kinematic_column(&self, ev: &Evaluation, twist: &Twist) -> Column {
+    pub fn kinematic_column(&self, ev: &Evaluation, twist: &ParameterTwist) -> ParameterColumn {
         let p = ev.target_world;
         let dp = twist.point_rate(&p);
-        let mut column = Column {
+        let mut column = ParameterColumn {
             position: dp,
             rotation: Vector3::zeros(),
         };
@@ -324,26 +325,26 @@ impl EgModel {
     }
 
     /// Column of `param` for an absolute reading in set-up `setup` (tracker frame).
-    pub fn tracker_column(&self, ev: &Evaluation, setup: usize, param: Param) -> Column {
+    pub fn tracker_column(&self, ev: &Evaluation, setup: usize, param: Param) -> ParameterColumn {
         let rotation = self.setups[setup].pose.rotation;
         match param {
             Param::SetupRotation(s, _) | Param::SetupTranslation(s, _) if s != setup => {
-                Column::default()
+                ParameterColumn::default()
             }
             Param::SetupRotation(_, k) => {
                 let e = Vector3::ith(k, 1.0);
-                Column {
+                ParameterColumn {
                     position: rotation * e.cross(&ev.predicted_world()),
                     rotation: rotation * e,
                 }
             }
-            Param::SetupTranslation(_, k) => Column {
+            Param::SetupTranslation(_, k) => ParameterColumn {
                 position: rotation * Vector3::ith(k, 1.0),
                 rotation: Vector3::zeros(),
             },
             other => {
                 let world = self.world_column(ev, other);
-                Column {
+                ParameterColumn {
                     position: rotation * world.position,
                     rotation: rotation * world.rotation,
                 }

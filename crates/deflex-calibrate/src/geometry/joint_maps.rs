@@ -319,7 +319,7 @@ pub fn train_into(
             &campaign.conditions(model, row),
         );
         let orientation = campaign.kind(i) == ReadingKind::Orientation;
-        let pick = |c: crate::geometry::jacobian::Column| {
+        let pick = |c: crate::geometry::jacobian::ParameterColumn| {
             if orientation { c.rotation } else { c.position }
         };
         index.clear();

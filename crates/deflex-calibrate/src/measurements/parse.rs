@@ -7,7 +7,7 @@ use crate::measurements::bounds::{
     DISPLACEMENT_COLUMNS, LOAD_POINT_COLUMNS, POINT_COLUMNS, ROTATION_COLUMNS, WRENCH_COLUMNS,
     column_bound,
 };
-use crate::measurements::reader::{self, Cells, Columns, Format, RowLimit};
+use crate::measurements::reader::{self, Cells, Columns, MeasurementFormat, RowLimit};
 use crate::measurements::{
     DataError, HeaderProblem, LabelLength, LoadCaseConflict, MAX_LABEL_CHARS, MAX_ROWS,
     MeasuredRotation, MeasurementFile, MeasurementRow, RowError, RowProblem, SigmaColumn,
@@ -119,7 +119,7 @@ struct Found {
     has_purpose: bool,
 }
 
-impl Format for LoadedDisplacements<'_> {
+impl MeasurementFormat for LoadedDisplacements<'_> {
     type Row = MeasurementRow;
     type Columns = Found;
     const ROW_LIMIT: RowLimit = RowLimit::PerLine(MAX_ROWS);

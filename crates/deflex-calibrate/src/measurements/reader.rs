@@ -1,7 +1,7 @@
 //! The one reader of the crate's measurement files: loaded displacements and plans
 //! ([`crate::measurements`]) and absolute tracker readings ([`crate::geometry::data`]). A
-//! [`Format`] names its columns and builds its row from the cells; [`read`] does the rest, the
-//! same way for every format:
+//! [`MeasurementFormat`] names its columns and builds its row from the cells; [`read`] does the
+//! rest, the same way for every format:
 //!
 //! * lines starting with `#` are comments; those before the column names may say which robot the
 //!   file was made for (`# robot:`, `# geometry:`: [`FileHeader`]);
@@ -25,7 +25,7 @@ use crate::measurements::{
 use std::collections::HashMap;
 
 /// A measurement format: its columns and its row.
-pub trait Format {
+pub trait MeasurementFormat {
     /// One row of the format.
     type Row;
     /// What the format found in a file's header (its joint count, which optional columns it has).
@@ -57,7 +57,7 @@ pub enum RowLimit {
 
 /// A file as read: its header comments, its rows and the line of each row.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Table<R> {
+pub struct MeasurementTable<R> {
     /// The header comments.
     pub header: FileHeader,
     /// The rows.
@@ -68,7 +68,11 @@ pub struct Table<R> {
 
 /// Read CSV text of `format`; `origin` names the file in errors. A file without data rows is an
 /// error.
-pub fn read<F: Format>(format: &F, text: &str, origin: &str) -> Result<Table<F::Row>, DataError> {
+pub fn read<F: MeasurementFormat>(
+    format: &F,
+    text: &str,
+    origin: &str,
+) -> Result<MeasurementTable<F::Row>, DataError> {
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .flexible(true)
@@ -144,7 +148,7 @@ pub fn read<F: Format>(format: &F, text: &str, origin: &str) -> Result<Table<F::
             path: origin.to_string(),
         });
     }
-    Ok(Table {
+    Ok(MeasurementTable {
         header: FileHeader::parse(text),
         rows,
         lines,

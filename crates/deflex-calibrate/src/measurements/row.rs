@@ -61,7 +61,7 @@ impl MeasuredRotation {
     }
 }
 /// A measurement or plan file as read: its header comments, its rows and the line of each row.
-pub type MeasurementFile = crate::measurements::reader::Table<MeasurementRow>;
+pub type MeasurementFile = crate::measurements::reader::MeasurementTable<MeasurementRow>;
 
 /// Number of distinct load cases among `rows`.
 pub fn load_case_count(rows: &[MeasurementRow]) -> usize {

@@ -72,7 +72,7 @@ pub enum Floor {
 
 /// A work table: a box from the floor to `top_z_m` over a rectangle (world, m).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Table {
+pub struct WorkTable {
     /// x range (min, max).
     pub x_m: [f64; 2],
     /// y range (min, max).
@@ -87,7 +87,7 @@ pub enum TableOption {
     /// [`default_table`].
     Default,
     /// This table.
-    At(Table),
+    At(WorkTable),
     /// No table check.
     Off,
 }
@@ -261,10 +261,10 @@ pub fn default_floor_z(robot: &Robot) -> Result<f64, CalibError> {
 }
 
 /// The default work table for a floor at `floor_z` (see the module documentation).
-pub fn default_table(robot: &Robot, floor_z: f64) -> Table {
+pub fn default_table(robot: &Robot, floor_z: f64) -> WorkTable {
     let reach = robot.reach_bound();
     let axis = robot.base.translation.vector;
-    Table {
+    WorkTable {
         x_m: [axis.x + 0.5 * reach, axis.x + 0.85 * reach],
         y_m: [axis.y - 0.3 * reach, axis.y + 0.3 * reach],
         top_z_m: floor_z + 0.2 * reach,
@@ -323,7 +323,7 @@ pub struct Obstacles {
     /// Floor height (world z, m), when checked.
     pub floor_z_m: Option<f64>,
     /// The table, when checked.
-    pub table: Option<Table>,
+    pub table: Option<WorkTable>,
     /// Clearance above both (m).
     pub clearance_m: f64,
     /// Free height needed below a hanging load's attachment (m).

@@ -3,7 +3,7 @@
 
 use crate::measurements::{DataError, RowValueError};
 use crate::stiffness::consistency::{GeometryMismatch, MAX_FK_TOLERANCE_M, MIN_FK_TOLERANCE_M};
-use crate::stiffness::plan::Table;
+use crate::stiffness::plan::WorkTable;
 use deflex_model::QLengthError;
 use thiserror::Error;
 
@@ -337,7 +337,7 @@ pub enum PlanError {
         /// The floor checked (world z, m).
         floor_z_m: Option<f64>,
         /// The table checked.
-        table: Option<Table>,
+        table: Option<WorkTable>,
     },
 }
 

@@ -5,8 +5,8 @@ use crate::gcode::arc;
 use crate::gcode::error::{GcodeError, GcodeErrorKind as K, Note, NoteKind};
 use crate::gcode::words::{Word, split};
 use crate::gcode::{
-    MAX_COORDINATE_BOUND_MM, MAX_FEED_BOUND_MM_MIN, MAX_LINE_CHARS, MAX_TEXT_BYTES,
-    MIN_FEED_MM_MIN, Move, MoveKind, PathPoint, Plane, Program, ReadOptions, WorkOffset,
+    GcodePoint, GcodeProgram, MAX_COORDINATE_BOUND_MM, MAX_FEED_BOUND_MM_MIN, MAX_LINE_CHARS,
+    MAX_TEXT_BYTES, MIN_FEED_MM_MIN, Move, MoveKind, Plane, ReadOptions, WorkOffset,
 };
 
 /// Modal motion.
@@ -803,7 +803,7 @@ fn check_options(options: &ReadOptions) -> Result<(), GcodeError> {
 }
 
 /// See [`crate::gcode::read`].
-pub(crate) fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
+pub(crate) fn read(text: &str, options: &ReadOptions) -> Result<GcodeProgram, GcodeError> {
     check_options(options)?;
     if text.len() > MAX_TEXT_BYTES {
         return Err(GcodeError {
@@ -828,7 +828,7 @@ pub(crate) fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeEr
 }
 
 /// Fill the start's unknown axes and build the program.
-fn finish(mut state: State) -> Result<Program, GcodeError> {
+fn finish(mut state: State) -> Result<GcodeProgram, GcodeError> {
     if state.points.len() < 2 {
         return Err(GcodeError {
             line: 0,
@@ -856,9 +856,9 @@ fn finish(mut state: State) -> Result<Program, GcodeError> {
     }
     let resolve =
         |p: [Option<f64>; 3]| -> [f64; 3] { std::array::from_fn(|a| p[a].unwrap_or(fill[a])) };
-    let mut points: Vec<PathPoint> = Vec::with_capacity(state.points.len());
+    let mut points: Vec<GcodePoint> = Vec::with_capacity(state.points.len());
     for raw in &state.points {
-        points.push(PathPoint {
+        points.push(GcodePoint {
             p_mm: resolve(raw.p),
             feed_mm_s: if points.is_empty() {
                 None
@@ -871,7 +871,7 @@ fn finish(mut state: State) -> Result<Program, GcodeError> {
     // Points that only filled an unknown axis are the same place: drop the repeats (the path's
     // moves are never zero-length).
     let mut keep: Vec<usize> = Vec::with_capacity(points.len());
-    let mut dedup: Vec<PathPoint> = Vec::with_capacity(points.len());
+    let mut dedup: Vec<GcodePoint> = Vec::with_capacity(points.len());
     for p in points {
         if let Some(last) = dedup.last()
             && (0..3).all(|a| (last.p_mm[a] - p.p_mm[a]).abs() <= 1e-9)
@@ -902,7 +902,7 @@ fn finish(mut state: State) -> Result<Program, GcodeError> {
             last_point: keep[last],
         })
         .collect();
-    Ok(Program {
+    Ok(GcodeProgram {
         number: state.number,
         work_offset: state.work_offset,
         moves,

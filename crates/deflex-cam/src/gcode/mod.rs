@@ -40,7 +40,7 @@
 //! (default [`MAX_COORDINATE_MM`]), feeds within [`MIN_FEED_MM_MIN`] ..=
 //! [`ReadOptions::max_feed_mm_min`] (default [`MAX_FEED_MM_MIN`]) mm/min.
 //!
-//! [`read`] reads a whole program into a [`Program`]; [`LineReader`] reads one line at a time
+//! [`read`] reads a whole program into a [`GcodeProgram`]; [`LineReader`] reads one line at a time
 //! and hands each line's move out as it is read, keeping nothing but the modal state (the
 //! programs deflex writes, read back by [`crate::program::readback`], may be too long to hold).
 //!
@@ -220,13 +220,13 @@ pub struct Move {
     pub end_mm: [f64; 3],
     /// Feed (mm/s); `None` for a rapid.
     pub feed_mm_s: Option<f64>,
-    /// Index in [`Program::points`] of the move's last point.
+    /// Index in [`GcodeProgram::points`] of the move's last point.
     pub last_point: usize,
 }
 
 /// One point of the interpolated path.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PathPoint {
+pub struct GcodePoint {
     /// Tool centre point (mm, work offset frame).
     pub p_mm: [f64; 3],
     /// Feed of the move ending here (mm/s); `None`: a rapid, and the first point.
@@ -237,7 +237,7 @@ pub struct PathPoint {
 
 /// A program read.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Program {
+pub struct GcodeProgram {
     /// The `O` number, if any.
     pub number: Option<u32>,
     /// The work offset the moves are written in, if the program names one.
@@ -245,14 +245,14 @@ pub struct Program {
     /// The moves, in order.
     pub moves: Vec<Move>,
     /// The path: the start of the first move, then the end of every move, arcs interpolated.
-    pub points: Vec<PathPoint>,
+    pub points: Vec<GcodePoint>,
     /// What was ignored or assumed.
     pub notes: Vec<Note>,
     /// The chord tolerance used (mm).
     pub chord_tolerance_mm: f64,
 }
 
-impl Program {
+impl GcodeProgram {
     /// Length of the path (mm).
     pub fn length_mm(&self) -> f64 {
         self.points
@@ -266,6 +266,6 @@ impl Program {
 }
 
 /// Read a program (see the crate documentation).
-pub fn read(text: &str, options: &ReadOptions) -> Result<Program, GcodeError> {
+pub fn read(text: &str, options: &ReadOptions) -> Result<GcodeProgram, GcodeError> {
     interpreter::read(text, options)
 }

@@ -17,7 +17,7 @@ use deflex_app::twin::form::{
 };
 use deflex_app::twin::path::{FEED_RANGE_MM_S, LENGTH_RANGE_MM};
 use deflex_app::twin::{
-    Correction, PathChoice, RECORDING, RunFolder, TwinRun, WrittenRun, check_correction,
+    FormCorrection, PathChoice, RECORDING, RunFolder, TwinRun, WrittenRun, check_correction,
 };
 use deflex_record::RecordStats;
 use deflex_telemetry::{CycleSample, broadcast};
@@ -52,7 +52,7 @@ pub struct IsfArgs {
     pub fixture_stiffness_n_m: Option<f64>,
     /// Online correction: `off` (default) or `on` (needs --model).
     #[arg(long, value_enum, default_value = "off", hide_possible_values = true)]
-    pub correction: Correction,
+    pub correction: FormCorrection,
     /// Identified model used by the correction controller (robot TOML).
     #[arg(long)]
     pub model: Option<PathBuf>,
@@ -249,8 +249,8 @@ impl RunReport<'_> {
 /// The key of the recorded stream's source.
 fn info_key(closed_loop: bool) -> &'static str {
     if closed_loop {
-        deflex_telemetry::Source::Twin.key()
+        deflex_telemetry::StreamSource::Twin.key()
     } else {
-        deflex_telemetry::Source::TwinCell.key()
+        deflex_telemetry::StreamSource::TwinCell.key()
     }
 }

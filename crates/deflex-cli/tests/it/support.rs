@@ -1,7 +1,7 @@
 //! What the tests of the binary share: running `deflex`, a fresh folder per test, free loopback
 //! ports, and the robot and the sensor a `deflex run` session talks to.
 
-use deflex_io::netft::{Calibration, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtSensorServer};
 use deflex_io::simple_udp::SimpleUdpRobotEndpoint;
 use deflex_io::{RobotSideLink, RobotState};
 use deflex_model::Wrench;
@@ -120,9 +120,11 @@ impl RunPeers {
         let sensor = {
             let (stop, answered) = (stop.clone(), answered.clone());
             std::thread::spawn(move || {
-                let mut s =
-                    NetFtSensorServer::bind(("127.0.0.1", sensor_port), Calibration::default())
-                        .unwrap();
+                let mut s = NetFtSensorServer::bind(
+                    ("127.0.0.1", sensor_port),
+                    NetFtCalibration::default(),
+                )
+                .unwrap();
                 while !stop.load(Ordering::Acquire) {
                     let Some(wrench) = sensor_wrench(answered.load(Ordering::Acquire)) else {
                         break;

@@ -2,8 +2,8 @@
 //! rows, checked, rotated into the robot's base axes, interpolated by arc length or time.
 
 use super::{
-    FeedForwardError, MAX_TABLE_COORDINATE_M, MAX_TABLE_POSITION_M, MAX_TABLE_ROTATION_RAD,
-    TableColumn,
+    FeedForwardColumn, FeedForwardError, MAX_TABLE_COORDINATE_M, MAX_TABLE_POSITION_M,
+    MAX_TABLE_ROTATION_RAD,
 };
 use deflex_model::{Displacement, Robot};
 use nalgebra::Vector3;
@@ -47,7 +47,7 @@ fn rotate6(r: &nalgebra::Rotation3<f64>, v: &[f64]) -> [f64; 6] {
 /// `value` within ±`limit`, else the error naming the point and the quantity.
 fn bounded(
     point: usize,
-    column: TableColumn,
+    column: FeedForwardColumn,
     value: f64,
     limit: f64,
 ) -> Result<(), FeedForwardError> {
@@ -71,8 +71,12 @@ fn check_point(
 ) -> Result<Vector3<f64>, FeedForwardError> {
     if let Some(prev) = previous {
         for (column, value, previous) in [
-            (TableColumn::ArcLength, p.arc_length_m, prev.arc_length_m),
-            (TableColumn::Time, p.time_s, prev.time_s),
+            (
+                FeedForwardColumn::ArcLength,
+                p.arc_length_m,
+                prev.arc_length_m,
+            ),
+            (FeedForwardColumn::Time, p.time_s, prev.time_s),
         ] {
             if value < previous {
                 return Err(FeedForwardError::NotMonotone {
@@ -90,15 +94,20 @@ fn check_point(
         } else {
             MAX_TABLE_ROTATION_RAD
         };
-        bounded(i, TableColumn::Deflection(k), p.deflection[k], limit)?;
-        bounded(i, TableColumn::Compensation(k), p.compensation[k], limit)?;
+        bounded(i, FeedForwardColumn::Deflection(k), p.deflection[k], limit)?;
+        bounded(
+            i,
+            FeedForwardColumn::Compensation(k),
+            p.compensation[k],
+            limit,
+        )?;
     }
     let commanded =
         p.desired_m + Vector3::new(p.compensation[0], p.compensation[1], p.compensation[2]);
     for k in 0..3 {
         bounded(
             i,
-            TableColumn::CommandedPosition(k),
+            FeedForwardColumn::CommandedPosition(k),
             commanded[k],
             MAX_TABLE_COORDINATE_M,
         )?;

@@ -239,7 +239,7 @@ fn tables_are_rotated_into_base_axes_and_checked() {
         fails(bad),
         FeedForwardError::NotMonotone {
             point: 3,
-            column: TableColumn::Time,
+            column: FeedForwardColumn::Time,
             value: 0.0,
             previous: 0.2
         }
@@ -248,7 +248,7 @@ fn tables_are_rotated_into_base_axes_and_checked() {
     bad[1].deflection[4] = 0.5;
     let e = fails(bad);
     assert!(
-        matches!(e, FeedForwardError::OutOfBounds { point: 1, column: TableColumn::Deflection(4), value, .. } if value == 0.5),
+        matches!(e, FeedForwardError::OutOfBounds { point: 1, column: FeedForwardColumn::Deflection(4), value, .. } if value == 0.5),
         "{e:?}"
     );
     assert!(e.to_string().contains("point 1: deflection ry"), "{e}");
@@ -258,7 +258,7 @@ fn tables_are_rotated_into_base_axes_and_checked() {
         fails(bad),
         FeedForwardError::OutOfBounds {
             point: 1,
-            column: TableColumn::Compensation(0),
+            column: FeedForwardColumn::Compensation(0),
             ..
         }
     ));

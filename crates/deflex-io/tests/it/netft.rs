@@ -59,7 +59,7 @@ fn record_known_bytes_to_si() {
     ];
     let r = decode_record(&b).unwrap();
     assert_eq!((r.rdt_sequence, r.ft_sequence, r.status), (1, 2, 0));
-    let w = Calibration::default().to_wrench(&r.counts);
+    let w = NetFtCalibration::default().to_wrench(&r.counts);
     assert_eq!(w[0], 1.5);
     assert_eq!(w[1], -0.25);
     assert_eq!(w[3], 1.0);
@@ -71,7 +71,7 @@ fn record_known_bytes_to_si() {
     assert!(decode_records(&[]).is_err());
     let two = [b, b].concat();
     assert_eq!(decode_records(&two).unwrap().count(), 2);
-    let c = Calibration {
+    let c = NetFtCalibration {
         counts_per_force: 1e6,
         counts_per_torque: 1e6,
     };
@@ -91,15 +91,15 @@ fn calibration_from_netftapi2_xml() {
 <netft><setserial>FT12345</setserial><cfgnam>Omega160</cfgnam>
 <cfgcpf>1000000</cfgcpf><cfgcpt>1000000</cfgcpt><scfgfu>N</scfgfu><scfgtu>N-m</scfgtu>
 <comrdtrate>1000</comrdtrate></netft>"#;
-    let c = Calibration::from_netftapi2_xml(xml).unwrap();
-    assert_eq!(c, Calibration::default());
+    let c = NetFtCalibration::from_netftapi2_xml(xml).unwrap();
+    assert_eq!(c, NetFtCalibration::default());
     // Units other than SI: counts per lbf and per lbf-in.
     let xml = "<netft><cfgcpf>4448.2216152605</cfgcpf><cfgcpt>1129.848290276167</cfgcpt><scfgfu>lbf</scfgfu><scfgtu>lbf-in</scfgtu></netft>";
-    let c = Calibration::from_netftapi2_xml(xml).unwrap();
+    let c = NetFtCalibration::from_netftapi2_xml(xml).unwrap();
     assert!((c.counts_per_force - 1000.0).abs() < 1e-6);
     assert!((c.counts_per_torque - 10000.0).abs() < 1e-6);
     let xml = "<netft><cfgcpf>1000</cfgcpf><cfgcpt>10</cfgcpt><scfgfu>kN</scfgfu><scfgtu>N-mm</scfgtu></netft>";
-    let c = Calibration::from_netftapi2_xml(xml).unwrap();
+    let c = NetFtCalibration::from_netftapi2_xml(xml).unwrap();
     assert!((c.counts_per_force - 1.0).abs() < 1e-12);
     assert!((c.counts_per_torque - 10_000.0).abs() < 1e-9);
     for bad in [
@@ -109,7 +109,7 @@ fn calibration_from_netftapi2_xml() {
         "<netft><cfgcpf>1</cfgcpf><cfgcpt>1</cfgcpt><scfgfu>furlong</scfgfu></netft>",
         "<netft><cfgcpf>1</cfgcpf>",
     ] {
-        assert!(Calibration::from_netftapi2_xml(bad).is_err(), "{bad}");
+        assert!(NetFtCalibration::from_netftapi2_xml(bad).is_err(), "{bad}");
     }
 }
 
@@ -141,14 +141,14 @@ fn fuzz_decoders_never_panic() {
         let _ = decode_records(&b).map(|it| it.count());
         let _ = decode_request(&b);
         let s = String::from_utf8_lossy(&b);
-        let _ = Calibration::from_netftapi2_xml(&s);
+        let _ = NetFtCalibration::from_netftapi2_xml(&s);
     }
     assert!(ok > 0);
 }
 
 #[test]
 fn loopback_stream_bias_gap_and_fault() {
-    let cal = Calibration::default();
+    let cal = NetFtCalibration::default();
     let mut sensor = NetFtSensorServer::bind("127.0.0.1:0", cal).unwrap();
     let mut client = NetFtClient::new("127.0.0.1:0", sensor.local_addr().unwrap(), cal).unwrap();
     let t = Duration::from_secs(2);

@@ -13,7 +13,7 @@
 use deflex_io::egm::{EgmConfig, EgmFrame, EgmLink, fill_robot_msg, msg};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, parse_correction_line};
-use deflex_io::staubli::{Header, StateMsg, StaubliLink, decode_correction, encode_state};
+use deflex_io::staubli::{StateMsg, StaubliHeader, StaubliLink, decode_correction, encode_state};
 use deflex_io::{Correction, DropReason, LinkError, RobotLink, RobotState};
 use std::net::{SocketAddr, UdpSocket};
 use std::time::Duration;
@@ -350,7 +350,7 @@ fn rsi_ipoc_wrapping_at_32_bits_advances() {
 
 fn state(seq: u32, t: f64) -> Vec<u8> {
     let m = StateMsg {
-        header: Header {
+        header: StaubliHeader {
             flags: 0,
             seq,
             ack: 0,

@@ -23,7 +23,7 @@ fn fletcher16_reference_vectors() {
 #[test]
 fn correction_known_layout() {
     let m = CorrectionMsg {
-        header: Header {
+        header: StaubliHeader {
             flags: FLAG_ACTIVE,
             seq: 0x0102_0304,
             ack: 7,
@@ -47,7 +47,7 @@ fn correction_known_layout() {
 #[test]
 fn state_round_trip_and_errors() {
     let m = StateMsg {
-        header: Header {
+        header: StaubliHeader {
             flags: 0,
             seq: 99,
             ack: 98,

@@ -5,7 +5,7 @@ use super::convert::{json_to_py, rows_to_numpy, run, to_numpy, to_py, type_error
 use super::robot::{PyRobot, robot_arg};
 use deflex_app::OptionNames;
 use deflex_app::calibrate::{
-    self, CalibrateOptions, CriterionChoice, DataCheck, Source, StructureChoice,
+    self, CalibrateOptions, CriterionChoice, DataCheck, MeasurementSource, StructureChoice,
 };
 use deflex_app::error::Error;
 use pyo3::prelude::*;
@@ -13,13 +13,15 @@ use pyo3::types::PyTuple;
 use std::path::PathBuf;
 
 /// A data source from the Python layer: `("file", path)` or `("table", csv_text, origin)`.
-pub fn source_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Source> {
+pub fn source_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<MeasurementSource> {
     let bad = || type_error(py, "data", "a file path or a table", obj);
     let tuple = obj.cast::<PyTuple>().map_err(|_| bad())?;
     let kind: String = tuple.get_item(0)?.extract().map_err(|_| bad())?;
     match (kind.as_str(), tuple.len()) {
-        ("file", 2) => Ok(Source::File(tuple.get_item(1)?.extract::<PathBuf>()?)),
-        ("table", 3) => Ok(Source::Table {
+        ("file", 2) => Ok(MeasurementSource::File(
+            tuple.get_item(1)?.extract::<PathBuf>()?,
+        )),
+        ("table", 3) => Ok(MeasurementSource::Table {
             text: tuple.get_item(1)?.extract()?,
             origin: tuple.get_item(2)?.extract()?,
         }),
@@ -27,7 +29,7 @@ pub fn source_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Source> {
     }
 }
 
-pub fn sources(py: Python<'_>, list: &[Bound<'_, PyAny>]) -> PyResult<Vec<Source>> {
+pub fn sources(py: Python<'_>, list: &[Bound<'_, PyAny>]) -> PyResult<Vec<MeasurementSource>> {
     list.iter().map(|o| source_arg(py, o)).collect()
 }
 
@@ -263,7 +265,7 @@ pub fn _calibrate(
 /// Prediction errors of a model (and a baseline) on measured rows (``deflex.validate``).
 #[pyclass(module = "deflex", frozen, name = "Validation")]
 pub struct PyValidation {
-    inner: calibrate::Validation,
+    inner: calibrate::ValidationRun,
 }
 
 #[pymethods]

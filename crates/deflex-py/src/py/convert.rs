@@ -225,17 +225,17 @@ pub fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny
 /// SIMULATED flag.
 pub fn make_log<'py>(
     py: Python<'py>,
-    table: deflex_app::table::Table,
+    table: deflex_app::table::CsvTable,
 ) -> PyResult<Bound<'py, PyAny>> {
     let columns = PyDict::new(py);
     let simulated = table.simulated();
     let rows = table.rows;
     for (name, column) in table.columns {
         match column {
-            deflex_app::table::Column::Number(values) => {
+            deflex_app::table::TableColumn::Number(values) => {
                 columns.set_item(name, to_numpy(py, values, &[rows])?)?
             }
-            deflex_app::table::Column::Text(values) => {
+            deflex_app::table::TableColumn::Text(values) => {
                 columns.set_item(name, PyList::new(py, values)?)?
             }
         }

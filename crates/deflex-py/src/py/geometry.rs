@@ -248,7 +248,7 @@ pub fn _calibrate_geometry(
 /// Per-row predictions of a calibrated robot (``deflex.predict``).
 #[pyclass(module = "deflex", frozen, name = "Prediction")]
 pub struct PyPrediction {
-    inner: calibrate_geometry::Prediction,
+    inner: calibrate_geometry::PredictionRun,
 }
 
 #[pymethods]

@@ -5,7 +5,7 @@ use super::robot::{PyRobot, robot_arg};
 use deflex_app::OptionNames;
 use deflex_app::error::{Error, bounded};
 use deflex_app::twin::form::{CorrectionModel, FIXTURE_STIFFNESS_RANGE_N_M};
-use deflex_app::twin::{self, Correction, FormOptions, PathChoice, TwinRun};
+use deflex_app::twin::{self, FormCorrection, FormOptions, PathChoice, TwinRun};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -104,12 +104,12 @@ pub fn _form(
     feed_m_s: Option<f64>,
     fixture_stiffness_n_m: Option<f64>,
 ) -> PyResult<PyTwinRun> {
-    let correction = Correction::from_str(correction).map_err(|e| to_py(py, e))?;
+    let correction = FormCorrection::from_str(correction).map_err(|e| to_py(py, e))?;
     let Ok(path) = PathChoice::from_str(&path.display().to_string());
     twin::check_correction(correction, model.is_some(), OptionNames::Python)
         .map_err(|e| to_py(py, e))?;
     let model = match (correction, model) {
-        (Correction::On, None) => {
+        (FormCorrection::On, None) => {
             return Err(to_py(
                 py,
                 Error::invalid(

@@ -6,8 +6,8 @@ use deflex_record::{
 };
 use deflex_telemetry::CycleSample;
 use deflex_telemetry::ros::{
-    DiagnosticArray, JointState, PoseStamped, RosMessage, TwistStamped, Vector3Stamped,
-    WrenchStamped,
+    DiagnosticArrayMsg, JointStateMsg, PoseStampedMsg, RosMessage, TwistStampedMsg,
+    Vector3StampedMsg, WrenchStampedMsg,
 };
 use deflex_telemetry::synthetic::SyntheticCell;
 use std::io::{Cursor, Write};
@@ -105,63 +105,63 @@ fn channels_have_the_ros2_schemas_and_encodings() {
     let expected: [(&str, &str, &str); 12] = [
         (
             channels::JOINT_STATES,
-            JointState::NAME,
-            JointState::DEFINITION,
+            JointStateMsg::NAME,
+            JointStateMsg::DEFINITION,
         ),
         (
             channels::WRENCH_RAW,
-            WrenchStamped::NAME,
-            WrenchStamped::DEFINITION,
+            WrenchStampedMsg::NAME,
+            WrenchStampedMsg::DEFINITION,
         ),
         (
             channels::WRENCH_SENSOR,
-            WrenchStamped::NAME,
-            WrenchStamped::DEFINITION,
+            WrenchStampedMsg::NAME,
+            WrenchStampedMsg::DEFINITION,
         ),
         (
             channels::WRENCH_TCP,
-            WrenchStamped::NAME,
-            WrenchStamped::DEFINITION,
+            WrenchStampedMsg::NAME,
+            WrenchStampedMsg::DEFINITION,
         ),
         (
             channels::TCP_POSE,
-            PoseStamped::NAME,
-            PoseStamped::DEFINITION,
+            PoseStampedMsg::NAME,
+            PoseStampedMsg::DEFINITION,
         ),
         (
             channels::PROGRAM_POSE,
-            PoseStamped::NAME,
-            PoseStamped::DEFINITION,
+            PoseStampedMsg::NAME,
+            PoseStampedMsg::DEFINITION,
         ),
         (
             channels::DEFLECTION,
-            TwistStamped::NAME,
-            TwistStamped::DEFINITION,
+            TwistStampedMsg::NAME,
+            TwistStampedMsg::DEFINITION,
         ),
         (
             channels::CORRECTION,
-            TwistStamped::NAME,
-            TwistStamped::DEFINITION,
+            TwistStampedMsg::NAME,
+            TwistStampedMsg::DEFINITION,
         ),
         (
             channels::ERROR,
-            TwistStamped::NAME,
-            TwistStamped::DEFINITION,
+            TwistStampedMsg::NAME,
+            TwistStampedMsg::DEFINITION,
         ),
         (
             channels::FEEDFORWARD,
-            TwistStamped::NAME,
-            TwistStamped::DEFINITION,
+            TwistStampedMsg::NAME,
+            TwistStampedMsg::DEFINITION,
         ),
         (
             channels::PATH_ERROR,
-            Vector3Stamped::NAME,
-            Vector3Stamped::DEFINITION,
+            Vector3StampedMsg::NAME,
+            Vector3StampedMsg::DEFINITION,
         ),
         (
             channels::DIAGNOSTICS,
-            DiagnosticArray::NAME,
-            DiagnosticArray::DEFINITION,
+            DiagnosticArrayMsg::NAME,
+            DiagnosticArrayMsg::DEFINITION,
         ),
     ];
     for (topic, name, definition) in expected {
@@ -201,17 +201,23 @@ fn channels_have_the_ros2_schemas_and_encodings() {
         let message = message.unwrap();
         let data = &message.data[..];
         let ok = match message.channel.schema.as_ref().map(|s| s.name.as_str()) {
-            Some(JointState::NAME) => deflex_telemetry::ros::decode::<JointState>(data).is_ok(),
-            Some(WrenchStamped::NAME) => {
-                deflex_telemetry::ros::decode::<WrenchStamped>(data).is_ok()
+            Some(JointStateMsg::NAME) => {
+                deflex_telemetry::ros::decode::<JointStateMsg>(data).is_ok()
             }
-            Some(PoseStamped::NAME) => deflex_telemetry::ros::decode::<PoseStamped>(data).is_ok(),
-            Some(TwistStamped::NAME) => deflex_telemetry::ros::decode::<TwistStamped>(data).is_ok(),
-            Some(Vector3Stamped::NAME) => {
-                deflex_telemetry::ros::decode::<Vector3Stamped>(data).is_ok()
+            Some(WrenchStampedMsg::NAME) => {
+                deflex_telemetry::ros::decode::<WrenchStampedMsg>(data).is_ok()
             }
-            Some(DiagnosticArray::NAME) => {
-                deflex_telemetry::ros::decode::<DiagnosticArray>(data).is_ok()
+            Some(PoseStampedMsg::NAME) => {
+                deflex_telemetry::ros::decode::<PoseStampedMsg>(data).is_ok()
+            }
+            Some(TwistStampedMsg::NAME) => {
+                deflex_telemetry::ros::decode::<TwistStampedMsg>(data).is_ok()
+            }
+            Some(Vector3StampedMsg::NAME) => {
+                deflex_telemetry::ros::decode::<Vector3StampedMsg>(data).is_ok()
+            }
+            Some(DiagnosticArrayMsg::NAME) => {
+                deflex_telemetry::ros::decode::<DiagnosticArrayMsg>(data).is_ok()
             }
             _ => serde_json::from_slice::<SessionRecord>(data).is_ok(),
         };
@@ -418,9 +424,9 @@ fn a_discarded_recording_leaves_the_earlier_file_whole() {
 /// and reads back with it.
 #[test]
 fn twin_cell_states_are_named_and_read_back() {
-    use deflex_telemetry::{CellState, Source};
+    use deflex_telemetry::{CellState, StreamSource};
     let mut info = SyntheticCell::new(0.02, 1, true).session_info();
-    info.source = Source::TwinCell;
+    info.source = StreamSource::TwinCell;
     let mut sink = McapSink::new(Vec::new(), "memory", &info, RecordOptions::default()).unwrap();
     let states = [CellState::Waiting, CellState::Forming, CellState::Finished];
     for (k, state) in states.iter().enumerate() {
@@ -440,6 +446,6 @@ fn twin_cell_states_are_named_and_read_back() {
     let summary = for_each_cycle(&path, |s| back.push(s.phase_code)).unwrap();
     assert_eq!(summary.session.unwrap().source, "twin-cell");
     assert_eq!(back, states.map(CellState::code).to_vec());
-    assert_eq!(Source::TwinCell.phase_name(back[1]), "forming");
+    assert_eq!(StreamSource::TwinCell.phase_name(back[1]), "forming");
     let _ = std::fs::remove_dir_all(dir);
 }

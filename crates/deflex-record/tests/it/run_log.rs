@@ -5,7 +5,7 @@
 use deflex_control::CycleOutput;
 use deflex_record::log_reader::{LogReadError, LogReader};
 use deflex_record::run_log::{
-    Block, RUN_LOG_SKIP_FLAGS, RunLogColumn, RunLogFormat, cycle_sample, joint_columns,
+    RUN_LOG_SKIP_FLAGS, RunLogBlock, RunLogColumn, RunLogFormat, cycle_sample, joint_columns,
 };
 use deflex_telemetry::{CycleSample, Flags};
 
@@ -30,14 +30,20 @@ fn columns_carry_their_units() {
     let cell = RunLogFormat::cell(6);
     assert_eq!(cell.columns().len(), 1 + 6 + 7 * 6 + 5);
     assert_eq!(RunLogColumn::Joint(0).name(), "q1_rad");
-    assert_eq!(RunLogColumn::Block(Block::TcpWrench, 5).name(), "w_mz_nm");
     assert_eq!(
-        RunLogColumn::Block(Block::Correction, 3).name(),
+        RunLogColumn::Block(RunLogBlock::TcpWrench, 5).name(),
+        "w_mz_nm"
+    );
+    assert_eq!(
+        RunLogColumn::Block(RunLogBlock::Correction, 3).name(),
         "xi_rx_rad"
     );
-    assert_eq!(RunLogColumn::Block(Block::TcpWrench, 4).unit(), "N·m");
-    assert_eq!(RunLogColumn::Block(Block::Deflection, 2).unit(), "m");
-    assert_eq!(RunLogColumn::Block(Block::FeedForward, 5).unit(), "rad");
+    assert_eq!(RunLogColumn::Block(RunLogBlock::TcpWrench, 4).unit(), "N·m");
+    assert_eq!(RunLogColumn::Block(RunLogBlock::Deflection, 2).unit(), "m");
+    assert_eq!(
+        RunLogColumn::Block(RunLogBlock::FeedForward, 5).unit(),
+        "rad"
+    );
     assert_eq!(RunLogColumn::CycleTime.unit(), "µs");
     // Every column's name ends in its unit (the ratio, flags and status have none).
     for column in cell.columns() {
@@ -119,7 +125,9 @@ fn a_written_log_reads_back() {
         .collect();
     assert_eq!(columns, (0..format.columns().len()).collect::<Vec<_>>());
     let q3 = RunLogColumn::Joint(2).find(&log).unwrap();
-    let fz = RunLogColumn::Block(Block::TcpWrench, 2).find(&log).unwrap();
+    let fz = RunLogColumn::Block(RunLogBlock::TcpWrench, 2)
+        .find(&log)
+        .unwrap();
     let path = RunLogColumn::PathPosition.find(&log).unwrap();
     let flags = RunLogColumn::Flags.find(&log).unwrap();
     let mut k = 0;

@@ -7,7 +7,9 @@
 #![allow(dead_code)]
 
 use deflex_ros2::{SensorSettings, message_type, qos_profile, ros_name};
-use deflex_telemetry::ros::{Header, Ros2Qos, RosMessage, Time, Vector3, Wrench, WrenchStamped};
+use deflex_telemetry::ros::{
+    HeaderMsg, Ros2Qos, RosMessage, TimeMsg, Vector3Msg, WrenchMsg, WrenchStampedMsg,
+};
 use ros2_client::{Node, Publisher, Subscription};
 use std::time::{Duration, Instant};
 
@@ -59,19 +61,19 @@ pub fn publisher<T: RosMessage>(node: &mut Node, topic: &str, qos: Ros2Qos) -> P
 
 /// A driver's reading in `frame`, stamped `stamp_ns`: force (1, −2, `fz`) N, torque
 /// (0.1, 0.2, 0.3) N·m.
-pub fn wrench(frame: &str, stamp_ns: u64, fz: f64) -> WrenchStamped {
-    WrenchStamped {
-        header: Header {
-            stamp: Time::from_nanos(stamp_ns),
+pub fn wrench(frame: &str, stamp_ns: u64, fz: f64) -> WrenchStampedMsg {
+    WrenchStampedMsg {
+        header: HeaderMsg {
+            stamp: TimeMsg::from_nanos(stamp_ns),
             frame_id: frame.into(),
         },
-        wrench: Wrench {
-            force: Vector3 {
+        wrench: WrenchMsg {
+            force: Vector3Msg {
                 x: 1.0,
                 y: -2.0,
                 z: fz,
             },
-            torque: Vector3 {
+            torque: Vector3Msg {
                 x: 0.1,
                 y: 0.2,
                 z: 0.3,

@@ -9,8 +9,10 @@ use deflex_ros2::{
     BridgeSettings, Refusal, Ros2Bridge, Ros2SensorLink, bridge, join, message_type, topic_name,
 };
 use deflex_telemetry::ros::cycle::STATUS_NAME;
-use deflex_telemetry::ros::{DiagnosticArray, JointState, Ros2Qos, Ros2Topic, WrenchStamped};
-use deflex_telemetry::{CycleSample, SessionInfo, Source, broadcast};
+use deflex_telemetry::ros::{
+    DiagnosticArrayMsg, JointStateMsg, Ros2Qos, Ros2Topic, WrenchStampedMsg,
+};
+use deflex_telemetry::{CycleSample, SessionInfo, StreamSource, broadcast};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -37,11 +39,11 @@ fn topic_and_type_names_are_ros2_names() {
     );
     assert_eq!(topic_name("/", "joint_states"), "/joint_states");
     assert_eq!(
-        message_type::<JointState>().dds_msg_type(),
+        message_type::<JointStateMsg>().dds_msg_type(),
         "sensor_msgs::msg::dds_::JointState_"
     );
     assert_eq!(
-        message_type::<DiagnosticArray>().dds_msg_type(),
+        message_type::<DiagnosticArrayMsg>().dds_msg_type(),
         "diagnostic_msgs::msg::dds_::DiagnosticArray_"
     );
 }
@@ -53,7 +55,7 @@ fn bridge_publishes_the_stream_over_loopback_dds() {
     let d = domain(0);
     let (mut tx, ring) = broadcast::<CycleSample>(1024);
     let mut info = SessionInfo::new(
-        Source::Runtime,
+        StreamSource::Runtime,
         "tx200",
         (1..=6).map(|i| format!("joint_{i}")).collect(),
     );
@@ -76,10 +78,11 @@ fn bridge_publishes_the_stream_over_loopback_dds() {
     );
     let mut node = join(d, "/", "listener").unwrap();
     let joints =
-        subscriber::<JointState>(&mut node, "/deflex_test/joint_states", Ros2Qos::Reliable);
-    let raw = subscriber::<WrenchStamped>(&mut node, "/deflex_test/wrench_raw", Ros2Qos::Reliable);
+        subscriber::<JointStateMsg>(&mut node, "/deflex_test/joint_states", Ros2Qos::Reliable);
+    let raw =
+        subscriber::<WrenchStampedMsg>(&mut node, "/deflex_test/wrench_raw", Ros2Qos::Reliable);
     let diag =
-        subscriber::<DiagnosticArray>(&mut node, "/deflex_test/diagnostics", Ros2Qos::Reliable);
+        subscriber::<DiagnosticArrayMsg>(&mut node, "/deflex_test/diagnostics", Ros2Qos::Reliable);
     // Warm-up: one sample at a time (cycles 1, 2, … at 0.01 s, each due at 50 Hz since they are
     // 2 cycles apart) until the listener hears one on every topic.
     let mut cycle = 0;
@@ -151,7 +154,7 @@ fn sensor_link_takes_good_wrenches_and_refuses_bad_ones() {
     let d = domain(1);
     let mut link = Ros2SensorLink::open(&sensor_settings(d, 64, Ros2Qos::Reliable)).unwrap();
     let mut node = join(d, "/", "driver").unwrap();
-    let tx = publisher::<WrenchStamped>(&mut node, "/ati/wrench", Ros2Qos::Reliable);
+    let tx = publisher::<WrenchStampedMsg>(&mut node, "/ati/wrench", Ros2Qos::Reliable);
     // Warm-up until a first reading gets through.
     wait_until("a first reading", || {
         tx.publish(wrench("ati_ft", now_ns(), -1.0)).unwrap();
@@ -214,7 +217,7 @@ fn a_flood_is_bounded_and_counted() {
     let d = domain(2);
     let mut link = Ros2SensorLink::open(&sensor_settings(d, 8, Ros2Qos::SensorData)).unwrap();
     let mut node = join(d, "/", "flood").unwrap();
-    let tx = publisher::<WrenchStamped>(&mut node, "/ati/wrench", Ros2Qos::SensorData);
+    let tx = publisher::<WrenchStampedMsg>(&mut node, "/ati/wrench", Ros2Qos::SensorData);
     let mut popped = 0u64;
     wait_until("a first reading", || {
         tx.publish(wrench("ati_ft", now_ns(), -1.0)).unwrap();
@@ -256,13 +259,13 @@ fn a_second_writer_is_refused_and_counted() {
     let d = domain(3);
     let mut link = Ros2SensorLink::open(&sensor_settings(d, 64, Ros2Qos::Reliable)).unwrap();
     let mut first = join(d, "/", "driver").unwrap();
-    let tx = publisher::<WrenchStamped>(&mut first, "/ati/wrench", Ros2Qos::Reliable);
+    let tx = publisher::<WrenchStampedMsg>(&mut first, "/ati/wrench", Ros2Qos::Reliable);
     wait_until("a first reading", || {
         tx.publish(wrench("ati_ft", now_ns(), -1.0)).unwrap();
         matches!(link.receive(Duration::from_millis(20)), Ok(Some(_)))
     });
     let mut second = join(d, "/", "intruder").unwrap();
-    let intruder = publisher::<WrenchStamped>(&mut second, "/ati/wrench", Ros2Qos::Reliable);
+    let intruder = publisher::<WrenchStampedMsg>(&mut second, "/ati/wrench", Ros2Qos::Reliable);
     let mut values = Vec::new();
     let mut errors = 0u64;
     wait_until("the intruder's messages refused", || {

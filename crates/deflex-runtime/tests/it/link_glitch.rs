@@ -17,7 +17,7 @@
 use crate::common;
 
 use deflex_io::egm::{EgmConfig, EgmLink, EgmRobotEndpoint};
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
@@ -291,11 +291,11 @@ fn session(kind: Kind, pause: Duration) -> Session {
     let q = common::q0();
     let raw = common::raw_reading(&config, &q, [200.0, -100.0, 900.0, 0.0, 0.0, 0.0]);
     let (link, pc) = controller_link(kind);
-    let mut server = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
+    let mut server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
     let client = NetFtClient::new(
         "127.0.0.1:0",
         server.local_addr().unwrap(),
-        Calibration::default(),
+        NetFtCalibration::default(),
     )
     .unwrap();
     let done = Arc::new(AtomicBool::new(false));

@@ -7,7 +7,7 @@ use crate::common;
 
 #[allow(unused_imports)]
 use deflex_io::RobotLink as _;
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::{RobotSideLink, RobotState};
 use deflex_runtime::WallClock;
@@ -53,9 +53,9 @@ fn run(script: Script) -> Outcome {
 
     let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
     let link_addr = link.local_addr().unwrap();
-    let mut server = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
+    let mut server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
     let sensor_addr = server.local_addr().unwrap();
-    let client = NetFtClient::new("127.0.0.1:0", sensor_addr, Calibration::default()).unwrap();
+    let client = NetFtClient::new("127.0.0.1:0", sensor_addr, NetFtCalibration::default()).unwrap();
 
     // Set by the robot (its script) or once the session has ended.
     let silence_sensor = Arc::new(AtomicBool::new(false));

@@ -8,7 +8,7 @@ use crate::common;
 
 use deflex_control::Controller;
 use deflex_io::egm::{EgmConfig, EgmLink};
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{JointTag, RsiAnswer, RsiConfig, RsiLink};
 use deflex_io::{RobotLink, RobotState};
 use deflex_model::Data;
@@ -46,11 +46,11 @@ impl Clock for FailingClock {
 fn sensor(
     raw: deflex_model::Wrench,
 ) -> (NetFtClient, Arc<AtomicBool>, std::thread::JoinHandle<()>) {
-    let mut server = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
+    let mut server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
     let client = NetFtClient::new(
         "127.0.0.1:0",
         server.local_addr().unwrap(),
-        Calibration::default(),
+        NetFtCalibration::default(),
     )
     .unwrap();
     let done = Arc::new(AtomicBool::new(false));

@@ -9,7 +9,7 @@ use deflex_record::csv_log::{Plain, spawn_writer};
 use deflex_record::run_log::RunLogFormat;
 use deflex_runtime::WallClock;
 use deflex_runtime::session::{RuntimeOptions, spawn};
-use deflex_runtime::telemetry::{Source, Telemetry, session_info};
+use deflex_runtime::telemetry::{StreamSource, Telemetry, session_info};
 use deflex_telemetry::Phase;
 
 fn options() -> RuntimeOptions {
@@ -43,7 +43,7 @@ fn session(capacity: usize) -> Sinks {
     // The robot and the sensor stream until the session has ended (by a stop request).
     let (link, client, peers) =
         common::loopback_cell(Default::default(), raw, q, f64::INFINITY, f64::INFINITY);
-    let info = session_info(&ctrl, Source::Runtime, "kuka-rsi", 0.004);
+    let info = session_info(&ctrl, StreamSource::Runtime, "kuka-rsi", 0.004);
     let telemetry = Telemetry::new(info, capacity);
     let log_path = std::env::temp_dir().join(format!(
         "deflex-runtime-telemetry-{capacity}-{}.csv",
@@ -93,7 +93,7 @@ fn the_log_is_written_from_the_stream_and_sinks_join_any_time() {
     let cycles = s.summary.cycles;
     assert!(cycles > 50, "{cycles} cycles");
     // The description is there for any sink.
-    assert_eq!(s.info.source, Source::Runtime);
+    assert_eq!(s.info.source, StreamSource::Runtime);
     assert_eq!(s.info.joint_names.len(), 6);
     assert_eq!(s.info.protocol, "kuka-rsi");
     assert_eq!(s.info.control_period_s, common::config().period_s);

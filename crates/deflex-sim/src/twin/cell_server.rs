@@ -11,7 +11,7 @@
 
 use crate::twin::twin_stream::TwinCellStream;
 use crate::{Cell, CellConfig, ToolPath};
-use deflex_io::netft::{Calibration, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtSensorServer};
 use deflex_io::{LinkError, RobotEndpoint, RobotKind, RobotSide, RobotState};
 use deflex_model::{Data, Robot, Wrench};
 use deflex_runtime::stats::{CycleStats, StatsSummary};
@@ -50,7 +50,7 @@ pub struct CellSides {
     /// Where the Net F/T server answers (`sensor.address`).
     pub sensor_address: SocketAddr,
     /// The Net F/T count scaling.
-    pub sensor_calibration: Calibration,
+    pub sensor_calibration: NetFtCalibration,
     /// The controller's robot model (`model.file`).
     pub model: Robot,
 }

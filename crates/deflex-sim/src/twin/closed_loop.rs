@@ -17,7 +17,7 @@ use deflex_control::{
 };
 use deflex_model::spatial::pose_from_xyz_rpy;
 use deflex_model::{Robot, Wrench};
-use deflex_runtime::telemetry::{CycleSample, Publisher, SessionInfo, Source, session_info};
+use deflex_runtime::telemetry::{CycleSample, Publisher, SessionInfo, StreamSource, session_info};
 use deflex_telemetry::Phase;
 use nalgebra::Rotation3;
 
@@ -84,7 +84,7 @@ impl TwinController {
         })
     }
 
-    /// Publish one telemetry sample per control cycle (SIMULATED: [`Source::Twin`]) into
+    /// Publish one telemetry sample per control cycle (SIMULATED: [`StreamSource::Twin`]) into
     /// `publisher`; `None` stops publishing (and ends the stream). The samples carry the twin's
     /// path error ([`CycleSample::truth_error_m`]: true − desired TCP, turned from the twin's
     /// part frame, whose axes are the world's, into the model's base axes) from
@@ -123,7 +123,7 @@ impl TwinController {
     /// The description of a twin session of this controller, whose robot runs every
     /// `robot_cycle_s` (SIMULATED).
     pub fn session_info(&self, robot_cycle_s: f64) -> SessionInfo {
-        session_info(&self.ctrl, Source::Twin, "in-process", robot_cycle_s)
+        session_info(&self.ctrl, StreamSource::Twin, "in-process", robot_cycle_s)
     }
 
     /// The controller.
@@ -267,7 +267,7 @@ pub fn run_closed_loop(
     let twin = TwinController::new(model, config, keep_trace)?;
     run_twin_controller(
         cell,
-        &Program {
+        &TwinProgram {
             path,
             reference: None,
         },
@@ -280,7 +280,7 @@ pub fn run_closed_loop(
 /// What the twin's robot runs: `path`, meaning `reference` when it is a compensated program
 /// (`crate::run_program_with_progress`).
 #[derive(Clone, Debug)]
-pub struct Program {
+pub struct TwinProgram {
     /// The robot program.
     pub path: ToolPath,
     /// The path it means (`None`: itself).
@@ -291,7 +291,7 @@ pub struct Program {
 /// feed-forward).
 pub fn run_twin_controller(
     cell: &CellConfig,
-    program: &Program,
+    program: &TwinProgram,
     seed: u64,
     mut twin: TwinController,
     progress: &mut dyn FnMut(f64),

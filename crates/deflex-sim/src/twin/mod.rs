@@ -27,7 +27,7 @@ pub mod sim_time;
 pub mod twin_stream;
 
 pub use closed_loop::{
-    ClosedLoopRun, Program, TwinController, controller_config_for, run_closed_loop,
+    ClosedLoopRun, TwinController, TwinProgram, controller_config_for, run_closed_loop,
     run_twin_controller,
 };
 pub use sim_time::run_runtime_in_sim_time;

@@ -11,7 +11,7 @@ use deflex_control::{Controller, ControllerConfig};
 use deflex_io::{Correction, ForceSensorLink, LinkError, RobotLink, RobotState, WrenchSample};
 use deflex_model::{Robot, Wrench};
 use deflex_runtime::session::{self, RunSummary, RuntimeOptions};
-use deflex_runtime::telemetry::{Source, Telemetry, session_info};
+use deflex_runtime::telemetry::{StreamSource, Telemetry, session_info};
 use deflex_runtime::{Clock, SimClock};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -198,7 +198,7 @@ pub fn run_runtime_in_sim_time(
     };
     let controller = Controller::new(model, config)?;
     let telemetry = telemetry.unwrap_or_else(|| {
-        let mut info = session_info(&controller, Source::Runtime, "in-memory", period_s);
+        let mut info = session_info(&controller, StreamSource::Runtime, "in-memory", period_s);
         info.simulated = true;
         Telemetry::new(info, 16)
     });

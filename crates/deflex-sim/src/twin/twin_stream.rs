@@ -1,4 +1,4 @@
-//! The digital twin's own telemetry stream ([`Source::TwinCell`], SIMULATED): what the robot
+//! The digital twin's own telemetry stream ([`StreamSource::TwinCell`], SIMULATED): what the robot
 //! reports and the plant's ground truth, as [`CycleSample`]s, with no controller in them. It is
 //! what `deflex cell --sim` shows and records (its controller is another process, `deflex run`,
 //! with its own stream) and what an open-loop `deflex sim isf` shows and records.
@@ -28,7 +28,7 @@
 
 use crate::{Cell, CellStep, CycleObserver};
 use deflex_model::{Data, Robot};
-use deflex_runtime::telemetry::{CycleSample, Publisher, SessionInfo, Source};
+use deflex_runtime::telemetry::{CycleSample, Publisher, SessionInfo, StreamSource};
 use deflex_telemetry::CellState;
 use nalgebra::{Rotation3, Vector3};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -38,7 +38,7 @@ use std::time::Instant;
 /// nothing).
 pub type SampleSink = Box<dyn FnMut(&CycleSample) + Send>;
 
-/// Turns the twin's cycles into [`Source::TwinCell`] samples and hands them to a telemetry
+/// Turns the twin's cycles into [`StreamSource::TwinCell`] samples and hands them to a telemetry
 /// publisher (a live view reads it) and/or a synchronous sink (a recording).
 pub struct TwinCellStream {
     publisher: Option<Publisher<CycleSample>>,
@@ -57,7 +57,7 @@ pub struct TwinCellStream {
 /// believes) in the cell `cell`.
 pub fn twin_cell_session_info(nominal: &Robot, cell: &crate::CellConfig) -> SessionInfo {
     let mut info = SessionInfo::new(
-        Source::TwinCell,
+        StreamSource::TwinCell,
         nominal.name.clone(),
         nominal.joints.iter().map(|j| j.name.clone()).collect(),
     );

@@ -19,8 +19,9 @@
 
 use crate::Flags;
 use crate::ros::{
-    DiagnosticArray, DiagnosticStatus, Header, JointState, KeyValue, Point, Pose, PoseStamped,
-    Quaternion, Time, Twist, TwistStamped, Vector3, Vector3Stamped, Wrench, WrenchStamped,
+    DiagnosticArrayMsg, DiagnosticStatusMsg, HeaderMsg, JointStateMsg, KeyValueMsg, PointMsg,
+    PoseMsg, PoseStampedMsg, QuaternionMsg, TimeMsg, TwistMsg, TwistStampedMsg, Vector3Msg,
+    Vector3StampedMsg, WrenchMsg, WrenchStampedMsg,
 };
 use crate::{CycleSample, LATE_UNKNOWN, SessionInfo};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3 as V3};
@@ -61,66 +62,66 @@ pub mod diag {
 #[derive(Clone, Debug, PartialEq)]
 pub struct CycleMessages {
     /// Joint values.
-    pub joint_states: JointState,
+    pub joint_states: JointStateMsg,
     /// Raw F/T reading, sensor frame.
-    pub wrench_raw: WrenchStamped,
+    pub wrench_raw: WrenchStampedMsg,
     /// Compensated F/T reading, sensor frame.
-    pub wrench_sensor: WrenchStamped,
+    pub wrench_sensor: WrenchStampedMsg,
     /// Environment wrench at the TCP, base frame.
-    pub wrench_tcp: WrenchStamped,
+    pub wrench_tcp: WrenchStampedMsg,
     /// Corrected TCP.
-    pub tcp_pose: PoseStamped,
+    pub tcp_pose: PoseStampedMsg,
     /// Program (desired) TCP.
-    pub program_pose: PoseStamped,
+    pub program_pose: PoseStampedMsg,
     /// δŝ.
-    pub deflection: TwistStamped,
+    pub deflection: TwistStampedMsg,
     /// ξ.
-    pub correction: TwistStamped,
+    pub correction: TwistStampedMsg,
     /// ε.
-    pub error: TwistStamped,
+    pub error: TwistStampedMsg,
     /// Feed-forward prior.
-    pub feedforward: TwistStamped,
+    pub feedforward: TwistStampedMsg,
     /// Twin only: true minus desired TCP; `None` when unknown (a real cell).
-    pub path_error: Option<Vector3Stamped>,
+    pub path_error: Option<Vector3StampedMsg>,
 }
 
-fn header(stamp: Time, frame: &str) -> Header {
-    Header {
+fn header(stamp: TimeMsg, frame: &str) -> HeaderMsg {
+    HeaderMsg {
         stamp,
         frame_id: frame.to_string(),
     }
 }
 
-fn wrench(stamp: Time, frame: &str, w: &[f64; 6]) -> WrenchStamped {
-    WrenchStamped {
+fn wrench(stamp: TimeMsg, frame: &str, w: &[f64; 6]) -> WrenchStampedMsg {
+    WrenchStampedMsg {
         header: header(stamp, frame),
-        wrench: Wrench {
-            force: Vector3::from_slice(&w[..3]),
-            torque: Vector3::from_slice(&w[3..]),
+        wrench: WrenchMsg {
+            force: Vector3Msg::from_slice(&w[..3]),
+            torque: Vector3Msg::from_slice(&w[3..]),
         },
     }
 }
 
-fn twist(stamp: Time, frame: &str, v: &[f64; 6]) -> TwistStamped {
-    TwistStamped {
+fn twist(stamp: TimeMsg, frame: &str, v: &[f64; 6]) -> TwistStampedMsg {
+    TwistStampedMsg {
         header: header(stamp, frame),
-        twist: Twist {
-            linear: Vector3::from_slice(&v[..3]),
-            angular: Vector3::from_slice(&v[3..]),
+        twist: TwistMsg {
+            linear: Vector3Msg::from_slice(&v[..3]),
+            angular: Vector3Msg::from_slice(&v[3..]),
         },
     }
 }
 
 /// A position and a rotation as a `geometry_msgs/Pose` (unit quaternion of `r`).
-pub fn pose(p: V3<f64>, r: &Rotation3<f64>) -> Pose {
+pub fn pose(p: V3<f64>, r: &Rotation3<f64>) -> PoseMsg {
     let q = UnitQuaternion::from_rotation_matrix(r);
-    Pose {
-        position: Point {
+    PoseMsg {
+        position: PointMsg {
             x: p.x,
             y: p.y,
             z: p.z,
         },
-        orientation: Quaternion {
+        orientation: QuaternionMsg {
             x: q.i,
             y: q.j,
             z: q.k,
@@ -131,7 +132,7 @@ pub fn pose(p: V3<f64>, r: &Rotation3<f64>) -> Pose {
 
 impl CycleMessages {
     /// The messages of cycle `s` of the session `info`, stamped `stamp`.
-    pub fn new(info: &SessionInfo, s: &CycleSample, stamp: Time) -> CycleMessages {
+    pub fn new(info: &SessionInfo, s: &CycleSample, stamp: TimeMsg) -> CycleMessages {
         let base = info.base_frame.as_str();
         let sensor = info.sensor_frame.as_str();
         let rotation = s.tcp_rotation();
@@ -139,7 +140,7 @@ impl CycleMessages {
         let program_rotation =
             Rotation3::from_scaled_axis(-V3::from_column_slice(&s.correction[3..])) * rotation;
         CycleMessages {
-            joint_states: JointState {
+            joint_states: JointStateMsg {
                 header: header(stamp, ""),
                 name: info.joint_names.clone(),
                 position: s.q().to_vec(),
@@ -149,11 +150,11 @@ impl CycleMessages {
             wrench_raw: wrench(stamp, sensor, &s.wrench_raw),
             wrench_sensor: wrench(stamp, sensor, &s.wrench_sensor),
             wrench_tcp: wrench(stamp, base, &s.wrench_tcp),
-            tcp_pose: PoseStamped {
+            tcp_pose: PoseStampedMsg {
                 header: header(stamp, base),
                 pose: pose(s.tcp_position(), &rotation),
             },
-            program_pose: PoseStamped {
+            program_pose: PoseStampedMsg {
                 header: header(stamp, base),
                 pose: pose(s.program_position_m(), &program_rotation),
             },
@@ -165,9 +166,9 @@ impl CycleMessages {
                 .truth_error_m
                 .iter()
                 .all(|v| v.is_finite())
-                .then(|| Vector3Stamped {
+                .then(|| Vector3StampedMsg {
                     header: header(stamp, base),
-                    vector: Vector3::from_slice(&s.truth_error_m),
+                    vector: Vector3Msg::from_slice(&s.truth_error_m),
                 }),
         }
     }
@@ -178,20 +179,20 @@ impl CycleMessages {
 pub fn diagnostics(
     info: &SessionInfo,
     s: &CycleSample,
-    stamp: Time,
+    stamp: TimeMsg,
     extra: &[(&str, String)],
-) -> DiagnosticArray {
+) -> DiagnosticArrayMsg {
     let flags = s.status_flags();
     let fault = s.fault_kind();
     let level = if fault.is_some() {
-        DiagnosticStatus::ERROR
+        DiagnosticStatusMsg::ERROR
     } else if flags.0
         & (Flags::SATURATED_SIZE | Flags::SATURATED_RATE | Flags::RUNAWAY_HOLD | Flags::RAMPING)
         != 0
     {
-        DiagnosticStatus::WARN
+        DiagnosticStatusMsg::WARN
     } else {
-        DiagnosticStatus::OK
+        DiagnosticStatusMsg::OK
     };
     let finite = |v: f64| {
         if v.is_finite() {
@@ -200,7 +201,7 @@ pub fn diagnostics(
             String::new()
         }
     };
-    let kv = |k: &str, v: String| KeyValue {
+    let kv = |k: &str, v: String| KeyValueMsg {
         key: k.to_string(),
         value: v,
     };
@@ -236,9 +237,9 @@ pub fn diagnostics(
         kv(diag::LOOP_GAIN, finite(s.loop_gain)),
     ];
     values.extend(extra.iter().map(|(k, v)| kv(k, v.clone())));
-    DiagnosticArray {
+    DiagnosticArrayMsg {
         header: header(stamp, ""),
-        status: vec![DiagnosticStatus {
+        status: vec![DiagnosticStatusMsg {
             level,
             name: STATUS_NAME.to_string(),
             message,

@@ -1,4 +1,6 @@
 //! The message structs: fields in the order, with the names and the types, of the `.msg` files.
+//! Each is named after its ROS 2 message type with the suffix `Msg`, which marks a ROS 2 message
+//! type (`geometry_msgs/msg/Wrench` is [`WrenchMsg`]).
 
 use crate::ros::RosMessage;
 use crate::ros::definitions as def;
@@ -6,18 +8,18 @@ use serde::{Deserialize, Serialize};
 
 /// `builtin_interfaces/msg/Time`: `int32 sec`, `uint32 nanosec`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Time {
+pub struct TimeMsg {
     /// Seconds.
     pub sec: i32,
     /// Nanoseconds past `sec` (0 ≤ nanosec < 10⁹).
     pub nanosec: u32,
 }
 
-impl Time {
+impl TimeMsg {
     /// The time `nanos` nanoseconds after the epoch (saturating at the `i32` seconds range).
-    pub fn from_nanos(nanos: u64) -> Time {
+    pub fn from_nanos(nanos: u64) -> TimeMsg {
         let sec = nanos / 1_000_000_000;
-        Time {
+        TimeMsg {
             sec: sec.min(i32::MAX as u64) as i32,
             nanosec: (nanos % 1_000_000_000) as u32,
         }
@@ -31,16 +33,16 @@ impl Time {
 
 /// `std_msgs/msg/Header`: `builtin_interfaces/Time stamp`, `string frame_id`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Header {
+pub struct HeaderMsg {
     /// Time of the data.
-    pub stamp: Time,
+    pub stamp: TimeMsg,
     /// Frame the data is expressed in.
     pub frame_id: String,
 }
 
 /// `geometry_msgs/msg/Vector3`: `float64 x, y, z`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Vector3 {
+pub struct Vector3Msg {
     /// x
     pub x: f64,
     /// y
@@ -49,11 +51,11 @@ pub struct Vector3 {
     pub z: f64,
 }
 
-impl Vector3 {
+impl Vector3Msg {
     /// From the first three values of a slice (zeros where it is shorter).
-    pub fn from_slice(v: &[f64]) -> Vector3 {
+    pub fn from_slice(v: &[f64]) -> Vector3Msg {
         let at = |i: usize| v.get(i).copied().unwrap_or(0.0);
-        Vector3 {
+        Vector3Msg {
             x: at(0),
             y: at(1),
             z: at(2),
@@ -68,7 +70,7 @@ impl Vector3 {
 
 /// `geometry_msgs/msg/Point`: `float64 x, y, z`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Point {
+pub struct PointMsg {
     /// x
     pub x: f64,
     /// y
@@ -79,7 +81,7 @@ pub struct Point {
 
 /// `geometry_msgs/msg/Quaternion`: `float64 x, y, z, w`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Quaternion {
+pub struct QuaternionMsg {
     /// x
     pub x: f64,
     /// y
@@ -90,10 +92,10 @@ pub struct Quaternion {
     pub w: f64,
 }
 
-impl Default for Quaternion {
+impl Default for QuaternionMsg {
     /// The identity (the `.msg` default `w = 1`).
     fn default() -> Self {
-        Quaternion {
+        QuaternionMsg {
             x: 0.0,
             y: 0.0,
             z: 0.0,
@@ -104,73 +106,73 @@ impl Default for Quaternion {
 
 /// `geometry_msgs/msg/Pose`: `Point position`, `Quaternion orientation`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Pose {
+pub struct PoseMsg {
     /// Position.
-    pub position: Point,
+    pub position: PointMsg,
     /// Orientation.
-    pub orientation: Quaternion,
+    pub orientation: QuaternionMsg,
 }
 
 /// `geometry_msgs/msg/PoseStamped`: `std_msgs/Header header`, `Pose pose`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct PoseStamped {
+pub struct PoseStampedMsg {
     /// Stamp and frame.
-    pub header: Header,
+    pub header: HeaderMsg,
     /// The pose.
-    pub pose: Pose,
+    pub pose: PoseMsg,
 }
 
 /// `geometry_msgs/msg/Wrench`: `Vector3 force`, `Vector3 torque`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Wrench {
+pub struct WrenchMsg {
     /// Force (N).
-    pub force: Vector3,
+    pub force: Vector3Msg,
     /// Torque (N·m).
-    pub torque: Vector3,
+    pub torque: Vector3Msg,
 }
 
 /// `geometry_msgs/msg/WrenchStamped`: `std_msgs/Header header`, `Wrench wrench`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct WrenchStamped {
+pub struct WrenchStampedMsg {
     /// Stamp and frame.
-    pub header: Header,
+    pub header: HeaderMsg,
     /// The wrench.
-    pub wrench: Wrench,
+    pub wrench: WrenchMsg,
 }
 
 /// `geometry_msgs/msg/Twist`: `Vector3 linear`, `Vector3 angular`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Twist {
+pub struct TwistMsg {
     /// Linear part.
-    pub linear: Vector3,
+    pub linear: Vector3Msg,
     /// Angular part.
-    pub angular: Vector3,
+    pub angular: Vector3Msg,
 }
 
 /// `geometry_msgs/msg/TwistStamped`: `std_msgs/Header header`, `Twist twist`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct TwistStamped {
+pub struct TwistStampedMsg {
     /// Stamp and frame.
-    pub header: Header,
+    pub header: HeaderMsg,
     /// The twist.
-    pub twist: Twist,
+    pub twist: TwistMsg,
 }
 
 /// `geometry_msgs/msg/Vector3Stamped`: `std_msgs/Header header`, `Vector3 vector`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Vector3Stamped {
+pub struct Vector3StampedMsg {
     /// Stamp and frame.
-    pub header: Header,
+    pub header: HeaderMsg,
     /// The vector.
-    pub vector: Vector3,
+    pub vector: Vector3Msg,
 }
 
 /// `sensor_msgs/msg/JointState`: `std_msgs/Header header`, `string[] name`,
 /// `float64[] position`, `float64[] velocity`, `float64[] effort`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct JointState {
+pub struct JointStateMsg {
     /// Stamp (and frame, usually empty).
-    pub header: Header,
+    pub header: HeaderMsg,
     /// Joint names.
     pub name: Vec<String>,
     /// Positions (rad for revolute joints).
@@ -183,7 +185,7 @@ pub struct JointState {
 
 /// `diagnostic_msgs/msg/KeyValue`: `string key`, `string value`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct KeyValue {
+pub struct KeyValueMsg {
     /// Key.
     pub key: String,
     /// Value.
@@ -194,8 +196,8 @@ pub struct KeyValue {
 /// `string hardware_id`, `KeyValue[] values` (constants `OK = 0`, `WARN = 1`, `ERROR = 2`,
 /// `STALE = 3`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct DiagnosticStatus {
-    /// One of [`DiagnosticStatus::OK`] … [`DiagnosticStatus::STALE`].
+pub struct DiagnosticStatusMsg {
+    /// One of [`DiagnosticStatusMsg::OK`] … [`DiagnosticStatusMsg::STALE`].
     pub level: u8,
     /// Component name.
     pub name: String,
@@ -204,10 +206,10 @@ pub struct DiagnosticStatus {
     /// Hardware identifier.
     pub hardware_id: String,
     /// Named values.
-    pub values: Vec<KeyValue>,
+    pub values: Vec<KeyValueMsg>,
 }
 
-impl DiagnosticStatus {
+impl DiagnosticStatusMsg {
     /// `byte OK=0`.
     pub const OK: u8 = 0;
     /// `byte WARN=1`.
@@ -228,11 +230,11 @@ impl DiagnosticStatus {
 
 /// `diagnostic_msgs/msg/DiagnosticArray`: `std_msgs/Header header`, `DiagnosticStatus[] status`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct DiagnosticArray {
+pub struct DiagnosticArrayMsg {
     /// Stamp.
-    pub header: Header,
+    pub header: HeaderMsg,
     /// One status per component.
-    pub status: Vec<DiagnosticStatus>,
+    pub status: Vec<DiagnosticStatusMsg>,
 }
 
 macro_rules! ros_message {
@@ -244,36 +246,36 @@ macro_rules! ros_message {
     };
 }
 
-ros_message!(Time, "builtin_interfaces/msg/Time", def::TIME_SCHEMA);
-ros_message!(Header, "std_msgs/msg/Header", def::HEADER_SCHEMA);
-ros_message!(Vector3, "geometry_msgs/msg/Vector3", def::VECTOR3_SCHEMA);
+ros_message!(TimeMsg, "builtin_interfaces/msg/Time", def::TIME_SCHEMA);
+ros_message!(HeaderMsg, "std_msgs/msg/Header", def::HEADER_SCHEMA);
+ros_message!(Vector3Msg, "geometry_msgs/msg/Vector3", def::VECTOR3_SCHEMA);
 ros_message!(
-    Vector3Stamped,
+    Vector3StampedMsg,
     "geometry_msgs/msg/Vector3Stamped",
     def::VECTOR3_STAMPED_SCHEMA
 );
 ros_message!(
-    PoseStamped,
+    PoseStampedMsg,
     "geometry_msgs/msg/PoseStamped",
     def::POSE_STAMPED_SCHEMA
 );
 ros_message!(
-    WrenchStamped,
+    WrenchStampedMsg,
     "geometry_msgs/msg/WrenchStamped",
     def::WRENCH_STAMPED_SCHEMA
 );
 ros_message!(
-    TwistStamped,
+    TwistStampedMsg,
     "geometry_msgs/msg/TwistStamped",
     def::TWIST_STAMPED_SCHEMA
 );
 ros_message!(
-    JointState,
+    JointStateMsg,
     "sensor_msgs/msg/JointState",
     def::JOINT_STATE_SCHEMA
 );
 ros_message!(
-    DiagnosticArray,
+    DiagnosticArrayMsg,
     "diagnostic_msgs/msg/DiagnosticArray",
     def::DIAGNOSTIC_ARRAY_SCHEMA
 );

@@ -6,6 +6,12 @@
 //! full concatenated definition ([`RosMessage::DEFINITION`], the `ros2msg` schema of an MCAP
 //! channel) and its CDR encoding ([`encode`], [`decode`]).
 //!
+//! Each struct is named after its ROS 2 message type with the suffix `Msg`
+//! ([`WrenchStampedMsg`] is `geometry_msgs/msg/WrenchStamped`, [`TimeMsg`] is
+//! `builtin_interfaces/msg/Time`): the suffix marks a ROS 2 message type, apart from the
+//! workspace's own types of the same name (nalgebra's `Vector3`, `deflex_model::Pose` and
+//! `deflex_model::Wrench`, the DDS crates' types).
+//!
 //! CDR here is XCDR1 little-endian with the 4-byte RTPS encapsulation header `00 01 00 00`
 //! (what ROS 2's default middleware sends and rosbag2 records, MCAP message encoding `cdr`):
 //! primitives aligned to their size from the end of the header, strings as a `u32` length that
@@ -16,14 +22,14 @@
 //! messages (topics, frames, diagnostics keys), shared by the recorder and the bridge.
 //!
 //! ```
-//! use deflex_telemetry::ros::{Header, Time, Vector3, Vector3Stamped, decode, encode};
-//! let msg = Vector3Stamped {
-//!     header: Header { stamp: Time::from_nanos(1_500_000_000), frame_id: "base".into() },
-//!     vector: Vector3 { x: 1.0, y: 2.0, z: 3.0 },
+//! use deflex_telemetry::ros::{HeaderMsg, TimeMsg, Vector3Msg, Vector3StampedMsg, decode, encode};
+//! let msg = Vector3StampedMsg {
+//!     header: HeaderMsg { stamp: TimeMsg::from_nanos(1_500_000_000), frame_id: "base".into() },
+//!     vector: Vector3Msg { x: 1.0, y: 2.0, z: 3.0 },
 //! };
 //! let bytes = encode(&msg).unwrap();
 //! assert_eq!(&bytes[..4], &[0, 1, 0, 0]);
-//! assert_eq!(decode::<Vector3Stamped>(&bytes).unwrap(), msg);
+//! assert_eq!(decode::<Vector3StampedMsg>(&bytes).unwrap(), msg);
 //! ```
 
 #![warn(missing_docs)]

@@ -167,14 +167,19 @@ fn sample_accessors() {
 
 #[test]
 fn sources_name_their_phases() {
-    use deflex_telemetry::{CellState, Source};
+    use deflex_telemetry::{CellState, StreamSource};
     assert_eq!(
-        [Source::Runtime, Source::Twin, Source::TwinCell].map(Source::key),
+        [
+            StreamSource::Runtime,
+            StreamSource::Twin,
+            StreamSource::TwinCell
+        ]
+        .map(StreamSource::key),
         ["runtime", "twin", "twin-cell"]
     );
     // A controller's stream names the controller's phases, the twin's own its cell's states,
     // by the same codes.
-    for source in [Source::Runtime, Source::Twin] {
+    for source in [StreamSource::Runtime, StreamSource::Twin] {
         for phase in [
             deflex_telemetry::Phase::Taring,
             deflex_telemetry::Phase::Faulted,
@@ -186,9 +191,12 @@ fn sources_name_their_phases() {
         }
     }
     for state in CellState::ALL {
-        assert_eq!(Source::TwinCell.phase_name(state.code()), state.name());
+        assert_eq!(
+            StreamSource::TwinCell.phase_name(state.code()),
+            state.name()
+        );
     }
-    assert_eq!(Source::TwinCell.phase_name(99), "-");
-    let info = deflex_telemetry::SessionInfo::new(Source::TwinCell, "tx200", vec![]);
+    assert_eq!(StreamSource::TwinCell.phase_name(99), "-");
+    let info = deflex_telemetry::SessionInfo::new(StreamSource::TwinCell, "tx200", vec![]);
     assert!(info.simulated, "the twin's own stream is SIMULATED");
 }

@@ -9,15 +9,15 @@ fn le_f64(v: f64) -> [u8; 8] {
 
 #[test]
 fn vector3_stamped_matches_hand_written_bytes() {
-    let msg = Vector3Stamped {
-        header: Header {
-            stamp: Time {
+    let msg = Vector3StampedMsg {
+        header: HeaderMsg {
+            stamp: TimeMsg {
                 sec: 1,
                 nanosec: 500_000_000,
             },
             frame_id: "base".into(),
         },
-        vector: Vector3 {
+        vector: Vector3Msg {
             x: 1.0,
             y: -2.5,
             z: 3.25,
@@ -34,19 +34,19 @@ fn vector3_stamped_matches_hand_written_bytes() {
     }
     let bytes = encode(&msg).unwrap();
     assert_eq!(bytes, expected);
-    assert_eq!(decode::<Vector3Stamped>(&bytes).unwrap(), msg);
+    assert_eq!(decode::<Vector3StampedMsg>(&bytes).unwrap(), msg);
 }
 
 #[test]
 fn diagnostic_array_matches_hand_written_bytes() {
-    let msg = DiagnosticArray {
-        header: Header::default(),
-        status: vec![DiagnosticStatus {
-            level: DiagnosticStatus::ERROR,
+    let msg = DiagnosticArrayMsg {
+        header: HeaderMsg::default(),
+        status: vec![DiagnosticStatusMsg {
+            level: DiagnosticStatusMsg::ERROR,
             name: "a".into(),
             message: String::new(),
             hardware_id: String::new(),
-            values: vec![KeyValue {
+            values: vec![KeyValueMsg {
                 key: "k".into(),
                 value: "v".into(),
             }],
@@ -74,14 +74,14 @@ fn diagnostic_array_matches_hand_written_bytes() {
     e.extend(b"v\0"); // 60..66
     let bytes = encode(&msg).unwrap();
     assert_eq!(bytes, e);
-    assert_eq!(decode::<DiagnosticArray>(&bytes).unwrap(), msg);
+    assert_eq!(decode::<DiagnosticArrayMsg>(&bytes).unwrap(), msg);
 }
 
 #[test]
 fn joint_state_round_trips_and_truncation_is_an_error() {
-    let msg = JointState {
-        header: Header {
-            stamp: Time::from_nanos(12_345_678_901),
+    let msg = JointStateMsg {
+        header: HeaderMsg {
+            stamp: TimeMsg::from_nanos(12_345_678_901),
             frame_id: String::new(),
         },
         name: vec!["joint_1".into(), "joint_2".into()],
@@ -90,9 +90,9 @@ fn joint_state_round_trips_and_truncation_is_an_error() {
         effort: vec![],
     };
     let bytes = encode(&msg).unwrap();
-    assert_eq!(decode::<JointState>(&bytes).unwrap(), msg);
+    assert_eq!(decode::<JointStateMsg>(&bytes).unwrap(), msg);
     for cut in [0, 3, 4, 10, bytes.len() - 1] {
-        let err = decode::<JointState>(&bytes[..cut]).unwrap_err();
+        let err = decode::<JointStateMsg>(&bytes[..cut]).unwrap_err();
         assert!(
             err.to_string().contains("sensor_msgs/msg/JointState"),
             "{err}"
@@ -103,21 +103,21 @@ fn joint_state_round_trips_and_truncation_is_an_error() {
 #[test]
 fn a_huge_sequence_length_is_refused_without_allocating_it() {
     // JointState with its name count set to 2³¹: the bound on the input length stops it.
-    let msg = JointState::default();
+    let msg = JointStateMsg::default();
     let mut bytes = encode(&msg).unwrap();
     // stamp (8) + frame_id length and NUL (5) + pad (3): the name count is at 4 + 16.
     bytes[20..24].copy_from_slice(&(1u32 << 31).to_le_bytes());
-    assert!(decode::<JointState>(&bytes).is_err());
+    assert!(decode::<JointStateMsg>(&bytes).is_err());
     let big = vec![0u8; MAX_MESSAGE_BYTES + 1];
     assert!(matches!(
-        decode::<JointState>(&big),
+        decode::<JointStateMsg>(&big),
         Err(CdrError::TooLarge { .. })
     ));
 }
 
 #[test]
 fn time_converts_nanoseconds_both_ways() {
-    let t = Time::from_nanos(1_700_000_000_123_456_789);
+    let t = TimeMsg::from_nanos(1_700_000_000_123_456_789);
     assert_eq!(t.sec, 1_700_000_000);
     assert_eq!(t.nanosec, 123_456_789);
     assert_eq!(t.to_nanos(), 1_700_000_000_123_456_789);
@@ -169,15 +169,15 @@ fn check_definition(name: &str, text: &str) {
 #[test]
 fn every_definition_resolves() {
     for (name, text) in [
-        (Vector3Stamped::NAME, Vector3Stamped::DEFINITION),
-        (PoseStamped::NAME, PoseStamped::DEFINITION),
-        (WrenchStamped::NAME, WrenchStamped::DEFINITION),
-        (TwistStamped::NAME, TwistStamped::DEFINITION),
-        (JointState::NAME, JointState::DEFINITION),
-        (DiagnosticArray::NAME, DiagnosticArray::DEFINITION),
-        (Header::NAME, Header::DEFINITION),
+        (Vector3StampedMsg::NAME, Vector3StampedMsg::DEFINITION),
+        (PoseStampedMsg::NAME, PoseStampedMsg::DEFINITION),
+        (WrenchStampedMsg::NAME, WrenchStampedMsg::DEFINITION),
+        (TwistStampedMsg::NAME, TwistStampedMsg::DEFINITION),
+        (JointStateMsg::NAME, JointStateMsg::DEFINITION),
+        (DiagnosticArrayMsg::NAME, DiagnosticArrayMsg::DEFINITION),
+        (HeaderMsg::NAME, HeaderMsg::DEFINITION),
     ] {
         check_definition(name, text);
     }
-    assert!(WrenchStamped::DEFINITION.starts_with("std_msgs/Header header\nWrench wrench\n"));
+    assert!(WrenchStampedMsg::DEFINITION.starts_with("std_msgs/Header header\nWrench wrench\n"));
 }

@@ -302,7 +302,7 @@ fn the_hello_names_the_layout_and_says_simulated() {
     assert_eq!(hello["faults"][0], "force_over_limit");
     assert_eq!(hello["session"]["correction_limit"][0], 0.01);
     let info = deflex_telemetry::SessionInfo::new(
-        deflex_telemetry::Source::Runtime,
+        deflex_telemetry::StreamSource::Runtime,
         "tx200",
         vec!["j1".into()],
     );
@@ -313,7 +313,7 @@ fn the_hello_names_the_layout_and_says_simulated() {
     assert!(hello["session"]["force_limit_n"].is_null());
     // The twin's own stream: its source, SIMULATED, and the cell's states as phase names.
     let mut info = SyntheticCell::new(0.02, 1, true).session_info();
-    info.source = deflex_telemetry::Source::TwinCell;
+    info.source = deflex_telemetry::StreamSource::TwinCell;
     let hello = hello_of(info, false);
     assert_eq!(hello["session"]["source"], "twin-cell");
     assert_eq!(hello["label"], "SIMULATED");

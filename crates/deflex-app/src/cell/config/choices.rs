@@ -46,7 +46,7 @@ pub enum RsiAnswerKind {
 /// An axis of ξ (`control.axes`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Axis {
+pub enum CorrectionAxis {
     /// Position x.
     X,
     /// Position y.
@@ -61,9 +61,16 @@ pub enum Axis {
     Rz,
 }
 
-impl Axis {
+impl CorrectionAxis {
     /// In ξ order.
-    pub const ALL: [Axis; 6] = [Axis::X, Axis::Y, Axis::Z, Axis::Rx, Axis::Ry, Axis::Rz];
+    pub const ALL: [CorrectionAxis; 6] = [
+        CorrectionAxis::X,
+        CorrectionAxis::Y,
+        CorrectionAxis::Z,
+        CorrectionAxis::Rx,
+        CorrectionAxis::Ry,
+        CorrectionAxis::Rz,
+    ];
 
     /// Index in ξ.
     pub fn index(self) -> usize {

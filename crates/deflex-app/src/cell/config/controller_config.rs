@@ -2,7 +2,7 @@
 //! limiter, wrench processing, safety).
 
 use super::CellFile;
-use super::choices::Axis;
+use super::choices::CorrectionAxis;
 use deflex_control::{
     ControllerConfig, LimiterConfig, PidGains, RunawayConfig, SafetyConfig, WrenchConfig,
 };
@@ -15,7 +15,7 @@ impl CellFile {
         let m = &self.mounting;
         let c = &self.control;
         let l = &self.limits;
-        let enabled = std::array::from_fn(|i| c.axes.contains(&Axis::ALL[i]));
+        let enabled = std::array::from_fn(|i| c.axes.contains(&CorrectionAxis::ALL[i]));
         ControllerConfig {
             period_s: 1.0 / c.rate_hz,
             gains: PidGains {

@@ -5,8 +5,8 @@
 //! every key (a test reads this file to check it).
 
 use super::choices::{
-    Axis, CorrectionModeDef, EgmFrameDef, FeedForwardModeDef, JointTagDef, PathIndexDef, RobotKind,
-    Ros2Qos, Ros2Topic, RsiAnswerKind, RunawayActionDef, SafeActionDef, SensorKind,
+    CorrectionAxis, CorrectionModeDef, EgmFrameDef, FeedForwardModeDef, JointTagDef, PathIndexDef,
+    RobotKind, Ros2Qos, Ros2Topic, RsiAnswerKind, RunawayActionDef, SafeActionDef, SensorKind,
 };
 use deflex_control::{
     FeedForwardConfig, FeedForwardMode, LimiterConfig, PathIndex, PidGains, RunawayAction,
@@ -199,7 +199,7 @@ pub struct ControlSection {
     /// Derivative filter ratio N (T_f = T_d/N).
     pub derivative_filter_n: f64,
     /// Corrected axes, any of `x y z rx ry rz`.
-    pub axes: Vec<Axis>,
+    pub axes: Vec<CorrectionAxis>,
     /// Try SCHED_FIFO for the loop threads.
     pub realtime: bool,
     /// Also lock memory (mlockall).
@@ -217,7 +217,7 @@ impl Default for ControlSection {
             ti_s: gains.ti_s,
             td_s: gains.td_s,
             derivative_filter_n: gains.derivative_filter_n,
-            axes: Axis::ALL.to_vec(),
+            axes: CorrectionAxis::ALL.to_vec(),
             realtime: true,
             lock_memory: true,
         }

@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 /// A generated block of the README.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Block {
+pub enum ReadmeBlock {
     /// The headline table ([`results_table`]).
     Results,
     /// The details under it ([`details_list`]).
@@ -18,17 +18,17 @@ pub enum Block {
     Sensitivity,
 }
 
-impl Block {
+impl ReadmeBlock {
     /// The marker line before the block.
     pub fn begin_marker(self) -> &'static str {
         match self {
-            Block::Results => {
+            ReadmeBlock::Results => {
                 "<!-- demo-results:begin (written by `deflex demo --seed 1` as results.md; kept by a test) -->"
             }
-            Block::Details => {
+            ReadmeBlock::Details => {
                 "<!-- demo-details:begin (written by `deflex demo --seed 1` as results.md; kept by a test) -->"
             }
-            Block::Sensitivity => {
+            ReadmeBlock::Sensitivity => {
                 "<!-- demo-sensitivity:begin (written by `deflex demo --seed 1` as results.md; kept by a test) -->"
             }
         }
@@ -37,9 +37,9 @@ impl Block {
     /// The marker line after the block.
     pub fn end_marker(self) -> &'static str {
         match self {
-            Block::Results => "<!-- demo-results:end -->",
-            Block::Details => "<!-- demo-details:end -->",
-            Block::Sensitivity => "<!-- demo-sensitivity:end -->",
+            ReadmeBlock::Results => "<!-- demo-results:end -->",
+            ReadmeBlock::Details => "<!-- demo-details:end -->",
+            ReadmeBlock::Sensitivity => "<!-- demo-sensitivity:end -->",
         }
     }
 }
@@ -49,9 +49,9 @@ impl Block {
 pub fn results_markdown(summary: &DemoSummary) -> String {
     let mut text = String::new();
     for (block, body) in [
-        (Block::Results, results_table(summary)),
-        (Block::Details, details_list(summary)),
-        (Block::Sensitivity, sensitivity_list(summary)),
+        (ReadmeBlock::Results, results_table(summary)),
+        (ReadmeBlock::Details, details_list(summary)),
+        (ReadmeBlock::Sensitivity, sensitivity_list(summary)),
     ] {
         if body.is_empty() {
             continue;
@@ -240,7 +240,7 @@ pub fn results_table(summary: &DemoSummary) -> String {
 }
 
 /// `readme` with `block` replaced by `text`; `None` when its markers are missing or out of order.
-pub fn replace_block(readme: &str, block: Block, text: &str) -> Option<String> {
+pub fn replace_block(readme: &str, block: ReadmeBlock, text: &str) -> Option<String> {
     let begin = readme.find(block.begin_marker())?;
     let after_begin = begin + block.begin_marker().len();
     let end = after_begin + readme[after_begin..].find(block.end_marker())?;
@@ -253,7 +253,7 @@ pub fn replace_block(readme: &str, block: Block, text: &str) -> Option<String> {
 }
 
 /// The text of `block` (without the marker lines), if present.
-pub fn current_block(readme: &str, block: Block) -> Option<&str> {
+pub fn current_block(readme: &str, block: ReadmeBlock) -> Option<&str> {
     let begin = readme.find(block.begin_marker())? + block.begin_marker().len();
     let end = begin + readme[begin..].find(block.end_marker())?;
     Some(readme[begin..end].trim_start_matches('\n'))

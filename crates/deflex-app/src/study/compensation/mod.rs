@@ -35,7 +35,7 @@ use deflex_compensate::{
 use deflex_control::{FeedForward, FeedForwardConfig, FeedForwardMode};
 use deflex_model::Robot;
 use deflex_sim::twin::{
-    ClosedLoopRun, Program, TwinController, controller_config_for, run_twin_controller,
+    ClosedLoopRun, TwinController, TwinProgram, controller_config_for, run_twin_controller,
 };
 use deflex_sim::{CellConfig, FormingProcess, FormingRun, ToolPath, compensated_tool_path};
 use lag::ErrorNumbers;
@@ -274,14 +274,14 @@ fn program(
     path: &ToolPath,
     tcp: &TcpPath,
     c: &Compensation,
-) -> Result<Program, DemoError> {
+) -> Result<TwinProgram, DemoError> {
     let commanded: Vec<_> = tcp
         .points()
         .iter()
         .zip(&c.points)
         .map(|(p, r)| commanded_pose(&p.pose, &r.compensation).translation.vector)
         .collect();
-    Ok(Program {
+    Ok(TwinProgram {
         path: compensated_tool_path(path, &commanded, &cell.part_frame())?,
         reference: Some(path.clone()),
     })
@@ -290,7 +290,7 @@ fn program(
 fn controlled(
     cell: &CellConfig,
     model: &Robot,
-    program: &Program,
+    program: &TwinProgram,
     seed: u64,
     feedforward: Option<FeedForward>,
     guard: bool,
@@ -359,7 +359,7 @@ impl PartSetup<'_> {
     }
 
     /// A compensated program run open loop, meaning the part's path.
-    fn run_program(&self, program: &Program) -> Result<FormingRun, DemoError> {
+    fn run_program(&self, program: &TwinProgram) -> Result<FormingRun, DemoError> {
         Ok(deflex_sim::run_program_with_progress(
             self.cell,
             program.path.clone(),
@@ -371,8 +371,8 @@ impl PartSetup<'_> {
     }
 
     /// The part's own path, as a program.
-    fn original(&self) -> Program {
-        Program {
+    fn original(&self) -> TwinProgram {
+        TwinProgram {
             path: self.path.clone(),
             reference: None,
         }
@@ -490,7 +490,7 @@ impl PartSetup<'_> {
         let process_program = program(self.cell, self.path, &self.tcp, process)?;
         let original = self.original();
         type Stage2 = (Option<FormingRun>, Option<LogCompensation>);
-        let closed = |program: &Program, feedforward: Option<FeedForward>, guard: bool| {
+        let closed = |program: &TwinProgram, feedforward: Option<FeedForward>, guard: bool| {
             controlled(
                 self.cell,
                 self.model,

@@ -375,7 +375,7 @@ fn check_profiles(dir: &Path) {
 /// sensitivity section). `DEFLEX_BLESS_README=1` rewrites the blocks instead.
 fn check_readme_blocks(with_sensitivity: bool) {
     use deflex_app::report::study::readme::{
-        Block, current_block, details_list, replace_block, results_table, sensitivity_list,
+        ReadmeBlock, current_block, details_list, replace_block, results_table, sensitivity_list,
     };
     let options = DemoOptions {
         seed: 1,
@@ -384,12 +384,12 @@ fn check_readme_blocks(with_sensitivity: bool) {
     };
     let cell = deflex_sim::CellConfig::for_robot(&options.robot).unwrap();
     let study = run_study(&options, cell, &mut |_| {}).expect("the demo's study runs");
-    let blocks: Vec<(Block, String)> = if with_sensitivity {
-        vec![(Block::Sensitivity, sensitivity_list(&study.summary))]
+    let blocks: Vec<(ReadmeBlock, String)> = if with_sensitivity {
+        vec![(ReadmeBlock::Sensitivity, sensitivity_list(&study.summary))]
     } else {
         vec![
-            (Block::Results, results_table(&study.summary)),
-            (Block::Details, details_list(&study.summary)),
+            (ReadmeBlock::Results, results_table(&study.summary)),
+            (ReadmeBlock::Details, details_list(&study.summary)),
         ]
     };
     let readme_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md");

@@ -5,7 +5,7 @@ use deflex_app::study::compensation::lag::{
     CONTACT_FORCE_N, SETTLE_WINDOW_S, error_numbers, ramps,
 };
 use deflex_sim::cell::TruthState;
-use deflex_sim::forming::{FormingLog, LogRow};
+use deflex_sim::forming::{FormingLog, FormingLogRow};
 use deflex_sim::sheet::ContactState;
 use deflex_sim::{FormingRun, FormingSummary, SensorSample};
 use nalgebra::Vector3;
@@ -21,7 +21,7 @@ fn run_rows(last: usize, force: impl Fn(f64) -> f64, error: impl Fn(f64) -> f64)
         .map(|k| {
             let t = k as f64 * 0.02;
             let desired = Vector3::new(0.01 * t, 0.0, 0.0);
-            LogRow {
+            FormingLogRow {
                 time_s: t,
                 truth: TruthState {
                     desired_m: desired,

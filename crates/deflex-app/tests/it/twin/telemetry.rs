@@ -4,8 +4,8 @@
 //! tests).
 
 use crate::twin::common;
-use deflex_runtime::telemetry::{Source, Telemetry};
-use deflex_sim::twin::{Program, TwinController, controller_config_for, run_twin_controller};
+use deflex_runtime::telemetry::{StreamSource, Telemetry};
+use deflex_sim::twin::{TwinController, TwinProgram, controller_config_for, run_twin_controller};
 use deflex_sim::{CellConfig, ToolPath};
 
 #[test]
@@ -18,14 +18,14 @@ fn the_twin_publishes_one_sample_per_cycle() {
     )
     .unwrap();
     let info = twin.session_info(cell.robot_period_s());
-    assert_eq!(info.source, Source::Twin);
+    assert_eq!(info.source, StreamSource::Twin);
     assert!(info.simulated);
     assert_eq!(info.protocol, "in-process");
     let telemetry = Telemetry::new(info, 1 << 16);
     let mut sink = telemetry.subscribe();
     let (publisher, ring, _info) = telemetry.into_parts();
     twin.set_telemetry(Some(publisher));
-    let program = Program {
+    let program = TwinProgram {
         path: ToolPath::paper_cone().truncated(150.0),
         reference: None,
     };

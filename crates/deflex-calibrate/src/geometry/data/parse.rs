@@ -8,7 +8,7 @@ use super::{
     APPROACH, AbsoluteRow, ORIENTATION, PAYLOAD_COM, POSITION, RowOrientation, RowPayload, WRENCH,
     limits,
 };
-use crate::measurements::reader::{self, Cells, Columns, Format, RowLimit};
+use crate::measurements::reader::{self, Cells, Columns, MeasurementFormat, RowLimit};
 use crate::measurements::{
     DataError, HeaderProblem, LabelLength, MAX_COORDINATE_M, MAX_FORCE_N, MAX_JOINT_RAD,
     MAX_MOMENT_NM, MAX_SIGMA_M, MAX_SIGMA_RAD, RowError, RowProblem,
@@ -28,7 +28,7 @@ struct Groups {
     approach: bool,
 }
 
-impl Format for Absolute<'_> {
+impl MeasurementFormat for Absolute<'_> {
     type Row = AbsoluteRow;
     type Columns = Groups;
     const ROW_LIMIT: RowLimit = RowLimit::PerFile(limits::MAX_ROWS);

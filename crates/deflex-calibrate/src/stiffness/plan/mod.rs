@@ -26,7 +26,7 @@ mod options;
 use crate::measurements::MeasurementRow;
 use crate::stiffness::campaign_cell::require_limits;
 pub use crate::stiffness::campaign_cell::{
-    BasePoint, Floor, LoadKind, PointSet, Table, TableOption, standard_points,
+    BasePoint, Floor, LoadKind, PointSet, TableOption, WorkTable, standard_points,
 };
 use crate::stiffness::design::{Design, EdofId, edof_label};
 use crate::stiffness::uncertainty::unscaled_covariance;
@@ -98,7 +98,7 @@ pub struct PlanSetup {
     /// Floor height (world z, m), when checked.
     pub floor_z_m: Option<f64>,
     /// The table, when checked.
-    pub table: Option<Table>,
+    pub table: Option<WorkTable>,
     /// The base reflector in R0 (m), when measured.
     pub base_point_r0_m: Option<[f64; 3]>,
     /// Configurations drawn and kept (clear of floor and table).

@@ -148,7 +148,12 @@ pub(super) fn check_options(robot: &Robot, o: &PlanOptions) -> Result<(), PlanEr
         return Err(E::option(
             "--table",
             "x_min,x_max,y_min,y_max,top_z (m) with min < max, within ±100 m",
-            format!("{t:?}"),
+            // The text the derived `Debug` gave before the type was renamed `WorkTable` (the
+            // message unchanged).
+            format!(
+                "Table {{ x_m: {:?}, y_m: {:?}, top_z_m: {:?} }}",
+                t.x_m, t.y_m, t.top_z_m
+            ),
         ));
     }
     if let BasePoint::At(p) = o.base_point

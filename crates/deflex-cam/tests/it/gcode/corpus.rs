@@ -1,6 +1,6 @@
 //! The corpus against its analytic geometry.
 
-use deflex_cam::gcode::{MoveKind, NoteKind, PathPoint, Plane, ReadOptions, WorkOffset, read};
+use deflex_cam::gcode::{GcodePoint, MoveKind, NoteKind, Plane, ReadOptions, WorkOffset, read};
 use std::f64::consts::PI;
 
 const CONE: &str = include_str!("../../../../../docs/parts/cone-contour-arcs.nc");
@@ -17,7 +17,7 @@ fn lines_with(text: &str, needle: &str) -> Vec<usize> {
         .collect()
 }
 
-fn points_of(points: &[PathPoint], line: usize) -> Vec<[f64; 3]> {
+fn points_of(points: &[GcodePoint], line: usize) -> Vec<[f64; 3]> {
     points
         .iter()
         .filter(|p| p.line == line)

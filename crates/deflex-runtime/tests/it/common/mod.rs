@@ -14,7 +14,7 @@ pub use controller::*;
 
 use deflex_control::Controller;
 use deflex_io::RobotSideLink;
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_model::Wrench;
 use std::net::SocketAddr;
@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 pub fn telemetry(ctrl: &Controller) -> deflex_runtime::Telemetry {
     let info = deflex_runtime::telemetry::session_info(
         ctrl,
-        deflex_runtime::telemetry::Source::Runtime,
+        deflex_runtime::telemetry::StreamSource::Runtime,
         "test",
         0.004,
     );
@@ -131,9 +131,9 @@ pub fn loopback_cell(
     sensor_s: f64,
 ) -> (RsiLink, NetFtClient, Peers) {
     let link = RsiLink::bind("127.0.0.1:0", rsi).unwrap();
-    let server = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
+    let server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
     let sensor_addr = server.local_addr().unwrap();
-    let client = NetFtClient::new("127.0.0.1:0", sensor_addr, Calibration::default()).unwrap();
+    let client = NetFtClient::new("127.0.0.1:0", sensor_addr, NetFtCalibration::default()).unwrap();
     let peers = Peers {
         sensor: netft_sensor(server, raw, sensor_s),
         robot: kuka_robot(link.local_addr().unwrap(), q, robot_s),

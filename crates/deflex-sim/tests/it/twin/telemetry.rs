@@ -44,7 +44,7 @@ fn the_twin_stream_samples_every_log_row_and_changes_nothing() {
     }
     let last = samples.last().unwrap();
     assert_eq!(
-        deflex_telemetry::Source::TwinCell.phase_name(last.phase_code),
+        deflex_telemetry::StreamSource::TwinCell.phase_name(last.phase_code),
         "finished"
     );
     // The TCP is the forward kinematics of the reported joints: the program position (TCP −

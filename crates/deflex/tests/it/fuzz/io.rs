@@ -158,7 +158,7 @@ fn staubli_decoders() {
     let mut a = [0u8; STATE_LEN];
     encode_state(
         &StateMsg {
-            header: Header {
+            header: StaubliHeader {
                 flags: 0,
                 seq: 9,
                 ack: 8,
@@ -173,7 +173,7 @@ fn staubli_decoders() {
     let mut c = [0u8; CORRECTION_LEN];
     encode_correction(
         &CorrectionMsg {
-            header: Header {
+            header: StaubliHeader {
                 flags: FLAG_ACTIVE,
                 seq: 10,
                 ack: 9,
@@ -289,7 +289,7 @@ fn netft_decoders() {
         |b| {
             match decode_records(b) {
                 Ok(records) => {
-                    let cal = Calibration::default();
+                    let cal = NetFtCalibration::default();
                     for r in records {
                         assert!(finite(cal.to_wrench(&r.counts).as_slice()));
                     }
@@ -301,7 +301,7 @@ fn netft_decoders() {
             }
             let _ = decode_request(b);
             if let Ok(text) = std::str::from_utf8(b)
-                && let Ok(c) = Calibration::from_netftapi2_xml(text)
+                && let Ok(c) = NetFtCalibration::from_netftapi2_xml(text)
             {
                 assert!(c.counts_per_force > 0.0 && c.counts_per_force.is_finite());
                 assert!(c.counts_per_torque > 0.0 && c.counts_per_torque.is_finite());
@@ -464,10 +464,10 @@ fn session_rules_on_staubli_streams() {
         let mut b = [0u8; STATE_LEN];
         encode_state(
             &StateMsg {
-                header: Header {
+                header: StaubliHeader {
                     seq,
                     timestamp_s: t,
-                    ..Header::default()
+                    ..StaubliHeader::default()
                 },
                 ..StateMsg::default()
             },

@@ -3,7 +3,7 @@
 //! counted on this thread by this binary's counting allocator.
 
 use deflex_io::egm::{EgmConfig, EgmLink, EgmRobotEndpoint};
-use deflex_io::netft::{Calibration, NetFtClient, NetFtSensorServer};
+use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{CorrectionMode, RsiConfig, RsiLink, RsiRobotEndpoint};
 use deflex_io::simple_tcp::{SimpleTcpLink, SimpleTcpRobotEndpoint};
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink, SimpleUdpRobotEndpoint};
@@ -98,11 +98,11 @@ fn the_counter_sees_allocations() {
 
 #[test]
 fn netft_receive_does_not_allocate() {
-    let mut sensor = NetFtSensorServer::bind("127.0.0.1:0", Calibration::default()).unwrap();
+    let mut sensor = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
     let mut client = NetFtClient::new(
         "127.0.0.1:0",
         sensor.local_addr().unwrap(),
-        Calibration::default(),
+        NetFtCalibration::default(),
     )
     .unwrap();
     client.start().unwrap();
@@ -205,7 +205,7 @@ fn drop_paths_do_not_allocate() {
     let staubli = |k: u64, n: usize| {
         (n == 6).then(|| {
             let m = deflex_io::staubli::StateMsg {
-                header: deflex_io::staubli::Header {
+                header: deflex_io::staubli::StaubliHeader {
                     seq: k as u32,
                     timestamp_s: k as f64 * 0.004,
                     ..Default::default()

@@ -15,9 +15,9 @@ use deflex_control::{Controller, ControllerConfig};
 use deflex_io::rsi::{RsiConfig, RsiLink};
 use deflex_ros2::{BridgeReport, BridgeSettings, Ros2Bridge, Ros2SensorLink, join};
 use deflex_runtime::session::{RuntimeOptions, spawn};
-use deflex_runtime::telemetry::{Source, session_info};
+use deflex_runtime::telemetry::{StreamSource, session_info};
 use deflex_runtime::{RunSummary, Telemetry};
-use deflex_telemetry::ros::{JointState, Ros2Qos, Ros2Topic, WrenchStamped};
+use deflex_telemetry::ros::{JointStateMsg, Ros2Qos, Ros2Topic, WrenchStampedMsg};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -52,7 +52,8 @@ fn session(d: u16, bridge: bool) -> Measured {
     settings.max_age = Duration::from_secs(1);
     let sensor = Ros2SensorLink::open(&settings).unwrap();
     let mut driver_node = join(d, "/", "driver").unwrap();
-    let driver = publisher::<WrenchStamped>(&mut driver_node, "/ati/wrench", Ros2Qos::SensorData);
+    let driver =
+        publisher::<WrenchStampedMsg>(&mut driver_node, "/ati/wrench", Ros2Qos::SensorData);
     let counts = sensor.counts_handle();
     // The driver is discovered before the session starts (the sensor must not time out).
     wait_until("the driver discovered", || {
@@ -60,7 +61,10 @@ fn session(d: u16, bridge: bool) -> Measured {
         std::thread::sleep(Duration::from_millis(5));
         counts.counts().accepted > 0
     });
-    let telemetry = Telemetry::new(session_info(&ctrl, Source::Runtime, "test", 0.004), 1024);
+    let telemetry = Telemetry::new(
+        session_info(&ctrl, StreamSource::Runtime, "test", 0.004),
+        1024,
+    );
     let mut listener = None;
     let bridge = bridge.then(|| {
         let settings = BridgeSettings {
@@ -77,7 +81,7 @@ fn session(d: u16, bridge: bool) -> Measured {
             Ros2Bridge::spawn(&settings, telemetry.subscribe(), telemetry.info().clone()).unwrap();
         let mut node = join(d + 1, "/", "listener").unwrap();
         let sub =
-            subscriber::<JointState>(&mut node, "/deflex_alloc/joint_states", Ros2Qos::Reliable);
+            subscriber::<JointStateMsg>(&mut node, "/deflex_alloc/joint_states", Ros2Qos::Reliable);
         listener = Some((node, sub));
         b
     });

@@ -14,7 +14,7 @@
 use super::cycle_counter::CycleCounter;
 use deflex_app::cell::config::CellFile;
 use deflex_control::Controller;
-use deflex_runtime::telemetry::{Source, Telemetry, session_info};
+use deflex_runtime::telemetry::{StreamSource, Telemetry, session_info};
 use deflex_runtime::{Clock, RuntimeOptions, WallClock, spawn};
 use deflex_sim::twin::cell_server::{ServeOptions, serve_cell};
 use deflex_sim::{CellConfig, ToolPath};
@@ -121,7 +121,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
     let joints = controller.robot().joint_count();
     let info = session_info(
         &controller,
-        Source::Runtime,
+        StreamSource::Runtime,
         file.robot.kind.key(),
         file.robot.cycle_s,
     );
