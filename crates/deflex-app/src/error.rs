@@ -157,6 +157,42 @@ pub enum Error {
         /// How to give the robot (`--robot`, `robot=`).
         robot_option: String,
     },
+    /// A fit that moves the robot's geometry further than a calibration does (bounds of
+    /// [`deflex_calibrate::geometry::plausible`]): another robot's or another target's readings.
+    #[error(
+        "{files}: the fit reshapes robot \"{robot}\" beyond what a calibration changes ({count} parameter(s): {changes}): these readings look like another robot or another target (check {} and the targets); a robot file that is only a rough first guess is allowed with {}; nothing written",
+        .names.give("robot"),
+        .names.switch("allow_large_changes")
+    )]
+    LargeChanges {
+        /// The data files.
+        files: String,
+        /// The robot given.
+        robot: String,
+        /// How many parameters exceed their bound.
+        count: usize,
+        /// The largest ones, with their changes and bounds (`J2.d +925 mm (bound ±44 mm)`).
+        changes: String,
+        /// The front end's words for the robot (`--robot`, `robot=`) and the switch that allows
+        /// the changes (`--allow-large-changes`, `allow_large_changes=True`).
+        names: crate::OptionNames,
+    },
+    /// A registration that moves a known set-up beyond the arm's working volume or puts a
+    /// target further from the flange than a probe sits
+    /// ([`deflex_calibrate::geometry::plausible::large_registration_moves`]).
+    #[error(
+        "{data}: the registration puts {changes}: these readings look like another robot, another target or another set-up's; a deliberate move is allowed with {}; nothing written",
+        .names.switch("allow_large_changes")
+    )]
+    LargeRegistration {
+        /// The data.
+        data: String,
+        /// What moved, by how much, and the bound (`setup[A] moved +2400 mm (bound ±1543 mm)`).
+        changes: String,
+        /// The front end's words for the switch that allows it (`--allow-large-changes`,
+        /// `allow_large_changes=True`).
+        names: crate::OptionNames,
+    },
     /// Fewer independent equations than parameters: the data cannot determine them.
     #[error(
         "{files}: {distinct} distinct reading(s) of {readings} give {equations} equations for {parameters} parameters: the data cannot determine them; measure more configurations (nothing written)"
@@ -503,6 +539,8 @@ impl Error {
             | Error::Predict(_)
             | Error::Register(_)
             | Error::ImplausibleFit { .. }
+            | Error::LargeChanges { .. }
+            | Error::LargeRegistration { .. }
             | Error::TooFewReadings { .. }
             | Error::Terms { .. } => ErrorKind::Calibration,
             Error::Compensate(_) | Error::Path(_) => ErrorKind::Compensation,

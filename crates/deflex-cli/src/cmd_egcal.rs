@@ -67,10 +67,11 @@ pub struct CalibrateGeometryArgs {
     /// turn, a gear's ratio), backlash, torsion:cubic / torsion:soft:T (a strain-wave gear's
     /// nonlinear torsion on the free eDoFs: hardening, or a soft zone below T N·m), residual (a
     /// residual model on the joint angles), joint-maps (each joint's angle error as a smooth
-    /// function of its angle). Opt-in steps are kept only when they improve the held-out groups (--test-data,
-    /// --cv-by).
-    #[arg(long, default_value = "registration,geometry,compliance")]
-    pub steps: String,
+    /// function of its angle). Opt-in steps are kept only when they improve the held-out groups
+    /// (--test-data, --cv-by). Default: registration,geometry,compliance, and joint-maps when
+    /// --cv-by gives groups to vote with.
+    #[arg(long)]
+    pub steps: Option<String>,
     /// Fit the measured orientations (rx_rad…) with the positions.
     #[arg(long)]
     pub orientations: bool,
@@ -91,6 +92,11 @@ pub struct CalibrateGeometryArgs {
     /// Register the target offset too (a new probe), not only the set-up.
     #[arg(long)]
     pub register_target: bool,
+    /// Write a fit that moves the geometry further than a calibration does (lengths, angles,
+    /// set-ups, targets beyond the bounds of the calibration chapter): only for a robot file
+    /// that is a rough first guess. Without it such a fit is refused.
+    #[arg(long)]
+    pub allow_large_changes: bool,
     /// eDoFs whose compliance is fitted (e.g. J2.z,J3.z); default: all of the robot's.
     #[arg(long)]
     pub elastic: Option<String>,
@@ -169,8 +175,13 @@ fn files(paths: Vec<PathBuf>) -> Vec<MeasurementSource> {
 
 /// Runs `deflex calibrate-geometry`.
 pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> CommandResult {
-    let steps: Vec<String> = args.steps.split(',').map(String::from).collect();
-    let steps = app::parse_steps(&steps, OptionNames::Cli)?;
+    let steps = match &args.steps {
+        Some(text) => {
+            let names: Vec<String> = text.split(',').map(String::from).collect();
+            Some(app::parse_steps(&names, OptionNames::Cli)?)
+        }
+        None => None,
+    };
     let loss = app::parse_loss(&args.loss, OptionNames::Cli)?;
     check_flag(
         "--sigma-rad",
@@ -200,6 +211,7 @@ pub fn calibrate_geometry(args: CalibrateGeometryArgs, json_output: bool) -> Com
             register_target: args.register_target,
         },
         ignored_columns: args.ignore_column,
+        allow_large_changes: args.allow_large_changes,
         names: OptionNames::Cli,
     };
     let cal = app::calibrate_geometry(

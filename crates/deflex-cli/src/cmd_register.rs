@@ -46,6 +46,10 @@ pub struct RegisterArgs {
     /// (repeatable). Without it an unknown column is an error naming the closest known one.
     #[arg(long = "ignore-column", value_name = "NAME")]
     pub ignore_column: Vec<String>,
+    /// Write a registration that moves a known set-up by more than the arm's size, or puts the
+    /// target further from the flange than half of it (refused without it).
+    #[arg(long)]
+    pub allow_large_changes: bool,
 }
 
 /// Runs `deflex register`.
@@ -67,6 +71,7 @@ pub fn register(args: RegisterArgs, json_output: bool) -> CommandResult {
         orientations: args.orientations.then_some(args.sigma_rad),
         recalibrate_above_m: args.recalibrate_above_mm.map(|mm| mm * 1e-3),
         ignored_columns: args.ignore_column,
+        allow_large_changes: args.allow_large_changes,
         names: OptionNames::Cli,
     };
     let registration = app::register(model, &MeasurementSource::File(args.data), &request)?;

@@ -12,6 +12,7 @@ use deflex_calibrate::geometry::fit::{
     ChoiceError, FitOptions, FitResult, HeldOutProtocol, Role, Step, fit, session_groups,
 };
 use deflex_calibrate::geometry::params::EgModel;
+use deflex_calibrate::geometry::plausible::{ChangeBounds, large_fit_changes};
 use deflex_calibrate::geometry::solve::Loss;
 use deflex_calibrate::geometry::terms::CalibrationTerms;
 use deflex_model::Robot;
@@ -90,11 +91,36 @@ impl std::str::FromStr for CvBy {
     }
 }
 
+/// The steps every calibration fits: the set-ups and targets, the geometry, the gravity sag.
+pub const BASE_STEPS: [Step; 3] = [Step::Registration, Step::Geometry, Step::Compliance];
+
+/// The steps a calibration fits when none are named, and why: [`BASE_STEPS`], and the joint
+/// maps when the data is grouped (`cv_by`) so that the held-out vote by those groups can judge
+/// them (they are kept only when they lower the left-out groups' error). Without groups the
+/// maps are not tried: their hyper-parameters would be chosen on the test readings.
+pub fn default_steps(cv_by: Option<CvBy>) -> (Vec<Step>, String) {
+    let mut steps = BASE_STEPS.to_vec();
+    let why = match cv_by {
+        Some(by) => {
+            steps.push(Step::JointMaps);
+            format!(
+                "default steps: registration, geometry, compliance, and joint-maps (the vote by \
+                 {} left out in turn judges them)",
+                by.name()
+            )
+        }
+        None => "default steps: registration, geometry, compliance; joint-maps not tried (no \
+                 groups to vote with: --cv-by session, setup or series)"
+            .to_string(),
+    };
+    (steps, why)
+}
+
 /// Options of [`calibrate_geometry`] (the CLI's flags, SI).
 #[derive(Clone, Debug)]
 pub struct GeometryOptions {
-    /// Model steps, each adding to the previous.
-    pub steps: Vec<Step>,
+    /// Model steps, each adding to the previous; `None`: [`default_steps`].
+    pub steps: Option<Vec<Step>>,
     /// Robust loss.
     pub loss: Loss,
     /// Cross-validation folds by configuration (0 = none).
@@ -115,6 +141,10 @@ pub struct GeometryOptions {
     pub protocol: HeldOutProtocol,
     /// Columns of the data files that deflex does not read, kept knowingly.
     pub ignored_columns: Vec<String>,
+    /// Write a fit that moves the geometry beyond a calibration's bounds
+    /// ([`deflex_calibrate::geometry::plausible`]): for a robot file that is only a rough
+    /// first guess. Off: such a fit is refused.
+    pub allow_large_changes: bool,
     /// How the messages name the options.
     pub names: OptionNames,
 }
@@ -132,6 +162,8 @@ pub struct GeometryCalibration {
     pub terms: CalibrationTerms,
     /// Wall time of the fit (s).
     pub elapsed_s: f64,
+    /// Which steps were chosen by default and why, when none were named.
+    pub default_steps: Option<String>,
 }
 
 /// The readings of a calibration: fitted ones first, then the test ones (never fitted).
@@ -225,8 +257,15 @@ pub fn calibrate_geometry(
         g.resize(total, usize::MAX);
         g
     });
+    let (steps, default_steps) = match &options.steps {
+        Some(steps) => (steps.clone(), None),
+        None => {
+            let (steps, why) = default_steps(options.cv_by);
+            (steps, Some(why))
+        }
+    };
     let fit_options = FitOptions {
-        steps: options.steps.clone(),
+        steps: steps.clone(),
         loss: options.loss,
         folds: options.folds,
         bootstrap: options.bootstrap,
@@ -253,6 +292,9 @@ pub fn calibrate_geometry(
         });
     }
     check_plausible_fit(&result, &start.name, data, options.names)?;
+    if !options.allow_large_changes {
+        check_changes(&result, start, data, options.names)?;
+    }
     let robot = result.model.to_robot();
     let terms = CalibrationTerms::of(&result);
     Ok(GeometryCalibration {
@@ -261,6 +303,7 @@ pub fn calibrate_geometry(
         robot,
         terms,
         elapsed_s,
+        default_steps,
     })
 }
 
@@ -310,6 +353,39 @@ fn check_plausible_fit(
     })
 }
 
+/// How many of the largest changes a refusal names.
+const CHANGES_NAMED: usize = 8;
+
+/// Refuse a fit that moves a geometric parameter further than its bound
+/// ([`deflex_calibrate::geometry::plausible`]), naming the largest changes: nothing is written.
+fn check_changes(
+    result: &FitResult,
+    start: &Robot,
+    data: &[MeasurementSource],
+    names: OptionNames,
+) -> Result<()> {
+    let bounds = ChangeBounds::for_robot(start);
+    let large = large_fit_changes(result, &bounds);
+    if large.is_empty() {
+        return Ok(());
+    }
+    let mut changes: Vec<String> = large
+        .iter()
+        .take(CHANGES_NAMED)
+        .map(ToString::to_string)
+        .collect();
+    if large.len() > CHANGES_NAMED {
+        changes.push(format!("and {} more", large.len() - CHANGES_NAMED));
+    }
+    Err(Error::LargeChanges {
+        files: shown_all(data),
+        robot: start.name.clone(),
+        count: large.len(),
+        changes: changes.join(", "),
+        names,
+    })
+}
+
 /// 95 % intervals `estimate ± 1.96 SE` of the identified parameters.
 pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
     cal.result
@@ -324,12 +400,23 @@ pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
 
 /// The text report (iteration table, held-out errors, estimates, warnings).
 pub fn report_text(cal: &GeometryCalibration) -> String {
-    absolute_report::text(&cal.result, &cal.campaign)
+    let text = absolute_report::text(&cal.result, &cal.campaign);
+    match &cal.default_steps {
+        Some(why) => format!("{why}\n{text}"),
+        None => text,
+    }
 }
 
 /// The JSON report (SI), as text.
 pub fn report_json(cal: &GeometryCalibration) -> String {
-    absolute_report::json(&cal.result, &cal.campaign).to_string()
+    report_value(cal).to_string()
+}
+
+/// The JSON report with `default_steps` (why the steps were chosen, `null` when named).
+fn report_value(cal: &GeometryCalibration) -> serde_json::Value {
+    let mut value = absolute_report::json(&cal.result, &cal.campaign);
+    value["default_steps"] = serde_json::json!(cal.default_steps);
+    value
 }
 
 /// What the report folder is, in the words of [`Error::ReportsNotBuilt`].
@@ -338,7 +425,12 @@ const GEOMETRY_REPORT: &str = "the elasto-geometric calibration report (`deflex 
 /// The report folder (text, JSON, CSV, plots, HTML), written whole or not at all. Needs the
 /// `report` feature: refused without it, nothing written.
 pub fn write_report(cal: &GeometryCalibration, dir: &Path) -> Result<Vec<PathBuf>> {
-    crate::report::require(GEOMETRY_REPORT)?.geometry_report(&cal.result, &cal.campaign, dir)
+    crate::report::require(GEOMETRY_REPORT)?.geometry_report(
+        &cal.result,
+        &cal.campaign,
+        cal.default_steps.as_deref(),
+        dir,
+    )
 }
 
 /// What [`save`] wrote.
@@ -373,7 +465,12 @@ pub fn save(
     })?;
     let report_files = write_unit(&cal.robot, Some(&terms), path, || {
         report_to.map_or(Ok(Vec::new()), |(dir, drawing)| {
-            drawing.geometry_report(&cal.result, &cal.campaign, dir)
+            drawing.geometry_report(
+                &cal.result,
+                &cal.campaign,
+                cal.default_steps.as_deref(),
+                dir,
+            )
         })
     })?;
     Ok(SavedCalibration {
@@ -403,7 +500,7 @@ pub fn saved_text(cal: &GeometryCalibration, saved: &SavedCalibration) -> String
 /// The JSON report of a saved calibration (the CLI's `--json`): the report with the fit time
 /// (`elapsed_s`) and the files written (`out`, `terms`, `report_files`).
 pub fn saved_json(cal: &GeometryCalibration, saved: &SavedCalibration) -> serde_json::Value {
-    let mut value = absolute_report::json(&cal.result, &cal.campaign);
+    let mut value = report_value(cal);
     value["elapsed_s"] = serde_json::json!(cal.elapsed_s);
     value["out"] = serde_json::json!(saved.robot.display().to_string());
     value["terms"] = serde_json::json!(saved.terms.display().to_string());

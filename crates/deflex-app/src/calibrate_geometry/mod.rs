@@ -39,9 +39,9 @@ pub use files::{
     read_absolute, read_loaded, terms_path,
 };
 pub use fit::{
-    CvBy, GeometryCalibration, GeometryOptions, MAX_PLAUSIBLE_RMS_M, SESSION_GAP_S,
-    SavedCalibration, calibrate_geometry, intervals95, parse_loss, parse_steps, report_json,
-    report_text, save, saved_json, saved_text, write_report,
+    BASE_STEPS, CvBy, GeometryCalibration, GeometryOptions, MAX_PLAUSIBLE_RMS_M, SESSION_GAP_S,
+    SavedCalibration, calibrate_geometry, default_steps, intervals95, parse_loss, parse_steps,
+    report_json, report_text, save, saved_json, saved_text, write_report,
 };
 pub use import::{ImportRequest, TrackerImport, import_ur10_tracker};
 pub use predict::{PredictionRun, predict};

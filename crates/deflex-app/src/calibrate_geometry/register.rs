@@ -9,6 +9,7 @@ use crate::report::absolute_report;
 use deflex_calibrate::geometry::campaign::Campaign;
 use deflex_calibrate::geometry::data::AbsoluteRow;
 use deflex_calibrate::geometry::params::EgModel;
+use deflex_calibrate::geometry::plausible::{ChangeBounds, large_registration_moves};
 use deflex_calibrate::geometry::register::{RegisterOptions, Registration};
 use deflex_calibrate::geometry::solve::Loss;
 use deflex_calibrate::geometry::terms::CalibrationTerms;
@@ -78,6 +79,10 @@ pub struct RegisterRequest {
     pub recalibrate_above_m: Option<f64>,
     /// Columns of the data that deflex does not read, kept knowingly.
     pub ignored_columns: Vec<String>,
+    /// Write a registration that moves a known set-up by more than the arm's size or puts the
+    /// target further from the flange than half of it
+    /// ([`deflex_calibrate::geometry::plausible`]). Off: such a registration is refused.
+    pub allow_large_changes: bool,
     /// How the messages name the options.
     pub names: OptionNames,
 }
@@ -181,6 +186,8 @@ pub fn register(
     let setup_name = chosen_setup(&rows, request, &data)?;
     let rows = setup_readings(rows, &setup_name, &model, request, &data)?;
     let new_setup = model.setup_index(&setup_name).is_none();
+    // The calibrated set-ups, to bound how far a known one moves.
+    let calibrated_setups = model.setups.clone();
     if let Some(t) = request
         .target
         .as_deref()
@@ -230,6 +237,9 @@ pub fn register(
     let all = vec![1.0; campaign.len()];
     let registration =
         deflex_calibrate::geometry::register::register(&mut model, &campaign, &all, &options)?;
+    if !request.allow_large_changes {
+        check_moves(&model, &calibrated_setups, setup, target, &data, names)?;
+    }
     // Orientations measured but not fitted: the new target's frame in closed form, so that
     // predictions can report orientation errors.
     if let Some(t) = target.filter(|&t| model.targets[t].rotation.is_none()) {
@@ -247,6 +257,34 @@ pub fn register(
         robot: model.to_robot(),
         terms,
         terms_text,
+    })
+}
+
+/// Refuse a registration that moves a known set-up (one of `calibrated_setups`) or puts the
+/// target beyond its bound ([`large_registration_moves`]): nothing is written.
+fn check_moves(
+    model: &EgModel,
+    calibrated_setups: &[deflex_model::NamedPose],
+    setup: usize,
+    target: Option<usize>,
+    data: &str,
+    names: OptionNames,
+) -> Result<()> {
+    let mut before = model.clone();
+    before.setups = calibrated_setups.to_vec();
+    let bounds = ChangeBounds::for_robot(&model.robot);
+    let large = large_registration_moves(&before, model, setup, target, &bounds);
+    if large.is_empty() {
+        return Ok(());
+    }
+    Err(Error::LargeRegistration {
+        data: data.to_string(),
+        changes: large
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(", "),
+        names,
     })
 }
 

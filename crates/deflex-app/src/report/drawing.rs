@@ -93,10 +93,14 @@ impl Drawing {
         self,
         result: &FitResult,
         campaign: &Campaign,
+        default_steps: Option<&str>,
         dir: &Path,
     ) -> Result<Vec<PathBuf>> {
         Ok(crate::report::absolute_report::write_report(
-            result, campaign, dir,
+            result,
+            campaign,
+            default_steps,
+            dir,
         )?)
     }
 
@@ -178,6 +182,7 @@ impl Drawing {
         self,
         _result: &FitResult,
         _campaign: &Campaign,
+        _default_steps: Option<&str>,
         _dir: &Path,
     ) -> Result<Vec<PathBuf>> {
         match self {}

@@ -44,7 +44,7 @@ fn table(text: String) -> MeasurementSource {
 
 fn options(steps: &[Step]) -> GeometryOptions {
     GeometryOptions {
-        steps: steps.to_vec(),
+        steps: Some(steps.to_vec()),
         loss: Loss::HUBER_DEFAULT,
         folds: 0,
         bootstrap: 0,
@@ -55,6 +55,7 @@ fn options(steps: &[Step]) -> GeometryOptions {
         cv_by: None,
         protocol: HeldOutProtocol::default(),
         ignored_columns: Vec::new(),
+        allow_large_changes: false,
         names: OptionNames::Cli,
     }
 }
@@ -331,6 +332,7 @@ fn register_names_the_set_up_and_target_to_choose_in_each_front_ends_words() {
         orientations: None,
         recalibrate_above_m: None,
         ignored_columns: Vec::new(),
+        allow_large_changes: false,
         names,
     };
     let model = || calibrated_model_of(&cal).unwrap();
@@ -395,4 +397,143 @@ fn register_names_the_set_up_and_target_to_choose_in_each_front_ends_words() {
     );
     assert!(registration_json(&registered, None)["out"].is_null());
     let _ = std::fs::remove_dir_all(&dir);
+    // Set-up A, calibrated, re-registered from readings 3 m away: beyond the UR10's working
+    // volume (its size, 1.54 m), refused in each front end's words unless allowed.
+    let mut moved = rows[..15].to_vec();
+    for row in &mut moved {
+        row.position_m[0] += 3.0;
+    }
+    let moved = table(format_absolute(&moved, &[]));
+    for (names, allow) in [
+        (OptionNames::Cli, "--allow-large-changes"),
+        (OptionNames::Python, "allow_large_changes=True"),
+    ] {
+        let e = register(model(), &moved, &request(names)).err().unwrap();
+        let text = e.to_string();
+        assert!(matches!(e, Error::LargeRegistration { .. }), "{text}");
+        assert!(
+            text.starts_with("table: the registration puts setup[A] moved +3000 mm (bound ±154")
+                && text.ends_with(&format!("allowed with {allow}; nothing written")),
+            "{text}"
+        );
+    }
+    let mut allowed = request(OptionNames::Cli);
+    allowed.allow_large_changes = true;
+    assert!(register(model(), &moved, &allowed).is_ok());
+    // Its own readings move it by less than a millimetre.
+    let own = table(format_absolute(&rows[..15], &[]));
+    assert!(register(model(), &own, &request(OptionNames::Cli)).is_ok());
+}
+
+/// A TX200 "calibrated" from a UR10's real tracker readings fits them (the fit reshapes one arm
+/// into the other), so the residual guard cannot see it; the bounds on the geometric changes
+/// refuse it, naming the parameters, in each front end's words. The UR10 from its own readings
+/// stays within them, and the override lets the reshaped fit through.
+#[test]
+fn another_robots_geometry_is_refused_naming_the_parameters_unless_allowed() {
+    let a = import("Series_A", "A", 4);
+    let steps = [Step::Registration, Step::Geometry, Step::Compliance];
+    let own = calibrate_geometry(
+        &ur10(),
+        &[table(a.text.clone())],
+        &[],
+        &[],
+        &options(&steps),
+    );
+    assert!(
+        own.is_ok(),
+        "the UR10 from its own readings: {:?}",
+        own.err()
+    );
+    let tx200 = deflex_app::load::load_robot("tx200").unwrap();
+    for (names, robot, allow) in [
+        (OptionNames::Cli, "--robot", "--allow-large-changes"),
+        (OptionNames::Python, "robot=", "allow_large_changes=True"),
+    ] {
+        let mut opts = options(&steps);
+        opts.names = names;
+        let e = calibrate_geometry(&tx200, &[table(a.text.clone())], &[], &[], &opts)
+            .err()
+            .expect("a TX200 from UR10 readings is refused");
+        let text = e.to_string();
+        assert!(matches!(e, Error::LargeChanges { .. }), "{text}");
+        assert_eq!(e.kind(), ErrorKind::Calibration);
+        assert!(
+            text.contains("these readings look like another robot or another target")
+                && text.contains(&format!("check {robot} and the targets"))
+                && text.contains(&format!("allowed with {allow}; nothing written")),
+            "{text}"
+        );
+        // The arm's lengths are named with their change and bound (mm).
+        assert!(text.contains("(bound ±"), "{text}");
+        assert!(
+            ["J2.", "J3.", "J4."].iter().any(|j| text.contains(j)),
+            "{text}"
+        );
+    }
+    let mut opts = options(&steps);
+    opts.allow_large_changes = true;
+    match calibrate_geometry(&tx200, &[table(a.text.clone())], &[], &[], &opts) {
+        Ok(_) | Err(Error::ImplausibleFit { .. }) => {}
+        Err(e) => panic!("allowed, only the residual guard may refuse: {e}"),
+    }
+}
+
+/// Without named steps a calibration fits the base steps and, when the data is grouped so that
+/// the held-out vote can judge them, the joint maps; the report's first line says which and
+/// why. Named steps are fitted as named.
+#[test]
+fn the_default_steps_try_the_joint_maps_when_groups_can_vote_on_them() {
+    let a = import("Series_A", "A", 4);
+    let b = import("Series_B", "B", 4);
+    let data = [table(a.text.clone()), table(b.text.clone())];
+    let mut grouped = options(&[]);
+    grouped.steps = None;
+    grouped.cv_by = Some(CvBy::Setup);
+    let cal = calibrate_geometry(&ur10(), &data, &[], &[], &grouped).unwrap();
+    let tried: Vec<Step> = cal.result.steps.iter().map(|s| s.step).collect();
+    assert_eq!(
+        tried,
+        [
+            Step::Registration,
+            Step::Geometry,
+            Step::Compliance,
+            Step::JointMaps
+        ]
+    );
+    let text = report_text(&cal);
+    assert!(
+        text.starts_with(
+            "default steps: registration, geometry, compliance, and joint-maps (the vote by setup \
+             left out in turn judges them)\n"
+        ),
+        "{text}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&report_json(&cal)).unwrap();
+    assert!(
+        json["default_steps"]
+            .as_str()
+            .unwrap()
+            .contains("joint-maps")
+    );
+    // The vote's verdict is in the iteration table, as for a named opt-in step.
+    let maps = cal.result.steps.last().unwrap();
+    assert!(
+        maps.acceptance.is_some(),
+        "the maps were judged by the vote"
+    );
+    // No groups: the maps are not tried, and the report says how to let them be.
+    let mut plain = options(&[]);
+    plain.steps = None;
+    let cal = calibrate_geometry(&ur10(), &data[..1], &[], &[], &plain).unwrap();
+    assert_eq!(cal.result.steps.len(), 3);
+    assert!(report_text(&cal).starts_with(
+        "default steps: registration, geometry, compliance; joint-maps not tried (no groups \
+             to vote with: --cv-by session, setup or series)\n"
+    ));
+    // Named steps: no line about defaults, `null` in the JSON.
+    let cal = calibrate_geometry(&ur10(), &data[..1], &[], &[], &options(&BASE_STEPS)).unwrap();
+    assert!(report_text(&cal).starts_with("Elasto-geometric calibration"));
+    let json: serde_json::Value = serde_json::from_str(&report_json(&cal)).unwrap();
+    assert!(json["default_steps"].is_null());
 }

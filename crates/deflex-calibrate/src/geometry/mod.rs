@@ -19,6 +19,7 @@
 //! * [`solve`]: Levenberg–Marquardt with robust (Huber/Cauchy) reweighting;
 //! * [`fit`]: registration, model steps, held-out acceptance, uncertainty, and what a fit
 //!   produces ([`fit::FitResult`]; its error statistics are [`crate::stats::ErrorNormStats`]);
+//! * [`plausible`]: how far a calibration may move a robot from its nominal geometry;
 //! * [`register`]: a new session or probe registered from a few readings, robot frozen;
 //! * [`protocol`]: the held-out protocol (register from some readings, score the rest);
 //! * [`residual_model`]: a Gaussian-process residual model on the joint angles;
@@ -37,6 +38,7 @@ pub mod joint_maps;
 pub mod model;
 mod outcome;
 pub mod params;
+pub mod plausible;
 pub mod predict;
 pub mod protocol;
 pub mod register;

@@ -384,7 +384,7 @@ def _calibrate_geometry(
     data: Sequence[_Source],
     loaded: Sequence[_Source],
     test_data: Sequence[_Source],
-    steps: Sequence[str],
+    steps: Optional[Sequence[str]],
     elastic: Sequence[str],
     loss: str,
     folds: int,
@@ -397,6 +397,7 @@ def _calibrate_geometry(
     register_readings: int,
     register_draws: int,
     register_target: bool,
+    allow_large_changes: bool,
 ) -> GeometryCalibration: ...
 def _predict(
     robot: Union[GeometryCalibration, _RobotLike], data: _Source, fit_setup: bool
@@ -409,6 +410,7 @@ def _register(
     orientations: bool,
     sigma_rad: float,
     recalibrate_above_m: Optional[float],
+    allow_large_changes: bool,
 ) -> Registration: ...
 def _import_ur10_tracker(
     series: str, setup: str, target: str, tracker_sigma: bool, every: int

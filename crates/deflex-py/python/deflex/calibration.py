@@ -193,7 +193,7 @@ def calibrate_geometry(
     *,
     loaded: Union[Table, Sequence[Table], None] = None,
     test_data: Union[Table, AbsoluteData, Sequence[Union[Table, AbsoluteData]], None] = None,
-    steps: Union[str, Sequence[str]] = ("registration", "geometry", "compliance"),
+    steps: Union[str, Sequence[str], None] = None,
     elastic: Union[str, Sequence[str], None] = None,
     loss: str = "huber",
     folds: int = 5,
@@ -206,6 +206,7 @@ def calibrate_geometry(
     register_readings: int = 0,
     register_draws: int = 1,
     register_target: bool = False,
+    allow_large_changes: bool = False,
 ) -> GeometryCalibration:
     """Elasto-geometric calibration from absolute tracker readings (``deflex
     calibrate-geometry``): DH errors with Hayati β, tracker set-up registrations, target
@@ -215,7 +216,9 @@ def calibrate_geometry(
     ``steps`` are added one after the other (``registration``, ``geometry``, ``compliance``,
     and the opt-in ``masses``, ``harmonics:N``, ``periodic:N``, ``backlash``,
     ``torsion:cubic``, ``torsion:soft:T``, ``residual``, ``joint-maps``, each kept only when
-    it lowers the held-out error); ``loss`` is ``huber``, ``cauchy`` or ``none`` (``huber:K``
+    it lowers the held-out error); by default ``registration``, ``geometry``, ``compliance``
+    and, when ``cv_by`` gives groups to vote with, ``joint-maps`` (the report's first line says
+    which and why); ``loss`` is ``huber``, ``cauchy`` or ``none`` (``huber:K``
     sets the threshold). ``test_fraction`` of the configurations and every ``test_data``
     reading are never fitted; a test set-up the fit has not seen gets only its own registration.
     ``folds``-fold cross-validation by configuration runs inside the fit set, ``bootstrap``
@@ -224,10 +227,19 @@ def calibrate_geometry(
     (``"session"``, ``"setup"`` or ``"series"``: each ``data`` table one series) leaves each
     group of the fit data out in turn and registers it by the protocol: ``register_readings``
     readings drawn at random (0: every other configuration), ``register_draws`` draws, the
-    target's offset too with ``register_target``. The result's ``to_dict()["steps"]`` is the
+    target's offset too with ``register_target``. A fit that moves a length, an angle, a set-up
+    or a target further than a calibration does (another robot's or another target's readings)
+    is refused, naming the parameters, unless ``allow_large_changes`` (a robot file that is
+    only a rough first guess). The result's ``to_dict()["steps"]`` is the
     iteration table (fit, cross-validated and held-out errors); ``save(path)`` writes the robot
     file and its terms (``NAME.terms.json``) as the CLI does."""
-    step_list = [s.strip() for s in steps.split(",")] if isinstance(steps, str) else list(steps)
+    step_list: Optional[List[str]]
+    if steps is None:
+        step_list = None
+    elif isinstance(steps, str):
+        step_list = [s.strip() for s in steps.split(",")]
+    else:
+        step_list = list(steps)
     if elastic is None:
         elastic_list: List[str] = []
     elif isinstance(elastic, str):
@@ -252,6 +264,7 @@ def calibrate_geometry(
         register_readings,
         register_draws,
         register_target,
+        allow_large_changes,
     )
     return result
 
@@ -283,6 +296,7 @@ def register(
     orientations: bool = False,
     sigma_rad: float = DEFAULT_ORIENTATION_SIGMA_RAD,
     recalibrate_above_m: Optional[float] = None,
+    allow_large_changes: bool = False,
 ) -> Registration:
     """Register a new measuring session (``deflex register``): the set-up ``setup`` (default:
     the one set-up the readings name; a new name is registered from scratch, a known one
@@ -291,12 +305,14 @@ def register(
     spread over the working volume and the wrist orientations) with the calibrated robot
     frozen. Warns (``.warnings``) when the readings are too few or too close together, and when
     the residual is above ``recalibrate_above_m`` (default 1.5 × the largest held-out RMS its
-    calibration recorded in its terms): the robot itself has changed. ``.robot`` (or ``.save(path)``) is the
+    calibration recorded in its terms): the robot itself has changed. A registration that moves
+    a known set-up by more than the arm's size or puts the target further from the flange than
+    half of it is refused unless ``allow_large_changes``. ``.robot`` (or ``.save(path)``) is the
     updated robot for :func:`predict` and everything else.
 
     ``robot`` as for :func:`predict`."""
     src = ("table", data.text, data.name) if isinstance(data, AbsoluteData) else source(data)
     result: Registration = _deflex._register(
-        robot, src, setup, target, orientations, sigma_rad, recalibrate_above_m
+        robot, src, setup, target, orientations, sigma_rad, recalibrate_above_m, allow_large_changes
     )
     return result

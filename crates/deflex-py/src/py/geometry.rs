@@ -189,7 +189,7 @@ impl PyGeometryCalibration {
 
 /// ``deflex.calibrate_geometry``'s engine call.
 #[pyfunction]
-#[pyo3(signature = (robot, data, loaded, test_data, steps, elastic, loss, folds, bootstrap, test_fraction, seed, orientations, sigma_rad, cv_by, register_readings, register_draws, register_target))]
+#[pyo3(signature = (robot, data, loaded, test_data, steps, elastic, loss, folds, bootstrap, test_fraction, seed, orientations, sigma_rad, cv_by, register_readings, register_draws, register_target, allow_large_changes))]
 #[allow(clippy::too_many_arguments)]
 pub fn _calibrate_geometry(
     py: Python<'_>,
@@ -197,7 +197,7 @@ pub fn _calibrate_geometry(
     data: Vec<Bound<'_, PyAny>>,
     loaded: Vec<Bound<'_, PyAny>>,
     test_data: Vec<Bound<'_, PyAny>>,
-    steps: Vec<String>,
+    steps: Option<Vec<String>>,
     elastic: Vec<String>,
     loss: &str,
     folds: usize,
@@ -210,6 +210,7 @@ pub fn _calibrate_geometry(
     register_readings: usize,
     register_draws: usize,
     register_target: bool,
+    allow_large_changes: bool,
 ) -> PyResult<PyGeometryCalibration> {
     let cv_by = cv_by
         .map(|name| name.parse::<CvBy>())
@@ -220,7 +221,9 @@ pub fn _calibrate_geometry(
     let loaded = sources(py, &loaded)?;
     let test = sources(py, &test_data)?;
     let options = GeometryOptions {
-        steps: calibrate_geometry::parse_steps(&steps, OptionNames::Python)
+        steps: steps
+            .map(|names| calibrate_geometry::parse_steps(&names, OptionNames::Python))
+            .transpose()
             .map_err(|e| to_py(py, e))?,
         loss: calibrate_geometry::parse_loss(loss, OptionNames::Python)
             .map_err(|e| to_py(py, e))?,
@@ -237,6 +240,7 @@ pub fn _calibrate_geometry(
             register_target,
         },
         ignored_columns: Vec::new(),
+        allow_large_changes,
         names: OptionNames::Python,
     };
     let inner = run(py, || {
@@ -436,7 +440,7 @@ impl PyRegistration {
 
 /// ``deflex.register``'s engine call.
 #[pyfunction]
-#[pyo3(signature = (robot, data, setup, target, orientations, sigma_rad, recalibrate_above_m))]
+#[pyo3(signature = (robot, data, setup, target, orientations, sigma_rad, recalibrate_above_m, allow_large_changes))]
 #[allow(clippy::too_many_arguments)]
 pub fn _register(
     py: Python<'_>,
@@ -447,6 +451,7 @@ pub fn _register(
     orientations: bool,
     sigma_rad: f64,
     recalibrate_above_m: Option<f64>,
+    allow_large_changes: bool,
 ) -> PyResult<PyRegistration> {
     let model = calibrated_arg(py, robot)?;
     let source = source_arg(py, data)?;
@@ -456,6 +461,7 @@ pub fn _register(
         orientations: orientations.then_some(sigma_rad),
         recalibrate_above_m,
         ignored_columns: Vec::new(),
+        allow_large_changes,
         names: OptionNames::Python,
     };
     let inner = run(py, move || {

@@ -111,6 +111,21 @@ def test_geometry_options_are_checked(series: Path) -> None:
         deflex.import_ur10_tracker(series / "nowhere", setup="A")
 
 
+def test_another_robots_geometry_is_refused_unless_allowed(series: Path) -> None:
+    a = deflex.import_ur10_tracker(series / "Series_A", setup="A", every=4)
+    with pytest.raises(deflex.CalibrationError, match="look like another robot") as refused:
+        deflex.calibrate_geometry("tx200", a, folds=0)
+    assert "allowed with allow_large_changes=True; nothing written" in str(refused.value)
+    assert "check robot= and the targets" in str(refused.value)
+    try:
+        deflex.calibrate_geometry("tx200", a, folds=0, allow_large_changes=True)
+    except deflex.CalibrationError as e:  # only the residual guard may still refuse
+        assert "these are not this robot's readings" in str(e)
+    own = deflex.calibrate_geometry("ur10", a, folds=0)
+    assert own.report().startswith("default steps: registration, geometry, compliance;")
+    assert own.to_dict()["default_steps"].startswith("default steps")
+
+
 def test_register_a_new_session_from_a_few_readings(series: Path, tmp_path: Path) -> None:
     """``deflex register`` from Python: the calibration saved with its terms, then set-up B
     registered from 30 of its readings with the robot frozen. The registered set-up is checked by

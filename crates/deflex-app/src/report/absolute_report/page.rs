@@ -14,10 +14,12 @@ use std::path::{Path, PathBuf};
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
 /// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, `joint_maps.csv` (with
-/// joint maps), plots and `index.html`.
+/// joint maps), plots and `index.html`. `default_steps`, when the steps were chosen by default,
+/// says which and why: the first line of `report.txt`, `default_steps` in `report.json`.
 pub fn write_report(
     result: &FitResult,
     campaign: &Campaign,
+    default_steps: Option<&str>,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, PageError> {
     let page = PageError::of("elasto-geometric calibration report");
@@ -36,8 +38,14 @@ pub fn write_report(
         Ok(())
     };
     let text_report = text(result, campaign);
-    put("report.txt", &text_report)?;
-    let json_text = serde_json::to_string_pretty(&json(result, campaign))
+    let text_file = match default_steps {
+        Some(why) => format!("{why}\n{text_report}"),
+        None => text_report,
+    };
+    put("report.txt", &text_file)?;
+    let mut json_value = json(result, campaign);
+    json_value["default_steps"] = serde_json::json!(default_steps);
+    let json_text = serde_json::to_string_pretty(&json_value)
         .map_err(|e| unwritable("report.json")(e.into()))?;
     put("report.json", &json_text)?;
     for table in tables::csv_tables(result, campaign) {
@@ -46,7 +54,7 @@ pub fn write_report(
     }
     let images = plots::draw(result, campaign, &root).map_err(&page)?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
-    html.section("Summary").preformatted(text_report.clone());
+    html.section("Summary").preformatted(text_file.clone());
     if let Some(w) = &result.warning {
         html.note(html_escape(w));
     }

@@ -5,6 +5,7 @@ mod data;
 mod fit_options;
 mod jacobian;
 mod joint_maps;
+mod plausible;
 mod registration;
 mod simulated;
 mod terms;
