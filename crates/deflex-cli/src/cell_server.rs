@@ -10,7 +10,7 @@ use crate::error::{CliError, CommandResult, UsageError};
 use clap::Args;
 use deflex_app::cell::sim_cell::{SimCellPath, SimCellPlan, SimCellReport};
 use deflex_sim::CellConfig;
-use deflex_sim::twin::cell_server::{CellEvent, ServeOptions};
+use deflex_sim::twin::cell_server::{CellEvent, PoseJump, ServeOptions};
 use deflex_view::ViewStats;
 use serde_json::json;
 use std::path::PathBuf;
@@ -55,6 +55,15 @@ pub struct CellArgs {
     /// sensor there, as a robot program that waits for the correction to be ready.
     #[arg(long, default_value_t = 0.5)]
     pub dwell_s: f64,
+    /// A fault to try the model check with (SIMULATED): from `--pose-jump-at-s` on, the TCP pose
+    /// the robot reports (KUKA RSI `RIst`, ABB EGM feedback) is MM (0–1000) higher along the
+    /// robot base's z than its kinematics give, as when a controller's tool or base is changed
+    /// mid-session; `deflex run` then latches `model_mismatch` once MM exceeds its tolerance.
+    #[arg(long, value_name = "MM")]
+    pub pose_jump_mm: Option<f64>,
+    /// Time of the path (s, 0–3600) from which `--pose-jump-mm` applies.
+    #[arg(long, default_value_t = 1.0)]
+    pub pose_jump_at_s: f64,
     /// No progress lines on stderr.
     #[arg(long)]
     pub quiet: bool,
@@ -81,6 +90,10 @@ impl CellArgs {
         }
         check_flag("--wait-s", self.wait_s, 0.0, 3600.0, "s")?;
         check_flag("--dwell-s", self.dwell_s, 0.0, 3600.0, "s")?;
+        if let Some(mm) = self.pose_jump_mm {
+            check_flag("--pose-jump-mm", mm, 0.0, 1000.0, "mm")?;
+        }
+        check_flag("--pose-jump-at-s", self.pose_jump_at_s, 0.0, 3600.0, "s")?;
         if let Some(v) = &self.view {
             crate::live::view_address(v)?;
         }
@@ -177,6 +190,10 @@ pub fn cell_session(
         speed: args.speed,
         wait_s: args.wait_s,
         dwell_s: args.dwell_s,
+        pose_jump: args.pose_jump_mm.map(|mm| PoseJump {
+            after_s: args.pose_jump_at_s,
+            offset_m: [0.0, 0.0, mm * 1e-3],
+        }),
     };
     let session = plan.start(options, args.log.as_deref())?;
     let view = match &args.view {

@@ -50,9 +50,13 @@ pub struct CompensateArgs {
     /// of this configuration about its axis. Default: the robot cell's seed.
     #[arg(long, allow_hyphen_values = true)]
     pub seed_deg: Option<String>,
-    /// With `--wrench log:FILE`: `law` (the force follows the depth the compensated tool reaches,
-    /// as the log shows it does) or `fixed` (the logged wrenches, one pass).
-    #[arg(long, value_enum, default_value = "law")]
+    /// With `--wrench log:FILE`: `auto` (the force–depth law when the log supports it as a
+    /// cause — the commanded depth explains the held-out force at least as well as the path
+    /// position, the loop gain is below 0.8, the force does not fall with depth — else the
+    /// logged wrenches; the output says which and why), `law` (the force follows the depth the
+    /// compensated tool reaches, whatever the evidence) or `fixed` (the logged wrenches, one
+    /// pass). A law whose iteration does not converge falls back to the logged wrenches.
+    #[arg(long, value_enum, default_value = "auto")]
     pub log_forces: LogForces,
     /// With `--wrench log:FILE`: do not use the log's measured TCP (a sim log's laser-tracker
     /// columns) to correct what the robot model misses.

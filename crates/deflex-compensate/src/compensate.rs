@@ -391,7 +391,7 @@ pub fn compensate(
         .into());
     }
     let count = path.len();
-    let (source_name, simulated, fixed) = match &source {
+    let (mut source_name, simulated, fixed) = match &source {
         WrenchSource::Process(model) => (model.name(), model.simulated(), false),
         WrenchSource::Fixed {
             label,
@@ -429,6 +429,8 @@ pub fn compensate(
         WrenchSource::Process(model) if model.observes_desired_path() => {
             stage("the log's force-depth law", &mut *progress);
             solver.observation_pass(&mut **model, progress)?;
+            // The name says what the observation identified (a law, or the logged forces).
+            source_name = model.name();
             !model.follows_command()
         }
         _ => fixed,

@@ -39,6 +39,9 @@ pub use compensate::{
 };
 pub use error::{CompensateError, LogError, PathError, ProcessError};
 pub use ik::{IkFailure, TrackingIkOptions};
-pub use logged::{Identification, LoggedOptionError, LoggedProcess, LoggedProcessOptions};
+pub use logged::{
+    Identification, LawEvidence, LoggedOptionError, LoggedProcess, LoggedProcessOptions, MARGIN,
+    MAX_FALLING_SHARE, MAX_LOOP_GAIN, MIN_R2,
+};
 pub use path::{MAX_PATH_POINTS, PathPoint, TcpPath};
 pub use process::{DepthProportional, ProcessModel, ProcessPoint};

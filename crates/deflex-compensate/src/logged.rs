@@ -60,11 +60,25 @@
 //! The first process pass of a compensation is at the desired path; when the logged run was not
 //! compensated that is the logged command and the wrench is the log's.
 //!
+//! **Whether the log supports the law.** The law above takes the depth as the force's cause.
+//! Where the force is set along the path (force control, constant pressure, a press fit) the
+//! depth in the log follows the deflection instead, the fitted law falls with depth and the
+//! fixed point does not contract. [`LawEvidence`] (module `evidence`) tests the log on itself —
+//! the held-out force explained by the commanded depth against the path position, the loop gain
+//! `|G'|·C_t`, the share of falling bins — and with
+//! [`LoggedProcessOptions::require_evidence`] a law the log does not support is not used: the
+//! logged wrenches are kept ([`ProcessModel::follows_command`] is false, one pass).
+//! [`Identification::evidence`] and [`Identification::law_used`] report it.
+//!
 //! **What it cannot know**: a force where the log has none (a tool that touches earlier when
 //! compensated), and the part of the deflection that is not proportional to the force (a
 //! geometric error of the arm measured in `b` is scaled with it). Measured positions must be in
 //! the world frame of the robot model, at the times of the rows (the tracker's lag and
 //! registration error go into `b`).
+
+mod evidence;
+
+pub use evidence::{LawEvidence, MARGIN, MAX_FALLING_SHARE, MAX_LOOP_GAIN, MIN_R2};
 
 use crate::error::ProcessError;
 use crate::log::Resampled;
@@ -86,6 +100,13 @@ pub struct LoggedProcessOptions {
     pub max_force_ratio: f64,
     /// Use the log's measured TCP (tracker) when it has one.
     pub use_measured: bool,
+    /// Use the law only when the log supports it as a cause ([`LawEvidence::supported`]);
+    /// otherwise keep the logged wrenches (`--log-forces auto`). Off: the law whenever it has a
+    /// slope (`--log-forces law`).
+    pub require_evidence: bool,
+    /// Off: never use the law, keep the logged wrenches (with the measured TCP's correction
+    /// of what the model misses, when used): the fallback of a law that did not converge.
+    pub use_law: bool,
 }
 
 impl Default for LoggedProcessOptions {
@@ -96,6 +117,8 @@ impl Default for LoggedProcessOptions {
             significance: 3.0,
             max_force_ratio: 2.0,
             use_measured: true,
+            require_evidence: false,
+            use_law: true,
         }
     }
 }
@@ -159,6 +182,12 @@ pub struct Identification {
     pub measured: bool,
     /// Largest deflection the robot model missed in the logged run, |b| (m; 0 unmeasured).
     pub max_unmodelled_m: f64,
+    /// Whether the log supports the law as a cause ([`evidence`](LawEvidence)); `None` without
+    /// contact points.
+    pub evidence: Option<LawEvidence>,
+    /// The law is used: it has a slope and, with [`LoggedProcessOptions::require_evidence`],
+    /// the evidence supports it.
+    pub law_used: bool,
 }
 
 /// The force–depth law `G`: fitted lines at bin centres `x_k = (k + ½)·width` above `origin`.
@@ -222,6 +251,10 @@ pub struct LoggedProcess {
     axial_force: Vec<f64>,
     depth: Vec<f64>,
     arc_length: Vec<f64>,
+    /// Commanded depth `t·c_log` (the depth without the deflection) and the model's compliance
+    /// along the tool axis `tᵀ C_ff t` at each point (freed after the observation).
+    commanded_depth: Vec<f64>,
+    axis_compliance: Vec<f64>,
     /// `b_i` (empty without measured positions).
     unmodelled: Vec<Vector3<f64>>,
     /// `G(u_log,i)` at the contact points, 0 elsewhere (the logged wrench is kept there).
@@ -267,6 +300,8 @@ impl LoggedProcess {
             axial_force: Vec::new(),
             depth: Vec::new(),
             arc_length: Vec::new(),
+            commanded_depth: Vec::new(),
+            axis_compliance: Vec::new(),
             unmodelled: Vec::new(),
             logged_level: Vec::new(),
             law: Law::default(),
@@ -448,12 +483,15 @@ impl Moments {
 impl ProcessModel for LoggedProcess {
     fn name(&self) -> String {
         let law = match &self.identification {
-            Some(id) if id.sloped_bins > 0 => format!(
+            Some(id) if id.law_used => format!(
                 "force along the tool axis × G(depth)/G(logged depth), G {:.0} … {:.0} N over {:.2} mm of depth",
                 id.force_range_n[0],
                 id.force_range_n[1],
                 (id.depth_range_m[1] - id.depth_range_m[0]) * 1e3
             ),
+            Some(id) if id.sloped_bins > 0 => {
+                "the logged forces (the log does not support a force–depth law)".into()
+            }
             Some(_) => "the logged forces (they do not follow the depth)".into(),
             None => "force–depth law".into(),
         };
@@ -507,6 +545,9 @@ impl ProcessModel for LoggedProcess {
         };
         self.axial_force.push(-t.dot(&force));
         self.depth.push(t.dot(&(c + deflection)));
+        self.commanded_depth.push(t.dot(&c));
+        let c_ff = point.compliance.fixed_view::<3, 3>(0, 0);
+        self.axis_compliance.push(t.dot(&(c_ff * t)));
         self.arc_length.push(point.arc_length_m);
         Ok(())
     }
@@ -541,6 +582,7 @@ impl ProcessModel for LoggedProcess {
         let sign = self.sign;
         self.axial_force.iter_mut().for_each(|f| *f *= sign);
         self.depth.iter_mut().for_each(|u| *u *= sign);
+        self.commanded_depth.iter_mut().for_each(|u| *u *= sign);
         let max_force = self.axial_force.iter().copied().fold(0.0, f64::max);
         let threshold = self.options.contact_fraction * max_force;
         let contact: Vec<usize> = (0..n)
@@ -562,7 +604,25 @@ impl ProcessModel for LoggedProcess {
             .flatten()
             .filter(|(_, slope)| *slope != 0.0)
             .count();
-        if sloped > 0 {
+        let fits: Vec<(f64, f64)> = self.law.fits.iter().flatten().copied().collect();
+        let evidence = (contact.len() >= 2 * evidence::BLOCKS).then(|| {
+            let pick = |v: &[f64]| contact.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let sloped_fits: Vec<(f64, f64)> =
+                fits.iter().copied().filter(|(_, s)| *s != 0.0).collect();
+            evidence::evaluate(
+                &pick(&self.axial_force),
+                &pick(&self.commanded_depth),
+                &pick(&self.arc_length),
+                &pick(&weights),
+                &pick(&self.axis_compliance),
+                &sloped_fits,
+            )
+        });
+        let law_used = self.options.use_law
+            && sloped > 0
+            && (!self.options.require_evidence
+                || evidence.as_ref().is_some_and(LawEvidence::supported));
+        if law_used {
             for &i in &contact {
                 let g = self.law.at(self.depth[i]);
                 if g > threshold {
@@ -570,7 +630,6 @@ impl ProcessModel for LoggedProcess {
                 }
             }
         }
-        let fits: Vec<(f64, f64)> = self.law.fits.iter().flatten().copied().collect();
         let relative = fits
             .iter()
             .filter(|(g, _)| *g > 0.0)
@@ -597,12 +656,16 @@ impl ProcessModel for LoggedProcess {
             max_axial_force_n: max_force,
             measured: !self.unmodelled.is_empty(),
             max_unmodelled_m: self.unmodelled.iter().map(|b| b.norm()).fold(0.0, f64::max),
+            evidence,
+            law_used,
         });
         // What the passes do not need any more.
         self.commanded = Vec::new();
         self.measured = None;
         self.arc_length = Vec::new();
         self.axial_force = Vec::new();
+        self.commanded_depth = Vec::new();
+        self.axis_compliance = Vec::new();
         Ok(())
     }
 

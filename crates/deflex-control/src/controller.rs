@@ -13,11 +13,12 @@
 
 use crate::feedforward::{FeedForward, FeedForwardStep, TrackState};
 use crate::limiter::{Limiter, LimiterConfig, LimiterOutput, RampState};
+use crate::model_check::{ModelCheckConfig, PoseMismatch};
 use crate::pid::{Pid, PidGains, PidSolution};
 use crate::runaway::{RunawayConfig, RunawayGuard};
 use crate::safety::{Fault, SafeAction, Safety, SafetyConfig};
 use crate::wrench::{WrenchConfig, WrenchProcessor};
-use deflex_model::{Data, MAX_JOINTS, Robot, Wrench};
+use deflex_model::{Data, MAX_JOINTS, Pose, Robot, Wrench};
 use deflex_telemetry::Phase;
 use deflex_telemetry::{FAULT_KINDS, FaultKind, Flags};
 use nalgebra::SMatrix;
@@ -45,6 +46,8 @@ pub struct ControllerConfig {
     pub bias: Option<[f64; 6]>,
     /// The contact-runaway guard ([`crate::runaway`]).
     pub runaway: RunawayConfig,
+    /// The robot's reported TCP pose against the model's ([`crate::model_check`]).
+    pub model_check: ModelCheckConfig,
 }
 
 impl Default for ControllerConfig {
@@ -58,6 +61,7 @@ impl Default for ControllerConfig {
             tare_s: 0.2,
             bias: None,
             runaway: RunawayConfig::default(),
+            model_check: ModelCheckConfig::default(),
         }
     }
 }
@@ -79,6 +83,10 @@ pub struct CycleInput<'a> {
     pub wrench_fresh: bool,
     /// The sensor's status word (0: healthy; anything else is a `sensor_status` fault).
     pub sensor_status: u32,
+    /// The TCP pose the robot reported with `q_rad` (robot base frame), when its protocol
+    /// carries one (KUKA RSI `RIst`, ABB EGM): checked against the model's
+    /// ([`crate::model_check`]).
+    pub tcp_pose: Option<Pose>,
 }
 
 /// What one cycle produced (all in base axes, SI).
@@ -132,6 +140,9 @@ pub struct Controller {
     feedforward: Option<FeedForward>,
     /// The feed-forward sent with the last cycle's law (part of the limiter's output).
     feedforward_sent: [f64; 6],
+    /// The largest difference between the robot's reported TCP pose and the model's so far
+    /// (`None`: no pose reported, or the check is off).
+    pose_mismatch_max: Option<PoseMismatch>,
 }
 
 /// Error building a controller: the setting and the value that make it unusable.
@@ -250,6 +261,7 @@ impl Controller {
             first_runaway: None,
             feedforward: None,
             feedforward_sent: [0.0; 6],
+            pose_mismatch_max: None,
         })
     }
 
@@ -281,6 +293,12 @@ impl Controller {
     /// held the correction, which is not latched).
     pub fn first_runaway(&self) -> Option<Fault> {
         self.first_runaway
+    }
+    /// The largest difference between the robot's reported TCP pose and the model's at the
+    /// same joints so far ([`crate::model_check`]); `None` when no pose was reported or the
+    /// check is off.
+    pub fn pose_mismatch_max(&self) -> Option<PoseMismatch> {
+        self.pose_mismatch_max
     }
     /// The runaway guard's active hold (direction, cap, phase), if any.
     pub fn runaway_hold(&self) -> Option<crate::runaway::RunawayHold> {
@@ -407,6 +425,7 @@ impl Controller {
             wrench_age_s: 0.0,
             wrench_fresh: true,
             sensor_status: 0,
+            tcp_pose: None,
         })
     }
 
@@ -518,6 +537,9 @@ impl Controller {
         let mut ff = FeedForwardStep::none();
         let q = &input.q_rad[..self.robot.joint_count()];
         let kinematics_ok = self.robot.forward_kinematics(&mut self.data, q).is_ok();
+        if kinematics_ok && let Some(reported) = input.tcp_pose.as_ref() {
+            self.check_model(reported, now, flags);
+        }
         if kinematics_ok {
             if let Some(feedforward) = self.feedforward.as_mut() {
                 // The robot's place on its program: the commanded TCP minus the correction

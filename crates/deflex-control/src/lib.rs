@@ -23,7 +23,8 @@
 //! 6. **safety** ([`safety`]): latched faults (force over limit, sensor silent, robot link lost,
 //!    non-finite or out-of-range values) freeze the integrator and ramp ξ to the safe value;
 //!    the **runaway guard** ([`runaway`]) withdraws a correction that a stiff contact turns into
-//!    positive feedback.
+//!    positive feedback; the **model check** ([`model_check`]) latches a fault when the TCP pose
+//!    the robot reports leaves the model's at the same joints.
 //!
 //! With an offline compensation (`deflex compensate`), [`feedforward`] adds the predicted
 //! correction as a feed-forward, or accounts for the compensation a pre-compensated program
@@ -44,6 +45,7 @@ pub mod controller;
 pub mod estimate;
 pub mod feedforward;
 pub mod limiter;
+pub mod model_check;
 pub mod pid;
 pub mod runaway;
 pub mod safety;
@@ -60,6 +62,7 @@ pub use feedforward::{
     FeedForwardPoint, FeedForwardTable, PathIndex,
 };
 pub use limiter::{Limiter, LimiterConfig};
+pub use model_check::{ModelCheckConfig, PoseMismatch, tcp_pose_mismatch};
 pub use pid::{Pid, PidGains};
 pub use runaway::{RunawayAction, RunawayConfig, RunawayGuard};
 pub use safety::{Channel, Fault, SafeAction, Safety, SafetyConfig};

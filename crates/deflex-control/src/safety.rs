@@ -30,6 +30,10 @@ pub enum Channel {
     Sensor(u8),
     /// Controller time.
     Time,
+    /// The TCP position (the robot's reported pose against the model's).
+    TcpPosition,
+    /// The TCP orientation (the robot's reported pose against the model's).
+    TcpOrientation,
 }
 
 const AXIS_NAMES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
@@ -45,6 +49,8 @@ impl std::fmt::Display for Channel {
                 write!(f, "sensor {}", SENSOR_NAMES.get(i as usize).unwrap_or(&"?"))
             }
             Channel::Time => f.write_str("time"),
+            Channel::TcpPosition => f.write_str("TCP position"),
+            Channel::TcpOrientation => f.write_str("TCP orientation"),
         }
     }
 }
@@ -82,12 +88,21 @@ impl Fault {
         self.channel = channel;
         self
     }
+
+    /// Unit of the value and the limit: the kind's ([`FaultKind::unit`]), rad for a
+    /// [`FaultKind::ModelMismatch`] on the TCP orientation.
+    pub fn unit(&self) -> &'static str {
+        match (self.kind, self.channel) {
+            (FaultKind::ModelMismatch, Channel::TcpOrientation) => "rad",
+            (kind, _) => kind.unit(),
+        }
+    }
 }
 
 impl std::fmt::Display for Fault {
     /// `joint_out_of_limits: joint 3 value 3.2000 rad limit 3.1416 rad at t = 1.230 s`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let unit = self.kind.unit();
+        let unit = self.unit();
         let sep = if unit.is_empty() { "" } else { " " };
         write!(f, "{}:", self.kind)?;
         if self.channel != Channel::Whole {
@@ -109,6 +124,20 @@ impl std::fmt::Display for Fault {
                 f,
                 " estimated loop gain {:.3} limit {:.3} (force rising with the correction)",
                 self.value, self.limit
+            )?,
+            FaultKind::ModelMismatch if self.channel == Channel::TcpOrientation => write!(
+                f,
+                " reported {:.2} mrad from the model's at the same joints, limit {:.2} mrad \
+                 (tool, base, robot file or units?)",
+                self.value * 1e3,
+                self.limit * 1e3
+            )?,
+            FaultKind::ModelMismatch => write!(
+                f,
+                " reported {:.2} mm from the model's at the same joints, limit {:.2} mm (tool, \
+                 base, robot file or units?)",
+                self.value * 1e3,
+                self.limit * 1e3
             )?,
             _ => write!(
                 f,

@@ -35,7 +35,8 @@ use deflex_control::{CycleOutput, RecordCycle};
 use deflex_telemetry::{CycleSample, Flags};
 
 /// `deflex run` flag bits whose rows' wrench is not a measurement of the process: the eleven
-/// fault bits, latched, taring and stale wrench ([`Flags`]). The compensation's logged forces
+/// fault bits of the law's checks, latched, taring and stale wrench ([`Flags`]; a
+/// `model_mismatch` is latched on the cycle it is detected, so `LATCHED` skips its rows). The compensation's logged forces
 /// skip these rows.
 pub const RUN_LOG_SKIP_FLAGS: u32 = Flags::FORCE_OVER_LIMIT
     | Flags::TORQUE_OVER_LIMIT

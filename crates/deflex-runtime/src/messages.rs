@@ -15,7 +15,7 @@
 use crate::send_shaper::LinkDirective;
 use bytemuck::{Pod, Zeroable};
 use deflex_control::JointCorrectionMap;
-use deflex_model::{MAX_JOINTS, Wrench};
+use deflex_model::{MAX_JOINTS, Pose, Wrench};
 use nalgebra::{Rotation3, Vector6};
 
 /// [`JointSample::robot_late`] when the robot does not report its count of late answers.
@@ -34,12 +34,22 @@ pub struct JointSample {
     /// The robot's own count of late answers (KUKA RSI `Delay`), [`LATE_UNKNOWN`] if it does
     /// not say.
     pub robot_late: u64,
+    /// The TCP pose the telegram reported (robot base frame), valid when
+    /// [`Self::tcp_pose_known`] is non-zero (KUKA RSI `RIst`, ABB EGM feedback).
+    pub tcp_pose: Pose,
+    /// 1 when the telegram carried [`Self::tcp_pose`], 0 otherwise.
+    pub tcp_pose_known: u64,
 }
 
 impl JointSample {
     /// The joint values the robot reported.
     pub fn q(&self) -> &[f64] {
         &self.q_rad[..(self.joint_count as usize).min(MAX_JOINTS)]
+    }
+
+    /// The TCP pose the robot reported with these joints, when its protocol carries one.
+    pub fn tcp_pose(&self) -> Option<Pose> {
+        (self.tcp_pose_known != 0).then_some(self.tcp_pose)
     }
 }
 

@@ -19,8 +19,13 @@
 //!   status and any other sink read it), and measures its cycle time and deadline misses.
 //!
 //! Before the correction starts, the first telegram's joint count must equal the model's and
-//! every joint must lie within the model's limits (plus the margin): otherwise the run is
-//! refused with a [`SessionError`] naming the joint, the value and the limit.
+//! every joint must lie within the model's limits (plus the margin), and where the protocol
+//! reports the controller's TCP pose (KUKA RSI `RIst`, ABB EGM) it must lie within the
+//! tolerance of the model's forward kinematics at the same joints
+//! ([`deflex_control::model_check`]): otherwise the run is refused with a [`SessionError`]
+//! naming the joint, the value and the limit (or the pose difference and its likely causes).
+//! During the session the controller checks the reported pose every cycle
+//! (`model_mismatch`).
 //!
 //! Failure: if the control thread panics, a guard marks it failed on the way out; the
 //! robot-link thread then ramps what it last sent to zero in robot cycles (at most

@@ -19,7 +19,7 @@
 use crate::cell_config::{CellConfig, MAX_LOG_ROWS, MAX_RUN_S, ProcessKind};
 use crate::controller_emulation::{ControllerCycle, ControllerEmulation};
 use crate::error::SimError;
-use crate::fixture::Fixture;
+use crate::fixture::{Fixture, PrescribedForce};
 use crate::forming_log::{FormingLog, FormingLogRow, RunningStats};
 use crate::plant::{Plant, displacement};
 use crate::sensor::ForceSensor;
@@ -68,6 +68,10 @@ pub struct CellStep {
     pub cycle: u64,
     /// Joint values reported by the robot (rad).
     pub q_measured_rad: [f64; 6],
+    /// The TCP pose the robot controller reports with them (KUKA RSI `RIst`, ABB EGM feedback),
+    /// robot base frame: its own rigid kinematics at the measured joints — the plant's chain,
+    /// with its geometry errors (the controller's calibration error), without deflection.
+    pub tcp_reported: Pose,
     /// F/T samples taken during this cycle (sensor clock), oldest first.
     pub sensor_samples: Vec<SensorSample>,
     /// The path is complete (this was the last cycle).
@@ -119,6 +123,8 @@ pub enum Workpiece {
     Sheet(Box<Sheet>),
     /// A stiff fixture (pressing, plunging).
     Fixture(Fixture),
+    /// A force set along the path, whatever the depth.
+    Prescribed(PrescribedForce),
 }
 
 impl Workpiece {
@@ -127,6 +133,7 @@ impl Workpiece {
         match self {
             Workpiece::Sheet(s) => s.contact(p),
             Workpiece::Fixture(f) => f.contact(p),
+            Workpiece::Prescribed(f) => f.contact(p),
         }
     }
 
@@ -140,7 +147,9 @@ impl Workpiece {
                 let moment = Vector3::new(0.0, 0.0, -s.tool_radius_m()).cross(&friction);
                 Wrench::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
             }
-            Workpiece::Fixture(_) => Wrench::new(0.0, 0.0, 1.0, 0.0, 0.0, 0.0),
+            Workpiece::Fixture(_) | Workpiece::Prescribed(_) => {
+                Wrench::new(0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+            }
         }
     }
 
@@ -155,6 +164,7 @@ impl Workpiece {
                 }
             }
             Workpiece::Fixture(f) => f.observe(state),
+            Workpiece::Prescribed(f) => f.observe(p, state),
         }
     }
 
@@ -162,7 +172,7 @@ impl Workpiece {
     pub fn sheet(&self) -> Option<&Sheet> {
         match self {
             Workpiece::Sheet(s) => Some(s),
-            Workpiece::Fixture(_) => None,
+            Workpiece::Fixture(_) | Workpiece::Prescribed(_) => None,
         }
     }
 }
@@ -180,6 +190,9 @@ pub struct Cell {
     tracker: LaserTracker,
     /// Part origin as programmed (world, m).
     origin: Vector3<f64>,
+    /// World → robot base frame R0 (the description's base): the frame the controller
+    /// reports its TCP pose in.
+    world_to_base: Pose,
     /// Part origin where it really is: taught with the robot, so it carries the robot's
     /// geometric error at the teaching pose (world, m).
     true_origin: Vector3<f64>,
@@ -281,6 +294,12 @@ impl Cell {
                 config.process.fixture_stiffness_n_m,
                 tool_radius_m,
             )),
+            ProcessKind::Prescribed => Workpiece::Prescribed(PrescribedForce::new(
+                config.process.prescribed_force_n,
+                config.process.prescribed_ramp_mm * 1e-3,
+                config.process.fixture_stiffness_n_m,
+                tool_radius_m,
+            )),
         };
         let mut sensor_rng = ChaCha8Rng::seed_from_u64(seed);
         sensor_rng.set_stream(1);
@@ -293,6 +312,7 @@ impl Cell {
             config: config.clone(),
             robot_name: nominal.name.clone(),
             origin: part.translation.vector,
+            world_to_base: nominal.base.inverse(),
             true_origin,
             log: FormingLog::with_capacity(&path.name, &nominal.name, seed, expected_rows as usize),
             stats: RunningStats::default(),
@@ -400,6 +420,7 @@ impl Cell {
         out.time_s = cycle.time_s;
         out.cycle = self.cycle;
         out.q_measured_rad = cycle.q_command;
+        out.tcp_reported = self.world_to_base * tcp_cmd;
         out.finished = cycle.finished;
         let truth = TruthState {
             desired_m: cycle.desired_m - self.origin,

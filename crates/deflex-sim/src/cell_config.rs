@@ -262,6 +262,11 @@ pub enum ProcessKind {
     /// Pressing on a stiff fixture ([`crate::fixture`]): a plunge, a press fit, a friction-stir
     /// plunge.
     Fixture,
+    /// A force set along the path ([`crate::fixture::PrescribedForce`]): force-controlled
+    /// forming, constant-pressure finishing, a press fit. The force is ramped over the first
+    /// [`ProcessConfig::prescribed_ramp_mm`] of travel in contact to
+    /// [`ProcessConfig::prescribed_force_n`] and held, whatever the depth the tool reaches.
+    Prescribed,
 }
 
 /// The process: a sheet to form or a fixture to press on.
@@ -270,8 +275,13 @@ pub enum ProcessKind {
 pub struct ProcessConfig {
     /// `sheet` (default) or `fixture`.
     pub kind: ProcessKind,
-    /// Contact stiffness of the fixture and workpiece under the tool (N/m, 10⁴–10⁹).
+    /// Contact stiffness of the fixture and workpiece under the tool (N/m, 10⁴–10⁹); with
+    /// `prescribed`, the stiffness of the surface until the prescribed force is reached.
     pub fixture_stiffness_n_m: f64,
+    /// `prescribed`: the force held along the path (N, 1–20 000).
+    pub prescribed_force_n: f64,
+    /// `prescribed`: travel in contact over which the force is ramped up (mm, 0–10 000).
+    pub prescribed_ramp_mm: f64,
 }
 
 impl Default for ProcessConfig {
@@ -279,6 +289,8 @@ impl Default for ProcessConfig {
         ProcessConfig {
             kind: ProcessKind::Sheet,
             fixture_stiffness_n_m: 1e7,
+            prescribed_force_n: 1000.0,
+            prescribed_ramp_mm: 30.0,
         }
     }
 }

@@ -64,3 +64,77 @@ impl Fixture {
         self.deepest_m
     }
 }
+
+/// A force set along the path, whatever the depth (force-controlled forming, constant-pressure
+/// finishing, a press fit): the tool meets the fixture's flat surface (z = 0 of R_p at the
+/// TCP), which pushes back with `min(k_c · penetration, F_set(s))`, where `F_set` rises
+/// linearly with the travel in contact `s` from 0 to the set force over the ramp and then holds.
+/// Once the robot pushes deep enough, the force is the set one, and the depth the tool reaches
+/// follows the arm's deflection under it, not the other way round: the case where a force–depth
+/// law read from a log reverses cause and effect (issue 33).
+#[derive(Clone, Debug)]
+pub struct PrescribedForce {
+    surface: Fixture,
+    force_n: f64,
+    ramp_m: f64,
+    travelled_m: f64,
+    last: Option<Vector3<f64>>,
+}
+
+impl PrescribedForce {
+    /// A set force `force_n` (N) reached over `ramp_m` (m) of travel in contact, on a surface of
+    /// stiffness `stiffness_n_m` met by a ball of `tool_radius_m`.
+    pub fn new(force_n: f64, ramp_m: f64, stiffness_n_m: f64, tool_radius_m: f64) -> Self {
+        PrescribedForce {
+            surface: Fixture::new(stiffness_n_m, tool_radius_m),
+            force_n,
+            ramp_m,
+            travelled_m: 0.0,
+            last: None,
+        }
+    }
+
+    /// The set force at the current travel (N).
+    pub fn set_force_n(&self) -> f64 {
+        if self.ramp_m <= 0.0 {
+            self.force_n
+        } else {
+            self.force_n * (self.travelled_m / self.ramp_m).min(1.0)
+        }
+    }
+
+    /// Travel in contact so far (m).
+    pub fn travelled_m(&self) -> f64 {
+        self.travelled_m
+    }
+
+    /// Contact state for a tool centre at `p` (R_p, m).
+    pub fn contact(&self, p: &Vector3<f64>) -> ContactState {
+        let mut state = self.surface.contact(p);
+        if state.penetration_m > 0.0 {
+            // The first contact touches with a small force, so the ramp can start.
+            let set = self.set_force_n().max(1e-3 * self.force_n);
+            state.flow_n = set;
+            state.force_n = state.force_n.min(set);
+        }
+        state
+    }
+
+    /// The tool is at `p` with `state`: the travel in contact advances.
+    pub fn observe(&mut self, p: &Vector3<f64>, state: &ContactState) {
+        self.surface.observe(state);
+        if state.force_n > 0.0 {
+            if let Some(last) = self.last {
+                self.travelled_m += (p - last).norm();
+            }
+            self.last = Some(*p);
+        } else {
+            self.last = None;
+        }
+    }
+
+    /// Deepest penetration so far (m).
+    pub fn deepest_m(&self) -> f64 {
+        self.surface.deepest_m()
+    }
+}

@@ -223,6 +223,9 @@ pub fn run_program_observed(
             crate::cell::Workpiece::Fixture(f) => {
                 (0.0, 0.0, (0.0, 0.0), f.deepest_m(), Vec::new(), Vec::new())
             }
+            crate::cell::Workpiece::Prescribed(f) => {
+                (0.0, 0.0, (0.0, 0.0), f.deepest_m(), Vec::new(), Vec::new())
+            }
         };
     let summary = FormingSummary {
         simulated: true,

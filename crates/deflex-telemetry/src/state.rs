@@ -60,10 +60,14 @@ pub enum FaultKind {
     /// The correction pushes into a contact stiff enough that the force rises in step with it
     /// (estimated loop gain, see `deflex_control::runaway`).
     ContactRunaway,
+    /// The TCP pose the robot reports (KUKA RSI `RIst`, ABB EGM feedback) is farther from the
+    /// model's forward kinematics at the same joints than the tolerance (m; rad on the
+    /// orientation): wrong tool, base, robot file or units (see `deflex_control::model_check`).
+    ModelMismatch,
 }
 
 /// Number of fault kinds.
-pub const FAULT_KINDS: usize = 11;
+pub const FAULT_KINDS: usize = 12;
 
 impl FaultKind {
     /// All kinds, in flag-bit order.
@@ -79,6 +83,7 @@ impl FaultKind {
         FaultKind::JointJump,
         FaultKind::JointCountMismatch,
         FaultKind::ContactRunaway,
+        FaultKind::ModelMismatch,
     ];
 
     /// Stable snake-case name used in logs and status: the check that tripped.
@@ -95,12 +100,15 @@ impl FaultKind {
             FaultKind::JointJump => "joint_jump",
             FaultKind::JointCountMismatch => "joint_count_mismatch",
             FaultKind::ContactRunaway => "contact_runaway",
+            FaultKind::ModelMismatch => "model_mismatch",
         }
     }
 
-    /// Unit of the fault's value and limit.
+    /// Unit of the fault's value and limit (a [`FaultKind::ModelMismatch`] on the orientation
+    /// is in rad: its fault record says which).
     pub fn unit(self) -> &'static str {
         match self {
+            FaultKind::ModelMismatch => "m",
             FaultKind::ForceOverLimit | FaultKind::SensorOverRange => "N",
             FaultKind::TorqueOverLimit => "N·m",
             FaultKind::SensorTimeout | FaultKind::RobotLinkLost => "s",
@@ -159,6 +167,8 @@ impl Flags {
     pub const JOINT_COUNT_MISMATCH: u32 = 1 << 9;
     /// Contact runaway detected (a fault, or the guard's hold; see [`Flags::RUNAWAY_HOLD`]).
     pub const CONTACT_RUNAWAY: u32 = 1 << 10;
+    /// Fault: the robot's reported TCP pose is not the model's.
+    pub const MODEL_MISMATCH: u32 = 1 << 11;
     /// A fault is latched (the correction is going to / at its safe value).
     pub const LATCHED: u32 = 1 << 16;
     /// ξ hit a size bound.

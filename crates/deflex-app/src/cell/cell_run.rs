@@ -94,6 +94,8 @@ pub struct CellRun {
     pub step_limit_m: f64,
     /// The feed-forward in use.
     pub feedforward: Option<FeedForwardInUse>,
+    /// The model check's settings (`[model_check]`).
+    pub model_check: deflex_control::ModelCheckConfig,
 }
 
 /// What a `deflex run` session did.
@@ -115,6 +117,8 @@ pub struct CellRunOutcome {
     pub step_limit_m: f64,
     /// The feed-forward in use.
     pub feedforward: Option<FeedForwardInUse>,
+    /// The model check's settings (`[model_check]`).
+    pub model_check: deflex_control::ModelCheckConfig,
 }
 
 /// Loads the model, the feed-forward and the controller of `cell`.
@@ -252,6 +256,7 @@ impl CellRun {
             robot_kind: cell.robot.kind,
             step_limit_m: cell.limits.max_rate_m_s * cell.robot.cycle_s,
             feedforward,
+            model_check: cell.controller_config().model_check,
         })
     }
 
@@ -285,6 +290,7 @@ impl CellRun {
             robot_kind: self.robot_kind,
             step_limit_m: self.step_limit_m,
             feedforward: self.feedforward,
+            model_check: self.model_check,
         })
     }
 }

@@ -15,8 +15,8 @@ mod validate;
 
 pub use choices::{CorrectionAxis, RobotKind, Ros2Qos, Ros2Topic, RsiAnswerKind, SensorKind};
 pub use sections::{
-    ControlSection, FeedForwardSection, LimitsSection, LogSection, ModelSection, MountingSection,
-    REQUIRED_KEYS, RobotSection, Ros2Section, SensorSection,
+    ControlSection, FeedForwardSection, LimitsSection, LogSection, ModelCheckSection, ModelSection,
+    MountingSection, REQUIRED_KEYS, RobotSection, Ros2Section, SensorSection,
 };
 pub use validate::{BOUNDS, bounds_of, valid_ros2_name};
 
@@ -181,6 +181,9 @@ pub struct CellFile {
     /// Limits.
     #[serde(default)]
     pub limits: LimitsSection,
+    /// The robot's reported TCP pose against the model's.
+    #[serde(default)]
+    pub model_check: ModelCheckSection,
     /// Log; absent = no CSV.
     #[serde(default)]
     pub log: Option<LogSection>,

@@ -16,7 +16,7 @@ pub fn stats_json(s: &StatsSummary) -> serde_json::Value {
 /// A latched fault in JSON: kind, channel, time, value against its limit and unit, text.
 pub fn fault_json(f: &Fault) -> serde_json::Value {
     json!({"kind": f.kind.name(), "channel": f.channel.to_string(), "time_s": f.time_s,
-           "value": f.value, "limit": f.limit, "unit": f.kind.unit(), "text": f.to_string()})
+           "value": f.value, "limit": f.limit, "unit": f.unit(), "text": f.to_string()})
 }
 
 /// The summary lines of what the front end attached to the session, where they belong.
@@ -52,6 +52,7 @@ impl RunReport {
             lines.push(format!("  feed-forward:      {text}"));
         }
         lines.push(self.robot_line());
+        lines.push(self.model_check_line());
         lines.push(format!(
             "  robot link: {} receive timeouts, {} malformed packets, {} errors, {} from other hosts or second connections refused{}; {} robot messages dropped as no new state ({} sequence not advancing, {} clock going back, {} joint count)",
             s.robot_timeouts,
@@ -112,6 +113,32 @@ impl RunReport {
                 None => String::new(),
             }
         )
+    }
+
+    /// The model check: the largest difference between the TCP pose the robot reported and the
+    /// model's at the same joints, or why none was made.
+    fn model_check_line(&self) -> String {
+        let o = &self.session;
+        let c = &o.model_check;
+        let tolerance = format!(
+            "tolerance {:.2} mm, {:.2} mrad",
+            c.position_tolerance_m * 1e3,
+            c.orientation_tolerance_rad * 1e3
+        );
+        match (&o.summary.pose_mismatch_max, c.enabled) {
+            (_, false) => "  model check: off ([model_check] enabled = false)".to_string(),
+            (Some(m), true) => format!(
+                "  model check: largest difference between the robot's reported TCP and the \
+                 model's at the same joints {:.3} mm, {:.3} mrad ({tolerance})",
+                m.position_m * 1e3,
+                m.orientation_rad * 1e3
+            ),
+            (None, true) => format!(
+                "  model check: not made: the robot reported no TCP pose ({} carries none; KUKA \
+                 RSI and ABB EGM do)",
+                o.robot_kind.name()
+            ),
+        }
     }
 
     /// The latched fault, or none (a final silence of the robot explained).
@@ -201,6 +228,7 @@ impl RunReport {
             "log_error": o.log_error,
             "runaway_events": s.runaway_events,
             "first_runaway": s.first_runaway.as_ref().map(fault_json),
+            "model_check": self.model_check_json(),
             "max_force_n": s.max_force_n, "max_correction_mm": s.max_xi_m * 1e3,
             "log_rows": o.log_rows, "log_committed": o.log_committed,
             "log_dropped": s.log_dropped, "warnings": s.warnings,
@@ -224,6 +252,17 @@ impl RunReport {
             value[key] = v;
         }
         value
+    }
+
+    /// The model check, for `--json`: on or off, the tolerances and the largest difference
+    /// seen (`null` when the robot reported no pose).
+    fn model_check_json(&self) -> serde_json::Value {
+        let c = &self.session.model_check;
+        let m = self.session.summary.pose_mismatch_max;
+        json!({"enabled": c.enabled, "position_tolerance_m": c.position_tolerance_m,
+               "orientation_tolerance_rad": c.orientation_tolerance_rad,
+               "max_position_m": m.map(|m| m.position_m),
+               "max_orientation_rad": m.map(|m| m.orientation_rad)})
     }
 
     /// The recording, for `--json` (`null` without `[log]`).

@@ -10,7 +10,9 @@
 //!    the programs' point limit). The path's tool axis is −Z of its part frame; a seed that holds
 //!    the tool more than [`MAX_TOOL_AXIS_DEG`] off it is refused.
 //! 2. [`compensate`]: the iteration (`deflex_compensate`) against the twin's process model, a
-//!    log's forces (its force–depth law or the logged wrenches, [`LogForces`]) or given wrenches.
+//!    log's forces (its force–depth law when the log supports it, or the logged wrenches,
+//!    [`LogForces`]) or given wrenches. When the law's iteration does not converge, the logged
+//!    wrenches are used instead, with a warning.
 //! 3. The outputs: [`write_output_folder`] writes the CLI's folder whole — `compensated_path.csv`,
 //!    `summary.json`, `summary.txt` and, when every point is compensated and the iteration
 //!    converged, `programs/` with one program per format, each read back and compared
@@ -50,11 +52,34 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum LogForces {
-    /// The force–depth law identified from the log: the compensated tool, reaching deeper,
-    /// meets the force the log shows at that depth (`deflex_compensate::logged`).
+    /// The force–depth law when the log supports it as a cause (the commanded depth explains
+    /// the held-out force at least as well as the path position, the loop gain is below the
+    /// bound, the force does not fall with depth: `deflex_compensate::LawEvidence`), else the
+    /// logged wrenches; the default.
+    Auto,
+    /// The force–depth law identified from the log, whatever the evidence: the compensated
+    /// tool, reaching deeper, meets the force the log shows at that depth
+    /// (`deflex_compensate::logged`).
     Law,
     /// The logged wrenches as they are (one pass).
     Fixed,
+}
+
+impl std::str::FromStr for LogForces {
+    type Err = Error;
+
+    /// `auto`, `law` or `fixed`.
+    fn from_str(text: &str) -> Result<LogForces> {
+        match text {
+            "auto" => Ok(LogForces::Auto),
+            "law" => Ok(LogForces::Law),
+            "fixed" => Ok(LogForces::Fixed),
+            other => Err(Error::invalid(
+                "log_forces",
+                format!("expected \"auto\", \"law\" or \"fixed\", got \"{other}\""),
+            )),
+        }
+    }
 }
 
 /// A program format to write, or none (`--format`).
@@ -247,8 +272,8 @@ pub struct Options {
 }
 
 impl Default for Options {
-    /// The CLI's defaults: the cell's placement, 1 µm, 30 iterations, a log's force–depth law,
-    /// no program.
+    /// The CLI's defaults: the cell's placement, 1 µm, 30 iterations, a log's force–depth law
+    /// when the log supports it (`auto`), no program.
     fn default() -> Options {
         Options {
             twin_config: None,
@@ -261,7 +286,7 @@ impl Default for Options {
             include_gravity: false,
             tolerance_m: 1e-6,
             max_iterations: 30,
-            log_forces: LogForces::Law,
+            log_forces: LogForces::Auto,
             use_measured_tcp: true,
             formats: Vec::new(),
             program_config: None,

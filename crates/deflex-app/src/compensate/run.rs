@@ -68,32 +68,65 @@ pub fn compensate(
                 resampled.off_path_rows,
                 resampled.max_offset_m * 1e3
             ));
+            let fixed_label = format!("{simulated}{} {}", log.kind.name(), file.display());
             match s.log_forces {
                 LogForces::Fixed => run(
                     WrenchSource::Fixed {
-                        label: format!("{simulated}{} {}", log.kind.name(), file.display()),
+                        label: fixed_label,
                         simulated: log.simulated,
                         wrenches: &resampled.wrenches,
                     },
                     on_progress,
                 )?,
-                LogForces::Law => {
+                LogForces::Law | LogForces::Auto => {
                     let label = format!("{} {}", log.kind.name(), file.display());
-                    let mut process = LoggedProcess::new(
-                        &label,
-                        log.simulated,
-                        resampled,
-                        LoggedProcessOptions {
-                            use_measured: s.use_measured_tcp,
-                            ..LoggedProcessOptions::default()
-                        },
-                    )
-                    .map_err(deflex_compensate::CompensateError::from)?;
+                    let options = LoggedProcessOptions {
+                        use_measured: s.use_measured_tcp,
+                        require_evidence: s.log_forces == LogForces::Auto,
+                        ..LoggedProcessOptions::default()
+                    };
+                    let mut process =
+                        LoggedProcess::new(&label, log.simulated, resampled.clone(), options)
+                            .map_err(deflex_compensate::CompensateError::from)?;
                     let result = run(WrenchSource::Process(&mut process), on_progress)?;
+                    let bounded = process.bounded_points();
+                    let mut json = process
+                        .identification()
+                        .map(|id| identification_json(id, bounded, s.log_forces));
                     if let Some(id) = process.identification() {
-                        source_lines.push(identification_line(id, process.bounded_points()));
-                        log_law = Some(identification_json(id, process.bounded_points()));
+                        source_lines.push(identification_line(id, bounded));
+                        source_lines.push(decision_line(id, s.log_forces));
                     }
+                    let result = if result.converged || result.failure_count() > 0 {
+                        result
+                    } else {
+                        // The law's iteration stopped contracting: the logged wrenches (one
+                        // exact pass, with the measured TCP's correction) rather than nothing.
+                        let last = result.iterations.last();
+                        let warning = format!(
+                            "warning: the compensation with the force-depth law did not converge in {} iterations (last change {:.4} mm); the logged wrenches were used instead, as --log-forces auto does when it rejects the law",
+                            result.iterations.len(),
+                            last.map_or(f64::NAN, |r| r.max_change_m * 1e3)
+                        );
+                        source_lines.push(warning.clone());
+                        if let Some(serde_json::Value::Object(map)) = json.as_mut() {
+                            map.insert("decision".into(), json!("rejected"));
+                            map.insert("used".into(), json!("fixed"));
+                            map.insert("fallback".into(), json!(warning));
+                        }
+                        let mut fixed = LoggedProcess::new(
+                            &format!("{label} (fallback from the force-depth law)"),
+                            log.simulated,
+                            resampled,
+                            LoggedProcessOptions {
+                                use_law: false,
+                                ..options
+                            },
+                        )
+                        .map_err(deflex_compensate::CompensateError::from)?;
+                        run(WrenchSource::Process(&mut fixed), on_progress)?
+                    };
+                    log_law = json;
                     result
                 }
             }
@@ -182,9 +215,86 @@ fn identification_line(id: &Identification, bounded: usize) -> String {
     )
 }
 
-/// The law identified from a log, for `summary.json`.
-fn identification_json(id: &Identification, bounded: usize) -> serde_json::Value {
+/// Why the law is or is not used, for the summary text.
+fn decision_line(id: &Identification, mode: LogForces) -> String {
+    let figures = id.evidence.as_ref().map_or_else(
+        || "too few points in contact to test the law".to_string(),
+        |e| {
+            format!(
+                "held-out force explained {:.0} % by the commanded depth, {:.0} % by the path position (RMS {:.0} N / {:.0} N of a {:.0} N spread), loop gain {:.2}",
+                e.r2_depth.max(-9.99) * 100.0,
+                e.r2_position.max(-9.99) * 100.0,
+                e.rms_depth_n,
+                e.rms_position_n,
+                e.force_std_n,
+                e.loop_gain
+            )
+        },
+    );
+    let reason = id
+        .evidence
+        .as_ref()
+        .and_then(deflex_compensate::LawEvidence::rejection)
+        .unwrap_or_else(|| "the log supports it".into());
+    match (id.law_used, mode) {
+        (true, LogForces::Law) if id.evidence.as_ref().is_some_and(|e| !e.supported()) => {
+            format!("log law: chosen (--log-forces law), although {reason}; {figures}")
+        }
+        (true, _) => format!("log law: chosen: {reason}; {figures}"),
+        (false, _) if id.sloped_bins == 0 => {
+            format!(
+                "log law: rejected: the force does not follow the depth; the logged wrenches are used; {figures}"
+            )
+        }
+        (false, _) => format!(
+            "log law: rejected: {reason}; the logged wrenches are used by path position (--log-forces fixed); {figures}"
+        ),
+    }
+}
+
+/// The law identified from a log, for `summary.json`: `decision` `chosen` or `rejected`,
+/// `reason`, `used` (`law` or `fixed`), the evidence's figures.
+fn identification_json(id: &Identification, bounded: usize, mode: LogForces) -> serde_json::Value {
+    let reason = match (&id.evidence, id.sloped_bins) {
+        (_, 0) => "the force does not follow the depth".to_string(),
+        (None, _) => "too few points in contact to test the law".to_string(),
+        (Some(e), _) => e
+            .rejection()
+            .unwrap_or_else(|| "the log supports it".into()),
+    };
+    let evidence = id.evidence.as_ref().map(|e| {
+        json!({
+            "blocks": e.blocks,
+            "evaluated_points": e.evaluated_points,
+            "r2_commanded_depth": e.r2_depth,
+            "r2_path_position": e.r2_position,
+            "rms_commanded_depth_N": e.rms_depth_n,
+            "rms_path_position_N": e.rms_position_n,
+            "force_std_N": e.force_std_n,
+            "commanded_depth_span_m": e.commanded_depth_span_m,
+            "compliance_along_tool_axis_m_per_N": e.compliance_m_per_n,
+            "steepest_slope_N_per_m": e.steepest_slope_n_per_m,
+            "loop_gain": e.loop_gain,
+            "falling_share": e.falling_share,
+            "supported": e.supported(),
+            "thresholds": {
+                "min_r2": deflex_compensate::MIN_R2,
+                "margin_r2": deflex_compensate::MARGIN,
+                "max_loop_gain": deflex_compensate::MAX_LOOP_GAIN,
+                "max_falling_share": deflex_compensate::MAX_FALLING_SHARE,
+            },
+        })
+    });
     json!({
+        "mode": match mode {
+            LogForces::Auto => "auto",
+            LogForces::Law => "law",
+            LogForces::Fixed => "fixed",
+        },
+        "decision": if id.law_used { "chosen" } else { "rejected" },
+        "used": if id.law_used { "law" } else { "fixed" },
+        "reason": reason,
+        "evidence": evidence,
         "points": id.points,
         "contact_points": id.contact_points,
         "law_bins": id.law_bins,

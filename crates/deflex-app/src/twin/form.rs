@@ -419,6 +419,14 @@ impl TwinRun {
                 self.config.process.fixture_stiffness_n_m,
                 s.final_part_depth_mm
             );
+        } else if self.config.process.kind == ProcessKind::Prescribed {
+            let _ = writeln!(
+                out,
+                "  force: max |F| {:.0} N, set along the path: ramped to {:.0} N over {:.0} mm of travel in contact, whatever the depth",
+                s.max_force_norm_N,
+                self.config.process.prescribed_force_n,
+                self.config.process.prescribed_ramp_mm
+            );
         } else {
             let _ = writeln!(
                 out,

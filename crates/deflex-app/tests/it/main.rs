@@ -9,6 +9,7 @@ mod example_cell;
 mod export;
 mod load;
 mod load_gcode_file;
+mod log_law;
 mod option_names;
 mod report;
 mod robot;

@@ -502,3 +502,81 @@ fn a_latched_fault_ends_the_run_with_exit_status_3() {
     assert!(err.contains("latched fault"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `deflex run` against `deflex cell --sim --length-mm 20 EXTRA…` on the example cell in
+/// `dir`: the run's exit code, standard output and error (the twin is ended afterwards).
+fn run_against_the_twin(dir: &Path, extra: &[&str]) -> (Option<i32>, String, String) {
+    let cell = dir.join("cell.toml");
+    let cell = cell.to_str().unwrap();
+    let mut twin = deflex()
+        .args([
+            "cell",
+            "--sim",
+            "--config",
+            cell,
+            "--length-mm",
+            "20",
+            "--quiet",
+        ])
+        .args(extra)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = deflex()
+        .args(["run", "--config", cell, "--quiet", "--idle-exit-s", "0.5"])
+        .output()
+        .unwrap();
+    // The twin waits for answers that no longer come once the run has ended.
+    sigterm(twin.id());
+    let _ = twin.wait();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The model checked against the robot (issue 33): the simulated KUKA reports its TCP in
+/// `RIst` (its own kinematics at the measured joints); a robot file whose tool is 60 mm too
+/// long is refused before the first correction with the difference in mm, the right one runs
+/// (its summary gives the largest difference), and a jump of the reported pose during the
+/// session latches `model_mismatch` (exit status 3).
+#[test]
+fn cell_and_run_check_the_model_against_the_robot() {
+    let _turn = crate::session_turn();
+    let dir = scratch("run-model-check");
+    example_cell_file(&dir);
+    let model = dir.join("tx200_cell.toml");
+    let right = std::fs::read_to_string(&model).unwrap();
+    let long = right.replace("xyz = [0.0, 0.0, 0.2]", "xyz = [0.0, 0.0, 0.26]");
+    assert_ne!(long, right);
+    std::fs::write(&model, &long).unwrap();
+    let (code, text, err) = run_against_the_twin(&dir, &[]);
+    println!("{err}");
+    assert_eq!(code, Some(1), "{text}\n{err}");
+    assert!(
+        err.contains("model_mismatch: the TCP pose the robot reports is 60.")
+            && err.contains("tolerance 5.00 mm, 10.00 mrad); refusing to run")
+            && err.contains("[0.0, 0.0, 260.0] mm"),
+        "{text}\n{err}"
+    );
+
+    std::fs::write(&model, &right).unwrap();
+    let (code, text, err) = run_against_the_twin(&dir, &[]);
+    assert_eq!(code, Some(0), "{text}\n{err}");
+    assert!(
+        text.contains("  model check: largest difference between the robot's reported TCP and the model's at the same joints 0.")
+            && text.contains("fault: none"),
+        "{text}"
+    );
+
+    let (code, text, err) = run_against_the_twin(&dir, &["--pose-jump-mm", "20"]);
+    println!("{text}");
+    assert_eq!(code, Some(3), "{text}\n{err}");
+    assert!(
+        text.contains("fault: model_mismatch: TCP position reported 20."),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -440,3 +440,52 @@ fn bad_options_and_mismatched_logs_are_refused() {
     .unwrap_err();
     assert!(e.message.contains("max_force_ratio"), "{e}");
 }
+
+/// The evidence for a force–depth law (issue 33) on synthetic logs along 400 mm of path, the
+/// arm's compliance along the tool axis 1 mm/kN: a force set along the path (a ramp to 1 kN
+/// over 30 mm, then held; the commanded depth constant, so the reached depth falls as the force
+/// rises: a law of slope −1/C) is rejected on every count; a force that follows the commanded
+/// depth (ten 0.5 mm levels, the force saturating with depth) is supported.
+#[test]
+fn the_law_is_supported_only_when_the_depth_causes_the_force() {
+    use deflex_compensate::LawEvidence;
+    let n = 2000;
+    let compliance = 1e-6;
+    let arc: Vec<f64> = (0..n).map(|i| 0.4 * i as f64 / n as f64).collect();
+    let weights = vec![0.4 / n as f64; n];
+    let c = vec![compliance; n];
+    // Set along the path; a small ripple as the sensor's noise.
+    let set: Vec<f64> = arc
+        .iter()
+        .enumerate()
+        .map(|(i, s)| 1000.0 * (s / 0.03).min(1.0) + 5.0 * ((i * 7919) % 13) as f64 / 13.0)
+        .collect();
+    let flat = vec![0.003; n];
+    let backwards = LawEvidence::evaluate(&set, &flat, &arc, &weights, &c, &[(900.0, -1e6)]);
+    let why = backwards.rejection().expect("rejected");
+    assert!(backwards.r2_depth < 0.5, "{backwards:?}");
+    assert!(backwards.loop_gain >= 0.99, "{backwards:?}");
+    assert!(
+        why.contains("falls with depth") && why.contains("loop gain"),
+        "{why}"
+    );
+    // Following the commanded depth: ten levels along the path.
+    let depth: Vec<f64> = arc
+        .iter()
+        .map(|s| 0.0005 * ((s / 0.04).floor() + 1.0))
+        .collect();
+    let law = |u: f64| 1000.0 * (1.0 - (-u / 0.002).exp());
+    let follows: Vec<f64> = depth.iter().map(|&u| law(u)).collect();
+    let slopes: Vec<(f64, f64)> = depth
+        .iter()
+        .step_by(200)
+        .map(|&u| (law(u), 1000.0 / 0.002 * (-u / 0.002).exp() / 2.0))
+        .collect();
+    let forward = LawEvidence::evaluate(&follows, &depth, &arc, &weights, &c, &slopes);
+    assert!(
+        forward.supported(),
+        "{forward:?}: {:?}",
+        forward.rejection()
+    );
+    assert!(forward.r2_depth > 0.9, "{forward:?}");
+}

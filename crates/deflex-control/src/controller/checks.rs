@@ -6,9 +6,10 @@
 
 use super::{Controller, CycleInput, CycleOutput, JointCorrectionMap};
 use crate::estimate::tcp_deflection_in_base;
+use crate::model_check::pose_mismatch;
 use crate::runaway::RunawayAction;
 use crate::safety::{Channel, Fault};
-use deflex_model::{MAX_JOINTS, Wrench};
+use deflex_model::{MAX_JOINTS, Pose, Wrench};
 use deflex_telemetry::Phase;
 use deflex_telemetry::{FaultKind, Flags};
 use nalgebra::{Rotation3, Vector3, Vector6};
@@ -114,6 +115,44 @@ impl Controller {
         let fault = found?;
         self.trip(fault);
         Some(fault.kind)
+    }
+
+    /// The robot's reported TCP pose against the model's at the same joints (forward
+    /// kinematics done): keeps the session's largest difference and latches
+    /// [`FaultKind::ModelMismatch`] above the tolerance ([`crate::model_check`]).
+    pub(super) fn check_model(&mut self, reported: &Pose, now: f64, flags: &mut Flags) {
+        let cfg = self.config.model_check;
+        if !cfg.enabled {
+            return;
+        }
+        let mismatch = pose_mismatch(&self.robot, &self.data, reported);
+        self.pose_mismatch_max = Some(
+            self.pose_mismatch_max
+                .map_or(mismatch, |m| m.max(&mismatch)),
+        );
+        if !mismatch.exceeds(&cfg) {
+            return;
+        }
+        let fault =
+            if mismatch.position_m > cfg.position_tolerance_m || !mismatch.position_m.is_finite() {
+                Fault::new(
+                    FaultKind::ModelMismatch,
+                    now,
+                    mismatch.position_m,
+                    cfg.position_tolerance_m,
+                )
+                .on(Channel::TcpPosition)
+            } else {
+                Fault::new(
+                    FaultKind::ModelMismatch,
+                    now,
+                    mismatch.orientation_rad,
+                    cfg.orientation_tolerance_rad,
+                )
+                .on(Channel::TcpOrientation)
+            };
+        flags.set(FaultKind::ModelMismatch.flag());
+        self.trip(fault);
     }
 
     /// Wrench path (eq. 2) and deflection estimate (eq. 15, [`tcp_deflection_in_base`]) into

@@ -111,6 +111,7 @@ fn sensor_silent() {
             wrench_age_s: t - t0,
             wrench_fresh: false,
             sensor_status: 0,
+            tcp_pose: None,
         })
     });
 }
@@ -129,6 +130,7 @@ fn sensor_status_fault() {
             wrench_age_s: 0.0,
             wrench_fresh: true,
             sensor_status: 0x8000_0040,
+            tcp_pose: None,
         })
     });
     // Its own kind, with the status word, not a timeout with a meaningless value.
@@ -140,6 +142,7 @@ fn sensor_status_fault() {
         wrench_age_s: 0.0,
         wrench_fresh: true,
         sensor_status: 0x8000_0040,
+        tcp_pose: None,
     });
     let f = ctrl2.fault().unwrap();
     assert_eq!(
@@ -162,6 +165,7 @@ fn robot_link_lost() {
             wrench_age_s: 0.0,
             wrench_fresh: true,
             sensor_status: 0,
+            tcp_pose: None,
         })
     });
 }
@@ -301,6 +305,7 @@ fn random_garbage_never_panics_and_stays_bounded() {
                 wrench_age_s: if rng.gen_bool(0.1) { f64::NAN } else { 0.0 },
                 wrench_fresh: rng.gen_bool(0.8),
                 sensor_status: if rng.gen_bool(0.02) { 1 } else { 0 },
+                tcp_pose: None,
             });
             for i in 0..6 {
                 assert!(out.xi[i].is_finite() && out.xi[i].abs() <= max_abs[i] + 1e-15);

@@ -14,6 +14,7 @@ mod faults;
 mod feedforward;
 mod feedforward_tracker;
 mod limiter;
+mod model_check;
 mod pid;
 mod runaway;
 mod runaway_analysis;

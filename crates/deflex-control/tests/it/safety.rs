@@ -40,4 +40,5 @@ fn every_kind_has_its_own_bit_below_the_state_bits() {
     }
     assert_eq!(Flags::CONTACT_RUNAWAY, FaultKind::ContactRunaway.flag());
     assert_eq!(Flags::ROBOT_LINK_LOST, FaultKind::RobotLinkLost.flag());
+    assert_eq!(Flags::MODEL_MISMATCH, FaultKind::ModelMismatch.flag());
 }

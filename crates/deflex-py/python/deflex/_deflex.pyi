@@ -430,6 +430,7 @@ def _compensate(
     include_gravity: bool,
     tolerance_m: float,
     max_iterations: int,
+    log_forces: str = "auto",
 ) -> Compensation: ...
 def _form(
     path: str,

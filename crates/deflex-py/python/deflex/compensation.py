@@ -37,6 +37,7 @@ def compensate(
     include_gravity: bool = False,
     tolerance_m: float = 1e-6,
     max_iterations: int = 30,
+    log_forces: str = "auto",
 ) -> Compensation:
     """Compensate a tool path for the deflection ``robot`` predicts (eq. 15) under the process
     wrenches, iterating until the commanded path changes by less than ``tolerance_m``
@@ -52,6 +53,14 @@ def compensate(
     path (a ``deflex run`` or ``deflex sim isf`` log of a previous run of this path, resampled on
     arc length), or an array of wrenches (world axes at the TCP, N and N·m): ``(6,)`` for every
     point or ``(N, 6)``, one per point.
+
+    With a log, ``log_forces`` says what it gives: ``"auto"`` (default) the force–depth law
+    identified from the log when the log supports it as a cause (the commanded depth explains
+    the held-out force at least as well as the path position, the loop gain is below 0.8, the
+    force does not fall with depth), else the logged wrenches by path position; ``"law"`` the
+    law whatever the evidence; ``"fixed"`` the logged wrenches. Which and why is in
+    ``to_dict()["log_law"]``. A law whose iteration does not converge falls back
+    to the logged wrenches with a warning in the source lines.
 
     Points that cannot be compensated (limits, reach) keep their desired pose and are named in
     ``status``; ``program()`` and ``write_programs()`` then refuse, as the CLI does."""
@@ -70,6 +79,7 @@ def compensate(
         include_gravity,
         tolerance_m,
         max_iterations,
+        log_forces,
     )
     return result
 

@@ -285,9 +285,10 @@ fn wrench_arg(py: Python<'_>, wrench: &Bound<'_, PyAny>) -> PyResult<WrenchSpec>
 }
 
 /// ``deflex.compensate``'s engine call: the keywords checked in SI (the messages name the
-/// keyword), converted to the workflow's options (a log gives its wrenches as they are).
+/// keyword), converted to the workflow's options (a log gives its force–depth law when it
+/// supports it, `log_forces`: `auto`, `law` or `fixed`).
 #[pyfunction]
-#[pyo3(signature = (robot, path, wrench, frame, feed_m_s, twin_config, part_xyz_m, seed_q, length_m, max_segment_m, position_only, include_gravity, tolerance_m, max_iterations))]
+#[pyo3(signature = (robot, path, wrench, frame, feed_m_s, twin_config, part_xyz_m, seed_q, length_m, max_segment_m, position_only, include_gravity, tolerance_m, max_iterations, log_forces = "auto"))]
 #[allow(clippy::too_many_arguments)]
 pub fn _compensate(
     py: Python<'_>,
@@ -305,6 +306,7 @@ pub fn _compensate(
     include_gravity: bool,
     tolerance_m: f64,
     max_iterations: usize,
+    log_forces: &str,
 ) -> PyResult<PyCompensation> {
     let model = robot_arg(py, robot, "robot")?;
     let frame: Frame = frame.parse().map_err(|e| to_py(py, e))?;
@@ -326,6 +328,7 @@ pub fn _compensate(
             .map(|m| bounded("max_segment_m", m, 1e-6, 10.0, "m").map(|m| m * 1e3))
             .transpose()?;
         bounded("tolerance_m", tolerance_m, 1e-9, 1e-3, "m")?;
+        let log_forces: LogForces = log_forces.parse()?;
         if !(1..=200).contains(&max_iterations) {
             return Err(Error::invalid(
                 "max_iterations",
@@ -342,7 +345,7 @@ pub fn _compensate(
             include_gravity,
             tolerance_m,
             max_iterations,
-            log_forces: LogForces::Fixed,
+            log_forces,
             ..Options::default()
         })
     };

@@ -104,6 +104,16 @@ def test_a_twin_log_serves_as_the_wrench_source(tmp_path: Path) -> None:
     comp = deflex.compensate("tx200", "cone", wrench=f"log:{tmp_path / 'open' / 'log.csv'}", length_m=0.15)
     assert comp.simulated and "SIMULATED deflex sim isf log" in comp.source
     assert np.abs(comp.wrench[:, 2]).max() > 10.0
+    # The default (log_forces="auto") says whether the log's force-depth law was used and why.
+    law = comp.to_dict()["log_law"]
+    assert law["decision"] in ("chosen", "rejected") and law["reason"]
+    assert law["evidence"] is None or "r2_commanded_depth" in law["evidence"]
+    fixed = deflex.compensate(
+        "tx200", "cone", wrench=f"log:{tmp_path / 'open' / 'log.csv'}", length_m=0.15, log_forces="fixed"
+    )
+    assert fixed.to_dict()["log_law"] is None
+    with pytest.raises(deflex.InputError, match="log_forces"):
+        deflex.compensate("tx200", "cone", wrench=f"log:{tmp_path / 'open' / 'log.csv'}", log_forces="maybe")
 
 
 def test_compensation_options_are_checked() -> None:

@@ -55,6 +55,40 @@ fn check_robot_matches_model(ctrl: &Controller, joints: &JointSample) -> Result<
             });
         }
     }
+    check_model_pose(ctrl, joints)
+}
+
+/// Checks the TCP pose the first telegram reports, when its protocol carries one, against the
+/// model's forward kinematics at its joints ([`deflex_control::model_check`]): a difference
+/// above the tolerance refuses the run before the first correction.
+fn check_model_pose(ctrl: &Controller, joints: &JointSample) -> Result<(), SessionError> {
+    let config = ctrl.config().model_check;
+    let Some(reported) = joints.tcp_pose() else {
+        return Ok(());
+    };
+    if !config.enabled {
+        return Ok(());
+    }
+    let robot = ctrl.robot();
+    let mut data = deflex_model::Data::new();
+    let Ok(mismatch) = deflex_control::tcp_pose_mismatch(
+        robot,
+        &mut data,
+        &joints.q()[..robot.joint_count()],
+        &reported,
+    ) else {
+        return Ok(());
+    };
+    if mismatch.exceeds(&config) {
+        let tool = robot.tool.translation.vector;
+        return Err(SessionError::ModelMismatch {
+            mismatch,
+            position_tolerance_m: config.position_tolerance_m,
+            orientation_tolerance_rad: config.orientation_tolerance_rad,
+            model: robot.name.clone(),
+            tool_m: [tool.x, tool.y, tool.z],
+        });
+    }
     Ok(())
 }
 
@@ -141,6 +175,7 @@ impl Cycles {
             wrench_age_s: now - accumulation.time_s,
             wrench_fresh: fresh,
             sensor_status: accumulation.status_word(),
+            tcp_pose: joints.tcp_pose(),
         };
         let out = ctrl.cycle_input(&input);
         shared.command.write(&CorrectionCommand {
@@ -302,6 +337,7 @@ pub(super) fn control_loop<C: Clock>(
         final_silence,
         runaway_events: ctrl.runaway_events(),
         first_runaway: ctrl.first_runaway(),
+        pose_mismatch_max: ctrl.pose_mismatch_max(),
         max_force_n: cycles.max_force,
         max_xi_m: cycles.max_xi,
         warnings,

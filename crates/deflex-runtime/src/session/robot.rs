@@ -46,6 +46,8 @@ impl Answering {
             time_s: clock.now(),
             joint_count: state.joint_count.min(MAX_JOINTS) as u64,
             robot_late: state.late_answers.map_or(LATE_UNKNOWN, u64::from),
+            tcp_pose: state.tcp_pose.unwrap_or_default(),
+            tcp_pose_known: u64::from(state.tcp_pose.is_some()),
         };
         shared.joints.write(&joints);
         shared

@@ -2,7 +2,7 @@
 //! including how the session ended (the robot's program finished, an operator stop, a failure).
 
 use crate::stats::StatsSummary;
-use deflex_control::Fault;
+use deflex_control::{Fault, PoseMismatch};
 use deflex_io::LinkCounters;
 use deflex_telemetry::{FaultKind, Flags, Phase};
 use std::net::SocketAddr;
@@ -52,6 +52,21 @@ pub enum SessionError {
         /// The margin allowed beyond them (rad).
         margin_rad: f64,
     },
+    /// The TCP pose the robot reports with its first telegram is farther from the model's
+    /// forward kinematics at the same joints than the tolerance
+    /// ([`FaultKind::ModelMismatch`], [`deflex_control::model_check`]).
+    ModelMismatch {
+        /// How far (position, orientation, the position offset in base axes).
+        mismatch: PoseMismatch,
+        /// The position tolerance (m).
+        position_tolerance_m: f64,
+        /// The orientation tolerance (rad).
+        orientation_tolerance_rad: f64,
+        /// The model's name.
+        model: String,
+        /// The model's tool: flange → TCP translation (m).
+        tool_m: [f64; 3],
+    },
     /// A thread panicked; the links ramped the correction out and stopped.
     ThreadPanicked {
         /// Which.
@@ -67,6 +82,7 @@ impl SessionError {
         match self {
             SessionError::JointCountMismatch { .. } => Some(FaultKind::JointCountMismatch),
             SessionError::JointOutOfLimits { .. } => Some(FaultKind::JointOutOfLimits),
+            SessionError::ModelMismatch { .. } => Some(FaultKind::ModelMismatch),
             _ => None,
         }
     }
@@ -112,6 +128,32 @@ impl std::fmt::Display for SessionError {
                 lo.to_degrees(),
                 hi.to_degrees(),
             ),
+            SessionError::ModelMismatch {
+                mismatch,
+                position_tolerance_m,
+                orientation_tolerance_rad,
+                model,
+                tool_m,
+            } => {
+                let [dx, dy, dz] = mismatch.offset_m.map(|v| v * 1e3);
+                let [tx, ty, tz] = tool_m.map(|v| v * 1e3);
+                write!(
+                    f,
+                    "{}: the TCP pose the robot reports is {:.2} mm and {:.2} mrad from the \
+                     model \"{model}\" at the same joints (reported − model [{dx:.2}, {dy:.2}, \
+                     {dz:.2}] mm, robot base axes; tolerance {:.2} mm, {:.2} mrad); refusing to \
+                     run. Likely causes: the tool (the model's flange → TCP is [{tx:.1}, {ty:.1}, \
+                     {tz:.1}] mm: compare with the controller's active tool), the base (the \
+                     robot file's frame R0 is not the frame the controller reports in), the \
+                     robot file (another robot or geometry), or units (lengths in mm where m are \
+                     expected)",
+                    FaultKind::ModelMismatch.name(),
+                    mismatch.position_m * 1e3,
+                    mismatch.orientation_rad * 1e3,
+                    position_tolerance_m * 1e3,
+                    orientation_tolerance_rad * 1e3,
+                )
+            }
             SessionError::ThreadPanicked { thread, message } => match thread {
                 SessionThread::Control => write!(
                     f,
@@ -262,6 +304,10 @@ pub struct RunSummary {
     pub runaway_events: u64,
     /// First runaway the guard acted on.
     pub first_runaway: Option<Fault>,
+    /// The largest difference between the TCP pose the robot reported and the model's at the
+    /// same joints ([`deflex_control::model_check`]); `None` when the protocol reports no pose
+    /// (Stäubli, the simple line links) or the check is off.
+    pub pose_mismatch_max: Option<PoseMismatch>,
     /// Largest force norm seen at the TCP once tared (N).
     pub max_force_n: f64,
     /// Largest |ξ_p| (m).
@@ -307,6 +353,7 @@ impl RunSummary {
             final_silence: None,
             runaway_events: 0,
             first_runaway: None,
+            pose_mismatch_max: None,
             max_force_n: 0.0,
             max_xi_m: 0.0,
             max_step_sent: [0.0; 6],

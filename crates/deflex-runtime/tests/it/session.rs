@@ -283,6 +283,66 @@ fn model_that_does_not_fit_the_robot_is_refused() {
     }
 }
 
+/// The model checked against the robot: a KUKA reporting its TCP in `RIst` (its own TX200 with
+/// the 0.2 m tool of the test set-up's robot) against a model whose tool is 60 mm longer is
+/// refused before the first correction, typed, with the difference in mm; the right model runs
+/// with the largest difference in its summary.
+#[test]
+fn a_model_with_another_tool_is_refused_before_the_first_correction() {
+    let config = common::config();
+    let q = common::q0();
+    let raw = common::raw_reading(&config, &q, [0.0; 6]);
+    let mut long_tool = common::robot();
+    long_tool.tool *= nalgebra::Translation3::new(0.0, 0.0, 0.06);
+    for (robot, refused) in [(long_tool, true), (common::robot(), false)] {
+        let (link, client, peers) =
+            common::loopback_cell(RsiConfig::default(), raw, q, f64::INFINITY, f64::INFINITY);
+        let ctrl = Controller::new(robot, config).unwrap();
+        let telemetry = common::telemetry(&ctrl);
+        let runtime = spawn(
+            ctrl,
+            Box::new(link),
+            Box::new(client),
+            WallClock::new(),
+            telemetry,
+            options(),
+        )
+        .unwrap();
+        if refused {
+            wait(&runtime, Duration::from_secs(30));
+        } else {
+            let started = Instant::now();
+            while runtime.status().cycles < 20 && started.elapsed() < Duration::from_secs(30) {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            runtime.request_stop();
+            wait(&runtime, Duration::from_secs(30));
+        }
+        let summary = runtime.join();
+        peers.join();
+        if !refused {
+            assert!(summary.error.is_none(), "{:?}", summary.error);
+            let m = summary.pose_mismatch_max.expect("checked");
+            // RSI carries 4 decimals of mm and degrees.
+            assert!(m.position_m < 1e-5 && m.orientation_rad < 1e-5, "{m:?}");
+            continue;
+        }
+        let error = summary.error.expect("refused");
+        assert_eq!(error.fault_kind(), Some(FaultKind::ModelMismatch));
+        let SessionError::ModelMismatch { mismatch, .. } = &error else {
+            panic!("{error:?}");
+        };
+        assert!((mismatch.position_m - 0.06).abs() < 1e-5, "{mismatch:?}");
+        let e = error.to_string();
+        assert!(
+            e.starts_with("model_mismatch: the TCP pose the robot reports is 60.00 mm and"),
+            "{e}"
+        );
+        assert_eq!(summary.cycles, 0);
+        assert!(summary.pose_mismatch_max.is_none());
+    }
+}
+
 /// Hand decoding of `EgmSensorPathCorr.pathCorr.pos` from the official egm.proto field numbers
 /// (message field 2 → field 1 → doubles 1, 2, 3), written here independently of deflex.
 fn egm_pos(b: &[u8]) -> [f64; 3] {

@@ -18,6 +18,20 @@ impl CellConfig {
             1e9,
             "N/m",
         )?;
+        bounded(
+            "process.prescribed_force_n",
+            self.process.prescribed_force_n,
+            1.0,
+            20_000.0,
+            "N",
+        )?;
+        bounded(
+            "process.prescribed_ramp_mm",
+            self.process.prescribed_ramp_mm,
+            0.0,
+            10_000.0,
+            "mm",
+        )?;
         bounded("log.rate_hz", self.log.rate_hz, 0.1, 1000.0, "Hz")?;
         if self.log.rate_hz > self.controller.rate_hz {
             return Err(SimError::config(

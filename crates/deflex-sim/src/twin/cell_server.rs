@@ -37,6 +37,21 @@ pub struct ServeOptions {
     /// Dwell at the start pose, out of contact, once the controller answers and the sensor
     /// streams, before the path starts (s of robot time): the controller tares its sensor there.
     pub dwell_s: f64,
+    /// A fault for tests: the TCP pose the robot reports jumps during the path (`None` in a
+    /// normal run).
+    pub pose_jump: Option<PoseJump>,
+}
+
+/// The TCP pose the simulated robot reports (KUKA RSI `RIst`, ABB EGM feedback) shifted from
+/// some time of the path on: what a controller whose tool or base was changed mid-session
+/// reports, for the model check's fault ([`deflex_telemetry::FaultKind::ModelMismatch`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseJump {
+    /// Time of the path (s of robot time since the twin started stepping) from which on the
+    /// pose is shifted.
+    pub after_s: f64,
+    /// The shift, robot base axes (m).
+    pub offset_m: [f64; 3],
 }
 
 /// The ends of the served cell: the robot controller's and the sensor's, and the controller's
@@ -294,6 +309,8 @@ struct Serving {
     dwell_cycles: u64,
     /// The controller answers and the sensor streams, the program has not started yet.
     dwelling: bool,
+    /// The test's jump of the reported pose.
+    pose_jump: Option<PoseJump>,
 }
 
 impl Serving {
@@ -331,6 +348,19 @@ impl Serving {
         }
     }
 
+    /// The TCP pose the robot reports this cycle: its controller's kinematics at the measured
+    /// joints ([`crate::CellStep::tcp_reported`]), shifted by the test's jump once due.
+    fn reported_pose(&self) -> deflex_model::Pose {
+        let mut pose = self.step.tcp_reported;
+        if let Some(jump) = self.pose_jump
+            && self.serving
+            && self.step.time_s >= jump.after_s
+        {
+            pose.translation.vector += Vector3::from(jump.offset_m);
+        }
+        pose
+    }
+
     /// Sends the robot's state of this cycle; returns when it was sent and whether the robot
     /// controller's kinematics of it are known.
     fn send_state(&mut self) -> (Instant, bool) {
@@ -343,6 +373,9 @@ impl Serving {
             cycle_id: self.ipoc,
             // A KUKA reports its count of late answers in every telegram.
             late_answers: Some(self.late.min(u64::from(u32::MAX)) as u32),
+            // The controller's own TCP pose at the measured joints (sent by the protocols that
+            // carry one: RSI `RIst`, EGM feedback), shifted by the test's jump once due.
+            tcp_pose: Some(self.reported_pose()),
             ..RobotState::with_joints(&self.step.q_measured_rad)
         };
         let sent = Instant::now();
@@ -491,6 +524,7 @@ pub fn serve_cell_with(
         late: 0,
         serving: false,
         dwelling: false,
+        pose_jump: options.pose_jump,
     };
     let mut state = s.state();
     if let Some(st) = stream.as_deref_mut() {

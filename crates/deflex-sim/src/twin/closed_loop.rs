@@ -163,6 +163,7 @@ impl CorrectionController for TwinController {
             wrench_age_s: input.time_s - self.last_sample_s,
             wrench_fresh: fresh,
             sensor_status: 0,
+            tcp_pose: None,
         });
         let f = &out.wrench_tcp;
         self.max_force_n = self

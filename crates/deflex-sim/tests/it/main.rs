@@ -11,6 +11,7 @@ mod forming;
 mod gcode;
 mod plant;
 mod process_model;
+mod reported_pose;
 mod sensor;
 mod sheet;
 mod toolpath;

@@ -4,7 +4,8 @@
 use super::CellFile;
 use super::choices::CorrectionAxis;
 use deflex_control::{
-    ControllerConfig, LimiterConfig, PidGains, RunawayConfig, SafetyConfig, WrenchConfig,
+    ControllerConfig, LimiterConfig, ModelCheckConfig, PidGains, RunawayConfig, SafetyConfig,
+    WrenchConfig,
 };
 use deflex_model::ToolLoad;
 use deflex_model::spatial::pose_from_xyz_rpy;
@@ -78,6 +79,11 @@ impl CellFile {
                 release_rate_m_s: l.runaway_release_rate_m_s,
                 action: l.runaway_action,
                 ..RunawayConfig::default()
+            },
+            model_check: ModelCheckConfig {
+                enabled: self.model_check.enabled,
+                position_tolerance_m: self.model_check.position_tolerance_m,
+                orientation_tolerance_rad: self.model_check.orientation_tolerance_rad,
             },
         }
     }

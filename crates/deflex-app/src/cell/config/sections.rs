@@ -9,8 +9,8 @@ use super::choices::{
     RobotKind, Ros2Qos, Ros2Topic, RsiAnswerKind, RunawayActionDef, SafeActionDef, SensorKind,
 };
 use deflex_control::{
-    FeedForwardConfig, FeedForwardMode, LimiterConfig, PathIndex, PidGains, RunawayAction,
-    RunawayConfig, SafeAction, SafetyConfig,
+    FeedForwardConfig, FeedForwardMode, LimiterConfig, ModelCheckConfig, PathIndex, PidGains,
+    RunawayAction, RunawayConfig, SafeAction, SafetyConfig,
 };
 use deflex_io::egm::EgmFrame;
 use deflex_io::rsi::{CorrectionMode, JointTag};
@@ -299,6 +299,31 @@ impl Default for LimitsSection {
             runaway_withdraw_s: runaway.withdraw_s,
             runaway_release_rate_m_s: runaway.release_rate_m_s,
             runaway_action: runaway.action,
+        }
+    }
+}
+
+/// `[model_check]`: the TCP pose the robot reports (KUKA RSI `RIst`, ABB EGM feedback) against
+/// the model's forward kinematics at the same joints ([`deflex_control::model_check`]).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModelCheckSection {
+    /// Make the check (where the protocol reports a pose).
+    pub enabled: bool,
+    /// Largest distance between the reported TCP and the model's (m).
+    pub position_tolerance_m: f64,
+    /// Largest rotation between the reported TCP orientation and the model's (rad).
+    pub orientation_tolerance_rad: f64,
+}
+
+impl Default for ModelCheckSection {
+    /// On, 5 mm, 10 mrad ([`ModelCheckConfig::default`]).
+    fn default() -> Self {
+        let c = ModelCheckConfig::default();
+        ModelCheckSection {
+            enabled: c.enabled,
+            position_tolerance_m: c.position_tolerance_m,
+            orientation_tolerance_rad: c.orientation_tolerance_rad,
         }
     }
 }

@@ -52,6 +52,8 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("limits.runaway_confirm_cycles", 1.0, 1000.0, "cycles"),
     ("limits.runaway_withdraw_s", 0.01, 10.0, "s"),
     ("limits.runaway_release_rate_m_s", 1e-6, 0.1, "m/s"),
+    ("model_check.position_tolerance_m", 1e-4, 0.5, "m"),
+    ("model_check.orientation_tolerance_rad", 1e-4, 0.5, "rad"),
     ("sensor.max_age_s", 0.001, 10.0, "s"),
     ("sensor.queue_depth", 1.0, 1024.0, "messages"),
     ("log.ring_capacity", 16.0, 262_144.0, "records"),
@@ -263,6 +265,12 @@ impl CellFile {
             ));
         }
         self.check("limits.runaway_window_s", l.runaway_window_s)?;
+        let m = &self.model_check;
+        self.check("model_check.position_tolerance_m", m.position_tolerance_m)?;
+        self.check(
+            "model_check.orientation_tolerance_rad",
+            m.orientation_tolerance_rad,
+        )?;
         self.check("limits.runaway_min_travel_m", l.runaway_min_travel_m)?;
         self.check(
             "limits.runaway_confirm_cycles",

@@ -104,6 +104,14 @@ fn every_number_is_bounded_and_named() {
         ),
         ("[mounting]\nlowpass_hz = 1e-9\n", "mounting.lowpass_hz"),
         (
+            "[model_check]\nposition_tolerance_m = 5.0\n",
+            "model_check.position_tolerance_m",
+        ),
+        (
+            "[model_check]\norientation_tolerance_rad = 0.0\n",
+            "model_check.orientation_tolerance_rad",
+        ),
+        (
             "[mounting]\nbias = [0.0, 0.0, nan, 0.0, 0.0, 0.0]\n",
             "mounting.bias[2]",
         ),
@@ -131,6 +139,32 @@ fn every_number_is_bounded_and_named() {
     for (field, lo, hi, _) in BOUNDS {
         assert!(lo < hi, "{field}");
     }
+}
+
+/// `[model_check]`: on by default at 5 mm and 10 mrad; the file's tolerances reach the
+/// controller.
+#[test]
+fn the_model_check_follows_the_file() {
+    let default = parse(MINIMAL).unwrap().controller_config().model_check;
+    assert_eq!(default, deflex_control::ModelCheckConfig::default());
+    assert!(default.enabled);
+    assert_eq!(
+        (
+            default.position_tolerance_m,
+            default.orientation_tolerance_rad
+        ),
+        (0.005, 0.01)
+    );
+    let text = format!(
+        "{MINIMAL}[model_check]\nenabled = false\nposition_tolerance_m = 0.002\n\
+         orientation_tolerance_rad = 0.004\n"
+    );
+    let c = parse(&text).unwrap().controller_config().model_check;
+    assert!(!c.enabled);
+    assert_eq!(
+        (c.position_tolerance_m, c.orientation_tolerance_rad),
+        (0.002, 0.004)
+    );
 }
 
 #[test]

@@ -12,4 +12,5 @@
 mod config;
 mod feedforward_table;
 mod links;
+mod model_check;
 mod sessions;

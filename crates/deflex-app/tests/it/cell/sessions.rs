@@ -156,6 +156,7 @@ fn run_and_the_simulated_cell_together() {
                 speed: 1.0,
                 wait_s: 60.0,
                 dwell_s: 0.5,
+                pose_jump: None,
             },
             None,
         )

@@ -24,6 +24,7 @@ fn cell_refuses_non_loopback_addresses() {
         speed: 1.0,
         wait_s: 1.0,
         dwell_s: 0.5,
+        pose_jump: None,
     };
     let sides = file.cell_sides(&options.twin).unwrap();
     let e = serve_cell(&sides, &options, &AtomicBool::new(false), &mut |_| {})

@@ -104,6 +104,7 @@ fn loopback_for(
         speed: 1.0,
         wait_s: 20.0,
         dwell_s: 0.5,
+        pose_jump: None,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let sides = file.cell_sides(&twin).unwrap();
@@ -193,6 +194,25 @@ fn check_loopback(kind: &str, l: &Loopback, min_telegrams: u64) {
         s.fault
     );
     assert_eq!(s.robot_joints, 6, "{kind}");
+    // The model check (issue 33): the KUKA and the ABB report their TCP pose, the twin's own
+    // kinematics at the measured joints; the model (calibrated from the twin's campaign, or
+    // nominal) is within a calibration's difference of it, far inside the 5 mm / 10 mrad
+    // tolerance. The other protocols carry no pose: nothing is checked.
+    match (kind, s.pose_mismatch_max) {
+        ("kuka-rsi" | "abb-egm", Some(m)) => {
+            println!(
+                "{kind}: model check: {:.4} mm, {:.4} mrad",
+                m.position_m * 1e3,
+                m.orientation_rad * 1e3
+            );
+            assert!(
+                m.position_m < 1e-3 && m.orientation_rad < 1e-3,
+                "{kind}: {m:?}"
+            );
+        }
+        ("kuka-rsi" | "abb-egm", None) => panic!("{kind}: the reported pose was not checked"),
+        (_, m) => assert!(m.is_none(), "{kind}: {m:?}"),
+    }
     // Every answer within the rate limit per robot cycle, whatever the timing.
     let limit = deflex_control::LimiterConfig::default().max_rate[0] * cycle_s;
     for i in 0..3 {

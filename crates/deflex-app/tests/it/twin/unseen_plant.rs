@@ -271,6 +271,17 @@ impl HeldOut {
         let id = process.identification().unwrap();
         assert!(id.sloped_bins > 0, "{id:?}");
         assert_eq!(id.measured, measured);
+        // `--log-forces auto` would choose the law on these logs too (issue 33).
+        let evidence = id.evidence.as_ref().unwrap();
+        println!(
+            "SIMULATED evidence (measured TCP {measured}): R² depth {:.3}, position {:.3}, loop gain {:.2}, falling {:.2}: {:?}",
+            evidence.r2_depth,
+            evidence.r2_position,
+            evidence.loop_gain,
+            evidence.falling_share,
+            evidence.rejection()
+        );
+        assert!(evidence.supported(), "{evidence:?}");
         result
     }
 

@@ -52,10 +52,13 @@ impl<T> Peer<T> {
     }
 }
 
-/// A KUKA (RSI robot side, absolute corrections) sending `q` to the link at `link` every 4 ms
-/// and reading its answers, for `seconds` of wall time (`f64::INFINITY`: until stopped); returns
-/// the telegrams it sent.
+/// A KUKA (RSI robot side, absolute corrections) sending `q` to the link at `link` every 4 ms,
+/// with its TCP pose in `RIst` (the built-in TX200's own kinematics at `q`, robot base frame,
+/// as the controller computes it), and reading its answers, for `seconds` of wall time
+/// (`f64::INFINITY`: until stopped); returns the telegrams it sent.
 pub fn kuka_robot(link: SocketAddr, q: [f64; 6], seconds: f64) -> Peer<u64> {
+    let tx200 = robot();
+    let pose = tx200.base.inverse() * tx200.tcp_pose(&q).unwrap();
     let stop = Arc::new(AtomicBool::new(false));
     let stopped = stop.clone();
     let handle = std::thread::spawn(move || {
@@ -66,6 +69,7 @@ pub fn kuka_robot(link: SocketAddr, q: [f64; 6], seconds: f64) -> Peer<u64> {
         while start.elapsed().as_secs_f64() < seconds && !stopped.load(Ordering::Acquire) {
             let state = deflex_io::RobotState {
                 cycle_id: sent + 1,
+                tcp_pose: Some(pose),
                 ..deflex_io::RobotState::with_joints(&q)
             };
             ep.send_state(&state).unwrap();

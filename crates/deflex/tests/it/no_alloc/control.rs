@@ -50,6 +50,51 @@ fn control_cycle_allocates_nothing() {
     assert!(super::allocations() > after);
 }
 
+/// The model check ([`deflex_control::model_check`]) on every cycle allocates nothing: the
+/// reported TCP pose compared with the model's (the session's largest kept), then a jump of it
+/// that latches `model_mismatch`, and the ramp-out; the free function too.
+#[test]
+fn model_check_allocates_nothing() {
+    use deflex_control::CycleInput;
+    let config = config();
+    let mut ctrl = controller(config);
+    let q = q0();
+    let raw = raw_reading(&config, &q, [300.0, -200.0, 900.0, 1.0, 2.0, -1.0]);
+    let model = robot();
+    let pose = model.base.inverse() * model.tcp_pose(&q).unwrap();
+    let mut jumped = pose;
+    jumped.translation.vector.z += 0.02;
+    let input = |t: f64, pose| CycleInput {
+        now_s: t,
+        q_rad: &q,
+        q_age_s: 0.0,
+        wrench_sensor: raw,
+        wrench_age_s: 0.0,
+        wrench_fresh: true,
+        sensor_status: 0,
+        tcp_pose: Some(pose),
+    };
+    ctrl.start(0.0);
+    ctrl.cycle_input(&input(0.01, pose));
+    let mut data = Data::new();
+    let before = super::allocations();
+    let mut t = 0.01;
+    for k in 0..1000 {
+        t += 0.01;
+        let reported = if k < 500 { pose } else { jumped };
+        std::hint::black_box(ctrl.cycle_input(&input(t, reported)));
+        std::hint::black_box(
+            deflex_control::tcp_pose_mismatch(&model, &mut data, &q, &reported).unwrap(),
+        );
+    }
+    let after = super::allocations();
+    assert_eq!(
+        ctrl.fault().map(|f| f.kind),
+        Some(deflex_telemetry::FaultKind::ModelMismatch)
+    );
+    assert_eq!(after - before, 0, "{} allocations", after - before);
+}
+
 /// The runaway guard's whole cycle (estimate, trip, withdrawal, latched hold, release at its rate)
 /// allocates nothing: a press on a 10⁷ N/m contact that trips it, then the contact goes away.
 /// Only the controller's cycles are counted (the test's plant is outside).

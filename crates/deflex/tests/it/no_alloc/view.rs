@@ -108,6 +108,7 @@ fn an_open_page_costs_the_control_loop_no_allocation() {
             speed: 1.0,
             wait_s: 60.0,
             dwell_s: 0.5,
+            pose_jump: None,
         };
         // The ends of the cell from the file, as `deflex cell --sim` takes them.
         let sides = file.cell_sides(&options.twin).unwrap();
