@@ -97,8 +97,15 @@ pub const BASE_STEPS: [Step; 3] = [Step::Registration, Step::Geometry, Step::Com
 /// The steps a calibration fits when none are named, and why: [`BASE_STEPS`], and the joint
 /// maps when the data is grouped (`cv_by`) so that the held-out vote by those groups can judge
 /// them (they are kept only when they lower the left-out groups' error). Without groups the
-/// maps are not tried: their hyper-parameters would be chosen on the test readings.
-pub fn default_steps(cv_by: Option<CvBy>) -> (Vec<Step>, String) {
+/// maps are not tried: their hyper-parameters would be chosen on the test readings; `sessions`
+/// and `setups` (how many the fitted readings hold) say which grouping would let them vote,
+/// in the front end's words (`names`).
+pub fn default_steps(
+    cv_by: Option<CvBy>,
+    sessions: usize,
+    setups: usize,
+    names: OptionNames,
+) -> (Vec<Step>, String) {
     let mut steps = BASE_STEPS.to_vec();
     let why = match cv_by {
         Some(by) => {
@@ -109,9 +116,26 @@ pub fn default_steps(cv_by: Option<CvBy>) -> (Vec<Step>, String) {
                 by.name()
             )
         }
-        None => "default steps: registration, geometry, compliance; joint-maps not tried (no \
-                 groups to vote with: --cv-by session, setup or series)"
-            .to_string(),
+        None => {
+            let hint = if sessions >= 2 {
+                format!(
+                    "; the data has {sessions} sessions: {} lets them vote",
+                    names.give_text("cv_by", "session")
+                )
+            } else if setups >= 2 {
+                format!(
+                    "; the data has {setups} set-ups: {} lets them vote",
+                    names.give_text("cv_by", "setup")
+                )
+            } else {
+                String::new()
+            };
+            format!(
+                "default steps: registration, geometry, compliance; joint-maps not tried (no \
+                 groups to vote with: {} session, setup or series{hint})",
+                names.name("cv_by")
+            )
+        }
     };
     (steps, why)
 }
@@ -260,7 +284,15 @@ pub fn calibrate_geometry(
     let (steps, default_steps) = match &options.steps {
         Some(steps) => (steps.clone(), None),
         None => {
-            let (steps, why) = default_steps(options.cv_by);
+            let fitted = |groups: &[usize]| {
+                let mut seen: Vec<usize> = groups[..fit_count].to_vec();
+                seen.sort_unstable();
+                seen.dedup();
+                seen.len()
+            };
+            let sessions = fitted(&session_groups(&campaign, SESSION_GAP_S));
+            let setups = fitted(&campaign.setup_of);
+            let (steps, why) = default_steps(options.cv_by, sessions, setups, options.names);
             (steps, Some(why))
         }
     };

@@ -527,10 +527,30 @@ fn the_default_steps_try_the_joint_maps_when_groups_can_vote_on_them() {
     plain.steps = None;
     let cal = calibrate_geometry(&ur10(), &data[..1], &[], &[], &plain).unwrap();
     assert_eq!(cal.result.steps.len(), 3);
-    assert!(report_text(&cal).starts_with(
-        "default steps: registration, geometry, compliance; joint-maps not tried (no groups \
-             to vote with: --cv-by session, setup or series)\n"
-    ));
+    let text = report_text(&cal);
+    assert!(
+        text.starts_with(
+            "default steps: registration, geometry, compliance; joint-maps not tried (no groups \
+             to vote with: --cv-by session, setup or series"
+        ),
+        "{text}"
+    );
+    // Two series with their sessions: the line says which grouping would let the maps vote,
+    // in each front end's words.
+    for (names, give) in [
+        (OptionNames::Cli, "--cv-by session"),
+        (OptionNames::Python, "cv_by=\"session\""),
+    ] {
+        let mut plain = options(&[]);
+        plain.steps = None;
+        plain.names = names;
+        let cal = calibrate_geometry(&ur10(), &data, &[], &[], &plain).unwrap();
+        let first = report_text(&cal).lines().next().unwrap().to_string();
+        assert!(
+            first.contains("; the data has") && first.ends_with(&format!("{give} lets them vote)")),
+            "{first}"
+        );
+    }
     // Named steps: no line about defaults, `null` in the JSON.
     let cal = calibrate_geometry(&ur10(), &data[..1], &[], &[], &options(&BASE_STEPS)).unwrap();
     assert!(report_text(&cal).starts_with("Elasto-geometric calibration"));
