@@ -20,7 +20,7 @@ use deflex_app::compensate::{
 };
 use deflex_compensate::commanded_pose;
 use deflex_sim::toolpath::Waypoint;
-use deflex_sim::{CellConfig, FormingRun, ProcessKind, ToolPath, run_forming};
+use deflex_sim::{CellConfig, ProcessKind, ToolPath, run_forming};
 use nalgebra::Vector3;
 
 /// The prescribed-force part: a plunge 3 mm below the surface, then a 60 mm circle (two
@@ -41,36 +41,6 @@ fn levels_program(levels: usize) -> String {
     }
     text.push_str("G0 Z5\nM30\n%\n");
     text
-}
-
-/// Largest path error (mm) over the rows with at least 20 N of contact force whose desired TCP
-/// is not on a rapid of `reference` (the retract).
-fn max_error_mm(run: &FormingRun, reference: &ToolPath) -> f64 {
-    let rapids: Vec<(Vector3<f64>, Vector3<f64>)> = reference
-        .waypoints
-        .windows(2)
-        .filter(|w| w[1].feed_mm_s.is_none())
-        .map(|w| {
-            (
-                Vector3::from(w[0].p_mm) * 1e-3,
-                Vector3::from(w[1].p_mm) * 1e-3,
-            )
-        })
-        .collect();
-    let on_rapid = |p: &Vector3<f64>| {
-        rapids.iter().any(|(a, b)| {
-            let ab = b - a;
-            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-            (a + ab * t - p).norm() < 1e-6 && (p - a).norm() > 1e-6
-        })
-    };
-    run.log
-        .rows
-        .iter()
-        .filter(|row| row.truth.force_norm_n() >= 20.0)
-        .filter(|row| !on_rapid(&row.truth.desired_m))
-        .map(|row| row.truth.path_error_m().norm() * 1e3)
-        .fold(0.0, f64::max)
 }
 
 struct Case {
@@ -169,8 +139,8 @@ fn case(
         &mut |_| {},
     )
     .unwrap();
-    let before_mm = max_error_mm(&open, &reference);
-    let after_mm = max_error_mm(&played, &reference);
+    let before_mm = crate::twin::common::max_contact_error_mm(&open, Some(&reference));
+    let after_mm = crate::twin::common::max_contact_error_mm(&played, Some(&reference));
     println!(
         "SIMULATED {name}, --log-forces {log_forces:?}: max path error in contact {before_mm:.3} → {after_mm:.3} mm ({:.1} %), max force {:.0} N uncorrected, {:.0} N compensated; {} iteration(s), converged {}",
         (1.0 - after_mm / before_mm) * 100.0,

@@ -39,3 +39,38 @@ pub fn careful_campaign(nominal: &Robot, cell: &CellConfig) -> (Vec<MeasurementR
     let search = search_structure(nominal, &rows, &SearchOptions::default(), &mut |_| {}).unwrap();
     (rows, search)
 }
+
+/// Largest path error (mm) over the rows with at least 20 N of contact force whose desired
+/// TCP is on a feed move of `reference` (not on a rapid: the retract); `None`: every row.
+pub fn max_contact_error_mm(
+    run: &deflex_sim::FormingRun,
+    reference: Option<&deflex_sim::ToolPath>,
+) -> f64 {
+    let rapids: Vec<(nalgebra::Vector3<f64>, nalgebra::Vector3<f64>)> =
+        reference.map_or(Vec::new(), |r| {
+            r.waypoints
+                .windows(2)
+                .filter(|w| w[1].feed_mm_s.is_none())
+                .map(|w| {
+                    (
+                        nalgebra::Vector3::from(w[0].p_mm) * 1e-3,
+                        nalgebra::Vector3::from(w[1].p_mm) * 1e-3,
+                    )
+                })
+                .collect()
+        });
+    let on_rapid = |p: &nalgebra::Vector3<f64>| {
+        rapids.iter().any(|(a, b)| {
+            let ab = b - a;
+            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+            (a + ab * t - p).norm() < 1e-6 && (p - a).norm() > 1e-6
+        })
+    };
+    run.log
+        .rows
+        .iter()
+        .filter(|row| reference.is_none() || row.truth.force_norm_n() >= 20.0)
+        .filter(|row| !on_rapid(&row.truth.desired_m))
+        .map(|row| row.truth.path_error_m().norm() * 1e3)
+        .fold(0.0, f64::max)
+}

@@ -57,7 +57,6 @@ use deflex_sim::{
     CellConfig, FormingRun, ToolPath, compensated_tool_path, run_forming,
     run_program_with_progress, tcp_path,
 };
-use nalgebra::Vector3;
 
 /// A 60 mm circle formed down a 45° wall in 0.5 mm levels (each a full G3 circle), so the force
 /// rises to the sheet's ≈ 1.2 kN level.
@@ -146,37 +145,6 @@ fn log_with_standstill(run: &FormingRun) -> String {
         text.push('\n');
     }
     text
-}
-
-/// Largest path error (mm) over the rows with at least 20 N of contact force whose desired
-/// TCP is on a feed move of `reference` (not on a rapid: the retract); `None`: every row.
-fn max_error_mm(run: &FormingRun, reference: Option<&ToolPath>) -> f64 {
-    let rapids: Vec<(Vector3<f64>, Vector3<f64>)> = reference.map_or(Vec::new(), |r| {
-        r.waypoints
-            .windows(2)
-            .filter(|w| w[1].feed_mm_s.is_none())
-            .map(|w| {
-                (
-                    Vector3::from(w[0].p_mm) * 1e-3,
-                    Vector3::from(w[1].p_mm) * 1e-3,
-                )
-            })
-            .collect()
-    });
-    let on_rapid = |p: &Vector3<f64>| {
-        rapids.iter().any(|(a, b)| {
-            let ab = b - a;
-            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-            (a + ab * t - p).norm() < 1e-6 && (p - a).norm() > 1e-6
-        })
-    };
-    run.log
-        .rows
-        .iter()
-        .filter(|row| reference.is_none() || row.truth.force_norm_n() >= 20.0)
-        .filter(|row| !on_rapid(&row.truth.desired_m))
-        .map(|row| row.truth.path_error_m().norm() * 1e3)
-        .fold(0.0, f64::max)
 }
 
 /// One part on one plant: the uncorrected run, its log, and the compensated runs.
@@ -303,15 +271,15 @@ impl HeldOut {
     /// Improvement of the compensated run over the uncorrected one, printed.
     fn improvement(&self, name: &str, run: &FormingRun, predicted_n: f64) -> f64 {
         let (before, after) = (
-            max_error_mm(&self.open, Some(&self.part)),
-            max_error_mm(run, Some(&self.part)),
+            super::common::max_contact_error_mm(&self.open, Some(&self.part)),
+            super::common::max_contact_error_mm(run, Some(&self.part)),
         );
         let improvement = 1.0 - after / before;
         println!(
             "SIMULATED {name}: max path error in contact {before:.3} → {after:.3} mm ({:.1} %); every row, the retract through the air included, {:.3} → {:.3} mm; max force {:.0} N uncorrected, {:.0} N compensated ({predicted_n:.0} N predicted)",
             improvement * 100.0,
-            max_error_mm(&self.open, None),
-            max_error_mm(run, None),
+            super::common::max_contact_error_mm(&self.open, None),
+            super::common::max_contact_error_mm(run, None),
             self.open.summary.max_force_norm_N,
             run.summary.max_force_norm_N,
         );
