@@ -188,6 +188,9 @@ pub struct GeometryCalibration {
     pub elapsed_s: f64,
     /// Which steps were chosen by default and why, when none were named.
     pub default_steps: Option<String>,
+    /// The warning of a fit beyond a calibration's bounds that was written because the front
+    /// end allowed it (`--allow-large-changes`), naming the largest changes.
+    pub large_changes: Option<String>,
 }
 
 /// The readings of a calibration: fitted ones first, then the test ones (never fitted).
@@ -324,9 +327,28 @@ pub fn calibrate_geometry(
         });
     }
     check_plausible_fit(&result, &start.name, data, options.names)?;
-    if !options.allow_large_changes {
-        check_changes(&result, start, data, options.names)?;
+    let large_changes = large_changes_of(&result, start);
+    if let Some(changes) = &large_changes
+        && !options.allow_large_changes
+    {
+        return Err(Error::LargeChanges {
+            files: shown_all(data),
+            robot: start.name.clone(),
+            count: changes.count,
+            changes: changes.named.clone(),
+            names: options.names,
+        });
     }
+    let large_changes = large_changes.map(|changes| {
+        format!(
+            "WARNING: the fit reshapes robot \"{}\" beyond what a calibration changes ({} \
+             parameter(s): {}); written because {} was given",
+            start.name,
+            changes.count,
+            changes.named,
+            options.names.switch("allow_large_changes")
+        )
+    });
     let robot = result.model.to_robot();
     let terms = CalibrationTerms::of(&result);
     Ok(GeometryCalibration {
@@ -336,6 +358,7 @@ pub fn calibrate_geometry(
         terms,
         elapsed_s,
         default_steps,
+        large_changes,
     })
 }
 
@@ -388,18 +411,21 @@ fn check_plausible_fit(
 /// How many of the largest changes a refusal names.
 const CHANGES_NAMED: usize = 8;
 
-/// Refuse a fit that moves a geometric parameter further than its bound
-/// ([`deflex_calibrate::geometry::plausible`]), naming the largest changes: nothing is written.
-fn check_changes(
-    result: &FitResult,
-    start: &Robot,
-    data: &[MeasurementSource],
-    names: OptionNames,
-) -> Result<()> {
+/// The parameters a fit moved beyond their bounds ([`deflex_calibrate::geometry::plausible`]).
+struct LargeChanges {
+    /// How many.
+    count: usize,
+    /// The largest ones named with their changes and bounds.
+    named: String,
+}
+
+/// The fit's changes beyond their bounds, the largest [`CHANGES_NAMED`] named; `None` when
+/// every change is within its bound.
+fn large_changes_of(result: &FitResult, start: &Robot) -> Option<LargeChanges> {
     let bounds = ChangeBounds::for_robot(start);
     let large = large_fit_changes(result, &bounds);
     if large.is_empty() {
-        return Ok(());
+        return None;
     }
     let mut changes: Vec<String> = large
         .iter()
@@ -409,12 +435,9 @@ fn check_changes(
     if large.len() > CHANGES_NAMED {
         changes.push(format!("and {} more", large.len() - CHANGES_NAMED));
     }
-    Err(Error::LargeChanges {
-        files: shown_all(data),
-        robot: start.name.clone(),
+    Some(LargeChanges {
         count: large.len(),
-        changes: changes.join(", "),
-        names,
+        named: changes.join(", "),
     })
 }
 
@@ -433,10 +456,20 @@ pub fn intervals95(cal: &GeometryCalibration) -> Vec<[f64; 2]> {
 /// The text report (iteration table, held-out errors, estimates, warnings).
 pub fn report_text(cal: &GeometryCalibration) -> String {
     let text = absolute_report::text(&cal.result, &cal.campaign);
-    match &cal.default_steps {
-        Some(why) => format!("{why}\n{text}"),
+    match preamble(cal) {
+        Some(lines) => format!("{lines}\n{text}"),
         None => text,
     }
+}
+
+/// The lines before the report: why the steps were chosen by default, and the warning of
+/// changes beyond a calibration's bounds that were allowed.
+fn preamble(cal: &GeometryCalibration) -> Option<String> {
+    let lines: Vec<&str> = [&cal.default_steps, &cal.large_changes]
+        .into_iter()
+        .filter_map(|line| line.as_deref())
+        .collect();
+    (!lines.is_empty()).then(|| lines.join("\n"))
 }
 
 /// The JSON report (SI), as text.
@@ -448,6 +481,7 @@ pub fn report_json(cal: &GeometryCalibration) -> String {
 fn report_value(cal: &GeometryCalibration) -> serde_json::Value {
     let mut value = absolute_report::json(&cal.result, &cal.campaign);
     value["default_steps"] = serde_json::json!(cal.default_steps);
+    value["large_changes_allowed"] = serde_json::json!(cal.large_changes);
     value
 }
 
@@ -460,7 +494,8 @@ pub fn write_report(cal: &GeometryCalibration, dir: &Path) -> Result<Vec<PathBuf
     crate::report::require(GEOMETRY_REPORT)?.geometry_report(
         &cal.result,
         &cal.campaign,
-        cal.default_steps.as_deref(),
+        &report_text(cal),
+        &report_value(cal),
         dir,
     )
 }
@@ -500,7 +535,8 @@ pub fn save(
             drawing.geometry_report(
                 &cal.result,
                 &cal.campaign,
-                cal.default_steps.as_deref(),
+                &report_text(cal),
+                &report_value(cal),
                 dir,
             )
         })

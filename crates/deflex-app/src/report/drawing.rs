@@ -93,13 +93,15 @@ impl Drawing {
         self,
         result: &FitResult,
         campaign: &Campaign,
-        default_steps: Option<&str>,
+        summary: &str,
+        summary_json: &serde_json::Value,
         dir: &Path,
     ) -> Result<Vec<PathBuf>> {
         Ok(crate::report::absolute_report::write_report(
             result,
             campaign,
-            default_steps,
+            summary,
+            summary_json,
             dir,
         )?)
     }
@@ -182,7 +184,8 @@ impl Drawing {
         self,
         _result: &FitResult,
         _campaign: &Campaign,
-        _default_steps: Option<&str>,
+        _summary: &str,
+        _summary_json: &serde_json::Value,
         _dir: &Path,
     ) -> Result<Vec<PathBuf>> {
         match self {}

@@ -473,10 +473,29 @@ fn another_robots_geometry_is_refused_naming_the_parameters_unless_allowed() {
     }
     let mut opts = options(&steps);
     opts.allow_large_changes = true;
-    match calibrate_geometry(&tx200, &[table(a.text.clone())], &[], &[], &opts) {
-        Ok(_) | Err(Error::ImplausibleFit { .. }) => {}
-        Err(e) => panic!("allowed, only the residual guard may refuse: {e}"),
-    }
+    // Allowed: written, with the warning first in the text and in the JSON.
+    let cal = calibrate_geometry(&tx200, &[table(a.text.clone())], &[], &[], &opts).unwrap();
+    let text = report_text(&cal);
+    assert!(
+        text.starts_with("WARNING: the fit reshapes robot \"Staubli TX200")
+            && text
+                .lines()
+                .next()
+                .unwrap()
+                .ends_with("written because --allow-large-changes was given"),
+        "{text}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&report_json(&cal)).unwrap();
+    assert!(
+        json["large_changes_allowed"]
+            .as_str()
+            .unwrap()
+            .starts_with("WARNING")
+    );
+    // Within the bounds: nothing to warn of.
+    let own = own.unwrap();
+    assert!(own.large_changes.is_none());
+    assert!(serde_json::from_str::<serde_json::Value>(&report_json(&own)).unwrap()["large_changes_allowed"].is_null());
 }
 
 /// Without named steps a calibration fits the base steps and, when the data is grouped so that

@@ -2,8 +2,7 @@
 //! the text, JSON and CSV of [`super`], the plots ([`super::plots`]) and `index.html`.
 
 use super::{
-    ESTIMATE_HEADERS, HELDOUT_HEADERS, estimate_rows, heldout_rows, iteration_rows, json, plots,
-    tables, text,
+    ESTIMATE_HEADERS, HELDOUT_HEADERS, estimate_rows, heldout_rows, iteration_rows, plots, tables,
 };
 use crate::report::draw::{write_page, write_text};
 use crate::report::{DrawError, PageError};
@@ -14,12 +13,15 @@ use std::path::{Path, PathBuf};
 
 /// Write the report folder (whole or not at all): `report.txt`, `report.json`,
 /// `iterations.csv`, `estimates.csv`, `residuals.csv`, `outliers.csv`, `joint_maps.csv` (with
-/// joint maps), plots and `index.html`. `default_steps`, when the steps were chosen by default,
-/// says which and why: the first line of `report.txt`, `default_steps` in `report.json`.
+/// joint maps), plots and `index.html`. `summary` is the text report and `summary_json` the
+/// JSON one as the workflow shows them ([`super::text`] and [`super::json()`] with what the
+/// workflow adds before them: why the steps were chosen, a warning of changes allowed beyond
+/// their bounds).
 pub fn write_report(
     result: &FitResult,
     campaign: &Campaign,
-    default_steps: Option<&str>,
+    summary: &str,
+    summary_json: &serde_json::Value,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, PageError> {
     let page = PageError::of("elasto-geometric calibration report");
@@ -37,15 +39,8 @@ pub fn write_report(
         files.push(dir.join(name));
         Ok(())
     };
-    let text_report = text(result, campaign);
-    let text_file = match default_steps {
-        Some(why) => format!("{why}\n{text_report}"),
-        None => text_report,
-    };
-    put("report.txt", &text_file)?;
-    let mut json_value = json(result, campaign);
-    json_value["default_steps"] = serde_json::json!(default_steps);
-    let json_text = serde_json::to_string_pretty(&json_value)
+    put("report.txt", summary)?;
+    let json_text = serde_json::to_string_pretty(summary_json)
         .map_err(|e| unwritable("report.json")(e.into()))?;
     put("report.json", &json_text)?;
     for table in tables::csv_tables(result, campaign) {
@@ -54,7 +49,7 @@ pub fn write_report(
     }
     let images = plots::draw(result, campaign, &root).map_err(&page)?;
     let mut html = HtmlReport::new("deflex: elasto-geometric calibration");
-    html.section("Summary").preformatted(text_file.clone());
+    html.section("Summary").preformatted(summary.to_string());
     if let Some(w) = &result.warning {
         html.note(html_escape(w));
     }
