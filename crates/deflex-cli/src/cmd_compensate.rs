@@ -91,7 +91,7 @@ pub struct CompensateArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
-    /// Programs to write (comma-separated).
+    /// Programs to write (comma-separated; `fanuc`, FANUC TP `.ls`, on request).
     #[arg(
         long,
         value_enum,

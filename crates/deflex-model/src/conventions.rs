@@ -13,6 +13,7 @@
 //! | ABB (RAPID `orient`) | unit quaternion, `q1` = scalar part | `[q1, q2, q3, q4] = [w, x, y, z]` | RAPID programs; ABB EGM's `orient` (`u0` … `u3`) | RAPID reference manual, data type `orient`: "q1=1, q2–q4=0 corresponds to no rotation", must be normalised; Basler *ABB pose format*: "(x y z w) = (Q2 Q3 Q4 Q1)" (<https://doc.rc-visard-ng.com/v25.10/en/pose_format_abb.html>) |
 //! | Universal Robots (URScript pose) | rotation vector (axis × angle, rad) | `R = exp([r]×)` | URScript programs; the rotation part of every protocol's correction | URScript manual, module *motion*: "the last three [coordinates of a pose form] an axis-angle" (<https://www.universal-robots.com/manuals/EN/HTML/SW10_13/Content/prod-scriptmanual/all_scripts/Module_otion.htm>) |
 //! | Stäubli (VAL3 `trsf`) | intrinsic X-Y'-Z'' | `R = Rx(rx)·Ry(ry)·Rz(rz)` | VAL3 programs; deflex's Stäubli protocol (`docs/staubli/PROTOCOL.md`, radians on the wire) | VAL3 reference manual, type `trsf` (rx about x, then ry about the new y', then rz about the new z''); the same convention is used by public VAL3 post-processors (`sin ry = R[0][2]`) |
+//! | FANUC (TP `W, P, R`) | fixed axes X, Y, Z (= intrinsic Z-Y'-X'') | `R = Rz(R)·Ry(P)·Rx(W)` | FANUC TP programs (`/POS`) | FANUC's `xyzwpr`: W (yaw) about the fixed x axis, then P (pitch) about the fixed y axis, then R (roll) about the fixed z axis (RoboDK's API, `xyzwpr_2_pose`, <https://robodk.com/doc/en/PythonAPI/robodk.html>; the same matrix as KUKA's with `(A, B, C) = (R, P, W)`) |
 //!
 //! **Gimbal lock.** The three-angle conventions are singular when the middle angle is ±90°:
 //! only the sum (or difference) of the outer angles is defined. The extraction takes the first
@@ -80,6 +81,19 @@ pub fn rotation_from_kuka_abc_rad(abc: [f64; 3]) -> Rotation3<f64> {
 /// Rotation of KUKA angles `A, B, C` (degrees): `Rz(A)·Ry(B)·Rx(C)`.
 pub fn rotation_from_kuka_abc_deg(abc: [f64; 3]) -> Rotation3<f64> {
     rotation_from_kuka_abc_rad(abc.map(f64::to_radians))
+}
+
+/// FANUC `W, P, R` (degrees) of a rotation: fixed-axis rotations about X, Y, Z, i.e.
+/// `R = Rz(R)·Ry(P)·Rx(W)`, `P ∈ [−90°, 90°]`, `W, R ∈ (−180°, 180°]`. `previous` (degrees,
+/// `[W, P, R]`) resolves the gimbal lock at `P = ±90°` (R is then kept from it).
+pub fn fanuc_wpr_deg(rotation: &Rotation3<f64>, previous: Option<[f64; 3]>) -> [f64; 3] {
+    let [r, p, w] = kuka_abc_deg(rotation, previous.map(|[w, p, r]| [r, p, w]));
+    [w, p, r]
+}
+
+/// Rotation of FANUC angles `W, P, R` (degrees): `Rz(R)·Ry(P)·Rx(W)`.
+pub fn rotation_from_fanuc_wpr_deg(wpr: [f64; 3]) -> Rotation3<f64> {
+    rotation_from_kuka_abc_deg([wpr[2], wpr[1], wpr[0]])
 }
 
 /// Stäubli `rx, ry, rz` (radians) of a rotation: `R = Rx(rx)·Ry(ry)·Rz(rz)`,

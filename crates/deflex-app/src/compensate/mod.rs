@@ -96,6 +96,8 @@ pub enum ProgramFormat {
     Urscript,
     /// G-code in the part frame.
     Gcode,
+    /// FANUC TP in its ASCII form (`.ls`).
+    Fanuc,
     /// No program.
     None,
 }
@@ -109,6 +111,7 @@ impl ProgramFormat {
             ProgramFormat::Val3 => Some(Format::Val3),
             ProgramFormat::Urscript => Some(Format::UrScript),
             ProgramFormat::Gcode => Some(Format::Gcode),
+            ProgramFormat::Fanuc => Some(Format::Fanuc),
             ProgramFormat::None => None,
         }
     }
@@ -129,13 +132,14 @@ impl ProgramFormat {
     }
 }
 
-/// A program format by name (`krl`, `rapid`, `val3`, `urscript`, `gcode`), as Python names it.
+/// A program format by name (`krl`, `rapid`, `val3`, `urscript`, `gcode`, `fanuc`), as Python
+/// names it.
 pub fn format(name: &str) -> Result<Format> {
     Format::parse(name).ok_or_else(|| {
         Error::invalid(
             "formats",
             format!(
-                "unknown format \"{}\"; expected krl, rapid, val3, urscript or gcode",
+                "unknown format \"{}\"; expected krl, rapid, val3, urscript, gcode or fanuc",
                 name.trim()
             ),
         )

@@ -216,12 +216,13 @@ impl ProgramPlan {
     }
 }
 
-/// A part file: `NAME_p01.src` … or `NAME/part1.pgx` ….
+/// A part file: `NAME_p01.src` …, `NAME_P01.ls` (FANUC) … or `NAME/part1.pgx` ….
 pub fn is_part_file(path: &str) -> bool {
     let stem = path.rsplit('/').next().unwrap_or(path);
     let stem = stem.split('.').next().unwrap_or(stem);
     let digits = |s: &str| !s.is_empty() && s.chars().all(|c| c.is_ascii_digit());
     stem.rsplit_once("_p").is_some_and(|(_, n)| digits(n))
+        || stem.rsplit_once("_P").is_some_and(|(_, n)| digits(n))
         || stem.strip_prefix("part").is_some_and(digits)
 }
 

@@ -274,13 +274,16 @@ fn the_choices_parse_the_front_ends_words() {
             .starts_with("frame: ")
     );
     assert_eq!(format("urscript").unwrap(), Format::UrScript);
+    assert_eq!(format("fanuc").unwrap(), Format::Fanuc);
+    assert_eq!(ProgramFormat::Fanuc.format(), Some(Format::Fanuc));
     assert!(
-        format("fanuc")
+        format("yaskawa")
             .unwrap_err()
             .to_string()
-            .contains("unknown format \"fanuc\"")
+            .contains("unknown format \"yaskawa\"")
     );
     assert!(ProgramFormat::formats(&[ProgramFormat::Krl, ProgramFormat::None]).is_empty());
     assert!(is_part_file("deflex_path_p01.src") && is_part_file("deflex_path/part2.pgx"));
+    assert!(is_part_file("DEFLEX_PATH_P01.ls") && !is_part_file("DEFLEX_PATH.ls"));
     assert!(!is_part_file("deflex_path.src"));
 }

@@ -209,6 +209,15 @@ pub(crate) fn comment_text(text: &str, forbidden: &[char]) -> String {
 /// wrapped at word boundaries to [`COMMENT_WIDTH`] characters (never cut mid-word; a single
 /// word longer than that is split).
 pub(crate) fn header_lines(input: &ProgramInput) -> Vec<String> {
+    header_texts(input)
+        .iter()
+        .flat_map(|l| wrap(l, COMMENT_WIDTH))
+        .collect()
+}
+
+/// The header comment texts of [`header_lines`], one per paragraph, not wrapped (for a writer
+/// that wraps to its own width).
+pub(crate) fn header_texts(input: &ProgramInput) -> Vec<String> {
     let mut lines: Vec<String> = input
         .description
         .iter()
@@ -231,7 +240,7 @@ pub(crate) fn header_lines(input: &ProgramInput) -> Vec<String> {
          simulator, then on the robot at reduced speed, before production."
             .into(),
     );
-    lines.iter().flat_map(|l| wrap(l, COMMENT_WIDTH)).collect()
+    lines
 }
 
 /// Width of a header comment line (characters, before the comment marker).

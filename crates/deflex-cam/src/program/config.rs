@@ -19,6 +19,11 @@
 //!   when the wrist centre is in front of axis 1, `lefty` behind; `elbow` `epositive` when
 //!   joint 3 ≥ 0, `enegative` otherwise; `wrist` `wpositive` when joint 5 ≥ 0, `wnegative`
 //!   otherwise.
+//! * **FANUC `CONFIG`** (`'F U T, t1, t4, t6'` in a TP position): flip `F` when J5 < 0, else `N`
+//!   (no flip); `U` (elbow up) when axis 3 is at or beyond its stretched value (the branch of
+//!   KUKA's Status bit 1, set in the usual elbow-up pose), else `D`; `T` (front, "toward") when
+//!   the wrist centre is in front of axis 1, else `B` (back); the turn numbers of J1, J4 and J6
+//!   are `floor((q + 180°) / 360°)`, 0 within −180° … 180°.
 
 use crate::program::ArmConfiguration;
 
@@ -67,5 +72,24 @@ pub fn staubli_config(c: &ArmConfiguration) -> (&'static str, &'static str, &'st
         } else {
             "wnegative"
         },
+    )
+}
+
+/// FANUC `CONFIG` text `'F U T, t1, t4, t6'` (see the module documentation); `None`: the
+/// default `N U T, 0, 0, 0`.
+pub fn fanuc_config(c: Option<&ArmConfiguration>) -> String {
+    let Some(c) = c else {
+        return "N U T, 0, 0, 0".into();
+    };
+    let q = c.joints_rad.map(f64::to_degrees);
+    let turn = |v: f64| ((v + 180.0) / 360.0).floor() as i32;
+    format!(
+        "{} {} {}, {}, {}, {}",
+        if q[4] < 0.0 { 'F' } else { 'N' },
+        if c.elbow_beyond_stretched { 'U' } else { 'D' },
+        if c.wrist_behind_axis_1 { 'B' } else { 'T' },
+        turn(q[0]),
+        turn(q[3]),
+        turn(q[5])
     )
 }

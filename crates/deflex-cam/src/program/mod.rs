@@ -9,6 +9,7 @@
 //! | [`Format::Rapid`] ABB | `NAME.mod` | `MoveL robtarget, speeddata, zonedata, tooldata \WObj` | mm, deg/s | quaternion `[q1..q4]`, q1 = w |
 //! | [`Format::Val3`] Stäubli | `NAME/NAME.pjx`, `.dtx`, `start.pgx`, `stop.pgx` | `movel(point, tool, mdesc)` | mm, deg | Rx-Ry-Rz (X-Y'-Z'') |
 //! | [`Format::UrScript`] UR | `NAME.script` | `movel(p[x,y,z,rx,ry,rz], a, v, r=…)` | m, rad, m/s | rotation vector |
+//! | [`Format::Fanuc`] FANUC | `NAME.ls` (TP, ASCII) | `L P[n] 250mm/sec CNT100`, `/POS` with `UF`, `UT`, `CONFIG` | mm, deg, mm/s (whole) | W-P-R (fixed X, Y, Z) |
 //! | [`Format::Gcode`] CAM / twin | `NAME.gcode` | `G1 X Y Z F` | mm, mm/min | none (positions only) |
 //!
 //! Every program runs safely from wherever the robot is: a safe-start block, a joint move to a
@@ -46,6 +47,7 @@
 pub mod common;
 pub mod config;
 pub mod error;
+mod fanuc;
 mod gcode;
 mod krl;
 pub mod names;
@@ -58,6 +60,7 @@ mod urscript;
 mod val3;
 
 pub use error::ProgramError;
+pub use fanuc::MAX_POINTS_PER_PART as FANUC_MAX_POINTS_PER_PART;
 pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
 pub use sink::{DirectorySink, MemorySink, ProgramSink};
 
@@ -78,8 +81,8 @@ pub struct ProgramPoint {
 
 /// The arm's configuration at a pose: the joint values (rad, the controller's axes) and where
 /// the wrist centre lies, from which each vendor's configuration data is written (KUKA
-/// Status/Turn, ABB `robconf`, Stäubli `config`). The caller computes it with the robot model
-/// (`deflex compensate` does); the conventions are in [`config`].
+/// Status/Turn, ABB `robconf`, Stäubli `config`, FANUC `CONFIG`). The caller computes it with
+/// the robot model (`deflex compensate` does); the conventions are in [`config`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArmConfiguration {
     /// Joint values A1 … A6 (rad).
@@ -200,19 +203,23 @@ pub enum Format {
     UrScript,
     /// G-code in the part frame (`.gcode`).
     Gcode,
+    /// FANUC TP in its ASCII form (`.ls`).
+    Fanuc,
 }
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 5] = [
+    pub const ALL: [Format; 6] = [
         Format::Krl,
         Format::Rapid,
         Format::Val3,
         Format::UrScript,
         Format::Gcode,
+        Format::Fanuc,
     ];
 
-    /// The name used on the command line (`krl`, `rapid`, `val3`, `urscript`, `gcode`).
+    /// The name used on the command line (`krl`, `rapid`, `val3`, `urscript`, `gcode`,
+    /// `fanuc`).
     pub fn name(self) -> &'static str {
         match self {
             Format::Krl => "krl",
@@ -220,6 +227,7 @@ impl Format {
             Format::Val3 => "val3",
             Format::UrScript => "urscript",
             Format::Gcode => "gcode",
+            Format::Fanuc => "fanuc",
         }
     }
 
@@ -274,6 +282,7 @@ pub fn export_to(
         Format::Val3 => val3::export(input, settings, sink),
         Format::UrScript => urscript::export(input, settings, sink),
         Format::Gcode => gcode::export(input, settings, sink),
+        Format::Fanuc => fanuc::export(input, settings, sink),
     }
 }
 

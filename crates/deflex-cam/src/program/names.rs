@@ -10,6 +10,9 @@
 //!   manual, and SRS rejects names it does not accept at import, so shorter is safer.
 //! * **URScript**: Python-like identifiers (a letter, then letters, digits and `_`); at most 32
 //!   characters (our bound).
+//! * **FANUC TP**: a letter, then letters, digits and `_`, written in upper case; at most 16
+//!   characters (our bound: R-30iB takes up to 36, older controllers 8 for names shown on the
+//!   teach pendant; deflex keeps parts' names `NAME_P01` within 16).
 //! * **G-code files**: letters, digits, `_` and `-`; at most 64 characters.
 //!
 //! Anything else is replaced by `_`; a name that does not start with a letter gets a `p` in
@@ -84,6 +87,16 @@ pub const URSCRIPT: NameRule = NameRule {
     reserved: &[
         "def", "end", "if", "else", "while", "for", "return", "thread", "global", "movel", "movej",
         "True", "False",
+    ],
+};
+
+/// FANUC TP program names (upper case is applied by the writer).
+pub const FANUC: NameRule = NameRule {
+    language: "FANUC TP",
+    max_len: 16,
+    extra: &[],
+    reserved: &[
+        "CALL", "END", "JMP", "LBL", "IF", "SELECT", "WAIT", "PAYLOAD",
     ],
 };
 

@@ -15,7 +15,8 @@
 //! programs at 2500–9999 lines by default (`MAX_LINES_X_PROG`, e.g. 5000 for several robot
 //! brands, 9999 for Fanuc), and KUKA, ABB and UR controllers load and parse programs of a few
 //! MB slowly or not at all (the issue that asked for this: a 408 kB `.src`, an 838 kB RAPID
-//! module, a 650 kB URScript). Raise them for your controller knowingly.
+//! module, a 650 kB URScript). Raise them for your controller knowingly. FANUC TP programs
+//! stop at 2000 points a part whatever the template says (`FANUC_MAX_POINTS_PER_PART`).
 
 use crate::program::ProgramInput;
 use crate::program::common::{Checked, check_input, checked};

@@ -12,8 +12,8 @@ use crate::program::settings::MAX_POINTS_LIMIT;
 use crate::program::{Format, ProgramFile};
 use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::conventions::{
-    rotation_from_abb_quaternion, rotation_from_kuka_abc_deg, rotation_from_rotation_vector,
-    rotation_from_staubli_rxryrz_deg,
+    rotation_from_abb_quaternion, rotation_from_fanuc_wpr_deg, rotation_from_kuka_abc_deg,
+    rotation_from_rotation_vector, rotation_from_staubli_rxryrz_deg,
 };
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
@@ -186,6 +186,20 @@ pub fn read_program(
         Format::Gcode => {
             let file = find(".gcode")?;
             read_gcode_lines(&mut source.open(file)?, file, &mut emit)?;
+        }
+        Format::Fanuc => {
+            // The main program is the first file (export_to lists it first).
+            let main = files.first().ok_or_else(|| ProgramError::Read {
+                file: "*.ls".into(),
+                line: 0,
+                message: "no program files".into(),
+            })?;
+            read_fanuc_lines(
+                &mut source.open(main)?,
+                main,
+                &mut emit,
+                Some(&|name| by_name(name, "ls")),
+            )?;
         }
     }
     Ok(count)
@@ -707,4 +721,257 @@ fn read_gcode_lines(
             n,
         )
     })
+}
+
+/// A motion or a call in a TP program's `/MN`, resolved once `/POS` is read.
+enum TpItem {
+    /// `J P[k] …` (speed `None`) or `L P[k] v mm/sec …`, at line `line`.
+    Motion {
+        index: usize,
+        speed_m_s: Option<f64>,
+        line: usize,
+    },
+    /// `CALL NAME ;`
+    Call(String),
+}
+
+/// FANUC `.ls` (ASCII TP): the `J`/`L` motions of `/MN` with their positions from `/POS`
+/// (`UF`, `UT`, `CONFIG` checked for form, X Y Z in mm, W P R in degrees,
+/// [`deflex_model::conventions::rotation_from_fanuc_wpr_deg`]); a single file ([`read_files`]
+/// follows the `CALL`s to the parts). The motions are held until `/POS` is read (a TP program
+/// lists its positions after its instructions), at most one part's.
+pub fn read_fanuc(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
+    collect(|emit| read_fanuc_lines(&mut text.as_bytes(), file, emit, None))
+}
+
+/// A TP position record `P[k]{ GP1: UF : u, UT : t, CONFIG : '…', X = … mm, …, R = … deg }`
+/// (joined into one line): its number, position (mm) and W P R (deg).
+fn tp_position(r: &Lines, n: usize, record: &str) -> Result<(usize, [f64; 6]), ProgramError> {
+    let index = record
+        .strip_prefix("P[")
+        .and_then(|rest| rest.split(']').next())
+        .and_then(|k| k.trim().parse::<usize>().ok())
+        .ok_or_else(|| r.error(n, "expected a position P[k]{…}"))?;
+    let open = record
+        .find('{')
+        .ok_or_else(|| r.error(n, "position without {"))?;
+    let close = record
+        .rfind('}')
+        .ok_or_else(|| r.error(n, "unclosed position"))?;
+    let mut body = record[open + 1..close].trim();
+    body = body
+        .strip_prefix("GP1:")
+        .ok_or_else(|| r.error(n, "position without GP1:"))?;
+    // The configuration: 'F U T, t1, t4, t6'.
+    let q1 = body
+        .find('\'')
+        .ok_or_else(|| r.error(n, "position without CONFIG"))?;
+    let q2 = body[q1 + 1..]
+        .find('\'')
+        .ok_or_else(|| r.error(n, "unclosed CONFIG"))?
+        + q1
+        + 1;
+    let config = &body[q1 + 1..q2];
+    let mut fields = config.split(',').map(str::trim);
+    let letters: Vec<&str> = fields.next().unwrap_or("").split_whitespace().collect();
+    let turns: Vec<&str> = fields.collect();
+    let valid = letters.len() == 3
+        && ["N", "F"].contains(&letters[0])
+        && ["U", "D"].contains(&letters[1])
+        && ["T", "B"].contains(&letters[2])
+        && turns.len() == 3
+        && turns
+            .iter()
+            .all(|t| t.parse::<i32>().is_ok_and(|v| v.abs() <= 8));
+    if !valid {
+        return Err(r.error(
+            n,
+            format!("CONFIG '{config}': expected 'N|F U|D T|B, t1, t4, t6'"),
+        ));
+    }
+    let rest = format!("{} {}", &body[..q1], &body[q2 + 1..]);
+    let mut values: HashMap<String, f64> = HashMap::new();
+    for item in rest.split(',').map(str::trim).filter(|t| !t.is_empty()) {
+        let (key, value) = item
+            .split_once(['=', ':'])
+            .ok_or_else(|| r.error(n, format!("expected `KEY = value`, got \"{item}\"")))?;
+        let key = key.trim();
+        if key == "CONFIG" {
+            continue;
+        }
+        let mut words = value.split_whitespace();
+        let number = r.number(n, words.next().unwrap_or(""), key)?;
+        let unit = words.next();
+        let want = match key {
+            "X" | "Y" | "Z" => Some("mm"),
+            "W" | "P" | "R" => Some("deg"),
+            "UF" | "UT" => None,
+            _ => return Err(r.error(n, format!("unknown position field {key}"))),
+        };
+        if unit != want || words.next().is_some() {
+            return Err(r.error(
+                n,
+                format!("{key}: expected the unit {want:?}, got {unit:?}"),
+            ));
+        }
+        if matches!(key, "UF" | "UT") && !(number.fract() == 0.0 && (0.0..=10.0).contains(&number))
+        {
+            return Err(r.error(n, format!("{key} {number}: expected 0 … 10")));
+        }
+        values.insert(key.to_string(), number);
+    }
+    let mut out = [0.0; 6];
+    for (k, key) in ["X", "Y", "Z", "W", "P", "R"].iter().enumerate() {
+        out[k] = *values
+            .get(*key)
+            .ok_or_else(|| r.error(n, format!("position without {key}")))?;
+    }
+    for key in ["UF", "UT"] {
+        if !values.contains_key(key) {
+            return Err(r.error(n, format!("position without {key}")));
+        }
+    }
+    Ok((index, out))
+}
+
+fn read_fanuc_lines(
+    reader: &mut dyn BufRead,
+    file: &str,
+    emit: &mut EmitAt,
+    part: Option<&PartLookup>,
+) -> Result<(), ProgramError> {
+    let r = Lines { file };
+    let mut section = String::new();
+    let mut items: Vec<TpItem> = Vec::new();
+    let mut positions: HashMap<usize, [f64; 6]> = HashMap::new();
+    let mut record = String::new();
+    let mut record_line = 0;
+    let mut default_group = false;
+    let mut ended = false;
+    r.each(reader, |n, line| {
+        if ended {
+            return Ok(());
+        }
+        if line.starts_with('/') && record.is_empty() {
+            section = line.split_whitespace().next().unwrap_or("").to_string();
+            if section == "/END" {
+                ended = true;
+            }
+            return Ok(());
+        }
+        match section.as_str() {
+            "/ATTR" => {
+                if let Some(v) = line.strip_prefix("DEFAULT_GROUP") {
+                    if !v.trim_start_matches([' ', '\t', '=']).starts_with("1,") {
+                        return Err(r.error(n, "DEFAULT_GROUP: expected group 1"));
+                    }
+                    default_group = true;
+                }
+            }
+            "/MN" => {
+                let (_, text) = line
+                    .split_once(':')
+                    .ok_or_else(|| r.error(n, "expected a numbered line `n:…`"))?;
+                let text = text.trim().trim_end_matches(';').trim();
+                if let Some(name) = text.strip_prefix("CALL ") {
+                    if part.is_some() {
+                        items.push(TpItem::Call(name.trim().to_string()));
+                        return Ok(());
+                    }
+                    return Err(r.error(n, "a CALL in a part"));
+                }
+                let joint = match text.get(..2) {
+                    Some("J ") => true,
+                    Some("L ") => false,
+                    _ => return Ok(()), // comments, frame and tool selection
+                };
+                let mut words = text[2..].split_whitespace();
+                let index = words
+                    .next()
+                    .and_then(|p| {
+                        p.strip_prefix("P[")?
+                            .strip_suffix(']')?
+                            .parse::<usize>()
+                            .ok()
+                    })
+                    .ok_or_else(|| r.error(n, "expected P[k]"))?;
+                let speed = words.next().unwrap_or("");
+                let speed_m_s = if joint {
+                    let percent = speed
+                        .strip_suffix('%')
+                        .ok_or_else(|| r.error(n, "J without n%"))?;
+                    r.number(n, percent, "joint speed %")?;
+                    None
+                } else {
+                    let v = speed
+                        .strip_suffix("mm/sec")
+                        .ok_or_else(|| r.error(n, "L without n mm/sec"))?;
+                    Some(r.number(n, v, "speed mm/sec")? * 1e-3)
+                };
+                let termination = words.next().unwrap_or("");
+                let valid = termination == "FINE"
+                    || termination
+                        .strip_prefix("CNT")
+                        .and_then(|c| c.parse::<u32>().ok())
+                        .is_some_and(|c| c <= 100);
+                if !valid || words.next().is_some() {
+                    return Err(r.error(n, format!("expected FINE or CNTn, got \"{termination}\"")));
+                }
+                items.push(TpItem::Motion {
+                    index,
+                    speed_m_s,
+                    line: n,
+                });
+            }
+            "/POS" => {
+                if record.is_empty() {
+                    record_line = n;
+                }
+                record.push_str(line);
+                record.push(' ');
+                if line.ends_with("};") {
+                    let (index, values) = tp_position(&r, record_line, record.trim())?;
+                    if positions.insert(index, values).is_some() {
+                        return Err(r.error(record_line, format!("P[{index}] twice")));
+                    }
+                    record.clear();
+                } else if record.len() > MAX_READ_LINE {
+                    return Err(r.error(record_line, "position record too long"));
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    })?;
+    if !ended || !record.is_empty() {
+        return Err(r.error(0, "no /END (or an unfinished position)"));
+    }
+    if !default_group {
+        return Err(r.error(0, "no DEFAULT_GROUP in /ATTR"));
+    }
+    for item in items {
+        match item {
+            TpItem::Motion {
+                index,
+                speed_m_s,
+                line,
+            } => {
+                let v = positions
+                    .get(&index)
+                    .ok_or_else(|| r.error(line, format!("P[{index}] not in /POS")))?;
+                let point = ReadPoint {
+                    position_m: Vector3::new(v[0], v[1], v[2]) * 1e-3,
+                    rotation: Some(rotation_from_fanuc_wpr_deg([v[3], v[4], v[5]])),
+                    speed_m_s,
+                };
+                emit(point, file, line)?;
+            }
+            TpItem::Call(name) => {
+                let lookup = part.expect("calls are only kept with a lookup");
+                let (path, mut reader) = lookup(&name)?;
+                read_fanuc_lines(&mut reader, &path, emit, None)?;
+            }
+        }
+    }
+    Ok(())
 }

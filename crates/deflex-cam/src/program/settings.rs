@@ -227,6 +227,37 @@ impl Default for UrSettings {
     }
 }
 
+/// FANUC TP (R-30iA / R-30iB, the ASCII `.ls` form).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FanucSettings {
+    /// `UFRAME_NUM=n` (0 ..= 9, 0 = the world frame, also used with `coordinates = "robot"`):
+    /// the user frame taught on the controller as the part frame.
+    pub uframe: u32,
+    /// `UTOOL_NUM=n` (1 ..= 10): the tool frame, which must hold the model's TCP.
+    pub utool: u32,
+    /// The payload schedule the user must select (`PAYLOAD[n]`, 1 ..= 10; named in the header,
+    /// not written as an instruction).
+    pub payload: u32,
+    /// Speed of the joint move to the clearance point (`J P[1] n%`, 1 ..= 100).
+    pub joint_percent: u32,
+    /// Path termination of the inner path points (`CNTn`, 0 ..= 100); the first and the last
+    /// point, rapids, the approach and the retract are `FINE`.
+    pub cnt: u32,
+}
+
+impl Default for FanucSettings {
+    fn default() -> Self {
+        FanucSettings {
+            uframe: 1,
+            utool: 1,
+            payload: 1,
+            joint_percent: 20,
+            cnt: 100,
+        }
+    }
+}
+
 /// G-code (the part frame, as `deflex sim isf` and CAM read it).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -257,6 +288,8 @@ pub struct ProgramSettings {
     pub ur: UrSettings,
     /// G-code.
     pub gcode: GcodeSettings,
+    /// FANUC TP.
+    pub fanuc: FanucSettings,
 }
 
 impl ProgramSettings {
@@ -392,6 +425,17 @@ impl ProgramSettings {
             10.0,
         )?;
         check("gcode.decimals", self.gcode.decimals as f64, 3.0, 6.0)?;
+        let f = &self.fanuc;
+        check("fanuc.uframe", f64::from(f.uframe), 0.0, 9.0)?;
+        check("fanuc.utool", f64::from(f.utool), 1.0, 10.0)?;
+        check("fanuc.payload", f64::from(f.payload), 1.0, 10.0)?;
+        check(
+            "fanuc.joint_percent",
+            f64::from(f.joint_percent),
+            1.0,
+            100.0,
+        )?;
+        check("fanuc.cnt", f64::from(f.cnt), 0.0, 100.0)?;
         Ok(())
     }
 }

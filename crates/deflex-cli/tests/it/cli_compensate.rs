@@ -168,14 +168,14 @@ fn negative_numbers_follow_their_flags() {
         .map(|p| p["format"].as_str().unwrap())
         .collect();
     assert_eq!(formats, ["krl", "gcode"]);
-    let fanuc = Command::new(env!("CARGO_BIN_EXE_deflex"))
+    let unknown = Command::new(env!("CARGO_BIN_EXE_deflex"))
         .args(["compensate", "--robot", "r", "--out"])
         .arg(&x)
-        .args(["--format", "fanuc"])
+        .args(["--format", "yaskawa"])
         .output()
         .unwrap();
-    assert_eq!(fanuc.status.code(), Some(2), "an argument error");
-    assert!(String::from_utf8_lossy(&fanuc.stderr).contains("invalid value 'fanuc'"));
+    assert_eq!(unknown.status.code(), Some(2), "an argument error");
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("invalid value 'yaskawa'"));
     assert!(!x.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -233,6 +233,53 @@ fn the_command_writes_safe_programs_that_read_back() {
         .fold(f64::MIN, f64::max);
     assert!((program.points[0].p_mm[2] - top).abs() < 1e-9);
     assert!((program.points.last().unwrap().p_mm[2] - top).abs() < 1e-9);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `--format fanuc` writes a FANUC TP program (`.ls`) that the command reads back and
+/// compares with the path, with the template's user and tool frame numbers.
+#[test]
+fn the_fanuc_format_writes_a_tp_program_that_reads_back() {
+    let dir = scratch("compensate-fanuc");
+    let out = dir.join("out");
+    let template = dir.join("program.toml");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(&template, "[fanuc]\nuframe = 3\nutool = 2\n").unwrap();
+    compensated(&args(
+        &out,
+        &[
+            "--format",
+            "fanuc",
+            "--program-config",
+            template.to_str().unwrap(),
+        ],
+    ));
+    let s = summary(&out);
+    let programs = s["programs"].as_array().unwrap();
+    assert_eq!(programs.len(), 1);
+    assert_eq!(programs[0]["format"], "fanuc");
+    assert!(
+        programs[0]["readback_max_position_error_m"]
+            .as_f64()
+            .unwrap()
+            <= 1e-6
+    );
+    assert!(
+        programs[0]["readback_max_rotation_error_rad"]
+            .as_f64()
+            .unwrap()
+            <= 2e-6
+    );
+    let text = std::fs::read_to_string(out.join("programs/DEFLEX_PATH.ls")).unwrap();
+    assert!(text.starts_with("/PROG  DEFLEX_PATH\n/ATTR\n"));
+    assert!(text.contains("DEFAULT_GROUP\t= 1,*,*,*,*;"));
+    assert!(text.contains("  UFRAME_NUM=3 ;") && text.contains("  UTOOL_NUM=2 ;"));
+    assert!(text.contains("UF : 3, UT : 2,\t\tCONFIG : '"));
+    assert!(text.trim_end().ends_with("/END"));
+    // Read back here too: the clearance points around every point of the table.
+    let rows = table(&out);
+    let read = deflex_cam::program::readback::read_fanuc(&text, "DEFLEX_PATH.ls").unwrap();
+    assert_eq!(read.len(), rows.len() + 2);
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -324,3 +324,31 @@ fn values_that_name_no_rotation() {
     let r = rotation_from_rotation_vector([f64::NAN, 0.0, 0.0]);
     assert!(r.matrix().iter().all(|v| v.is_nan()));
 }
+
+#[test]
+fn fanuc_wpr_rebuilds_fixed_xyz_products_and_round_trips() {
+    for m in samples() {
+        let wpr = fanuc_wpr_deg(&rot(m), None);
+        // Fixed axes: W about x first, then P about the fixed y, then R about the fixed z.
+        let rebuilt = rz(wpr[2]) * ry(wpr[1]) * rx(wpr[0]);
+        assert!(distance(&m, &rebuilt) < 1e-12, "{wpr:?}");
+        assert!(wpr[1].abs() <= 90.0 && wpr[0].abs() <= 180.0 && wpr[2].abs() <= 180.0);
+        let back = rotation_from_fanuc_wpr_deg(wpr);
+        assert!(distance(back.matrix(), &m) < 1e-12, "{wpr:?}");
+        // Printed to 6 decimals, as the TP writer does, the rotation comes back within 1e-7 rad.
+        let printed = wpr.map(|v| (v * 1e6).round() / 1e6);
+        assert!(distance(rotation_from_fanuc_wpr_deg(printed).matrix(), &m) < 1e-7);
+    }
+    // Known angles come back unchanged, in FANUC's order W, P, R.
+    let wpr = fanuc_wpr_deg(&rot(rz(-120.0) * ry(35.0) * rx(170.0)), None);
+    for (got, want) in wpr.iter().zip([170.0, 35.0, -120.0]) {
+        assert!((got - want).abs() < 1e-9, "{wpr:?}");
+    }
+    // A tool pointing down (TCP z along −z): W = 180, P = 0, R = 0.
+    let down = rotation_from_fanuc_wpr_deg([180.0, 0.0, 0.0]);
+    assert!((down * Vector3::z() - Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-15);
+    // At the gimbal lock the previous point's R is kept.
+    let locked = rot(rz(25.0) * ry(90.0) * rx(0.0));
+    let wpr = fanuc_wpr_deg(&locked, Some([0.0, 89.0, 25.0]));
+    assert!((wpr[2] - 25.0).abs() < 1e-9, "{wpr:?}");
+}

@@ -15,8 +15,8 @@ from ._deflex import Compensation, Robot
 
 __all__ = ["compensate", "FORMATS"]
 
-#: The program formats: KUKA KRL, ABB RAPID, Stäubli VAL3, UR URScript, G-code.
-FORMATS = ("krl", "rapid", "val3", "urscript", "gcode")
+#: The program formats: KUKA KRL, ABB RAPID, Stäubli VAL3, UR URScript, G-code, FANUC TP (.ls).
+FORMATS = ("krl", "rapid", "val3", "urscript", "gcode", "fanuc")
 
 PathLike = Union[str, "os.PathLike[str]"]
 

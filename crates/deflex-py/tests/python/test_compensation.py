@@ -75,8 +75,9 @@ def test_a_gcode_part_with_the_process_model_and_the_five_programs(tmp_path: Pat
     written = comp.write_programs(tmp_path / "programs")
     names = {Path(p).name for p in written}
     assert {"deflex_path.src", "deflex_path.mod", "deflex_path.script", "deflex_path.gcode"} <= names
-    with pytest.raises(deflex.InputError, match='unknown format "fanuc"'):
-        comp.program("fanuc")
+    assert "/PROG  DEFLEX_PATH" in comp.program("fanuc")["DEFLEX_PATH.ls"]
+    with pytest.raises(deflex.InputError, match='unknown format "yaskawa"'):
+        comp.program("yaskawa")
 
 
 def test_points_beyond_a_joint_limit_are_named_and_no_program_is_written(tmp_path: Path) -> None:

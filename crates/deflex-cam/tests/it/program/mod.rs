@@ -2,6 +2,7 @@
 
 mod common;
 mod config;
+mod fanuc;
 mod names;
 mod round_trip;
 mod streaming;
