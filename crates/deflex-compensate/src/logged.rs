@@ -609,7 +609,7 @@ impl ProcessModel for LoggedProcess {
             let pick = |v: &[f64]| contact.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             let sloped_fits: Vec<(f64, f64)> =
                 fits.iter().copied().filter(|(_, s)| *s != 0.0).collect();
-            evidence::evaluate(
+            LawEvidence::evaluate(
                 &pick(&self.axial_force),
                 &pick(&self.commanded_depth),
                 &pick(&self.arc_length),

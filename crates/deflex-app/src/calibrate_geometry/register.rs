@@ -270,10 +270,8 @@ fn check_moves(
     data: &str,
     names: OptionNames,
 ) -> Result<()> {
-    let mut before = model.clone();
-    before.setups = calibrated_setups.to_vec();
     let bounds = ChangeBounds::for_robot(&model.robot);
-    let large = large_registration_moves(&before, model, setup, target, &bounds);
+    let large = large_registration_moves(calibrated_setups, model, setup, target, &bounds);
     if large.is_empty() {
         return Ok(());
     }

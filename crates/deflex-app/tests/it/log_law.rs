@@ -161,21 +161,9 @@ fn case(
     }
 }
 
-/// The unseen KR 210-like plant of `twin::unseen_plant` (plant 1: J2/J3 coupling 0.3, 0.4 mrad
-/// of wrist lost motion taken up over 600 N·m, a tool holder of 4e5 N·m/rad 80 mm down the
-/// tool), forming a sheet.
+/// The unseen KR 210-like plant of `twin::unseen_plant` (plant 1), forming a sheet.
 fn sheet_cell() -> CellConfig {
-    let mut cell = CellConfig::for_robot("kr210-r2700").unwrap();
-    let p = &mut cell.plant;
-    p.j2_j3_coupling = 0.3;
-    p.wrist_lost_motion_rad = [0.4e-3; 3];
-    p.wrist_takeup_torque_nm = 600.0;
-    p.wrist_hysteresis_nm = 60.0;
-    p.joint_stiffness[5][0] = 4.0e5;
-    p.joint_stiffness[5][1] = 4.0e5;
-    p.center_shift_m[5] = 0.08;
-    cell.validate().unwrap();
-    cell
+    crate::twin::common::plant_1()
 }
 
 /// The same plant pressing at a force set along the path.

@@ -31,7 +31,7 @@
 use crate::geometry::fit::{Estimate, FitResult};
 use crate::geometry::joint_maps::JointMaps;
 use crate::geometry::params::{DhField, EgModel, Param, Unit};
-use deflex_model::Robot;
+use deflex_model::{NamedPose, Robot};
 use std::f64::consts::PI;
 
 /// Bounds on the change of each geometric parameter (module documentation).
@@ -220,18 +220,19 @@ fn sort_by_excess(large: &mut [LargeChange]) {
     });
 }
 
-/// What a registration moved beyond its bounds: the set-up `setup` (when `before` knew it) by
-/// more than the arm's size, the target `target` (when one was registered) further from the
-/// flange than half of it. `before` is the model as calibrated, `after` as registered.
+/// What a registration moved beyond its bounds: the set-up `setup` (when `calibrated_setups`,
+/// the set-ups as calibrated, held it) by more than the arm's size, the target `target` (when
+/// one was registered) further from the flange than half of it. `after` is the model as
+/// registered.
 pub fn large_registration_moves(
-    before: &EgModel,
+    calibrated_setups: &[NamedPose],
     after: &EgModel,
     setup: usize,
     target: Option<usize>,
     bounds: &ChangeBounds,
 ) -> Vec<LargeChange> {
     let mut large = Vec::new();
-    if let (Some(old), Some(new)) = (before.setups.get(setup), after.setups.get(setup)) {
+    if let (Some(old), Some(new)) = (calibrated_setups.get(setup), after.setups.get(setup)) {
         let moved = (new.pose.translation.vector - old.pose.translation.vector).norm();
         if !moved.is_finite() || moved > bounds.setup_move_m {
             large.push(LargeChange {

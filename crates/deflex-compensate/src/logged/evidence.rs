@@ -122,13 +122,70 @@ impl LawEvidence {
         compliance: &[f64],
         slopes: &[(f64, f64)],
     ) -> LawEvidence {
-        evaluate(force, commanded, arc, weights, compliance, slopes)
+        let n = force.len();
+        let (s_lo, s_hi) = range_of(arc);
+        let span = (s_hi - s_lo).max(1e-12);
+        let block: Vec<usize> = arc
+            .iter()
+            .map(|s| (((s - s_lo) / span * BLOCKS as f64) as usize).min(BLOCKS - 1))
+            .collect();
+        let stride = n.div_ceil(MAX_EVALUATED).max(1);
+        let w: Vec<f64> = weights.iter().map(|v| v.max(1e-12)).collect();
+        let (r2_depth, rms_depth_n, evaluated) = held_out(commanded, force, &w, &block, stride);
+        let (r2_position, rms_position_n, _) = held_out(arc, force, &w, &block, stride);
+        let total: f64 = w.iter().sum();
+        let mean = force.iter().zip(&w).map(|(f, w)| f * w).sum::<f64>() / total.max(1e-300);
+        let var = force
+            .iter()
+            .zip(&w)
+            .map(|(f, w)| w * (f - mean) * (f - mean))
+            .sum::<f64>()
+            / total.max(1e-300);
+        let mut sorted: Vec<f64> = compliance.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let compliance_m_per_n = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+        let steepest = slopes
+            .iter()
+            .map(|(_, s)| *s)
+            .fold(0.0, |a: f64, s| if s.abs() > a.abs() { s } else { a });
+        let falling = slopes.iter().filter(|(_, s)| *s < 0.0).count();
+        let (c_lo, c_hi) = range_of(commanded);
+        LawEvidence {
+            blocks: BLOCKS,
+            evaluated_points: evaluated,
+            r2_depth: finite_or_zero(r2_depth),
+            r2_position: finite_or_zero(r2_position),
+            rms_depth_n: finite_or_zero(rms_depth_n),
+            rms_position_n: finite_or_zero(rms_position_n),
+            force_std_n: var.sqrt(),
+            commanded_depth_span_m: if n > 0 { c_hi - c_lo } else { 0.0 },
+            compliance_m_per_n,
+            steepest_slope_n_per_m: steepest,
+            loop_gain: steepest.abs() * compliance_m_per_n,
+            falling_share: if slopes.is_empty() {
+                0.0
+            } else {
+                falling as f64 / slopes.len() as f64
+            },
+        }
     }
 
     /// The law is supported by the log.
     pub fn supported(&self) -> bool {
         self.rejection().is_none()
     }
+}
+
+/// `(min, max)` of `values` (`(f64::MAX, f64::MIN)` when empty).
+fn range_of(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)))
+}
+
+/// `value`, or 0 when it is not finite (a held-out figure with no point to score).
+fn finite_or_zero(value: f64) -> f64 {
+    if value.is_finite() { value } else { 0.0 }
 }
 
 /// Bins of the regressor's range in the held-out predictions.
@@ -142,9 +199,7 @@ fn held_out(x: &[f64], y: &[f64], w: &[f64], block: &[usize], stride: usize) -> 
     let n = x.len();
     let total: f64 = w.iter().sum();
     let mean = y.iter().zip(w).map(|(y, w)| y * w).sum::<f64>() / total;
-    let (lo, hi) = x
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let (lo, hi) = range_of(x);
     let width = ((hi - lo) / BINS as f64).max(1e-300);
     let bin = |v: f64| (((v - lo) / width) as usize).min(BINS - 1);
     let (mut ssr, mut sst, mut weight, mut count) = (0.0, 0.0, 0.0, 0usize);
@@ -192,79 +247,4 @@ fn held_out(x: &[f64], y: &[f64], w: &[f64], block: &[usize], stride: usize) -> 
     }
     let r2 = if sst > 0.0 { 1.0 - ssr / sst } else { 0.0 };
     (r2, (ssr / weight).sqrt(), count)
-}
-
-/// The figures over the contact points: axial force `force`, commanded depth `commanded`, arc
-/// length `arc`, weights `w`, compliance along the axis `compliance`; `slopes` the law's
-/// sloped bins' `(G, G')`.
-pub fn evaluate(
-    force: &[f64],
-    commanded: &[f64],
-    arc: &[f64],
-    w: &[f64],
-    compliance: &[f64],
-    slopes: &[(f64, f64)],
-) -> LawEvidence {
-    let n = force.len();
-    let (s_lo, s_hi) = arc
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-    let span = (s_hi - s_lo).max(1e-12);
-    let block: Vec<usize> = arc
-        .iter()
-        .map(|s| (((s - s_lo) / span * BLOCKS as f64) as usize).min(BLOCKS - 1))
-        .collect();
-    let stride = n.div_ceil(MAX_EVALUATED).max(1);
-    let w: Vec<f64> = w.iter().map(|v| v.max(1e-12)).collect();
-    let (r2_depth, rms_depth_n, evaluated) = held_out(commanded, force, &w, &block, stride);
-    let (r2_position, rms_position_n, _) = held_out(arc, force, &w, &block, stride);
-    let total: f64 = w.iter().sum();
-    let mean = force.iter().zip(&w).map(|(f, w)| f * w).sum::<f64>() / total.max(1e-300);
-    let var = force
-        .iter()
-        .zip(&w)
-        .map(|(f, w)| w * (f - mean) * (f - mean))
-        .sum::<f64>()
-        / total.max(1e-300);
-    let mut sorted: Vec<f64> = compliance.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let compliance_m_per_n = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-    let steepest = slopes
-        .iter()
-        .map(|(_, s)| *s)
-        .fold(0.0, |a: f64, s| if s.abs() > a.abs() { s } else { a });
-    let falling = slopes.iter().filter(|(_, s)| *s < 0.0).count();
-    let (c_lo, c_hi) = commanded
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-    LawEvidence {
-        blocks: BLOCKS,
-        evaluated_points: evaluated,
-        r2_depth: if r2_depth.is_finite() { r2_depth } else { 0.0 },
-        r2_position: if r2_position.is_finite() {
-            r2_position
-        } else {
-            0.0
-        },
-        rms_depth_n: if rms_depth_n.is_finite() {
-            rms_depth_n
-        } else {
-            0.0
-        },
-        rms_position_n: if rms_position_n.is_finite() {
-            rms_position_n
-        } else {
-            0.0
-        },
-        force_std_n: var.sqrt(),
-        commanded_depth_span_m: if n > 0 { c_hi - c_lo } else { 0.0 },
-        compliance_m_per_n,
-        steepest_slope_n_per_m: steepest,
-        loop_gain: steepest.abs() * compliance_m_per_n,
-        falling_share: if slopes.is_empty() {
-            0.0
-        } else {
-            falling as f64 / slopes.len() as f64
-        },
-    }
 }

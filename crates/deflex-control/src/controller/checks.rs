@@ -133,24 +133,21 @@ impl Controller {
         if !mismatch.exceeds(&cfg) {
             return;
         }
-        let fault =
+        let (value, limit, channel) =
             if mismatch.position_m > cfg.position_tolerance_m || !mismatch.position_m.is_finite() {
-                Fault::new(
-                    FaultKind::ModelMismatch,
-                    now,
+                (
                     mismatch.position_m,
                     cfg.position_tolerance_m,
+                    Channel::TcpPosition,
                 )
-                .on(Channel::TcpPosition)
             } else {
-                Fault::new(
-                    FaultKind::ModelMismatch,
-                    now,
+                (
                     mismatch.orientation_rad,
                     cfg.orientation_tolerance_rad,
+                    Channel::TcpOrientation,
                 )
-                .on(Channel::TcpOrientation)
             };
+        let fault = Fault::new(FaultKind::ModelMismatch, now, value, limit).on(channel);
         flags.set(FaultKind::ModelMismatch.flag());
         self.trip(fault);
     }

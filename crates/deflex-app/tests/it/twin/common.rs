@@ -74,3 +74,36 @@ pub fn max_contact_error_mm(
         .map(|row| row.truth.path_error_m().norm() * 1e3)
         .fold(0.0, f64::max)
 }
+
+/// A KR 210-like cell with an unseen plant (kept here, out of the built-in cells).
+fn unseen_cell(
+    coupling: f64,
+    lost_motion_rad: f64,
+    takeup_nm: f64,
+    holder: (f64, f64),
+) -> CellConfig {
+    let mut cell = CellConfig::for_robot("kr210-r2700").unwrap();
+    let p = &mut cell.plant;
+    p.j2_j3_coupling = coupling;
+    // Hardening wrist: lost motion taken up over a large torque.
+    p.wrist_lost_motion_rad = [lost_motion_rad; 3];
+    p.wrist_takeup_torque_nm = takeup_nm;
+    p.wrist_hysteresis_nm = 0.1 * takeup_nm;
+    // A compliant tool holder: J6 bending about x and y, centred down the tool.
+    p.joint_stiffness[5][0] = holder.0;
+    p.joint_stiffness[5][1] = holder.0;
+    p.center_shift_m[5] = holder.1;
+    cell.validate().unwrap();
+    cell
+}
+
+/// Plant 1: J2/J3 coupling 0.3, 0.4 mrad of wrist lost motion taken up over 600 N·m, a tool
+/// holder of 4e5 N·m/rad 80 mm down the tool.
+pub fn plant_1() -> CellConfig {
+    unseen_cell(0.3, 0.4e-3, 600.0, (4.0e5, 0.08))
+}
+
+/// Plant 2: coupling 0.2, 0.3 mrad over 400 N·m, a holder of 6e5 N·m/rad 60 mm down the tool.
+pub fn plant_2() -> CellConfig {
+    unseen_cell(0.2, 0.3e-3, 400.0, (6.0e5, 0.06))
+}

@@ -45,6 +45,7 @@
 //!
 //! SIMULATED.
 
+use super::common::{plant_1, plant_2};
 use deflex_app::load::parse_wrench_log;
 use deflex_compensate::log::{ResampleOptions, Resampled, resample_on_path};
 use deflex_compensate::{
@@ -87,36 +88,6 @@ fn second_program() -> String {
     }
     text.push_str("G0 Z5\nM30\n%\n");
     text
-}
-
-/// A KR 210-like cell with an unseen plant (kept here, out of the built-in cells).
-fn unseen_cell(
-    coupling: f64,
-    lost_motion_rad: f64,
-    takeup_nm: f64,
-    holder: (f64, f64),
-) -> CellConfig {
-    let mut cell = CellConfig::for_robot("kr210-r2700").unwrap();
-    let p = &mut cell.plant;
-    p.j2_j3_coupling = coupling;
-    // Hardening wrist: lost motion taken up over a large torque.
-    p.wrist_lost_motion_rad = [lost_motion_rad; 3];
-    p.wrist_takeup_torque_nm = takeup_nm;
-    p.wrist_hysteresis_nm = 0.1 * takeup_nm;
-    // A compliant tool holder: J6 bending about x and y, centred down the tool.
-    p.joint_stiffness[5][0] = holder.0;
-    p.joint_stiffness[5][1] = holder.0;
-    p.center_shift_m[5] = holder.1;
-    cell.validate().unwrap();
-    cell
-}
-
-fn plant_1() -> CellConfig {
-    unseen_cell(0.3, 0.4e-3, 600.0, (4.0e5, 0.08))
-}
-
-fn plant_2() -> CellConfig {
-    unseen_cell(0.2, 0.3e-3, 400.0, (6.0e5, 0.06))
 }
 
 /// The run's log as CSV with 200 rows at rest at the end, the force fading out.
