@@ -100,7 +100,12 @@ impl CellConfig {
         crate::plant::check_six_joints(&robot)?;
         let maker = Maker::of(spec, &robot.name);
         let mut cell = match maker {
-            Maker::StaubliTx200 => CellConfig::default(),
+            Maker::StaubliTx200 => {
+                let mut cell = CellConfig::default();
+                (cell.part.tool_xyz_m, cell.part.tool_rpy) =
+                    forming_tool(&robot, cell.part.tool_xyz_m);
+                cell
+            }
             Maker::UniversalRobots => ur_cell(&robot)?,
             Maker::Kuka | Maker::Abb | Maker::Other => generic_cell(&robot, maker)?,
         };
@@ -110,6 +115,21 @@ impl CellConfig {
         }
         cell.validate()?;
         Ok(cell)
+    }
+}
+
+/// The tool of a robot's cell, flange → TCP (translation in m, roll-pitch-yaw in rad): the
+/// robot model's own tool when it has one, so that the model, `deflex compensate` and the twin
+/// use one tool; else the cell's forming tool `default_xyz_m` along the flange's z axis.
+pub fn forming_tool(robot: &Robot, default_xyz_m: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let tool = robot.tool;
+    if tool.translation.vector.norm() == 0.0 && tool.rotation.angle() == 0.0 {
+        (default_xyz_m, [0.0; 3])
+    } else {
+        (
+            tool.translation.vector.into(),
+            deflex_model::spatial::rpy_from_rotation(&tool.rotation),
+        )
     }
 }
 
@@ -375,7 +395,7 @@ pub fn ur_cell(robot: &Robot) -> Result<CellConfig, SimError> {
         plant: derived_plant(robot, true),
         ..CellConfig::default()
     };
-    cell.part.tool_xyz_m = [0.0, 0.0, 0.150];
+    (cell.part.tool_xyz_m, cell.part.tool_rpy) = forming_tool(robot, [0.0, 0.0, 0.150]);
     cell.part.base_pivot_m = None;
     let mut with_tool = robot.clone();
     with_tool.tool = cell.tool();
@@ -405,6 +425,7 @@ pub fn generic_cell(robot: &Robot, maker: Maker) -> Result<CellConfig, SimError>
         plant: derived_plant(robot, false),
         ..CellConfig::default()
     };
+    (cell.part.tool_xyz_m, cell.part.tool_rpy) = forming_tool(robot, cell.part.tool_xyz_m);
     cell.part.base_pivot_m = None;
     cell.controller.correction_delay_s = 0.012;
     cell.controller.correction_filter_s = 0.0;
@@ -518,12 +539,12 @@ impl std::fmt::Display for CellSummary {
         )?;
         writeln!(
             f,
-            "  part frame origin (mm, R0 axes): {:.1}, {:.1}, {:.1}   (--part-xyz-mm)",
+            "  part frame origin (mm, R0 axes): {:.4}, {:.4}, {:.4}   (--part-xyz-mm)",
             o[0], o[1], o[2]
         )?;
         writeln!(
             f,
-            "  seed configuration (deg): {:.2}, {:.2}, {:.2}, {:.2}, {:.2}, {:.2}   (--seed-deg)",
+            "  seed configuration (deg): {:.6}, {:.6}, {:.6}, {:.6}, {:.6}, {:.6}   (--seed-deg)",
             q[0], q[1], q[2], q[3], q[4], q[5]
         )?;
         let q = self.forming_q_deg;
@@ -535,7 +556,7 @@ impl std::fmt::Display for CellSummary {
         let t = self.tool_xyz_m;
         writeln!(
             f,
-            "  tool, flange → TCP (mm): {:.1}, {:.1}, {:.1}",
+            "  tool, flange → TCP (mm): {:.4}, {:.4}, {:.4}   (the tool compensate, sim, cell and demo use: the robot model's own when it has one)",
             t[0] * 1e3,
             t[1] * 1e3,
             t[2] * 1e3

@@ -81,6 +81,8 @@ pub struct Setup {
     pub frame_name: Option<String>,
     /// Where the part frame and seed come from (`the ur10e cell`, `--part-xyz-mm` …).
     pub placement_source: String,
+    /// Where the tool ([`Robot::tool`] of [`Setup::robot`]) comes from, for the user.
+    pub tool_source: String,
     /// Lines for the user: the placement, the G-code reader's notes.
     pub notes: Vec<String>,
     /// The tool load of the cell (centre of mass in the flange frame), for the programs.
@@ -92,29 +94,60 @@ pub struct Setup {
 }
 
 impl Setup {
-    /// The placement in one line (headers and summaries).
+    /// The placement in one line (headers and summaries), at the programs' precision.
     pub fn placement_line(&self) -> String {
-        let o = self.part_origin_mm;
+        placement_text(
+            self.frame_name.as_deref(),
+            self.part_origin_mm,
+            &self.seed,
+            &self.placement_source,
+        )
+    }
+
+    /// The tool in one line (headers and summaries), at the programs' precision.
+    pub fn tool_line(&self) -> String {
+        let t = &self.robot.tool;
+        let xyz = t.translation.vector * 1e3;
+        let rpy = deflex_model::spatial::rpy_from_rotation(&t.rotation);
         format!(
-            "part frame{} at ({:.1}, {:.1}, {:.1}) mm and seed ({}) deg: {}",
-            self.frame_name
-                .as_ref()
-                .map_or(String::new(), |n| format!(" {n}")),
-            o[0],
-            o[1],
-            o[2],
-            degrees(&self.seed),
-            self.placement_source
+            "tool (flange to TCP) at ({}) mm, roll-pitch-yaw ({}) deg: {}",
+            exact_mm([xyz.x, xyz.y, xyz.z]),
+            degrees(&rpy),
+            self.tool_source
         )
     }
 }
 
-/// Joint values in degrees, two decimals, comma-separated.
-pub(super) fn degrees(q: &[f64]) -> String {
-    q.iter()
-        .map(|q| format!("{:.2}", q.to_degrees()))
+/// Lengths in mm to 0.1 µm (4 decimals), comma-separated: the precision of the programs (every
+/// number an operator types in from a header is printed as the program itself uses it).
+pub(super) fn exact_mm(v: [f64; 3]) -> String {
+    v.iter()
+        .map(|v| format!("{:.4}", v + 0.0))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// Joint values or angles in degrees to 6 decimals (0.02 µrad), comma-separated.
+pub(super) fn degrees(q: &[f64]) -> String {
+    q.iter()
+        .map(|q| format!("{:.6}", q.to_degrees() + 0.0))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `part frame [NAME] at (x, y, z) mm and seed (…) deg: SOURCE`, at the programs' precision.
+fn placement_text(
+    frame_name: Option<&str>,
+    origin_mm: [f64; 3],
+    seed: &[f64],
+    source: &str,
+) -> String {
+    format!(
+        "part frame{} at ({}) mm and seed ({}) deg: {source}",
+        frame_name.map_or(String::new(), |n| format!(" {n}")),
+        exact_mm(origin_mm),
+        degrees(seed),
+    )
 }
 
 /// The robot's cell: the twin file over it, else the cell of the robot (built-in or file; a
@@ -175,8 +208,12 @@ pub fn setup(
         Err(e) => return Err(e),
     };
     let placement = placement(&robot, options, config.as_mut(), names)?;
-    let RobotChoice { model: robot, spec } = robot;
+    let RobotChoice {
+        model: mut robot,
+        spec,
+    } = robot;
     let robot_shown = spec.unwrap_or_else(|| robot.name.clone());
+    let tool_source = one_tool(&mut robot, config.as_ref(), &robot_shown);
     let part_origin_mm = placement.part_origin_mm;
     let seed = placement.seed;
     let part_frame = Pose::translation(
@@ -216,16 +253,14 @@ pub fn setup(
     notes.insert(
         0,
         format!(
-            "{}: part frame{} at ({:.1}, {:.1}, {:.1}) mm, seed ({}) deg — {}",
+            "{}: {}",
             robot.name,
-            frame_name
-                .as_ref()
-                .map_or(String::new(), |n| format!(" {n}")),
-            part_origin_mm[0],
-            part_origin_mm[1],
-            part_origin_mm[2],
-            degrees(&seed),
-            placement.source
+            placement_text(
+                frame_name.as_deref(),
+                part_origin_mm,
+                &seed,
+                &placement.source
+            )
         ),
     );
     // A robot without a cell has no tool load of its cell to state in the programs.
@@ -255,9 +290,34 @@ pub fn setup(
         part_origin_mm,
         frame_name,
         placement_source: placement.source,
+        tool_source,
         notes,
         front,
     })
+}
+
+/// One tool per cell: a compensation with a cell uses the cell's tool (what `deflex sim`,
+/// `deflex cell --sim` and `deflex model show` name), which is the robot model's own tool when
+/// it has one ([`deflex_sim::profile::forming_tool`]); without a cell, the model's. Returns
+/// where the tool comes from, for the headers.
+fn one_tool(robot: &mut Robot, config: Option<&CellConfig>, shown: &str) -> String {
+    let Some(config) = config else {
+        return "the robot model's tool (no cell)".into();
+    };
+    let model_has_none =
+        robot.tool.translation.vector.norm() == 0.0 && robot.tool.rotation.angle() == 0.0;
+    let same = (robot.tool.translation.vector - config.tool().translation.vector).norm() < 1e-12
+        && robot.tool.rotation.angle_to(&config.tool().rotation) < 1e-12;
+    robot.tool = config.tool();
+    if same {
+        "the robot model's tool, as its cell's".into()
+    } else if model_has_none {
+        format!(
+            "the forming tool of the cell of {shown} (the robot model has none; a tool in a robot file or part.tool_xyz_m in a twin file changes it)"
+        )
+    } else {
+        "the twin file's tool (part.tool_xyz_m), not the robot model's".into()
+    }
 }
 
 /// The programs hold at most `program.max_points` points.

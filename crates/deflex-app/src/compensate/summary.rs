@@ -3,7 +3,6 @@
 //! compensated or the iteration did not converge.
 
 use super::CompensationRun;
-use super::setup::degrees;
 use crate::error::{Error, Result};
 use deflex_compensate::table::write_csv;
 use serde_json::{Value, json};
@@ -35,6 +34,7 @@ pub fn description(run: &CompensationRun) -> Vec<String> {
             result.source
         ),
         s.placement_line(),
+        s.tool_line(),
         format!(
             "predicted error {:.4} mm uncompensated, {:.4} mm compensated; largest compensation {:.4} mm, {:.4} mrad",
             result
@@ -96,12 +96,8 @@ pub fn refusal(run: &CompensationRun) -> Result<()> {
             points: s.path.len(),
             list: list.join("\n"),
             hint: format!(
-                "The path was placed with the part frame at ({:.1}, {:.1}, {:.1}) mm and the seed ({}) deg ({}): move the part with {} x,y,z or choose the arm's branch with {} (deflex sim robot --robot R prints the robot's cell).",
-                s.part_origin_mm[0],
-                s.part_origin_mm[1],
-                s.part_origin_mm[2],
-                degrees(&s.seed),
-                s.placement_source,
+                "The path was placed with the {}: move the part with {} x,y,z or choose the arm's branch with {} (deflex sim robot --robot R prints the robot's cell).",
+                s.placement_line(),
                 names.name("part_xyz_m"),
                 names.name("seed_q"),
             ),
@@ -180,6 +176,17 @@ pub(super) fn run_json(run: &CompensationRun) -> serde_json::Map<String, Value> 
         ("part_origin_m", json!(s.part_origin_mm.map(|v| v * 1e-3))),
         ("seed_q_rad", json!(s.seed)),
         ("placement", json!(s.placement_source)),
+        (
+            "tool_xyz_m",
+            json!(<[f64; 3]>::from(s.robot.tool.translation.vector)),
+        ),
+        (
+            "tool_rpy_rad",
+            json!(deflex_model::spatial::rpy_from_rotation(
+                &s.robot.tool.rotation
+            )),
+        ),
+        ("tool", json!(s.tool_source)),
         ("gcode_notes", json!(s.notes)),
         ("orientation_compensated", json!(s.options.orientation)),
         ("tolerance_m", json!(s.options.tolerance_m)),
@@ -211,7 +218,7 @@ pub fn summary_text(run: &CompensationRun) -> String {
     let s = &run.setup;
     let result = &run.result;
     let mut t = String::new();
-    for line in description(run).iter().take(3) {
+    for line in description(run).iter().take(4) {
         let _ = writeln!(t, "{line}");
     }
     for line in &run.source_lines {

@@ -114,7 +114,7 @@ fn pose_text(pose: &deflex_model::Pose) -> String {
     let t = pose.translation.vector * 1e3;
     let r = rpy_from_rotation(&pose.rotation).map(f64::to_degrees);
     format!(
-        "xyz {:.1} {:.1} {:.1} mm, rpy {:.2} {:.2} {:.2}°",
+        "xyz {:.4} {:.4} {:.4} mm, rpy {:.6} {:.6} {:.6}°",
         t.x, t.y, t.z, r[0], r[1], r[2]
     )
 }
@@ -211,7 +211,14 @@ pub fn describe(robot: &Robot) -> String {
             pose_text(&robot.flange)
         );
     }
-    let _ = writeln!(out, "tool (flange → TCP): {}", pose_text(&robot.tool));
+    if robot.tool == deflex_model::Pose::identity() {
+        let _ = writeln!(
+            out,
+            "tool (flange → TCP): none in the model, the flange (deflex compensate, sim and cell use the twin cell's tool)"
+        );
+    } else {
+        let _ = writeln!(out, "tool (flange → TCP): {}", pose_text(&robot.tool));
+    }
     if robot.base != deflex_model::Pose::identity() {
         let _ = writeln!(out, "base (world → R0): {}", pose_text(&robot.base));
     }

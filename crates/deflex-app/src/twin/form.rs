@@ -394,6 +394,12 @@ impl TwinRun {
             "SIMULATED {mode} run on the twin of the {}: {} (seed {})",
             s.robot, self.path_name, self.seed
         );
+        let tool = self.config.part.tool_xyz_m.map(|v| v * 1e3);
+        let _ = writeln!(
+            out,
+            "  tool (flange to TCP) at ({:.4}, {:.4}, {:.4}) mm: the cell's, as deflex compensate and model show use it",
+            tool[0], tool[1], tool[2]
+        );
         if let Some(status) = &self.controller_status {
             let _ = writeln!(out, "  {status}");
         }

@@ -178,7 +178,10 @@ impl std::fmt::Display for NoteKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             NoteKind::ToolIgnored => {
-                write!(f, "tool word ignored: the TCP is the robot model's tool")
+                write!(
+                    f,
+                    "tool word ignored: the TCP is the compensation's tool (its tool line)"
+                )
             }
             NoteKind::SpindleIgnored => write!(f, "spindle word ignored"),
             NoteKind::CoolantIgnored => write!(f, "coolant word ignored"),

@@ -227,7 +227,7 @@ pub(crate) fn header_texts(input: &ProgramInput) -> Vec<String> {
     if let Some(load) = &input.tool_load_in_flange {
         let centre = load.centre_of_mass_m;
         lines.push(format!(
-            "tool load ({}): {:.3} kg at ({:.1}, {:.1}, {:.1}) mm in the flange frame",
+            "tool load ({}): {:.3} kg at ({:.4}, {:.4}, {:.4}) mm in the flange frame",
             input.tool_load_source,
             load.mass_kg,
             centre[0] * 1e3,

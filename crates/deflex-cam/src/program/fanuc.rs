@@ -311,9 +311,9 @@ fn write_header(
             "Select PAYLOAD[{}] with the tool load: {} kg at {}, {}, {} mm",
             f.payload,
             num(l.mass_kg, 3),
-            num(l.centre_of_mass_m[0] * 1e3, 1),
-            num(l.centre_of_mass_m[1] * 1e3, 1),
-            num(l.centre_of_mass_m[2] * 1e3, 1)
+            num(l.centre_of_mass_m[0] * 1e3, 3),
+            num(l.centre_of_mass_m[1] * 1e3, 3),
+            num(l.centre_of_mass_m[2] * 1e3, 3)
         )),
         None => tp.comment(&format!(
             "Select PAYLOAD[{}] with the tool load (not known to deflex)",
@@ -328,11 +328,11 @@ fn pose_text(pose: &Pose) -> String {
     let wpr = fanuc_wpr_deg(&pose.rotation, None);
     format!(
         "X {} Y {} Z {} W {} P {} R {}",
-        num(t.x, 3),
-        num(t.y, 3),
-        num(t.z, 3),
-        num(wpr[0], 4),
-        num(wpr[1], 4),
-        num(wpr[2], 4)
+        num(t.x, 4),
+        num(t.y, 4),
+        num(t.z, 4),
+        num(wpr[0], 6),
+        num(wpr[1], 6),
+        num(wpr[2], 6)
     )
 }

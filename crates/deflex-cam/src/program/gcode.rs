@@ -67,6 +67,7 @@ pub(crate) fn export(
         num(spread * 1e3, 4)
     );
     let offset = input.frame_name.as_deref().unwrap_or("G54");
+    operator_lines(&mut out, input, settings, offset)?;
     let _ = writeln!(out, "( safe start )\nG17 G40 G49 G80 G90 G21 {offset}");
     let xyz = |p: &Checked| {
         format!(
@@ -113,4 +114,106 @@ pub(crate) fn export(
     put(sink, FORMAT, &out)?;
     sink.end()?;
     Ok(vec![path])
+}
+
+/// The work offset's number for `G10 L2 P…`: G54 = 1 … G59 = 6, G59.1 = 7 … G59.3 = 9.
+fn work_offset_number(name: &str) -> Option<u32> {
+    match name {
+        "G54" => Some(1),
+        "G55" => Some(2),
+        "G56" => Some(3),
+        "G57" => Some(4),
+        "G58" => Some(5),
+        "G59" => Some(6),
+        "G59.1" => Some(7),
+        "G59.2" => Some(8),
+        "G59.3" => Some(9),
+        _ => None,
+    }
+}
+
+/// What the operator must enter for the program to be right, at the program's own precision
+/// (`gcode.decimals` in mm, 6 decimals in degrees): the work offset `offset` (the program
+/// frame in the robot base frame) and the tool; with `gcode.set_work_offset`, the `G10 L2`
+/// line that sets the work offset instead (translation only: a rotated frame is refused).
+fn operator_lines(
+    out: &mut String,
+    input: &ProgramInput,
+    settings: &ProgramSettings,
+    offset: &str,
+) -> Result<(), ProgramError> {
+    let d = settings.gcode.decimals;
+    let xyz = |v: nalgebra::Vector3<f64>| {
+        format!(
+            "X{} Y{} Z{}",
+            num(v.x * 1e3, d),
+            num(v.y * 1e3, d),
+            num(v.z * 1e3, d)
+        )
+    };
+    let rpy = |r: &nalgebra::Rotation3<f64>| {
+        let [a, b, c] = deflex_model::spatial::rpy_from_rotation(r);
+        format!(
+            "{} {} {}",
+            num(a.to_degrees(), 6),
+            num(b.to_degrees(), 6),
+            num(c.to_degrees(), 6)
+        )
+    };
+    let frame = &input.frame_in_robot;
+    let rotated = frame.rotation.angle() > 0.0;
+    let frame_text = format!(
+        "{}{}",
+        xyz(frame.translation.vector),
+        if rotated {
+            format!(", rotated by roll-pitch-yaw {} deg", rpy(&frame.rotation))
+        } else {
+            String::new()
+        }
+    );
+    let tool = &input.tool_in_flange;
+    let _ = writeln!(
+        out,
+        "( tool: the controller's TCP must be flange -> {} mm, roll-pitch-yaw {} deg )",
+        xyz(tool.translation.vector),
+        rpy(&tool.rotation)
+    );
+    match input.coordinates {
+        crate::program::Coordinates::Robot => {
+            let _ = writeln!(
+                out,
+                "( work offset {offset} must be zero: the positions are in the robot base frame )"
+            );
+            return Ok(());
+        }
+        crate::program::Coordinates::Part => {}
+    }
+    if !settings.gcode.set_work_offset {
+        let _ = writeln!(
+            out,
+            "( work offset {offset} must hold the part frame in the robot base frame [mm]: {frame_text} )"
+        );
+        return Ok(());
+    }
+    let refuse = |message: String| ProgramError::Settings {
+        source_name: "the program template".into(),
+        key: "gcode.set_work_offset".into(),
+        message,
+    };
+    let number = work_offset_number(offset).ok_or_else(|| {
+        refuse(format!(
+            "`{offset}` is not a work offset G10 L2 can set (G54 to G59.3)"
+        ))
+    })?;
+    if rotated {
+        return Err(refuse(format!(
+            "the part frame is rotated (roll-pitch-yaw {} deg); G10 L2 sets a translation only: enter the work offset by hand",
+            rpy(&frame.rotation)
+        )));
+    }
+    let _ = writeln!(
+        out,
+        "( the program sets work offset {offset} to the part frame in the robot base frame [mm] )\nG10 L2 P{number} {frame_text}"
+    );
+    Ok(())
 }

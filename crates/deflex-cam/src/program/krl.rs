@@ -221,9 +221,9 @@ fn write_header_and_safe_start(
                 "; LOAD_DATA[{}] must hold the tool load: M {} kg, CM {{X {}, Y {}, Z {}}} mm\r",
                 k.tool,
                 num(l.mass_kg, 3),
-                num(l.centre_of_mass_m[0] * 1e3, 1),
-                num(l.centre_of_mass_m[1] * 1e3, 1),
-                num(l.centre_of_mass_m[2] * 1e3, 1)
+                num(l.centre_of_mass_m[0] * 1e3, 4),
+                num(l.centre_of_mass_m[1] * 1e3, 4),
+                num(l.centre_of_mass_m[2] * 1e3, 4)
             );
         }
         None => {

@@ -697,7 +697,13 @@ fn read_gcode_lines(
         ..ReadOptions::default()
     })
     .map_err(gcode_error)?;
+    let mut moved = false;
     r.each(reader, |n, line| {
+        // The work offset the program sets itself (`gcode.set_work_offset`), before any motion:
+        // a setting, not a motion (the CAM reader refuses G10 in a path it is given).
+        if !moved && line.starts_with("G10 L2 P") {
+            return Ok(());
+        }
         let Some(motion) = gcode.read_line(line).map_err(gcode_error)? else {
             return Ok(());
         };
@@ -711,6 +717,7 @@ fn read_gcode_lines(
                 return Err(r.error(n, "an arc (G2/G3): deflex writes straight moves only"));
             }
         };
+        moved = true;
         emit(
             ReadPoint {
                 position_m: Vector3::new(x, y, z) * 1e-3,

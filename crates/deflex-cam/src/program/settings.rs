@@ -264,11 +264,18 @@ impl Default for FanucSettings {
 pub struct GcodeSettings {
     /// Decimals of the coordinates in mm (3 ..= 6).
     pub decimals: usize,
+    /// Whether the program sets its work offset itself (`G10 L2 P… X… Y… Z…` before the safe
+    /// start) instead of asking the operator to enter it; for controllers that allow it
+    /// (LinuxCNC, Fanuc-style and most NC controls with G10 L2).
+    pub set_work_offset: bool,
 }
 
 impl Default for GcodeSettings {
     fn default() -> Self {
-        GcodeSettings { decimals: 4 }
+        GcodeSettings {
+            decimals: 4,
+            set_work_offset: false,
+        }
     }
 }
 

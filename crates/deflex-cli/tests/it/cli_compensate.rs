@@ -124,7 +124,7 @@ fn negative_numbers_follow_their_flags() {
         x.to_str().unwrap(),
     ]);
     assert!(
-        e.contains("the seed configuration (-1.00, 34.66, -90.00, 0.00, -45.00, 12.00) deg"),
+        e.contains("the seed configuration (-1.000000, 34.660000, -90.000000, 0.000000, -45.000000, 12.000000) deg"),
         "{e}"
     );
     let out = dir.join("out");
@@ -419,8 +419,10 @@ fn a_deflex_run_log_serves_as_the_wrench_source() {
     );
     let dir = scratch("compensate-runlog");
     let out = dir.join("out");
-    // The robot of `--robot tx200` and the path the command places (its first 40 mm).
-    let robot = deflex_model::builtin("tx200").unwrap();
+    // The robot of `--robot tx200` with its cell's tool (the tool the command compensates) and
+    // the path the command places (its first 40 mm).
+    let mut robot = deflex_model::builtin("tx200").unwrap();
+    robot.tool = CellConfig::for_robot("tx200").unwrap().tool();
     let (seed, tcp) = placed_path(&dir, "40");
     // A log written by the run log's own writer: 0.1 mm steps, a constant 900 N push up,
     // taring rows with nonsense at the start, 100 rows at rest at the end with the force

@@ -197,7 +197,7 @@ fn model_show_prints_standard_dh_masses_and_urdf_geometry() {
     } = deflex(&["model", "show", "--robot", s(&arm)]);
     assert!(ok, "{stderr}");
     assert!(
-        stdout.contains("URDF") && stdout.contains("xyz 250.0 0.0 0.0 mm"),
+        stdout.contains("URDF") && stdout.contains("xyz 250.0000 0.0000 0.0000 mm"),
         "{stdout}"
     );
 }

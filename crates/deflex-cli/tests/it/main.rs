@@ -22,6 +22,7 @@ mod cli_sim;
 #[path = "../../../deflex-app/tests/it/example_cell.rs"]
 mod example_cell;
 mod hostile;
+mod operator_frames;
 mod strict_inputs;
 mod support;
 mod walkthrough;

@@ -28,6 +28,12 @@ def test_an_array_path_under_given_wrenches_lands_on_the_desired_path() -> None:
     path = square()
     comp = deflex.compensate("tx200", path, wrench=W, feed_m_s=0.02, tolerance_m=1e-8)
     assert comp.converged and set(comp.status) == {"ok"} and len(comp) == len(path)
+    # One tool per cell: the built-in file has none, the compensation uses the TX200 cell's
+    # 200 mm forming tool (as the twin does), and says so.
+    summary = comp.to_dict()
+    assert summary["tool_xyz_m"] == [0.0, 0.0, 0.2] and "forming tool" in summary["tool"]
+    ref.tool = np.eye(4)
+    ref.tool[2, 3] = 0.2
     assert comp.desired.shape == (len(path), 3)
     # The part frame sits at the cell's [1500, 0, −183] mm.
     np.testing.assert_allclose(comp.desired, path + [1.5, 0.0, -0.183], atol=1e-12)
@@ -57,10 +63,13 @@ def test_an_array_path_under_given_wrenches_lands_on_the_desired_path() -> None:
 
 def test_a_gcode_part_with_the_process_model_and_the_five_programs(tmp_path: Path) -> None:
     gcode = tmp_path / "part.gcode"
+    # Each step down ramps along the first side, as incremental forming enters a level (a
+    # vertical plunge at a corner, under the TX200 cell's 200 mm tool, leaves one point
+    # oscillating between contact and none: that compensation is refused as not converged).
     lines = ["G21", "G90", "G0 X0 Y0 Z5", "G1 Z0 F600"]
     for k in range(1, 4):
         z = -0.5 * k
-        lines += [f"G1 X0 Y0 Z{z} F600", "G1 X20 Y0 F1200", "G1 X20 Y20", "G1 X0 Y20", "G1 X0 Y0"]
+        lines += [f"G1 X20 Y0 Z{z} F1200", "G1 X20 Y20", "G1 X0 Y20", "G1 X0 Y0"]
     gcode.write_text("\n".join(lines) + "\n")
     comp = deflex.compensate("tx200", gcode, wrench="process", max_segment_m=0.002)
     assert comp.simulated and comp.converged, comp
