@@ -4,11 +4,12 @@
 // No deflex code: what deflex sends is decoded, and what deflex reads is encoded, by Fast DDS.
 // Driven by test_fastdds_interop.py (run.sh builds it into target/fastdds/).
 //
-//   fastdds_ros2 subscribe DOMAIN NAMESPACE OUT_DIR MAX_S
+//   fastdds_ros2 subscribe DOMAIN NAMESPACE OUT_DIR MAX_S [default|sensor-data]
 //       Subscribes to rt<NAMESPACE>/joint_states (sensor_msgs/JointState) and
 //       rt<NAMESPACE>/wrench_raw, rt<NAMESPACE>/wrench_tcp (geometry_msgs/WrenchStamped) at ROS 2's
-//       default QoS (reliable, volatile, keep last 10), writes every sample taken to
-//       OUT_DIR/<topic>.csv (doubles with 17 significant digits) and prints a JSON summary.
+//       default QoS (reliable, volatile, keep last 10) or its SensorDataQoS (best effort,
+//       volatile, keep last 5), writes every sample taken to OUT_DIR/<topic>.csv (doubles with
+//       17 significant digits) and prints a JSON summary.
 //   fastdds_ros2 publish DOMAIN TOPIC FRAME NETFT_PORT MAX_S
 //       A ROS 2 F/T driver: an RDT client of the Net F/T at 127.0.0.1:NETFT_PORT, each reading
 //       published on rt<TOPIC> as a WrenchStamped in FRAME, stamped with the system clock, at
@@ -73,6 +74,15 @@ void ros2_default_qos(Qos& qos)
     qos.history().depth = 10;
     qos.endpoint().history_memory_policy =
         eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+}
+
+// ROS 2's SensorDataQoS (rmw_qos_profile_sensor_data: best effort, volatile, keep last 5).
+template<typename Qos>
+void ros2_sensor_data_qos(Qos& qos)
+{
+    ros2_default_qos(qos);
+    qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+    qos.history().depth = 5;
 }
 
 // Returns when standard input ends or `max_s` has passed.
@@ -217,7 +227,8 @@ std::string wrench_row(const geometry_msgs::msg::WrenchStamped& m)
     return r;
 }
 
-int subscribe(int domain, const std::string& ns, const std::string& out, double max_s)
+int subscribe(int domain, const std::string& ns, const std::string& out, double max_s,
+              const std::string& profile)
 {
     DomainParticipant* p = participant(domain);
     TypeSupport joint_type(new sensor_msgs::msg::JointStatePubSubType());
@@ -229,7 +240,13 @@ int subscribe(int domain, const std::string& ns, const std::string& out, double 
         fail("cannot create a Subscriber");
     }
     DataReaderQos qos = DATAREADER_QOS_DEFAULT;
-    ros2_default_qos(qos);
+    if (profile == "default") {
+        ros2_default_qos(qos);
+    } else if (profile == "sensor-data") {
+        ros2_sensor_data_qos(qos);
+    } else {
+        fail("unknown QoS profile " + profile + " (default or sensor-data)");
+    }
 
     Recorder<sensor_msgs::msg::JointState> joints(
         "rt" + ns + "/joint_states",
@@ -419,15 +436,17 @@ int publish(int domain, const std::string& topic, const std::string& frame, int 
 int main(int argc, char** argv)
 {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "subscribe" && argc == 6) {
-        return subscribe(std::atoi(argv[2]), argv[3], argv[4], std::atof(argv[5]));
+    if (mode == "subscribe" && (argc == 6 || argc == 7)) {
+        return subscribe(std::atoi(argv[2]), argv[3], argv[4], std::atof(argv[5]),
+                         argc == 7 ? argv[6] : "default");
     }
     if (mode == "publish" && argc == 7) {
         return publish(std::atoi(argv[2]), argv[3], argv[4], std::atoi(argv[5]),
                        std::atof(argv[6]));
     }
     std::fprintf(stderr,
-                 "usage: fastdds_ros2 subscribe DOMAIN NAMESPACE OUT_DIR MAX_S\n"
+                 "usage: fastdds_ros2 subscribe DOMAIN NAMESPACE OUT_DIR MAX_S"
+                 " [default|sensor-data]\n"
                  "       fastdds_ros2 publish DOMAIN TOPIC FRAME NETFT_PORT MAX_S\n");
     return 2;
 }

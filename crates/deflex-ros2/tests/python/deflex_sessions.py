@@ -23,7 +23,7 @@ RATE_HZ = 50.0
 
 def domain_base():
     """This process's own DDS domains (other processes on the machine may use DDS): the base
-    and the next two, all below 100, so a domain's RTPS ports (7400 + 250 d + …) lie under
+    and the three after it, all below 100, so a domain's RTPS ports (7400 + 250 d + …) lie under
     Linux's ephemeral range (32768 on) and no socket a test binds to port 0 (the relay's, the
     links') can take a DDS port or be sent DDS traffic."""
     return 12 + (os.getpid() % 28) * 3
