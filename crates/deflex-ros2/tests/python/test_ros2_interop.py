@@ -17,18 +17,14 @@ loopback) and `deflex run` against it, both from the `deflex` binary built here 
    and counted; the session neither stalls nor faults.
 """
 
-import csv
 import json
 import math
 import os
 import socket
 import struct
-import subprocess
-import threading
 import time
 from pathlib import Path
 
-import pytest
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
@@ -36,19 +32,14 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
+from deflex_sessions import (NETFT, NETFT_PORT, NS, Q_COLUMNS, RATE_HZ, RAW_COLUMNS, ROOT,
+                             ROS2_SENSOR, SENSOR_FRAME, LogRows, assert_same_correction,
+                             cell_toml, deflex, domain_base, read_log, ros2_section, session)
 from ros2_types import (DiagnosticArray, Header, JointState, Time, Vector3, Wrench,
                         WrenchStamped)
 
-ROOT = Path(__file__).resolve().parents[4]
-MODEL = ROOT / "docs" / "tx200_cell.toml"
-# This process's own DDS domains (other processes on the machine may use DDS), all below 100:
-# a domain's RTPS ports (7400 + 250 d + …) then lie under Linux's ephemeral range (32768 on), so
-# no socket this test binds to port 0 (the relay's, the links') can take a DDS port or be sent
-# DDS traffic.
-DOMAIN = 12 + (os.getpid() % 28) * 3
-SENSOR_FRAME = "ati_ft"
-NS = "/deflex_it"
-RATE_HZ = 50.0
+DOMAIN = domain_base()
+assert deflex  # the pytest fixture, imported
 
 
 def xcdr1(*policies):
@@ -60,98 +51,6 @@ RELIABLE = xcdr1(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Histor
                  Policy.Durability.Volatile)
 SENSOR_DATA = xcdr1(Policy.Reliability.BestEffort, Policy.History.KeepLast(10),
                     Policy.Durability.Volatile)
-
-
-@pytest.fixture(scope="module")
-def deflex():
-    """The `deflex` binary: $DEFLEX_BIN when set, otherwise built here with cargo."""
-    if os.environ.get("DEFLEX_BIN"):
-        return Path(os.environ["DEFLEX_BIN"])
-    subprocess.run(["cargo", "build", "-q", "-p", "deflex-cli", "--features", "ros2"], cwd=ROOT,
-                   check=True)
-    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
-    return target / "debug" / "deflex"
-
-
-def free_port():
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def cell_toml(sensor, ros2, log="run.csv"):
-    return f"""[robot]
-kind = "kuka-rsi"
-bind = "127.0.0.1:{ROBOT_PORT}"
-timeout_s = 0.1
-[sensor]
-{sensor if "timeout_s" in sensor else sensor + chr(10) + "timeout_s = 0.1"}
-range = [1500.0, 1500.0, 3750.0, 240.0, 240.0, 240.0]
-[mounting]
-sensor_xyz_m = [0.0, 0.0, 0.030]
-tool_mass_kg = 3.2
-tool_com_m = [0.003, -0.002, 0.075]
-[model]
-file = "{MODEL}"
-[control]
-realtime = false
-lock_memory = false
-[log]
-path = "{log}"
-{ros2}
-"""
-
-
-ROBOT_PORT = free_port()
-NETFT_PORT = free_port()
-NETFT = f'kind = "netft"\naddress = "127.0.0.1:{NETFT_PORT}"\nbind = "127.0.0.1:0"'
-# The ROS 2 sensor's readings pass through a Python relay on a shared machine: the sensor
-# timeout (which also latches a fault) is 0.5 s there instead of the Net F/T's 0.1 s.
-ROS2_SENSOR = ('kind = "ros2"\ntopic = "/ati/wrench"\nmax_age_s = 0.25\nqueue_depth = 16\n'
-               'timeout_s = 0.5')
-
-
-def ros2_section(domain, topics=None, qos="reliable"):
-    text = (f'[ros2]\ndomain_id = {domain}\nnamespace = "{NS}"\nqos = "{qos}"\ndepth = 100\n'
-            f'publish_rate_hz = {RATE_HZ}\ndiagnostics_rate_hz = 5.0\n'
-            f'sensor_frame = "{SENSOR_FRAME}"\n')
-    if topics is not None:
-        text += "topics = [" + ", ".join(f'"{t}"' for t in topics) + "]\n"
-    return text
-
-
-def session(deflex, workdir, cell_config, run_config, length_mm, during=None):
-    """`deflex cell --sim` and `deflex run` together; `during(stop)` runs alongside in a thread.
-    Returns the run's and the cell's JSON summaries."""
-    cell = subprocess.Popen(
-        [str(deflex), "cell", "--sim", "--config", str(cell_config), "--length-mm",
-         str(length_mm), "--quiet", "--json", "--wait-s", "60"],
-        cwd=workdir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    stop = threading.Event()
-    helper = None
-    if during is not None:
-        helper = threading.Thread(target=during, args=(stop,), daemon=True)
-        helper.start()
-    try:
-        run = subprocess.run(
-            [str(deflex), "run", "--config", str(run_config), "--idle-exit-s", "0.5",
-             "--startup-timeout-s", "60", "--quiet", "--json"],
-            cwd=workdir, capture_output=True, text=True, timeout=300)
-        cell_out, cell_err = cell.communicate(timeout=120)
-    finally:
-        stop.set()
-        if cell.poll() is None:
-            cell.kill()
-        if helper is not None:
-            helper.join(timeout=30)
-    assert run.returncode == 0, run.stdout + run.stderr
-    assert cell.returncode == 0, cell_out + cell_err
-    return json.loads(run.stdout), json.loads(cell_out)
-
-
-def read_log(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
 
 
 def take(reader, n=200):
@@ -200,43 +99,28 @@ def test_subscriber_receives_joint_states_wrenches_and_diagnostics(deflex, tmp_p
     steps.sort()
     assert abs(steps[len(steps) // 2] - 1.0 / RATE_HZ) < 2e-3, steps[len(steps) // 2]
 
-    # Values against the CSV log: a stamp is the session time plus one fixed offset; find it
-    # from the first message's joint values, then every message must match its row.
-    times = [float(r["time_s"]) for r in rows]
-    q_cols = [f"q{i}_rad" for i in range(1, 7)]
-
-    def row_at(t):
-        i = min(range(len(times)), key=lambda k: abs(times[k] - t))
-        assert abs(times[i] - t) < 5e-6, (t, times[i])
-        return rows[i]
-
-    # The joints barely move between cycles: the offset comes from the wrench, which does.
-    first_raw = got["raw"][len(got["raw"]) // 2]
-    candidates = [r for r in rows
-                  if abs(float(r["raw_fz_n"]) - first_raw.wrench.force.z) < 6e-5
-                  and abs(float(r["raw_fx_n"]) - first_raw.wrench.force.x) < 6e-5]
-    assert len(candidates) == 1, len(candidates)
-    offset = stamp_s(first_raw.header) - float(candidates[0]["time_s"])
+    # Values against the CSV log, each message with its own row (see LogRows).
+    mid = got["raw"][len(got["raw"]) // 2]
+    log = LogRows(rows, stamp_s(mid.header), mid.wrench.force.x, mid.wrench.force.z)
     for m in joints:
-        row = row_at(stamp_s(m.header) - offset)
+        row = log.at(stamp_s(m.header))
         assert m.name == [f"joint_{i}" for i in range(1, 7)]
-        for v, c in zip(m.position, q_cols):
+        for v, c in zip(m.position, Q_COLUMNS):
             assert abs(v - float(row[c])) <= 6e-10, (v, row[c])
     for m in got["raw"]:
-        row = row_at(stamp_s(m.header) - offset)
+        row = log.at(stamp_s(m.header))
         assert m.header.frame_id == SENSOR_FRAME
         w = m.wrench
         for v, c in zip([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z],
-                        ["raw_fx_n", "raw_fy_n", "raw_fz_n", "raw_mx_nm", "raw_my_nm",
-                         "raw_mz_nm"]):
+                        RAW_COLUMNS):
             assert abs(v - float(row[c])) <= 6e-5, (c, v, row[c])
     for m in got["tcp"]:
-        row = row_at(stamp_s(m.header) - offset)
+        row = log.at(stamp_s(m.header))
         assert m.header.frame_id == "base"
         assert abs(m.wrench.force.z - float(row["w_fz_n"])) <= 6e-5
     # Diagnostics: at least 5 Hz over the session, the controller's status with the log's flags.
     diag = got["diag"]
-    duration_s = times[-1] - times[0]
+    duration_s = log.times[-1] - log.times[0]
     assert len(diag) >= 5.0 * duration_s * 0.8, (len(diag), duration_s)
     phases = set()
     for m in diag:
@@ -244,7 +128,7 @@ def test_subscriber_receives_joint_states_wrenches_and_diagnostics(deflex, tmp_p
         assert status.name == "deflex/controller" and status.hardware_id
         values = {kv.key: kv.value for kv in status.values}
         phases.add(values["phase"])
-        row = row_at(stamp_s(m.header) - offset)
+        row = log.at(stamp_s(m.header))
         assert int(values["flags"]) == int(row["flags"]), (values, row["flags"])
         # The latched fault as the log names it (the robot's silence at the program's end).
         assert values["fault"] == "" or values["fault"] in row["status"], (values, row)
@@ -323,19 +207,6 @@ class NetFtRelay:
         sock.close()
 
 
-def correction_profile(rows):
-    """ξz against the TCP force fz (what the loop settles to), sampled in 8 force bins."""
-    pairs = [(float(r["w_fz_n"]), float(r["xi_z_m"])) for r in rows if r["status"] != "taring"]
-    lo, hi = min(p[0] for p in pairs), max(p[0] for p in pairs)
-    bins = []
-    for b in range(8):
-        a, c = lo + (hi - lo) * b / 8, lo + (hi - lo) * (b + 1) / 8
-        xs = [x for f, x in pairs if a <= f < c]
-        if len(xs) >= 10:
-            bins.append(((a + c) / 2, sum(xs) / len(xs)))
-    return bins
-
-
 def test_ros2_wrench_drives_the_closed_loop_like_the_net_ft(deflex, tmp_path):
     length = 60.0
     netft_dir = tmp_path / "netft"
@@ -358,20 +229,7 @@ def test_ros2_wrench_drives_the_closed_loop_like_the_net_ft(deflex, tmp_path):
     assert sensor["accepted"] > 0.9 * relay.sent["good"], (sensor, relay.sent)
     assert sum(sensor["refused"].values()) == 0, sensor
     assert run["samples"] == sensor["accepted"] - sensor["overflow"]
-    # The same correction as with the Net F/T: the twin's truth and the law's ξ against force.
-    for key in ("max_correction_mm", "max_force_norm_n"):
-        a, b = cell_out[key], base_cell[key]
-        print(f"\n{key}: ROS 2 sensor {a:.4f}, Net F/T {b:.4f}")
-        assert abs(a - b) <= 0.05 * abs(b), (key, a, b)
-    ros_profile = correction_profile(read_log(ros_dir / "run.csv"))
-    base_profile = correction_profile(read_log(netft_dir / "run.csv"))
-    assert len(ros_profile) >= 6 and len(base_profile) >= 6
-    scale = max(abs(x) for _, x in base_profile)
-    for (f, x) in ros_profile:
-        (fb, xb) = min(base_profile, key=lambda p: abs(p[0] - f))
-        if abs(fb - f) < 1.0:
-            print(f"fz {f:.1f} N: xi_z ROS 2 {x * 1e3:.4f} mm, Net F/T {xb * 1e3:.4f} mm")
-            assert abs(x - xb) <= 0.05 * scale, (f, x, xb, scale)
+    assert_same_correction(ros_dir, netft_dir, cell_out, base_cell)
 
 
 def test_bad_sensor_input_is_refused_and_counted(deflex, tmp_path):
