@@ -3,6 +3,7 @@
 mod common;
 mod config;
 mod fanuc;
+mod gcode_offset;
 mod names;
 mod round_trip;
 mod streaming;
