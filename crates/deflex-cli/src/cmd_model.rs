@@ -5,6 +5,7 @@ use crate::args::{joint_values, parse_fixed, parse_length_mm_default, print_repo
 use crate::error::{CliError, CommandResult, UsageError};
 use clap::{Args, Subcommand};
 use deflex_app::robot::describe::ModelShow;
+use deflex_app::robot::fk::FkTable;
 use deflex_app::robot::map::{MAX_MAP_NODES_PER_SIDE, MAX_MAP_SIZE_M, MapGrid, write_map};
 use deflex_app::robot::single::{DeflectionReport, IkReport, PoseReport};
 use deflex_model::Robot;
@@ -18,6 +19,21 @@ pub enum ModelCommand {
         /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
         #[arg(long)]
         robot: String,
+    },
+    /// Forward kinematics of a table of joint values (a controller's joint log, a
+    /// compensated_path.csv): the TCP of the model's tool in the world frame, a row per row.
+    Fk {
+        /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
+        #[arg(long)]
+        robot: String,
+        /// CSV with a header and the columns q1_rad … qN_rad or q1_deg … qN_deg (other columns
+        /// are ignored).
+        #[arg(long)]
+        joints: PathBuf,
+        /// Output CSV (index,x_m,y_m,z_m,rx_rad,ry_rad,rz_rad: position m, rotation vector rad,
+        /// world); default: standard output.
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -107,6 +123,28 @@ pub fn model(command: ModelCommand, json_output: bool) -> CommandResult {
             // cell can be built around (not 6 joints, no reachable part placement) says why.
             let shown = ModelShow::load(&spec)?;
             print_report(json_output, || shown.text(), || shown.to_json());
+            Ok(())
+        }
+        ModelCommand::Fk {
+            robot: spec,
+            joints,
+            out,
+        } => {
+            let robot = robot(&spec)?;
+            let table = FkTable::read(&robot, &joints)?;
+            match out {
+                Some(path) => {
+                    deflex_app::table::write_text(&path, &table.csv())?;
+                    let rows = table.poses.len();
+                    print_report(
+                        json_output,
+                        || format!("wrote {rows} pose(s) to {}\n", path.display()),
+                        || serde_json::json!({ "rows": rows, "out": path }),
+                    );
+                }
+                None if json_output => print_report(true, String::new, || table.to_json()),
+                None => print!("{}", table.csv()),
+            }
             Ok(())
         }
     }

@@ -9,6 +9,7 @@ use std::path::Path;
 
 pub mod batch;
 pub mod describe;
+pub mod fk;
 pub mod map;
 pub mod single;
 

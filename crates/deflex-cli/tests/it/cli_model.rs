@@ -316,3 +316,89 @@ fn model_show_and_sim_robot_print_the_robots_twin_cell() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `model fk` (issue 35: a controller's joint log checked with deflex's kinematics): the q
+/// columns of a compensated_path.csv give back its commanded points; degrees read as `pose`.
+#[test]
+fn model_fk_reads_a_compensated_path_and_a_joint_log_in_degrees() {
+    let dir = scratch("model-fk");
+    let out = dir.join("run");
+    let Run { ok, stderr, .. } = deflex(&[
+        "compensate",
+        "--robot",
+        "ur10",
+        "--path",
+        "cone-contour",
+        "--length-mm",
+        "20",
+        "--format",
+        "none",
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok, "{stderr}");
+    let path = out.join("compensated_path.csv");
+    let fk = dir.join("fk.csv");
+    let Run {
+        ok, stdout, stderr, ..
+    } = deflex(&[
+        "model",
+        "fk",
+        "--robot",
+        "ur10",
+        "--joints",
+        s(&path),
+        "--out",
+        s(&fk),
+    ]);
+    assert!(ok && stdout.contains("pose(s)"), "{stderr}");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let poses = std::fs::read_to_string(&fk).unwrap();
+    let poses: Vec<Vec<f64>> = poses
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(poses.len(), rows.len());
+    for (row, pose) in rows.iter().zip(&poses) {
+        for (k, c) in ["cx_m", "cy_m", "cz_m"].iter().enumerate() {
+            let want: f64 = row[col(c)].parse().unwrap();
+            assert!(
+                (pose[k + 1] - want).abs() < 2e-9,
+                "{c}: {} vs {want}",
+                pose[k + 1]
+            );
+        }
+    }
+    // A joint log in degrees (other columns ignored), to standard output.
+    let log = dir.join("log.csv");
+    std::fs::write(
+        &log,
+        "sample,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,line\n3,10,-50,80,20,90,0,7\n",
+    )
+    .unwrap();
+    let Run { ok, stdout, .. } = deflex(&["model", "fk", "--robot", "ur10", "--joints", s(&log)]);
+    assert!(ok);
+    let v = json(&["pose", "--robot", "ur10", "--q-deg", "10,-50,80,20,90,0"]);
+    let tcp: Vec<f64> = serde_json::from_value(v["tcp_m"].clone()).unwrap();
+    let got: Vec<f64> = stdout
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(
+        (0..3).all(|k| (got[k] - tcp[k]).abs() < 1e-9),
+        "{got:?} vs {tcp:?}"
+    );
+    // A log without the robot's joint columns is refused, naming what is missing.
+    std::fs::write(&log, "sample,q1_deg\n0,1\n").unwrap();
+    let Run { ok, stderr, .. } = deflex(&["model", "fk", "--robot", "ur10", "--joints", s(&log)]);
+    assert!(!ok && stderr.contains("q2_deg is missing"), "{stderr}");
+}

@@ -538,6 +538,13 @@ const INPUT_TEMPLATES: &[Template] = &[
         ],
     },
     Template {
+        name: "model fk --joints",
+        slot: Slot::Log,
+        args: &[
+            "model", "fk", "--robot", "tx200", "--joints", "{IN}", "--out", "{OUT}",
+        ],
+    },
+    Template {
         name: "compensate --wrench log:",
         slot: Slot::Log,
         args: &[
