@@ -3,6 +3,7 @@
 mod common;
 mod config;
 mod fanuc;
+mod inform;
 mod names;
 mod round_trip;
 mod streaming;
