@@ -84,8 +84,9 @@ pub struct ProgramPoint {
 
 /// The arm's configuration at a pose: the joint values (rad, the controller's axes) and where
 /// the wrist centre lies, from which each vendor's configuration data is written (KUKA
-/// Status/Turn, ABB `robconf`, Stäubli `config`, FANUC `CONFIG`, Yaskawa `///RCONF`). The caller computes it with
-/// the robot model (`deflex compensate` does); the conventions are in [`config`].
+/// Status/Turn, ABB `robconf`, Stäubli `config`, FANUC `CONFIG`, Yaskawa `///RCONF`). The
+/// caller computes it with the robot model (`deflex compensate` does); the conventions are in
+/// [`config`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArmConfiguration {
     /// Joint values A1 … A6 (rad).
@@ -98,6 +99,10 @@ pub struct ArmConfiguration {
     pub wrist_behind_lower_arm: bool,
     /// Axis 3 at or beyond its stretched value φ (the elbow straight): KUKA Status bit 1.
     pub elbow_beyond_stretched: bool,
+    /// The elbow (axis 3) lies above the line from axis 2 to the wrist centre (seen in the
+    /// arm's plane, "above" along R0's z): FANUC's `U` (else `D`), Yaskawa's upper arm (else
+    /// lower arm). Geometric, so it does not depend on axis 3's sense.
+    pub elbow_up: bool,
 }
 
 /// What an exporter writes: the points plus the frames a program declares or checks.

@@ -648,3 +648,67 @@ fn a_log_of_a_set_force_gets_the_fixed_wrench_by_default() {
     assert!(out.join("programs").is_dir());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The FANUC-like and the Motoman-like built-ins compensate a shipped part into all seven
+/// formats, each read back within 0.1 µm; their TP and INFORM programs carry the elbow-up
+/// branch the twin cell's arm is in (FANUC `U`, Yaskawa upper arm) and the model's 200 mm tool,
+/// which is the twin cell's.
+#[test]
+fn the_fanuc_and_motoman_built_ins_write_all_seven_formats_that_read_back() {
+    let dir = scratch("compensate-seven");
+    let part = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/parts/pyramid-pocket.gcode"
+    );
+    for robot in ["r2000ic-165f", "gp180"] {
+        let out = dir.join(robot);
+        compensated(&[
+            "--robot",
+            robot,
+            "--path",
+            part,
+            "--format",
+            "fanuc,inform,krl,rapid,val3,urscript,gcode",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let s = summary(&out);
+        let programs = s["programs"].as_array().unwrap();
+        let formats: Vec<&str> = programs
+            .iter()
+            .map(|p| p["format"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            formats,
+            [
+                "fanuc", "inform", "krl", "rapid", "val3", "urscript", "gcode"
+            ]
+        );
+        for p in programs {
+            assert!(
+                p["readback_max_position_error_m"].as_f64().unwrap() <= 1e-7,
+                "{robot}: {p}"
+            );
+        }
+        let jbi = std::fs::read_to_string(out.join("programs/DEFLEX_PATH.JBI")).unwrap();
+        assert!(
+            jbi.contains("\r\n///RCONF 1,0,0,0,0,0,0,0\r\n")
+                || jbi.contains("\r\n///RCONF 0,0,0,0,0,0,0,0\r\n"),
+            "{robot}: upper arm, front"
+        );
+        assert!(jbi.contains("\r\n'Z 200.0000\r\n"), "{robot}: the tool");
+        let rows = table(&out);
+        let read = deflex_cam::program::readback::read_inform(&jbi, "DEFLEX_PATH.JBI").unwrap();
+        assert_eq!(read.len(), rows.len() + 2);
+        let ls = std::fs::read_to_string(out.join("programs/DEFLEX_PATH.ls")).unwrap();
+        assert!(
+            ls.contains("CONFIG : 'N U T, 0, 0, 0'") || ls.contains("CONFIG : 'F U T, 0, 0, 0'"),
+            "{robot}"
+        );
+        assert!(
+            !ls.contains(" D T,") && !ls.contains(" D B,"),
+            "{robot}: elbow up"
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

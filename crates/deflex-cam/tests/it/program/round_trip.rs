@@ -438,6 +438,7 @@ fn arm(q: [f64; 6]) -> deflex_cam::program::ArmConfiguration {
         wrist_behind_axis_1: false,
         wrist_behind_lower_arm: false,
         elbow_beyond_stretched: q[2] > 0.3,
+        elbow_up: q[2] > 0.3,
     }
 }
 
