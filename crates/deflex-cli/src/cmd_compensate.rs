@@ -91,7 +91,8 @@ pub struct CompensateArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
-    /// Programs to write (comma-separated; `fanuc`, FANUC TP `.ls`, on request).
+    /// Programs to write (comma-separated; `fanuc`, FANUC TP `.ls`, and `inform`, Yaskawa
+    /// INFORM `.JBI`, on request).
     #[arg(
         long,
         value_enum,

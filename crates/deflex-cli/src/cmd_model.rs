@@ -16,7 +16,8 @@ use std::path::PathBuf;
 pub enum ModelCommand {
     /// The joint table, eDoFs and stiffnesses.
     Show {
-        /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
+        /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600,
+        /// r2000ic-165f, gp180) or TOML file.
         #[arg(long)]
         robot: String,
     },
@@ -56,7 +57,8 @@ impl JointArgs {
 
 #[derive(Args)]
 pub struct PoseArgs {
-    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600,
+    /// r2000ic-165f, gp180) or TOML file.
     #[arg(long)]
     pub robot: String,
     #[command(flatten)]
@@ -65,7 +67,8 @@ pub struct PoseArgs {
 
 #[derive(Args)]
 pub struct DeflectArgs {
-    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600,
+    /// r2000ic-165f, gp180) or TOML file.
     #[arg(long)]
     pub robot: String,
     #[command(flatten)]
@@ -77,7 +80,8 @@ pub struct DeflectArgs {
 
 #[derive(Args)]
 pub struct IkArgs {
-    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600,
+    /// r2000ic-165f, gp180) or TOML file.
     #[arg(long)]
     pub robot: String,
     /// TCP position in world, mm.
@@ -93,7 +97,8 @@ pub struct IkArgs {
 
 #[derive(Args)]
 pub struct MapArgs {
-    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
+    /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600,
+    /// r2000ic-165f, gp180) or TOML file.
     #[arg(long)]
     pub robot: String,
     /// Grid plane, e.g. z=100mm (bare numbers are mm).

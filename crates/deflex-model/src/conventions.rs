@@ -14,6 +14,7 @@
 //! | Universal Robots (URScript pose) | rotation vector (axis × angle, rad) | `R = exp([r]×)` | URScript programs; the rotation part of every protocol's correction | URScript manual, module *motion*: "the last three [coordinates of a pose form] an axis-angle" (<https://www.universal-robots.com/manuals/EN/HTML/SW10_13/Content/prod-scriptmanual/all_scripts/Module_otion.htm>) |
 //! | Stäubli (VAL3 `trsf`) | intrinsic X-Y'-Z'' | `R = Rx(rx)·Ry(ry)·Rz(rz)` | VAL3 programs; deflex's Stäubli protocol (`docs/staubli/PROTOCOL.md`, radians on the wire) | VAL3 reference manual, type `trsf` (rx about x, then ry about the new y', then rz about the new z''); the same convention is used by public VAL3 post-processors (`sin ry = R[0][2]`) |
 //! | FANUC (TP `W, P, R`) | fixed axes X, Y, Z (= intrinsic Z-Y'-X'') | `R = Rz(R)·Ry(P)·Rx(W)` | FANUC TP programs (`/POS`) | FANUC's `xyzwpr`: W (yaw) about the fixed x axis, then P (pitch) about the fixed y axis, then R (roll) about the fixed z axis (RoboDK's API, `xyzwpr_2_pose`, <https://robodk.com/doc/en/PythonAPI/robodk.html>; the same matrix as KUKA's with `(A, B, C) = (R, P, W)`) |
+//! | Yaskawa (INFORM `Rx, Ry, Rz`) | fixed axes X, Y, Z (= intrinsic Z-Y'-X'') | `R = Rz(Rz)·Ry(Ry)·Rx(Rx)` | Yaskawa INFORM jobs (`.JBI`, `C00000=` positions) | Yaskawa DX100 *Interface with an Easy Offline Teaching System*, 4.3.1.1 "Robot Axis": "by rotating the specified coordinate system in the order of Rz, Ry and Rx, it takes the coordinate system posture of the control point"; Basler *Yaskawa pose format*: "computed by r_z(Rz) r_y(Ry) r_x(Rx)" (<https://docs.baslerweb.com/stereovisard/rc_cube/en/pose_format_yaskawa>); the same matrix as FANUC's W, P, R |
 //!
 //! **Gimbal lock.** The three-angle conventions are singular when the middle angle is ±90°:
 //! only the sum (or difference) of the outer angles is defined. The extraction takes the first
@@ -94,6 +95,19 @@ pub fn fanuc_wpr_deg(rotation: &Rotation3<f64>, previous: Option<[f64; 3]>) -> [
 /// Rotation of FANUC angles `W, P, R` (degrees): `Rz(R)·Ry(P)·Rx(W)`.
 pub fn rotation_from_fanuc_wpr_deg(wpr: [f64; 3]) -> Rotation3<f64> {
     rotation_from_kuka_abc_deg([wpr[2], wpr[1], wpr[0]])
+}
+
+/// Yaskawa `Rx, Ry, Rz` (degrees) of a rotation: fixed-axis rotations about X, then Y, then Z,
+/// i.e. `R = Rz(Rz)·Ry(Ry)·Rx(Rx)`, `Ry ∈ [−90°, 90°]`, `Rx, Rz ∈ (−180°, 180°]`. `previous`
+/// (degrees, `[Rx, Ry, Rz]`) resolves the gimbal lock at `Ry = ±90°` (Rz is then kept from it).
+/// Numerically FANUC's `W, P, R` ([`fanuc_wpr_deg`]): both vendors name the same matrix.
+pub fn yaskawa_rxryrz_deg(rotation: &Rotation3<f64>, previous: Option<[f64; 3]>) -> [f64; 3] {
+    fanuc_wpr_deg(rotation, previous)
+}
+
+/// Rotation of Yaskawa angles `Rx, Ry, Rz` (degrees): `Rz(Rz)·Ry(Ry)·Rx(Rx)`.
+pub fn rotation_from_yaskawa_rxryrz_deg(rxryrz: [f64; 3]) -> Rotation3<f64> {
+    rotation_from_fanuc_wpr_deg(rxryrz)
 }
 
 /// Stäubli `rx, ry, rz` (radians) of a rotation: `R = Rx(rx)·Ry(ry)·Rz(rz)`,

@@ -21,6 +21,8 @@ pub const BUILTIN_ROBOTS: &[(&str, &str)] = &[
     ("ur10e", include_str!("../robots/ur10e.toml")),
     ("kr210-r2700", include_str!("../robots/kr210-r2700.toml")),
     ("irb4600", include_str!("../robots/irb4600.toml")),
+    ("r2000ic-165f", include_str!("../robots/r2000ic-165f.toml")),
+    ("gp180", include_str!("../robots/gp180.toml")),
 ];
 
 /// A built-in robot by name (see [`BUILTIN_ROBOTS`]).

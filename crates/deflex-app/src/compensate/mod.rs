@@ -98,6 +98,8 @@ pub enum ProgramFormat {
     Gcode,
     /// FANUC TP in its ASCII form (`.ls`).
     Fanuc,
+    /// Yaskawa INFORM job (`.JBI`).
+    Inform,
     /// No program.
     None,
 }
@@ -112,6 +114,7 @@ impl ProgramFormat {
             ProgramFormat::Urscript => Some(Format::UrScript),
             ProgramFormat::Gcode => Some(Format::Gcode),
             ProgramFormat::Fanuc => Some(Format::Fanuc),
+            ProgramFormat::Inform => Some(Format::Inform),
             ProgramFormat::None => None,
         }
     }
@@ -132,14 +135,14 @@ impl ProgramFormat {
     }
 }
 
-/// A program format by name (`krl`, `rapid`, `val3`, `urscript`, `gcode`, `fanuc`), as Python
-/// names it.
+/// A program format by name (`krl`, `rapid`, `val3`, `urscript`, `gcode`, `fanuc`, `inform`),
+/// as Python names it.
 pub fn format(name: &str) -> Result<Format> {
     Format::parse(name).ok_or_else(|| {
         Error::invalid(
             "formats",
             format!(
-                "unknown format \"{}\"; expected krl, rapid, val3, urscript, gcode or fanuc",
+                "unknown format \"{}\"; expected krl, rapid, val3, urscript, gcode, fanuc or inform",
                 name.trim()
             ),
         )

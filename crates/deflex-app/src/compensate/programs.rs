@@ -272,6 +272,16 @@ fn arm_configuration(robot: &Robot, q: &[f64], phi: f64, data: &mut Data) -> Arm
     // positive x): u × v < 0.
     let (u, v) = (p3 - p2, wrist - p2);
     let cross = u.x * v.z - u.z * v.x;
+    // The elbow above the line from axis 2 to the wrist: the part of (axis 3 − axis 2) across
+    // that line points up along R0's z (world vectors).
+    let up = robot.base.rotation * nalgebra::Vector3::z();
+    let (p2w, p3w, ww) = (
+        data.link_frame(2).translation.vector,
+        data.link_frame(3).translation.vector,
+        data.link_frame(5).translation.vector,
+    );
+    let (d, e) = (ww - p2w, p3w - p2w);
+    let across = e - d * (d.dot(&e) / d.norm_squared().max(f64::MIN_POSITIVE));
     let mut joints_rad = [0.0; 6];
     joints_rad.copy_from_slice(&q[..6]);
     ArmConfiguration {
@@ -279,6 +289,7 @@ fn arm_configuration(robot: &Robot, q: &[f64], phi: f64, data: &mut Data) -> Arm
         wrist_behind_axis_1: wrist.x < 0.0,
         wrist_behind_lower_arm: cross > 0.0,
         elbow_beyond_stretched: q[2] >= phi,
+        elbow_up: across.dot(&up) > 0.0,
     }
 }
 

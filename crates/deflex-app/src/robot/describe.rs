@@ -217,7 +217,11 @@ pub fn describe(robot: &Robot) -> String {
             "tool (flange → TCP): none in the model, the flange (deflex compensate, sim and cell use the twin cell's tool)"
         );
     } else {
-        let _ = writeln!(out, "tool (flange → TCP): {}", pose_text(&robot.tool));
+        let _ = writeln!(
+            out,
+            "tool (flange → TCP): {} (its cell keeps it: deflex compensate, sim and cell use it)",
+            pose_text(&robot.tool)
+        );
     }
     if robot.base != deflex_model::Pose::identity() {
         let _ = writeln!(out, "base (world → R0): {}", pose_text(&robot.base));

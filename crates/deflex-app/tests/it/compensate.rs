@@ -276,6 +276,9 @@ fn the_choices_parse_the_front_ends_words() {
     assert_eq!(format("urscript").unwrap(), Format::UrScript);
     assert_eq!(format("fanuc").unwrap(), Format::Fanuc);
     assert_eq!(ProgramFormat::Fanuc.format(), Some(Format::Fanuc));
+    assert_eq!(format("inform").unwrap(), Format::Inform);
+    assert_eq!(ProgramFormat::Inform.format(), Some(Format::Inform));
+    assert!(is_part_file("DEFLEX_PATH_P01.JBI") && !is_part_file("DEFLEX_PATH.JBI"));
     assert!(
         format("yaskawa")
             .unwrap_err()

@@ -20,10 +20,18 @@
 //!   joint 3 ≥ 0, `enegative` otherwise; `wrist` `wpositive` when joint 5 ≥ 0, `wnegative`
 //!   otherwise.
 //! * **FANUC `CONFIG`** (`'F U T, t1, t4, t6'` in a TP position): flip `F` when J5 < 0, else `N`
-//!   (no flip); `U` (elbow up) when axis 3 is at or beyond its stretched value (the branch of
-//!   KUKA's Status bit 1, set in the usual elbow-up pose), else `D`; `T` (front, "toward") when
+//!   (no flip); `U` (elbow up) when the elbow lies above the line from axis 2 to the wrist
+//!   centre ([`ArmConfiguration::elbow_up`]), else `D`; `T` (front, "toward") when
 //!   the wrist centre is in front of axis 1, else `B` (back); the turn numbers of J1, J4 and J6
 //!   are `floor((q + 180°) / 360°)`, 0 within −180° … 180°.
+//! * **Yaskawa `///RCONF l,m,n,o,p,q,0,0`** (DX100 / NX100 *Interface with an Easy Offline
+//!   Teaching System*, 4.1 "Job Data Format", `RCONF`: `<l>` 0 flip, 1 no-flip; `<m>` 0 upper
+//!   arm, 1 lower arm; `<n>` 0 front, 1 rear; `<o>` 0 R < 180, 1 R ≥ 180; `<p>` the same for T;
+//!   `<q>` the same for S; the rest unused, written 0): flip when B (axis 5) ≥ 0; upper arm when
+//!   the elbow lies above the line from axis 2 to the wrist centre (as FANUC's `U`); rear when the wrist centre is
+//!   behind axis 1; R, T, S (axes 4, 6, 1) "≥ 180" when |q| ≥ 180°. The flip sense follows the
+//!   manual's manipulator-type figure for arms whose B axis has the ROS-Industrial sense (the
+//!   built-in `gp180`); check one taught point on your controller.
 
 use crate::program::ArmConfiguration;
 
@@ -86,10 +94,30 @@ pub fn fanuc_config(c: Option<&ArmConfiguration>) -> String {
     format!(
         "{} {} {}, {}, {}, {}",
         if q[4] < 0.0 { 'F' } else { 'N' },
-        if c.elbow_beyond_stretched { 'U' } else { 'D' },
+        if c.elbow_up { 'U' } else { 'D' },
         if c.wrist_behind_axis_1 { 'B' } else { 'T' },
         turn(q[0]),
         turn(q[3]),
         turn(q[5])
     )
+}
+
+/// Yaskawa `///RCONF` fields `l,m,n,o,p,q,0,0` (see the module documentation); `None`: flip,
+/// upper arm, front, all axes within ±180° (`0,0,0,0,0,0,0,0`).
+pub fn yaskawa_rconf(c: Option<&ArmConfiguration>) -> [u8; 8] {
+    let Some(c) = c else {
+        return [0; 8];
+    };
+    let q = c.joints_rad.map(f64::to_degrees);
+    let beyond = |v: f64| u8::from(v.abs() >= 180.0);
+    [
+        u8::from(q[4] < 0.0),
+        u8::from(!c.elbow_up),
+        u8::from(c.wrist_behind_axis_1),
+        beyond(q[3]),
+        beyond(q[5]),
+        beyond(q[0]),
+        0,
+        0,
+    ]
 }

@@ -10,6 +10,7 @@
 //! | [`Format::Val3`] Stäubli | `NAME/NAME.pjx`, `.dtx`, `start.pgx`, `stop.pgx` | `movel(point, tool, mdesc)` | mm, deg | Rx-Ry-Rz (X-Y'-Z'') |
 //! | [`Format::UrScript`] UR | `NAME.script` | `movel(p[x,y,z,rx,ry,rz], a, v, r=…)` | m, rad, m/s | rotation vector |
 //! | [`Format::Fanuc`] FANUC | `NAME.ls` (TP, ASCII) | `L P[n] 250mm/sec CNT100`, `/POS` with `UF`, `UT`, `CONFIG` | mm, deg, mm/s (whole) | W-P-R (fixed X, Y, Z) |
+//! | [`Format::Inform`] Yaskawa | `NAME.JBI` (INFORM job) | `MOVL C00001 V=10.0 PL=1`, `//POS` with `///USER`, `///TOOL`, `///RCONF` | mm, deg, mm/s (0.1) | Rx-Ry-Rz (fixed X, Y, Z) |
 //! | [`Format::Gcode`] CAM / twin | `NAME.gcode` | `G1 X Y Z F` | mm, mm/min | none (positions only) |
 //!
 //! Every program runs safely from wherever the robot is: a safe-start block, a joint move to a
@@ -49,6 +50,7 @@ pub mod config;
 pub mod error;
 mod fanuc;
 mod gcode;
+mod inform;
 mod krl;
 pub mod names;
 mod plan;
@@ -61,6 +63,7 @@ mod val3;
 
 pub use error::ProgramError;
 pub use fanuc::MAX_POINTS_PER_PART as FANUC_MAX_POINTS_PER_PART;
+pub use inform::MAX_POINTS_PER_PART as INFORM_MAX_POINTS_PER_PART;
 pub use settings::{Clearance, Coordinates, ProgramSettings, StaubliBlend};
 pub use sink::{DirectorySink, MemorySink, ProgramSink};
 
@@ -81,8 +84,9 @@ pub struct ProgramPoint {
 
 /// The arm's configuration at a pose: the joint values (rad, the controller's axes) and where
 /// the wrist centre lies, from which each vendor's configuration data is written (KUKA
-/// Status/Turn, ABB `robconf`, Stäubli `config`, FANUC `CONFIG`). The caller computes it with
-/// the robot model (`deflex compensate` does); the conventions are in [`config`].
+/// Status/Turn, ABB `robconf`, Stäubli `config`, FANUC `CONFIG`, Yaskawa `///RCONF`). The
+/// caller computes it with the robot model (`deflex compensate` does); the conventions are in
+/// [`config`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArmConfiguration {
     /// Joint values A1 … A6 (rad).
@@ -95,6 +99,10 @@ pub struct ArmConfiguration {
     pub wrist_behind_lower_arm: bool,
     /// Axis 3 at or beyond its stretched value φ (the elbow straight): KUKA Status bit 1.
     pub elbow_beyond_stretched: bool,
+    /// The elbow (axis 3) lies above the line from axis 2 to the wrist centre (seen in the
+    /// arm's plane, "above" along R0's z): FANUC's `U` (else `D`), Yaskawa's upper arm (else
+    /// lower arm). Geometric, so it does not depend on axis 3's sense.
+    pub elbow_up: bool,
 }
 
 /// What an exporter writes: the points plus the frames a program declares or checks.
@@ -205,21 +213,24 @@ pub enum Format {
     Gcode,
     /// FANUC TP in its ASCII form (`.ls`).
     Fanuc,
+    /// Yaskawa INFORM job (`.JBI`).
+    Inform,
 }
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 6] = [
+    pub const ALL: [Format; 7] = [
         Format::Krl,
         Format::Rapid,
         Format::Val3,
         Format::UrScript,
         Format::Gcode,
         Format::Fanuc,
+        Format::Inform,
     ];
 
     /// The name used on the command line (`krl`, `rapid`, `val3`, `urscript`, `gcode`,
-    /// `fanuc`).
+    /// `fanuc`, `inform`).
     pub fn name(self) -> &'static str {
         match self {
             Format::Krl => "krl",
@@ -228,6 +239,7 @@ impl Format {
             Format::UrScript => "urscript",
             Format::Gcode => "gcode",
             Format::Fanuc => "fanuc",
+            Format::Inform => "inform",
         }
     }
 
@@ -283,6 +295,7 @@ pub fn export_to(
         Format::UrScript => urscript::export(input, settings, sink),
         Format::Gcode => gcode::export(input, settings, sink),
         Format::Fanuc => fanuc::export(input, settings, sink),
+        Format::Inform => inform::export(input, settings, sink),
     }
 }
 

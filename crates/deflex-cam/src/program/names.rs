@@ -13,6 +13,8 @@
 //! * **FANUC TP**: a letter, then letters, digits and `_`, written in upper case; at most 16
 //!   characters (our bound: R-30iB takes up to 36, older controllers 8 for names shown on the
 //!   teach pendant; deflex keeps parts' names `NAME_P01` within 16).
+//! * **Yaskawa INFORM**: a letter, then letters, digits and `_`, written in upper case; at most
+//!   32 characters (DX100 and later; the NX100 took 8).
 //! * **G-code files**: letters, digits, `_` and `-`; at most 64 characters.
 //!
 //! Anything else is replaced by `_`; a name that does not start with a letter gets a `p` in
@@ -98,6 +100,14 @@ pub const FANUC: NameRule = NameRule {
     reserved: &[
         "CALL", "END", "JMP", "LBL", "IF", "SELECT", "WAIT", "PAYLOAD",
     ],
+};
+
+/// Yaskawa INFORM job names (upper case is applied by the writer).
+pub const INFORM: NameRule = NameRule {
+    language: "Yaskawa INFORM",
+    max_len: 32,
+    extra: &[],
+    reserved: &["NOP", "END", "CALL", "JOB", "MOVJ", "MOVL", "TIMER", "RET"],
 };
 
 /// G-code file names.

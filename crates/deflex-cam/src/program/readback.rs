@@ -14,6 +14,7 @@ use deflex_files::{FileIoError, FileTooLarge};
 use deflex_model::conventions::{
     rotation_from_abb_quaternion, rotation_from_fanuc_wpr_deg, rotation_from_kuka_abc_deg,
     rotation_from_rotation_vector, rotation_from_staubli_rxryrz_deg,
+    rotation_from_yaskawa_rxryrz_deg,
 };
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
@@ -199,6 +200,21 @@ pub fn read_program(
                 main,
                 &mut emit,
                 Some(&|name| by_name(name, "ls")),
+            )?;
+        }
+
+        Format::Inform => {
+            // The main job is the first file (export_to lists it first).
+            let main = files.first().ok_or_else(|| ProgramError::Read {
+                file: "*.JBI".into(),
+                line: 0,
+                message: "no program files".into(),
+            })?;
+            read_inform_lines(
+                &mut source.open(main)?,
+                main,
+                &mut emit,
+                Some(&|name| by_name(name, "JBI")),
             )?;
         }
     }
@@ -979,6 +995,240 @@ fn read_fanuc_lines(
                 read_fanuc_lines(&mut reader, &path, emit, None)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// Yaskawa `.JBI` (INFORM job): the `MOVJ` / `MOVL` steps of `//INST` with their positions from
+/// `//POS` (`///RECTAN` Cartesian positions, X Y Z in mm, Rx Ry Rz in degrees,
+/// [`deflex_model::conventions::rotation_from_yaskawa_rxryrz_deg`]; `///NPOS`, `///POSTYPE`,
+/// `///RCONF` and `///GROUP1` checked for form); a single file ([`read_files`] follows the
+/// `CALL JOB:`s to the parts).
+pub fn read_inform(text: &str, file: &str) -> Result<Vec<ReadPoint>, ProgramError> {
+    collect(|emit| read_inform_lines(&mut text.as_bytes(), file, emit, None))
+}
+
+fn read_inform_lines(
+    reader: &mut dyn BufRead,
+    file: &str,
+    emit: &mut EmitAt,
+    part: Option<&PartLookup>,
+) -> Result<(), ProgramError> {
+    let r = Lines { file };
+    let mut positions: HashMap<usize, [f64; 6]> = HashMap::new();
+    let mut npos: Option<usize> = None;
+    let mut postype = false;
+    let mut rectan = false;
+    let mut rconf = false;
+    let mut group = false;
+    let mut section = "";
+    let mut ended = false;
+    let mut calls: Vec<(String, usize)> = Vec::new();
+    r.each(reader, |n, line| {
+        if ended {
+            return if line.is_empty() {
+                Ok(())
+            } else {
+                Err(r.error(n, "text after END"))
+            };
+        }
+        if n == 1 {
+            return if line == "/JOB" {
+                Ok(())
+            } else {
+                Err(r.error(n, "expected /JOB on the first line"))
+            };
+        }
+        if line.is_empty() {
+            return Ok(());
+        }
+        if line == "//POS" || line == "//INST" {
+            section = if line == "//POS" { "pos" } else { "inst" };
+            if section == "inst" {
+                let count = npos.ok_or_else(|| r.error(n, "//INST before ///NPOS"))?;
+                if count != positions.len() {
+                    return Err(r.error(
+                        n,
+                        format!(
+                            "///NPOS says {count} positions, //POS holds {}",
+                            positions.len()
+                        ),
+                    ));
+                }
+                if count > 0 && !(postype && rectan && rconf) {
+                    return Err(r.error(n, "positions without ///POSTYPE, ///RECTAN or ///RCONF"));
+                }
+            }
+            return Ok(());
+        }
+        if let Some(name) = line.strip_prefix("//NAME ") {
+            if !crate::program::names::is_valid(name.trim(), &crate::program::names::INFORM) {
+                return Err(r.error(n, format!("job name \"{}\"", name.trim())));
+            }
+            return Ok(());
+        }
+        match section {
+            "pos" => {
+                if let Some(v) = line.strip_prefix("///NPOS ") {
+                    let c = v.split(',').next().unwrap_or("");
+                    npos = Some(
+                        c.trim()
+                            .parse::<usize>()
+                            .map_err(|_| r.error(n, format!("///NPOS \"{v}\"")))?,
+                    );
+                } else if let Some(v) = line.strip_prefix("///POSTYPE ") {
+                    if !matches!(v.trim(), "USER" | "BASE" | "ROBOT") {
+                        return Err(
+                            r.error(n, format!("///POSTYPE {v}: expected USER, BASE or ROBOT"))
+                        );
+                    }
+                    postype = true;
+                } else if line == "///RECTAN" {
+                    rectan = true;
+                } else if let Some(v) = line.strip_prefix("///RCONF ") {
+                    let fields: Vec<&str> = v.split(',').map(str::trim).collect();
+                    if !(6..=24).contains(&fields.len())
+                        || fields.iter().any(|f| !matches!(*f, "0" | "1"))
+                    {
+                        return Err(r.error(
+                            n,
+                            format!("///RCONF {v}: expected 6 to 24 fields of 0 or 1"),
+                        ));
+                    }
+                    rconf = true;
+                } else if let Some(v) = line
+                    .strip_prefix("///USER ")
+                    .or_else(|| line.strip_prefix("///TOOL "))
+                {
+                    if !v.trim().parse::<u32>().is_ok_and(|k| k <= 63) {
+                        return Err(r.error(n, format!("\"{line}\": expected a number 0 … 63")));
+                    }
+                } else if let Some(rest) = line.strip_prefix('C') {
+                    let (k, values) = rest
+                        .split_once('=')
+                        .ok_or_else(|| r.error(n, "expected Cnnnnn=X,Y,Z,Rx,Ry,Rz"))?;
+                    let k = k
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|_| k.len() == 5)
+                        .ok_or_else(|| r.error(n, format!("position name C{k}")))?;
+                    if !rectan {
+                        return Err(r.error(n, "a position before ///RECTAN"));
+                    }
+                    let fields: Vec<&str> = values.split(',').collect();
+                    if fields.len() != 6 {
+                        return Err(r.error(
+                            n,
+                            format!("C{k:05}: expected 6 values, got {}", fields.len()),
+                        ));
+                    }
+                    let mut v = [0.0; 6];
+                    for (slot, (text, what)) in v
+                        .iter_mut()
+                        .zip(fields.iter().zip(["X", "Y", "Z", "Rx", "Ry", "Rz"]))
+                    {
+                        *slot = r.number(n, text, what)?;
+                    }
+                    if positions.insert(k, v).is_some() {
+                        return Err(r.error(n, format!("C{k:05} twice")));
+                    }
+                } else {
+                    return Err(r.error(n, format!("unexpected line in //POS: \"{line}\"")));
+                }
+                Ok(())
+            }
+            "inst" => {
+                if line.starts_with("///") {
+                    if line == "///GROUP1 RB1" {
+                        group = true;
+                    }
+                    return Ok(());
+                }
+                if line.starts_with('\'') || line == "NOP" {
+                    return Ok(());
+                }
+                if line == "END" {
+                    ended = true;
+                    return Ok(());
+                }
+                if !group {
+                    return Err(r.error(n, "an instruction before ///GROUP1 RB1"));
+                }
+                if let Some(name) = line.strip_prefix("CALL JOB:") {
+                    return match part {
+                        Some(_) => {
+                            calls.push((name.trim().to_string(), n));
+                            Ok(())
+                        }
+                        None => Err(r.error(n, "a CALL in a part")),
+                    };
+                }
+                let mut words = line.split_whitespace();
+                let joint = match words.next() {
+                    Some("MOVJ") => true,
+                    Some("MOVL") => false,
+                    _ => return Err(r.error(n, format!("unexpected instruction \"{line}\""))),
+                };
+                let k = words
+                    .next()
+                    .and_then(|c| c.strip_prefix('C'))
+                    .and_then(|c| c.parse::<usize>().ok())
+                    .ok_or_else(|| r.error(n, "expected a position Cnnnnn"))?;
+                let v = positions
+                    .get(&k)
+                    .ok_or_else(|| r.error(n, format!("C{k:05} not in //POS")))?;
+                let speed = words.next().unwrap_or("");
+                let speed_m_s = if joint {
+                    let percent = speed
+                        .strip_prefix("VJ=")
+                        .ok_or_else(|| r.error(n, "MOVJ without VJ="))?;
+                    let percent = r.number(n, percent, "VJ")?;
+                    if !(0.0..=100.0).contains(&percent) {
+                        return Err(r.error(n, format!("VJ={percent}: expected 0 … 100")));
+                    }
+                    None
+                } else {
+                    let v = speed
+                        .strip_prefix("V=")
+                        .ok_or_else(|| r.error(n, "MOVL without V="))?;
+                    Some(r.number(n, v, "V (mm/s)")? * 1e-3)
+                };
+                if let Some(pl) = words.next() {
+                    let valid = pl
+                        .strip_prefix("PL=")
+                        .and_then(|p| p.parse::<u32>().ok())
+                        .is_some_and(|p| p <= 8);
+                    if !valid {
+                        return Err(r.error(n, format!("expected PL=0 … 8, got \"{pl}\"")));
+                    }
+                }
+                if words.next().is_some() {
+                    return Err(r.error(n, format!("unexpected words in \"{line}\"")));
+                }
+                // Calls come before this motion in the job: read the parts first.
+                for (name, _) in calls.drain(..) {
+                    let lookup = part.expect("calls are only kept with a lookup");
+                    let (path, mut reader) = lookup(&name)?;
+                    read_inform_lines(&mut reader, &path, emit, None)?;
+                }
+                let point = ReadPoint {
+                    position_m: Vector3::new(v[0], v[1], v[2]) * 1e-3,
+                    rotation: Some(rotation_from_yaskawa_rxryrz_deg([v[3], v[4], v[5]])),
+                    speed_m_s,
+                };
+                emit(point, file, n)
+            }
+            _ => Err(r.error(n, format!("unexpected line before //POS: \"{line}\""))),
+        }
+    })?;
+    if !ended {
+        return Err(r.error(0, "no END"));
+    }
+    let lookup = part;
+    for (name, _) in calls {
+        let lookup = lookup.expect("calls are only kept with a lookup");
+        let (path, mut reader) = lookup(&name)?;
+        read_inform_lines(&mut reader, &path, emit, None)?;
     }
     Ok(())
 }

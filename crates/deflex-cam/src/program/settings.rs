@@ -258,6 +258,47 @@ impl Default for FanucSettings {
     }
 }
 
+/// Yaskawa INFORM `///POSTYPE`: the frame the positions are written in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InformPostype {
+    /// `///POSTYPE USER` with `///USER n`: the part frame taught as user frame `n`.
+    User,
+    /// `///POSTYPE BASE`: the robot base frame (with `[program] coordinates = "robot"` only).
+    Base,
+}
+
+/// Yaskawa INFORM (DX100 / DX200 / YRC1000, the `.JBI` job file).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InformSettings {
+    /// `///USER n` (1 ..= 63): the user frame taught on the controller as the part frame.
+    pub user: u32,
+    /// `///TOOL n` (0 ..= 63): the tool file, which must hold the model's TCP and the tool load.
+    pub tool: u32,
+    /// `///POSTYPE`: `"user"` (the part frame, the default) or `"base"` (the robot base, only
+    /// with `coordinates = "robot"`, which always writes `BASE`).
+    pub postype: InformPostype,
+    /// Speed of the joint move to the clearance point (`MOVJ … VJ=n`, % of the maximum,
+    /// 0.01 ..= 100).
+    pub joint_percent: f64,
+    /// Position level of the inner path points (`PL=n`, 0 ..= 8); the first and the last path
+    /// point, rapids, the approach and the retract are `PL=0`.
+    pub pl: u32,
+}
+
+impl Default for InformSettings {
+    fn default() -> Self {
+        InformSettings {
+            user: 1,
+            tool: 1,
+            postype: InformPostype::User,
+            joint_percent: 10.0,
+            pl: 1,
+        }
+    }
+}
+
 /// G-code (the part frame, as `deflex sim isf` and CAM read it).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -297,6 +338,8 @@ pub struct ProgramSettings {
     pub gcode: GcodeSettings,
     /// FANUC TP.
     pub fanuc: FanucSettings,
+    /// Yaskawa INFORM.
+    pub inform: InformSettings,
 }
 
 impl ProgramSettings {
@@ -443,6 +486,11 @@ impl ProgramSettings {
             100.0,
         )?;
         check("fanuc.cnt", f64::from(f.cnt), 0.0, 100.0)?;
+        let y = &self.inform;
+        check("inform.user", f64::from(y.user), 1.0, 63.0)?;
+        check("inform.tool", f64::from(y.tool), 0.0, 63.0)?;
+        check("inform.joint_percent", y.joint_percent, 0.01, 100.0)?;
+        check("inform.pl", f64::from(y.pl), 0.0, 8.0)?;
         Ok(())
     }
 }

@@ -650,3 +650,137 @@ fn a_log_of_a_set_force_gets_the_fixed_wrench_by_default() {
     assert!(out.join("programs").is_dir());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The FANUC-like and the Motoman-like built-ins compensate a shipped part into all seven
+/// formats, each read back within 0.1 µm; their TP and INFORM programs carry the elbow-up
+/// branch the twin cell's arm is in (FANUC `U`, Yaskawa upper arm) and the model's 200 mm tool,
+/// which is the twin cell's.
+#[test]
+fn the_fanuc_and_motoman_built_ins_write_all_seven_formats_that_read_back() {
+    let dir = scratch("compensate-seven");
+    let part = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/parts/pyramid-pocket.gcode"
+    );
+    for robot in ["r2000ic-165f", "gp180"] {
+        let out = dir.join(robot);
+        compensated(&[
+            "--robot",
+            robot,
+            "--path",
+            part,
+            "--format",
+            "fanuc,inform,krl,rapid,val3,urscript,gcode",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let s = summary(&out);
+        let programs = s["programs"].as_array().unwrap();
+        let formats: Vec<&str> = programs
+            .iter()
+            .map(|p| p["format"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            formats,
+            [
+                "fanuc", "inform", "krl", "rapid", "val3", "urscript", "gcode"
+            ]
+        );
+        for p in programs {
+            assert!(
+                p["readback_max_position_error_m"].as_f64().unwrap() <= 1e-7,
+                "{robot}: {p}"
+            );
+        }
+        let jbi = std::fs::read_to_string(out.join("programs/DEFLEX_PATH.JBI")).unwrap();
+        assert!(
+            jbi.contains("\r\n///RCONF 1,0,0,0,0,0,0,0\r\n")
+                || jbi.contains("\r\n///RCONF 0,0,0,0,0,0,0,0\r\n"),
+            "{robot}: upper arm, front"
+        );
+        assert!(jbi.contains("\r\n'Z 200.0000\r\n"), "{robot}: the tool");
+        let rows = table(&out);
+        let read = deflex_cam::program::readback::read_inform(&jbi, "DEFLEX_PATH.JBI").unwrap();
+        assert_eq!(read.len(), rows.len() + 2);
+        operator_frame_rebuilds_the_commanded_path(&jbi, &out, robot);
+        let ls = std::fs::read_to_string(out.join("programs/DEFLEX_PATH.ls")).unwrap();
+        assert!(
+            ls.contains("CONFIG : 'N U T, 0, 0, 0'") || ls.contains("CONFIG : 'F U T, 0, 0, 0'"),
+            "{robot}"
+        );
+        assert!(
+            !ls.contains(" D T,") && !ls.contains(" D B,"),
+            "{robot}: elbow up"
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// As an operator would: the user frame typed in from the job's header (`'X …` … `'Rz …`, mm
+/// and degrees, Yaskawa's `Rz·Ry·Rx` written out here), applied to every path position of the
+/// job (`C00001` …), lands on the commanded points of `compensated_path.csv` (`cx_m cy_m cz_m`,
+/// world = R0 for the built-ins). Tolerance: two roundings to 0.1 µm (≤ 0.087 µm each) and the
+/// frame's angles to 1e-6° over the path's ≤ 0.2 m from the frame origin.
+fn operator_frame_rebuilds_the_commanded_path(jbi: &str, out: &Path, robot: &str) {
+    let lines: Vec<&str> = jbi.lines().collect();
+    let start = lines
+        .iter()
+        .position(|l| l.starts_with("'Set USER 1 to the program"))
+        .unwrap();
+    let mut frame = Vec::new();
+    for key in ["X", "Y", "Z", "Rx", "Ry", "Rz"] {
+        let line = lines[start..]
+            .iter()
+            .find_map(|l| l.strip_prefix(&format!("'{key} ")))
+            .unwrap_or_else(|| panic!("{robot}: no '{key} in the header"));
+        frame.push(line.trim().parse::<f64>().unwrap());
+    }
+    let [rx, ry, rz] = [frame[3], frame[4], frame[5]].map(f64::to_radians);
+    let (sx, cx) = rx.sin_cos();
+    let (sy, cy) = ry.sin_cos();
+    let (sz, cz) = rz.sin_cos();
+    // Rz·Ry·Rx, written out.
+    let r = [
+        [cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
+        [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
+        [-sy, cy * sx, cy * cx],
+    ];
+    let origin = [frame[0] * 1e-3, frame[1] * 1e-3, frame[2] * 1e-3];
+    let csv = std::fs::read_to_string(out.join("compensated_path.csv")).unwrap();
+    let mut rows = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (ix, iy, iz) = (column("cx_m"), column("cy_m"), column("cz_m"));
+    let commanded: Vec<[f64; 3]> = rows
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            [ix, iy, iz].map(|i| v[i].parse::<f64>().unwrap())
+        })
+        .collect();
+    let positions: Vec<[f64; 3]> = lines
+        .iter()
+        .filter_map(|l| l.strip_prefix('C'))
+        .filter_map(|l| l.split_once('='))
+        .map(|(_, v)| {
+            let v: Vec<f64> = v.split(',').map(|x| x.parse::<f64>().unwrap()).collect();
+            [v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3]
+        })
+        .collect();
+    // The clearance point, the path, the retract.
+    assert_eq!(positions.len(), commanded.len() + 2, "{robot}");
+    let tolerance = 2.0 * 0.5e-7 * 3f64.sqrt() + 0.2 * 3.0 * 0.5e-6f64.to_radians() + 1e-9;
+    let mut worst: f64 = 0.0;
+    for (p, c) in positions[1..=commanded.len()].iter().zip(&commanded) {
+        let world: Vec<f64> = (0..3)
+            .map(|i| origin[i] + r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2])
+            .collect();
+        let d = ((world[0] - c[0]).powi(2) + (world[1] - c[1]).powi(2) + (world[2] - c[2]).powi(2))
+            .sqrt();
+        worst = worst.max(d);
+    }
+    assert!(worst <= tolerance, "{robot}: {worst} m > {tolerance} m");
+    eprintln!(
+        "{robot}: the typed-in user frame rebuilds the commanded path within {:.3} um",
+        worst * 1e6
+    );
+}

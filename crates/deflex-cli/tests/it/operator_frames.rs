@@ -228,6 +228,46 @@ fn fanuc(dir: &Path) -> OperatorView {
     }
 }
 
+/// Yaskawa INFORM: the user frame from the header's `'` comment lines (`Set USER n to the program
+/// frame … X … Y … Z … Rx … Ry … Rz …`, one value a line), the `C…=` positions in the order
+/// the `MOVJ`/`MOVL` lines use them.
+fn inform(dir: &Path) -> OperatorView {
+    let text = read(dir, "DEFLEX_PATH.JBI");
+    let comments: String = text
+        .lines()
+        .filter_map(|l| l.strip_prefix('\''))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let at = comments.find("Set USER").expect("the USER comment");
+    let frame = &comments[at..];
+    for key in ["Rx ", "Ry ", "Rz "] {
+        assert_eq!(numbers_after(frame, key)[0], 0.0, "{frame}");
+    }
+    let positions: std::collections::HashMap<&str, [f64; 3]> = text
+        .lines()
+        .filter(|l| l.starts_with('C') && l.contains('='))
+        .map(|l| {
+            let (name, values) = l.split_once('=').unwrap();
+            let v: Vec<f64> = values
+                .split(',')
+                .take(3)
+                .map(|t| t.parse().unwrap())
+                .collect();
+            (name, [v[0], v[1], v[2]])
+        })
+        .collect();
+    let positions_mm = text
+        .lines()
+        .filter(|l| l.starts_with("MOVJ C") || l.starts_with("MOVL C"))
+        .map(|l| positions[l.split_whitespace().nth(1).unwrap()])
+        .collect();
+    OperatorView {
+        frame_mm: xyz_words(frame, " "),
+        positions_mm,
+        tolerance_mm: TOLERANCE_MM,
+    }
+}
+
 /// The commanded positions of `compensated_path.csv` (mm, world).
 fn commanded_mm(dir: &Path) -> Vec<[f64; 3]> {
     let text = read(dir, "compensated_path.csv");
@@ -286,7 +326,8 @@ fn check(format: &str, robot: &str, view: &OperatorView, table: &[[f64; 3]]) -> 
 #[test]
 fn the_frame_an_operator_enters_from_each_program_rebuilds_the_commanded_path() {
     let dir = scratch("operator-frames");
-    let readers: [(&str, ProgramReader); 6] = [
+    let readers: [(&str, ProgramReader); 7] = [
+        ("inform", inform),
         ("gcode", gcode),
         ("krl", krl),
         ("rapid", rapid),
@@ -388,7 +429,7 @@ fn the_model_the_cell_and_the_programs_name_one_tool() {
             .collect();
         let text = succeeds(&["model", "show", "--robot", robot]);
         assert!(
-            text.contains("compensate, sim and cell use the twin cell's tool"),
+            text.contains("deflex compensate, sim and cell use"),
             "{robot}: {text}"
         );
         let out = dir.join(robot);

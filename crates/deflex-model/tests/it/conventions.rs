@@ -352,3 +352,53 @@ fn fanuc_wpr_rebuilds_fixed_xyz_products_and_round_trips() {
     let wpr = fanuc_wpr_deg(&locked, Some([0.0, 89.0, 25.0]));
     assert!((wpr[2] - 25.0).abs() < 1e-9, "{wpr:?}");
 }
+
+/// Yaskawa's Rx, Ry, Rz as a quaternion `[w, x, y, z]` by the half-angle products Basler
+/// publishes for the Yaskawa pose format (written out here, independently of the library).
+fn yaskawa_quaternion(rxryrz_deg: [f64; 3]) -> [f64; 4] {
+    let [x, y, z] = rxryrz_deg.map(|d| d.to_radians() / 2.0);
+    let (sx, cx) = x.sin_cos();
+    let (sy, cy) = y.sin_cos();
+    let (sz, cz) = z.sin_cos();
+    [
+        cz * cy * cx + sz * sy * sx,
+        cz * cy * sx - sz * sy * cx,
+        cz * sy * cx + sz * cy * sx,
+        sz * cy * cx - cz * sy * sx,
+    ]
+}
+
+#[test]
+fn yaskawa_rxryrz_rebuilds_fixed_xyz_products_and_the_published_quaternion() {
+    for m in samples() {
+        let r = yaskawa_rxryrz_deg(&rot(m), None);
+        // Fixed axes: Rx about x first, then Ry about the fixed y, then Rz about the fixed z.
+        let rebuilt = rz(r[2]) * ry(r[1]) * rx(r[0]);
+        assert!(distance(&m, &rebuilt) < 1e-12, "{r:?}");
+        assert!(r[1].abs() <= 90.0 && r[0].abs() <= 180.0 && r[2].abs() <= 180.0);
+        // The published quaternion of the angles is the rotation's (up to its sign).
+        let q = yaskawa_quaternion(r);
+        let from_q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            q[0], q[1], q[2], q[3],
+        ))
+        .to_rotation_matrix();
+        assert!(distance(from_q.matrix(), &m) < 1e-12, "{r:?}: {q:?}");
+        let back = rotation_from_yaskawa_rxryrz_deg(r);
+        assert!(distance(back.matrix(), &m) < 1e-12, "{r:?}");
+        // Printed to 6 decimals, as the INFORM writer does: within 1e-7 rad.
+        let printed = r.map(|v| (v * 1e6).round() / 1e6);
+        assert!(distance(rotation_from_yaskawa_rxryrz_deg(printed).matrix(), &m) < 1e-7);
+    }
+    // Known angles come back in Yaskawa's order Rx, Ry, Rz.
+    let r = yaskawa_rxryrz_deg(&rot(rz(75.0) * ry(-20.0) * rx(-150.0)), None);
+    for (got, want) in r.iter().zip([-150.0, -20.0, 75.0]) {
+        assert!((got - want).abs() < 1e-9, "{r:?}");
+    }
+    // Tool pointing down: Rx = 180.
+    let down = rotation_from_yaskawa_rxryrz_deg([180.0, 0.0, 0.0]);
+    assert!((down * Vector3::z() - Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-15);
+    // At the gimbal lock the previous point's Rz is kept.
+    let locked = rot(rz(-40.0) * ry(-90.0) * rx(0.0));
+    let r = yaskawa_rxryrz_deg(&locked, Some([0.0, -89.0, -40.0]));
+    assert!((r[2] + 40.0).abs() < 1e-9, "{r:?}");
+}

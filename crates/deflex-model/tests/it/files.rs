@@ -119,7 +119,9 @@ fn builtins_parse_and_differ_as_documented() {
             "ur10",
             "ur10e",
             "kr210-r2700",
-            "irb4600"
+            "irb4600",
+            "r2000ic-165f",
+            "gp180"
         ]
     );
     for (name, text) in BUILTIN_ROBOTS {

@@ -378,7 +378,7 @@ fn fingerprints_tell_robots_apart_and_survive_a_round_trip() {
         seen.insert((robot.geometry_fingerprint(), name.starts_with("tx200")));
     }
     // tx200 and tx200-1edof share their geometry; every other robot differs.
-    assert_eq!(seen.len(), 5);
+    assert_eq!(seen.len(), 7);
     let mut moved = builtin("ur10").unwrap();
     moved.joints[2].dh.as_mut().unwrap().a += 1e-6;
     moved.rebuild_dh_geometry();
@@ -635,5 +635,52 @@ fn rebuilding_the_dh_geometry_keeps_centres_of_mass_where_they_are() {
     for (a, b) in robot.joints.iter().zip(&again.joints) {
         let (a, b) = (a.inertia.unwrap(), b.inertia.unwrap());
         assert!((a.com - b.com).norm() < 1e-12, "{} vs {}", a.com, b.com);
+    }
+}
+
+/// The FANUC-like and the Motoman-like built-ins against their ROS-Industrial URDF chains (R0 at
+/// the J2 height: the URDF's `base`, so J1's origin is at z = 0 here), and at zero joint
+/// values the faceplate (`tool0`: z forward, x up) where the data sheet's dimensions put it.
+#[test]
+fn fanuc_and_motoman_built_ins_match_their_urdfs_and_zero_poses() {
+    for (name, a1, a2, a3, d4, d6) in [
+        ("r2000ic-165f", 0.312, 1.075, 0.225, 1.280, 0.215),
+        ("gp180", 0.325, 1.150, 0.300, 1.225, 0.225),
+    ] {
+        let robot = builtin(name).unwrap();
+        let urdf = urdf_robot(
+            name,
+            &[
+                ("j1", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+                ("j2", [a1, 0.0, 0.0], [0.0, 1.0, 0.0]),
+                ("j3", [0.0, 0.0, a2], [0.0, -1.0, 0.0]),
+                ("j4", [0.0, 0.0, a3], [-1.0, 0.0, 0.0]),
+                ("j5", [d4, 0.0, 0.0], [0.0, -1.0, 0.0]),
+                ("j6", [d6, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+            ],
+            [std::f64::consts::PI, -FRAC_PI_2, 0.0],
+        );
+        assert_same_flange(&robot, &urdf, &q_samples(25));
+        let mut data = Data::new();
+        robot.forward_kinematics(&mut data, &[0.0; 6]).unwrap();
+        let flange = data.flange;
+        let want = Vector3::new(a1 + d4 + d6, 0.0, a2 + a3);
+        assert!((flange.translation.vector - want).norm() < 1e-12, "{name}");
+        let r = flange.rotation.matrix();
+        assert!(
+            (r.column(2) - Vector3::x()).norm() < 1e-12,
+            "{name}: z forward"
+        );
+        assert!((r.column(0) - Vector3::z()).norm() < 1e-12, "{name}: x up");
+        // J2 positive leans the arm forward, J1 positive turns it towards +y.
+        let mut leaned = Data::new();
+        robot
+            .forward_kinematics(&mut leaned, &[0.3, 0.2, 0.0, 0.0, 0.0, 0.0])
+            .unwrap();
+        assert!(leaned.flange.translation.vector.y > 0.3, "{name}");
+        // The tool is the twin cell's: 200 mm along the flange z.
+        assert!((robot.tool.translation.vector - Vector3::new(0.0, 0.0, 0.2)).norm() < 1e-15);
+        // The mounting face is the base pivot, below R0.
+        assert!((robot.base_pivot.z + if name == "gp180" { 0.650 } else { 0.670 }).abs() < 1e-12);
     }
 }

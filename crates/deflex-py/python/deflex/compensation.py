@@ -15,8 +15,9 @@ from ._deflex import Compensation, Robot
 
 __all__ = ["compensate", "FORMATS"]
 
-#: The program formats: KUKA KRL, ABB RAPID, Stäubli VAL3, UR URScript, G-code, FANUC TP (.ls).
-FORMATS = ("krl", "rapid", "val3", "urscript", "gcode", "fanuc")
+#: The program formats: KUKA KRL, ABB RAPID, Stäubli VAL3, UR URScript, G-code, FANUC TP (.ls),
+#: Yaskawa INFORM (.JBI).
+FORMATS = ("krl", "rapid", "val3", "urscript", "gcode", "fanuc", "inform")
 
 PathLike = Union[str, "os.PathLike[str]"]
 

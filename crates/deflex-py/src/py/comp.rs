@@ -155,8 +155,8 @@ impl PyCompensation {
     }
 
     /// The robot program in ``format`` (``krl``, ``rapid``, ``val3``, ``urscript``, ``gcode``,
-    /// ``fanuc``) as ``{relative path: text}``, with the template ``settings`` (a program TOML file,
-    /// ``docs/program.example.toml``) or the defaults. Refused (``deflex.CompensationError``,
+    /// ``fanuc``, ``inform``) as ``{relative path: text}``, with the template ``settings`` (a
+    /// program TOML file, ``docs/program.example.toml``) or the defaults. Refused (``deflex.CompensationError``,
     /// the CLI's text) when points are not compensated or the iteration did not converge.
     #[pyo3(signature = (format, settings = None))]
     fn program(

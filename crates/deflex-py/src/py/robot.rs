@@ -51,7 +51,7 @@ fn shape(batched: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
 #[pymethods]
 impl PyRobot {
     /// A built-in robot by name: ``tx200``, ``tx200-1edof``, ``ur10``, ``ur10e``,
-    /// ``kr210-r2700``, ``irb4600`` (see ``Robot.builtins()``).
+    /// ``kr210-r2700``, ``irb4600``, ``r2000ic-165f``, ``gp180`` (see ``Robot.builtins()``).
     #[staticmethod]
     fn builtin(py: Python<'_>, name: &str) -> PyResult<PyRobot> {
         let name = name.to_string();

@@ -85,6 +85,7 @@ def test_a_gcode_part_with_the_process_model_and_the_five_programs(tmp_path: Pat
     names = {Path(p).name for p in written}
     assert {"deflex_path.src", "deflex_path.mod", "deflex_path.script", "deflex_path.gcode"} <= names
     assert "/PROG  DEFLEX_PATH" in comp.program("fanuc")["DEFLEX_PATH.ls"]
+    assert "//NAME DEFLEX_PATH\r\n" in comp.program("inform")["DEFLEX_PATH.JBI"]
     with pytest.raises(deflex.InputError, match='unknown format "yaskawa"'):
         comp.program("yaskawa")
 

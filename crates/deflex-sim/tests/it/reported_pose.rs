@@ -12,7 +12,15 @@ use deflex_sim::{Cell, CellConfig, ToolPath};
 #[test]
 fn the_reported_pose_is_the_model_s_within_a_calibration_s_difference() {
     let tolerance = ModelCheckConfig::default();
-    for robot in ["tx200", "ur10", "ur10e", "kr210-r2700", "irb4600"] {
+    for robot in [
+        "tx200",
+        "ur10",
+        "ur10e",
+        "kr210-r2700",
+        "irb4600",
+        "r2000ic-165f",
+        "gp180",
+    ] {
         let config = CellConfig::for_robot(robot).unwrap();
         let model = config.nominal_robot().unwrap();
         let path = ToolPath::paper_cone().truncated(20.0);

@@ -99,10 +99,13 @@ fn every_builtin_robot_gets_a_plan_for_a_real_cell() {
             deflex_calibrate::measurements::load_case_count(&plan.rows)
         );
         check_cell(&robot, &plan, 0.05);
-        let expected_floor = if name.starts_with("tx200") {
-            -0.642
-        } else {
-            0.0
+        // The mounting face: below a shoulder-height R0 for the TX200 and the FANUC-like and
+        // Motoman-like arms (R0 at J2's height, as their controllers' frames), else R0's plane.
+        let expected_floor = match *name {
+            n if n.starts_with("tx200") => -0.642,
+            "r2000ic-165f" => -0.670,
+            "gp180" => -0.650,
+            _ => 0.0,
         };
         assert!((floor - expected_floor).abs() < 1e-9, "{name}: {floor}");
         assert!(plan.rows.iter().any(|r| r.point == "M0"));

@@ -10,6 +10,7 @@ fn arm(q_deg: [f64; 6], behind: bool, lower: bool, stretched: bool) -> ArmConfig
         wrist_behind_axis_1: behind,
         wrist_behind_lower_arm: lower,
         elbow_beyond_stretched: stretched,
+        elbow_up: stretched,
     }
 }
 

@@ -46,6 +46,7 @@ fn arm(q: [f64; 6], behind: bool, elbow_up: bool) -> ArmConfiguration {
         wrist_behind_axis_1: behind,
         wrist_behind_lower_arm: false,
         elbow_beyond_stretched: elbow_up,
+        elbow_up,
     }
 }
 

@@ -4,6 +4,7 @@ mod common;
 mod config;
 mod fanuc;
 mod gcode_offset;
+mod inform;
 mod names;
 mod round_trip;
 mod streaming;

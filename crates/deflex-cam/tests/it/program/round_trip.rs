@@ -122,10 +122,11 @@ fn check_round_trip(format: Format, input: &ProgramInput, settings: &ProgramSett
             }
             Some(v) => {
                 // Speeds are written to 0.01 mm/s; FANUC's `mm/sec` takes whole mm/s.
-                let tolerance = if format == Format::Fanuc {
-                    0.5e-3
-                } else {
-                    0.5e-5
+                let tolerance = match format {
+                    Format::Fanuc => 0.5e-3,
+                    // INFORM's `V=` takes 0.1 mm/s.
+                    Format::Inform => 0.5e-4,
+                    _ => 0.5e-5,
                 };
                 assert!(
                     (v - want).abs() <= tolerance + 1e-12,
@@ -367,6 +368,7 @@ fn names_are_made_valid_per_language_and_lines_stay_short() {
             Format::UrScript => names::URSCRIPT,
             Format::Gcode => names::GCODE_FILE,
             Format::Fanuc => names::FANUC,
+            Format::Inform => names::INFORM,
         };
         assert!(names::is_valid(&stem, &rule), "{format:?}: {stem}");
     }
@@ -436,6 +438,7 @@ fn arm(q: [f64; 6]) -> deflex_cam::program::ArmConfiguration {
         wrist_behind_axis_1: false,
         wrist_behind_lower_arm: false,
         elbow_beyond_stretched: q[2] > 0.3,
+        elbow_up: q[2] > 0.3,
     }
 }
 
@@ -463,7 +466,12 @@ fn long_paths_are_split_into_parts_that_read_back_in_order() {
             .collect();
         match format {
             // 999 moves after the first point in parts of 300: 4 parts.
-            Format::Krl | Format::Rapid | Format::UrScript | Format::Val3 | Format::Fanuc => {
+            Format::Krl
+            | Format::Rapid
+            | Format::UrScript
+            | Format::Val3
+            | Format::Fanuc
+            | Format::Inform => {
                 assert_eq!(parts.len(), 4, "{format:?}: {parts:?}")
             }
             Format::Gcode => assert!(parts.is_empty()),
