@@ -313,11 +313,11 @@ pub struct Status {
 }
 
 impl Status {
-    /// The controller takes commands: ready, system ready, no error, no emergency stop.
+    /// The controller takes commands: ready, no error, no emergency stop. (System ready is
+    /// reported but not required: a controller clears ready when it is not, and `airo-fanuc`'s
+    /// fake controller never sets it.)
     pub fn accepts_commands(&self) -> bool {
-        self.status & STATUS_READY != 0
-            && self.status & STATUS_SYSRDY != 0
-            && self.robot_status & (ROBOT_ERROR | ROBOT_ESTOP) == 0
+        self.status & STATUS_READY != 0 && self.robot_status & (ROBOT_ERROR | ROBOT_ESTOP) == 0
     }
 
     /// The controller reports an error or an emergency stop.

@@ -214,6 +214,7 @@ pub struct FanucStreamLink {
     answered: bool,
     start_sent_at: Option<Instant>,
     answers: u64,
+    superseded: u64,
     largest_step_rad: [f64; AXES],
 }
 
@@ -280,6 +281,7 @@ impl FanucStreamLink {
             answered: true,
             start_sent_at: None,
             answers: 0,
+            superseded: 0,
             largest_step_rad: [0.0; AXES],
         })
     }
@@ -531,6 +533,30 @@ impl FanucStreamLink {
         };
     }
 
+    /// One datagram: from the controller (else refused, and the stream stops), a status
+    /// packet, a new one (its sequence number advances).
+    fn take_datagram(&mut self, n: usize, from: SocketAddr) -> Result<Status, LinkError> {
+        if let Err(e) = self.peers.check(P, from) {
+            if self.streaming() || self.phase == Phase::Starting {
+                self.begin_stop(StopReason::ForeignStatus { from });
+            }
+            return Err(e);
+        }
+        let status = parse_status(&self.rx[..n])?;
+        self.guard
+            .admit(AXES, Some(u64::from(status.sequence)), None)
+            .map_err(|reason| LinkError::Dropped {
+                protocol: P,
+                reason,
+            })?;
+        Ok(status)
+    }
+
+    /// Statuses superseded by a newer one waiting behind them (not answered).
+    pub fn superseded(&self) -> u64 {
+        self.superseded
+    }
+
     fn answer(&mut self, dq_rad: &[f64]) -> Result<(), LinkError> {
         let status = self.last_status.ok_or(LinkError::NoPeer { protocol: P })?;
         if self.answered {
@@ -555,6 +581,12 @@ impl FanucStreamLink {
         }
         if self.phase == Phase::Starting {
             let q = std::array::from_fn(|i| f64::from(status.joints_deg[i]).to_radians());
+            if !status.accepts_commands() {
+                // Not ready yet (the TP program has not reached IBGN start): hold where the
+                // robot stands until it is.
+                self.limiter = MotionLimiter::new(self.cfg.period_s, self.limits, q);
+                return self.send_command(status.sequence, q, false);
+            }
             self.begin_motion(q);
         } else if self.phase == Phase::Stopping && self.answers == 0 {
             // Stopped before the first command: hold where the robot stands.
@@ -563,14 +595,21 @@ impl FanucStreamLink {
         }
         let before = self.limiter.position();
         let (q, last) = self.next_command(&dq);
+        for i in 0..AXES {
+            self.largest_step_rad[i] = self.largest_step_rad[i].max((q[i] - before[i]).abs());
+        }
+        self.send_command(status.sequence, q, last)
+    }
+
+    /// Sends the command `q` (rad) answering status `sequence`.
+    fn send_command(&mut self, sequence: u32, q: [f64; AXES], last: bool) -> Result<(), LinkError> {
         let mut joints_deg = [0.0; MAX_AXES];
         for i in 0..AXES {
             joints_deg[i] = q[i].to_degrees();
-            self.largest_step_rad[i] = self.largest_step_rad[i].max((q[i] - before[i]).abs());
         }
         let command = Command {
             version: self.version,
-            sequence: status.sequence,
+            sequence,
             is_last: last,
             joints_deg,
         };
@@ -615,20 +654,30 @@ impl RobotLink for FanucStreamLink {
             }
             return Ok(None);
         };
-        if let Err(e) = self.peers.check(P, from) {
-            if self.streaming() || self.phase == Phase::Starting {
-                self.begin_stop(StopReason::ForeignStatus { from });
+        // The newest status waiting is the one answered: statuses queued behind a stall are
+        // superseded (answering each would send commands back to back).
+        let arrived = Instant::now();
+        let mut latest = None;
+        let mut first_error = None;
+        let mut next = Some((n, from));
+        while let Some((n, from)) = next {
+            match self.take_datagram(n, from) {
+                Ok(status) => {
+                    if latest.is_some() {
+                        self.superseded += 1;
+                    }
+                    latest = Some(status);
+                }
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
             }
-            return Err(e);
+            next = self.ep.recv(&mut self.rx[..], Duration::ZERO)?;
         }
-        let status = parse_status(&self.rx[..n])?;
-        self.guard
-            .admit(AXES, Some(u64::from(status.sequence)), None)
-            .map_err(|reason| LinkError::Dropped {
-                protocol: P,
-                reason,
-            })?;
-        let now = Instant::now();
+        let Some(status) = latest else {
+            return Err(first_error.unwrap_or(LinkError::NoPeer { protocol: P }));
+        };
+        let now = arrived;
         if let Some(at) = self.last_status_at {
             let gap = now.duration_since(at);
             if self.streaming() && gap > self.cfg.late_after {
@@ -637,8 +686,7 @@ impl RobotLink for FanucStreamLink {
                 });
             }
         }
-        let commanding = self.streaming() || self.phase == Phase::Starting;
-        if status.in_error() || (commanding && self.answers > 0 && !status.accepts_commands()) {
+        if status.in_error() || (self.streaming() && !status.accepts_commands()) {
             self.begin_stop(StopReason::ControllerError {
                 status: status.status,
                 robot_status: status.robot_status,

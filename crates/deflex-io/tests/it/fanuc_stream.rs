@@ -739,3 +739,31 @@ fn a_wild_correction_never_steps_beyond_the_limits() {
     cell.run_out([0.0; AXES]);
     assert_eq!(cell.robot.counts().1, 0);
 }
+
+#[test]
+fn statuses_queued_behind_a_stall_are_answered_once_by_the_newest() {
+    let mut cell = Cell::new(start_pose(), limits(), |_| {});
+    cell.start();
+    cell.stream_into_path(5);
+    // Two statuses arrive together (the controller's first answer was delayed): only the
+    // newest is answered, so no two commands leave back to back.
+    let state = RobotState::with_joints(&cell.q);
+    cell.robot.send_state(&state).unwrap();
+    cell.robot.send_state(&state).unwrap();
+    let s = cell.link.receive(WAIT).unwrap().unwrap();
+    assert_eq!(cell.link.superseded(), 1);
+    cell.link.send_joint_correction(&[0.0; AXES]).unwrap();
+    let answer = cell.robot.receive_correction(WAIT).unwrap().unwrap();
+    assert_eq!(answer.cycle_id, s.cycle_id);
+    assert!(
+        cell.robot
+            .receive_correction(Duration::from_millis(50))
+            .unwrap()
+            .is_none(),
+        "one command only"
+    );
+    assert!(matches!(
+        cell.link.send_joint_correction(&[0.0; AXES]),
+        Err(LinkError::InvalidValue { .. })
+    ));
+}
