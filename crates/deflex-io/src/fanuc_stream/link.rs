@@ -57,6 +57,10 @@ const RX: usize = 1024;
 /// Transmit buffer.
 const TX: usize = 512;
 
+/// The share of the limits the correction may use by default
+/// ([`FanucStreamConfig::correction_share`]).
+pub const DEFAULT_CORRECTION_SHARE: f64 = 0.25;
+
 /// Settings of the controller side.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FanucStreamConfig {
@@ -96,7 +100,7 @@ impl FanucStreamConfig {
             lost_after: Duration::from_millis(500),
             max_approach_rad: 0.35,
             max_correction_rad: 0.02,
-            correction_share: 0.25,
+            correction_share: DEFAULT_CORRECTION_SHARE,
         }
     }
 }

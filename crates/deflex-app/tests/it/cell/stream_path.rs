@@ -97,3 +97,65 @@ fn a_failed_point_or_another_arm_is_not_streamed() {
     let e = stream_trajectory_of(&t, "fast.csv", T, 0.05, &limits).unwrap_err();
     assert!(e.to_string().starts_with("fast.csv: axis 3"), "{e}");
 }
+
+/// `kind = "fanuc-stream"` in a CELL.toml: the controller's address and the path are required
+/// (each error names its field), and the link it opens streams the table's joints to a
+/// controller at `robot.peer`.
+#[test]
+fn a_cell_file_opens_a_stream_motion_link() {
+    use deflex_app::cell::config::CellFile;
+    use deflex_io::fanuc_stream::robot::FanucStreamRobotEndpoint;
+    use deflex_io::{RobotSideLink, RobotState};
+    use std::time::Duration;
+    let dir = std::env::temp_dir().join(format!("deflex-stream-cell-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = table();
+    std::fs::write(dir.join("compensated_path.csv"), &text).unwrap();
+    let t = parse(&text, "t").unwrap();
+    let q0: [f64; 6] = std::array::from_fn(|i| column(&t, &format!("q{}_rad", i + 1))[0]);
+    let limits = StreamLimits::uniform(2.0, 10.0, 200.0);
+    let mut robot = FanucStreamRobotEndpoint::bind("127.0.0.1:0", T, limits).unwrap();
+    let cell = |extra: &str| {
+        format!(
+            "[robot]\nkind = \"fanuc-stream\"\nbind = \"127.0.0.1:0\"\ncycle_s = 0.008\n\
+             timeout_s = 0.5\nstream_velocity_rad_s = [2.0, 2.0, 2.0, 2.0, 2.0, 2.0]\n{extra}\
+             [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:49152\"\n[model]\nfile = \"{ARM}\"\n"
+        )
+    };
+    let peer = format!("peer = \"{}\"\n", robot.local_addr().unwrap());
+    let path = "stream_path = \"compensated_path.csv\"\n";
+    for (extra, field) in [
+        (path.to_string(), "robot.peer"),
+        (peer.clone(), "robot.stream_path"),
+    ] {
+        let e = CellFile::parse(&cell(&extra), "cell.toml", dir.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(field), "{e}");
+    }
+    let file = CellFile::parse(&cell(&format!("{peer}{path}")), "cell.toml", dir.clone()).unwrap();
+    let traj = file.stream_trajectory().unwrap();
+    assert_eq!(traj.period_s(), T);
+    let mut link = file.open_robot_link(6).unwrap();
+    assert!(link.answers_in_joint_space());
+    // The robot stands at the path's start: the first commands hold it there.
+    assert!(link.receive(Duration::from_millis(1)).unwrap().is_none());
+    for _ in 0..3 {
+        robot.send_state(&RobotState::with_joints(&q0)).unwrap();
+        let s = link.receive(Duration::from_secs(2)).unwrap().unwrap();
+        assert_eq!(s.joint_count, 6);
+        link.send_joint_correction(&[0.0; 6]).unwrap();
+        assert!(
+            robot
+                .receive_correction(Duration::from_secs(2))
+                .unwrap()
+                .is_some()
+        );
+        let c = robot.commanded_rad().unwrap();
+        for i in 0..6 {
+            assert!((c[i] - q0[i]).abs() < 1e-4, "axis {i}");
+        }
+    }
+    assert_eq!(robot.counts().1, 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
