@@ -767,3 +767,97 @@ fn statuses_queued_behind_a_stall_are_answered_once_by_the_newest() {
         Err(LinkError::InvalidValue { .. })
     ));
 }
+
+/// A controller written here from FANUC's tables (raw packets on a socket, not deflex's robot
+/// side): not ready yet, then ready; a replayed status, a malformed one and a status with the
+/// error bit, each from the controller's own address.
+#[test]
+fn a_hand_written_controller_not_ready_replayed_malformed_and_in_error() {
+    let controller = UdpSocket::bind("127.0.0.1:0").unwrap();
+    controller
+        .set_read_timeout(Some(Duration::from_secs(2)))
+        .unwrap();
+    let mut cfg = FanucStreamConfig::new(controller.local_addr().unwrap(), T);
+    cfg.limits = limits();
+    cfg.late_after = Duration::from_secs(1);
+    let mut link = FanucStreamLink::bind("127.0.0.1:0", cfg, path()).unwrap();
+    let pc = link.local_addr().unwrap();
+    assert!(link.receive(Duration::from_millis(1)).unwrap().is_none());
+    let mut buf = [0u8; 1024];
+    let (n, from) = controller.recv_from(&mut buf).unwrap();
+    assert_eq!(from, pc);
+    assert_eq!(&buf[..n], &[0, 0, 0, 200, 0, 0, 0, 3], "the start packet");
+    let start_deg: [f32; 9] = std::array::from_fn(|i| {
+        if i < AXES {
+            start_pose()[i].to_degrees() as f32
+        } else {
+            0.0
+        }
+    });
+    let send = |seq: u32, status: u8, robot: u8| {
+        controller
+            .send_to(&status_bytes(202, seq, status, robot, start_deg), pc)
+            .unwrap();
+    };
+    let read_command = |c: &UdpSocket| {
+        let mut b = [0u8; 1024];
+        let (n, _) = c.recv_from(&mut b).unwrap();
+        parse_command(&b[..n]).unwrap()
+    };
+    // Not ready (IBGN start not reached): held at the reported joints, still starting.
+    send(1, STATUS_SYSRDY, 0);
+    link.receive(WAIT).unwrap().unwrap();
+    link.send_joint_correction(&[0.0; AXES]).unwrap();
+    let hold = read_command(&controller);
+    assert_eq!(hold.sequence, 1);
+    assert!(!hold.is_last);
+    for i in 0..AXES {
+        assert!((hold.joints_deg[i] - f64::from(start_deg[i])).abs() < 1e-9);
+    }
+    assert_eq!(link.phase(), StreamPhase::Starting);
+    // Ready: the motion begins.
+    send(2, STATUS_READY | STATUS_SYSRDY, 0);
+    link.receive(WAIT).unwrap().unwrap();
+    link.send_joint_correction(&[0.0; AXES]).unwrap();
+    assert_eq!(read_command(&controller).sequence, 2);
+    assert_ne!(link.phase(), StreamPhase::Starting);
+    // A replay of status 2: dropped unanswered.
+    send(2, STATUS_READY | STATUS_SYSRDY, 0);
+    let e = link.receive(WAIT).unwrap_err();
+    assert!(e.is_dropped(), "{e}");
+    // A truncated packet from the controller: a bad packet, the link stays usable.
+    controller.send_to(&[0, 0, 0, 202, 0, 0], pc).unwrap();
+    assert!(link.receive(WAIT).unwrap_err().is_bad_packet());
+    // The error bit: the stream stops, braking, then the last command.
+    send(3, STATUS_READY | STATUS_SYSRDY, ROBOT_ERROR);
+    link.receive(WAIT).unwrap().unwrap();
+    assert!(matches!(
+        link.stop_reason(),
+        Some(StopReason::ControllerError {
+            robot_status: ROBOT_ERROR,
+            ..
+        })
+    ));
+    let mut seq = 3;
+    loop {
+        link.send_joint_correction(&[0.0; AXES]).unwrap();
+        let c = read_command(&controller);
+        assert_eq!(c.sequence, seq);
+        if c.is_last {
+            break;
+        }
+        seq += 1;
+        assert!(seq < 100, "never ended");
+        send(seq, STATUS_READY | STATUS_SYSRDY, ROBOT_ERROR);
+        link.receive(WAIT).unwrap().unwrap();
+    }
+    // The next status brings the stop packet.
+    send(seq + 1, STATUS_SYSRDY, ROBOT_ERROR);
+    link.receive(WAIT).unwrap().unwrap();
+    let mut b = [0u8; 64];
+    let (n, _) = controller.recv_from(&mut b).unwrap();
+    assert_eq!(&b[..n], &[0, 0, 0, 2, 0, 0, 0, 3], "the stop packet");
+    assert_eq!(link.phase(), StreamPhase::Done);
+    let c = link.counters();
+    assert_eq!(c.dropped_sequence, 1);
+}
