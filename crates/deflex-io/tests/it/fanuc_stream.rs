@@ -403,9 +403,10 @@ impl Cell {
         let robot = FanucStreamRobotEndpoint::bind("127.0.0.1:0", T, robot_limits).unwrap();
         let mut cfg = FanucStreamConfig::new(robot.local_addr().unwrap(), T);
         cfg.limits = limits();
-        // Generous: the tests that want a late status make one on purpose.
-        cfg.late_after = Duration::from_millis(400);
-        cfg.lost_after = Duration::from_millis(900);
+        // Generous (a loaded 2-core machine may hold this thread back): the tests that want a
+        // late status make one on purpose.
+        cfg.late_after = Duration::from_secs(1);
+        cfg.lost_after = Duration::from_secs(2);
         tune(&mut cfg);
         let link = FanucStreamLink::bind("127.0.0.1:0", cfg, path()).unwrap();
         Cell {
@@ -561,17 +562,17 @@ fn assert_braked(cell: &Cell, from: usize) {
 #[test]
 fn a_late_status_stops_the_stream_within_the_limits() {
     let mut cell = Cell::new(start_pose(), limits(), |c| {
-        c.late_after = Duration::from_millis(150);
+        c.late_after = Duration::from_millis(300);
     });
     cell.start();
     cell.stream_into_path(60);
     let at = cell.commands.len();
     // The next status comes late: three times the allowance.
-    std::thread::sleep(Duration::from_millis(450));
+    std::thread::sleep(Duration::from_millis(900));
     assert!(cell.cycle([0.0; AXES]));
     assert!(matches!(
         cell.link.stop_reason(),
-        Some(StopReason::LateStatus { gap_s }) if gap_s >= 0.45
+        Some(StopReason::LateStatus { gap_s }) if gap_s >= 0.9
     ));
     assert_eq!(cell.link.phase(), StreamPhase::Stopping);
     cell.run_out([0.0; AXES]);
