@@ -24,6 +24,8 @@ pub enum Protocol {
     Xml,
     /// A ROS 2 topic over DDS (the `deflex-ros2` bridge's sensor link).
     Ros2,
+    /// FANUC Stream Motion (option J519), binary UDP (port 60015).
+    FanucStream,
 }
 
 impl fmt::Display for Protocol {
@@ -36,6 +38,7 @@ impl fmt::Display for Protocol {
             Protocol::SimpleLine => "simple line",
             Protocol::Xml => "XML",
             Protocol::Ros2 => "ROS 2",
+            Protocol::FanucStream => "FANUC Stream Motion",
         };
         f.write_str(s)
     }

@@ -10,6 +10,7 @@
 //! | [`rsi`] | KUKA RSI, XML over UDP (port 59152) | mm, degrees |
 //! | [`egm`] | ABB EGM path correction, protobuf over UDP | mm, degrees |
 //! | [`staubli`] | deflex binary protocol for a Stäubli VAL3 `alter` program | m, rad |
+//! | [`fanuc_stream`] | FANUC Stream Motion (J519), binary UDP (port 60015); deflex streams the joints | degrees |
 //! | [`netft`] | ATI Net F/T RDT, binary UDP (port 49152) | sensor counts |
 //! | [`simple_udp`] | text lines over UDP, for other controllers | m, rad |
 //! | [`simple_tcp`] | the same text lines over TCP (port 50161), for UR URScript | m, rad |
@@ -32,6 +33,7 @@
 
 pub mod egm;
 pub mod error;
+pub mod fanuc_stream;
 pub mod guard;
 pub mod link;
 pub mod netft;

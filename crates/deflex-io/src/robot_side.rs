@@ -28,6 +28,8 @@ pub enum RobotKind {
     SimpleUdp,
     /// The same text lines over TCP (the controller listens; a UR script connects to it).
     SimpleTcp,
+    /// FANUC Stream Motion (J519): deflex streams the joints ([`crate::fanuc_stream`]).
+    FanucStream,
 }
 
 impl RobotKind {
@@ -39,6 +41,7 @@ impl RobotKind {
             RobotKind::Staubli => "Stäubli",
             RobotKind::SimpleUdp => "simple UDP",
             RobotKind::SimpleTcp => "simple TCP",
+            RobotKind::FanucStream => "FANUC Stream Motion",
         }
     }
 
@@ -50,14 +53,19 @@ impl RobotKind {
             RobotKind::Staubli => "staubli",
             RobotKind::SimpleUdp => "simple-udp",
             RobotKind::SimpleTcp => "simple-tcp",
+            RobotKind::FanucStream => "fanuc-stream",
         }
     }
 
     /// Whether the robot's replies echo its telegram's cycle id (RSI's IPOC, the Stäubli
-    /// acknowledgement), so a late reply is never taken for the current one. The other
-    /// protocols carry no echo: the first reply after a state is its answer.
+    /// acknowledgement, the Stream Motion command's sequence number), so a late reply is never
+    /// taken for the current one. The other protocols carry no echo: the first reply after a
+    /// state is its answer.
     pub fn echoes_cycle(self) -> bool {
-        matches!(self, RobotKind::KukaRsi | RobotKind::Staubli)
+        matches!(
+            self,
+            RobotKind::KukaRsi | RobotKind::Staubli | RobotKind::FanucStream
+        )
     }
 }
 
@@ -101,6 +109,15 @@ impl RobotSide {
             )?)),
             RobotKind::SimpleUdp => {
                 EndpointLink::Other(Box::new(SimpleUdpRobotEndpoint::new(local, pc)?))
+            }
+            RobotKind::FanucStream => {
+                // The twin plays a robot that runs its own path and takes corrections; following
+                // streamed joints needs a joint-command mode of its controller emulation.
+                return Err(LinkError::InvalidValue {
+                    protocol: crate::Protocol::FanucStream,
+                    reason: "the simulated cell does not serve FANUC Stream Motion yet \
+                             (docs/fanuc/README.md)",
+                });
             }
             RobotKind::SimpleTcp => {
                 let start = Instant::now();

@@ -12,7 +12,10 @@
 //! agree on the protocol by construction.
 
 use crate::cell::config::{CellFile, RobotKind, RsiAnswerKind, SensorKind};
+use crate::cell::stream_path::{StreamPathError, stream_trajectory};
 use deflex_io::egm::{EgmConfig, EgmLink};
+use deflex_io::fanuc_stream::link::{DEFAULT_CORRECTION_SHARE, FanucStreamConfig, FanucStreamLink};
+use deflex_io::fanuc_stream::motion::{StreamLimits, StreamTrajectory};
 use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::robot_side::RobotSide;
 use deflex_io::rsi::{CorrectionMode, RsiAnswer, RsiConfig, RsiLink};
@@ -135,7 +138,63 @@ impl CellFile {
                 link.set_peer_policy(policy);
                 Box::new(link)
             }
+            RobotKind::FanucStream => {
+                let trajectory = self
+                    .stream_trajectory()
+                    .map_err(|_| LinkError::InvalidValue {
+                        protocol: deflex_io::Protocol::FanucStream,
+                        reason: "robot.stream_path cannot be streamed (CellFile::stream_trajectory \
+                             says why)",
+                    })?;
+                let mut link = FanucStreamLink::bind(r.bind, self.stream_config()?, trajectory)?;
+                // The controller's own limit tables, when it answers them (else the file's).
+                link.query_thresholds(Duration::from_millis(200))?;
+                Box::new(link)
+            }
         })
+    }
+
+    /// FANUC Stream Motion: the link settings of `[robot]` (the controller at `robot.peer`,
+    /// port 60015 when 0; the limits `robot.stream_*`; lost after `robot.timeout_s`, at least ten
+    /// cycles).
+    pub fn stream_config(&self) -> Result<FanucStreamConfig, LinkError> {
+        let r = &self.robot;
+        let mut controller = r.peer.ok_or(LinkError::NoPeer {
+            protocol: deflex_io::Protocol::FanucStream,
+        })?;
+        if controller.port() == 0 {
+            controller.set_port(deflex_io::fanuc_stream::DEFAULT_PORT);
+        }
+        let mut cfg = FanucStreamConfig::new(controller, r.cycle_s);
+        cfg.limits = self.stream_limits();
+        cfg.lost_after = Duration::from_secs_f64(r.timeout_s.max(10.0 * r.cycle_s));
+        Ok(cfg)
+    }
+
+    /// FANUC Stream Motion: the limits of `robot.stream_*`.
+    pub fn stream_limits(&self) -> StreamLimits {
+        let r = &self.robot;
+        StreamLimits {
+            velocity: r.stream_velocity_rad_s,
+            acceleration: r.stream_acceleration_rad_s2,
+            jerk: r.stream_jerk_rad_s3,
+        }
+    }
+
+    /// FANUC Stream Motion: the trajectory of `robot.stream_path`, sampled at `robot.cycle_s`
+    /// with `robot.stream_ramp_s`, within the path's share of the limits.
+    pub fn stream_trajectory(&self) -> Result<StreamTrajectory, StreamPathError> {
+        let r = &self.robot;
+        let path = self
+            .base_dir
+            .join(r.stream_path.as_deref().unwrap_or_default());
+        let share = 1.0 - DEFAULT_CORRECTION_SHARE;
+        stream_trajectory(
+            &path,
+            r.cycle_s,
+            r.stream_ramp_s,
+            &self.stream_limits().scaled(share),
+        )
     }
 
     /// The robot link's peer policy from `robot.peer`, `robot.bind` and `robot.allow_any_peer`

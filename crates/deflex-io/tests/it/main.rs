@@ -5,6 +5,7 @@
 //! no parser panics are checked in the facade's test binary (`no_alloc::io`, `fuzz::io`).
 
 mod egm;
+mod fanuc_stream;
 mod guard;
 mod link;
 mod netft;

@@ -13,6 +13,7 @@
 
 mod clock;
 mod common;
+mod fanuc_stream;
 mod link_glitch;
 mod loopback;
 mod rt;

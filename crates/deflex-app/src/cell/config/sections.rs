@@ -69,6 +69,18 @@ pub struct RobotSection {
     pub cycle_s: f64,
     /// Silence after which the robot link counts as lost (s).
     pub timeout_s: f64,
+    /// FANUC Stream Motion: the compensated path deflex streams (`compensated_path.csv` of
+    /// `deflex compensate`, relative to the CELL.toml; required for `fanuc-stream`).
+    pub stream_path: Option<String>,
+    /// FANUC Stream Motion: joint velocity limits, axes 1–6 (rad/s; the controller's tables may
+    /// tighten them).
+    pub stream_velocity_rad_s: [f64; 6],
+    /// FANUC Stream Motion: joint acceleration limits (rad/s²).
+    pub stream_acceleration_rad_s2: [f64; 6],
+    /// FANUC Stream Motion: joint jerk limits (rad/s³).
+    pub stream_jerk_rad_s3: [f64; 6],
+    /// FANUC Stream Motion: the path's start and stop ramps (s).
+    pub stream_ramp_s: f64,
 }
 
 impl Default for RobotSection {
@@ -88,6 +100,11 @@ impl Default for RobotSection {
             egm_work_object_rpy_rad: [0.0; 3],
             cycle_s: 0.004,
             timeout_s: SafetyConfig::default().robot_timeout_s,
+            stream_path: None,
+            stream_velocity_rad_s: [1.0; 6],
+            stream_acceleration_rad_s2: [5.0; 6],
+            stream_jerk_rad_s3: [100.0; 6],
+            stream_ramp_s: 0.5,
         }
     }
 }

@@ -12,6 +12,10 @@ use deflex_control::FeedForwardMode;
 pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("robot.cycle_s", 0.0005, 0.1, "s"),
     ("robot.timeout_s", 0.001, 10.0, "s"),
+    ("robot.stream_velocity_rad_s", 1e-3, 20.0, "rad/s"),
+    ("robot.stream_acceleration_rad_s2", 1e-3, 500.0, "rad/s²"),
+    ("robot.stream_jerk_rad_s3", 1e-3, 1e5, "rad/s³"),
+    ("robot.stream_ramp_s", 0.01, 10.0, "s"),
     ("robot.egm_sensor_rpy_rad", -7.0, 7.0, "rad"),
     ("robot.egm_work_object_rpy_rad", -7.0, 7.0, "rad"),
     ("sensor.counts_per_force", 1e-3, 1e12, "counts/N"),
@@ -194,6 +198,29 @@ impl CellFile {
         self.check_all("robot.egm_work_object_rpy_rad", &r.egm_work_object_rpy_rad)?;
         self.check("robot.cycle_s", r.cycle_s)?;
         self.check("robot.timeout_s", r.timeout_s)?;
+        self.check_all("robot.stream_velocity_rad_s", &r.stream_velocity_rad_s)?;
+        self.check_all(
+            "robot.stream_acceleration_rad_s2",
+            &r.stream_acceleration_rad_s2,
+        )?;
+        self.check_all("robot.stream_jerk_rad_s3", &r.stream_jerk_rad_s3)?;
+        self.check("robot.stream_ramp_s", r.stream_ramp_s)?;
+        if r.kind == super::RobotKind::FanucStream {
+            if r.peer.is_none() {
+                return Err(self.invalid(
+                    "robot.peer",
+                    InvalidReason::Empty(
+                        "give the controller's Stream Motion address (port 60015)",
+                    ),
+                ));
+            }
+            if r.stream_path.as_deref().is_none_or(|p| p.trim().is_empty()) {
+                return Err(self.invalid(
+                    "robot.stream_path",
+                    InvalidReason::Empty("name the compensated_path.csv deflex streams"),
+                ));
+            }
+        }
         if let Err(e) = deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer) {
             let field = match e {
                 deflex_io::PeerConfigError::NoPeerOnNetworkBind { .. } => "robot.bind",

@@ -14,3 +14,4 @@ mod feedforward_table;
 mod links;
 mod model_check;
 mod sessions;
+mod stream_path;

@@ -1,5 +1,6 @@
-//! Fuzzing deflex's io parsers: one target per wire parser (KUKA RSI, ABB EGM, Stäubli, simple
-//! UDP lines, the simple TCP stream framing + lines, ATI Net F/T), on the shared mutation fuzzer
+//! Fuzzing deflex's io parsers: one target per wire parser (KUKA RSI, ABB EGM, FANUC Stream
+//! Motion, Stäubli, simple UDP lines, the simple TCP stream framing + lines, ATI Net F/T), on
+//! the shared mutation fuzzer
 //! ([`crate::fuzz::engine`]): random bytes and mutations of valid messages must never make a
 //! parser panic, and whatever a parser accepts must keep its promises (finite values, counts in
 //! range, a message that formats again). The session rules (`deflex_io::guard`) are fuzzed on
@@ -541,4 +542,79 @@ fn simple_state_lines() {
             Err(e) => packet_error(&e),
         },
     );
+}
+
+#[test]
+fn fanuc_stream_parsers() {
+    use deflex_io::fanuc_stream::*;
+    let mut status = [0u8; STATUS_LEN];
+    let mut joints = [0.0f32; MAX_AXES];
+    joints[..6].copy_from_slice(&[10.0, -20.0, 30.0, 0.5, 45.0, -170.0]);
+    let s = Status {
+        version: VERSION,
+        sequence: 77,
+        status: STATUS_READY | STATUS_SYSRDY,
+        joints_deg: joints,
+        safety_scale: 1.0,
+        ..Status::default()
+    };
+    format_status(&s, &mut status).unwrap();
+    let mut command = [0u8; COMMAND_LEN];
+    let c = Command {
+        version: VERSION,
+        sequence: 77,
+        is_last: false,
+        joints_deg: [12.5; MAX_AXES],
+    };
+    format_command(&c, &mut command).unwrap();
+    let mut table = [0u8; THRESHOLD_TABLE_LEN];
+    let t = ThresholdTable {
+        version: VERSION,
+        axis: 2,
+        kind: ThresholdKind::Jerk,
+        max_cartesian_speed: 2000,
+        interval: 100,
+        no_payload: [900.0; THRESHOLD_ENTRIES],
+        full_payload: [800.0; THRESHOLD_ENTRIES],
+    };
+    format_threshold_table(&t, &mut table).unwrap();
+    let mut start = [0u8; CONTROL_LEN];
+    format_start(VERSION, &mut start).unwrap();
+    let corpus = [
+        status.to_vec(),
+        command.to_vec(),
+        table.to_vec(),
+        start.to_vec(),
+    ];
+    run("fanuc_stream", &corpus, 600, |b| {
+        match parse_status(b) {
+            Ok(s) => {
+                let all = s.joints_deg.iter().chain(&s.position).chain(&s.current);
+                assert!(all.chain([&s.safety_scale]).all(|v| v.is_finite()));
+                let mut out = [0u8; STATUS_LEN];
+                format_status(&s, &mut out).unwrap();
+            }
+            Err(e) => packet_error(&e),
+        }
+        match parse_command(b) {
+            Ok(c) => {
+                assert!(finite(&c.joints_deg));
+                let mut out = [0u8; COMMAND_LEN];
+                assert_eq!(format_command(&c, &mut out).unwrap(), COMMAND_LEN);
+                // Byte for byte up to the I/O block (deflex writes no I/O; the parser ignores it).
+                assert_eq!(&out[..88], &b[..88], "a command reads back byte for byte");
+            }
+            Err(e) => packet_error(&e),
+        }
+        match parse_threshold_table(b) {
+            Ok(t) => assert!(t.tightest() > 0.0 && t.tightest().is_finite()),
+            Err(e) => packet_error(&e),
+        }
+        if let Err(e) = parse_threshold_request(b) {
+            packet_error(&e);
+        }
+        if let Err(e) = parse_control(b) {
+            packet_error(&e);
+        }
+    });
 }

@@ -264,3 +264,50 @@ fn drop_paths_do_not_allocate() {
     assert_eq!(total, 0, "simple TCP with refusals");
     assert_eq!(pc.counters().refused_busy, 30);
 }
+
+/// FANUC Stream Motion: the link's receive and joint answer (approach, path with a changing
+/// correction, the filter and limiter) allocate nothing after construction.
+#[test]
+fn fanuc_stream_link_does_not_allocate_while_streaming() {
+    use deflex_io::fanuc_stream::link::{FanucStreamConfig, FanucStreamLink, StreamPhase};
+    use deflex_io::fanuc_stream::motion::{StreamLimits, StreamTrajectory};
+    use deflex_io::fanuc_stream::robot::FanucStreamRobotEndpoint;
+    let period = 0.008;
+    let limits = StreamLimits::uniform(1.0, 5.0, 100.0);
+    let start = [0.0, -0.5, 0.5, 0.0, 0.4, 0.0];
+    let end = [0.2, -0.4, 0.45, 0.05, 0.4, 0.1];
+    let trajectory =
+        StreamTrajectory::from_waypoints(period, 0.3, &[(0.0, start), (1.0, end)], &limits)
+            .unwrap();
+    let mut robot = FanucStreamRobotEndpoint::bind("127.0.0.1:0", period, limits).unwrap();
+    let mut cfg = FanucStreamConfig::new(robot.local_addr().unwrap(), period);
+    cfg.limits = limits;
+    cfg.late_after = Duration::from_secs(1);
+    cfg.lost_after = Duration::from_secs(2);
+    let mut pc = FanucStreamLink::bind("127.0.0.1:0", cfg, trajectory).unwrap();
+    let mut q = start;
+    q[1] += 0.02;
+    assert!(pc.receive(Duration::from_millis(1)).unwrap().is_none());
+    let mut total = 0;
+    let mut path_cycles = 0;
+    for k in 0..400u64 {
+        robot.send_state(&RobotState::with_joints(&q)).unwrap();
+        let dq = [0.0, 0.0, 1e-4 * (k % 50) as f64, 0.0, 0.0, 0.0];
+        let before = allocs();
+        let s = pc.receive(T).unwrap().unwrap();
+        pc.send_joint_correction(&dq).unwrap();
+        let after = allocs();
+        if k > 0 {
+            total += after - before;
+        }
+        assert!((s.q_rad[1] - q[1]).abs() < 1e-5);
+        robot.receive_correction(T).unwrap().unwrap();
+        q = robot.commanded_rad().unwrap();
+        if pc.phase() == StreamPhase::Path {
+            path_cycles += 1;
+        }
+    }
+    assert!(path_cycles > 50, "{path_cycles}");
+    assert_eq!(robot.counts().1, 0);
+    assert_eq!(total, 0);
+}
