@@ -22,7 +22,9 @@ pub enum ModelCommand {
         robot: String,
     },
     /// Forward kinematics of a table of joint values (a controller's joint log, a
-    /// compensated_path.csv): the TCP of the model's tool in the world frame, a row per row.
+    /// compensated_path.csv): the TCP of the model's own tool in the world frame, a row per
+    /// row. The built-in files have no tool (the flange); for the cell's tool, which compensate
+    /// uses, give the robot file `deflex sim robot --robot R --out FILE` writes.
     Fk {
         /// Robot: built-in name (tx200, tx200-1edof, ur10, ur10e, kr210-r2700, irb4600) or TOML file.
         #[arg(long)]
@@ -143,7 +145,16 @@ pub fn model(command: ModelCommand, json_output: bool) -> CommandResult {
                     let rows = table.poses.len();
                     print_report(
                         json_output,
-                        || format!("wrote {rows} pose(s) to {}\n", path.display()),
+                        || {
+                            let t = robot.tool.translation.vector * 1e3;
+                            format!(
+                                "wrote {rows} pose(s) to {} (TCP of the model's tool, flange → TCP ({:.4}, {:.4}, {:.4}) mm)\n",
+                                path.display(),
+                                t.x,
+                                t.y,
+                                t.z
+                            )
+                        },
                         || serde_json::json!({ "rows": rows, "out": path }),
                     );
                 }

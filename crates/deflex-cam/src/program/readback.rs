@@ -188,33 +188,30 @@ pub fn read_program(
             let file = find(".gcode")?;
             read_gcode_lines(&mut source.open(file)?, file, &mut emit)?;
         }
-        Format::Fanuc => {
-            // The main program is the first file (export_to lists it first).
+        Format::Fanuc | Format::Inform => {
+            // The main program is the first file (export_to lists it first); it calls its
+            // parts by name.
+            type TpReader = fn(
+                &mut dyn BufRead,
+                &str,
+                &mut EmitAt,
+                Option<&PartLookup>,
+            ) -> Result<(), ProgramError>;
+            let (extension, read): (&str, TpReader) = if format == Format::Fanuc {
+                ("ls", read_fanuc_lines)
+            } else {
+                ("JBI", read_inform_lines)
+            };
             let main = files.first().ok_or_else(|| ProgramError::Read {
-                file: "*.ls".into(),
+                file: format!("*.{extension}"),
                 line: 0,
                 message: "no program files".into(),
             })?;
-            read_fanuc_lines(
+            read(
                 &mut source.open(main)?,
                 main,
                 &mut emit,
-                Some(&|name| by_name(name, "ls")),
-            )?;
-        }
-
-        Format::Inform => {
-            // The main job is the first file (export_to lists it first).
-            let main = files.first().ok_or_else(|| ProgramError::Read {
-                file: "*.JBI".into(),
-                line: 0,
-                message: "no program files".into(),
-            })?;
-            read_inform_lines(
-                &mut source.open(main)?,
-                main,
-                &mut emit,
-                Some(&|name| by_name(name, "JBI")),
+                Some(&|name| by_name(name, extension)),
             )?;
         }
     }

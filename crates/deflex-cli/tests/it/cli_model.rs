@@ -339,19 +339,27 @@ fn model_fk_reads_a_compensated_path_and_a_joint_log_in_degrees() {
     assert!(ok, "{stderr}");
     let path = out.join("compensated_path.csv");
     let fk = dir.join("fk.csv");
+    // The UR10 with its cell's 150 mm tool, the one compensate used.
+    let cell_robot = dir.join("ur10_cell.toml");
+    let Run { ok, stderr, .. } =
+        deflex(&["sim", "robot", "--robot", "ur10", "--out", s(&cell_robot)]);
+    assert!(ok, "{stderr}");
     let Run {
         ok, stdout, stderr, ..
     } = deflex(&[
         "model",
         "fk",
         "--robot",
-        "ur10",
+        s(&cell_robot),
         "--joints",
         s(&path),
         "--out",
         s(&fk),
     ]);
-    assert!(ok && stdout.contains("pose(s)"), "{stderr}");
+    assert!(
+        ok && stdout.contains("pose(s)") && stdout.contains("(0.0000, 0.0000, 150.0000) mm"),
+        "{stdout} {stderr}"
+    );
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -116,10 +116,13 @@ fn the_runtime_streams_the_path_with_the_correction_added() {
     assert_eq!((refused, foreign), (0, 0));
     assert!(accepted > 150, "{accepted}");
     assert_eq!(summary.end, SessionEnd::RobotFinished, "{summary:?}");
-    // The robot ended at the path's end plus the correction (the control law pushed against
-    // the contact wrench): not on the bare path.
+    // The control law pushed against the contact wrench (a correction was streamed), and the
+    // robot ended near the path's end: at most the bounded correction away from it. How much of
+    // the correction is left at the very end depends on how the last cycles were scheduled (a
+    // stale wrench on a busy machine ramps it out), so the end is only bounded.
+    assert!(summary.max_xi_m > 1e-5, "no correction: {summary:?}");
     let offset = (0..6).map(|i| (q[i] - last[i]).abs()).fold(0.0, f64::max);
-    assert!(offset > 1e-5 && offset < 0.02, "{offset}");
+    assert!(offset < 0.02, "{offset}");
     eprintln!(
         "{accepted} commands, the path's end offset by the correction {:.3} mrad",
         offset * 1e3
