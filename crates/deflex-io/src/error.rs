@@ -24,6 +24,8 @@ pub enum Protocol {
     Xml,
     /// A ROS 2 topic over DDS (the `deflex-ros2` bridge's sensor link).
     Ros2,
+    /// Universal Robots RTDE over TCP ([`crate::rtde`]).
+    Rtde,
 }
 
 impl fmt::Display for Protocol {
@@ -36,6 +38,7 @@ impl fmt::Display for Protocol {
             Protocol::SimpleLine => "simple line",
             Protocol::Xml => "XML",
             Protocol::Ros2 => "ROS 2",
+            Protocol::Rtde => "UR RTDE",
         };
         f.write_str(s)
     }
@@ -139,6 +142,16 @@ pub enum LinkError {
         holder: std::net::SocketAddr,
         /// The holder was not serving robot lines.
         starving: bool,
+    },
+    /// The peer refused the session's set-up, or deflex refused the peer's (an RTDE recipe with
+    /// a variable the controller does not know or another client holds, a controller too old):
+    /// the link cannot serve this session until the cause is removed.
+    #[error("{protocol}: {refusal}")]
+    SetupRefused {
+        /// Protocol of the endpoint.
+        protocol: Protocol,
+        /// What was refused, with its values.
+        refusal: crate::rtde::SetupRefusal,
     },
     /// A value was rejected before sending (e.g. non-finite number, or a
     /// configuration string with forbidden characters).

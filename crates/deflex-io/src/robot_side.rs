@@ -5,6 +5,7 @@
 
 use crate::egm::{EgmConfig, EgmRobotEndpoint};
 use crate::rsi::{CorrectionMode, RsiRobotEndpoint};
+use crate::rtde::{PathOffsetModel, RtdeRobotEndpoint};
 use crate::simple_tcp::SimpleTcpRobotEndpoint;
 use crate::simple_udp::SimpleUdpRobotEndpoint;
 use crate::staubli::StaubliRobotEndpoint;
@@ -28,6 +29,9 @@ pub enum RobotKind {
     SimpleUdp,
     /// The same text lines over TCP (the controller listens; a UR script connects to it).
     SimpleTcp,
+    /// Universal Robots RTDE (deflex connects to the controller's port 30004; a URScript
+    /// program applies the correction through `path_offset`).
+    UrRtde,
 }
 
 impl RobotKind {
@@ -39,6 +43,7 @@ impl RobotKind {
             RobotKind::Staubli => "Stäubli",
             RobotKind::SimpleUdp => "simple UDP",
             RobotKind::SimpleTcp => "simple TCP",
+            RobotKind::UrRtde => "UR RTDE",
         }
     }
 
@@ -50,6 +55,7 @@ impl RobotKind {
             RobotKind::Staubli => "staubli",
             RobotKind::SimpleUdp => "simple-udp",
             RobotKind::SimpleTcp => "simple-tcp",
+            RobotKind::UrRtde => "ur-rtde",
         }
     }
 
@@ -75,13 +81,18 @@ pub struct RobotSide {
     pub egm: EgmConfig,
     /// The Stäubli VAL3 program's watchdog.
     pub staubli_watchdog: Duration,
+    /// UR RTDE: the first correction register (`robot.rtde_register`).
+    pub rtde_register: u8,
+    /// UR RTDE: the URScript program's path offset (alpha filter, maximum offset, watchdog).
+    pub path_offset: PathOffsetModel,
 }
 
 impl RobotSide {
     /// The robot controller of [`RobotSide::kind`], bound on an ephemeral loopback port and
     /// sending its state to [`RobotSide::controller`]. A simple TCP robot (a UR script)
     /// connects to the controller: it retries for up to `wait` until the controller listens, or
-    /// until `stop` is set.
+    /// until `stop` is set. A UR RTDE controller is a server: it listens on
+    /// [`RobotSide::controller`] (the address `deflex run` connects to).
     pub fn open(&self, wait: Duration, stop: &AtomicBool) -> Result<RobotEndpoint, LinkError> {
         let pc = self.controller;
         let local = "127.0.0.1:0";
@@ -102,6 +113,11 @@ impl RobotSide {
             RobotKind::SimpleUdp => {
                 EndpointLink::Other(Box::new(SimpleUdpRobotEndpoint::new(local, pc)?))
             }
+            RobotKind::UrRtde => EndpointLink::Rtde(Box::new(RtdeRobotEndpoint::bind(
+                pc,
+                self.rtde_register,
+                self.path_offset,
+            )?)),
             RobotKind::SimpleTcp => {
                 let start = Instant::now();
                 loop {
@@ -124,6 +140,7 @@ impl RobotSide {
 
 enum EndpointLink {
     Egm(Box<EgmRobotEndpoint>, EgmConfig),
+    Rtde(Box<RtdeRobotEndpoint>),
     Other(Box<dyn RobotSideLink + Send>),
 }
 
@@ -143,7 +160,32 @@ impl RobotEndpoint {
     pub fn link(&mut self) -> &mut dyn RobotSideLink {
         match &mut self.link {
             EndpointLink::Egm(l, _) => l.as_mut(),
+            EndpointLink::Rtde(l) => l.as_mut(),
             EndpointLink::Other(l) => l.as_mut(),
+        }
+    }
+
+    /// The UR controller's flange sensor reading of this cycle (raw, sensor axes), streamed as
+    /// `ft_raw_wrench` with the next state; other protocols carry no wrench (false).
+    pub fn set_flange_wrench(&mut self, w: &deflex_model::Wrench) -> bool {
+        if let EndpointLink::Rtde(ep) = &mut self.link {
+            ep.set_flange_wrench(w);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// True while an RTDE client streams the flange sensor's wrench.
+    pub fn flange_sensor_streaming(&self) -> bool {
+        matches!(&self.link, EndpointLink::Rtde(ep) if ep.flange_sensor_streaming())
+    }
+
+    /// The UR RTDE endpoint, for a UR RTDE robot.
+    pub fn rtde(&mut self) -> Option<&mut RtdeRobotEndpoint> {
+        match &mut self.link {
+            EndpointLink::Rtde(ep) => Some(ep),
+            _ => None,
         }
     }
 

@@ -13,6 +13,7 @@ mod peer_policy;
 mod peers;
 mod replays;
 mod rsi;
+mod rtde;
 mod simple_tcp;
 mod simple_udp;
 mod staubli;

@@ -34,11 +34,13 @@ pub const REQUIRED_KEYS: &[(&str, &str)] = &[
 pub struct RobotSection {
     /// Protocol (required).
     pub kind: RobotKind,
-    /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI; required).
+    /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI; required, except
+    /// for `ur-rtde`, where deflex connects to the robot and does not listen).
     pub bind: SocketAddr,
     /// The robot controller's address: the link answers only it (port 0: any port of that
     /// IP; the simple TCP link compares the IP only). Absent: the link locks to the first host
-    /// that sends a valid telegram, for the whole session.
+    /// that sends a valid telegram, for the whole session. For `ur-rtde` (required): the
+    /// controller's RTDE server that deflex connects to (port 0: 30004).
     pub peer: Option<SocketAddr>,
     /// Without `peer`, let the first host on the network that sends a valid message own the
     /// session (default `false`: a network `bind` without `peer` is refused; a loopback `bind`
@@ -69,6 +71,13 @@ pub struct RobotSection {
     pub cycle_s: f64,
     /// Silence after which the robot link counts as lost (s).
     pub timeout_s: f64,
+    /// `ur-rtde`: the first register of the correction: `input_double_register_N … N+5` (m, rad,
+    /// base axes), `input_int_register_N` (sequence), `output_int_register_N` (the script's
+    /// heartbeat); 24–42 (RTDE clients own 24–47). The URScript program's `REG` must match.
+    pub rtde_register: u8,
+    /// `ur-rtde`: the alpha of `path_offset_set_alpha_filter` in the URScript program (0.001–1,
+    /// 1 = no filter): `applied = alpha · register + (1 − alpha) · applied` every 2 ms.
+    pub ur_alpha_filter: f64,
 }
 
 impl Default for RobotSection {
@@ -88,6 +97,8 @@ impl Default for RobotSection {
             egm_work_object_rpy_rad: [0.0; 3],
             cycle_s: 0.004,
             timeout_s: SafetyConfig::default().robot_timeout_s,
+            rtde_register: 24,
+            ur_alpha_filter: 0.5,
         }
     }
 }
@@ -98,7 +109,8 @@ impl Default for RobotSection {
 pub struct SensorSection {
     /// Protocol (required).
     pub kind: SensorKind,
-    /// Sensor address (`<ip>:49152`; required).
+    /// Sensor address (`<ip>:49152` for a Net F/T; the controller's RTDE address `<ip>:30004`
+    /// for `ur-rtde`; required).
     pub address: SocketAddr,
     /// Local address (default: any port on all interfaces).
     pub bind: SocketAddr,
