@@ -969,12 +969,15 @@ pub fn decode_protocol_request(payload: &[u8]) -> Result<u16, LinkError> {
     }
 }
 
-/// Splits a set-up request's names; `Ok(None)` at a name deflex does not know (the controller
-/// answers `NOT_FOUND` there). Calls `each` with every name's position and variable.
+/// Splits a set-up request's names; `None` at a name deflex does not know (the controller
+/// answers `NOT_FOUND` there). Calls `each` with every name's position and variable. One
+/// trailing comma is allowed (SDU's `ur_rtde` ends its lists with one, and UR's controllers take
+/// them).
 pub fn for_each_name(
     names: &[u8],
     mut each: impl FnMut(usize, Option<Variable>) -> Result<(), LinkError>,
 ) -> Result<usize, LinkError> {
+    let names = names.strip_suffix(b",").unwrap_or(names);
     let mut n = 0;
     for (i, name) in names.split(|&b| b == b',').enumerate() {
         if i >= MAX_FIELDS {

@@ -14,6 +14,7 @@ mod peers;
 mod replays;
 mod rsi;
 mod rtde;
+mod rtde_python;
 mod simple_tcp;
 mod simple_udp;
 mod staubli;

@@ -774,6 +774,28 @@ fn hostile_clients_of_the_twin_s_controller_are_closed_or_answered_and_counted()
     b.write_all(&package(b'I', b"input_double_register_24,no_such_thing"))
         .unwrap();
     poll_until(&mut server, &|c| c.not_found == 1);
+    // A trailing comma (as SDU's ur_rtde sends) is no extra name.
+    let mut c = TcpStream::connect(addr).unwrap();
+    c.write_all(&package(
+        b'O',
+        &[&500.0f64.to_be_bytes()[..], b"timestamp,actual_q,"].concat(),
+    ))
+    .unwrap();
+    c.set_read_timeout(Some(GUARD)).unwrap();
+    let start = Instant::now();
+    let mut answer = Vec::new();
+    while answer.len() < 3 || answer.len() < u16::from_be_bytes([answer[0], answer[1]]) as usize {
+        assert!(start.elapsed() < GUARD);
+        server.poll_wait(Duration::from_millis(5), 24);
+        let mut buf = [0u8; 64];
+        c.set_nonblocking(true).unwrap();
+        if let Ok(n) = c.read(&mut buf) {
+            answer.extend_from_slice(&buf[..n]);
+        }
+    }
+    assert_eq!(answer, package(b'O', b"\x01DOUBLE,VECTOR6D"));
+    assert_eq!(server.counters().not_found, 1);
+    drop(c);
     // Too many clients: refused.
     let extra: Vec<TcpStream> = (0..10).map(|_| TcpStream::connect(addr).unwrap()).collect();
     poll_until(&mut server, &|c| c.refused_full >= 3);
