@@ -245,8 +245,9 @@ fn missing_required(table: &toml::Table) -> Option<(&'static str, &'static str)>
         .and_then(toml::Value::as_str)
         == Some("ur-rtde");
     REQUIRED_KEYS.iter().copied().find(|(section, key)| {
-        !(ros2_sensor && (*section, *key) == ("sensor", "address"))
-            && !(rtde_robot && (*section, *key) == ("robot", "bind"))
+        let exempt = (ros2_sensor && (*section, *key) == ("sensor", "address"))
+            || (rtde_robot && (*section, *key) == ("robot", "bind"));
+        !exempt
             && table
                 .get(*section)
                 .and_then(toml::Value::as_table)

@@ -315,7 +315,7 @@ impl Default for LimitsSection {
     }
 }
 
-/// `[model_check]`: the TCP pose the robot reports (KUKA RSI `RIst`, ABB EGM feedback) against
+/// `[model_check]`: the TCP pose the robot reports (KUKA RSI `RIst`, ABB EGM feedback, UR RTDE `actual_TCP_pose`) against
 /// the model's forward kinematics at the same joints ([`deflex_control::model_check`]).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
