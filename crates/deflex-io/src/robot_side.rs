@@ -181,6 +181,16 @@ impl RobotEndpoint {
         matches!(&self.link, EndpointLink::Rtde(ep) if ep.flange_sensor_streaming())
     }
 
+    /// The correction the robot applies in a cycle whose answer did not come: a UR program's
+    /// `path_offset` keeps running on the registers (and ramps out after its watchdog); the
+    /// other protocols keep what they applied (`None`).
+    pub fn unanswered_cycle(&mut self) -> Option<crate::Correction> {
+        match &mut self.link {
+            EndpointLink::Rtde(ep) => ep.unanswered_cycle(),
+            _ => None,
+        }
+    }
+
     /// The UR RTDE endpoint, for a UR RTDE robot.
     pub fn rtde(&mut self) -> Option<&mut RtdeRobotEndpoint> {
         match &mut self.link {

@@ -676,6 +676,19 @@ impl RtdeRobotEndpoint {
     pub fn path_offset(&self) -> &PathOffsetModel {
         &self.model
     }
+
+    /// A controller cycle in which no correction arrived: the URScript program still runs its
+    /// cycle on the registers as they stand (the sequence not advancing, so after the watchdog
+    /// the offset ramps out). `None` until a client has written the registers once.
+    pub fn unanswered_cycle(&mut self) -> Option<Correction> {
+        if self.applied_inputs == 0 {
+            return None;
+        }
+        let r = self.register;
+        let target = std::array::from_fn(|k| self.server.input_double(r + k as u8));
+        let applied = self.model.step(target, self.server.input_int(r));
+        Some(Correction::from_array(applied))
+    }
 }
 
 impl RobotSideLink for RtdeRobotEndpoint {

@@ -802,3 +802,49 @@ fn hostile_clients_of_the_twin_s_controller_are_closed_or_answered_and_counted()
     assert!(server.client_count() <= server::MAX_CLIENTS);
     drop((a, b, extra));
 }
+
+/// When deflex falls silent the twin's URScript program keeps running its cycles on the
+/// registers: after the sequence watchdog the offset ramps out through the alpha filter.
+#[test]
+fn the_twin_s_program_ramps_the_offset_out_when_deflex_falls_silent() {
+    let mut ep =
+        RtdeRobotEndpoint::bind("127.0.0.1:0", 24, PathOffsetModel::new(0.5, 0.01, 0.1, 5))
+            .unwrap();
+    assert!(ep.unanswered_cycle().is_none(), "no registers written yet");
+    let addr = ep.server().local_addr().unwrap();
+    let client = std::thread::spawn(move || {
+        let mut link = RtdeLink::connect(addr, config()).unwrap();
+        for _ in 0..30 {
+            receive(&mut link);
+            link.send_correction(&Correction::from_array([0.002, 0.0, -0.001, 0.0, 0.0, 0.0]))
+                .unwrap();
+        }
+        link
+    });
+    // Serve until 30 corrections were applied (hang guard).
+    let start = Instant::now();
+    let mut applied = 0;
+    let mut last = [0.0; 6];
+    while applied < 30 {
+        assert!(start.elapsed() < GUARD);
+        ep.send_state(&RobotState::with_joints(&q_of(1))).unwrap();
+        if let Some(r) = ep.receive_correction(Duration::from_millis(5)).unwrap() {
+            applied += 1;
+            last = r.correction.to_array();
+        }
+    }
+    let link = client.join().unwrap();
+    assert!((last[0] - 0.002).abs() < 1e-6, "{last:?}");
+    // deflex silent (the link is alive but sends nothing): 5 cycles held, then the ramp-out.
+    let mut held = Vec::new();
+    for _ in 0..40 {
+        held.push(ep.unanswered_cycle().unwrap().to_array()[0]);
+    }
+    assert!(
+        held[..5].iter().all(|x| (x - 0.002).abs() < 1e-6),
+        "{held:?}"
+    );
+    assert!(held[39] < 0.002 * 1e-9, "{held:?}");
+    assert!(held.windows(2).skip(5).all(|w| w[1] < w[0]), "{held:?}");
+    drop(link);
+}

@@ -583,6 +583,13 @@ pub fn serve_cell_with(
         let (sent, kinematics_ok) = s.send_state();
         next += period;
         let answer = s.await_answer(next, sent, kinematics_ok);
+        if answer.is_none()
+            && s.serving
+            && let Some(c) = s.robot.unanswered_cycle()
+        {
+            // A UR program's path_offset runs every cycle, answered or not.
+            s.cell.set_correction(c.to_array());
+        }
         s.account(answer.is_some());
         if let Some(st) = stream.as_deref_mut() {
             st.count_sensor_samples(streamed);
