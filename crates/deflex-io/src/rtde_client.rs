@@ -362,10 +362,8 @@ impl Session {
                     if !read_once(&mut self.stream, &mut self.rx, wait, &mut self.read_mode)? {
                         return Ok(Data::Timeout);
                     }
+                    // Later reads of the same package wait only what is left (none: no wait).
                     wait = deadline.saturating_duration_since(Instant::now());
-                    if wait.is_zero() {
-                        wait = Duration::ZERO;
-                    }
                 }
             }
         }
@@ -415,8 +413,8 @@ fn open_with_retry(
     loop {
         match Session::open(controller, spec, SETUP_TIMEOUT) {
             Ok(s) => return Ok(s),
-            Err(e @ LinkError::Io(_)) if start.elapsed() < wait => {
-                let _ = e;
+            // Refused or reset: the controller (or the twin) is not listening yet.
+            Err(LinkError::Io(_)) if start.elapsed() < wait => {
                 std::thread::sleep(Duration::from_millis(50));
             }
             Err(e) => return Err(e),

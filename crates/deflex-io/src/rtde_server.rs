@@ -23,7 +23,7 @@ use crate::error::LinkError;
 use crate::link::{Correction, ReceivedCorrection, RobotSideLink, RobotState};
 use deflex_model::Wrench;
 use deflex_model::conventions::rotation_vector;
-use std::io::Write;
+use std::io::{ErrorKind, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
@@ -366,9 +366,12 @@ impl RtdeServer {
             let _ = c.stream.set_nonblocking(false);
             c.read_mode = None;
         }
-        if c.stream.write_all(data).is_err() {
+        if let Err(e) = c.stream.write_all(data) {
             c.closed = true;
-            self.counters.closed_bad += 1;
+            // A client that went away is no bad client; one that does not take its data is.
+            if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) {
+                self.counters.closed_bad += 1;
+            }
         }
     }
 

@@ -468,8 +468,9 @@ fn deflex_reads_the_twin_s_state_and_its_corrections_reach_the_registers() {
     assert!(states.windows(2).all(|w| w[1].0.cycle_id > w[0].0.cycle_id));
     assert_eq!(counters_link.answers, 200);
     assert_eq!(counters_link.bad_packets, 0);
+    // At least the 150 applications awaited above (the last packages may be unread at the stop).
     assert!(
-        counters.input_packages >= 200 && counters.clients == 1,
+        counters.input_packages >= 150 && counters.clients == 1,
         "{counters:?}"
     );
     assert_eq!(
