@@ -22,8 +22,9 @@ pub struct CellArgs {
     #[arg(long)]
     pub sim: bool,
     /// The same CELL.toml as `deflex run`: robot.bind is where the robot's telegrams go (any
-    /// robot.kind), sensor.address is where the simulated Net F/T answers. Both must be
-    /// loopback addresses.
+    /// robot.kind; for ur-rtde, robot.peer is where the simulated UR controller serves RTDE),
+    /// sensor.address is where the simulated Net F/T answers (for sensor.kind = "ur-rtde", the
+    /// UR controller streams the flange sensor). All must be loopback addresses.
     #[arg(long)]
     pub config: PathBuf,
     /// Twin settings (`[cell]` TOML of `deflex sim`) over the robot's cell; default: the robot's
@@ -56,7 +57,7 @@ pub struct CellArgs {
     #[arg(long, default_value_t = 0.5)]
     pub dwell_s: f64,
     /// A fault to try the model check with (SIMULATED): from `--pose-jump-at-s` on, the TCP pose
-    /// the robot reports (KUKA RSI `RIst`, ABB EGM feedback) is MM (0–1000) higher along the
+    /// the robot reports (KUKA RSI `RIst`, ABB EGM feedback, UR RTDE `actual_TCP_pose`) is MM (0–1000) higher along the
     /// robot base's z than its kinematics give, as when a controller's tool or base is changed
     /// mid-session; `deflex run` then latches `model_mismatch` once MM exceeds its tolerance.
     #[arg(long, value_name = "MM")]

@@ -156,7 +156,7 @@ fn run_session(
             "deflex run: waiting for the robot ({}) on {} and the sensor at {} (Ctrl-C or \
              SIGTERM stops, ramping the correction out)",
             cell.robot.kind.name(),
-            cell.robot.bind,
+            cell.robot_link_address(),
             cell.sensor.address
         );
     }

@@ -26,6 +26,8 @@ pub enum Protocol {
     Ros2,
     /// FANUC Stream Motion (option J519), binary UDP (port 60015).
     FanucStream,
+    /// Universal Robots RTDE over TCP ([`crate::rtde`]).
+    Rtde,
 }
 
 impl fmt::Display for Protocol {
@@ -39,6 +41,7 @@ impl fmt::Display for Protocol {
             Protocol::Xml => "XML",
             Protocol::Ros2 => "ROS 2",
             Protocol::FanucStream => "FANUC Stream Motion",
+            Protocol::Rtde => "UR RTDE",
         };
         f.write_str(s)
     }
@@ -142,6 +145,16 @@ pub enum LinkError {
         holder: std::net::SocketAddr,
         /// The holder was not serving robot lines.
         starving: bool,
+    },
+    /// The peer refused the session's set-up, or deflex refused the peer's (an RTDE recipe with
+    /// a variable the controller does not know or another client holds, a controller too old):
+    /// the link cannot serve this session until the cause is removed.
+    #[error("{protocol}: {refusal}")]
+    SetupRefused {
+        /// Protocol of the endpoint.
+        protocol: Protocol,
+        /// What was refused, with its values.
+        refusal: crate::rtde::SetupRefusal,
     },
     /// A value was rejected before sending (e.g. non-finite number, or a
     /// configuration string with forbidden characters).

@@ -161,6 +161,9 @@ pub struct LinkCounters {
     pub refused_starving: u64,
     /// TCP: held connections closed after the idle timeout without a valid line.
     pub idle_closed: u64,
+    /// UR RTDE: packages refused as malformed (unknown type, another recipe id, another size, a
+    /// non-finite double, a size the stream cannot carry), each also returned as an error.
+    pub bad_packets: u64,
 }
 
 impl LinkCounters {

@@ -14,6 +14,7 @@
 //! | [`netft`] | ATI Net F/T RDT, binary UDP (port 49152) | sensor counts |
 //! | [`simple_udp`] | text lines over UDP, for other controllers | m, rad |
 //! | [`simple_tcp`] | the same text lines over TCP (port 50161), for UR URScript | m, rad |
+//! | [`rtde`] | Universal Robots RTDE, binary over TCP (port 30004; deflex is the client) | m, rad, N, N·m |
 //!
 //! Inside the crate and at its API everything is SI: metres, radians,
 //! newtons, newton-metres, with the model's spatial types (`deflex_model::Pose`,
@@ -40,6 +41,7 @@ pub mod netft;
 pub mod peer;
 pub mod robot_side;
 pub mod rsi;
+pub mod rtde;
 pub mod simple_tcp;
 pub mod simple_udp;
 pub mod staubli;

@@ -5,6 +5,7 @@
 
 use crate::egm::{EgmConfig, EgmRobotEndpoint};
 use crate::rsi::{CorrectionMode, RsiRobotEndpoint};
+use crate::rtde::{PathOffsetModel, RtdeRobotEndpoint};
 use crate::simple_tcp::SimpleTcpRobotEndpoint;
 use crate::simple_udp::SimpleUdpRobotEndpoint;
 use crate::staubli::StaubliRobotEndpoint;
@@ -30,6 +31,9 @@ pub enum RobotKind {
     SimpleTcp,
     /// FANUC Stream Motion (J519): deflex streams the joints ([`crate::fanuc_stream`]).
     FanucStream,
+    /// Universal Robots RTDE (deflex connects to the controller's port 30004; a URScript
+    /// program applies the correction through `path_offset`).
+    UrRtde,
 }
 
 impl RobotKind {
@@ -42,6 +46,7 @@ impl RobotKind {
             RobotKind::SimpleUdp => "simple UDP",
             RobotKind::SimpleTcp => "simple TCP",
             RobotKind::FanucStream => "FANUC Stream Motion",
+            RobotKind::UrRtde => "UR RTDE",
         }
     }
 
@@ -54,6 +59,7 @@ impl RobotKind {
             RobotKind::SimpleUdp => "simple-udp",
             RobotKind::SimpleTcp => "simple-tcp",
             RobotKind::FanucStream => "fanuc-stream",
+            RobotKind::UrRtde => "ur-rtde",
         }
     }
 
@@ -83,13 +89,18 @@ pub struct RobotSide {
     pub egm: EgmConfig,
     /// The Stäubli VAL3 program's watchdog.
     pub staubli_watchdog: Duration,
+    /// UR RTDE: the first correction register (`robot.rtde_register`).
+    pub rtde_register: u8,
+    /// UR RTDE: the URScript program's path offset (alpha filter, maximum offset, watchdog).
+    pub path_offset: PathOffsetModel,
 }
 
 impl RobotSide {
     /// The robot controller of [`RobotSide::kind`], bound on an ephemeral loopback port and
     /// sending its state to [`RobotSide::controller`]. A simple TCP robot (a UR script)
     /// connects to the controller: it retries for up to `wait` until the controller listens, or
-    /// until `stop` is set.
+    /// until `stop` is set. A UR RTDE controller is a server: it listens on
+    /// [`RobotSide::controller`] (the address `deflex run` connects to).
     pub fn open(&self, wait: Duration, stop: &AtomicBool) -> Result<RobotEndpoint, LinkError> {
         let pc = self.controller;
         let local = "127.0.0.1:0";
@@ -119,6 +130,11 @@ impl RobotSide {
                              (docs/fanuc/README.md)",
                 });
             }
+            RobotKind::UrRtde => EndpointLink::Rtde(Box::new(RtdeRobotEndpoint::bind(
+                pc,
+                self.rtde_register,
+                self.path_offset,
+            )?)),
             RobotKind::SimpleTcp => {
                 let start = Instant::now();
                 loop {
@@ -141,6 +157,7 @@ impl RobotSide {
 
 enum EndpointLink {
     Egm(Box<EgmRobotEndpoint>, EgmConfig),
+    Rtde(Box<RtdeRobotEndpoint>),
     Other(Box<dyn RobotSideLink + Send>),
 }
 
@@ -160,7 +177,42 @@ impl RobotEndpoint {
     pub fn link(&mut self) -> &mut dyn RobotSideLink {
         match &mut self.link {
             EndpointLink::Egm(l, _) => l.as_mut(),
+            EndpointLink::Rtde(l) => l.as_mut(),
             EndpointLink::Other(l) => l.as_mut(),
+        }
+    }
+
+    /// The UR controller's flange sensor reading of this cycle (raw, sensor axes), streamed as
+    /// `ft_raw_wrench` with the next state; other protocols carry no wrench (false).
+    pub fn set_flange_wrench(&mut self, w: &deflex_model::Wrench) -> bool {
+        if let EndpointLink::Rtde(ep) = &mut self.link {
+            ep.set_flange_wrench(w);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// True while an RTDE client streams the flange sensor's wrench.
+    pub fn flange_sensor_streaming(&self) -> bool {
+        matches!(&self.link, EndpointLink::Rtde(ep) if ep.flange_sensor_streaming())
+    }
+
+    /// The correction the robot applies in a cycle whose answer did not come: a UR program's
+    /// `path_offset` keeps running on the registers (and ramps out after its watchdog); the
+    /// other protocols keep what they applied (`None`).
+    pub fn unanswered_cycle(&mut self) -> Option<crate::Correction> {
+        match &mut self.link {
+            EndpointLink::Rtde(ep) => ep.unanswered_cycle(),
+            _ => None,
+        }
+    }
+
+    /// The UR RTDE endpoint, for a UR RTDE robot.
+    pub fn rtde(&mut self) -> Option<&mut RtdeRobotEndpoint> {
+        match &mut self.link {
+            EndpointLink::Rtde(ep) => Some(ep),
+            _ => None,
         }
     }
 

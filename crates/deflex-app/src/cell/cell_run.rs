@@ -38,7 +38,7 @@ pub enum StartError {
     /// The robot link cannot be bound.
     #[error("robot link on {bind}: {error}")]
     RobotLink {
-        /// `robot.bind`.
+        /// `robot.bind` (for `ur-rtde`, the controller's address `robot.peer`).
         bind: SocketAddr,
         /// Why.
         error: LinkError,
@@ -175,7 +175,7 @@ impl CellRun {
         let robot = cell
             .open_robot_link(joints)
             .map_err(|error| StartError::RobotLink {
-                bind: cell.robot.bind,
+                bind: cell.robot_link_address(),
                 error,
             })?;
         let sensor = match sensor {

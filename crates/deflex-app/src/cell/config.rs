@@ -107,6 +107,12 @@ pub enum InvalidReason {
     /// `robot.peer` / `robot.bind` / `robot.allow_any_peer` that cannot be served safely.
     #[error("{0}")]
     Peer(deflex_io::PeerConfigError),
+    /// `robot.kind = "ur-rtde"` without `robot.peer`.
+    #[error(
+        "robot.kind = \"ur-rtde\" connects to the UR controller: set robot.peer to its address \
+         (e.g. \"192.168.1.10:30004\"; port 0 = 30004)"
+    )]
+    RtdeNeedsPeer,
     /// An empty text where a name is needed.
     #[error("must {0}")]
     Empty(&'static str),
@@ -224,15 +230,24 @@ fn dotted_key_at(text: &str, offset: usize) -> Option<String> {
 }
 
 /// The first key of [`REQUIRED_KEYS`] missing from a section that is present (`sensor.address`
-/// only for a sensor on the network: `sensor.kind = "ros2"` takes a topic instead).
+/// only for a sensor on the network: `sensor.kind = "ros2"` takes a topic instead; `robot.bind`
+/// only for a robot that connects to deflex: deflex connects to a `ur-rtde` controller).
 fn missing_required(table: &toml::Table) -> Option<(&'static str, &'static str)> {
     let sensor = table.get("sensor").and_then(toml::Value::as_table);
     let ros2_sensor = sensor
         .and_then(|s| s.get("kind"))
         .and_then(toml::Value::as_str)
         == Some("ros2");
+    let rtde_robot = table
+        .get("robot")
+        .and_then(toml::Value::as_table)
+        .and_then(|s| s.get("kind"))
+        .and_then(toml::Value::as_str)
+        == Some("ur-rtde");
     REQUIRED_KEYS.iter().copied().find(|(section, key)| {
-        !(ros2_sensor && (*section, *key) == ("sensor", "address"))
+        let exempt = (ros2_sensor && (*section, *key) == ("sensor", "address"))
+            || (rtde_robot && (*section, *key) == ("robot", "bind"));
+        !exempt
             && table
                 .get(*section)
                 .and_then(toml::Value::as_table)

@@ -19,13 +19,27 @@ use deflex_io::fanuc_stream::motion::{StreamLimits, StreamTrajectory};
 use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::robot_side::RobotSide;
 use deflex_io::rsi::{CorrectionMode, RsiAnswer, RsiConfig, RsiLink};
+use deflex_io::rtde::{PathOffsetModel, RtdeLink, RtdeLinkConfig, RtdeSensor};
 use deflex_io::simple_tcp::SimpleTcpLink;
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink};
 use deflex_io::staubli::StaubliLink;
 use deflex_io::{ForceSensorLink, LinkError, PeerPolicy, RobotLink};
 use deflex_model::spatial::rotation_from_rpy;
 use deflex_sim::twin::cell_server::CellSides;
+use std::net::SocketAddr;
 use std::time::Duration;
+
+/// How long `deflex run` retries a refused connection to a UR controller's RTDE server (the
+/// controller booting, `deflex cell --sim` starting).
+pub const RTDE_CONNECT_WAIT: Duration = Duration::from_secs(10);
+
+/// An RTDE address with port 0 replaced by the controller's RTDE port 30004.
+fn with_rtde_port(mut a: SocketAddr) -> SocketAddr {
+    if a.port() == 0 {
+        a.set_port(deflex_io::rtde::DEFAULT_PORT);
+    }
+    a
+}
 
 /// Why the ends of a simulated cell could not be made from a `CELL.toml`.
 #[derive(Debug, thiserror::Error)]
@@ -41,6 +55,18 @@ pub enum CellSidesError {
     /// The twin refuses its settings.
     #[error(transparent)]
     Twin(#[from] deflex_sim::SimError),
+    /// `sensor.kind = "ur-rtde"` without the UR controller that streams it.
+    #[error(
+        "{origin}: sensor.kind = \"ur-rtde\": the simulated cell streams the flange sensor from \
+         its UR controller only: set robot.kind = \"ur-rtde\" and sensor.address = robot.peer \
+         ({robot})"
+    )]
+    UrSensorWithoutUrRobot {
+        /// The CELL.toml.
+        origin: String,
+        /// The controller's address.
+        robot: SocketAddr,
+    },
 }
 
 impl CellFile {
@@ -54,7 +80,18 @@ impl CellFile {
                 error,
             })?;
         let joints = twin.nominal_robot()?.joint_count();
+        let sensor_over_rtde = self.sensor.kind == SensorKind::UrRtde;
+        if sensor_over_rtde
+            && (self.robot.kind != RobotKind::UrRtde
+                || with_rtde_port(self.sensor.address) != self.robot_link_address())
+        {
+            return Err(CellSidesError::UrSensorWithoutUrRobot {
+                origin: self.origin.clone(),
+                robot: self.robot_link_address(),
+            });
+        }
         Ok(CellSides {
+            sensor_over_rtde,
             origin: self.origin.clone(),
             robot: self.robot_side(joints),
             sensor_address: self.sensor.address,
@@ -111,7 +148,12 @@ impl CellFile {
         joint_count: usize,
     ) -> Result<Box<dyn RobotLink + Send>, LinkError> {
         let r = &self.robot;
-        let policy = self.peer_policy()?;
+        let policy = if r.kind == RobotKind::UrRtde {
+            // deflex connects to the configured controller: no listener to lock.
+            PeerPolicy::FirstLocalSender
+        } else {
+            self.peer_policy()?
+        };
         Ok(match r.kind {
             RobotKind::KukaRsi => {
                 let mut link = RsiLink::bind(r.bind, self.rsi_config())?;
@@ -138,6 +180,13 @@ impl CellFile {
                 link.set_peer_policy(policy);
                 Box::new(link)
             }
+            RobotKind::UrRtde => Box::new(RtdeLink::connect(
+                self.robot_link_address(),
+                RtdeLinkConfig {
+                    register: r.rtde_register,
+                    connect_wait: RTDE_CONNECT_WAIT,
+                },
+            )?),
             RobotKind::FanucStream => {
                 let trajectory = self
                     .stream_trajectory()
@@ -197,6 +246,30 @@ impl CellFile {
         )
     }
 
+    /// Where the robot link is: `robot.bind`, or for `ur-rtde` the controller's RTDE address
+    /// `robot.peer` (port 0: 30004) that deflex connects to.
+    pub fn robot_link_address(&self) -> SocketAddr {
+        match (self.robot.kind, self.robot.peer) {
+            (RobotKind::UrRtde, Some(p)) => with_rtde_port(p),
+            _ => self.robot.bind,
+        }
+    }
+
+    /// The URScript program's path offset for `ur-rtde` (and the twin's model of it): the alpha
+    /// filter of `robot.ur_alpha_filter`; a maximum offset of √3 times the per-axis limits of
+    /// `[limits]` (the norm of the largest correction deflex sends, so the controller's limit is
+    /// a second net that never cuts a correction deflex allows); the offset ramped out once the
+    /// sequence register has not advanced for `robot.timeout_s`.
+    pub fn path_offset_model(&self) -> PathOffsetModel {
+        let cycles = (self.robot.timeout_s / deflex_io::rtde::server::CONTROLLER_PERIOD_S).ceil();
+        PathOffsetModel::new(
+            self.robot.ur_alpha_filter,
+            self.limits.max_correction_m * 3f64.sqrt(),
+            self.limits.max_correction_rad * 3f64.sqrt(),
+            cycles.clamp(1.0, 1e6) as u32,
+        )
+    }
+
     /// The robot link's peer policy from `robot.peer`, `robot.bind` and `robot.allow_any_peer`
     /// ([`deflex_io::validate_peer`]; a loaded file has passed it already). Its
     /// [`PeerPolicy::warning`] is what a session without a peer prints at start.
@@ -215,6 +288,10 @@ impl CellFile {
                 self.sensor.address,
                 self.calibration(),
             )?),
+            SensorKind::UrRtde => Box::new(RtdeSensor::connect(
+                with_rtde_port(self.sensor.address),
+                RTDE_CONNECT_WAIT,
+            )?),
             SensorKind::Ros2 => {
                 return Err(LinkError::InvalidValue {
                     protocol: deflex_io::Protocol::Ros2,
@@ -229,11 +306,13 @@ impl CellFile {
     pub fn robot_side(&self, joint_count: usize) -> RobotSide {
         RobotSide {
             kind: self.robot.kind,
-            controller: self.robot.bind,
+            controller: self.robot_link_address(),
             rsi_mode: self.rsi_mode(),
             egm: self.egm_config(joint_count),
             // The VAL3 program's watchdog: the robot's own timeout.
             staubli_watchdog: Duration::from_secs_f64(self.robot.timeout_s.clamp(1e-3, 10.0)),
+            rtde_register: self.robot.rtde_register,
+            path_offset: self.path_offset_model(),
         }
     }
 

@@ -14,6 +14,8 @@ mod peer_policy;
 mod peers;
 mod replays;
 mod rsi;
+mod rtde;
+mod rtde_python;
 mod simple_tcp;
 mod simple_udp;
 mod staubli;

@@ -66,6 +66,9 @@ pub struct CellSides {
     pub sensor_address: SocketAddr,
     /// The Net F/T count scaling.
     pub sensor_calibration: NetFtCalibration,
+    /// The sensor is the UR arm's own (`sensor.kind = "ur-rtde"`): its raw wrench streams as
+    /// `ft_raw_wrench` from the robot's RTDE server, no Net F/T is served.
+    pub sensor_over_rtde: bool,
     /// The controller's robot model (`model.file`).
     pub model: Robot,
 }
@@ -294,7 +297,8 @@ fn check_sides(sides: &CellSides, twin: &CellConfig) -> Result<Robot, CellServeE
 /// The served session's state between robot cycles.
 struct Serving {
     cell: Cell,
-    server: NetFtSensorServer,
+    /// The Net F/T, unless the sensor streams over the robot's RTDE server.
+    server: Option<NetFtSensorServer>,
     robot: RobotEndpoint,
     kinematics: ControllerKinematics,
     step: crate::CellStep,
@@ -317,19 +321,45 @@ impl Serving {
     /// Steps the twin (once serving; before, it holds the start pose) and streams the cycle's
     /// F/T samples; returns how many it streamed and whether the twin stepped.
     fn step_twin(&mut self) -> (usize, bool) {
-        while let Ok(Some(_)) = self.server.poll_request(Duration::ZERO) {}
-        if self.serving {
+        if let Some(server) = self.server.as_mut() {
+            while let Ok(Some(_)) = server.poll_request(Duration::ZERO) {}
+        }
+        let stepped = self.serving;
+        if stepped {
             self.cell.step_into(&mut self.step);
-            for s in &self.step.sensor_samples {
-                let _ = self.server.send_sample(&Wrench::from(s.wrench_sensor), 0);
-            }
-            (self.step.sensor_samples.len(), true)
-        } else if let Some(s) = self.step.sensor_samples.last() {
-            // Waiting for the controller, then dwelling: hold the start pose, keep streaming.
-            let _ = self.server.send_sample(&Wrench::from(s.wrench_sensor), 0);
-            (1, false)
+        }
+        let samples: &[crate::SensorSample] = if stepped {
+            &self.step.sensor_samples
         } else {
-            (0, false)
+            // Waiting for the controller, then dwelling: hold the start pose, keep streaming.
+            match self.step.sensor_samples.last() {
+                Some(last) => std::slice::from_ref(last),
+                None => &[],
+            }
+        };
+        match self.server.as_mut() {
+            Some(server) => {
+                for s in samples {
+                    let _ = server.send_sample(&Wrench::from(s.wrench_sensor), 0);
+                }
+                (samples.len(), stepped)
+            }
+            None => {
+                // The UR controller streams one reading per cycle: the cycle's last.
+                let streamed = samples
+                    .last()
+                    .is_some_and(|s| self.robot.set_flange_wrench(&Wrench::from(s.wrench_sensor)));
+                (usize::from(streamed), stepped)
+            }
+        }
+    }
+
+    /// The sensor streams to the controller (the Net F/T was started, or an RTDE client reads
+    /// the flange wrench).
+    fn sensor_streaming(&self) -> bool {
+        match &self.server {
+            Some(server) => server.streaming(),
+            None => self.robot.flange_sensor_streaming(),
         }
     }
 
@@ -408,7 +438,7 @@ impl Serving {
                     if self.serving {
                         self.round_trip.record(round_trip);
                     }
-                    if !self.serving && self.server.streaming() {
+                    if !self.serving && self.sensor_streaming() {
                         if self.dwell_cycles == 0 {
                             self.serving = true;
                             self.dwelling = false;
@@ -492,12 +522,18 @@ pub fn serve_cell_with(
         geometry_note: geometry_note(model, &nominal),
     });
     let mut cell = Cell::new(twin, options.path.clone(), options.seed)?;
-    let server = NetFtSensorServer::bind(sides.sensor_address, sides.sensor_calibration).map_err(
-        |error| CellServeError::Sensor {
-            address: sides.sensor_address,
-            error,
-        },
-    )?;
+    let server = if sides.sensor_over_rtde {
+        None
+    } else {
+        Some(
+            NetFtSensorServer::bind(sides.sensor_address, sides.sensor_calibration).map_err(
+                |error| CellServeError::Sensor {
+                    address: sides.sensor_address,
+                    error,
+                },
+            )?,
+        )
+    };
     let wait = Duration::from_secs_f64(options.wait_s);
     let robot = sides
         .robot
@@ -547,6 +583,13 @@ pub fn serve_cell_with(
         let (sent, kinematics_ok) = s.send_state();
         next += period;
         let answer = s.await_answer(next, sent, kinematics_ok);
+        if answer.is_none()
+            && s.serving
+            && let Some(c) = s.robot.unanswered_cycle()
+        {
+            // A UR program's path_offset runs every cycle, answered or not.
+            s.cell.set_correction(c.to_array());
+        }
         s.account(answer.is_some());
         if let Some(st) = stream.as_deref_mut() {
             st.count_sensor_samples(streamed);

@@ -20,14 +20,18 @@ pub enum SensorKind {
     /// A `geometry_msgs/WrenchStamped` topic on the ROS 2 graph (`sensor.topic`, the DDS
     /// settings of `[ros2]`): any ROS 2 F/T driver. Opened by the `deflex-ros2` bridge.
     Ros2,
+    /// A Universal Robots arm's own flange sensor over RTDE (`ft_raw_wrench`, e-Series and
+    /// UR-Series): `sensor.address` is the controller's RTDE address (port 30004).
+    UrRtde,
 }
 
 impl SensorKind {
-    /// The name in `CELL.toml` (`netft`, `ros2`).
+    /// The name in `CELL.toml` (`netft`, `ros2`, `ur-rtde`).
     pub fn key(self) -> &'static str {
         match self {
             SensorKind::Netft => "netft",
             SensorKind::Ros2 => "ros2",
+            SensorKind::UrRtde => "ur-rtde",
         }
     }
 }

@@ -34,11 +34,13 @@ pub const REQUIRED_KEYS: &[(&str, &str)] = &[
 pub struct RobotSection {
     /// Protocol (required).
     pub kind: RobotKind,
-    /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI; required).
+    /// Local address the controller listens on (e.g. `0.0.0.0:59152` for RSI; required, except
+    /// for `ur-rtde`, where deflex connects to the robot and does not listen).
     pub bind: SocketAddr,
     /// The robot controller's address: the link answers only it (port 0: any port of that
     /// IP; the simple TCP link compares the IP only). Absent: the link locks to the first host
-    /// that sends a valid telegram, for the whole session.
+    /// that sends a valid telegram, for the whole session. For `ur-rtde` (required): the
+    /// controller's RTDE server that deflex connects to (port 0: 30004).
     pub peer: Option<SocketAddr>,
     /// Without `peer`, let the first host on the network that sends a valid message own the
     /// session (default `false`: a network `bind` without `peer` is refused; a loopback `bind`
@@ -81,6 +83,13 @@ pub struct RobotSection {
     pub stream_jerk_rad_s3: [f64; 6],
     /// FANUC Stream Motion: the path's start and stop ramps (s).
     pub stream_ramp_s: f64,
+    /// `ur-rtde`: the first register of the correction: `input_double_register_N … N+5` (m, rad,
+    /// base axes), `input_int_register_N` (sequence), `output_int_register_N` (the script's
+    /// heartbeat); 24–42 (RTDE clients own 24–47). The URScript program's `REG` must match.
+    pub rtde_register: u8,
+    /// `ur-rtde`: the alpha of `path_offset_set_alpha_filter` in the URScript program (0.001–1,
+    /// 1 = no filter): `applied = alpha · register + (1 − alpha) · applied` every 2 ms.
+    pub ur_alpha_filter: f64,
 }
 
 impl Default for RobotSection {
@@ -105,6 +114,8 @@ impl Default for RobotSection {
             stream_acceleration_rad_s2: [5.0; 6],
             stream_jerk_rad_s3: [100.0; 6],
             stream_ramp_s: 0.5,
+            rtde_register: 24,
+            ur_alpha_filter: 0.5,
         }
     }
 }
@@ -115,7 +126,8 @@ impl Default for RobotSection {
 pub struct SensorSection {
     /// Protocol (required).
     pub kind: SensorKind,
-    /// Sensor address (`<ip>:49152`; required).
+    /// Sensor address (`<ip>:49152` for a Net F/T; the controller's RTDE address `<ip>:30004`
+    /// for `ur-rtde`; required).
     pub address: SocketAddr,
     /// Local address (default: any port on all interfaces).
     pub bind: SocketAddr,
@@ -320,7 +332,7 @@ impl Default for LimitsSection {
     }
 }
 
-/// `[model_check]`: the TCP pose the robot reports (KUKA RSI `RIst`, ABB EGM feedback) against
+/// `[model_check]`: the TCP pose the robot reports (KUKA RSI `RIst`, ABB EGM feedback, UR RTDE `actual_TCP_pose`) against
 /// the model's forward kinematics at the same joints ([`deflex_control::model_check`]).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]

@@ -3,8 +3,8 @@
 //! what was expected. The bounds keep every duration, rate, size and count the runtime derives
 //! from the file (sleep periods, buffer sizes, ramp lengths) finite and small enough to act on.
 
-use super::SensorKind;
 use super::{CellFile, ConfigError, InvalidReason};
+use super::{RobotKind, SensorKind};
 use deflex_control::FeedForwardMode;
 
 /// Bounds of every numeric field, `(field, lowest, highest, unit)`. A lowest bound written as
@@ -16,6 +16,8 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("robot.stream_acceleration_rad_s2", 1e-3, 500.0, "rad/s²"),
     ("robot.stream_jerk_rad_s3", 1e-3, 1e5, "rad/s³"),
     ("robot.stream_ramp_s", 0.01, 10.0, "s"),
+    ("robot.rtde_register", 24.0, 42.0, ""),
+    ("robot.ur_alpha_filter", 0.001, 1.0, ""),
     ("robot.egm_sensor_rpy_rad", -7.0, 7.0, "rad"),
     ("robot.egm_work_object_rpy_rad", -7.0, 7.0, "rad"),
     ("sensor.counts_per_force", 1e-3, 1e12, "counts/N"),
@@ -221,7 +223,21 @@ impl CellFile {
                 ));
             }
         }
-        if let Err(e) = deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer) {
+        if r.kind == RobotKind::UrRtde {
+            // deflex connects to the controller: its address is required, nothing listens.
+            self.check("robot.rtde_register", f64::from(r.rtde_register))?;
+            self.check("robot.ur_alpha_filter", r.ur_alpha_filter)?;
+            match r.peer {
+                None => return Err(self.invalid("robot.peer", InvalidReason::RtdeNeedsPeer)),
+                Some(p) if p.ip().is_unspecified() || p.ip().is_multicast() => {
+                    return Err(self.invalid(
+                        "robot.peer",
+                        InvalidReason::Peer(deflex_io::PeerConfigError::NotAHost { peer: p }),
+                    ));
+                }
+                Some(_) => {}
+            }
+        } else if let Err(e) = deflex_io::validate_peer(r.bind, r.peer, r.allow_any_peer) {
             let field = match e {
                 deflex_io::PeerConfigError::NoPeerOnNetworkBind { .. } => "robot.bind",
                 deflex_io::PeerConfigError::PeerAndAllowAny { .. } => "robot.allow_any_peer",

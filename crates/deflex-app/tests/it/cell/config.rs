@@ -408,3 +408,83 @@ fn ros2_section_and_sensor() {
         .to_string();
     assert!(e.contains("sensor.address"), "{e}");
 }
+
+const UR_RTDE: &str = r#"
+[robot]
+kind = "ur-rtde"
+peer = "127.0.0.1:0"
+cycle_s = 0.002
+[sensor]
+kind = "ur-rtde"
+address = "127.0.0.1:0"
+[model]
+file = "ur10e"
+"#;
+
+/// Issue 34: a UR over RTDE is connected to, not listened for: `robot.peer` is required (port 0
+/// means 30004), `robot.bind` is not; the registers and the alpha filter are bounded; the
+/// twin's path offset follows the file.
+#[test]
+fn ur_rtde_needs_the_controller_s_address_and_bounds_its_registers() {
+    let cell = parse(UR_RTDE).unwrap();
+    assert_eq!(cell.robot.kind, RobotKind::UrRtde);
+    assert_eq!(cell.sensor.kind, SensorKind::UrRtde);
+    assert_eq!(cell.robot_link_address().to_string(), "127.0.0.1:30004");
+    assert_eq!(
+        (cell.robot.rtde_register, cell.robot.ur_alpha_filter),
+        (24, 0.5)
+    );
+    let side = cell.robot_side(6);
+    assert_eq!(side.controller.to_string(), "127.0.0.1:30004");
+    assert_eq!(side.rtde_register, 24);
+    let m = side.path_offset;
+    assert_eq!(m.alpha, 0.5);
+    assert!((m.max_offset_m - cell.limits.max_correction_m * 3f64.sqrt()).abs() < 1e-15);
+    // robot.timeout_s (0.05 s by default) in 2 ms controller cycles.
+    assert_eq!(m.watchdog_cycles, 25);
+
+    let no_peer = UR_RTDE.replace("peer = \"127.0.0.1:0\"\n", "");
+    let e = parse(&no_peer).unwrap_err().to_string();
+    assert!(e.contains("robot.peer") && e.contains("ur-rtde"), "{e}");
+    refused_naming(
+        parse(&UR_RTDE.replace("127.0.0.1:0\"\ncycle", "0.0.0.0:30004\"\ncycle")),
+        "unspecified peer",
+        "robot.peer",
+    );
+    for (key, value) in [
+        ("rtde_register", "23"),
+        ("rtde_register", "43"),
+        ("ur_alpha_filter", "0.0"),
+        ("ur_alpha_filter", "1.5"),
+    ] {
+        let text = UR_RTDE.replace(
+            "cycle_s = 0.002",
+            &format!("cycle_s = 0.002\n{key} = {value}"),
+        );
+        refused_naming(parse(&text), value, &format!("robot.{key}"));
+    }
+    // The other robots still need their bind.
+    let rsi = MINIMAL.replace("bind = \"127.0.0.1:59152\"\n", "");
+    refused_naming(parse(&rsi), "kuka-rsi without bind", "robot.bind");
+}
+
+/// The simulated cell streams the flange sensor from its UR controller only.
+#[test]
+fn the_twin_plays_the_arm_s_sensor_only_with_its_ur_controller() {
+    let twin = deflex_sim::CellConfig::for_robot("ur10e").unwrap();
+    let sides = parse(UR_RTDE).unwrap().cell_sides(&twin).unwrap();
+    assert!(sides.sensor_over_rtde);
+    let with_rsi = UR_RTDE.replace(
+        "kind = \"ur-rtde\"\npeer = \"127.0.0.1:0\"",
+        "kind = \"kuka-rsi\"\nbind = \"127.0.0.1:59152\"",
+    );
+    let elsewhere = UR_RTDE.replace("address = \"127.0.0.1:0\"", "address = \"127.0.0.2:0\"");
+    for text in [with_rsi, elsewhere] {
+        let e = parse(&text)
+            .unwrap()
+            .cell_sides(&twin)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("ur-rtde") && e.contains("robot.peer"), "{e}");
+    }
+}

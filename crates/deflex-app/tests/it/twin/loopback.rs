@@ -47,7 +47,7 @@ fn helical(length_mm: f64) -> ToolPath {
 /// loaded machine (with 1 s, the ramp-out delayed past it latched `sensor_timeout`).
 fn cell_toml(kind: &str, twin: &CellConfig) -> String {
     let s = &twin.sensor;
-    let robot_port = if kind == "simple-tcp" {
+    let robot_port = if kind == "simple-tcp" || kind == "ur-rtde" {
         std::net::TcpListener::bind("127.0.0.1:0")
             .and_then(|l| l.local_addr())
             .map(|a| a.port())
@@ -55,17 +55,29 @@ fn cell_toml(kind: &str, twin: &CellConfig) -> String {
     } else {
         free_port()
     };
+    // A UR arm over RTDE: deflex connects to its controller (robot.peer) and reads the flange
+    // sensor from the same controller.
+    let (robot_address, sensor) = if kind == "ur-rtde" {
+        (
+            format!("peer = \"127.0.0.1:{robot_port}\""),
+            format!("kind = \"ur-rtde\"\naddress = \"127.0.0.1:{robot_port}\""),
+        )
+    } else {
+        (
+            format!("bind = \"127.0.0.1:{robot_port}\""),
+            format!("kind = \"netft\"\naddress = \"127.0.0.1:{}\"", free_port()),
+        )
+    };
     format!(
-        "[robot]\nkind = \"{kind}\"\nbind = \"127.0.0.1:{robot_port}\"\ntimeout_s = 1.0\n\
+        "[robot]\nkind = \"{kind}\"\n{robot_address}\ntimeout_s = 1.0\n\
          cycle_s = {}\n\
-         [sensor]\nkind = \"netft\"\naddress = \"127.0.0.1:{}\"\nbind = \"127.0.0.1:0\"\n\
+         [sensor]\n{sensor}\nbind = \"127.0.0.1:0\"\n\
          timeout_s = 2.0\nrange = {:?}\n\
          [mounting]\nsensor_xyz_m = {:?}\nsensor_rpy_rad = {:?}\ntool_mass_kg = {}\ntool_com_m = {:?}\n\
          gravity_m_s2 = [0.0, 0.0, {}]\n\
          [model]\nfile = \"model.toml\"\n[control]\nrealtime = false\nlock_memory = false\n\
          [log]\npath = \"run.csv\"\n",
         twin.robot_period_s(),
-        free_port(),
         s.range,
         s.sensor_in_flange_xyz_m,
         s.sensor_in_flange_rpy,
@@ -194,12 +206,15 @@ fn check_loopback(kind: &str, l: &Loopback, min_telegrams: u64) {
         s.fault
     );
     assert_eq!(s.robot_joints, 6, "{kind}");
-    // The model check (issue 33): the KUKA and the ABB report their TCP pose, the twin's own
+    // The model check (issue 33): the KUKA, the ABB and the UR over RTDE report their TCP pose, the twin's own
     // kinematics at the measured joints; the model (calibrated from the twin's campaign, or
     // nominal) is within a calibration's difference of it, far inside the 5 mm / 10 mrad
     // tolerance. The other protocols carry no pose: nothing is checked.
-    match (kind, s.pose_mismatch_max) {
-        ("kuka-rsi" | "abb-egm", Some(m)) => {
+    let carries_pose = ["kuka-rsi", "abb-egm", "ur-rtde"]
+        .iter()
+        .any(|k| kind.starts_with(k));
+    match (carries_pose, s.pose_mismatch_max) {
+        (true, Some(m)) => {
             println!(
                 "{kind}: model check: {:.4} mm, {:.4} mrad",
                 m.position_m * 1e3,
@@ -210,7 +225,7 @@ fn check_loopback(kind: &str, l: &Loopback, min_telegrams: u64) {
                 "{kind}: {m:?}"
             );
         }
-        ("kuka-rsi" | "abb-egm", None) => panic!("{kind}: the reported pose was not checked"),
+        (true, None) => panic!("{kind}: the reported pose was not checked"),
         (_, m) => assert!(m.is_none(), "{kind}: {m:?}"),
     }
     // Every answer within the rate limit per robot cycle, whatever the timing.
@@ -301,4 +316,25 @@ fn loopback_ur10e_cell_over_simple_tcp() {
     // and the run saw it through the UR cell's sensor.
     let f = l.cell.summary.max_force_norm_n;
     assert!(f > 0.5 && f < 400.0, "{f} N");
+}
+
+/// The UR10e twin over RTDE (issue 34, SIMULATED): `deflex run` connects to the twin's
+/// controller, reads joints, `actual_TCP_pose` (the model check) and the arm's own flange sensor
+/// (`ft_raw_wrench`, a second RTDE connection), and writes the correction to the input registers
+/// the twin's URScript program applies through `path_offset` (alpha filter 0.5, 2 ms cycle).
+#[test]
+fn loopback_ur10e_cell_over_rtde_with_the_arm_s_own_sensor() {
+    let _turn = crate::twin::session_turn();
+    let twin = CellConfig::for_robot("ur10e").unwrap();
+    let model = twin.nominal_robot().unwrap();
+    let l = loopback_for(Some("ur10e"), model, "ur-rtde", 30.0, 5);
+    assert!(l.cell.robot.contains("UR10e"), "{}", l.cell.robot);
+    assert!(l.cell.model_geometry_matches);
+    assert_eq!(l.cell_cycle_s, 0.002);
+    check_loopback("ur-rtde (UR10e)", &l, 600);
+    // The correction reached the arm through path_offset, and the sensor saw the contact.
+    assert!(l.cell.summary.max_correction_m > 0.0);
+    let f = l.cell.summary.max_force_norm_n;
+    assert!(f > 0.5 && f < 400.0, "{f} N");
+    assert!(l.run.summary.samples > 600, "{}", l.run.summary.samples);
 }

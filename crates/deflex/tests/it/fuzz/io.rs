@@ -618,3 +618,77 @@ fn fanuc_stream_parsers() {
         }
     });
 }
+
+/// UR RTDE: the package framing, data packages of a recipe, recipe answers, text messages and
+/// the controller side's requests never panic; an accepted data package has finite doubles and
+/// re-encodes to the same bytes.
+#[test]
+fn rtde_parsers() {
+    use deflex_io::rtde::client::{Next, PackageBuf};
+    use deflex_io::rtde::*;
+    let recipe = Recipe::new(
+        1,
+        &[
+            Variable::Timestamp,
+            Variable::ActualQ,
+            Variable::RobotMode,
+            Variable::RuntimeState,
+        ],
+    )
+    .unwrap();
+    let mut valid = [0u8; 256];
+    let values = [
+        Value::F64(1.5),
+        Value::V6([0.1, -0.2, 0.3, 0.0, 1.0, -3.0]),
+        Value::I32(7),
+        Value::U32(2),
+    ];
+    let n = encode_data(&mut valid, &recipe, &values).unwrap();
+    let corpus = vec![
+        valid[..n].to_vec(),
+        b"\x00\x08M\x02hi\x00\x03".to_vec(),
+        b"\x00\x14O\x01DOUBLE,VECTOR6D".to_vec(),
+    ];
+    run("rtde", &corpus, 600, |b| {
+        let mut buf = PackageBuf::new();
+        let take = b.len().min(buf.space().len());
+        buf.space()[..take].copy_from_slice(&b[..take]);
+        buf.commit(take);
+        while let Ok(next) = buf.next_package() {
+            let Next::Package(t, size) = next else {
+                if next == Next::Incomplete {
+                    break;
+                }
+                continue;
+            };
+            let payload = &buf.package(size)[3..];
+            let mut out = [Value::default(); MAX_FIELDS];
+            match t {
+                PackageType::DataPackage => match decode_data(payload, &recipe, &mut out) {
+                    Ok(()) => {
+                        let mut again = [0u8; 256];
+                        let m = encode_data(&mut again, &recipe, &out[..4]).unwrap();
+                        assert_eq!(&again[3..m], payload);
+                    }
+                    Err(e) => packet_error(&e),
+                },
+                PackageType::TextMessage => {
+                    let _ = decode_text_message(payload);
+                }
+                PackageType::SetupOutputs => {
+                    let _ = decode_recipe_answer(payload, recipe.variables());
+                    if let Ok((f, names)) = decode_setup_outputs(payload) {
+                        assert!(f.is_finite() && f > 0.0);
+                        let _ = for_each_name(names, |_, _| Ok(()));
+                    }
+                }
+                _ => {
+                    let _ = decode_accepted(payload);
+                    let _ = decode_controller_version(payload);
+                    let _ = decode_protocol_request(payload);
+                }
+            }
+            buf.consume(size);
+        }
+    });
+}

@@ -311,3 +311,62 @@ fn fanuc_stream_link_does_not_allocate_while_streaming() {
     assert_eq!(robot.counts().1, 0);
     assert_eq!(total, 0);
 }
+
+/// UR RTDE: the robot link's `receive` / `send_correction` and the flange sensor's `receive`
+/// allocate nothing once connected (the twin's controller runs in a thread of its own, whose
+/// allocations this thread's counter does not see).
+#[test]
+fn rtde_links_do_not_allocate_on_the_hot_path() {
+    use deflex_io::rtde::{
+        PathOffsetModel, RtdeLink, RtdeLinkConfig, RtdeRobotEndpoint, RtdeSensor,
+    };
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let mut controller =
+        RtdeRobotEndpoint::bind("127.0.0.1:0", 24, PathOffsetModel::new(1.0, 1.0, 1.0, 100))
+            .unwrap();
+    let addr = controller.server().local_addr().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let thread = std::thread::spawn(move || {
+        let mut k = 0u64;
+        while !flag.load(Ordering::SeqCst) {
+            k += 1;
+            controller.set_flange_wrench(&Wrench::new(1.0, 2.0, 3.0, 0.1, 0.2, k as f64));
+            controller.send_state(&state(k)).unwrap();
+            let _ = controller.receive_correction(Duration::from_millis(5));
+        }
+    });
+    let mut link = RtdeLink::connect(
+        addr,
+        RtdeLinkConfig {
+            register: 24,
+            connect_wait: T,
+        },
+    )
+    .unwrap();
+    let mut sensor = RtdeSensor::connect(addr, T).unwrap();
+    let (mut total, mut states, mut samples) = (0, 0, 0);
+    for k in 0..200u64 {
+        let before = allocs();
+        let s = link.receive(Duration::from_millis(20)).unwrap();
+        if s.is_some() {
+            link.send_correction(&Correction {
+                dp_m: [1e-5 * k as f64, 0.0, 0.0],
+                dphi_rad: [0.0; 3],
+            })
+            .unwrap();
+        }
+        let w = sensor.receive(Duration::from_millis(20)).unwrap();
+        let after = allocs();
+        if k > 0 {
+            total += after - before;
+        }
+        states += u64::from(s.is_some());
+        samples += u64::from(w.is_some());
+    }
+    stop.store(true, Ordering::SeqCst);
+    thread.join().unwrap();
+    assert!(states > 50 && samples > 50, "{states} {samples}");
+    assert_eq!(total, 0, "RTDE");
+}
