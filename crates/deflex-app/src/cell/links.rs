@@ -17,7 +17,7 @@ use deflex_io::egm::{EgmConfig, EgmLink};
 use deflex_io::fanuc_stream::link::{DEFAULT_CORRECTION_SHARE, FanucStreamConfig, FanucStreamLink};
 use deflex_io::fanuc_stream::motion::{StreamLimits, StreamTrajectory};
 use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
-use deflex_io::robot_side::RobotSide;
+use deflex_io::robot_side::{RobotSide, StreamSide};
 use deflex_io::rsi::{CorrectionMode, RsiAnswer, RsiConfig, RsiLink};
 use deflex_io::simple_tcp::SimpleTcpLink;
 use deflex_io::simple_udp::{ReplyStyle, SimpleUdpLink};
@@ -234,6 +234,20 @@ impl CellFile {
             egm: self.egm_config(joint_count),
             // The VAL3 program's watchdog: the robot's own timeout.
             staubli_watchdog: Duration::from_secs_f64(self.robot.timeout_s.clamp(1e-3, 10.0)),
+            // FANUC Stream Motion: the controller listens at `robot.peer` (port 0: 60015).
+            stream: (self.robot.kind == RobotKind::FanucStream)
+                .then_some(self.robot.peer)
+                .flatten()
+                .map(|mut address| {
+                    if address.port() == 0 {
+                        address.set_port(deflex_io::fanuc_stream::DEFAULT_PORT);
+                    }
+                    StreamSide {
+                        address,
+                        period_s: self.robot.cycle_s,
+                        limits: self.stream_limits(),
+                    }
+                }),
         }
     }
 

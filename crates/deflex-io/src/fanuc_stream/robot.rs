@@ -127,6 +127,11 @@ impl FanucStreamRobotEndpoint {
         self.stopped
     }
 
+    /// The sequence number of the last status packet sent (its command must echo it).
+    pub fn sequence(&self) -> u32 {
+        self.sequence
+    }
+
     /// The latched threshold fault.
     pub fn fault(&self) -> Option<ThresholdFault> {
         self.error

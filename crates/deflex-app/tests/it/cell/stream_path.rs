@@ -7,9 +7,8 @@ use deflex_app::option_names::OptionNames;
 use deflex_app::table::{TableColumn, parse};
 use deflex_io::fanuc_stream::motion::{SMOOTHING_CYCLES, StreamLimits};
 
-/// The arm streamed: a built-in six-axis arm (the FANUC-like built-in arm, once there, is a
-/// one-line change here).
-const ARM: &str = "kr210-r2700";
+/// The arm streamed: the FANUC-like built-in arm.
+const ARM: &str = "r2000ic-165f";
 const T: f64 = 0.008;
 
 fn table() -> String {
