@@ -394,7 +394,7 @@ impl ControllerEmulation {
     }
 
     /// The closest point to `p` (world, m) of the programmed polyline's segments from the
-    /// current one forward over [`PROJECTION_WINDOW`] segments (the earliest on a tie), which
+    /// current one forward over 64 segments (the earliest on a tie), which
     /// becomes the current segment. Allocation-free.
     pub fn project(&mut self, p: &Vector3<f64>) -> Vector3<f64> {
         let last = self.p.len() - 1;
