@@ -156,6 +156,7 @@ impl CellFile {
 
     /// FANUC Stream Motion: the link settings of `[robot]` (the controller at `robot.peer`,
     /// port 60015 when 0; the limits `robot.stream_*`; lost after `robot.timeout_s`, at least ten
+    /// cycles; a late status after `robot.stream_late_after_s`, at least a cycle, else five
     /// cycles).
     pub fn stream_config(&self) -> Result<FanucStreamConfig, LinkError> {
         let r = &self.robot;
@@ -168,6 +169,9 @@ impl CellFile {
         let mut cfg = FanucStreamConfig::new(controller, r.cycle_s);
         cfg.limits = self.stream_limits();
         cfg.lost_after = Duration::from_secs_f64(r.timeout_s.max(10.0 * r.cycle_s));
+        if let Some(late) = r.stream_late_after_s {
+            cfg.late_after = Duration::from_secs_f64(late.max(r.cycle_s));
+        }
         Ok(cfg)
     }
 

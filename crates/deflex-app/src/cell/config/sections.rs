@@ -81,6 +81,9 @@ pub struct RobotSection {
     pub stream_jerk_rad_s3: [f64; 6],
     /// FANUC Stream Motion: the path's start and stop ramps (s).
     pub stream_ramp_s: f64,
+    /// FANUC Stream Motion: a status later than this after the previous one stops the stream
+    /// (s); `None`: five cycles.
+    pub stream_late_after_s: Option<f64>,
 }
 
 impl Default for RobotSection {
@@ -105,6 +108,7 @@ impl Default for RobotSection {
             stream_acceleration_rad_s2: [5.0; 6],
             stream_jerk_rad_s3: [100.0; 6],
             stream_ramp_s: 0.5,
+            stream_late_after_s: None,
         }
     }
 }
