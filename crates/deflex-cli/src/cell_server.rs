@@ -22,8 +22,9 @@ pub struct CellArgs {
     #[arg(long)]
     pub sim: bool,
     /// The same CELL.toml as `deflex run`: robot.bind is where the robot's telegrams go (any
-    /// robot.kind), sensor.address is where the simulated Net F/T answers. Both must be
-    /// loopback addresses.
+    /// robot.kind; with fanuc-stream the simulated controller listens at robot.peer and
+    /// follows the joints deflex streams), sensor.address is where the simulated Net F/T
+    /// answers. All must be loopback addresses.
     #[arg(long)]
     pub config: PathBuf,
     /// Twin settings (`[cell]` TOML of `deflex sim`) over the robot's cell; default: the robot's

@@ -1,11 +1,16 @@
 //! `deflex cell --sim`: the digital twin served on loopback over the protocols of a real cell
 //! (SIMULATED). It plays the robot of `robot.kind` (a KUKA sending RSI telegrams, an ABB
-//! streaming EGM, the Stäubli VAL3 program, a UR script on the simple UDP/TCP line links) at the
+//! streaming EGM, the Stäubli VAL3 program, a UR script on the simple UDP/TCP line links, a
+//! FANUC controller following the joints deflex streams over Stream Motion) at the
 //! twin's robot cycle and the ATI Net F/T streaming its readings while the twin forms the path,
 //! so `deflex run` can be tried end to end with no hardware. Its ends ([`CellSides`]) come from
 //! the same `CELL.toml` as `deflex run`'s (`deflex-app` builds both), and each protocol's robot
 //! side is the protocol crate's own ([`deflex_io::robot_side`]), so both sides agree on the
-//! protocol by construction. The twin
+//! protocol by construction. With Stream Motion the robot has no program of its own to run:
+//! its drives take the last command each cycle, from its first (no dwell: deflex's approach and
+//! ramp move it), its desired point is the path's closest to the true tool
+//! ([`crate::controller_emulation`]), and the session ends at deflex's stop packet, or after
+//! 2 s without a command (the robot's watchdog). The twin
 //! plays any robot (`crate::CellConfig::for_robot`: part position, force level, controller
 //! rate, sensor) and names it in every output.
 
