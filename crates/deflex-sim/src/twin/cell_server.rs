@@ -104,6 +104,21 @@ pub enum CellServeError {
         /// Its joints.
         played_joints: usize,
     },
+    /// A FANUC Stream Motion cell whose `robot.cycle_s` is not the cycle of the robot the twin
+    /// plays: deflex would stream one cycle's path per status at another pace.
+    #[error(
+        "{origin}: robot.cycle_s = {cycle_s} s, but the FANUC controller the twin plays runs every \
+         {twin_cycle_s} s (its cell's controller.rate_hz; give --twin a [cell.controller] rate_hz \
+         of 1/cycle_s)"
+    )]
+    StreamCycleMismatch {
+        /// The CELL.toml.
+        origin: String,
+        /// `robot.cycle_s`.
+        cycle_s: f64,
+        /// The twin's robot cycle (s).
+        twin_cycle_s: f64,
+    },
     /// The twin refuses its settings or the path.
     #[error(transparent)]
     Twin(#[from] crate::SimError),
@@ -285,6 +300,15 @@ fn check_sides(sides: &CellSides, twin: &CellConfig) -> Result<Robot, CellServeE
                 address,
             });
         }
+    }
+    if let Some(stream) = sides.robot.stream
+        && (stream.period_s - twin.robot_period_s()).abs() > 1e-9
+    {
+        return Err(CellServeError::StreamCycleMismatch {
+            origin: sides.origin.clone(),
+            cycle_s: stream.period_s,
+            twin_cycle_s: twin.robot_period_s(),
+        });
     }
     let model = &sides.model;
     let nominal = twin.nominal_robot()?;

@@ -238,3 +238,48 @@ fn stream_motion_closes_the_loop_on_the_fanuc_like_twin() {
     }
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// A Stream Motion cell whose `robot.cycle_s` is not the cycle of the controller the twin plays
+/// is refused before anything is bound: deflex would stream one cycle's path per status at
+/// another pace.
+#[test]
+fn a_stream_at_another_cycle_than_the_twin_s_is_refused() {
+    use deflex_sim::twin::cell_server::CellServeError;
+    let twin = CellConfig::for_robot(ARM).unwrap();
+    assert_eq!(twin.robot_period_s(), 0.004);
+    let dir = std::env::temp_dir().join(format!("deflex-twin-fanuc-cycle-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let toml = cell_toml(
+        &format!(
+            "kind = \"fanuc-stream\"\npeer = \"127.0.0.1:{}\"\nstream_path = \"compensated_path.csv\"",
+            free_port()
+        ),
+        &twin,
+        "",
+    )
+    .replace("cycle_s = 0.004", "cycle_s = 0.008");
+    let config = dir.join("cell.toml");
+    std::fs::write(&config, toml).unwrap();
+    let file = CellFile::load(&config).unwrap();
+    let sides = file.cell_sides(&twin).unwrap();
+    let options = ServeOptions {
+        twin: twin.clone(),
+        path: SimCellPath::Cone.tool_path(Some(5.0)).unwrap(),
+        seed: 1,
+        speed: 1.0,
+        wait_s: 1.0,
+        dwell_s: 0.0,
+        pose_jump: None,
+    };
+    match serve_cell(&sides, &options, &AtomicBool::new(false), &mut |_| {}) {
+        Err(e @ CellServeError::StreamCycleMismatch { .. }) => {
+            let text = e.to_string();
+            assert!(
+                text.contains("robot.cycle_s = 0.008 s") && text.contains("every 0.004 s"),
+                "{text}"
+            );
+        }
+        other => panic!("{:?}", other.map(|o| o.cycles)),
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
