@@ -22,9 +22,10 @@ pub struct CellArgs {
     #[arg(long)]
     pub sim: bool,
     /// The same CELL.toml as `deflex run`: robot.bind is where the robot's telegrams go (any
-    /// robot.kind; for ur-rtde, robot.peer is where the simulated UR controller serves RTDE),
-    /// sensor.address is where the simulated Net F/T answers (for sensor.kind = "ur-rtde", the
-    /// UR controller streams the flange sensor). All must be loopback addresses.
+    /// robot.kind; for ur-rtde, robot.peer is where the simulated UR controller serves RTDE;
+    /// with fanuc-stream the simulated controller listens at robot.peer and follows the joints
+    /// deflex streams), sensor.address is where the simulated Net F/T answers (for sensor.kind =
+    /// "ur-rtde", the UR controller streams the flange sensor). All must be loopback addresses.
     #[arg(long)]
     pub config: PathBuf,
     /// Twin settings (`[cell]` TOML of `deflex sim`) over the robot's cell; default: the robot's

@@ -55,4 +55,4 @@ pub use link::{
     WrenchSample,
 };
 pub use peer::{PeerConfigError, PeerPolicy, PeerWarning, validate_peer};
-pub use robot_side::{RobotEndpoint, RobotKind, RobotSide};
+pub use robot_side::{RobotEndpoint, RobotKind, RobotSide, StreamSide};

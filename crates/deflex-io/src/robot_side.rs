@@ -4,6 +4,8 @@
 //! on the protocol by construction.
 
 use crate::egm::{EgmConfig, EgmRobotEndpoint};
+use crate::fanuc_stream::motion::StreamLimits;
+use crate::fanuc_stream::robot::FanucStreamRobotEndpoint;
 use crate::rsi::{CorrectionMode, RsiRobotEndpoint};
 use crate::rtde::{PathOffsetModel, RtdeRobotEndpoint};
 use crate::simple_tcp::SimpleTcpRobotEndpoint;
@@ -93,6 +95,20 @@ pub struct RobotSide {
     pub rtde_register: u8,
     /// UR RTDE: the URScript program's path offset (alpha filter, maximum offset, watchdog).
     pub path_offset: PathOffsetModel,
+    /// FANUC Stream Motion: where the controller itself listens (`robot.peer`; the device,
+    /// deflex, sends first), its cycle and the thresholds it reports and enforces.
+    pub stream: Option<StreamSide>,
+}
+
+/// The FANUC controller's end of a Stream Motion session ([`RobotSide::stream`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamSide {
+    /// Where the controller listens (its port 60015 on a real controller).
+    pub address: SocketAddr,
+    /// Its interpolation cycle (s): 0.008 or 0.004.
+    pub period_s: f64,
+    /// The velocity, acceleration and jerk thresholds it reports and enforces.
+    pub limits: StreamLimits,
 }
 
 impl RobotSide {
@@ -122,13 +138,16 @@ impl RobotSide {
                 EndpointLink::Other(Box::new(SimpleUdpRobotEndpoint::new(local, pc)?))
             }
             RobotKind::FanucStream => {
-                // The twin plays a robot that runs its own path and takes corrections; following
-                // streamed joints needs a joint-command mode of its controller emulation.
-                return Err(LinkError::InvalidValue {
-                    protocol: crate::Protocol::FanucStream,
-                    reason: "the simulated cell does not serve FANUC Stream Motion yet \
-                             (docs/fanuc/README.md)",
-                });
+                let Some(side) = self.stream else {
+                    return Err(LinkError::NoPeer {
+                        protocol: crate::Protocol::FanucStream,
+                    });
+                };
+                EndpointLink::Fanuc(Box::new(FanucStreamRobotEndpoint::bind(
+                    side.address,
+                    side.period_s,
+                    side.limits,
+                )?))
             }
             RobotKind::UrRtde => EndpointLink::Rtde(Box::new(RtdeRobotEndpoint::bind(
                 pc,
@@ -158,6 +177,7 @@ impl RobotSide {
 enum EndpointLink {
     Egm(Box<EgmRobotEndpoint>, EgmConfig),
     Rtde(Box<RtdeRobotEndpoint>),
+    Fanuc(Box<FanucStreamRobotEndpoint>),
     Other(Box<dyn RobotSideLink + Send>),
 }
 
@@ -178,6 +198,7 @@ impl RobotEndpoint {
         match &mut self.link {
             EndpointLink::Egm(l, _) => l.as_mut(),
             EndpointLink::Rtde(l) => l.as_mut(),
+            EndpointLink::Fanuc(l) => l.as_mut(),
             EndpointLink::Other(l) => l.as_mut(),
         }
     }
@@ -208,11 +229,45 @@ impl RobotEndpoint {
         }
     }
 
+    /// Whether the robot follows the joints a device streams (FANUC Stream Motion) rather than
+    /// running its own program and taking corrections.
+    pub fn follows_joint_stream(&self) -> bool {
+        matches!(self.link, EndpointLink::Fanuc(_))
+    }
+
+    /// The joints the robot is commanded to by a joint stream (rad): the last command it
+    /// accepted; `None` before the first, or for a robot running its own program.
+    pub fn joint_command(&self) -> Option<[f64; 6]> {
+        match &self.link {
+            EndpointLink::Fanuc(l) => l.commanded_rad(),
+            _ => None,
+        }
+    }
+
     /// The UR RTDE endpoint, for a UR RTDE robot.
     pub fn rtde(&mut self) -> Option<&mut RtdeRobotEndpoint> {
         match &mut self.link {
             EndpointLink::Rtde(ep) => Some(ep),
             _ => None,
+        }
+    }
+
+    /// A joint stream is over: the device sent its stop packet (always false for a robot
+    /// running its own program).
+    pub fn stream_ended(&self) -> bool {
+        match &self.link {
+            EndpointLink::Fanuc(l) => l.stopped(),
+            _ => false,
+        }
+    }
+
+    /// The cycle id the answer to the last state sent must echo: the state's own
+    /// ([`RobotState::cycle_id`]), or for Stream Motion the sequence number of the controller's
+    /// last status packet.
+    pub fn expected_cycle_id(&self, state_cycle_id: u64) -> u64 {
+        match &self.link {
+            EndpointLink::Fanuc(l) => u64::from(l.sequence()),
+            _ => state_cycle_id,
         }
     }
 

@@ -388,6 +388,23 @@ impl Cell {
         self.controller.set_correction(xi);
     }
 
+    /// From now on the robot follows the joints a device streams (FANUC Stream Motion), not
+    /// its program's clock; the program's path stays the reference of the error, measured from
+    /// the closest point of the path to the tool (see [`crate::controller_emulation`]).
+    pub fn follow_joint_stream(&mut self) {
+        self.controller.follow_joint_stream();
+    }
+
+    /// The joints streamed for the next cycle (rad), when following a joint stream.
+    pub fn set_joint_command(&mut self, q: [f64; 6]) {
+        self.controller.set_joint_command(q);
+    }
+
+    /// The device ended its joint stream: the next cycle is the run's last.
+    pub fn end_joint_stream(&mut self) {
+        self.controller.end_joint_stream();
+    }
+
     /// Advance one robot-controller cycle (1/250 s by default); returns what the robot and the
     /// sensor report in that cycle.
     pub fn step(&mut self) -> CellStep {
@@ -405,6 +422,13 @@ impl Cell {
         let (wrench, contact) = self.equilibrium(&cycle, &p_cmd);
         let tcp_true = self.plant.deformed_tcp();
         let p_true = tcp_true.translation.vector - self.true_origin;
+        // Following a joint stream, the desired point is the path's closest to the true tool
+        // (the part's frame as programmed: its origin where the program puts it).
+        let desired_m = if self.controller.follows_joint_stream() {
+            self.controller.project(&(p_true + self.origin)) - self.origin
+        } else {
+            cycle.desired_m - self.origin
+        };
         self.work.commit(&p_true, &contact);
         self.plant.commit();
         self.last_force = wrench[2];
@@ -423,7 +447,7 @@ impl Cell {
         out.tcp_reported = self.world_to_base * tcp_cmd;
         out.finished = cycle.finished;
         let truth = TruthState {
-            desired_m: cycle.desired_m - self.origin,
+            desired_m,
             commanded_m: p_cmd,
             true_m: p_true,
             wrench,

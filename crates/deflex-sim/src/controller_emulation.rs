@@ -13,6 +13,17 @@
 //!   through the Jacobian as a joint offset `δq = J⁻¹ ξ` (small corrections, so no IK per
 //!   cycle): `s_com = s_des + ξ` (eq. 7).
 
+//! * **Joint stream** ([`ControllerEmulation::follow_joint_stream`], FANUC Stream Motion): the
+//!   motion source is the device, not the controller's clock. Each cycle the drives take the
+//!   last joint command received ([`ControllerEmulation::set_joint_command`]; the start pose
+//!   until the first), tracked exactly as a programmed path is (the joint servos are
+//!   feed-forwarded); no correction pipeline (the device adds its correction to the joints).
+//!   The *desired* point is then not a time's: it is the closest point of the programmed
+//!   polyline to the tool where it really is ([`ControllerEmulation::project`]), searched
+//!   forward from the last one, so the error is the tool's distance from the path whatever the
+//!   device's timing (the approach, its ramps, its pauses) and an along-path lag is not an
+//!   error of the part.
+
 use crate::cell_config::RobotControllerConfig;
 use crate::error::SimError;
 use crate::toolpath::ToolPath;
@@ -225,7 +236,21 @@ pub struct ControllerEmulation {
     cycle: u64,
     period_s: f64,
     pipeline: CorrectionPipeline,
+    /// Joint stream mode: the last command received (`None` before the first).
+    stream: Option<JointStream>,
 }
+
+/// The state of a joint stream ([`ControllerEmulation::follow_joint_stream`]).
+#[derive(Clone, Copy, Debug)]
+struct JointStream {
+    /// The joints commanded (rad): the last command, the start pose before the first.
+    command: [f64; 6],
+    /// The device ended the stream.
+    ended: bool,
+}
+
+/// Segments searched forward from the last projection's ([`ControllerEmulation::project`]).
+const PROJECTION_WINDOW: usize = 64;
 
 impl ControllerEmulation {
     /// Plan the path: waypoints (R_p, mm) → world poses with the tool orientation of the seed
@@ -331,7 +356,70 @@ impl ControllerEmulation {
             cycle: 0,
             period_s: 1.0 / config.rate_hz,
             pipeline: CorrectionPipeline::new(config, servo),
+            stream: None,
         })
+    }
+
+    /// From now on the drives follow the joints a device streams (see the module
+    /// documentation), starting at the path's start pose until the first command.
+    pub fn follow_joint_stream(&mut self) {
+        if self.stream.is_none() {
+            self.stream = Some(JointStream {
+                command: self.q[0],
+                ended: false,
+            });
+        }
+    }
+
+    /// The joints streamed for the next cycle (rad); ignored unless following a joint stream,
+    /// or when not finite.
+    pub fn set_joint_command(&mut self, q: [f64; 6]) {
+        if let Some(s) = self.stream.as_mut()
+            && q.iter().all(|v| v.is_finite())
+        {
+            s.command = q;
+        }
+    }
+
+    /// The device ended its stream: the next cycle is the run's last.
+    pub fn end_joint_stream(&mut self) {
+        if let Some(s) = self.stream.as_mut() {
+            s.ended = true;
+        }
+    }
+
+    /// Following a joint stream.
+    pub fn follows_joint_stream(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// The closest point to `p` (world, m) of the programmed polyline's segments from the
+    /// current one forward over 64 segments (the earliest on a tie), which
+    /// becomes the current segment. Allocation-free.
+    pub fn project(&mut self, p: &Vector3<f64>) -> Vector3<f64> {
+        let last = self.p.len() - 1;
+        if last == 0 {
+            return self.p[0];
+        }
+        let mut best = (f64::INFINITY, self.segment, self.p[self.segment]);
+        let end = (self.segment + PROJECTION_WINDOW).min(last);
+        for k in self.segment..end {
+            let (a, b) = (self.p[k], self.p[k + 1]);
+            let ab = b - a;
+            let len2 = ab.norm_squared();
+            let f = if len2 > 0.0 {
+                ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let q = a + ab * f;
+            let d = (p - q).norm_squared();
+            if d < best.0 {
+                best = (d, k, q);
+            }
+        }
+        self.segment = best.1;
+        best.2
     }
 
     /// Controller period (s).
@@ -361,6 +449,9 @@ impl ControllerEmulation {
 
     /// Run one controller cycle. Allocation-free.
     pub fn advance(&mut self) -> ControllerCycle {
+        if let Some(stream) = self.stream {
+            return self.advance_stream(stream);
+        }
         let time_s = self.cycle as f64 * self.period_s;
         self.cycle += 1;
         let last = self.times.len() - 1;
@@ -403,6 +494,32 @@ impl ControllerEmulation {
             q_command,
             correction,
             finished,
+        }
+    }
+
+    /// One cycle following a joint stream: the command, the desired point where the last
+    /// projection left it (the cell projects the true tool once it is known), the feed direction
+    /// of that segment.
+    fn advance_stream(&mut self, stream: JointStream) -> ControllerCycle {
+        let time_s = self.cycle as f64 * self.period_s;
+        self.cycle += 1;
+        let last = self.p.len() - 1;
+        let (a, b) = (self.segment, (self.segment + 1).min(last));
+        let mut dir = self.p[b] - self.p[a];
+        dir.z = 0.0;
+        let feed_dir = if stream.ended || dir.norm() < 1e-12 {
+            Vector3::zeros()
+        } else {
+            dir.normalize()
+        };
+        ControllerCycle {
+            time_s,
+            desired_m: self.p[a],
+            feed_dir,
+            q_nominal: stream.command,
+            q_command: stream.command,
+            correction: [0.0; 6],
+            finished: stream.ended,
         }
     }
 

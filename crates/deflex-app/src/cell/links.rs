@@ -17,7 +17,7 @@ use deflex_io::egm::{EgmConfig, EgmLink};
 use deflex_io::fanuc_stream::link::{DEFAULT_CORRECTION_SHARE, FanucStreamConfig, FanucStreamLink};
 use deflex_io::fanuc_stream::motion::{StreamLimits, StreamTrajectory};
 use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
-use deflex_io::robot_side::RobotSide;
+use deflex_io::robot_side::{RobotSide, StreamSide};
 use deflex_io::rsi::{CorrectionMode, RsiAnswer, RsiConfig, RsiLink};
 use deflex_io::rtde::{PathOffsetModel, RtdeLink, RtdeLinkConfig, RtdeSensor};
 use deflex_io::simple_tcp::SimpleTcpLink;
@@ -205,6 +205,7 @@ impl CellFile {
 
     /// FANUC Stream Motion: the link settings of `[robot]` (the controller at `robot.peer`,
     /// port 60015 when 0; the limits `robot.stream_*`; lost after `robot.timeout_s`, at least ten
+    /// cycles; a late status after `robot.stream_late_after_s`, at least a cycle, else five
     /// cycles).
     pub fn stream_config(&self) -> Result<FanucStreamConfig, LinkError> {
         let r = &self.robot;
@@ -217,6 +218,9 @@ impl CellFile {
         let mut cfg = FanucStreamConfig::new(controller, r.cycle_s);
         cfg.limits = self.stream_limits();
         cfg.lost_after = Duration::from_secs_f64(r.timeout_s.max(10.0 * r.cycle_s));
+        if let Some(late) = r.stream_late_after_s {
+            cfg.late_after = Duration::from_secs_f64(late.max(r.cycle_s));
+        }
         Ok(cfg)
     }
 
@@ -313,6 +317,20 @@ impl CellFile {
             staubli_watchdog: Duration::from_secs_f64(self.robot.timeout_s.clamp(1e-3, 10.0)),
             rtde_register: self.robot.rtde_register,
             path_offset: self.path_offset_model(),
+            // FANUC Stream Motion: the controller listens at `robot.peer` (port 0: 60015).
+            stream: (self.robot.kind == RobotKind::FanucStream)
+                .then_some(self.robot.peer)
+                .flatten()
+                .map(|mut address| {
+                    if address.port() == 0 {
+                        address.set_port(deflex_io::fanuc_stream::DEFAULT_PORT);
+                    }
+                    StreamSide {
+                        address,
+                        period_s: self.robot.cycle_s,
+                        limits: self.stream_limits(),
+                    }
+                }),
         }
     }
 

@@ -7,7 +7,9 @@
 //! bit once latched), and takes the command answering it ([`RobotSideLink::receive_correction`]).
 //! Like a real controller it refuses a command that steps beyond its velocity, acceleration or
 //! jerk thresholds: it latches its error bit, holds its last accepted command and reports the
-//! error until a new start. A command with `is_last_command` ends the motion; a stop packet
+//! error until a new start. A status left unanswered holds the last command for that cycle:
+//! the next command's step is checked over the cycles since the last accepted one (up to four).
+//! A command with `is_last_command` ends the motion; a stop packet
 //! ends the session.
 
 use super::motion::{AXES, StreamLimits};
@@ -27,6 +29,10 @@ const P: Protocol = Protocol::FanucStream;
 
 /// Relative tolerance of the robot side's threshold checks (rounding of the wire's degrees).
 const CHECK_TOLERANCE: f64 = 1e-6;
+
+/// The most cycles a command's step may span when the statuses before it went unanswered
+/// ([`FanucStreamRobotEndpoint`]'s threshold check).
+const MAX_HELD_CYCLES: u32 = 4;
 
 /// Why the simulated controller latched its error.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,6 +62,8 @@ pub struct FanucStreamRobotEndpoint {
     error: Option<ThresholdFault>,
     /// Last accepted command, its velocity and acceleration (rad, rad/s, rad/s²).
     command: Option<([f64; AXES], [f64; AXES], [f64; AXES])>,
+    /// The sequence number the last accepted command answered.
+    command_sequence: u32,
     reported: [f64; AXES],
     last_command_seen: bool,
     stopped: bool,
@@ -92,6 +100,7 @@ impl FanucStreamRobotEndpoint {
             answered: false,
             error: None,
             command: None,
+            command_sequence: 0,
             reported: [0.0; AXES],
             last_command_seen: false,
             stopped: false,
@@ -125,6 +134,11 @@ impl FanucStreamRobotEndpoint {
     /// A stop packet came.
     pub fn stopped(&self) -> bool {
         self.stopped
+    }
+
+    /// The sequence number of the last status packet sent (its command must echo it).
+    pub fn sequence(&self) -> u32 {
+        self.sequence
     }
 
     /// The latched threshold fault.
@@ -219,7 +233,16 @@ impl FanucStreamRobotEndpoint {
 
     /// Checks a command against the thresholds; accepts it or latches the error.
     fn take(&mut self, c: &Command) {
-        let t = self.period_s;
+        // A status left unanswered (its command came too late and was dropped) held the last
+        // command for that cycle: the next command's step spans the cycles since the last one
+        // accepted, up to [`MAX_HELD_CYCLES`] (a longer gap is checked as one cycle's step).
+        let gap = c.sequence.wrapping_sub(self.command_sequence);
+        let cycles = if self.command.is_some() && (1..=MAX_HELD_CYCLES).contains(&gap) {
+            f64::from(gap)
+        } else {
+            1.0
+        };
+        let t = self.period_s * cycles;
         let q: [f64; AXES] = std::array::from_fn(|i| c.joints_deg[i].to_radians());
         let (q0, v0, a0) = self
             .command
@@ -249,6 +272,7 @@ impl FanucStreamRobotEndpoint {
             }
         }
         self.command = Some((q, v, a));
+        self.command_sequence = c.sequence;
         self.accepted += 1;
         if c.is_last {
             self.last_command_seen = true;

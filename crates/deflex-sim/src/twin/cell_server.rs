@@ -1,11 +1,16 @@
 //! `deflex cell --sim`: the digital twin served on loopback over the protocols of a real cell
 //! (SIMULATED). It plays the robot of `robot.kind` (a KUKA sending RSI telegrams, an ABB
-//! streaming EGM, the Stäubli VAL3 program, a UR script on the simple UDP/TCP line links) at the
+//! streaming EGM, the Stäubli VAL3 program, a UR script on the simple UDP/TCP line links, a
+//! FANUC controller following the joints deflex streams over Stream Motion) at the
 //! twin's robot cycle and the ATI Net F/T streaming its readings while the twin forms the path,
 //! so `deflex run` can be tried end to end with no hardware. Its ends ([`CellSides`]) come from
 //! the same `CELL.toml` as `deflex run`'s (`deflex-app` builds both), and each protocol's robot
 //! side is the protocol crate's own ([`deflex_io::robot_side`]), so both sides agree on the
-//! protocol by construction. The twin
+//! protocol by construction. With Stream Motion the robot has no program of its own to run:
+//! its drives take the last command each cycle, from its first (no dwell: deflex's approach and
+//! ramp move it), its desired point is the path's closest to the true tool
+//! ([`crate::controller_emulation`]), and the session ends at deflex's stop packet, or after
+//! 2 s without a command (the robot's watchdog). The twin
 //! plays any robot (`crate::CellConfig::for_robot`: part position, force level, controller
 //! rate, sensor) and names it in every output.
 
@@ -101,6 +106,21 @@ pub enum CellServeError {
         played: String,
         /// Its joints.
         played_joints: usize,
+    },
+    /// A FANUC Stream Motion cell whose `robot.cycle_s` is not the cycle of the robot the twin
+    /// plays: deflex would stream one cycle's path per status at another pace.
+    #[error(
+        "{origin}: robot.cycle_s = {cycle_s} s, but the FANUC controller the twin plays runs every \
+         {twin_cycle_s} s (its cell's controller.rate_hz; give --twin a [cell.controller] rate_hz \
+         of 1/cycle_s)"
+    )]
+    StreamCycleMismatch {
+        /// The CELL.toml.
+        origin: String,
+        /// `robot.cycle_s`.
+        cycle_s: f64,
+        /// The twin's robot cycle (s).
+        twin_cycle_s: f64,
     },
     /// The twin refuses its settings or the path.
     #[error(transparent)]
@@ -268,10 +288,14 @@ impl ControllerKinematics {
 /// Checks the ends of the simulated cell: loopback addresses, a model with the joints of the
 /// robot the twin plays. Returns the robot the twin plays.
 fn check_sides(sides: &CellSides, twin: &CellConfig) -> Result<Robot, CellServeError> {
+    let stream = sides.robot.stream.map(|s| ("robot.peer", s.address));
     for (field, address) in [
         ("robot.bind", sides.robot.controller),
         ("sensor.address", sides.sensor_address),
-    ] {
+    ]
+    .into_iter()
+    .chain(stream)
+    {
         if !address.ip().is_loopback() {
             return Err(CellServeError::NotLoopback {
                 origin: sides.origin.clone(),
@@ -279,6 +303,15 @@ fn check_sides(sides: &CellSides, twin: &CellConfig) -> Result<Robot, CellServeE
                 address,
             });
         }
+    }
+    if let Some(stream) = sides.robot.stream
+        && (stream.period_s - twin.robot_period_s()).abs() > 1e-9
+    {
+        return Err(CellServeError::StreamCycleMismatch {
+            origin: sides.origin.clone(),
+            cycle_s: stream.period_s,
+            twin_cycle_s: twin.robot_period_s(),
+        });
     }
     let model = &sides.model;
     let nominal = twin.nominal_robot()?;
@@ -315,6 +348,12 @@ struct Serving {
     dwelling: bool,
     /// The test's jump of the reported pose.
     pose_jump: Option<PoseJump>,
+    /// The robot follows the joints deflex streams (FANUC Stream Motion).
+    joint_stream: bool,
+    /// Robot cycles in a row without a command while following a joint stream.
+    silent: u64,
+    /// After this many silent cycles the robot's own watchdog ends the stream (2 s).
+    silent_limit: u64,
 }
 
 impl Serving {
@@ -427,9 +466,12 @@ impl Serving {
             if wait.is_zero() {
                 return None;
             }
+            let expected = self.robot.expected_cycle_id(self.ipoc);
             match self.robot.receive(wait) {
-                Ok(Some(r)) if r.cycle_id == self.ipoc || !echoes_cycle => {
+                Ok(Some(r)) if r.cycle_id == expected || !echoes_cycle => {
                     let correction = match r.joint_correction_rad {
+                        // A joint stream's command is the joints themselves (below).
+                        _ if self.joint_stream => [0.0; 6],
                         Some(dq) if kinematics_ok => self.kinematics.joint_to_cartesian(&dq),
                         Some(_) => [0.0; 6],
                         None => r.correction.to_array(),
@@ -447,7 +489,13 @@ impl Serving {
                             self.dwell_cycles -= 1;
                         }
                     }
-                    self.cell.set_correction(correction);
+                    if self.joint_stream {
+                        if let Some(q) = self.robot.joint_command() {
+                            self.cell.set_joint_command(q);
+                        }
+                    } else {
+                        self.cell.set_correction(correction);
+                    }
                     return Some(round_trip);
                 }
                 Ok(Some(_)) | Err(_) => continue,
@@ -459,6 +507,22 @@ impl Serving {
     /// Counts the cycle; a missing answer is late, as the robot counts it (and reports it in its
     /// next telegram; the program's last telegram has no next).
     fn account(&mut self, answered: bool) {
+        if self.joint_stream && self.serving {
+            // The stream's end (the device's stop packet), or its silence past the robot's
+            // watchdog, makes the next cycle the run's last: the robot stands at its last
+            // command.
+            self.silent = if answered { 0 } else { self.silent + 1 };
+            if self.robot.stream_ended() || self.silent > self.silent_limit {
+                self.cell.end_joint_stream();
+                if !answered {
+                    // The stop packet answers no status: not a late answer.
+                    if self.silent <= self.silent_limit {
+                        self.cycles += 1;
+                        return;
+                    }
+                }
+            }
+        }
         if self.serving && !answered {
             self.round_trip.record_miss();
             if !self.step.finished {
@@ -544,8 +608,21 @@ pub fn serve_cell_with(
             error,
         })?;
     let period = Duration::from_secs_f64(cell.robot_period_s() / options.speed);
+    let joint_stream = robot.follows_joint_stream();
+    if joint_stream {
+        // FANUC Stream Motion: the robot follows deflex's joints from its first command (which
+        // moves it: no dwell, deflex's approach and ramp hold it near the start).
+        cell.follow_joint_stream();
+    }
     let mut s = Serving {
-        dwell_cycles: (options.dwell_s / cell.robot_period_s()).ceil() as u64,
+        joint_stream,
+        silent: 0,
+        silent_limit: (2.0 / cell.robot_period_s()).ceil() as u64,
+        dwell_cycles: if joint_stream {
+            0
+        } else {
+            (options.dwell_s / cell.robot_period_s()).ceil() as u64
+        },
         step: cell.step(),
         cell,
         server,

@@ -9,6 +9,7 @@ mod controller_emulation;
 mod fixture;
 mod forming;
 mod gcode;
+mod joint_stream;
 mod plant;
 mod process_model;
 mod reported_pose;

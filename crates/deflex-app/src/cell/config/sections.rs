@@ -90,6 +90,9 @@ pub struct RobotSection {
     /// `ur-rtde`: the alpha of `path_offset_set_alpha_filter` in the URScript program (0.001–1,
     /// 1 = no filter): `applied = alpha · register + (1 − alpha) · applied` every 2 ms.
     pub ur_alpha_filter: f64,
+    /// FANUC Stream Motion: a status later than this after the previous one stops the stream
+    /// (s); `None`: five cycles.
+    pub stream_late_after_s: Option<f64>,
 }
 
 impl Default for RobotSection {
@@ -116,6 +119,7 @@ impl Default for RobotSection {
             stream_ramp_s: 0.5,
             rtde_register: 24,
             ur_alpha_filter: 0.5,
+            stream_late_after_s: None,
         }
     }
 }

@@ -18,6 +18,7 @@ pub const BOUNDS: &[(&str, f64, f64, &str)] = &[
     ("robot.stream_ramp_s", 0.01, 10.0, "s"),
     ("robot.rtde_register", 24.0, 42.0, ""),
     ("robot.ur_alpha_filter", 0.001, 1.0, ""),
+    ("robot.stream_late_after_s", 0.001, 10.0, "s"),
     ("robot.egm_sensor_rpy_rad", -7.0, 7.0, "rad"),
     ("robot.egm_work_object_rpy_rad", -7.0, 7.0, "rad"),
     ("sensor.counts_per_force", 1e-3, 1e12, "counts/N"),
@@ -207,6 +208,9 @@ impl CellFile {
         )?;
         self.check_all("robot.stream_jerk_rad_s3", &r.stream_jerk_rad_s3)?;
         self.check("robot.stream_ramp_s", r.stream_ramp_s)?;
+        if let Some(late) = r.stream_late_after_s {
+            self.check("robot.stream_late_after_s", late)?;
+        }
         if r.kind == super::RobotKind::FanucStream {
             if r.peer.is_none() {
                 return Err(self.invalid(

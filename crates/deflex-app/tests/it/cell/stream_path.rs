@@ -7,9 +7,8 @@ use deflex_app::option_names::OptionNames;
 use deflex_app::table::{TableColumn, parse};
 use deflex_io::fanuc_stream::motion::{SMOOTHING_CYCLES, StreamLimits};
 
-/// The arm streamed: a built-in six-axis arm (the FANUC-like built-in arm, once there, is a
-/// one-line change here).
-const ARM: &str = "kr210-r2700";
+/// The arm streamed: the FANUC-like built-in arm.
+const ARM: &str = "r2000ic-165f";
 const T: f64 = 0.008;
 
 fn table() -> String {
@@ -136,6 +135,25 @@ fn a_cell_file_opens_a_stream_motion_link() {
     let file = CellFile::parse(&cell(&format!("{peer}{path}")), "cell.toml", dir.clone()).unwrap();
     let traj = file.stream_trajectory().unwrap();
     assert_eq!(traj.period_s(), T);
+    // The late-status rule: five cycles by default, `robot.stream_late_after_s` when given.
+    assert_eq!(
+        file.stream_config().unwrap().late_after,
+        Duration::from_secs_f64(5.0 * T)
+    );
+    let late = CellFile::parse(
+        &cell(&format!("{peer}{path}stream_late_after_s = 0.25\n")),
+        "cell.toml",
+        dir.clone(),
+    )
+    .unwrap();
+    assert_eq!(
+        late.stream_config().unwrap().late_after,
+        Duration::from_millis(250)
+    );
+    // The robot side the twin plays listens at the peer with the file's cycle and limits.
+    let side = file.robot_side(6).stream.unwrap();
+    assert_eq!(side.address, robot.local_addr().unwrap());
+    assert_eq!((side.period_s, side.limits), (T, file.stream_limits()));
     let mut link = file.open_robot_link(6).unwrap();
     assert!(link.answers_in_joint_space());
     // The robot stands at the path's start: the first commands hold it there.

@@ -8,6 +8,7 @@ mod cell_file;
 mod cell_server;
 mod closed_loop;
 pub mod common;
+mod fanuc_stream;
 mod loopback;
 mod sim_time;
 mod telemetry;
