@@ -3,51 +3,21 @@
 //! [`FANUC_MAX_POINTS_PER_PART`] with a main program that calls the parts, and the reader's
 //! refusals. The pose round trip of every format (FANUC included) is in `round_trip.rs`.
 
+use super::arm;
 use deflex_cam::program::readback::{read_fanuc, read_files};
 use deflex_cam::program::settings::{CommonSettings, ProgramSettings};
 use deflex_cam::program::{
-    ArmConfiguration, Coordinates, FANUC_MAX_POINTS_PER_PART, Format, ProgramInput, ProgramPoint,
-    export,
+    Coordinates, FANUC_MAX_POINTS_PER_PART, Format, ProgramInput, ProgramPoint, export,
 };
-use deflex_model::Pose;
 use deflex_model::conventions::rotation_distance;
-use nalgebra::{Rotation3, Translation3, Vector3};
 
-/// A line along x with the tool pointing down and a small tilt, 10 mm/s, the first point a
-/// rapid start.
+/// The FANUC test line: 0.1 mm steps at 10 mm/s ([`super::tilted_line`]).
 fn line_path(points: usize) -> Vec<ProgramPoint> {
-    let down = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::PI);
-    (0..points)
-        .map(|i| ProgramPoint {
-            pose: Pose::from_parts(
-                Translation3::new(0.4 + 1e-4 * i as f64, -0.1, 0.3),
-                Rotation3::from_scaled_axis(Vector3::new(0.0, 1e-3 * (i % 7) as f64, 0.0)) * down,
-            ),
-            speed_m_s: (i > 0).then_some(0.010),
-        })
-        .collect()
+    super::tilted_line(points, 1e-4, 0.010)
 }
 
 fn input(points: Vec<ProgramPoint>) -> ProgramInput {
-    let mut input = ProgramInput::new(points);
-    input.description = vec!["SIMULATED test line for the FANUC writer".into()];
-    input.tool_load_in_flange = Some(deflex_model::ToolLoad {
-        mass_kg: 2.5,
-        centre_of_mass_m: Vector3::new(0.0, 0.0, 0.08),
-    });
-    input.tool_load_source = "test".into();
-    input.tool_in_flange = Pose::translation(0.0, 0.0, 0.2);
-    input
-}
-
-fn arm(q: [f64; 6], behind: bool, elbow_up: bool) -> ArmConfiguration {
-    ArmConfiguration {
-        joints_rad: q,
-        wrist_behind_axis_1: behind,
-        wrist_behind_lower_arm: false,
-        elbow_beyond_stretched: elbow_up,
-        elbow_up,
-    }
+    super::tool_input(points, "FANUC")
 }
 
 /// The `/MN` lines of a TP text, without their numbers.

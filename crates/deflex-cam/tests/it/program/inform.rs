@@ -9,52 +9,29 @@ use deflex_cam::program::settings::{
     CommonSettings, InformPostype, InformSettings, MAX_POINTS_LIMIT, ProgramSettings,
 };
 use deflex_cam::program::{
-    ArmConfiguration, Coordinates, FANUC_MAX_POINTS_PER_PART, Format, INFORM_MAX_POINTS_PER_PART,
-    ProgramError, ProgramInput, ProgramPoint, ProgramSink, export, export_to,
+    Coordinates, FANUC_MAX_POINTS_PER_PART, Format, INFORM_MAX_POINTS_PER_PART, ProgramError,
+    ProgramInput, ProgramPoint, ProgramSink, export, export_to,
 };
 use deflex_model::Pose;
 use deflex_model::conventions::rotation_distance;
 use nalgebra::{Rotation3, Translation3, Vector3};
 
-/// A line along x with the tool pointing down and a small tilt, 10 mm/s, the first point a
-/// rapid start.
+use super::arm;
+
+/// The INFORM test line: 0.1 µm steps (a million points stay within the writers' coordinate
+/// bounds) at 12.3 mm/s ([`super::tilted_line`]).
 fn line_path(points: usize) -> Vec<ProgramPoint> {
-    let down = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::PI);
-    (0..points)
-        .map(|i| ProgramPoint {
-            pose: Pose::from_parts(
-                Translation3::new(0.4 + 1e-7 * i as f64, -0.1, 0.3),
-                Rotation3::from_scaled_axis(Vector3::new(0.0, 1e-3 * (i % 7) as f64, 0.0)) * down,
-            ),
-            speed_m_s: (i > 0).then_some(0.0123),
-        })
-        .collect()
+    super::tilted_line(points, 1e-7, 0.0123)
 }
 
+/// [`super::tool_input`] in a user frame that is rotated and off the axes.
 fn input(points: Vec<ProgramPoint>) -> ProgramInput {
-    let mut input = ProgramInput::new(points);
-    input.description = vec!["SIMULATED test line for the INFORM writer".into()];
-    input.tool_load_in_flange = Some(deflex_model::ToolLoad {
-        mass_kg: 2.5,
-        centre_of_mass_m: Vector3::new(0.0, 0.0, 0.08),
-    });
-    input.tool_load_source = "test".into();
-    input.tool_in_flange = Pose::translation(0.0, 0.0, 0.2);
+    let mut input = super::tool_input(points, "INFORM");
     input.frame_in_robot = Pose::from_parts(
         Translation3::new(1.71363512, -0.01, 0.20764501),
         Rotation3::from_euler_angles(0.0, 0.0, 0.3),
     );
     input
-}
-
-fn arm(q: [f64; 6], behind: bool, elbow_up: bool) -> ArmConfiguration {
-    ArmConfiguration {
-        joints_rad: q,
-        wrist_behind_axis_1: behind,
-        wrist_behind_lower_arm: false,
-        elbow_beyond_stretched: elbow_up,
-        elbow_up,
-    }
 }
 
 /// The `//INST` lines of a job, after `NOP`.
