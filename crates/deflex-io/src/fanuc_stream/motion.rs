@@ -393,38 +393,38 @@ impl StreamTrajectory {
         let p = &self.points;
         for k in 1..p.len() {
             for i in 0..AXES {
-                let v = (p[k][i] - p[k - 1][i]) / t;
-                if v.abs() > limits.velocity[i] {
-                    return Err(TrajectoryError::BeyondLimit {
-                        axis: i + 1,
-                        cycle: k,
-                        what: "rad/s",
-                        needed: v.abs(),
-                        limit: limits.velocity[i],
-                    });
-                }
-                if k >= 3 {
-                    let j = (p[k][i] - 3.0 * p[k - 1][i] + 3.0 * p[k - 2][i] - p[k - 3][i])
-                        / (t * t * t);
-                    if j.abs() > limits.jerk[i] {
+                // Velocity, jerk and acceleration by backward differences, where the samples
+                // reach back far enough, in the order they are reported.
+                let differences = [
+                    (
+                        Some((p[k][i] - p[k - 1][i]) / t),
+                        limits.velocity[i],
+                        "rad/s",
+                    ),
+                    (
+                        (k >= 3).then(|| {
+                            (p[k][i] - 3.0 * p[k - 1][i] + 3.0 * p[k - 2][i] - p[k - 3][i])
+                                / (t * t * t)
+                        }),
+                        limits.jerk[i],
+                        "rad/s³",
+                    ),
+                    (
+                        (k >= 2).then(|| (p[k][i] - 2.0 * p[k - 1][i] + p[k - 2][i]) / (t * t)),
+                        limits.acceleration[i],
+                        "rad/s²",
+                    ),
+                ];
+                for (value, limit, what) in differences {
+                    if let Some(value) = value
+                        && value.abs() > limit
+                    {
                         return Err(TrajectoryError::BeyondLimit {
                             axis: i + 1,
                             cycle: k,
-                            what: "rad/s³",
-                            needed: j.abs(),
-                            limit: limits.jerk[i],
-                        });
-                    }
-                }
-                if k >= 2 {
-                    let a = (p[k][i] - 2.0 * p[k - 1][i] + p[k - 2][i]) / (t * t);
-                    if a.abs() > limits.acceleration[i] {
-                        return Err(TrajectoryError::BeyondLimit {
-                            axis: i + 1,
-                            cycle: k,
-                            what: "rad/s²",
-                            needed: a.abs(),
-                            limit: limits.acceleration[i],
+                            what,
+                            needed: value.abs(),
+                            limit,
                         });
                     }
                 }
