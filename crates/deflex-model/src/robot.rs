@@ -310,6 +310,12 @@ pub struct Robot {
 pub const STANDARD_GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -9.80665);
 
 impl Robot {
+    /// Whether the model carries a tool of its own: a flange → TCP other than the identity (a
+    /// model without one has its TCP at the flange, and a cell gives it the cell's tool).
+    pub fn has_tool(&self) -> bool {
+        self.tool != Pose::identity()
+    }
+
     /// The couplings' invariants: at most [`MAX_COUPLINGS`], between two distinct eDoFs the
     /// robot has, each pair once, `|c| < √(c_a c_b)` (a positive definite joint compliance).
     fn check_couplings(

@@ -122,14 +122,13 @@ impl CellConfig {
 /// robot model's own tool when it has one, so that the model, `deflex compensate` and the twin
 /// use one tool; else the cell's forming tool `default_xyz_m` along the flange's z axis.
 pub fn forming_tool(robot: &Robot, default_xyz_m: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let tool = robot.tool;
-    if tool.translation.vector.norm() == 0.0 && tool.rotation.angle() == 0.0 {
-        (default_xyz_m, [0.0; 3])
-    } else {
+    if robot.has_tool() {
         (
-            tool.translation.vector.into(),
-            deflex_model::spatial::rpy_from_rotation(&tool.rotation),
+            robot.tool.translation.vector.into(),
+            deflex_model::spatial::rpy_from_rotation(&robot.tool.rotation),
         )
+    } else {
+        (default_xyz_m, [0.0; 3])
     }
 }
 

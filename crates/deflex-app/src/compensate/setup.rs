@@ -304,8 +304,7 @@ fn one_tool(robot: &mut Robot, config: Option<&CellConfig>, shown: &str) -> Stri
     let Some(config) = config else {
         return "the robot model's tool (no cell)".into();
     };
-    let model_has_none =
-        robot.tool.translation.vector.norm() == 0.0 && robot.tool.rotation.angle() == 0.0;
+    let model_has_none = !robot.has_tool();
     let same = (robot.tool.translation.vector - config.tool().translation.vector).norm() < 1e-12
         && robot.tool.rotation.angle_to(&config.tool().rotation) < 1e-12;
     robot.tool = config.tool();

@@ -211,7 +211,7 @@ pub fn describe(robot: &Robot) -> String {
             pose_text(&robot.flange)
         );
     }
-    if robot.tool == deflex_model::Pose::identity() {
+    if !robot.has_tool() {
         let _ = writeln!(
             out,
             "tool (flange → TCP): none in the model, the flange (deflex compensate, sim and cell use the twin cell's tool)"
