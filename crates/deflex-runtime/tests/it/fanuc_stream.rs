@@ -10,12 +10,11 @@ use crate::common;
 use deflex_io::fanuc_stream::link::{FanucStreamConfig, FanucStreamLink};
 use deflex_io::fanuc_stream::motion::{StreamLimits, StreamTrajectory};
 use deflex_io::fanuc_stream::robot::FanucStreamRobotEndpoint;
-use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::{RobotSideLink, RobotState};
 use deflex_runtime::WallClock;
 use deflex_runtime::session::{RuntimeOptions, SessionEnd, spawn};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 const PERIOD_S: f64 = 0.008;
@@ -48,24 +47,7 @@ fn the_runtime_streams_the_path_with_the_correction_added() {
     cfg.lost_after = Duration::from_secs(2);
     let link = FanucStreamLink::bind("127.0.0.1:0", cfg, trajectory).unwrap();
 
-    let mut server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
-    let client = NetFtClient::new(
-        "127.0.0.1:0",
-        server.local_addr().unwrap(),
-        NetFtCalibration::default(),
-    )
-    .unwrap();
-    let done = Arc::new(AtomicBool::new(false));
-    let sensor = {
-        let done = done.clone();
-        std::thread::spawn(move || {
-            while !done.load(Ordering::Acquire) {
-                let _ = server.poll_request(Duration::from_micros(500));
-                let _ = server.send_sample(&raw, 0);
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        })
-    };
+    let (client, done, sensor) = common::sensor(raw);
     let robot = std::thread::spawn(move || {
         let start = Instant::now();
         let mut q = q0;

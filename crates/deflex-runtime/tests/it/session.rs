@@ -8,7 +8,6 @@ use crate::common;
 
 use deflex_control::Controller;
 use deflex_io::egm::{EgmConfig, EgmLink};
-use deflex_io::netft::{NetFtCalibration, NetFtClient, NetFtSensorServer};
 use deflex_io::rsi::{JointTag, RsiAnswer, RsiConfig, RsiLink};
 use deflex_io::{RobotLink, RobotState};
 use deflex_model::Data;
@@ -40,31 +39,6 @@ impl Clock for FailingClock {
         }
         self.inner.sleep_until(t)
     }
-}
-
-/// A Net F/T streaming `raw` until the returned flag is set.
-fn sensor(
-    raw: deflex_model::Wrench,
-) -> (NetFtClient, Arc<AtomicBool>, std::thread::JoinHandle<()>) {
-    let mut server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
-    let client = NetFtClient::new(
-        "127.0.0.1:0",
-        server.local_addr().unwrap(),
-        NetFtCalibration::default(),
-    )
-    .unwrap();
-    let done = Arc::new(AtomicBool::new(false));
-    let handle = {
-        let done = done.clone();
-        std::thread::spawn(move || {
-            while !done.load(Ordering::Acquire) {
-                let _ = server.poll_request(Duration::from_micros(500));
-                let _ = server.send_sample(&raw, 0);
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        })
-    };
-    (client, done, handle)
 }
 
 fn options() -> RuntimeOptions {
@@ -154,7 +128,7 @@ fn panicking_control_thread_ends_the_session_with_an_error() {
     let config = common::config();
     let q = common::q0();
     let raw = common::raw_reading(&config, &q, [0.0, 0.0, 900.0, 0.0, 0.0, 0.0]);
-    let (client, sensor_done, sensor) = sensor(raw);
+    let (client, sensor_done, sensor) = common::sensor(raw);
     let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
     let to = link.local_addr().unwrap();
     let robot = kuka(to, q.iter().map(|v| v.to_degrees()).collect());
@@ -237,7 +211,7 @@ fn model_that_does_not_fit_the_robot_is_refused() {
             FaultKind::JointOutOfLimits,
         ),
     ] {
-        let (client, done, sensor) = sensor(raw);
+        let (client, done, sensor) = common::sensor(raw);
         let link = RsiLink::bind("127.0.0.1:0", RsiConfig::default()).unwrap();
         let to = link.local_addr().unwrap();
         let kuka = kuka(to, q.iter().map(|v| v.to_degrees()).collect());
@@ -402,7 +376,7 @@ fn egm_tool_down_correction_has_the_right_sign_on_the_wire() {
         "the forming pose holds the tool down: {tool_z}"
     );
     let raw = common::raw_reading(&config, &q, [0.0, 0.0, 900.0, 0.0, 0.0, 0.0]);
-    let (client, done, sensor) = sensor(raw);
+    let (client, done, sensor) = common::sensor(raw);
     let link = EgmLink::bind("127.0.0.1:0", EgmConfig::default()).unwrap();
     let to = link.local_addr().unwrap();
     let ctrl = common::controller(config);
@@ -473,7 +447,7 @@ fn rsi_joint_answers_move_the_tcp_by_the_correction() {
     reference.start(0.0);
     let t = common::run_steady(&mut reference, &raw, &q, 0.0, 5.0);
     let xi = reference.cycle(t + 0.01, &q, &raw).xi;
-    let (client, done, sensor) = sensor(raw);
+    let (client, done, sensor) = common::sensor(raw);
     let cfg = RsiConfig {
         answer: RsiAnswer::Joint(JointTag::Ak),
         ..RsiConfig::default()

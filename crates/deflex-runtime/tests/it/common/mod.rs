@@ -154,3 +154,28 @@ pub fn finish(runtime: deflex_runtime::Runtime) -> deflex_runtime::RunSummary {
     runtime.request_stop();
     runtime.join()
 }
+
+/// A Net F/T streaming `raw` until the returned flag is set.
+pub fn sensor(
+    raw: deflex_model::Wrench,
+) -> (NetFtClient, Arc<AtomicBool>, std::thread::JoinHandle<()>) {
+    let mut server = NetFtSensorServer::bind("127.0.0.1:0", NetFtCalibration::default()).unwrap();
+    let client = NetFtClient::new(
+        "127.0.0.1:0",
+        server.local_addr().unwrap(),
+        NetFtCalibration::default(),
+    )
+    .unwrap();
+    let done = Arc::new(AtomicBool::new(false));
+    let handle = {
+        let done = done.clone();
+        std::thread::spawn(move || {
+            while !done.load(Ordering::Acquire) {
+                let _ = server.poll_request(Duration::from_micros(500));
+                let _ = server.send_sample(&raw, 0);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    };
+    (client, done, handle)
+}
