@@ -14,4 +14,4 @@ mod feedforward_table;
 mod links;
 mod model_check;
 mod sessions;
-mod stream_path;
+pub(crate) mod stream_path;

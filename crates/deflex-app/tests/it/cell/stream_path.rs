@@ -11,12 +11,14 @@ use deflex_io::fanuc_stream::motion::{SMOOTHING_CYCLES, StreamLimits};
 const ARM: &str = "r2000ic-165f";
 const T: f64 = 0.008;
 
-fn table() -> String {
+/// `compensated_path.csv` of `deflex compensate --robot ARM --path cone --length-mm L` (the
+/// twin's process model), in memory; the Stream Motion twin tests stream it too.
+pub(crate) fn compensated_cone(arm: &str, length_mm: f64) -> String {
     let options = Options {
-        length_mm: Some(20.0),
+        length_mm: Some(length_mm),
         ..Options::default()
     };
-    let robot = RobotChoice::load("--robot", ARM).unwrap();
+    let robot = RobotChoice::load("--robot", arm).unwrap();
     let s = setup(
         robot,
         &PathSpec::named("cone"),
@@ -26,6 +28,10 @@ fn table() -> String {
     )
     .unwrap();
     table_csv(&compensate(s, &mut |_| {}).unwrap())
+}
+
+fn table() -> String {
+    compensated_cone(ARM, 20.0)
 }
 
 fn column<'a>(t: &'a deflex_app::table::CsvTable, name: &str) -> &'a [f64] {

@@ -10,8 +10,6 @@
 use deflex_app::cell::cell_run::{CellRun, CellRunOutcome};
 use deflex_app::cell::config::CellFile;
 use deflex_app::cell::sim_cell::SimCellPath;
-use deflex_app::compensate::{PathSpec, RobotChoice, WrenchSpec, compensate, setup, table_csv};
-use deflex_app::option_names::OptionNames;
 use deflex_sim::twin::cell_server::{CellOutcome, ServeOptions, serve_cell};
 use deflex_sim::{CellConfig, FormingLog, ToolPath};
 use nalgebra::Vector3;
@@ -54,20 +52,7 @@ fn cell_toml(robot: &str, twin: &CellConfig, extra: &str) -> String {
 
 /// `deflex compensate --robot r2000ic-165f --path cone --length-mm L` into `dir`.
 fn compensated_path(dir: &Path, length_mm: f64) {
-    let options = deflex_app::compensate::Options {
-        length_mm: Some(length_mm),
-        ..deflex_app::compensate::Options::default()
-    };
-    let robot = RobotChoice::load("--robot", ARM).unwrap();
-    let s = setup(
-        robot,
-        &PathSpec::named("cone"),
-        WrenchSpec::Process,
-        &options,
-        OptionNames::Cli,
-    )
-    .unwrap();
-    let csv = table_csv(&compensate(s, &mut |_| {}).unwrap());
+    let csv = crate::cell::stream_path::compensated_cone(ARM, length_mm);
     std::fs::write(dir.join("compensated_path.csv"), csv).unwrap();
 }
 
