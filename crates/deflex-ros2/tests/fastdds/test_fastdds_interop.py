@@ -26,9 +26,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 
 from deflex_sessions import (NETFT, NETFT_PORT, NS, Q_COLUMNS, RATE_HZ,  # noqa: E402
-                             RAW_COLUMNS, ROOT, ROS2_SENSOR, SENSOR_FRAME, LogRows,
-                             assert_same_correction, cell_toml, deflex, domain_base, read_log,
-                             ros2_section, session)
+                             RAW_COLUMNS, ROOT, SENSOR_FRAME, LogRows,
+                             assert_same_correction, cell_toml, deflex, domain_base,
+                             netft_baseline, read_log, ros2_section, ros2_sensor_configs, session)
 
 assert deflex  # the pytest fixture, imported
 DOMAIN = domain_base()
@@ -187,20 +187,9 @@ def test_fastdds_at_sensor_data_qos_and_a_reliable_reader_refused(deflex, tmp_pa
 
 def test_fastdds_wrench_drives_the_closed_loop_like_the_net_ft(deflex, tmp_path):
     length = 60.0
-    netft_dir = tmp_path / "netft"
-    netft_dir.mkdir()
-    cell = netft_dir / "cell.toml"
-    cell.write_text(cell_toml(NETFT, ""))
-    base_run, base_cell = session(deflex, netft_dir, cell, cell, length)
-
-    ros_dir = tmp_path / "ros2"
-    ros_dir.mkdir()
-    cell = ros_dir / "cell.toml"
-    cell.write_text(cell_toml(NETFT, ""))
-    run_config = ros_dir / "run.toml"
+    netft_dir, base_run, base_cell = netft_baseline(deflex, tmp_path, length)
     # deflex's subscription reliable too (ROS 2's default profile, as the Fast DDS writer).
-    run_config.write_text(cell_toml(ROS2_SENSOR, ros2_section(DOMAIN + 1, topics=[],
-                                                              qos="reliable")))
+    ros_dir, cell, run_config = ros2_sensor_configs(tmp_path, DOMAIN + 1, "reliable")
     driver = {}
 
     def relay(stop):

@@ -116,6 +116,30 @@ def session(deflex, workdir, cell_config, run_config, length_mm, during=None):
     return json.loads(run.stdout), json.loads(cell_out)
 
 
+def netft_baseline(deflex, tmp_path, length_mm):
+    """The Net F/T session a ROS 2 sensor session is compared with, in `tmp_path/netft`: that
+    folder and the run's and the cell's summaries."""
+    netft_dir = tmp_path / "netft"
+    netft_dir.mkdir()
+    cell = netft_dir / "cell.toml"
+    cell.write_text(cell_toml(NETFT, ""))
+    run, cell_out = session(deflex, netft_dir, cell, cell, length_mm)
+    return netft_dir, run, cell_out
+
+
+def ros2_sensor_configs(tmp_path, domain, qos):
+    """A session folder `tmp_path/ros2` whose twin streams its Net F/T while `deflex run` takes
+    the wrench from ROS 2 (`domain`, the subscription's `qos`): the folder, the cell's config and
+    the run's."""
+    ros_dir = tmp_path / "ros2"
+    ros_dir.mkdir()
+    cell = ros_dir / "cell.toml"
+    cell.write_text(cell_toml(NETFT, ""))
+    run_config = ros_dir / "run.toml"
+    run_config.write_text(cell_toml(ROS2_SENSOR, ros2_section(domain, topics=[], qos=qos)))
+    return ros_dir, cell, run_config
+
+
 def read_log(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))

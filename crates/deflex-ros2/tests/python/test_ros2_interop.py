@@ -34,7 +34,8 @@ from cyclonedds.util import duration
 
 from deflex_sessions import (NETFT, NETFT_PORT, NS, Q_COLUMNS, RATE_HZ, RAW_COLUMNS, ROOT,
                              ROS2_SENSOR, SENSOR_FRAME, LogRows, assert_same_correction,
-                             cell_toml, deflex, domain_base, read_log, ros2_section, session)
+                             cell_toml, deflex, domain_base, netft_baseline, read_log,
+                             ros2_section, ros2_sensor_configs, session)
 from ros2_types import (DiagnosticArray, Header, JointState, Time, Vector3, Wrench,
                         WrenchStamped)
 
@@ -209,19 +210,8 @@ class NetFtRelay:
 
 def test_ros2_wrench_drives_the_closed_loop_like_the_net_ft(deflex, tmp_path):
     length = 60.0
-    netft_dir = tmp_path / "netft"
-    netft_dir.mkdir()
-    cell = netft_dir / "cell.toml"
-    cell.write_text(cell_toml(NETFT, ""))
-    base_run, base_cell = session(deflex, netft_dir, cell, cell, length)
-
-    ros_dir = tmp_path / "ros2"
-    ros_dir.mkdir()
-    cell = ros_dir / "cell.toml"
-    cell.write_text(cell_toml(NETFT, ""))
-    run_config = ros_dir / "run.toml"
-    run_config.write_text(cell_toml(ROS2_SENSOR, ros2_section(DOMAIN + 1, topics=[],
-                                                              qos="sensor-data")))
+    netft_dir, base_run, base_cell = netft_baseline(deflex, tmp_path, length)
+    ros_dir, cell, run_config = ros2_sensor_configs(tmp_path, DOMAIN + 1, "sensor-data")
     relay = NetFtRelay(DOMAIN + 1)
     run, cell_out = session(deflex, ros_dir, cell, run_config, length, during=relay)
     sensor = run["ros2_sensor"]
