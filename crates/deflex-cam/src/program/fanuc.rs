@@ -59,7 +59,7 @@ use crate::program::common::{Checked, comment_text, header_texts, num, wrap};
 use crate::program::config::fanuc_config;
 use crate::program::error::ProgramError;
 use crate::program::names::{FANUC, sanitize};
-use crate::program::plan::{Plan, part_name, plan};
+use crate::program::plan::{Plan, part_name, plan_within};
 use crate::program::settings::{Coordinates, ProgramSettings};
 use crate::program::sink::{ProgramSink, emit};
 use deflex_model::Pose;
@@ -192,12 +192,7 @@ pub(crate) fn export(
     sink: &mut dyn ProgramSink,
 ) -> Result<Vec<String>, ProgramError> {
     // FANUC's own part limit on top of the template's.
-    let mut limited = settings.clone();
-    limited.program.max_points_per_part = settings
-        .program
-        .max_points_per_part
-        .min(MAX_POINTS_PER_PART);
-    let plan = plan(FORMAT, input, &limited, POSITION_BYTES)?;
+    let plan = plan_within(FORMAT, input, settings, POSITION_BYTES, MAX_POINTS_PER_PART)?;
     let name = sanitize(&settings.program.name, &FANUC).to_ascii_uppercase();
     // Part names add `_P01`: keep room for them.
     let name = if plan.split() && name.len() > FANUC.max_len - 4 {

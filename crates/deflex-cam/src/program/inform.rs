@@ -60,7 +60,7 @@ use crate::program::common::{Checked, comment_text, header_texts, num, wrap};
 use crate::program::config::yaskawa_rconf;
 use crate::program::error::ProgramError;
 use crate::program::names::{INFORM, sanitize};
-use crate::program::plan::{Plan, part_name, plan};
+use crate::program::plan::{Plan, part_name, plan_within};
 use crate::program::settings::{Coordinates, InformPostype, ProgramSettings};
 use crate::program::sink::{ProgramSink, emit};
 use deflex_model::Pose;
@@ -215,12 +215,7 @@ pub(crate) fn export(
                 .into(),
         });
     }
-    let mut limited = settings.clone();
-    limited.program.max_points_per_part = settings
-        .program
-        .max_points_per_part
-        .min(MAX_POINTS_PER_PART);
-    let plan = plan(FORMAT, input, &limited, POINT_BYTES)?;
+    let plan = plan_within(FORMAT, input, settings, POINT_BYTES, MAX_POINTS_PER_PART)?;
     let name = sanitize(&settings.program.name, &INFORM).to_ascii_uppercase();
     // Part names add `_P01` … `_P999`: keep room for them.
     let name = if plan.split() && name.len() > INFORM.max_len - 5 {

@@ -130,6 +130,18 @@ pub(crate) fn plan<'a>(
     settings: &'a ProgramSettings,
     line_bytes: usize,
 ) -> Result<Plan<'a>, ProgramError> {
+    plan_within(format, input, settings, line_bytes, usize::MAX)
+}
+
+/// [`plan`] for a format with a part limit of its own: at most `format_max_points` moves per
+/// part, or `program.max_points_per_part` when lower (FANUC TP, Yaskawa INFORM).
+pub(crate) fn plan_within<'a>(
+    format: &'static str,
+    input: &'a ProgramInput,
+    settings: &'a ProgramSettings,
+    line_bytes: usize,
+    format_max_points: usize,
+) -> Result<Plan<'a>, ProgramError> {
     check_input(format, input, settings)?;
     let count = input.points.len();
     if !input.configurations.is_empty() && input.configurations.len() != count {
@@ -166,6 +178,7 @@ pub(crate) fn plan<'a>(
     let per_part = settings
         .program
         .max_points_per_part
+        .min(format_max_points)
         .min(settings.program.max_part_kb * 1024 / line_bytes.max(1))
         .max(1);
     let moves = count - 1;
